@@ -1,0 +1,45 @@
+"""Glare around bright regions of linear HDR luminance images.
+
+Models: :class:`GaussianGlare` (Yoshida et al. 2008) and :class:`VosGlare` (Vos 1984 eye PSF
+as used by Spencer et al. 1995). Digitise one with :func:`kernel` / :func:`digitise_kernel`,
+apply it with :func:`add_glare` / :func:`render_glare`. The eye state is in :mod:`glare.eye`,
+the PSF components in :mod:`glare.vos`.
+"""
+
+from . import eye, vos
+from .digitise import Kernel, kernel_shape_for
+from .eye import pupil_diameter_mm, regime
+from .flare import flare_line_pattern
+from .models import (
+    GLARE_MODELS,
+    GaussianGlare,
+    GlareModel,
+    VosGlare,
+    digitise_kernel,
+    kernel,
+    make_model,
+)
+from .render import L_DMAX_YOSHIDA2008_CD_M2, GlareResult, add_glare, render_glare
+from .spectral import HaloSpectrum
+
+__all__ = [
+    "GLARE_MODELS",
+    "L_DMAX_YOSHIDA2008_CD_M2",
+    "GaussianGlare",
+    "GlareModel",
+    "GlareResult",
+    "HaloSpectrum",
+    "Kernel",
+    "VosGlare",
+    "add_glare",
+    "digitise_kernel",
+    "eye",
+    "flare_line_pattern",
+    "kernel",
+    "kernel_shape_for",
+    "make_model",
+    "pupil_diameter_mm",
+    "regime",
+    "render_glare",
+    "vos",
+]

@@ -1,0 +1,123 @@
+"""Checks at the public boundary of :mod:`glare`.
+
+Every check raises :class:`ValueError` whose message names the argument, the value it got and
+what is allowed, so that a wrong call is fixed from the message alone.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+
+import numpy as np
+
+__all__ = [
+    "check_choice",
+    "check_image",
+    "check_in_range",
+    "check_positive",
+    "check_positive_int",
+]
+
+
+def _describe(value: object) -> str:
+    if isinstance(value, float | np.floating):
+        return repr(float(value))
+    return repr(value)
+
+
+def check_positive(name: str, value: float, *, unit: str = "") -> float:
+    """Return ``value`` as a float if it is finite and > 0, else raise ``ValueError``."""
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(
+            f"{name} must be a finite number > 0{' ' + unit if unit else ''}, got {value!r}"
+        ) from None
+    if not math.isfinite(number) or number <= 0.0:
+        raise ValueError(
+            f"{name} must be a finite number > 0{' ' + unit if unit else ''}, "
+            f"got {_describe(value)}"
+        )
+    return number
+
+
+def check_in_range(
+    name: str,
+    value: float,
+    low: float,
+    high: float,
+    *,
+    unit: str = "",
+    low_inclusive: bool = True,
+    high_inclusive: bool = True,
+) -> float:
+    """Return ``value`` as a float if it lies in the interval, else raise ``ValueError``."""
+    lb = "[" if low_inclusive else "("
+    hb = "]" if high_inclusive else ")"
+    allowed = f"{lb}{low:g}, {high:g}{hb}{' ' + unit if unit else ''}"
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a number in {allowed}, got {value!r}") from None
+    above = number >= low if low_inclusive else number > low
+    below = number <= high if high_inclusive else number < high
+    if not (math.isfinite(number) and above and below):
+        raise ValueError(f"{name} must be in {allowed}, got {_describe(value)}")
+    return number
+
+
+def check_positive_int(name: str, value: int, *, minimum: int = 1) -> int:
+    """Return ``value`` if it is an integer >= ``minimum``, else raise ``ValueError``."""
+    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < minimum:
+        raise ValueError(f"{name} must be an integer >= {minimum}, got {value!r}")
+    return int(value)
+
+
+def check_choice(name: str, value: object, allowed: Iterable[object]) -> object:
+    """Return ``value`` if it is one of ``allowed``, else raise ``ValueError``."""
+    options = tuple(allowed)
+    if value not in options:
+        raise ValueError(
+            f"{name} must be one of {', '.join(repr(o) for o in options)}; got {value!r}"
+        )
+    return value
+
+
+def check_image(name: str, image: object, *, channels: tuple[int, ...] = ()) -> np.ndarray:
+    """Return ``image`` as a float array after checking it is a finite, non-negative image.
+
+    Parameters
+    ----------
+    name
+        Argument name used in the error message.
+    image
+        Array-like of shape ``(H, W)`` or, when ``channels`` is given, ``(H, W, C)`` with
+        ``C`` in ``channels``.
+    channels
+        Allowed channel counts for a 3-D image; empty means 2-D only.
+    """
+    array = np.asarray(image)
+    allowed = "a 2-D (H, W) array"
+    if channels:
+        allowed += " or a 3-D (H, W, C) array with C in " + str(list(channels))
+    if array.ndim == 3 and channels:
+        if array.shape[2] not in channels:
+            raise ValueError(f"{name} must be {allowed}; got shape {array.shape}")
+    elif array.ndim != 2:
+        raise ValueError(f"{name} must be {allowed}; got shape {array.shape}")
+    if array.shape[0] < 1 or array.shape[1] < 1:
+        raise ValueError(f"{name} must have at least one pixel; got shape {array.shape}")
+    if not (np.issubdtype(array.dtype, np.floating) or np.issubdtype(array.dtype, np.integer)):
+        raise ValueError(f"{name} must hold real numbers; got dtype {array.dtype}")
+    finite = np.isfinite(array)
+    if not finite.all():
+        where = tuple(int(i) for i in np.argwhere(~finite)[0])
+        raise ValueError(
+            f"{name} must be finite (NaN and Inf are not luminances); "
+            f"got {array[where]!r} at index {where}"
+        )
+    if (array < 0).any():
+        where = tuple(int(i) for i in np.argwhere(array < 0)[0])
+        raise ValueError(f"{name} must be >= 0 cd/m²; got {array[where]!r} at index {where}")
+    return array
