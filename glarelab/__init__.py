@@ -1,1 +1,1 @@
-"""glarelab package."""
+"""The glarelab command line: ``glarelab render``, ``glarelab demo``."""

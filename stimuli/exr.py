@@ -1,0 +1,76 @@
+"""OpenEXR input and output of linear luminance images, always float32.
+
+Half floats overflow at 65,504, far below the luminance of a lamp or the sun (Spencer Fig. 16:
+7.5e8 cd/m²), so images are written as 32-bit float and read back as such.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import OpenEXR
+
+__all__ = ["read_exr", "write_exr"]
+
+
+def write_exr(path: str | Path, image: np.ndarray) -> Path:
+    """Write a linear image as a float32 OpenEXR file (ZIP compression, lossless).
+
+    Parameters
+    ----------
+    path
+        Output file.
+    image
+        ``(H, W)`` luminance, written as channel ``Y``, or ``(H, W, 3)`` linear RGB, written as
+        channels ``R``, ``G``, ``B``. Values must be finite.
+
+    Returns
+    -------
+    pathlib.Path
+        The path written.
+
+    Raises
+    ------
+    ValueError
+        For another shape or non-finite values.
+    """
+    array = np.asarray(image)
+    if not (array.ndim == 2 or (array.ndim == 3 and array.shape[2] == 3)):
+        raise ValueError(
+            f"image must be (H, W) luminance or (H, W, 3) RGB; got shape {array.shape}"
+        )
+    if not np.isfinite(array).all():
+        raise ValueError("image must be finite to be written as EXR; it holds NaN or Inf")
+    array = np.ascontiguousarray(array, dtype=np.float32)
+    channels = {"Y": array} if array.ndim == 2 else {"RGB": array}
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with OpenEXR.File(header, channels) as exr:
+        exr.write(str(path))
+    return path
+
+
+def read_exr(path: str | Path) -> np.ndarray:
+    """Read an OpenEXR file as a float32 array: ``(H, W)`` for Y, ``(H, W, 3)`` for RGB.
+
+    Raises
+    ------
+    ValueError
+        If the file holds neither a ``Y`` channel nor ``R``, ``G`` and ``B``.
+    FileNotFoundError
+        If the file does not exist.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"no EXR file at {path}")
+    with OpenEXR.File(str(path), separate_channels=True) as exr:
+        channels = {name: np.asarray(c.pixels) for name, c in exr.channels().items()}
+    if {"R", "G", "B"} <= channels.keys():
+        return np.stack([channels[c] for c in "RGB"], axis=-1).astype(np.float32, copy=False)
+    if "Y" in channels:
+        return channels["Y"].astype(np.float32, copy=False)
+    raise ValueError(
+        f"{path} must hold a Y channel or R, G, B channels; it holds {sorted(channels)}"
+    )

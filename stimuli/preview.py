@@ -1,0 +1,64 @@
+"""Previews: what a linear luminance image looks like on a display, as an 8-bit PNG."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Literal
+
+import colour
+import numpy as np
+from PIL import Image
+
+__all__ = ["preview_png", "to_display"]
+
+
+def to_display(
+    luminance_cd_m2: np.ndarray,
+    *,
+    l_dmax_cd_m2: float,
+    scale: Literal["display", "log"] = "display",
+    decades: float = 4.0,
+) -> np.ndarray:
+    """Encode linear luminance as 8-bit sRGB for viewing.
+
+    Parameters
+    ----------
+    luminance_cd_m2
+        ``(H, W)`` or ``(H, W, 3)`` linear image in cd/m².
+    l_dmax_cd_m2
+        Luminance shown as white, cd/m².
+    scale
+        ``'display'``: what the display shows (clipped at ``l_dmax``, sRGB-encoded).
+        ``'log'``: ``decades`` decades below ``l_dmax`` mapped linearly in log luminance, to
+        see faint glare such as the lenticular halo.
+    decades
+        Range of the log scale in decades; default 4.
+
+    Returns
+    -------
+    numpy.ndarray
+        uint8 image, ``(H, W)`` or ``(H, W, 3)``.
+    """
+    relative = np.asarray(luminance_cd_m2, dtype=np.float64) / float(l_dmax_cd_m2)
+    if scale == "display":
+        encoded = colour.cctf_encoding(np.clip(relative, 0.0, 1.0), function="sRGB")
+    elif scale == "log":
+        floor = 10.0**-decades
+        encoded = (np.log10(np.clip(relative, floor, 1.0)) + decades) / decades
+    else:
+        raise ValueError(f"scale must be one of 'display', 'log'; got {scale!r}")
+    return np.round(np.clip(encoded, 0.0, 1.0) * 255.0).astype(np.uint8)
+
+
+def preview_png(
+    path: str | Path,
+    luminance_cd_m2: np.ndarray,
+    *,
+    l_dmax_cd_m2: float,
+    scale: Literal["display", "log"] = "display",
+) -> Path:
+    """Write :func:`to_display` of an image to a PNG file and return its path."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    Image.fromarray(to_display(luminance_cd_m2, l_dmax_cd_m2=l_dmax_cd_m2, scale=scale)).save(path)
+    return path

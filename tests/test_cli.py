@@ -1,0 +1,112 @@
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+from PIL import Image
+
+import glare
+from glarelab.cli import main
+from stimuli.exr import read_exr, write_exr
+from stimuli.shapes import disk
+
+
+def yoshida_disk():
+    return disk(
+        field_deg=2.0,
+        pixel_deg=0.02,
+        disk_diameter_deg=0.3,
+        disk_cd_m2=4000.0,
+        background_cd_m2=150.0,
+    )["img"].astype(np.float32)
+
+
+@pytest.mark.parametrize("model", ["gaussian", "vos"])
+def test_render_round_trips_a_float32_exr(tmp_path, model):
+    image = yoshida_disk()
+    source = write_exr(tmp_path / "in.exr", image)
+    target, preview = tmp_path / "out.exr", tmp_path / "out.png"
+    status = main(
+        [
+            "render",
+            str(source),
+            str(target),
+            "--model",
+            model,
+            "--pixel-deg",
+            "0.02",
+            "--l-dmax",
+            "220",
+            "--preview",
+            str(preview),
+        ]
+    )
+    assert status == 0
+    out = read_exr(target)
+    assert out.dtype == np.float32 and out.shape == image.shape
+    model_object = glare.GaussianGlare() if model == "gaussian" else glare.VosGlare()
+    expected = glare.add_glare(image, model_object, pixel_deg=0.02, l_dmax_cd_m2=220.0)
+    assert_allclose(out, expected.astype(np.float32), rtol=0)
+    png = np.asarray(Image.open(preview))
+    assert png.shape == image.shape and png.max() == 255
+
+
+def test_render_accepts_rgb_and_mesopic_options(tmp_path):
+    image = np.repeat(yoshida_disk()[..., None], 3, axis=2)
+    source = write_exr(tmp_path / "rgb.exr", image)
+    target = tmp_path / "rgb_out.exr"
+    assert (
+        main(
+            [
+                "render",
+                str(source),
+                str(target),
+                "--regime",
+                "mesopic",
+                "--age",
+                "40",
+                "--flare-lines",
+                "--seed",
+                "3",
+                "--pixel-deg",
+                "0.02",
+                "--method",
+                "Spencer1995",
+                "--precision",
+                "float32",
+            ]
+        )
+        == 0
+    )
+    assert read_exr(target).shape == image.shape
+
+
+def test_render_reports_bad_arguments_by_name(tmp_path, capsys):
+    source = write_exr(tmp_path / "in.exr", yoshida_disk())
+    with pytest.raises(SystemExit) as stop:
+        main(["render", str(source), str(tmp_path / "o.exr"), "--pixel-deg", "-1"])
+    assert stop.value.code == 2
+    assert "pixel_deg must be a finite number > 0 deg, got -1.0" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main(["render", str(tmp_path / "none.exr"), str(tmp_path / "o.exr"), "--pixel-deg", "1"])
+    assert "no EXR file" in capsys.readouterr().err
+
+
+def test_demo_writes_exr_and_png_for_each_model(tmp_path):
+    status = subprocess.run(
+        [sys.executable, "-m", "glarelab", "demo", "--out", str(tmp_path)],
+        capture_output=True,
+        text=True,
+        check=False,
+        timeout=600,
+    )
+    assert status.returncode == 0, status.stderr
+    for name in ("gaussian", "vos_photopic", "vos_mesopic", "vos_scotopic_flare"):
+        assert read_exr(tmp_path / f"{name}.exr").max() == pytest.approx(220.0)
+        assert Image.open(tmp_path / f"{name}.png").size == (641, 641)
+    manifest = json.loads((tmp_path / "manifest.json").read_text())
+    assert manifest["stimulus"]["disk_cd_m2"] == 4000.0
+    assert (tmp_path / "profiles.png").stat().st_size > 10_000
+    assert "[4/4]" in status.stderr
