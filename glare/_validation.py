@@ -112,12 +112,16 @@ def check_image(name: str, image: object, *, channels: tuple[int, ...] = ()) -> 
         raise ValueError(f"{name} must hold real numbers; got dtype {array.dtype}")
     finite = np.isfinite(array)
     if not finite.all():
-        where = tuple(int(i) for i in np.argwhere(~finite)[0])
         raise ValueError(
-            f"{name} must be finite (NaN and Inf are not luminances); "
-            f"got {array[where]!r} at index {where}"
+            f"{name} must be finite (NaN and Inf are not luminances); got {_first(array, ~finite)}"
         )
     if (array < 0).any():
-        where = tuple(int(i) for i in np.argwhere(array < 0)[0])
-        raise ValueError(f"{name} must be >= 0 cd/m²; got {array[where]!r} at index {where}")
+        raise ValueError(f"{name} must be >= 0 cd/m²; got {_first(array, array < 0)}")
     return array
+
+
+def _first(array: np.ndarray, bad: np.ndarray) -> str:
+    """The first offending value, with its index when the array holds more than one."""
+    where = tuple(int(i) for i in np.argwhere(bad)[0])
+    value = float(array[where])
+    return f"{value!r}" if array.size == 1 else f"{value!r} at index {where}"

@@ -16,7 +16,7 @@ import numpy as np
 from scipy.signal import fftconvolve
 
 from ._validation import check_choice, check_image, check_positive
-from .digitise import Kernel, kernel_shape_for
+from .digitise import Kernel, check_kernel_shape, kernel_shape_for
 from .models import GlareModel, _resolve
 
 __all__ = ["L_DMAX_YOSHIDA2008_CD_M2", "GlareResult", "add_glare", "render_glare"]
@@ -239,7 +239,9 @@ def add_glare(
     Returns
     -------
     numpy.ndarray
-        The image with glare, same shape as the input, dtype of ``precision``.
+        The image with glare, same shape as the input, dtype of ``precision``; an image with
+        no pixel above ``l_dmax_cd_m2`` comes back as an unchanged copy (its own dtype), and
+        no kernel is digitised for it.
 
     Raises
     ------
@@ -257,8 +259,19 @@ def add_glare(
     >>> bool((add_glare(dim, VosGlare(), pixel_deg=0.1) == dim).all())
     True
     """
+    image = check_image("luminance_cd_m2", luminance_cd_m2, channels=(3,))
+    l_dmax = check_positive("l_dmax_cd_m2", l_dmax_cd_m2, unit="cd/m²")
+    if not (image > l_dmax).any():
+        # nothing to spread: skip digitising a kernel, after checking the other arguments
+        check_positive("pixel_deg", pixel_deg, unit="deg")
+        check_choice("method", method, METHODS)
+        check_choice("precision", precision, PRECISIONS)
+        if kernel_shape is not None:
+            check_kernel_shape(kernel_shape)
+        _resolve(model)
+        return image.copy()
     return render_glare(
-        luminance_cd_m2,
+        image,
         model,
         pixel_deg=pixel_deg,
         l_dmax_cd_m2=l_dmax_cd_m2,

@@ -40,6 +40,7 @@ from typing import Final
 
 import numpy as np
 
+from ._radial import radial_mass
 from ._validation import check_choice, check_in_range
 from .eye import Regime
 
@@ -435,7 +436,5 @@ def volume(profile, *, upper_deg: float = 90.0) -> float:
     >>> round(volume(f2), 4)
     0.9999
     """
-    from ._radial import radial_mass
-
     check_in_range("upper_deg", upper_deg, 0.0, 90.0, unit="deg", low_inclusive=False)
     return float(radial_mass(profile, np.array([upper_deg]))[0])
