@@ -67,8 +67,9 @@ class Kernel:
         Fraction of the PSF's energy that falls outside the kernel's support (not spread),
         per channel for a colour kernel.
     quadrature_error
-        Relative correction the exact support energy made to the per-pixel quadrature; a
-        measure of how well the samples resolved the PSF.
+        Relative correction the exact support energy made to the per-pixel quadrature,
+        averaged over the kernel's parts by the energy each holds; a measure of how well the
+        samples resolved the PSF (about 6e-5 with the default samples).
     description
         The model and digitisation settings, for logs.
     """

@@ -252,7 +252,9 @@ class VosGlare:
         (k1, k2), inside, total, error = digitise_radial([vos.f1, vos.f2], **settings)
         corona = w1 * k1 / total[0] + w2 * k2 / total[1]
         out_corona = w1 * (1 - inside[0] / total[0]) + w2 * (1 - inside[1] / total[1])
-        errors = [(w1 + w2, float(np.max(np.abs(error))))]
+        # each part's quadrature error, weighted by the energy it holds inside the support
+        held = (w1 * inside[0] / total[0], w2 * inside[1] / total[1])
+        errors = [(held[0], abs(float(error[0]))), (held[1], abs(float(error[1])))]
         rng_corona, rng_halo = np.random.default_rng(self.seed).spawn(2)
         if self.flare_lines:
             corona = _streak(corona, rng_corona, self.corona_lines)
@@ -274,7 +276,9 @@ class VosGlare:
             )
             halo = w3 * parts / total[:, None, None]
             out_halo = w3 * (1 - inside / total)
-            errors.append((w3, float(np.max(np.abs(error)))))
+            errors += [
+                (w3 * i / t, abs(float(e))) for i, t, e in zip(inside, total, error, strict=True)
+            ]
             if self.flare_lines:
                 pattern = flare_line_pattern(shape, rng=rng_halo, n_lines=self.halo_lines)
                 halo = np.stack([_rescaled(h, h * pattern) for h in halo])
