@@ -1,12 +1,14 @@
 """Glare around bright regions of linear HDR luminance images.
 
-Models: :class:`GaussianGlare` (Yoshida et al. 2008) and :class:`VosGlare` (Vos 1984 eye PSF
-as used by Spencer et al. 1995). Digitise one with :func:`kernel` / :func:`digitise_kernel`,
+Models: :class:`GaussianGlare` (Yoshida et al. 2008), :class:`VosGlare` (Vos 1984 eye PSF
+as used by Spencer et al. 1995), :class:`WaveOpticsGlare` (Kakimoto et al. 2004, with pupil,
+particles and Fresnel term as in Luidolt 2020) and :class:`HybridGlare` (diffraction plus Vos
+scattering). Digitise one with :func:`kernel` / :func:`digitise_kernel`,
 apply it with :func:`add_glare` / :func:`render_glare`. The eye state is in :mod:`glare.eye`,
 the PSF components in :mod:`glare.vos`.
 """
 
-from . import eye, vos
+from . import apertures, eye, vos, wave
 from .digitise import Kernel, kernel_shape_for
 from .eye import pupil_diameter_mm, regime
 from .flare import flare_line_pattern
@@ -14,13 +16,15 @@ from .models import (
     GLARE_MODELS,
     GaussianGlare,
     GlareModel,
+    HybridGlare,
     VosGlare,
     digitise_kernel,
     kernel,
     make_model,
 )
 from .render import L_DMAX_YOSHIDA2008_CD_M2, GlareResult, add_glare, render_glare
-from .spectral import HaloSpectrum
+from .spectral import HaloSpectrum, Spectrum
+from .wave import WaveOpticsGlare
 
 __all__ = [
     "GLARE_MODELS",
@@ -29,9 +33,13 @@ __all__ = [
     "GlareModel",
     "GlareResult",
     "HaloSpectrum",
+    "HybridGlare",
     "Kernel",
+    "Spectrum",
     "VosGlare",
+    "WaveOpticsGlare",
     "add_glare",
+    "apertures",
     "digitise_kernel",
     "eye",
     "flare_line_pattern",
@@ -42,4 +50,5 @@ __all__ = [
     "regime",
     "render_glare",
     "vos",
+    "wave",
 ]

@@ -26,11 +26,13 @@ from .digitise import (
 from .eye import Regime, regime
 from .flare import CORONA_LINES, HALO_LINES, flare_line_pattern
 from .spectral import HALO_TABLE_MAX_DEG, HaloSpectrum, halo_profiles
+from .wave import WaveOpticsGlare
 
 __all__ = [
     "GLARE_MODELS",
     "GaussianGlare",
     "GlareModel",
+    "HybridGlare",
     "VosGlare",
     "digitise_kernel",
     "kernel",
@@ -224,6 +226,78 @@ class VosGlare:
             "center_radius_px": self.center_radius_px,
         }
 
+    def parts(self, pixel_deg: float, shape: tuple[int, int], *, colour: bool = False) -> dict:
+        """The digitised parts of the PSF, each with its energy outside the support.
+
+        Returns a dict with ``weights`` ``(w0, w1, w2, w3)``; ``core`` (``f0``, unit volume,
+        ``(KH, KW)``) and ``core_outside``; ``scatter`` (``w1 f1 + w2 f2``, flare lines
+        applied, ``(KH, KW)``) and ``scatter_outside``; ``halo`` (``w3 f3``, ``(C, KH, KW)``)
+        and ``halo_outside`` ``(C,)``; and ``errors``, ``(energy, quadrature error)`` pairs.
+        """
+        pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
+        shape = check_kernel_shape(shape)
+        w0, w1, w2, w3 = vos.weights(self.regime, self.age)
+        settings = self._digitise_settings(pixel_deg, shape)
+
+        # f0: exact, separable (Spencer: a delta when narrower than a pixel)
+        gy = gaussian_pixel_energies(vos.F0_WIDTH_DEG, pixel_deg, shape[0] // 2)
+        gx = gaussian_pixel_energies(vos.F0_WIDTH_DEG, pixel_deg, shape[1] // 2)
+        core = mirror_quadrant(np.outer(gy, gx))
+
+        # f1, f2: the corona, one sampling pass for both
+        (k1, k2), inside, total, error = digitise_radial([vos.f1, vos.f2], **settings)
+        scatter = w1 * k1 / total[0] + w2 * k2 / total[1]
+        scatter_outside = w1 * (1 - inside[0] / total[0]) + w2 * (1 - inside[1] / total[1])
+        # each part's quadrature error, weighted by the energy it holds inside the support
+        held = (w1 * inside[0] / total[0], w2 * inside[1] / total[1])
+        errors = [(held[0], abs(float(error[0]))), (held[1], abs(float(error[1])))]
+        rng_corona, rng_halo = np.random.default_rng(self.seed).spawn(2)
+        if self.flare_lines:
+            scatter = _streak(scatter, rng_corona, self.corona_lines)
+
+        n_channels = 3 if colour else 1
+        halo = np.zeros((n_channels, *shape))
+        halo_outside = np.zeros(n_channels)
+        if w3 > 0:
+            channels = "RGB" if colour else "Y"
+            profiles = halo_profiles(
+                channels, self.halo_spectrum, wavelength_nm=self.wavelength_nm
+            )
+            pieces, inside, total, error = digitise_radial(
+                profiles,
+                **settings,
+                max_spacing_deg=0.04,  # a quarter of the ring's σ = 0.16°
+                breakpoints=(2.0, 3.0, 4.0),
+                support_deg=HALO_TABLE_MAX_DEG,
+            )
+            halo = w3 * pieces / total[:, None, None]
+            halo_outside = w3 * (1 - inside / total)
+            errors += [
+                (w3 * i / t, abs(float(e))) for i, t, e in zip(inside, total, error, strict=True)
+            ]
+            if self.flare_lines:
+                pattern = flare_line_pattern(shape, rng=rng_halo, n_lines=self.halo_lines)
+                halo = np.stack([_rescaled(h, h * pattern) for h in halo])
+        return {
+            "weights": (w0, w1, w2, w3),
+            "core": core,
+            "core_outside": 1.0 - core.sum(),
+            "scatter": scatter,
+            "scatter_outside": scatter_outside,
+            "halo": halo,
+            "halo_outside": halo_outside,
+            "errors": errors,
+        }
+
+    def description(self, colour: bool) -> dict:
+        return {
+            "model": type(self).__name__,
+            **{k: v for k, v in asdict(self).items() if k != "halo_spectrum"},
+            "halo_spectrum": asdict(self.halo_spectrum),
+            "weights": vos.weights(self.regime, self.age),
+            "colour": colour,
+        }
+
     def kernel(self, pixel_deg: float, shape: tuple[int, int], *, colour: bool = False) -> Kernel:
         """Digitise the PSF into an odd ``shape`` for pixels of ``pixel_deg`` degrees.
 
@@ -237,67 +311,105 @@ class VosGlare:
             ``False``: a luminance kernel ``(KH, KW)``. ``True``: ``(KH, KW, 3)`` in the linear
             RGB of ``halo_spectrum.colourspace``; only the halo differs between channels.
         """
-        pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
-        shape = check_kernel_shape(shape)
-        w0, w1, w2, w3 = vos.weights(self.regime, self.age)
-        settings = self._digitise_settings(pixel_deg, shape)
-
-        # f0: exact, separable (Spencer: a delta when narrower than a pixel)
-        gy = gaussian_pixel_energies(vos.F0_WIDTH_DEG, pixel_deg, shape[0] // 2)
-        gx = gaussian_pixel_energies(vos.F0_WIDTH_DEG, pixel_deg, shape[1] // 2)
-        k0 = mirror_quadrant(np.outer(gy, gx))
-        out0 = 1.0 - k0.sum()
-
-        # f1, f2: the corona, one sampling pass for both
-        (k1, k2), inside, total, error = digitise_radial([vos.f1, vos.f2], **settings)
-        corona = w1 * k1 / total[0] + w2 * k2 / total[1]
-        out_corona = w1 * (1 - inside[0] / total[0]) + w2 * (1 - inside[1] / total[1])
-        # each part's quadrature error, weighted by the energy it holds inside the support
-        held = (w1 * inside[0] / total[0], w2 * inside[1] / total[1])
-        errors = [(held[0], abs(float(error[0]))), (held[1], abs(float(error[1])))]
-        rng_corona, rng_halo = np.random.default_rng(self.seed).spawn(2)
-        if self.flare_lines:
-            corona = _streak(corona, rng_corona, self.corona_lines)
-
-        n_channels = 3 if colour else 1
-        halo = np.zeros((n_channels, *shape))
-        out_halo = np.zeros(n_channels)
-        if w3 > 0:
-            channels = "RGB" if colour else "Y"
-            profiles = halo_profiles(
-                channels, self.halo_spectrum, wavelength_nm=self.wavelength_nm
-            )
-            parts, inside, total, error = digitise_radial(
-                profiles,
-                **settings,
-                max_spacing_deg=0.04,  # a quarter of the ring's σ = 0.16°
-                breakpoints=(2.0, 3.0, 4.0),
-                support_deg=HALO_TABLE_MAX_DEG,
-            )
-            halo = w3 * parts / total[:, None, None]
-            out_halo = w3 * (1 - inside / total)
-            errors += [
-                (w3 * i / t, abs(float(e))) for i, t, e in zip(inside, total, error, strict=True)
-            ]
-            if self.flare_lines:
-                pattern = flare_line_pattern(shape, rng=rng_halo, n_lines=self.halo_lines)
-                halo = np.stack([_rescaled(h, h * pattern) for h in halo])
-
-        values = w0 * k0 + corona + halo  # (C, KH, KW)
-        energy_outside = w0 * out0 + out_corona + out_halo
-        values = values[0] if not colour else np.moveaxis(values, 0, -1)
-        return Kernel(
-            values=values,
+        p = self.parts(pixel_deg, shape, colour=colour)
+        w0 = p["weights"][0]
+        return _combine(
+            w0 * p["core"],
+            w0 * p["core_outside"],
+            p,
             pixel_deg=pixel_deg,
-            energy_outside=float(energy_outside[0]) if not colour else energy_outside,
-            quadrature_error=sum(w * e for w, e in errors) / sum(w for w, _ in errors),
-            description={
-                "model": "VosGlare",
-                **{k: v for k, v in asdict(self).items() if k != "halo_spectrum"},
-                "halo_spectrum": asdict(self.halo_spectrum),
-                "weights": (w0, w1, w2, w3),
-                "colour": colour,
-            },
+            colour=colour,
+            description=self.description(colour),
+        )
+
+
+def _combine(
+    core: np.ndarray,
+    core_outside: float | np.ndarray,
+    parts: dict,
+    *,
+    pixel_deg: float,
+    colour: bool,
+    description: dict,
+) -> Kernel:
+    """A kernel from a weighted core ``(KH, KW)`` or ``(C, KH, KW)`` and the Vos scattering
+    and halo parts of :meth:`VosGlare.parts`."""
+    values = core + parts["scatter"] + parts["halo"]  # (C, KH, KW)
+    energy_outside = core_outside + parts["scatter_outside"] + parts["halo_outside"]
+    errors = parts["errors"]
+    return Kernel(
+        values=values[0] if not colour else np.moveaxis(values, 0, -1),
+        pixel_deg=pixel_deg,
+        energy_outside=float(np.asarray(energy_outside).reshape(-1)[0])
+        if not colour
+        else np.broadcast_to(energy_outside, (3,)).copy(),
+        quadrature_error=sum(w * e for w, e in errors) / sum(w for w, _ in errors),
+        description=description,
+    )
+
+
+@dataclass(frozen=True)
+class HybridGlare:
+    """Diffraction and scattering together: the Vos PSF with its unscattered core ``f0``
+    replaced by a wave-optics diffraction kernel.
+
+    Kakimoto et al. (2004, §2.1) note that diffraction alone misses the scattering in the eye
+    and that a hybrid with Spencer et al.'s filter may be needed. In the Vos PSF the narrow
+    Gaussian ``f0`` stands for the unscattered (diffraction-limited) light; here that share,
+    ``w0``, is spread by the diffraction pattern of the pupil, lids, lashes and particles, and
+    the scattering terms ``w1 f1 + w2 f2`` (and the halo ``w3 f3``) are the Vos ones.
+
+    Parameters
+    ----------
+    wave
+        The diffraction model.
+    regime, age, flare_lines, seed
+        As for :class:`VosGlare`.
+
+    References
+    ----------
+    Kakimoto et al. 2004, §2.1; Spencer et al. 1995, eqs. 5, 8-10.
+
+    Examples
+    --------
+    >>> m = HybridGlare(WaveOpticsGlare(pupil_mm=3.0, eyelashes=False, eyelid=False,
+    ...                                 particles=0))
+    >>> k = m.kernel(0.05, (41, 41))
+    >>> bool(abs(k.values.sum() + k.energy_outside - 1) < 1e-9)
+    True
+    """
+
+    wave: WaveOpticsGlare = field(default_factory=WaveOpticsGlare)
+    regime: Regime = "photopic"
+    age: float | None = None
+    flare_lines: bool = False
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.wave, WaveOpticsGlare):
+            raise ValueError(f"wave must be a WaveOpticsGlare, got {self.wave!r}")
+        VosGlare(regime=self.regime, age=self.age, seed=self.seed)  # validates
+
+    def kernel(self, pixel_deg: float, shape: tuple[int, int], *, colour: bool = False) -> Kernel:
+        vos_model = VosGlare(
+            regime=self.regime, age=self.age, flare_lines=self.flare_lines, seed=self.seed
+        )
+        parts = vos_model.parts(pixel_deg, shape, colour=colour)
+        diffraction = self.wave.kernel(pixel_deg, shape, colour=colour)
+        w0 = parts["weights"][0]
+        core = diffraction.values if not colour else np.moveaxis(diffraction.values, -1, 0)
+        description = {
+            **vos_model.description(colour),
+            "model": "HybridGlare",
+            "wave": diffraction.description,
+        }
+        return _combine(
+            w0 * core,
+            w0 * np.asarray(diffraction.energy_outside),
+            parts,
+            pixel_deg=pixel_deg,
+            colour=colour,
+            description=description,
         )
 
 
@@ -318,6 +430,9 @@ GLARE_MODELS: dict[str, type] = {
     "gaussian": GaussianGlare,
     "Spencer1995": VosGlare,
     "vos": VosGlare,
+    "Kakimoto2004": WaveOpticsGlare,
+    "wave": WaveOpticsGlare,
+    "hybrid": HybridGlare,
 }
 
 

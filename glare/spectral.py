@@ -40,6 +40,7 @@ __all__ = [
     "HALO_TABLE_MAX_DEG",
     "HALO_WAVELENGTHS_NM",
     "HaloSpectrum",
+    "Spectrum",
     "halo_profiles",
 ]
 
@@ -50,14 +51,16 @@ _OBSERVER = "CIE 1931 2 Degree Standard Observer"
 
 
 @dataclass(frozen=True)
-class HaloSpectrum:
-    """Spectral sampling and display of the halo colour.
+class Spectrum:
+    """Spectral sampling of a white source and the display it is shown on.
 
     Attributes
     ----------
     n_wavelengths
-        Wavelengths between 400 and 700 nm, evenly spaced; default 61 (5 nm steps; Spencer
-        uses 50). At least 2.
+        Wavelengths across ``wavelength_range_nm``, evenly spaced; default 61 (5 nm steps over
+        the default range; Spencer uses 50). At least 2.
+    wavelength_range_nm
+        First and last wavelength in nm, within 380-780; default (400, 700) (Spencer §3.2).
     colourspace
         Name of a colour-science RGB colourspace for the display primaries; default
         ``'ITU-R BT.709'``.
@@ -70,6 +73,7 @@ class HaloSpectrum:
     """
 
     n_wavelengths: int = 61
+    wavelength_range_nm: tuple[float, float] = HALO_WAVELENGTHS_NM
     colourspace: str = "ITU-R BT.709"
     illuminant: str = "D65"
     in_gamut_above: float = 0.1
@@ -77,12 +81,15 @@ class HaloSpectrum:
     def __post_init__(self) -> None:
         check_in_range("in_gamut_above", self.in_gamut_above, 0.0, 1.0)
         check_positive_int("n_wavelengths", self.n_wavelengths, minimum=2)
+        low, high = self.wavelength_range_nm
+        check_in_range("wavelength_range_nm[0]", low, 380.0, 780.0, unit="nm")
+        check_in_range("wavelength_range_nm[1]", high, low, 780.0, unit="nm", low_inclusive=False)
         check_choice("colourspace", self.colourspace, sorted(colour.RGB_COLOURSPACES))
         check_choice("illuminant", self.illuminant, sorted(colour.SDS_ILLUMINANTS))
 
     @property
     def wavelengths_nm(self) -> np.ndarray:
-        return np.linspace(*HALO_WAVELENGTHS_NM, self.n_wavelengths)
+        return np.linspace(*self.wavelength_range_nm, self.n_wavelengths)
 
     def channel_weights(self, channels: Literal["Y", "XYZ", "RGB"]) -> np.ndarray:
         """Weights ``(C, n_wavelengths)`` turning ``f3(θ, λ)`` into channel profiles."""
@@ -100,6 +107,9 @@ class HaloSpectrum:
             white = rgb.sum(axis=1)  # RGB of a flat ring: balance it to R = G = B = Y = 1
             return rgb / white[:, None]
         raise ValueError(f"channels must be one of 'Y', 'XYZ', 'RGB'; got {channels!r}")
+
+
+HaloSpectrum = Spectrum  # the name the halo code and its users know it by
 
 
 def _into_gamut(
@@ -132,7 +142,7 @@ def _into_gamut(
 
 def halo_profiles(
     channels: Literal["Y", "XYZ", "RGB"],
-    spectrum: HaloSpectrum,
+    spectrum: Spectrum,
     *,
     wavelength_nm: float | None = None,
 ) -> list[Callable[[np.ndarray], np.ndarray]]:

@@ -1,0 +1,576 @@
+"""Wave-optics glare: the Fraunhofer diffraction pattern of the obstacles before the retina.
+
+For an aperture of amplitude transmittance ``t(x, y)`` (mm) lit by a plane wave of wavelength
+``λ``, the eye focused at infinity forms on the retina (Kakimoto et al. 2004, eqs. 2, 5)
+
+.. math:: I(\\theta_x, \\theta_y) \\propto \\frac{1}{\\lambda^2}
+          \\Bigl| \\mathcal{F}[t](\\theta_x / \\lambda, \\theta_y / \\lambda) \\Bigr|^2 ,
+
+a function of angle ``θ = x_f / f``. On a grid of ``N`` samples spaced ``δ`` mm, the DFT gives
+``F[t]`` at frequencies ``k / (N δ)``, so the PSF's angular sample spacing is ``λ / (N δ)``
+radians and its extent ``λ / δ``. Two conditions keep it honest:
+
+- the grid must be at least twice the aperture (``N δ ≥ 2 D``): the PSF is the transform of
+  the aperture's autocorrelation, which is twice as wide; a smaller grid wraps it round;
+- the aperture must be resolved (``D / δ`` samples), else its sampled spectrum is aliased.
+
+:func:`psf_fraunhofer` enforces both (padding automatically, refusing what it cannot fix).
+:func:`rebin` then integrates the PSF exactly (area-weighted) onto the stimulus' pixels.
+
+**The Fresnel term** of Luidolt eq. 5.6, ``exp(iπ r² / (λ d))`` with ``d = 24 mm``, is the
+quadratic phase of free propagation from the pupil to the retina *without* a lens (after
+Ritschel et al. 2009). A focused eye's lens adds ``exp(-iπ r² / (λ f))`` with ``f = d``, which
+cancels it exactly; Fraunhofer at the focal plane is then exact (Kakimoto eq. 1 with
+``d_o = f``). In physical units the term is large (about 680 half-waves at the edge of a 6 mm
+pupil at 550 nm): it spreads the PSF over the pupil's geometric shadow, ``D / d`` radians (14°
+for 6 mm). It is available (``fresnel=True``) to reproduce kernels built that way, with
+``fresnel_distance_mm`` as its parameter, but is off by default. ``tests/glare/test_wave.py``
+measures the shadow.
+
+References
+----------
+Kakimoto, M., Matsuoka, K., Nishita, T., Naemura, T., Harashima, H. (2004). Glare generation
+based on wave optics. Computer Graphics International, eqs. 1-7.
+Luidolt, L. (2020). Perception of light in virtual reality. TU Wien, §5.2, eqs. 5.5-5.13.
+Ritschel, T., Ihrke, M., Frisvad, J. R., et al. (2009). Temporal glare. Eurographics.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import asdict, dataclass, field, replace
+from typing import Literal
+
+import colour
+import numpy as np
+import scipy.fft
+
+from . import apertures as ap
+from ._validation import check_choice, check_in_range, check_positive, check_positive_int
+from .digitise import Kernel, check_kernel_shape
+from .eye import pupil_diameter_mm
+from .spectral import Spectrum
+from .vos import WAVELENGTH_RANGE_NM
+
+__all__ = [
+    "FRESNEL_DISTANCE_MM_LUIDOLT2020",
+    "KAKIMOTO2004_WAVELENGTHS_NM",
+    "MIN_APERTURE_SAMPLES",
+    "SPECTRAL_METHODS",
+    "DiffractionPSF",
+    "WaveOpticsGlare",
+    "compare_spectral_methods",
+    "psf_fraunhofer",
+    "rebin",
+    "sigmoid_Kakimoto2004",
+]
+
+FRESNEL_DISTANCE_MM_LUIDOLT2020 = 24.0  # Luidolt 2020 eq. 5.6: pupil-retina distance d
+LUIDOLT2020_REFERENCE_NM = 575.0  # Luidolt 2020 §5.2.2: the one wavelength that is transformed
+KAKIMOTO2004_WAVELENGTHS_NM = (680.0, 530.0, 460.0)  # Kakimoto 2004 §3.2: R, G, B
+SIGMOID_D_KAKIMOTO2004 = 640.0  # Kakimoto 2004 §3.4: tone curve maximum
+SIGMOID_K_KAKIMOTO2004 = 20.0  # Kakimoto 2004 §3.4
+SIGMOID_G_KAKIMOTO2004 = 0.465  # Kakimoto 2004 §3.4
+MIN_APERTURE_SAMPLES = 32  # fewest samples across the open aperture we accept
+PUPIL_SAMPLES = 64  # samples across the pupil the model asks for
+MAX_GRID = 8192  # largest FFT grid (complex64: 512 MB)
+SPECTRAL_METHODS = ("reference", "scaled", "kakimoto")
+_MM_PER_NM = 1e-6
+
+
+@dataclass(frozen=True)
+class DiffractionPSF:
+    """A monochromatic diffraction PSF on its native angular grid.
+
+    Attributes
+    ----------
+    values
+        ``(N, N)`` PSF, centred at ``N // 2``, summing to 1.
+    spacing_deg
+        Angular sample spacing, degrees: ``λ / (N δ)``.
+    wavelength_nm
+        Wavelength.
+    raw_energy
+        ``Σ |DFT[t]|²`` before normalisation; Parseval: ``N² Σ |t|²``.
+    transmitted_samples
+        ``Σ |t|²``: the transmitted area in samples.
+    padded_to
+        Grid size after automatic padding (equals the input size when none was needed).
+    """
+
+    values: np.ndarray
+    spacing_deg: float
+    wavelength_nm: float
+    raw_energy: float
+    transmitted_samples: float
+    padded_to: int
+
+
+def _support_extent(aperture: np.ndarray) -> tuple[int, int]:
+    rows = np.flatnonzero(aperture.any(axis=1))
+    cols = np.flatnonzero(aperture.any(axis=0))
+    return rows[-1] - rows[0] + 1, cols[-1] - cols[0] + 1
+
+
+def psf_fraunhofer(
+    aperture: np.ndarray,
+    spacing_mm: float,
+    wavelength_nm: float,
+    *,
+    fresnel_distance_mm: float | None = None,
+) -> DiffractionPSF:
+    """Monochromatic Fraunhofer PSF of an aperture (Kakimoto eq. 5; Luidolt eqs. 5.5-5.11).
+
+    Parameters
+    ----------
+    aperture
+        ``(N, N)`` amplitude transmittance in [0, 1] (use :mod:`glare.apertures`), centred at
+        ``N // 2``.
+    spacing_mm
+        Sample spacing of the aperture in mm, > 0.
+    wavelength_nm
+        Wavelength in nm, 380-780.
+    fresnel_distance_mm
+        If given, multiply by Luidolt's Fresnel term ``exp(iπ r² / (λ d))`` with this ``d``
+        (eq. 5.6; see the module notes on what it models).
+
+    Returns
+    -------
+    DiffractionPSF
+
+    Raises
+    ------
+    ValueError
+        For a bad aperture (not square and 2-D, NaN, values outside [0, 1], nothing open), a
+        non-positive spacing, a wavelength outside 380-780 nm, or an aperture narrower than
+        :data:`MIN_APERTURE_SAMPLES` samples (undersampled: its spectrum would alias).
+
+    Notes
+    -----
+    .. math:: M(\\theta) = \\frac{|\\mathrm{DFT}[t \\cdot F](\\theta)|^2}{\\sum |\\mathrm{DFT}|^2},
+              \\qquad \\Delta\\theta = \\frac{\\lambda}{N \\delta}
+
+    An aperture wider than half its grid would wrap its autocorrelation round the grid; it is
+    zero-padded to twice its extent first (reported in ``padded_to``).
+
+    Examples
+    --------
+    >>> grid = ap.ApertureGrid(256, 0.05)
+    >>> psf = psf_fraunhofer(ap.aperture_pupil(grid, 4.0), 0.05, 550.0)
+    >>> round(psf.spacing_deg, 5), round(float(psf.values.sum()), 12)
+    (0.00246, 1.0)
+    """
+    t = ap.aperture_from_image(aperture)
+    if t.shape[0] != t.shape[1]:
+        raise ValueError(f"aperture must be square (N, N); got shape {t.shape}")
+    spacing = check_positive("spacing_mm", spacing_mm, unit="mm")
+    wavelength = check_in_range("wavelength_nm", wavelength_nm, *WAVELENGTH_RANGE_NM, unit="nm")
+    if not t.any():
+        raise ValueError("aperture is opaque everywhere: no light passes")
+    extent = max(_support_extent(t > 0))
+    if extent < MIN_APERTURE_SAMPLES:
+        raise ValueError(
+            f"aperture is undersampled: its open part spans {extent} samples, fewer than "
+            f"{MIN_APERTURE_SAMPLES}; sample it finer (smaller spacing_mm)"
+        )
+    n = t.shape[0]
+    needed = 2 * extent
+    if n < needed:  # the autocorrelation would wrap round the grid: pad, centred
+        size = scipy.fft.next_fast_len(needed + needed % 2)
+        padded = np.zeros((size, size))
+        offset = size // 2 - n // 2
+        padded[offset : offset + n, offset : offset + n] = t
+        t, n = padded, size
+    field_: np.ndarray = t.astype(np.complex64)
+    if fresnel_distance_mm is not None:
+        d = check_positive("fresnel_distance_mm", fresnel_distance_mm, unit="mm")
+        axis = (np.arange(n) - n // 2) * spacing
+        r2 = axis[None, :] ** 2 + axis[:, None] ** 2
+        field_ = field_ * np.exp(1j * np.pi * r2 / (wavelength * _MM_PER_NM * d)).astype(
+            np.complex64
+        )
+    spectrum = scipy.fft.fft2(scipy.fft.ifftshift(field_), workers=-1)
+    intensity = scipy.fft.fftshift(spectrum.real.astype(np.float64) ** 2 + spectrum.imag**2)
+    raw = float(intensity.sum())
+    return DiffractionPSF(
+        values=intensity / raw,
+        spacing_deg=math.degrees(wavelength * _MM_PER_NM / (n * spacing)),
+        wavelength_nm=wavelength,
+        raw_energy=raw,
+        transmitted_samples=float(np.sum(t**2)),
+        padded_to=n,
+    )
+
+
+def _rebin_axis(values: np.ndarray, axis: int, src: float, dst: float, size: int) -> np.ndarray:
+    n = values.shape[axis]
+    src_edges = (np.arange(n + 1) - n // 2 - 0.5) * src
+    dst_edges = (np.arange(size + 1) - size // 2 - 0.5) * dst
+    moved = np.moveaxis(values, axis, -1)
+    cumulative = np.concatenate(
+        [np.zeros((*moved.shape[:-1], 1)), np.cumsum(moved, axis=-1)], axis=-1
+    )
+    position = np.clip((dst_edges - src_edges[0]) / src, 0.0, n)
+    lower = np.minimum(position.astype(int), n - 1)
+    fraction = position - lower
+    at_edges = cumulative[..., lower] * (1 - fraction) + cumulative[..., lower + 1] * fraction
+    return np.moveaxis(np.diff(at_edges, axis=-1), -1, axis)
+
+
+def _crop_to_reach(
+    values: np.ndarray, spacing_deg: float, to_spacing_deg: float, shape: tuple[int, int]
+) -> np.ndarray:
+    """The centred part of ``values`` that the output grid can reach (with one sample spare)."""
+    n = values.shape[0]
+    half = [min(n // 2, math.ceil((m / 2 * to_spacing_deg) / spacing_deg) + 1) for m in shape]
+    c = n // 2
+    return values[c - half[0] : c + half[0] + 1, c - half[1] : c + half[1] + 1]
+
+
+def rebin(
+    values: np.ndarray, from_spacing_deg: float, to_spacing_deg: float, shape: tuple[int, int]
+) -> np.ndarray:
+    """Integrate a centred, piecewise-constant image onto a grid of another spacing.
+
+    Exact for energy: each output pixel receives the integral of the input over its area
+    (cumulative sums interpolated at the output pixel edges), so the sum is conserved
+    wherever the output covers the input.
+
+    Examples
+    --------
+    >>> a = np.zeros((5, 5)); a[2, 2] = 1.0
+    >>> rebin(a, 1.0, 2.0, (3, 3))[1, 1]
+    1.0
+    """
+    values = _crop_to_reach(values, from_spacing_deg, to_spacing_deg, shape)
+    out = _rebin_axis(values, 1, from_spacing_deg, to_spacing_deg, shape[1])
+    return _rebin_axis(out, 0, from_spacing_deg, to_spacing_deg, shape[0])
+
+
+def sigmoid_Kakimoto2004(
+    x: np.ndarray,
+    *,
+    D: float = SIGMOID_D_KAKIMOTO2004,
+    k: float = SIGMOID_K_KAKIMOTO2004,
+    g: float = SIGMOID_G_KAKIMOTO2004,
+) -> np.ndarray:
+    """Kakimoto's sigmoid tone curve for viewing glare images (eqs. 6-7).
+
+    .. math:: \\mathrm{sig}(x) = \\frac{x^g + 1}{x^g + k} D
+
+    Parameters default to the paper's D = 640, k = 20, g = 0.465 (§3.4).
+
+    Examples
+    --------
+    >>> float(sigmoid_Kakimoto2004(np.array(0.0)))  # D / k
+    32.0
+    """
+    x = np.asarray(x, dtype=float)
+    if (x < 0).any() or not np.isfinite(x).all():
+        raise ValueError("x must be finite and >= 0")
+    power = x**g
+    return (power + 1.0) / (power + k) * D
+
+
+def _luminance_weights(colourspace: str) -> np.ndarray:
+    return np.asarray(colour.RGB_COLOURSPACES[colourspace].matrix_RGB_to_XYZ[1])
+
+
+@dataclass(frozen=True)
+class WaveOpticsGlare:
+    """Glare as diffraction by the pupil, eyelids, eyelashes, particles and filters.
+
+    Parameters
+    ----------
+    pupil_mm
+        Pupil (or diaphragm) diameter in mm, 1-10; ``None`` (default): from
+        ``field_luminance_cd_m2`` by Moon & Spencer (:func:`glare.eye.pupil_diameter_mm`).
+    field_luminance_cd_m2
+        Adapting luminance for the pupil when ``pupil_mm`` is None; default 1 cd/m² (3.8 mm).
+    eyelashes, eyelid
+        Include the upper eyelid margin and eyelashes (Kakimoto §3.2); default True.
+    particles
+        Number of lens/cornea particles (Luidolt §5.2.4 default 1000); 0 for none.
+    particle_size_mm
+        Particle diameter; default 0.042 mm (Luidolt §5.2.4).
+    fresnel
+        Multiply Luidolt's Fresnel term (eq. 5.6); default False (see the module notes).
+    fresnel_distance_mm
+        ``d`` of the Fresnel term; default 24 mm (Luidolt).
+    spectral
+        ``'scaled'`` (default): one FFT, exact scaled copies per wavelength (Luidolt eq. 5.12);
+        ``'reference'``: one FFT per wavelength; ``'kakimoto'``: 680/530/460 nm as R/G/B.
+    spectrum
+        Wavelength sampling and display for 'scaled' and 'reference'; default 31 wavelengths
+        380-780 nm, Rec. 709.
+    seed
+        Seed of the eyelashes and particles.
+    source_x_deg
+        Horizontal direction of the light source; moves the eyelashes and lids across the
+        pupil by ``obstacle_distance_mm · tan(source_x_deg)`` (Kakimoto §3.2, §4.2).
+    obstacle_distance_mm
+        Distance of eyelashes and lids in front of the pupil; default 10 mm.
+    diaphragm_sides
+        A regular polygon of this many sides instead of a round pupil (camera); default None.
+    cross_screen
+        ``'4-point'`` or ``'trigonal'`` cross-screen filter; default None.
+    eye
+        ``'right'`` or ``'left'``: which way the lashes curl.
+    psf_extent_deg
+        Full width of the PSF computed, degrees; energy beyond it is reported as outside the
+        kernel. Default 4.
+
+    Examples
+    --------
+    >>> m = WaveOpticsGlare(pupil_mm=3.0, eyelashes=False, eyelid=False, particles=0)
+    >>> k = m.kernel(0.02, (41, 41))
+    >>> k.values.shape, bool(abs(k.values.sum() + k.energy_outside - 1) < 1e-9)
+    ((41, 41), True)
+    """
+
+    pupil_mm: float | None = None
+    field_luminance_cd_m2: float = 1.0
+    eyelashes: bool = True
+    eyelid: bool = True
+    particles: int = ap.PARTICLE_COUNT_LUIDOLT2020
+    particle_size_mm: float = ap.PARTICLE_SIZE_MM_LUIDOLT2020
+    fresnel: bool = False
+    fresnel_distance_mm: float = FRESNEL_DISTANCE_MM_LUIDOLT2020
+    spectral: Literal["scaled", "reference", "kakimoto"] = "scaled"
+    spectrum: Spectrum = field(
+        default_factory=lambda: Spectrum(n_wavelengths=31, wavelength_range_nm=(380.0, 780.0))
+    )
+    seed: int = 0
+    source_x_deg: float = 0.0
+    obstacle_distance_mm: float = 10.0
+    diaphragm_sides: int | None = None
+    cross_screen: Literal["4-point", "trigonal"] | None = None
+    eye: Literal["left", "right"] = "right"
+    psf_extent_deg: float = 4.0
+
+    def __post_init__(self) -> None:
+        if self.pupil_mm is not None:
+            check_in_range("pupil_mm", self.pupil_mm, 1.0, 10.0, unit="mm")
+        pupil_diameter_mm(self.field_luminance_cd_m2)  # validates the luminance
+        check_positive_int("particles", self.particles, minimum=0)
+        check_positive("particle_size_mm", self.particle_size_mm, unit="mm")
+        check_positive("fresnel_distance_mm", self.fresnel_distance_mm, unit="mm")
+        check_choice("spectral", self.spectral, SPECTRAL_METHODS)
+        check_positive_int("seed", self.seed, minimum=0)
+        check_in_range("source_x_deg", self.source_x_deg, -60.0, 60.0, unit="deg")
+        check_positive("obstacle_distance_mm", self.obstacle_distance_mm, unit="mm")
+        if self.diaphragm_sides is not None:
+            check_positive_int("diaphragm_sides", self.diaphragm_sides, minimum=3)
+        check_choice("cross_screen", self.cross_screen, (None, "4-point", "trigonal"))
+        check_choice("eye", self.eye, ("left", "right"))
+        check_positive("psf_extent_deg", self.psf_extent_deg, unit="deg")
+
+    # --- aperture -----------------------------------------------------------------------
+
+    @property
+    def pupil_diameter(self) -> float:
+        """The pupil diameter used, mm."""
+        if self.pupil_mm is not None:
+            return float(self.pupil_mm)
+        return float(pupil_diameter_mm(self.field_luminance_cd_m2))
+
+    def _wavelengths(self) -> np.ndarray:
+        if self.spectral == "kakimoto":
+            return np.array(KAKIMOTO2004_WAVELENGTHS_NM)
+        return self.spectrum.wavelengths_nm
+
+    def grid_for(self, pixel_deg: float, shape: tuple[int, int]) -> ap.ApertureGrid:
+        """The aperture grid that resolves the obstacles and covers the kernel.
+
+        The sample spacing makes the PSF's extent at the shortest wavelength at least twice
+        the kernel's (so the aperture's aliased spectrum folds far outside it), resolves the
+        pupil by 64 samples and particles and lashes by 2; the grid spans twice the pupil.
+
+        Raises
+        ------
+        ValueError
+            If that grid would exceed 8192² samples.
+        """
+        extent_deg = min(max(shape) * pixel_deg, self.psf_extent_deg)
+        shortest_mm = float(self._wavelengths().min()) * _MM_PER_NM
+        diameter = self.pupil_diameter
+        spacing = min(
+            shortest_mm / (2.0 * math.radians(extent_deg)),
+            diameter / PUPIL_SAMPLES,
+            self.particle_size_mm / 2 if self.particles else math.inf,
+            0.09 / 2 if self.eyelashes else math.inf,
+        )
+        n = scipy.fft.next_fast_len(math.ceil(2.1 * diameter / spacing))
+        n += n % 2
+        if n > MAX_GRID:
+            raise ValueError(
+                f"the aperture grid would need {n}² samples (more than {MAX_GRID}²) to cover a "
+                f"{extent_deg:g}° kernel for a {diameter:g} mm pupil; lower psf_extent_deg or "
+                "use coarser pixels"
+            )
+        return ap.ApertureGrid(n, spacing)
+
+    def aperture(self, grid: ap.ApertureGrid) -> np.ndarray:
+        """The composite amplitude transmittance on ``grid`` (Kakimoto eq. 5: ``t_o · P``).
+
+        Obstacles are drawn only over the pupil's bounding box: outside it ``P = 0``.
+        """
+        rng_lashes, rng_particles = np.random.default_rng(self.seed).spawn(2)
+        diameter = self.pupil_diameter
+        n_crop = min(grid.n, 2 * (math.ceil(diameter / 2 / grid.spacing_mm) + 2) + 1)
+        crop = ap.ApertureGrid(n_crop, grid.spacing_mm)
+        if self.diaphragm_sides is None:
+            t = ap.aperture_pupil(crop, diameter)
+        else:
+            t = ap.aperture_diaphragm(crop, diameter, self.diaphragm_sides)
+        shift = self.obstacle_distance_mm * math.tan(math.radians(self.source_x_deg))
+        if self.eyelid:
+            t = t * ap.aperture_eyelid(crop, shift_x_mm=shift)
+        if self.eyelashes:
+            t = t * ap.aperture_eyelashes(crop, rng=rng_lashes, eye=self.eye, shift_x_mm=shift)
+        if self.particles:
+            t = t * ap.aperture_particles(
+                crop, rng=rng_particles, count=self.particles, size_mm=self.particle_size_mm
+            )
+        if self.cross_screen is not None:
+            t = t * ap.aperture_cross_screen(crop, self.cross_screen)
+        full = np.zeros((grid.n, grid.n))
+        offset = grid.n // 2 - n_crop // 2
+        full[offset : offset + n_crop, offset : offset + n_crop] = t
+        return full
+
+    # --- PSFs ---------------------------------------------------------------------------
+
+    def monochromatic_kernels(
+        self, pixel_deg: float, shape: tuple[int, int]
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Kernels ``(n_wavelengths, KH, KW)`` on ``pixel_deg``, one per wavelength, and the
+        wavelengths. 'reference' transforms once per wavelength, 'scaled' once in all."""
+        pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
+        shape = check_kernel_shape(shape)
+        grid = self.grid_for(pixel_deg, shape)
+        t = self.aperture(grid)
+        d = self.fresnel_distance_mm if self.fresnel else None
+        wavelengths = self._wavelengths()
+        kernels = np.empty((wavelengths.size, *shape))
+        if self.spectral == "scaled":
+            base = psf_fraunhofer(
+                t, grid.spacing_mm, LUIDOLT2020_REFERENCE_NM, fresnel_distance_mm=d
+            )
+            for i, wavelength in enumerate(wavelengths):
+                spacing = base.spacing_deg * wavelength / LUIDOLT2020_REFERENCE_NM
+                kernels[i] = rebin(base.values, spacing, pixel_deg, shape)
+        elif self.spectral in ("reference", "kakimoto"):
+            for i, wavelength in enumerate(wavelengths):
+                psf = psf_fraunhofer(t, grid.spacing_mm, wavelength, fresnel_distance_mm=d)
+                kernels[i] = rebin(psf.values, psf.spacing_deg, pixel_deg, shape)
+        else:
+            raise ValueError(f"spectral must be one of {SPECTRAL_METHODS}; got {self.spectral!r}")
+        return kernels, wavelengths
+
+    def kernel(self, pixel_deg: float, shape: tuple[int, int], *, colour: bool = False) -> Kernel:
+        """The glare kernel on ``pixel_deg`` pixels: luminance ``(KH, KW)`` or RGB
+        ``(KH, KW, 3)`` in the display primaries of ``spectrum``."""
+        kernels, wavelengths = self.monochromatic_kernels(pixel_deg, shape)
+        if self.spectral == "kakimoto":
+            rgb = kernels  # Kakimoto §3.2: each wavelength is one display channel
+            weights_y = _luminance_weights(self.spectrum.colourspace)
+            values = np.tensordot(weights_y, rgb, axes=1)[None] if not colour else rgb
+        else:
+            weights = self.spectrum.channel_weights("RGB" if colour else "Y")
+            values = np.tensordot(weights, kernels, axes=1)
+        clipped = 0.0
+        if colour:
+            negative = np.minimum(values, 0.0)
+            clipped = float(-negative.sum() / max(values.sum(), 1e-300))
+            sums = values.sum(axis=(1, 2))
+            values = np.maximum(values, 0.0)
+            values *= (sums / values.sum(axis=(1, 2)))[:, None, None]
+        energy_outside = 1.0 - values.sum(axis=(1, 2))
+        description = {
+            "model": "WaveOpticsGlare",
+            **{k: v for k, v in asdict(self).items() if k != "spectrum"},
+            "spectrum": asdict(self.spectrum),
+            "pupil_diameter_mm": self.pupil_diameter,
+            "wavelengths_nm": wavelengths.tolist(),
+            "out_of_gamut_clipped": clipped,
+        }
+        return Kernel(
+            values=values[0] if not colour else np.moveaxis(values, 0, -1),
+            pixel_deg=pixel_deg,
+            energy_outside=float(energy_outside[0]) if not colour else energy_outside,
+            quadrature_error=0.0,
+            description=description,
+        )
+
+    def at_source(self, source_x_deg: float) -> WaveOpticsGlare:
+        """The same eye with the light source at another horizontal angle."""
+        return replace(self, source_x_deg=source_x_deg)
+
+    def kernel_set(
+        self,
+        pixel_deg: float,
+        shape: tuple[int, int],
+        positions_deg: list[float],
+        *,
+        colour: bool = False,
+    ) -> dict[float, Kernel]:
+        """Kernels keyed by source position, precomputed as Kakimoto §4.3 does."""
+        return {
+            float(x): self.at_source(x).kernel(pixel_deg, shape, colour=colour)
+            for x in positions_deg
+        }
+
+
+def _lab(rgb: np.ndarray, colourspace: str, scale: float) -> np.ndarray:
+    xyz = colour.RGB_to_XYZ(rgb * scale, colourspace, apply_cctf_decoding=False)
+    white = colour.RGB_COLOURSPACES[colourspace].whitepoint
+    return colour.XYZ_to_Lab(xyz, white)
+
+
+def compare_spectral_methods(
+    model: WaveOpticsGlare, pixel_deg: float, shape: tuple[int, int]
+) -> list[dict]:
+    """Time the three spectral methods and measure their colour error against 'reference'.
+
+    The error is CIEDE2000 between each kernel pixel's colour and the reference's, with every
+    pixel shown at a luminance of 20 % of the display white (the reference pixel's luminance;
+    the method's pixel keeps its luminance ratio to it), averaged with the reference energy as
+    weight, and the maximum over pixels holding 1e-4 of the energy or more.
+
+    Returns
+    -------
+    list of dict
+        ``method``, ``seconds``, ``delta_e_mean``, ``delta_e_max``, ``luminance_error``
+        (sum of absolute luminance differences, relative to the reference's sum).
+    """
+    kernels = {}
+    seconds = {}
+    for method in SPECTRAL_METHODS:
+        variant = replace(model, spectral=method)
+        start = time.perf_counter()
+        kernels[method] = variant.kernel(pixel_deg, shape, colour=True).values
+        seconds[method] = time.perf_counter() - start
+    space = model.spectrum.colourspace
+    weights_y = _luminance_weights(space)
+    reference = kernels["reference"]
+    y_ref = reference @ weights_y
+    significant = y_ref >= 1e-4 * y_ref.sum()
+    scale = 0.2 / np.where(y_ref > 0, y_ref, 1.0)
+    lab_ref = _lab(reference[significant], space, scale[significant][:, None])
+    rows = []
+    for method in SPECTRAL_METHODS:
+        lab = _lab(kernels[method][significant], space, scale[significant][:, None])
+        delta = colour.delta_E(lab_ref, lab, method="CIE 2000")
+        y = kernels[method] @ weights_y
+        rows.append(
+            {
+                "method": method,
+                "seconds": seconds[method],
+                "delta_e_mean": float(np.average(delta, weights=y_ref[significant])),
+                "delta_e_max": float(delta.max()),
+                "luminance_error": float(np.abs(y - y_ref).sum() / y_ref.sum()),
+            }
+        )
+    return rows
