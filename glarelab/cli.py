@@ -12,8 +12,9 @@ from pathlib import Path
 import numpy as np
 
 import glare
+from stimuli.apertures import load_aperture_image
 from stimuli.exr import read_exr, write_exr
-from stimuli.preview import preview_png
+from stimuli.preview import preview_png, psf_png
 from stimuli.shapes import disk
 
 __all__ = ["build_model", "main"]
@@ -35,12 +36,36 @@ def build_model(args: argparse.Namespace) -> glare.GlareModel:
             seed=args.seed,
             wavelength_nm=args.wavelength_nm,
         )
-    raise ValueError(f"--model must be one of 'gaussian', 'vos'; got {args.model!r}")
+    if args.model in ("wave", "hybrid"):
+        image = None
+        if args.aperture_image is not None:
+            image = load_aperture_image(args.aperture_image)
+        wave = glare.WaveOpticsGlare(
+            pupil_mm=args.pupil_mm,
+            eyelashes=not args.no_eyelashes,
+            eyelid=not args.no_eyelid,
+            particles=args.particles,
+            fresnel=args.fresnel,
+            spectral=args.spectral,
+            seed=args.seed,
+            source_x_deg=args.source_x_deg,
+            diaphragm_sides=args.diaphragm_sides,
+            cross_screen=args.cross_screen,
+            obstacle_image=image,
+            obstacle_spacing_mm=args.aperture_spacing_mm,
+        )
+        if args.model == "wave":
+            return wave
+        return glare.HybridGlare(wave=wave, regime=args.regime, age=args.age)
+    raise ValueError(f"--model must be one of {MODEL_CHOICES}; got {args.model!r}")
 
 
-def _add_model_options(parser: argparse.ArgumentParser) -> None:
+MODEL_CHOICES = ("gaussian", "vos", "wave", "hybrid")
+
+
+def _add_model_options(parser: argparse.ArgumentParser, default: str = "vos") -> None:
     group = parser.add_argument_group("glare model")
-    group.add_argument("--model", choices=("gaussian", "vos"), default="vos")
+    group.add_argument("--model", choices=MODEL_CHOICES, default=default)
     group.add_argument("--sigma-deg", type=float, default=0.34, help="Gaussian σ (deg)")
     group.add_argument("--regime", choices=glare.vos.REGIMES, default="photopic")
     group.add_argument("--age", type=float, default=None, help="observer age, years (eq. 10)")
@@ -49,6 +74,18 @@ def _add_model_options(parser: argparse.ArgumentParser) -> None:
     group.add_argument(
         "--wavelength-nm", type=float, default=None, help="monochromatic halo (default: white)"
     )
+    wave = parser.add_argument_group("wave optics (--model wave|hybrid)")
+    wave.add_argument("--pupil-mm", type=float, default=None, help="default: Moon-Spencer")
+    wave.add_argument("--no-eyelashes", action="store_true")
+    wave.add_argument("--no-eyelid", action="store_true")
+    wave.add_argument("--particles", type=int, default=1000)
+    wave.add_argument("--fresnel", action="store_true", help="Luidolt eq. 5.6 Fresnel term")
+    wave.add_argument("--spectral", choices=glare.wave.SPECTRAL_METHODS, default="scaled")
+    wave.add_argument("--source-x-deg", type=float, default=0.0)
+    wave.add_argument("--diaphragm-sides", type=int, default=None)
+    wave.add_argument("--cross-screen", choices=("4-point", "trigonal"), default=None)
+    wave.add_argument("--aperture-image", type=Path, default=None, help="obstacle PNG/EXR")
+    wave.add_argument("--aperture-spacing-mm", type=float, default=None)
 
 
 def _render(args: argparse.Namespace) -> int:
@@ -153,6 +190,78 @@ def _demo(args: argparse.Namespace) -> int:
     return 0
 
 
+def _psf(args: argparse.Namespace) -> int:
+    model = build_model(args)
+    shape = (args.size, args.size)
+    _log(f"computing the {args.size}² kernel of {type(model).__name__} at {args.pixel_deg}°/px")
+    start = time.perf_counter()
+    kernel = glare.digitise_kernel(model, args.pixel_deg, shape, colour=not args.luminance)
+    _log(
+        f"done in {time.perf_counter() - start:.2f} s; energy outside the kernel "
+        f"{np.max(kernel.energy_outside):.3g}"
+    )
+    psf_png(args.out, kernel.values)
+    _log(f"wrote {args.out}")
+    if args.exr is not None:
+        write_exr(args.exr, kernel.values.astype(np.float32))
+        _log(f"wrote {args.exr}")
+    return 0
+
+
+# Kakimoto 2004 Fig. 5 and Luidolt 2020 Fig. 5.6: name → (caption, model)
+def gallery_models() -> dict[str, tuple[str, glare.GlareModel]]:
+    """The configurations of the wave-optics gallery."""
+    camera = {"eyelashes": False, "eyelid": False, "particles": 0}
+    models = {
+        "wave_eyelashes_eyelid": (
+            "eyelashes and eyelid, 5 mm pupil",
+            glare.WaveOpticsGlare(pupil_mm=5.0, particles=0),
+        ),
+        "wave_daylight_pupil": (
+            "small daylight pupil (1000 cd/m², Moon-Spencer)",
+            glare.WaveOpticsGlare(field_luminance_cd_m2=1000.0, particles=0),
+        ),
+        "wave_night_pupil": (
+            "large night pupil (0.01 cd/m², Moon-Spencer)",
+            glare.WaveOpticsGlare(field_luminance_cd_m2=0.01, particles=0),
+        ),
+        "wave_cross_screen_round": (
+            "4-point cross screen, round 6 mm diaphragm",
+            glare.WaveOpticsGlare(pupil_mm=6.0, cross_screen="4-point", **camera),
+        ),
+        "wave_cross_screen_trigonal": (
+            "trigonal cross screen, round 6 mm diaphragm",
+            glare.WaveOpticsGlare(pupil_mm=6.0, cross_screen="trigonal", **camera),
+        ),
+        "wave_hexagonal_diaphragm": (
+            "hexagonal 6 mm diaphragm",
+            glare.WaveOpticsGlare(pupil_mm=6.0, diaphragm_sides=6, **camera),
+        ),
+    }
+    for pupil in (2, 4, 6, 8):
+        models[f"wave_particles_pupil_{pupil}mm"] = (
+            f"pupil {pupil} mm and 1000 particles (Luidolt Fig. 5.6)",
+            glare.WaveOpticsGlare(pupil_mm=float(pupil), eyelashes=False, eyelid=False),
+        )
+    return models
+
+
+def _gallery(args: argparse.Namespace) -> int:
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    models = gallery_models()
+    captions = {}
+    for index, (name, (caption, model)) in enumerate(models.items(), start=1):
+        _log(f"[{index}/{len(models)}] {caption}")
+        start = time.perf_counter()
+        kernel = model.kernel(args.pixel_deg, (args.size, args.size), colour=True)
+        psf_png(out / f"{name}.png", kernel.values)
+        captions[name] = {"caption": caption, "seconds": round(time.perf_counter() - start, 2)}
+        _log(f"    {captions[name]['seconds']} s → {out / name}.png")
+    (out / "wave_gallery.json").write_text(json.dumps(captions, indent=2))
+    return 0
+
+
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="glarelab", description="Glare illusion psychophysics suite"
@@ -170,6 +279,21 @@ def _parser() -> argparse.ArgumentParser:
     render.add_argument("--preview-scale", choices=("display", "log"), default="display")
     _add_model_options(render)
     render.set_defaults(run=_render)
+
+    psf = commands.add_parser("psf", help="render a glare model's kernel as a PNG")
+    psf.add_argument("--out", type=Path, required=True, help="PNG (Kakimoto's tone curve)")
+    psf.add_argument("--exr", type=Path, default=None, help="also write the kernel as EXR")
+    psf.add_argument("--pixel-deg", type=float, default=0.01)
+    psf.add_argument("--size", type=int, default=401, help="kernel size in pixels (odd)")
+    psf.add_argument("--luminance", action="store_true", help="luminance only, no colour")
+    _add_model_options(psf, default="wave")
+    psf.set_defaults(run=_psf)
+
+    gallery = commands.add_parser("gallery", help="render the wave-optics PSF gallery")
+    gallery.add_argument("--out", type=Path, default=Path("docs/gallery"))
+    gallery.add_argument("--pixel-deg", type=float, default=0.01)
+    gallery.add_argument("--size", type=int, default=401)
+    gallery.set_defaults(run=_gallery)
 
     demo = commands.add_parser("demo", help="render a glare stimulus with each model")
     demo.add_argument("--out", type=Path, default=Path("out/demo"), help="output folder")

@@ -110,3 +110,75 @@ def test_demo_writes_exr_and_png_for_each_model(tmp_path):
     assert manifest["stimulus"]["disk_cd_m2"] == 4000.0
     assert (tmp_path / "profiles.png").stat().st_size > 10_000
     assert "[4/4]" in status.stderr
+
+
+def test_psf_command_writes_a_png_and_exr(tmp_path):
+    png, exr = tmp_path / "psf.png", tmp_path / "psf.exr"
+    assert (
+        main(
+            [
+                "psf",
+                "--model",
+                "wave",
+                "--pupil-mm",
+                "3",
+                "--particles",
+                "100",
+                "--pixel-deg",
+                "0.04",
+                "--size",
+                "61",
+                "--out",
+                str(png),
+                "--exr",
+                str(exr),
+            ]
+        )
+        == 0
+    )
+    image = np.asarray(Image.open(png))
+    assert image.shape == (61, 61, 3) and image.max() == 255
+    kernel = read_exr(exr)
+    assert kernel.shape == (61, 61, 3) and 0.9 < kernel.sum(axis=(0, 1)).min() <= 1.0
+
+
+def test_psf_command_takes_an_aperture_image(tmp_path):
+    bars = np.ones((101, 101), dtype=np.uint8) * 255
+    bars[:, 48:53] = 0
+    Image.fromarray(bars).save(tmp_path / "bars.png")
+    assert (
+        main(
+            [
+                "psf",
+                "--model",
+                "wave",
+                "--pupil-mm",
+                "3",
+                "--no-eyelashes",
+                "--no-eyelid",
+                "--particles",
+                "0",
+                "--aperture-image",
+                str(tmp_path / "bars.png"),
+                "--aperture-spacing-mm",
+                "0.03",
+                "--pixel-deg",
+                "0.04",
+                "--size",
+                "41",
+                "--luminance",
+                "--out",
+                str(tmp_path / "bars_psf.png"),
+            ]
+        )
+        == 0
+    )
+    assert np.asarray(Image.open(tmp_path / "bars_psf.png")).shape == (41, 41)
+
+
+def test_gallery_command_renders_every_configuration(tmp_path):
+    assert main(["gallery", "--out", str(tmp_path), "--pixel-deg", "0.05", "--size", "41"]) == 0
+    captions = json.loads((tmp_path / "wave_gallery.json").read_text())
+    assert len(captions) == 10
+    for name in captions:
+        assert Image.open(tmp_path / f"{name}.png").size == (41, 41)
