@@ -300,6 +300,9 @@ class WaveOpticsGlare:
         Adapting luminance for the pupil when ``pupil_mm`` is None; default 1 cd/m² (3.8 mm).
     eyelashes, eyelid
         Include the upper eyelid margin and eyelashes (Kakimoto §3.2); default True.
+    eyelash_count, eyelash_thickness_mm, eyelash_curvature
+        The procedural lashes (:func:`glare.apertures.aperture_eyelashes`); defaults 45,
+        0.09 mm, 0.35.
     particles
         Number of lens/cornea particles (Luidolt §5.2.4 default 1000); 0 for none.
     particle_size_mm
@@ -347,6 +350,9 @@ class WaveOpticsGlare:
     field_luminance_cd_m2: float = 1.0
     eyelashes: bool = True
     eyelid: bool = True
+    eyelash_count: int = 45
+    eyelash_thickness_mm: float = 0.09
+    eyelash_curvature: float = 0.35
     particles: int = ap.PARTICLE_COUNT_LUIDOLT2020
     particle_size_mm: float = ap.PARTICLE_SIZE_MM_LUIDOLT2020
     fresnel: bool = False
@@ -372,6 +378,9 @@ class WaveOpticsGlare:
         if self.pupil_mm is not None:
             check_in_range("pupil_mm", self.pupil_mm, 1.0, 10.0, unit="mm")
         pupil_diameter_mm(self.field_luminance_cd_m2)  # validates the luminance
+        check_positive_int("eyelash_count", self.eyelash_count, minimum=0)
+        check_positive("eyelash_thickness_mm", self.eyelash_thickness_mm, unit="mm")
+        check_in_range("eyelash_curvature", self.eyelash_curvature, 0.0, 2.0)
         check_positive_int("particles", self.particles, minimum=0)
         check_positive("particle_size_mm", self.particle_size_mm, unit="mm")
         check_positive("fresnel_distance_mm", self.fresnel_distance_mm, unit="mm")
@@ -423,7 +432,7 @@ class WaveOpticsGlare:
         if self.particles:
             limits["2 samples across a particle"] = self.particle_size_mm / 2
         if self.eyelashes:
-            limits["2 samples across an eyelash"] = 0.09 / 2
+            limits["2 samples across an eyelash"] = self.eyelash_thickness_mm / 2
         if self.fresnel:  # the chirp at the pupil edge below Nyquist, with 5 % to spare
             limits["the Fresnel term below Nyquist"] = (
                 0.95 * shortest_mm * self.fresnel_distance_mm / diameter
@@ -457,7 +466,15 @@ class WaveOpticsGlare:
         if self.eyelid:
             t = t * ap.aperture_eyelid(crop, shift_x_mm=shift)
         if self.eyelashes:
-            t = t * ap.aperture_eyelashes(crop, rng=rng_lashes, eye=self.eye, shift_x_mm=shift)
+            t = t * ap.aperture_eyelashes(
+                crop,
+                rng=rng_lashes,
+                count=self.eyelash_count,
+                thickness_mm=self.eyelash_thickness_mm,
+                curvature=self.eyelash_curvature,
+                eye=self.eye,
+                shift_x_mm=shift,
+            )
         if self.particles:
             t = t * ap.aperture_particles(
                 crop, rng=rng_particles, count=self.particles, size_mm=self.particle_size_mm

@@ -238,3 +238,24 @@ def test_sigmoid_tone_curve_of_kakimoto():
     assert np.all(np.diff(y) > 0) and y[-1] < 640.0
     with pytest.raises(ValueError, match=">= 0"):
         sigmoid_Kakimoto2004(np.array([-1.0]))
+
+
+def test_eyelash_parameters_reach_the_aperture():
+    base = WaveOpticsGlare(pupil_mm=4.0, particles=0)
+    grid = base.grid_for(0.02, (101, 101))
+    few = WaveOpticsGlare(pupil_mm=4.0, particles=0, eyelash_count=5).aperture(grid)
+    thick = WaveOpticsGlare(pupil_mm=4.0, particles=0, eyelash_thickness_mm=0.2).aperture(grid)
+    plain = base.aperture(grid)
+    assert few.sum() > plain.sum() > thick.sum()
+
+
+def test_wave_models_render_like_the_others():
+    from glare import add_glare, render_glare
+
+    image = np.full((61, 61), 100.0)
+    image[30, 30] = 1e6
+    model = WaveOpticsGlare(pupil_mm=3.0, particles=100)
+    result = render_glare(image, model, pixel_deg=0.03, method="Spencer1995")
+    total = result.spread.sum() + result.energy_outside_image + result.energy_outside_kernel
+    assert_allclose(total, result.excess_energy, rtol=1e-9)
+    assert add_glare(image, "hybrid", pixel_deg=0.05).max() == 220.0
