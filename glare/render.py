@@ -97,6 +97,7 @@ def render_glare(
     method: Literal["Yoshida2008", "Spencer1995"] = "Yoshida2008",
     precision: Literal["float64", "float32"] = "float64",
     kernel_shape: tuple[int, int] | None = None,
+    kernel: Kernel | None = None,
 ) -> GlareResult:
     """Add glare to a linear luminance image and account for every bit of energy.
 
@@ -119,6 +120,9 @@ def render_glare(
     kernel_shape
         Odd kernel shape; default ``(2H - 1, 2W - 1)``, which lets every pixel reach every
         other (Spencer §3.2: "double the width and height of the target image").
+    kernel
+        A kernel already digitised by ``model`` for this ``pixel_deg`` (and colour), to reuse
+        across images; its ``pixel_deg`` must match. Default None: digitise one.
 
     Returns
     -------
@@ -160,8 +164,17 @@ def render_glare(
     check_choice("precision", precision, PRECISIONS)
     glare_model = _resolve(model)
     colour = image.ndim == 3
-    shape = kernel_shape_for(image.shape) if kernel_shape is None else tuple(kernel_shape)
-    digitised = glare_model.kernel(pixel_deg, shape, colour=colour)
+    if kernel is None:
+        shape = kernel_shape_for(image.shape) if kernel_shape is None else tuple(kernel_shape)
+        digitised = glare_model.kernel(pixel_deg, shape, colour=colour)
+    else:
+        if not np.isclose(kernel.pixel_deg, pixel_deg, rtol=1e-12, atol=0):
+            raise ValueError(
+                f"kernel was digitised for pixel_deg = {kernel.pixel_deg!r}, not {pixel_deg!r}"
+            )
+        if colour and kernel.values.ndim == 3 and kernel.values.shape[2] != 3:
+            raise ValueError(f"kernel must have 3 channels for an RGB image; got {kernel.shape}")
+        digitised, shape = kernel, kernel.values.shape[:2]
     dtype = np.dtype(precision)
     parameters = {
         "pixel_deg": pixel_deg,

@@ -197,3 +197,14 @@ def test_input_is_never_modified():
     before = image.copy()
     add_glare(image, VosGlare(), pixel_deg=0.02)
     assert np.array_equal(image, before)
+
+
+def test_a_digitised_kernel_can_be_reused():
+    image = disk(radius_px=3, inside=5000.0)
+    model = VosGlare()
+    kernel = model.kernel(0.02, (101, 101))
+    reused = render_glare(image, model, pixel_deg=0.02, kernel=kernel)
+    fresh = render_glare(image, model, pixel_deg=0.02, kernel_shape=(101, 101))
+    assert np.array_equal(reused.image, fresh.image)
+    with pytest.raises(ValueError, match=r"kernel was digitised for pixel_deg = 0\.02, not 0\.03"):
+        render_glare(image, model, pixel_deg=0.03, kernel=kernel)

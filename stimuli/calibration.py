@@ -1,0 +1,381 @@
+"""Display calibration: from photometer readings to luminance ↔ drive-code conversion.
+
+A calibration maps every drive code of a display (0 … 2^bits - 1) to the luminance it
+produces. It is built from readings (code → cd/m², as from a Minolta LS-100) either by a
+monotone piecewise-cubic interpolant (PCHIP, the default: follows any measured curve) or by a
+gain-offset-gamma model (with its residuals reported). Encoding picks, for each luminance, the
+code whose luminance is nearest, so the error is at most half the local code step inside the
+display's range; luminances above the maximum or below the black level are clipped to the end
+codes and counted, never wrapped.
+
+A calibration file (JSON) carries its date, the readings and their hash, the method, and a
+verification status: ``unverified`` after fitting, ``passed`` or ``failed`` after a
+verification pass, ``synthetic`` for the made-up displays shipped for demos.
+"""
+
+from __future__ import annotations
+
+import csv
+import datetime as dt
+import hashlib
+import itertools
+import json
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+from scipy.interpolate import PchipInterpolator
+from scipy.optimize import curve_fit
+
+__all__ = [
+    "Calibration",
+    "EncodeReport",
+    "fit_calibration",
+    "read_readings",
+    "synthetic_calibration",
+]
+
+FORMAT = "glarelab display calibration v1"
+SYNTHETIC_GAMMA = 2.2  # the synthetic displays follow L = black + (max - black) (c/cmax)^2.2
+
+
+@dataclass(frozen=True)
+class EncodeReport:
+    """What encoding did to an image: pixels clipped above the maximum or below black."""
+
+    above_max: int
+    below_black: int
+    max_error_cd_m2: float
+    pixels: int
+
+    @property
+    def clipped(self) -> int:
+        return self.above_max + self.below_black
+
+
+def _gog(
+    code_fraction: np.ndarray, gain: float, offset: float, gamma: float, black: float, peak: float
+):
+    drive = np.clip(gain * code_fraction + offset, 0.0, None)
+    return black + (peak - black) * drive**gamma
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """Luminance of every drive code of a display.
+
+    Attributes
+    ----------
+    bit_depth
+        Bits per channel (codes 0 … 2^bits - 1).
+    readings
+        ``(code, cd/m²)`` pairs measured (or made up, for a synthetic display).
+    method
+        ``'pchip'`` or ``'gog'``.
+    created
+        ISO date of the fit.
+    status
+        ``'unverified'``, ``'passed'``, ``'failed'`` or ``'synthetic'``.
+    label
+        Free text: display, photometer, who measured.
+    model
+        GOG parameters and residuals when ``method == 'gog'``.
+    verification
+        The verification pass (targets, codes, measured luminances, errors, tolerance).
+    """
+
+    bit_depth: int
+    readings: tuple[tuple[int, float], ...]
+    method: Literal["pchip", "gog"] = "pchip"
+    created: str = ""
+    status: Literal["unverified", "passed", "failed", "synthetic"] = "unverified"
+    label: str = ""
+    model: dict = field(default_factory=dict)
+    verification: dict = field(default_factory=dict)
+
+    @property
+    def n_codes(self) -> int:
+        return 2**self.bit_depth
+
+    @property
+    def readings_sha256(self) -> str:
+        text = json.dumps([[int(c), float(v)] for c, v in self.readings])
+        return hashlib.sha256(text.encode()).hexdigest()
+
+    @property
+    def lut(self) -> np.ndarray:
+        """Luminance of every code, cd/m² (monotone non-decreasing)."""
+        codes = np.arange(self.n_codes, dtype=float)
+        data = np.array(self.readings, dtype=float)
+        if self.method == "pchip":
+            curve = PchipInterpolator(data[:, 0], data[:, 1], extrapolate=False)
+            values = curve(np.clip(codes, data[0, 0], data[-1, 0]))
+        elif self.method == "gog":
+            p = self.model
+            values = _gog(
+                codes / (self.n_codes - 1),
+                p["gain"],
+                p["offset"],
+                p["gamma"],
+                p["black_cd_m2"],
+                p["max_cd_m2"],
+            )
+        else:
+            raise ValueError(f"method must be 'pchip' or 'gog'; got {self.method!r}")
+        return np.maximum.accumulate(values)
+
+    @property
+    def black_cd_m2(self) -> float:
+        return float(self.lut[0])
+
+    @property
+    def max_cd_m2(self) -> float:
+        return float(self.lut[-1])
+
+    def decode(self, codes: np.ndarray) -> np.ndarray:
+        """Luminance (cd/m²) the display shows for drive codes."""
+        codes = np.asarray(codes)
+        if codes.size and (codes.min() < 0 or codes.max() >= self.n_codes):
+            raise ValueError(
+                f"codes must be in [0, {self.n_codes - 1}] for a {self.bit_depth}-bit display"
+            )
+        return self.lut[codes.astype(np.int64)]
+
+    def encode(self, luminance_cd_m2: np.ndarray) -> tuple[np.ndarray, EncodeReport]:
+        """Drive codes (uint16) for a luminance image, and a report of what was clipped.
+
+        Each luminance gets the code whose luminance is nearest: within the display's range
+        the error is at most half the step between neighbouring codes.
+        """
+        values = np.asarray(luminance_cd_m2, dtype=float)
+        if not np.isfinite(values).all():
+            raise ValueError("luminance_cd_m2 must be finite to be encoded")
+        lut = self.lut
+        upper = np.clip(np.searchsorted(lut, values, side="left"), 1, self.n_codes - 1)
+        lower = upper - 1
+        nearer_upper = np.abs(lut[upper] - values) < np.abs(values - lut[lower])
+        codes = np.where(nearer_upper, upper, lower)
+        codes = np.where(values >= lut[-1], self.n_codes - 1, codes)
+        codes = np.where(values <= lut[0], 0, codes)
+        inside = (values >= lut[0]) & (values <= lut[-1])
+        error = np.abs(lut[codes] - values)[inside]
+        report = EncodeReport(
+            above_max=int((values > lut[-1]).sum()),
+            below_black=int((values < lut[0]).sum()),
+            max_error_cd_m2=float(error.max()) if error.size else 0.0,
+            pixels=int(values.size),
+        )
+        return codes.astype(np.uint16), report
+
+    def step_cd_m2(self, codes: np.ndarray) -> np.ndarray:
+        """Luminance step to the neighbouring codes (the larger of the two), cd/m²."""
+        lut = self.lut
+        codes = np.asarray(codes, dtype=np.int64)
+        up = lut[np.minimum(codes + 1, self.n_codes - 1)] - lut[codes]
+        down = lut[codes] - lut[np.maximum(codes - 1, 0)]
+        return np.maximum(up, down)
+
+    def verified(
+        self,
+        measurements: list[tuple[float, int, float]],
+        *,
+        tolerance_fraction: float = 0.03,
+    ) -> Calibration:
+        """This calibration with a verification pass recorded.
+
+        Parameters
+        ----------
+        measurements
+            ``(target cd/m², code shown, measured cd/m²)`` triples.
+        tolerance_fraction
+            Largest allowed ``|measured - target| / target``; default 3 %.
+        """
+        rows = []
+        for target, code, measured in measurements:
+            rows.append(
+                {
+                    "target_cd_m2": float(target),
+                    "code": int(code),
+                    "measured_cd_m2": float(measured),
+                    "relative_error": abs(float(measured) - float(target)) / float(target),
+                }
+            )
+        worst = max(r["relative_error"] for r in rows) if rows else float("inf")
+        status = "passed" if worst <= tolerance_fraction else "failed"
+        verification = {
+            "tolerance_fraction": tolerance_fraction,
+            "max_relative_error": worst,
+            "measurements": rows,
+            "date": dt.date.today().isoformat(),
+        }
+        return replace(self, status=status, verification=verification)
+
+    def to_json(self) -> dict:
+        return {
+            "format": FORMAT,
+            "label": self.label,
+            "created": self.created,
+            "status": self.status,
+            "method": self.method,
+            "bit_depth": self.bit_depth,
+            "readings": [[int(c), float(v)] for c, v in self.readings],
+            "readings_sha256": self.readings_sha256,
+            "model": self.model,
+            "verification": self.verification,
+            "black_cd_m2": self.black_cd_m2,
+            "max_cd_m2": self.max_cd_m2,
+        }
+
+    def save(self, path: str | Path) -> Path:
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(json.dumps(self.to_json(), indent=2) + "\n")
+        return path
+
+    @classmethod
+    def load(cls, path: str | Path) -> Calibration:
+        """Read a calibration file, checking its format and the hash of its readings."""
+        path = Path(path)
+        if not path.is_file():
+            raise FileNotFoundError(f"no calibration file at {path}")
+        data = json.loads(path.read_text())
+        if data.get("format") != FORMAT:
+            raise ValueError(f"{path}: not a glarelab calibration (format {data.get('format')!r})")
+        calibration = cls(
+            bit_depth=int(data["bit_depth"]),
+            readings=tuple((int(c), float(v)) for c, v in data["readings"]),
+            method=data["method"],
+            created=data["created"],
+            status=data["status"],
+            label=data.get("label", ""),
+            model=data.get("model", {}),
+            verification=data.get("verification", {}),
+        )
+        if calibration.readings_sha256 != data.get("readings_sha256"):
+            raise ValueError(f"{path}: the readings do not match their recorded hash (edited?)")
+        return calibration
+
+
+def _check_readings(
+    readings: list[tuple[int, float]], bit_depth: int, source: str
+) -> list[tuple[int, float]]:
+    if bit_depth not in (8, 10, 12, 16):
+        raise ValueError(f"bit_depth must be one of 8, 10, 12, 16; got {bit_depth!r}")
+    if len(readings) < 4:
+        raise ValueError(f"{source}: at least 4 readings are needed, got {len(readings)}")
+    ordered = sorted(readings)
+    top = 2**bit_depth - 1
+    for code, value in ordered:
+        if not 0 <= code <= top:
+            raise ValueError(
+                f"{source}: code {code} is outside 0-{top} for a {bit_depth}-bit display"
+            )
+        if not (np.isfinite(value) and value >= 0):
+            raise ValueError(f"{source}: code {code} has luminance {value!r}; must be >= 0 cd/m²")
+    for (c0, v0), (c1, v1) in itertools.pairwise(ordered):
+        if c1 == c0:
+            raise ValueError(f"{source}: code {c0} is measured twice; average the readings first")
+        if v1 <= v0:
+            raise ValueError(
+                f"{source}: luminance is not increasing: code {c1} → {v1:g} cd/m² is not above "
+                f"code {c0} → {v0:g} cd/m² (photometer drift or a misread value?)"
+            )
+    if ordered[0][0] != 0 or ordered[-1][0] != top:
+        raise ValueError(
+            f"{source}: readings must include code 0 and code {top} (black and white)"
+        )
+    return ordered
+
+
+def read_readings(path: str | Path) -> list[tuple[int, float]]:
+    """Read photometer readings from a CSV with columns ``code`` and ``luminance_cd_m2``."""
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"no readings file at {path}")
+    rows = []
+    with path.open(newline="") as handle:
+        reader = csv.DictReader(handle)
+        missing = {"code", "luminance_cd_m2"} - set(reader.fieldnames or [])
+        if missing:
+            raise ValueError(
+                f"{path}: missing column(s) {sorted(missing)}; need code, luminance_cd_m2"
+            )
+        for line, row in enumerate(reader, start=2):
+            try:
+                rows.append((int(row["code"]), float(row["luminance_cd_m2"])))
+            except ValueError:
+                raise ValueError(
+                    f"{path}, line {line}: code and luminance_cd_m2 must be numbers; got {row}"
+                ) from None
+    return rows
+
+
+def fit_calibration(
+    readings: list[tuple[int, float]],
+    *,
+    bit_depth: int,
+    method: Literal["pchip", "gog"] = "pchip",
+    label: str = "",
+    source: str = "readings",
+) -> Calibration:
+    """Build a calibration from ``(code, cd/m²)`` readings.
+
+    Raises
+    ------
+    ValueError
+        For fewer than 4 readings, codes outside the bit depth, a repeated code, readings that
+        do not increase with code (named), or readings without code 0 and the top code.
+    """
+    ordered = _check_readings(list(readings), bit_depth, source)
+    model: dict = {}
+    if method == "gog":
+        data = np.array(ordered, dtype=float)
+        fraction = data[:, 0] / (2**bit_depth - 1)
+        black, peak = data[0, 1], data[-1, 1]
+
+        def curve(x, gain, offset, gamma):
+            return _gog(x, gain, offset, gamma, black, peak)
+
+        params, _ = curve_fit(curve, fraction, data[:, 1], p0=(1.0, 0.0, 2.2), maxfev=20_000)
+        residuals = curve(fraction, *params) - data[:, 1]
+        model = {
+            "gain": float(params[0]),
+            "offset": float(params[1]),
+            "gamma": float(params[2]),
+            "black_cd_m2": float(black),
+            "max_cd_m2": float(peak),
+            "rms_residual_cd_m2": float(np.sqrt(np.mean(residuals**2))),
+            "max_residual_cd_m2": float(np.abs(residuals).max()),
+            "residuals_cd_m2": [float(r) for r in residuals],
+        }
+    elif method != "pchip":
+        raise ValueError(f"method must be 'pchip' or 'gog'; got {method!r}")
+    return Calibration(
+        bit_depth=bit_depth,
+        readings=tuple(ordered),
+        method=method,
+        created=dt.date.today().isoformat(),
+        status="unverified",
+        label=label,
+        model=model,
+    )
+
+
+def synthetic_calibration(
+    *, max_cd_m2: float, black_cd_m2: float, bit_depth: int, label: str = ""
+) -> Calibration:
+    """A made-up display following a 2.2 gamma, marked ``synthetic`` (for demos and tests,
+    never for a real study: experiments treat it as uncalibrated)."""
+    top = 2**bit_depth - 1
+    codes = np.unique(np.round(np.linspace(0, top, 33)).astype(int))
+    values = black_cd_m2 + (max_cd_m2 - black_cd_m2) * (codes / top) ** SYNTHETIC_GAMMA
+    text = (
+        label
+        or f"SYNTHETIC display: {max_cd_m2:g} cd/m², black {black_cd_m2:g}, "
+        f"{bit_depth}-bit, gamma 2.2"
+    )
+    calibration = fit_calibration(
+        list(zip(codes.tolist(), values.tolist(), strict=True)), bit_depth=bit_depth, label=text
+    )
+    return replace(calibration, status="synthetic", created="synthetic")
