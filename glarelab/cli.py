@@ -13,9 +13,12 @@ import numpy as np
 
 import glare
 from stimuli.apertures import load_aperture_image
+from stimuli.calibration import Calibration, fit_calibration, read_readings
 from stimuli.exr import read_exr, write_exr
 from stimuli.preview import preview_png, psf_png
+from stimuli.protocol import ProtocolError, describe_schema, load_protocol
 from stimuli.shapes import disk
+from stimuli.stimulus_set import build_stimulus_set, verify_stimulus_set
 
 __all__ = ["build_model", "main"]
 
@@ -262,6 +265,68 @@ def _gallery(args: argparse.Namespace) -> int:
     return 0
 
 
+def _stimuli_build(args: argparse.Namespace) -> int:
+    protocol = load_protocol(args.protocol)
+    calibration = Calibration.load(args.calibration) if args.calibration else None
+    _log(f"building the {protocol.study} stimulus set into {args.out}")
+    start = time.perf_counter()
+    manifest = build_stimulus_set(protocol, args.out, calibration=calibration)
+    clipped = sum(
+        r.get("encoding", {}).get("above_max", 0) + r.get("encoding", {}).get("below_black", 0)
+        for r in manifest["images"].values()
+    )
+    _log(
+        f"{len(manifest['files'])} files in {time.perf_counter() - start:.1f} s; calibration "
+        f"status '{manifest['calibration']['status']}'; {clipped} pixels clipped by the display"
+    )
+    print(Path(args.out).resolve())
+    return 0
+
+
+def _stimuli_verify(args: argparse.Namespace) -> int:
+    problems = verify_stimulus_set(args.folder)
+    if problems:
+        for problem in problems:
+            print(f"{args.folder}: {problem}", file=sys.stderr)
+        return 1
+    print(f"{args.folder}: every file matches its manifest")
+    return 0
+
+
+def _protocol_keys(args: argparse.Namespace) -> int:
+    print("| key | unit | default | allowed | meaning |\n| --- | --- | --- | --- | --- |")
+    for row in describe_schema(args.study):
+        print("| " + " | ".join(row) + " |")
+    return 0
+
+
+def _protocol_check(args: argparse.Namespace) -> int:
+    protocol = load_protocol(args.protocol)
+    print(f"{args.protocol}: valid {protocol.study} protocol, sha256 {protocol.sha256}")
+    return 0
+
+
+def _calibrate_fit(args: argparse.Namespace) -> int:
+    readings = read_readings(args.readings)
+    calibration = fit_calibration(
+        readings,
+        bit_depth=args.bit_depth,
+        method=args.method,
+        label=args.label,
+        source=str(args.readings),
+    )
+    calibration.save(args.out)
+    _log(
+        f"{len(readings)} readings → {args.method} calibration, {calibration.black_cd_m2:.4g}-"
+        f"{calibration.max_cd_m2:.4g} cd/m², status '{calibration.status}' → {args.out}"
+    )
+    if calibration.model:
+        _log(
+            f"gain-offset-gamma residuals: RMS {calibration.model['rms_residual_cd_m2']:.3g} cd/m²"
+        )
+    return 0
+
+
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="glarelab", description="Glare illusion psychophysics suite"
@@ -289,6 +354,36 @@ def _parser() -> argparse.ArgumentParser:
     _add_model_options(psf, default="wave")
     psf.set_defaults(run=_psf)
 
+    stimuli = commands.add_parser("stimuli", help="build or verify a study's stimulus set")
+    stimuli_commands = stimuli.add_subparsers(dest="stimuli_command", required=True)
+    build = stimuli_commands.add_parser("build", help="build a stimulus set from a protocol")
+    build.add_argument("protocol", type=Path)
+    build.add_argument("--out", type=Path, required=True)
+    build.add_argument("--calibration", type=Path, default=None, help="display calibration JSON")
+    build.set_defaults(run=_stimuli_build)
+    verify = stimuli_commands.add_parser("verify", help="re-hash a stimulus set")
+    verify.add_argument("folder", type=Path)
+    verify.set_defaults(run=_stimuli_verify)
+
+    protocol = commands.add_parser("protocol", help="check a protocol or list its keys")
+    protocol_commands = protocol.add_subparsers(dest="protocol_command", required=True)
+    check = protocol_commands.add_parser("check", help="validate a protocol file")
+    check.add_argument("protocol", type=Path)
+    check.set_defaults(run=_protocol_check)
+    keys = protocol_commands.add_parser("keys", help="every key of a study's protocol")
+    keys.add_argument("study", choices=("yoshida2008", "spencer1995", "luidolt2020"))
+    keys.set_defaults(run=_protocol_keys)
+
+    calibrate = commands.add_parser("calibrate", help="display calibration")
+    calibrate_commands = calibrate.add_subparsers(dest="calibrate_command", required=True)
+    fit = calibrate_commands.add_parser("fit", help="fit a calibration to photometer readings")
+    fit.add_argument("readings", type=Path, help="CSV with columns code, luminance_cd_m2")
+    fit.add_argument("--out", type=Path, required=True)
+    fit.add_argument("--bit-depth", type=int, default=10, choices=(8, 10, 12, 16))
+    fit.add_argument("--method", choices=("pchip", "gog"), default="pchip")
+    fit.add_argument("--label", default="", help="display, photometer, operator")
+    fit.set_defaults(run=_calibrate_fit)
+
     gallery = commands.add_parser("gallery", help="render the wave-optics PSF gallery")
     gallery.add_argument("--out", type=Path, default=Path("docs/gallery"))
     gallery.add_argument("--pixel-deg", type=float, default=0.01)
@@ -307,7 +402,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         return args.run(args)
-    except (ValueError, FileNotFoundError) as error:
+    except (ValueError, FileNotFoundError, ProtocolError) as error:
         parser.error(f"{args.command}: {error}")
     return 2
 

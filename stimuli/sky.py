@@ -1,0 +1,66 @@
+"""A procedural cloudy sky: the background of the Yoshida et al. (2008) stimuli.
+
+Yoshida et al. used a photograph of a cloudy sky (mean 150 cd/m²) that is not available; this
+sky is generated from a seed instead. Its spectrum of cloud sizes is documented and set by the
+protocol: Gaussian noise filtered to an amplitude spectrum ``∝ f^-slope`` between the spatial
+frequencies of the largest and the smallest cloud structure (``1 / cloud_max_deg`` and
+``1 / cloud_min_deg`` cycles/deg, with smooth half-octave edges), mapped through ``exp`` so
+that contrast is multiplicative (a log-normal sky, as luminance in natural scenes), scaled to
+the wanted mean and RMS contrast, and kept below a ceiling (``L_dmax``: the sky itself must
+not glare). The mean is exact after the ceiling is applied.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["cloudy_sky"]
+
+
+def cloudy_sky(
+    shape: tuple[int, int],
+    *,
+    pixel_deg: float,
+    rng: np.random.Generator,
+    mean_cd_m2: float,
+    contrast: float,
+    cloud_min_deg: float,
+    cloud_max_deg: float,
+    slope: float,
+    ceiling_cd_m2: float,
+) -> np.ndarray:
+    """A sky of luminances (cd/m²) with the given mean and spectrum of cloud sizes.
+
+    Examples
+    --------
+    >>> sky = cloudy_sky((64, 64), pixel_deg=0.05, rng=np.random.default_rng(0),
+    ...                  mean_cd_m2=150.0, contrast=0.15, cloud_min_deg=0.1,
+    ...                  cloud_max_deg=3.0, slope=1.0, ceiling_cd_m2=220.0)
+    >>> round(float(sky.mean()), 6), bool(sky.max() <= 220.0)
+    (150.0, True)
+    """
+    height, width = shape
+    noise = rng.standard_normal(shape)
+    fy = np.fft.fftfreq(height, d=pixel_deg)[:, None]
+    fx = np.fft.rfftfreq(width, d=pixel_deg)[None, :]
+    f = np.hypot(fx, fy)
+    low, high = 1.0 / cloud_max_deg, 1.0 / cloud_min_deg
+    with np.errstate(divide="ignore"):
+        amplitude = np.where(f > 0, f ** (-slope), 0.0)
+    # smooth band edges, half an octave wide, in log frequency
+    logf = np.log2(np.where(f > 0, f, low))
+    edge_low = np.clip((logf - np.log2(low)) / 0.5 + 0.5, 0.0, 1.0)
+    edge_high = np.clip((np.log2(high) - logf) / 0.5 + 0.5, 0.0, 1.0)
+    spectrum = np.fft.rfft2(noise) * amplitude * edge_low * edge_high
+    field = np.fft.irfft2(spectrum, s=shape)
+    sd = field.std()
+    z = (field - field.mean()) / sd if sd > 0 else np.zeros(shape)
+    sigma = np.sqrt(np.log1p(contrast**2))  # log-normal with this RMS contrast
+    sky = np.exp(sigma * z - sigma**2 / 2)
+    for _ in range(20):  # scale to the mean, then keep under the ceiling, until both hold
+        sky *= mean_cd_m2 / sky.mean()
+        if sky.max() <= ceiling_cd_m2:
+            break
+        sky = np.minimum(sky, ceiling_cd_m2)
+    sky = np.minimum(sky, ceiling_cd_m2)
+    return sky

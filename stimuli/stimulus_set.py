@@ -1,0 +1,219 @@
+"""A stimulus set on disk: what a study shows, exactly reproducible and self-describing.
+
+A set is a folder with, for every image, float32 linear luminance (``NAME.exr``, cd/m²) and
+the display codes that show it through the calibration (``NAME.png``, 16-bit greyscale holding
+the codes); luminance-profile plots through the disk centre (``profiles_*.png``, like Yoshida
+et al.'s Figure 3); and ``manifest.json``: the validated protocol and its hash, the
+calibration and its hash, the geometry, every image's parameters and encoding report, the
+package versions, and the sha256 of every file. Nothing in it depends on the time or the
+place of the build, so the same protocol and calibration give identical files.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import sys
+from importlib import metadata
+from pathlib import Path
+
+import numpy as np
+from PIL import Image
+
+from .calibration import Calibration, synthetic_calibration
+from .exr import write_exr
+from .protocol import Protocol
+from .spencer1995 import build_spencer1995
+from .yoshida2008 import build_yoshida2008
+
+__all__ = ["build_stimulus_set", "default_calibration", "progress_bar", "verify_stimulus_set"]
+
+MANIFEST = "manifest.json"
+PACKAGES = ("numpy", "scipy", "colour-science", "OpenEXR", "matplotlib", "pillow", "glarelab")
+BUILDERS = {"yoshida2008": build_yoshida2008, "spencer1995": build_spencer1995}
+
+
+def progress_bar(done: int, total: int, what: str, *, stream=None) -> None:
+    """A one-line text progress bar on stderr."""
+    stream = stream or sys.stderr
+    width = 30
+    filled = round(width * done / total) if total else width
+    print(
+        f"\r[{'#' * filled}{'-' * (width - filled)}] {done}/{total} {what:<28}",
+        end="\n" if done >= total else "",
+        file=stream,
+        flush=True,
+    )
+
+
+def _sha256(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def default_calibration(protocol: Protocol) -> Calibration:
+    """The synthetic calibration of the protocol's display (gamma 2.2; marked synthetic)."""
+    d = protocol["display"]
+    return synthetic_calibration(
+        max_cd_m2=d["max_cd_m2"],
+        black_cd_m2=d["black_cd_m2"],
+        bit_depth=d["bit_depth"],
+        label=f"SYNTHETIC calibration of '{d['name']}' from its protocol (gamma 2.2)",
+    )
+
+
+def _versions() -> dict[str, str]:
+    versions = {}
+    for name in PACKAGES:
+        try:
+            versions[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            versions[name] = "not installed"
+    return versions
+
+
+def _profile_plots(out: Path, study: str, images: dict, geometry: dict) -> list[str]:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    written = []
+    pixel = geometry["pixel_deg"]
+    if study == "yoshida2008":
+        groups = {
+            m: [(k, v) for k, v in images.items() if v.get("method") == m]
+            for m in ("gaussian", "vos")
+        }
+        titles = {"gaussian": "Method I (Gaussian)", "vos": "Method II (Vos PSF)"}
+    else:
+        groups = {
+            c: [(k, v) for k, v in images.items() if v["kind"] == "glare" and v["context"] == c]
+            for c in ("none", "lamp")
+        }
+        titles = {"none": "glare levels, no context", "lamp": "glare levels, lamp context"}
+    for group, members in groups.items():
+        if not members:
+            continue
+        figure, axes = plt.subplots(2, len(members), figsize=(2.0 * len(members), 4.2), dpi=110)
+        axes = np.atleast_2d(axes).reshape(2, len(members))
+        for column, (_name, info) in enumerate(members):
+            img = info["img"]
+            row = img.shape[0] // 2
+            axes[0, column].imshow(img, cmap="gray", vmin=0, vmax=img.max() or 1)
+            axes[0, column].set_axis_off()
+            label = info.get("label") or f"{info.get('level', '')}"
+            axes[0, column].set_title(label, fontsize=9)
+            offsets = (np.arange(img.shape[1]) - img.shape[1] // 2) * pixel
+            axes[1, column].plot(offsets, img[row], lw=0.8)
+            axes[1, column].set_xlabel("deg", fontsize=7)
+            axes[1, column].tick_params(labelsize=6)
+        axes[1, 0].set_ylabel("cd/m²", fontsize=8)
+        figure.suptitle(f"{titles[group]}: images and profiles through the centre", fontsize=10)
+        figure.tight_layout()
+        name = f"profiles_{group}.png"
+        figure.savefig(out / name, metadata={"Software": None})
+        plt.close(figure)
+        written.append(name)
+    return written
+
+
+def build_stimulus_set(
+    protocol: Protocol,
+    out: str | Path,
+    *,
+    calibration: Calibration | None = None,
+    progress=progress_bar,
+) -> dict:
+    """Build a study's stimulus set into folder ``out`` and return its manifest.
+
+    Parameters
+    ----------
+    protocol
+        A validated protocol of a study with stimuli (``yoshida2008``, ``spencer1995``).
+    out
+        Output folder (created; existing files of the same names are replaced).
+    calibration
+        The display calibration; default: the protocol display's synthetic calibration, which
+        the manifest marks as synthetic.
+    progress
+        ``progress(done, total, what)``; default a text bar on stderr; None for silence.
+
+    Raises
+    ------
+    ValueError
+        For a protocol without stimuli, or a calibration whose bit depth is not the display's.
+    """
+    if protocol.study not in BUILDERS:
+        raise ValueError(
+            f"study {protocol.study!r} has no stimuli to build; "
+            f"stimulus sets exist for {', '.join(BUILDERS)}"
+        )
+    calibration = calibration or default_calibration(protocol)
+    if calibration.bit_depth != protocol["display"]["bit_depth"]:
+        raise ValueError(
+            f"the calibration is for a {calibration.bit_depth}-bit display, the protocol's "
+            f"display is {protocol['display']['bit_depth']}-bit"
+        )
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    built = BUILDERS[protocol.study](protocol, progress=progress)
+    images = built["images"]
+    records = {}
+    for name, info in images.items():
+        img = np.asarray(info["img"], dtype=np.float64)
+        write_exr(out / f"{name}.exr", img.astype(np.float32))
+        files = [f"{name}.exr"]
+        record = {k: v for k, v in info.items() if k != "img"}
+        if info["kind"] != "component":  # display luminances: encode them for the display
+            codes, report = calibration.encode(img)
+            Image.fromarray(codes.astype(np.uint16)).save(out / f"{name}.png")
+            files.append(f"{name}.png")
+            record["encoding"] = {
+                "above_max": report.above_max,
+                "below_black": report.below_black,
+                "max_error_cd_m2": report.max_error_cd_m2,
+            }
+        record["files"] = files
+        record["shape"] = list(img.shape)
+        records[name] = record
+    plots = _profile_plots(out, protocol.study, images, built["geometry"])
+    files = sorted(f for r in records.values() for f in r["files"]) + plots
+    manifest = {
+        "format": "glarelab stimulus set v1",
+        "study": protocol.study,
+        "protocol": protocol.data,
+        "protocol_sha256": protocol.sha256,
+        "calibration": calibration.to_json(),
+        "calibration_sha256": hashlib.sha256(
+            json.dumps(calibration.to_json(), sort_keys=True).encode()
+        ).hexdigest(),
+        "seed": protocol.seed,
+        "geometry": built["geometry"],
+        "parameters": built["parameters"],
+        "images": records,
+        "plots": plots,
+        "packages": _versions(),
+        "files": {f: _sha256(out / f) for f in files},
+    }
+    (out / MANIFEST).write_text(json.dumps(manifest, indent=2, sort_keys=True) + "\n")
+    return manifest
+
+
+def verify_stimulus_set(folder: str | Path) -> list[str]:
+    """Re-hash every file of a stimulus set; return the problems (empty if it is intact)."""
+    folder = Path(folder)
+    manifest_path = folder / MANIFEST
+    if not manifest_path.is_file():
+        return [f"{manifest_path}: missing (not a stimulus set?)"]
+    try:
+        manifest = json.loads(manifest_path.read_text())
+    except json.JSONDecodeError as error:
+        return [f"{manifest_path}: not valid JSON ({error})"]
+    problems = []
+    for name, expected in sorted(manifest.get("files", {}).items()):
+        path = folder / name
+        if not path.is_file():
+            problems.append(f"{name}: missing")
+        elif _sha256(path) != expected:
+            problems.append(f"{name}: changed (sha256 differs from the manifest)")
+    return problems
