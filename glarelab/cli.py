@@ -327,6 +327,35 @@ def _calibrate_fit(args: argparse.Namespace) -> int:
     return 0
 
 
+def _calibrate_measure(args: argparse.Namespace) -> int:
+    from stimuli.measure import MeasurementSession
+    from stimuli.measure_psychopy import run_measurement
+
+    session = MeasurementSession(
+        bit_depth=args.bit_depth,
+        out=args.out,
+        rng=np.random.default_rng(args.seed),
+        points=args.points,
+        order=args.order,
+        verify_points=args.verify_points,
+        tolerance_fraction=args.tolerance,
+        label=args.label,
+    )
+    photometer = None
+    if args.simulate is not None:  # a display following L = black + (white - black) x^gamma
+        white, black, gamma = args.simulate
+        top = 2**args.bit_depth - 1
+
+        def photometer(code: int) -> float:
+            return black + (white - black) * (code / top) ** gamma
+
+    result = run_measurement(session, photometer=photometer, fullscr=not args.windowed)
+    for flag in result["flags"]:
+        _log(f"flag: {flag}")
+    _log(f"calibration status: {result['status']}; session saved at {session.session_path}")
+    return 0 if result["status"] == "passed" else 1
+
+
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="glarelab", description="Glare illusion psychophysics suite"
@@ -383,6 +412,28 @@ def _parser() -> argparse.ArgumentParser:
     fit.add_argument("--method", choices=("pchip", "gog"), default="pchip")
     fit.add_argument("--label", default="", help="display, photometer, operator")
     fit.set_defaults(run=_calibrate_fit)
+
+    measure = calibrate_commands.add_parser(
+        "measure", help="measure a display with a photometer (PsychoPy, full-field patches)"
+    )
+    measure.add_argument("--out", type=Path, required=True, help="calibration JSON to write")
+    measure.add_argument("--bit-depth", type=int, default=10, choices=(8, 10, 12, 16))
+    measure.add_argument("--points", type=int, default=33)
+    measure.add_argument("--order", choices=("random", "reversed"), default="random")
+    measure.add_argument("--verify-points", type=int, default=5)
+    measure.add_argument("--tolerance", type=float, default=0.03, help="relative, for 'passed'")
+    measure.add_argument("--seed", type=int, default=0)
+    measure.add_argument("--label", default="")
+    measure.add_argument("--windowed", action="store_true")
+    measure.add_argument(
+        "--simulate",
+        type=float,
+        nargs=3,
+        metavar=("WHITE", "BLACK", "GAMMA"),
+        default=None,
+        help="a simulated photometer instead of typed readings (dry runs)",
+    )
+    measure.set_defaults(run=_calibrate_measure)
 
     gallery = commands.add_parser("gallery", help="render the wave-optics PSF gallery")
     gallery.add_argument("--out", type=Path, default=Path("docs/gallery"))

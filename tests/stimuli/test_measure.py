@@ -1,0 +1,161 @@
+import json
+import os
+import shutil
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+
+from stimuli.measure import MeasurementSession
+
+
+def gamma_display(white=300.0, black=0.4, gamma=2.3, top=1023):
+    return lambda code: black + (white - black) * (code / top) ** gamma
+
+
+def run(session, photometer):
+    trajectory = []
+    while session.phase != "done":
+        step = session.current()
+        trajectory.append((step["phase"], step["code"]))
+        session.record(photometer(step["code"]))
+    return trajectory
+
+
+def test_reversed_order_trajectory_and_a_passing_calibration(tmp_path):
+    session = MeasurementSession(
+        bit_depth=10,
+        out=tmp_path / "d.json",
+        rng=np.random.default_rng(0),
+        points=33,
+        order="reversed",
+        verify_points=4,
+    )
+    trajectory = run(session, gamma_display())
+    codes = np.unique(np.round(np.linspace(0, 1023, 33)).astype(int)).tolist()
+    measured = [c for phase, c in trajectory if phase == "measure"]
+    assert measured == [*codes[::-1], 1023]  # top first, then the first code again (drift)
+    assert [p for p, _ in trajectory].count("verify") == 4
+    assert session.calibration.status == "passed"
+    assert session.flags == []
+    saved = json.loads((tmp_path / "d.json").read_text())
+    assert saved["status"] == "passed" and len(saved["verification"]["measurements"]) == 4
+
+
+def test_random_order_is_seeded(tmp_path):
+    a = MeasurementSession(bit_depth=8, out=tmp_path / "a.json", rng=np.random.default_rng(5))
+    b = MeasurementSession(bit_depth=8, out=tmp_path / "b.json", rng=np.random.default_rng(5))
+    c = MeasurementSession(bit_depth=8, out=tmp_path / "c.json", rng=np.random.default_rng(6))
+    assert a.queue == b.queue and a.queue != c.queue
+    codes = [c for c, _ in a.queue]
+    assert sorted(codes[:-1]) == sorted(set(codes)) and a.queue[-1] == (codes[0], "drift")
+
+
+def test_every_entry_is_saved_at_once(tmp_path):
+    session = MeasurementSession(
+        bit_depth=8, out=tmp_path / "d.json", rng=np.random.default_rng(0), points=9
+    )
+    photometer = gamma_display(top=255)
+    for entries in range(1, 4):
+        session.record(photometer(session.current()["code"]))
+        saved = json.loads(session.session_path.read_text())
+        assert len(saved["log"]) == entries
+
+
+def test_drift_is_flagged(tmp_path):
+    session = MeasurementSession(
+        bit_depth=8, out=tmp_path / "d.json", rng=np.random.default_rng(0), points=9
+    )
+    base, count = gamma_display(top=255), [0]
+
+    def warming_up(code):  # the display brightens 1 % per reading
+        count[0] += 1
+        return base(code) * (1 + 0.01 * count[0])
+
+    while session.phase == "measure":
+        session.record(warming_up(session.current()["code"]))
+    assert any(f.startswith("drift: code") for f in session.flags)
+
+
+def test_a_misread_value_is_flagged_and_measured_again(tmp_path):
+    session = MeasurementSession(
+        bit_depth=10,
+        out=tmp_path / "d.json",
+        rng=np.random.default_rng(1),
+        points=33,
+        order="reversed",
+    )
+    good, typo = gamma_display(), {"done": False}
+
+    def operator(code):
+        if code == 512 and not typo["done"]:  # types 12.1 instead of 121
+            typo["done"] = True
+            return good(code) / 10
+        return good(code)
+
+    trajectory = run(session, operator)
+    assert any("outlier: code" in f for f in session.flags)
+    assert any(f.startswith("re-measuring codes") and "512" in f for f in session.flags)
+    assert [c for p, c in trajectory if p == "measure"].count(512) == 2
+    assert session.calibration.status == "passed"
+
+
+def test_a_display_that_changed_fails_verification(tmp_path):
+    session = MeasurementSession(
+        bit_depth=10, out=tmp_path / "d.json", rng=np.random.default_rng(0)
+    )
+    good = gamma_display()
+
+    def display(code):  # 10 % dimmer by the time of the verification pass
+        return good(code) * (0.9 if session.phase == "verify" else 1.0)
+
+    run(session, display)
+    assert session.calibration.status == "failed"
+    assert session.calibration.verification["max_relative_error"] > 0.05
+
+
+def test_bad_entries_are_refused(tmp_path):
+    session = MeasurementSession(
+        bit_depth=8, out=tmp_path / "d.json", rng=np.random.default_rng(0)
+    )
+    with pytest.raises(ValueError, match="luminance must be a number >= 0"):
+        session.record(-3.0)
+    with pytest.raises(ValueError, match="points must be at least 4"):
+        MeasurementSession(
+            bit_depth=8, out=tmp_path / "e.json", rng=np.random.default_rng(0), points=2
+        )
+
+
+FRONT_END = textwrap.dedent(
+    """
+    import json, sys
+    import numpy as np
+    from stimuli.measure import MeasurementSession
+    from stimuli.measure_psychopy import run_measurement
+    session = MeasurementSession(bit_depth=8, out=sys.argv[1], rng=np.random.default_rng(0),
+                                 points=9, verify_points=3)
+    result = run_measurement(session, photometer=lambda c: 0.1 + 99.9 * (c / 255) ** 2.2,
+                             fullscr=False, size=(160, 120))
+    print("RESULT", json.dumps(result))
+    """
+)
+
+
+def test_psychopy_front_end_shows_each_code(tmp_path):
+    script = tmp_path / "front.py"
+    script.write_text(FRONT_END)
+    command = [sys.executable, str(script), str(tmp_path / "display.json")]
+    if not os.environ.get("DISPLAY"):
+        command = [shutil.which("xvfb-run"), "-a", "-s", "-screen 0 1024x768x24", *command]
+    done = subprocess.run(
+        command, capture_output=True, text=True, timeout=300, check=False, cwd=os.getcwd()
+    )
+    lines = [line for line in done.stdout.splitlines() if line.startswith("RESULT")]
+    assert lines, done.stderr[-3000:]
+    result = json.loads(lines[0][len("RESULT ") :])
+    assert result["status"] == "passed"
+    assert len(result["shown"]) == 9 + 1 + 3
+    for code, pixel in result["shown"]:
+        assert abs(pixel - code) <= 1  # the patch shows the drive code (8-bit frame buffer)
