@@ -182,3 +182,53 @@ def test_gallery_command_renders_every_configuration(tmp_path):
     assert len(captions) == 10
     for name in captions:
         assert Image.open(tmp_path / f"{name}.png").size == (41, 41)
+
+
+def test_calibrate_fit_writes_a_dated_calibration_with_the_readings_hash(tmp_path):
+    readings = tmp_path / "readings.csv"
+    # codes 0, 93, ..., 1023 (= 11 × 93)
+    rows = ["code,luminance_cd_m2"] + [
+        f"{c},{0.3 + 250 * (c / 1023) ** 2.4:.5f}" for c in range(0, 1024, 93)
+    ]
+    readings.write_text("\n".join(rows) + "\n")
+    out = tmp_path / "display.json"
+    assert (
+        main(
+            [
+                "calibrate",
+                "fit",
+                str(readings),
+                "--out",
+                str(out),
+                "--method",
+                "gog",
+                "--label",
+                "test",
+            ]
+        )
+        == 0
+    )
+    data = json.loads(out.read_text())
+    assert data["status"] == "unverified" and len(data["readings_sha256"]) == 64
+    assert data["created"] and abs(data["model"]["gamma"] - 2.4) < 0.01
+
+
+def test_protocol_commands(tmp_path, capsys):
+    from pathlib import Path
+
+    root = Path(__file__).parents[1] / "protocols"
+    assert main(["protocol", "check", str(root / "spencer1995.toml")]) == 0
+    assert "valid spencer1995 protocol" in capsys.readouterr().out
+    bad = tmp_path / "bad.toml"
+    bad.write_text(
+        (root / "luidolt2020.toml").read_text().replace("scale_max = 7", "scale_maxx = 7")
+    )
+    with pytest.raises(SystemExit):
+        main(["protocol", "check", str(bad)])
+    err = capsys.readouterr().err
+    assert (
+        "questionnaire.scale_maxx: unknown key" in err
+        and "questionnaire.scale_max: missing" in err
+    )
+    assert main(["protocol", "keys", "yoshida2008"]) == 0
+    assert "| glare.gaussian.sigma_deg | deg | required |" in capsys.readouterr().out

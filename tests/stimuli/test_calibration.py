@@ -117,3 +117,17 @@ def test_readings_csv(tmp_path):
     path.write_text("code,luminance_cd_m2\n0,abc\n")
     with pytest.raises(ValueError, match="line 2"):
         read_readings(path)
+
+
+def test_shipped_synthetic_calibrations_match_their_protocols():
+    from pathlib import Path
+
+    from stimuli.protocol import load_protocol
+    from stimuli.stimulus_set import default_calibration
+
+    root = Path(__file__).parents[2]
+    for study, name in (("yoshida2008", "433cd-10bit"), ("spencer1995", "100cd-8bit")):
+        shipped = Calibration.load(root / "calibrations" / f"SYNTHETIC-{study}-{name}.json")
+        assert shipped.status == "synthetic" and "SYNTHETIC" in shipped.label
+        expected = default_calibration(load_protocol(root / "protocols" / f"{study}.toml"))
+        assert np.array_equal(shipped.lut, expected.lut)
