@@ -21,6 +21,7 @@ import datetime as dt
 import hashlib
 import itertools
 import json
+import warnings
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Literal
@@ -35,6 +36,7 @@ __all__ = [
     "fit_calibration",
     "read_readings",
     "synthetic_calibration",
+    "usable_calibration",
 ]
 
 FORMAT = "glarelab display calibration v1"
@@ -388,3 +390,42 @@ def synthetic_calibration(
         list(zip(codes.tolist(), values.tolist(), strict=True)), bit_depth=bit_depth, label=text
     )
     return replace(calibration, status="synthetic", created="synthetic")
+
+
+def usable_calibration(
+    calibration: Calibration | None, *, allow_uncalibrated: bool = False
+) -> dict:
+    """Decide whether a session may run on this calibration; return what to record.
+
+    A missing, failed or synthetic calibration is refused unless ``allow_uncalibrated`` (and
+    the session data then say it ran uncalibrated); an unverified one runs with a warning.
+
+    Returns
+    -------
+    dict
+        ``calibrated`` (bool), ``status``, ``readings_sha256`` (None without a calibration).
+
+    Raises
+    ------
+    ValueError
+        If the calibration is missing, failed or synthetic and ``allow_uncalibrated`` is False.
+    """
+    status = calibration.status if calibration is not None else "missing"
+    record = {
+        "calibrated": status in ("passed", "unverified"),
+        "status": status,
+        "readings_sha256": calibration.readings_sha256 if calibration is not None else None,
+    }
+    if status in ("missing", "failed", "synthetic") and not allow_uncalibrated:
+        raise ValueError(
+            f"the display calibration is {status}: measure the display "
+            "(glarelab calibrate measure) or run explicitly uncalibrated "
+            "(allow_uncalibrated, recorded in the data)"
+        )
+    if status == "unverified":
+        warnings.warn(
+            "the display calibration has not been verified (no verification pass)",
+            UserWarning,
+            stacklevel=2,
+        )
+    return record

@@ -131,3 +131,24 @@ def test_shipped_synthetic_calibrations_match_their_protocols():
         assert shipped.status == "synthetic" and "SYNTHETIC" in shipped.label
         expected = default_calibration(load_protocol(root / "protocols" / f"{study}.toml"))
         assert np.array_equal(shipped.lut, expected.lut)
+
+
+def test_sessions_refuse_missing_failed_or_synthetic_calibrations():
+    from stimuli.calibration import usable_calibration
+
+    synthetic = synthetic_calibration(max_cd_m2=433.0, black_cd_m2=0.5, bit_depth=10)
+    fitted = fit_calibration(measured_looking(), bit_depth=10)
+    passed = fitted.verified([(10.0, 100, 10.1)])
+    failed = fitted.verified([(10.0, 100, 12.0)])
+    for calibration, status in ((None, "missing"), (failed, "failed"), (synthetic, "synthetic")):
+        with pytest.raises(ValueError, match=f"calibration is {status}"):
+            usable_calibration(calibration)
+        record = usable_calibration(calibration, allow_uncalibrated=True)
+        assert record == {
+            "calibrated": False,
+            "status": status,
+            "readings_sha256": None if calibration is None else calibration.readings_sha256,
+        }
+    assert usable_calibration(passed)["calibrated"] is True
+    with pytest.warns(UserWarning, match="not been verified"):
+        assert usable_calibration(fitted)["calibrated"] is True
