@@ -187,6 +187,18 @@ VIEWING: Schema = {
     "distance_m": Key(float, "eye-screen distance", unit="m", low=0.1, high=20.0),
     "room_lux": Key(float, "room illumination at the eye", unit="lx", low=0.0, high=1e5),
 }
+LEVEL_LABELS = Key(list, "level labels", item=str, length=(1, 26))
+LEVELS_CD_M2 = Key(
+    list,
+    "input disk luminances L_disk",
+    unit="cd/m²",
+    item=float,
+    length=(1, 26),
+    low=0.0,
+    high=1e9,
+)
+REGIME = Key(str, "Vos PSF regime", choices=("photopic", "mesopic", "scotopic"))
+INSTRUCTIONS: Schema = {"text": Key(str, "written instruction")}
 STUDY: Schema = {
     "name": Key(str, "study", choices=("yoshida2008", "spencer1995", "luidolt2020")),
     "title": Key(str, "title for reports"),
@@ -242,29 +254,13 @@ YOSHIDA2008: Schema = {
             "sigma_deg": Key(
                 float, "Gaussian σ (Yoshida eq. 2)", unit="deg", low=0.001, high=10.0
             ),
-            "labels": Key(list, "level labels", item=str, length=(1, 26)),
-            "levels_cd_m2": Key(
-                list,
-                "input disk luminances L_disk",
-                unit="cd/m²",
-                item=float,
-                length=(1, 26),
-                low=0.0,
-                high=1e9,
-            ),
+            "labels": LEVEL_LABELS,
+            "levels_cd_m2": LEVELS_CD_M2,
         },
         "vos": {
-            "regime": Key(str, "Vos PSF regime", choices=("photopic", "mesopic", "scotopic")),
-            "labels": Key(list, "level labels", item=str, length=(1, 26)),
-            "levels_cd_m2": Key(
-                list,
-                "input disk luminances L_disk",
-                unit="cd/m²",
-                item=float,
-                length=(1, 26),
-                low=0.0,
-                high=1e9,
-            ),
+            "regime": REGIME,
+            "labels": LEVEL_LABELS,
+            "levels_cd_m2": LEVELS_CD_M2,
         },
     },
     "trials": {
@@ -315,7 +311,7 @@ SPENCER1995: Schema = {
         "context": Key(list, "context conditions", item=str, length=(1, 2), choices=None),
     },
     "glare": {
-        "regime": Key(str, "Vos PSF regime", choices=("photopic", "mesopic", "scotopic")),
+        "regime": REGIME,
         "flare_lines": Key(bool, "ciliary-corona flare lines (Spencer §3.2)"),
         "peak_fraction": Key(
             float,
@@ -360,12 +356,12 @@ SPENCER1995: Schema = {
             choices=("hold", "toward-glare", "alternate"),
         ),
     },
-    "instructions": {"text": Key(str, "written instruction")},
+    "instructions": INSTRUCTIONS,
 }
 
 LUIDOLT2020: Schema = {
     "study": STUDY,
-    "instructions": {"text": Key(str, "written instruction")},
+    "instructions": INSTRUCTIONS,
     "questionnaire": {
         "scale_min": Key(int, "lowest rating", low=0, high=10),
         "scale_max": Key(int, "highest rating", low=1, high=100),
