@@ -356,6 +356,70 @@ def _calibrate_measure(args: argparse.Namespace) -> int:
     return 0 if result["status"] == "passed" else 1
 
 
+def _run(args: argparse.Namespace) -> int:
+    from experiments.observers import SimulatedObserver
+    from experiments.session import SimulatedFrontend, run_session
+
+    protocol_path = args.protocol or Path(__file__).parents[1] / "protocols" / f"{args.study}.toml"
+    protocol = load_protocol(protocol_path)
+    if protocol.study != args.study:
+        raise ValueError(f"{protocol_path} is a {protocol.study} protocol, not {args.study}")
+    out = Path(args.out)
+    if args.simulate:
+        ids = (
+            [args.participant]
+            if args.participant
+            else [f"sim{index:02d}" for index in range(1, args.participants + 1)]
+        )
+        for number, participant in enumerate(ids, start=1):
+            observer = SimulatedObserver(protocol, participant, seed=args.seed)
+            frontend = SimulatedFrontend(observer, trial_delay_s=args.trial_delay_ms / 1000)
+            sidecar = run_session(
+                protocol,
+                participant,
+                out=out,
+                frontend=frontend,
+                session=args.session,
+                resume=args.resume,
+                counterbalance=args.counterbalance,
+                simulated=True,
+                participant_info={"simulated_observer_seed": args.seed},
+            )
+            done = f"{sidecar['trials']} trials, {sidecar['status']}"
+            _log(f"[{number}/{len(ids)}] {participant}: {done}")
+        print(out.resolve())
+        return 0
+    if not args.participant:
+        raise ValueError("--participant is required (or --simulate)")
+    from experiments.psychopy_frontend import PsychoPyFrontend
+
+    calibration = Calibration.load(args.calibration) if args.calibration else None
+    scripted = Path(args.scripted_keys).read_text().split() if args.scripted_keys else None
+    frontend = PsychoPyFrontend(
+        protocol,
+        stimuli=args.stimuli,
+        calibration=calibration,
+        fullscreen=args.fullscreen,
+        scripted_keys=scripted,
+        screenshot=args.screenshot,
+    )
+    sidecar = run_session(
+        protocol,
+        args.participant,
+        out=out,
+        frontend=frontend,
+        session=args.session,
+        stimuli=args.stimuli,
+        calibration=calibration,
+        allow_uncalibrated=args.allow_uncalibrated,
+        resume=args.resume,
+        counterbalance=args.counterbalance,
+        participant_info={"age": args.age, "sex": args.sex, "vision_correction": args.vision},
+    )
+    _log(f"{args.participant}: {sidecar['trials']} trials, {sidecar['status']}")
+    return 0 if sidecar["status"] == "completed" else 3
+
+
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="glarelab", description="Glare illusion psychophysics suite"
@@ -434,6 +498,37 @@ def _parser() -> argparse.ArgumentParser:
         help="a simulated photometer instead of typed readings (dry runs)",
     )
     measure.set_defaults(run=_calibrate_measure)
+
+    run = commands.add_parser("run", help="run a study session (PsychoPy) or simulated sessions")
+    run.add_argument("study", choices=("yoshida2008", "spencer1995", "luidolt2020"))
+    run.add_argument("--participant", default=None, help="participant id (file-name safe)")
+    run.add_argument("--session", type=int, default=1)
+    run.add_argument("--protocol", type=Path, default=None, help="default: protocols/STUDY.toml")
+    run.add_argument("--stimuli", type=Path, default=None, help="the stimulus set folder")
+    run.add_argument("--calibration", type=Path, default=None, help="display calibration JSON")
+    run.add_argument(
+        "--allow-uncalibrated",
+        action="store_true",
+        help="run without a valid calibration (recorded)",
+    )
+    run.add_argument("--out", type=Path, default=Path("data"), help="folder for the session files")
+    run.add_argument("--resume", action="store_true", help="continue an interrupted session")
+    run.add_argument("--fullscreen", action="store_true")
+    run.add_argument(
+        "--counterbalance", type=int, choices=(0, 1), default=None, help="Spencer block order"
+    )
+    run.add_argument("--age", type=int, default=None)
+    run.add_argument("--sex", default=None)
+    run.add_argument("--vision", default=None, help="vision correction: none, glasses, lenses")
+    run.add_argument(
+        "--scripted-keys", type=Path, default=None, help="file of key names (dry runs)"
+    )
+    run.add_argument("--screenshot", type=Path, default=None, help="save the first trial's screen")
+    run.add_argument("--simulate", action="store_true", help="simulated observers, no screen")
+    run.add_argument("--participants", type=int, default=10, help="simulated participants")
+    run.add_argument("--seed", type=int, default=0, help="seed of the simulated observers")
+    run.add_argument("--trial-delay-ms", type=float, default=0.0, help=argparse.SUPPRESS)
+    run.set_defaults(run=_run)
 
     gallery = commands.add_parser("gallery", help="render the wave-optics PSF gallery")
     gallery.add_argument("--out", type=Path, default=Path("docs/gallery"))

@@ -274,6 +274,27 @@ YOSHIDA2008: Schema = {
         ),
     },
     "instructions": {"text": Key(str, "written instruction shown before training")},
+    "observer": {
+        "boost_gaussian": Key(
+            float, "simulated observers: largest brightness boost, Method I", low=0.0, high=5.0
+        ),
+        "boost_vos": Key(
+            float, "simulated observers: largest brightness boost, Method II", low=0.0, high=5.0
+        ),
+        "saturation": Key(
+            float,
+            "relative excess (L_disk - L_dmax) / L_dmax at which the boost reaches 63 %",
+            low=0.001,
+            high=1000.0,
+        ),
+        "margin": Key(
+            float, "'slightly but visibly' darker/brighter, as a fraction", low=0.0, high=1.0
+        ),
+        "observer_sd": Key(float, "between-observer SD of the boost gain", low=0.0, high=2.0),
+        "setting_sd": Key(
+            float, "within-observer SD of each setting, as a fraction", low=0.0, high=1.0
+        ),
+    },
     "questionnaire": {
         "questions": Key(
             list, "yes/no questions after each trial (Yoshida Table 1)", item=str, length=(0, 20)
@@ -353,10 +374,32 @@ SPENCER1995: Schema = {
         "neither": Key(
             str,
             "how a 'neither brighter' answer moves the staircase",
-            choices=("hold", "toward-glare", "alternate"),
+            choices=("hold", "alternate"),
         ),
     },
     "instructions": INSTRUCTIONS,
+    "observer": {
+        "boost": Key(
+            float,
+            "simulated observers: largest brightness boost of the glare image",
+            low=0.0,
+            high=5.0,
+        ),
+        "saturation": Key(
+            float, "glare strength at which the boost reaches 63 %", low=0.001, high=1e6
+        ),
+        "observer_sd": Key(float, "between-observer SD of the boost gain", low=0.0, high=2.0),
+        "noise_sd": Key(
+            float, "SD of the comparison noise, fraction of the maximum", low=0.0, high=1.0
+        ),
+        "neither_band": Key(
+            float,
+            "differences below this (fraction of max) are answered 'neither'",
+            low=0.0,
+            high=1.0,
+        ),
+        "context_gain": Key(float, "boost multiplier in the lamp context", low=0.0, high=5.0),
+    },
 }
 
 LUIDOLT2020: Schema = {
@@ -369,6 +412,17 @@ LUIDOLT2020: Schema = {
         "categories": Key(list, "category names", item=str, length=(1, 30)),
         "prompts": Key(list, "one question per category", item=str, length=(1, 30)),
         "comments": Key(bool, "ask for an optional comment per category"),
+    },
+    "observer": {
+        "means": Key(
+            list,
+            "simulated observers: mean rating per category",
+            item=float,
+            length=(1, 30),
+            low=1.0,
+            high=100.0,
+        ),
+        "sd": Key(float, "SD of a rating", low=0.0, high=10.0),
     },
 }
 
