@@ -149,6 +149,8 @@ def run_session(
         else usable_calibration(calibration, allow_uncalibrated=allow_uncalibrated)
     )
     files = SessionFiles(protocol.study, participant, session, Path(out), resume=resume)
+    if hasattr(frontend, "open"):
+        frontend.open()  # the window opens after every check has passed
     engine = make_engine(
         protocol,
         participant,
@@ -170,6 +172,7 @@ def run_session(
             "refresh_hz": frontend.refresh_hz,
             "bit_depth": frontend.bit_depth,
             "simulated": simulated,
+            "images_encoded_with": getattr(frontend, "calibration_used", None),
             "counterbalance": getattr(engine, "counterbalance", None),
             "trial_order": getattr(engine, "order", None),
             "status": "running",

@@ -9,8 +9,9 @@ an exact number of frames at the measured refresh rate), then asks: ``left`` bri
 ``right`` brighter, or ``down`` for neither.
 
 Each staircase starts at ``start_fraction`` and moves the disc up when the glare image looked
-brighter and down when the disc did, by ``step_fractions[k]`` after its ``k``-th reversal (the
-last step is kept). **Neither** means the two looked equally bright, a point of equality, and
+brighter and down when the disc did, by ``step_fractions[k]`` once it has had ``k`` reversals
+(the last step is kept; as in PsychoPy's ``StairHandler``, the reversing move already takes the
+smaller step). **Neither** means the two looked equally bright, a point of equality, and
 always counts as a reversal, which guarantees the staircase ends:
 
 - ``hold``: the disc stays where it is;
@@ -72,11 +73,10 @@ class Staircase:
         else:
             raise ValueError(f"response must be 'glare', 'disc' or 'neither'; got {response!r}")
         reversal = response == "neither" or (self.direction != 0 and move == -self.direction)
-        step = self.step  # the step this move uses
-        if reversal:
+        if reversal:  # as PsychoPy's StairHandler: the reversing move already takes the next step
             self.reversals += 1
         if move:
-            self.fraction = min(max(self.fraction + move * step, 0.0), 1.0)
+            self.fraction = min(max(self.fraction + move * self.step, 0.0), 1.0)
             self.direction = move
         self.history.append((response, reversal))
         return reversal
