@@ -15,6 +15,7 @@ from experiments.data import read_rows
 from experiments.schema import columns
 from glarelab.cli import main
 from stimuli.calibration import Calibration
+from stimuli.protocol import load_protocol
 from stimuli.stimulus_set import default_calibration
 
 ROOT = Path(__file__).parents[2]
@@ -238,14 +239,8 @@ def test_one_trial_through_the_real_psychopy_front_end(tmp_path, sets, study):
             else "SYNTHETIC-spencer1995-100cd-8bit.json"
         )
     )
-    assert np.array_equal(
-        protocol_calibration.lut,
-        default_calibration(
-            __import__("stimuli.protocol", fromlist=["load_protocol"]).load_protocol(
-                PROTOCOLS / f"{study}.toml"
-            )
-        ).lut,
-    )
+    expected_lut = default_calibration(load_protocol(PROTOCOLS / f"{study}.toml")).lut
+    assert np.array_equal(protocol_calibration.lut, expected_lut)  # the set was encoded with it
     height, width = frame.shape[:2]
     if study == "yoshida2008":
         luminance, x = 220.0, width // 2  # the reference disk, clamped at L_dmax, in the middle
