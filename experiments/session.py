@@ -15,11 +15,10 @@ import hashlib
 import json
 import re
 import time
-from importlib import metadata
 from pathlib import Path
 
 from stimuli.calibration import Calibration, usable_calibration
-from stimuli.stimulus_set import verify_stimulus_set
+from stimuli.stimulus_set import package_versions, verify_stimulus_set
 
 from .data import SessionFiles, session_paths
 from .luidolt2020 import LikertQuestionnaire
@@ -82,16 +81,6 @@ class SimulatedFrontend:
                     on_row(row)
                     if self.trial_delay_s:
                         time.sleep(self.trial_delay_s)
-
-
-def _versions() -> dict[str, str]:
-    out = {}
-    for name in PACKAGES:
-        try:
-            out[name] = metadata.version(name)
-        except metadata.PackageNotFoundError:
-            out[name] = "not installed"
-    return out
 
 
 def _check_stimuli(protocol, stimuli: Path | None) -> str | None:
@@ -168,7 +157,7 @@ def run_session(
             "protocol_sha256": protocol.sha256,
             "stimulus_set_manifest_sha256": manifest_sha,
             "calibration": calibration_record,
-            "packages": _versions(),
+            "packages": package_versions(PACKAGES),
             "refresh_hz": frontend.refresh_hz,
             "bit_depth": frontend.bit_depth,
             "simulated": simulated,

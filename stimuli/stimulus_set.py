@@ -26,7 +26,13 @@ from .protocol import Protocol
 from .spencer1995 import build_spencer1995
 from .yoshida2008 import build_yoshida2008
 
-__all__ = ["build_stimulus_set", "default_calibration", "progress_bar", "verify_stimulus_set"]
+__all__ = [
+    "build_stimulus_set",
+    "default_calibration",
+    "package_versions",
+    "progress_bar",
+    "verify_stimulus_set",
+]
 
 MANIFEST = "manifest.json"
 PACKAGES = ("numpy", "scipy", "colour-science", "OpenEXR", "matplotlib", "pillow", "glarelab")
@@ -61,9 +67,10 @@ def default_calibration(protocol: Protocol) -> Calibration:
     )
 
 
-def _versions() -> dict[str, str]:
+def package_versions(names=PACKAGES) -> dict[str, str]:
+    """Installed versions of ``names`` (``'not installed'`` where absent), for provenance."""
     versions = {}
-    for name in PACKAGES:
+    for name in names:
         try:
             versions[name] = metadata.version(name)
         except metadata.PackageNotFoundError:
@@ -192,7 +199,7 @@ def build_stimulus_set(
         "parameters": built["parameters"],
         "images": records,
         "plots": plots,
-        "packages": _versions(),
+        "packages": package_versions(),
         "files": {f: _sha256(out / f) for f in files},
     }
     (out / MANIFEST).write_text(json.dumps(manifest, indent=2, sort_keys=True) + "\n")
