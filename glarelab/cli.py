@@ -420,6 +420,17 @@ def _run(args: argparse.Namespace) -> int:
     return 0 if sidecar["status"] == "completed" else 3
 
 
+def _analyse(args: argparse.Namespace) -> int:
+    from analysis.report import write_report
+
+    report = write_report(
+        args.study, args.csv, args.out, exclude_incomplete=args.exclude_incomplete
+    )
+    _log(f"wrote {report} with its tables and figures")
+    print(report.resolve())
+    return 0
+
+
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="glarelab", description="Glare illusion psychophysics suite"
@@ -529,6 +540,17 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--seed", type=int, default=0, help="seed of the simulated observers")
     run.add_argument("--trial-delay-ms", type=float, default=0.0, help=argparse.SUPPRESS)
     run.set_defaults(run=_run)
+
+    analyse = commands.add_parser("analyse", help="analyse session CSVs: tables, figures, report")
+    analyse.add_argument("study", choices=("yoshida2008", "spencer1995", "luidolt2020"))
+    analyse.add_argument("csv", nargs="+", type=Path, help="session CSV files")
+    analyse.add_argument("--out", type=Path, required=True, help="report folder")
+    analyse.add_argument(
+        "--exclude-incomplete",
+        action="store_true",
+        help="drop participants with a missing design cell (listed in the report)",
+    )
+    analyse.set_defaults(run=_analyse)
 
     gallery = commands.add_parser("gallery", help="render the wave-optics PSF gallery")
     gallery.add_argument("--out", type=Path, default=Path("docs/gallery"))

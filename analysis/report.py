@@ -1,0 +1,123 @@
+"""Writing an analysis: tables (CSV and Markdown), figures (PNG) and one self-contained HTML.
+
+Everything is written to a temporary folder next to the destination and moved into place only
+when all of it succeeded, so a failing analysis leaves no partial report behind.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import os
+import shutil
+import tempfile
+from pathlib import Path
+
+import pandas as pd
+
+from .load import Dataset, load_sessions
+from .luidolt2020 import analyse_luidolt2020
+from .spencer1995 import analyse_spencer1995
+from .yoshida2008 import analyse_yoshida2008
+
+__all__ = ["ANALYSES", "analyse", "write_report"]
+
+ANALYSES = {
+    "yoshida2008": analyse_yoshida2008,
+    "spencer1995": analyse_spencer1995,
+    "luidolt2020": analyse_luidolt2020,
+}
+TITLES = {
+    "yoshida2008": "Brightness of the glare illusion (Yoshida et al. 2008): analysis",
+    "spencer1995": "Perceived brightness of glare (Spencer et al. 1995): analysis",
+    "luidolt2020": "Perception of light in VR (Luidolt 2020): questionnaire",
+}
+
+
+def _markdown(table: pd.DataFrame) -> str:
+    formatted = table.copy()
+    for column in formatted.columns:
+        if pd.api.types.is_float_dtype(formatted[column]):
+            formatted[column] = formatted[column].map(lambda v: "" if pd.isna(v) else f"{v:.4g}")
+    header = "| " + " | ".join(map(str, formatted.columns)) + " |"
+    rule = "| " + " | ".join("---" for _ in formatted.columns) + " |"
+    rows = ["| " + " | ".join(map(str, row)) + " |" for row in formatted.itertuples(index=False)]
+    return "\n".join([header, rule, *rows]) + "\n"
+
+
+def analyse(
+    study: str, paths: list[str | Path], *, exclude_incomplete: bool = False
+) -> tuple[Dataset, dict]:
+    if study not in ANALYSES:
+        raise ValueError(f"study must be one of {', '.join(ANALYSES)}; got {study!r}")
+    dataset = load_sessions(study, paths, exclude_incomplete=exclude_incomplete)
+    return dataset, ANALYSES[study](dataset)
+
+
+def _html(study: str, dataset: Dataset, result: dict) -> str:
+    parts = [
+        "<!doctype html><html><head><meta charset='utf-8'>",
+        f"<title>{html.escape(TITLES[study])}</title>",
+        "<style>body{font-family:sans-serif;max-width:1100px;margin:2em auto;line-height:1.4}"
+        "table{border-collapse:collapse;font-size:0.85em;margin:0.5em 0 1.5em}"
+        "td,th{border:1px solid #ccc;padding:2px 6px;text-align:right}"
+        "th{background:#f2f2f2}code{background:#f5f5f5}</style></head><body>",
+        f"<h1>{html.escape(TITLES[study])}</h1>",
+    ]
+    participants = dataset.trials["participant"].nunique()
+    parts.append(
+        f"<p>{participants} participants, {len(dataset.trials)} trials from "
+        f"{len(dataset.files)} session files.</p>"
+    )
+    if dataset.excluded:
+        items = "".join(
+            f"<li>{html.escape(p)}: {html.escape(w)}</li>" for p, w in dataset.excluded.items()
+        )
+        parts.append(f"<h2>Excluded participants (incomplete design)</h2><ul>{items}</ul>")
+    if result["text"]:
+        items = "".join(
+            f"<li><b>{html.escape(k)}</b>: {html.escape(v)}</li>"
+            for k, v in result["text"].items()
+        )
+        parts.append(f"<h2>Results</h2><ul>{items}</ul>")
+    for name, data in result["figures"].items():
+        encoded = base64.b64encode(data).decode()
+        parts.append(
+            f"<h2>{html.escape(name)}</h2><img alt='{html.escape(name)}' "
+            f"src='data:image/png;base64,{encoded}' style='max-width:100%'>"
+        )
+    for name, table in result["tables"].items():
+        parts.append(f"<h2>{html.escape(name.replace('_', ' '))}</h2>")
+        parts.append(table.to_html(index=False, float_format=lambda v: f"{v:.4g}", na_rep=""))
+    files = "".join(f"<li><code>{html.escape(f)}</code></li>" for f in dataset.files)
+    parts.append(f"<h2>Data</h2><ul>{files}</ul></body></html>")
+    return "\n".join(parts)
+
+
+def write_report(
+    study: str, paths: list[str | Path], out: str | Path, *, exclude_incomplete: bool = False
+) -> Path:
+    """Analyse session CSVs and write the report folder; returns the path of report.html.
+
+    Raises
+    ------
+    analysis.load.DataError
+        For bad input (nothing is written).
+    """
+    out = Path(out)
+    dataset, result = analyse(study, paths, exclude_incomplete=exclude_incomplete)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    staging = Path(tempfile.mkdtemp(prefix=".report-", dir=out.parent))
+    try:
+        for name, table in result["tables"].items():
+            table.to_csv(staging / f"{name}.csv", index=False)
+            (staging / f"{name}.md").write_text(_markdown(table))
+        for name, data in result["figures"].items():
+            (staging / name).write_bytes(data)
+        (staging / "report.html").write_text(_html(study, dataset, result), encoding="utf-8")
+        out.mkdir(parents=True, exist_ok=True)
+        for item in staging.iterdir():
+            os.replace(item, out / item.name)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+    return out / "report.html"

@@ -1,0 +1,176 @@
+import shutil
+import subprocess
+import sys
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from analysis.load import DataError, load_sessions
+from analysis.report import write_report
+from analysis.stats import rm_anova
+from glarelab.cli import main
+
+
+def glarelab(*args):
+    return subprocess.run(
+        [sys.executable, "-m", "glarelab", *map(str, args)],
+        capture_output=True,
+        text=True,
+        timeout=600,
+        check=False,
+    )
+
+
+@pytest.fixture(scope="module")
+def simulated(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("sessions")
+    for study in ("yoshida2008", "spencer1995", "luidolt2020"):
+        done = glarelab(
+            "run", study, "--simulate", "--participants", 10, "--seed", 1, "--out", folder
+        )
+        assert done.returncode == 0, done.stderr
+    return folder
+
+
+def csvs(folder, study):
+    return sorted(folder.glob(f"{study}_*.csv"))
+
+
+def test_yoshida_report_holds_every_analysis(simulated, tmp_path):
+    report = write_report("yoshida2008", csvs(simulated, "yoshida2008"), tmp_path / "report")
+    text = report.read_text()
+    for table in (
+        "anova",
+        "methods_at_high_levels",
+        "pairwise_contrasts",
+        "similarity_groups",
+        "boost",
+        "bounds_and_match",
+        "questionnaire",
+    ):
+        assert (tmp_path / "report" / f"{table}.csv").is_file()
+        assert (tmp_path / "report" / f"{table}.md").is_file()
+        assert table.replace("_", " ") in text
+    for figure in ("figure4_bounds_and_match.png", "figure5_boost.png"):
+        assert (tmp_path / "report" / figure).stat().st_size > 5000
+    assert text.count("data:image/png;base64,") == 2
+    anova = pd.read_csv(tmp_path / "report" / "anova.csv")
+    assert set(anova["analysis"]) == {
+        "6 × 2 (all levels)",
+        "3 × 2 ({A, B, C})",
+        "3 × 2 ({D, E, F})",
+    }
+    main_effect = anova[
+        (anova["analysis"] == "6 × 2 (all levels)") & (anova["source"] == "L_disk")
+    ].iloc[0]
+    assert main_effect["df1"] == 5 and main_effect["df2"] == 45  # as the paper's F(5, 45)
+    tests = pd.read_csv(tmp_path / "report" / "methods_at_high_levels.csv")
+    assert set(tests["test"]) == {"paired", "Welch"} and len(tests) == 6
+    assert (tests.loc[tests["test"] == "paired", "df"] == 9).all()
+    boost = pd.read_csv(tmp_path / "report" / "boost.csv")
+    assert abs(boost.loc[boost["level"] == "A", "boost_percent_mean"].iloc[0]) < 2  # no glare at A
+
+
+@pytest.mark.parametrize("study", ["spencer1995", "luidolt2020"])
+def test_other_reports(simulated, tmp_path, study):
+    report = write_report(study, csvs(simulated, study), tmp_path / "r")
+    assert report.read_text().count("data:image/png;base64,") == 1
+
+
+def test_no_effect_data_are_significant_at_the_nominal_rate():
+    # matches drawn with no level or method effect: the GG-corrected main effects should be
+    # significant in about 5 % of 300 data sets (binomial 99 % range: 2 %-9 %)
+    rng = np.random.default_rng(0)
+    hits = {"L_disk": 0, "method": 0}
+    for _ in range(300):
+        rows = [
+            {
+                "participant": s,
+                "L_disk": str(level),
+                "method": method,
+                "match_cd_m2": 250 + subject + rng.normal(0, 10),
+            }
+            for s, subject in enumerate(rng.normal(0, 20, 10))
+            for level in range(1, 7)
+            for method in ("gaussian", "vos")
+        ]
+        table = rm_anova(
+            pd.DataFrame(rows), "match_cd_m2", ["L_disk", "method"], "participant"
+        ).set_index("source")
+        for effect in hits:
+            hits[effect] += table.loc[effect, "p_gg"] < 0.05
+    for effect, count in hits.items():
+        assert 0.02 <= count / 300 <= 0.09, (effect, count)
+
+
+def write_csv(path, text):
+    path.write_text(text)
+    return path
+
+
+def test_bad_cells_are_named_by_file_line_and_column(simulated, tmp_path):
+    source = csvs(simulated, "yoshida2008")[0]
+    lines = source.read_text().splitlines()
+    header = lines[0].split(",")
+    cells = lines[3].split(",")
+    cells[header.index("darker_cd_m2")] = "bright"
+    lines[3] = ",".join(cells)
+    bad = write_csv(tmp_path / "bad.csv", "\n".join(lines) + "\n")
+    with pytest.raises(
+        DataError, match=r"bad\.csv, line 4, column darker_cd_m2: 'bright' is not a float"
+    ):
+        load_sessions("yoshida2008", [bad])
+
+
+def test_missing_column_other_study_duplicates_and_unbalanced(simulated, tmp_path):
+    source = csvs(simulated, "yoshida2008")[0]
+    text = source.read_text()
+    dropped = pd.read_csv(source).drop(columns=["q2_ring"])
+    dropped.to_csv(tmp_path / "missing.csv", index=False)
+    with pytest.raises(
+        DataError,
+        match=r"missing\.csv, line 1: columns do not match the yoshida2008 schema; missing \['q2_ring'\]",
+    ):
+        load_sessions("yoshida2008", [tmp_path / "missing.csv"])
+    with pytest.raises(DataError, match="columns do not match the spencer1995 schema"):
+        load_sessions("spencer1995", [source])
+    lines = text.splitlines()
+    duplicate = write_csv(tmp_path / "dup.csv", "\n".join([*lines, lines[5]]) + "\n")
+    with pytest.raises(
+        DataError,
+        match=r"dup\.csv, line 17: duplicated trial \(participant sim01, session 1, trial 5\)",
+    ):
+        load_sessions("yoshida2008", [duplicate])
+    short = write_csv(
+        tmp_path / "short.csv", "\n".join(lines[:-2]) + "\n"
+    )  # last two main trials lost
+    with pytest.raises(
+        DataError,
+        match=r"participant sim01 has no trial at \{'method': '\w+', 'level_index': \d\}",
+    ):
+        load_sessions("yoshida2008", [short, *csvs(simulated, "yoshida2008")[1:]])
+    dataset = load_sessions(
+        "yoshida2008", [short, *csvs(simulated, "yoshida2008")[1:]], exclude_incomplete=True
+    )
+    assert list(dataset.excluded) == ["sim01"] and "sim01" not in set(
+        dataset.trials["participant"]
+    )
+
+
+def test_the_command_exits_non_zero_and_writes_nothing_on_bad_input(simulated, tmp_path, capsys):
+    data = pd.read_csv(csvs(simulated, "luidolt2020")[0], keep_default_na=False)
+    data.loc[0, "rating"] = 9  # outside the 1-7 scale
+    bad = tmp_path / "bad.csv"
+    data.to_csv(bad, index=False)
+    out = tmp_path / "report"
+    with pytest.raises(SystemExit) as stop:
+        main(["analyse", "luidolt2020", str(bad), "--out", str(out)])
+    assert stop.value.code == 2
+    assert "bad.csv, line 2, column rating" in capsys.readouterr().err
+    assert not out.exists()
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".report-")]
+    good = [str(p) for p in csvs(simulated, "luidolt2020")]
+    assert main(["analyse", "luidolt2020", *good, "--out", str(out)]) == 0
+    assert (out / "report.html").is_file()
+    shutil.rmtree(out)
