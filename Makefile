@@ -19,7 +19,7 @@ $(VENV)/.installed-test: pyproject.toml $(VENV)/.installed-core
 	touch $@
 
 demo: $(VENV)/.installed-core
-	$(BIN)/glarelab demo --out out/demo
+	$(BIN)/glarelab demo --protocol yoshida2008 --out out/demo
 
 system-deps:
 	bash scripts/system-deps.sh

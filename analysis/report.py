@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import base64
 import html
+import json
 import os
 import shutil
 import tempfile
@@ -17,6 +18,7 @@ import pandas as pd
 
 from .load import Dataset, load_sessions
 from .luidolt2020 import analyse_luidolt2020
+from .methods import methods_paragraph, provenance
 from .spencer1995 import analyse_spencer1995
 from .yoshida2008 import analyse_yoshida2008
 
@@ -54,7 +56,7 @@ def analyse(
     return dataset, ANALYSES[study](dataset)
 
 
-def _html(study: str, dataset: Dataset, result: dict) -> str:
+def _html(study: str, dataset: Dataset, result: dict, methods: str | None, origin: dict) -> str:
     parts = [
         "<!doctype html><html><head><meta charset='utf-8'>",
         f"<title>{html.escape(TITLES[study])}</title>",
@@ -65,10 +67,15 @@ def _html(study: str, dataset: Dataset, result: dict) -> str:
         f"<h1>{html.escape(TITLES[study])}</h1>",
     ]
     participants = dataset.trials["participant"].nunique()
+    blocks = dataset.trials["block"].value_counts()
+    training = int(blocks.get("training", 0))
+    note = f" ({training} of them training trials, not analysed)" if training else ""
     parts.append(
-        f"<p>{participants} participants, {len(dataset.trials)} trials from "
+        f"<p>{participants} participants, {len(dataset.trials)} trials{note} from "
         f"{len(dataset.files)} session files.</p>"
     )
+    if methods:
+        parts.append(f"<h2>Methods</h2><p>{html.escape(methods)}</p>")
     if dataset.excluded:
         items = "".join(
             f"<li>{html.escape(p)}: {html.escape(w)}</li>" for p, w in dataset.excluded.items()
@@ -89,15 +96,29 @@ def _html(study: str, dataset: Dataset, result: dict) -> str:
     for name, table in result["tables"].items():
         parts.append(f"<h2>{html.escape(name.replace('_', ' '))}</h2>")
         parts.append(table.to_html(index=False, float_format=lambda v: f"{v:.4g}", na_rep=""))
-    files = "".join(f"<li><code>{html.escape(f)}</code></li>" for f in dataset.files)
-    parts.append(f"<h2>Data</h2><ul>{files}</ul></body></html>")
+    files = "".join(f"<li><code>{html.escape(Path(f).name)}</code></li>" for f in dataset.files)
+    parts.append(f"<h2>Data</h2><ul>{files}</ul>")
+    parts.append(
+        "<h2>Provenance</h2><pre>"
+        + html.escape(json.dumps(origin, indent=2, default=str))
+        + "</pre></body></html>"
+    )
     return "\n".join(parts)
 
 
 def write_report(
-    study: str, paths: list[str | Path], out: str | Path, *, exclude_incomplete: bool = False
+    study: str,
+    paths: list[str | Path],
+    out: str | Path,
+    *,
+    exclude_incomplete: bool = False,
+    protocol=None,
+    stimuli: str | Path | None = None,
 ) -> Path:
     """Analyse session CSVs and write the report folder; returns the path of report.html.
+
+    ``protocol`` (a validated protocol: ``.data`` and ``.sha256``) adds a methods paragraph
+    naming its parameters; ``stimuli`` (the set's folder) adds its manifest hash.
 
     Raises
     ------
@@ -114,7 +135,25 @@ def write_report(
             (staging / f"{name}.md").write_text(_markdown(table))
         for name, data in result["figures"].items():
             (staging / name).write_bytes(data)
-        (staging / "report.html").write_text(_html(study, dataset, result), encoding="utf-8")
+        simulated = any(s.get("simulated") for s in dataset.sidecars.values())
+        methods = (
+            methods_paragraph(
+                study, protocol.data, dataset.trials["participant"].nunique(), simulated
+            )
+            if protocol is not None
+            else None
+        )
+        origin = provenance(
+            dataset.sidecars,
+            protocol.sha256 if protocol else None,
+            Path(stimuli) if stimuli else None,
+        )
+        (staging / "provenance.json").write_text(json.dumps(origin, indent=2, default=str))
+        if methods:
+            (staging / "methods.md").write_text(methods + "\n")
+        (staging / "report.html").write_text(
+            _html(study, dataset, result, methods, origin), encoding="utf-8"
+        )
         out.mkdir(parents=True, exist_ok=True)
         for item in staging.iterdir():
             os.replace(item, out / item.name)

@@ -144,7 +144,7 @@ DEMO_DISK = {  # Yoshida 2008 §3: a 0.3° disk; level "E" = 4000 cd/m²
 }
 
 
-def _demo(args: argparse.Namespace) -> int:
+def _looks(args: argparse.Namespace) -> int:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -423,11 +423,38 @@ def _run(args: argparse.Namespace) -> int:
 def _analyse(args: argparse.Namespace) -> int:
     from analysis.report import write_report
 
+    protocol = load_protocol(args.protocol) if args.protocol else None
     report = write_report(
-        args.study, args.csv, args.out, exclude_incomplete=args.exclude_incomplete
+        args.study,
+        args.csv,
+        args.out,
+        exclude_incomplete=args.exclude_incomplete,
+        protocol=protocol,
+        stimuli=args.stimuli,
     )
     _log(f"wrote {report} with its tables and figures")
     print(report.resolve())
+    return 0
+
+
+def _demo(args: argparse.Namespace) -> int:
+    from glarelab.demo import run_demo
+
+    report = run_demo(
+        args.protocol, args.out, participants=args.participants, seed=args.seed, log=_log
+    )
+    print(f"report: {report.resolve()}")
+    return 0
+
+
+def _docs(args: argparse.Namespace) -> int:
+    from glarelab.docs import data_reference, protocol_reference
+
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "protocols.md").write_text(protocol_reference())
+    (out / "data.md").write_text(data_reference())
+    _log(f"wrote {out / 'protocols.md'} and {out / 'data.md'}")
     return 0
 
 
@@ -545,6 +572,8 @@ def _parser() -> argparse.ArgumentParser:
     analyse.add_argument("study", choices=("yoshida2008", "spencer1995", "luidolt2020"))
     analyse.add_argument("csv", nargs="+", type=Path, help="session CSV files")
     analyse.add_argument("--out", type=Path, required=True, help="report folder")
+    analyse.add_argument("--protocol", type=Path, default=None, help="for the methods paragraph")
+    analyse.add_argument("--stimuli", type=Path, default=None, help="the set, for provenance")
     analyse.add_argument(
         "--exclude-incomplete",
         action="store_true",
@@ -552,14 +581,31 @@ def _parser() -> argparse.ArgumentParser:
     )
     analyse.set_defaults(run=_analyse)
 
+    docs = commands.add_parser("docs", help="regenerate docs/protocols.md and docs/data.md")
+    docs.add_argument("--out", type=Path, default=Path("docs"))
+    docs.set_defaults(run=_docs)
+
     gallery = commands.add_parser("gallery", help="render the wave-optics PSF gallery")
     gallery.add_argument("--out", type=Path, default=Path("docs/gallery"))
     gallery.add_argument("--pixel-deg", type=float, default=0.01)
     gallery.add_argument("--size", type=int, default=401)
     gallery.set_defaults(run=_gallery)
 
-    demo = commands.add_parser("demo", help="render a glare stimulus with each model")
-    demo.add_argument("--out", type=Path, default=Path("out/demo"), help="output folder")
+    looks = commands.add_parser("looks", help="render a glare stimulus with each model")
+    looks.add_argument("--out", type=Path, default=Path("out/looks"), help="output folder")
+    looks.set_defaults(run=_looks)
+
+    demo = commands.add_parser(
+        "demo", help="the whole study on simulated observers: stimuli, sessions, analysis, report"
+    )
+    demo.add_argument(
+        "--protocol", choices=("yoshida2008", "spencer1995", "luidolt2020"), default="yoshida2008"
+    )
+    demo.add_argument(
+        "--out", type=Path, default=Path("out/demo"), help="output folder (replaced)"
+    )
+    demo.add_argument("--participants", type=int, default=10)
+    demo.add_argument("--seed", type=int, default=1, help="seed of the simulated observers")
     demo.set_defaults(run=_demo)
     return parser
 

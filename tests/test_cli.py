@@ -94,9 +94,9 @@ def test_render_reports_bad_arguments_by_name(tmp_path, capsys):
     assert "no EXR file" in capsys.readouterr().err
 
 
-def test_demo_writes_exr_and_png_for_each_model(tmp_path):
+def test_looks_writes_exr_and_png_for_each_model(tmp_path):
     status = subprocess.run(
-        [sys.executable, "-m", "glarelab", "demo", "--out", str(tmp_path)],
+        [sys.executable, "-m", "glarelab", "looks", "--out", str(tmp_path)],
         capture_output=True,
         text=True,
         check=False,

@@ -1,0 +1,61 @@
+"""The demo runs the whole study, and its report says what the analysis computes."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pandas as pd
+from pandas.testing import assert_frame_equal
+
+from analysis.report import write_report
+from stimuli.protocol import load_protocol
+
+ROOT = Path(__file__).parents[1]
+
+
+def test_demo_report_matches_a_fresh_analysis_and_names_the_protocol(tmp_path):
+    out = tmp_path / "demo"
+    done = subprocess.run(
+        [sys.executable, "-m", "glarelab", "demo", "--protocol", "yoshida2008", "--out", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=900,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr
+    assert "[4/4] report written" in done.stderr and "report:" in done.stdout
+    report = out / "report" / "report.html"
+    assert report.is_file()
+    csvs = sorted((out / "data").glob("yoshida2008_sim*_s1.csv"))
+    assert len(csvs) == 10
+    protocol = load_protocol(ROOT / "protocols" / "yoshida2008.toml")
+    again = write_report(
+        "yoshida2008", csvs, tmp_path / "again", protocol=protocol, stimuli=out / "stimuli"
+    ).parent
+    for table in sorted((out / "report").glob("*.csv")):
+        assert_frame_equal(pd.read_csv(table), pd.read_csv(again / table.name), check_exact=True)
+    methods = (out / "report" / "methods.md").read_text()
+    for fact in (
+        "10 simulated observers",
+        "0.3° disk",
+        "3.2° cloudy sky",
+        "mean 150 cd/m²",
+        "maximum 433 cd/m²",
+        "1 m in 60 lx",
+        "L_dmax = 220 cd/m²",
+        "σ = 0.34°",
+        "220, 1165, 2110, 3055, 4000, 7000",
+        "220, 1480, 2740, 4000, 7000, 10000",
+        "100, 400 cd/m²",
+        "2048 × 1536 px, 10-bit",
+    ):
+        assert fact in methods, fact
+    html = report.read_text()
+    assert methods.strip() in html
+    provenance = json.loads((out / "report" / "provenance.json").read_text())
+    assert provenance["protocol_sha256"] == protocol.sha256
+    assert provenance["protocol_sha256_in_sessions"] == [protocol.sha256]
+    assert len(provenance["stimulus_set_manifest_sha256"]) == 64
+    assert provenance["stimulus_set_calibration_status"] == "synthetic"
+    assert provenance["packages"]["glarelab"] != "not installed"
