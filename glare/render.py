@@ -60,6 +60,23 @@ class GlareResult:
     parameters: dict
 
 
+FLOAT32_NOISE_LIMIT_CD_M2 = 1e-3  # largest FFT round-off the float32 path may add anywhere
+
+
+def _convolution_dtype(excess: np.ndarray, kernel: np.ndarray, requested: np.dtype) -> np.dtype:
+    """float32 unless its FFT round-off could exceed FLOAT32_NOISE_LIMIT_CD_M2.
+
+    FFT round-off is about machine epsilon times the largest values in the transform, and it
+    lands everywhere, including the dark parts of the image. The spread's largest value is at
+    most ``Σ ΔL × max K``; next to the sun (Spencer Fig. 16: 7.5e8 cd/m²) float32 would add
+    ±2 cd/m² of noise to dark pixels, so such scenes are convolved in float64.
+    """
+    if requested == np.float64:
+        return np.dtype(np.float64)
+    bound = float(excess.sum(dtype=np.float64)) * float(kernel.max()) * np.finfo(np.float32).eps
+    return np.dtype(np.float64 if bound > FLOAT32_NOISE_LIMIT_CD_M2 else np.float32)
+
+
 def _bounding_box(mask: np.ndarray) -> tuple[slice, slice]:
     rows = np.flatnonzero(mask.any(axis=1))
     cols = np.flatnonzero(mask.any(axis=0))
@@ -116,7 +133,9 @@ def render_glare(
         ``'Yoshida2008'`` (default): ``min(L + ΔL ⊛ K, L_dmax)``. ``'Spencer1995'``:
         ``min(L, L_dmax) + ΔL ⊛ K`` with no clamp.
     precision
-        ``'float64'`` (reference) or ``'float32'`` (fast; about 1e-6 relative).
+        ``'float64'`` (reference) or ``'float32'`` (fast; about 1e-6 relative). The float32
+        path convolves in float64 when its FFT round-off could add more than 1e-3 cd/m² to the
+        image (a scene with a sun); ``parameters['convolution_precision']`` says which ran.
     kernel_shape
         Odd kernel shape; default ``(2H - 1, 2W - 1)``, which lets every pixel reach every
         other (Spencer §3.2: "double the width and height of the target image").
@@ -192,12 +211,22 @@ def render_glare(
         [kernels] if kernels.ndim == 2 else [kernels[..., c] for c in range(kernels.shape[2])]
     )
     excess_list, spread_list = [], []
+    used: set[str] = set()
     for index, channel in enumerate(channels):
         excess = np.maximum(channel - dtype.type(l_dmax), dtype.type(0))
         k = kernel_channels[min(index, len(kernel_channels) - 1)].astype(dtype, copy=False)
         bright = excess > 0
         if bright.any():
-            spread = _spread(excess, k, _bounding_box(bright)).astype(dtype, copy=False)
+            work_dtype = _convolution_dtype(excess, k, dtype)
+            used.add(work_dtype.name)
+            spread = _spread(
+                excess.astype(work_dtype, copy=False),
+                k.astype(work_dtype, copy=False),
+                _bounding_box(bright),
+            )
+            # the spread of a non-negative excess by a non-negative kernel is non-negative;
+            # FFT round-off is not
+            spread = np.maximum(spread, 0.0).astype(dtype, copy=False)
         else:
             spread = np.zeros_like(excess)
         excess_list.append(excess)
@@ -215,6 +244,7 @@ def render_glare(
     else:
         raise ValueError(f"method must be one of {METHODS}; got {method!r}")
 
+    parameters["convolution_precision"] = sorted(used) or [precision]
     axes = (0, 1)
     excess_energy = excess.sum(axis=axes, dtype=np.float64)
     kernel_sum = digitised.values.sum(axis=axes, dtype=np.float64)

@@ -208,3 +208,48 @@ def test_a_digitised_kernel_can_be_reused():
     assert np.array_equal(reused.image, fresh.image)
     with pytest.raises(ValueError, match=r"kernel was digitised for pixel_deg = 0\.02, not 0\.03"):
         render_glare(image, model, pixel_deg=0.03, kernel=kernel)
+
+
+@pytest.mark.parametrize("model", [GaussianGlare(sigma_deg=0.05), VosGlare()])
+def test_float32_next_to_the_sun_adds_no_noise_to_dark_pixels(model):
+    # Spencer Fig. 16: a 7.5e8 cd/m² sun. Float32 FFT round-off would add ±2 cd/m² (and
+    # negative light) to dark pixels; the float32 path must stay at the float64 result.
+    image = np.full((256, 256), 0.5)
+    image[60:64, 60:64] = 7.5e8
+    reference = add_glare(image, model, pixel_deg=0.02)
+    fast = render_glare(image.astype(np.float32), model, pixel_deg=0.02, precision="float32")
+    assert fast.image.min() >= 0.5 - 1e-6  # nothing darker than the scene itself
+    far = (slice(180, None), slice(180, None))
+    assert_allclose(fast.image[far], reference[far], rtol=1e-6, atol=1e-5)
+    assert fast.parameters["convolution_precision"] == ["float64"]
+    ordinary = np.full((64, 64), 0.5)
+    ordinary[30, 30] = 4000.0
+    assert render_glare(ordinary, model, pixel_deg=0.02, precision="float32").parameters[
+        "convolution_precision"
+    ] == ["float32"]
+
+
+def test_spread_is_linear_in_the_excess_and_shift_equivariant():
+    model, pixel = VosGlare(regime="mesopic"), 0.03
+    base = np.zeros((81, 81))
+    base[40, 40] = 1220.0  # excess 1000 over L_dmax = 220
+    one = render_glare(base, model, pixel_deg=pixel, kernel_shape=(61, 61)).spread
+    brighter = base.copy()
+    brighter[40, 40] = 220.0 + 3000.0
+    three = render_glare(brighter, model, pixel_deg=pixel, kernel_shape=(61, 61)).spread
+    assert_allclose(three, 3 * one, rtol=1e-9, atol=1e-12)  # linear in ΔL
+    shifted = np.roll(base, (5, -7), axis=(0, 1))
+    moved = render_glare(shifted, model, pixel_deg=pixel, kernel_shape=(61, 61)).spread
+    inner = (slice(20, 61), slice(20, 61))
+    assert_allclose(moved[inner], np.roll(one, (5, -7), axis=(0, 1))[inner], rtol=1e-9, atol=1e-9)
+
+
+@settings(max_examples=20, deadline=None)
+@given(st.floats(221.0, 1e9), st.floats(1.01, 100.0))
+def test_glare_grows_with_source_luminance(luminance, factor):
+    image = np.full((41, 41), 1.0)
+    image[20, 20] = luminance
+    dim = render_glare(image, VosGlare(), pixel_deg=0.05, method="Spencer1995").image
+    image[20, 20] = 220.0 + (luminance - 220.0) * factor
+    bright = render_glare(image, VosGlare(), pixel_deg=0.05, method="Spencer1995").image
+    assert (bright >= dim - 1e-9 * dim).all()
