@@ -137,9 +137,14 @@ def run_session(
         if simulated
         else usable_calibration(calibration, allow_uncalibrated=allow_uncalibrated)
     )
-    files = SessionFiles(protocol.study, participant, session, Path(out), resume=resume)
     if hasattr(frontend, "open"):
-        frontend.open()  # the window opens after every check has passed
+        frontend.open()  # after every check, before any file: a failing window leaves no data
+    try:
+        files = SessionFiles(protocol.study, participant, session, Path(out), resume=resume)
+    except Exception:
+        if hasattr(frontend, "close"):
+            frontend.close()
+        raise
     engine = make_engine(
         protocol,
         participant,
