@@ -458,6 +458,14 @@ def _docs(args: argparse.Namespace) -> int:
     return 0
 
 
+def _bench(args: argparse.Namespace) -> int:
+    from glarelab.bench import run_bench
+
+    run_bench(args.out, large=args.large, repeats=args.repeats, log=_log)
+    _log(f"wrote {args.out / 'bench.csv'}, bench.md and the Pareto plots")
+    return 0
+
+
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="glarelab", description="Glare illusion psychophysics suite"
@@ -580,6 +588,14 @@ def _parser() -> argparse.ArgumentParser:
         help="drop participants with a missing design cell (listed in the report)",
     )
     analyse.set_defaults(run=_analyse)
+
+    bench = commands.add_parser(
+        "bench", help="time each speed knob against its error in display codes"
+    )
+    bench.add_argument("--out", type=Path, default=Path("out/bench"))
+    bench.add_argument("--large", action="store_true", help="add the 2048² sun scene")
+    bench.add_argument("--repeats", type=int, default=3)
+    bench.set_defaults(run=_bench)
 
     docs = commands.add_parser("docs", help="regenerate docs/protocols.md and docs/data.md")
     docs.add_argument("--out", type=Path, default=Path("docs"))
