@@ -16,11 +16,13 @@ from stimuli.apertures import load_aperture_image
 from stimuli.calibration import Calibration, fit_calibration, read_readings
 from stimuli.exr import read_exr, write_exr
 from stimuli.preview import preview_png, psf_png
-from stimuli.protocol import ProtocolError, describe_schema, load_protocol
+from stimuli.protocol import SCHEMAS, ProtocolError, describe_schema, load_protocol
 from stimuli.shapes import disk
 from stimuli.stimulus_set import build_stimulus_set, verify_stimulus_set
 
 __all__ = ["build_model", "main"]
+
+STUDIES = tuple(SCHEMAS)  # the studies a protocol file can name
 
 
 def _log(message: str) -> None:
@@ -510,7 +512,7 @@ def _parser() -> argparse.ArgumentParser:
     check.add_argument("protocol", type=Path)
     check.set_defaults(run=_protocol_check)
     keys = protocol_commands.add_parser("keys", help="every key of a study's protocol")
-    keys.add_argument("study", choices=("yoshida2008", "spencer1995", "luidolt2020"))
+    keys.add_argument("study", choices=STUDIES)
     keys.set_defaults(run=_protocol_keys)
 
     calibrate = commands.add_parser("calibrate", help="display calibration")
@@ -546,7 +548,7 @@ def _parser() -> argparse.ArgumentParser:
     measure.set_defaults(run=_calibrate_measure)
 
     run = commands.add_parser("run", help="run a study session (PsychoPy) or simulated sessions")
-    run.add_argument("study", choices=("yoshida2008", "spencer1995", "luidolt2020"))
+    run.add_argument("study", choices=STUDIES)
     run.add_argument("--participant", default=None, help="participant id (file-name safe)")
     run.add_argument("--session", type=int, default=1)
     run.add_argument("--protocol", type=Path, default=None, help="default: protocols/STUDY.toml")
@@ -577,7 +579,7 @@ def _parser() -> argparse.ArgumentParser:
     run.set_defaults(run=_run)
 
     analyse = commands.add_parser("analyse", help="analyse session CSVs: tables, figures, report")
-    analyse.add_argument("study", choices=("yoshida2008", "spencer1995", "luidolt2020"))
+    analyse.add_argument("study", choices=STUDIES)
     analyse.add_argument("csv", nargs="+", type=Path, help="session CSV files")
     analyse.add_argument("--out", type=Path, required=True, help="report folder")
     analyse.add_argument("--protocol", type=Path, default=None, help="for the methods paragraph")
@@ -614,9 +616,7 @@ def _parser() -> argparse.ArgumentParser:
     demo = commands.add_parser(
         "demo", help="the whole study on simulated observers: stimuli, sessions, analysis, report"
     )
-    demo.add_argument(
-        "--protocol", choices=("yoshida2008", "spencer1995", "luidolt2020"), default="yoshida2008"
-    )
+    demo.add_argument("--protocol", choices=STUDIES, default="yoshida2008")
     demo.add_argument(
         "--out", type=Path, default=Path("out/demo"), help="output folder (replaced)"
     )
