@@ -86,19 +86,11 @@ class PsychoPyFrontend:
     def _set_calibration(self) -> Calibration | None:
         if self.stimuli is None:
             return None
-        manifest = json.loads((self.stimuli / "manifest.json").read_text())
-        c = manifest["calibration"]
-        calibration = Calibration(
-            bit_depth=c["bit_depth"],
-            readings=tuple(tuple(r) for r in c["readings"]),
-            method=c["method"],
-            created=c["created"],
-            status=c["status"],
-            label=c["label"],
-            model=c["model"],
-            verification=c["verification"],
+        manifest_path = self.stimuli / "manifest.json"
+        manifest = json.loads(manifest_path.read_text())
+        return Calibration.from_json(
+            manifest["calibration"], source=f"{manifest_path} calibration"
         )
-        return calibration
 
     # --- window ---------------------------------------------------------------------------
 

@@ -245,14 +245,13 @@ class Calibration:
         return path
 
     @classmethod
-    def load(cls, path: str | Path) -> Calibration:
-        """Read a calibration file, checking its format and the hash of its readings."""
-        path = Path(path)
-        if not path.is_file():
-            raise FileNotFoundError(f"no calibration file at {path}")
-        data = json.loads(path.read_text())
+    def from_json(cls, data: dict, *, source: str = "calibration") -> Calibration:
+        """A calibration from its JSON form (a file, or a stimulus-set manifest), checking its
+        format and the hash of its readings."""
         if data.get("format") != FORMAT:
-            raise ValueError(f"{path}: not a glarelab calibration (format {data.get('format')!r})")
+            raise ValueError(
+                f"{source}: not a glarelab calibration (format {data.get('format')!r})"
+            )
         calibration = cls(
             bit_depth=int(data["bit_depth"]),
             readings=tuple((int(c), float(v)) for c, v in data["readings"]),
@@ -264,8 +263,16 @@ class Calibration:
             verification=data.get("verification", {}),
         )
         if calibration.readings_sha256 != data.get("readings_sha256"):
-            raise ValueError(f"{path}: the readings do not match their recorded hash (edited?)")
+            raise ValueError(f"{source}: the readings do not match their recorded hash (edited?)")
         return calibration
+
+    @classmethod
+    def load(cls, path: str | Path) -> Calibration:
+        """Read a calibration file, checking its format and the hash of its readings."""
+        path = Path(path)
+        if not path.is_file():
+            raise FileNotFoundError(f"no calibration file at {path}")
+        return cls.from_json(json.loads(path.read_text()), source=str(path))
 
 
 def _check_readings(
