@@ -23,6 +23,7 @@ import itertools
 import json
 import warnings
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 from pathlib import Path
 from typing import Literal
 
@@ -107,9 +108,9 @@ class Calibration:
         text = json.dumps([[int(c), float(v)] for c, v in self.readings])
         return hashlib.sha256(text.encode()).hexdigest()
 
-    @property
+    @cached_property
     def lut(self) -> np.ndarray:
-        """Luminance of every code, cd/m² (monotone non-decreasing)."""
+        """Luminance of every code, cd/m² (monotone non-decreasing; computed once, read-only)."""
         codes = np.arange(self.n_codes, dtype=float)
         data = np.array(self.readings, dtype=float)
         if self.method == "pchip":
@@ -134,7 +135,9 @@ class Calibration:
             )
         else:
             raise ValueError(f"method must be 'pchip' or 'gog'; got {self.method!r}")
-        return np.maximum.accumulate(values)
+        values = np.maximum.accumulate(values)
+        values.setflags(write=False)
+        return values
 
     @property
     def black_cd_m2(self) -> float:
