@@ -197,6 +197,7 @@ LEVELS_CD_M2 = Key(
     low=0.0,
     high=1e9,
 )
+OBSERVER_SD = Key(float, "between-observer SD of the boost gain", low=0.0, high=2.0)
 REGIME = Key(str, "Vos PSF regime", choices=("photopic", "mesopic", "scotopic"))
 INSTRUCTIONS: Schema = {"text": Key(str, "written instruction")}
 STUDY: Schema = {
@@ -290,7 +291,7 @@ YOSHIDA2008: Schema = {
         "margin": Key(
             float, "'slightly but visibly' darker/brighter, as a fraction", low=0.0, high=1.0
         ),
-        "observer_sd": Key(float, "between-observer SD of the boost gain", low=0.0, high=2.0),
+        "observer_sd": OBSERVER_SD,
         "setting_sd": Key(
             float, "within-observer SD of each setting, as a fraction", low=0.0, high=1.0
         ),
@@ -388,7 +389,7 @@ SPENCER1995: Schema = {
         "saturation": Key(
             float, "glare strength at which the boost reaches 63 %", low=0.001, high=1e6
         ),
-        "observer_sd": Key(float, "between-observer SD of the boost gain", low=0.0, high=2.0),
+        "observer_sd": OBSERVER_SD,
         "noise_sd": Key(
             float, "SD of the comparison noise, fraction of the maximum", low=0.0, high=1.0
         ),
