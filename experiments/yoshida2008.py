@@ -122,9 +122,9 @@ class BrightnessMatching:
                 self.adjustments += self.values[self.selected] != before
             elif key == "return":
                 self.confirm_time = t
-                self.phase = "question" if self.questions else "adjust"
                 if not self.questions:
                     return self._finish()
+                self.phase = "question"
             return None
         if self.phase == "question":
             if key in ("y", "n"):
