@@ -22,6 +22,7 @@ from .models import (
     kernel,
     make_model,
 )
+from .plan import Display, GlarePlan, PlannedGlare, plan_glare, render_planned
 from .render import L_DMAX_YOSHIDA2008_CD_M2, GlareResult, add_glare, render_glare
 from .spectral import HaloSpectrum, Spectrum
 from .wave import WaveOpticsGlare
@@ -29,12 +30,15 @@ from .wave import WaveOpticsGlare
 __all__ = [
     "GLARE_MODELS",
     "L_DMAX_YOSHIDA2008_CD_M2",
+    "Display",
     "GaussianGlare",
     "GlareModel",
+    "GlarePlan",
     "GlareResult",
     "HaloSpectrum",
     "HybridGlare",
     "Kernel",
+    "PlannedGlare",
     "Spectrum",
     "VosGlare",
     "WaveOpticsGlare",
@@ -46,9 +50,11 @@ __all__ = [
     "kernel",
     "kernel_shape_for",
     "make_model",
+    "plan_glare",
     "pupil_diameter_mm",
     "regime",
     "render_glare",
+    "render_planned",
     "vos",
     "wave",
 ]

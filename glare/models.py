@@ -15,7 +15,8 @@ from typing import Literal, Protocol
 import numpy as np
 
 from . import vos
-from ._validation import check_choice, check_positive, check_positive_int
+from ._radial import radial_mass
+from ._validation import check_choice, check_in_range, check_positive, check_positive_int
 from .digitise import (
     Kernel,
     check_kernel_shape,
@@ -23,7 +24,7 @@ from .digitise import (
     gaussian_pixel_energies,
     mirror_quadrant,
 )
-from .eye import Regime, regime
+from .eye import HALO_PUPIL_MM, Regime, regime
 from .flare import CORONA_LINES, HALO_LINES, flare_line_pattern
 from .spectral import HALO_TABLE_MAX_DEG, HaloSpectrum, halo_profiles
 from .wave import WaveOpticsGlare
@@ -39,7 +40,29 @@ __all__ = [
     "make_model",
 ]
 
+PUPIL_RANGE_MM = (0.5, 10.0)  # accepted pupil diameters; the eye spans about 2-8 mm
 SIGMA_DEG_YOSHIDA2008 = 0.34  # Yoshida 2008 §3: σ = 0.34 visual degrees (Method I)
+TAIL_MARGIN = 1.02  # the peak beyond a radius is found on a grid; 2 % covers the ring's crest
+
+
+@dataclass(frozen=True)
+class TailBound:
+    """Upper bounds on what a kernel cut to a centred square leaves out, per radius.
+
+    Attributes
+    ----------
+    peak
+        Largest value of a kernel pixel outside the square (fraction of the source's energy).
+    energy
+        Energy of the PSF outside the square (fraction).
+    renormalised
+        Whether the model normalises its kernel over the support, so that cutting it also
+        scales what is kept by ``1 / (1 - energy)``.
+    """
+
+    peak: np.ndarray
+    energy: np.ndarray
+    renormalised: bool = False
 
 
 class GlareModel(Protocol):
@@ -87,6 +110,31 @@ class GaussianGlare:
     def __post_init__(self) -> None:
         check_positive("sigma_deg", self.sigma_deg, unit="deg")
         check_choice("sampling", self.sampling, ("point", "pixel"))
+
+    def tail_bound(
+        self, pixel_deg: float, radius_px: np.ndarray, *, colour: bool = False
+    ) -> TailBound:
+        """What a kernel cut to a centred square of half-size ``radius_px`` leaves out.
+
+        Exact for the separable kernel: the largest pixel outside is ``a[r+1] a[0]`` and the
+        energy outside ``1 - (Σ_{|i|≤r} a_i)²`` for the normalised 1-D profile ``a``. The cut
+        kernel is normalised over its support (eq. 2's ``k``), so it is marked renormalised.
+        """
+        pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
+        radius = np.asarray(radius_px, dtype=np.int64)
+        sigma_px = self.sigma_deg / pixel_deg
+        n = int(radius.max()) + 2 + math.ceil(12 * sigma_px)
+        if self.sampling == "point":
+            profile = np.exp(-(np.arange(n + 1, dtype=float) ** 2) / (2.0 * sigma_px**2))
+        else:
+            profile = gaussian_pixel_energies(self.sigma_deg * math.sqrt(2.0), pixel_deg, n)
+        profile = profile / (2.0 * profile.sum() - profile[0])
+        inside = 2.0 * np.cumsum(profile) - profile[0]  # Σ_{|i|≤r} a_i
+        return TailBound(
+            peak=profile[radius + 1] * profile[0],
+            energy=np.clip(1.0 - inside[radius] ** 2, 0.0, 1.0),
+            renormalised=True,
+        )
 
     def kernel(self, pixel_deg: float, shape: tuple[int, int], *, colour: bool = False) -> Kernel:
         """Digitise the Gaussian for pixels of ``pixel_deg`` degrees into an odd ``shape``.
@@ -159,6 +207,11 @@ class VosGlare:
         (Spencer's 10,000 samples per central pixel), 4 px.
     corona_lines, halo_lines
         Number of flare lines in the corona and the halo; defaults 150 and 300.
+    pupil_mm
+        Pupil diameter in mm (0.5-10), or ``None`` (default): the pupil the regime implies.
+        Below 3 mm the lenticular halo is dropped and its weight returned to ``f0``: a beam
+        narrower than 3 mm passes the clear centre of the lens (Spencer §2.1), and eq. 8's
+        halo weight is "diverted from the central peak" (§3.1.1).
 
     Notes
     -----
@@ -189,9 +242,12 @@ class VosGlare:
     center_radius_px: float = 4.0
     corona_lines: int = CORONA_LINES
     halo_lines: int = HALO_LINES
+    pupil_mm: float | None = None
 
     def __post_init__(self) -> None:
         vos.weights(self.regime, self.age)  # validates regime and age
+        if self.pupil_mm is not None:
+            check_in_range("pupil_mm", self.pupil_mm, *PUPIL_RANGE_MM, unit="mm")
         if self.wavelength_nm is not None:
             vos.f3(0.0, self.wavelength_nm)  # validates the wavelength
         check_positive_int("seed", self.seed, minimum=0)
@@ -212,10 +268,80 @@ class VosGlare:
         """
         return cls(regime=regime(field_luminance_cd_m2), **options)
 
+    @property
+    def halo_skipped(self) -> bool:
+        """True when a pupil under 3 mm removes the lenticular halo (Spencer §2.1)."""
+        return self.pupil_mm is not None and self.pupil_mm < HALO_PUPIL_MM
+
+    @property
+    def weights(self) -> tuple[float, float, float, float]:
+        """``(w0, w1, w2, w3)`` of eqs. 5, 8-10, with the halo's weight moved to ``f0`` when
+        :attr:`halo_skipped`."""
+        w0, w1, w2, w3 = vos.weights(self.regime, self.age)
+        if self.halo_skipped:
+            return (w0 + w3, w1, w2, 0.0)
+        return (w0, w1, w2, w3)
+
     def psf(self, theta_deg: float | np.ndarray) -> float | np.ndarray:
         """The continuous PSF (per steradian) at the halo wavelength (568 nm if white)."""
+        w0, w1, w2, w3 = self.weights
         wavelength = vos.HALO_REFERENCE_NM if self.wavelength_nm is None else self.wavelength_nm
-        return vos.psf(theta_deg, self.regime, wavelength, self.age)
+        theta = np.asarray(theta_deg, dtype=float)
+        values = w0 * vos.f0(theta) + w1 * vos.f1(theta) + w2 * vos.f2(theta)
+        if w3:
+            values = values + w3 * vos.f3(theta, wavelength)
+        return float(values) if np.ndim(theta_deg) == 0 else values
+
+    def tail_bound(
+        self, pixel_deg: float, radius_px: np.ndarray, *, colour: bool = False
+    ) -> TailBound | None:
+        """What a kernel cut to a centred square of half-size ``radius_px`` leaves out.
+
+        A pixel outside the square lies beyond ``θ = (r + ½) Δ``; its energy is at most the
+        PSF's largest value beyond that angle times the pixel's area (the measure of eq. 4
+        has ``sin θ ≤ θ``), and the energy outside the square at most that outside the disc
+        of radius ``θ``. Every channel's halo profile is bounded separately. ``None`` with
+        flare lines, whose streaks are not bounded by the smooth PSF.
+        """
+        if self.flare_lines:
+            return None
+        pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
+        radius = np.asarray(radius_px, dtype=float)
+        theta = (radius + 0.5) * pixel_deg
+        w0, w1, w2, w3 = self.weights
+        halos = [None]
+        if w3 > 0:
+            halos = halo_profiles(
+                "RGB" if colour else "Y", self.halo_spectrum, wavelength_nm=self.wavelength_nm
+            )
+
+        def profile_for(halo):
+            def profile(t):
+                values = w0 * vos.f0(t) + w1 * vos.f1(t) + w2 * vos.f2(t)
+                return values if halo is None else values + w3 * halo(t)
+
+            return profile
+
+        grid = np.unique(
+            np.concatenate(
+                [theta, np.linspace(0.0, HALO_TABLE_MAX_DEG, 1601), np.geomspace(1e-4, 180, 4000)]
+            )
+        )
+        grid = grid[grid >= theta.min()]
+        peak = np.zeros_like(theta)
+        energy = np.zeros_like(theta)
+        for halo in halos:
+            profile = profile_for(halo)
+            running_max = np.maximum.accumulate(profile(grid)[::-1])[::-1]
+            peak = np.maximum(peak, running_max[np.searchsorted(grid, theta)])
+            total = radial_mass(profile, np.array([90.0]), breakpoints=(2.0, 3.0, 4.0))[0]
+            inside = radial_mass(profile, theta, breakpoints=(2.0, 3.0, 4.0))
+            energy = np.maximum(energy, 1.0 - inside / total)
+        pixel_sr = math.radians(pixel_deg) ** 2
+        return TailBound(
+            peak=TAIL_MARGIN * peak * pixel_sr,
+            energy=np.clip(TAIL_MARGIN * energy, 0.0, 1.0),
+        )
 
     def _digitise_settings(self, pixel_deg: float, shape: tuple[int, int]) -> dict:
         return {
@@ -236,7 +362,7 @@ class VosGlare:
         """
         pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
         shape = check_kernel_shape(shape)
-        w0, w1, w2, w3 = vos.weights(self.regime, self.age)
+        w0, w1, w2, w3 = self.weights
         settings = self._digitise_settings(pixel_deg, shape)
 
         # f0: exact, separable (Spencer: a delta when narrower than a pixel)
@@ -294,7 +420,7 @@ class VosGlare:
             "model": type(self).__name__,
             **{k: v for k, v in asdict(self).items() if k != "halo_spectrum"},
             "halo_spectrum": asdict(self.halo_spectrum),
-            "weights": vos.weights(self.regime, self.age),
+            "weights": self.weights,
             "colour": colour,
         }
 
@@ -392,7 +518,11 @@ class HybridGlare:
 
     def kernel(self, pixel_deg: float, shape: tuple[int, int], *, colour: bool = False) -> Kernel:
         vos_model = VosGlare(
-            regime=self.regime, age=self.age, flare_lines=self.flare_lines, seed=self.seed
+            regime=self.regime,
+            age=self.age,
+            flare_lines=self.flare_lines,
+            seed=self.seed,
+            pupil_mm=self.wave.pupil_diameter,  # one eye: the halo needs a 3 mm pupil
         )
         parts = vos_model.parts(pixel_deg, shape, colour=colour)
         diffraction = self.wave.kernel(pixel_deg, shape, colour=colour)

@@ -13,11 +13,13 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
-from scipy.signal import fftconvolve
 
+from ._convolve import bounding_box, convolution_dtype
+from ._convolve import spread as spread_fn
 from ._validation import check_choice, check_image, check_positive
 from .digitise import Kernel, check_kernel_shape, kernel_shape_for
 from .models import GlareModel, _resolve
+from .plan import render_planned
 
 __all__ = ["L_DMAX_YOSHIDA2008_CD_M2", "GlareResult", "add_glare", "render_glare"]
 
@@ -58,51 +60,6 @@ class GlareResult:
     energy_outside_kernel: np.ndarray
     energy_outside_image: np.ndarray
     parameters: dict
-
-
-FLOAT32_NOISE_LIMIT_CD_M2 = 1e-3  # largest FFT round-off the float32 path may add anywhere
-
-
-def _convolution_dtype(excess: np.ndarray, kernel: np.ndarray, requested: np.dtype) -> np.dtype:
-    """float32 unless its FFT round-off could exceed FLOAT32_NOISE_LIMIT_CD_M2.
-
-    FFT round-off is about machine epsilon times the largest values in the transform, and it
-    lands everywhere, including the dark parts of the image. The spread's largest value is at
-    most ``Σ ΔL × max K``; next to the sun (Spencer Fig. 16: 7.5e8 cd/m²) float32 would add
-    ±2 cd/m² of noise to dark pixels, so such scenes are convolved in float64.
-    """
-    if requested == np.float64:
-        return np.dtype(np.float64)
-    bound = float(excess.sum(dtype=np.float64)) * float(kernel.max()) * np.finfo(np.float32).eps
-    return np.dtype(np.float64 if bound > FLOAT32_NOISE_LIMIT_CD_M2 else np.float32)
-
-
-def _bounding_box(mask: np.ndarray) -> tuple[slice, slice]:
-    rows = np.flatnonzero(mask.any(axis=1))
-    cols = np.flatnonzero(mask.any(axis=0))
-    return slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1)
-
-
-def _spread(excess: np.ndarray, kernel: np.ndarray, box: tuple[slice, slice]) -> np.ndarray:
-    """Linear convolution of ``excess`` (zero outside ``box``) with a centred odd kernel,
-    cropped to the image. Only the bounding box of the bright pixels is transformed: exact,
-    and far cheaper than the whole image when the bright region is small."""
-    height, width = excess.shape
-    rows, cols = box
-    full = fftconvolve(excess[rows, cols], kernel, mode="full")
-    kh, kw = kernel.shape
-    # full[a, b] is the response at image pixel (a + rows.start - kh//2, b + cols.start - kw//2)
-    top, left = rows.start - kh // 2, cols.start - kw // 2
-    out = np.zeros((height, width), dtype=full.dtype)
-    src_r0, src_c0 = max(0, -top), max(0, -left)
-    dst_r0, dst_c0 = max(0, top), max(0, left)
-    n_rows = min(full.shape[0] - src_r0, height - dst_r0)
-    n_cols = min(full.shape[1] - src_c0, width - dst_c0)
-    if n_rows > 0 and n_cols > 0:
-        out[dst_r0 : dst_r0 + n_rows, dst_c0 : dst_c0 + n_cols] = full[
-            src_r0 : src_r0 + n_rows, src_c0 : src_c0 + n_cols
-        ]
-    return out
 
 
 def render_glare(
@@ -217,12 +174,12 @@ def render_glare(
         k = kernel_channels[min(index, len(kernel_channels) - 1)].astype(dtype, copy=False)
         bright = excess > 0
         if bright.any():
-            work_dtype = _convolution_dtype(excess, k, dtype)
+            work_dtype = convolution_dtype(excess, k, dtype)
             used.add(work_dtype.name)
-            spread = _spread(
+            spread = spread_fn(
                 excess.astype(work_dtype, copy=False),
                 k.astype(work_dtype, copy=False),
-                _bounding_box(bright),
+                bounding_box(bright),
             )
             # the spread of a non-negative excess by a non-negative kernel is non-negative;
             # FFT round-off is not
@@ -271,13 +228,26 @@ def add_glare(
     method: Literal["Yoshida2008", "Spencer1995"] = "Yoshida2008",
     precision: Literal["float64", "float32"] = "float64",
     kernel_shape: tuple[int, int] | None = None,
+    tolerance_codes: float | None = 0.5,
+    display=None,
 ) -> np.ndarray:
-    """Add glare to a linear luminance image; the image part of :func:`render_glare`.
+    """Add glare to a linear luminance image, doing only the work the scene and display need.
 
     Parameters
     ----------
-    luminance_cd_m2, model, pixel_deg, l_dmax_cd_m2, method, precision, kernel_shape
+    luminance_cd_m2, model, pixel_deg, l_dmax_cd_m2, method, precision
         As for :func:`render_glare`.
+    kernel_shape
+        ``None`` (default): planned from the scene. A shape renders exactly with that kernel,
+        as :func:`render_glare` does (no plan).
+    tolerance_codes
+        Largest error allowed against the exact render, in codes of ``display``; default 0.5
+        (half a code step cannot be seen). The work is planned by :func:`glare.plan_glare`
+        (kernel reach, multi-resolution far tail) and the bound checked on the result.
+        ``None`` or 0: the exact render with the full ``(2H - 1) × (2W - 1)`` kernel.
+    display
+        The display the error is counted on: a calibration, a :class:`glare.plan.Display`,
+        or ``None`` for a 10-bit, gamma-2.2, 1000:1 display whose white is ``l_dmax_cd_m2``.
 
     Returns
     -------
@@ -289,7 +259,11 @@ def add_glare(
     Raises
     ------
     ValueError
-        As for :func:`render_glare`.
+        As for :func:`render_glare` and :func:`glare.plan_glare`.
+
+    See Also
+    --------
+    glare.plan_glare, glare.render_planned : the plan, and the result with its error bound.
 
     References
     ----------
@@ -313,6 +287,17 @@ def add_glare(
             check_kernel_shape(kernel_shape)
         _resolve(model)
         return image.copy()
+    if kernel_shape is None and tolerance_codes:
+        return render_planned(
+            image,
+            model,
+            pixel_deg=pixel_deg,
+            l_dmax_cd_m2=l_dmax_cd_m2,
+            method=method,
+            precision=precision,
+            tolerance_codes=tolerance_codes,
+            display=display,
+        ).image
     return render_glare(
         image,
         model,

@@ -99,21 +99,44 @@ def _render(args: argparse.Namespace) -> int:
     image = read_exr(args.input)
     _log(f"{image.shape} image, max {float(image.max()):.4g} cd/m²; rendering with {model}")
     start = time.perf_counter()
-    result = glare.render_glare(
-        image,
-        model,
-        pixel_deg=args.pixel_deg,
-        l_dmax_cd_m2=args.l_dmax,
-        method=args.method,
-        precision=args.precision,
-    )
-    left_image = result.energy_outside_image / np.maximum(result.excess_energy, 1e-300)
-    _log(
-        f"done in {time.perf_counter() - start:.2f} s; energy outside the kernel "
-        f"{np.max(result.kernel.energy_outside):.3g}, outside the image "
-        f"{float(np.max(left_image)):.3g} of the excess"
-    )
-    write_exr(args.output, result.image.astype(np.float32))
+    display = Calibration.load(args.calibration) if args.calibration else None
+    if args.tolerance_codes > 0:
+        planned = glare.render_planned(
+            image,
+            model,
+            pixel_deg=args.pixel_deg,
+            l_dmax_cd_m2=args.l_dmax,
+            method=args.method,
+            precision=args.precision,
+            tolerance_codes=args.tolerance_codes,
+            display=display,
+            log=_log,
+        )
+        if args.explain:
+            print(planned.plan)
+            print(
+                f"  result: error bound {planned.error_bound_codes:.3g} display codes"
+                + (f" ({planned.fallback})" if planned.fallback else "")
+            )
+        output = planned.image
+        _log(f"done in {time.perf_counter() - start:.2f} s")
+    else:
+        result = glare.render_glare(
+            image,
+            model,
+            pixel_deg=args.pixel_deg,
+            l_dmax_cd_m2=args.l_dmax,
+            method=args.method,
+            precision=args.precision,
+        )
+        left_image = result.energy_outside_image / np.maximum(result.excess_energy, 1e-300)
+        _log(
+            f"done in {time.perf_counter() - start:.2f} s (exact); energy outside the kernel "
+            f"{np.max(result.kernel.energy_outside):.3g}, outside the image "
+            f"{float(np.max(left_image)):.3g} of the excess"
+        )
+        output = result.image
+    write_exr(args.output, output.astype(np.float32))
     _log(f"wrote {args.output}")
     if args.preview:
         preview_png(args.preview, result.image, l_dmax_cd_m2=args.l_dmax, scale=args.preview_scale)
@@ -481,6 +504,16 @@ def _parser() -> argparse.ArgumentParser:
     render.add_argument("--l-dmax", type=float, default=220.0, help="display maximum, cd/m²")
     render.add_argument("--method", choices=("Yoshida2008", "Spencer1995"), default="Yoshida2008")
     render.add_argument("--precision", choices=("float64", "float32"), default="float64")
+    render.add_argument(
+        "--tolerance-codes",
+        type=float,
+        default=0.5,
+        help="largest error allowed, display codes (default 0.5; 0 = exact, full kernel)",
+    )
+    render.add_argument(
+        "--calibration", type=Path, help="display calibration the error is counted on"
+    )
+    render.add_argument("--explain", action="store_true", help="print the plan and its bound")
     render.add_argument("--preview", type=Path, help="also write a PNG preview here")
     render.add_argument("--preview-scale", choices=("display", "log"), default="display")
     _add_model_options(render)
