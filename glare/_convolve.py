@@ -3,9 +3,18 @@
 from __future__ import annotations
 
 import numpy as np
+import scipy.fft
 from scipy.signal import fftconvolve
 
-__all__ = ["FLOAT32_NOISE_LIMIT_CD_M2", "bounding_box", "convolution_dtype", "spread"]
+__all__ = [
+    "FFT_WORKERS",
+    "FLOAT32_NOISE_LIMIT_CD_M2",
+    "bounding_box",
+    "convolution_dtype",
+    "spread",
+]
+
+FFT_WORKERS = -1  # scipy.fft threads for the convolutions: all cores
 
 FLOAT32_NOISE_LIMIT_CD_M2 = 1e-3  # largest FFT round-off the float32 path may add anywhere
 
@@ -36,7 +45,8 @@ def spread(excess: np.ndarray, kernel: np.ndarray, box: tuple[slice, slice]) -> 
     and far cheaper than the whole image when the bright region is small."""
     height, width = excess.shape
     rows, cols = box
-    full = fftconvolve(excess[rows, cols], kernel, mode="full")
+    with scipy.fft.set_workers(FFT_WORKERS):  # every core: a scope, not global state
+        full = fftconvolve(excess[rows, cols], kernel, mode="full")
     kh, kw = kernel.shape
     # full[a, b] is the response at image pixel (a + rows.start - kh//2, b + cols.start - kw//2)
     top, left = rows.start - kh // 2, cols.start - kw // 2

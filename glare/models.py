@@ -42,6 +42,9 @@ __all__ = [
 
 PUPIL_RANGE_MM = (0.5, 10.0)  # accepted pupil diameters; the eye spans about 2-8 mm
 SIGMA_DEG_YOSHIDA2008 = 0.34  # Yoshida 2008 §3: σ = 0.34 visual degrees (Method I)
+# Sample spacing in the halo ring (σ = 0.159°): σ/16. At σ/4 the 0.03°/px night scene was
+# 0.99 display codes (2e-4 relative) off near the black of a 10-bit display; at σ/16, 0.16.
+HALO_MAX_SPACING_DEG = 0.01
 TAIL_MARGIN = 1.02  # the peak beyond a radius is found on a grid; 2 % covers the ring's crest
 
 
@@ -205,6 +208,9 @@ class VosGlare:
     samples_per_pixel, center_samples_per_pixel, center_radius_px
         Kernel integration (see :func:`glare.digitise.digitise_radial`); defaults 10, 100
         (Spencer's 10,000 samples per central pixel), 4 px.
+    halo_spacing_deg
+        Largest sample spacing in the halo ring, degrees; default 0.01 (a sixteenth of the
+        ring's σ).
     corona_lines, halo_lines
         Number of flare lines in the corona and the halo; defaults 150 and 300.
     pupil_mm
@@ -240,6 +246,7 @@ class VosGlare:
     samples_per_pixel: int = 10
     center_samples_per_pixel: int = 100
     center_radius_px: float = 4.0
+    halo_spacing_deg: float = HALO_MAX_SPACING_DEG
     corona_lines: int = CORONA_LINES
     halo_lines: int = HALO_LINES
     pupil_mm: float | None = None
@@ -254,6 +261,7 @@ class VosGlare:
         check_positive_int("samples_per_pixel", self.samples_per_pixel)
         check_positive_int("center_samples_per_pixel", self.center_samples_per_pixel)
         check_positive("center_radius_px", self.center_radius_px, unit="px")
+        check_positive("halo_spacing_deg", self.halo_spacing_deg, unit="deg")
         check_positive_int("corona_lines", self.corona_lines)
         check_positive_int("halo_lines", self.halo_lines)
 
@@ -392,7 +400,7 @@ class VosGlare:
             pieces, inside, total, error = digitise_radial(
                 profiles,
                 **settings,
-                max_spacing_deg=0.04,  # a quarter of the ring's σ = 0.16°
+                max_spacing_deg=self.halo_spacing_deg,
                 breakpoints=(2.0, 3.0, 4.0),
                 support_deg=HALO_TABLE_MAX_DEG,
             )

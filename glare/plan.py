@@ -360,7 +360,8 @@ def plan_glare(
 
     # one code step at the darkest pixel that can change, in cd/m²
     if targets.any():
-        darkest = float(np.min(planes[targets]))
+        # the darkest channel of any pixel is a target's (Yoshida: some channel below L_dmax)
+        darkest = float(planes.min())
         code = int(np.floor(display_codes(np.array(darkest), lut)))
         step = float(_steps_above(lut)[min(code, lut.size - 2)])
     else:
@@ -618,10 +619,9 @@ def _splat(excess: np.ndarray, factor: int, box, grid: tuple[int, int]) -> np.nd
 def _upsample(coarse: np.ndarray, factor: int, shape: tuple[int, int]) -> np.ndarray:
     """Cubic interpolation of the coarse nodes onto the fine pixels (the adjoint of
     :func:`_splat`)."""
-    rows, row_w = _cubic(shape[0], factor)
-    cols, col_w = _cubic(shape[1], factor)
-    along = sum(coarse[rows + tap] * row_w[:, tap, None] for tap in range(4))
-    return sum(along[:, cols + tap] * col_w[None, :, tap] for tap in range(4))
+    rows = _node_matrix(*_cubic(shape[0], factor), coarse.shape[0])
+    cols = _node_matrix(*_cubic(shape[1], factor), coarse.shape[1])
+    return (rows.T @ coarse) @ cols  # two dense products: BLAS beats gathering taps
 
 
 def _sharpen_cells(cells: np.ndarray) -> np.ndarray:
@@ -684,22 +684,21 @@ def _multires_kernels(model, pixel_deg, factor, split, colour, coarse) -> _Multi
     worst = 0.0
     base = factor * (window // factor + 2)
     size = base + factor + window + 1
-    for dy in sorted({0, factor // 2, factor - 1}):
-        for dx in sorted({0, factor // 2, factor - 1}):
-            q = (base + dy, base + dx)
-            point = np.zeros((size, size))
-            point[q] = 1.0
-            box = (q[0], q[0] + 1, q[1], q[1] + 1)
-            window_slice = np.s_[
-                q[0] - window : q[0] + window + 1, q[1] - window : q[1] + window + 1
-            ]
-            for channel, (n_k, f_k, exact) in enumerate(
-                zip(_channels(near_full), _channels(far), _channels(fine), strict=True)
-            ):
-                del channel
-                approx = n_k + _far_spread(point, f_k, factor, box)[window_slice]
-                ratio = np.abs(approx - exact)[exact > 0] / exact[exact > 0]
-                worst = max(worst, float(ratio.max()))
+    # the corners of a block (where the source is farthest from a node) and its centre
+    corners = sorted({0, factor - 1})
+    positions = [(dy, dx) for dy in corners for dx in corners] + [(factor // 2,) * 2]
+    for dy, dx in positions:
+        q = (base + dy, base + dx)
+        point = np.zeros((size, size))
+        point[q] = 1.0
+        box = (q[0], q[0] + 1, q[1], q[1] + 1)
+        window_slice = np.s_[q[0] - window : q[0] + window + 1, q[1] - window : q[1] + window + 1]
+        for n_k, f_k, exact in zip(
+            _channels(near_full), _channels(far), _channels(fine), strict=True
+        ):
+            approx = n_k + _far_spread(point, f_k, factor, box)[window_slice]
+            ratio = np.abs(approx - exact)[exact > 0] / exact[exact > 0]
+            worst = max(worst, float(ratio.max()))
     return _MultiresKernels(near=near, far=far, relative_error=worst)
 
 
@@ -712,7 +711,14 @@ def _convolve(excess, kernels, source_box, dtype) -> np.ndarray:
 
 
 def _error_codes(out, bound, planes, spread_values, l_dmax, method, lut) -> float:
-    """Largest error in display codes when the exact spread lies within ``± bound``."""
+    """Bound on the largest error in display codes when the exact spread lies within
+    ``± bound`` of ``spread_values`` (cd/m², per pixel or one number).
+
+    Pixels whose range of possible values is clipped away by the display (all below black,
+    or all at or above white or Yoshida's clamp) cannot be off. Pixels at or above the
+    luminance from which every code step exceeds ``2 max(bound)`` are off by less than half a
+    code step there (no table look-up); the rest are looked up through the display."""
+    bound = np.broadcast_to(bound, np.shape(spread_values))
     if method == "Yoshida2008":
         high = np.minimum(planes + spread_values + bound, l_dmax)
         low = np.minimum(planes + np.maximum(spread_values - bound, 0.0), l_dmax)
@@ -720,11 +726,26 @@ def _error_codes(out, bound, planes, spread_values, l_dmax, method, lut) -> floa
         base = np.minimum(planes, l_dmax)
         high = base + spread_values + bound
         low = base + np.maximum(spread_values - bound, 0.0)
-    codes = display_codes(out, lut)
+    top = min(lut[-1], l_dmax if method == "Yoshida2008" else np.inf)
+    visible = (high > lut[0]) & (low < top)
+    if not visible.any():
+        return 0.0
+    steps = _steps_above(lut)
+    largest = float(bound.max())
+    wide = np.flatnonzero(steps >= 2.0 * largest)  # steps_above is non-decreasing
+    quick = 0.0
+    if wide.size and largest > 0:
+        above = visible & (low >= lut[wide[0]])
+        visible &= ~above
+        quick = largest / steps[wide[0]] if above.any() else 0.0
+        if not visible.any():
+            return quick
+    codes = display_codes(out[visible], lut)
     return float(
         max(
-            np.max(display_codes(high, lut) - codes, initial=0.0),
-            np.max(codes - display_codes(low, lut), initial=0.0),
+            quick,
+            np.max(display_codes(high[visible], lut) - codes),
+            np.max(codes - display_codes(low[visible], lut)),
         )
     )
 
@@ -856,7 +877,10 @@ def render_planned(
     else:
         spreads, used32 = full_resolution()
     while True:
-        spread_values = np.stack(spreads * (3 if n_conv == 1 and plan.colour else 1), axis=-1)
+        if plan.colour:
+            spread_values = np.stack(spreads * (3 if n_conv == 1 else 1), axis=-1)
+        else:
+            spread_values = spreads[0][..., None]  # a view: no copy of a large image
         spread_values = spread_values.astype(dtype, copy=False)
         if method == "Yoshida2008":
             out = np.minimum(planes + spread_values, dtype.type(l_dmax))

@@ -486,7 +486,14 @@ def _docs(args: argparse.Namespace) -> int:
 def _bench(args: argparse.Namespace) -> int:
     from glarelab.bench import run_bench
 
-    run_bench(args.out, large=args.large, repeats=args.repeats, log=_log)
+    run_bench(
+        args.out,
+        large=args.large,
+        only=tuple(args.only) if args.only else None,
+        spectral=not args.no_spectral,
+        repeats=args.repeats,
+        log=_log,
+    )
     _log(f"wrote {args.out / 'bench.csv'}, bench.md and the Pareto plots")
     return 0
 
@@ -628,7 +635,11 @@ def _parser() -> argparse.ArgumentParser:
         "bench", help="time each speed knob against its error in display codes"
     )
     bench.add_argument("--out", type=Path, default=Path("out/bench"))
-    bench.add_argument("--large", action="store_true", help="add the 2048² sun scene")
+    bench.add_argument("--large", action="store_true", help="add the 4096² scenes")
+    bench.add_argument("--only", nargs="+", metavar="WORKLOAD", help="run only these workloads")
+    bench.add_argument(
+        "--no-spectral", action="store_true", help="skip the wave-optics spectral section"
+    )
     bench.add_argument("--repeats", type=int, default=3)
     bench.set_defaults(run=_bench)
 
