@@ -39,10 +39,17 @@ def bounding_box(mask: np.ndarray) -> tuple[slice, slice]:
     return slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1)
 
 
-def spread(excess: np.ndarray, kernel: np.ndarray, box: tuple[slice, slice]) -> np.ndarray:
+def spread(
+    excess: np.ndarray,
+    kernel: np.ndarray,
+    box: tuple[slice, slice],
+    *,
+    into: np.ndarray | None = None,
+) -> np.ndarray:
     """Linear convolution of ``excess`` (zero outside ``box``) with a centred odd kernel,
     cropped to the image. Only the bounding box of the bright pixels is transformed: exact,
-    and far cheaper than the whole image when the bright region is small."""
+    and far cheaper than the whole image when the bright region is small. With ``into``, the
+    result is added to that image-sized array (only where it is non-zero) and returned."""
     height, width = excess.shape
     rows, cols = box
     with scipy.fft.set_workers(FFT_WORKERS):  # every core: a scope, not global state
@@ -50,13 +57,13 @@ def spread(excess: np.ndarray, kernel: np.ndarray, box: tuple[slice, slice]) -> 
     kh, kw = kernel.shape
     # full[a, b] is the response at image pixel (a + rows.start - kh//2, b + cols.start - kw//2)
     top, left = rows.start - kh // 2, cols.start - kw // 2
-    out = np.zeros((height, width), dtype=full.dtype)
+    out = np.zeros((height, width), dtype=full.dtype) if into is None else into
     src_r0, src_c0 = max(0, -top), max(0, -left)
     dst_r0, dst_c0 = max(0, top), max(0, left)
     n_rows = min(full.shape[0] - src_r0, height - dst_r0)
     n_cols = min(full.shape[1] - src_c0, width - dst_c0)
     if n_rows > 0 and n_cols > 0:
-        out[dst_r0 : dst_r0 + n_rows, dst_c0 : dst_c0 + n_cols] = full[
+        out[dst_r0 : dst_r0 + n_rows, dst_c0 : dst_c0 + n_cols] += full[
             src_r0 : src_r0 + n_rows, src_c0 : src_c0 + n_cols
         ]
     return out

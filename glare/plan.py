@@ -702,12 +702,14 @@ def _multires_kernels(model, pixel_deg, factor, split, colour, coarse) -> _Multi
     return _MultiresKernels(near=near, far=far, relative_error=worst)
 
 
-def _convolve(excess, kernels, source_box, dtype) -> np.ndarray:
+def _convolve(excess, kernels, source_box, dtype, *, into=None) -> np.ndarray:
     """Full-resolution spread of one channel; float64 when float32 round-off could show."""
     k = kernels.astype(dtype, copy=False)
     work = convolution_dtype(excess, k, dtype)
     rows, cols = slice(source_box[0], source_box[1]), slice(source_box[2], source_box[3])
-    return spread(excess.astype(work, copy=False), k.astype(work, copy=False), (rows, cols))
+    return spread(
+        excess.astype(work, copy=False), k.astype(work, copy=False), (rows, cols), into=into
+    )
 
 
 def _error_codes(out, bound, planes, spread_values, l_dmax, method, lut) -> float:
@@ -868,12 +870,14 @@ def render_planned(
         near_ks, far_ks = _channels(kernels.near), _channels(kernels.far)
         spreads, used32 = [], False
         for i, e in enumerate(sources):
-            near = _convolve(e, near_ks[min(i, len(near_ks) - 1)], plan.source_box, dtype)
-            used32 |= near.dtype == np.float32
-            far = _far_spread(
+            total = _far_spread(
                 e.astype(np.float64), far_ks[min(i, len(far_ks) - 1)], f, plan.source_box
             )
-            spreads.append(np.maximum(near + far, 0.0))
+            # the near part is non-zero only around the bright box: added there, in place
+            k = near_ks[min(i, len(near_ks) - 1)]
+            used32 |= convolution_dtype(e, k.astype(dtype, copy=False), dtype) == np.float32
+            _convolve(e, k, plan.source_box, dtype, into=total)
+            spreads.append(np.maximum(total, 0.0, out=total))
     else:
         spreads, used32 = full_resolution()
     while True:
@@ -883,9 +887,11 @@ def render_planned(
             spread_values = spreads[0][..., None]  # a view: no copy of a large image
         spread_values = spread_values.astype(dtype, copy=False)
         if method == "Yoshida2008":
-            out = np.minimum(planes + spread_values, dtype.type(l_dmax))
+            out = np.add(planes, spread_values)
+            np.minimum(out, dtype.type(l_dmax), out=out)
         else:
-            out = np.minimum(planes, dtype.type(l_dmax)) + spread_values
+            out = np.minimum(planes, dtype.type(l_dmax))
+            out += spread_values
         bound = plan.cut_bound_cd_m2 + (FLOAT32_NOISE_LIMIT_CD_M2 if used32 else 0.0)
         if relative:
             bound = bound + relative / max(1.0 - relative, 1e-12) * spread_values

@@ -215,11 +215,11 @@ def psf_fraunhofer(
     )
 
 
-def _rebin_axis(values: np.ndarray, axis: int, src: float, dst: float, size: int) -> np.ndarray:
-    """Integrate along one axis: output cell ``j`` receives each input cell times the length
-    of their overlap (in input cells), a sparse band matrix applied to ``values``; the same
-    as interpolating the cumulative sum at the output edges, without gathering it."""
-    n = values.shape[axis]
+def _rebin_matrix(n: int, src: float, dst: float, size: int) -> scipy.sparse.csr_matrix:
+    """``(size, n)`` band matrix integrating a centred axis of ``n`` cells of ``src`` onto
+    ``size`` cells of ``dst``: each output cell receives each input cell times the length of
+    their overlap (in input cells), the same as interpolating the cumulative sum at the output
+    edges."""
     src_edges = (np.arange(n + 1) - n // 2 - 0.5) * src
     dst_edges = (np.arange(size + 1) - size // 2 - 0.5) * dst
     position = np.clip((dst_edges - src_edges[0]) / src, 0.0, n)
@@ -234,12 +234,17 @@ def _rebin_axis(values: np.ndarray, axis: int, src: float, dst: float, size: int
         rows.append(np.flatnonzero(keep))
         cols.append(cell[keep])
         weights.append(overlap[keep])
-    matrix = scipy.sparse.csr_matrix(
+    return scipy.sparse.csr_matrix(
         (np.concatenate(weights), (np.concatenate(rows), np.concatenate(cols))), shape=(size, n)
     )
-    if axis == 0:
-        return np.asarray(matrix @ values)
-    return np.asarray(matrix @ values.T).T
+
+
+def _rebin_cropped(values: np.ndarray, src: float, dst: float, shape) -> np.ndarray:
+    """``A V Bᵀ`` for a C-contiguous ``values``: the sparse rows product first (no copy), then
+    the columns, which needs one transposed copy of the smaller intermediate."""
+    rows = _rebin_matrix(values.shape[0], src, dst, shape[0])
+    cols = _rebin_matrix(values.shape[1], src, dst, shape[1])
+    return np.asarray(cols @ np.asarray(rows @ values).T).T
 
 
 def _crop_to_reach(
@@ -267,9 +272,8 @@ def rebin(
     >>> rebin(a, 1.0, 2.0, (3, 3))[1, 1]
     1.0
     """
-    values = _crop_to_reach(values, from_spacing_deg, to_spacing_deg, shape)
-    out = _rebin_axis(values, 1, from_spacing_deg, to_spacing_deg, shape[1])
-    return _rebin_axis(out, 0, from_spacing_deg, to_spacing_deg, shape[0])
+    values = np.ascontiguousarray(_crop_to_reach(values, from_spacing_deg, to_spacing_deg, shape))
+    return _rebin_cropped(values, from_spacing_deg, to_spacing_deg, shape)
 
 
 def sigmoid_Kakimoto2004(
@@ -520,9 +524,13 @@ class WaveOpticsGlare:
             base = psf_fraunhofer(
                 t, grid.spacing_mm, LUIDOLT2020_REFERENCE_NM, fresnel_distance_mm=d
             )
-            for i, wavelength in enumerate(wavelengths):
-                spacing = base.spacing_deg * wavelength / LUIDOLT2020_REFERENCE_NM
-                kernels[i] = rebin(base.values, spacing, pixel_deg, shape)
+            # one contiguous crop wide enough for the shortest wavelength serves them all
+            spacings = base.spacing_deg * wavelengths / LUIDOLT2020_REFERENCE_NM
+            crop = np.ascontiguousarray(
+                _crop_to_reach(base.values, float(spacings.min()), pixel_deg, shape)
+            )
+            for i, spacing in enumerate(spacings):
+                kernels[i] = _rebin_cropped(crop, float(spacing), pixel_deg, shape)
         elif self.spectral in ("reference", "kakimoto"):
             for i, wavelength in enumerate(wavelengths):
                 psf = psf_fraunhofer(t, grid.spacing_mm, wavelength, fresnel_distance_mm=d)

@@ -408,15 +408,13 @@ def run_bench(
             for r in results:
                 r["speed_vs_peer"] = peer / r["seconds"]
             rows += results
-            _pareto(
-                results, f"{label}: time against error", out / f"pareto_{name}_{model_name}.png"
-            )
     spectral_rows = []
     if spectral:
         log("wave-optics PSF: scaled copies against one FFT per wavelength")
         spectral_rows = spectral_bench(repeats=1)
         for r in spectral_rows:
             log(f"  {r['variant']}: {r['seconds']:.2f} s, ΔE00 {r['delta_e_mean']:.3g}")
+    write_plots(rows, out)
     with (out / "bench.csv").open("w", newline="") as handle:
         writer = csv.DictWriter(handle, fieldnames=list(rows[0]))
         writer.writeheader()
@@ -451,30 +449,49 @@ def run_bench(
     return rows + spectral_rows
 
 
+def write_plots(rows: list[dict], out: Path) -> None:
+    """One Pareto PNG per workload and model, ``pareto_<workload>_<model>.png``."""
+    for key in dict.fromkeys((r["workload"], r["model"]) for r in rows):
+        results = [r for r in rows if (r["workload"], r["model"]) == key]
+        title = f"{key[0]} / {key[1]}: time against error"
+        _pareto(results, title, Path(out) / f"pareto_{key[0]}_{key[1]}.png")
+
+
 def _pareto(results: list[dict], title: str, path: Path) -> None:
-    """Time against largest error, one labelled point per variant, log-log."""
+    """Time against largest error, one marker per variant (legend at the side), log-log;
+    peers are squares, the plan's points are joined (its tolerance is the knob)."""
     from analysis.figures import plt, png
 
     floor = 1e-4  # errors below this are drawn on it (a log axis has no zero)
-    figure, axis = plt.subplots(figsize=(7, 4.2))
-    for r in results:
-        error = max(r["max_error_codes"], floor)
+    markers = "oD^v<>phX*P"  # squares are for peers
+    figure, axis = plt.subplots(figsize=(8.5, 4.2))
+    plan = [r for r in results if r["variant"].startswith(("default", "plan"))]
+    plan.sort(key=lambda r: r["seconds"])
+    axis.plot(
+        [r["seconds"] for r in plan],
+        [max(r["max_error_codes"], floor) for r in plan],
+        color="0.7",
+        lw=1,
+        zorder=1,
+    )
+    for index, r in enumerate(results):
         peer = r["variant"].startswith("peer")
-        axis.scatter(r["seconds"], error, s=30, marker="s" if peer else "o")
-        axis.annotate(
-            r["variant"].split(" (")[0],
-            (r["seconds"], error),
-            fontsize=7,
-            xytext=(4, 2),
-            textcoords="offset points",
+        axis.scatter(
+            r["seconds"],
+            max(r["max_error_codes"], floor),
+            s=42,
+            marker="s" if peer else markers[index % len(markers)],
+            label=r["variant"].removeprefix("peer: "),
+            zorder=2,
+            edgecolors="k" if r["variant"].startswith("default") else "none",
         )
     axis.axhline(0.5, color="k", ls="--", lw=0.8, label="half a display code")
     axis.set(
         xscale="log",
         yscale="log",
         xlabel="time (s, median, kernel digitisation included)",
-        ylabel=f"max error (10-bit codes; < {floor:g} drawn at {floor:g})",
+        ylabel=f"max error (10-bit codes; < {floor:g} at {floor:g})",
         title=title,
     )
-    axis.legend(fontsize=7, loc="upper right")
+    axis.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.02, 0.5), frameon=False)
     path.write_bytes(png(figure))

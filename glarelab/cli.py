@@ -139,7 +139,7 @@ def _render(args: argparse.Namespace) -> int:
     write_exr(args.output, output.astype(np.float32))
     _log(f"wrote {args.output}")
     if args.preview:
-        preview_png(args.preview, result.image, l_dmax_cd_m2=args.l_dmax, scale=args.preview_scale)
+        preview_png(args.preview, output, l_dmax_cd_m2=args.l_dmax, scale=args.preview_scale)
         _log(f"wrote {args.preview}")
     return 0
 
