@@ -197,18 +197,21 @@ class GlarePlan:
             f"  bright: {self.bright_pixels} px above L_dmax, max ΔL {self.max_excess_cd_m2:.4g}"
             f" cd/m², ΣΔL {self.total_excess:.4g} cd/m²·px, box {self.source_box}",
             f"  targets: {self.target_pixels} px can change, box {self.target_box}",
-            f"  kernel: {2 * reach[0] + 1} × {2 * reach[1] + 1} px"
-            f" (full {full[0]} × {full[1]}, geometric need "
-            f"{2 * self.geometric_reach_px[0] + 1} × {2 * self.geometric_reach_px[1] + 1});"
+            f"  reach: ±{reach[0]} × ±{reach[1]} px (geometric need ±{self.geometric_reach_px[0]}"
+            f" × ±{self.geometric_reach_px[1]}; the full kernel is {full[0]} × {full[1]});"
             f" the cut leaves out at most {self.cut_bound_cd_m2:.3g} cd/m²",
         ]
         if self.multires_factor > 1:
+            near = 4 * self.split_px + 1
             lines.append(
-                f"  far tail: beyond {self.split_px} px at 1/{self.multires_factor} resolution,"
-                f" blended over {self.split_px}-{2 * self.split_px} px"
+                f"  near part: {near} × {near} px at full resolution; far tail beyond "
+                f"{self.split_px} px (blended to {2 * self.split_px} px) on a grid "
+                f"{self.multires_factor}× coarser"
             )
         else:
-            lines.append("  far tail: full resolution")
+            lines.append(
+                f"  kernel: {2 * reach[0] + 1} × {2 * reach[1] + 1} px at full resolution"
+            )
         lines.append(
             f"  colour: {'RGB scene' if self.colour else 'luminance scene'}, "
             f"{'colour' if self.colour_kernel else 'achromatic'} kernel, "
