@@ -287,23 +287,14 @@ def add_glare(
             check_kernel_shape(kernel_shape)
         _resolve(model)
         return image.copy()
+    common = {
+        "pixel_deg": pixel_deg,
+        "l_dmax_cd_m2": l_dmax_cd_m2,
+        "method": method,
+        "precision": precision,
+    }
     if kernel_shape is None and tolerance_codes:
         return render_planned(
-            image,
-            model,
-            pixel_deg=pixel_deg,
-            l_dmax_cd_m2=l_dmax_cd_m2,
-            method=method,
-            precision=precision,
-            tolerance_codes=tolerance_codes,
-            display=display,
+            image, model, **common, tolerance_codes=tolerance_codes, display=display
         ).image
-    return render_glare(
-        image,
-        model,
-        pixel_deg=pixel_deg,
-        l_dmax_cd_m2=l_dmax_cd_m2,
-        method=method,
-        precision=precision,
-        kernel_shape=kernel_shape,
-    ).image
+    return render_glare(image, model, **common, kernel_shape=kernel_shape).image

@@ -100,14 +100,17 @@ def _render(args: argparse.Namespace) -> int:
     _log(f"{image.shape} image, max {float(image.max()):.4g} cd/m²; rendering with {model}")
     start = time.perf_counter()
     display = Calibration.load(args.calibration) if args.calibration else None
+    common = {
+        "pixel_deg": args.pixel_deg,
+        "l_dmax_cd_m2": args.l_dmax,
+        "method": args.method,
+        "precision": args.precision,
+    }
     if args.tolerance_codes > 0:
         planned = glare.render_planned(
             image,
             model,
-            pixel_deg=args.pixel_deg,
-            l_dmax_cd_m2=args.l_dmax,
-            method=args.method,
-            precision=args.precision,
+            **common,
             tolerance_codes=args.tolerance_codes,
             display=display,
             log=_log,
@@ -121,14 +124,7 @@ def _render(args: argparse.Namespace) -> int:
         output = planned.image
         _log(f"done in {time.perf_counter() - start:.2f} s")
     else:
-        result = glare.render_glare(
-            image,
-            model,
-            pixel_deg=args.pixel_deg,
-            l_dmax_cd_m2=args.l_dmax,
-            method=args.method,
-            precision=args.precision,
-        )
+        result = glare.render_glare(image, model, **common)
         left_image = result.energy_outside_image / np.maximum(result.excess_energy, 1e-300)
         _log(
             f"done in {time.perf_counter() - start:.2f} s (exact); energy outside the kernel "
