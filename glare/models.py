@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from typing import Literal, Protocol
 
@@ -290,14 +291,21 @@ class VosGlare:
             return (w0 + w3, w1, w2, 0.0)
         return (w0, w1, w2, w3)
 
+    def _profile(self, halo) -> Callable[[np.ndarray], np.ndarray]:
+        """``P(θ) = w0 f0 + w1 f1 + w2 f2 + w3 halo(θ)`` with this model's weights; the halo
+        term is left out when the model has none."""
+        w0, w1, w2, w3 = self.weights
+
+        def profile(theta: np.ndarray) -> np.ndarray:
+            values = w0 * vos.f0(theta) + w1 * vos.f1(theta) + w2 * vos.f2(theta)
+            return values + w3 * halo(theta) if w3 else values
+
+        return profile
+
     def psf(self, theta_deg: float | np.ndarray) -> float | np.ndarray:
         """The continuous PSF (per steradian) at the halo wavelength (568 nm if white)."""
-        w0, w1, w2, w3 = self.weights
         wavelength = vos.HALO_REFERENCE_NM if self.wavelength_nm is None else self.wavelength_nm
-        theta = np.asarray(theta_deg, dtype=float)
-        values = w0 * vos.f0(theta) + w1 * vos.f1(theta) + w2 * vos.f2(theta)
-        if w3:
-            values = values + w3 * vos.f3(theta, wavelength)
+        values = self._profile(lambda t: vos.f3(t, wavelength))(np.asarray(theta_deg, float))
         return float(values) if np.ndim(theta_deg) == 0 else values
 
     def tail_bound(
@@ -316,20 +324,11 @@ class VosGlare:
         pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
         radius = np.asarray(radius_px, dtype=float)
         theta = (radius + 0.5) * pixel_deg
-        w0, w1, w2, w3 = self.weights
         halos = [None]
-        if w3 > 0:
+        if self.weights[3] > 0:
             halos = halo_profiles(
                 "RGB" if colour else "Y", self.halo_spectrum, wavelength_nm=self.wavelength_nm
             )
-
-        def profile_for(halo):
-            def profile(t):
-                values = w0 * vos.f0(t) + w1 * vos.f1(t) + w2 * vos.f2(t)
-                return values if halo is None else values + w3 * halo(t)
-
-            return profile
-
         grid = np.unique(
             np.concatenate(
                 [theta, np.linspace(0.0, HALO_TABLE_MAX_DEG, 1601), np.geomspace(1e-4, 180, 4000)]
@@ -339,7 +338,7 @@ class VosGlare:
         peak = np.zeros_like(theta)
         energy = np.zeros_like(theta)
         for halo in halos:
-            profile = profile_for(halo)
+            profile = self._profile(halo)
             running_max = np.maximum.accumulate(profile(grid)[::-1])[::-1]
             peak = np.maximum(peak, running_max[np.searchsorted(grid, theta)])
             total = radial_mass(profile, np.array([90.0]), breakpoints=(2.0, 3.0, 4.0))[0]

@@ -39,7 +39,7 @@ import numpy as np
 from ._convolve import FLOAT32_NOISE_LIMIT_CD_M2, bounding_box, convolution_dtype, spread
 from ._validation import check_choice, check_image, check_positive
 from .digitise import kernel_shape_for
-from .models import GlareModel, _resolve
+from .models import GaussianGlare, GlareModel, _resolve
 
 __all__ = [
     "DISPLAY_BITS",
@@ -182,9 +182,13 @@ class GlarePlan:
     colour_kernel: bool
     convolutions: int
     halo: str
-    exact: bool
     notes: tuple[str, ...] = field(default_factory=tuple)
     preview: _Preview | None = field(default=None, repr=False, compare=False)
+
+    @property
+    def exact(self) -> bool:
+        """True when nothing is approximated: no cut and no coarse far tail."""
+        return self.cut_bound_cd_m2 == 0.0 and self.multires_factor == 1
 
     def __str__(self) -> str:
         full = kernel_shape_for(self.shape[:2])
@@ -269,7 +273,7 @@ def _achromatic_kernel(model: GlareModel) -> bool:
     weights = getattr(model, "weights", None)
     if weights is not None and not callable(weights):
         return weights[3] == 0.0
-    return type(model).__name__ == "GaussianGlare"
+    return isinstance(model, GaussianGlare)
 
 
 def plan_glare(
@@ -332,6 +336,15 @@ def plan_glare(
     >>> plan.reach_px < plan.geometric_reach_px
     True
     """
+    return _plan(
+        *_checked(luminance_cd_m2, model, pixel_deg, l_dmax_cd_m2, method, tolerance_codes),
+        method=method,
+        lut=_display_lut(display, l_dmax_cd_m2),
+    )[0]
+
+
+def _checked(luminance_cd_m2, model, pixel_deg, l_dmax_cd_m2, method, tolerance_codes):
+    """The public arguments, validated: image, model, pixel_deg, l_dmax, tolerance."""
     image = check_image("luminance_cd_m2", luminance_cd_m2, channels=(3,))
     pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
     l_dmax = check_positive("l_dmax_cd_m2", l_dmax_cd_m2, unit="cd/m²")
@@ -339,12 +352,21 @@ def plan_glare(
     tolerance = float(tolerance_codes)
     if not math.isfinite(tolerance) or tolerance < 0:
         raise ValueError(f"tolerance_codes must be a finite number >= 0, got {tolerance_codes!r}")
-    glare_model = _resolve(model)
-    lut = (
-        Display.gamma(l_dmax, black_cd_m2=l_dmax / DISPLAY_CONTRAST).lut
-        if display is None
-        else _lut(display)
-    )
+    return image, _resolve(model), pixel_deg, l_dmax, tolerance
+
+
+def _display_lut(display, l_dmax_cd_m2: float) -> np.ndarray:
+    """The display's code → cd/m² table; the reference display when ``display`` is None."""
+    if display is None:
+        l_dmax = check_positive("l_dmax_cd_m2", l_dmax_cd_m2, unit="cd/m²")
+        return Display.gamma(l_dmax, black_cd_m2=l_dmax / DISPLAY_CONTRAST).lut
+    return _lut(display)
+
+
+def _plan(
+    image, glare_model, pixel_deg, l_dmax, tolerance, *, method, lut
+) -> tuple[GlarePlan, np.ndarray]:
+    """The plan, and the excess ``ΔL`` as ``(H, W, C)`` (the renderer reuses it)."""
     colour = image.ndim == 3
     planes = image if colour else image[..., None]
     excess = np.maximum(planes - l_dmax, 0.0)
@@ -445,7 +467,6 @@ def plan_glare(
         notes.append("every pixel is at L_dmax: Yoshida's clamp leaves nothing to spread into")
     elif not tail_bound or bound is None:
         notes.append("the model has no tail bound (flare lines or wave optics): full reach")
-    exact = cut_bound == 0.0 and factor == 1
     return GlarePlan(
         shape=tuple(image.shape),
         model=glare_model.description(colour_kernel)
@@ -468,10 +489,9 @@ def plan_glare(
         colour_kernel=colour_kernel,
         convolutions=convolutions,
         halo=halo,
-        exact=exact,
         notes=tuple(notes),
         preview=preview,
-    )
+    ), excess
 
 
 @dataclass(frozen=True)
@@ -804,24 +824,14 @@ def render_planned(
     True
     """
     check_choice("precision", precision, ("float64", "float32"))
-    plan = plan_glare(
-        luminance_cd_m2,
-        model,
-        pixel_deg=pixel_deg,
-        l_dmax_cd_m2=l_dmax_cd_m2,
-        method=method,
-        tolerance_codes=tolerance_codes,
-        display=display,
+    image, glare_model, pixel_deg, l_dmax, tolerance = _checked(
+        luminance_cd_m2, model, pixel_deg, l_dmax_cd_m2, method, tolerance_codes
+    )
+    lut = _display_lut(display, l_dmax)
+    plan, planned_excess = _plan(
+        image, glare_model, pixel_deg, l_dmax, tolerance, method=method, lut=lut
     )
     say = log or (lambda line: None)
-    image = np.asarray(luminance_cd_m2)
-    glare_model = _resolve(model)
-    l_dmax = float(l_dmax_cd_m2)
-    lut = (
-        Display.gamma(l_dmax, black_cd_m2=l_dmax / DISPLAY_CONTRAST).lut
-        if display is None
-        else _lut(display)
-    )
     dtype = np.dtype(precision)
     if plan.source_box is None:
         return PlannedGlare(image.copy(), plan, 0.0, 0.0)
@@ -829,7 +839,11 @@ def render_planned(
     if method == "Yoshida2008" and plan.target_pixels == 0:
         out = np.minimum(planes, dtype.type(l_dmax))
         return PlannedGlare(out if plan.colour else out[..., 0], plan, 0.0, 0.0)
-    excess = np.maximum(planes - dtype.type(l_dmax), dtype.type(0))
+    excess = (
+        planned_excess
+        if planned_excess.dtype == dtype
+        else np.maximum(planes - dtype.type(l_dmax), dtype.type(0))
+    )
     n_conv = plan.convolutions
     sources = [excess[..., 0]] if n_conv == 1 else [excess[..., c] for c in range(3)]
 
@@ -867,7 +881,7 @@ def render_planned(
         if kernels is None:
             fallback = "the far path's measured error does not fit the tolerance"
             say(fallback + ": full resolution")
-            plan = replace(plan, multires_factor=1, split_px=0, exact=plan.cut_bound_cd_m2 == 0)
+            plan = replace(plan, multires_factor=1, split_px=0)
     if kernels is not None:
         relative = kernels.relative_error
         near_ks, far_ks = _channels(kernels.near), _channels(kernels.far)
@@ -909,7 +923,7 @@ def render_planned(
                 "rendered at full resolution"
             )
             say(fallback)
-            plan = replace(plan, multires_factor=1, split_px=0, exact=plan.cut_bound_cd_m2 == 0)
+            plan = replace(plan, multires_factor=1, split_px=0)
             relative = 0.0
             spreads, used32 = full_resolution()
             continue

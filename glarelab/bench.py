@@ -35,6 +35,7 @@ from scipy.signal import fftconvolve
 import glare
 from glare._convolve import FFT_WORKERS, bounding_box, spread
 from glare.digitise import kernel_shape_for
+from glare.plan import display_codes
 from stimuli.calibration import Calibration
 
 __all__ = ["WORKLOADS", "run_bench", "spectral_bench", "workload", "workload_names"]
@@ -167,8 +168,19 @@ def workload_names(large: bool = False) -> list[str]:
     return [name for name in WORKLOADS if large or name not in LARGE]
 
 
-def _codes(image: np.ndarray, lut: np.ndarray) -> np.ndarray:
-    return np.interp(np.clip(image, lut[0], lut[-1]), lut, np.arange(lut.size, dtype=float))
+def _full_kernel_peer(image: np.ndarray, pixel: float, model) -> Callable[[], np.ndarray]:
+    """The peer: ``fftconvolve`` of the whole excess image with the full kernel, digitised as
+    ours is, on as many FFT threads as ours."""
+    full = kernel_shape_for(image.shape)
+
+    def peer():
+        kernel = model.kernel(pixel, full).values
+        excess = np.maximum(image - L_DMAX, 0.0)
+        with scipy.fft.set_workers(FFT_WORKERS):
+            spread = fftconvolve(excess, kernel, mode="same")
+        return np.minimum(image + spread, L_DMAX)
+
+    return peer
 
 
 def _timed(function: Callable[[], np.ndarray], repeats: int) -> tuple[float, np.ndarray]:
@@ -206,13 +218,6 @@ def _vos_variants(image, pixel, model, lut) -> dict[str, Callable[[], np.ndarray
         if shape != full:
             variants[f"fixed reach {reach:g}°"] = add(kernel_shape=shape)
 
-    def peer():
-        kernel = model.kernel(pixel, full).values
-        excess = np.maximum(image - L_DMAX, 0.0)
-        with scipy.fft.set_workers(FFT_WORKERS):  # as many threads as ours
-            spread = fftconvolve(excess, kernel, mode="same")
-        return np.minimum(image + spread, L_DMAX)
-
     bright = image > L_DMAX
     box = bounding_box(bright)
     box_area = (box[0].stop - box[0].start) * (box[1].stop - box[1].start)
@@ -224,7 +229,7 @@ def _vos_variants(image, pixel, model, lut) -> dict[str, Callable[[], np.ndarray
             return np.minimum(image + spread(excess, kernel, box, method="direct"), L_DMAX)
 
         variants["direct convolution over the bright box, full kernel"] = direct
-    variants[PEER] = peer
+    variants[PEER] = _full_kernel_peer(image, pixel, model)
     return variants
 
 
@@ -232,7 +237,6 @@ def _gaussian_variants(image, pixel, model, lut) -> dict[str, Callable[[], np.nd
     from scipy.ndimage import gaussian_filter
 
     sigma_px = model.sigma_deg / pixel
-    full = kernel_shape_for(image.shape)
 
     def add(**options):
         return lambda: glare.add_glare(
@@ -272,13 +276,7 @@ def _gaussian_variants(image, pixel, model, lut) -> dict[str, Callable[[], np.nd
         if cv2 is not None:
             variants[f"peer: OpenCV GaussianBlur ({truncate:g} σ)"] = opencv_blur(truncate)
 
-    def peer():
-        kernel = model.kernel(pixel, full).values
-        with scipy.fft.set_workers(FFT_WORKERS):
-            spread = fftconvolve(excess(), kernel, mode="same")
-        return np.minimum(image + spread, L_DMAX)
-
-    variants[PEER] = peer
+    variants[PEER] = _full_kernel_peer(image, pixel, model)
     return variants
 
 
@@ -397,14 +395,14 @@ def run_bench(
             model = _model(model_name, pixel)
             label = f"{name} / {model_name}"
             log(f"{label}: {image.shape[1]} × {image.shape[0]} px at {pixel:.4g}°/px")
-            reference_codes = _codes(_reference(image, pixel, model), lut)
+            reference_codes = display_codes(_reference(image, pixel, model), lut)
             variants = (_gaussian_variants if model_name == "gaussian" else _vos_variants)(
                 image, pixel, model, lut
             )
             results = []
             for variant, function in variants.items():
                 seconds, result = _timed(function, repeats)
-                error = np.abs(_codes(result, lut) - reference_codes)
+                error = np.abs(display_codes(result, lut) - reference_codes)
                 results.append(
                     {
                         "workload": name,
