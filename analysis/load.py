@@ -1,6 +1,7 @@
 """Reading session CSVs: every cell checked, every problem named, nothing dropped silently.
 
-The schema is :mod:`experiments.schema`, the one the experiments write. A problem is reported
+The schema is :mod:`experiments.schema`, the one the experiments write; files written before a
+column was added (its ``since``) are read with that column missing. A problem is reported
 with its file, line and column; all problems of all files are collected and raised together
 (:class:`DataError`). A design with a missing cell is refused naming the participant and the
 cell, unless the caller asks to exclude incomplete participants, in which case they are
@@ -19,6 +20,10 @@ import pandas as pd
 from experiments.schema import columns
 
 __all__ = ["DataError", "Dataset", "load_sessions"]
+
+# columns added after the first data format, as files written before them are read: every
+# trial of those files counted (no presentation was repeated); the others are missing
+LEGACY_DEFAULTS = {"counted": True}
 
 
 class DataError(ValueError):
@@ -91,7 +96,8 @@ def _read_file(path: Path, study: str, problems: list[str]) -> list[dict]:
         if header is None:
             problems.append(f"{path}: empty file, no header")
             return rows
-        missing = [n for n in names if n not in header]
+        added = {c.name for c in expected if c.since != "0.1"}  # older files lack these
+        missing = [n for n in names if n not in header and n not in added]
         extra = [n for n in header if n not in names]
         if missing or extra:
             problems.append(
@@ -117,6 +123,8 @@ def _read_file(path: Path, study: str, problems: list[str]) -> list[dict]:
                 c.name: _parse(
                     record[c.name], c, f"{path}, line {line}, column {c.name}", problems
                 )
+                if c.name in record
+                else LEGACY_DEFAULTS.get(c.name)
                 for c in expected
             }
             parsed["_file"], parsed["_line"] = str(path), line

@@ -67,7 +67,8 @@ def psychometric_match(staircase: pd.DataFrame) -> float:
 
 
 def analyse_spencer1995(dataset: Dataset) -> dict:
-    trials = dataset.trials
+    every = dataset.trials
+    trials = every[every["counted"].astype(bool)]  # repeated flashes did not move a staircase
     rows = []
     for (participant, context, level), staircase in trials.groupby(
         ["participant", "context", "glare_level"]
@@ -107,6 +108,11 @@ def analyse_spencer1995(dataset: Dataset) -> dict:
         ]
         tables["anova"] = anova
         text = {row.source: row.apa_gg for row in anova.itertuples()}
+    repeated = len(every) - len(trials)
+    text["repeated_presentations"] = (
+        f"{repeated} of {len(every)} flashes missed their frames or timing and were shown "
+        "again; the staircases use only the counted ones"
+    )
     return {
         "tables": tables,
         "figures": {"figure13_matches.png": _figure13(summary)},

@@ -1,19 +1,83 @@
-"""What every protocol engine shares: seeded randomness per participant, and the interface.
+"""What every protocol engine shares: the interface, key presses, seeded randomness.
 
-An engine is a plain state machine. ``screen()`` says what to show now (a dict: ``kind`` and
-what the front-end needs to draw it); ``press(key, t)`` takes a key press at ``t`` seconds
-after the current screen appeared and returns the finished trial's row (a dict of
-:mod:`experiments.schema` columns) when that key ended a trial, else None. ``done`` says the
-session is over. ``replay(rows)`` rebuilds the state after the rows already on disk, to resume.
+An engine is a plain state machine. ``screen()`` says what to show now: a dict with ``kind``,
+``keys`` (the key names this screen takes, each with what it does, for the key legend) and what
+the front-end needs to draw it; screens of a trial carry its number in ``trial``. ``press(key,
+t)`` takes a key press at ``t`` seconds after the onset of the current trial's stimulus (the
+flip that first showed it) and returns the finished trial's row (a dict of
+:mod:`experiments.schema` columns) when that key ended a trial, else None. ``presented(ok)``
+tells the engine whether the last timed presentation kept its frames. ``done`` says the session
+is over. ``replay(rows)`` rebuilds the state after the rows already on disk, to resume.
+
+The session loop (:mod:`experiments.loop`) is the only caller: it decides which key presses
+reach the engine (those made after the onset, on keys the screen takes) and adds the timing
+columns to each row.
 """
 
 from __future__ import annotations
 
 import hashlib
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["participant_rng"]
+__all__ = ["Engine", "Press", "normalise_key", "participant_rng"]
+
+# the same key on the main block and the keypad
+KEY_ALIASES = {"num_enter": "return", "num_decimal": "period", "num_subtract": "minus"} | {
+    f"num_{digit}": str(digit) for digit in range(10)
+}
+
+
+def normalise_key(name: str) -> str:
+    """A key name as the engines use it (keypad digits and Enter as their main-block twins)."""
+    return KEY_ALIASES.get(name, name)
+
+
+@dataclass(frozen=True)
+class Press:
+    """One key press: its name, the time it went down (s, on the session clock), and for the
+    Enter that ends a typed answer, the text typed."""
+
+    name: str
+    t_s: float
+    text: str | None = None
+
+
+class Engine(ABC):
+    """Base of the protocol engines: the interface, and defaults where one fits all."""
+
+    study: str = ""
+
+    @property
+    @abstractmethod
+    def done(self) -> bool:
+        """The session is over."""
+
+    @abstractmethod
+    def screen(self) -> dict:
+        """What to show now."""
+
+    @abstractmethod
+    def press(self, key: str, t: float = 0.0) -> dict | None:
+        """Take a key press ``t`` s after the trial's onset; the finished row, or None."""
+
+    @abstractmethod
+    def replay(self, rows: list[dict]) -> None:
+        """Continue after the rows already recorded."""
+
+    def presented(self, ok: bool) -> None:  # noqa: B027 - a hook most engines ignore
+        """The last timed presentation kept its frames (``ok``) or not; default: no effect."""
+
+    @property
+    def total_trials(self) -> int | None:
+        """Trials in the session when known in advance (None for adaptive procedures)."""
+        return None
+
+    def key_legend(self) -> list[tuple[str, str]]:
+        """``(keys, what they do)`` for the instructions screen."""
+        return []
 
 
 def participant_rng(seed: int, participant: str, purpose: str) -> np.random.Generator:

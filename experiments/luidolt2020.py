@@ -2,16 +2,19 @@
 
 Six categories (glare appearance, glare movement, eye adaptation, visual acuity, scotopic
 vision, overall), each rated from 1 = completely different to 7 = exactly the same with the
-number keys, then an optional comment (typed; ``return`` records it, or skips when empty).
-One row per category.
+number keys, then an optional comment (typed into a text box, which keeps case and punctuation;
+``return`` records it, or skips when empty). One row per category; ``time_s`` is the time from
+the rating screen's onset to the rating key.
 """
 
 from __future__ import annotations
 
+from .engine import Engine, normalise_key
+
 __all__ = ["LikertQuestionnaire"]
 
 
-class LikertQuestionnaire:
+class LikertQuestionnaire(Engine):
     """The Luidolt 2020 questionnaire engine (no PsychoPy)."""
 
     study = "luidolt2020"
@@ -34,9 +37,25 @@ class LikertQuestionnaire:
     def done(self) -> bool:
         return self.phase == "done"
 
+    @property
+    def total_trials(self) -> int:
+        return len(self.categories)
+
+    def key_legend(self) -> list[tuple[str, str]]:
+        legend = [(f"{self.low} … {self.high}", "your rating (number keys)")]
+        if self.comments:
+            legend.append(("Enter", "after typing a comment (or with none) goes on"))
+        return legend
+
     def screen(self) -> dict:
-        if self.phase in ("instructions", "done"):
-            return {"kind": self.phase, "text": self.protocol["instructions"]["text"]}
+        if self.phase == "instructions":
+            return {
+                "kind": "instructions",
+                "text": self.protocol["instructions"]["text"],
+                "keys": {"space": "start"},
+            }
+        if self.phase == "done":
+            return {"kind": "done", "keys": {}}
         base = {
             "trial": self.index + 1,
             "category": self.categories[self.index],
@@ -45,8 +64,16 @@ class LikertQuestionnaire:
             "scale": (self.low, self.high),
         }
         if self.phase == "rate":
-            return {**base, "kind": "rate"}
-        return {**base, "kind": "comment", "rating": self.rating, "typed": self.typed}
+            keys = {str(r): f"rate {r}" for r in range(self.low, self.high + 1) if r < 10}
+            return {**base, "kind": "rate", "keys": keys}
+        return {
+            **base,
+            "kind": "comment",
+            "rating": self.rating,
+            "typed": self.typed,
+            "keys": {"return": "finish the comment"},
+            "text_entry": True,
+        }
 
     def press(self, key: str, t: float = 0.0) -> dict | None:
         if self.phase == "instructions":
@@ -54,7 +81,7 @@ class LikertQuestionnaire:
                 self.phase = "rate"
             return None
         if self.phase == "rate":
-            digit = key.removeprefix("num_")
+            digit = normalise_key(key)
             if digit.isdigit() and self.low <= int(digit) <= self.high:
                 self.rating = int(digit)
                 self.time = t
@@ -65,19 +92,13 @@ class LikertQuestionnaire:
         if self.phase == "comment":
             if key == "return":
                 return self._finish()
-            if key == "backspace":
-                self.typed = self.typed[:-1]
-            elif key == "space":
-                self.typed += " "
-            elif len(key) == 1:
-                self.typed += key
             return None
         return None
 
     def type_text(self, text: str) -> None:
-        """Enter a whole comment at once (front-ends with a text box, observers)."""
+        """The comment as typed into the front-end's text box (kept verbatim)."""
         if self.phase == "comment":
-            self.typed += text
+            self.typed = text
 
     def _finish(self) -> dict:
         row = {
@@ -87,7 +108,6 @@ class LikertQuestionnaire:
             "trial": self.index + 1,
             "block": "questionnaire",
             "time_s": self.time,
-            "dropped_frames": 0,
             "category": self.categories[self.index],
             "rating": self.rating,
             "comment": self.typed.strip() or None,

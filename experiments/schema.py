@@ -5,14 +5,18 @@ module imports nothing of the suite and never PsychoPy.
 
 Every CSV begins with the columns of :data:`COMMON`; each study adds its own. Types are one of
 ``str``, ``int``, ``float``, ``bool`` (written ``true``/``false``); an empty cell is a missing
-value and is allowed only where the column says so (``optional=True``).
+value and is allowed only where the column says so (``optional=True``). ``since`` names the
+data-format version that added a column: files written before it lack the column, and the
+analysis reads them with the column missing (``counted`` as true).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["COMMON", "STUDY_COLUMNS", "Column", "columns", "format_value"]
+__all__ = ["COMMON", "DATA_FORMAT", "STUDY_COLUMNS", "Column", "columns", "format_value"]
+
+DATA_FORMAT = "0.2"  # the version of the session files written now (recorded in the sidecar)
 
 
 @dataclass(frozen=True)
@@ -27,6 +31,7 @@ class Column:
     choices: tuple[str, ...] | None = None
     low: float | None = None
     high: float | None = None
+    since: str = "0.1"  # the data-format version that added the column
 
 
 COMMON = (
@@ -35,8 +40,40 @@ COMMON = (
     Column("session", int, "session number", low=1),
     Column("trial", int, "trial number within the session, from 1", low=1),
     Column("block", str, "block of the trial"),
-    Column("time_s", float, "time from the start of the trial to its response", unit="s", low=0.0),
-    Column("dropped_frames", int, "frames dropped during the trial", low=0),
+    Column(
+        "onset_s",
+        float,
+        "onset of the trial's stimulus: the flip that first showed it, on the clock of the run "
+        "that recorded the trial (the PsychoPy log's time base; the sidecar's runs give each "
+        "run's clock epoch and trials)",
+        unit="s",
+        low=0.0,
+        since="0.2",
+    ),
+    Column(
+        "time_s",
+        float,
+        "response time: from the onset flip of the trial's stimulus to the key press that "
+        "ended the trial (Yoshida: Enter confirming both settings; Spencer: the answer; "
+        "Luidolt: the rating)",
+        unit="s",
+        low=0.0,
+    ),
+    Column(
+        "dropped_frames",
+        int,
+        "frames dropped while the trial's stimulus was on a timed presentation (Spencer's "
+        "flash); static screens are drawn once per change and drop none",
+        low=0,
+    ),
+    Column(
+        "ignored_keys",
+        str,
+        "key presses not taken as input during the trial or before its onset, as "
+        "name@seconds from the onset (negative: before it), separated by ';'",
+        optional=True,
+        since="0.2",
+    ),
 )
 
 YOSHIDA2008 = (
@@ -68,9 +105,25 @@ YOSHIDA2008 = (
         low=0.0,
     ),
     Column("adjustments", int, "key presses that changed a target", low=0),
-    Column("q1_glow", bool, "Does the reference image glow?"),
-    Column("q2_ring", bool, "Do you see a bright ring (a.k.a. Mach-band)?"),
-    Column("q3_same_size", bool, "Are the sizes of reference and target disks the same?"),
+    Column(
+        "q1_glow",
+        bool,
+        "Does the reference image glow? (empty: the protocol asks no questions)",
+        optional=True,
+    ),
+    Column(
+        "q2_ring",
+        bool,
+        "Do you see a bright ring (a.k.a. Mach-band)? (empty: the protocol asks no questions)",
+        optional=True,
+    ),
+    Column(
+        "q3_same_size",
+        bool,
+        "Are the sizes of reference and target disks the same? (empty: the protocol asks "
+        "no questions)",
+        optional=True,
+    ),
 )
 
 SPENCER1995 = (
@@ -90,6 +143,35 @@ SPENCER1995 = (
     Column("response", str, "which looked brighter", choices=("glare", "disc", "neither")),
     Column("reversal", bool, "this response reversed the staircase's direction"),
     Column("step_fraction", float, "step size the staircase used after this trial", low=0.0),
+    Column(
+        "offset_s",
+        float,
+        "the flip that ended the flash, on the session clock",
+        unit="s",
+        low=0.0,
+        since="0.2",
+    ),
+    Column(
+        "shown_ms",
+        float,
+        "measured presentation: offset flip minus onset flip",
+        unit="ms",
+        low=0.0,
+        since="0.2",
+    ),
+    Column(
+        "presentation_ok",
+        bool,
+        "no frame dropped and shown_ms within trials.timing_tolerance_ms of the frames asked",
+        since="0.2",
+    ),
+    Column(
+        "counted",
+        bool,
+        "the answer moved its staircase (false: the presentation failed and the protocol "
+        "repeats such trials, trials.repeat_failed_presentations)",
+        since="0.2",
+    ),
 )
 
 LUIDOLT2020 = (

@@ -5,8 +5,11 @@ Two blocks, without and with context, in an order counterbalanced across partici
 glare level runs on the comparison disc's intensity (0-100 % of the display maximum),
 interleaved in a seeded random order. A trial shows the glare image and the disc-and-annulus
 image side by side, sides swapped at random, for 400 or 700 ms (chosen at random per trial;
-an exact number of frames at the measured refresh rate), then asks: ``left`` brighter,
-``right`` brighter, or ``down`` for neither.
+an exact number of frames at the display's refresh rate) after a blank of ``inter_trial_ms``,
+then asks: ``left`` brighter, ``right`` brighter, or ``down`` for neither (an answer during the
+flash counts). A flash that dropped frames or missed its timing is recorded with
+``presentation_ok`` false; with ``repeat_failed_presentations`` it does not move its staircase
+(``counted`` false) and the same staircase is shown again.
 
 Each staircase starts at ``start_fraction`` and moves the disc up when the glare image looked
 brighter and down when the disc did, by ``step_fractions[k]`` once it has had ``k`` reversals
@@ -28,7 +31,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from .engine import participant_rng
+from .engine import Engine, participant_rng
 
 __all__ = ["Staircase", "StaircaseExperiment"]
 
@@ -82,7 +85,7 @@ class Staircase:
         return reversal
 
 
-class StaircaseExperiment:
+class StaircaseExperiment(Engine):
     """The Spencer 1995 protocol engine (no PsychoPy)."""
 
     study = "spencer1995"
@@ -98,6 +101,8 @@ class StaircaseExperiment:
     ):
         if counterbalance not in (0, 1):
             raise ValueError(f"counterbalance must be 0 or 1; got {counterbalance!r}")
+        if not refresh_hz > 0:
+            raise ValueError(f"refresh_hz must be > 0; got {refresh_hz!r}")
         self.protocol = protocol
         self.participant = participant
         self.session = session
@@ -105,10 +110,12 @@ class StaircaseExperiment:
         contexts = list(protocol["stimulus"]["context"])
         self.contexts = contexts if counterbalance == 0 else contexts[::-1]
         self.counterbalance = counterbalance
+        self.repeat_failed = protocol["trials"]["repeat_failed_presentations"]
         self.rng = participant_rng(protocol.seed, participant, "spencer1995 trials")
         self.block = 0
         self.trial = 0
         self.phase = "instructions"
+        self.presentation_ok = True
         self._start_block()
 
     def _start_block(self) -> None:
@@ -126,16 +133,19 @@ class StaircaseExperiment:
         ]
         self._next_trial()
 
-    def _next_trial(self) -> None:
-        open_ = [s for s in self.staircases if not s.done]
-        if not open_:
-            self.current = None
-            return
-        self.current = open_[int(self.rng.integers(len(open_)))]
+    def _next_trial(self, *, again: bool = False) -> None:
+        """Draw the next staircase (or keep the current one, ``again``), its side and time."""
+        if not again:
+            open_ = [s for s in self.staircases if not s.done]
+            if not open_:
+                self.current = None
+                return
+            self.current = open_[int(self.rng.integers(len(open_)))]
         self.glare_side = ("left", "right")[int(self.rng.integers(2))]
         durations = self.protocol["trials"]["presentation_ms"]
         self.duration_ms = float(durations[int(self.rng.integers(len(durations)))])
         self.frames = max(1, round(self.duration_ms * self.refresh_hz / 1000.0))
+        self.presentation_ok = True
 
     @property
     def done(self) -> bool:
@@ -145,11 +155,31 @@ class StaircaseExperiment:
     def context(self) -> str:
         return self.contexts[self.block]
 
+    def key_legend(self) -> list[tuple[str, str]]:
+        return [
+            ("←", "the LEFT light looked brighter"),
+            ("→", "the RIGHT light looked brighter"),
+            ("↓", "NEITHER looked brighter"),
+            ("", "you may answer during the flash or after it"),
+        ]
+
     def screen(self) -> dict:
         if self.phase == "instructions":
-            return {"kind": "instructions", "text": self.protocol["instructions"]["text"]}
+            return {
+                "kind": "instructions",
+                "text": self.protocol["instructions"]["text"],
+                "keys": {"space": "start"},
+            }
+        if self.phase == "block":
+            scene = "alone on a black screen" if self.context == "none" else "in a scene (a lamp)"
+            return {
+                "kind": "block",
+                "text": f"Part {self.block + 1} of {len(self.contexts)}: the light is shown "
+                f"{scene}.",
+                "keys": {"space": "continue"},
+            }
         if self.phase == "done":
-            return {"kind": "done"}
+            return {"kind": "done", "keys": {}}
         s = self.current
         return {
             "kind": "present",
@@ -160,11 +190,20 @@ class StaircaseExperiment:
             "disc_fraction": s.fraction,
             "frames": self.frames,
             "duration_ms": self.duration_ms,
+            "blank_before_ms": self.protocol["trials"]["inter_trial_ms"],
             "context": self.context,
+            "keys": {
+                "left": "left looked brighter",
+                "right": "right looked brighter",
+                "down": "neither",
+            },
         }
 
+    def presented(self, ok: bool) -> None:
+        self.presentation_ok = bool(ok)
+
     def press(self, key: str, t: float = 0.0) -> dict | None:
-        if self.phase == "instructions":
+        if self.phase in ("instructions", "block"):
             if key == "space":
                 self.phase = "trial"
             return None
@@ -174,12 +213,13 @@ class StaircaseExperiment:
             response = "neither"
         else:
             response = "glare" if key == self.glare_side else "disc"
-        return self._respond(response, t)
+        return self._respond(response, t, presentation_ok=self.presentation_ok)
 
-    def _respond(self, response: str, t: float) -> dict:
+    def _respond(self, response: str, t: float, *, presentation_ok: bool) -> dict:
         s = self.current
         tested = s.fraction
-        reversal = s.update(response)
+        counted = presentation_ok or not self.repeat_failed
+        reversal = s.update(response) if counted else False
         self.trial += 1
         row = {
             "study": self.study,
@@ -188,7 +228,6 @@ class StaircaseExperiment:
             "trial": self.trial,
             "block": self.context,
             "time_s": t,
-            "dropped_frames": 0,
             "context": self.context,
             "glare_level": s.level,
             "strength": s.strength,
@@ -199,12 +238,15 @@ class StaircaseExperiment:
             "response": response,
             "reversal": reversal,
             "step_fraction": s.step,
+            "presentation_ok": presentation_ok,
+            "counted": counted,
         }
-        self._next_trial()
+        self._next_trial(again=not counted)
         if self.current is None:
             self.block += 1
             if self.block < len(self.contexts):
                 self._start_block()
+                self.phase = "block"
             else:
                 self.phase = "done"
         return row
@@ -214,6 +256,8 @@ class StaircaseExperiment:
         if rows and self.phase == "instructions":
             self.phase = "trial"
         for row in rows:
+            if self.phase == "block":
+                self.phase = "trial"
             expected = self.screen()
             level = int(row["glare_level"])
             if (
@@ -225,4 +269,5 @@ class StaircaseExperiment:
                     f"the recorded trial {row['trial']} (level {level}, {row['context']}) does "
                     "not follow this participant's seeded order; was the protocol or seed changed?"
                 )
-            self._respond(row["response"], float(row["time_s"]))
+            ok = str(row.get("presentation_ok", "true")).lower() == "true"
+            self._respond(row["response"], float(row["time_s"]), presentation_ok=ok)

@@ -3,24 +3,34 @@
 After the instructions and a training block, each of the 12 references (6 levels × 2 methods)
 is shown once, in an order randomised per participant (seeded, recorded). A trial shows the
 reference in the middle and two glare-free targets left and right, starting at 100 and 400
-cd/m². The participant selects a target (``left``/``right``; a thin line marks it), adjusts its
-disk luminance (``up``/``down`` coarse, ``pageup``/``pagedown`` fine; the display's range bounds
-it) and confirms with ``return`` when the left disk looks slightly but visibly darker and the
-right slightly but visibly brighter than the reference. Three yes/no questions follow (``y`` /
-``n``, Table 1). The row holds both settings, their mean (the match), the answers, the number of
-adjustments and the time to confirm.
+cd/m². The participant selects a target (``left``/``right``; a bar under it marks it), adjusts
+its disk luminance (``up``/``down`` coarse, ``pageup``/``pagedown`` fine; the display's range
+bounds it) and confirms with ``return`` when the left disk looks slightly but visibly darker and
+the right slightly but visibly brighter than the reference. Three yes/no questions follow
+(``y`` / ``n``, Table 1). The row holds both settings, their mean (the match), the answers, the
+number of adjustments and the time from the reference's onset to the confirming Enter.
 """
 
 from __future__ import annotations
 
-from .engine import participant_rng
+from .engine import Engine, participant_rng
 
 __all__ = ["BrightnessMatching"]
 
 QUESTION_COLUMNS = ("q1_glow", "q2_ring", "q3_same_size")
+ADJUST_KEYS = {
+    "left": "select the left target (slightly darker)",
+    "right": "select the right target (slightly brighter)",
+    "up": "selected target brighter (coarse step)",
+    "down": "selected target darker (coarse step)",
+    "pageup": "brighter (fine step)",
+    "pagedown": "darker (fine step)",
+    "return": "confirm both settings",
+}
+QUESTION_KEYS = {"y": "yes", "n": "no"}
 
 
-class BrightnessMatching:
+class BrightnessMatching(Engine):
     """The Yoshida 2008 protocol engine (no PsychoPy)."""
 
     study = "yoshida2008"
@@ -74,11 +84,30 @@ class BrightnessMatching:
         """The trial order, ``block:method:level``, for the sidecar."""
         return [f"{t['block']}:{t['method']}:{t['level']}" for t in self.trials]
 
+    @property
+    def total_trials(self) -> int:
+        return len(self.trials)
+
+    def key_legend(self) -> list[tuple[str, str]]:
+        legend = [
+            ("← →", "select the left (darker) or right (brighter) target"),
+            ("↑ ↓", "make the selected target brighter or darker"),
+            ("Page Up / Page Down", "the same in fine steps"),
+            ("Enter", "confirm both settings"),
+        ]
+        if self.questions:
+            legend.append(("Y / N", "answer yes or no to the questions after each trial"))
+        return legend
+
     def screen(self) -> dict:
         if self.phase == "instructions":
-            return {"kind": "instructions", "text": self.protocol["instructions"]["text"]}
+            return {
+                "kind": "instructions",
+                "text": self.protocol["instructions"]["text"],
+                "keys": {"space": "start"},
+            }
         if self.phase == "done":
-            return {"kind": "done"}
+            return {"kind": "done", "keys": {}}
         trial = self.trials[self.index]
         base = {
             "trial": self.index + 1,
@@ -92,10 +121,12 @@ class BrightnessMatching:
                 "left_cd_m2": self.values["left"],
                 "right_cd_m2": self.values["right"],
                 "selected": self.selected,
+                "keys": ADJUST_KEYS,
             }
         return {
             **base,
             "kind": "question",
+            "keys": QUESTION_KEYS,
             "question": self.questions[len(self.answers)],
             "number": len(self.answers) + 1,
         }
@@ -144,7 +175,6 @@ class BrightnessMatching:
             "trial": self.index + 1,
             "block": trial["block"],
             "time_s": self.confirm_time,
-            "dropped_frames": 0,
             "method": trial["method"],
             "level": trial["level"],
             "level_index": trial["level_index"],

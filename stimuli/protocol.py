@@ -182,6 +182,13 @@ DISPLAY: Schema = {
     "refresh_hz": Key(
         float, "nominal refresh rate", unit="Hz", low=20.0, high=1000.0, default=60.0
     ),
+    "white_tolerance": Key(
+        float,
+        "largest relative difference between a session's calibration white and max_cd_m2",
+        low=0.0,
+        high=1.0,
+        default=0.1,
+    ),
 }
 VIEWING: Schema = {
     "distance_m": Key(float, "eye-screen distance", unit="m", low=0.1, high=20.0),
@@ -196,6 +203,13 @@ LEVELS_CD_M2 = Key(
     length=(1, 26),
     low=0.0,
     high=1e9,
+)
+BREAK_EVERY = Key(
+    int,
+    "a break screen after every this many trials (0: no breaks)",
+    low=0,
+    high=100_000,
+    default=0,
 )
 OBSERVER_SD = Key(float, "between-observer SD of the boost gain", low=0.0, high=2.0)
 REGIME = Key(str, "Vos PSF regime", choices=("photopic", "mesopic", "scotopic"))
@@ -273,6 +287,7 @@ YOSHIDA2008: Schema = {
         "fine_step_cd_m2": Key(
             float, "fine adjustment step", unit="cd/m²", low=0.001, high=1000.0
         ),
+        "break_every": BREAK_EVERY,
     },
     "instructions": {"text": Key(str, "written instruction shown before training")},
     "observer": {
@@ -298,7 +313,11 @@ YOSHIDA2008: Schema = {
     },
     "questionnaire": {
         "questions": Key(
-            list, "yes/no questions after each trial (Yoshida Table 1)", item=str, length=(0, 20)
+            list,
+            "yes/no questions after each trial (Yoshida Table 1): none, or three, one per CSV "
+            "column q1_glow, q2_ring, q3_same_size",
+            item=str,
+            length=(0, 3),
         ),
     },
 }
@@ -377,6 +396,29 @@ SPENCER1995: Schema = {
             "how a 'neither brighter' answer moves the staircase",
             choices=("hold", "alternate"),
         ),
+        "inter_trial_ms": Key(
+            float,
+            "blank screen before each flash",
+            unit="ms",
+            low=0.0,
+            high=60_000.0,
+            default=500.0,
+        ),
+        "timing_tolerance_ms": Key(
+            float,
+            "largest difference between the measured flash and its frames (Spencer §4: ±10 ms)",
+            unit="ms",
+            low=0.0,
+            high=1000.0,
+            default=10.0,
+        ),
+        "repeat_failed_presentations": Key(
+            bool,
+            "a flash that dropped frames or missed its timing does not move its staircase and "
+            "is shown again",
+            default=True,
+        ),
+        "break_every": BREAK_EVERY,
     },
     "instructions": INSTRUCTIONS,
     "observer": {
@@ -407,8 +449,8 @@ LUIDOLT2020: Schema = {
     "study": STUDY,
     "instructions": INSTRUCTIONS,
     "questionnaire": {
-        "scale_min": Key(int, "lowest rating", low=0, high=10),
-        "scale_max": Key(int, "highest rating", low=1, high=100),
+        "scale_min": Key(int, "lowest rating (a number key; the CSV holds 1-7)", low=1, high=6),
+        "scale_max": Key(int, "highest rating (a number key; the CSV holds 1-7)", low=2, high=7),
         "anchors": Key(list, "labels of the lowest and highest rating", item=str, length=2),
         "categories": Key(list, "category names", item=str, length=(1, 30)),
         "prompts": Key(list, "one question per category", item=str, length=(1, 30)),
@@ -485,6 +527,12 @@ def _cross_checks(study: str, p: dict, problems: list[str]) -> None:
                 problems.append(
                     f"glare.{method}: {len(labels)} labels for {len(levels)} levels_cd_m2"
                 )
+        questions = p["questionnaire"]["questions"]
+        if questions is not None and len(questions) not in (0, 3):
+            problems.append(
+                f"questionnaire.questions has {len(questions)} entries: must be none or three "
+                "(the session CSV has one column per question: q1_glow, q2_ring, q3_same_size)"
+            )
         t = p["trials"]
         if (
             t["fine_step_cd_m2"] is not None
@@ -523,6 +571,16 @@ def _cross_checks(study: str, p: dict, problems: list[str]) -> None:
             and len(q["categories"]) != len(q["prompts"])
         ):
             problems.append("questionnaire.prompts: one prompt per category is needed")
+        means = p["observer"]["means"]
+        if (
+            q["categories"] is not None
+            and means is not None
+            and len(means) != len(q["categories"])
+        ):
+            problems.append(
+                f"observer.means has {len(means)} entries for {len(q['categories'])} "
+                "categories: one mean per category is needed"
+            )
 
 
 @dataclass(frozen=True)

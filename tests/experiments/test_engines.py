@@ -165,14 +165,13 @@ def test_likert_ratings_and_comments(protocols):
     assert engine.screen()["category"] == "Glare Appearance"
     assert engine.press("9") is None and engine.screen()["kind"] == "rate"  # outside 1-7
     engine.press("4", 3.0)
-    for key in "too bright":
-        engine.press("space" if key == " " else key)
-    engine.press("backspace")
+    assert engine.screen()["text_entry"] and set(engine.screen()["keys"]) == {"return"}
+    engine.type_text("Too bright, isn't it.")
     row = engine.press("return")
     assert (row["category"], row["rating"], row["comment"], row["time_s"]) == (
         "Glare Appearance",
         4,
-        "too brigh",
+        "Too bright, isn't it.",
         3.0,
     )
     engine.press("num_7")

@@ -119,3 +119,16 @@ def test_schema_documents_every_key():
     keys = {r[0] for r in rows}
     assert "glare.gaussian.sigma_deg" in keys and "display.bit_depth" in keys
     assert all(r[4] for r in rows)  # every key has a description
+
+
+def test_questions_that_do_not_fit_the_session_csv_are_refused():
+    text = (PROTOCOLS / "yoshida2008.toml").read_text()
+    five = text.replace(
+        '"Are the sizes of reference and target disks the same?",',
+        '"Are the sizes of reference and target disks the same?", "Q4?", "Q5?",',
+    )
+    with pytest.raises(ProtocolError, match=r"questionnaire.questions has 5 entries: must be"):
+        parse_protocol(tomllib.loads(five))
+    two = text.replace('  "Do you see a bright ring (a.k.a. Mach-band)?",\n', "")
+    with pytest.raises(ProtocolError, match="must be none or three"):
+        parse_protocol(tomllib.loads(two))
