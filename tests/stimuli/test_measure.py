@@ -4,6 +4,7 @@ import shutil
 import subprocess
 import sys
 import textwrap
+import time
 
 import numpy as np
 import pytest
@@ -159,3 +160,45 @@ def test_psychopy_front_end_shows_each_code(tmp_path):
     assert len(result["shown"]) == 9 + 1 + 3
     for code, pixel in result["shown"]:
         assert abs(pixel - code) <= 1  # the patch shows the drive code (8-bit frame buffer)
+
+
+def test_a_reading_typed_quickly_keeps_every_character(tmp_path):
+    """Real key events through the X server, typed faster than the patch redraws."""
+    from tests.experiments.xscreen import XScreen
+
+    x = XScreen(tmp_path)
+    out = tmp_path / "display.json"
+    try:
+        x.run("calibrate", "measure", "--out", out, "--bit-depth", "8", "--points", "5",
+              "--windowed")  # fmt: skip
+        session = out.with_suffix(".session.json")
+        x.focus_window()  # waits for the window
+        time.sleep(1.0)
+        x.key("1", "2", "3", "period", "4", "5", "6", "Return")  # no pause between keys
+        deadline = time.time() + 30
+        while not session.exists() and time.time() < deadline:
+            time.sleep(0.05)
+        x.key("7", "comma", "2", "5", "Return", delay_ms=0)
+        time.sleep(1.0)
+        x.key("Escape")
+        assert x.wait() == 1, x.stderr[-2000:]
+    finally:
+        x.close()
+    log = json.loads(session.read_text())["log"]
+    assert [entry["cd_m2"] for entry in log] == [123.456, 7.25]
+
+
+def test_a_10_bit_calibration_is_not_measured_through_an_8_bit_window(tmp_path):
+    from tests.experiments.xscreen import XScreen
+
+    x = XScreen(tmp_path)
+    try:
+        done = x.glarelab(
+            "calibrate", "measure", "--out", tmp_path / "d.json", "--bit-depth", "10",
+            "--windowed", "--simulate", "100", "0.1", "2.2",
+        )  # fmt: skip
+    finally:
+        x.close()
+    assert done.returncode == 2
+    assert "the window gives 8 bits per channel, the calibration is for 10" in done.stderr
+    assert not (tmp_path / "d.json").exists()

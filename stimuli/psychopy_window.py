@@ -1,0 +1,187 @@
+"""The PsychoPy window and keyboard of every glarelab screen: photometer sessions, experiment
+sessions and the display check. Only the front-end modules import this one, and it imports
+PsychoPy only when called.
+
+- :func:`open_window` asks for the bits per channel the display needs (10 on a 10-bit display)
+  and reports the bits the window was given; it never silently runs at fewer.
+- :func:`measure_refresh` measures the frame interval on the open window (PsychoPy's
+  ``getActualFrameRate``) and returns None when no stable interval was found: a failed
+  measurement is never taken for a nominal rate.
+- :class:`KeyReader` is one ``psychopy.hardware.keyboard.Keyboard`` (Psychtoolbox backend,
+  key-down times stamped by the operating system's input thread) whose presses are each
+  returned once, in the order pressed, and never cleared: a key pressed while a screen redraws,
+  or during a flash, is kept.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import sys
+
+import numpy as np
+
+__all__ = [
+    "KeyReader",
+    "grab_screen",
+    "measure_frame_intervals",
+    "measure_refresh",
+    "open_window",
+    "screen_resolution",
+    "window_bits",
+]
+
+BACKGROUND = (-1.0, -1.0, -1.0)  # black, in PsychoPy's rgb (-1 .. 1)
+
+
+def open_window(
+    *,
+    bits: int,
+    fullscreen: bool,
+    size: tuple[int, int] = (1280, 800),
+    units: str = "pix",
+    screen: int = 0,
+):
+    """A PsychoPy window asking for ``bits`` per channel (10 or more: a deep frame buffer).
+
+    Returns
+    -------
+    (window, bits_given)
+    """
+    from psychopy import visual
+
+    common = dict(
+        size=size,
+        fullscr=fullscreen,
+        screen=screen,
+        units=units,
+        color=BACKGROUND,
+        colorSpace="rgb",
+        allowGUI=False,
+        useFBO=False,
+        checkTiming=False,
+        waitBlanking=True,
+    )
+    window = None
+    if bits > 8:
+        try:
+            window = visual.Window(bpc=(bits, bits, bits), **common)
+        except RuntimeError:  # no deep frame buffer on this screen: an 8-bit one
+            window = None
+    if window is None:
+        window = visual.Window(**common)
+    window.mouseVisible = False
+    return window, window_bits()
+
+
+def window_bits() -> int:
+    """Bits per channel of the current OpenGL frame buffer."""
+    from pyglet import gl
+
+    value = ctypes.c_int()
+    gl.glGetIntegerv(gl.GL_RED_BITS, ctypes.byref(value))
+    return int(value.value) or 8
+
+
+def screen_resolution(window) -> tuple[int, int]:
+    """The (width, height) in pixels of the screen the window is on."""
+    screen = window.winHandle.screen
+    return int(screen.width), int(screen.height)
+
+
+def measure_refresh(window) -> float | None:
+    """The refresh rate (Hz) from frame intervals on the open window, or None when the
+    intervals never settled (no vertical sync, a busy machine)."""
+    rate = window.getActualFrameRate(nIdentical=20, nMaxFrames=240, nWarmUpFrames=20)
+    return float(rate) if rate else None
+
+
+def measure_frame_intervals(window, frames: int = 300, draw=None) -> np.ndarray:
+    """Intervals (s) between ``frames`` consecutive flips, each after ``draw()`` if given."""
+    times = []
+    for _ in range(frames + 1):
+        if draw is not None:
+            draw()
+        times.append(window.flip())
+    return np.diff(np.asarray(times, dtype=float))
+
+
+def grab_screen(window, *, buffer: str = "back") -> np.ndarray:
+    """The window's pixels (height, width, 3) as uint8, from the back or front buffer."""
+    return np.asarray(window.getMovieFrame(buffer=buffer))
+
+
+class KeyReader:
+    """Every key press of a session, each returned once, in the order pressed.
+
+    Wraps one ``psychopy.hardware.keyboard.Keyboard`` on the Psychtoolbox backend. PsychoPy's
+    ``getKeys`` returns a press either while the key is down (``waitRelease=False``) or after
+    its release (``waitRelease=True``), never both ways at once, so a press that goes down and
+    up between two reads would be missed by the first and a held key delayed by the second.
+    :meth:`read` asks both ways and returns each press once, as soon as it went down.
+
+    Times are key-down times on PsychoPy's clock (``psychopy.logging.defaultClock``, the clock
+    ``window.flip()`` returns), stamped by the input thread, not when they were read.
+
+    Raises
+    ------
+    RuntimeError
+        If Psychtoolbox's keyboard is not available (on Linux it needs the JACK library,
+        Debian's ``libjack-jackd2-0``).
+    """
+
+    def __init__(self):
+        from psychopy.hardware import keyboard
+
+        if not keyboard.havePTB:
+            raise RuntimeError(
+                "PsychoPy's keyboard needs Psychtoolbox (the psychtoolbox package; on Linux "
+                "also the JACK library, e.g. apt install libjack-jackd2-0): without it key "
+                "presses are time-stamped only when read, and some are lost"
+            )
+        self.keyboard = keyboard.Keyboard(backend="ptb")
+        if self.keyboard.getBackend() != "ptb":
+            raise RuntimeError(
+                f"PsychoPy's keyboard runs on its {self.keyboard.getBackend()!r} backend, "
+                "not Psychtoolbox's (another part of the program chose it first)"
+            )
+        self._down: list = []  # presses returned while down, until they come back released
+
+    def read(self) -> list[tuple[str, float]]:
+        """``(key name, key-down time)`` of every press not returned before, in order."""
+        down = self.keyboard.getKeys(waitRelease=False, clear=True)
+        released = self.keyboard.getKeys(waitRelease=True, clear=True)
+        new, still_down = list(down), list(down)
+        for press in released:
+            if any(press is seen for seen in self._down):  # returned while down before
+                self._down = [seen for seen in self._down if seen is not press]
+            elif any(press is seen for seen in still_down):  # went down and up since
+                still_down = [seen for seen in still_down if seen is not press]
+            else:
+                new.append(press)
+        self._down += still_down
+        new.sort(key=lambda press: press.tDown)
+        return [(str(press.name), float(press.tDown)) for press in new]
+
+    def clear(self) -> None:
+        """Forget presses made so far (only before the first screen of a session)."""
+        self.keyboard.clearEvents()
+        self._down = []
+
+
+def dispatch_events(window) -> None:
+    """Let the window process its events (keeps it responsive while waiting)."""
+    window.winHandle.dispatch_events()
+
+
+if sys.platform.startswith("linux"):  # pragma: no branch
+
+    def qt_dialog_available() -> bool:
+        """Whether Qt can open a dialog on this X display (it aborts the process if not)."""
+        import ctypes.util
+
+        return ctypes.util.find_library("xcb-cursor") is not None
+
+else:  # pragma: no cover
+
+    def qt_dialog_available() -> bool:
+        return True
