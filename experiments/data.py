@@ -1,9 +1,18 @@
 """Writing session data so that nothing collected is ever lost.
 
-One CSV per session, one row per trial, written, flushed and fsync'ed the moment the trial
-ends; a JSON sidecar with who, what and how, rewritten atomically whenever the session's state
-changes. A session file that exists is never overwritten: a new session refuses, ``resume``
-appends to it.
+A session's files share one stem, ``PARTICIPANT_STUDY_sN_YYYY-MM-DD_HHMM`` (the date and time the
+session first started, as PsychoPy names its data files): the CSV, one row per trial, written,
+flushed and fsync'ed the moment the trial ends; the JSON sidecar (who, what, how, when),
+rewritten atomically whenever the session's state changes; the PsychoPy log (``.log``) and the
+frame intervals (``_frames.tsv``) of sessions run on a screen.
+
+A session is held by one process at a time: an exclusive lock on a small lock file
+(``.PARTICIPANT_STUDY_sN.lock``, which names the holder's process id) is taken before any file
+is looked at, so a second process that starts or resumes the same session is refused. A new
+session refuses when any file of that participant, study and session number exists; its CSV
+header is written and fsync'ed before the first trial, and a session whose files cannot be
+written (a full disk) leaves no file behind. ``resume`` appends to the existing CSV after
+checking its header.
 """
 
 from __future__ import annotations
@@ -13,26 +22,55 @@ import io
 import json
 import os
 import re
+import socket
+import sys
+from datetime import datetime
 from pathlib import Path
 
 from .schema import columns, format_value
 
-__all__ = ["SessionFiles", "read_rows", "session_paths"]
+__all__ = [
+    "SessionError",
+    "SessionFiles",
+    "SessionLock",
+    "check_session_id",
+    "read_rows",
+    "session_files",
+]
 
 _ID = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")
 
 
-def session_paths(out: Path, study: str, participant: str, session: int) -> tuple[Path, Path]:
-    """``(csv, sidecar)`` paths of a session; the participant id must be file-name safe."""
-    if not _ID.match(participant):
-        raise ValueError(
-            f"participant must be 1-64 letters, digits, '_', '-' or '.', starting with a letter "
+class SessionError(ValueError):
+    """A session that may not start or resume; nothing was written."""
+
+
+def check_session_id(participant: str, session: int) -> None:
+    """Refuse a participant id that is not file-name safe, or a session number below 1."""
+    if not isinstance(participant, str) or not _ID.match(participant):
+        raise SessionError(
+            "participant must be 1-64 letters, digits, '_', '-' or '.', starting with a letter "
             f"or digit; got {participant!r}"
         )
-    if session < 1:
-        raise ValueError(f"session must be >= 1; got {session!r}")
-    stem = f"{study}_{participant}_s{session}"
-    return Path(out) / f"{stem}.csv", Path(out) / f"{stem}.json"
+    if isinstance(session, bool) or not isinstance(session, int) or session < 1:
+        raise SessionError(f"session must be an integer >= 1; got {session!r}")
+
+
+def _prefix(participant: str, study: str, session: int) -> str:
+    return f"{participant}_{study}_s{session}"
+
+
+def session_files(out: Path, participant: str, study: str, session: int) -> list[Path]:
+    """Every file of one participant's session of a study in ``out`` (whatever its date)."""
+    check_session_id(participant, session)
+    pattern = re.compile(
+        re.escape(_prefix(participant, study, session))
+        + r"_\d{4}-\d{2}-\d{2}_\d{4}(\.csv|\.json|\.log|_frames\.tsv)$"
+    )
+    folder = Path(out)
+    if not folder.is_dir():
+        return []
+    return sorted(p for p in folder.iterdir() if pattern.match(p.name))
 
 
 def read_rows(path: Path) -> list[dict[str, str]]:
@@ -43,45 +81,185 @@ def read_rows(path: Path) -> list[dict[str, str]]:
     return list(csv.DictReader(io.StringIO(text)))
 
 
+def _fsync_folder(folder: Path) -> None:
+    if sys.platform == "win32":  # pragma: no cover - folders cannot be opened there
+        return
+    descriptor = os.open(folder, os.O_RDONLY)
+    try:
+        os.fsync(descriptor)
+    finally:
+        os.close(descriptor)
+
+
+class SessionLock:
+    """An exclusive, non-blocking lock on one participant's session of a study.
+
+    The operating system releases it when the process ends, however it ends, so a killed
+    session never leaves a stale lock. The lock file records the holder's process id and host
+    for the refusal message.
+    """
+
+    def __init__(self, out: Path, participant: str, study: str, session: int):
+        check_session_id(participant, session)
+        self.path = Path(out) / f".{_prefix(participant, study, session)}.lock"
+        self.what = f"participant {participant!r}'s {study} session {session}"
+        self._fd: int | None = None
+
+    def acquire(self) -> None:
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            _lock(fd)
+        except OSError:
+            holder = os.read(fd, 200).decode("utf-8", "replace").strip() or "unknown"
+            os.close(fd)
+            raise SessionError(
+                f"{self.what} is in use by another process ({holder}; lock file {self.path}): "
+                "one session is run by one process at a time"
+            ) from None
+        try:  # who holds it, for the refusal message (a full disk only loses the name)
+            os.ftruncate(fd, 0)
+            os.write(fd, f"pid {os.getpid()} on {socket.gethostname()}\n".encode())
+        except OSError:
+            pass
+        self._fd = fd
+
+    def release(self) -> None:
+        if self._fd is not None:
+            os.close(self._fd)  # closing the descriptor releases the lock
+            self._fd = None
+
+
+if sys.platform == "win32":  # pragma: no cover - the lab machines of CI are Linux
+
+    def _lock(fd: int) -> None:
+        import msvcrt
+
+        os.lseek(fd, 0, os.SEEK_SET)
+        msvcrt.locking(fd, msvcrt.LK_NBLCK, 1)
+
+else:
+
+    def _lock(fd: int) -> None:
+        import fcntl
+
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+
+
 class SessionFiles:
-    """The CSV and sidecar of one session.
+    """The files of one session, held under its lock until :meth:`close`.
+
+    Creating the object takes the lock and checks the session's files without writing
+    anything (a new session: none may exist; a resumed one: its CSV must exist with this
+    format's header); :meth:`open` then creates the CSV with its header (fsync'ed) or opens it
+    for appending.
 
     Parameters
     ----------
     study, participant, session, out
         Which session, and the folder for its files.
     resume
-        Continue an existing session (its CSV must exist); otherwise a new session, which
-        refuses to start if its CSV or sidecar exists.
+        Continue the existing session; otherwise start a new one.
+    started
+        When this run started (names a new session's files).
+
+    Raises
+    ------
+    SessionError
+        The session is held by another process, has data (new) or none (resume), or its CSV
+        cannot be resumed; nothing was written.
     """
 
-    def __init__(self, study: str, participant: str, session: int, out: Path, *, resume: bool):
+    def __init__(
+        self,
+        study: str,
+        participant: str,
+        session: int,
+        out: Path,
+        *,
+        resume: bool,
+        started: datetime,
+    ):
         self.study = study
+        self.resume = resume
         self.columns = columns(study)
-        self.csv_path, self.sidecar_path = session_paths(out, study, participant, session)
-        Path(out).mkdir(parents=True, exist_ok=True)
-        if resume:
-            if not self.csv_path.is_file():
-                raise ValueError(f"nothing to resume: {self.csv_path} does not exist")
-            self.rows = read_rows(self.csv_path)
-            self._truncate_partial_line()
-            self._handle = self.csv_path.open("a", encoding="utf-8", newline="")
-        else:
-            for path in (self.csv_path, self.sidecar_path):
-                if path.exists():
-                    raise ValueError(
-                        f"{path} exists: participant {participant!r} session {session} already "
-                        "has data; use another session number, or --resume to continue it"
-                    )
-            self.rows = []
-            self._handle = self.csv_path.open("x", encoding="utf-8", newline="")
-            self._write_line([c.name for c in self.columns])
+        self.names = [c.name for c in self.columns]
+        out = Path(out)
+        self.lock = SessionLock(out, participant, study, session)
+        self.lock.acquire()
+        self._handle = None
+        self.created = False
+        self.rows: list[dict[str, str]] = []
+        try:
+            existing = session_files(out, participant, study, session)
+            if resume:
+                self.csv_path = self._existing_csv(existing, out, participant, study, session)
+            elif existing:
+                raise SessionError(
+                    f"{existing[0]} exists: participant {participant!r} session {session} "
+                    "already has data; use another session number, or --resume to continue it"
+                )
+            else:
+                stem = f"{_prefix(participant, study, session)}_{started:%Y-%m-%d_%H%M}"
+                self.csv_path = out / f"{stem}.csv"
+        except BaseException:
+            self.lock.release()
+            raise
+        stem = self.csv_path.name.removesuffix(".csv")
+        self.sidecar_path = self.csv_path.with_suffix(".json")
+        self.log_path = self.csv_path.with_suffix(".log")
+        self.frames_path = out / f"{stem}_frames.tsv"
 
-    def _truncate_partial_line(self) -> None:
-        data = self.csv_path.read_bytes()
-        if data and not data.endswith(b"\n"):
-            with self.csv_path.open("r+b") as handle:
-                handle.truncate(data.rfind(b"\n") + 1)
+    def _existing_csv(self, existing, out, participant, study, session) -> Path:
+        csvs = [p for p in existing if p.suffix == ".csv"]
+        if not csvs:
+            raise SessionError(
+                f"nothing to resume: no file {_prefix(participant, study, session)}_*.csv in {out}"
+            )
+        if len(csvs) > 1:
+            raise SessionError(
+                f"several files of participant {participant!r}'s {study} session {session}: "
+                f"{', '.join(p.name for p in csvs)}; move all but one away to resume"
+            )
+        path = csvs[0]
+        data = path.read_bytes()
+        first = data.split(b"\n", 1)[0].decode("utf-8", "replace")
+        if b"\n" not in data or first != ",".join(self.names):
+            found = "an empty file" if not data else f"first line {first[:80]!r}"
+            raise SessionError(
+                f"{path} has no valid {study} header ({found}): it cannot be resumed; keep it "
+                "for the record and start a new session number"
+            )
+        self.rows = read_rows(path)
+        return path
+
+    def open(self) -> None:
+        """Create the new session's CSV with its header, or open the resumed one to append.
+
+        Raises
+        ------
+        SessionError
+            If the CSV cannot be written (a full disk); a new session leaves no file.
+        """
+        if self.resume:
+            data = self.csv_path.read_bytes()
+            if not data.endswith(b"\n"):  # a row cut by a crash is not a trial
+                with self.csv_path.open("r+b") as handle:
+                    handle.truncate(data.rfind(b"\n") + 1)
+            self._handle = self.csv_path.open("a", encoding="utf-8", newline="")
+            return
+        self._handle = self.csv_path.open("x", encoding="utf-8", newline="")
+        self.created = True
+        try:
+            self._write_line(self.names)
+        except OSError as error:
+            self.discard()
+            raise SessionError(
+                f"could not write {self.csv_path} ({error.strerror or error}); the session "
+                "did not start and left no file"
+            ) from None
+
+    # --- writing ------------------------------------------------------------------------
 
     def _write_line(self, cells: list[str]) -> None:
         buffer = io.StringIO()
@@ -92,23 +270,54 @@ class SessionFiles:
 
     def write_row(self, row: dict) -> None:
         """Append one trial and make it durable before returning."""
-        unknown = set(row) - {c.name for c in self.columns}
+        unknown = set(row) - set(self.names)
         if unknown:
             raise ValueError(f"row has columns the {self.study} schema lacks: {sorted(unknown)}")
         cells = [format_value(row.get(c.name), c) for c in self.columns]
         self._write_line(cells)
-        self.rows.append(dict(zip([c.name for c in self.columns], cells, strict=True)))
+        self.rows.append(dict(zip(self.names, cells, strict=True)))
 
     def write_sidecar(self, data: dict) -> None:
         """Rewrite the sidecar atomically (a crash leaves the previous version)."""
         temporary = self.sidecar_path.with_suffix(".json.tmp")
-        temporary.write_text(json.dumps(data, indent=2, sort_keys=True, default=str) + "\n")
-        with temporary.open("rb") as handle:
-            os.fsync(handle.fileno())
-        os.replace(temporary, self.sidecar_path)
+        try:
+            with temporary.open("w", encoding="utf-8") as handle:
+                handle.write(json.dumps(data, indent=2, sort_keys=True, default=str) + "\n")
+                handle.flush()
+                os.fsync(handle.fileno())
+            os.replace(temporary, self.sidecar_path)
+            _fsync_folder(self.sidecar_path.parent)
+        except OSError:
+            temporary.unlink(missing_ok=True)
+            raise
 
     def read_sidecar(self) -> dict:
-        return json.loads(self.sidecar_path.read_text()) if self.sidecar_path.is_file() else {}
+        if not self.sidecar_path.is_file():
+            return {}
+        try:
+            data = json.loads(self.sidecar_path.read_text(encoding="utf-8"))
+        except (json.JSONDecodeError, UnicodeDecodeError) as error:
+            raise SessionError(f"{self.sidecar_path} is not valid JSON ({error})") from None
+        if not isinstance(data, dict):
+            raise SessionError(f"{self.sidecar_path} is not a JSON object")
+        return data
+
+    def discard(self) -> None:
+        """Remove the files of a new session that could not start (no trial was run); a
+        resumed session's files are never removed."""
+        if self._handle is not None:
+            try:
+                self._handle.close()
+            except OSError:  # the buffered header could not be written either
+                pass
+            self._handle = None
+        if self.created and not self.rows:
+            for path in (self.csv_path, self.sidecar_path):
+                path.unlink(missing_ok=True)
+            self.created = False
 
     def close(self) -> None:
-        self._handle.close()
+        if self._handle is not None:
+            self._handle.close()
+            self._handle = None
+        self.lock.release()

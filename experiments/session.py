@@ -1,39 +1,65 @@
-"""Running a session: checks before the first trial, then every trial on disk as it ends.
+"""Running a session: every check before the first trial, then every trial on disk as it ends.
 
-Before any trial runs (and before any file is created) a session refuses: a participant id
-that is not file-name safe or whose session already has data (unless resuming); a stimulus set
-that fails its manifest or was built from another protocol; a missing, failed or synthetic
-calibration unless the session is explicitly uncalibrated. Then the sidecar is written
-(status ``running``), each finished trial is appended and fsync'ed, and the sidecar ends as
-``completed`` or ``aborted`` (Escape). Simulated sessions take the same path with an observer
-for a front-end.
+In order, before any file is written:
+
+1. the participant id and session number are file-name safe, and the session is not held by
+   another process (a lock, see :mod:`experiments.data`);
+2. a new session has no files yet; a resumed one has its CSV with a valid header and its
+   sidecar, and the protocol, stimulus set and calibration are the ones it started with, and
+   the participant's details given now do not contradict the stored ones;
+3. the stimulus set matches its manifest and was built from this protocol; the calibration is
+   usable (not missing, failed or synthetic unless the session is explicitly uncalibrated) and
+   is this display's (:func:`experiments.display.check_calibration`);
+4. the window opens and its resolution, refresh rate and bits per channel are the protocol's
+   (:func:`experiments.display.check_screen`), unless a mismatch is accepted.
+
+Then the CSV header and the sidecar (status ``running``, start time) are written and fsync'ed,
+and :class:`experiments.loop.SessionLoop` runs the trials, each row fsync'ed as it ends. The
+sidecar ends as ``completed`` or ``aborted`` (Escape, SIGINT, SIGTERM, SIGHUP), with the end
+time. A session killed outright keeps its rows and a ``running`` sidecar; resuming it records
+that run as ``interrupted``, ended at the CSV's last write. Simulated sessions take the same
+path with a simulated device.
 """
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
+import os
 import re
+import signal
+import socket
+import threading
 import time
+from datetime import UTC, datetime
 from pathlib import Path
 
 from stimuli.calibration import Calibration, usable_calibration
 from stimuli.stimulus_set import package_versions, verify_stimulus_set
 
-from .data import SessionFiles, session_paths
+from .data import SessionError, SessionFiles, check_session_id
+from .display import check_calibration, check_screen, enforce, timing_rate_hz
+from .engine import Press
+from .loop import SessionAborted, SessionLoop, Shown
 from .luidolt2020 import LikertQuestionnaire
 from .observers import SimulatedObserver
+from .schema import DATA_FORMAT
 from .spencer1995 import StaircaseExperiment
 from .yoshida2008 import BrightnessMatching
 
-__all__ = ["SimulatedFrontend", "counterbalance_for", "make_engine", "run_session"]
+__all__ = [
+    "SessionAborted",
+    "SimulatedFrontend",
+    "counterbalance_for",
+    "make_engine",
+    "run_session",
+]
 
 STUDIES_WITH_STIMULI = ("yoshida2008", "spencer1995")
 PACKAGES = ("numpy", "scipy", "OpenEXR", "colour-science", "psychopy", "glarelab")
-
-
-class SessionAborted(Exception):
-    """Raised by a front-end when the participant presses Escape."""
+INFO_KEYS = ("age", "sex", "vision_correction")
+END_TEXT = "The session is complete. Thank you!\n\nPlease tell the experimenter."
 
 
 def counterbalance_for(participant: str) -> int:
@@ -63,24 +89,71 @@ def make_engine(
     raise ValueError(f"no experiment for study {protocol.study!r}")
 
 
-class SimulatedFrontend:
-    """Drives an engine with a simulated observer's key presses (no screen)."""
+def _tick(seconds: float) -> float:
+    """A time on the simulated clock's grid of 2⁻²⁰ s (about 1 µs): sums and differences of
+    such times are exact, so a trial's times do not depend on when it ran (a resumed
+    simulation writes the rows an uninterrupted one does)."""
+    return round(seconds * 2**20) / 2**20
 
-    bit_depth = None
-    refresh_hz = 60.0
+
+class SimulatedFrontend:
+    """A device driven by a simulated observer's key presses, on a virtual clock (no screen).
+
+    Screens that wait for the space bar (instructions, breaks) are answered after a second;
+    trial screens by the observer, with its times from the trial's onset.
+    """
+
+    keyboard = "simulated observer"
+    calibration_used = None
 
     def __init__(self, observer: SimulatedObserver, *, trial_delay_s: float = 0.0):
         self.observer = observer
         self.trial_delay_s = trial_delay_s
+        self.clock = 0.0
+        self.refresh_hz = 60.0
+        self.screen: dict | None = None
 
-    def run(self, engine, on_row) -> None:
-        while not engine.done:
-            for key, t in self.observer.keys(engine.screen()):
-                row = engine.press(key, t)
-                if row is not None:
-                    on_row(row)
-                    if self.trial_delay_s:
-                        time.sleep(self.trial_delay_s)
+    def open(self):
+        return None
+
+    def start(self, *, refresh_hz: float, pace: bool, frames_path, log_path) -> None:
+        self.refresh_hz = refresh_hz
+
+    def close(self) -> None:
+        pass
+
+    def log(self, message: str) -> None:
+        pass
+
+    def clock_epoch_s(self) -> float | None:
+        return None
+
+    def show(self, screen: dict) -> float:
+        self.screen = screen
+        self.clock += _tick(0.001)
+        return self.clock
+
+    def present(self, screen: dict) -> Shown:
+        self.screen = screen
+        onset = self.clock + _tick(screen.get("blank_before_ms", 0.0) / 1000.0)
+        self.clock = onset + _tick(screen["frames"] / self.refresh_hz)
+        return Shown(onset_s=onset, offset_s=self.clock, frames=screen["frames"])
+
+    def wait_keys(self, anchor_s: float) -> list[Press]:
+        screen = self.screen
+        if "trial" in screen:
+            keys = self.observer.keys(screen)
+            if self.trial_delay_s:
+                time.sleep(self.trial_delay_s)
+        else:
+            keys = [("space", 1.0)]
+        if not keys:
+            raise RuntimeError(
+                f"the simulated observer has no answer to a {screen['kind']} screen"
+            )
+        presses = [Press(key, anchor_s + _tick(t)) for key, t in keys]
+        self.clock = max(self.clock, *(p.t_s for p in presses))
+        return presses
 
 
 def _check_stimuli(protocol, stimuli: Path | None) -> str | None:
@@ -103,6 +176,80 @@ def _check_stimuli(protocol, stimuli: Path | None) -> str | None:
     return hashlib.sha256((Path(stimuli) / "manifest.json").read_bytes()).hexdigest()
 
 
+def _now() -> datetime:
+    return datetime.now().astimezone()
+
+
+def _iso(moment: datetime) -> str:
+    return moment.isoformat(timespec="seconds")
+
+
+def _check_resume(
+    sidecar: dict, files: SessionFiles, protocol, manifest_sha, calibration_record, info: dict
+) -> dict:
+    """Refuse a resume whose inputs changed; return the participant's details to keep."""
+    if not sidecar:
+        raise SessionError(
+            f"{files.sidecar_path} is missing: without it the session cannot be checked "
+            "against its protocol, stimulus set and calibration, so it is not resumed; start "
+            "a new session number"
+        )
+    changed = []
+    for what, key, now in (
+        ("protocol", "protocol_sha256", protocol.sha256),
+        ("stimulus set", "stimulus_set_manifest_sha256", manifest_sha),
+    ):
+        if sidecar.get(key) != now:
+            changed.append(
+                f"the {what} (sha256 {str(sidecar.get(key))[:12]}… then, {str(now)[:12]}… now)"
+            )
+    before = (sidecar.get("calibration") or {}).get("readings_sha256")
+    if before != calibration_record["readings_sha256"]:
+        changed.append(
+            f"the calibration (readings sha256 {str(before)[:12]}… then, "
+            f"{str(calibration_record['readings_sha256'])[:12]}… now)"
+        )
+    if changed:
+        raise SessionError(
+            f"{files.csv_path.name} was started with other inputs: "
+            + "; ".join(changed)
+            + ". A session is resumed only with what it started with"
+        )
+    stored = dict(sidecar.get("participant_info") or {})
+    conflicts = [
+        f"{key} {value!r} (stored: {stored[key]!r})"
+        for key, value in info.items()
+        if value is not None and stored.get(key) is not None and stored[key] != value
+    ]
+    if conflicts:
+        raise SessionError(
+            f"the participant's details given now contradict those stored in "
+            f"{files.sidecar_path.name}: {', '.join(conflicts)}; resume without them, or check "
+            "the participant id"
+        )
+    return stored | {k: v for k, v in info.items() if v is not None}
+
+
+@contextlib.contextmanager
+def _signals(handler):
+    """SIGINT, SIGTERM and SIGHUP go to ``handler`` within the block (main thread only)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    names = ("SIGINT", "SIGTERM", "SIGHUP")
+    numbers = [getattr(signal, n) for n in names if hasattr(signal, n)]
+    previous = {n: signal.signal(n, handler) for n in numbers}
+    try:
+        yield
+    finally:
+        for number, old in previous.items():
+            signal.signal(number, old)
+
+
+def _abort(number, frame):
+    raise SessionAborted(signal.Signals(number).name)
+
+
 def run_session(
     protocol,
     participant: str,
@@ -117,79 +264,231 @@ def run_session(
     counterbalance: int | None = None,
     participant_info: dict | None = None,
     simulated: bool = False,
+    accept_mismatch: tuple[str, ...] = (),
+    allow_unmeasured_refresh: bool = False,
 ) -> dict:
     """Run (or resume) one session; return its sidecar.
+
+    Parameters
+    ----------
+    protocol, participant, session, out
+        The study, who, which session, and the folder for its files.
+    frontend
+        The device: :class:`experiments.psychopy_frontend.PsychoPyFrontend` or
+        :class:`SimulatedFrontend`.
+    stimuli, calibration, allow_uncalibrated
+        The stimulus set folder and the display calibration (see the module notes).
+    resume
+        Continue the session's files instead of starting new ones.
+    counterbalance
+        Spencer's block order (default: from the participant's number).
+    participant_info
+        Age, sex, vision correction (a resume keeps the stored ones).
+    simulated
+        A simulated observer: no stimulus set, calibration or display checks.
+    accept_mismatch
+        Display checks whose failure is accepted (recorded): ``resolution``, ``refresh``,
+        ``bit-depth``, ``calibration``.
+    allow_unmeasured_refresh
+        Run although the refresh rate could not be measured (recorded).
 
     Raises
     ------
     ValueError
-        Before any trial runs: see the module notes.
+        Before any trial and before any file is written: see the module notes.
     """
-    csv_path, sidecar_path = session_paths(out, protocol.study, participant, session)
-    if not resume and (csv_path.exists() or sidecar_path.exists()):
-        raise ValueError(
-            f"{csv_path} exists: participant {participant!r} session {session} already has data; "
-            "use another session number, or --resume to continue it"
-        )
+    started = _now()
+    check_session_id(participant, session)
+    accept = set(accept_mismatch) | ({"refresh-unmeasured"} if allow_unmeasured_refresh else set())
     manifest_sha = _check_stimuli(protocol, stimuli) if not simulated else None
-    calibration_record = (
-        {"calibrated": False, "status": "simulated", "readings_sha256": None}
-        if simulated
-        else usable_calibration(calibration, allow_uncalibrated=allow_uncalibrated)
+    if simulated:
+        calibration_record = {"calibrated": False, "status": "simulated", "readings_sha256": None}
+        checks = []
+    elif protocol.study not in STUDIES_WITH_STIMULI:  # a questionnaire shows no luminances
+        calibration_record = {"calibrated": False, "status": "not needed", "readings_sha256": None}
+        checks = []
+    else:
+        calibration_record = usable_calibration(calibration, allow_uncalibrated=allow_uncalibrated)
+        checks = enforce(check_calibration(protocol, calibration), accept=accept)
+    files = SessionFiles(
+        protocol.study, participant, session, Path(out), resume=resume, started=started
     )
-    if hasattr(frontend, "open"):
-        frontend.open()  # after every check, before any file: a failing window leaves no data
     try:
-        files = SessionFiles(protocol.study, participant, session, Path(out), resume=resume)
-    except Exception:
-        if hasattr(frontend, "close"):
+        info = {key: (participant_info or {}).get(key) for key in INFO_KEYS}
+        info |= {k: v for k, v in (participant_info or {}).items() if k not in INFO_KEYS}
+        sidecar = files.read_sidecar() if resume else {}
+        if resume:
+            info = _check_resume(sidecar, files, protocol, manifest_sha, calibration_record, info)
+        facts = frontend.open()
+        try:
+            if facts is not None:
+                checks += enforce(check_screen(protocol, facts), accept=accept)
+            rate = timing_rate_hz(protocol, facts, checks)
+            engine = make_engine(
+                protocol,
+                participant,
+                session=session,
+                counterbalance=counterbalance,
+                refresh_hz=rate,
+            )
+            files.open()
+            sidecar = _start_run(
+                sidecar,
+                files,
+                engine,
+                protocol,
+                info=info,
+                started=started,
+                checks=checks,
+                facts=facts,
+                rate=rate,
+                frontend=frontend,
+                manifest_sha=manifest_sha,
+                calibration_record=calibration_record,
+                simulated=simulated,
+            )
+            try:
+                files.write_sidecar(sidecar)
+            except OSError as error:
+                files.discard()
+                raise SessionError(
+                    f"could not write {files.sidecar_path} ({error.strerror or error}); the "
+                    "session did not start"
+                ) from None
+            if resume:
+                engine.replay(files.rows)
+            frontend.start(
+                refresh_hz=rate,
+                pace=facts is not None and not _refresh_verified(checks),
+                frames_path=files.frames_path if facts is not None else None,
+                log_path=files.log_path if facts is not None else None,
+            )
+            _run_trials(engine, frontend, files, sidecar, protocol, rate, resume)
+        finally:
             frontend.close()
-        raise
-    engine = make_engine(
-        protocol,
-        participant,
-        session=session,
-        counterbalance=counterbalance,
-        refresh_hz=frontend.refresh_hz,
-    )
-    sidecar = files.read_sidecar() if resume else {}
-    sidecar.update(
-        {
-            "study": protocol.study,
-            "participant": participant,
-            "session": session,
-            "participant_info": participant_info or sidecar.get("participant_info", {}),
-            "protocol_sha256": protocol.sha256,
-            "stimulus_set_manifest_sha256": manifest_sha,
-            "calibration": calibration_record,
-            "packages": package_versions(PACKAGES),
-            "refresh_hz": frontend.refresh_hz,
-            "bit_depth": frontend.bit_depth,
-            "simulated": simulated,
-            "images_encoded_with": getattr(frontend, "calibration_used", None),
-            "counterbalance": getattr(engine, "counterbalance", None),
-            "trial_order": getattr(engine, "order", None),
-            "status": "running",
-            "resumed": sidecar.get("resumed", 0) + (1 if resume else 0),
-        }
-    )
-    files.write_sidecar(sidecar)
-    if resume:
-        engine.replay(files.rows)
-    status = "completed"
-    try:
-        frontend.run(engine, files.write_row)
-    except SessionAborted:
-        status = "aborted"
     finally:
-        sidecar.update(
-            {
-                "status": status if engine.done or status == "aborted" else "aborted",
-                "trials": len(files.rows),
-                "refresh_hz": frontend.refresh_hz,
-                "bit_depth": frontend.bit_depth,
-            }
-        )
-        files.write_sidecar(sidecar)
         files.close()
     return sidecar
+
+
+def _refresh_verified(checks: list[dict]) -> bool:
+    return any(c["name"] == "refresh" and c["passed"] for c in checks)
+
+
+def _start_run(
+    sidecar: dict,
+    files: SessionFiles,
+    engine,
+    protocol,
+    *,
+    info: dict,
+    started: datetime,
+    checks: list[dict],
+    facts,
+    rate: float,
+    frontend,
+    manifest_sha: str | None,
+    calibration_record: dict,
+    simulated: bool,
+) -> dict:
+    """The sidecar of a run that starts now (earlier runs kept; a killed one marked)."""
+    runs = list(sidecar.get("runs", []))
+    if runs and runs[-1].get("status") == "running":  # killed: it never wrote its end
+        mtime = datetime.fromtimestamp(files.csv_path.stat().st_mtime, UTC).astimezone()
+        runs[-1] |= {"status": "interrupted", "ended": _iso(mtime)}
+    runs.append(
+        {
+            "started": _iso(started),
+            "ended": None,
+            "status": "running",
+            "trials_before": len(files.rows),
+            "pid": os.getpid(),
+            "host": socket.gethostname(),
+            "keyboard": getattr(frontend, "keyboard", None),
+            "clock_epoch_s": frontend.clock_epoch_s(),
+            "display": None
+            if facts is None
+            else {
+                "resolution_px": list(facts.resolution_px),
+                "refresh_hz_measured": facts.refresh_hz,
+                "bits_per_channel": facts.bits_per_channel,
+                "timing_refresh_hz": rate,
+                "frame_pacing": "vertical sync" if _refresh_verified(checks) else "clock",
+            },
+            "checks": checks,
+            "accepted_mismatches": [c["name"] for c in checks if c["accepted"]],
+            "log": files.log_path.name if facts is not None else None,
+            "frame_intervals": files.frames_path.name if facts is not None else None,
+        }
+    )
+    return sidecar | {
+        "data_format": DATA_FORMAT,
+        "study": protocol.study,
+        "participant": engine.participant,
+        "session": engine.session,
+        "participant_info": info,
+        "protocol_sha256": protocol.sha256,
+        "protocol_source": protocol.source,
+        "stimulus_set_manifest_sha256": manifest_sha,
+        "calibration": calibration_record,
+        "packages": package_versions(PACKAGES),
+        "refresh_hz": rate,
+        "bit_depth": None if facts is None else facts.bits_per_channel,
+        "simulated": simulated,
+        "images_encoded_with": getattr(frontend, "calibration_used", None),
+        "counterbalance": getattr(engine, "counterbalance", None),
+        "trial_order": getattr(engine, "order", None),
+        "status": "running",
+        "started": sidecar.get("started", _iso(started)),
+        "ended": None,
+        "runs": runs,
+        "resumed": len(runs) - 1,
+        "trials": len(files.rows),
+    }
+
+
+def _run_trials(engine, frontend, files, sidecar, protocol, rate, resume) -> None:
+    trials = protocol.data.get("trials", {})
+    loop = SessionLoop(
+        frontend,
+        files.write_row,
+        refresh_hz=rate,
+        timing_tolerance_ms=trials.get("timing_tolerance_ms", 10.0),
+        break_every=trials.get("break_every", 0),
+        log=frontend.log,
+    )
+    status, reason = "aborted", None
+    try:
+        with _signals(_abort):
+            try:
+                loop.run(engine, resumed_after=len(files.rows) if resume else 0)
+                status = "completed"
+            except SessionAborted as abort:
+                reason = abort.args[0] if abort.args else "escape"
+            except BaseException as error:
+                reason = f"error: {type(error).__name__}: {error}"
+                raise
+    finally:
+        _finish_run(sidecar, files, engine, loop, status, reason)
+    if status == "completed":
+        with contextlib.suppress(SessionAborted), _signals(_abort):
+            loop.pause({"kind": "end", "text": END_TEXT, "keys": {"space": "close"}})
+
+
+def _finish_run(sidecar, files, engine, loop, status, reason) -> None:
+    """Write the run's end into the sidecar; a second Ctrl-C cannot interrupt it."""
+    with _signals(signal.SIG_IGN):
+        ended = _now()
+        sidecar["runs"][-1] |= {
+            "ended": _iso(ended),
+            "status": status,
+            "trials_after": len(files.rows),
+            "ignored_key_presses": loop.total_ignored,
+            "ended_by": reason,
+        }
+        sidecar |= {
+            "status": status,
+            "ended": _iso(ended),
+            "trials": len(files.rows),
+        }
+        files.write_sidecar(sidecar)

@@ -72,7 +72,7 @@ def run_demo(
         log(f"      {number}/{participants} {participant}")
     step += 1
     log(f"[{step}/{steps}] analysing")
-    csvs = sorted((out / "data").glob(f"{study}_*.csv"))
+    csvs = sorted((out / "data").glob(f"*_{study}_s*.csv"))
     report = write_report(study, csvs, out / "report", protocol=protocol, stimuli=stimuli)
     step += 1
     log(f"[{step}/{steps}] report written: {report}")

@@ -27,7 +27,7 @@ def test_demo_report_matches_a_fresh_analysis_and_names_the_protocol(tmp_path):
     assert "[4/4] report written" in done.stderr and "report:" in done.stdout
     report = out / "report" / "report.html"
     assert report.is_file()
-    csvs = sorted((out / "data").glob("yoshida2008_sim*_s1.csv"))
+    csvs = sorted((out / "data").glob("sim*_yoshida2008_s1_*.csv"))
     assert len(csvs) == 10
     protocol = load_protocol(ROOT / "protocols" / "yoshida2008.toml")
     again = write_report(

@@ -34,7 +34,7 @@ def simulated(tmp_path_factory):
 
 
 def csvs(folder, study):
-    return sorted(folder.glob(f"{study}_*.csv"))
+    return sorted(folder.glob(f"*_{study}_s*.csv"))
 
 
 def test_yoshida_report_holds_every_analysis(simulated, tmp_path):

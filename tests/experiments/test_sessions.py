@@ -41,6 +41,13 @@ def sets(tmp_path_factory):
     return folder
 
 
+def session_csv(folder: Path, participant: str, study: str, session: int = 1) -> Path:
+    """The CSV of a participant's session (its name carries the date it started)."""
+    found = sorted(Path(folder).glob(f"{participant}_{study}_s{session}_*-*-*_*.csv"))
+    assert len(found) == 1, found
+    return found[0]
+
+
 def check_schema(path: Path, study: str) -> list[dict]:
     rows = read_rows(path)
     names = [c.name for c in columns(study)]
@@ -69,7 +76,7 @@ def test_simulated_participants_write_schema_valid_csvs(tmp_path, study, trials)
         "run", study, "--simulate", "--participants", 10, "--seed", 1, "--out", tmp_path
     )
     assert done.returncode == 0, done.stderr
-    csvs = sorted(tmp_path.glob(f"{study}_sim*_s1.csv"))
+    csvs = sorted(tmp_path.glob(f"sim*_{study}_s1_*.csv"))
     assert len(csvs) == 10
     for path in csvs:
         rows = check_schema(path, study)
@@ -89,10 +96,11 @@ def test_existing_data_is_never_overwritten(tmp_path):
         ).returncode
         == 0
     )
-    before = (tmp_path / "luidolt2020_P01_s1.csv").read_bytes()
+    csv = session_csv(tmp_path, "P01", "luidolt2020")
+    before = csv.read_bytes()
     again = glarelab("run", "luidolt2020", "--simulate", "--participant", "P01", "--out", tmp_path)
     assert again.returncode == 2 and "already has data" in again.stderr
-    assert (tmp_path / "luidolt2020_P01_s1.csv").read_bytes() == before
+    assert csv.read_bytes() == before
     bad_id = glarelab(
         "run", "luidolt2020", "--simulate", "--participant", "../P01", "--out", tmp_path
     )
@@ -103,7 +111,6 @@ def test_a_killed_session_keeps_its_trials_and_resumes_to_the_same_file(tmp_path
     args = ["run", "spencer1995", "--simulate", "--participant", "P07", "--seed", 4]
     reference = glarelab(*args, "--out", tmp_path / "whole")
     assert reference.returncode == 0, reference.stderr
-    csv = tmp_path / "crash" / "spencer1995_P07_s1.csv"
     process = subprocess.Popen(
         [
             sys.executable,
@@ -119,20 +126,30 @@ def test_a_killed_session_keeps_its_trials_and_resumes_to_the_same_file(tmp_path
         stderr=subprocess.DEVNULL,
     )
     deadline = time.time() + 120
-    while time.time() < deadline and (not csv.exists() or len(csv.read_text().splitlines()) < 40):
+    found: list[Path] = []
+    while time.time() < deadline and (not found or len(found[0].read_text().splitlines()) < 40):
+        found = sorted((tmp_path / "crash").glob("P07_spencer1995_s1_*.csv"))
         time.sleep(0.05)
+    csv = found[0]
     process.send_signal(signal.SIGKILL)
     process.wait()
     rows = read_rows(csv)
     assert len(rows) >= 39  # every completed trial is on disk and readable
-    whole = (tmp_path / "whole" / "spencer1995_P07_s1.csv").read_text().splitlines()
+    whole_csv = session_csv(tmp_path / "whole", "P07", "spencer1995")
+    whole = whole_csv.read_text().splitlines()
     assert csv.read_text().splitlines()[: len(rows) + 1] == whole[: len(rows) + 1]
     assert json.loads(csv.with_suffix(".json").read_text())["status"] == "running"
     resumed = glarelab(*args, "--out", tmp_path / "crash", "--resume")
     assert resumed.returncode == 0, resumed.stderr
-    assert csv.read_bytes() == (tmp_path / "whole" / "spencer1995_P07_s1.csv").read_bytes()
+    clocked = ("onset_s", "offset_s")  # on the clock of the run that recorded the trial
+    assert [{k: v for k, v in r.items() if k not in clocked} for r in read_rows(csv)] == [
+        {k: v for k, v in r.items() if k not in clocked} for r in read_rows(whole_csv)
+    ]
     sidecar = json.loads(csv.with_suffix(".json").read_text())
     assert sidecar["status"] == "completed" and sidecar["resumed"] == 1
+    killed, finished = sidecar["runs"]
+    assert killed["status"] == "interrupted" and killed["ended"] is not None
+    assert finished["status"] == "completed" and finished["trials_before"] == len(rows)
 
 
 def test_sessions_refuse_bad_stimuli_and_calibration_before_any_trial(tmp_path, sets, capsys):
@@ -195,7 +212,7 @@ KEYS = {
 
 
 @pytest.mark.parametrize("study", ["yoshida2008", "spencer1995", "luidolt2020"])
-def test_one_trial_through_the_real_psychopy_front_end(tmp_path, sets, study):
+def test_a_scripted_dry_run_shows_the_calibrated_codes(tmp_path, sets, study):
     keys = tmp_path / "keys.txt"
     keys.write_text(KEYS[study])
     shot = tmp_path / "screen.png"
@@ -215,20 +232,24 @@ def test_one_trial_through_the_real_psychopy_front_end(tmp_path, sets, study):
         "--screenshot",
         str(shot),
     ]
-    if study != "luidolt2020":
-        command += ["--stimuli", str(sets / study)]
+    if study != "luidolt2020":  # Xvfb is not the protocol's display: accepted, and recorded
+        command += ["--stimuli", str(sets / study), "--accept-mismatch", "resolution", "refresh"]
+        command += ["bit-depth"] if study == "yoshida2008" else []
     if not os.environ.get("DISPLAY"):
         command = [shutil.which("xvfb-run"), "-a", "-s", "-screen 0 1920x1080x24", *command]
     done = subprocess.run(command, capture_output=True, text=True, timeout=300, check=False)
     assert done.returncode == 3, done.stderr[-3000:]  # aborted by the scripted Escape
-    csv = tmp_path / "data" / f"{study}_P01_s1.csv"
+    csv = session_csv(tmp_path / "data", "P01", study)
     rows = check_schema(csv, study)
     assert len(rows) == 1
     sidecar = json.loads(csv.with_suffix(".json").read_text())
     assert sidecar["status"] == "aborted" and sidecar["bit_depth"] in (8, 10)
-    assert sidecar["refresh_hz"] > 0
+    assert sidecar["refresh_hz"] > 0 and sidecar["runs"][0]["keyboard"] == "scripted keys"
     if study == "luidolt2020":
+        assert sidecar["calibration"]["status"] == "not needed"
         return
+    accepted = {"resolution", "refresh"} | ({"bit-depth"} if study == "yoshida2008" else set())
+    assert set(sidecar["runs"][0]["accepted_mismatches"]) == accepted
     frame = np.asarray(Image.open(shot))
     protocol_calibration = Calibration.load(
         ROOT
