@@ -370,11 +370,55 @@ def _calibrate_measure(args: argparse.Namespace) -> int:
         def photometer(code: int) -> float:
             return black + (white - black) * (code / top) ** gamma
 
-    result = run_measurement(session, photometer=photometer, fullscr=not args.windowed)
+    result = run_measurement(
+        session,
+        photometer=photometer,
+        fullscr=not args.windowed,
+        allow_fewer_bits=args.allow_fewer_bits,
+        log=_log,
+    )
     for flag in result["flags"]:
         _log(f"flag: {flag}")
     _log(f"calibration status: {result['status']}; session saved at {session.session_path}")
     return 0 if result["status"] == "passed" else 1
+
+
+def _experiment_info(args: argparse.Namespace) -> None:
+    """Ask for the participant's details in a dialog, as PsychoPy's experiment info does."""
+    import os
+
+    from stimuli.psychopy_window import qt_dialog_available
+
+    if sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
+        raise ValueError("--participant is required (no display for the participant dialog)")
+    if not qt_dialog_available():
+        raise ValueError(
+            "--participant is required: the participant dialog needs Qt's X11 libraries "
+            "(Debian: libxcb-cursor0)"
+        )
+    from psychopy import gui
+
+    info = {
+        "participant": "",
+        "session": args.session,
+        "age": "" if args.age is None else args.age,
+        "sex": ["", "f", "m", "x"],
+        "vision": ["none", "glasses", "lenses"],
+    }
+    dialog = gui.DlgFromDict(info, title=f"glarelab {args.study}", order=list(info))
+    if not dialog.OK:
+        raise ValueError("the participant dialog was cancelled: nothing was run or written")
+    args.participant = str(info["participant"]).strip()
+    try:
+        args.session = int(info["session"])
+        args.age = int(info["age"]) if str(info["age"]).strip() else None
+    except ValueError:
+        raise ValueError(
+            f"the dialog's session {info['session']!r} and age {info['age']!r} must be whole "
+            "numbers"
+        ) from None
+    args.sex = info["sex"] or None
+    args.vision = info["vision"] or None
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -410,8 +454,8 @@ def _run(args: argparse.Namespace) -> int:
             _log(f"[{number}/{len(ids)}] {participant}: {done}")
         print(out.resolve())
         return 0
-    if not args.participant:
-        raise ValueError("--participant is required (or --simulate)")
+    if args.participant is None:
+        _experiment_info(args)
     from experiments.psychopy_frontend import PsychoPyFrontend
 
     calibration = Calibration.load(args.calibration) if args.calibration else None
@@ -436,9 +480,69 @@ def _run(args: argparse.Namespace) -> int:
         resume=args.resume,
         counterbalance=args.counterbalance,
         participant_info={"age": args.age, "sex": args.sex, "vision_correction": args.vision},
+        accept_mismatch=tuple(args.accept_mismatch or ()),
+        allow_unmeasured_refresh=args.allow_unmeasured_refresh,
     )
-    _log(f"{args.participant}: {sidecar['trials']} trials, {sidecar['status']}")
+    run = sidecar["runs"][-1]
+    _log(
+        f"{args.participant}: {sidecar['trials']} trials, {sidecar['status']}"
+        + (f" ({run['ended_by']})" if run.get("ended_by") else "")
+        + f"; data in {out.resolve()}"
+    )
     return 0 if sidecar["status"] == "completed" else 3
+
+
+def _check_display(args: argparse.Namespace) -> int:
+    from experiments.check_display import check_display, write_check
+
+    protocol = load_protocol(_protocol_path(args.protocol))
+    calibration = Calibration.load(args.calibration) if args.calibration else None
+    if args.out is not None:
+        out = args.out
+    elif args.calibration is not None:
+        out = args.calibration.with_suffix(".display-check.json")
+    else:
+        raise ValueError("give --out FILE, or --calibration (the check is written next to it)")
+    result = check_display(
+        protocol,
+        stimuli=args.stimuli,
+        calibration=calibration,
+        frames=args.frames,
+        fullscreen=not args.windowed,
+        log=_log,
+    )
+    empty = result["frame_intervals_empty"]
+    print(
+        f"screen {result['resolution_px'][0]} × {result['resolution_px'][1]} px, refresh "
+        f"{result['refresh_hz_measured'] or float('nan'):.2f} Hz measured, frame intervals "
+        f"{empty['median_ms']:.2f} ± {empty['sd_ms']:.2f} ms (worst {empty['max_ms']:.1f} ms, "
+        f"{100 * empty['late_fraction']:.1f} % late), {result['bits_per_channel']} bits per "
+        f"channel ({result['framebuffer_levels']} of {result['framebuffer_levels_asked']} "
+        "levels distinct in the frame buffer)"
+    )
+    for check in result["checks"]:
+        print(
+            f"  {'ok  ' if check['passed'] else 'FAIL'} {check['name']}: protocol "
+            f"{check['expected']}, display {check['actual']}"
+        )
+    if "flash" in result:
+        flash = result["flash"]
+        print(
+            f"flash frame: draw {flash['draw_median_ms']:.2f} ms (99th percentile "
+            f"{flash['draw_p99_ms']:.2f}), {100 * flash['draw_fraction_of_frame']:.1f} % of a "
+            f"{flash['frame_period_ms']:.2f} ms frame; flip to flip "
+            f"{flash['frame_intervals_drawing']['median_ms']:.2f} ms"
+        )
+    _log(f"wrote {write_check(result, out)}")
+    return 0 if all(c["passed"] for c in result["checks"]) else 1
+
+
+def _protocol_path(name: str | Path) -> Path:
+    """A shipped protocol's name (``yoshida2008``) or a path to a TOML file."""
+    path = Path(name)
+    if path.suffix != ".toml" and not path.exists() and str(name) in STUDIES:
+        return Path(__file__).parents[1] / "protocols" / f"{name}.toml"
+    return path
 
 
 def _analyse(args: argparse.Namespace) -> int:
@@ -574,6 +678,11 @@ def _parser() -> argparse.ArgumentParser:
     measure.add_argument("--label", default="")
     measure.add_argument("--windowed", action="store_true")
     measure.add_argument(
+        "--allow-fewer-bits",
+        action="store_true",
+        help="measure although the window gives fewer bits per channel than --bit-depth",
+    )
+    measure.add_argument(
         "--simulate",
         type=float,
         nargs=3,
@@ -585,8 +694,12 @@ def _parser() -> argparse.ArgumentParser:
 
     run = commands.add_parser("run", help="run a study session (PsychoPy) or simulated sessions")
     run.add_argument("study", choices=STUDIES)
-    run.add_argument("--participant", default=None, help="participant id (file-name safe)")
-    run.add_argument("--session", type=int, default=1)
+    run.add_argument(
+        "--participant",
+        default=None,
+        help="participant id (file-name safe); without it, a dialog asks for the details",
+    )
+    run.add_argument("--session", type=int, default=1, help="session number (default 1)")
     run.add_argument("--protocol", type=Path, default=None, help="default: protocols/STUDY.toml")
     run.add_argument("--stimuli", type=Path, default=None, help="the stimulus set folder")
     run.add_argument("--calibration", type=Path, default=None, help="display calibration JSON")
@@ -595,24 +708,67 @@ def _parser() -> argparse.ArgumentParser:
         action="store_true",
         help="run without a valid calibration (recorded)",
     )
-    run.add_argument("--out", type=Path, default=Path("data"), help="folder for the session files")
+    run.add_argument(
+        "--accept-mismatch",
+        nargs="+",
+        choices=("resolution", "refresh", "bit-depth", "calibration"),
+        metavar="CHECK",
+        help="run although the display differs from the protocol in these checks (recorded): "
+        "resolution, refresh, bit-depth, calibration",
+    )
+    run.add_argument(
+        "--allow-unmeasured-refresh",
+        action="store_true",
+        help="run although the refresh rate could not be measured (recorded; flips are then "
+        "paced by the clock at the protocol's rate)",
+    )
+    run.add_argument(
+        "--out",
+        type=Path,
+        default=Path("data"),
+        help="folder for the session files (default data)",
+    )
     run.add_argument("--resume", action="store_true", help="continue an interrupted session")
     run.add_argument("--fullscreen", action="store_true")
     run.add_argument(
         "--counterbalance", type=int, choices=(0, 1), default=None, help="Spencer block order"
     )
-    run.add_argument("--age", type=int, default=None)
-    run.add_argument("--sex", default=None)
+    run.add_argument("--age", type=int, default=None, help="participant's age, years")
+    run.add_argument("--sex", default=None, help="participant's sex (as the lab records it)")
     run.add_argument("--vision", default=None, help="vision correction: none, glasses, lenses")
     run.add_argument(
-        "--scripted-keys", type=Path, default=None, help="file of key names (dry runs)"
+        "--scripted-keys",
+        type=Path,
+        default=None,
+        help="dry run: a text file of PsychoPy key names separated by spaces or lines, one per "
+        "press (e.g. 'space up up return y n y'); Escape when they run out",
     )
     run.add_argument("--screenshot", type=Path, default=None, help="save the first trial's screen")
     run.add_argument("--simulate", action="store_true", help="simulated observers, no screen")
-    run.add_argument("--participants", type=int, default=10, help="simulated participants")
-    run.add_argument("--seed", type=int, default=0, help="seed of the simulated observers")
+    run.add_argument(
+        "--participants", type=int, default=10, help="simulated participants (default 10)"
+    )
+    run.add_argument(
+        "--seed", type=int, default=0, help="seed of the simulated observers (default 0)"
+    )
     run.add_argument("--trial-delay-ms", type=float, default=0.0, help=argparse.SUPPRESS)
     run.set_defaults(run=_run)
+
+    check = commands.add_parser(
+        "check-display",
+        help="measure the display: resolution, refresh, frame jitter, bits, a flash's cost",
+    )
+    check.add_argument("protocol", help="a shipped protocol's name or a protocol TOML file")
+    check.add_argument("--stimuli", type=Path, default=None, help="also time a flash of this set")
+    check.add_argument("--calibration", type=Path, default=None, help="the display calibration")
+    check.add_argument(
+        "--out", type=Path, default=None, help="JSON to write (default: next to --calibration)"
+    )
+    check.add_argument(
+        "--frames", type=int, default=600, help="flips per measurement (default 600)"
+    )
+    check.add_argument("--windowed", action="store_true", help="a window, not full screen")
+    check.set_defaults(run=_check_display)
 
     analyse = commands.add_parser("analyse", help="analyse session CSVs: tables, figures, report")
     analyse.add_argument("study", choices=STUDIES)

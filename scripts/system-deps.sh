@@ -1,12 +1,28 @@
 #!/usr/bin/env bash
-# Debian packages the PsychoPy window tests need: a virtual X server and OpenGL.
+# Debian packages the PsychoPy sessions and their tests need: a virtual X server, OpenGL, the
+# JACK library Psychtoolbox's keyboard loads (PsychoPy's Keyboard times key presses with it),
+# Qt's X11 libraries for the participant dialog, and xdotool to send real key events in tests.
 # Installs them with apt-get where it is available and we may use it; otherwise says what is
 # missing and leaves the decision to the caller (the window tests then fail with that message).
 set -euo pipefail
 needed=()
+have_lib() { ldconfig -p 2>/dev/null | grep -q "$1"; }
 command -v xvfb-run >/dev/null 2>&1 || needed+=(xvfb xauth)
-ldconfig -p 2>/dev/null | grep -q 'libGL.so.1' || needed+=(libgl1)
-ldconfig -p 2>/dev/null | grep -q 'libGLU.so.1' || needed+=(libglu1-mesa)
+command -v xdotool >/dev/null 2>&1 || needed+=(xdotool)
+have_lib 'libGL.so.1' || needed+=(libgl1)
+have_lib 'libGLU.so.1' || needed+=(libglu1-mesa)
+have_lib 'libjack.so.0' || needed+=(libjack-jackd2-0)
+have_lib 'libxcb-cursor.so.0' || needed+=(libxcb-cursor0)
+have_lib 'libxkbcommon-x11.so.0' || needed+=(libxkbcommon-x11-0)
+have_lib 'libxcb-icccm.so.4' || needed+=(libxcb-icccm4)
+have_lib 'libxcb-image.so.0' || needed+=(libxcb-image0)
+have_lib 'libxcb-keysyms.so.1' || needed+=(libxcb-keysyms1)
+have_lib 'libxcb-render-util.so.0' || needed+=(libxcb-render-util0)
+have_lib 'libxcb-xinerama.so.0' || needed+=(libxcb-xinerama0)
+have_lib 'libxcb-shape.so.0' || needed+=(libxcb-shape0)
+have_lib 'libEGL.so.1' || needed+=(libegl1)
+have_lib 'libfontconfig.so.1' || needed+=(libfontconfig1)
+have_lib 'libdbus-1.so.3' || needed+=(libdbus-1-3)
 if [ ${#needed[@]} -eq 0 ]; then
     exit 0
 fi
