@@ -208,7 +208,7 @@ class SessionLoop:
                     shown = Shown(onset_s=self.device.show(screen))
                 onset_trial, anchor, drawn = trial, shown.onset_s, screen
                 self.log(f"trial {trial} onset at {anchor:.4f}")
-            elif screen != drawn:
+            elif screen != drawn and not self.pending:  # presses read already go first
                 self.device.show(screen)
                 drawn = screen
             press = self._next_press(anchor)

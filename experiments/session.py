@@ -194,6 +194,10 @@ def _check_resume(
             "against its protocol, stimulus set and calibration, so it is not resumed; start "
             "a new session number"
         )
+    if sidecar.get("status") == "completed":
+        raise SessionError(
+            f"{files.csv_path.name} is a completed session: there is nothing to resume"
+        )
     changed = []
     for what, key, now in (
         ("protocol", "protocol_sha256", protocol.sha256),

@@ -161,6 +161,8 @@ def test_a_failed_refresh_measurement_refuses_unless_allowed(tmp_path):
 
 def test_a_resume_with_another_protocol_is_refused(tmp_path):
     assert simulated(tmp_path, "yoshida2008", "P01").returncode == 0
+    (sidecar,) = tmp_path.glob("*.json")  # as if it had ended with Escape
+    sidecar.write_text(sidecar.read_text().replace('"status": "completed"', '"status": "aborted"'))
     before = data_files(tmp_path)
     changed = tmp_path / "changed.toml"
     changed.write_text(
@@ -251,3 +253,11 @@ def test_the_header_and_sidecar_are_on_disk_before_the_first_trial(tmp_path):
     )
     assert seen["header"].startswith("study,participant,session,trial,block,onset_s")
     assert seen["sidecar"]["status"] == "running" and seen["sidecar"]["started"]
+
+
+def test_a_completed_session_is_not_resumed(tmp_path):
+    assert simulated(tmp_path).returncode == 0
+    before = data_files(tmp_path)
+    done = simulated(tmp_path, "luidolt2020", "P01", "--resume")
+    assert done.returncode == 2 and "is a completed session" in done.stderr
+    assert data_files(tmp_path) == before
