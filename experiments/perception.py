@@ -144,9 +144,10 @@ COMPARISON_SD = 0.04
 Spencer 1995 gives no spread)."""
 NEITHER_BAND = 0.02
 """``b``: relative differences within ±2 % are answered "neither" (assumed)."""
-BLOCK_SD = 0.0
-"""``σ_b``: SD of an observer's shift between blocks run apart (e.g. Spencer's context
-blocks); 0 by default: the papers do not give it (``docs/observers.md`` shows its effect)."""
+BLOCK_SD = 0.02
+"""``σ_b``: SD of an observer's shift between blocks run apart (Spencer's context blocks): the
+smallest on a grid under which Spencer's non-significant context effect (§4.1) is at least as
+likely as a significant one (fitted; without it, 100 %; ``docs/observers.md``)."""
 
 
 @dataclass(frozen=True)
