@@ -6,7 +6,7 @@ Build the two stimulus sets first, then run this script from the repository's ro
     glarelab stimuli build protocols/spencer1995.toml --out out/stimuli/spencer1995
     python scripts/fit_observers.py
 
-What it does, deterministically (fixed seeds, common random numbers), in about five minutes:
+What it does, deterministically (fixed seeds, common random numbers), in about two minutes:
 
 1. **Perceives every image once** with :class:`experiments.perception.BrightnessModel`: the 12
    Yoshida references, glare-free targets on a grid of disk luminances (composed from the set's
