@@ -50,9 +50,9 @@ larger areas look brighter):
 
 A glare-free disk has no plateau beyond ``R``, no ramp and ``2 R_e = d``, so ``B = L_d``; the
 model is invariant to the luminance scale (``B(kI) = k B(I)``), as Weber's law is in the
-photopic range. ``β``, ``G_50`` and ``α`` are fitted once (``scripts/fit_observers.py``, see
-``docs/observers.md``); the geometry constants and ``G_0`` are set from the vision literature and
-the stimuli's texture, as their comments say.
+photopic range. ``β``, ``G_50``, ``α`` and the glow band ``w`` are fitted once
+(``scripts/fit_observers.py``, see ``docs/observers.md``); the other geometry constants and
+``G_0`` are set from the vision literature, as their comments say.
 
 **Observers** (:class:`ObserverNoise`, :class:`Observer`): each has a gain ``g ~ N(1, σ_g)``
 (clipped at 0) on the illusion, ``B_obs = L_d + g (B - L_d)``; sets the "slightly darker" and
@@ -90,7 +90,7 @@ __all__ = [
     "Percept",
 ]
 
-# --- geometry of the judgement (set from the literature, not fitted) ------------------------
+# --- geometry of the judgement (set from the literature; the glow band fitted) -------------
 PLATEAU_TOLERANCE = 0.01
 """``ε``: luminances within 1 % of the disk's belong to it: the photopic Weber fraction for
 large fields (Whittle 1986 reports increment thresholds of 1-2 % on photopic backgrounds)."""
@@ -108,8 +108,9 @@ SECTORS = 8
 in 8 sectors of 45° ..."""
 SURROUND_QUANTILE = 25.0
 """... and the one counted is their lower quartile, a drop seen on three sides out of four. On
-random skies like the Yoshida stimuli's, this keeps the glow of 90 % of glare-free disks below
-0.03 (the azimuthal mean reaches 0.15; ``docs/observers.md``)."""
+100 random skies like the Yoshida stimuli's, a glare-free disk at 150-433 cd/m² then has no glow
+on 92 % or more and one above ``G_0`` on at most 3 % (the drop of the azimuthal mean exceeds
+``G_0`` on 12-29 %; ``docs/observers.md``)."""
 GLOW_THRESHOLD = 0.02
 """``G_0``: the smallest ramp seen as a glow, twice the Weber fraction ``ε``."""
 
