@@ -1,11 +1,11 @@
 """Reading session CSVs: every cell checked, every problem named, nothing dropped silently.
 
-The schema is :mod:`experiments.schema`, the one the experiments write; files written before a
-column was added (its ``since``) are read with that column missing. A problem is reported
-with its file, line and column; all problems of all files are collected and raised together
-(:class:`DataError`). A design with a missing cell is refused naming the participant and the
-cell, unless the caller asks to exclude incomplete participants, in which case they are
-excluded and listed (the report shows the list).
+The columns are the protocol's (:func:`protocols.columns`), the ones the experiments write;
+files written before a column was added (its ``since``) are read with that column missing. A
+problem is reported with its file, line and column; all problems of all files are collected
+and raised together (:class:`DataError`). A design with a missing cell is refused naming the
+participant and the cell, unless the caller asks to exclude incomplete participants, in which
+case they are excluded and listed (the report shows the list).
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from experiments.schema import columns
+from protocols import columns
 
 __all__ = ["DataError", "Dataset", "load_sessions"]
 
@@ -86,8 +86,9 @@ def _parse(cell: str, column, where: str, problems: list[str]):
     return value
 
 
-def _read_file(path: Path, study: str, problems: list[str]) -> list[dict]:
-    expected = columns(study)
+def _read_file(path: Path, protocol, problems: list[str]) -> list[dict]:
+    study = protocol.study
+    expected = columns(protocol)
     names = [c.name for c in expected]
     rows = []
     with path.open(newline="", encoding="utf-8") as handle:
@@ -132,29 +133,11 @@ def _read_file(path: Path, study: str, problems: list[str]) -> list[dict]:
     return rows
 
 
-def _design_cells(study: str, trials: pd.DataFrame) -> tuple[list[str], list[tuple]]:
-    """The within cells every participant must have, by study."""
-    if study == "yoshida2008":
-        main = trials[trials["block"] == "main"]
-        cells = sorted(
-            {(m, i) for m in ("gaussian", "vos") for i in main["level_index"].dropna().unique()}
-        )
-        return ["method", "level_index"], cells
-    if study == "spencer1995":
-        return ["context", "glare_level"], sorted(
-            {
-                (c, int(g))
-                for c in trials["context"].dropna().unique()
-                for g in trials["glare_level"].dropna().unique()
-            }
-        )
-    return ["category"], sorted({(c,) for c in trials["category"].dropna().unique()})
-
-
 def load_sessions(
-    study: str, paths: list[str | Path], *, exclude_incomplete: bool = False
+    protocol, paths: list[str | Path], *, exclude_incomplete: bool = False
 ) -> Dataset:
-    """Load and validate session CSVs of one study.
+    """Load and validate session CSVs of one study (its protocol sets the columns and the
+    design).
 
     Raises
     ------
@@ -174,7 +157,7 @@ def load_sessions(
             problems.append(f"{path}: no such file")
             continue
         files.append(str(path))
-        rows += _read_file(path, study, problems)
+        rows += _read_file(path, protocol, problems)
         sidecar = path.with_suffix(".json")
         if sidecar.is_file():
             try:
@@ -193,8 +176,10 @@ def load_sessions(
             f"{row['_file']}, line {row['_line']}: duplicated trial (participant "
             f"{row['participant']}, session {row['session']}, trial {row['trial']})"
         )
-    factors, cells = _design_cells(study, trials)
-    analysed = trials[trials["block"] == "main"] if study == "yoshida2008" else trials
+    from .paradigms import PARADIGMS
+
+    factors, cells, block = PARADIGMS[protocol.paradigm].design(protocol)
+    analysed = trials[trials["block"] == block] if block else trials
     excluded: dict[str, str] = {}
     for participant, group in analysed.groupby("participant"):
         counts = group.groupby(factors).size()
@@ -211,7 +196,7 @@ def load_sessions(
                         "and the report lists them)"
                     )
                     break
-        if study != "spencer1995" and (counts > 1).any():
+        if protocol.paradigm != "staircase" and (counts > 1).any():
             cell = counts[counts > 1].index[0]
             problems.append(
                 f"participant {participant} has {counts.max()} trials at {cell}: unbalanced design"
@@ -219,4 +204,6 @@ def load_sessions(
     if problems:
         raise DataError(problems)
     kept = trials[~trials["participant"].isin(excluded)].reset_index(drop=True)
-    return Dataset(study=study, trials=kept, files=files, sidecars=sidecars, excluded=excluded)
+    return Dataset(
+        study=protocol.study, trials=kept, files=files, sidecars=sidecars, excluded=excluded
+    )

@@ -1,4 +1,5 @@
-"""A methods paragraph written from the protocol that was run, and the data's provenance."""
+"""What every methods paragraph and report shares: the display as the text names it, and the
+data's provenance."""
 
 from __future__ import annotations
 
@@ -6,58 +7,21 @@ import hashlib
 import json
 from pathlib import Path
 
-__all__ = ["methods_paragraph", "provenance"]
+__all__ = ["display_text", "provenance"]
 
 
-def _levels(values) -> str:
-    return ", ".join(f"{v:g}" for v in values)
-
-
-def methods_paragraph(study: str, protocol: dict, participants: int, simulated: bool) -> str:
-    """Methods text naming the protocol's actual parameters."""
-    who = f"{participants} {'simulated observers' if simulated else 'participants'}"
-    if study == "luidolt2020":
-        q = protocol["questionnaire"]
-        return (
-            f"{who} rated {len(q['categories'])} categories ({', '.join(q['categories'])}) on a "
-            f"{q['scale_min']}-{q['scale_max']} Likert scale from “{q['anchors'][0]}” to "
-            f"“{q['anchors'][1]}”{', each with an optional comment' if q['comments'] else ''}."
-        )
+def display_text(protocol) -> str:
+    """The display and viewing conditions, as the methods section names them."""
     d, v = protocol["display"], protocol["viewing"]
     size = (
         f"{d['diagonal_in']:g}-inch"
         if d["diagonal_in"] is not None
         else f"{d['pixel_pitch_mm']:g} mm pixel pitch"
     )
-    display = (
+    return (
         f"a {d['name']} ({size}, {d['resolution_px'][0]} × {d['resolution_px'][1]} px, "
         f"{d['bit_depth']}-bit, maximum {d['max_cd_m2']:g} cd/m²) viewed from "
         f"{v['distance_m']:g} m in {v['room_lux']:g} lx"
-    )
-    if study == "yoshida2008":
-        s, g = protocol["stimulus"], protocol["glare"]
-        return (
-            f"{who} matched the brightness of a {s['disk_deg']:g}° disk on a {s['background_deg']:g}° "
-            f"cloudy sky (mean {s['background_mean_cd_m2']:g} cd/m²) shown on {display}. Glare was "
-            f"added above L_dmax = {g['l_dmax_cd_m2']:g} cd/m² with a Gaussian kernel (σ = "
-            f"{g['gaussian']['sigma_deg']:g}°; levels {'-'.join(g['gaussian']['labels'][::5])}: "
-            f"{_levels(g['gaussian']['levels_cd_m2'])} cd/m²) and with the Vos PSF "
-            f"({g['vos']['regime']}; levels {'-'.join(g['vos']['labels'][::5])}: "
-            f"{_levels(g['vos']['levels_cd_m2'])} cd/m²), rendered at {s['supersample']}× resolution. "
-            f"The darker and brighter targets started at {_levels(s['target_start_cd_m2'])} cd/m²; "
-            f"{protocol['trials']['training_trials']} training trials preceded the 12 references, "
-            f"shown once each in {protocol['trials']['order']} order."
-        )
-    s, g, t = protocol["stimulus"], protocol["glare"], protocol["trials"]
-    return (
-        f"{who} compared a light source with glare (Vos PSF, {g['regime']}"
-        f"{', with flare lines' if g['flare_lines'] else ''}; peak {100 * g['peak_fraction']:g} % of "
-        f"the maximum; {len(g['strengths'])} strengths from {g['strengths'][0]:g} to "
-        f"{g['strengths'][-1]:g}) with a disc and an annulus at {s['annulus_ratio']:.3g} of its "
-        f"intensity, in {s['window_px']} × {s['window_px']} px windows on {display}, shown for "
-        f"{' or '.join(f'{x:g}' for x in t['presentation_ms'])} ms, in contexts "
-        f"{', '.join(s['context'])}. Interleaved staircases ({t['reversals']} reversals, steps "
-        f"{_levels(t['step_fractions'])} of the maximum; 'neither': {t['neither']}) set the disc."
     )
 
 

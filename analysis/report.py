@@ -17,23 +17,10 @@ from pathlib import Path
 import pandas as pd
 
 from .load import Dataset, load_sessions
-from .luidolt2020 import analyse_luidolt2020
-from .methods import methods_paragraph, provenance
-from .spencer1995 import analyse_spencer1995
-from .yoshida2008 import analyse_yoshida2008
+from .methods import provenance
+from .paradigms import PARADIGMS
 
-__all__ = ["ANALYSES", "analyse", "write_report"]
-
-ANALYSES = {
-    "yoshida2008": analyse_yoshida2008,
-    "spencer1995": analyse_spencer1995,
-    "luidolt2020": analyse_luidolt2020,
-}
-TITLES = {
-    "yoshida2008": "Brightness of the glare illusion (Yoshida et al. 2008): analysis",
-    "spencer1995": "Perceived brightness of glare (Spencer et al. 1995): analysis",
-    "luidolt2020": "Perception of light in VR (Luidolt 2020): questionnaire",
-}
+__all__ = ["analyse", "methods_paragraph", "write_report"]
 
 
 def _markdown(table: pd.DataFrame) -> str:
@@ -48,23 +35,28 @@ def _markdown(table: pd.DataFrame) -> str:
 
 
 def analyse(
-    study: str, paths: list[str | Path], *, exclude_incomplete: bool = False
+    protocol, paths: list[str | Path], *, exclude_incomplete: bool = False
 ) -> tuple[Dataset, dict]:
-    if study not in ANALYSES:
-        raise ValueError(f"study must be one of {', '.join(ANALYSES)}; got {study!r}")
-    dataset = load_sessions(study, paths, exclude_incomplete=exclude_incomplete)
-    return dataset, ANALYSES[study](dataset)
+    """Load the sessions of the protocol's study and run its paradigm's analysis."""
+    dataset = load_sessions(protocol, paths, exclude_incomplete=exclude_incomplete)
+    return dataset, PARADIGMS[protocol.paradigm].analyse(dataset, protocol)
 
 
-def _html(study: str, dataset: Dataset, result: dict, methods: str | None, origin: dict) -> str:
+def methods_paragraph(protocol, participants: int, simulated: bool) -> str:
+    """Methods text naming the protocol's actual parameters."""
+    who = f"{participants} {'simulated observers' if simulated else 'participants'}"
+    return PARADIGMS[protocol.paradigm].methods(protocol, participants, who)
+
+
+def _html(title: str, dataset: Dataset, result: dict, methods: str | None, origin: dict) -> str:
     parts = [
         "<!doctype html><html><head><meta charset='utf-8'>",
-        f"<title>{html.escape(TITLES[study])}</title>",
+        f"<title>{html.escape(title)}</title>",
         "<style>body{font-family:sans-serif;max-width:1100px;margin:2em auto;line-height:1.4}"
         "table{border-collapse:collapse;font-size:0.85em;margin:0.5em 0 1.5em}"
         "td,th{border:1px solid #ccc;padding:2px 6px;text-align:right}"
         "th{background:#f2f2f2}code{background:#f5f5f5}</style></head><body>",
-        f"<h1>{html.escape(TITLES[study])}</h1>",
+        f"<h1>{html.escape(title)}: analysis</h1>",
     ]
     participants = dataset.trials["participant"].nunique()
     blocks = dataset.trials["block"].value_counts()
@@ -107,18 +99,17 @@ def _html(study: str, dataset: Dataset, result: dict, methods: str | None, origi
 
 
 def write_report(
-    study: str,
+    protocol,
     paths: list[str | Path],
     out: str | Path,
     *,
     exclude_incomplete: bool = False,
-    protocol=None,
     stimuli: str | Path | None = None,
 ) -> Path:
     """Analyse session CSVs and write the report folder; returns the path of report.html.
 
-    ``protocol`` (a validated protocol: ``.data`` and ``.sha256``) adds a methods paragraph
-    naming its parameters; ``stimuli`` (the set's folder) adds its manifest hash.
+    ``protocol`` (a validated protocol) sets the columns, the analysis and the methods
+    paragraph naming its parameters; ``stimuli`` (the set's folder) adds its manifest hash.
 
     Raises
     ------
@@ -126,7 +117,7 @@ def write_report(
         For bad input (nothing is written).
     """
     out = Path(out)
-    dataset, result = analyse(study, paths, exclude_incomplete=exclude_incomplete)
+    dataset, result = analyse(protocol, paths, exclude_incomplete=exclude_incomplete)
     out.parent.mkdir(parents=True, exist_ok=True)
     staging = Path(tempfile.mkdtemp(prefix=".report-", dir=out.parent))
     try:
@@ -136,23 +127,13 @@ def write_report(
         for name, data in result["figures"].items():
             (staging / name).write_bytes(data)
         simulated = any(s.get("simulated") for s in dataset.sidecars.values())
-        methods = (
-            methods_paragraph(
-                study, protocol.data, dataset.trials["participant"].nunique(), simulated
-            )
-            if protocol is not None
-            else None
-        )
-        origin = provenance(
-            dataset.sidecars,
-            protocol.sha256 if protocol else None,
-            Path(stimuli) if stimuli else None,
-        )
+        methods = methods_paragraph(protocol, dataset.trials["participant"].nunique(), simulated)
+        origin = provenance(dataset.sidecars, protocol.sha256, Path(stimuli) if stimuli else None)
         (staging / "provenance.json").write_text(json.dumps(origin, indent=2, default=str))
         if methods:
             (staging / "methods.md").write_text(methods + "\n")
         (staging / "report.html").write_text(
-            _html(study, dataset, result, methods, origin), encoding="utf-8"
+            _html(protocol.title, dataset, result, methods, origin), encoding="utf-8"
         )
         out.mkdir(parents=True, exist_ok=True)
         for item in staging.iterdir():

@@ -12,8 +12,9 @@ participant:
 - the bits per channel the window was given, and what the frame buffer really holds: a ramp of
   every code of the protocol's bit depth is drawn and read back at 16 bits, and the distinct
   levels found give the effective bits;
-- with a stimulus set of a flashing protocol (Spencer), the cost of one frame of the flash:
-  the time to draw both images (CPU) and the flip-to-flip time while drawing them, against the
+- with a stimulus set of a protocol that flashes its stimuli (a staircase), the cost of one
+  frame of the first flash a session shows:
+  the time to draw its images (CPU) and the flip-to-flip time while drawing them, against the
   frame period a session would time its flashes at (the measured one when it matches the
   protocol's, else the protocol's).
 
@@ -150,32 +151,23 @@ def check_display(
             if calibration is None
             else {"label": calibration.label, "status": calibration.status},
         }
-        if stimuli is not None and protocol.study == "spencer1995":
-            result["flash"] = _flash_cost(device, protocol, frames, period, log)
+        flash = _first_flash(protocol, 1.0 / period) if stimuli is not None else None
+        if flash is not None:
+            result["flash"] = _flash_cost(device, flash, frames, period, log)
         return result
     finally:
         device.close()
 
 
-def _flash_cost(device, protocol, frames: int, period: float, log) -> dict:
-    """Draw time and flip-to-flip time of the heaviest frame of a Spencer flash."""
-    levels = len(protocol["glare"]["strengths"])
-    screen = {
-        "glare_image": f"glare_{protocol['stimulus']['context'][-1]}_{levels:02d}",
-        "glare_side": "left",
-        "context": protocol["stimulus"]["context"][-1],
-        "disc_fraction": 1.0,
-    }
-    glare = device._set_image(screen["glare_image"])
-    comparison = device._comparison(screen)
-    offset = (glare.size[0] + protocol["stimulus"]["window_gap_px"]) / 2
-    glare.pos, comparison.pos = (-offset, 0), (offset, 0)
+def _flash_cost(device, screen: dict, frames: int, period: float, log) -> dict:
+    """Draw time and flip-to-flip time of a frame of a flash (``screen``'s images)."""
+    stims = device._place(screen)
     log(f"drawing {frames} frames of the flash")
     draw_s, flips = [], []
     for _ in range(frames + 1):
         start = time.perf_counter()
-        glare.draw()
-        comparison.draw()
+        for stim in stims:
+            stim.draw()
         draw_s.append(time.perf_counter() - start)
         flips.append(device.window.flip())
     draw_ms = 1000.0 * np.asarray(draw_s[1:])
@@ -186,6 +178,18 @@ def _flash_cost(device, protocol, frames: int, period: float, log) -> dict:
         "frame_intervals_drawing": _interval_summary(np.diff(flips), period),
         "frame_period_ms": 1000.0 * period,
     }
+
+
+def _first_flash(protocol, refresh_hz: float) -> dict | None:
+    """The first timed presentation a session of this protocol shows, if any."""
+    from .paradigms import PARADIGMS
+
+    engine = PARADIGMS[protocol.paradigm].engine(
+        protocol, "check1", counterbalance=0, refresh_hz=refresh_hz
+    )
+    engine.press("space", 0.0)
+    screen = engine.screen()
+    return screen if screen.get("frames") else None
 
 
 def write_check(result: dict, path: Path) -> Path:

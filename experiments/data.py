@@ -17,6 +17,7 @@ checking its header.
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import io
 import json
@@ -27,7 +28,7 @@ import sys
 from datetime import datetime
 from pathlib import Path
 
-from .schema import columns, format_value
+from protocols import columns, format_value
 
 __all__ = [
     "SessionError",
@@ -156,8 +157,8 @@ class SessionFiles:
 
     Parameters
     ----------
-    study, participant, session, out
-        Which session, and the folder for its files.
+    protocol, participant, session, out
+        Which study (its protocol sets the CSV's columns) and session, and the folder.
     resume
         Continue the existing session; otherwise start a new one.
     started
@@ -172,7 +173,7 @@ class SessionFiles:
 
     def __init__(
         self,
-        study: str,
+        protocol,
         participant: str,
         session: int,
         out: Path,
@@ -180,14 +181,15 @@ class SessionFiles:
         resume: bool,
         started: datetime,
     ):
+        study = protocol.study
         self.study = study
         self.resume = resume
-        self.columns = columns(study)
+        self.columns = columns(protocol)
         self.names = [c.name for c in self.columns]
         out = Path(out)
         self.lock = SessionLock(out, participant, study, session)
         self.lock.acquire()
-        self._handle = None
+        self._fd: int | None = None  # the CSV, written unbuffered: a row is on disk or not at all
         self.created = False
         self.rows: list[dict[str, str]] = []
         try:
@@ -246,9 +248,11 @@ class SessionFiles:
             if not data.endswith(b"\n"):  # a row cut by a crash is not a trial
                 with self.csv_path.open("r+b") as handle:
                     handle.truncate(data.rfind(b"\n") + 1)
-            self._handle = self.csv_path.open("a", encoding="utf-8", newline="")
+            self._fd = os.open(self.csv_path, os.O_WRONLY | os.O_APPEND)
             return
-        self._handle = self.csv_path.open("x", encoding="utf-8", newline="")
+        self._fd = os.open(
+            self.csv_path, os.O_WRONLY | os.O_APPEND | os.O_CREAT | os.O_EXCL, 0o644
+        )
         self.created = True
         try:
             self._write_line(self.names)
@@ -264,9 +268,17 @@ class SessionFiles:
     def _write_line(self, cells: list[str]) -> None:
         buffer = io.StringIO()
         csv.writer(buffer, lineterminator="\n").writerow(cells)
-        self._handle.write(buffer.getvalue())
-        self._handle.flush()
-        os.fsync(self._handle.fileno())
+        data = buffer.getvalue().encode("utf-8")
+        size = os.fstat(self._fd).st_size
+        try:
+            written = 0
+            while written < len(data):
+                written += os.write(self._fd, data[written:])
+            os.fsync(self._fd)
+        except OSError:
+            with contextlib.suppress(OSError):  # no half row: back to the last whole one
+                os.ftruncate(self._fd, size)
+            raise
 
     def write_row(self, row: dict) -> None:
         """Append one trial and make it durable before returning."""
@@ -305,19 +317,16 @@ class SessionFiles:
     def discard(self) -> None:
         """Remove the files of a new session that could not start (no trial was run); a
         resumed session's files are never removed."""
-        if self._handle is not None:
-            try:
-                self._handle.close()
-            except OSError:  # the buffered header could not be written either
-                pass
-            self._handle = None
+        if self._fd is not None:
+            os.close(self._fd)
+            self._fd = None
         if self.created and not self.rows:
-            for path in (self.csv_path, self.sidecar_path):
+            for path in (self.csv_path, self.sidecar_path, self.log_path, self.frames_path):
                 path.unlink(missing_ok=True)
             self.created = False
 
     def close(self) -> None:
-        if self._handle is not None:
-            self._handle.close()
-            self._handle = None
+        if self._fd is not None:
+            os.close(self._fd)
+            self._fd = None
         self.lock.release()

@@ -24,25 +24,46 @@ import numpy as np
 
 __all__ = ["Engine", "Press", "normalise_key", "participant_rng"]
 
-# the same key on the main block and the keypad
-KEY_ALIASES = {"num_enter": "return", "num_decimal": "period", "num_subtract": "minus"} | {
-    f"num_{digit}": str(digit) for digit in range(10)
+# a keypad key is a digit with Num Lock on and an arrow or page key with it off; Psychtoolbox
+# names it by its position (num_8) either way, so a screen takes whichever meaning it uses
+KEYPAD = {
+    "num_0": ("0", "insert"),
+    "num_1": ("1", "end"),
+    "num_2": ("2", "down"),
+    "num_3": ("3", "pagedown"),
+    "num_4": ("4", "left"),
+    "num_5": ("5",),
+    "num_6": ("6", "right"),
+    "num_7": ("7", "home"),
+    "num_8": ("8", "up"),
+    "num_9": ("9", "pageup"),
+    "num_enter": ("return",),
+    "num_decimal": ("period", "delete"),
+    "num_subtract": ("minus",),
 }
 
 
-def normalise_key(name: str) -> str:
-    """A key name as the engines use it (keypad digits and Enter as their main-block twins)."""
-    return KEY_ALIASES.get(name, name)
+def normalise_key(name: str, taken=()) -> str:
+    """A key name as a screen takes it: a keypad key becomes the main-block key the screen
+    takes (a digit, or an arrow or page key), else its first meaning.
+
+    Examples
+    --------
+    >>> normalise_key("num_8", {"up": "brighter"}), normalise_key("num_8", {"8": "rate 8"})
+    ('up', '8')
+    """
+    meanings = KEYPAD.get(name)
+    if meanings is None:
+        return name
+    return next((m for m in meanings if m in taken), meanings[0])
 
 
 @dataclass(frozen=True)
 class Press:
-    """One key press: its name, the time it went down (s, on the session clock), and for the
-    Enter that ends a typed answer, the text typed."""
+    """One key press: its name and the time it went down (s, on the session clock)."""
 
     name: str
     t_s: float
-    text: str | None = None
 
 
 class Engine(ABC):

@@ -42,8 +42,11 @@ PAUSE_KINDS = ("instructions", "block", "break", "continue", "end")
 DROPPED_INTERVAL = 1.5  # an interval over 1.5 frames lost at least one frame
 
 
-class SessionAborted(Exception):
-    """The participant or experimenter ended the session (Escape, SIGINT, SIGTERM)."""
+class SessionAborted(BaseException):
+    """The participant or experimenter ended the session (Escape, SIGINT, SIGTERM).
+
+    A BaseException, as KeyboardInterrupt is, so that no ``except Exception`` in a library the
+    session calls (PsychoPy opening its window) can swallow it."""
 
 
 @dataclass(frozen=True)
@@ -74,6 +77,9 @@ class Device(TypingProtocol):
     def wait_keys(self, anchor_s: float) -> list[Press]:
         """Block until at least one key press is available; return every press not yet
         returned, in the order pressed. ``anchor_s`` is the onset the loop times from."""
+
+    def typed(self) -> str:
+        """The text typed on the current text-entry screen, up to its Enter."""
 
 
 def count_dropped_frames(flip_times_s, refresh_hz: float) -> int:
@@ -163,10 +169,9 @@ class SessionLoop:
         anchor = self.device.show(screen)
         while True:
             press = self._next_press(anchor)
-            name = normalise_key(press.name)
-            if press.t_s >= anchor and name in screen["keys"]:
+            if press.t_s >= anchor and normalise_key(press.name, screen["keys"]) in screen["keys"]:
                 return
-            self._ignore(name, press.t_s, f"on the {screen['kind']} screen")
+            self._ignore(press.name, press.t_s, f"on the {screen['kind']} screen")
 
     # --- the session --------------------------------------------------------------------
 
@@ -208,21 +213,23 @@ class SessionLoop:
                     shown = Shown(onset_s=self.device.show(screen))
                 onset_trial, anchor, drawn = trial, shown.onset_s, screen
                 self.log(f"trial {trial} onset at {anchor:.4f}")
-            elif screen != drawn and not self.pending:  # presses read already go first
-                self.device.show(screen)
-                drawn = screen
+            elif screen != drawn and (not self.pending or screen.get("text_entry")):
+                self.device.show(screen)  # presses read already go first, but typed text
+                drawn = screen  # needs its screen to begin
             press = self._next_press(anchor)
-            name = normalise_key(press.name)
+            name = normalise_key(press.name, screen["keys"])
             t = press.t_s - anchor
             if t < 0:
-                self._ignore(name, press.t_s, "before the trial's onset")
+                self._ignore(press.name, press.t_s, "before the trial's onset")
                 continue
             if name not in screen["keys"]:
                 if not screen.get("text_entry"):
-                    self._ignore(name, press.t_s, f"not a key of the {screen['kind']} screen")
+                    self._ignore(
+                        press.name, press.t_s, f"not a key of the {screen['kind']} screen"
+                    )
                 continue
-            if press.text is not None and screen.get("text_entry"):
-                engine.type_text(press.text)
+            if screen.get("text_entry") and name == "return":
+                engine.type_text(self.device.typed())
             row = engine.press(name, t)
             if row is not None:
                 self._finish_row(row, shown, anchor)

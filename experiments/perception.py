@@ -88,6 +88,7 @@ __all__ = [
     "Observer",
     "ObserverNoise",
     "Percept",
+    "observer_parameters",
 ]
 
 # --- geometry of the judgement (set from the literature; the glow band fitted) -------------
@@ -631,3 +632,37 @@ class Observer:
         if difference > 0:
             return "first"
         return "second"
+
+
+def observer_parameters(table: dict) -> tuple[BrightnessModel, ObserverNoise]:
+    """The model and the noise from a protocol's ``[observer]`` table: any field of
+    :class:`BrightnessModel` or :class:`ObserverNoise`; the others keep their fitted defaults.
+
+    Raises
+    ------
+    ValueError
+        For a key that is neither's field, or a value out of its range.
+
+    Examples
+    --------
+    >>> model, noise = observer_parameters({"glow_gain": 0.3, "margin": 0.05})
+    >>> model.glow_gain, noise.margin, noise.gain_sd == GAIN_SD
+    (0.3, 0.05, True)
+    """
+    import dataclasses
+
+    model_keys = {f.name for f in dataclasses.fields(BrightnessModel)}
+    noise_keys = {f.name for f in dataclasses.fields(ObserverNoise)}
+    unknown = sorted(set(table) - model_keys - noise_keys)
+    if unknown:
+        raise ValueError(
+            f"observer: unknown key(s) {', '.join(unknown)} (known: "
+            f"{', '.join(sorted(model_keys | noise_keys))})"
+        )
+    try:
+        return (
+            BrightnessModel(**{k: v for k, v in table.items() if k in model_keys}),
+            ObserverNoise(**{k: v for k, v in table.items() if k in noise_keys}),
+        )
+    except TypeError as error:
+        raise ValueError(f"observer: {error}") from None

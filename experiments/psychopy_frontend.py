@@ -18,30 +18,35 @@ the clock at the protocol's nominal rate. The frame intervals of each flash are 
 session's ``_frames.tsv``, and every onset, offset and key press goes to its PsychoPy log.
 
 **Keys.** One :class:`stimuli.psychopy_window.KeyReader` for the session, never cleared after
-the first screen; comments are typed into a ``TextBox2``, which keeps case and punctuation.
+the first screen. Comments are read from the window system's text events (the keyboard's layout,
+case, punctuation and accents as typed, Backspace and the arrows as editing): what was typed
+after the rating key and before the Enter that ends the comment, even before the comment box
+appeared.
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
+import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
 from stimuli.calibration import Calibration, synthetic_calibration
-from stimuli.exr import read_exr
 from stimuli.psychopy_window import (
     KeyReader,
+    TextCapture,
     dispatch_events,
     grab_screen,
     measure_frame_intervals,
     measure_refresh,
     open_window,
     screen_resolution,
+    typed_text,
 )
-from stimuli.spencer1995 import compose_comparison
-from stimuli.yoshida2008 import compose_target
+from stimuli.stimulus_set import StimulusSet
 
 from .display import ScreenFacts
 from .engine import Press
@@ -49,11 +54,10 @@ from .loop import Shown, count_dropped_frames
 
 __all__ = ["PsychoPyFrontend", "ScriptedKeys"]
 
-GAP_PX = 40  # between Yoshida's reference and targets
 TEXT_RGB = (0.5, 0.5, 0.5)  # instructions and prompts: a mid grey on black
 DIM_RGB = (-0.4, -0.4, -0.4)  # labels next to the stimuli: dim, to leave the judgement alone
 MARKER_RGB = (0.2, 0.2, 0.2)  # the bar under the selected target
-ARROWS = {"left": "←", "right": "→", "up": "↑", "down": "↓"}
+PAUSE_KINDS = ("instructions", "block", "break", "continue", "end")
 
 
 class ScriptedKeys:
@@ -124,18 +128,18 @@ class PsychoPyFrontend:
             }
         )
         self.window = None
+        self.should_stop = None  # the session's check for a stop signal (raises when stopped)
         self._logfile = None
         self.keys = None
         self.refresh_hz = protocol["display"]["refresh_hz"] if "display" in protocol.data else 60.0
         self.pace = False
         self.facts: ScreenFacts | None = None
         self.frames_path: Path | None = None
-        self._exr_cache: dict[str, np.ndarray] = {}
-        self._stims: dict[str, object] = {}
-        self._targets: dict[str, tuple[float, object]] = {}
+        self.set = StimulusSet(self.stimuli) if self.stimuli else None
+        self._stims: dict[tuple, object] = {}  # set images by their terms
+        self._roles: dict[str, tuple[tuple, object]] = {}  # images that change: by role
         self._screen: dict | None = None
         self._screenshot_taken = False
-        self.shown_codes: dict[str, np.ndarray] = {}
 
     def _set_calibration(self) -> Calibration | None:
         if self.stimuli is None:
@@ -184,7 +188,33 @@ class PsychoPyFrontend:
             colorSpace="rgb",
             autoLog=False,
         )
-        self.textbox = None
+        self.typing = TextCapture(self.window)
+        self._typing_mark = 0  # where the current screen's typing began
+        self._comment_start: int | None = None
+        self.box = visual.Rect(
+            self.window,
+            width=900,
+            height=160,
+            pos=(0, -40),
+            units="pix",
+            fillColor=None,
+            lineColor=DIM_RGB,
+            colorSpace="rgb",
+            autoLog=False,
+        )
+        self.typed_stim = visual.TextStim(
+            self.window,
+            text="",
+            height=24,
+            wrapWidth=880,
+            pos=(-440, 30),
+            anchorHoriz="left",
+            anchorVert="top",
+            alignText="left",
+            color=TEXT_RGB,
+            colorSpace="rgb",
+            autoLog=False,
+        )
         return self.facts
 
     @property
@@ -215,33 +245,28 @@ class PsychoPyFrontend:
                 f"{'the clock' if pace else 'vertical sync'}; screen {self.facts}"
             )
         if frames_path is not None:
-            with frames_path.open("a", encoding="utf-8") as handle:
-                if handle.tell() == 0:
-                    handle.write("what\tframe\tinterval_ms\n")
-                for index, interval in enumerate(self._refresh_intervals, start=1):
-                    handle.write(f"window opened\t{index}\t{1000 * interval:.3f}\n")
+            try:
+                with frames_path.open("a", encoding="utf-8") as handle:
+                    if handle.tell() == 0:
+                        handle.write("what\tframe\tinterval_ms\n")
+                    for index, interval in enumerate(self._refresh_intervals, start=1):
+                        handle.write(f"window opened\t{index}\t{1000 * interval:.3f}\n")
+            except OSError as error:
+                self._warn(f"frame intervals not written to {frames_path}", error)
+                self.frames_path = None
         self.keys.clear()
 
     def close(self) -> None:
-        from psychopy import logging
-
         if self.window is not None:
             self.window.close()
             self.window = None
-        if getattr(self, "_logfile", None) is not None:
-            logging.flush()
-            logging.root.removeTarget(self._logfile)
-            self._logfile.stream.close()
-            self._logfile = None
+        if self._logfile is not None:
+            self._flush_log()
+            self._close_log()
 
     # --- images -----------------------------------------------------------------------------
 
-    def _exr(self, name: str) -> np.ndarray:
-        if name not in self._exr_cache:
-            self._exr_cache[name] = read_exr(self.stimuli / f"{name}.exr").astype(np.float64)
-        return self._exr_cache[name]
-
-    def _levels(self, luminance: np.ndarray, label: str) -> np.ndarray:
+    def _levels(self, luminance: np.ndarray) -> np.ndarray:
         if self.calibration is None:
             self.calibration = synthetic_calibration(
                 max_cd_m2=self.protocol["display"]["max_cd_m2"],
@@ -249,14 +274,13 @@ class PsychoPyFrontend:
                 bit_depth=self.display_bits,
             )
         codes, _ = self.calibration.encode(luminance)
-        self.shown_codes[label] = codes
         level = codes.astype(np.float64) / (2**self.calibration.bit_depth - 1) * 2.0 - 1.0
         return np.flipud(level)
 
-    def _image_stim(self, luminance: np.ndarray, label: str):
+    def _image_stim(self, luminance: np.ndarray):
         from psychopy import visual
 
-        levels = self._levels(luminance, label)
+        levels = self._levels(luminance)
         h, w = levels.shape
         return visual.ImageStim(
             self.window,
@@ -268,42 +292,35 @@ class PsychoPyFrontend:
             autoLog=False,
         )
 
-    def _set_image(self, name: str):
-        """The stimulus of a set image, encoded and uploaded on first use."""
-        if name not in self._stims:
-            self._stims[name] = self._image_stim(self._exr(name), name)
-        return self._stims[name]
-
-    def _target(self, side: str, disk_cd_m2: float):
-        """A Yoshida target at ``disk_cd_m2``, re-encoded only when its setting changed."""
-        value, stim = self._targets.get(side, (None, None))
-        if value != disk_cd_m2:
-            image = compose_target(
-                self._exr("target_background"), self._exr("target_coverage"), disk_cd_m2
-            )
+    def _stim(self, image: dict):
+        """The stimulus of a screen's image, encoded and uploaded once: a set image on first
+        use, an image that depends on a setting (a target, a comparison) when it changes."""
+        terms = tuple((name, float(weight)) for name, weight in image["terms"])
+        role = image["role"]
+        if len(terms) == 1 and terms[0][1] == 1.0:  # a set image as it is
+            if terms not in self._stims:
+                self._stims[terms] = self._image_stim(self.set.image(terms[0][0]))
+            return self._stims[terms]
+        shown, stim = self._roles.get(role, (None, None))
+        if shown != terms:
+            luminance = self.set.compose(terms)
             if stim is None:
-                stim = self._image_stim(image, side)
+                stim = self._image_stim(luminance)
             else:
-                stim.image = self._levels(image, side)
-            self._targets[side] = (disk_cd_m2, stim)
+                stim.image = self._levels(luminance)
+            self._roles[role] = (terms, stim)
         return stim
 
-    def _comparison(self, screen: dict):
-        """Spencer's disc-and-annulus comparison for this trial, encoded once."""
-        scene = self._exr(f"scene_{screen['context']}")
-        disc, annulus = self._exr("comparison_disc"), self._exr("comparison_annulus")
-        image = compose_comparison(
-            scene,
-            disc,
-            annulus,
-            screen["disc_fraction"] * self.protocol["display"]["max_cd_m2"],
-            self.protocol["stimulus"]["annulus_ratio"],
-        )
-        if "comparison" not in self._stims:
-            self._stims["comparison"] = self._image_stim(image, "comparison")
-        else:
-            self._stims["comparison"].image = self._levels(image, "comparison")
-        return self._stims["comparison"]
+    def _place(self, screen: dict) -> list:
+        """The screen's images, uploaded and laid out in a row, centred, the set's gap apart."""
+        stims = [self._stim(image) for image in screen.get("images", [])]
+        gap = self.set.geometry.get("gap_px", 40) if self.set else 0
+        width = sum(s.size[0] for s in stims) + gap * max(len(stims) - 1, 0)
+        x = -width / 2
+        for stim in stims:
+            stim.pos = (x + stim.size[0] / 2, 0)
+            x += stim.size[0] + gap
+        return stims
 
     # --- screens ----------------------------------------------------------------------------
 
@@ -312,83 +329,52 @@ class PsychoPyFrontend:
         self.text.pos = pos
         self.text.draw()
 
-    def _draw(self, screen: dict) -> None:
-        kind = screen["kind"]
-        if kind in ("instructions", "block", "break", "continue", "end"):
-            text = screen["text"].strip()
+    def _draw(self, screen: dict, *, prompt: bool = True) -> None:
+        """Images with their labels and marker; the screen's text, or its answer prompt; the
+        text box of a typed answer."""
+        stims = self._place(screen)
+        roles = [image["role"] for image in screen.get("images", [])]
+        for stim in stims:
+            stim.draw()
+        bottom = -max((s.size[1] for s in stims), default=0) / 2
+        for role, stim in zip(roles, stims, strict=True):
+            label = screen.get("labels", {}).get(role)
+            if label:
+                self.label.text = label
+                self.label.pos = (stim.pos[0], bottom - 36)
+                self.label.draw()
+            if screen.get("marker") == role:
+                self.marker.width, self.marker.pos = stim.size[0], (stim.pos[0], bottom - 14)
+                self.marker.draw()
+        text = screen.get("text", "").strip()
+        if screen["kind"] in PAUSE_KINDS:
             legend = screen.get("legend")
             if legend:
                 lines = [f"{keys}: {what}" if keys else what for keys, what in legend]
                 text += "\n\nKeys\n" + "\n".join(lines) + "\nEsc: end the session"
             if "space" in screen.get("keys", {}):
                 text += "\n\nPress SPACE to continue."
-            self._draw_text(text)
-        elif kind == "adjust":
-            self._draw_adjust(screen)
-        elif kind == "question":
-            self._draw_text(
-                f"Question {screen['number']}\n\n{screen['question']}\n\nY = yes     N = no"
-            )
-        elif kind == "rate":
-            low, high = screen["scale"]
-            self._draw_text(
-                f"{screen['category']}\n\n{screen['prompt']}\n\n{low} = {screen['anchors'][0]}"
-                f"   …   {high} = {screen['anchors'][1]}\n\nPress a number key from {low} to "
-                f"{high}."
-            )
-        elif kind == "comment":
-            self._draw_text(
-                f"{screen['category']}: rated {screen['rating']}\n\nComment (optional); press "
-                "Enter when done:",
-                pos=(0, 120),
-            )
-            self._comment_box().draw()
-        elif kind == "present":
-            self._draw_text(
-                f"{ARROWS['left']} left brighter      {ARROWS['down']} neither      "
-                f"right brighter {ARROWS['right']}",
-                pos=(0, -self.protocol["stimulus"]["window_px"]),
-            )
-        else:
-            raise ValueError(f"no drawing for a {kind!r} screen")
+        if text:
+            self._draw_text(text, pos=(0, 120) if screen.get("text_entry") else (0, 0))
+        if prompt and screen.get("prompt"):
+            self._draw_text(screen["prompt"], pos=(0, bottom - 60))
+        if screen.get("text_entry"):
+            text, cursor, _ = typed_text(self.typing.events, self._comment_start or 0)
+            self.typed_stim.text = text[:cursor] + "|" + text[cursor:]
+            self.box.draw()
+            self.typed_stim.draw()
 
-    def _draw_adjust(self, screen: dict) -> None:
-        reference = self._set_image(screen["reference"])
-        w, h = reference.size
-        offset = w + GAP_PX
-        reference.pos = (0, 0)
-        reference.draw()
-        for side, x in (("left", -offset), ("right", offset)):
-            target = self._target(side, screen[f"{side}_cd_m2"])
-            target.pos = (x, 0)
-            target.draw()
-            self.label.text = "slightly darker" if side == "left" else "slightly brighter"
-            self.label.pos = (x, -h / 2 - 36)
-            self.label.draw()
-        x = -offset if screen["selected"] == "left" else offset
-        self.marker.width, self.marker.pos = w, (x, -h / 2 - 14)
-        self.marker.draw()
-
-    def _comment_box(self):
-        from psychopy import visual
-
-        if self.textbox is None:
-            self.textbox = visual.TextBox2(
-                self.window,
-                text="",
-                editable=True,
-                size=(900, 160),
-                pos=(0, -40),
-                units="pix",
-                letterHeight=24,
-                color=TEXT_RGB,
-                colorSpace="rgb",
-                borderColor=DIM_RGB,
-                fillColor=None,
-                alignment="top-left",
-                autoLog=False,
-            )
-        return self.textbox
+    def _start_comment(self, screen: dict) -> None:
+        """Where the comment begins: after the rating key's own character, typed since the
+        rating screen appeared (characters typed before the box showed are kept)."""
+        dispatch_events(self.window)
+        events = self.typing.events
+        rating = str(screen.get("rating", ""))
+        for index in range(self._typing_mark, len(events)):
+            if events[index] == ("text", rating):
+                self._comment_start = index + 1
+                return
+        self._comment_start = len(events)
 
     def _flip(self, *, capture: bool = False) -> float:
         if capture and self.screenshot is not None and not self._screenshot_taken:
@@ -402,11 +388,10 @@ class PsychoPyFrontend:
     # --- the device interface ---------------------------------------------------------------
 
     def show(self, screen: dict) -> float:
-        if screen["kind"] == "comment" and (self._screen or {}).get("kind") != "comment":
-            dispatch_events(self.window)  # characters typed before the box opened stay out
-            box = self._comment_box()
-            box.text = ""
-            box.hasFocus = True
+        if screen.get("text_entry") and self._comment_start is None:
+            self._start_comment(screen)
+        elif not screen.get("text_entry"):
+            self._typing_mark = max(self._typing_mark, len(self.typing.events))
         self._screen = screen
         self._draw(screen)
         onset = self._flip(capture="trial" in screen)
@@ -416,28 +401,21 @@ class PsychoPyFrontend:
 
     def present(self, screen: dict) -> Shown:
         self._screen = screen
-        glare = self._set_image(screen["glare_image"])
-        comparison = self._comparison(screen)  # encoded and uploaded before the first frame
-        w = glare.size[0]
-        offset = (w + self.protocol["stimulus"]["window_gap_px"]) / 2
-        left, right = (
-            (glare, comparison) if screen["glare_side"] == "left" else (comparison, glare)
-        )
-        left.pos, right.pos = (-offset, 0), (offset, 0)
+        stims = self._place(screen)  # encoded and uploaded before the first frame
         period = 1.0 / self.refresh_hz
-        left.draw()  # a first draw outside the flash: textures on the GPU before frame one
-        right.draw()
+        for stim in stims:  # a first draw outside the flash: textures on the GPU before frame one
+            stim.draw()
         self.window.clearBuffer()
         blank = self.window.flip()
         self._wait_until(blank + screen["blank_before_ms"] / 1000.0 - (0 if self.pace else period))
         flips = []
         for frame in range(screen["frames"]):
-            left.draw()
-            right.draw()
+            for stim in stims:
+                stim.draw()
             if self.pace and flips:
                 self._wait_until(flips[0] + frame * period)
             flips.append(self._flip(capture=frame == 0))
-        self._draw(screen)  # the answer prompt on black
+        self._draw_text(screen.get("prompt", ""), pos=(0, -stims[0].size[1] / 2 - 60))
         if self.pace:
             self._wait_until(flips[0] + screen["frames"] * period)
         flips.append(self.window.flip())
@@ -456,11 +434,11 @@ class PsychoPyFrontend:
         return shown
 
     def wait_keys(self, anchor_s: float) -> list[Press]:
-        from psychopy import logging
-
-        logging.flush()
+        self._flush_log()
         text_entry = bool((self._screen or {}).get("text_entry"))
         while True:
+            if self.should_stop is not None:
+                self.should_stop()
             presses = self.keys.read()
             if presses:
                 break
@@ -473,13 +451,23 @@ class PsychoPyFrontend:
         result = []
         for name, t in presses:
             self._log(f"key {name} down at {t:.4f}")
-            text = None
-            if text_entry and name in ("return", "num_enter"):
-                dispatch_events(self.window)  # the characters typed before Enter
-                typed = self._comment_box().text.replace("\r", "")
-                text = typed.rstrip("\n").replace("\n", " ")
-            result.append(Press(name, t, text))
+            result.append(Press(name, t))
         return result
+
+    def typed(self) -> str:
+        """The comment typed since the comment screen's rating key, up to its Enter."""
+        dispatch_events(self.window)  # the characters typed before Enter
+        start = self._comment_start if self._comment_start is not None else len(self.typing.events)
+        text, _, _ = typed_text(self.typing.events, start)
+        end = start
+        while end < len(self.typing.events) and self.typing.events[end] not in (
+            ("text", "\r"),
+            ("text", "\n"),
+        ):
+            end += 1
+        self._typing_mark = min(end + 1, len(self.typing.events))  # the next screen's typing
+        self._comment_start = None
+        return text
 
     # --- records ----------------------------------------------------------------------------
 
@@ -495,9 +483,35 @@ class PsychoPyFrontend:
     def _write_intervals(self, what: str, flips: list[float]) -> None:
         if self.frames_path is None:
             return
-        with self.frames_path.open("a", encoding="utf-8") as handle:
-            for index, interval in enumerate(np.diff(flips), start=1):
-                handle.write(f"{what}\t{index}\t{1000 * interval:.3f}\n")
+        try:
+            with self.frames_path.open("a", encoding="utf-8") as handle:
+                for index, interval in enumerate(np.diff(flips), start=1):
+                    handle.write(f"{what}\t{index}\t{1000 * interval:.3f}\n")
+        except OSError as error:  # the trials matter more than the frame intervals
+            self._warn(f"frame intervals no longer written to {self.frames_path}", error)
+            self.frames_path = None
+
+    def _flush_log(self) -> None:
+        from psychopy import logging
+
+        try:
+            logging.flush()
+        except OSError as error:  # the trials matter more than the log
+            self._warn("the session log is no longer written", error)
+            self._close_log()
+
+    def _close_log(self) -> None:
+        from psychopy import logging
+
+        if self._logfile is not None:
+            logging.root.removeTarget(self._logfile)
+            with contextlib.suppress(OSError):
+                self._logfile.stream.close()
+            self._logfile = None
+
+    @staticmethod
+    def _warn(what: str, error: OSError) -> None:
+        print(f"[glarelab] {what} ({error.strerror or error})", file=sys.stderr, flush=True)
 
     def log(self, message: str) -> None:
         """A line in the session's PsychoPy log (written when the loop waits for keys)."""

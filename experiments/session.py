@@ -27,66 +27,73 @@ import contextlib
 import hashlib
 import json
 import os
-import re
 import signal
 import socket
+import sys
 import threading
 import time
 from datetime import UTC, datetime
 from pathlib import Path
 
+from protocols import DATA_FORMAT
 from stimuli.calibration import Calibration, usable_calibration
-from stimuli.stimulus_set import package_versions, verify_stimulus_set
+from stimuli.stimulus_set import BUILDERS, package_versions, verify_stimulus_set
 
 from .data import SessionError, SessionFiles, check_session_id
 from .display import check_calibration, check_screen, enforce, timing_rate_hz
 from .engine import Press
 from .loop import SessionAborted, SessionLoop, Shown
-from .luidolt2020 import LikertQuestionnaire
-from .observers import SimulatedObserver
-from .schema import DATA_FORMAT
-from .spencer1995 import StaircaseExperiment
-from .yoshida2008 import BrightnessMatching
+from .paradigms import PARADIGMS
 
 __all__ = [
     "SessionAborted",
     "SimulatedFrontend",
-    "counterbalance_for",
     "make_engine",
+    "make_observer",
     "run_session",
+    "shows_images",
 ]
 
-STUDIES_WITH_STIMULI = ("yoshida2008", "spencer1995")
 PACKAGES = ("numpy", "scipy", "OpenEXR", "colour-science", "psychopy", "glarelab")
 INFO_KEYS = ("age", "sex", "vision_correction")
 END_TEXT = "The session is complete. Thank you!\n\nPlease tell the experimenter."
 
 
-def counterbalance_for(participant: str) -> int:
-    """Block order of a participant from the number in their id: odd → 0 (no context first),
-    even → 1 (context first), so consecutive participants alternate."""
-    digits = re.findall(r"\d+", participant)
-    if not digits:
-        raise ValueError(
-            f"participant {participant!r} has no number to counterbalance by; "
-            "give --counterbalance 0 or 1"
-        )
-    return 0 if int(digits[-1]) % 2 == 1 else 1
+def shows_images(protocol) -> bool:
+    """Whether the protocol's paradigm shows images (and so needs a stimulus set)."""
+    return BUILDERS.get(protocol.paradigm) is not None
 
 
 def make_engine(
     protocol, participant: str, *, session: int, counterbalance: int | None, refresh_hz: float
 ):
-    if protocol.study == "yoshida2008":
-        return BrightnessMatching(protocol, participant, session=session)
-    if protocol.study == "spencer1995":
-        cb = counterbalance_for(participant) if counterbalance is None else counterbalance
-        return StaircaseExperiment(
-            protocol, participant, session=session, counterbalance=cb, refresh_hz=refresh_hz
+    """The engine of the protocol's paradigm for one participant's session."""
+    return PARADIGMS[protocol.paradigm].engine(
+        protocol,
+        participant,
+        session=session,
+        counterbalance=counterbalance,
+        refresh_hz=refresh_hz,
+    )
+
+
+def make_observer(protocol, participant: str, *, seed: int, stimuli: Path | None):
+    """A simulated observer of the protocol's paradigm; it looks at the set in ``stimuli``."""
+    from stimuli.stimulus_set import StimulusSet
+
+    observer = PARADIGMS[protocol.paradigm].observer
+    if observer is None:
+        raise ValueError(f"the {protocol.paradigm} paradigm has no simulated observer")
+    if shows_images(protocol) and stimuli is None:
+        raise ValueError(
+            f"a simulated {protocol.study} observer needs the stimulus set to look at"
         )
-    if protocol.study == "luidolt2020":
-        return LikertQuestionnaire(protocol, participant, session=session)
-    raise ValueError(f"no experiment for study {protocol.study!r}")
+    return observer(
+        protocol,
+        participant,
+        seed=seed,
+        stimuli=StimulusSet(stimuli) if stimuli is not None else None,
+    )
 
 
 def _tick(seconds: float) -> float:
@@ -106,7 +113,7 @@ class SimulatedFrontend:
     keyboard = "simulated observer"
     calibration_used = None
 
-    def __init__(self, observer: SimulatedObserver, *, trial_delay_s: float = 0.0):
+    def __init__(self, observer, *, trial_delay_s: float = 0.0):
         self.observer = observer
         self.trial_delay_s = trial_delay_s
         self.clock = 0.0
@@ -139,6 +146,9 @@ class SimulatedFrontend:
         self.clock = onset + _tick(screen["frames"] / self.refresh_hz)
         return Shown(onset_s=onset, offset_s=self.clock, frames=screen["frames"])
 
+    def typed(self) -> str:
+        return ""  # simulated observers comment on nothing
+
     def wait_keys(self, anchor_s: float) -> list[Press]:
         screen = self.screen
         if "trial" in screen:
@@ -157,7 +167,7 @@ class SimulatedFrontend:
 
 
 def _check_stimuli(protocol, stimuli: Path | None) -> str | None:
-    if protocol.study not in STUDIES_WITH_STIMULI:
+    if not shows_images(protocol):
         return None
     if stimuli is None:
         raise ValueError(f"a {protocol.study} session needs its stimulus set (--stimuli DIR)")
@@ -185,9 +195,16 @@ def _iso(moment: datetime) -> str:
 
 
 def _check_resume(
-    sidecar: dict, files: SessionFiles, protocol, manifest_sha, calibration_record, info: dict
-) -> dict:
-    """Refuse a resume whose inputs changed; return the participant's details to keep."""
+    sidecar: dict,
+    files: SessionFiles,
+    protocol,
+    manifest_sha,
+    calibration_record,
+    info: dict,
+    counterbalance: int | None,
+) -> tuple[dict, int | None]:
+    """Refuse a resume whose inputs changed; return the participant's details to keep and the
+    counterbalance the session started with."""
     if not sidecar:
         raise SessionError(
             f"{files.sidecar_path} is missing: without it the session cannot be checked "
@@ -231,7 +248,14 @@ def _check_resume(
             f"{files.sidecar_path.name}: {', '.join(conflicts)}; resume without them, or check "
             "the participant id"
         )
-    return stored | {k: v for k, v in info.items() if v is not None}
+    started_with = sidecar.get("counterbalance")
+    if counterbalance is not None and started_with is not None and counterbalance != started_with:
+        raise SessionError(
+            f"--counterbalance {counterbalance} contradicts the {started_with} "
+            f"{files.csv_path.name} started with; resume without it"
+        )
+    keep = counterbalance if counterbalance is not None else started_with
+    return stored | {k: v for k, v in info.items() if v is not None}, keep
 
 
 @contextlib.contextmanager
@@ -250,8 +274,20 @@ def _signals(handler):
             signal.signal(number, old)
 
 
-def _abort(number, frame):
-    raise SessionAborted(signal.Signals(number).name)
+class _StopRequest:
+    """A signal to stop: raised at once, and remembered, so that a library that swallows the
+    exception (PsychoPy opening its window catches broadly) cannot keep the session going."""
+
+    def __init__(self):
+        self.reason: str | None = None
+
+    def __call__(self, number, frame):
+        self.reason = signal.Signals(number).name
+        raise SessionAborted(self.reason)
+
+    def check(self) -> None:
+        if self.reason is not None:
+            raise SessionAborted(self.reason)
 
 
 def run_session(
@@ -289,7 +325,8 @@ def run_session(
     participant_info
         Age, sex, vision correction (a resume keeps the stored ones).
     simulated
-        A simulated observer: no stimulus set, calibration or display checks.
+        A simulated observer: it looks at the stimulus set's images as the set's calibration
+        shows them; no calibration or display checks.
     accept_mismatch
         Display checks whose failure is accepted (recorded): ``resolution``, ``refresh``,
         ``bit-depth``, ``calibration``.
@@ -304,74 +341,97 @@ def run_session(
     started = _now()
     check_session_id(participant, session)
     accept = set(accept_mismatch) | ({"refresh-unmeasured"} if allow_unmeasured_refresh else set())
-    manifest_sha = _check_stimuli(protocol, stimuli) if not simulated else None
+    manifest_sha = _check_stimuli(protocol, stimuli)
     if simulated:
         calibration_record = {"calibrated": False, "status": "simulated", "readings_sha256": None}
         checks = []
-    elif protocol.study not in STUDIES_WITH_STIMULI:  # a questionnaire shows no luminances
+    elif not shows_images(protocol):  # a questionnaire shows no luminances
         calibration_record = {"calibrated": False, "status": "not needed", "readings_sha256": None}
         checks = []
     else:
         calibration_record = usable_calibration(calibration, allow_uncalibrated=allow_uncalibrated)
         checks = enforce(check_calibration(protocol, calibration), accept=accept)
-    files = SessionFiles(
-        protocol.study, participant, session, Path(out), resume=resume, started=started
-    )
-    try:
-        info = {key: (participant_info or {}).get(key) for key in INFO_KEYS}
-        info |= {k: v for k, v in (participant_info or {}).items() if k not in INFO_KEYS}
-        sidecar = files.read_sidecar() if resume else {}
-        if resume:
-            info = _check_resume(sidecar, files, protocol, manifest_sha, calibration_record, info)
-        facts = frontend.open()
+    stop = _StopRequest()
+    with _signals(stop):  # Ctrl-C or kill before the first trial: stopped, nothing written
+        files = SessionFiles(
+            protocol, participant, session, Path(out), resume=resume, started=started
+        )
         try:
-            if facts is not None:
-                checks += enforce(check_screen(protocol, facts), accept=accept)
-            rate = timing_rate_hz(protocol, facts, checks)
-            engine = make_engine(
-                protocol,
-                participant,
-                session=session,
-                counterbalance=counterbalance,
-                refresh_hz=rate,
-            )
-            files.open()
-            sidecar = _start_run(
-                sidecar,
-                files,
-                engine,
-                protocol,
-                info=info,
-                started=started,
-                checks=checks,
-                facts=facts,
-                rate=rate,
-                frontend=frontend,
-                manifest_sha=manifest_sha,
-                calibration_record=calibration_record,
-                simulated=simulated,
-            )
-            try:
-                files.write_sidecar(sidecar)
-            except OSError as error:
-                files.discard()
-                raise SessionError(
-                    f"could not write {files.sidecar_path} ({error.strerror or error}); the "
-                    "session did not start"
-                ) from None
+            info = {key: (participant_info or {}).get(key) for key in INFO_KEYS}
+            info |= {k: v for k, v in (participant_info or {}).items() if k not in INFO_KEYS}
+            sidecar = files.read_sidecar() if resume else {}
             if resume:
-                engine.replay(files.rows)
-            frontend.start(
-                refresh_hz=rate,
-                pace=facts is not None and not _refresh_verified(checks),
-                frames_path=files.frames_path if facts is not None else None,
-                log_path=files.log_path if facts is not None else None,
-            )
-            _run_trials(engine, frontend, files, sidecar, protocol, rate, resume)
+                info, counterbalance = _check_resume(
+                    sidecar,
+                    files,
+                    protocol,
+                    manifest_sha,
+                    calibration_record,
+                    info,
+                    counterbalance,
+                )
+            facts = frontend.open()
+            frontend.should_stop = stop.check
+            try:
+                stop.check()
+                if facts is not None:
+                    checks += enforce(check_screen(protocol, facts), accept=accept)
+                rate = timing_rate_hz(protocol, facts, checks)
+                engine = make_engine(
+                    protocol,
+                    participant,
+                    session=session,
+                    counterbalance=counterbalance,
+                    refresh_hz=rate,
+                )
+                if resume:  # a session that does not replay is refused before anything is written
+                    try:
+                        engine.replay(files.rows)
+                    except ValueError as error:
+                        raise SessionError(f"{files.csv_path.name}: {error}") from None
+                files.open()
+                sidecar = _start_run(
+                    sidecar,
+                    files,
+                    engine,
+                    protocol,
+                    info=info,
+                    started=started,
+                    checks=checks,
+                    facts=facts,
+                    rate=rate,
+                    frontend=frontend,
+                    manifest_sha=manifest_sha,
+                    calibration_record=calibration_record,
+                    simulated=simulated,
+                )
+                try:
+                    files.write_sidecar(sidecar)
+                except OSError as error:
+                    files.discard()
+                    raise SessionError(
+                        f"could not write {files.sidecar_path} ({error.strerror or error}); the "
+                        "session did not start"
+                    ) from None
+                frontend.start(
+                    refresh_hz=rate,
+                    pace=facts is not None and not _refresh_verified(checks),
+                    frames_path=files.frames_path if facts is not None else None,
+                    log_path=files.log_path if facts is not None else None,
+                )
+                _run_trials(engine, frontend, files, sidecar, protocol, rate, resume, stop)
+            finally:
+                frontend.close()
+            if files.created and not files.rows and sidecar["status"] == "aborted":
+                # ended before its first trial: a new session that recorded nothing leaves
+                # nothing (the participant can start it again)
+                raise SessionAborted(sidecar["runs"][-1]["ended_by"] or "escape")
+        except SessionAborted:
+            if files.created and not files.rows:  # stopped before its first trial
+                files.discard()
+            raise
         finally:
-            frontend.close()
-    finally:
-        files.close()
+            files.close()
     return sidecar
 
 
@@ -451,7 +511,7 @@ def _start_run(
     }
 
 
-def _run_trials(engine, frontend, files, sidecar, protocol, rate, resume) -> None:
+def _run_trials(engine, frontend, files, sidecar, protocol, rate, resume, stop) -> None:
     trials = protocol.data.get("trials", {})
     loop = SessionLoop(
         frontend,
@@ -463,19 +523,28 @@ def _run_trials(engine, frontend, files, sidecar, protocol, rate, resume) -> Non
     )
     status, reason = "aborted", None
     try:
-        with _signals(_abort):
+        with _signals(stop):
             try:
+                stop.check()
                 loop.run(engine, resumed_after=len(files.rows) if resume else 0)
                 status = "completed"
             except SessionAborted as abort:
                 reason = abort.args[0] if abort.args else "escape"
+            except OSError as error:  # the disk is full or gone: stop, keep what is written
+                reason = f"could not write: {error.strerror or error}"
+                _finish_run(sidecar, files, engine, loop, status, reason)
+                raise SessionError(
+                    f"the session stopped after {len(files.rows)} trials: {reason} "
+                    f"({files.csv_path}); every trial before it is on disk"
+                ) from None
             except BaseException as error:
                 reason = f"error: {type(error).__name__}: {error}"
                 raise
     finally:
-        _finish_run(sidecar, files, engine, loop, status, reason)
+        if reason is None or not reason.startswith("could not write"):
+            _finish_run(sidecar, files, engine, loop, status, reason)
     if status == "completed":
-        with contextlib.suppress(SessionAborted), _signals(_abort):
+        with contextlib.suppress(SessionAborted), _signals(stop):
             loop.pause({"kind": "end", "text": END_TEXT, "keys": {"space": "close"}})
 
 
@@ -495,4 +564,12 @@ def _finish_run(sidecar, files, engine, loop, status, reason) -> None:
             "ended": _iso(ended),
             "trials": len(files.rows),
         }
-        files.write_sidecar(sidecar)
+        try:
+            files.write_sidecar(sidecar)
+        except OSError as error:  # the CSV holds the trials; say what the sidecar lacks
+            print(
+                f"[glarelab] could not update {files.sidecar_path} ({error.strerror or error}): "
+                f"it still says 'running'; the session ended {status} after {len(files.rows)} "
+                "trials",
+                file=sys.stderr,
+            )

@@ -12,17 +12,17 @@ from pathlib import Path
 import numpy as np
 
 import glare
+from protocols import PARADIGMS, ProtocolError, describe_schema, load_protocol
 from stimuli.apertures import load_aperture_image
 from stimuli.calibration import Calibration, fit_calibration, read_readings
 from stimuli.exr import read_exr, write_exr
 from stimuli.preview import preview_png, psf_png
-from stimuli.protocol import SCHEMAS, ProtocolError, describe_schema, load_protocol
 from stimuli.shapes import disk
 from stimuli.stimulus_set import build_stimulus_set, verify_stimulus_set
 
 __all__ = ["build_model", "main"]
 
-STUDIES = tuple(SCHEMAS)  # the studies a protocol file can name
+PROTOCOL_HELP = "a shipped study's name (yoshida2008, spencer1995, luidolt2020, …) or a TOML file"
 
 
 def _log(message: str) -> None:
@@ -316,14 +316,23 @@ def _stimuli_verify(args: argparse.Namespace) -> int:
 
 def _protocol_keys(args: argparse.Namespace) -> int:
     print("| key | unit | default | allowed | meaning |\n| --- | --- | --- | --- | --- |")
-    for row in describe_schema(args.study):
+    paradigm = args.paradigm
+    if paradigm not in PARADIGMS:  # a protocol: its paradigm
+        paradigm = load_protocol(paradigm).paradigm
+    for row in describe_schema(paradigm):
         print("| " + " | ".join(row) + " |")
     return 0
 
 
 def _protocol_check(args: argparse.Namespace) -> int:
+    from experiments.paradigms import PARADIGMS as RUNS
+
     protocol = load_protocol(args.protocol)
-    print(f"{args.protocol}: valid {protocol.study} protocol, sha256 {protocol.sha256}")
+    RUNS[protocol.paradigm].observer.check(protocol)  # the simulated observers' parameters
+    print(
+        f"{args.protocol}: valid protocol of the {protocol.paradigm} paradigm (study "
+        f"{protocol.study}), sha256 {protocol.sha256}"
+    )
     return 0
 
 
@@ -383,6 +392,25 @@ def _calibrate_measure(args: argparse.Namespace) -> int:
     return 0 if result["status"] == "passed" else 1
 
 
+VISION = ("none", "glasses", "lenses", "other")
+
+
+def _age(text: str) -> int:
+    """An age in whole years, 0-120."""
+    try:
+        age = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"age must be whole years; got {text!r}") from None
+    if not 0 <= age <= 120:
+        raise argparse.ArgumentTypeError(f"age must be 0-120 years; got {age}")
+    return age
+
+
+def _detail(text: str) -> str | None:
+    """A participant detail: trimmed text, or none when empty."""
+    return text.strip() or None
+
+
 def _experiment_info(args: argparse.Namespace) -> None:
     """Ask for the participant's details in a dialog, as PsychoPy's experiment info does."""
     import os
@@ -403,41 +431,46 @@ def _experiment_info(args: argparse.Namespace) -> None:
         "session": args.session,
         "age": "" if args.age is None else args.age,
         "sex": ["", "f", "m", "x"],
-        "vision": ["none", "glasses", "lenses"],
+        "vision": list(VISION),
     }
-    dialog = gui.DlgFromDict(info, title=f"glarelab {args.study}", order=list(info))
+    dialog = gui.DlgFromDict(info, title=f"glarelab {args.title}", order=list(info))
     if not dialog.OK:
         raise ValueError("the participant dialog was cancelled: nothing was run or written")
     args.participant = str(info["participant"]).strip()
     try:
         args.session = int(info["session"])
-        args.age = int(info["age"]) if str(info["age"]).strip() else None
-    except ValueError:
+        args.age = _age(str(info["age"])) if str(info["age"]).strip() else None
+    except (ValueError, argparse.ArgumentTypeError) as error:
         raise ValueError(
-            f"the dialog's session {info['session']!r} and age {info['age']!r} must be whole "
-            "numbers"
+            f"the dialog's session {info['session']!r} must be a whole number and its age "
+            f"0-120 years ({error})"
         ) from None
     args.sex = info["sex"] or None
     args.vision = info["vision"] or None
 
 
 def _run(args: argparse.Namespace) -> int:
-    from experiments.observers import SimulatedObserver
     from experiments.session import SimulatedFrontend, run_session
 
-    protocol_path = args.protocol or Path(__file__).parents[1] / "protocols" / f"{args.study}.toml"
-    protocol = load_protocol(protocol_path)
-    if protocol.study != args.study:
-        raise ValueError(f"{protocol_path} is a {protocol.study} protocol, not {args.study}")
+    protocol = load_protocol(args.protocol or args.study)
+    args.title = protocol.study
     out = Path(args.out)
     if args.simulate:
+        from experiments.session import make_observer, shows_images
+        from stimuli.stimulus_set import cached_stimulus_set
+
         ids = (
             [args.participant]
             if args.participant
             else [f"sim{index:02d}" for index in range(1, args.participants + 1)]
         )
+        stimuli = args.stimuli
+        if stimuli is None and shows_images(protocol):
+            _log(f"building (or reusing) the {protocol.study} stimulus set the observers look at")
+            stimuli = cached_stimulus_set(protocol)
+            _log(f"stimulus set: {stimuli}")
         for number, participant in enumerate(ids, start=1):
-            observer = SimulatedObserver(protocol, participant, seed=args.seed)
+            observer = make_observer(protocol, participant, seed=args.seed, stimuli=stimuli)
             frontend = SimulatedFrontend(observer, trial_delay_s=args.trial_delay_ms / 1000)
             sidecar = run_session(
                 protocol,
@@ -445,6 +478,7 @@ def _run(args: argparse.Namespace) -> int:
                 out=out,
                 frontend=frontend,
                 session=args.session,
+                stimuli=stimuli,
                 resume=args.resume,
                 counterbalance=args.counterbalance,
                 simulated=True,
@@ -495,7 +529,7 @@ def _run(args: argparse.Namespace) -> int:
 def _check_display(args: argparse.Namespace) -> int:
     from experiments.check_display import check_display, write_check
 
-    protocol = load_protocol(_protocol_path(args.protocol))
+    protocol = load_protocol(args.protocol)
     calibration = Calibration.load(args.calibration) if args.calibration else None
     if args.out is not None:
         out = args.out
@@ -537,24 +571,15 @@ def _check_display(args: argparse.Namespace) -> int:
     return 0 if all(c["passed"] for c in result["checks"]) else 1
 
 
-def _protocol_path(name: str | Path) -> Path:
-    """A shipped protocol's name (``yoshida2008``) or a path to a TOML file."""
-    path = Path(name)
-    if path.suffix != ".toml" and not path.exists() and str(name) in STUDIES:
-        return Path(__file__).parents[1] / "protocols" / f"{name}.toml"
-    return path
-
-
 def _analyse(args: argparse.Namespace) -> int:
     from analysis.report import write_report
 
-    protocol = load_protocol(args.protocol) if args.protocol else None
+    protocol = load_protocol(args.protocol or args.study)
     report = write_report(
-        args.study,
+        protocol,
         args.csv,
         args.out,
         exclude_incomplete=args.exclude_incomplete,
-        protocol=protocol,
         stimuli=args.stimuli,
     )
     _log(f"wrote {report} with its tables and figures")
@@ -638,7 +663,7 @@ def _parser() -> argparse.ArgumentParser:
     stimuli = commands.add_parser("stimuli", help="build or verify a study's stimulus set")
     stimuli_commands = stimuli.add_subparsers(dest="stimuli_command", required=True)
     build = stimuli_commands.add_parser("build", help="build a stimulus set from a protocol")
-    build.add_argument("protocol", type=Path)
+    build.add_argument("protocol", help=PROTOCOL_HELP)
     build.add_argument("--out", type=Path, required=True)
     build.add_argument("--calibration", type=Path, default=None, help="display calibration JSON")
     build.set_defaults(run=_stimuli_build)
@@ -649,10 +674,12 @@ def _parser() -> argparse.ArgumentParser:
     protocol = commands.add_parser("protocol", help="check a protocol or list its keys")
     protocol_commands = protocol.add_subparsers(dest="protocol_command", required=True)
     check = protocol_commands.add_parser("check", help="validate a protocol file")
-    check.add_argument("protocol", type=Path)
+    check.add_argument("protocol", help=PROTOCOL_HELP)
     check.set_defaults(run=_protocol_check)
     keys = protocol_commands.add_parser("keys", help="every key of a study's protocol")
-    keys.add_argument("study", choices=STUDIES)
+    keys.add_argument(
+        "paradigm", help=f"a paradigm ({', '.join(PARADIGMS)}) or a protocol ({PROTOCOL_HELP})"
+    )
     keys.set_defaults(run=_protocol_keys)
 
     calibrate = commands.add_parser("calibrate", help="display calibration")
@@ -693,14 +720,16 @@ def _parser() -> argparse.ArgumentParser:
     measure.set_defaults(run=_calibrate_measure)
 
     run = commands.add_parser("run", help="run a study session (PsychoPy) or simulated sessions")
-    run.add_argument("study", choices=STUDIES)
+    run.add_argument("study", help=f"the protocol: {PROTOCOL_HELP}")
     run.add_argument(
         "--participant",
         default=None,
         help="participant id (file-name safe); without it, a dialog asks for the details",
     )
     run.add_argument("--session", type=int, default=1, help="session number (default 1)")
-    run.add_argument("--protocol", type=Path, default=None, help="default: protocols/STUDY.toml")
+    run.add_argument(
+        "--protocol", type=Path, default=None, help="a protocol TOML file (instead of STUDY)"
+    )
     run.add_argument("--stimuli", type=Path, default=None, help="the stimulus set folder")
     run.add_argument("--calibration", type=Path, default=None, help="display calibration JSON")
     run.add_argument(
@@ -733,9 +762,16 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument(
         "--counterbalance", type=int, choices=(0, 1), default=None, help="Spencer block order"
     )
-    run.add_argument("--age", type=int, default=None, help="participant's age, years")
-    run.add_argument("--sex", default=None, help="participant's sex (as the lab records it)")
-    run.add_argument("--vision", default=None, help="vision correction: none, glasses, lenses")
+    run.add_argument("--age", type=_age, default=None, help="participant's age, years (0-120)")
+    run.add_argument(
+        "--sex", type=_detail, default=None, help="participant's sex (as the lab records it)"
+    )
+    run.add_argument(
+        "--vision",
+        choices=VISION,
+        default=None,
+        help=f"vision correction: {', '.join(VISION)}",
+    )
     run.add_argument(
         "--scripted-keys",
         type=Path,
@@ -771,10 +807,12 @@ def _parser() -> argparse.ArgumentParser:
     check.set_defaults(run=_check_display)
 
     analyse = commands.add_parser("analyse", help="analyse session CSVs: tables, figures, report")
-    analyse.add_argument("study", choices=STUDIES)
+    analyse.add_argument("study", help=f"the protocol: {PROTOCOL_HELP}")
     analyse.add_argument("csv", nargs="+", type=Path, help="session CSV files")
     analyse.add_argument("--out", type=Path, required=True, help="report folder")
-    analyse.add_argument("--protocol", type=Path, default=None, help="for the methods paragraph")
+    analyse.add_argument(
+        "--protocol", type=Path, default=None, help="a protocol TOML file (instead of STUDY)"
+    )
     analyse.add_argument("--stimuli", type=Path, default=None, help="the set, for provenance")
     analyse.add_argument(
         "--exclude-incomplete",
@@ -812,7 +850,9 @@ def _parser() -> argparse.ArgumentParser:
     demo = commands.add_parser(
         "demo", help="the whole study on simulated observers: stimuli, sessions, analysis, report"
     )
-    demo.add_argument("--protocol", choices=STUDIES, default="yoshida2008")
+    demo.add_argument(
+        "--protocol", default="yoshida2008", help=f"{PROTOCOL_HELP} (default yoshida2008)"
+    )
     demo.add_argument(
         "--out", type=Path, default=Path("out/demo"), help="output folder (replaced)"
     )
@@ -826,10 +866,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``glarelab`` command; returns the exit status."""
     parser = _parser()
     args = parser.parse_args(argv)
+    from experiments.loop import SessionAborted
+
     try:
         return args.run(args)
     except (ValueError, FileNotFoundError, ProtocolError) as error:
         parser.error(f"{args.command}: {error}")
+    except (SessionAborted, KeyboardInterrupt) as stop:
+        why = stop.args[0] if stop.args else "SIGINT"
+        _log(f"{args.command}: stopped by {why} before the first trial; nothing was recorded")
+        return 3
     return 2
 
 

@@ -430,7 +430,7 @@ def usable_calibration(
         raise ValueError(
             f"the display calibration is {status}: measure the display "
             "(glarelab calibrate measure) or run explicitly uncalibrated "
-            "(allow_uncalibrated, recorded in the data)"
+            "(--allow-uncalibrated, recorded in the data)"
         )
     if status == "unverified":
         warnings.warn(

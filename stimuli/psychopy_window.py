@@ -11,6 +11,9 @@ PsychoPy only when called.
   key-down times stamped by the operating system's input thread) whose presses are each
   returned once, in the order pressed, and never cleared: a key pressed while a screen redraws,
   or during a flash, is kept.
+- :class:`TextCapture` keeps every character the window system types into the window (its
+  text events: the keyboard's layout, case, punctuation and accents as typed), in order, and
+  :func:`typed_text` turns a stretch of them into the text they type.
 """
 
 from __future__ import annotations
@@ -22,11 +25,13 @@ import numpy as np
 
 __all__ = [
     "KeyReader",
+    "TextCapture",
     "grab_screen",
     "measure_frame_intervals",
     "measure_refresh",
     "open_window",
     "screen_resolution",
+    "typed_text",
     "window_bits",
 ]
 
@@ -166,6 +171,74 @@ class KeyReader:
         """Forget presses made so far (only before the first screen of a session)."""
         self.keyboard.clearEvents()
         self._down = []
+
+
+class TextCapture:
+    """Every text event of a window, in order: ``("text", characters)`` and
+    ``("motion", name)`` (Backspace, Delete, arrows, Home, End), as pyglet reports them.
+
+    PsychoPy's own handlers keep running; this one only listens.
+    """
+
+    def __init__(self, window):
+        self.events: list[tuple[str, str]] = []
+        window.winHandle.push_handlers(
+            on_text=self._on_text, on_text_motion=self._on_motion, on_key_press=self._on_key
+        )
+
+    def _on_text(self, text: str) -> None:
+        if text != "\t":  # a tab comes as its key (PsychoPy takes the text event for itself)
+            self.events.append(("text", text))
+
+    def _on_key(self, symbol: int, modifiers: int) -> None:
+        from pyglet.window import key
+
+        if symbol == key.TAB:
+            self.events.append(("text", "\t"))
+
+    def _on_motion(self, motion: int) -> None:
+        from pyglet.window import key
+
+        self.events.append(("motion", key.motion_string(motion)))
+
+
+def typed_text(events: list[tuple[str, str]], start: int = 0) -> tuple[str, int, bool]:
+    r"""The text typed by ``events[start:]`` up to the first Enter.
+
+    Returns the text, the cursor's position in it, and whether an Enter ended it. Backspace and
+    Delete remove a character, the arrows, Home and End move the cursor; every other character
+    (tabs included) is kept as typed.
+
+    Examples
+    --------
+    >>> keys = [("text", "T"), ("text", "o"), ("text", "o"), ("motion", "MOTION_BACKSPACE"),
+    ...         ("text", "o,"), ("motion", "MOTION_LEFT"), ("text", "!"), ("text", "\r"),
+    ...         ("text", "7")]
+    >>> typed_text(keys)
+    ('Too!,', 4, True)
+    """
+    text: list[str] = []
+    cursor = 0
+    for kind, value in events[start:]:
+        if kind == "text":
+            if value in ("\r", "\n"):
+                return "".join(text), cursor, True
+            text[cursor:cursor] = list(value)
+            cursor += len(value)
+        elif value == "MOTION_BACKSPACE" and cursor > 0:
+            del text[cursor - 1]
+            cursor -= 1
+        elif value == "MOTION_DELETE" and cursor < len(text):
+            del text[cursor]
+        elif value == "MOTION_LEFT":
+            cursor = max(cursor - 1, 0)
+        elif value == "MOTION_RIGHT":
+            cursor = min(cursor + 1, len(text))
+        elif value in ("MOTION_BEGINNING_OF_LINE", "MOTION_BEGINNING_OF_FILE"):
+            cursor = 0
+        elif value in ("MOTION_END_OF_LINE", "MOTION_END_OF_FILE"):
+            cursor = len(text)
+    return "".join(text), cursor, False
 
 
 def dispatch_events(window) -> None:

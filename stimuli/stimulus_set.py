@@ -20,14 +20,19 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
+from protocols import Protocol
+
 from .calibration import Calibration, synthetic_calibration
-from .exr import write_exr
-from .protocol import Protocol
-from .spencer1995 import build_spencer1995
-from .yoshida2008 import build_yoshida2008
+from .exr import read_exr, write_exr
+from .matching import build_matching
+from .staircase import build_staircase
 
 __all__ = [
+    "BUILDERS",
+    "StimulusSet",
     "build_stimulus_set",
+    "cached_stimulus_set",
+    "compose",
     "default_calibration",
     "package_versions",
     "progress_bar",
@@ -36,7 +41,10 @@ __all__ = [
 
 MANIFEST = "manifest.json"
 PACKAGES = ("numpy", "scipy", "colour-science", "OpenEXR", "matplotlib", "pillow", "glarelab")
-BUILDERS = {"yoshida2008": build_yoshida2008, "spencer1995": build_spencer1995}
+# the stimulus builder of each paradigm (None: the paradigm shows no images)
+BUILDERS = {"matching": build_matching, "staircase": build_staircase, "rating": None}
+# how the profile plots group a paradigm's images: (image kind, the key that names a group)
+PROFILE_GROUPS = {"matching": ("reference", "method"), "staircase": ("glare", "context")}
 
 
 def progress_bar(done: int, total: int, what: str, *, stream=None) -> None:
@@ -78,7 +86,7 @@ def package_versions(names=PACKAGES) -> dict[str, str]:
     return versions
 
 
-def _profile_plots(out: Path, study: str, images: dict, geometry: dict) -> list[str]:
+def _profile_plots(out: Path, paradigm: str, images: dict, geometry: dict) -> list[str]:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -86,21 +94,12 @@ def _profile_plots(out: Path, study: str, images: dict, geometry: dict) -> list[
 
     written = []
     pixel = geometry["pixel_deg"]
-    if study == "yoshida2008":
-        groups = {
-            m: [(k, v) for k, v in images.items() if v.get("method") == m]
-            for m in ("gaussian", "vos")
-        }
-        titles = {"gaussian": "Method I (Gaussian)", "vos": "Method II (Vos PSF)"}
-    else:
-        groups = {
-            c: [(k, v) for k, v in images.items() if v["kind"] == "glare" and v["context"] == c]
-            for c in ("none", "lamp")
-        }
-        titles = {"none": "glare levels, no context", "lamp": "glare levels, lamp context"}
+    kind, key = PROFILE_GROUPS[paradigm]
+    groups: dict[str, list] = {}
+    for name, info in images.items():
+        if info["kind"] == kind:
+            groups.setdefault(info[key], []).append((name, info))
     for group, members in groups.items():
-        if not members:
-            continue
         figure, axes = plt.subplots(2, len(members), figsize=(2.0 * len(members), 4.2), dpi=110)
         axes = np.atleast_2d(axes).reshape(2, len(members))
         for column, (_name, info) in enumerate(members):
@@ -115,7 +114,7 @@ def _profile_plots(out: Path, study: str, images: dict, geometry: dict) -> list[
             axes[1, column].set_xlabel("deg", fontsize=7)
             axes[1, column].tick_params(labelsize=6)
         axes[1, 0].set_ylabel("cd/m²", fontsize=8)
-        figure.suptitle(f"{titles[group]}: images and profiles through the centre", fontsize=10)
+        figure.suptitle(f"{key} {group}: images and profiles through the centre", fontsize=10)
         figure.tight_layout()
         name = f"profiles_{group}.png"
         figure.savefig(out / name, metadata={"Software": None})
@@ -136,7 +135,7 @@ def build_stimulus_set(
     Parameters
     ----------
     protocol
-        A validated protocol of a study with stimuli (``yoshida2008``, ``spencer1995``).
+        A validated protocol of a paradigm that shows images (matching, staircase).
     out
         Output folder (created; existing files of the same names are replaced).
     calibration
@@ -150,10 +149,10 @@ def build_stimulus_set(
     ValueError
         For a protocol without stimuli, or a calibration whose bit depth is not the display's.
     """
-    if protocol.study not in BUILDERS:
+    if BUILDERS.get(protocol.paradigm) is None:
         raise ValueError(
-            f"study {protocol.study!r} has no stimuli to build; "
-            f"stimulus sets exist for {', '.join(BUILDERS)}"
+            f"the {protocol.study} protocol's paradigm ({protocol.paradigm}) shows no images: "
+            "there is no stimulus set to build"
         )
     calibration = calibration or default_calibration(protocol)
     if calibration.bit_depth != protocol["display"]["bit_depth"]:
@@ -163,7 +162,7 @@ def build_stimulus_set(
         )
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    built = BUILDERS[protocol.study](protocol, progress=progress)
+    built = BUILDERS[protocol.paradigm](protocol, progress=progress)
     images = built["images"]
     records = {}
     for name, info in images.items():
@@ -183,11 +182,12 @@ def build_stimulus_set(
         record["files"] = files
         record["shape"] = list(img.shape)
         records[name] = record
-    plots = _profile_plots(out, protocol.study, images, built["geometry"])
+    plots = _profile_plots(out, protocol.paradigm, images, built["geometry"])
     files = sorted(f for r in records.values() for f in r["files"]) + plots
     manifest = {
-        "format": "glarelab stimulus set v1",
+        "format": "glarelab stimulus set v2",
         "study": protocol.study,
+        "paradigm": protocol.paradigm,
         "protocol": protocol.data,
         "protocol_sha256": protocol.sha256,
         "calibration": calibration.to_json(),
@@ -224,3 +224,72 @@ def verify_stimulus_set(folder: str | Path) -> list[str]:
         elif _sha256(path) != expected:
             problems.append(f"{name}: changed (sha256 differs from the manifest)")
     return problems
+
+
+def compose(terms, image) -> np.ndarray:
+    """The image ``Σ weight × image(name)`` of ``terms``, ``[(name, weight), …]``: how sessions
+    show images that depend on a setting (a target's disk, a staircase's disc) from the set's
+    components."""
+    total = None
+    for name, weight in terms:
+        part = image(name) * float(weight)
+        total = part if total is None else total + part
+    if total is None:
+        raise ValueError("terms must name at least one image")
+    return total
+
+
+class StimulusSet:
+    """A built stimulus set, read back: its manifest and its images (float64 cd/m², read once).
+
+    Parameters
+    ----------
+    folder
+        The set's folder (verify it first: :func:`verify_stimulus_set`).
+    """
+
+    def __init__(self, folder: str | Path):
+        self.folder = Path(folder)
+        self.manifest = json.loads((self.folder / MANIFEST).read_text())
+        self.geometry = self.manifest["geometry"]
+        self._images: dict[str, np.ndarray] = {}
+
+    def image(self, name: str) -> np.ndarray:
+        if name not in self._images:
+            self._images[name] = read_exr(self.folder / f"{name}.exr").astype(np.float64)
+        return self._images[name]
+
+    def compose(self, terms) -> np.ndarray:
+        return compose(terms, self.image)
+
+
+def cached_stimulus_set(
+    protocol: Protocol, *, root: Path | None = None, progress=progress_bar
+) -> Path:
+    """The protocol's stimulus set with its display's synthetic calibration, built once into a
+    cache folder and reused while it verifies (simulated sessions need the images, not a lab
+    calibration).
+
+    ``root`` defaults to ``$GLARELAB_CACHE`` or ``~/.cache/glarelab``; the set is
+    ``ROOT/sets/STUDY-SHA``, named by the protocol's hash.
+    """
+    import os
+    import shutil
+    import tempfile
+
+    if root is None:
+        root = Path(os.environ.get("GLARELAB_CACHE") or Path.home() / ".cache" / "glarelab")
+    folder = Path(root) / "sets" / f"{protocol.study}-{protocol.sha256[:16]}"
+    if (folder / MANIFEST).is_file() and not verify_stimulus_set(folder):
+        return folder
+    folder.parent.mkdir(parents=True, exist_ok=True)
+    staging = Path(tempfile.mkdtemp(prefix=".building-", dir=folder.parent))
+    try:
+        build_stimulus_set(
+            protocol, staging, calibration=default_calibration(protocol), progress=progress
+        )
+        shutil.rmtree(folder, ignore_errors=True)
+        os.replace(staging, folder)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+    return folder

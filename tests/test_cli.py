@@ -218,7 +218,10 @@ def test_protocol_commands(tmp_path, capsys):
 
     root = Path(__file__).parents[1] / "protocols"
     assert main(["protocol", "check", str(root / "spencer1995.toml")]) == 0
-    assert "valid spencer1995 protocol" in capsys.readouterr().out
+    assert "valid protocol of the staircase paradigm (study spencer1995)" in (
+        capsys.readouterr().out
+    )
+    assert main(["protocol", "check", "luidolt2020"]) == 0  # a shipped study by its name
     bad = tmp_path / "bad.toml"
     bad.write_text(
         (root / "luidolt2020.toml").read_text().replace("scale_max = 7", "scale_maxx = 7")
@@ -230,5 +233,10 @@ def test_protocol_commands(tmp_path, capsys):
         "questionnaire.scale_maxx: unknown key" in err
         and "questionnaire.scale_max: missing" in err
     )
-    assert main(["protocol", "keys", "yoshida2008"]) == 0
-    assert "| glare.gaussian.sigma_deg | deg | required |" in capsys.readouterr().out
+    capsys.readouterr()
+    assert main(["protocol", "keys", "matching"]) == 0
+    out = capsys.readouterr().out
+    assert "| [[glare.methods]] |  | required | 1-12 tables |" in out
+    assert "| glare.methods[].model |  | required | str |" in out
+    assert main(["protocol", "keys", "yoshida2008"]) == 0  # a protocol: its paradigm's keys
+    assert capsys.readouterr().out == out

@@ -9,7 +9,7 @@ import pandas as pd
 from pandas.testing import assert_frame_equal
 
 from analysis.report import write_report
-from stimuli.protocol import load_protocol
+from protocols import load_protocol
 
 ROOT = Path(__file__).parents[1]
 
@@ -29,22 +29,19 @@ def test_demo_report_matches_a_fresh_analysis_and_names_the_protocol(tmp_path):
     assert report.is_file()
     csvs = sorted((out / "data").glob("sim*_yoshida2008_s1_*.csv"))
     assert len(csvs) == 10
-    protocol = load_protocol(ROOT / "protocols" / "yoshida2008.toml")
-    again = write_report(
-        "yoshida2008", csvs, tmp_path / "again", protocol=protocol, stimuli=out / "stimuli"
-    ).parent
+    protocol = load_protocol("yoshida2008")
+    again = write_report(protocol, csvs, tmp_path / "again", stimuli=out / "stimuli").parent
     for table in sorted((out / "report").glob("*.csv")):
         assert_frame_equal(pd.read_csv(table), pd.read_csv(again / table.name), check_exact=True)
     methods = (out / "report" / "methods.md").read_text()
     for fact in (
         "10 simulated observers",
         "0.3° disk",
-        "3.2° cloudy sky",
-        "mean 150 cd/m²",
+        "a cloudy sky (mean 150 cd/m²) (3.2°)",
         "maximum 433 cd/m²",
         "1 m in 60 lx",
         "L_dmax = 220 cd/m²",
-        "σ = 0.34°",
+        "sigma_deg = 0.34",
         "220, 1165, 2110, 3055, 4000, 7000",
         "220, 1480, 2740, 4000, 7000, 10000",
         "100, 400 cd/m²",

@@ -10,6 +10,7 @@ from analysis.load import DataError, load_sessions
 from analysis.report import write_report
 from analysis.stats import rm_anova
 from glarelab.cli import main
+from protocols import load_protocol
 
 
 def glarelab(*args):
@@ -38,11 +39,13 @@ def csvs(folder, study):
 
 
 def test_yoshida_report_holds_every_analysis(simulated, tmp_path):
-    report = write_report("yoshida2008", csvs(simulated, "yoshida2008"), tmp_path / "report")
+    report = write_report(
+        load_protocol("yoshida2008"), csvs(simulated, "yoshida2008"), tmp_path / "report"
+    )
     text = report.read_text()
     for table in (
         "anova",
-        "methods_at_high_levels",
+        "methods_at_levels",
         "pairwise_contrasts",
         "similarity_groups",
         "boost",
@@ -65,7 +68,7 @@ def test_yoshida_report_holds_every_analysis(simulated, tmp_path):
         (anova["analysis"] == "6 × 2 (all levels)") & (anova["source"] == "L_disk")
     ].iloc[0]
     assert main_effect["df1"] == 5 and main_effect["df2"] == 45  # as the paper's F(5, 45)
-    tests = pd.read_csv(tmp_path / "report" / "methods_at_high_levels.csv")
+    tests = pd.read_csv(tmp_path / "report" / "methods_at_levels.csv")
     assert set(tests["test"]) == {"paired", "Welch"} and len(tests) == 6
     assert (tests.loc[tests["test"] == "paired", "df"] == 9).all()
     boost = pd.read_csv(tmp_path / "report" / "boost.csv")
@@ -74,7 +77,7 @@ def test_yoshida_report_holds_every_analysis(simulated, tmp_path):
 
 @pytest.mark.parametrize("study", ["spencer1995", "luidolt2020"])
 def test_other_reports(simulated, tmp_path, study):
-    report = write_report(study, csvs(simulated, study), tmp_path / "r")
+    report = write_report(load_protocol(study), csvs(simulated, study), tmp_path / "r")
     assert report.read_text().count("data:image/png;base64,") == 1
 
 
@@ -120,7 +123,7 @@ def test_bad_cells_are_named_by_file_line_and_column(simulated, tmp_path):
     with pytest.raises(
         DataError, match=r"bad\.csv, line 4, column darker_cd_m2: 'bright' is not a float"
     ):
-        load_sessions("yoshida2008", [bad])
+        load_sessions(load_protocol("yoshida2008"), [bad])
 
 
 def test_missing_column_other_study_duplicates_and_unbalanced(simulated, tmp_path):
@@ -132,16 +135,16 @@ def test_missing_column_other_study_duplicates_and_unbalanced(simulated, tmp_pat
         DataError,
         match=r"missing\.csv, line 1: columns do not match the yoshida2008 schema; missing \['q2_ring'\]",
     ):
-        load_sessions("yoshida2008", [tmp_path / "missing.csv"])
+        load_sessions(load_protocol("yoshida2008"), [tmp_path / "missing.csv"])
     with pytest.raises(DataError, match="columns do not match the spencer1995 schema"):
-        load_sessions("spencer1995", [source])
+        load_sessions(load_protocol("spencer1995"), [source])
     lines = text.splitlines()
     duplicate = write_csv(tmp_path / "dup.csv", "\n".join([*lines, lines[5]]) + "\n")
     with pytest.raises(
         DataError,
         match=r"dup\.csv, line 17: duplicated trial \(participant sim01, session 1, trial 5\)",
     ):
-        load_sessions("yoshida2008", [duplicate])
+        load_sessions(load_protocol("yoshida2008"), [duplicate])
     short = write_csv(
         tmp_path / "short.csv", "\n".join(lines[:-2]) + "\n"
     )  # last two main trials lost
@@ -149,9 +152,11 @@ def test_missing_column_other_study_duplicates_and_unbalanced(simulated, tmp_pat
         DataError,
         match=r"participant sim01 has no trial at \{'method': '\w+', 'level_index': \d\}",
     ):
-        load_sessions("yoshida2008", [short, *csvs(simulated, "yoshida2008")[1:]])
+        load_sessions(load_protocol("yoshida2008"), [short, *csvs(simulated, "yoshida2008")[1:]])
     dataset = load_sessions(
-        "yoshida2008", [short, *csvs(simulated, "yoshida2008")[1:]], exclude_incomplete=True
+        load_protocol("yoshida2008"),
+        [short, *csvs(simulated, "yoshida2008")[1:]],
+        exclude_incomplete=True,
     )
     assert list(dataset.excluded) == ["sim01"] and "sim01" not in set(
         dataset.trials["participant"]
@@ -174,3 +179,19 @@ def test_the_command_exits_non_zero_and_writes_nothing_on_bad_input(simulated, t
     assert main(["analyse", "luidolt2020", *good, "--out", str(out)]) == 0
     assert (out / "report.html").is_file()
     shutil.rmtree(out)
+
+
+def test_files_of_the_first_data_format_still_load(simulated, tmp_path):
+    """Before format 0.2 the CSVs had no onset, ignored keys or flash timing columns."""
+    added = ["onset_s", "ignored_keys", "offset_s", "shown_ms", "presentation_ok", "counted"]
+    old = []
+    for path in csvs(simulated, "spencer1995"):
+        data = pd.read_csv(path, keep_default_na=False)
+        target = tmp_path / path.name.replace("_2026", "_old_2026")
+        data.drop(columns=[c for c in added if c in data]).to_csv(target, index=False)
+        old.append(target)
+    dataset = load_sessions(load_protocol("spencer1995"), old)
+    assert dataset.trials["counted"].all()  # every trial of an old file moved its staircase
+    assert dataset.trials["onset_s"].isna().all()
+    new = load_sessions(load_protocol("spencer1995"), csvs(simulated, "spencer1995"))
+    assert len(dataset.trials) == len(new.trials)

@@ -1,21 +1,15 @@
-from pathlib import Path
-
 import pytest
 
-from experiments.luidolt2020 import LikertQuestionnaire
-from experiments.spencer1995 import Staircase, StaircaseExperiment
-from experiments.yoshida2008 import BrightnessMatching
-from stimuli.protocol import load_protocol
-
-PROTOCOLS = Path(__file__).parents[2] / "protocols"
+from experiments.matching import MatchingEngine as BrightnessMatching
+from experiments.rating import RatingEngine as LikertQuestionnaire
+from experiments.staircase import Staircase
+from experiments.staircase import StaircaseEngine as StaircaseExperiment
+from protocols import load_protocol
 
 
 @pytest.fixture(scope="module")
 def protocols():
-    return {
-        s: load_protocol(PROTOCOLS / f"{s}.toml")
-        for s in ("yoshida2008", "spencer1995", "luidolt2020")
-    }
+    return {s: load_protocol(s) for s in ("yoshida2008", "spencer1995", "luidolt2020")}
 
 
 # --- Yoshida 2008 ---------------------------------------------------------------------------
@@ -26,10 +20,10 @@ def test_yoshida_scripted_trial_records_exactly_what_was_set(protocols):
     assert engine.screen()["kind"] == "instructions"
     engine.press("space")
     shown = engine.screen()
-    assert shown["kind"] == "adjust" and (shown["left_cd_m2"], shown["right_cd_m2"]) == (
-        100.0,
-        400.0,
-    )
+    assert shown["kind"] == "adjust" and shown["settings_cd_m2"] == {"left": 100.0, "right": 400.0}
+    left, reference, _right = shown["images"]
+    assert reference["terms"][0][0].startswith("reference_") and shown["marker"] == "left"
+    assert left["terms"] == [("target_background", 1.0), ("target_coverage", 100.0)]
     # left: +3 coarse (10) +2 fine (1) = 132; right: -5 coarse, -1 fine = 349
     script = ["up", "up", "up", "pageup", "pageup", "right", *["down"] * 5, "pagedown"]
     for key in script:
@@ -56,7 +50,7 @@ def test_yoshida_targets_stay_in_the_display_range(protocols):
     for _ in range(60):
         engine.press("up")
     shown = engine.screen()
-    assert shown["left_cd_m2"] == 0.5 and shown["right_cd_m2"] == 433.0  # black .. max
+    assert shown["settings_cd_m2"] == {"left": 0.5, "right": 433.0}  # black .. max
 
 
 def test_yoshida_order_is_random_per_participant_and_fixed_by_seed(protocols):
@@ -114,18 +108,18 @@ def test_spencer_counterbalancing_and_exact_trial_sequence(protocols):
     screens = []
     for _ in range(20):
         screen = first.screen()
-        screens.append((screen["glare_image"], screen["glare_side"], screen["frames"]))
+        screens.append((screen["glare_level"], screen["glare_side"], screen["frames"]))
         first.press("left")
     again = StaircaseExperiment(p, "P01", counterbalance=0, refresh_hz=60.0)
     again.press("space")
     replayed = []
     for _ in range(20):
         screen = again.screen()
-        replayed.append((screen["glare_image"], screen["glare_side"], screen["frames"]))
+        replayed.append((screen["glare_level"], screen["glare_side"], screen["frames"]))
         again.press("left")
     assert screens == replayed  # fixed by seed and participant
     assert {f for _, _, f in screens} <= {24, 42}  # 400 and 700 ms at 60 Hz
-    assert all(name.startswith("glare_none_") for name, _, _ in screens)
+    assert first.context == "none"
 
 
 def test_spencer_keys_map_to_sides(protocols):

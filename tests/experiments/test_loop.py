@@ -1,8 +1,6 @@
 """The session loop against a scripted device: which presses count, how they are timed, and
 what is recorded of the others."""
 
-from pathlib import Path
-
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -15,20 +13,15 @@ from experiments.loop import (
     count_dropped_frames,
     presentation_ok,
 )
-from experiments.luidolt2020 import LikertQuestionnaire
-from experiments.spencer1995 import StaircaseExperiment
-from experiments.yoshida2008 import BrightnessMatching
-from stimuli.protocol import load_protocol
-
-PROTOCOLS = Path(__file__).parents[2] / "protocols"
+from experiments.matching import MatchingEngine as BrightnessMatching
+from experiments.rating import RatingEngine as LikertQuestionnaire
+from experiments.staircase import StaircaseEngine as StaircaseExperiment
+from protocols import load_protocol
 
 
 @pytest.fixture(scope="module")
 def protocols():
-    return {
-        s: load_protocol(PROTOCOLS / f"{s}.toml")
-        for s in ("yoshida2008", "spencer1995", "luidolt2020")
-    }
+    return {s: load_protocol(s) for s in ("yoshida2008", "spencer1995", "luidolt2020")}
 
 
 class FakeDevice:
@@ -41,6 +34,7 @@ class FakeDevice:
         self.onset_step = onset_step
         self.flash = flash or {}
         self.shown: list[tuple[str, float]] = []
+        self.texts: list[str] = []
 
     def show(self, screen):
         self.clock += self.onset_step
@@ -59,11 +53,13 @@ class FakeDevice:
         if not self.batches:
             return [Press("escape", self.clock)]
         batch = self.batches.pop(0)
-        return [Press(name, anchor_s + t, text) for name, t, text in _texts(batch)]
+        for press in batch:
+            if len(press) > 2:  # the text typed before this Enter
+                self.texts.append(press[2])
+        return [Press(name, anchor_s + t) for name, t, *_ in batch]
 
-
-def _texts(batch):
-    return [(p[0], p[1], p[2] if len(p) > 2 else None) for p in batch]
+    def typed(self):
+        return self.texts.pop(0) if self.texts else ""
 
 
 def run(engine, device, **options):
@@ -201,3 +197,38 @@ def test_dropped_frames_and_presentation_judgement():
     assert not presentation_ok(Shown(0.0, 30 * period, 30, 1), refresh_hz=76.0, tolerance_ms=10)
     slow = Shown(0.0, 30 * period + 0.011, 30, 0)
     assert not presentation_ok(slow, refresh_hz=76.0, tolerance_ms=10.0)
+
+
+def test_keypad_keys_take_the_meaning_the_screen_uses(protocols):
+    engine = BrightnessMatching(protocols["yoshida2008"], "P01")
+    device = FakeDevice(
+        [
+            [("space", 0.1)],
+            [("num_8", 0.5), ("num_9", 0.6), ("num_6", 0.7), ("num_2", 0.8), ("num_5", 0.9)],
+            [("num_enter", 2.0)],
+            [("y", 2.1), ("n", 2.2), ("y", 2.3)],
+        ]
+    )
+    rows, _ = run(engine, device)
+    (row,) = rows
+    # Num Lock off: up (+10) and page up (+1) on the left, right, down (-10) on the right
+    assert (row["darker_cd_m2"], row["brighter_cd_m2"]) == (111.0, 390.0)
+    assert row["ignored_keys"] == "num_5@0.900"  # named as pressed, not as a digit
+    rating = LikertQuestionnaire(protocols["luidolt2020"], "P01")
+    rows, _ = run(rating, FakeDevice([[("space", 0.1)], [("num_6", 1.0)], [("num_enter", 1.5)]]))
+    assert rows[0]["rating"] == 6  # Num Lock on: a digit
+
+
+def test_a_display_that_keeps_failing_cannot_stall_the_staircase(protocols):
+    engine = StaircaseExperiment(protocols["spencer1995"], "P01", counterbalance=0, refresh_hz=76)
+    limit = protocols["spencer1995"]["trials"]["repeat_limit"]
+    device = FakeDevice(
+        [[("space", 0.1)]] + [[("left", 0.3)]] * (2 * limit + 2),
+        flash={k: 1 for k in range(1, 100)},  # every flash drops a frame
+    )
+    rows, _ = run(engine, device)
+    counted = [r["counted"] for r in rows]
+    # shown again `limit` times, then the answer counts (still flagged)
+    assert counted[: limit + 1] == [False] * limit + [True]
+    assert not any(r["presentation_ok"] for r in rows)
+    assert counted[limit + 1 : 2 * limit + 2] == [False] * limit + [True]

@@ -20,12 +20,6 @@ from experiments.perception import (
     ObserverNoise,
     Percept,
 )
-from experiments.rating_observer_defaults import (
-    LUIDOLT_CATEGORIES,
-    LUIDOLT_RATING_PROBABILITIES,
-    draw_rating,
-    expected_rating,
-)
 from stimuli.sky import cloudy_sky
 
 MODEL = BrightnessModel()
@@ -298,8 +292,6 @@ def test_bad_parameters_are_refused(cls, changes, message):
 def test_randomness_only_through_a_generator():
     with pytest.raises(ValueError, match=r"rng must be a numpy.random.Generator; got int"):
         ObserverNoise().draw(42)
-    with pytest.raises(ValueError, match=r"category must be one of 'Glare Appearance'"):
-        draw_rating("Glare", np.random.default_rng(0))
 
 
 def test_an_unresolved_disk_warns():
@@ -375,28 +367,37 @@ def test_identical_methods_give_no_method_effect():
 # --- Luidolt 2020 §7.2.1 ratings -------------------------------------------------------------
 
 
-def test_rating_defaults_follow_luidolt_7_2_1():
+def test_the_luidolt_protocols_rating_observers_follow_7_2_1():
     """Expected values against every statement of §7.2.1 (5 participants)."""
-    for category in LUIDOLT_CATEGORIES:
-        p = np.asarray(LUIDOLT_RATING_PROBABILITIES[category])
-        assert p.shape == (7,) and (p >= 0).all()
-        assert_allclose(p.sum(), 1.0, rtol=1e-12)
+    from experiments.rating import RatingObserver
+    from protocols import load_protocol
+
+    protocol = load_protocol("luidolt2020")
+    observer = RatingObserver(protocol, "sim01", seed=0)
+    categories = protocol["questionnaire"]["categories"]
+    p = observer.probabilities
+    for category in categories:
+        assert p[category].shape == (7,) and (p[category] >= 0).all()
+        assert_allclose(p[category].sum(), 1.0, rtol=1e-12)
     # "only the glare appearance voted 3.9 on average"; the five others at 5 or above
-    assert_allclose(expected_rating("Glare Appearance"), 3.9, rtol=1e-12)
-    assert all(expected_rating(c) >= 5.0 for c in LUIDOLT_CATEGORIES[1:])
-    p = {c: np.asarray(LUIDOLT_RATING_PROBABILITIES[c]) for c in LUIDOLT_CATEGORIES}
+    assert_allclose(observer.expected("Glare Appearance"), 3.9, rtol=1e-12)
+    assert all(observer.expected(c) >= 5.0 for c in categories[1:])
     # visual acuity: four of five "entirely equal" (7), so its mean is at least 5.8
     assert_allclose(5 * p["Visual Acuity"][6], 4.0)
-    assert expected_rating("Visual Acuity") >= 5.8
+    assert observer.expected("Visual Acuity") >= 5.8
     # overall: one "neither good nor bad" (4), the others 5 or 6, "no one rated it as perfect"
     assert_allclose(5 * p["Overall"][3], 1.0)
     assert_allclose(p["Overall"][4] + p["Overall"][5], 0.8)
     assert p["Overall"][6] == 0.0 and p["Overall"][:3].sum() == 0.0
-    assert 5.0 <= expected_rating("Overall") <= 5.6
+    assert 5.0 <= observer.expected("Overall") <= 5.6
     # glare movement: one "just perfect"; scotopic vision: two "completely matched"
     assert_allclose(5 * p["Glare Movement"][6], 1.0)
     assert_allclose(5 * p["Scotopic Vision"][6], 2.0)
-    rng = np.random.default_rng(7)
-    ratings = [draw_rating("Overall", rng) for _ in range(2000)]
+    ratings = [
+        int(RatingObserver(protocol, f"sim{i}", seed=7).keys(
+            {"kind": "rate", "trial": 6, "category": "Overall"}
+        )[0][0])
+        for i in range(400)
+    ]  # fmt: skip
     assert set(ratings) <= {4, 5, 6}
-    assert_allclose(np.mean(ratings), expected_rating("Overall"), atol=0.1)
+    assert_allclose(np.mean(ratings), observer.expected("Overall"), atol=0.15)

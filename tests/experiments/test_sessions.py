@@ -12,10 +12,9 @@ import pytest
 from PIL import Image
 
 from experiments.data import read_rows
-from experiments.schema import columns
 from glarelab.cli import main
+from protocols import columns, load_protocol
 from stimuli.calibration import Calibration
-from stimuli.protocol import load_protocol
 from stimuli.stimulus_set import default_calibration
 
 ROOT = Path(__file__).parents[2]
@@ -50,10 +49,10 @@ def session_csv(folder: Path, participant: str, study: str, session: int = 1) ->
 
 def check_schema(path: Path, study: str) -> list[dict]:
     rows = read_rows(path)
-    names = [c.name for c in columns(study)]
+    names = [c.name for c in columns(load_protocol(study))]
     assert path.read_text().splitlines()[0].split(",") == names
     for row in rows:
-        for column in columns(study):
+        for column in columns(load_protocol(study)):
             cell = row[column.name]
             if cell == "":
                 assert column.optional, (column.name, row)
@@ -233,7 +232,8 @@ def test_a_scripted_dry_run_shows_the_calibrated_codes(tmp_path, sets, study):
         str(shot),
     ]
     if study != "luidolt2020":  # Xvfb is not the protocol's display: accepted, and recorded
-        command += ["--stimuli", str(sets / study), "--accept-mismatch", "resolution", "refresh"]
+        command += ["--stimuli", str(sets / study), "--allow-unmeasured-refresh"]
+        command += ["--accept-mismatch", "resolution", "refresh"]
         command += ["bit-depth"] if study == "yoshida2008" else []
     if not os.environ.get("DISPLAY"):
         command = [shutil.which("xvfb-run"), "-a", "-s", "-screen 0 1920x1080x24", *command]

@@ -122,7 +122,7 @@ def test_readings_csv(tmp_path):
 def test_shipped_synthetic_calibrations_match_their_protocols():
     from pathlib import Path
 
-    from stimuli.protocol import load_protocol
+    from protocols import load_protocol
     from stimuli.stimulus_set import default_calibration
 
     root = Path(__file__).parents[2]

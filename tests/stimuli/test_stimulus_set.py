@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 from PIL import Image
 
+from protocols import load_protocol
 from stimuli.exr import read_exr
-from stimuli.protocol import load_protocol
 from stimuli.stimulus_set import build_stimulus_set, default_calibration, verify_stimulus_set
 
 PROTOCOLS = Path(__file__).parents[2] / "protocols"
@@ -21,7 +21,7 @@ def build_in_process(study, out):
         "glarelab",
         "stimuli",
         "build",
-        str(PROTOCOLS / f"{study}.toml"),
+        study,
         "--out",
         str(out),
     ]
@@ -81,5 +81,5 @@ def test_a_calibration_for_another_bit_depth_is_refused(tmp_path):
     with pytest.raises(ValueError, match="8-bit display, the protocol's display is 10-bit"):
         build_stimulus_set(protocol, tmp_path, calibration=eight_bit, progress=None)
     luidolt = load_protocol(PROTOCOLS / "luidolt2020.toml")
-    with pytest.raises(ValueError, match="has no stimuli to build"):
+    with pytest.raises(ValueError, match="shows no images: there is no stimulus set to build"):
         build_stimulus_set(luidolt, tmp_path, progress=None)

@@ -1,4 +1,4 @@
-"""The analysis of Spencer et al. (1995, §4.1) from staircase sessions.
+"""The analysis of three-way staircase sessions (Spencer et al. 1995, §4.1).
 
 **Matched intensity** of each staircase (participant × context × glare level): the mean disc
 intensity at its reversals after the first two (the first reversals still carry the start
@@ -8,9 +8,10 @@ disc intensity fitted by maximum likelihood to the answers "glare brighter" (1),
 brighter" (0) and "neither" (½); its 50 % point is the match, reported only where it lies
 inside the tested range (``psychometric_identified`` counts those staircases).
 
-**Figure 13**: matched intensity against glare level, with and without context, mean ± SEM
-over participants, with the 75 % line (the glare image's actual peak). **The context effect**:
-a 12 (level) × 2 (context) repeated-measures ANOVA on the matched intensity.
+**Figure 13**: matched intensity against glare level, per context, mean ± SEM over
+participants, with the line of the glare image's actual peak (Spencer: 75 %). **The context
+effect**: a level × context repeated-measures ANOVA on the matched intensity (with one
+context, a one-way ANOVA over the levels).
 """
 
 from __future__ import annotations
@@ -22,12 +23,38 @@ from scipy.special import expit
 
 from .figures import plt, png
 from .load import Dataset
+from .methods import display_text
 from .stats import apa_F, rm_anova
 
-__all__ = ["analyse_spencer1995", "psychometric_match", "reversal_match"]
+__all__ = ["analyse", "design", "methods", "psychometric_match", "reversal_match"]
 
 DISCARDED_REVERSALS = 2
-PEAK_FRACTION = 0.75  # Spencer §4: the glare image's peak
+MARKERS = "osD^v<>"
+
+
+def design(protocol) -> tuple[list[str], list[tuple], str | None]:
+    """Within factors, the cells every participant needs, and the block analysed (all)."""
+    levels = range(1, len(protocol["glare"]["strengths"]) + 1)
+    cells = [(c["name"], level) for c in protocol["contexts"] for level in levels]
+    return ["context", "glare_level"], cells, None
+
+
+def methods(protocol, participants: int, who: str) -> str:
+    """Methods text naming the protocol's actual parameters."""
+    s, g, t = protocol["stimulus"], protocol["glare"], protocol["trials"]
+    parameters = ", ".join(f"{k} = {v}" for k, v in g["parameters"].items())
+    return (
+        f"{who} compared a light source with glare ({g['model']} model"
+        f"{'; ' + parameters if parameters else ''}; peak {100 * g['peak_fraction']:g} % of "
+        f"the maximum; {len(g['strengths'])} strengths from {g['strengths'][0]:g} to "
+        f"{g['strengths'][-1]:g}) with a disc and an annulus at {s['annulus_ratio']:.3g} of its "
+        f"intensity, in {s['window_px']} × {s['window_px']} px windows on "
+        f"{display_text(protocol)}, shown for "
+        f"{' or '.join(f'{x:g}' for x in t['presentation_ms'])} ms, in contexts "
+        f"{', '.join(c['name'] for c in protocol['contexts'])}. Interleaved staircases "
+        f"({t['reversals']} reversals, steps {', '.join(f'{x:g}' for x in t['step_fractions'])} "
+        f"of the maximum; 'neither': {t['neither']}) set the disc."
+    )
 
 
 def reversal_match(staircase: pd.DataFrame) -> float:
@@ -66,7 +93,7 @@ def psychometric_match(staircase: pd.DataFrame) -> float:
     return centre if 0.0 <= centre <= 1.0 else float("nan")
 
 
-def analyse_spencer1995(dataset: Dataset) -> dict:
+def analyse(dataset: Dataset, protocol) -> dict:
     every = dataset.trials
     trials = every[every["counted"].astype(bool)]  # repeated flashes did not move a staircase
     rows = []
@@ -100,9 +127,10 @@ def analyse_spencer1995(dataset: Dataset) -> dict:
     )
     tables = {"matches": matches, "summary": summary}
     text = {}
-    if matches["context"].nunique() == 2:
-        data = matches.rename(columns={"match_reversals": "match"}).astype({"glare_level": str})
-        anova = rm_anova(data, "match", ["glare_level", "context"], "participant")
+    data = matches.rename(columns={"match_reversals": "match"}).astype({"glare_level": str})
+    factors = ["glare_level", "context"] if matches["context"].nunique() > 1 else ["glare_level"]
+    if data["participant"].nunique() > 1:
+        anova = rm_anova(data, "match", factors, "participant")
         anova["apa_gg"] = [
             apa_F(r.df1 * r.eps_gg, r.df2 * r.eps_gg, r.F, r.p_gg) for r in anova.itertuples()
         ]
@@ -115,14 +143,20 @@ def analyse_spencer1995(dataset: Dataset) -> dict:
     )
     return {
         "tables": tables,
-        "figures": {"figure13_matches.png": _figure13(summary)},
+        "figures": {
+            "figure13_matches.png": _figure13(
+                summary,
+                [c["name"] for c in protocol["contexts"]],
+                protocol["glare"]["peak_fraction"],
+            )
+        },
         "text": text,
     }
 
 
-def _figure13(summary: pd.DataFrame) -> bytes:
+def _figure13(summary: pd.DataFrame, contexts: list[str], peak_fraction: float) -> bytes:
     figure, axis = plt.subplots(figsize=(6, 4))
-    for context, marker in (("none", "o"), ("lamp", "s")):
+    for context, marker in zip(contexts, MARKERS, strict=False):
         part = summary[summary["context"] == context]
         if part.empty:
             continue
@@ -132,10 +166,16 @@ def _figure13(summary: pd.DataFrame) -> bytes:
             yerr=100 * part["match_sem"],
             marker=marker,
             capsize=3,
-            label="with context" if context == "lamp" else "without context",
+            label=f"context: {context}",
         )
-    axis.axhline(100 * PEAK_FRACTION, color="k", ls="--", lw=0.8, label="actual peak (75 %)")
-    axis.set_xlabel("glare level (1 = slightly blurry dot … 12 = unbelievable flare)")
+    axis.axhline(
+        100 * peak_fraction,
+        color="k",
+        ls="--",
+        lw=0.8,
+        label=f"actual peak ({100 * peak_fraction:g} %)",
+    )
+    axis.set_xlabel("glare level (1 = weakest glare)")
     axis.set_ylabel("matched disc intensity (% of max), mean ± SEM")
     axis.legend(fontsize=8)
     return png(figure)

@@ -1,7 +1,8 @@
-"""Three-way forced choice with interleaved staircases (Spencer et al. 1995, §4).
+"""Three-way forced choice with interleaved staircases (Spencer et al. 1995, §4): the engine.
 
-Two blocks, without and with context, in an order counterbalanced across participants
-(``counterbalance`` 0: no context first; 1: the lamp first). In each block one staircase per
+One block per context (Spencer: without and with context), in an order counterbalanced across
+participants (``counterbalance`` 0: the protocol's order; 1: reversed). In each block one
+staircase per
 glare level runs on the comparison disc's intensity (0-100 % of the display maximum),
 interleaved in a seeded random order. A trial shows the glare image and the disc-and-annulus
 image side by side, sides swapped at random, for 400 or 700 ms (chosen at random per trial;
@@ -9,7 +10,9 @@ an exact number of frames at the display's refresh rate) after a blank of ``inte
 then asks: ``left`` brighter, ``right`` brighter, or ``down`` for neither (an answer during the
 flash counts). A flash that dropped frames or missed its timing is recorded with
 ``presentation_ok`` false; with ``repeat_failed_presentations`` it does not move its staircase
-(``counted`` false) and the same staircase is shown again.
+(``counted`` false) and the same staircase is shown again, at most ``repeat_limit`` times in a
+row (then the answer counts, still flagged, so a display that keeps failing cannot stall the
+session).
 
 Each staircase starts at ``start_fraction`` and moves the disc up when the glare image looked
 brighter and down when the disc did, by ``step_fractions[k]`` once it has had ``k`` reversals
@@ -29,13 +32,30 @@ has no third answer, and importing it would put PsychoPy into this screen-free e
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
+
+from protocols.staircase import comparison_terms, glare_name
 
 from .engine import Engine, participant_rng
 
-__all__ = ["Staircase", "StaircaseExperiment"]
+__all__ = ["Staircase", "StaircaseEngine", "StaircaseObserver", "counterbalance_for"]
+
+PROMPT = "←  left brighter        ↓  neither        right brighter  →"
 
 RESPONSE_KEYS = ("left", "right", "down")
+
+
+def counterbalance_for(participant: str) -> int:
+    """Block order of a participant from the number in their id: odd → 0 (the protocol's
+    order), even → 1 (reversed), so consecutive participants alternate."""
+    digits = re.findall(r"\d+", participant)
+    if not digits:
+        raise ValueError(
+            f"participant {participant!r} has no number to counterbalance by; "
+            "give --counterbalance 0 or 1"
+        )
+    return 0 if int(digits[-1]) % 2 == 1 else 1
 
 
 @dataclass
@@ -85,10 +105,8 @@ class Staircase:
         return reversal
 
 
-class StaircaseExperiment(Engine):
-    """The Spencer 1995 protocol engine (no PsychoPy)."""
-
-    study = "spencer1995"
+class StaircaseEngine(Engine):
+    """The engine of a staircase protocol (no PsychoPy)."""
 
     def __init__(
         self,
@@ -96,22 +114,27 @@ class StaircaseExperiment(Engine):
         participant: str,
         *,
         session: int = 1,
-        counterbalance: int,
-        refresh_hz: float,
+        counterbalance: int | None = None,
+        refresh_hz: float = 60.0,
     ):
+        if counterbalance is None:
+            counterbalance = counterbalance_for(participant)
         if counterbalance not in (0, 1):
             raise ValueError(f"counterbalance must be 0 or 1; got {counterbalance!r}")
         if not refresh_hz > 0:
             raise ValueError(f"refresh_hz must be > 0; got {refresh_hz!r}")
         self.protocol = protocol
+        self.study = protocol.study
         self.participant = participant
         self.session = session
         self.refresh_hz = refresh_hz
-        contexts = list(protocol["stimulus"]["context"])
+        contexts = [c["name"] for c in protocol["contexts"]]
         self.contexts = contexts if counterbalance == 0 else contexts[::-1]
         self.counterbalance = counterbalance
         self.repeat_failed = protocol["trials"]["repeat_failed_presentations"]
-        self.rng = participant_rng(protocol.seed, participant, "spencer1995 trials")
+        self.repeat_limit = protocol["trials"]["repeat_limit"]
+        self.repeats = 0  # failed flashes of the current trial shown again so far
+        self.rng = participant_rng(protocol.seed, participant, f"{protocol.study} trials")
         self.block = 0
         self.trial = 0
         self.phase = "instructions"
@@ -171,27 +194,35 @@ class StaircaseExperiment(Engine):
                 "keys": {"space": "start"},
             }
         if self.phase == "block":
-            scene = "alone on a black screen" if self.context == "none" else "in a scene (a lamp)"
             return {
                 "kind": "block",
-                "text": f"Part {self.block + 1} of {len(self.contexts)}: the light is shown "
-                f"{scene}.",
+                "text": f"Part {self.block + 1} of {len(self.contexts)}.",
                 "keys": {"space": "continue"},
             }
         if self.phase == "done":
             return {"kind": "done", "keys": {}}
         s = self.current
+        maximum = self.protocol["display"]["max_cd_m2"]
+        glare = {"role": "glare", "terms": [(glare_name(self.context, s.level), 1.0)]}
+        comparison = {
+            "role": "comparison",
+            "terms": comparison_terms(
+                self.context, s.fraction * maximum, self.protocol["stimulus"]["annulus_ratio"]
+            ),
+        }
         return {
             "kind": "present",
             "trial": self.trial + 1,
             "block": self.context,
-            "glare_image": f"glare_{self.context}_{s.level:02d}",
+            "images": [glare, comparison] if self.glare_side == "left" else [comparison, glare],
+            "glare_level": s.level,
             "glare_side": self.glare_side,
             "disc_fraction": s.fraction,
             "frames": self.frames,
             "duration_ms": self.duration_ms,
             "blank_before_ms": self.protocol["trials"]["inter_trial_ms"],
             "context": self.context,
+            "prompt": PROMPT,
             "keys": {
                 "left": "left looked brighter",
                 "right": "right looked brighter",
@@ -218,7 +249,8 @@ class StaircaseExperiment(Engine):
     def _respond(self, response: str, t: float, *, presentation_ok: bool) -> dict:
         s = self.current
         tested = s.fraction
-        counted = presentation_ok or not self.repeat_failed
+        counted = presentation_ok or not self.repeat_failed or self.repeats >= self.repeat_limit
+        self.repeats = 0 if counted else self.repeats + 1
         reversal = s.update(response) if counted else False
         self.trial += 1
         row = {
@@ -271,3 +303,86 @@ class StaircaseExperiment(Engine):
                 )
             ok = str(row.get("presentation_ok", "true")).lower() == "true"
             self._respond(row["response"], float(row["time_s"]), presentation_ok=ok)
+
+
+class StaircaseObserver:
+    """A simulated observer of a staircase study: looks at the glare image and the comparison
+    as the display shows them (:mod:`experiments.perception`) and says which looked brighter,
+    or neither, with the noise of one brief comparison and a shift of its own per block.
+
+    Parameters
+    ----------
+    protocol
+        A staircase protocol; its ``[observer]`` table may change the model's and the noise's
+        parameters.
+    participant, seed
+        Who, and the simulation's seed (they fix the observer and every trial's noise).
+    stimuli
+        The stimulus set it looks at.
+    """
+
+    @staticmethod
+    def check(protocol) -> None:
+        """Refuse an ``[observer]`` table the model and the noise do not take (ValueError)."""
+        from .perception import observer_parameters
+
+        observer_parameters(protocol["observer"])
+
+    def __init__(self, protocol, participant: str, *, seed: int, stimuli):
+        from .looking import DisplayedSet
+        from .perception import observer_parameters
+
+        self.protocol = protocol
+        self.participant = participant
+        self.seed = seed
+        self.model, self.noise = observer_parameters(protocol["observer"])
+        self.observer = self.noise.draw(
+            participant_rng(protocol.seed, participant, f"observer {seed}")
+        )
+        self.display = DisplayedSet(stimuli)
+        g = self.display.geometry
+        self.centre = tuple(g["centre_px"])
+        self.pixel_deg = g["pixel_deg"]
+        self.diameters = {"glare": g["source_diameter_deg"], "comparison": g["disc_diameter_deg"]}
+        self._percepts: dict[tuple, object] = {}
+        self._shifts: dict[str, float] = {}
+
+    def _percept(self, image: dict):
+        key = (image["role"], *((n, float(w)) for n, w in image["terms"]))
+        if key not in self._percepts:
+            self._percepts[key] = self.model.percept(
+                self.display.shows(image["terms"]),
+                centre_px=self.centre,
+                diameter_deg=self.diameters[image["role"]],
+                pixel_deg=self.pixel_deg,
+            )
+        return self._percepts[key]
+
+    def keys(self, screen: dict) -> list[tuple[str, float]]:
+        """The answer (with its time from the flash's onset) to a flash."""
+        if screen["kind"] != "present":
+            raise ValueError(f"a staircase observer cannot answer a {screen['kind']!r} screen")
+        context = screen["context"]
+        if context not in self._shifts:  # the observer's own shift in this block
+            self._shifts[context] = self.noise.block_shift(
+                participant_rng(
+                    self.protocol.seed, self.participant, f"observer {self.seed} block {context}"
+                )
+            )
+        rng = participant_rng(
+            self.protocol.seed, self.participant, f"observer {self.seed} trial {screen['trial']}"
+        )
+        images = {image["role"]: image for image in screen["images"]}
+        seen = self.observer.compare(
+            self._percept(images["glare"]),
+            self._percept(images["comparison"]),
+            rng,
+            shift=self._shifts[context],
+        )
+        if seen == "neither":
+            key = "down"
+        elif seen == "first":
+            key = screen["glare_side"]
+        else:
+            key = "left" if screen["glare_side"] == "right" else "right"
+        return [(key, 0.6 + float(rng.exponential(0.4)))]

@@ -1,0 +1,20 @@
+"""The analysis of each paradigm: one registry for the layer (see docs/extending.md).
+
+Each module gives ``analyse(dataset, protocol)`` (tables, figures, text), ``design(protocol)``
+(the within factors and the cells every participant needs) and ``methods(protocol,
+participants, who)`` (the methods paragraph).
+"""
+
+from __future__ import annotations
+
+from types import ModuleType
+
+from . import matching, rating, staircase
+
+__all__ = ["PARADIGMS"]
+
+PARADIGMS: dict[str, ModuleType] = {
+    "matching": matching,
+    "staircase": staircase,
+    "rating": rating,
+}

@@ -1,0 +1,31 @@
+"""The paradigms the experiments run: for each, its engine and its simulated observer.
+
+One registry for the layer; a new paradigm adds its module (engine and observer) and a line
+here (see docs/extending.md).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from .engine import Engine
+from .matching import MatchingEngine, MatchingObserver
+from .rating import RatingEngine, RatingObserver
+from .staircase import StaircaseEngine, StaircaseObserver
+
+__all__ = ["PARADIGMS", "Paradigm"]
+
+
+@dataclass(frozen=True)
+class Paradigm:
+    """How a paradigm is run: the engine's class and the simulated observer's."""
+
+    engine: type[Engine]
+    observer: type | None = None
+
+
+PARADIGMS: dict[str, Paradigm] = {
+    "matching": Paradigm(MatchingEngine, MatchingObserver),
+    "staircase": Paradigm(StaircaseEngine, StaircaseObserver),
+    "rating": Paradigm(RatingEngine, RatingObserver),
+}

@@ -1,0 +1,42 @@
+"""Study protocols: the contract the stimuli, the experiments and the analysis all read.
+
+A protocol is a TOML file that names its paradigm (matching, staircase, rating) and says
+everything the study needs; the shipped studies' files live in this package. The session CSV
+format is derived from the protocol here too (:mod:`protocols.columns`), so the experiments that
+write data and the analysis that reads it agree by construction. This package imports nothing
+of the suite but :mod:`glare` (to check glare models' parameters).
+"""
+
+from .columns import COMMON, DATA_FORMAT, Column, columns, format_value
+from .core import (
+    PARADIGMS,
+    SHIPPED,
+    Protocol,
+    describe_schema,
+    load_protocol,
+    parse_protocol,
+    pixel_deg,
+    protocol_path,
+    shipped_protocols,
+)
+from .keys import Key, ProtocolError, Tables
+
+__all__ = [
+    "COMMON",
+    "DATA_FORMAT",
+    "PARADIGMS",
+    "SHIPPED",
+    "Column",
+    "Key",
+    "Protocol",
+    "ProtocolError",
+    "Tables",
+    "columns",
+    "describe_schema",
+    "format_value",
+    "load_protocol",
+    "parse_protocol",
+    "pixel_deg",
+    "protocol_path",
+    "shipped_protocols",
+]

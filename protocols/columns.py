@@ -1,0 +1,99 @@
+"""The session data format: one CSV per session, one row per trial, and a JSON sidecar.
+
+Defined once, here, for the experiments that write it and the analysis that reads it. This
+module imports nothing of the suite but the protocols and never PsychoPy.
+
+Every CSV begins with the columns of :data:`COMMON`; the study's paradigm adds its own, derived
+from the protocol (:func:`columns`). Types are one of
+``str``, ``int``, ``float``, ``bool`` (written ``true``/``false``); an empty cell is a missing
+value and is allowed only where the column says so (``optional=True``). ``since`` names the
+data-format version that added a column: files written before it lack the column, and the
+analysis reads them with the column missing (``counted`` as true).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+__all__ = ["COMMON", "DATA_FORMAT", "Column", "columns", "format_value"]
+
+DATA_FORMAT = "0.3"  # the version of the session files written now (recorded in the sidecar)
+
+
+@dataclass(frozen=True)
+class Column:
+    """One CSV column: name, type, unit and meaning; ``choices`` limits a string column."""
+
+    name: str
+    kind: type
+    doc: str
+    unit: str = ""
+    optional: bool = False
+    choices: tuple[str, ...] | None = None
+    low: float | None = None
+    high: float | None = None
+    since: str = "0.1"  # the data-format version that added the column
+
+
+COMMON = (
+    Column("study", str, "study name (the protocol's study.name)"),
+    Column("participant", str, "participant id"),
+    Column("session", int, "session number", low=1),
+    Column("trial", int, "trial number within the session, from 1", low=1),
+    Column("block", str, "block of the trial"),
+    Column(
+        "onset_s",
+        float,
+        "onset of the trial's stimulus: the flip that first showed it, on the clock of the run "
+        "that recorded the trial (the PsychoPy log's time base; the sidecar's runs give each "
+        "run's clock epoch and trials)",
+        unit="s",
+        low=0.0,
+        since="0.2",
+    ),
+    Column(
+        "time_s",
+        float,
+        "response time: from the onset flip of the trial's stimulus to the key press that "
+        "ended the trial (matching: the Enter confirming the settings; staircase: the "
+        "answer; rating: the rating key)",
+        unit="s",
+        low=0.0,
+    ),
+    Column(
+        "dropped_frames",
+        int,
+        "frames dropped while the trial's stimulus was on a timed presentation (the "
+        "staircase's flash); static screens are drawn once per change and drop none",
+        low=0,
+    ),
+    Column(
+        "ignored_keys",
+        str,
+        "key presses not taken as input during the trial or before its onset, as "
+        "name@seconds from the onset (negative: before it), separated by ';'",
+        optional=True,
+        since="0.2",
+    ),
+)
+
+
+def columns(protocol) -> tuple[Column, ...]:
+    """Every column of a protocol's session CSV, in file order: :data:`COMMON`, then those its
+    paradigm derives from the protocol (methods, levels, questions, contexts, scale)."""
+    from .core import PARADIGMS
+
+    return COMMON + PARADIGMS[protocol.paradigm].columns(protocol)
+
+
+def format_value(value: object, column: Column) -> str:
+    """A value as written in the CSV (floats with full precision, booleans as true/false)."""
+    if value is None or value == "":
+        if not column.optional:
+            raise ValueError(f"column {column.name} needs a value")
+        return ""
+    if column.kind is bool:
+        return "true" if value else "false"
+    if column.kind is float:
+        return repr(float(value))
+    return str(value)

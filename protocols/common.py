@@ -1,0 +1,218 @@
+"""Tables every paradigm's protocol shares: the study, the display, the viewing geometry, the
+instructions, backgrounds and glare methods (any registered glare model with its parameters).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from .keys import Key, Schema, validate
+
+__all__ = [
+    "BACKGROUNDS",
+    "BREAK_EVERY",
+    "DISPLAY",
+    "INSTRUCTIONS",
+    "LEVELS_CD_M2",
+    "LEVEL_LABELS",
+    "METHOD",
+    "VIEWING",
+    "check_background",
+    "check_display",
+    "check_glare_model",
+    "check_methods",
+    "glare_model",
+]
+
+DISPLAY: Schema = {
+    "name": Key(str, "display model, for the record"),
+    "resolution_px": Key(list, "pixels (width, height)", item=int, length=2, low=1, high=16384),
+    "diagonal_in": Key(float, "visible diagonal", unit="in", low=1.0, high=400.0, default=None),
+    "pixel_pitch_mm": Key(float, "pixel pitch", unit="mm", low=0.01, high=10.0, default=None),
+    "max_cd_m2": Key(float, "maximum luminance", unit="cd/m²", low=1.0, high=1e5),
+    "black_cd_m2": Key(float, "black level", unit="cd/m²", low=0.0, high=100.0, default=0.0),
+    "bit_depth": Key(int, "bits per channel of the display", choices=(8, 10, 12, 16)),
+    "refresh_hz": Key(
+        float, "nominal refresh rate", unit="Hz", low=20.0, high=1000.0, default=60.0
+    ),
+    "white_tolerance": Key(
+        float,
+        "largest relative difference between a session's calibration white and max_cd_m2",
+        low=0.0,
+        high=1.0,
+        default=0.1,
+    ),
+}
+VIEWING: Schema = {
+    "distance_m": Key(float, "eye-screen distance", unit="m", low=0.1, high=20.0),
+    "room_lux": Key(float, "room illumination at the eye", unit="lx", low=0.0, high=1e5),
+}
+INSTRUCTIONS: Schema = {"text": Key(str, "written instruction shown before the first trial")}
+BREAK_EVERY = Key(
+    int,
+    "a break screen after every this many trials (0: no breaks)",
+    low=0,
+    high=100_000,
+    default=0,
+)
+LEVEL_LABELS = Key(
+    list, "level labels (in the data and the report)", item=str, length=(1, 26), token=True,
+    unique=True,
+)  # fmt: skip
+LEVELS_CD_M2 = Key(
+    list,
+    "input disk luminances L_disk, one per label",
+    unit="cd/m²",
+    item=float,
+    length=(1, 26),
+    low=0.0,
+    high=1e9,
+)
+
+
+def check_display(display: dict | None, problems: list[str]) -> None:
+    """Rules between the display's keys."""
+    if not display:
+        return
+    if (display["diagonal_in"] is None) == (display["pixel_pitch_mm"] is None):
+        problems.append("display: give exactly one of diagonal_in and pixel_pitch_mm")
+    if display["black_cd_m2"] >= display["max_cd_m2"]:
+        problems.append(
+            f"display.black_cd_m2 = {display['black_cd_m2']!r}: must be below "
+            f"display.max_cd_m2 = {display['max_cd_m2']!r}"
+        )
+
+
+# --- backgrounds -----------------------------------------------------------------------------
+
+_KIND = Key(str, "what the background is", choices=("sky", "uniform", "lamp", "exr"))
+BACKGROUNDS: dict[str, Schema] = {
+    "sky": {
+        "kind": _KIND,
+        "mean_cd_m2": Key(float, "mean luminance of the sky", unit="cd/m²", low=0.0, high=1e4),
+        "contrast": Key(float, "RMS contrast of the sky (SD / mean)", low=0.0, high=1.0),
+        "cloud_min_deg": Key(float, "smallest cloud structure", unit="deg", low=0.001, high=60.0),
+        "cloud_max_deg": Key(float, "largest cloud structure", unit="deg", low=0.001, high=600.0),
+        "spectrum_slope": Key(
+            float, "amplitude spectrum ∝ f^-slope between the cloud sizes", low=0.0, high=4.0
+        ),
+    },
+    "uniform": {
+        "kind": _KIND,
+        "cd_m2": Key(float, "luminance of the field", unit="cd/m²", low=0.0, high=1e5),
+    },
+    "lamp": {
+        "kind": _KIND,
+        "peak_cd_m2": Key(
+            float,
+            "the lamp scene's scale: its surfaces stay below 15 % of this",
+            unit="cd/m²",
+            low=0.0,
+            high=1e5,
+        ),
+    },
+    "exr": {
+        "kind": _KIND,
+        "path": Key(str, "a linear luminance EXR (cd/m²), relative to the protocol file"),
+        "pixel_deg": Key(
+            float, "visual angle of the file's pixels", unit="deg", low=1e-4, high=10.0
+        ),
+    },
+}
+
+
+def check_background(
+    table: Any, where: str, problems: list[str], folder: Path | None
+) -> dict | None:
+    """A background table validated for its ``kind`` (an EXR's path must exist)."""
+    if not isinstance(table, Mapping):
+        problems.append(f"{where} = {table!r}: must be a table with a kind")
+        return None
+    kind = table.get("kind")
+    if kind not in BACKGROUNDS:
+        problems.append(
+            f"{where}.kind = {kind!r}: must be one of {', '.join(map(repr, BACKGROUNDS))}"
+        )
+        return None
+    result = validate(table, BACKGROUNDS[kind], where, problems)
+    if kind == "sky" and result.get("cloud_min_deg") and result.get("cloud_max_deg"):
+        if result["cloud_min_deg"] >= result["cloud_max_deg"]:
+            problems.append(f"{where}.cloud_min_deg: must be below {where}.cloud_max_deg")
+    if kind == "exr" and result.get("path") is not None:
+        path = Path(result["path"])
+        if not path.is_absolute() and folder is not None:
+            path = folder / path
+        if not path.is_file():
+            problems.append(f"{where}.path = {result['path']!r}: no such file ({path})")
+    return result
+
+
+# --- glare methods ---------------------------------------------------------------------------
+
+
+def _glare_models() -> tuple[str, ...]:
+    from glare import GLARE_MODELS
+
+    return tuple(GLARE_MODELS)
+
+
+METHOD: Schema = {
+    "name": Key(str, "the method's name in the data and the report", token=True),
+    "title": Key(str, "the method's name in figures and text", default=""),
+    "model": Key(str, "a glare model registered in glare.GLARE_MODELS (gaussian, vos, wave, …)"),
+    "parameters": Key(dict, "the model's parameters (its constructor's keywords)", default={}),
+    "labels": LEVEL_LABELS,
+    "levels_cd_m2": LEVELS_CD_M2,
+}
+
+
+def glare_model(model: str, parameters: Mapping[str, Any]):
+    """The glare model ``model`` with ``parameters``; a table value builds the nested model
+    of a parameter whose default is one (``hybrid``'s ``wave``)."""
+    import dataclasses
+
+    from glare import GLARE_MODELS, make_model
+
+    cls = GLARE_MODELS.get(model)
+    values = dict(parameters)
+    if cls is not None and dataclasses.is_dataclass(cls):
+        for field in dataclasses.fields(cls):
+            value = values.get(field.name)
+            if isinstance(value, Mapping) and field.default_factory is not dataclasses.MISSING:
+                nested = field.default_factory()
+                if dataclasses.is_dataclass(nested):
+                    values[field.name] = type(nested)(**value)
+    return make_model(model, **values)
+
+
+def check_glare_model(model: Any, parameters: Any, where: str, problems: list[str]) -> None:
+    """The model exists and takes these parameters (its own checks name what is wrong)."""
+    names = _glare_models()
+    if model not in names:
+        problems.append(f"{where}.model = {model!r}: must be one of {', '.join(map(repr, names))}")
+        return
+    try:
+        glare_model(model, parameters or {})
+    except TypeError as error:
+        problems.append(f"{where}.parameters: {error}")
+    except ValueError as error:
+        problems.append(f"{where}.parameters: {error}")
+
+
+def check_methods(methods: list[dict] | None, where: str, problems: list[str]) -> None:
+    """Glare methods: names unique, labels as many as levels, models and parameters valid."""
+    if not methods:
+        return
+    names = [m["name"] for m in methods if m.get("name")]
+    if len(set(names)) != len(names):
+        repeated = sorted({n for n in names if names.count(n) > 1})
+        problems.append(f"{where}: method names repeat {repeated}: each must be different")
+    for i, method in enumerate(methods):
+        at = f"{where}[{i}]"
+        labels, levels = method.get("labels"), method.get("levels_cd_m2")
+        if labels is not None and levels is not None and len(labels) != len(levels):
+            problems.append(f"{at}: {len(labels)} labels for {len(levels)} levels_cd_m2")
+        if method.get("model") is not None:
+            check_glare_model(method["model"], method.get("parameters"), at, problems)

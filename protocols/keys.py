@@ -1,0 +1,222 @@
+"""The protocol file format's building blocks: keys with type, unit, default and range, tables
+of keys, and lists of tables; and their validation, which reports every problem at once, each
+with its key, its value and what is allowed.
+
+No other module of the suite is imported here.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+__all__ = ["TOKEN", "Key", "ProtocolError", "Schema", "Tables", "check_token", "validate"]
+
+# a label that is safe in a file name and a CSV cell: letters, digits, '_', '-', '.'
+TOKEN = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")
+
+
+class ProtocolError(ValueError):
+    """A protocol file that does not validate; ``problems`` lists every finding."""
+
+    def __init__(self, source: str, problems: list[str]):
+        self.source = source
+        self.problems = problems
+        lines = "\n".join(f"  - {p}" for p in problems)
+        super().__init__(f"{source}: {len(problems)} problem(s) in the protocol:\n{lines}")
+
+
+@dataclass(frozen=True)
+class Key:
+    """One key of a protocol schema.
+
+    ``kind`` is ``float``, ``int``, ``str``, ``bool``, ``list`` or ``dict`` (a free-form table,
+    checked by whoever reads it); lists give ``item`` (the kind of their elements) and
+    optionally ``length``. Numbers may have ``low``/``high`` bounds (inclusive); strings and
+    numbers may have ``choices``; ``token`` strings must be file-name-safe labels. A key with
+    ``default`` is optional.
+    """
+
+    kind: type
+    doc: str
+    unit: str = ""
+    low: float | None = None
+    high: float | None = None
+    choices: tuple | None = None
+    default: Any = ...
+    item: type | None = None
+    length: int | tuple[int, int] | None = None
+    token: bool = False
+    unique: bool = False
+
+    @property
+    def required(self) -> bool:
+        return self.default is ...
+
+    def allowed(self) -> str:
+        parts = []
+        if self.kind is list:
+            what = f"a list of {self.item.__name__}" if self.item else "a list"
+            if isinstance(self.length, int):
+                what += f" of length {self.length}"
+            elif self.length:
+                what += f" of length {self.length[0]}-{self.length[1]}"
+            if self.unique:
+                what += ", all different"
+            parts.append(what)
+        elif self.kind is dict:
+            parts.append("a table")
+        else:
+            parts.append(self.kind.__name__)
+        if self.token:
+            parts.append("letters, digits, '_', '-', '.' (a file-name-safe label)")
+        if self.choices:
+            parts.append("one of " + ", ".join(repr(c) for c in self.choices))
+        if self.low is not None or self.high is not None:
+            low = "-inf" if self.low is None else f"{self.low:g}"
+            high = "inf" if self.high is None else f"{self.high:g}"
+            parts.append(f"in [{low}, {high}]{' ' + self.unit if self.unit else ''}")
+        return ", ".join(parts)
+
+
+@dataclass(frozen=True)
+class Tables:
+    """A list of tables (``[[name]]`` in TOML), each following ``schema``."""
+
+    schema: Mapping
+    doc: str
+    length: tuple[int, int] = (1, 100)
+    default: Any = ...
+
+    @property
+    def required(self) -> bool:
+        return self.default is ...
+
+
+Schema = Mapping[str, "Key | Tables | Schema"]
+
+
+def check_token(value: str, where: str, problems: list[str]) -> bool:
+    """Whether ``value`` is a file-name-safe label; if not, say so."""
+    if isinstance(value, str) and TOKEN.match(value):
+        return True
+    problems.append(
+        f"{where} = {value!r}: must be 1-64 letters, digits, '_', '-' or '.', starting with a "
+        "letter or digit (it names files and CSV cells)"
+    )
+    return False
+
+
+def _check_scalar(value: Any, kind: type, key: Key, path: str, problems: list[str]) -> Any:
+    if kind is float:
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            problems.append(f"{path} = {value!r}: must be a number ({key.allowed()})")
+            return None
+        value = float(value)
+        if not math.isfinite(value):
+            problems.append(f"{path} = {value!r}: must be finite ({key.allowed()})")
+            return None
+    elif kind is int:
+        if isinstance(value, bool) or not isinstance(value, int):
+            problems.append(f"{path} = {value!r}: must be an integer ({key.allowed()})")
+            return None
+    elif kind is bool:
+        if not isinstance(value, bool):
+            problems.append(f"{path} = {value!r}: must be true or false")
+            return None
+    elif kind is str:
+        if not isinstance(value, str):
+            problems.append(f"{path} = {value!r}: must be a string ({key.allowed()})")
+            return None
+        if key.token and not check_token(value, path, problems):
+            return None
+    elif kind is dict:
+        if not isinstance(value, Mapping):
+            problems.append(f"{path} = {value!r}: must be a table")
+            return None
+        return dict(value)
+    if key.choices is not None and value not in key.choices:
+        problems.append(f"{path} = {value!r}: must be {key.allowed()}")
+        return None
+    if kind in (int, float):
+        if (key.low is not None and value < key.low) or (
+            key.high is not None and value > key.high
+        ):
+            problems.append(f"{path} = {value!r}: must be {key.allowed()}")
+            return None
+    return value
+
+
+def _check_key(value: Any, key: Key, path: str, problems: list[str]) -> Any:
+    if key.kind is not list:
+        return _check_scalar(value, key.kind, key, path, problems)
+    if not isinstance(value, list):
+        problems.append(f"{path} = {value!r}: must be {key.allowed()}")
+        return None
+    n = len(value)
+    if isinstance(key.length, int) and n != key.length:
+        problems.append(f"{path} has {n} entries: must be {key.allowed()}")
+        return None
+    if isinstance(key.length, tuple) and not key.length[0] <= n <= key.length[1]:
+        problems.append(f"{path} has {n} entries: must be {key.allowed()}")
+        return None
+    items = [
+        _check_scalar(v, key.item, key, f"{path}[{i}]", problems) if key.item else v
+        for i, v in enumerate(value)
+    ]
+    if key.item and any(i is None for i in items):
+        return None
+    if key.unique and len(set(items)) != len(items):
+        repeated = sorted({v for v in items if items.count(v) > 1}, key=str)
+        problems.append(f"{path} repeats {', '.join(map(repr, repeated))}: must be all different")
+        return None
+    return items
+
+
+def validate(data: Mapping[str, Any], schema: Schema, path: str, problems: list[str]) -> dict:
+    """``data`` checked against ``schema`` with defaults filled in; problems appended."""
+    result: dict[str, Any] = {}
+    for name in data:
+        if name not in schema:
+            where = f"{path}.{name}" if path else name
+            known = ", ".join(sorted(schema))
+            problems.append(f"{where}: unknown key (known here: {known})")
+    for name, spec in schema.items():
+        where = f"{path}.{name}" if path else name
+        if isinstance(spec, Tables):
+            result[name] = _tables(data.get(name), spec, where, problems)
+        elif isinstance(spec, Mapping):
+            table = data.get(name)
+            if table is None:
+                problems.append(f"[{where}]: missing table")
+                continue
+            if not isinstance(table, Mapping):
+                problems.append(f"{where} = {table!r}: must be a table [{where}]")
+                continue
+            result[name] = validate(table, spec, where, problems)
+        elif name in data:
+            result[name] = _check_key(data[name], spec, where, problems)
+        elif spec.required:
+            problems.append(f"{where}: missing ({spec.doc}; {spec.allowed()})")
+        else:
+            result[name] = spec.default
+    return result
+
+
+def _tables(value: Any, spec: Tables, where: str, problems: list[str]) -> list[dict] | None:
+    if value is None:
+        if spec.required:
+            problems.append(f"[[{where}]]: missing ({spec.doc})")
+            return None
+        return spec.default
+    if not isinstance(value, list) or not all(isinstance(v, Mapping) for v in value):
+        problems.append(f"{where}: must be a list of tables [[{where}]] ({spec.doc})")
+        return None
+    low, high = spec.length
+    if not low <= len(value) <= high:
+        problems.append(f"[[{where}]] has {len(value)} entries: must have {low}-{high}")
+        return None
+    return [validate(v, spec.schema, f"{where}[{i}]", problems) for i, v in enumerate(value)]

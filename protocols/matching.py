@@ -1,0 +1,277 @@
+"""Matching by adjustment (Yoshida et al. 2008): the protocol's keys, rules and CSV columns.
+
+A reference image shows a disk with glare (one per glare method and level); glare-free target
+disks beside it are adjusted until they look slightly darker and slightly brighter than the
+reference (``settings = "bounds"``, Yoshida §4; the match is their mean) or as bright
+(``"single"``). Any number of glare methods, each a registered glare model with its
+parameters, labels and levels; a background (procedural sky, uniform field, lamp scene or a
+linear EXR); optional yes/no questions after each trial, each with the CSV column it fills;
+follow-up analyses named by level positions.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from .columns import Column
+from .common import (
+    BREAK_EVERY,
+    DISPLAY,
+    INSTRUCTIONS,
+    METHOD,
+    VIEWING,
+    check_background,
+    check_display,
+    check_methods,
+)
+from .keys import Key, Schema, Tables
+
+__all__ = ["SCHEMA", "check", "columns", "reference_name"]
+
+QUESTION: Schema = {
+    "column": Key(str, "the CSV column of the answers (true/false)", token=True),
+    "text": Key(str, "the question as shown"),
+    "simulated_by": Key(
+        str,
+        "what a simulated observer answers it from: the reference's glow, its bright ring, "
+        "the disks' sizes being the same, or nothing (a coin flip)",
+        choices=("glow", "ring", "same_size", "none"),
+        default="none",
+    ),
+}
+FOLLOWUP: Schema = {
+    "name": Key(str, "the follow-up analysis's name in the report"),
+    "levels": Key(
+        list,
+        "level positions (1 = first label) it is run on",
+        item=int,
+        length=(2, 26),
+        low=1,
+        unique=True,
+    ),
+}
+SCHEMA: Schema = {
+    "display": DISPLAY,
+    "viewing": VIEWING,
+    "stimulus": {
+        "size_deg": Key(float, "side of the square image", unit="deg", low=0.1, high=60.0),
+        "disk_deg": Key(float, "disk diameter", unit="deg", low=0.01, high=10.0),
+        "supersample": Key(
+            int,
+            "render at this multiple of the display resolution, then box-filter",
+            low=1,
+            high=8,
+        ),
+        "target_start_cd_m2": Key(
+            list,
+            "start luminance of the target disks (darker and brighter, or the one target)",
+            unit="cd/m²",
+            item=float,
+            length=(1, 2),
+            low=0.0,
+            high=1e5,
+        ),
+        "gap_deg": Key(float, "gap between reference and targets", unit="deg", low=0.0, high=30.0),
+    },
+    "background": Key(
+        dict, "the background: kind = 'sky', 'uniform', 'lamp' or 'exr' and its keys"
+    ),
+    "glare": {
+        "l_dmax_cd_m2": Key(
+            float,
+            "the 'typical display' maximum glare is added above (Yoshida eq. 1)",
+            unit="cd/m²",
+            low=1.0,
+            high=1e5,
+        ),
+        "methods": Tables(METHOD, "glare methods, each a model with its levels", (1, 12)),
+    },
+    "trials": {
+        "settings": Key(
+            str,
+            "'bounds': a slightly darker and a slightly brighter target (the match is their "
+            "mean); 'single': one target set to look as bright",
+            choices=("bounds", "single"),
+            default="bounds",
+        ),
+        "training_trials": Key(int, "training trials before the main block", low=0, high=100),
+        "order": Key(str, "order of the references per participant", choices=("random", "fixed")),
+        "coarse_step_cd_m2": Key(
+            float, "coarse adjustment step", unit="cd/m²", low=0.01, high=1000.0
+        ),
+        "fine_step_cd_m2": Key(
+            float, "fine adjustment step", unit="cd/m²", low=0.001, high=1000.0
+        ),
+        "break_every": BREAK_EVERY,
+    },
+    "instructions": INSTRUCTIONS,
+    "questionnaire": {
+        "questions": Tables(QUESTION, "yes/no questions after each trial", (0, 20), default=[]),
+    },
+    "analysis": {
+        "followups": Tables(
+            FOLLOWUP,
+            "methods × levels ANOVAs on subsets of the levels (Yoshida: {A, B, C}, {D, E, F})",
+            (0, 10),
+            default=[],
+        ),
+        "compare_methods_at": Key(
+            list,
+            "level positions where the methods are compared by t-tests (Yoshida: D, E, F)",
+            item=int,
+            length=(0, 26),
+            low=1,
+            default=[],
+            unique=True,
+        ),
+    },
+    "observer": Key(
+        dict,
+        "simulated observers' parameters (experiments.perception); empty: the fitted defaults",
+        default={},
+    ),
+}
+
+
+def reference_name(method: str, label: str) -> str:
+    """The stimulus-set image of a method's level (the contract between set and session)."""
+    return f"reference_{method}_{label}"
+
+
+def check(p: dict, problems: list[str], folder: Path | None) -> None:
+    """Rules between keys: geometry, display limits, methods, questions, analyses."""
+    display = p["display"]
+    check_display(display, problems)
+    s, g = p["stimulus"], p["glare"]
+    maximum = display["max_cd_m2"]
+    if g["l_dmax_cd_m2"] > maximum:
+        problems.append(
+            f"glare.l_dmax_cd_m2 = {g['l_dmax_cd_m2']!r}: above what the display shows "
+            f"(display.max_cd_m2 = {maximum!r})"
+        )
+    starts = s["target_start_cd_m2"]
+    expected = 2 if p["trials"]["settings"] == "bounds" else 1
+    if len(starts) != expected:
+        problems.append(
+            f"stimulus.target_start_cd_m2 has {len(starts)} entries: trials.settings = "
+            f"{p['trials']['settings']!r} has {expected} target(s)"
+        )
+    for i, start in enumerate(starts):
+        if start > maximum:
+            problems.append(
+                f"stimulus.target_start_cd_m2[{i}] = {start!r}: above what the display "
+                f"shows (display.max_cd_m2 = {maximum!r})"
+            )
+    if s["disk_deg"] >= s["size_deg"]:
+        problems.append("stimulus.disk_deg: must be smaller than stimulus.size_deg")
+    background = check_background(p["background"], "background", problems, folder)
+    if background is not None:
+        p["background"] = background
+        if background["kind"] == "sky" and background["mean_cd_m2"] > g["l_dmax_cd_m2"]:
+            problems.append(
+                f"background.mean_cd_m2 = {background['mean_cd_m2']!r}: above "
+                f"glare.l_dmax_cd_m2 = {g['l_dmax_cd_m2']!r}, so the sky itself would glare"
+            )
+    methods = g["methods"] or []
+    check_methods(methods, "glare.methods", problems)
+    counts = {len(m["labels"]) for m in methods if m.get("labels")}
+    if len(counts) > 1:
+        problems.append(
+            "glare.methods: every method needs the same number of levels (the level positions "
+            f"are one factor of the analysis); found {sorted(counts)}"
+        )
+    t = p["trials"]
+    if t["fine_step_cd_m2"] > t["coarse_step_cd_m2"]:
+        problems.append("trials.fine_step_cd_m2: must not exceed trials.coarse_step_cd_m2")
+    questions = p["questionnaire"]["questions"] or []
+    taken = {c.name for c in _fixed_columns(p)}
+    seen: set[str] = set()
+    for i, question in enumerate(questions):
+        column = question.get("column")
+        if column in taken or column in seen:
+            problems.append(
+                f"questionnaire.questions[{i}].column = {column!r}: already a column of the "
+                "session CSV; each question needs a column of its own"
+            )
+        seen.add(column)
+    n_levels = max(counts) if counts else 0
+    a = p["analysis"]
+    for i, followup in enumerate(a["followups"] or []):
+        for level in followup.get("levels") or []:
+            if level > n_levels:
+                problems.append(
+                    f"analysis.followups[{i}].levels: {level} is beyond the {n_levels} levels"
+                )
+    for level in a["compare_methods_at"] or []:
+        if level > n_levels:
+            problems.append(
+                f"analysis.compare_methods_at: {level} is beyond the {n_levels} levels"
+            )
+    if a["compare_methods_at"] and len(methods) < 2:
+        problems.append("analysis.compare_methods_at: needs at least two glare methods")
+
+
+def _fixed_columns(p: dict) -> tuple[Column, ...]:
+    methods = p["glare"]["methods"] or []
+    labels = tuple(dict.fromkeys(label for m in methods for label in (m.get("labels") or [])))
+    levels = max((len(m.get("labels") or []) for m in methods), default=1)
+    bounds = p["trials"]["settings"] == "bounds"
+    settings = (
+        (
+            Column(
+                "darker_cd_m2",
+                float,
+                "setting of the left, 'slightly darker' target",
+                unit="cd/m²",
+                low=0.0,
+            ),
+            Column(
+                "brighter_cd_m2",
+                float,
+                "setting of the right, 'slightly brighter' target",
+                unit="cd/m²",
+                low=0.0,
+            ),
+        )
+        if bounds
+        else ()
+    )
+    return (
+        Column(
+            "method",
+            str,
+            "glare method of the reference",
+            choices=tuple(m["name"] for m in methods),
+        ),
+        Column("level", str, "level label of the reference", choices=labels or None),
+        Column(
+            "level_index",
+            int,
+            "level position, the ordinal scale the methods share",
+            low=1,
+            high=levels,
+        ),
+        Column(
+            "l_disk_cd_m2", float, "input disk luminance of the reference", unit="cd/m²", low=0.0
+        ),
+        *settings,
+        Column(
+            "match_cd_m2",
+            float,
+            "the perceived luminance: the mean of the two settings"
+            if bounds
+            else "the perceived luminance: the target's setting",
+            unit="cd/m²",
+            low=0.0,
+        ),
+        Column("adjustments", int, "key presses that changed a target", low=0),
+    )
+
+
+def columns(protocol) -> tuple[Column, ...]:
+    """The paradigm's CSV columns for this protocol (after the common ones)."""
+    p = protocol.data if hasattr(protocol, "data") else protocol
+    questions = tuple(
+        Column(q["column"], bool, q["text"]) for q in p["questionnaire"]["questions"] or []
+    )
+    return _fixed_columns(p) + questions

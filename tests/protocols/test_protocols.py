@@ -1,0 +1,234 @@
+import copy
+import tomllib
+from pathlib import Path
+
+import pytest
+
+from protocols import (
+    PARADIGMS,
+    ProtocolError,
+    columns,
+    describe_schema,
+    load_protocol,
+    parse_protocol,
+    pixel_deg,
+    shipped_protocols,
+)
+
+PROTOCOLS = Path(__file__).parents[2] / "protocols"
+
+
+def raw(study):
+    return tomllib.loads((PROTOCOLS / f"{study}.toml").read_text())
+
+
+@pytest.mark.parametrize("study", shipped_protocols())
+def test_shipped_protocols_are_valid(study):
+    protocol = load_protocol(study)
+    assert protocol.study == study and protocol.paradigm in PARADIGMS
+    assert len(protocol.sha256) == 64
+    assert load_protocol(PROTOCOLS / f"{study}.toml").sha256 == protocol.sha256
+
+
+def test_the_papers_are_protocols_of_the_three_paradigms():
+    paradigms = {name: load_protocol(name).paradigm for name in shipped_protocols()}
+    assert paradigms["yoshida2008"] == "matching"
+    assert paradigms["spencer1995"] == "staircase"
+    assert paradigms["luidolt2020"] == "rating"
+
+
+def test_yoshida_values_are_the_papers():
+    p = load_protocol("yoshida2008")
+    gaussian, vos = p["glare"]["methods"]
+    # Yoshida 2008 §3
+    assert gaussian["levels_cd_m2"] == [220, 1165, 2110, 3055, 4000, 7000]
+    assert vos["levels_cd_m2"] == [220, 1480, 2740, 4000, 7000, 10000]
+    assert (gaussian["model"], gaussian["parameters"]) == ("gaussian", {"sigma_deg": 0.34})
+    assert p["display"]["max_cd_m2"] == 433.0 and p["display"]["bit_depth"] == 10
+    # 20.8" 4:3 2048 × 1536 at 1 m: pitch 0.2064 mm → 0.011824° per pixel (hand calculation)
+    assert pixel_deg(p) == pytest.approx(0.0118244, rel=1e-5)
+
+
+def method(data, index):
+    return data["glare"]["methods"][index]
+
+
+@pytest.mark.parametrize(
+    ("edit", "match"),
+    [
+        (lambda d: d["stimulus"].update(disk_degg=0.3), r"stimulus\.disk_degg: unknown key"),
+        (
+            lambda d: d["stimulus"].update(disk_deg=-0.3),
+            r"stimulus\.disk_deg = -0\.3: must be float, in \[0\.01, 10\] deg",
+        ),
+        (
+            lambda d: d["stimulus"].update(target_start_cd_m2=[100.0, 500.0]),
+            r"stimulus\.target_start_cd_m2\[1\] = 500\.0: above what the display shows",
+        ),
+        (
+            lambda d: d["glare"].update(l_dmax_cd_m2=500.0),
+            r"glare\.l_dmax_cd_m2 = 500\.0: above what the display shows",
+        ),
+        (
+            lambda d: method(d, 0)["parameters"].update(sigma_deg=-1.0),
+            r"glare\.methods\[0\]\.parameters: sigma_deg must be",
+        ),
+        (
+            lambda d: method(d, 0)["parameters"].update(sigma=0.3),
+            r"glare\.methods\[0\]\.parameters: .*unexpected keyword argument 'sigma'",
+        ),
+        (
+            lambda d: method(d, 1).update(model="kakimoto"),
+            r"glare\.methods\[1\]\.model = 'kakimoto': must be one of",
+        ),
+        (lambda d: d["glare"].pop("methods"), r"\[\[glare\.methods\]\]: missing"),
+        (
+            lambda d: d["display"].update(bit_depth=9),
+            r"display\.bit_depth = 9: must be int, one of 8, 10, 12, 16",
+        ),
+        (
+            lambda d: d["display"].update(max_cd_m2="bright"),
+            r"display\.max_cd_m2 = 'bright': must be a number",
+        ),
+        (
+            lambda d: method(d, 1).update(labels=["a", "b"]),
+            r"glare\.methods\[1\]: 2 labels for 6 levels_cd_m2",
+        ),
+        (
+            lambda d: method(d, 1).update(labels=["a", "b", "c", "d", "e", "e"]),
+            r"glare\.methods\[1\]\.labels repeats 'e': must be all different",
+        ),
+        (
+            lambda d: method(d, 1).update(labels=["a", "b", "c", "d", "e", "../../escaped"]),
+            r"glare\.methods\[1\]\.labels\[5\] = '\.\./\.\./escaped': must be 1-64 letters",
+        ),
+        (
+            lambda d: method(d, 1).update(name="gaussian"),
+            r"glare\.methods: method names repeat \['gaussian'\]",
+        ),
+        (
+            lambda d: d["display"].update(pixel_pitch_mm=0.2),
+            "give exactly one of diagonal_in and pixel_pitch_mm",
+        ),
+        (
+            lambda d: d["study"].update(paradigm="kakimoto2004"),
+            r"study\.paradigm = 'kakimoto2004': must be one of",
+        ),
+        (
+            lambda d: d["study"].update(name="my study"),
+            r"study\.name = 'my study': must be 1-64 letters",
+        ),
+        (
+            lambda d: d["background"].update(kind="cloud"),
+            r"background\.kind = 'cloud': must be one of 'sky', 'uniform', 'lamp', 'exr'",
+        ),
+        (
+            lambda d: d.update(background={"kind": "exr", "path": "none.exr", "pixel_deg": 0.01}),
+            r"background\.path = 'none\.exr': no such file",
+        ),
+        (
+            lambda d: d["analysis"].update(compare_methods_at=[4, 7]),
+            r"analysis\.compare_methods_at: 7 is beyond the 6 levels",
+        ),
+        (
+            lambda d: d["questionnaire"]["questions"][1].update(column="match_cd_m2"),
+            r"questions\[1\]\.column = 'match_cd_m2': already a column of the session CSV",
+        ),
+        (
+            lambda d: method(d, 1).update(labels=["a", "b", "c"], levels_cd_m2=[220.0, 1.0, 2.0]),
+            "every method needs the same number of levels",
+        ),
+    ],
+)
+def test_bad_protocols_are_refused_with_the_key_named(edit, match):
+    data = copy.deepcopy(raw("yoshida2008"))
+    edit(data)
+    with pytest.raises(ProtocolError, match=match):
+        parse_protocol(data, source="test.toml", folder=PROTOCOLS)
+
+
+def test_every_problem_is_reported_at_once():
+    data = copy.deepcopy(raw("spencer1995"))
+    data["stimulus"]["window_pxx"] = 300
+    data["glare"]["peak_fraction"] = 2.0
+    data["trials"]["neither"] = "maybe"
+    with pytest.raises(ProtocolError) as caught:
+        parse_protocol(data)
+    assert len(caught.value.problems) == 3
+
+
+def test_a_file_that_is_not_toml_is_named(tmp_path):
+    path = tmp_path / "broken.toml"
+    path.write_text("[study\nname = 1")
+    with pytest.raises(ProtocolError, match=r"broken\.toml: 1 problem(?s:.*)not valid TOML"):
+        load_protocol(path)
+    with pytest.raises(FileNotFoundError, match="no protocol file"):
+        load_protocol(tmp_path / "missing.toml")
+    with pytest.raises(FileNotFoundError, match="no protocol 'yoshida2009': give a TOML file"):
+        load_protocol("yoshida2009")
+
+
+def test_the_hash_follows_the_content():
+    a = parse_protocol(raw("luidolt2020"))
+    changed = raw("luidolt2020")
+    changed["questionnaire"]["comments"] = False
+    assert parse_protocol(changed).sha256 != a.sha256
+    assert parse_protocol(raw("luidolt2020")).sha256 == a.sha256
+
+
+@pytest.mark.parametrize("paradigm", list(PARADIGMS))
+def test_schema_documents_every_key(paradigm):
+    rows = describe_schema(paradigm)
+    assert all(r[4] for r in rows)  # every key has a description
+    keys = {r[0] for r in rows}
+    assert "study.paradigm" in keys
+
+
+def test_the_csv_columns_follow_the_protocol():
+    yoshida = load_protocol("yoshida2008")
+    names = [c.name for c in columns(yoshida)]
+    assert names[-3:] == ["q1_glow", "q2_ring", "q3_same_size"]
+    data = raw("yoshida2008")
+    data["questionnaire"]["questions"] = [
+        *data["questionnaire"]["questions"][:2],
+        {"column": "q4_flicker", "text": "Did it flicker?"},
+        {"column": "q5_colour", "text": "Was it coloured?"},
+    ]
+    data["trials"]["settings"] = "single"
+    data["stimulus"]["target_start_cd_m2"] = [150.0]
+    five = parse_protocol(data)
+    names = [c.name for c in columns(five)]
+    assert names[-4:] == ["q1_glow", "q2_ring", "q4_flicker", "q5_colour"]
+    assert "darker_cd_m2" not in names and "match_cd_m2" in names
+    method = {c.name: c for c in columns(five)}["method"]
+    assert method.choices == ("gaussian", "vos")
+    spencer = {c.name: c for c in columns(load_protocol("spencer1995"))}
+    assert spencer["context"].choices == ("none", "lamp") and spencer["glare_level"].high == 12
+
+
+def test_single_settings_take_one_start():
+    data = raw("yoshida2008")
+    data["trials"]["settings"] = "single"
+    with pytest.raises(ProtocolError, match="'single' has 1 target"):
+        parse_protocol(data)
+
+
+def test_any_registered_glare_model_with_its_parameters():
+    data = raw("yoshida2008")
+    data["glare"]["methods"].append(
+        {
+            "name": "hybrid",
+            "model": "hybrid",
+            "parameters": {"regime": "mesopic", "wave": {"pupil_mm": 4.0, "particles": 0}},
+            "labels": ["h1", "h2", "h3", "h4", "h5", "h6"],
+            "levels_cd_m2": [220.0, 1000.0, 2000.0, 3000.0, 4000.0, 5000.0],
+        }
+    )
+    protocol = parse_protocol(data)
+    from protocols.common import glare_model
+
+    model = glare_model("hybrid", protocol["glare"]["methods"][2]["parameters"])
+    assert model.wave.pupil_mm == 4.0 and model.regime == "mesopic"
+    data["glare"]["methods"][2]["parameters"]["wave"]["pupil_mm"] = -1.0
+    with pytest.raises(ProtocolError, match=r"glare\.methods\[2\]\.parameters: pupil_mm"):
+        parse_protocol(data)
