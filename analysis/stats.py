@@ -3,27 +3,42 @@
 All functions take long-format pandas DataFrames (one row per subject × cell).
 
 ``rm_anova`` uses statsmodels' ``AnovaRM`` for the F tests and adds what it lacks: for every
-within effect, main effects and interactions alike, the Greenhouse–Geisser epsilon with its
-corrected p-value, Mauchly's test of sphericity (for effects with more than one degree of
-freedom) and partial eta squared. Epsilon and Mauchly's W come from the subjects' scores
-projected on the effect's orthonormal contrasts (the product of Helmert contrasts for the
+within effect, main effects and interactions alike, the Greenhouse–Geisser and Huynh–Feldt
+epsilons with their corrected p-values, Mauchly's test of sphericity (for effects with more than
+one degree of freedom) and partial eta squared. Epsilon and Mauchly's W come from the subjects'
+scores projected on the effect's orthonormal contrasts (the product of Helmert contrasts for the
 effect's factors and normalised averages for the others), ``Z = Y C``, with covariance ``S``
-(``p × p``, ``p`` = the effect's df):
+(``p × p``, ``p`` = the effect's df) over ``n`` subjects:
 
 .. math::
 
    \\hat\\varepsilon_{GG} = \\frac{(\\operatorname{tr} S)^2}{p \\operatorname{tr}(S^2)}, \\qquad
+   \\tilde\\varepsilon_{HF} = \\min\\Bigl(1,
+       \\frac{n p \\hat\\varepsilon_{GG} - 2}{p (n - 1 - p \\hat\\varepsilon_{GG})}\\Bigr),
+
    W = \\frac{\\det S}{(\\operatorname{tr} S / p)^p}, \\qquad
    \\chi^2 = -\\Bigl(n - 1 - \\frac{2p^2 + p + 2}{6p}\\Bigr) \\ln W,
    \\; \\nu = \\frac{p (p + 1)}{2} - 1 ,
 
 with the second-order correction of the chi-square approximation (Box 1949), as R's
-``mauchly.test`` and pingouin apply it.
+``mauchly.test`` and ``car::Anova`` apply it. The Huynh–Feldt estimate is Lecoutre's (1991)
+correction of Huynh & Feldt (1976), the one R's ``car::Anova``, ``stats::anova.mlm`` and afex
+report: ``(N - g + 1) p ε - 2`` in the numerator where Huynh & Feldt had ``N p ε - 2``; with no
+between-subject groups (``g = 1``, as here) both read ``n p ε - 2``. The estimate can exceed 1;
+``car`` prints it uncapped and computes its p-value with ``min(1, ε)``, afex caps it: the
+``eps_hf`` column is the capped value.
+
+When the effect's contrast covariance is singular (fewer subjects than the effect's df + 1, as in
+a 12 × 2 design with 8 subjects), neither epsilon nor Mauchly's test can be estimated: R's
+``car::Anova`` gives none of them ("not available"); ``rm_anova`` gives NaN and says why in its
+``sphericity`` column.
 
 References
 ----------
-Greenhouse & Geisser (1959); Mauchly (1940); Holm (1979); Piepho (2004) for the compact letter
-display; the F tests: statsmodels ``AnovaRM``.
+Greenhouse & Geisser (1959), Psychometrika 24, 95-112; Huynh & Feldt (1976), J. Educ. Stat. 1,
+69-82; Lecoutre (1991), J. Educ. Stat. 16, 371-372; Mauchly (1940); Box (1949); Holm (1979);
+Piepho (2004) for the compact letter display; the F tests: statsmodels ``AnovaRM``. Reference
+values: R 4.2 with car and afex (``tests/analysis/R``).
 """
 
 from __future__ import annotations
@@ -61,6 +76,22 @@ def _helmert(levels: int) -> np.ndarray:
     return matrix
 
 
+def _finite(values: np.ndarray, name: str, where) -> None:
+    """Refuse NaN and infinities, naming the first one by ``where(index)``."""
+    bad = np.flatnonzero(~np.isfinite(values))
+    if bad.size:
+        raise ValueError(
+            f"{name} is {values[bad[0]]} {where(bad[0])}; every value must be a finite number "
+            f"({bad.size} of {values.size} are not)"
+        )
+
+
+def _numeric(df: pd.DataFrame, dv: str, caller: str) -> np.ndarray:
+    if not pd.api.types.is_numeric_dtype(df[dv]) or pd.api.types.is_bool_dtype(df[dv]):
+        raise ValueError(f"{caller}: column dv={dv!r} must be numeric; got dtype {df[dv].dtype}")
+    return df[dv].to_numpy(float)
+
+
 def _wide(df: pd.DataFrame, dv: str, within: list[str], subject: str) -> tuple[np.ndarray, list]:
     counts = df.groupby([subject, *within], observed=True).size()
     if (counts != 1).any():
@@ -69,6 +100,13 @@ def _wide(df: pd.DataFrame, dv: str, within: list[str], subject: str) -> tuple[n
             f"rm_anova needs exactly one {dv!r} per subject and cell; subject {bad[0]!r} has "
             f"{counts[bad]} at {dict(zip(within, bad[1:], strict=True))}"
         )
+    values = _numeric(df, dv, "rm_anova")
+    rows = df[[subject, *within]].to_numpy()
+
+    def where(i: int) -> str:
+        return f"for subject {rows[i][0]!r} at {dict(zip(within, rows[i][1:], strict=True))}"
+
+    _finite(values, f"rm_anova: dv {dv!r}", where)
     levels = [sorted(df[f].unique(), key=str) for f in within]
     subjects = sorted(df[subject].unique(), key=str)
     table = df.set_index([subject, *within])[dv]
@@ -81,7 +119,7 @@ def _wide(df: pd.DataFrame, dv: str, within: list[str], subject: str) -> tuple[n
             f"rm_anova needs a balanced design: subject {s!r} has no {dv!r} at "
             f"{dict(zip(within, cell, strict=True))}"
         )
-    values = table.reindex(full).to_numpy().reshape(len(subjects), len(cells))
+    values = table.reindex(full).to_numpy(float).reshape(len(subjects), len(cells))
     return values, levels
 
 
@@ -94,25 +132,43 @@ def _effect_scores(values: np.ndarray, levels: list, effect: Sequence[int]) -> n
     return values @ matrix
 
 
-def _sphericity(scores: np.ndarray, conditions: int) -> tuple[float, float, float]:
-    """``(eps_gg, W, p)`` for an effect's contrast scores ``(n, p)``; ``conditions`` is the
-    number of cells of the whole design (the columns of the response matrix, as in R)."""
+def _sphericity(scores: np.ndarray, conditions: int) -> dict:
+    """Epsilons, Mauchly's test and a note for an effect's contrast scores ``(n, p)``.
+
+    ``conditions`` is the number of cells of the whole design (the columns of the response
+    matrix, as in R). Where the covariance of the scores is singular, nothing is estimable.
+    """
     n, p = scores.shape
     if p == 1:
-        return 1.0, float("nan"), float("nan")
+        return {
+            "eps_gg": 1.0,
+            "eps_hf": 1.0,
+            "mauchly_W": float("nan"),
+            "mauchly_p": float("nan"),
+            "sphericity": "holds: 1 df",
+        }
+    if n - 1 < p:
+        return _not_estimable(f"not estimable: {n} subjects for {p} df, needs at least {p + 1}")
     s = np.cov(scores, rowvar=False)
-    trace = np.trace(s)
-    eps = float(trace**2 / (p * np.trace(s @ s)))
-    sign, logdet = np.linalg.slogdet(s)
-    if sign <= 0 or n - 1 < p:
-        return eps, 0.0, float("nan")
-    log_w = logdet - p * math.log(trace / p)
+    eigenvalues = np.linalg.eigvalsh(s)
+    # rank as numpy's matrix_rank decides it; relative to the largest eigenvalue, unlike car's
+    # absolute threshold (1.5e-8), so that it does not depend on the unit of the data
+    rank = int(np.sum(eigenvalues > eigenvalues.max() * p * np.finfo(float).eps))
+    if rank < p:
+        return _not_estimable(
+            f"not estimable: the covariance of the {p} contrast scores has rank {rank}"
+        )
+    trace = float(eigenvalues.sum())
+    eps = trace**2 / (p * float(np.sum(eigenvalues**2)))
+    denominator = p * (n - 1 - p * eps)
+    eps_hf = 1.0 if denominator <= 0 else min(1.0, (n * p * eps - 2) / denominator)
+    log_w = float(np.sum(np.log(eigenvalues))) - p * math.log(trace / p)
     f = 1 - (2 * p**2 + p + 2) / (6 * p * (n - 1))
     chi2 = -(n - 1) * f * log_w
     dof = p * (p + 1) / 2 - 1
     first = sps.chi2.sf(chi2, dof)
     # second-order term (Box 1949); with the number of conditions where Anderson has p, as
-    # R's mauchly.test and pingouin do, so that the p-values agree with theirs
+    # R's mauchly.test, car and pingouin do, so that the p-values agree with theirs
     w2 = (
         (p + 2)
         * (p - 1)
@@ -120,20 +176,32 @@ def _sphericity(scores: np.ndarray, conditions: int) -> tuple[float, float, floa
         * (2 * p**3 + 6 * p**2 + 3 * conditions + 2)
         / (288 * ((n - 1) * p * f) ** 2)
     )
-    return eps, math.exp(log_w), float(first + w2 * (sps.chi2.sf(chi2, dof + 4) - first))
+    return {
+        "eps_gg": eps,
+        "eps_hf": eps_hf,
+        "mauchly_W": math.exp(log_w),
+        "mauchly_p": float(first + w2 * (sps.chi2.sf(chi2, dof + 4) - first)),
+        "sphericity": "estimated",
+    }
+
+
+def _not_estimable(reason: str) -> dict:
+    nan = float("nan")
+    return {"eps_gg": nan, "eps_hf": nan, "mauchly_W": nan, "mauchly_p": nan, "sphericity": reason}
 
 
 def rm_anova(df: pd.DataFrame, dv: str, within: str | Sequence[str], subject: str) -> pd.DataFrame:
-    """Repeated-measures ANOVA with Greenhouse–Geisser correction and Mauchly's test.
+    """Repeated-measures ANOVA with Greenhouse–Geisser and Huynh–Feldt corrections and
+    Mauchly's test.
 
     Parameters
     ----------
     df
         Long format: one row per subject and cell of the within factors.
     dv
-        Column of the dependent variable.
+        Column of the dependent variable (finite numbers).
     within
-        One or more within-subject factors.
+        One or more within-subject factors (any column names).
     subject
         Column identifying subjects.
 
@@ -141,56 +209,98 @@ def rm_anova(df: pd.DataFrame, dv: str, within: str | Sequence[str], subject: st
     -------
     pandas.DataFrame
         One row per effect (main effects, then interactions, as ``a × b``) with columns
-        ``source, df1, df2, F, p, eps_gg, p_gg, eta2_partial, mauchly_W, mauchly_p``
-        (Mauchly NaN for effects with one degree of freedom, where sphericity holds).
+        ``source, df1, df2, F, p, eps_gg, p_gg, eps_hf, p_hf, eta2_partial, mauchly_W,
+        mauchly_p, sphericity``. For effects with one degree of freedom sphericity holds:
+        epsilons 1, corrected p = p, Mauchly NaN. Where sphericity is not estimable (fewer
+        than df + 1 subjects, or a singular covariance of the effect's contrast scores) the
+        epsilons, corrected p-values and Mauchly's test are NaN and ``sphericity`` says why;
+        otherwise it reads ``estimated``.
 
     Raises
     ------
     ValueError
-        For missing columns, a subject with no value (or several) in a cell, fewer than two
-        subjects, or a factor with one level.
+        For missing columns, a non-numeric, NaN or infinite dependent variable, a subject with
+        no value (or several) in a cell, fewer than two subjects, a factor with one level, or
+        a factor that is also the subject or dependent variable.
+
+    Notes
+    -----
+    The epsilons and Mauchly's test are given in the module docstring. The corrected p-values
+    use the F distribution with ``ε df1`` and ``ε df2`` degrees of freedom; the Huynh–Feldt
+    ``ε`` is capped at 1 as R does for its p-value. Partial eta squared is
+    ``F df1 / (F df1 + df2)``.
 
     Examples
     --------
     >>> data = pd.DataFrame({"s": np.repeat([1, 2, 3, 4], 3), "c": ["x", "y", "z"] * 4,
     ...                      "v": [1.0, 2.1, 3.0, 1.2, 2.0, 3.3, 0.9, 2.2, 2.8, 1.1, 1.9, 3.1]})
-    >>> float(rm_anova(data, "v", "c", "s").loc[0, "df1"])
-    2.0
+    >>> table = rm_anova(data, "v", "c", "s")
+    >>> float(table.loc[0, "df1"]), round(float(table.loc[0, "eps_hf"]), 4)  # R, car: 0.5344
+    (2.0, 0.5344)
+    >>> table.loc[0, "sphericity"]
+    'estimated'
     """
     factors = [within] if isinstance(within, str) else list(within)
+    if not factors:
+        raise ValueError("rm_anova: within must name at least one factor; got none")
     missing = [c for c in (dv, subject, *factors) if c not in df.columns]
     if missing:
         raise ValueError(f"rm_anova: column(s) {missing} not in the data")
+    names = [dv, subject, *factors]
+    if len(set(names)) < len(names):
+        raise ValueError(
+            f"rm_anova: dv, subject and within factors must be different columns; got "
+            f"dv={dv!r}, subject={subject!r}, within={factors!r}"
+        )
     if df[subject].nunique() < 2:
         raise ValueError("rm_anova needs at least two subjects")
     for f in factors:
         if df[f].nunique() < 2:
             raise ValueError(f"rm_anova: factor {f!r} has only one level")
     values, levels = _wide(df, dv, factors, subject)
-    fit = AnovaRM(df, dv, subject, within=factors).fit().anova_table
+    # statsmodels builds formulas from the column names ('C', 'I', 'Q', spaces, digits break
+    # them): fit on positional names
+    safe = [f"factor{i}" for i in range(len(factors))]
+    renamed = pd.DataFrame(
+        {"subject": df[subject].to_numpy(), "dv": df[dv].to_numpy(float)}
+        | {name: df[f].to_numpy() for name, f in zip(safe, factors, strict=True)}
+    )
+    fit = AnovaRM(renamed, "dv", "subject", within=safe).fit().anova_table
     rows = []
     for order in range(1, len(factors) + 1):
         for effect in itertools.combinations(range(len(factors)), order):
-            name = ":".join(factors[i] for i in effect)
-            table_row = fit.loc[name]
+            table_row = fit.loc[":".join(safe[i] for i in effect)]
             df1, df2 = float(table_row["Num DF"]), float(table_row["Den DF"])
             f_value = float(table_row["F Value"])
-            eps, w, p_w = _sphericity(_effect_scores(values, levels, effect), values.shape[1])
+            p_value = float(table_row["Pr > F"])
+            sphericity = _sphericity(_effect_scores(values, levels, effect), values.shape[1])
+            eps_gg, eps_hf = sphericity["eps_gg"], sphericity["eps_hf"]
             rows.append(
                 {
-                    "source": " × ".join(factors[i] for i in effect),
+                    "source": " × ".join(str(factors[i]) for i in effect),
                     "df1": df1,
                     "df2": df2,
                     "F": f_value,
-                    "p": float(table_row["Pr > F"]),
-                    "eps_gg": eps,
-                    "p_gg": float(sps.f.sf(f_value, df1 * eps, df2 * eps)),
+                    "p": p_value,
+                    "eps_gg": eps_gg,
+                    "p_gg": _corrected_p(f_value, df1, df2, eps_gg, p_value),
+                    "eps_hf": eps_hf,
+                    "p_hf": _corrected_p(f_value, df1, df2, eps_hf, p_value),
                     "eta2_partial": f_value * df1 / (f_value * df1 + df2),
-                    "mauchly_W": w,
-                    "mauchly_p": p_w,
+                    "mauchly_W": sphericity["mauchly_W"],
+                    "mauchly_p": sphericity["mauchly_p"],
+                    "sphericity": sphericity["sphericity"],
                 }
             )
     return pd.DataFrame(rows)
+
+
+def _corrected_p(f_value: float, df1: float, df2: float, eps: float, p: float) -> float:
+    if math.isnan(eps):
+        return float("nan")
+    if eps == 1.0:
+        return p
+    return float(sps.f.sf(f_value, df1 * eps, df2 * eps))
 
 
 def holm(pvalues: Sequence[float]) -> np.ndarray:

@@ -1,9 +1,18 @@
+"""Statistics against R (the reference: values stored in tests/analysis/R by reference.R, made
+with R 4.2, car, afex and multcompView), pingouin (an independent implementation) and
+analytic properties."""
+
 import itertools
+import math
+import re
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pingouin as pg  # test-only dependency: the independent implementation
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
 from analysis.stats import (
@@ -16,6 +25,22 @@ from analysis.stats import (
     ttest_paired,
     ttest_welch,
 )
+
+R_FOLDER = Path(__file__).parent / "R"
+R_TOLERANCE = 1e-11  # relative; the measured differences are below 1e-13
+
+
+def read_r(name):
+    """A table written by reference.R (its comment lines name the R version and packages)."""
+    return pd.read_csv(R_FOLDER / name, comment="#")
+
+
+def numbers(text):
+    return [float(v) for v in text.split(";")]
+
+
+R_ANOVA = read_r("anova_results.csv")
+R_TTESTS = read_r("ttests.csv")
 
 COLUMNS = ["df1", "df2", "F", "p", "eps_gg", "p_gg"]
 
@@ -192,3 +217,178 @@ def test_apa_strings():
     assert apa_F(1, 9, 1.64, 0.2325) == "F(1, 9) = 1.64, p = .233"
     assert apa_F(2.5, 22.51, 3.0, 0.07) == "F(2.50, 22.51) = 3.00, p = .070"
     assert apa_t(14, 1.714, 0.05) == "t(14) = 1.71, p = .050"
+
+
+# ---------------------------------------------------------------------------------- against R
+
+
+def test_every_stored_r_output_names_r_and_its_packages():
+    outputs = sorted(R_FOLDER.glob("*.csv"))
+    assert len(outputs) == 15  # 10 designs and their results, 4 more
+    for path in outputs:
+        first, second = path.read_text().splitlines()[:2]
+        assert re.fullmatch(
+            r"# made by tests/analysis/R/reference\.R with R version 4\.2\.\d.*", first
+        )
+        assert re.fullmatch(
+            r"# packages: car [\d.]+, afex [\d.]+, multcompView [\d.]+, stats 4\.2\.\d", second
+        )
+
+
+@pytest.mark.parametrize("design", list(dict.fromkeys(R_ANOVA["design"])))
+def test_rm_anova_matches_r(design):
+    theirs = R_ANOVA[R_ANOVA["design"] == design].reset_index(drop=True)
+    data = read_r(f"anova_{design}.csv")
+    within = theirs["within"].iloc[0].split(";")
+    ours = rm_anova(data, "y", within, theirs["subject"].iloc[0])
+    assert list(ours["source"]) == [s.replace(":", " × ") for s in theirs["source"]]
+    for column in ("df1", "df2", "F", "p", "eta2_partial"):
+        assert_allclose(ours[column], theirs[column], rtol=R_TOLERANCE, err_msg=column)
+    one_df = theirs["df1"] == 1
+    estimated = ~theirs["singular"] & ~one_df
+    # where R estimates sphericity: GG, HF (capped at 1 as car does for its p-value), Mauchly
+    theirs = theirs.assign(eps_hf=np.minimum(1.0, theirs["eps_hf_uncapped"]))
+    for column in ("eps_gg", "p_gg", "eps_hf", "p_hf", "mauchly_W", "mauchly_p"):
+        assert_allclose(
+            ours.loc[estimated, column],
+            theirs.loc[estimated, column],
+            rtol=R_TOLERANCE,
+            err_msg=column,
+        )
+    assert (ours.loc[estimated, "sphericity"] == "estimated").all()
+    # one df: sphericity holds (R gives no correction and no Mauchly test)
+    assert (ours.loc[one_df, ["eps_gg", "eps_hf"]] == 1.0).all().all()
+    assert_allclose(ours.loc[one_df, "p_gg"], theirs.loc[one_df, "p"], rtol=R_TOLERANCE)
+    assert_allclose(ours.loc[one_df, "p_hf"], theirs.loc[one_df, "p"], rtol=R_TOLERANCE)
+    assert ours.loc[one_df, ["mauchly_W", "mauchly_p"]].isna().all().all()
+    # a singular error SSP matrix: R estimates nothing, and neither do we
+    singular = theirs["singular"]
+    columns = ["eps_gg", "p_gg", "eps_hf", "p_hf", "mauchly_W", "mauchly_p"]
+    assert ours.loc[singular, columns].isna().all().all()
+    assert ours.loc[singular, "sphericity"].str.startswith("not estimable: ").all()
+
+
+def test_r_reference_covers_the_cases_of_the_issue():
+    by_design = R_ANOVA.groupby("design")
+    assert by_design["within"].first().str.count(";").max() == 2  # one to three within factors
+    assert (R_ANOVA["eps_hf_uncapped"] > 1).sum() >= 3  # HF capped at 1
+    assert (R_ANOVA["eps_hf_uncapped"] < 1).sum() >= 10
+    assert R_ANOVA.loc[R_ANOVA["design"] == "spencer_12x2", "singular"].sum() == 2
+    assert by_design["within"].first()["formula_names"] == "C;Q"
+
+
+# --------------------------------------------------------------------- properties and refusals
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    names=st.lists(
+        st.one_of(st.text(min_size=1, max_size=8), st.sampled_from(["C", "I", "Q", "1", "a b"])),
+        min_size=4,
+        max_size=4,
+        unique=True,
+    )
+)
+def test_any_column_names_give_rs_numbers(names):
+    # R's table for factors named C and Q, subject I (names patsy's formulas cannot take)
+    theirs = R_ANOVA[R_ANOVA["design"] == "formula_names"].reset_index(drop=True)
+    data = read_r("anova_formula_names.csv")
+    subject, a, b, dv = names
+    data = data.rename(columns={"I": subject, "C": a, "Q": b, "y": dv})
+    ours = rm_anova(data, dv, [a, b], subject)
+    assert list(ours["source"]) == [a, b, f"{a} × {b}"]
+    assert_allclose(ours["F"], theirs["F"], rtol=R_TOLERANCE)
+    assert_allclose(ours.loc[[0, 2], "p_hf"], theirs.loc[[0, 2], "p_hf"], rtol=R_TOLERANCE)
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    levels=st.sampled_from([(3,), (5,), (2, 4), (3, 3), (2, 2, 3)]),
+    extra=st.integers(0, 6),
+)
+def test_epsilons_lie_between_their_bounds(seed, levels, extra):
+    # Huynh–Feldt's estimate is at least Greenhouse–Geisser's (algebra: n p ε - 2 ≥ ε p (n - 1
+    # - p ε) as p ε ≥ 1) and at most 1 after capping; GG lies in [1/df, 1]
+    p_max = max(math.prod(k - 1 for k in subset) for subset in _subsets(levels))
+    df, names = random_design(levels, n=p_max + 1 + extra, seed=seed)
+    table = rm_anova(df, "v", names, "s")
+    assert (table["sphericity"] != "estimated").sum() == (table["df1"] == 1).sum()
+    assert (table["eps_gg"] >= 1 / table["df1"] - 1e-12).all()
+    assert (table["eps_hf"] >= table["eps_gg"] - 1e-12).all()
+    assert (table["eps_hf"] <= 1).all()
+    estimated = table[table["df1"] > 1]
+    assert ((estimated["mauchly_W"] > 0) & (estimated["mauchly_W"] <= 1 + 1e-12)).all()
+    assert ((estimated["mauchly_p"] >= 0) & (estimated["mauchly_p"] <= 1)).all()
+
+
+def _subsets(levels):
+    for order in range(1, len(levels) + 1):
+        yield from itertools.combinations(levels, order)
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), levels=st.sampled_from([(4,), (6,), (12, 2), (3, 4)]))
+def test_too_few_subjects_make_sphericity_not_estimable(seed, levels):
+    p_max = max(math.prod(k - 1 for k in subset) for subset in _subsets(levels))
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(2, p_max + 1))  # at most df subjects for the largest effect
+    df, names = random_design(levels, n=n, seed=seed)
+    table = rm_anova(df, "v", names, "s").set_index("source")
+    for effect in _subsets(range(len(levels))):
+        p = math.prod(levels[i] - 1 for i in effect)
+        row = table.loc[" × ".join(names[i] for i in effect)]
+        if p == 1:
+            assert row["sphericity"] == "holds: 1 df"
+        elif n <= p:
+            assert row["sphericity"] == (
+                f"not estimable: {n} subjects for {p} df, needs at least {p + 1}"
+            )
+            assert math.isnan(row["eps_gg"]) and math.isnan(row["mauchly_W"])
+            assert math.isnan(row["p_gg"]) and math.isnan(row["p_hf"])
+            assert math.isfinite(row["F"]) and math.isfinite(row["p"])
+        else:
+            assert row["sphericity"] == "estimated"
+
+
+def test_a_singular_covariance_with_enough_subjects_is_not_estimable():
+    df, _ = random_design((4,), n=8, seed=2)
+    wide = df.pivot(index="s", columns="f0", values="v")
+    wide["L3"] = 2 * wide["L2"] - wide["L1"]  # collinear scores: rank 2 of 3
+    long = wide.reset_index().melt(id_vars="s", var_name="f0", value_name="v")
+    row = rm_anova(long, "v", "f0", "s").iloc[0]
+    assert row["sphericity"] == "not estimable: the covariance of the 3 contrast scores has rank 2"
+    assert math.isnan(row["eps_gg"]) and math.isfinite(row["F"])
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    bad=st.sampled_from([float("nan"), float("inf"), -float("inf")]),
+    position=st.integers(0, 23),
+)
+def test_nan_or_infinite_values_are_refused_by_name(seed, bad, position):
+    df, names = random_design((3, 2), n=4, seed=seed)
+    df.loc[position, "v"] = bad
+    s, f0, f1 = df.loc[position, ["s", "f0", "f1"]]
+    with pytest.raises(
+        ValueError,
+        match=re.escape(
+            f"rm_anova: dv 'v' is {bad} for subject {s!r} at {{'f0': {f0!r}, 'f1': {f1!r}}}; "
+            "every value must be a finite number (1 of 24 are not)"
+        ),
+    ):
+        rm_anova(df, "v", names, "s")
+
+
+def test_rm_anova_refuses_bad_arguments_by_name():
+    df, names = random_design((3,), n=5, seed=0)
+    with pytest.raises(ValueError, match=r"column dv='v' must be numeric; got dtype"):
+        rm_anova(df.astype({"v": str}), "v", names, "s")
+    with pytest.raises(
+        ValueError,
+        match=r"must be different columns; got dv='v', subject='s', within=\['f0', 'f0'\]",
+    ):
+        rm_anova(df, "v", ["f0", "f0"], "s")
+    with pytest.raises(ValueError, match="within must name at least one factor"):
+        rm_anova(df, "v", [], "s")
