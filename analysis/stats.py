@@ -1,6 +1,7 @@
 """Statistics for the studies: repeated-measures ANOVA with sphericity, Holm, t-tests, groups.
 
-All functions take long-format pandas DataFrames (one row per subject × cell).
+All functions take long-format pandas DataFrames (one row per subject × cell) or arrays, and
+refuse missing or non-finite values with a ``ValueError`` instead of returning NaN.
 
 ``rm_anova`` uses statsmodels' ``AnovaRM`` for the F tests and adds what it lacks: for every
 within effect, main effects and interactions alike, the Greenhouse–Geisser and Huynh–Feldt
@@ -306,6 +307,11 @@ def _corrected_p(f_value: float, df1: float, df2: float, eps: float, p: float) -
 def holm(pvalues: Sequence[float]) -> np.ndarray:
     """Holm-adjusted p-values (statsmodels ``multipletests``), in the input order.
 
+    Raises
+    ------
+    ValueError
+        For a p-value that is NaN or outside [0, 1].
+
     Examples
     --------
     >>> [round(float(p), 3) for p in holm([0.01, 0.04, 0.03])]
@@ -314,16 +320,38 @@ def holm(pvalues: Sequence[float]) -> np.ndarray:
     p = np.asarray(pvalues, dtype=float)
     if p.size == 0:
         return p
-    if np.isnan(p).any() or (p < 0).any() or (p > 1).any():
-        raise ValueError("holm: p-values must be numbers in [0, 1]")
+    bad = np.flatnonzero(~((p >= 0) & (p <= 1)))
+    if bad.size:
+        raise ValueError(
+            f"holm: p-values must be numbers in [0, 1]; got {p[bad[0]]} at position {bad[0]}"
+        )
     return multipletests(p, method="holm")[1]
 
 
+def _sample(values: Sequence[float], name: str, caller: str) -> np.ndarray:
+    array = np.asarray(values, dtype=float)
+    if array.ndim != 1:
+        raise ValueError(f"{caller}: {name} must be one-dimensional; got shape {array.shape}")
+    _finite(array, f"{caller}: {name}", lambda i: f"at position {i}")
+    return array
+
+
 def ttest_paired(a: Sequence[float], b: Sequence[float]) -> dict:
-    """Paired t-test: ``t``, ``df`` (n - 1), two-sided ``p``, mean difference."""
-    a, b = np.asarray(a, float), np.asarray(b, float)
+    """Paired t-test: ``t``, ``df`` (n - 1), two-sided ``p``, mean difference.
+
+    Raises
+    ------
+    ValueError
+        For samples of different sizes, fewer than 2 pairs, or a value that is NaN or infinite
+        (drop incomplete pairs first: R's ``t.test`` drops them silently).
+    """
+    a = _sample(a, "a", "ttest_paired")
+    b = _sample(b, "b", "ttest_paired")
     if a.shape != b.shape or a.size < 2:
-        raise ValueError("ttest_paired needs two samples of the same size, at least 2")
+        raise ValueError(
+            f"ttest_paired needs two samples of the same size, at least 2; got {a.size} and "
+            f"{b.size}"
+        )
     result = sps.ttest_rel(a, b)
     return {
         "t": float(result.statistic),
@@ -334,10 +362,19 @@ def ttest_paired(a: Sequence[float], b: Sequence[float]) -> dict:
 
 
 def ttest_welch(a: Sequence[float], b: Sequence[float]) -> dict:
-    """Welch's unpaired t-test: ``t``, Welch–Satterthwaite ``df``, two-sided ``p``."""
-    a, b = np.asarray(a, float), np.asarray(b, float)
+    """Welch's unpaired t-test: ``t``, Welch–Satterthwaite ``df``, two-sided ``p``.
+
+    Raises
+    ------
+    ValueError
+        For fewer than 2 values in a sample, or a value that is NaN or infinite.
+    """
+    a = _sample(a, "a", "ttest_welch")
+    b = _sample(b, "b", "ttest_welch")
     if a.size < 2 or b.size < 2:
-        raise ValueError("ttest_welch needs at least 2 values in each sample")
+        raise ValueError(
+            f"ttest_welch needs at least 2 values in each sample; got {a.size} and {b.size}"
+        )
     result = sps.ttest_ind(a, b, equal_var=False)
     va, vb = a.var(ddof=1) / a.size, b.var(ddof=1) / b.size
     dof = (va + vb) ** 2 / (va**2 / (a.size - 1) + vb**2 / (b.size - 1))
@@ -350,9 +387,41 @@ def ttest_welch(a: Sequence[float], b: Sequence[float]) -> dict:
 
 
 def pairwise_tests(df: pd.DataFrame, dv: str, factor: str, subject: str) -> pd.DataFrame:
-    """Paired t-tests between every pair of levels of ``factor``, Holm-adjusted."""
+    """Paired t-tests between every pair of levels of ``factor``, Holm-adjusted.
+
+    Raises
+    ------
+    ValueError
+        For missing columns, a non-numeric, NaN or infinite ``dv``, or a subject without
+        exactly one value at every level.
+    """
+    missing = [c for c in (dv, factor, subject) if c not in df.columns]
+    if missing:
+        raise ValueError(f"pairwise_tests: column(s) {missing} not in the data")
+    values = _numeric(df, dv, "pairwise_tests")
+    rows = df[[subject, factor]].to_numpy()
+    _finite(
+        values,
+        f"pairwise_tests: dv {dv!r}",
+        lambda i: f"for subject {rows[i][0]!r} at {factor}={rows[i][1]!r}",
+    )
     levels = sorted(df[factor].unique(), key=str)
-    wide = df.pivot_table(index=subject, columns=factor, values=dv, observed=True)
+    counts = (
+        df.groupby([subject, factor], observed=True)
+        .size()
+        .unstack(factor)
+        .reindex(columns=levels)
+        .fillna(0)
+    )
+    bad = counts[(counts != 1).any(axis=1)]
+    if len(bad):
+        who = bad.index[0]
+        level = next(lev for lev in levels if bad.loc[who, lev] != 1)
+        raise ValueError(
+            f"pairwise_tests needs exactly one {dv!r} per subject and level of {factor!r}; "
+            f"subject {who!r} has {int(bad.loc[who, level])} at {factor}={level!r}"
+        )
+    wide = df.pivot(index=subject, columns=factor, values=dv)
     rows = []
     for a, b in itertools.combinations(levels, 2):
         result = ttest_paired(wide[a], wide[b])

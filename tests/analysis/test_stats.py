@@ -14,6 +14,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
+from scipy import stats as sps
 
 from analysis.stats import (
     apa_F,
@@ -277,6 +278,43 @@ def test_r_reference_covers_the_cases_of_the_issue():
     assert by_design["within"].first()["formula_names"] == "C;Q"
 
 
+@pytest.mark.parametrize("case", R_TTESTS["case"])
+def test_t_tests_match_r(case):
+    theirs = R_TTESTS.set_index("case").loc[case]
+    a, b = numbers(theirs["a"]), numbers(theirs["b"])
+    for name, ours in (("paired", ttest_paired(a, b)), ("welch", ttest_welch(a, b))):
+        assert_allclose(
+            [ours["t"], ours["df"], ours["p"]],
+            [theirs[f"{name}_t"], theirs[f"{name}_df"], theirs[f"{name}_p"]],
+            rtol=R_TOLERANCE,
+        )
+    welch = ttest_welch(a, b)  # the one-sided test as the Yoshida analysis computes it
+    assert_allclose(sps.t.sf(welch["t"], welch["df"]), theirs["welch_p_greater"], rtol=R_TOLERANCE)
+
+
+def test_pairwise_tests_holm_and_letters_match_r():
+    theirs = read_r("pairwise_results.csv")
+    ours = pairwise_tests(read_r("pairwise_data.csv"), "y", "level", "subject")
+    assert list(zip(ours["a"], ours["b"], strict=True)) == list(
+        zip(theirs["a"], theirs["b"], strict=True)
+    )
+    for column in ("t", "df", "p", "p_holm"):
+        assert_allclose(ours[column], theirs[column], rtol=R_TOLERANCE, err_msg=column)
+    means = read_r("pairwise_data.csv").groupby("level")["y"].mean().to_dict()
+    letters = similarity_groups(means, {(r.a, r.b): r.p_holm for r in ours.itertuples()})
+    r_letters = dict(zip(theirs["a"], theirs["letters_a"], strict=True)) | dict(
+        zip(theirs["b"], theirs["letters_b"], strict=True)
+    )
+
+    def groups(display):  # the letters' names differ; the groups they define must not
+        return {frozenset(k for k, v in display.items() if letter in v) for letter in "abcde"} - {
+            frozenset()
+        }
+
+    assert groups(letters) == groups(r_letters)
+    assert len(groups(letters)) == 3
+
+
 # --------------------------------------------------------------------- properties and refusals
 
 
@@ -379,6 +417,12 @@ def test_nan_or_infinite_values_are_refused_by_name(seed, bad, position):
         ),
     ):
         rm_anova(df, "v", names, "s")
+    long = df[df["f1"] == df.loc[position, "f1"]]
+    with pytest.raises(
+        ValueError,
+        match=re.escape(f"pairwise_tests: dv 'v' is {bad} for subject {s!r} at f0={f0!r}"),
+    ):
+        pairwise_tests(long, "v", "f0", "s")
 
 
 def test_rm_anova_refuses_bad_arguments_by_name():
@@ -392,3 +436,28 @@ def test_rm_anova_refuses_bad_arguments_by_name():
         rm_anova(df, "v", ["f0", "f0"], "s")
     with pytest.raises(ValueError, match="within must name at least one factor"):
         rm_anova(df, "v", [], "s")
+
+
+def test_t_tests_refuse_nan_instead_of_returning_it():
+    with pytest.raises(
+        ValueError,
+        match=r"ttest_paired: a is nan at position 1; every value must be a finite number \(1 of 3",
+    ):
+        ttest_paired([1.0, np.nan, 3.0], [1.5, 2.0, 2.5])
+    with pytest.raises(ValueError, match=r"ttest_welch: b is inf at position 0"):
+        ttest_welch([1.0, 2.0], [np.inf, 2.0])
+    with pytest.raises(ValueError, match=r"same size, at least 2; got 3 and 2"):
+        ttest_paired([1.0, 2.0, 3.0], [1.0, 2.0])
+
+
+def test_pairwise_tests_name_a_missing_or_repeated_cell():
+    df, _ = random_design((4,), n=6, seed=1)
+    with pytest.raises(
+        ValueError,
+        match=r"exactly one 'v' per subject and level of 'f0'; subject 'S1' has 0 at f0='L2'",
+    ):
+        pairwise_tests(df.drop(index=6), "v", "f0", "s")
+    with pytest.raises(ValueError, match=r"subject 'S0' has 2 at f0='L0'"):
+        pairwise_tests(pd.concat([df, df.iloc[[0]]]), "v", "f0", "s")
+    with pytest.raises(ValueError, match=r"got nan at position 1"):
+        holm([0.2, float("nan")])
