@@ -34,12 +34,15 @@ a 12 × 2 design with 8 subjects), neither epsilon nor Mauchly's test can be est
 ``car::Anova`` gives none of them ("not available"); ``rm_anova`` gives NaN and says why in its
 ``sphericity`` column.
 
+The Wilcoxon signed-rank test (``wilcoxon_signed_rank``) is R's ``wilcox.test(x, mu = mu)`` with
+R's defaults, written out so that the result does not depend on the SciPy version.
+
 References
 ----------
 Greenhouse & Geisser (1959), Psychometrika 24, 95-112; Huynh & Feldt (1976), J. Educ. Stat. 1,
 69-82; Lecoutre (1991), J. Educ. Stat. 16, 371-372; Mauchly (1940); Box (1949); Holm (1979);
-Piepho (2004) for the compact letter display; the F tests: statsmodels ``AnovaRM``. Reference
-values: R 4.2 with car and afex (``tests/analysis/R``).
+Wilcoxon (1945); Piepho (2004) for the compact letter display; the F tests: statsmodels
+``AnovaRM``. Reference values: R 4.2 with car and afex (``tests/analysis/R``).
 """
 
 from __future__ import annotations
@@ -64,7 +67,11 @@ __all__ = [
     "similarity_groups",
     "ttest_paired",
     "ttest_welch",
+    "wilcoxon_signed_rank",
 ]
+
+
+WILCOXON_EXACT_BELOW_N = 50  # R's wilcox.test: exact p for fewer non-zero differences, no ties
 
 
 def _helmert(levels: int) -> np.ndarray:
@@ -384,6 +391,105 @@ def ttest_welch(a: Sequence[float], b: Sequence[float]) -> dict:
         "p": float(result.pvalue),
         "mean_difference": float(a.mean() - b.mean()),
     }
+
+
+def wilcoxon_signed_rank(x: Sequence[float], *, mu: float = 0.0) -> dict:
+    """Wilcoxon signed-rank test of ``x`` against ``mu``, two-sided, as R's
+    ``wilcox.test(x, mu = mu)`` with its defaults.
+
+    Parameters
+    ----------
+    x
+        The sample (finite numbers, e.g. Likert ratings).
+    mu
+        The value tested against (e.g. a scale's midpoint); default 0.
+
+    Returns
+    -------
+    dict
+        ``V`` (the sum of the ranks of the positive differences ``x - mu``, R's statistic),
+        ``p`` (two-sided), ``n`` (non-zero differences), ``zeros`` (dropped differences) and
+        ``method`` (``"exact"`` or ``"normal, continuity-corrected"``).
+
+    Raises
+    ------
+    ValueError
+        For a value of ``x`` or ``mu`` that is NaN or infinite, an empty sample, or a sample
+        whose every value equals ``mu`` (R gives ``V = 0`` and ``p = NA`` there).
+
+    Notes
+    -----
+    Differences ``d = x - mu`` of zero are dropped (Wilcoxon 1945); the others are ranked by
+    ``|d|`` with mid-ranks for ties. With fewer than 50 non-zero differences, no ties and no
+    zeros, ``p`` is exact: twice the smaller tail of the null distribution of ``V`` (the
+    number of subsets of ``1 … n`` with each sum, counted exactly), at most 1. Otherwise the
+    normal approximation with the tie and continuity corrections:
+
+    .. math::
+
+       z = \\frac{V - n(n+1)/4 - \\tfrac12 \\operatorname{sign}(V - n(n+1)/4)}
+                {\\sqrt{n(n+1)(2n+1)/24 - \\sum_j (t_j^3 - t_j)/48}},
+
+    with ``t_j`` the sizes of the tie groups, and ``p = 2 min(Φ(z), 1 - Φ(z))``. This is
+    R's default (R 4.2 ``wilcox.test``: ``exact = NULL, correct = TRUE``), written out here
+    because ``scipy.stats.wilcoxon`` chooses between its exact and normal variants, and
+    reports the smaller rank sum instead of ``V``, differently across SciPy versions.
+
+    References
+    ----------
+    Wilcoxon (1945), Biometrics Bulletin 1, 80-83; Hollander, Wolfe & Chicken (2014),
+    Nonparametric Statistical Methods, 3rd ed., §3.1 (the null distribution, ties and the
+    normal approximation); R's ``wilcox.test`` (stats package).
+
+    Examples
+    --------
+    >>> result = wilcoxon_signed_rank([4.8, 5.6, 3.1, 6.2, 4.45, 5.9, 7.3], mu=4)
+    >>> result["V"], result["p"], result["method"]
+    (25.0, 0.078125, 'exact')
+    >>> result = wilcoxon_signed_rank([5, 5, 4, 6, 3, 5, 6, 4, 5, 7], mu=4)
+    >>> result["V"], round(result["p"], 4), result["n"], result["zeros"]
+    (33.0, 0.0371, 8, 2)
+    """
+    values = _sample(x, "x", "wilcoxon_signed_rank")
+    if not math.isfinite(mu):
+        raise ValueError(f"wilcoxon_signed_rank: mu must be a finite number; got {mu!r}")
+    if values.size == 0:
+        raise ValueError("wilcoxon_signed_rank: x is empty; it needs at least one value")
+    differences = values - mu
+    nonzero = differences[differences != 0]
+    n = nonzero.size
+    if n == 0:
+        raise ValueError(
+            f"wilcoxon_signed_rank: all {values.size} values of x equal mu={mu!r}; the test "
+            "needs at least one value different from mu"
+        )
+    ranks = sps.rankdata(np.abs(nonzero))  # mid-ranks for ties
+    statistic = float(ranks[nonzero > 0].sum())
+    _, tie_sizes = np.unique(ranks, return_counts=True)
+    ties = bool((tie_sizes > 1).any())
+    zeros = int(values.size - n)
+    if n < WILCOXON_EXACT_BELOW_N and not ties and not zeros:
+        counts = _signed_rank_counts(n)
+        v = round(statistic)
+        tail = counts[v:].sum() if statistic > n * (n + 1) / 4 else counts[: v + 1].sum()
+        p = min(1.0, 2 * float(tail) / 2.0**n)
+        method = "exact"
+    else:
+        centred = statistic - n * (n + 1) / 4
+        sigma = math.sqrt(n * (n + 1) * (2 * n + 1) / 24 - np.sum(tie_sizes**3 - tie_sizes) / 48)
+        z = (centred - math.copysign(0.5, centred) * (centred != 0)) / sigma
+        p = float(2 * min(sps.norm.cdf(z), sps.norm.sf(z)))
+        method = "normal, continuity-corrected"
+    return {"V": statistic, "p": p, "n": int(n), "zeros": zeros, "method": method}
+
+
+def _signed_rank_counts(n: int) -> np.ndarray:
+    """How many subsets of ``{1, …, n}`` have each sum ``0 … n(n+1)/2`` (exact for n < 63)."""
+    counts = np.zeros(n * (n + 1) // 2 + 1, dtype=np.int64)
+    counts[0] = 1
+    for k in range(1, n + 1):
+        counts[k:] = counts[k:] + counts[:-k]
+    return counts
 
 
 def pairwise_tests(df: pd.DataFrame, dv: str, factor: str, subject: str) -> pd.DataFrame:

@@ -25,6 +25,7 @@ from analysis.stats import (
     similarity_groups,
     ttest_paired,
     ttest_welch,
+    wilcoxon_signed_rank,
 )
 
 R_FOLDER = Path(__file__).parent / "R"
@@ -41,6 +42,7 @@ def numbers(text):
 
 
 R_ANOVA = read_r("anova_results.csv")
+R_WILCOXON = read_r("wilcoxon.csv")
 R_TTESTS = read_r("ttests.csv")
 
 COLUMNS = ["df1", "df2", "F", "p", "eps_gg", "p_gg"]
@@ -278,6 +280,28 @@ def test_r_reference_covers_the_cases_of_the_issue():
     assert by_design["within"].first()["formula_names"] == "C;Q"
 
 
+@pytest.mark.parametrize("case", R_WILCOXON["case"])
+def test_wilcoxon_matches_rs_default(case):
+    theirs = R_WILCOXON.set_index("case").loc[case]
+    ours = wilcoxon_signed_rank(numbers(theirs["x"]), mu=float(theirs["mu"]))
+    assert ours["V"] == theirs["V"]  # R's statistic: the positive ranks' sum
+    assert_allclose(ours["p"], theirs["p"], rtol=R_TOLERANCE)
+    r_method = {
+        "Wilcoxon signed rank exact test": "exact",
+        "Wilcoxon signed rank test with continuity correction": "normal, continuity-corrected",
+    }
+    assert ours["method"] == r_method[theirs["method"]]
+
+
+def test_wilcoxon_reference_covers_exact_normal_ties_and_zeros():
+    methods = R_WILCOXON.set_index("case")["method"]
+    assert methods["exact_n49"].endswith("exact test")  # n < 50: exact
+    assert methods["normal_n50"].endswith("continuity correction")  # n = 50: normal
+    assert methods["ties"].endswith("continuity correction")
+    assert methods["zeros"].endswith("continuity correction")
+    assert methods["decimal_not_tied"].endswith("exact test")  # 4.1 - 4 != 4 - 3.9 in binary
+
+
 @pytest.mark.parametrize("case", R_TTESTS["case"])
 def test_t_tests_match_r(case):
     theirs = R_TTESTS.set_index("case").loc[case]
@@ -461,3 +485,47 @@ def test_pairwise_tests_name_a_missing_or_repeated_cell():
         pairwise_tests(pd.concat([df, df.iloc[[0]]]), "v", "f0", "s")
     with pytest.raises(ValueError, match=r"got nan at position 1"):
         holm([0.2, float("nan")])
+
+
+def brute_force_signed_rank_p(differences):
+    """Two-sided exact p by enumerating all 2^n sign patterns (no ties, no zeros)."""
+    n = len(differences)
+    ranks = sps.rankdata(np.abs(differences))
+    observed = ranks[np.asarray(differences) > 0].sum()
+    centre = n * (n + 1) / 4
+    totals = [
+        sum(r for r, sign in zip(ranks, signs, strict=True) if sign)
+        for signs in itertools.product([0, 1], repeat=n)
+    ]
+    extreme = sum(abs(t - centre) >= abs(observed - centre) - 1e-9 for t in totals)
+    return min(1.0, extreme / 2**n)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    st.lists(
+        st.floats(-50, 50).filter(lambda v: abs(v) > 1e-3), min_size=1, max_size=11, unique_by=abs
+    )
+)
+def test_exact_wilcoxon_is_the_enumerated_null_distribution(differences):
+    ours = wilcoxon_signed_rank(np.asarray(differences) + 4.0, mu=4.0)
+    shifted = list(np.asarray(differences) + 4.0 - 4.0)
+    if len(set(np.abs(shifted))) < len(shifted) or 0.0 in shifted:
+        return  # the shift made a tie or a zero (floating point): the normal variant
+    assert ours["method"] == "exact"
+    assert_allclose(ours["p"], brute_force_signed_rank_p(shifted), rtol=1e-12)
+    mirrored = wilcoxon_signed_rank(-np.asarray(shifted))
+    n = len(shifted)
+    assert mirrored["V"] == n * (n + 1) / 2 - ours["V"]
+    assert_allclose(mirrored["p"], ours["p"], rtol=1e-12)
+
+
+def test_wilcoxon_refusals():
+    with pytest.raises(ValueError, match=r"x is nan at position 2; every value must be a finite"):
+        wilcoxon_signed_rank([5.0, 6.0, np.nan], mu=4)
+    with pytest.raises(ValueError, match=r"all 3 values of x equal mu=4"):
+        wilcoxon_signed_rank([4, 4, 4], mu=4)
+    with pytest.raises(ValueError, match=r"mu must be a finite number; got nan"):
+        wilcoxon_signed_rank([4, 5], mu=float("nan"))
+    with pytest.raises(ValueError, match=r"x is empty"):
+        wilcoxon_signed_rank([], mu=4)
