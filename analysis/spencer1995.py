@@ -22,7 +22,7 @@ from scipy.special import expit
 
 from .figures import plt, png
 from .load import Dataset
-from .stats import apa_F, rm_anova
+from .stats import apa_anova, rm_anova
 
 __all__ = ["analyse_spencer1995", "psychometric_match", "reversal_match"]
 
@@ -103,9 +103,8 @@ def analyse_spencer1995(dataset: Dataset) -> dict:
     if matches["context"].nunique() == 2:
         data = matches.rename(columns={"match_reversals": "match"}).astype({"glare_level": str})
         anova = rm_anova(data, "match", ["glare_level", "context"], "participant")
-        anova["apa_gg"] = [
-            apa_F(r.df1 * r.eps_gg, r.df2 * r.eps_gg, r.F, r.p_gg) for r in anova.itertuples()
-        ]
+        anova["apa_gg"] = apa_anova(anova, correction="GG")
+        anova["apa_hf"] = apa_anova(anova, correction="HF")
         tables["anova"] = anova
         text = {row.source: row.apa_gg for row in anova.itertuples()}
     repeated = len(every) - len(trials)

@@ -32,7 +32,7 @@ between-subject groups (``g = 1``, as here) both read ``n p ε - 2``. The estima
 When the effect's contrast covariance is singular (fewer subjects than the effect's df + 1, as in
 a 12 × 2 design with 8 subjects), neither epsilon nor Mauchly's test can be estimated: R's
 ``car::Anova`` gives none of them ("not available"); ``rm_anova`` gives NaN and says why in its
-``sphericity`` column.
+``sphericity`` column, and ``apa_anova`` prints the uncorrected test with that reason.
 
 The Wilcoxon signed-rank test (``wilcoxon_signed_rank``) is R's ``wilcox.test(x, mu = mu)`` with
 R's defaults, written out so that the result does not depend on the SciPy version.
@@ -50,6 +50,7 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Sequence
+from typing import Literal, get_args
 
 import numpy as np
 import pandas as pd
@@ -59,6 +60,7 @@ from statsmodels.stats.multitest import multipletests
 
 __all__ = [
     "apa_F",
+    "apa_anova",
     "apa_p",
     "apa_t",
     "holm",
@@ -69,7 +71,6 @@ __all__ = [
     "ttest_welch",
     "wilcoxon_signed_rank",
 ]
-
 
 WILCOXON_EXACT_BELOW_N = 50  # R's wilcox.test: exact p for fewer non-zero differences, no ties
 
@@ -592,10 +593,32 @@ def similarity_groups(means: dict, p_adjusted: dict, alpha: float = 0.05) -> dic
 
 
 def apa_p(p: float) -> str:
-    """``p < .001`` or ``p = .034`` (APA: no leading zero)."""
-    if p < 0.001:
+    """``p < .001``, ``p = .034`` or ``p > .999`` (APA: three decimals, no leading zero).
+
+    Raises
+    ------
+    ValueError
+        For a p that is NaN or outside [0, 1] (a test that could not be computed has no p to
+        print; say why instead).
+
+    Examples
+    --------
+    >>> apa_p(0.0341), apa_p(0.0004), apa_p(0.9996)
+    ('p = .034', 'p < .001', 'p > .999')
+    """
+    try:
+        value = float(p)
+    except (TypeError, ValueError):
+        value = float("nan")
+    if not 0 <= value <= 1:
+        shown = value if isinstance(p, int | float | np.floating) else repr(p)
+        raise ValueError(f"apa_p: p must be a number in [0, 1]; got {shown}")
+    if value < 0.001:
         return "p < .001"
-    return f"p = {p:.3f}".replace("0.", ".", 1)
+    text = f"{value:.3f}"
+    if text == "1.000":  # p >= .9995 would round to 1
+        return "p > .999"
+    return f"p = {text[1:]}"
 
 
 def apa_F(df1: float, df2: float, f_value: float, p: float) -> str:
@@ -611,6 +634,59 @@ def apa_F(df1: float, df2: float, f_value: float, p: float) -> str:
         return f"{x:.0f}" if float(x).is_integer() else f"{x:.2f}"
 
     return f"F({dof(df1)}, {dof(df2)}) = {f_value:.2f}, {apa_p(p)}"
+
+
+Correction = Literal["none", "GG", "HF"]
+
+
+def apa_anova(table: pd.DataFrame, *, correction: Correction) -> list[str]:
+    """APA strings for the rows of an ``rm_anova`` table, uncorrected or corrected.
+
+    Parameters
+    ----------
+    table
+        The result of ``rm_anova``.
+    correction
+        ``"none"``, ``"GG"`` (Greenhouse–Geisser) or ``"HF"`` (Huynh–Feldt): the corrected
+        tests give ``ε df1``, ``ε df2`` and the corrected p. Where sphericity is not
+        estimable, the uncorrected test followed by the reason.
+
+    Raises
+    ------
+    ValueError
+        For another ``correction``.
+
+    Examples
+    --------
+    >>> table = pd.DataFrame({"df1": [2.0, 11.0], "df2": [18.0, 77.0], "F": [2.98, 0.66],
+    ...     "p": [0.076, 0.772], "eps_gg": [0.943, float("nan")],
+    ...     "p_gg": [0.080, float("nan")], "eps_hf": [1.0, float("nan")],
+    ...     "p_hf": [0.076, float("nan")],
+    ...     "sphericity": ["estimated", "not estimable: 8 subjects for 11 df"]})
+    >>> apa_anova(table, correction="GG")
+    ['F(1.89, 16.97) = 2.98, p = .080',
+     'F(11, 77) = 0.66, p = .772 (uncorrected; sphericity not estimable: 8 subjects for 11 df)']
+    """
+    if correction == "none":
+        return [apa_F(r.df1, r.df2, r.F, r.p) for r in table.itertuples()]
+    elif correction in ("GG", "HF"):
+        suffix = correction.lower()
+        strings = []
+        for row in table.itertuples():
+            eps, p = getattr(row, f"eps_{suffix}"), getattr(row, f"p_{suffix}")
+            if math.isnan(eps):
+                strings.append(
+                    f"{apa_F(row.df1, row.df2, row.F, row.p)} (uncorrected; sphericity "
+                    f"{row.sphericity})"
+                )
+            else:
+                strings.append(apa_F(row.df1 * eps, row.df2 * eps, row.F, p))
+        return strings
+    else:
+        raise ValueError(
+            f"apa_anova: correction must be one of {', '.join(get_args(Correction))}; "
+            f"got {correction!r}"
+        )
 
 
 def apa_t(dof: float, t: float, p: float) -> str:

@@ -25,7 +25,7 @@ from scipy import stats as sps
 from .figures import plt, png
 from .load import Dataset
 from .stats import (
-    apa_F,
+    apa_anova,
     apa_t,
     pairwise_tests,
     rm_anova,
@@ -47,10 +47,9 @@ def _sem(x: pd.Series) -> float:
 def _anova(data: pd.DataFrame, label: str) -> pd.DataFrame:
     table = rm_anova(data, "match_cd_m2", ["L_disk", "method"], "participant")
     table.insert(0, "analysis", label)
-    table["apa"] = [apa_F(r.df1, r.df2, r.F, r.p) for r in table.itertuples()]
-    table["apa_gg"] = [
-        apa_F(r.df1 * r.eps_gg, r.df2 * r.eps_gg, r.F, r.p_gg) for r in table.itertuples()
-    ]
+    table["apa"] = apa_anova(table, correction="none")
+    table["apa_gg"] = apa_anova(table, correction="GG")
+    table["apa_hf"] = apa_anova(table, correction="HF")
     return table
 
 

@@ -17,7 +17,9 @@ from numpy.testing import assert_allclose
 from scipy import stats as sps
 
 from analysis.stats import (
+    apa_anova,
     apa_F,
+    apa_p,
     apa_t,
     holm,
     pairwise_tests,
@@ -280,6 +282,44 @@ def test_r_reference_covers_the_cases_of_the_issue():
     assert by_design["within"].first()["formula_names"] == "C;Q"
 
 
+def test_spencers_shape_says_why_sphericity_is_not_estimable():
+    ours = rm_anova(
+        read_r("anova_spencer_12x2.csv"), "y", ["glare_level", "context"], "subject"
+    ).set_index("source")
+    reason = "not estimable: 8 subjects for 11 df, needs at least 12"
+    assert ours.loc["glare_level", "sphericity"] == reason
+    assert ours.loc["glare_level × context", "sphericity"] == reason
+    assert ours.loc["context", "sphericity"] == "holds: 1 df"
+    theirs = R_ANOVA[R_ANOVA["design"] == "spencer_12x2"].set_index("source")
+    strings = dict(zip(ours.index, apa_anova(ours.reset_index(), correction="GG"), strict=True))
+    level = theirs.loc["glare_level"]
+    assert strings["glare_level"] == (
+        f"{apa_F(level['df1'], level['df2'], level['F'], level['p'])} (uncorrected; sphericity "
+        f"{reason})"
+    )
+    assert "nan" not in " ".join(strings.values())
+
+
+@pytest.mark.parametrize("correction", ["GG", "HF"])
+def test_apa_anova_prints_rs_corrected_tests(correction):
+    theirs = R_ANOVA[(R_ANOVA["design"] == "yoshida_6x2")].reset_index(drop=True)
+    ours = rm_anova(read_r("anova_yoshida_6x2.csv"), "y", ["L_disk", "method"], "subject")
+    eps = theirs["eps_gg"] if correction == "GG" else np.minimum(1, theirs["eps_hf_uncapped"])
+    p = theirs["p_gg"] if correction == "GG" else theirs["p_hf"]
+    expected = [
+        apa_F(r.df1, r.df2, r.F, r.p)
+        if r.df1 == 1
+        else apa_F(r.df1 * e, r.df2 * e, r.F, corrected)
+        for r, e, corrected in zip(theirs.itertuples(), eps, p, strict=True)
+    ]
+    assert apa_anova(ours, correction=correction) == expected
+    assert apa_anova(ours, correction="none") == [
+        apa_F(r.df1, r.df2, r.F, r.p) for r in theirs.itertuples()
+    ]
+    with pytest.raises(ValueError, match=r"correction must be one of none, GG, HF; got 'gg'"):
+        apa_anova(ours, correction="gg")
+
+
 @pytest.mark.parametrize("case", R_WILCOXON["case"])
 def test_wilcoxon_matches_rs_default(case):
     theirs = R_WILCOXON.set_index("case").loc[case]
@@ -337,6 +377,49 @@ def test_pairwise_tests_holm_and_letters_match_r():
 
     assert groups(letters) == groups(r_letters)
     assert len(groups(letters)) == 3
+
+
+def test_p_values_print_as_apa_including_rs_near_one():
+    no_difference = R_TTESTS.set_index("case").loc["no_difference"]
+    assert no_difference["paired_p"] >= 0.9995 and no_difference["welch_p"] >= 0.9995
+    assert apa_p(no_difference["paired_p"]) == "p > .999"
+    assert (
+        apa_t(7, no_difference["paired_t"], no_difference["paired_p"]) == "t(7) = -0.00, p > .999"
+    )
+    symmetric = R_WILCOXON.set_index("case").loc["symmetric_p1"]
+    assert symmetric["p"] == 1.0 and apa_p(symmetric["p"]) == "p > .999"
+    assert [apa_p(p) for p in (0.9995, 0.99949, 0.0341, 0.001, 0.000999, 0.0)] == [
+        "p > .999",
+        "p = .999",
+        "p = .034",
+        "p = .001",
+        "p < .001",
+        "p < .001",
+    ]
+    for bad, shown in (
+        (float("nan"), "nan"),
+        (np.float64("nan"), "nan"),
+        (-0.01, "-0.01"),
+        (1.01, "1.01"),
+        (float("inf"), "inf"),
+        ("n.s.", "'n.s.'"),
+    ):
+        with pytest.raises(
+            ValueError, match=re.escape(f"apa_p: p must be a number in [0, 1]; got {shown}")
+        ):
+            apa_p(bad)
+
+
+@given(st.floats(0, 1))
+def test_apa_p_states_the_value_to_its_precision(p):
+    text = apa_p(p)
+    if p < 0.001:
+        assert text == "p < .001"
+    elif p >= 0.9995:
+        assert text == "p > .999"
+    else:
+        assert re.fullmatch(r"p = \.\d{3}", text)
+        assert abs(float(text[4:]) - p) <= 0.0005 + 1e-12
 
 
 # --------------------------------------------------------------------- properties and refusals
