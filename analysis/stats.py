@@ -72,6 +72,7 @@ __all__ = [
     "wilcoxon_signed_rank",
 ]
 
+ROUNDING = 1e-12  # error SD below this fraction of the data's RMS is taken as none
 WILCOXON_EXACT_BELOW_N = 50  # R's wilcox.test: exact p for fewer non-zero differences, no ties
 
 
@@ -229,8 +230,10 @@ def rm_anova(df: pd.DataFrame, dv: str, within: str | Sequence[str], subject: st
     ------
     ValueError
         For missing columns, a non-numeric, NaN or infinite dependent variable, a subject with
-        no value (or several) in a cell, fewer than two subjects, a factor with one level, or
-        a factor that is also the subject or dependent variable.
+        no value (or several) in a cell, fewer than two subjects, a factor with one level,
+        a factor that is also the subject or dependent variable, or an effect without error
+        variance (every subject's contrast scores equal, e.g. data without noise), where F is
+        undefined.
 
     Notes
     -----
@@ -267,6 +270,7 @@ def rm_anova(df: pd.DataFrame, dv: str, within: str | Sequence[str], subject: st
         if df[f].nunique() < 2:
             raise ValueError(f"rm_anova: factor {f!r} has only one level")
     values, levels = _wide(df, dv, factors, subject)
+    scale = float(np.sqrt(np.mean(values**2)))  # the data's magnitude
     # statsmodels builds formulas from the column names ('C', 'I', 'Q', spaces, digits break
     # them): fit on positional names
     safe = [f"factor{i}" for i in range(len(factors))]
@@ -282,11 +286,20 @@ def rm_anova(df: pd.DataFrame, dv: str, within: str | Sequence[str], subject: st
             df1, df2 = float(table_row["Num DF"]), float(table_row["Den DF"])
             f_value = float(table_row["F Value"])
             p_value = float(table_row["Pr > F"])
-            sphericity = _sphericity(_effect_scores(values, levels, effect), values.shape[1])
+            scores = _effect_scores(values, levels, effect)
+            source = " × ".join(str(factors[i]) for i in effect)
+            # error variance at the level of rounding: F is 0/0 or a rounding artefact
+            # (statsmodels and R print one, e.g. F = -2.8 for constant data)
+            if not np.var(scores, axis=0, ddof=1).mean() > (ROUNDING * scale) ** 2:
+                raise ValueError(
+                    f"rm_anova: {dv!r} has no error variance for {source}: every subject's "
+                    "scores on its contrasts are equal (to rounding), so F is undefined"
+                )
+            sphericity = _sphericity(scores, values.shape[1])
             eps_gg, eps_hf = sphericity["eps_gg"], sphericity["eps_hf"]
             rows.append(
                 {
-                    "source": " × ".join(str(factors[i]) for i in effect),
+                    "source": source,
                     "df1": df1,
                     "df2": df2,
                     "F": f_value,

@@ -545,6 +545,24 @@ def test_rm_anova_refuses_bad_arguments_by_name():
         rm_anova(df, "v", [], "s")
 
 
+def test_an_effect_without_error_variance_is_refused():
+    # F = SS_effect / SS_error is 0/0 (constant data) or effect/rounding (subject + condition,
+    # no noise): statsmodels returned F = -2.8 and F = 2e30 for these
+    df, names = random_design((3, 2), n=5, seed=3)
+    constant = df.assign(v=250.0)
+    with pytest.raises(ValueError, match=r"'v' has no error variance for f0: every subject's"):
+        rm_anova(constant, "v", names, "s")
+    subject = df["s"].str[1:].astype(float)
+    additive = df.assign(v=1e4 + 30 * subject + df["f0"].map({"L0": 0.0, "L1": 2.5, "L2": 7.0}))
+    with pytest.raises(ValueError, match=r"no error variance for f0: .* F is undefined"):
+        rm_anova(additive, "v", names, "s")
+    # tiny but real noise is analysed, whatever the unit
+    rng = np.random.default_rng(0)
+    for unit in (1e-9, 1.0, 1e9):
+        noisy = additive.assign(v=unit * (additive["v"] + 1e-4 * rng.normal(size=len(df))))
+        assert np.isfinite(rm_anova(noisy, "v", names, "s")["F"]).all()
+
+
 def test_t_tests_refuse_nan_instead_of_returning_it():
     with pytest.raises(
         ValueError,
