@@ -288,8 +288,8 @@ def rm_anova(df: pd.DataFrame, dv: str, within: str | Sequence[str], subject: st
             p_value = float(table_row["Pr > F"])
             scores = _effect_scores(values, levels, effect)
             source = " × ".join(str(factors[i]) for i in effect)
-            # error variance at the level of rounding: F is 0/0 or a rounding artefact
-            # (statsmodels and R print one, e.g. F = -2.8 for constant data)
+            # no error variance beyond rounding: F is 0/0 or effect/rounding (statsmodels gave
+            # F = -2.8 for constant data, R's car NaN)
             if not np.var(scores, axis=0, ddof=1).mean() > (ROUNDING * scale) ** 2:
                 raise ValueError(
                     f"rm_anova: {dv!r} has no error variance for {source}: every subject's "

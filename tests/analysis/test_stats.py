@@ -233,10 +233,10 @@ def test_every_stored_r_output_names_r_and_its_packages():
     for path in outputs:
         first, second = path.read_text().splitlines()[:2]
         assert re.fullmatch(
-            r"# made by tests/analysis/R/reference\.R with R version 4\.2\.\d.*", first
+            r"# made by tests/analysis/R/reference\.R with R version \d+\.\d+\.\d+.*", first
         )
         assert re.fullmatch(
-            r"# packages: car [\d.]+, afex [\d.]+, multcompView [\d.]+, stats 4\.2\.\d", second
+            r"# packages: car [\d.-]+, afex [\d.-]+, multcompView [\d.-]+, stats [\d.]+", second
         )
 
 
