@@ -7,11 +7,10 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
-from scipy import stats as sps
 
 from .figures import plt, png
 from .load import Dataset
-from .stats import apa_p, holm
+from .stats import apa_p, holm, wilcoxon_signed_rank
 
 __all__ = ["analyse", "design", "methods"]
 
@@ -41,12 +40,11 @@ def analyse(dataset: Dataset, protocol) -> dict:
     for category in categories:
         ratings = trials.loc[trials["category"] == category, "rating"].astype(float)
         q1, q3 = np.percentile(ratings, [25, 75])
-        differences = ratings - midpoint
-        if (differences != 0).any():
-            test = sps.wilcoxon(differences, zero_method="wilcox")
-            statistic, p = float(test.statistic), float(test.pvalue)
-        else:
-            statistic, p = float("nan"), 1.0
+        if (ratings != midpoint).any():
+            test = wilcoxon_signed_rank(ratings, mu=midpoint)
+            statistic, p = test["V"], test["p"]
+        else:  # every rating at the midpoint: no evidence of a difference (R: V = 0, p = NA)
+            statistic, p = 0.0, 1.0
         row = {
             "category": category,
             "n": int(ratings.count()),
@@ -54,7 +52,7 @@ def analyse(dataset: Dataset, protocol) -> dict:
             "sd": ratings.std(ddof=1),
             "median": ratings.median(),
             "iqr": q3 - q1,
-            "wilcoxon_W": statistic,
+            "wilcoxon_V": statistic,
             "p": p,
         }
         row.update({f"count_{k}": int((ratings == k).sum()) for k in scale})
@@ -62,8 +60,8 @@ def analyse(dataset: Dataset, protocol) -> dict:
     summary = pd.DataFrame(rows)
     summary["p_holm"] = holm(summary["p"])
     summary["apa"] = [
-        f"W = {w:g}, {apa_p(p)} (Holm)"
-        for w, p in zip(summary["wilcoxon_W"], summary["p_holm"], strict=True)
+        f"V = {v:g}, {apa_p(p)} (Holm)"
+        for v, p in zip(summary["wilcoxon_V"], summary["p_holm"], strict=True)
     ]
     comments = trials.loc[
         trials["comment"].notna(), ["participant", "category", "rating", "comment"]

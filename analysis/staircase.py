@@ -24,7 +24,7 @@ from scipy.special import expit
 from .figures import plt, png
 from .load import Dataset
 from .methods import display_text
-from .stats import apa_F, rm_anova
+from .stats import apa_anova, rm_anova
 
 __all__ = ["analyse", "design", "methods", "psychometric_match", "reversal_match"]
 
@@ -131,9 +131,8 @@ def analyse(dataset: Dataset, protocol) -> dict:
     factors = ["glare_level", "context"] if matches["context"].nunique() > 1 else ["glare_level"]
     if data["participant"].nunique() > 1:
         anova = rm_anova(data, "match", factors, "participant")
-        anova["apa_gg"] = [
-            apa_F(r.df1 * r.eps_gg, r.df2 * r.eps_gg, r.F, r.p_gg) for r in anova.itertuples()
-        ]
+        anova["apa_gg"] = apa_anova(anova, correction="GG")
+        anova["apa_hf"] = apa_anova(anova, correction="HF")
         tables["anova"] = anova
         text = {row.source: row.apa_gg for row in anova.itertuples()}
     repeated = len(every) - len(trials)
