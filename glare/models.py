@@ -11,13 +11,14 @@ import math
 import warnings
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
-from typing import Literal, Protocol
+from typing import Literal
 
 import numpy as np
 
 from . import vos
 from ._radial import radial_mass
 from ._validation import check_choice, check_in_range, check_positive, check_positive_int
+from .base import GlareModel, TailBound, as_model
 from .digitise import (
     Kernel,
     check_kernel_shape,
@@ -35,6 +36,7 @@ __all__ = [
     "GaussianGlare",
     "GlareModel",
     "HybridGlare",
+    "TailBound",
     "VosGlare",
     "digitise_kernel",
     "kernel",
@@ -50,35 +52,7 @@ TAIL_MARGIN = 1.02  # the peak beyond a radius is found on a grid; 2 % covers th
 
 
 @dataclass(frozen=True)
-class TailBound:
-    """Upper bounds on what a kernel cut to a centred square leaves out, per radius.
-
-    Attributes
-    ----------
-    peak
-        Largest value of a kernel pixel outside the square (fraction of the source's energy).
-    energy
-        Energy of the PSF outside the square (fraction).
-    renormalised
-        Whether the model normalises its kernel over the support, so that cutting it also
-        scales what is kept by ``1 / (1 - energy)``.
-    """
-
-    peak: np.ndarray
-    energy: np.ndarray
-    renormalised: bool = False
-
-
-class GlareModel(Protocol):
-    """What the rest of the suite needs from a glare model."""
-
-    def kernel(
-        self, pixel_deg: float, shape: tuple[int, int], *, colour: bool = False
-    ) -> Kernel: ...
-
-
-@dataclass(frozen=True)
-class GaussianGlare:
+class GaussianGlare(GlareModel):
     """Gaussian glare kernel of Yoshida et al. 2008 (Method I).
 
     Parameters
@@ -114,6 +88,14 @@ class GaussianGlare:
     def __post_init__(self) -> None:
         check_positive("sigma_deg", self.sigma_deg, unit="deg")
         check_choice("sampling", self.sampling, ("point", "pixel"))
+
+    @property
+    def achromatic(self) -> bool:
+        """The Gaussian is the same in every channel."""
+        return True
+
+    def halo(self) -> str:
+        return "none in this model"
 
     def tail_bound(
         self, pixel_deg: float, radius_px: np.ndarray, *, colour: bool = False
@@ -187,7 +169,7 @@ class GaussianGlare:
 
 
 @dataclass(frozen=True)
-class VosGlare:
+class VosGlare(GlareModel):
     """Vos (1984) eye PSF with Spencer et al.'s (1995) halo, regimes, age and flare lines.
 
     Parameters
@@ -290,6 +272,18 @@ class VosGlare:
         if self.halo_skipped:
             return (w0 + w3, w1, w2, 0.0)
         return (w0, w1, w2, w3)
+
+    @property
+    def achromatic(self) -> bool:
+        """True without a lenticular halo: only the halo differs between channels."""
+        return self.weights[3] == 0.0
+
+    def halo(self) -> str:
+        if self.halo_skipped:
+            return f"skipped: pupil {self.pupil_mm:g} mm < 3 mm (Spencer §2.1)"
+        if self.weights[3] == 0.0:
+            return f"none in this model ({self.regime} weights, Spencer eq. 5)"
+        return "included"
 
     def _profile(self, halo) -> Callable[[np.ndarray], np.ndarray]:
         """``P(θ) = w0 f0 + w1 f1 + w2 f2 + w3 halo(θ)`` with this model's weights; the halo
@@ -482,7 +476,7 @@ def _combine(
 
 
 @dataclass(frozen=True)
-class HybridGlare:
+class HybridGlare(GlareModel):
     """Diffraction and scattering together: the Vos PSF with its unscattered core ``f0``
     replaced by a wave-optics diffraction kernel.
 
@@ -522,6 +516,21 @@ class HybridGlare:
         if not isinstance(self.wave, WaveOpticsGlare):
             raise ValueError(f"wave must be a WaveOpticsGlare, got {self.wave!r}")
         VosGlare(regime=self.regime, age=self.age, seed=self.seed)  # validates
+
+    def _vos(self) -> VosGlare:
+        return VosGlare(
+            regime=self.regime,
+            age=self.age,
+            flare_lines=self.flare_lines,
+            seed=self.seed,
+            pupil_mm=self.wave.pupil_diameter,  # one eye: the halo needs a 3 mm pupil
+        )
+
+    def halo(self) -> str:
+        return self._vos().halo()
+
+    def description(self, colour: bool) -> dict:
+        return {**self._vos().description(colour), "model": "HybridGlare"}
 
     def kernel(self, pixel_deg: float, shape: tuple[int, int], *, colour: bool = False) -> Kernel:
         vos_model = VosGlare(
@@ -588,12 +597,12 @@ def make_model(method: str, **parameters) -> GlareModel:
 def _resolve(model: GlareModel | str) -> GlareModel:
     if isinstance(model, str):
         return make_model(model)
-    if not hasattr(model, "kernel"):
-        raise ValueError(
-            f"model must be a glare model (e.g. GaussianGlare(), VosGlare()) or one of "
-            f"{', '.join(repr(m) for m in GLARE_MODELS)}; got {model!r}"
-        )
-    return model
+    if isinstance(model, GlareModel) or callable(getattr(model, "kernel", None)):
+        return as_model(model)
+    raise ValueError(
+        f"model must be a glare model (e.g. GaussianGlare(), VosGlare()) or one of "
+        f"{', '.join(repr(m) for m in GLARE_MODELS)}; got {model!r}"
+    )
 
 
 def digitise_kernel(

@@ -49,6 +49,7 @@ import scipy.sparse
 
 from . import apertures as ap
 from ._validation import check_choice, check_in_range, check_positive, check_positive_int
+from .base import GlareModel
 from .digitise import Kernel, check_kernel_shape
 from .eye import pupil_diameter_mm
 from .spectral import Spectrum
@@ -306,7 +307,7 @@ def _luminance_weights(colourspace: str) -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class WaveOpticsGlare:
+class WaveOpticsGlare(GlareModel):
     """Glare as diffraction by the pupil, eyelids, eyelashes, particles and filters.
 
     Parameters
@@ -538,6 +539,9 @@ class WaveOpticsGlare:
         else:
             raise ValueError(f"spectral must be one of {SPECTRAL_METHODS}; got {self.spectral!r}")
         return kernels, wavelengths
+
+    def halo(self) -> str:
+        return "none in this model"
 
     def kernel(self, pixel_deg: float, shape: tuple[int, int], *, colour: bool = False) -> Kernel:
         """The glare kernel on ``pixel_deg`` pixels: luminance ``(KH, KW)`` or RGB
