@@ -35,7 +35,7 @@ from scipy.signal import fftconvolve
 import glare
 from glare._convolve import FFT_WORKERS, bounding_box, spread
 from glare.digitise import kernel_shape_for
-from glare.plan import display_codes
+from glare.display import display_codes
 from stimuli.calibration import Calibration
 
 __all__ = ["WORKLOADS", "run_bench", "spectral_bench", "workload", "workload_names"]
