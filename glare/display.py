@@ -185,10 +185,10 @@ class CodeBound:
         """
         if absolute == 0.0 and relative == 0.0:
             return 0.0
-        p_min = block_reduce(np.min(planes, axis=2), np.minimum)
-        s_min = block_reduce(np.min(spread, axis=2), np.minimum)
-        s_max = block_reduce(np.max(spread, axis=2), np.maximum)
-        p_max = block_reduce(np.max(planes, axis=2), np.maximum)
+        p_lo, p_hi = _channel_extremes(planes)
+        s_lo, s_hi = _channel_extremes(spread)
+        p_min, p_max = block_reduce(p_lo, np.minimum), block_reduce(p_hi, np.maximum)
+        s_min, s_max = block_reduce(s_lo, np.minimum), block_reduce(s_hi, np.maximum)
         low, _ = self._outputs(p_min, np.maximum((1.0 - relative) * s_min - absolute, 0.0), 0.0)
         _, high = self._outputs(p_max, 0.0, (1.0 + relative) * s_max + absolute)
         width = np.clip(high - low, 0.0, absolute + relative * s_max)
@@ -196,35 +196,67 @@ class CodeBound:
         worst = float(blocks.max())
         if worst <= tolerance_codes:
             return worst
-        rows = np.nonzero(blocks > tolerance_codes)[0]
-        worst = float(blocks[blocks <= tolerance_codes].max(initial=0.0))
-        for r0 in np.unique(rows):  # pixel by pixel, one row of blocks at a time
-            band = np.s_[r0 * BLOCK_PX : (r0 + 1) * BLOCK_PX]
-            p, s = planes[band], np.broadcast_to(spread[band], planes[band].shape)
+        failing = blocks > tolerance_codes
+        worst = float(blocks[~failing].max(initial=0.0))
+        for p, s in _failing_pixels(planes, spread, failing):
             bound = absolute + relative * s
             low, high = self._outputs(p, np.maximum(s - bound, 0.0), s + bound)
             pixels = np.minimum(high - low, bound) / self._table_step(low)
-            worst = max(worst, float(pixels.max()))
+            worst = max(worst, float(pixels.max(initial=0.0)))
         return worst
 
 
-def block_reduce(values: np.ndarray, ufunc) -> np.ndarray:
-    """``ufunc`` over blocks of :data:`BLOCK_PX` × :data:`BLOCK_PX` pixels of a 2-D array
-    (the last ones smaller): rows of blocks first, over contiguous memory."""
+def _channel_extremes(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Smallest and largest channel of each pixel of ``(H, W, C)`` (views for one channel)."""
+    if values.shape[2] == 1:
+        return values[..., 0], values[..., 0]
+    return values.min(axis=2), values.max(axis=2)
+
+
+def _failing_pixels(planes: np.ndarray, spread: np.ndarray, failing: np.ndarray):
+    """The pixels of the failing blocks, as ``(planes, spread)`` pairs of arrays: whole
+    blocks gathered through a strided view, then the partial blocks of the last row and
+    column of blocks."""
+    height, width, n = planes.shape
+    spread = np.broadcast_to(spread, planes.shape)
+    rows, cols = height // BLOCK_PX, width // BLOCK_PX
+    inner = np.nonzero(failing[:rows, :cols])
+    if inner[0].size:
+        views = []
+        for array in (planes, spread):
+            s0, s1, s2 = array.strides
+            views.append(
+                np.lib.stride_tricks.as_strided(
+                    array,
+                    (rows, cols, BLOCK_PX, BLOCK_PX, n),
+                    (BLOCK_PX * s0, BLOCK_PX * s1, s0, s1, s2),
+                    writeable=False,
+                )[inner]
+            )
+        yield views[0], views[1]
+    if height % BLOCK_PX and failing[rows:].any():
+        band = np.s_[rows * BLOCK_PX :]
+        yield planes[band], spread[band]
+    if width % BLOCK_PX and failing[:, cols:].any():
+        band = np.s_[:, cols * BLOCK_PX :]
+        yield planes[band], spread[band]
+
+
+def block_reduce(values: np.ndarray, ufunc, block: int = BLOCK_PX) -> np.ndarray:
+    """``ufunc`` over blocks of ``block × block`` pixels of a 2-D array (the last ones
+    smaller): rows of blocks first, over contiguous memory."""
     height, width = values.shape
-    full_rows, full_cols = height // BLOCK_PX, width // BLOCK_PX
+    full_rows, full_cols = height // block, width // block
     parts = []
     if full_rows:
-        parts.append(
-            ufunc.reduce(values[: full_rows * BLOCK_PX].reshape(full_rows, BLOCK_PX, width), 1)
-        )
-    if height % BLOCK_PX:
-        parts.append(ufunc.reduce(values[full_rows * BLOCK_PX :], axis=0, keepdims=True))
+        parts.append(ufunc.reduce(values[: full_rows * block].reshape(full_rows, block, width), 1))
+    if height % block:
+        parts.append(ufunc.reduce(values[full_rows * block :], axis=0, keepdims=True))
     rows = np.concatenate(parts) if len(parts) > 1 else parts[0]
     parts = []
     if full_cols:
-        main = np.ascontiguousarray(rows[:, : full_cols * BLOCK_PX])
-        parts.append(ufunc.reduce(main.reshape(rows.shape[0], full_cols, BLOCK_PX), axis=2))
-    if width % BLOCK_PX:
-        parts.append(ufunc.reduce(rows[:, full_cols * BLOCK_PX :], axis=1, keepdims=True))
+        main = np.ascontiguousarray(rows[:, : full_cols * block])
+        parts.append(ufunc.reduce(main.reshape(rows.shape[0], full_cols, block), axis=2))
+    if width % block:
+        parts.append(ufunc.reduce(rows[:, full_cols * block :], axis=1, keepdims=True))
     return np.concatenate(parts, axis=1) if len(parts) > 1 else parts[0]

@@ -78,39 +78,63 @@ def _cubic(n_fine: int, factor: int, start: int = 0) -> tuple[np.ndarray, np.nda
     return base.astype(np.int64) + PAD_NODES - 1, weights
 
 
-def _node_matrix(first: np.ndarray, weights: np.ndarray, n_nodes: int) -> np.ndarray:
-    matrix = np.zeros((n_nodes, first.size))
-    index = np.arange(first.size)
-    for tap in range(4):
-        matrix[first + tap, index] += weights[:, tap]
-    return matrix
+def _phase_weights(factor: int) -> np.ndarray:
+    """``(f, 5)`` weights of a pixel at each phase ``s`` of cell ``m`` onto the nodes
+    ``m + PAD_NODES - 2 + j``: every cell has the same four cubic weights per phase."""
+    first, weights = _cubic(factor, factor)
+    table = np.zeros((factor, 5))
+    for phase in range(factor):
+        shift = first[phase] - (PAD_NODES - 2)  # 0 or 1
+        table[phase, shift : shift + 4] = weights[phase]
+    return table
+
+
+def _splat_last(values: np.ndarray, factor: int, start: int, n_nodes: int) -> np.ndarray:
+    """:func:`splat` along the last axis: pixels ``start …`` onto ``n_nodes`` nodes."""
+    offset, first_cell = start % factor, start // factor
+    cells = -(-(offset + values.shape[-1]) // factor)
+    padded = np.zeros((*values.shape[:-1], cells * factor))
+    padded[..., offset : offset + values.shape[-1]] = values
+    parts = padded.reshape(*values.shape[:-1], cells, factor) @ _phase_weights(factor)
+    out = np.zeros((*values.shape[:-1], n_nodes))
+    for shift in range(5):
+        node = first_cell + PAD_NODES - 2 + shift
+        out[..., node : node + cells] += parts[..., shift]
+    return out
+
+
+def _upsample_last(nodes: np.ndarray, factor: int, start: int, n_fine: int) -> np.ndarray:
+    """:func:`upsample` along the last axis: nodes onto pixels ``start … start + n_fine``."""
+    first_cell = start // factor
+    cells = -(-(start + n_fine) // factor) - first_cell
+    shifted = np.stack(
+        [
+            nodes[
+                ...,
+                first_cell + PAD_NODES - 2 + shift : first_cell + PAD_NODES - 2 + shift + cells,
+            ]
+            for shift in range(5)
+        ],
+        axis=-1,
+    )
+    fine = (shifted @ _phase_weights(factor).T).reshape(*nodes.shape[:-1], cells * factor)
+    offset = start - first_cell * factor
+    return fine[..., offset : offset + n_fine]
 
 
 def splat(excess: np.ndarray, factor: int, box, grid: tuple[int, int]) -> np.ndarray:
-    """Distribute each pixel of ``excess`` (the image's ``box = (r0, r1, c0, c1)``) over its 4 × 4
-    nearest coarse nodes with cubic weights: the total, centroid and second moments of the
-    excess are kept, so the coarse convolution is off only in third order of ``f / r``."""
-    r0, r1, c0, c1 = box
-    out = np.zeros(grid)
-    rows, row_w = _cubic(r1 - r0, factor, r0)
-    cols, col_w = _cubic(c1 - c0, factor, c0)
-    lo_r, hi_r = rows.min(), rows.max() + 4
-    lo_c, hi_c = cols.min(), cols.max() + 4
-    left = _node_matrix(rows - lo_r, row_w, hi_r - lo_r)
-    right = _node_matrix(cols - lo_c, col_w, hi_c - lo_c)
-    out[lo_r:hi_r, lo_c:hi_c] = left @ excess @ right.T
-    return out
+    """Distribute each pixel of ``excess`` (the image's ``box = (r0, r1, c0, c1)``) over its
+    4 × 4 nearest coarse nodes with cubic weights: the total, centroid and second moments of
+    the excess are kept, so the coarse convolution is off only in third order of ``f / r``."""
+    columns = _splat_last(excess, factor, box[2], grid[1])
+    return _splat_last(columns.T, factor, box[0], grid[0]).T
 
 
 def upsample(coarse: np.ndarray, factor: int, shape: tuple[int, int], start=(0, 0)) -> np.ndarray:
     """Cubic interpolation of the coarse nodes onto the fine pixels ``start … start + shape``
-    (the adjoint of :func:`splat`)."""
-    rows = _node_matrix(*_cubic(shape[0], factor, start[0]), coarse.shape[0])
-    cols = _node_matrix(*_cubic(shape[1], factor, start[1]), coarse.shape[1])
-    used_r = np.flatnonzero(rows.any(axis=1))
-    used_c = np.flatnonzero(cols.any(axis=1))
-    r, c = slice(used_r[0], used_r[-1] + 1), slice(used_c[0], used_c[-1] + 1)
-    return (rows[r].T @ coarse[r, c]) @ cols[c]  # two dense products: BLAS beats gathering
+    (the adjoint of :func:`splat`), one axis at a time, as a few dense products per cell."""
+    rows = _upsample_last(coarse.T, factor, start[0], shape[0]).T
+    return _upsample_last(rows, factor, start[1], shape[1])
 
 
 def sharpen_cells(cells: np.ndarray) -> np.ndarray:
@@ -131,11 +155,14 @@ def far_spread(
     factor: int,
     *,
     nodes: bool = False,
+    splatted: np.ndarray | None = None,
 ) -> np.ndarray:
     """The far tail's spread of one channel of an image of ``shape`` whose excess is
-    ``excess`` within ``box`` (zero elsewhere): splat, convolve on the coarse grid,
-    interpolate (or, with ``nodes``, the values at the coarse nodes)."""
-    coarse = splat(excess, factor, box, grid_shape(shape, factor))
+    ``excess`` within ``box`` (zero elsewhere): splat (or take ``splatted``), convolve on
+    the coarse grid, interpolate (or, with ``nodes``, the values at the coarse nodes)."""
+    coarse = (
+        splat(excess, factor, box, grid_shape(shape, factor)) if splatted is None else splatted
+    )
     rows = np.flatnonzero(coarse.any(axis=1))
     cols = np.flatnonzero(coarse.any(axis=0))
     box_nodes = (slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1))

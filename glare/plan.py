@@ -38,7 +38,8 @@ import numpy as np
 
 from ._convolve import fft_length
 from .base import GlareModel
-from .multires import PAD_NODES, far_spread, grid_shape
+from .display import block_reduce
+from .multires import PAD_NODES, far_spread, grid_shape, splat
 
 __all__ = ["CUT_SHARE", "FAR_SHARE", "PATHS", "GlarePlan", "Scene", "plan_glare"]
 
@@ -52,15 +53,17 @@ MULTIRES_MIN_REACH = 4  # multi-resolution only when the reach is at least 4 R0
 # Which split to measure first: the far path's relative error is about 0.25 (f / R0)²
 # (measured on VosGlare, all regimes: 5e-4 at R0 = 16 f); the render measures it exactly.
 FAR_ERROR_SAFETY = 0.25
-# Costs, seconds on a 2-core machine (a forward and an inverse real FFT of n points cost
-# about FFT_S · n log2 n; a kernel spectrum SPECTRUM_SHARE of that; a scaled kernel copy
-# DIRECT_S per pixel; cubic interpolation UPSAMPLE_S per fine pixel and coarse column;
-# a pass over the image PASS_S per pixel): only their ratios choose the path.
-FFT_S = 1.0e-9
-SPECTRUM_SHARE = 0.6
-DIRECT_S = 3.5e-9
-UPSAMPLE_S = 2.0e-11
-PASS_S = 2.0e-9
+# Costs, seconds, measured on a 2-core machine: a forward and an inverse real FFT of n
+# points cost about FFT_S · n log2 n (up to 4096²; FFT_LARGE_S beyond FFT_LARGE_POINTS, where
+# the arrays leave the caches); a scaled kernel copy DIRECT_S per pixel it covers; the far
+# tail (splat, coarse convolution, cubic interpolation, preview and per-pixel check)
+# MULTIRES_S per image pixel and convolution. Only their ratios choose the path. A kernel
+# spectrum is made once per renderer and FFT length, so it is not counted.
+FFT_S = 4.5e-10
+FFT_LARGE_S = 5.5e-10
+FFT_LARGE_POINTS = 2**25
+DIRECT_S = 3.2e-9
+MULTIRES_S = 3.5e-8
 
 
 @dataclass(frozen=True)
@@ -82,6 +85,23 @@ class Scene:
     total_excess: float
     darkest: float
     achromatic: bool
+    _splats: dict = field(default_factory=dict, repr=False, compare=False)
+
+    def splat(self, factor: int, channel: int | None) -> np.ndarray:
+        """The excess of one channel (``None``: the brightest channel of each pixel) splatted
+        onto the coarse grid of ``factor`` (:func:`glare.multires.splat`), made once."""
+        if self.excess.shape[2] == 1:
+            channel = 0
+        key = (factor, channel)
+        if key not in self._splats:
+            excess = self.excess.max(axis=2) if channel is None else self.excess[..., channel]
+            self._splats[key] = splat(
+                excess.astype(np.float64, copy=False),
+                factor,
+                self.source_box,
+                grid_shape(self.planes.shape[:2], factor),
+            )
+        return self._splats[key]
 
     @classmethod
     def of(cls, image: np.ndarray, l_dmax: float, method: str, dtype) -> Scene:
@@ -268,7 +288,7 @@ def _geometric_reach(source, target, half) -> tuple[int, int]:
 def fft_cost(lengths: tuple[int, int]) -> float:
     """Estimated seconds of one forward and one inverse real FFT of ``N0 × N1`` points."""
     n = lengths[0] * lengths[1]
-    return FFT_S * n * math.log2(max(n, 2))
+    return (FFT_LARGE_S if n > FFT_LARGE_POINTS else FFT_S) * n * math.log2(max(n, 2))
 
 
 def plan_glare(
@@ -423,10 +443,8 @@ def make_plan(renderer, scene: Scene) -> GlarePlan:
         fft_length(source[:2], out[:2], reach[0]),
         fft_length(source[2:], out[2:], reach[1]),
     )
-    n_kernels = 3 if colour_kernel else 1
-    cached = renderer.has_spectrum(lengths, reach, colour_kernel)
     costs = {
-        "fft": fft_cost(lengths) * (convolutions + (0 if cached else SPECTRUM_SHARE * n_kernels)),
+        "fft": fft_cost(lengths) * convolutions,
         "direct": DIRECT_S
         * scene.bright_pixels
         * convolutions
@@ -474,8 +492,7 @@ def _choose_multires(renderer, scene: Scene, plan: GlarePlan, *, lengths_cost: f
         ]
         if not ratios:
             continue
-        coarse_cols = grid_shape((height, width), factor)[1]
-        far_cost = UPSAMPLE_S * height * width * coarse_cols * (plan.convolutions + 1)
+        far_cost = MULTIRES_S * height * width * plan.convolutions
         preview = None
         for k in ratios:
             split = k * factor
@@ -489,13 +506,7 @@ def _choose_multires(renderer, scene: Scene, plan: GlarePlan, *, lengths_cost: f
                 fft_length(source[:2], near[:2], 2 * split),
                 fft_length(source[2:], near[2:], 2 * split),
             )
-            cached = renderer.has_spectrum(
-                near_lengths, (2 * split,) * 2, plan.colour_kernel, split
-            )
-            n_kernels = 3 if plan.colour_kernel else 1
-            cost = far_cost + fft_cost(near_lengths) * (
-                plan.convolutions + (0 if cached else SPECTRUM_SHARE * n_kernels)
-            )
+            cost = far_cost + fft_cost(near_lengths) * plan.convolutions
             if cost >= lengths_cost:
                 break  # longer splits cost more
             if preview is None:
@@ -516,17 +527,19 @@ def _preview(renderer, scene: Scene, factor: int, colour_kernel: bool):
     coarse = renderer.coarse_kernel(factor, colour_kernel)
     brightest = coarse if coarse.ndim == 2 else coarse.max(axis=2)
     height, width = scene.planes.shape[:2]
-    excess = scene.excess.max(axis=2).astype(np.float64, copy=False)
     nodes = far_spread(
-        excess, scene.source_box, (height, width), brightest / factor**2, factor, nodes=True
+        None,
+        scene.source_box,
+        (height, width),
+        brightest / factor**2,
+        factor,
+        nodes=True,
+        splatted=scene.splat(factor, None),
     )
     cells = -(-height // factor), -(-width // factor)
     spread_cells = nodes[PAD_NODES : PAD_NODES + cells[0], PAD_NODES : PAD_NODES + cells[1]]
-    darkest = np.minimum.reduceat(
-        np.minimum.reduceat(scene.planes.min(axis=2), np.arange(0, height, factor), axis=0),
-        np.arange(0, width, factor),
-        axis=1,
-    )
+    planes = scene.planes[..., 0] if scene.planes.shape[2] == 1 else scene.planes.min(axis=2)
+    darkest = block_reduce(planes, np.minimum, factor)
 
     def codes(relative: float) -> float:
         return renderer.code_bound.codes(

@@ -303,12 +303,6 @@ class GlareRenderer:
             )
         return self._multires[key]
 
-    def has_spectrum(self, lengths, reach, colour: bool, split_px: int = 0) -> bool:
-        """Whether the spectrum of this kernel crop (or near kernel of ``split_px``) and FFT
-        length is kept."""
-        wanted = (tuple(lengths), tuple(reach), colour, split_px)
-        return any(key[:4] == wanted for key in self._spectra)
-
     def _spectrum(self, lengths, reach, colour, split_px, channel, dtype, values=None):
         key = (tuple(lengths), tuple(reach), colour, split_px, channel, np.dtype(dtype).name)
         if key in self._spectra:
@@ -482,12 +476,13 @@ class GlareRenderer:
                 values, half = near[min(c, len(near) - 1)], (2 * plan.split_px,) * 2
                 far = channels(kernels.far)
                 coarse = far_spread(
-                    excess.astype(np.float64, copy=False),
+                    None,
                     box,
                     self.shape,
                     far[min(c, len(far) - 1)],
                     plan.multires_factor,
                     nodes=True,
+                    splatted=scene.splat(plan.multires_factor, c),
                 )
                 spread[..., c][o] = upsample(
                     coarse,
