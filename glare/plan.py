@@ -39,9 +39,10 @@ import numpy as np
 from ._convolve import fft_length
 from .base import GlareModel
 from .display import block_reduce
-from .multires import PAD_NODES, far_spread, grid_shape, splat
+from .multires import PAD_NODES, far_spread
+from .scene import Scene
 
-__all__ = ["CUT_SHARE", "FAR_SHARE", "PATHS", "GlarePlan", "Scene", "plan_glare"]
+__all__ = ["CUT_SHARE", "FAR_SHARE", "PATHS", "GlarePlan", "plan_glare"]
 
 PATHS = ("direct", "fft", "multires")
 
@@ -64,82 +65,6 @@ FFT_LARGE_S = 5.5e-10
 FFT_LARGE_POINTS = 2**25
 DIRECT_S = 3.2e-9
 MULTIRES_S = 3.5e-8
-
-
-@dataclass(frozen=True)
-class Scene:
-    """What the plan reads from one image (in the render's dtype).
-
-    ``planes`` is ``(H, W, C)``; ``excess`` is ``ΔL`` within ``source_box`` only,
-    ``(rows, cols, C)``; boxes are ``(row0, row1, col0, col1)``.
-    """
-
-    planes: np.ndarray
-    colour: bool
-    source_box: tuple[int, int, int, int] | None
-    target_box: tuple[int, int, int, int] | None
-    excess: np.ndarray | None
-    bright_pixels: int
-    target_pixels: int
-    max_excess: float
-    total_excess: float
-    darkest: float
-    achromatic: bool
-    _splats: dict = field(default_factory=dict, repr=False, compare=False)
-
-    def splat(self, factor: int, channel: int | None) -> np.ndarray:
-        """The excess of one channel (``None``: the brightest channel of each pixel) splatted
-        onto the coarse grid of ``factor`` (:func:`glare.multires.splat`), made once."""
-        if self.excess.shape[2] == 1:
-            channel = 0
-        key = (factor, channel)
-        if key not in self._splats:
-            excess = self.excess.max(axis=2) if channel is None else self.excess[..., channel]
-            self._splats[key] = splat(
-                excess.astype(np.float64, copy=False),
-                factor,
-                self.source_box,
-                grid_shape(self.planes.shape[:2], factor),
-            )
-        return self._splats[key]
-
-    @classmethod
-    def of(cls, image: np.ndarray, l_dmax: float, method: str, dtype) -> Scene:
-        colour = image.ndim == 3
-        planes = (image if colour else image[..., None]).astype(dtype, copy=False)
-        bright = planes > l_dmax
-        bright = bright.any(axis=2) if colour else bright[..., 0]
-        source = _box(bright)
-        if method == "Yoshida2008":
-            targets = planes < l_dmax
-            targets = targets.any(axis=2) if colour else targets[..., 0]
-            target_box, n_targets = _box(targets), int(np.count_nonzero(targets))
-        else:
-            target_box, n_targets = (0, planes.shape[0], 0, planes.shape[1]), bright.size
-        excess = None
-        if source is not None:
-            r0, r1, c0, c1 = source
-            box = planes[r0:r1, c0:c1]
-            excess = np.maximum(box - dtype.type(l_dmax), dtype.type(0))
-        achromatic = colour and bool(
-            np.array_equal(image[..., 0], image[..., 1])
-            and np.array_equal(image[..., 0], image[..., 2])
-        )
-        return cls(
-            planes=planes,
-            colour=colour,
-            source_box=source,
-            target_box=target_box,
-            excess=excess,
-            bright_pixels=int(np.count_nonzero(bright)) if source is not None else 0,
-            target_pixels=n_targets,
-            max_excess=float(excess.max()) if excess is not None else 0.0,
-            total_excess=float(excess.sum(axis=(0, 1), dtype=np.float64).max())
-            if excess is not None
-            else 0.0,
-            darkest=float(planes.min()),
-            achromatic=achromatic,
-        )
 
 
 @dataclass(frozen=True)
@@ -267,14 +192,6 @@ class GlarePlan:
         lines.append(f"  halo: {self.halo}")
         lines += [f"  - {note}" for note in self.notes]
         return "\n".join(lines)
-
-
-def _box(mask: np.ndarray) -> tuple[int, int, int, int] | None:
-    rows = np.flatnonzero(mask.any(axis=1))
-    if rows.size == 0:
-        return None
-    cols = np.flatnonzero(mask.any(axis=0))
-    return int(rows[0]), int(rows[-1]) + 1, int(cols[0]), int(cols[-1]) + 1
 
 
 def _geometric_reach(source, target, half) -> tuple[int, int]:
