@@ -140,6 +140,9 @@ def build_spencer1995(protocol: Protocol, *, progress=None) -> dict:
     annulus = _circle_coverage(size, s["annulus_outer_px"]) - disc
     model = glare.VosGlare(regime=g["regime"], flare_lines=g["flare_lines"], seed=protocol.seed)
     kernel = model.kernel(p, kernel_shape_for((size, size)))
+    renderer = glare.GlareRenderer(  # exact; the kernel's spectrum is kept across images
+        model, pixel_deg=p, shape=(size, size), l_dmax_cd_m2=peak, tolerance_codes=0, kernel=kernel
+    )
     images: dict[str, dict] = {
         "comparison_disc": {"img": disc, "kind": "component"},
         "comparison_annulus": {"img": annulus, "kind": "component"},
@@ -161,7 +164,7 @@ def build_spencer1995(protocol: Protocol, *, progress=None) -> dict:
         for level, strength in enumerate(g["strengths"], start=1):
             source_l = peak * (1.0 + strength)
             hdr = scene * (1.0 - source) + source_l * source
-            result = glare.render_glare(hdr, model, pixel_deg=p, l_dmax_cd_m2=peak, kernel=kernel)
+            result = renderer.render(hdr)
             images[f"glare_{context}_{level:02d}"] = {
                 "img": result.image,
                 "kind": "glare",

@@ -103,15 +103,17 @@ def build_yoshida2008(protocol: Protocol, *, progress=None) -> dict:
     done = 0
     for method, model in methods.items():
         kernel = model.kernel(fine_p, kernel_shape_for((fine_n, fine_n)))
+        renderer = glare.GlareRenderer(  # exact; the kernel's spectrum is kept across levels
+            model,
+            pixel_deg=fine_p,
+            shape=(fine_n, fine_n),
+            l_dmax_cd_m2=g["l_dmax_cd_m2"],
+            tolerance_codes=0,
+            kernel=kernel,
+        )
         for label, level in zip(g[method]["labels"], g[method]["levels_cd_m2"], strict=True):
             scene = np.where(mask, level, sky)
-            result = glare.render_glare(
-                scene,
-                model,
-                pixel_deg=fine_p,
-                l_dmax_cd_m2=g["l_dmax_cd_m2"],
-                kernel=kernel,
-            )
+            result = renderer.render(scene)
             images[f"reference_{method}_{label}"] = {
                 "img": box_filter(result.image, factor),
                 "kind": "reference",
