@@ -345,7 +345,9 @@ def make_plan(renderer, scene: Scene) -> GlarePlan:
     elif tolerance == 0:
         notes.append("tolerance 0: exact render")
     elif bound is None:
-        notes.append("the model has no tail bound (flare lines or wave optics): full reach")
+        notes.append(
+            "the model gives no tail bound (as with flare lines or wave optics): full reach, exact"
+        )
 
     plan = GlarePlan(
         **common, reach_px=reach, cut_bound_cd_m2=cut_bound, path="fft", multires_factor=1,
