@@ -99,11 +99,12 @@ def _render(args: argparse.Namespace) -> int:
     if not inputs:
         raise ValueError("render needs an input EXR and an output EXR (or folder)")
     targets = [Path(output)]
-    if len(inputs) > 1:  # many files: one renderer per image shape, its kernel made once
+    folder = len(inputs) > 1 or output.endswith(("/", "\\")) or Path(output).is_dir()
+    if folder:  # many files: one renderer per image shape, its kernel made once
         Path(output).mkdir(parents=True, exist_ok=True)
         targets = [Path(output) / Path(name).name for name in inputs]
         if args.preview:
-            raise ValueError("--preview is for one input; render the files one by one")
+            raise ValueError("--preview is for one output file; render that file on its own")
     display = Calibration.load(args.calibration) if args.calibration else None
     renderers: dict[tuple, glare.GlareRenderer] = {}
     for number, (source, target) in enumerate(zip(inputs, targets, strict=True), start=1):
@@ -517,10 +518,9 @@ def _parser() -> argparse.ArgumentParser:
     render.add_argument(
         "paths",
         nargs="+",
-        type=Path,
         metavar="INPUT... OUTPUT",
-        help="linear luminance EXRs (Y or RGB), cd/m², then the output EXR (float32), or "
-        "for several inputs the output folder",
+        help="linear luminance EXRs (Y or RGB), cd/m², then the output EXR (float32), or an "
+        "output folder (several inputs, or a name ending in /) for files of the same names",
     )
     render.add_argument("--pixel-deg", type=float, required=True, help="visual angle of a pixel")
     render.add_argument("--l-dmax", type=float, default=220.0, help="display maximum, cd/m²")
