@@ -36,7 +36,7 @@ from typing import Literal
 
 import numpy as np
 
-from ._convolve import fft_length
+from ._convolve import DIRECT_PIXEL_S, cluster_cost, fft_length
 from .base import GlareModel
 from .display import block_reduce
 from .multires import PAD_NODES, far_spread
@@ -56,14 +56,14 @@ MULTIRES_MIN_REACH = 4  # multi-resolution only when the reach is at least 4 R0
 FAR_ERROR_SAFETY = 0.25
 # Costs, seconds, measured on a 2-core machine: a forward and an inverse real FFT of n
 # points cost about FFT_S · n log2 n (up to 4096²; FFT_LARGE_S beyond FFT_LARGE_POINTS, where
-# the arrays leave the caches); a scaled kernel copy DIRECT_S per pixel it covers; the far
+# the arrays leave the caches); the direct spread as glare._convolve.cluster_cost says; the far
 # tail (splat, coarse convolution, cubic interpolation, preview and per-pixel check)
 # MULTIRES_S per image pixel and convolution. Only their ratios choose the path. A kernel
 # spectrum is made once per renderer and FFT length, so it is not counted.
 FFT_S = 4.5e-10
 FFT_LARGE_S = 5.5e-10
 FFT_LARGE_POINTS = 2**25
-DIRECT_S = 3.2e-9
+DIRECT_MAX_PIXELS = 20_000  # more bright pixels than this are never spread directly
 MULTIRES_S = 3.5e-8
 
 
@@ -200,6 +200,14 @@ def _geometric_reach(source, target, half) -> tuple[int, int]:
     rows = max(target[1] - 1 - source[0], source[1] - 1 - target[0], 0)
     cols = max(target[3] - 1 - source[2], source[3] - 1 - target[2], 0)
     return min(int(rows), half[0]), min(int(cols), half[1])
+
+
+def _direct_cost(scene: Scene, out, reach) -> float:
+    """Estimated seconds of spreading the scene's bright clusters directly."""
+    area = min((out[1] - out[0]) * (out[3] - out[2]), (2 * reach[0] + 1) * (2 * reach[1] + 1))
+    if scene.bright_pixels > DIRECT_MAX_PIXELS:  # never cheaper: no need to find clusters
+        return DIRECT_PIXEL_S * scene.bright_pixels * area
+    return area * sum(cluster_cost(mask.size, int(mask.sum())) for _, mask in scene.clusters())
 
 
 def fft_cost(lengths: tuple[int, int]) -> float:
@@ -364,10 +372,7 @@ def make_plan(renderer, scene: Scene) -> GlarePlan:
     )
     costs = {
         "fft": fft_cost(lengths) * convolutions,
-        "direct": DIRECT_S
-        * scene.bright_pixels
-        * convolutions
-        * min((out[1] - out[0]) * (out[3] - out[2]), (2 * reach[0] + 1) * (2 * reach[1] + 1)),
+        "direct": _direct_cost(scene, out, reach) * convolutions,
     }
     exact_paths = [p for p in ("direct", "fft") if p in renderer.paths] or ["direct", "fft"]
     path, factor, split = min(exact_paths, key=costs.get), 1, 0

@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ._convolve import clusters
 from .multires import grid_shape, splat
 
 __all__ = ["Scene"]
@@ -36,6 +37,12 @@ class Scene:
     darkest: float
     achromatic: bool
     _splats: dict = field(default_factory=dict, repr=False, compare=False)
+
+    def clusters(self) -> list[tuple[tuple[slice, slice], np.ndarray]]:
+        """The connected groups of bright pixels in the source box (made once)."""
+        if "clusters" not in self._splats:
+            self._splats["clusters"] = clusters((self.excess > 0).any(axis=2))
+        return self._splats["clusters"]
 
     def splat(self, factor: int, channel: int | None) -> np.ndarray:
         """The excess of one channel (``None``: the brightest channel of each pixel) splatted

@@ -372,7 +372,7 @@ PEER = "peer: scipy fftconvolve, whole image, full kernel"
 PEER_SPECTRUM = "peer: rfft2 with precomputed kernel spectrum, float64"
 PEER_SPECTRUM_32 = "peer: rfft2 with precomputed kernel spectrum, float32"
 GAUSSIAN_PEER_TRUNCATE = (4.0, 5.0, 6.0)  # 4 σ is both libraries' default
-DIRECT_LIMIT = 4e10  # multiply-adds up to which the direct path alone is timed
+DIRECT_LIMIT = 2e9  # multiply-adds up to which the direct path alone is timed
 # workload → the models benched on it
 MODELS = {
     "yoshida2008": ("vos", "gaussian"),
