@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._validation import check_positive
-from .compose import METHODS
+from .compose import METHODS, compose
 
 __all__ = [
     "DISPLAY_BITS",
@@ -152,14 +152,9 @@ class CodeBound:
     def _outputs(self, planes, spread_low, spread_high):
         """Lowest and highest output (cd/m²) for spreads in ``[low, high]``, within the
         display's range."""
-        if self.method == "Yoshida2008":
-            low = np.minimum(planes + spread_low, self.top)
-            high = np.minimum(planes + spread_high, self.top)
-        else:
-            base = np.minimum(planes, self.l_dmax)
-            low = np.minimum(base + spread_low, self.top)
-            high = np.minimum(base + spread_high, self.top)
-        return np.maximum(low, self.black), np.maximum(high, self.black)
+        low = compose(planes, spread_low, self.l_dmax, self.method)
+        high = compose(planes, spread_high, self.l_dmax, self.method)
+        return np.clip(low, self.black, self.top), np.clip(high, self.black, self.top)
 
     def codes(
         self,

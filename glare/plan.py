@@ -170,8 +170,8 @@ class GlarePlan:
             )
         elif self.path == "direct":
             lines.append(
-                f"  path: direct — {self.bright_pixels} scaled copies of a "
-                f"{2 * reach[0] + 1} × {2 * reach[1] + 1} px kernel"
+                f"  path: direct — each cluster of the {self.bright_pixels} bright pixels "
+                f"correlated with a {2 * reach[0] + 1} × {2 * reach[1] + 1} px kernel (exact)"
             )
         elif self.path == "fft":
             lines.append(

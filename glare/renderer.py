@@ -303,7 +303,7 @@ class GlareRenderer:
                 spread=empty, source=source,
             )  # fmt: skip
         if plan.path == "clamp":
-            out = np.minimum(scene.planes, self.dtype.type(self.l_dmax))
+            out = compose(scene.planes, self.dtype.type(0), self.l_dmax, self.method)
             return GlareResult(
                 out if scene.colour else out[..., 0], plan, **result, kernel=None,
                 parameters=parameters, spread=empty, source=source,

@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ._convolve import clusters
+from .compose import excess as excess_of
 from .multires import grid_shape, splat
 
 __all__ = ["Scene"]
@@ -77,7 +78,7 @@ class Scene:
         if source is not None:
             r0, r1, c0, c1 = source
             box = planes[r0:r1, c0:c1]
-            excess = np.maximum(box - dtype.type(l_dmax), dtype.type(0))
+            excess = excess_of(box, l_dmax)
         achromatic = colour and bool(
             np.array_equal(image[..., 0], image[..., 1])
             and np.array_equal(image[..., 0], image[..., 2])
