@@ -164,6 +164,7 @@ class GlareRenderer:
             raise ValueError(f"paths must name at least one of {PATHS}; got {paths!r}")
         self.say = log or (lambda line: None)
         self._kernels: dict[bool, Kernel] = {}
+        self._peaks: dict[bool, float] = {}
         self._bounds: dict[bool, TailBound | None] = {}
         self._coarse: dict[tuple, np.ndarray] = {}
         self._multires: dict[tuple, MultiresKernels] = {}
@@ -182,6 +183,12 @@ class GlareRenderer:
                 self.pixel_deg, self.kernel_shape, colour=colour
             )
         return self._kernels[colour]
+
+    def kernel_peak(self, colour: bool = False) -> float:
+        """The reference kernel's largest value (found once)."""
+        if colour not in self._peaks:
+            self._peaks[colour] = float(np.max(self.kernel(colour).values))
+        return self._peaks[colour]
 
     def tail_bound(self, colour: bool) -> TailBound | None:
         """The model's tail bounds for every radius up to the kernel's half-size."""
@@ -295,7 +302,7 @@ class GlareRenderer:
             "convolution_precision": [self.dtype.name],
         }
         source = (scene.excess, scene.source_box)
-        empty = np.zeros(image.shape, dtype=self.dtype)
+        empty = np.zeros(image.shape, dtype=self.dtype)  # calloc: pages only when touched
         result = {"error_bound_codes": 0.0, "far_relative_error": 0.0, "fallback": ""}
         if plan.path == "none":
             return GlareResult(
@@ -361,7 +368,7 @@ class GlareRenderer:
         if "float32" in used:
             absolute += FLOAT32_NOISE_LIMIT_CD_M2
         if plan.path in ("fft", "multires"):
-            peak = float(np.max(self.kernel(plan.colour_kernel).values))
+            peak = self.kernel_peak(plan.colour_kernel)
             n = 4 * self.shape[0] * self.shape[1]
             absolute += np.finfo(np.float64).eps * math.log2(n) * scene.total_excess * peak
         return absolute
@@ -418,8 +425,8 @@ class GlareRenderer:
                 fft_length(box[:2], near_box[:2], half[0]),
                 fft_length(box[2:], near_box[2:], half[1]),
             )
-            peak = float(np.max(self.kernel(plan.colour_kernel).values))
-            work = convolution_dtype(excess, np.array([peak]), self.dtype)
+            peak = np.array([self.kernel_peak(plan.colour_kernel)])
+            work = convolution_dtype(excess, peak, self.dtype)
             used.add(work.name)
             spectrum = self._spectrum(
                 lengths,
