@@ -36,7 +36,7 @@ from typing import Literal
 
 import numpy as np
 
-from ._convolve import DIRECT_PIXEL_S, cluster_cost, fft_length
+from ._convolve import CORRELATE_WEIGHT_S, DIRECT_PIXEL_S, cluster_cost, fft_length
 from .base import GlareModel
 from .display import block_reduce
 from .multires import PAD_NODES, far_spread
@@ -63,7 +63,6 @@ FAR_ERROR_SAFETY = 0.25
 FFT_S = 4.5e-10
 FFT_LARGE_S = 5.5e-10
 FFT_LARGE_POINTS = 2**25
-DIRECT_MAX_PIXELS = 20_000  # more bright pixels than this are never spread directly
 MULTIRES_S = 3.5e-8
 
 
@@ -202,11 +201,13 @@ def _geometric_reach(source, target, half) -> tuple[int, int]:
     return min(int(rows), half[0]), min(int(cols), half[1])
 
 
-def _direct_cost(scene: Scene, out, reach) -> float:
-    """Estimated seconds of spreading the scene's bright clusters directly."""
+def _direct_cost(scene: Scene, out, reach, limit: float) -> float:
+    """Estimated seconds of spreading the scene's bright clusters directly; a lower bound
+    when that is already above ``limit`` (the clusters are then not looked for)."""
     area = min((out[1] - out[0]) * (out[3] - out[2]), (2 * reach[0] + 1) * (2 * reach[1] + 1))
-    if scene.bright_pixels > DIRECT_MAX_PIXELS:  # never cheaper: no need to find clusters
-        return DIRECT_PIXEL_S * scene.bright_pixels * area
+    lowest = area * scene.bright_pixels * min(DIRECT_PIXEL_S, CORRELATE_WEIGHT_S)
+    if lowest >= limit:
+        return lowest
     return area * sum(cluster_cost(mask.size, int(mask.sum())) for _, mask in scene.clusters())
 
 
@@ -370,10 +371,8 @@ def make_plan(renderer, scene: Scene) -> GlarePlan:
         fft_length(source[:2], out[:2], reach[0]),
         fft_length(source[2:], out[2:], reach[1]),
     )
-    costs = {
-        "fft": fft_cost(lengths) * convolutions,
-        "direct": _direct_cost(scene, out, reach) * convolutions,
-    }
+    costs = {"fft": fft_cost(lengths) * convolutions}
+    costs["direct"] = _direct_cost(scene, out, reach, costs["fft"] / convolutions) * convolutions
     exact_paths = [p for p in ("direct", "fft") if p in renderer.paths] or ["direct", "fft"]
     path, factor, split = min(exact_paths, key=costs.get), 1, 0
     if bound is not None and tolerance > 0 and "multires" in renderer.paths:

@@ -414,53 +414,33 @@ def _reference(image, pixel, model):
     return glare.add_glare(image, model, pixel_deg=pixel, tolerance_codes=None)
 
 
-MEMORY_SCRIPT = """
-import resource, sys, numpy as np
-sys.path[:0] = {path!r}
-import glare
-from glarelab import bench
-image, kernel = np.load({image!r}), np.load({kernel!r})
-before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-contender = {contender!r}
-if contender == "default":
-    model = glare.VosGlare()
-    k = glare.Kernel(values=kernel, pixel_deg={pixel!r})
-    glare.GlareRenderer(model, pixel_deg={pixel!r}, shape=image.shape, kernel=k).render(image)
-elif contender == "spectrum":
-    bench._spectrum_peer(image, kernel, np.float64)()
-else:
-    bench._fftconvolve_peer(image, kernel)()
-after = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-print((after - before) / 1024)
-"""
-
-
 def memory_bench(name: str, log=print) -> list[dict]:
-    """Peak memory (MiB above the image and kernel) of one Vos render of a workload: ours
-    (renderer built, kernel given) and the two FFT peers, each in a fresh process."""
-    import subprocess
-    import sys
-    import tempfile
+    """Peak memory (MiB) of one Vos render of a workload, allocated through Python and NumPy
+    (``tracemalloc``; FFT scratch inside pocketfft is not counted) on top of the image and the
+    digitised kernel: ours (renderer built with the kernel, then one render) and the two FFT
+    peers (their kernel spectrum included)."""
+    import tracemalloc
 
     image, pixel = workload(name)
-    kernel = glare.VosGlare().kernel(pixel, kernel_shape_for(image.shape)).values
+    model = glare.VosGlare()
+    kernel = model.kernel(pixel, kernel_shape_for(image.shape))
+    contenders = {
+        DEFAULT: lambda: glare.GlareRenderer(
+            model, pixel_deg=pixel, shape=image.shape, kernel=kernel
+        ).render(image),
+        PEER_SPECTRUM: lambda: _spectrum_peer(image, kernel.values, np.float64)(),
+        PEER: lambda: _fftconvolve_peer(image, kernel.values)(),
+    }
     rows = []
-    with tempfile.TemporaryDirectory() as folder:
-        paths = {"image": f"{folder}/image.npy", "kernel": f"{folder}/kernel.npy"}
-        np.save(paths["image"], image)
-        np.save(paths["kernel"], kernel)
-        for contender, label in (
-            ("default", DEFAULT),
-            ("spectrum", PEER_SPECTRUM),
-            ("fftconvolve", PEER),
-        ):
-            script = MEMORY_SCRIPT.format(path=sys.path, contender=contender, pixel=pixel, **paths)
-            done = subprocess.run(
-                [sys.executable, "-c", script], capture_output=True, text=True, check=True
-            )
-            mib = float(done.stdout.split()[-1])
-            rows.append({"workload": name, "variant": label, "peak_mib": mib})
-            log(f"  memory, {label}: {mib:.0f} MiB")
+    for label, contender in contenders.items():
+        tracemalloc.start()
+        try:
+            contender()
+            mib = tracemalloc.get_traced_memory()[1] / 2**20
+        finally:
+            tracemalloc.stop()
+        rows.append({"workload": name, "variant": label, "peak_mib": mib})
+        log(f"  memory, {label}: {mib:.0f} MiB")
     return rows
 
 
