@@ -570,8 +570,10 @@ def run_bench(
 
 def _best_peer(mine: list[dict], bound: float) -> dict | None:
     """The fastest peer whose error is within ``bound`` codes."""
-    peers = [r for r in mine if r["variant"].startswith("peer") and r["max_error_codes"] <= bound]
-    return min(peers, key=lambda r: r["seconds"], default=None)
+    peers = [
+        r for r in mine if r["variant"].startswith("peer") and float(r["max_error_codes"]) <= bound
+    ]
+    return min(peers, key=lambda r: float(r["seconds"]), default=None)
 
 
 def tables(rows: list[dict], spectral_rows: list[dict] = (), memory_rows: list[dict] = ()) -> str:
