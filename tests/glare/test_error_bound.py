@@ -6,7 +6,7 @@ and RGB, and every path the renderer can take."""
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 import glare
@@ -90,8 +90,9 @@ def _check(image, model, pixel_deg, tolerance, *, paths=None, kernel=None, displ
 
 
 @st.composite
-def scenes(draw, *, large):
-    kind = draw(st.sampled_from(("strip", "small", "medium") if large else ("strip", "small")))
+def scenes(draw, *, large, kinds=None):
+    kinds = kinds or (("strip", "small", "medium") if large else ("strip", "small"))
+    kind = draw(st.sampled_from(kinds))
     if kind == "strip":
         n = draw(st.integers(2, 600 if large else 200))
         shape = (1, n) if draw(st.booleans()) else (n, 1)
@@ -131,6 +132,22 @@ def test_the_error_is_within_the_tolerance_and_the_reported_bound(
     image, model, pixel_deg, tolerance, paths
 ):
     error, result = _check(image, model, pixel_deg, tolerance, paths=paths)
+    event(f"path {result.plan.path}")  # --hypothesis-show-statistics shows how often each ran
+    assert error <= tolerance, (error, str(result.plan))
+    assert error <= result.error_bound_codes, (error, str(result.plan))
+
+
+@settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    image=scenes(large=True, kinds=("medium",)),
+    model=st.sampled_from(list(BOUNDED.values())),
+    pixel_deg=st.sampled_from([0.005, 0.01, 0.02]),
+    tolerance=st.sampled_from([0.5, 2.0]),
+)
+def test_the_coarse_far_tail_keeps_the_bound_where_it_is_taken(image, model, pixel_deg, tolerance):
+    # the far tail needs a reach of 4 R0 >= 256 px: medium images, small pixels
+    error, result = _check(image, model, pixel_deg, tolerance, paths=("multires",))
+    event(f"path {result.plan.path}" + (" (fallback)" if result.fallback else ""))
     assert error <= tolerance, (error, str(result.plan))
     assert error <= result.error_bound_codes, (error, str(result.plan))
 
