@@ -26,8 +26,8 @@ from .models import (
     make_model,
 )
 from .plan import GlarePlan, plan_glare
-from .render import L_DMAX_YOSHIDA2008_CD_M2, add_glare, render_glare
-from .renderer import GlareRenderer, GlareResult, PlannedGlare, render_planned
+from .render import L_DMAX_YOSHIDA2008_CD_M2, add_glare, render_glare, render_planned
+from .renderer import GlareRenderer, GlareResult, PlannedGlare
 from .spectral import HaloSpectrum, Spectrum
 from .wave import WaveOpticsGlare
 

@@ -19,7 +19,13 @@ from .digitise import Kernel, check_kernel_shape
 from .models import GlareModel, _resolve
 from .renderer import PRECISIONS, GlareRenderer, GlareResult
 
-__all__ = ["L_DMAX_YOSHIDA2008_CD_M2", "GlareResult", "add_glare", "render_glare"]
+__all__ = [
+    "L_DMAX_YOSHIDA2008_CD_M2",
+    "GlareResult",
+    "add_glare",
+    "render_glare",
+    "render_planned",
+]
 
 L_DMAX_YOSHIDA2008_CD_M2 = 220.0  # Yoshida 2008 §3: maximum luminance of a typical display
 
@@ -190,3 +196,60 @@ def add_glare(
         kernel_shape=kernel_shape,
     )
     return renderer.render(image).image
+
+
+def render_planned(
+    luminance_cd_m2: np.ndarray,
+    model: GlareModel | str,
+    *,
+    pixel_deg: float,
+    l_dmax_cd_m2: float,
+    method: Literal["Yoshida2008", "Spencer1995"] = "Yoshida2008",
+    precision: Literal["float64", "float32"] = "float64",
+    tolerance_codes: float = 0.5,
+    display=None,
+    log=None,
+) -> GlareResult:
+    """Add glare as :func:`glare.plan_glare` plans it, and bound the error reached: the
+    one-call form of :meth:`GlareRenderer.render`.
+
+    Parameters
+    ----------
+    luminance_cd_m2, model, pixel_deg, l_dmax_cd_m2, method, tolerance_codes, display
+        As for :func:`glare.plan_glare`.
+    precision
+        ``'float64'`` or ``'float32'``, as for :func:`glare.render_glare`.
+    log
+        Called with one line per step, or ``None``.
+
+    Returns
+    -------
+    GlareResult
+
+    Raises
+    ------
+    ValueError
+        As for :func:`glare.plan_glare`, and for an unknown precision.
+
+    Examples
+    --------
+    >>> from glare import VosGlare
+    >>> image = np.full((64, 64), 50.0)
+    >>> image[32, 32] = 1e5
+    >>> result = render_planned(image, VosGlare(), pixel_deg=0.05, l_dmax_cd_m2=220.0)
+    >>> result.error_bound_codes <= 0.5
+    True
+    """
+    image = check_image("luminance_cd_m2", luminance_cd_m2, channels=(3,))
+    renderer = GlareRenderer(
+        model,
+        pixel_deg=pixel_deg,
+        shape=image.shape[:2],
+        l_dmax_cd_m2=l_dmax_cd_m2,
+        method=method,
+        precision=precision,
+        tolerance_codes=tolerance_codes,
+        display=display,
+        log=log,
+    )
+    return renderer.render(image)

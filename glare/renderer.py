@@ -46,9 +46,12 @@ from .plan import PATHS, GlarePlan, make_plan
 from .result import GlareResult, PlannedGlare
 from .scene import Scene
 
-__all__ = ["SPECTRA_BYTES", "GlareRenderer", "GlareResult", "PlannedGlare", "render_planned"]
+__all__ = ["SPECTRA_BYTES", "GlareRenderer", "GlareResult", "PlannedGlare"]
 
 SPECTRA_BYTES = 512 * 2**20  # kernel spectra a renderer keeps (the one in use always)
+# When the FFT's round-off bound exceeds the tolerance, the image is spread directly (no
+# round-off) if that is estimated to cost at most DIRECT_FALLBACK times the FFT.
+DIRECT_FALLBACK = 50.0
 PRECISIONS = ("float64", "float32")
 
 
@@ -332,7 +335,7 @@ class GlareRenderer:
                 tolerance_codes=plan.tolerance_codes,
             )
         else:
-            error = absolute / float(self.code_bound.step(scene.darkest))
+            error = self._exact_error(scene, spread, absolute, plan.tolerance_codes)
         if plan.path == "multires" and error > plan.tolerance_codes:
             result["fallback"] = (
                 f"far tail error bound {error:.3g} codes > {plan.tolerance_codes:g}: "
@@ -346,7 +349,23 @@ class GlareRenderer:
             out = compose(scene.planes, spread, self.l_dmax, self.method)
             absolute = self._absolute(scene, plan, used)
             relative = 0.0
-            error = absolute / float(self.code_bound.step(scene.darkest))
+            error = self._exact_error(scene, spread, absolute, plan.tolerance_codes)
+        if (
+            plan.path == "fft"
+            and error > plan.tolerance_codes
+            and "direct" in self.paths
+            and plan.costs.get("direct", math.inf) <= DIRECT_FALLBACK * plan.costs["fft"]
+        ):
+            result["fallback"] = (
+                f"FFT round-off bound {error:.3g} codes > {plan.tolerance_codes:g}: "
+                "spread directly"
+            )
+            self.say(result["fallback"])
+            plan = replace(plan, path="direct")
+            spread, used = self._spread(scene, plan)
+            out = compose(scene.planes, spread, self.l_dmax, self.method)
+            absolute = self._absolute(scene, plan, used)
+            error = self._exact_error(scene, spread, absolute, plan.tolerance_codes)
         self.say(f"error bound {error:.3g} display codes")
         parameters["convolution_precision"] = sorted(used)
         result.update(error_bound_codes=error, far_relative_error=relative)
@@ -358,6 +377,20 @@ class GlareRenderer:
             out, plan, **result, kernel=self._kernels.get(plan.colour_kernel, self._given),
             parameters=parameters, spread=spread, source=source,
         )  # fmt: skip
+
+    def _exact_error(self, scene: Scene, spread, absolute: float, tolerance: float) -> float:
+        """Codes of a bound that does not grow with the spread: at the darkest pixel's step,
+        or, when that is over the tolerance, pixel by pixel through the display."""
+        error = absolute / float(self.code_bound.step(scene.darkest))
+        if error > tolerance:
+            error = min(
+                error,
+                self.code_bound.codes(
+                    scene.planes, spread, absolute=absolute, relative=0.0,
+                    tolerance_codes=tolerance,
+                ),
+            )  # fmt: skip
+        return error
 
     def _absolute(self, scene: Scene, plan: GlarePlan, used: set[str]) -> float:
         """The part of the error bound that does not grow with the spread, cd/m²: the cut's
@@ -453,60 +486,3 @@ def _within(out_box, box, half) -> tuple[int, int, int, int]:
         max(out_box[2], box[2] - half[1]),
         min(out_box[3], box[3] + half[1]),
     )
-
-
-def render_planned(
-    luminance_cd_m2: np.ndarray,
-    model: GlareModel | str,
-    *,
-    pixel_deg: float,
-    l_dmax_cd_m2: float,
-    method: Literal["Yoshida2008", "Spencer1995"] = "Yoshida2008",
-    precision: Literal["float64", "float32"] = "float64",
-    tolerance_codes: float = 0.5,
-    display=None,
-    log=None,
-) -> GlareResult:
-    """Add glare as :func:`glare.plan_glare` plans it, and bound the error reached: the
-    one-call form of :meth:`GlareRenderer.render`.
-
-    Parameters
-    ----------
-    luminance_cd_m2, model, pixel_deg, l_dmax_cd_m2, method, tolerance_codes, display
-        As for :func:`glare.plan_glare`.
-    precision
-        ``'float64'`` or ``'float32'``, as for :func:`glare.render_glare`.
-    log
-        Called with one line per step, or ``None``.
-
-    Returns
-    -------
-    GlareResult
-
-    Raises
-    ------
-    ValueError
-        As for :func:`glare.plan_glare`, and for an unknown precision.
-
-    Examples
-    --------
-    >>> from glare import VosGlare
-    >>> image = np.full((64, 64), 50.0)
-    >>> image[32, 32] = 1e5
-    >>> result = render_planned(image, VosGlare(), pixel_deg=0.05, l_dmax_cd_m2=220.0)
-    >>> result.error_bound_codes <= 0.5
-    True
-    """
-    image = check_image("luminance_cd_m2", luminance_cd_m2, channels=(3,))
-    renderer = GlareRenderer(
-        model,
-        pixel_deg=pixel_deg,
-        shape=image.shape[:2],
-        l_dmax_cd_m2=l_dmax_cd_m2,
-        method=method,
-        precision=precision,
-        tolerance_codes=tolerance_codes,
-        display=display,
-        log=log,
-    )
-    return renderer.render(image)

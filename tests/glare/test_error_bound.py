@@ -160,8 +160,8 @@ def test_the_coarse_far_tail_keeps_the_bound_where_it_is_taken(image, model, pix
 )
 def test_models_without_a_tail_bound_render_exactly(image, model, pixel_deg):
     error, result = _check(image, model, pixel_deg, 0.5)
-    assert result.plan.exact and result.plan.path in ("direct", "fft")
-    assert error <= result.error_bound_codes <= 0.5, (error, str(result.plan))
+    assert result.plan.exact and result.plan.path in ("none", "clamp", "direct", "fft")
+    assert error <= result.error_bound_codes and error <= 0.5, (error, str(result.plan))
 
 
 @pytest.fixture(scope="module")
