@@ -4,12 +4,15 @@ Models: :class:`GaussianGlare` (Yoshida et al. 2008), :class:`VosGlare` (Vos 198
 as used by Spencer et al. 1995), :class:`WaveOpticsGlare` (Kakimoto et al. 2004, with pupil,
 particles and Fresnel term as in Luidolt 2020) and :class:`HybridGlare` (diffraction plus Vos
 scattering). Digitise one with :func:`kernel` / :func:`digitise_kernel`,
-apply it with :func:`add_glare` / :func:`render_glare`. The eye state is in :mod:`glare.eye`,
+apply it with :func:`add_glare` / :func:`render_glare`, or to many images of one shape with
+a :class:`GlareRenderer`. The eye state is in :mod:`glare.eye`,
 the PSF components in :mod:`glare.vos`.
 """
 
 from . import apertures, eye, vos, wave
+from .base import TailBound
 from .digitise import Kernel, kernel_shape_for
+from .display import Display
 from .eye import pupil_diameter_mm, regime
 from .flare import flare_line_pattern
 from .models import (
@@ -22,8 +25,9 @@ from .models import (
     kernel,
     make_model,
 )
-from .plan import Display, GlarePlan, PlannedGlare, plan_glare, render_planned
-from .render import L_DMAX_YOSHIDA2008_CD_M2, GlareResult, add_glare, render_glare
+from .plan import GlarePlan, plan_glare
+from .render import L_DMAX_YOSHIDA2008_CD_M2, add_glare, render_glare, render_planned
+from .renderer import GlareRenderer, GlareResult, PlannedGlare
 from .spectral import HaloSpectrum, Spectrum
 from .wave import WaveOpticsGlare
 
@@ -34,12 +38,14 @@ __all__ = [
     "GaussianGlare",
     "GlareModel",
     "GlarePlan",
+    "GlareRenderer",
     "GlareResult",
     "HaloSpectrum",
     "HybridGlare",
     "Kernel",
     "PlannedGlare",
     "Spectrum",
+    "TailBound",
     "VosGlare",
     "WaveOpticsGlare",
     "add_glare",

@@ -110,12 +110,13 @@ def check_image(name: str, image: object, *, channels: tuple[int, ...] = ()) -> 
         raise ValueError(f"{name} must have at least one pixel; got shape {array.shape}")
     if not (np.issubdtype(array.dtype, np.floating) or np.issubdtype(array.dtype, np.integer)):
         raise ValueError(f"{name} must hold real numbers; got dtype {array.dtype}")
-    finite = np.isfinite(array)
-    if not finite.all():
+    low, high = (array.min(), array.max()) if array.size else (0, 0)  # NaN propagates
+    if not (np.isfinite(low) and np.isfinite(high)):
+        finite = np.isfinite(array)
         raise ValueError(
             f"{name} must be finite (NaN and Inf are not luminances); got {_first(array, ~finite)}"
         )
-    if (array < 0).any():
+    if low < 0:
         raise ValueError(f"{name} must be >= 0 cd/m²; got {_first(array, array < 0)}")
     return array
 

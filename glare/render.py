@@ -9,57 +9,25 @@ each pixel and adds the spread excess without a clamp (values above ``L_dmax`` a
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
 
-from ._convolve import bounding_box, convolution_dtype
-from ._convolve import spread as spread_fn
 from ._validation import check_choice, check_image, check_positive
-from .digitise import Kernel, check_kernel_shape, kernel_shape_for
+from .compose import METHODS
+from .digitise import Kernel, check_kernel_shape
 from .models import GlareModel, _resolve
-from .plan import render_planned
+from .renderer import PRECISIONS, GlareRenderer, GlareResult
 
-__all__ = ["L_DMAX_YOSHIDA2008_CD_M2", "GlareResult", "add_glare", "render_glare"]
+__all__ = [
+    "L_DMAX_YOSHIDA2008_CD_M2",
+    "GlareResult",
+    "add_glare",
+    "render_glare",
+    "render_planned",
+]
 
 L_DMAX_YOSHIDA2008_CD_M2 = 220.0  # Yoshida 2008 §3: maximum luminance of a typical display
-METHODS = ("Yoshida2008", "Spencer1995")
-PRECISIONS = ("float64", "float32")
-
-
-@dataclass(frozen=True)
-class GlareResult:
-    """An image with glare, and everything needed to say what was done to it.
-
-    Attributes
-    ----------
-    image
-        The image with glare, cd/m², same shape as the input.
-    excess
-        ``ΔL``: the luminance above ``l_dmax_cd_m2`` that was spread (Yoshida eq. 1).
-    spread
-        ``ΔL`` convolved with the kernel, inside the image.
-    kernel
-        The kernel used, with its own energy account.
-    excess_energy
-        Sum of ``ΔL`` (cd/m² × pixels), per channel for colour images.
-    energy_outside_kernel
-        Part of ``excess_energy`` the PSF sends beyond the kernel's support.
-    energy_outside_image
-        Part of ``excess_energy`` the kernel sends beyond the image border.
-    parameters
-        The arguments, for logs.
-    """
-
-    image: np.ndarray
-    excess: np.ndarray
-    spread: np.ndarray
-    kernel: Kernel
-    excess_energy: np.ndarray
-    energy_outside_kernel: np.ndarray
-    energy_outside_image: np.ndarray
-    parameters: dict
 
 
 def render_glare(
@@ -134,89 +102,18 @@ def render_glare(
     (220.0, 9780.0)
     """
     image = check_image("luminance_cd_m2", luminance_cd_m2, channels=(3,))
-    pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
-    l_dmax = check_positive("l_dmax_cd_m2", l_dmax_cd_m2, unit="cd/m²")
-    check_choice("method", method, METHODS)
-    check_choice("precision", precision, PRECISIONS)
-    glare_model = _resolve(model)
-    colour = image.ndim == 3
-    if kernel is None:
-        shape = kernel_shape_for(image.shape) if kernel_shape is None else tuple(kernel_shape)
-        digitised = glare_model.kernel(pixel_deg, shape, colour=colour)
-    else:
-        if not np.isclose(kernel.pixel_deg, pixel_deg, rtol=1e-12, atol=0):
-            raise ValueError(
-                f"kernel was digitised for pixel_deg = {kernel.pixel_deg!r}, not {pixel_deg!r}"
-            )
-        if colour and kernel.values.ndim == 3 and kernel.values.shape[2] != 3:
-            raise ValueError(f"kernel must have 3 channels for an RGB image; got {kernel.shape}")
-        digitised, shape = kernel, kernel.values.shape[:2]
-    dtype = np.dtype(precision)
-    parameters = {
-        "pixel_deg": pixel_deg,
-        "l_dmax_cd_m2": l_dmax,
-        "method": method,
-        "precision": precision,
-        "kernel_shape": shape,
-        "model": digitised.description,
-    }
-
-    work = image.astype(dtype, copy=False)
-    channels = [work] if not colour else [work[..., c] for c in range(3)]
-    kernels = digitised.values
-    kernel_channels = (
-        [kernels] if kernels.ndim == 2 else [kernels[..., c] for c in range(kernels.shape[2])]
+    renderer = GlareRenderer(
+        model,
+        pixel_deg=pixel_deg,
+        shape=image.shape[:2],
+        l_dmax_cd_m2=l_dmax_cd_m2,
+        method=method,
+        precision=precision,
+        tolerance_codes=0,
+        kernel_shape=kernel_shape,
+        kernel=kernel,
     )
-    excess_list, spread_list = [], []
-    used: set[str] = set()
-    for index, channel in enumerate(channels):
-        excess = np.maximum(channel - dtype.type(l_dmax), dtype.type(0))
-        k = kernel_channels[min(index, len(kernel_channels) - 1)].astype(dtype, copy=False)
-        bright = excess > 0
-        if bright.any():
-            work_dtype = convolution_dtype(excess, k, dtype)
-            used.add(work_dtype.name)
-            spread = spread_fn(
-                excess.astype(work_dtype, copy=False),
-                k.astype(work_dtype, copy=False),
-                bounding_box(bright),
-            )
-            # the spread of a non-negative excess by a non-negative kernel is non-negative;
-            # FFT round-off is not
-            spread = np.maximum(spread, 0.0).astype(dtype, copy=False)
-        else:
-            spread = np.zeros_like(excess)
-        excess_list.append(excess)
-        spread_list.append(spread)
-    stack = (lambda arrays: arrays[0]) if not colour else (lambda arrays: np.stack(arrays, -1))
-    excess = stack(excess_list)
-    spread = stack(spread_list)
-
-    if not (excess > 0).any():
-        out = image.copy()
-    elif method == "Yoshida2008":
-        out = np.minimum(work + spread, dtype.type(l_dmax))
-    elif method == "Spencer1995":
-        out = np.minimum(work, dtype.type(l_dmax)) + spread
-    else:
-        raise ValueError(f"method must be one of {METHODS}; got {method!r}")
-
-    parameters["convolution_precision"] = sorted(used) or [precision]
-    axes = (0, 1)
-    excess_energy = excess.sum(axis=axes, dtype=np.float64)
-    kernel_sum = digitised.values.sum(axis=axes, dtype=np.float64)
-    outside_kernel = excess_energy * np.asarray(digitised.energy_outside)
-    outside_image = excess_energy * kernel_sum - spread.sum(axis=axes, dtype=np.float64)
-    return GlareResult(
-        image=out,
-        excess=excess,
-        spread=spread,
-        kernel=digitised,
-        excess_energy=excess_energy,
-        energy_outside_kernel=outside_kernel,
-        energy_outside_image=outside_image,
-        parameters=parameters,
-    )
+    return renderer.render(image)
 
 
 def add_glare(
@@ -287,14 +184,72 @@ def add_glare(
             check_kernel_shape(kernel_shape)
         _resolve(model)
         return image.copy()
-    common = {
-        "pixel_deg": pixel_deg,
-        "l_dmax_cd_m2": l_dmax_cd_m2,
-        "method": method,
-        "precision": precision,
-    }
-    if kernel_shape is None and tolerance_codes:
-        return render_planned(
-            image, model, **common, tolerance_codes=tolerance_codes, display=display
-        ).image
-    return render_glare(image, model, **common, kernel_shape=kernel_shape).image
+    renderer = GlareRenderer(
+        model,
+        pixel_deg=pixel_deg,
+        shape=image.shape[:2],
+        l_dmax_cd_m2=l_dmax_cd_m2,
+        method=method,
+        precision=precision,
+        tolerance_codes=tolerance_codes if kernel_shape is None else 0,
+        display=display,
+        kernel_shape=kernel_shape,
+    )
+    return renderer.render(image).image
+
+
+def render_planned(
+    luminance_cd_m2: np.ndarray,
+    model: GlareModel | str,
+    *,
+    pixel_deg: float,
+    l_dmax_cd_m2: float,
+    method: Literal["Yoshida2008", "Spencer1995"] = "Yoshida2008",
+    precision: Literal["float64", "float32"] = "float64",
+    tolerance_codes: float = 0.5,
+    display=None,
+    log=None,
+) -> GlareResult:
+    """Add glare as :func:`glare.plan_glare` plans it, and bound the error reached: the
+    one-call form of :meth:`GlareRenderer.render`.
+
+    Parameters
+    ----------
+    luminance_cd_m2, model, pixel_deg, l_dmax_cd_m2, method, tolerance_codes, display
+        As for :func:`glare.plan_glare`.
+    precision
+        ``'float64'`` or ``'float32'``, as for :func:`glare.render_glare`.
+    log
+        Called with one line per step, or ``None``.
+
+    Returns
+    -------
+    GlareResult
+
+    Raises
+    ------
+    ValueError
+        As for :func:`glare.plan_glare`, and for an unknown precision.
+
+    Examples
+    --------
+    >>> from glare import VosGlare
+    >>> image = np.full((64, 64), 50.0)
+    >>> image[32, 32] = 1e5
+    >>> result = render_planned(image, VosGlare(), pixel_deg=0.05, l_dmax_cd_m2=220.0)
+    >>> result.error_bound_codes <= 0.5
+    True
+    """
+    image = check_image("luminance_cd_m2", luminance_cd_m2, channels=(3,))
+    renderer = GlareRenderer(
+        model,
+        pixel_deg=pixel_deg,
+        shape=image.shape[:2],
+        l_dmax_cd_m2=l_dmax_cd_m2,
+        method=method,
+        precision=precision,
+        tolerance_codes=tolerance_codes,
+        display=display,
+        log=log,
+    )
+    return renderer.render(image)

@@ -2,27 +2,34 @@
 
 For each workload and model a float64 reference is rendered with generous settings (the exact
 render: full-reach kernel, full resolution, and for the Vos PSF 4× the default integration
-samples). Every variant is timed (median of repeats, in this process, kernel digitisation
-included: what a user pays) and compared with the reference in the codes of the shipped
-10-bit, 433 cd/m² synthetic display (continuous codes through its calibration: 0.5 is half a
-step). Peers are timed in the same run and every time is also a ratio to them:
-``scipy.signal.fftconvolve`` of the whole excess image with the full kernel (the kernel
-digitised as ours is), and for the Gaussian ``scipy.ndimage.gaussian_filter`` and OpenCV's
-``GaussianBlur`` (when ``cv2`` is installed), each truncated at 4 σ, their defaults.
+samples). Every variant is timed in this process, the contenders interleaved (one run of each
+in turn, ``repeats`` rounds, the best kept), with the kernel digitised beforehand for every
+one of them (a stimulus set renders many images with one kernel): our renderers are built
+and run once before timing, the peers get the digitised kernel. One row, ``add_glare, one
+call``, pays the digitisation. Errors are in codes of the shipped 10-bit, 433 cd/m²
+synthetic display (continuous codes through its calibration: 0.5 is half a step).
 
-Workloads (:func:`workloads`): the Yoshida 2008 stimulus at the paper's display geometry; a
-1280 × 1024 night scene with six headlights (Spencer Fig. 14); 2048² scenes at 40° with a
-7.5e8 cd/m² sun disk over a displayable landscape, the Fig. 16 tree against a 4000 cd/m² sky
-with the sun through three holes, and water with glints (many bright pixels all over);
-``large`` adds the 4096² versions. The spectral section times the wave-optics PSF's
-``scaled`` copies against one FFT per wavelength, with CIEDE2000.
+Peers, timed in the same run: ``irfft2(rfft2(ΔL) · K̂)`` with the kernel's spectrum computed
+once (the best a user could write with ``scipy.fft``; float64, and float32 where it stays
+within half a code); ``scipy.signal.fftconvolve`` of the whole excess image with the full
+kernel; for the Gaussian ``scipy.ndimage.gaussian_filter`` and OpenCV's ``GaussianBlur``
+(when ``cv2`` is installed), each truncated at 4-6 σ.
+
+Workloads (:data:`WORKLOADS`): the Yoshida 2008 stimulus at the paper's display geometry; a
+1280 × 1024 night scene with six headlights (Spencer Fig. 14); a 256² street with a few
+lamps and a 4096 × 256 strip; 2048² scenes at 40°: a 7.5e8 cd/m² sun disk over a
+displayable landscape, the Fig. 16 tree against a 4000 cd/m² sky with the sun through three
+holes, water with glints (many bright pixels all over), a city at night with 300 lamps
+(luminance and RGB), and a night scene with a sun-bright glint and three lamps; ``large``
+adds the 4096² versions. Peak memory of a 2048² render is measured in separate processes.
+The spectral section times the wave-optics PSF's ``scaled`` copies against one FFT per
+wavelength, with CIEDE2000.
 """
 
 from __future__ import annotations
 
 import csv
 import math
-import statistics
 import time
 from collections.abc import Callable
 from dataclasses import replace
@@ -33,9 +40,9 @@ import scipy.fft
 from scipy.signal import fftconvolve
 
 import glare
-from glare._convolve import FFT_WORKERS, bounding_box, spread
+from glare._convolve import FFT_WORKERS
 from glare.digitise import kernel_shape_for
-from glare.plan import display_codes
+from glare.display import display_codes
 from stimuli.calibration import Calibration
 
 __all__ = ["WORKLOADS", "run_bench", "spectral_bench", "workload", "workload_names"]
@@ -143,17 +150,56 @@ def night_scene(*, seed: int = 0) -> tuple[np.ndarray, float]:
     return night, 0.03
 
 
+def lamps_scene(
+    shape: tuple[int, int],
+    lamps: int,
+    *,
+    pixel_deg: float,
+    colour: bool = False,
+    glint_cd_m2: float | None = None,
+    seed: int = 0,
+) -> tuple[np.ndarray, float]:
+    """A night street: 0.01-1 cd/m² (log-uniform texture), ``lamps`` lamps of 3 × 3 px at
+    1e3-1e5 cd/m² anywhere, and optionally a 2 × 2 glint (a sun reflected in a window).
+    In RGB the background is bluish and each lamp sodium orange or white."""
+    rng = np.random.default_rng(seed)
+    height, width = shape
+    image = 10 ** rng.uniform(-2, 0, shape)
+    if colour:
+        image = image[..., None] * np.array([0.8, 0.9, 1.2])
+    for _ in range(lamps):
+        row, col = rng.integers(0, height - 2), rng.integers(0, width - 2)
+        level = 10 ** rng.uniform(3, 5)
+        tint = (np.array([1.0, 0.55, 0.15]) if rng.random() < 0.5 else 1.0) if colour else 1.0
+        image[row : row + 3, col : col + 3] = level * tint
+    if glint_cd_m2 is not None:
+        row, col = int(0.3 * height), int(0.6 * width)
+        image[row : row + 2, col : col + 2] = glint_cd_m2
+    return image, pixel_deg
+
+
+NIGHT_PIXEL_DEG = 0.02  # the 2048² night scenes: 41° across
 WORKLOADS = {  # name → builder: the scenes of the benchmark and of the tests
     "yoshida2008": yoshida_scene,
     "night_1280x1024": night_scene,
+    "street_256": lambda: lamps_scene((256, 256), 6, pixel_deg=0.05),
+    "strip_4096x256": lambda: lamps_scene((256, 4096), 24, pixel_deg=NIGHT_PIXEL_DEG),
     "sun_2048": lambda: sun_scene(2048),
     "leaves_2048": lambda: leaves_scene(2048),
     "glints_2048": lambda: glints_scene(2048),
+    "city_2048": lambda: lamps_scene((2048, 2048), 300, pixel_deg=NIGHT_PIXEL_DEG),
+    "city_rgb_2048": lambda: lamps_scene(
+        (2048, 2048), 300, pixel_deg=NIGHT_PIXEL_DEG, colour=True
+    ),
+    "night_sun_2048": lambda: lamps_scene(
+        (2048, 2048), 3, pixel_deg=NIGHT_PIXEL_DEG, glint_cd_m2=SUN_CD_M2
+    ),
     "sun_4096": lambda: sun_scene(4096),
     "leaves_4096": lambda: leaves_scene(4096),
     "glints_4096": lambda: glints_scene(4096),
 }
 LARGE = ("sun_4096", "leaves_4096", "glints_4096")
+MEMORY_WORKLOADS = ("leaves_2048", "night_sun_2048")  # peak memory, in separate processes
 
 
 def workload(name: str) -> tuple[np.ndarray, float]:
@@ -168,90 +214,132 @@ def workload_names(large: bool = False) -> list[str]:
     return [name for name in WORKLOADS if large or name not in LARGE]
 
 
-def _full_kernel_peer(image: np.ndarray, pixel: float, model) -> Callable[[], np.ndarray]:
-    """The peer: ``fftconvolve`` of the whole excess image with the full kernel, digitised as
-    ours is, on as many FFT threads as ours."""
-    full = kernel_shape_for(image.shape)
+def _spectrum_peer(image, kernel, dtype) -> Callable[[], np.ndarray]:
+    """The peer a user could write: the kernel's spectrum computed once, then per image
+    ``irfft2(rfft2(ΔL padded to next_fast_len) · K̂)``, every channel at once."""
+    height, width = image.shape[:2]
+    lengths = tuple(scipy.fft.next_fast_len(2 * n - 1, real=True) for n in (height, width))
+    placed = np.zeros(lengths + kernel.shape[2:], dtype=dtype)
+    placed[: 2 * height - 1, : 2 * width - 1] = kernel
+    placed = np.roll(placed, (1 - height, 1 - width), axis=(0, 1))
+    with scipy.fft.set_workers(FFT_WORKERS):
+        spectrum = scipy.fft.rfft2(placed, axes=(0, 1))
+    if image.ndim == 3 and kernel.ndim == 2:
+        spectrum = spectrum[..., None]
+    work = image.astype(dtype)
 
     def peer():
-        kernel = model.kernel(pixel, full).values
+        with scipy.fft.set_workers(FFT_WORKERS):
+            excess = np.maximum(work - dtype(L_DMAX), dtype(0))
+            transformed = scipy.fft.rfft2(excess, s=lengths, axes=(0, 1)) * spectrum
+            spread = scipy.fft.irfft2(transformed, s=lengths, axes=(0, 1))[:height, :width]
+        return np.minimum(work + spread, dtype(L_DMAX))
+
+    return peer
+
+
+def _fftconvolve_peer(image, kernel) -> Callable[[], np.ndarray]:
+    """``scipy.signal.fftconvolve`` of the whole excess image with the full kernel."""
+
+    def peer():
         excess = np.maximum(image - L_DMAX, 0.0)
         with scipy.fft.set_workers(FFT_WORKERS):
-            spread = fftconvolve(excess, kernel, mode="same")
+            if image.ndim == 3:
+                k = kernel if kernel.ndim == 3 else kernel[..., None]
+                spread = fftconvolve(excess, k, mode="same", axes=(0, 1))
+            else:
+                spread = fftconvolve(excess, kernel, mode="same")
         return np.minimum(image + spread, L_DMAX)
 
     return peer
 
 
-def _timed(function: Callable[[], np.ndarray], repeats: int) -> tuple[float, np.ndarray]:
-    times, result = [], None
+def _timed(variants: dict[str, Callable[[], np.ndarray]], repeats: int) -> dict:
+    """Best time and last result of each variant, the variants run in turn ``repeats``
+    times (so that a busy moment of a shared machine does not fall on one of them)."""
+    times = {name: [] for name in variants}
+    results = {}
     for _ in range(repeats):
-        start = time.perf_counter()
-        result = function()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times), result
+        for name, function in variants.items():
+            start = time.perf_counter()
+            results[name] = function()
+            times[name].append(time.perf_counter() - start)
+    return {name: (min(times[name]), results[name]) for name in variants}
 
 
 def _reach_shape(reach_deg: float, pixel: float, full: tuple[int, int]) -> tuple[int, int]:
     return tuple(min(2 * round(reach_deg / pixel / 2) + 1, f) for f in full)
 
 
-def _vos_variants(image, pixel, model, lut) -> dict[str, Callable[[], np.ndarray]]:
-    full = kernel_shape_for(image.shape)
+class _Prepared:
+    """A renderer for ``image``, built and run once (what a stimulus set reuses); calling it
+    renders again and notes the path taken."""
 
-    def add(chosen=model, **options):
-        return lambda: glare.add_glare(
-            image, chosen, pixel_deg=pixel, l_dmax_cd_m2=L_DMAX, display=lut, **options
+    def __init__(self, model, image, pixel, lut, **options) -> None:
+        self.renderer = glare.GlareRenderer(
+            model, pixel_deg=pixel, shape=image.shape, l_dmax_cd_m2=L_DMAX, display=lut, **options
         )
+        self.image = image
+        self()
+
+    def __call__(self) -> np.ndarray:
+        result = self.renderer.render(self.image)
+        self.path = result.plan.path + (" (fallback)" if result.fallback else "")
+        return result.image
+
+
+def _variants(image, pixel, model, lut, kernel) -> dict[str, Callable[[], np.ndarray]]:
+    full = kernel_shape_for(image.shape)
+    given = {"kernel": kernel}
+
+    def prepared(chosen=model, **options):
+        kernel_given = given if chosen is model and "kernel_shape" not in options else {}
+        return _Prepared(chosen, image, pixel, lut, **kernel_given, **options)
 
     variants = {
-        "default (plan, 0.5 codes)": add(),
-        "plan, 2 codes": add(tolerance_codes=2.0),
-        "plan, 0.1 codes": add(tolerance_codes=0.1),
-        "float32": add(precision="float32"),
-        "samples 2/10": add(replace(model, samples_per_pixel=2, center_samples_per_pixel=10)),
-        "samples 5/50": add(replace(model, samples_per_pixel=5, center_samples_per_pixel=50)),
-        "exact (full kernel, full resolution)": add(tolerance_codes=None),
+        DEFAULT: prepared(),
+        "add_glare, one call (kernel digitised)": lambda: glare.add_glare(
+            image, model, pixel_deg=pixel, l_dmax_cd_m2=L_DMAX, display=lut
+        ),
+        "plan, 2 codes": prepared(tolerance_codes=2.0),
+        "plan, 0.1 codes": prepared(tolerance_codes=0.1),
+        "float32": prepared(precision="float32"),
+        "path: fft only": prepared(paths=("fft",)),
+        "path: multires only": prepared(paths=("multires",)),
+        "exact (full kernel, full resolution)": prepared(tolerance_codes=0),
     }
+    bright = image > L_DMAX
+    bright = int(np.count_nonzero(bright.any(axis=2) if image.ndim == 3 else bright))
+    if bright * image.shape[0] * image.shape[1] <= DIRECT_LIMIT:
+        variants["path: direct only"] = prepared(paths=("direct",))
+    if isinstance(model, glare.VosGlare):
+        for label, samples in (("samples 2/10", (2, 10)), ("samples 5/50", (5, 50))):
+            coarser = replace(
+                model, samples_per_pixel=samples[0], center_samples_per_pixel=samples[1]
+            )
+            variants[label] = prepared(coarser)
     for reach in (1.0, 4.0):
         shape = _reach_shape(reach, pixel, full)
         if shape != full:
-            variants[f"fixed reach {reach:g}°"] = add(kernel_shape=shape)
-
-    bright = image > L_DMAX
-    box = bounding_box(bright)
-    box_area = (box[0].stop - box[0].start) * (box[1].stop - box[1].start)
-    if box_area * full[0] * full[1] <= DIRECT_LIMIT:
-
-        def direct():
-            kernel = model.kernel(pixel, full).values
-            excess = np.maximum(image - L_DMAX, 0.0)
-            return np.minimum(image + spread(excess, kernel, box, method="direct"), L_DMAX)
-
-        variants["direct convolution over the bright box, full kernel"] = direct
-    variants[PEER] = _full_kernel_peer(image, pixel, model)
+            variants[f"fixed reach {reach:g}°"] = prepared(kernel_shape=shape, tolerance_codes=0)
+    values = kernel.values
+    if values.ndim == 3 and model.achromatic:  # one kernel for the three channels
+        values = values[..., 0]
+    variants[PEER_SPECTRUM] = _spectrum_peer(image, values, np.float64)
+    variants[PEER_SPECTRUM_32] = _spectrum_peer(image, values, np.float32)
+    variants[PEER] = _fftconvolve_peer(image, values)
+    if isinstance(model, glare.GaussianGlare):
+        variants.update(_gaussian_peers(image, pixel, model))
     return variants
 
 
-def _gaussian_variants(image, pixel, model, lut) -> dict[str, Callable[[], np.ndarray]]:
+def _gaussian_peers(image, pixel, model) -> dict[str, Callable[[], np.ndarray]]:
     from scipy.ndimage import gaussian_filter
 
     sigma_px = model.sigma_deg / pixel
 
-    def add(**options):
-        return lambda: glare.add_glare(
-            image, model, pixel_deg=pixel, l_dmax_cd_m2=L_DMAX, display=lut, **options
-        )
-
     def excess():
         return np.maximum(image - L_DMAX, 0.0)
-
-    variants = {
-        "default (plan, 0.5 codes)": add(),
-        "plan, 2 codes": add(tolerance_codes=2.0),
-        "float32": add(precision="float32"),
-        "exact (full kernel, full resolution)": add(tolerance_codes=None),
-    }
 
     def scipy_filter(truncate):
         return lambda: np.minimum(
@@ -271,25 +359,32 @@ def _gaussian_variants(image, pixel, model, lut) -> dict[str, Callable[[], np.nd
         import cv2
     except ImportError:  # OpenCV is not a dependency; measured where it is installed
         cv2 = None
+    peers = {}
     for truncate in GAUSSIAN_PEER_TRUNCATE:
-        variants[f"peer: scipy gaussian_filter ({truncate:g} σ)"] = scipy_filter(truncate)
+        peers[f"peer: scipy gaussian_filter ({truncate:g} σ)"] = scipy_filter(truncate)
         if cv2 is not None:
-            variants[f"peer: OpenCV GaussianBlur ({truncate:g} σ)"] = opencv_blur(truncate)
-
-    variants[PEER] = _full_kernel_peer(image, pixel, model)
-    return variants
+            peers[f"peer: OpenCV GaussianBlur ({truncate:g} σ)"] = opencv_blur(truncate)
+    return peers
 
 
+DEFAULT = "default (renderer, plan, 0.5 codes)"
 PEER = "peer: scipy fftconvolve, whole image, full kernel"
+PEER_SPECTRUM = "peer: rfft2 with precomputed kernel spectrum, float64"
+PEER_SPECTRUM_32 = "peer: rfft2 with precomputed kernel spectrum, float32"
 GAUSSIAN_PEER_TRUNCATE = (4.0, 5.0, 6.0)  # 4 σ is both libraries' default
-DIRECT_LIMIT = 2e9  # multiply-adds up to which the direct convolution is timed
+DIRECT_LIMIT = 2e9  # multiply-adds up to which the direct path alone is timed
 # workload → the models benched on it
 MODELS = {
     "yoshida2008": ("vos", "gaussian"),
     "night_1280x1024": ("vos_scotopic",),
+    "street_256": ("vos",),
+    "strip_4096x256": ("vos",),
     "sun_2048": ("vos",),
     "leaves_2048": ("vos",),
     "glints_2048": ("vos", "gaussian"),
+    "city_2048": ("vos",),
+    "city_rgb_2048": ("vos",),
+    "night_sun_2048": ("vos",),
     "sun_4096": ("vos",),
     "leaves_4096": ("vos",),
     "glints_4096": ("vos", "gaussian"),
@@ -319,6 +414,36 @@ def _reference(image, pixel, model):
     return glare.add_glare(image, model, pixel_deg=pixel, tolerance_codes=None)
 
 
+def memory_bench(name: str, log=print) -> list[dict]:
+    """Peak memory (MiB) of one Vos render of a workload, allocated through Python and NumPy
+    (``tracemalloc``; FFT scratch inside pocketfft is not counted) on top of the image and the
+    digitised kernel: ours (renderer built with the kernel, then one render) and the two FFT
+    peers (their kernel spectrum included)."""
+    import tracemalloc
+
+    image, pixel = workload(name)
+    model = glare.VosGlare()
+    kernel = model.kernel(pixel, kernel_shape_for(image.shape))
+    contenders = {
+        DEFAULT: lambda: glare.GlareRenderer(
+            model, pixel_deg=pixel, shape=image.shape, kernel=kernel
+        ).render(image),
+        PEER_SPECTRUM: lambda: _spectrum_peer(image, kernel.values, np.float64)(),
+        PEER: lambda: _fftconvolve_peer(image, kernel.values)(),
+    }
+    rows = []
+    for label, contender in contenders.items():
+        tracemalloc.start()
+        try:
+            contender()
+            mib = tracemalloc.get_traced_memory()[1] / 2**20
+        finally:
+            tracemalloc.stop()
+        rows.append({"workload": name, "variant": label, "peak_mib": mib})
+        log(f"  memory, {label}: {mib:.0f} MiB")
+    return rows
+
+
 def spectral_bench(
     shape: tuple[int, int] = (1025, 1025), *, pixel_deg: float = 0.004, repeats: int = 1
 ) -> list[dict]:
@@ -340,8 +465,7 @@ def spectral_bench(
         "Kakimoto: three wavelengths": kernel(spectral="kakimoto"),
     }
     results, reference = [], None
-    for label, function in variants.items():
-        seconds, rgb = _timed(function, repeats)
+    for label, (seconds, rgb) in _timed(variants, repeats).items():
         reference = rgb if reference is None else reference
         error = glare.wave.kernel_colour_error(reference, rgb, "ITU-R BT.709")
         results.append(
@@ -363,7 +487,8 @@ def run_bench(
     repeats: int = 3,
     log=print,
 ) -> list[dict]:
-    """Run the benchmark; write ``bench.csv``, ``bench.md`` and one Pareto PNG per workload.
+    """Run the benchmark; write ``bench.csv``, ``bench.md`` and one Pareto PNG per workload
+    (and ``memory.csv`` when a workload of :data:`MEMORY_WORKLOADS` is run).
 
     Parameters
     ----------
@@ -372,11 +497,11 @@ def run_bench(
     large
         Add the 4096² scenes.
     only
-        Run only these workloads (names of :func:`workloads`).
+        Run only these workloads (names of :data:`WORKLOADS`).
     spectral
         Also run :func:`spectral_bench`.
     repeats
-        Timings per variant; the median is reported.
+        Rounds of timings (the contenders in turn); the best is reported.
     log
         Called with one line per step.
     """
@@ -389,19 +514,17 @@ def run_bench(
     if unknown:
         raise ValueError(f"unknown workloads {unknown}; choose from {sorted(WORKLOADS)}")
     rows = []
-    for name in names:
+    for number, name in enumerate(names, start=1):
         image, pixel = workload(name)
         for model_name in MODELS[name]:
             model = _model(model_name, pixel)
-            label = f"{name} / {model_name}"
+            label = f"[{number}/{len(names)}] {name} / {model_name}"
             log(f"{label}: {image.shape[1]} × {image.shape[0]} px at {pixel:.4g}°/px")
             reference_codes = display_codes(_reference(image, pixel, model), lut)
-            variants = (_gaussian_variants if model_name == "gaussian" else _vos_variants)(
-                image, pixel, model, lut
-            )
+            kernel = model.kernel(pixel, kernel_shape_for(image.shape), colour=image.ndim == 3)
+            variants = _variants(image, pixel, model, lut, kernel)
             results = []
-            for variant, function in variants.items():
-                seconds, result = _timed(function, repeats)
+            for variant, (seconds, result) in _timed(variants, repeats).items():
                 error = np.abs(display_codes(result, lut) - reference_codes)
                 results.append(
                     {
@@ -411,13 +534,19 @@ def run_bench(
                         "seconds": seconds,
                         "max_error_codes": float(error.max()),
                         "rms_error_codes": float(np.sqrt(np.mean(error**2))),
+                        "path": getattr(variants[variant], "path", ""),
                     }
                 )
                 log(f"  {variant}: {seconds:.3f} s, max error {error.max():.3g} codes")
-            peer = next(r["seconds"] for r in results if r["variant"] == PEER)
+            by_variant = {r["variant"]: r["seconds"] for r in results}
             for r in results:
-                r["speed_vs_peer"] = peer / r["seconds"]
+                r["speed_vs_peer"] = by_variant[PEER] / r["seconds"]
+                r["speed_vs_spectrum_peer"] = by_variant[PEER_SPECTRUM] / r["seconds"]
             rows += results
+    memory_rows = []
+    for name in (n for n in names if n in MEMORY_WORKLOADS):
+        log(f"peak memory: {name}")
+        memory_rows += memory_bench(name, log=log)
     spectral_rows = []
     if spectral:
         log("wave-optics PSF: scaled copies against one FFT per wavelength")
@@ -425,55 +554,70 @@ def run_bench(
         for r in spectral_rows:
             log(f"  {r['variant']}: {r['seconds']:.2f} s, ΔE00 {r['delta_e_mean']:.3g}")
     write_plots(rows, out)
-    for name, table in (("bench.csv", rows), ("spectral.csv", spectral_rows)):
+    for file, table in (
+        ("bench.csv", rows),
+        ("spectral.csv", spectral_rows),
+        ("memory.csv", memory_rows),
+    ):
         if table:
-            with (out / name).open("w", newline="") as handle:
+            with (out / file).open("w", newline="") as handle:
                 writer = csv.DictWriter(handle, fieldnames=list(table[0]))
                 writer.writeheader()
                 writer.writerows(table)
-    (out / "bench.md").write_text(tables(rows, spectral_rows))
-    return rows + spectral_rows
+    (out / "bench.md").write_text(tables(rows, spectral_rows, memory_rows))
+    return rows + spectral_rows + memory_rows
 
 
 def _best_peer(mine: list[dict], bound: float) -> dict | None:
-    """The fastest peer whose error is within ``bound`` codes (the fftconvolve one is exact)."""
-    peers = [r for r in mine if r["variant"].startswith("peer") and r["max_error_codes"] <= bound]
-    return min(peers, key=lambda r: r["seconds"], default=None)
+    """The fastest peer whose error is within ``bound`` codes."""
+    peers = [
+        r for r in mine if r["variant"].startswith("peer") and float(r["max_error_codes"]) <= bound
+    ]
+    return min(peers, key=lambda r: float(r["seconds"]), default=None)
 
 
-def tables(rows: list[dict], spectral_rows: list[dict] = ()) -> str:
+def tables(rows: list[dict], spectral_rows: list[dict] = (), memory_rows: list[dict] = ()) -> str:
     """Markdown: a summary per workload and model (the default against the exact render and
-    the fastest peer within half a code), then every variant, then the spectral section."""
+    the peers, as ratios of times measured in the same run), then every variant, then peak
+    memory and the spectral section."""
     lines = [
-        "| workload | model | default (s) | error (codes) | exact (s) | fastest peer within "
-        "0.5 codes | peer (s) | × faster than it | × faster than full-kernel fftconvolve |",
-        "| --- | --- | --- | --- | --- | --- | --- | --- | --- |",
+        "| workload | model | default (s) | path | error (codes) | fastest peer within "
+        "0.5 codes | peer (s) | × faster than it | × faster than rfft2 with precomputed "
+        "spectrum | × faster than full-kernel fftconvolve |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
     ]
     for key in dict.fromkeys((r["workload"], r["model"]) for r in rows):
         mine = [r for r in rows if (r["workload"], r["model"]) == key]
-        default = next(r for r in mine if r["variant"].startswith("default"))
-        exact = next(r for r in mine if r["variant"].startswith("exact"))
-        full = next(r for r in mine if r["variant"] == PEER)
+        default = next(r for r in mine if r["variant"] == DEFAULT)
         best = _best_peer(mine, 0.5)
+        spectrum = next(r for r in mine if r["variant"] == PEER_SPECTRUM)
+        full = next(r for r in mine if r["variant"] == PEER)
         lines.append(
-            f"| {key[0]} | {key[1]} | {default['seconds']:.3f} | "
-            f"{default['max_error_codes']:.2g} | {exact['seconds']:.3f} | "
-            f"{best['variant'].removeprefix('peer: ')} | {best['seconds']:.3f} | "
-            f"{best['seconds'] / default['seconds']:.2f} | "
-            f"{full['seconds'] / default['seconds']:.2f} |"
+            f"| {key[0]} | {key[1]} | {float(default['seconds']):.3f} | "
+            f"{default.get('path', '')} | {float(default['max_error_codes']):.2g} | "
+            f"{best['variant'].removeprefix('peer: ')} | {float(best['seconds']):.3f} | "
+            f"{float(best['seconds']) / float(default['seconds']):.2f} | "
+            f"{float(spectrum['seconds']) / float(default['seconds']):.2f} | "
+            f"{float(full['seconds']) / float(default['seconds']):.2f} |"
         )
     lines += [
         "",
-        "| workload | model | variant | time (s) | × peer speed | max error (codes) "
-        "| RMS (codes) |",
-        "| --- | --- | --- | --- | --- | --- | --- |",
+        "| workload | model | variant | time (s) | × rfft2-spectrum peer | × fftconvolve peer "
+        "| max error (codes) | RMS (codes) |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- |",
     ]
     lines += [
         f"| {r['workload']} | {r['model']} | {r['variant']} | {float(r['seconds']):.3f} | "
-        f"{float(r['speed_vs_peer']):.2f} | {float(r['max_error_codes']):.3g} | "
-        f"{float(r['rms_error_codes']):.3g} |"
+        f"{float(r['speed_vs_spectrum_peer']):.2f} | {float(r['speed_vs_peer']):.2f} | "
+        f"{float(r['max_error_codes']):.3g} | {float(r['rms_error_codes']):.3g} |"
         for r in rows
     ]
+    if memory_rows:
+        lines += ["", "| workload | variant | peak memory (MiB) |", "| --- | --- | --- |"]
+        lines += [
+            f"| {r['workload']} | {r['variant']} | {float(r['peak_mib']):.0f} |"
+            for r in memory_rows
+        ]
     if spectral_rows:
         lines += [
             "",
@@ -526,13 +670,13 @@ def _pareto(results: list[dict], title: str, path: Path) -> None:
             marker="s" if peer else markers[index % len(markers)],
             label=r["variant"].removeprefix("peer: "),
             zorder=2,
-            edgecolors="k" if r["variant"].startswith("default") else "none",
+            edgecolors="k" if r["variant"] == DEFAULT else "none",
         )
     axis.axhline(0.5, color="k", ls="--", lw=0.8, label="half a display code")
     axis.set(
         xscale="log",
         yscale="log",
-        xlabel="time (s, median, kernel digitisation included)",
+        xlabel="time (s, best of the rounds, kernel digitised beforehand)",
         ylabel=f"max error (10-bit codes; < {floor:g} at {floor:g})",
         title=title,
     )

@@ -95,48 +95,60 @@ def _add_model_options(parser: argparse.ArgumentParser, default: str = "vos") ->
 
 def _render(args: argparse.Namespace) -> int:
     model = build_model(args)
-    _log(f"reading {args.input}")
-    image = read_exr(args.input)
-    _log(f"{image.shape} image, max {float(image.max()):.4g} cd/m²; rendering with {model}")
-    start = time.perf_counter()
+    *inputs, output = args.paths
+    if not inputs:
+        raise ValueError("render needs an input EXR and an output EXR (or folder)")
+    targets = [Path(output)]
+    folder = len(inputs) > 1 or output.endswith(("/", "\\")) or Path(output).is_dir()
+    if folder:  # many files: one renderer per image shape, its kernel made once
+        Path(output).mkdir(parents=True, exist_ok=True)
+        targets = [Path(output) / Path(name).name for name in inputs]
+        if args.preview:
+            raise ValueError("--preview is for one output file; render that file on its own")
     display = Calibration.load(args.calibration) if args.calibration else None
-    common = {
-        "pixel_deg": args.pixel_deg,
-        "l_dmax_cd_m2": args.l_dmax,
-        "method": args.method,
-        "precision": args.precision,
-    }
-    if args.tolerance_codes > 0:
-        planned = glare.render_planned(
-            image,
-            model,
-            **common,
-            tolerance_codes=args.tolerance_codes,
-            display=display,
-            log=_log,
-        )
-        if args.explain:
-            print(planned.plan)
-            print(
-                f"  result: error bound {planned.error_bound_codes:.3g} display codes"
-                + (f" ({planned.fallback})" if planned.fallback else "")
+    renderers: dict[tuple, glare.GlareRenderer] = {}
+    for number, (source, target) in enumerate(zip(inputs, targets, strict=True), start=1):
+        _log(f"[{number}/{len(inputs)}] reading {source}")
+        image = read_exr(source)
+        _log(f"{image.shape} image, max {float(image.max()):.4g} cd/m²; rendering with {model}")
+        start = time.perf_counter()
+        key = image.shape[:2]
+        if key not in renderers:
+            renderers[key] = glare.GlareRenderer(
+                model,
+                pixel_deg=args.pixel_deg,
+                shape=key,
+                l_dmax_cd_m2=args.l_dmax,
+                method=args.method,
+                precision=args.precision,
+                tolerance_codes=args.tolerance_codes,
+                display=display,
+                log=_log,
             )
-        output = planned.image
-        _log(f"done in {time.perf_counter() - start:.2f} s")
-    else:
-        result = glare.render_glare(image, model, **common)
-        left_image = result.energy_outside_image / np.maximum(result.excess_energy, 1e-300)
-        _log(
-            f"done in {time.perf_counter() - start:.2f} s (exact); energy outside the kernel "
-            f"{np.max(result.kernel.energy_outside):.3g}, outside the image "
-            f"{float(np.max(left_image)):.3g} of the excess"
-        )
-        output = result.image
-    write_exr(args.output, output.astype(np.float32))
-    _log(f"wrote {args.output}")
-    if args.preview:
-        preview_png(args.preview, output, l_dmax_cd_m2=args.l_dmax, scale=args.preview_scale)
-        _log(f"wrote {args.preview}")
+        result = renderers[key].render(image)
+        if args.explain:
+            print(result.plan)
+            print(
+                f"  result: error bound {result.error_bound_codes:.3g} display codes"
+                + (f" ({result.fallback})" if result.fallback else "")
+            )
+        seconds = time.perf_counter() - start
+        if result.plan.exact and result.energy_outside_image is not None:
+            left = result.energy_outside_image / np.maximum(result.excess_energy, 1e-300)
+            _log(
+                f"done in {seconds:.2f} s (exact); energy outside the kernel "
+                f"{np.max(result.kernel.energy_outside):.3g}, outside the image "
+                f"{float(np.max(left)):.3g} of the excess"
+            )
+        else:
+            _log(f"done in {seconds:.2f} s; error bound {result.error_bound_codes:.3g} codes")
+        write_exr(target, result.image.astype(np.float32))
+        _log(f"wrote {target}")
+        if args.preview:
+            preview_png(
+                args.preview, result.image, l_dmax_cd_m2=args.l_dmax, scale=args.preview_scale
+            )
+            _log(f"wrote {args.preview}")
     return 0
 
 
@@ -629,9 +641,16 @@ def _parser() -> argparse.ArgumentParser:
     )
     commands = parser.add_subparsers(dest="command", required=True)
 
-    render = commands.add_parser("render", help="add glare to a linear float EXR image")
-    render.add_argument("input", type=Path, help="linear luminance EXR (Y or RGB), cd/m²")
-    render.add_argument("output", type=Path, help="output EXR (float32)")
+    render = commands.add_parser(
+        "render", help="add glare to linear float EXR images (one kernel for many files)"
+    )
+    render.add_argument(
+        "paths",
+        nargs="+",
+        metavar="INPUT... OUTPUT",
+        help="linear luminance EXRs (Y or RGB), cd/m², then the output EXR (float32), or an "
+        "output folder (several inputs, or a name ending in /) for files of the same names",
+    )
     render.add_argument("--pixel-deg", type=float, required=True, help="visual angle of a pixel")
     render.add_argument("--l-dmax", type=float, default=220.0, help="display maximum, cd/m²")
     render.add_argument("--method", choices=("Yoshida2008", "Spencer1995"), default="Yoshida2008")

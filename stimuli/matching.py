@@ -107,15 +107,17 @@ def build_matching(protocol: Protocol, *, progress=None) -> dict:
         model = glare_model(method["model"], method["parameters"])
         models[method["name"]] = repr(model)
         kernel = model.kernel(fine_p, shape)
+        renderer = glare.GlareRenderer(  # exact; the kernel's spectrum is kept across levels
+            model,
+            pixel_deg=fine_p,
+            shape=(fine_n, fine_n),
+            l_dmax_cd_m2=g["l_dmax_cd_m2"],
+            tolerance_codes=0,
+            kernel=kernel,
+        )
         for label, level in zip(method["labels"], method["levels_cd_m2"], strict=True):
             scene = np.where(mask, level, field)
-            result = glare.render_glare(
-                scene,
-                model,
-                pixel_deg=fine_p,
-                l_dmax_cd_m2=g["l_dmax_cd_m2"],
-                kernel=kernel,
-            )
+            result = renderer.render(scene)
             images[reference_name(method["name"], label)] = {
                 "img": box_filter(result.image, factor),
                 "kind": "reference",

@@ -70,6 +70,9 @@ def build_staircase(protocol: Protocol, *, progress=None) -> dict:
     cover = np.clip(disc + annulus, 0.0, 1.0)
     model = glare_model(g["model"], g["parameters"])
     kernel = model.kernel(p, kernel_shape_for((size, size)))
+    renderer = glare.GlareRenderer(  # exact; the kernel's spectrum is kept across images
+        model, pixel_deg=p, shape=(size, size), l_dmax_cd_m2=peak, tolerance_codes=0, kernel=kernel
+    )
     images: dict[str, dict] = {
         "comparison_disc": {"img": disc, "kind": "component"},
         "comparison_annulus": {"img": annulus, "kind": "component"},
@@ -104,7 +107,7 @@ def build_staircase(protocol: Protocol, *, progress=None) -> dict:
         for level, strength in enumerate(g["strengths"], start=1):
             source_l = peak * (1.0 + strength)
             hdr = scene * (1.0 - source) + source_l * source
-            result = glare.render_glare(hdr, model, pixel_deg=p, l_dmax_cd_m2=peak, kernel=kernel)
+            result = renderer.render(hdr)
             images[glare_name(name, level)] = {
                 "img": result.image,
                 "kind": "glare",

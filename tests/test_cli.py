@@ -53,6 +53,19 @@ def test_render_round_trips_a_float32_exr(tmp_path, model):
     assert png.shape == image.shape and png.max() == 255
 
 
+def test_render_many_files_into_a_folder_with_one_kernel(tmp_path, capsys):
+    sources = []
+    for level in (4000.0, 40000.0):
+        image = yoshida_disk() * np.float32(level / 4000.0)
+        sources.append(write_exr(tmp_path / f"disk_{level:g}.exr", image))
+    out = tmp_path / "glare"
+    assert main(["render", *map(str, sources), str(out), "--pixel-deg", "0.02"]) == 0
+    for source in sources:
+        expected = glare.add_glare(read_exr(source), glare.VosGlare(), pixel_deg=0.02)
+        assert_allclose(read_exr(out / source.name), expected.astype(np.float32), rtol=0)
+    assert capsys.readouterr().err.count("digitising") == 1  # the kernel is made once
+
+
 def test_render_accepts_rgb_and_mesopic_options(tmp_path):
     image = np.repeat(yoshida_disk()[..., None], 3, axis=2)
     source = write_exr(tmp_path / "rgb.exr", image)

@@ -11,8 +11,8 @@ from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
 import glare
-from glare import GaussianGlare, VosGlare, WaveOpticsGlare
-from glare.plan import DISPLAY_CONTRAST, Display, display_codes, render_planned
+from glare import GaussianGlare, VosGlare, WaveOpticsGlare, render_planned
+from glare.display import DISPLAY_CONTRAST, Display, display_codes
 from glare.vos import max_age_years
 
 L_DMAX = 220.0

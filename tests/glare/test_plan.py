@@ -5,23 +5,20 @@ import pytest
 from numpy.testing import assert_allclose
 
 import glare
-from glare import GaussianGlare, VosGlare
-from glare.plan import (
-    CUT_SHARE,
-    Display,
-    _multires_kernels,
-    display_codes,
-    plan_glare,
-    render_planned,
-)
+from glare import GaussianGlare, GlareRenderer, VosGlare, plan_glare, render_planned
+from glare.display import Display, display_codes
+from glare.multires import multires_kernels
+from glare.plan import CUT_SHARE
 from glarelab.bench import CALIBRATION, MODELS, WORKLOADS, _model, workload
 from stimuli.calibration import Calibration
 
 LUT = Calibration.load(CALIBRATION).lut  # the shipped 10-bit, 433 cd/m² synthetic display
 
 
-def _exact(image, model, pixel, method="Yoshida2008"):
-    return glare.render_glare(image, model, pixel_deg=pixel, l_dmax_cd_m2=220.0, method=method)
+def _exact(image, model, pixel, method="Yoshida2008", kernel=None):
+    return glare.render_glare(
+        image, model, pixel_deg=pixel, l_dmax_cd_m2=220.0, method=method, kernel=kernel
+    )
 
 
 def _code_error(a, b):
@@ -34,27 +31,34 @@ def test_default_stays_within_half_a_code_of_the_exact_render_on_every_workload(
     image, pixel = workload(name)
     for model_name in MODELS[name]:
         model = _model(model_name, pixel)
-        planned = render_planned(image, model, pixel_deg=pixel, l_dmax_cd_m2=220.0, display=LUT)
-        exact = _exact(image, model, pixel).image
+        renderer = GlareRenderer(model, pixel_deg=pixel, shape=image.shape, display=LUT)
+        planned = renderer.render(image)
+        exact = _exact(image, model, pixel, kernel=renderer.kernel()).image
         error = _code_error(planned.image, exact)
         assert error <= 0.5, (name, model_name, error)
-        # the reported bound holds (up to the quadrature of kernels of another size)
-        assert error <= planned.error_bound_codes + 0.01
-        assert_allclose(
-            planned.image,
-            glare.add_glare(image, model, pixel_deg=pixel, display=LUT),
-            rtol=0,
-            atol=0,
-        )
+        assert error <= planned.error_bound_codes + 1e-9  # the reported bound holds
+        if image.size <= 2048**2:  # the one-call form is the same render
+            assert_allclose(
+                planned.image,
+                glare.add_glare(image, model, pixel_deg=pixel, display=LUT),
+                rtol=0,
+                atol=0,
+            )
 
 
-def test_large_scenes_use_the_coarse_far_tail_and_a_short_near_kernel():
+def test_the_coarse_far_tail_takes_a_short_near_kernel_when_asked_for():
     image, pixel = workload("leaves_2048")
-    planned = render_planned(image, VosGlare(), pixel_deg=pixel, l_dmax_cd_m2=220.0, display=LUT)
+    renderer = GlareRenderer(
+        VosGlare(), pixel_deg=pixel, shape=image.shape, display=LUT, paths=("multires",)
+    )
+    planned = renderer.render(image)
     plan = planned.plan
-    assert plan.multires_factor in (4, 8) and 0 < plan.split_px <= 512
+    assert plan.path == "multires" and plan.multires_factor in (4, 8)
+    assert 0 < plan.split_px <= 512
     assert planned.far_relative_error < 1e-3 and not planned.fallback
     assert plan.source_box == (0, 2048, 0, 2048)  # sky all over: many bright pixels
+    exact = _exact(image, VosGlare(), pixel, kernel=renderer.kernel()).image
+    assert _code_error(planned.image, exact) <= planned.error_bound_codes <= 0.5
 
 
 def test_a_gaussian_kernel_is_cut_where_its_tail_cannot_show():
@@ -94,30 +98,39 @@ def test_tail_bounds_bound_the_digitised_kernel(model, colour):
         assert energy <= 3 * left.max() + 1e-9  # and is not wildly loose
 
 
-def test_the_far_path_error_is_measured_on_the_model():
+def test_the_far_path_error_is_measured_on_the_model_over_the_whole_kernel():
     # smootherstep blend, cubic splat and interpolation, sharpened cell averages: the far
     # path's relative error falls as (f / R0)²; measured 5e-4 at R0 = 16 f, photopic
-    coarse = VosGlare().kernel(0.01 * 8, (2 * 70 + 1, 2 * 70 + 1)).values
-    short = _multires_kernels(VosGlare(), 0.01, 8, 128, False, coarse).relative_error
-    longer = _multires_kernels(VosGlare(), 0.01, 8, 256, False, coarse).relative_error
+    full = VosGlare().kernel(0.01, (1023, 1023)).values
+    coarse = VosGlare().kernel(0.01 * 4, (2 * (128 + 5) + 1,) * 2).values
+    short = multires_kernels(full, coarse, 4, 64, (511, 511)).relative_error
+    longer = multires_kernels(full, coarse, 4, 128, (511, 511)).relative_error
     assert short < 1e-3 and longer < short / 2.5
+    # a coarse kernel two nodes short of the splat and interpolation footprint (as before
+    # issue 13): the border of the reach is off, and the measurement sees it
+    short_coarse = coarse[3:-3, 3:-3]
+    assert multires_kernels(full, short_coarse, 4, 64, (511, 511)).relative_error > 4 * short
 
 
-def test_a_far_path_that_does_not_fit_falls_back_to_full_resolution(monkeypatch):
-    import glare.plan as plan_module
+def test_a_far_path_that_does_not_fit_falls_back_to_an_exact_path(monkeypatch):
+    import glare.renderer as renderer_module
+    from glare.multires import MultiresKernels
 
     image, pixel = workload("glints_2048")
     image = image[:1024, :1024]
 
     def inaccurate(*args):
-        kernels = _multires_kernels(*args)
-        return plan_module._MultiresKernels(kernels.near, kernels.far, relative_error=0.5)
+        kernels = multires_kernels(*args)
+        return MultiresKernels(*list(kernels.__dict__.values())[:4], relative_error=0.2)
 
-    monkeypatch.setattr(plan_module, "_multires_kernels", inaccurate)
-    monkeypatch.setattr(plan_module, "MULTIRES_FACTORS", (4,))
-    planned = render_planned(image, VosGlare(), pixel_deg=pixel, l_dmax_cd_m2=220.0, display=LUT)
-    assert planned.plan.multires_factor == 1 and "does not fit" in planned.fallback
-    assert _code_error(planned.image, _exact(image, VosGlare(), pixel).image) < 1e-6
+    monkeypatch.setattr(renderer_module, "multires_kernels", inaccurate)
+    renderer = GlareRenderer(
+        VosGlare(), pixel_deg=pixel, shape=image.shape, display=LUT, paths=("multires",)
+    )
+    planned = renderer.render(image)
+    assert planned.plan.path in ("direct", "fft") and planned.plan.multires_factor == 1
+    exact = _exact(image, VosGlare(), pixel, kernel=renderer.kernel()).image
+    assert _code_error(planned.image, exact) < 1e-6
 
 
 def test_saturated_targets_need_no_convolution():

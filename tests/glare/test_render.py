@@ -6,7 +6,7 @@ from hypothesis.extra import numpy as hnp
 from numpy.testing import assert_allclose
 from scipy.signal import convolve
 
-from glare import GaussianGlare, VosGlare, add_glare, render_glare
+from glare import GaussianGlare, GlareRenderer, VosGlare, add_glare, render_glare
 
 MODELS = [GaussianGlare(sigma_deg=0.2), VosGlare(), VosGlare(regime="mesopic", flare_lines=True)]
 
@@ -217,10 +217,18 @@ def test_float32_next_to_the_sun_adds_no_noise_to_dark_pixels(model):
     image = np.full((256, 256), 0.5)
     image[60:64, 60:64] = 7.5e8
     reference = add_glare(image, model, pixel_deg=0.02)
-    fast = render_glare(image.astype(np.float32), model, pixel_deg=0.02, precision="float32")
-    assert fast.image.min() >= 0.5 - 1e-6  # nothing darker than the scene itself
     far = (slice(180, None), slice(180, None))
-    assert_allclose(fast.image[far], reference[far], rtol=1e-6, atol=1e-5)
+    for paths in (("fft",), ("direct",)):  # FFT round-off, or sums of scaled kernels
+        fast = GlareRenderer(
+            model, pixel_deg=0.02, shape=image.shape, precision="float32", paths=paths
+        ).render(image.astype(np.float32))
+        assert fast.plan.path == paths[0]
+        assert fast.image.min() >= 0.5 - 1e-6  # nothing darker than the scene itself
+        assert_allclose(fast.image[far], reference[far], rtol=1e-6, atol=1e-5)
+    assert fast.parameters["convolution_precision"] == ["float32"]  # no FFT: no noise
+    fast = GlareRenderer(
+        model, pixel_deg=0.02, shape=image.shape, precision="float32", paths=("fft",)
+    ).render(image)
     assert fast.parameters["convolution_precision"] == ["float64"]
     ordinary = np.full((64, 64), 0.5)
     ordinary[30, 30] = 4000.0

@@ -1,0 +1,78 @@
+"""Putting the spread excess back into the image: Yoshida's clamp or Spencer's sum.
+
+``ΔL = max(L - L_dmax, 0)`` is the light the display cannot show (Yoshida et al. 2008 eq. 1).
+After it is spread by the kernel (``S = ΔL ⊛ K``) the two methods compose differently:
+
+- ``'Yoshida2008'``: ``min(L + S, L_dmax)`` (Yoshida §3): pixels at ``L_dmax`` cannot change.
+- ``'Spencer1995'``: ``min(L, L_dmax) + S`` (Spencer §3.2, no clamp; values above ``L_dmax``
+  are the "burn-out" of §5, left to the tone mapper).
+
+Every render path composes through :func:`compose`.
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+import numpy as np
+
+__all__ = ["METHODS", "Method", "compose", "excess"]
+
+METHODS = ("Yoshida2008", "Spencer1995")
+Method = Literal["Yoshida2008", "Spencer1995"]
+
+
+def excess(planes: np.ndarray, l_dmax_cd_m2: float) -> np.ndarray:
+    """``ΔL = max(L - L_dmax, 0)`` (Yoshida 2008 eq. 1), in the dtype of ``planes``.
+
+    Examples
+    --------
+    >>> excess(np.array([100.0, 300.0]), 220.0).tolist()
+    [0.0, 80.0]
+    """
+    dtype = planes.dtype.type
+    return np.maximum(planes - dtype(l_dmax_cd_m2), dtype(0))
+
+
+def compose(
+    planes: np.ndarray,
+    spread: np.ndarray,
+    l_dmax_cd_m2: float,
+    method: Method,
+    *,
+    out: np.ndarray | None = None,
+) -> np.ndarray:
+    """The image with glare from the image ``planes`` and the spread excess ``spread``.
+
+    Parameters
+    ----------
+    planes, spread
+        Arrays of one dtype that broadcast together, cd/m².
+    l_dmax_cd_m2
+        Maximum luminance of the display, cd/m².
+    method
+        ``'Yoshida2008'`` (``min(L + S, L_dmax)``) or ``'Spencer1995'``
+        (``min(L, L_dmax) + S``).
+    out
+        Where to write the result (may be ``planes`` itself), or ``None`` for a new array.
+
+    Raises
+    ------
+    ValueError
+        For an unknown method.
+
+    Examples
+    --------
+    >>> L, S = np.array([100.0, 300.0]), np.array([50.0, 50.0])
+    >>> compose(L, S, 220.0, "Yoshida2008").tolist(), compose(L, S, 220.0, "Spencer1995").tolist()
+    ([150.0, 220.0], [150.0, 270.0])
+    """
+    l_dmax = np.result_type(planes, spread).type(l_dmax_cd_m2)
+    if method == "Yoshida2008":
+        out = np.add(planes, spread, out=out)
+        return np.minimum(out, l_dmax, out=out)
+    if method == "Spencer1995":
+        out = np.minimum(planes, l_dmax, out=out)
+        out += spread
+        return out
+    raise ValueError(f"method must be one of {METHODS}; got {method!r}")
