@@ -1,0 +1,108 @@
+"""The ``glarelab`` commands of display calibration: calibrate fit, calibrate measure."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+
+from stimuli.calibration import fit_calibration, read_readings
+
+from .common import log as _log
+
+
+def _calibrate_fit(args: argparse.Namespace) -> int:
+    readings = read_readings(args.readings)
+    calibration = fit_calibration(
+        readings,
+        bit_depth=args.bit_depth,
+        method=args.method,
+        label=args.label,
+        source=str(args.readings),
+    )
+    calibration.save(args.out)
+    _log(
+        f"{len(readings)} readings → {args.method} calibration, {calibration.black_cd_m2:.4g}-"
+        f"{calibration.max_cd_m2:.4g} cd/m², status '{calibration.status}' → {args.out}"
+    )
+    if calibration.model:
+        _log(
+            f"gain-offset-gamma residuals: RMS {calibration.model['rms_residual_cd_m2']:.3g} cd/m²"
+        )
+    return 0
+
+
+def _calibrate_measure(args: argparse.Namespace) -> int:
+    from stimuli.measure import MeasurementSession
+    from stimuli.measure_psychopy import run_measurement
+
+    session = MeasurementSession(
+        bit_depth=args.bit_depth,
+        out=args.out,
+        rng=np.random.default_rng(args.seed),
+        points=args.points,
+        order=args.order,
+        verify_points=args.verify_points,
+        tolerance_fraction=args.tolerance,
+        label=args.label,
+    )
+    photometer = None
+    if args.simulate is not None:  # a display following L = black + (white - black) x^gamma
+        white, black, gamma = args.simulate
+        top = 2**args.bit_depth - 1
+
+        def photometer(code: int) -> float:
+            return black + (white - black) * (code / top) ** gamma
+
+    result = run_measurement(
+        session,
+        photometer=photometer,
+        fullscr=not args.windowed,
+        allow_fewer_bits=args.allow_fewer_bits,
+        log=_log,
+    )
+    for flag in result["flags"]:
+        _log(f"flag: {flag}")
+    _log(f"calibration status: {result['status']}; session saved at {session.session_path}")
+    return 0 if result["status"] == "passed" else 1
+
+
+def add(commands) -> None:
+    """Add the commands to the ``glarelab`` parser."""
+    calibrate = commands.add_parser("calibrate", help="display calibration")
+    calibrate_commands = calibrate.add_subparsers(dest="calibrate_command", required=True)
+    fit = calibrate_commands.add_parser("fit", help="fit a calibration to photometer readings")
+    fit.add_argument("readings", type=Path, help="CSV with columns code, luminance_cd_m2")
+    fit.add_argument("--out", type=Path, required=True)
+    fit.add_argument("--bit-depth", type=int, default=10, choices=(8, 10, 12, 16))
+    fit.add_argument("--method", choices=("pchip", "gog"), default="pchip")
+    fit.add_argument("--label", default="", help="display, photometer, operator")
+    fit.set_defaults(run=_calibrate_fit)
+
+    measure = calibrate_commands.add_parser(
+        "measure", help="measure a display with a photometer (PsychoPy, full-field patches)"
+    )
+    measure.add_argument("--out", type=Path, required=True, help="calibration JSON to write")
+    measure.add_argument("--bit-depth", type=int, default=10, choices=(8, 10, 12, 16))
+    measure.add_argument("--points", type=int, default=33)
+    measure.add_argument("--order", choices=("random", "reversed"), default="random")
+    measure.add_argument("--verify-points", type=int, default=5)
+    measure.add_argument("--tolerance", type=float, default=0.03, help="relative, for 'passed'")
+    measure.add_argument("--seed", type=int, default=0)
+    measure.add_argument("--label", default="")
+    measure.add_argument("--windowed", action="store_true")
+    measure.add_argument(
+        "--allow-fewer-bits",
+        action="store_true",
+        help="measure although the window gives fewer bits per channel than --bit-depth",
+    )
+    measure.add_argument(
+        "--simulate",
+        type=float,
+        nargs=3,
+        metavar=("WHITE", "BLACK", "GAMMA"),
+        default=None,
+        help="a simulated photometer instead of typed readings (dry runs)",
+    )
+    measure.set_defaults(run=_calibrate_measure)

@@ -1,0 +1,341 @@
+"""The ``glarelab`` commands of rendering glare: render, psf, gallery, looks."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+
+import glare
+from stimuli.apertures import load_aperture_image
+from stimuli.calibration import Calibration
+from stimuli.exr import read_exr, write_exr
+from stimuli.preview import preview_png, psf_png
+from stimuli.shapes import disk
+
+from .common import log as _log
+
+
+def build_model(args: argparse.Namespace) -> glare.GlareModel:
+    """The glare model named by the command-line options."""
+    if args.model == "gaussian":
+        return glare.GaussianGlare(sigma_deg=args.sigma_deg)
+    if args.model == "vos":
+        return glare.VosGlare(
+            regime=args.regime,
+            age=args.age,
+            flare_lines=args.flare_lines,
+            seed=args.seed,
+            wavelength_nm=args.wavelength_nm,
+        )
+    if args.model in ("wave", "hybrid"):
+        image = None
+        if args.aperture_image is not None:
+            image = load_aperture_image(args.aperture_image)
+        wave = glare.WaveOpticsGlare(
+            pupil_mm=args.pupil_mm,
+            eyelashes=not args.no_eyelashes,
+            eyelid=not args.no_eyelid,
+            particles=args.particles,
+            fresnel=args.fresnel,
+            spectral=args.spectral,
+            seed=args.seed,
+            source_x_deg=args.source_x_deg,
+            diaphragm_sides=args.diaphragm_sides,
+            cross_screen=args.cross_screen,
+            obstacle_image=image,
+            obstacle_spacing_mm=args.aperture_spacing_mm,
+        )
+        if args.model == "wave":
+            return wave
+        return glare.HybridGlare(wave=wave, regime=args.regime, age=args.age)
+    raise ValueError(f"--model must be one of {MODEL_CHOICES}; got {args.model!r}")
+
+
+MODEL_CHOICES = ("gaussian", "vos", "wave", "hybrid")
+
+
+def _add_model_options(parser: argparse.ArgumentParser, default: str = "vos") -> None:
+    group = parser.add_argument_group("glare model")
+    group.add_argument("--model", choices=MODEL_CHOICES, default=default)
+    group.add_argument("--sigma-deg", type=float, default=0.34, help="Gaussian σ (deg)")
+    group.add_argument("--regime", choices=glare.vos.REGIMES, default="photopic")
+    group.add_argument("--age", type=float, default=None, help="observer age, years (eq. 10)")
+    group.add_argument("--flare-lines", action="store_true", help="add Spencer's flare lines")
+    group.add_argument("--seed", type=int, default=0, help="seed of the flare lines")
+    group.add_argument(
+        "--wavelength-nm", type=float, default=None, help="monochromatic halo (default: white)"
+    )
+    wave = parser.add_argument_group("wave optics (--model wave|hybrid)")
+    wave.add_argument("--pupil-mm", type=float, default=None, help="default: Moon-Spencer")
+    wave.add_argument("--no-eyelashes", action="store_true")
+    wave.add_argument("--no-eyelid", action="store_true")
+    wave.add_argument("--particles", type=int, default=1000)
+    wave.add_argument("--fresnel", action="store_true", help="Luidolt eq. 5.6 Fresnel term")
+    wave.add_argument("--spectral", choices=glare.wave.SPECTRAL_METHODS, default="scaled")
+    wave.add_argument("--source-x-deg", type=float, default=0.0)
+    wave.add_argument("--diaphragm-sides", type=int, default=None)
+    wave.add_argument("--cross-screen", choices=("4-point", "trigonal"), default=None)
+    wave.add_argument("--aperture-image", type=Path, default=None, help="obstacle PNG/EXR")
+    wave.add_argument("--aperture-spacing-mm", type=float, default=None)
+
+
+def _render(args: argparse.Namespace) -> int:
+    model = build_model(args)
+    *inputs, output = args.paths
+    if not inputs:
+        raise ValueError("render needs an input EXR and an output EXR (or folder)")
+    targets = [Path(output)]
+    folder = len(inputs) > 1 or output.endswith(("/", "\\")) or Path(output).is_dir()
+    if folder:  # many files: one renderer per image shape, its kernel made once
+        Path(output).mkdir(parents=True, exist_ok=True)
+        targets = [Path(output) / Path(name).name for name in inputs]
+        if args.preview:
+            raise ValueError("--preview is for one output file; render that file on its own")
+    display = Calibration.load(args.calibration) if args.calibration else None
+    renderers: dict[tuple, glare.GlareRenderer] = {}
+    for number, (source, target) in enumerate(zip(inputs, targets, strict=True), start=1):
+        _log(f"[{number}/{len(inputs)}] reading {source}")
+        image = read_exr(source)
+        _log(f"{image.shape} image, max {float(image.max()):.4g} cd/m²; rendering with {model}")
+        start = time.perf_counter()
+        key = image.shape[:2]
+        if key not in renderers:
+            renderers[key] = glare.GlareRenderer(
+                model,
+                pixel_deg=args.pixel_deg,
+                shape=key,
+                l_dmax_cd_m2=args.l_dmax,
+                method=args.method,
+                precision=args.precision,
+                tolerance_codes=args.tolerance_codes,
+                display=display,
+                log=_log,
+            )
+        result = renderers[key].render(image)
+        if args.explain:
+            print(result.plan)
+            print(
+                f"  result: error bound {result.error_bound_codes:.3g} display codes"
+                + (f" ({result.fallback})" if result.fallback else "")
+            )
+        seconds = time.perf_counter() - start
+        if result.plan.exact and result.energy_outside_image is not None:
+            left = result.energy_outside_image / np.maximum(result.excess_energy, 1e-300)
+            _log(
+                f"done in {seconds:.2f} s (exact); energy outside the kernel "
+                f"{np.max(result.kernel.energy_outside):.3g}, outside the image "
+                f"{float(np.max(left)):.3g} of the excess"
+            )
+        else:
+            _log(f"done in {seconds:.2f} s; error bound {result.error_bound_codes:.3g} codes")
+        write_exr(target, result.image.astype(np.float32))
+        _log(f"wrote {target}")
+        if args.preview:
+            preview_png(
+                args.preview, result.image, l_dmax_cd_m2=args.l_dmax, scale=args.preview_scale
+            )
+            _log(f"wrote {args.preview}")
+    return 0
+
+
+def _psf(args: argparse.Namespace) -> int:
+    model = build_model(args)
+    shape = (args.size, args.size)
+    _log(f"computing the {args.size}² kernel of {type(model).__name__} at {args.pixel_deg}°/px")
+    start = time.perf_counter()
+    kernel = glare.digitise_kernel(model, args.pixel_deg, shape, colour=not args.luminance)
+    _log(
+        f"done in {time.perf_counter() - start:.2f} s; energy outside the kernel "
+        f"{np.max(kernel.energy_outside):.3g}"
+    )
+    psf_png(args.out, kernel.values)
+    _log(f"wrote {args.out}")
+    if args.exr is not None:
+        write_exr(args.exr, kernel.values.astype(np.float32))
+        _log(f"wrote {args.exr}")
+    return 0
+
+
+# Kakimoto 2004 Fig. 5 and Luidolt 2020 Fig. 5.6: name → (caption, model)
+def gallery_models() -> dict[str, tuple[str, glare.GlareModel]]:
+    """The configurations of the wave-optics gallery."""
+    camera = {"eyelashes": False, "eyelid": False, "particles": 0}
+    models = {
+        "wave_eyelashes_eyelid": (
+            "eyelashes and eyelid, 5 mm pupil",
+            glare.WaveOpticsGlare(pupil_mm=5.0, particles=0),
+        ),
+        "wave_daylight_pupil": (
+            "small daylight pupil (1000 cd/m², Moon-Spencer)",
+            glare.WaveOpticsGlare(field_luminance_cd_m2=1000.0, particles=0),
+        ),
+        "wave_night_pupil": (
+            "large night pupil (0.01 cd/m², Moon-Spencer)",
+            glare.WaveOpticsGlare(field_luminance_cd_m2=0.01, particles=0),
+        ),
+        "wave_cross_screen_round": (
+            "4-point cross screen, round 6 mm diaphragm",
+            glare.WaveOpticsGlare(pupil_mm=6.0, cross_screen="4-point", **camera),
+        ),
+        "wave_cross_screen_trigonal": (
+            "trigonal cross screen, round 6 mm diaphragm",
+            glare.WaveOpticsGlare(pupil_mm=6.0, cross_screen="trigonal", **camera),
+        ),
+        "wave_hexagonal_diaphragm": (
+            "hexagonal 6 mm diaphragm",
+            glare.WaveOpticsGlare(pupil_mm=6.0, diaphragm_sides=6, **camera),
+        ),
+    }
+    for pupil in (2, 4, 6, 8):
+        models[f"wave_particles_pupil_{pupil}mm"] = (
+            f"pupil {pupil} mm and 1000 particles (Luidolt Fig. 5.6)",
+            glare.WaveOpticsGlare(pupil_mm=float(pupil), eyelashes=False, eyelid=False),
+        )
+    return models
+
+
+def _gallery(args: argparse.Namespace) -> int:
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    models = gallery_models()
+    captions = {}
+    for index, (name, (caption, model)) in enumerate(models.items(), start=1):
+        _log(f"[{index}/{len(models)}] {caption}")
+        start = time.perf_counter()
+        kernel = model.kernel(args.pixel_deg, (args.size, args.size), colour=True)
+        psf_png(out / f"{name}.png", kernel.values)
+        captions[name] = {"caption": caption, "seconds": round(time.perf_counter() - start, 2)}
+        _log(f"    {captions[name]['seconds']} s → {out / name}.png")
+    (out / "wave_gallery.json").write_text(json.dumps(captions, indent=2))
+    return 0
+
+
+# name: (label, model, colour); colour renders a white RGB disk so the halo shows its colours
+DEMO_MODELS = {
+    "gaussian": ("Gaussian, σ = 0.34° (Yoshida 2008)", glare.GaussianGlare(), False),
+    "vos_photopic": ("Vos PSF, photopic (Spencer 1995 eq. 5)", glare.VosGlare(), False),
+    "vos_mesopic": (
+        "Vos PSF, mesopic with lenticular halo (Spencer 1995 eq. 8)",
+        glare.VosGlare(regime="mesopic"),
+        True,
+    ),
+    "vos_scotopic_flare": (
+        "Vos PSF, scotopic with flare lines (Spencer 1995 eq. 9, §3.2)",
+        glare.VosGlare(regime="scotopic", flare_lines=True, seed=1),
+        True,
+    ),
+}
+REC709_LUMINANCE = np.array([0.2126, 0.7152, 0.0722])  # ITU-R BT.709 luminance of linear RGB
+
+
+DEMO_DISK = {  # Yoshida 2008 §3: a 0.3° disk; level "E" = 4000 cd/m²
+    "field_deg": 8.0,
+    "pixel_deg": 0.0125,
+    "disk_diameter_deg": 0.3,
+    "disk_cd_m2": 4000.0,
+    "background_cd_m2": 1.0,
+}
+
+
+def _looks(args: argparse.Namespace) -> int:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    stimulus = disk(**DEMO_DISK)
+    write_exr(out / "stimulus.exr", stimulus["img"].astype(np.float32))
+    pixel_deg = stimulus["pixel_deg"]
+    n = stimulus["img"].shape[0]
+    offsets = (np.arange(n) - n // 2) * pixel_deg
+    figure, axis = plt.subplots(figsize=(7, 4.5), dpi=120)
+    manifest = {"stimulus": {k: v for k, v in stimulus.items() if k not in ("img", "mask")}}
+    for index, (name, (label, model, colour)) in enumerate(DEMO_MODELS.items(), start=1):
+        _log(f"[{index}/{len(DEMO_MODELS)}] {label}")
+        image = np.repeat(stimulus["img"][..., None], 3, axis=2) if colour else stimulus["img"]
+        start = time.perf_counter()
+        result = glare.render_glare(image, model, pixel_deg=pixel_deg, l_dmax_cd_m2=220.0)
+        seconds = time.perf_counter() - start
+        luminance = result.image if not colour else result.image @ REC709_LUMINANCE
+        write_exr(out / f"{name}.exr", result.image.astype(np.float32))
+        preview_png(out / f"{name}.png", result.image, l_dmax_cd_m2=220.0)
+        preview_png(out / f"{name}_log.png", result.image, l_dmax_cd_m2=220.0, scale="log")
+        axis.semilogy(offsets[n // 2 :], luminance[n // 2, n // 2 :], label=label)
+        manifest[name] = {
+            "label": label,
+            "seconds": round(seconds, 3),
+            "energy_outside_kernel": float(np.max(result.kernel.energy_outside)),
+            "parameters": result.parameters,
+        }
+        _log(f"    {seconds:.2f} s → {out / name}.exr, .png, _log.png")
+    axis.axhline(220.0, color="grey", lw=0.8, ls="--", label="L_dmax = 220 cd/m²")
+    axis.set(
+        xlabel="angle from the disk centre (deg)",
+        ylabel="luminance (cd/m²)",
+        title="0.3° disk at 4000 cd/m² on 1 cd/m²: glare by model",
+    )
+    axis.legend(fontsize=8)
+    figure.tight_layout()
+    figure.savefig(out / "profiles.png")
+    plt.close(figure)
+    (out / "manifest.json").write_text(json.dumps(manifest, indent=2, default=str))
+    _log(f"wrote {out / 'profiles.png'} and {out / 'manifest.json'}")
+    print(out.resolve())
+    return 0
+
+
+def add(commands) -> None:
+    """Add the commands to the ``glarelab`` parser."""
+    render = commands.add_parser(
+        "render", help="add glare to linear float EXR images (one kernel for many files)"
+    )
+    render.add_argument(
+        "paths",
+        nargs="+",
+        metavar="INPUT... OUTPUT",
+        help="linear luminance EXRs (Y or RGB), cd/m², then the output EXR (float32), or an "
+        "output folder (several inputs, or a name ending in /) for files of the same names",
+    )
+    render.add_argument("--pixel-deg", type=float, required=True, help="visual angle of a pixel")
+    render.add_argument("--l-dmax", type=float, default=220.0, help="display maximum, cd/m²")
+    render.add_argument("--method", choices=("Yoshida2008", "Spencer1995"), default="Yoshida2008")
+    render.add_argument("--precision", choices=("float64", "float32"), default="float64")
+    render.add_argument(
+        "--tolerance-codes",
+        type=float,
+        default=0.5,
+        help="largest error allowed, display codes (default 0.5; 0 = exact, full kernel)",
+    )
+    render.add_argument(
+        "--calibration", type=Path, help="display calibration the error is counted on"
+    )
+    render.add_argument("--explain", action="store_true", help="print the plan and its bound")
+    render.add_argument("--preview", type=Path, help="also write a PNG preview here")
+    render.add_argument("--preview-scale", choices=("display", "log"), default="display")
+    _add_model_options(render)
+    render.set_defaults(run=_render)
+
+    psf = commands.add_parser("psf", help="render a glare model's kernel as a PNG")
+    psf.add_argument("--out", type=Path, required=True, help="PNG (Kakimoto's tone curve)")
+    psf.add_argument("--exr", type=Path, default=None, help="also write the kernel as EXR")
+    psf.add_argument("--pixel-deg", type=float, default=0.01)
+    psf.add_argument("--size", type=int, default=401, help="kernel size in pixels (odd)")
+    psf.add_argument("--luminance", action="store_true", help="luminance only, no colour")
+    _add_model_options(psf, default="wave")
+    psf.set_defaults(run=_psf)
+
+    gallery = commands.add_parser("gallery", help="render the wave-optics PSF gallery")
+    gallery.add_argument("--out", type=Path, default=Path("docs/gallery"))
+    gallery.add_argument("--pixel-deg", type=float, default=0.01)
+    gallery.add_argument("--size", type=int, default=401)
+    gallery.set_defaults(run=_gallery)
+
+    looks = commands.add_parser("looks", help="render a glare stimulus with each model")
+    looks.add_argument("--out", type=Path, default=Path("out/looks"), help="output folder")
+    looks.set_defaults(run=_looks)

@@ -1,0 +1,220 @@
+"""The ``glarelab`` commands of sessions: run."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from protocols import load_protocol
+from stimuli.calibration import Calibration
+
+from .common import PROTOCOL_HELP
+from .common import log as _log
+
+VISION = ("none", "glasses", "lenses", "other")
+
+
+def _age(text: str) -> int:
+    """An age in whole years, 0-120."""
+    try:
+        age = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"age must be whole years; got {text!r}") from None
+    if not 0 <= age <= 120:
+        raise argparse.ArgumentTypeError(f"age must be 0-120 years; got {age}")
+    return age
+
+
+def _detail(text: str) -> str | None:
+    """A participant detail: trimmed text, or none when empty."""
+    return text.strip() or None
+
+
+def _experiment_info(args: argparse.Namespace) -> None:
+    """Ask for the participant's details in a dialog, as PsychoPy's experiment info does."""
+    import os
+
+    from stimuli.psychopy_window import qt_dialog_available
+
+    if sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
+        raise ValueError("--participant is required (no display for the participant dialog)")
+    if not qt_dialog_available():
+        raise ValueError(
+            "--participant is required: the participant dialog needs Qt's X11 libraries "
+            "(Debian: libxcb-cursor0)"
+        )
+    from psychopy import gui
+
+    info = {
+        "participant": "",
+        "session": args.session,
+        "age": "" if args.age is None else args.age,
+        "sex": ["", "f", "m", "x"],
+        "vision": list(VISION),
+    }
+    dialog = gui.DlgFromDict(info, title=f"glarelab {args.title}", order=list(info))
+    if not dialog.OK:
+        raise ValueError("the participant dialog was cancelled: nothing was run or written")
+    args.participant = str(info["participant"]).strip()
+    try:
+        args.session = int(info["session"])
+        args.age = _age(str(info["age"])) if str(info["age"]).strip() else None
+    except (ValueError, argparse.ArgumentTypeError) as error:
+        raise ValueError(
+            f"the dialog's session {info['session']!r} must be a whole number and its age "
+            f"0-120 years ({error})"
+        ) from None
+    args.sex = info["sex"] or None
+    args.vision = info["vision"] or None
+
+
+def _run(args: argparse.Namespace) -> int:
+    from experiments.session import SimulatedFrontend, run_session
+
+    protocol = load_protocol(args.protocol or args.study)
+    args.title = protocol.study
+    out = Path(args.out)
+    if args.simulate:
+        from experiments.session import make_observer, shows_images
+        from stimuli.stimulus_set import cached_stimulus_set
+
+        ids = (
+            [args.participant]
+            if args.participant
+            else [f"sim{index:02d}" for index in range(1, args.participants + 1)]
+        )
+        stimuli = args.stimuli
+        if stimuli is None and shows_images(protocol):
+            _log(f"building (or reusing) the {protocol.study} stimulus set the observers look at")
+            stimuli = cached_stimulus_set(protocol)
+            _log(f"stimulus set: {stimuli}")
+        for number, participant in enumerate(ids, start=1):
+            observer = make_observer(protocol, participant, seed=args.seed, stimuli=stimuli)
+            frontend = SimulatedFrontend(observer, trial_delay_s=args.trial_delay_ms / 1000)
+            sidecar = run_session(
+                protocol,
+                participant,
+                out=out,
+                frontend=frontend,
+                session=args.session,
+                stimuli=stimuli,
+                resume=args.resume,
+                counterbalance=args.counterbalance,
+                simulated=True,
+                participant_info={"simulated_observer_seed": args.seed},
+            )
+            done = f"{sidecar['trials']} trials, {sidecar['status']}"
+            _log(f"[{number}/{len(ids)}] {participant}: {done}")
+        print(out.resolve())
+        return 0
+    if args.participant is None:
+        _experiment_info(args)
+    from experiments.psychopy_frontend import PsychoPyFrontend
+
+    calibration = Calibration.load(args.calibration) if args.calibration else None
+    scripted = Path(args.scripted_keys).read_text().split() if args.scripted_keys else None
+    frontend = PsychoPyFrontend(
+        protocol,
+        stimuli=args.stimuli,
+        calibration=calibration,
+        fullscreen=args.fullscreen,
+        scripted_keys=scripted,
+        screenshot=args.screenshot,
+    )
+    sidecar = run_session(
+        protocol,
+        args.participant,
+        out=out,
+        frontend=frontend,
+        session=args.session,
+        stimuli=args.stimuli,
+        calibration=calibration,
+        allow_uncalibrated=args.allow_uncalibrated,
+        resume=args.resume,
+        counterbalance=args.counterbalance,
+        participant_info={"age": args.age, "sex": args.sex, "vision_correction": args.vision},
+        accept_mismatch=tuple(args.accept_mismatch or ()),
+        allow_unmeasured_refresh=args.allow_unmeasured_refresh,
+    )
+    run = sidecar["runs"][-1]
+    _log(
+        f"{args.participant}: {sidecar['trials']} trials, {sidecar['status']}"
+        + (f" ({run['ended_by']})" if run.get("ended_by") else "")
+        + f"; data in {out.resolve()}"
+    )
+    return 0 if sidecar["status"] == "completed" else 3
+
+
+def add(commands) -> None:
+    """Add the commands to the ``glarelab`` parser."""
+    run = commands.add_parser("run", help="run a study session (PsychoPy) or simulated sessions")
+    run.add_argument("study", help=f"the protocol: {PROTOCOL_HELP}")
+    run.add_argument(
+        "--participant",
+        default=None,
+        help="participant id (file-name safe); without it, a dialog asks for the details",
+    )
+    run.add_argument("--session", type=int, default=1, help="session number (default 1)")
+    run.add_argument(
+        "--protocol", type=Path, default=None, help="a protocol TOML file (instead of STUDY)"
+    )
+    run.add_argument("--stimuli", type=Path, default=None, help="the stimulus set folder")
+    run.add_argument("--calibration", type=Path, default=None, help="display calibration JSON")
+    run.add_argument(
+        "--allow-uncalibrated",
+        action="store_true",
+        help="run without a valid calibration (recorded)",
+    )
+    run.add_argument(
+        "--accept-mismatch",
+        nargs="+",
+        choices=("resolution", "refresh", "bit-depth", "calibration"),
+        metavar="CHECK",
+        help="run although the display differs from the protocol in these checks (recorded): "
+        "resolution, refresh, bit-depth, calibration",
+    )
+    run.add_argument(
+        "--allow-unmeasured-refresh",
+        action="store_true",
+        help="run although the refresh rate could not be measured (recorded; flips are then "
+        "paced by the clock at the protocol's rate)",
+    )
+    run.add_argument(
+        "--out",
+        type=Path,
+        default=Path("data"),
+        help="folder for the session files (default data)",
+    )
+    run.add_argument("--resume", action="store_true", help="continue an interrupted session")
+    run.add_argument("--fullscreen", action="store_true")
+    run.add_argument(
+        "--counterbalance", type=int, choices=(0, 1), default=None, help="Spencer block order"
+    )
+    run.add_argument("--age", type=_age, default=None, help="participant's age, years (0-120)")
+    run.add_argument(
+        "--sex", type=_detail, default=None, help="participant's sex (as the lab records it)"
+    )
+    run.add_argument(
+        "--vision",
+        choices=VISION,
+        default=None,
+        help=f"vision correction: {', '.join(VISION)}",
+    )
+    run.add_argument(
+        "--scripted-keys",
+        type=Path,
+        default=None,
+        help="dry run: a text file of PsychoPy key names separated by spaces or lines, one per "
+        "press (e.g. 'space up up return y n y'); Escape when they run out",
+    )
+    run.add_argument("--screenshot", type=Path, default=None, help="save the first trial's screen")
+    run.add_argument("--simulate", action="store_true", help="simulated observers, no screen")
+    run.add_argument(
+        "--participants", type=int, default=10, help="simulated participants (default 10)"
+    )
+    run.add_argument(
+        "--seed", type=int, default=0, help="seed of the simulated observers (default 0)"
+    )
+    run.add_argument("--trial-delay-ms", type=float, default=0.0, help=argparse.SUPPRESS)
+    run.set_defaults(run=_run)

@@ -1,0 +1,57 @@
+"""The ``glarelab`` commands of stimulus sets: stimuli build, stimuli verify."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+from protocols import load_protocol
+from stimuli.calibration import Calibration
+from stimuli.stimulus_set import build_stimulus_set, verify_stimulus_set
+
+from .common import PROTOCOL_HELP
+from .common import log as _log
+
+
+def _stimuli_build(args: argparse.Namespace) -> int:
+    protocol = load_protocol(args.protocol)
+    calibration = Calibration.load(args.calibration) if args.calibration else None
+    _log(f"building the {protocol.study} stimulus set into {args.out}")
+    start = time.perf_counter()
+    manifest = build_stimulus_set(protocol, args.out, calibration=calibration)
+    clipped = sum(
+        r.get("encoding", {}).get("above_max", 0) + r.get("encoding", {}).get("below_black", 0)
+        for r in manifest["images"].values()
+    )
+    _log(
+        f"{len(manifest['files'])} files in {time.perf_counter() - start:.1f} s; calibration "
+        f"status '{manifest['calibration']['status']}'; {clipped} pixels clipped by the display"
+    )
+    print(Path(args.out).resolve())
+    return 0
+
+
+def _stimuli_verify(args: argparse.Namespace) -> int:
+    problems = verify_stimulus_set(args.folder)
+    if problems:
+        for problem in problems:
+            print(f"{args.folder}: {problem}", file=sys.stderr)
+        return 1
+    print(f"{args.folder}: every file matches its manifest")
+    return 0
+
+
+def add(commands) -> None:
+    """Add the commands to the ``glarelab`` parser."""
+    stimuli = commands.add_parser("stimuli", help="build or verify a study's stimulus set")
+    stimuli_commands = stimuli.add_subparsers(dest="stimuli_command", required=True)
+    build = stimuli_commands.add_parser("build", help="build a stimulus set from a protocol")
+    build.add_argument("protocol", help=PROTOCOL_HELP)
+    build.add_argument("--out", type=Path, required=True)
+    build.add_argument("--calibration", type=Path, default=None, help="display calibration JSON")
+    build.set_defaults(run=_stimuli_build)
+    verify = stimuli_commands.add_parser("verify", help="re-hash a stimulus set")
+    verify.add_argument("folder", type=Path)
+    verify.set_defaults(run=_stimuli_verify)

@@ -1,0 +1,77 @@
+"""The ``glarelab`` commands of the demo, the docs and the bench: demo, docs, bench."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from .common import PROTOCOL_HELP
+from .common import log as _log
+
+
+def _demo(args: argparse.Namespace) -> int:
+    from glarelab.demo import run_demo
+
+    report = run_demo(
+        args.protocol, args.out, participants=args.participants, seed=args.seed, log=_log
+    )
+    print(f"report: {report.resolve()}")
+    return 0
+
+
+def _docs(args: argparse.Namespace) -> int:
+    from glarelab.docs import data_reference, protocol_reference
+
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "protocols.md").write_text(protocol_reference())
+    (out / "data.md").write_text(data_reference())
+    _log(f"wrote {out / 'protocols.md'} and {out / 'data.md'}")
+    return 0
+
+
+def _bench(args: argparse.Namespace) -> int:
+    from glarelab.bench import run_bench
+
+    run_bench(
+        args.out,
+        large=args.large,
+        only=tuple(args.only) if args.only else None,
+        spectral=not args.no_spectral,
+        repeats=args.repeats,
+        log=_log,
+    )
+    _log(f"wrote {args.out / 'bench.csv'}, bench.md and the Pareto plots")
+    return 0
+
+
+def add(commands) -> None:
+    """Add the commands to the ``glarelab`` parser."""
+    bench = commands.add_parser(
+        "bench", help="time each speed knob against its error in display codes"
+    )
+    bench.add_argument("--out", type=Path, default=Path("out/bench"))
+    bench.add_argument("--large", action="store_true", help="add the 4096² scenes")
+    bench.add_argument("--only", nargs="+", metavar="WORKLOAD", help="run only these workloads")
+    bench.add_argument(
+        "--no-spectral", action="store_true", help="skip the wave-optics spectral section"
+    )
+    bench.add_argument("--repeats", type=int, default=3)
+    bench.set_defaults(run=_bench)
+
+    docs = commands.add_parser("docs", help="regenerate docs/protocols.md and docs/data.md")
+    docs.add_argument("--out", type=Path, default=Path("docs"))
+    docs.set_defaults(run=_docs)
+
+    demo = commands.add_parser(
+        "demo", help="the whole study on simulated observers: stimuli, sessions, analysis, report"
+    )
+    demo.add_argument(
+        "--protocol", default="yoshida2008", help=f"{PROTOCOL_HELP} (default yoshida2008)"
+    )
+    demo.add_argument(
+        "--out", type=Path, default=Path("out/demo"), help="output folder (replaced)"
+    )
+    demo.add_argument("--participants", type=int, default=10)
+    demo.add_argument("--seed", type=int, default=1, help="seed of the simulated observers")
+    demo.set_defaults(run=_demo)
