@@ -26,6 +26,7 @@ mapping. SCCG '05 (as quoted by Luidolt).
 from __future__ import annotations
 
 import math
+from typing import Literal
 
 import colour
 import numpy as np
@@ -33,6 +34,7 @@ import numpy as np
 from ._validation import check_choice, check_image, check_in_range, check_positive
 
 __all__ = [
+    "ABSOLUTE_THRESHOLD_CD_M2",
     "RGB_TO_Y_LUIDOLT2020",
     "SIGMA_HALF_CD_M2",
     "TAU_CONE_S",
@@ -55,6 +57,7 @@ RGB_TO_Y_LUIDOLT2020 = (0.2125, 0.7154, 0.0721)
 # Luidolt §5.1 weights the frame by a Gaussian around the gaze without giving its width; we
 # assume σ = 5°, a window whose half maximum (11.8° across) covers the central visual field
 WINDOW_SIGMA_DEG = 5.0
+ABSOLUTE_THRESHOLD_CD_M2 = 1e-6  # Luidolt §3.3: human vision spans 1e-6 to 1e8 cd/m²
 
 
 def luminance(rgb: np.ndarray, *, colourspace: str = "ITU-R BT.709") -> np.ndarray:
@@ -215,8 +218,10 @@ def adaptation_step(
     target = float(_luminances("target_cd_m2", target_cd_m2))
     frame_time_s = check_in_range("frame_time_s", frame_time_s, 0.0, math.inf, unit="s")
     tau = adaptation_time_s(target, tau_rod_s=tau_rod_s, tau_cone_s=tau_cone_s)
-    gain = -math.expm1(-frame_time_s / tau)  # 1 - exp(-ft/τ), exact for small steps
-    return previous + (target - previous) * gain
+    # the convex combination of eq. 5.2, each weight computed to full precision: never
+    # below 0 or past the two luminances, even from 1e9 cd/m² into the dark
+    gain = -math.expm1(-frame_time_s / tau)  # 1 - exp(-ft/τ)
+    return target * gain + previous * math.exp(-frame_time_s / tau)
 
 
 def adaptation_luminance(
@@ -295,6 +300,7 @@ def frame_luminance(
     pixel_deg: float,
     gaze_px: tuple[float, float] | None = None,
     window_sigma_deg: float = WINDOW_SIGMA_DEG,
+    mean: Literal["log", "arithmetic"] = "log",
     colourspace: str = "ITU-R BT.709",
 ) -> float:
     """The luminance a frame asks the eye to adapt to: its mean, weighted around the gaze
@@ -312,6 +318,10 @@ def frame_luminance(
     window_sigma_deg
         Standard deviation of the Gaussian window around the gaze, degrees; default 5 (an
         assumption: Luidolt gives no width).
+    mean
+        ``'log'`` (default): the weighted logarithmic mean, luminances below 1e-6 cd/m² (the
+        absolute threshold) taken as 1e-6; ``'arithmetic'``: the weighted mean, as Luidolt
+        prints it ("the average"). See Notes.
     colourspace
         The RGB colourspace of an RGB image (eq. 5.1).
 
@@ -326,8 +336,11 @@ def frame_luminance(
     pyramid down to 16 × 16 and takes the mean: a fast mean on a GPU. Here the weighted mean
     is computed exactly, and divided by the window's mean weight: Luidolt's unnormalised
     product would make a uniform field look darker the further the gaze is from the centre.
+    The default is the logarithmic mean (the "key" of Reinhard et al. 2002): in the
+    arithmetic mean four pixels of a 5e4 cd/m² lamp outweigh a 0.02 cd/m² street of 1500, and
+    the eye would adapt to daylight in the middle of the night.
 
-    .. math:: Y = \\frac{\\sum_x w(x) Y(x)}{\\sum_x w(x)}, \\quad
+    .. math:: Y = \\exp \\frac{\\sum_x w(x) \\ln Y(x)}{\\sum_x w(x)}, \\quad
               w(x) = \\exp\\Bigl(-\\frac{|x - g|^2 \\Delta^2}{2 s^2}\\Bigr)
 
     References
@@ -336,18 +349,27 @@ def frame_luminance(
 
     Examples
     --------
-    >>> image = np.zeros((50, 100))
+    >>> image = np.full((50, 100), 0.5)
     >>> image[:, 50:] = 2.0
-    >>> frame_luminance(image, pixel_deg=0.1)
+    >>> frame_luminance(image, pixel_deg=0.1)  # exp of the mean of ln 0.5 and ln 2
     1.0
+    >>> frame_luminance(image, pixel_deg=0.1, mean="arithmetic")
+    1.25
     >>> round(frame_luminance(image, pixel_deg=0.1, gaze_px=(25, 90), window_sigma_deg=1.0), 3)
     2.0
     """
     image = check_image("image_cd_m2", image_cd_m2, channels=(3,))
     pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
+    check_choice("mean", mean, ("log", "arithmetic"))
     y = luminance(image, colourspace=colourspace) if image.ndim == 3 else image.astype(float)
+    if mean == "log":
+        y = np.log(np.maximum(y, ABSOLUTE_THRESHOLD_CD_M2))
+
+    def back(value: float) -> float:
+        return float(np.exp(value)) if mean == "log" else float(value)
+
     if gaze_px is None:
-        return float(np.mean(y))
+        return back(np.mean(y))
     window_sigma_deg = check_positive("window_sigma_deg", window_sigma_deg, unit="deg")
     try:
         row, col = (float(v) for v in gaze_px)
@@ -364,7 +386,7 @@ def frame_luminance(
             f"gaze_px = {gaze_px!r} is too far from the {y.shape} frame for a window of "
             f"{window_sigma_deg:g}°: no pixel has any weight"
         )
-    return float(rows @ y @ cols / total)
+    return back(rows @ y @ cols / total)
 
 
 def _luminances(name: str, value) -> np.ndarray:

@@ -115,8 +115,24 @@ def test_the_window_follows_the_gaze():
 
 
 def test_black_frames_and_a_single_pixel():
-    assert adaptation.frame_luminance(np.zeros((3, 4, 3)), pixel_deg=0.1, gaze_px=(1, 1)) == 0.0
-    assert adaptation.frame_luminance(np.array([[1e9]]), pixel_deg=1.0, gaze_px=(0, 0)) == 1e9
+    black = np.zeros((3, 4, 3))
+    # the log mean takes black as the absolute threshold of vision, 1e-6 cd/m²
+    assert_allclose(adaptation.frame_luminance(black, pixel_deg=0.1, gaze_px=(1, 1)), 1e-6)
+    assert adaptation.frame_luminance(black, pixel_deg=0.1, mean="arithmetic") == 0.0
+    assert_allclose(
+        adaptation.frame_luminance(np.array([[1e9]]), pixel_deg=1.0, gaze_px=(0, 0)), 1e9
+    )
+
+
+def test_a_small_lamp_does_not_make_the_night_day():
+    # 4 pixels of a 5e4 cd/m² lamp in a 0.02 cd/m² street of 1536 pixels: the arithmetic mean
+    # is 130 cd/m² (photopic), the log mean exp((4 ln 5e4 + 1532 ln 0.02) / 1536) = 0.0208
+    street = np.full((32, 48), 0.02)
+    street[10:12, 20:22] = 5e4
+    arithmetic = adaptation.frame_luminance(street, pixel_deg=0.05, mean="arithmetic")
+    log = adaptation.frame_luminance(street, pixel_deg=0.05)
+    assert_allclose(arithmetic, (4 * 5e4 + 1532 * 0.02) / 1536, rtol=1e-12)
+    assert_allclose(log, math.exp((4 * math.log(5e4) + 1532 * math.log(0.02)) / 1536), rtol=1e-12)
 
 
 @pytest.mark.parametrize(
@@ -144,6 +160,10 @@ def test_black_frames_and_a_single_pixel():
         ),
         (lambda: adaptation.frame_luminance(-np.ones((2, 2)), pixel_deg=0.1), "image_cd_m2"),
         (lambda: adaptation.luminance(np.ones((2, 2))), "3 channels"),
+        (
+            lambda: adaptation.frame_luminance(np.ones((2, 2)), pixel_deg=0.1, mean="median"),
+            "mean",
+        ),
     ],
 )
 def test_bad_input_is_refused_by_name(call, pattern):
