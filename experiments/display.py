@@ -188,7 +188,7 @@ def enforce(checks: Iterable[Check], *, accept: Iterable[str] = ()) -> list[dict
 def timing_rate_hz(protocol, facts: ScreenFacts | None, records: list[dict]) -> float:
     """The frame rate presentations are timed at: the measured one when the refresh check
     passed, else the protocol's nominal rate (the window then paces frames by the clock)."""
-    nominal = protocol["display"]["refresh_hz"] if "display" in protocol.data else 60.0
+    nominal = (protocol.data.get("display") or {}).get("refresh_hz", 60.0)
     passed = any(r["name"] == "refresh" and r["passed"] for r in records)
     if passed and facts is not None and facts.refresh_hz is not None:
         return float(facts.refresh_hz)

@@ -15,7 +15,9 @@ import hashlib
 import json
 import os
 import shutil
+import struct
 import sys
+import zlib
 from importlib import metadata
 from pathlib import Path
 
@@ -28,6 +30,7 @@ from protocols.folders import check_replaceable, replace_folder, staging_folder
 from .calibration import Calibration, synthetic_calibration
 from .exr import read_exr, write_exr
 from .matching import build_matching
+from .night import build_night
 from .staircase import build_staircase
 
 __all__ = [
@@ -39,15 +42,56 @@ __all__ = [
     "default_calibration",
     "package_versions",
     "progress_bar",
+    "shows_images",
     "verify_stimulus_set",
+    "write_codes_png",
 ]
 
 MANIFEST = "manifest.json"
 PACKAGES = ("numpy", "scipy", "colour-science", "OpenEXR", "matplotlib", "pillow", "glarelab")
-# the stimulus builder of each paradigm (None: the paradigm shows no images)
-BUILDERS = {"matching": build_matching, "staircase": build_staircase, "rating": None}
+# the stimulus builder of each paradigm (None: the paradigm shows no images); a builder's
+# ``shows(protocol)``, where it has one, says whether a protocol of the paradigm shows images
+BUILDERS = {"matching": build_matching, "staircase": build_staircase, "rating": build_night}
 # how the profile plots group a paradigm's images: (image kind, the key that names a group)
 PROFILE_GROUPS = {"matching": ("reference", "method"), "staircase": ("glare", "context")}
+
+
+def shows_images(protocol: Protocol) -> bool:
+    """Whether the protocol shows images (and so has a stimulus set): its paradigm has a
+    builder, and the builder takes this protocol (a questionnaire without a scene shows none)."""
+    builder = BUILDERS.get(protocol.paradigm)
+    if builder is None:
+        return False
+    shows = getattr(builder, "shows", None)
+    return True if shows is None else bool(shows(protocol))
+
+
+def write_codes_png(path: Path, codes: np.ndarray) -> None:
+    """Display codes as a 16-bit PNG: greyscale for ``(H, W)``, RGB for ``(H, W, 3)``.
+
+    Pillow writes 16-bit greyscale but not 16-bit RGB, so RGB is written here (PNG
+    specification, ISO/IEC 15948: IHDR with bit depth 16 and colour type 2, big-endian samples,
+    filter type 0 on every row, zlib-compressed IDAT).
+    """
+    codes = np.asarray(codes, dtype=np.uint16)
+    if codes.ndim == 2:
+        Image.fromarray(codes).save(path)
+        return
+    height, width, _ = codes.shape
+    rows = np.ascontiguousarray(codes.astype(">u2")).reshape(height, width * 3).view(np.uint8)
+    raw = np.concatenate([np.zeros((height, 1), np.uint8), rows], axis=1).tobytes()
+
+    def chunk(kind: bytes, data: bytes) -> bytes:
+        body = kind + data
+        return struct.pack(">I", len(data)) + body + struct.pack(">I", zlib.crc32(body))
+
+    header = struct.pack(">IIBBBBB", width, height, 16, 2, 0, 0, 0)
+    Path(path).write_bytes(
+        b"\x89PNG\r\n\x1a\n"
+        + chunk(b"IHDR", header)
+        + chunk(b"IDAT", zlib.compress(raw, 6))
+        + chunk(b"IEND", b"")
+    )
 
 
 def progress_bar(done: int, total: int, what: str, *, stream=None) -> None:
@@ -154,7 +198,7 @@ def build_stimulus_set(
         For a protocol without stimuli, a calibration whose bit depth is not the display's,
         or an ``out`` that is a file or a folder holding something other than a stimulus set.
     """
-    if BUILDERS.get(protocol.paradigm) is None:
+    if not shows_images(protocol):
         raise ValueError(
             f"the {protocol.study} protocol's paradigm ({protocol.paradigm}) shows no images: "
             "there is no stimulus set to build"
@@ -186,7 +230,7 @@ def _write_set(out: Path, protocol: Protocol, built: dict, calibration: Calibrat
         record = {k: v for k, v in info.items() if k != "img"}
         if info["kind"] != "component":  # display luminances: encode them for the display
             codes, report = calibration.encode(img)
-            Image.fromarray(codes.astype(np.uint16)).save(out / f"{name}.png")
+            write_codes_png(out / f"{name}.png", codes)
             files.append(f"{name}.png")
             record["encoding"] = {
                 "above_max": report.above_max,
@@ -196,7 +240,14 @@ def _write_set(out: Path, protocol: Protocol, built: dict, calibration: Calibrat
         record["files"] = files
         record["shape"] = list(img.shape)
         records[name] = record
-    plots = _profile_plots(out, protocol.paradigm, images, built["geometry"])
+    plots = (
+        _profile_plots(out, protocol.paradigm, images, built["geometry"])
+        if protocol.paradigm in PROFILE_GROUPS
+        else []
+    )
+    for name, pixels in sorted(built.get("previews", {}).items()):  # what a report shows
+        Image.fromarray(pixels).save(out / name)
+        plots.append(name)
     files = sorted(f for r in records.values() for f in r["files"]) + plots
     manifest = {
         "format": "glarelab stimulus set v2",
@@ -310,8 +361,12 @@ class StimulusSet:
 
     def image(self, name: str) -> np.ndarray:
         if name not in self._images:
-            self._images[name] = read_exr(self.folder / f"{name}.exr").astype(np.float64)
+            self._images[name] = self.read(name)
         return self._images[name]
+
+    def read(self, name: str) -> np.ndarray:
+        """An image read from its file, not kept (a sequence's frames are shown once)."""
+        return read_exr(self.folder / f"{name}.exr").astype(np.float64)
 
     def compose(self, terms) -> np.ndarray:
         return compose(terms, self.image)
