@@ -160,7 +160,7 @@ def _anova(data: pd.DataFrame, label: str) -> pd.DataFrame:
     return table
 
 
-def analyse(dataset: Dataset, protocol) -> dict:
+def analyse(dataset: Dataset, protocol, *, stimuli=None) -> dict:
     """Every analysis of Yoshida §5 for the protocol's methods and levels: tables (DataFrames),
     figures (PNG bytes) and text."""
     g = protocol["glare"]

@@ -44,12 +44,14 @@ def analyse(
     *,
     exclude_incomplete: bool = False,
     include_aborted: bool = False,
+    stimuli: str | Path | None = None,
 ) -> tuple[Dataset, dict]:
-    """Load the sessions of the protocol's study and run its paradigm's analysis."""
+    """Load the sessions of the protocol's study and run its paradigm's analysis (``stimuli``,
+    the set's folder, lets a figure show the stimulus next to its results)."""
     dataset = load_sessions(
         protocol, paths, exclude_incomplete=exclude_incomplete, include_aborted=include_aborted
     )
-    return dataset, PARADIGMS[protocol.paradigm].analyse(dataset, protocol)
+    return dataset, PARADIGMS[protocol.paradigm].analyse(dataset, protocol, stimuli=stimuli)
 
 
 def methods_paragraph(protocol, participants: int, simulated: bool | int) -> str:
@@ -143,7 +145,11 @@ def write_report(
     """
     out = check_replaceable(out, marker=REPORT, what="report")
     dataset, result = analyse(
-        protocol, paths, exclude_incomplete=exclude_incomplete, include_aborted=include_aborted
+        protocol,
+        paths,
+        exclude_incomplete=exclude_incomplete,
+        include_aborted=include_aborted,
+        stimuli=stimuli,
     )
     staging = staging_folder(out)
     try:

@@ -108,7 +108,7 @@ def psychometric_match(staircase: pd.DataFrame) -> float:
     return centre if 0.0 <= centre <= 1.0 else float("nan")
 
 
-def analyse(dataset: Dataset, protocol) -> dict:
+def analyse(dataset: Dataset, protocol, *, stimuli=None) -> dict:
     every = dataset.trials
     trials = every[every["counted"].astype(bool)]  # repeated flashes did not move a staircase
     rows = []
