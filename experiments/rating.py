@@ -9,8 +9,9 @@ category; ``time_s`` is the time from the rating screen's onset to the rating ke
 With a scene and conditions, the questionnaire rates what is shown: each condition (in an order
 of its own per participant) begins with a timed presentation of its frames (the scene still,
 or a sequence, each frame for a whole number of refreshes), after which the first category's
-question appears; its row's timing columns are the presentation's (onset, offset, frames
-dropped). The rows name the condition.
+question appears; keys pressed while the scene shows are not taken (they are recorded as
+ignored). That row's timing columns are the presentation's (onset, offset, frames dropped;
+``time_s`` from the scene's onset). The rows name the condition.
 """
 
 from __future__ import annotations
@@ -134,6 +135,7 @@ class RatingEngine(Engine):
             "images": frames[0]["images"],
             "frames": sum(f["frames"] for f in frames),
             "blank_before_ms": self.protocol["scene"]["blank_before_ms"],
+            "answer_after_presentation": True,  # the question comes after the scene
         }
 
     @property

@@ -157,3 +157,40 @@ def test_a_bad_night_protocol_is_refused_by_key(change, pattern):
     change(data)
     with pytest.raises(ProtocolError, match=pattern):
         parse_protocol(data)
+
+
+def test_keys_pressed_while_the_scene_shows_are_not_taken(night):
+    from experiments.engine import Press
+    from experiments.loop import SessionLoop, Shown
+
+    class Device:  # the scene from 1.0 s to 4.0 s; a 3 during it, a 5 after it
+        def __init__(self):
+            self.presses = [
+                Press("space", 0.5),
+                Press("3", 2.0),
+                Press("5", 4.5),
+                Press("escape", 9),
+            ]
+
+        def show(self, screen):
+            return 0.1
+
+        def present(self, screen):
+            return Shown(onset_s=1.0, offset_s=4.0, frames=screen["frames"])
+
+        def wait_keys(self, anchor_s):
+            return [self.presses.pop(0)]
+
+        def typed(self):
+            return ""
+
+    rows = []
+    loop = SessionLoop(Device(), rows.append, refresh_hz=60.0)
+    from experiments.loop import SessionAborted
+
+    engine = RatingEngine(night, "P01")
+    with pytest.raises(SessionAborted):
+        loop.run(engine)
+    assert loop.total_ignored == 1  # the 3, pressed during the scene
+    assert (engine.phase, engine.rating, engine.time) == ("comment", 5, 3.5)  # from the onset
+    assert rows == []
