@@ -86,6 +86,9 @@ LAB_WHITE_CD_M2_LUIDOLT2020 = 100.0
 # threshold: eq. 5.14 falls to 0 cycles/deg at 6.6e-10 cd/m² and is negative below
 MIN_LUMINANCE_CD_M2 = 1e-6
 TRUNCATE = 4.0  # Gaussians are cut at ⌊4σ + ½⌋ pixels, as scipy.ndimage.gaussian_filter
+# the ladder's default: the error within half a code of a 10-bit display on the night street
+# (glarelab bench --acuity, docs/night-vision.md: 0.24 codes at 16, 0.75 at 8, 3.3 at 4)
+LEVELS_PER_OCTAVE = 16
 SIGMA_METHODS = ("Krawczyk2005", "Luidolt2020")
 BLUR_METHODS = ("layers", "separable", "exact")
 _SMALLEST_LEVEL_PX = 0.25  # below this a sampled Gaussian moves < 3e-4 of a pixel's light
@@ -231,7 +234,7 @@ def acuity_blur(
     space: Literal["lightness", "linear"] = "lightness",
     white_cd_m2: float = LAB_WHITE_CD_M2_LUIDOLT2020,
     luminance_scale: float = 1.0,
-    levels_per_octave: int = 4,
+    levels_per_octave: int = LEVELS_PER_OCTAVE,
     colourspace: str = "ITU-R BT.709",
 ) -> np.ndarray:
     """The image as the dark-adapted eye resolves it: each pixel blurred by the σ of its
@@ -260,7 +263,8 @@ def acuity_blur(
         The scene luminance σ follows from is the image's luminance times this; default 1
         (the image is the scene). The night pipeline blurs a display image: 1 / exposure.
     levels_per_octave
-        Levels of the ``'layers'`` ladder per doubling of σ; default 4.
+        Levels of the ``'layers'`` ladder per doubling of σ; default 16
+        (:data:`LEVELS_PER_OCTAVE`: within half a code of a 10-bit display, measured).
     colourspace
         The RGB colourspace of an RGB image.
 

@@ -43,7 +43,7 @@ from typing import Literal
 import numpy as np
 
 from ._validation import check_choice, check_image, check_in_range, check_positive
-from .acuity import MIN_LUMINANCE_CD_M2, SIGMA_METHODS, acuity_blur
+from .acuity import LEVELS_PER_OCTAVE, MIN_LUMINANCE_CD_M2, SIGMA_METHODS, acuity_blur
 from .adaptation import (
     TAU_CONE_S,
     TAU_ROD_S,
@@ -169,7 +169,7 @@ def render_night(
     tolerance_codes: float = 0.5,
     acuity_method: Literal["Krawczyk2005", "Luidolt2020"] = "Krawczyk2005",
     blur: Literal["layers", "separable", "exact"] = "layers",
-    levels_per_octave: int = 4,
+    levels_per_octave: int = LEVELS_PER_OCTAVE,
     acuity_space: Literal["lightness", "linear"] = "lightness",
     scotopic_method: Literal["Luidolt2020", "Spencer1995"] = "Luidolt2020",
     desaturation: float = SPENCER1995_DESATURATION,

@@ -550,6 +550,9 @@ CASES = [
     ),
     ("bench-repeats", "bench --repeats 0 --out {box}/bench", "--repeats: 0"),
     ("bench-only", "bench --only nothing --out {box}/bench", "nothing"),
+    ("bench-acuity-only", "bench --acuity --only yoshida2008 --out {box}/bench", "yoshida2008"),
+    ("bench-acuity-large", "bench --acuity --large --out {box}/bench", "--large"),
+    ("bench-acuity-foreign", "bench --acuity --out {box}/foreign", "foreign is a folder"),
     (
         "bench-foreign",
         "bench --only street_256 --out {box}/foreign",
