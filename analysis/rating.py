@@ -19,6 +19,7 @@ import pandas as pd
 
 from .figures import plt, png
 from .load import Dataset
+from .methods import display_text
 from .stats import apa_p, holm, wilcoxon_signed_rank
 
 __all__ = ["analyse", "check", "design", "methods"]
@@ -52,8 +53,16 @@ def methods(protocol, participants: int, who: str) -> str:
             f" Before each condition's questions a procedural night {scene['kind']} "
             f"({scene['size_px'][0]} × {scene['size_px'][1]} px, {scene['lamps']} lamps of "
             f"{scene['lamp_cd_m2']:g} cd/m², ambient {scene['ambient_cd_m2']:g} cd/m²) was shown "
-            f"for {scene['seconds']:g} s as a {scene['sequence'].replace('_', ' ')} sequence, "
-            f"rendered through the night-vision pipeline with the condition's effects ({listed}), "
+            f"on {display_text(protocol)} for {scene['seconds']:g} s "
+            + {
+                "still": "as a still, ",
+                "enter_dark": f"as the eye adapts after leaving {scene['start_cd_m2']:g} cd/m² "
+                f"({scene['frame_rate_hz']:g} frames/s), ",
+                "gaze": "with the gaze moving from the dark road to a lamp and back "
+                f"({scene['frame_rate_hz']:g} frames/s), ",
+            }[scene["sequence"]]
+            + "rendered through the night-vision pipeline with the condition's effects "
+            f"({listed}), "
             "the conditions in an order of each participant's own; each condition was compared "
             f"with {conditions[0]['name']} by a Wilcoxon signed-rank test of the paired "
             "differences, Holm-corrected."
