@@ -58,7 +58,7 @@ def methods(protocol, participants: int, who: str) -> str:
                 "still": "as a still, ",
                 "enter_dark": f"as the eye adapts after leaving {scene['start_cd_m2']:g} cd/m² "
                 f"({scene['frame_rate_hz']:g} frames/s), ",
-                "gaze": "with the gaze moving from the dark road to a lamp and back "
+                "gaze": "with the gaze moving from the road to a lamp and back "
                 f"({scene['frame_rate_hz']:g} frames/s), ",
             }[scene["sequence"]]
             + "rendered through the night-vision pipeline with the condition's effects "

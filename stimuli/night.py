@@ -14,8 +14,8 @@ fine stripes and print in the dark (what acuity loss blurs). Lamp bulbs are smal
 - ``'still'``: one frame, the eye adapted to it;
 - ``'enter_dark'``: the same frame over time, the eye adapted to ``start_cd_m2`` before (the
   lit room it left; Luidolt §5.1, eqs. 5.2-5.4);
-- ``'gaze'``: the gaze moves from the dark road to the nearest lamp and back (the
-  view-dependent window of §5.1).
+- ``'gaze'``: the gaze moves from the road between the first two pools of light to the
+  first lamp and back (the view-dependent window of §5.1).
 
 :func:`build_night` renders a rating protocol's scene once per condition with
 :func:`glare.render_night` (the effects the condition names) for a stimulus set.
@@ -260,13 +260,13 @@ def night_sequence(
         }
     elif sequence == "gaze":
         height, width = img.shape[:2]
-        dark = (0.85 * height, 0.5 * width)  # the road between the pools of light
-        lamp = street["lamps_px"][0]
+        lamps = street["lamps_px"]
+        between = width / len(lamps) if len(lamps) > 1 else 0.05 * width
+        dark = (0.95 * height, between)  # the road's edge between the first two pools of light
+        lamp = lamps[0]
         # to the lamp over the first half, back over the second
         phase = 1.0 - np.abs(np.linspace(-1.0, 1.0, n)) if n > 1 else np.ones(1)
-        gaze = [
-            (dark[0] + p * (lamp[0] - dark[0]), dark[1] + p * (lamp[1] - dark[1])) for p in phase
-        ]
+        gaze = [((1 - p) * dark[0] + p * lamp[0], (1 - p) * dark[1] + p * lamp[1]) for p in phase]
         return {
             "frames": [img] * n,
             "frame_time_s": 1.0 / rate,
@@ -385,6 +385,7 @@ def build_night(protocol: Protocol, *, progress=None) -> dict:
                 "frame": number,
                 "effects": list(effects),
                 "refreshes": plan[condition["name"]]["refreshes_per_frame"],
+                "target_cd_m2": float(night.targets_cd_m2[number]),
                 "adaptation_cd_m2": float(night.adaptation_cd_m2[number]),
                 "pupil_mm": None
                 if math.isnan(night.pupil_mm[number])

@@ -73,7 +73,8 @@ def test_no_nan_and_no_negative_light_at_the_extremes(lamp, ambient, width, heig
     )["img"]  # fmt: skip
     assert img.shape == (height, width, 3)
     assert np.isfinite(img).all() and img.min() >= 0.0
-    assert img.max() <= max(lamp, 2 * ambient + 1e-3) * (1 + 1e-9)  # bulbs, or the poster
+    # a bulb, lit also by the other lamps' pools, or the poster
+    assert img.max() <= max(lamp * (1 + lamps * POOL_FRACTION), 2 * ambient + 1e-3) * (1 + 1e-9)
 
 
 def test_the_same_rng_gives_the_same_street():
@@ -198,3 +199,21 @@ def test_a_single_frame_and_black_scene_build(tmp_path):
     assert names == ["full_f000"]
     frame = read_exr(tmp_path / "set" / "full_f000.exr")
     assert np.isfinite(frame).all() and frame.min() >= 0.0
+
+
+def test_the_adaptation_follows_the_gaze_and_a_still_is_one_frame(tmp_path):
+    # 0.3° a pixel: the 5° window around the gaze sees the lamp's surroundings or the road
+    gaze = parse_protocol(tomllib.loads(small_night_protocol(sequence="gaze", pixel_deg=0.3)))
+    manifest = build_stimulus_set(gaze, tmp_path / "gaze", progress=None)
+    frames = [manifest["images"][n] for n in manifest["parameters"]["sequences"]["full"]["frames"]]
+    target = [f["target_cd_m2"] for f in frames]
+    adapting = [f["adaptation_cd_m2"] for f in frames]
+    # the log mean around the lamp is the dark sky and fronts around a small bulb: lower than
+    # the lit road's; the eye moves part of the way there in one frame, and back
+    assert target[1] < target[0] == target[2]
+    assert target[1] < adapting[1] < adapting[0] == target[0]
+    assert adapting[1] < adapting[2] < target[2]
+    assert manifest["parameters"]["gaze_px"][1] == manifest["geometry"]["lamps_px"][0]
+    still = parse_protocol(tomllib.loads(small_night_protocol(sequence="still")))
+    plan = night_plan(still, 60.0)["full"]
+    assert plan == {"frames": ["full_f000"], "refreshes_per_frame": 18, "refreshes": 18}
