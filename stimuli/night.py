@@ -115,8 +115,8 @@ def night_street(
     Examples
     --------
     >>> street = night_street((96, 64), pixel_deg=0.1, rng=np.random.default_rng(0))
-    >>> street["img"].shape, bool(street["img"].max() <= 2e4), len(street["lamps_px"])
-    ((64, 96, 3), True, 3)
+    >>> street["img"].shape, round(float(street["img"].max())), len(street["lamps_px"])
+    ((64, 96, 3), 20000, 3)
     """
     if (
         not isinstance(size_px, tuple | list)
@@ -264,8 +264,11 @@ def night_sequence(
         between = width / len(lamps) if len(lamps) > 1 else 0.05 * width
         dark = (0.95 * height, between)  # the road's edge between the first two pools of light
         lamp = lamps[0]
-        # to the lamp over the first half, back over the second
-        phase = 1.0 - np.abs(np.linspace(-1.0, 1.0, n)) if n > 1 else np.ones(1)
+        # to the lamp by the middle frame (n // 2), back by the last
+        middle = n // 2
+        steps = np.arange(n, dtype=float)
+        back = (n - 1 - steps) / max(n - 1 - middle, 1)  # after the middle frame
+        phase = np.where(steps <= middle, steps / max(middle, 1), back) if n > 1 else np.ones(1)
         gaze = [((1 - p) * dark[0] + p * lamp[0], (1 - p) * dark[1] + p * lamp[1]) for p in phase]
         return {
             "frames": [img] * n,
