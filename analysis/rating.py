@@ -14,7 +14,7 @@ from .figures import Figure, plt, png
 from .load import Dataset
 from .stats import apa_p, holm, wilcoxon_signed_rank
 
-__all__ = ["analyse", "design", "methods"]
+__all__ = ["analyse", "check", "design", "methods"]
 
 ALPHA = 0.05  # the significance level the results text uses
 NEUTRAL = "#9e9e9e"  # the scale's middle category: a grey that shows on white
@@ -33,6 +33,12 @@ def methods(protocol, participants: int, who: str) -> str:
         f"{q['scale_min']}-{q['scale_max']} scale from “{q['anchors'][0]}” to "
         f"“{q['anchors'][1]}”{', each with an optional comment' if q['comments'] else ''}."
     )
+
+
+def check(trials: pd.DataFrame, protocol) -> list[str]:
+    """Values no session of this protocol can write beyond the columns' own checks (category
+    and rating range): none."""
+    return []
 
 
 def analyse(dataset: Dataset, protocol) -> dict:

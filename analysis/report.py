@@ -28,9 +28,10 @@ the paradigm's module has ``stimulus_figures(protocol, shown)``, adds the figure
 (the set's images as the display showed them) after the analysis's own ``stimuli``.
 
 The page holds everything (images as data URLs, no script, no external address), so it can be
-mailed or archived as one file. Everything is written to a temporary folder next to the
+mailed or archived as one file. Everything is written to a staging folder next to the
 destination and moved into place only when all of it succeeded, so a failing analysis leaves no
-partial report behind.
+partial report behind; an earlier report in the destination is replaced whole, and a folder
+holding anything else is refused (:mod:`protocols.folders`).
 """
 
 from __future__ import annotations
@@ -39,22 +40,23 @@ import base64
 import html
 import io
 import json
-import os
 import shutil
-import tempfile
 from pathlib import Path
 
 import pandas as pd
 from PIL import Image
 
+from protocols.folders import check_replaceable, replace_folder, staging_folder
+
 from .apa import format_table, header
 from .figures import Figure, as_figure
 from .load import Dataset, load_sessions
-from .methods import provenance, sessions
+from .methods import provenance, session_rows
 from .paradigms import PARADIGMS
 
 __all__ = ["analyse", "methods_paragraph", "write_report"]
 
+REPORT = "report.html"
 COLLAPSE_ROWS = 30  # longer tables are folded (<details>), their title stays visible
 STYLE = """
 body{font-family:system-ui,-apple-system,"Segoe UI",Roboto,sans-serif;max-width:1100px;
@@ -85,16 +87,28 @@ def _markdown(table: pd.DataFrame) -> str:
 
 
 def analyse(
-    protocol, paths: list[str | Path], *, exclude_incomplete: bool = False
+    protocol,
+    paths: list[str | Path],
+    *,
+    exclude_incomplete: bool = False,
+    include_aborted: bool = False,
 ) -> tuple[Dataset, dict]:
     """Load the sessions of the protocol's study and run its paradigm's analysis."""
-    dataset = load_sessions(protocol, paths, exclude_incomplete=exclude_incomplete)
+    dataset = load_sessions(
+        protocol, paths, exclude_incomplete=exclude_incomplete, include_aborted=include_aborted
+    )
     return dataset, PARADIGMS[protocol.paradigm].analyse(dataset, protocol)
 
 
-def methods_paragraph(protocol, participants: int, simulated: bool) -> str:
-    """Methods text naming the protocol's actual parameters."""
-    who = f"{participants} {'simulated observers' if simulated else 'participants'}"
+def methods_paragraph(protocol, participants: int, simulated: bool | int) -> str:
+    """Methods text naming the protocol's actual parameters; ``simulated`` is true when every
+    participant was a simulated observer, or the number of them among the participants."""
+    if simulated is True:
+        who = f"{participants} simulated observers"
+    elif not simulated:
+        who = f"{participants} participants"
+    else:
+        who = f"{participants} participants ({simulated} of them simulated observers)"
     return PARADIGMS[protocol.paradigm].methods(protocol, participants, who)
 
 
@@ -187,16 +201,19 @@ def _html(
     result: dict,
     methods: str | None,
     origin: dict,
+    rows: list[dict],
     stimuli: list[Figure],
     had_set: bool,
 ) -> str:
     title = protocol.title
     participants = dataset.trials["participant"].nunique()
-    simulated = bool(origin.get("simulated"))
     blocks = dataset.trials["block"].value_counts()
     training = int(blocks.get("training", 0))
     note = f" ({training} of them training trials, not analysed)" if training else ""
-    who = "simulated observers" if simulated else "participants"
+    who = {
+        True: "simulated observers",
+        "mixed": "participants, some of them simulated observers (see Sessions),",
+    }.get(origin.get("simulated"), "participants")
     version = (origin.get("packages") or {}).get("glarelab", "")
     parts = [
         "<!doctype html><html lang='en'><head><meta charset='utf-8'>",
@@ -225,6 +242,14 @@ def _html(
             "<p class='note'>The stimuli are shown when the report is given the stimulus set "
             "(<code>glarelab analyse … --stimuli SET</code>).</p>"
         )
+    if dataset.incomplete_sessions:
+        items = "".join(
+            f"<li><code>{html.escape(Path(s['file']).name)}</code>: {html.escape(s['status'])}, "
+            f"{s['trials']} trials{' (analysed)' if s['trials'] else ' (nothing to analyse)'}"
+            "</li>"
+            for s in dataset.incomplete_sessions
+        )
+        parts.append(f"<h3>Sessions that did not complete</h3><ul>{items}</ul>")
     if dataset.excluded:
         items = "".join(
             f"<li>{html.escape(p)}: {html.escape(w)}</li>" for p, w in dataset.excluded.items()
@@ -246,7 +271,7 @@ def _html(
         "<p class='note'>One row per session file: its sidecar's record of the run. "
         "✓ marks a hash that matches this analysis's protocol (or stimulus set).</p>"
     )
-    parts.append(_sessions_html(origin.get("sessions", [])))
+    parts.append(_sessions_html(rows))
     parts.append("<h2 id='provenance'>Provenance</h2>")
     parts.append(
         "<details><summary>hashes and package versions (provenance.json)</summary><pre>"
@@ -262,6 +287,7 @@ def write_report(
     out: str | Path,
     *,
     exclude_incomplete: bool = False,
+    include_aborted: bool = False,
     stimuli: str | Path | None = None,
 ) -> Path:
     """Analyse session CSVs and write the report folder; returns the path of report.html.
@@ -276,12 +302,13 @@ def write_report(
         For bad input: the data, or a stimulus set that fails its manifest or was built from
         another protocol (nothing is written).
     """
-    out = Path(out)
+    out = check_replaceable(out, marker=REPORT, what="report")
     stimuli = Path(stimuli) if stimuli is not None else None
-    dataset, result = analyse(protocol, paths, exclude_incomplete=exclude_incomplete)
+    dataset, result = analyse(
+        protocol, paths, exclude_incomplete=exclude_incomplete, include_aborted=include_aborted
+    )
     shown = _stimuli(protocol, result, stimuli)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    staging = Path(tempfile.mkdtemp(prefix=".report-", dir=out.parent))
+    staging = staging_folder(out)
     try:
         for name, table in result["tables"].items():
             table.to_csv(staging / f"{name}.csv", index=False)
@@ -290,10 +317,14 @@ def write_report(
             (staging / name).write_bytes(as_figure(item, name).png)
         for index, figure in enumerate(shown, start=1):
             (staging / f"stimulus_{index:02d}.png").write_bytes(figure.png)
-        simulated = any(s.get("simulated") for s in dataset.sidecars.values())
+        flags = dataset.trials.groupby("participant")["_file"].first()
+        simulated_ids = sum(
+            bool(dataset.sidecars.get(file, {}).get("simulated")) for file in flags
+        )
+        simulated = True if simulated_ids == len(flags) else simulated_ids
         methods = methods_paragraph(protocol, dataset.trials["participant"].nunique(), simulated)
         origin = provenance(dataset.sidecars, protocol.sha256, stimuli)
-        origin["sessions"] = sessions(
+        rows = session_rows(
             dataset.files,
             dataset.sidecars,
             protocol.sha256,
@@ -304,13 +335,11 @@ def write_report(
             (staging / "methods.md").write_text(methods + "\n")
         if result.get("results"):
             (staging / "results.md").write_text("\n\n".join(result["results"]) + "\n")
-        (staging / "report.html").write_text(
-            _html(protocol, dataset, result, methods, origin, shown, stimuli is not None),
+        (staging / REPORT).write_text(
+            _html(protocol, dataset, result, methods, origin, rows, shown, stimuli is not None),
             encoding="utf-8",
         )
-        out.mkdir(parents=True, exist_ok=True)
-        for item in staging.iterdir():
-            os.replace(item, out / item.name)
+        replace_folder(staging, out)
     finally:
         shutil.rmtree(staging, ignore_errors=True)
-    return out / "report.html"
+    return out / REPORT

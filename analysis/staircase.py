@@ -24,12 +24,13 @@ from scipy.special import expit
 
 from .apa import anova_effect, corrected_p, series, unit_interval
 from .figures import Figure, plt, png, small_multiples
-from .load import Dataset
+from .load import Dataset, where
 from .methods import display_text
 from .stats import apa_anova, rm_anova
 
 __all__ = [
     "analyse",
+    "check",
     "design",
     "methods",
     "psychometric_match",
@@ -70,6 +71,21 @@ def methods(protocol, participants: int, who: str) -> str:
         f"({t['reversals']} reversals, steps {', '.join(f'{x:g}' for x in t['step_fractions'])} "
         f"of the maximum; 'neither': {t['neither']}) set the disc."
     )
+
+
+def check(trials: pd.DataFrame, protocol) -> list[str]:
+    """Values no session of this protocol can write: a strength that is not the protocol's at
+    the trial's glare level."""
+    strengths = protocol["glare"]["strengths"]
+    problems = []
+    for _, row in trials.iterrows():
+        expected = strengths[int(row["glare_level"]) - 1]
+        if not np.isclose(row["strength"], expected, rtol=1e-6):
+            problems.append(
+                f"{where(row)}, column strength: {row['strength']!r}; the protocol's glare "
+                f"level {int(row['glare_level'])} has strength {expected:g}"
+            )
+    return problems
 
 
 def reversal_match(staircase: pd.DataFrame) -> float:
@@ -128,6 +144,8 @@ def analyse(dataset: Dataset, protocol) -> dict:
             }
         )
     matches = pd.DataFrame(rows)
+    needed = protocol["trials"]["reversals"]
+    matches["converged"] = matches["reversals"] >= needed
     summary = (
         matches.groupby(["context", "glare_level"])
         .agg(
@@ -149,7 +167,32 @@ def analyse(dataset: Dataset, protocol) -> dict:
         anova["apa_gg"] = apa_anova(anova, correction="GG")
         anova["apa_hf"] = apa_anova(anova, correction="HF")
         tables["anova"] = anova
-        text = {row["source"]: anova_effect(row) for _, row in anova.iterrows()}
+        text |= {row["source"]: anova_effect(row) for _, row in anova.iterrows()}
+    else:
+        text["inference"] = (
+            "one participant: the tables describe their staircases; no ANOVA, which tests "
+            "differences between participants' means and needs at least two participants"
+        )
+    unconverged = matches[~matches["converged"]]
+    if len(unconverged):
+        none = unconverged[unconverged["reversals"] == 0]
+        listed = "; ".join(
+            f"{r.participant} {r.context} level {r.glare_level} ({r.reversals} reversals, "
+            f"{r.trials} trials)"
+            for r in unconverged.itertuples()
+        )
+        text["unconverged_staircases"] = (
+            f"{len(unconverged)} of {len(matches)} staircases ended before their {needed} "
+            f"reversals (at the trial cap or with the session){': ' + listed}. "
+            + (
+                f"{len(none)} had no reversal at all: their match is the last disc intensity, "
+                "a bound (the staircase ran into the end of its range), not a threshold. "
+                if len(none)
+                else ""
+            )
+            + "They are in the means and the ANOVA; the matches table marks them "
+            "(converged = false)."
+        )
     repeated = len(every) - len(trials)
     text["repeated_presentations"] = (
         f"{repeated} of {len(every)} flashes missed their frames or timing and were shown "
@@ -181,7 +224,8 @@ def analyse(dataset: Dataset, protocol) -> dict:
             ),
         },
         "text": text,
-        "results": _results(tables, summary, matches, protocol, repeated, len(every)),
+        "results": _results(tables, summary, matches, protocol, repeated, len(every))
+        + ([text["unconverged_staircases"]] if "unconverged_staircases" in text else []),
         "captions": {
             k: v
             for k, v in {
