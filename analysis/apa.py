@@ -61,6 +61,7 @@ HEADERS = {
     "sd": "SD",
     "iqr": "IQR",
     "n": "n",
+    "l_disk_cd_m2": "L_disk (cd/m²)",  # Yoshida et al.'s symbol
 }
 WORDS = {"sem": "SEM", "sd": "SD", "iqr": "IQR"}  # abbreviations in headings
 

@@ -152,7 +152,7 @@ def test_a_mean_and_its_sem_share_decimals_and_strengths_keep_their_digits():
     assert formatted["strength"].tolist() == ["0.01", "284"]
     assert formatted["l_disk_cd_m2"].tolist() == ["220", "10,000"]
     assert "apa" not in formatted  # the results text quotes these
-    assert header("lower_sem") == "lower SEM" and header("l_disk_cd_m2") == "l disk (cd/m²)"
+    assert header("lower_sem") == "lower SEM" and header("l_disk_cd_m2") == "L_disk (cd/m²)"
 
 
 @settings(max_examples=300, deadline=None)
