@@ -1,6 +1,6 @@
 """The three paper studies' demo reports, opened in a real browser (headless Chromium through
 its WebDriver): every image decodes, the console stays clean, and a screenshot of the whole page
-is saved under the test's output for people to look at.
+is saved under the test output, ``out/test-browser/STUDY.png``, for people to look at.
 
 Chromium and chromium-driver are Debian packages that ``make system-deps`` installs
 (``scripts/system-deps.sh``); without them this test fails and says so."""
@@ -29,8 +29,12 @@ def demos(tmp_path_factory):
 
 
 @pytest.fixture(scope="module")
-def screenshots(tmp_path_factory):
-    return tmp_path_factory.mktemp("browser-screenshots", numbered=False)
+def screenshots():
+    """``out/test-browser/`` of the checkout (ignored by git): pytest's own temporary folders
+    are pruned after three runs, too soon for someone to look."""
+    folder = Path(__file__).parents[2] / "out" / "test-browser"
+    folder.mkdir(parents=True, exist_ok=True)
+    return folder
 
 
 @pytest.fixture(scope="module")
