@@ -7,7 +7,7 @@ import hashlib
 import json
 from pathlib import Path
 
-__all__ = ["display_text", "provenance"]
+__all__ = ["display_text", "provenance", "session_rows"]
 
 
 def display_text(protocol) -> str:
@@ -70,3 +70,61 @@ def provenance(
         record["stimulus_set_calibration_sha256"] = data.get("calibration_sha256")
         record["stimulus_set_calibration_status"] = data.get("calibration", {}).get("status")
     return record
+
+
+def _hash(value: str | None, expected: str | None) -> str:
+    if not value:
+        return "—"
+    return f"{value[:12]}{' ✓' if expected and value == expected else ''}"
+
+
+def _time(value: str | None, since: str | None = None) -> str:
+    """An ISO time as ``2026-11-30 14:32:05+01:00``; only the time if on ``since``'s date."""
+    if not value:
+        return "—"
+    date, _, time = value.partition("T")
+    return time if since and since.startswith(date) else f"{date} {time}"
+
+
+def session_rows(
+    files: list[str],
+    sidecars: dict[str, dict],
+    protocol_sha256: str | None,
+    stimuli_sha256: str | None,
+) -> list[dict]:
+    """One row per session file with a sidecar, as the report's Sessions table shows it: who,
+    when, how it ended, and the hashes and versions it ran with, shortened (a ✓ after a hash
+    that matches the analysis's protocol or stimulus set). :func:`provenance` keeps them whole."""
+    rows = []
+    for file in files:
+        sidecar = sidecars.get(file)
+        if sidecar is None:
+            continue
+        calibration = sidecar.get("calibration") or {}
+        packages = sidecar.get("packages") or {}
+        runs = sidecar.get("runs") or []
+        rows.append(
+            {
+                "file": Path(file).name,
+                "participant": sidecar.get("participant"),
+                "session": sidecar.get("session"),
+                "status": sidecar.get("status"),
+                "started": _time(sidecar.get("started")),
+                "ended": _time(sidecar.get("ended"), sidecar.get("started")),
+                "trials": sidecar.get("trials"),
+                "runs": len(runs),
+                "simulated": "yes" if sidecar.get("simulated") else "no",
+                "host": ", ".join(sorted({str(r.get("host")) for r in runs if r.get("host")}))
+                or "—",
+                "protocol": _hash(sidecar.get("protocol_sha256"), protocol_sha256),
+                "stimulus set": _hash(sidecar.get("stimulus_set_manifest_sha256"), stimuli_sha256),
+                "calibration": f"{calibration.get('status', '—')}"
+                + (
+                    f" {calibration['readings_sha256'][:12]}"
+                    if calibration.get("readings_sha256")
+                    else ""
+                ),
+                "glarelab": packages.get("glarelab", "—"),
+            }
+        )
+    return rows

@@ -5,14 +5,19 @@ midpoint (Luidolt's 1-7 scale: 4), Holm-corrected across categories."""
 
 from __future__ import annotations
 
+import matplotlib.colors
 import numpy as np
 import pandas as pd
 
-from .figures import plt, png
+from .apa import unit_interval
+from .figures import Figure, plt, png
 from .load import Dataset
 from .stats import apa_p, holm, wilcoxon_signed_rank
 
 __all__ = ["analyse", "check", "design", "methods"]
+
+ALPHA = 0.05  # the significance level the results text uses
+NEUTRAL = "#9e9e9e"  # the scale's middle category: a grey that shows on white
 
 
 def design(protocol) -> tuple[list[str], list[tuple], str | None]:
@@ -72,23 +77,74 @@ def analyse(dataset: Dataset, protocol) -> dict:
     comments = trials.loc[
         trials["comment"].notna(), ["participant", "category", "rating", "comment"]
     ]
+    n = trials["participant"].nunique()
+    neutral = f" (grey: the neutral {scale[len(scale) // 2]})" if len(scale) % 2 else ""
     return {
         "tables": {"summary": summary, "comments": comments},
-        "figures": {"figure7_ratings.png": _diverging(summary, scale, q["anchors"])},
-        "text": {},
+        "figures": {
+            "figure7_ratings.png": Figure(
+                _diverging(summary, scale, q["anchors"]),
+                "Ratings per category",
+                f"The share of the {n} participants giving each rating from {scale[0]} "
+                f"({q['anchors'][0]}) to {scale[-1]} ({q['anchors'][1]}), as diverging bars: "
+                f"ratings below the middle of the scale extend left of 0, ratings above it "
+                f"right{neutral}, the middle category split across 0.",
+            ),
+            "participants_ratings.png": Figure(
+                _participants(trials, categories, scale),
+                "Every participant's ratings",
+                f"The rating of each participant (rows, n = {n}) in each category (columns), "
+                f"coloured as in the diverging bars; a participant whose row differs from "
+                f"the others stands out.",
+            ),
+        },
+        "text": dict(zip(summary["category"], summary["apa"], strict=True)),
+        "results": _results(summary, midpoint, n),
+        "captions": {
+            "summary": "Ratings per category: mean, SD, median, IQR, Wilcoxon signed-rank test "
+            f"against the midpoint {midpoint:g} (Holm-corrected) and the count of each rating",
+            "comments": "The participants' comments",
+        },
     }
+
+
+def _results(summary: pd.DataFrame, midpoint: float, n: int) -> list[str]:
+    """The results section as one paragraph, generated from the summary table."""
+    parts = []
+    for _, row in summary.iterrows():
+        side = "above" if row["median"] > midpoint else "below"
+        verdict = (
+            f"differed from the midpoint ({side} it)"
+            if row["p_holm"] < ALPHA
+            else "did not differ from the midpoint"
+        )
+        parts.append(
+            f"{row['category']} (Mdn = {row['median']:g}, IQR = {row['iqr']:g}; M = "
+            f"{row['mean']:.2f}, SD = {row['sd']:.2f}) {verdict}, {row['apa']}"
+        )
+    return [
+        f"The {n} participants' ratings of each category were compared with the scale's "
+        f"midpoint, {midpoint:g}, by Wilcoxon signed-rank tests, Holm-corrected across the "
+        f"{len(summary)} categories (α = {unit_interval(ALPHA)}): "
+        + "; ".join(parts[:-1])
+        + ("; and " if len(parts) > 1 else "")
+        + parts[-1]
+        + "."
+    ]
 
 
 def _diverging(summary: pd.DataFrame, scale: range, anchors: list[str]) -> bytes:
     figure, axis = plt.subplots(figsize=(7, 0.5 * len(summary) + 1.5))
-    colours = plt.cm.RdBu(np.linspace(0.1, 0.9, len(scale)))
+    colours = _colours(scale)
     y = np.arange(len(summary))[::-1]
     below = len(scale) // 2  # ratings left of the middle; an odd scale has a neutral one
+    reach = 0.0
     for index, row in enumerate(summary.itertuples()):
         counts = np.array([getattr(row, f"count_{k}") for k in scale], float)
         share = 100 * counts / counts.sum()
         neutral = share[below] if len(scale) % 2 else 0.0
         left = -share[:below].sum() - neutral / 2  # the middle of the scale on 0
+        reach = max(reach, -left, left + share.sum())
         for k in range(len(scale)):
             axis.barh(
                 y[index],
@@ -100,9 +156,53 @@ def _diverging(summary: pd.DataFrame, scale: range, anchors: list[str]) -> bytes
             )
             left += share[k]
     axis.axvline(0, color="k", lw=0.8)
+    axis.set_xlim(-reach - 5, reach + 5)  # symmetric, no bar touching the frame
+    axis.xaxis.set_major_formatter(lambda x, _: f"{abs(x):g}")  # shares, left and right
     axis.set_yticks(y, summary["category"])
     axis.set_xlabel(f"% of participants ({scale[0]} = {anchors[0]} … {scale[-1]} = {anchors[1]})")
     axis.legend(
         ncol=len(scale), fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.25), frameon=False
     )
+    return png(figure)
+
+
+def _colours(scale: range) -> list:
+    """Reds below the middle of the scale, blues above it, and a grey middle category that
+    shows against white (a diverging map's own middle is nearly white)."""
+    below = len(scale) // 2
+    reds = plt.cm.RdBu(np.linspace(0.08, 0.35, below)) if below else []
+    blues = plt.cm.RdBu(np.linspace(0.65, 0.92, below)) if below else []
+    middle = [matplotlib.colors.to_rgba(NEUTRAL)] if len(scale) % 2 else []
+    return [*reds, *middle, *blues]
+
+
+def _participants(trials: pd.DataFrame, categories: list[str], scale: range) -> bytes:
+    participants = sorted(trials["participant"].unique())
+    ratings = trials.pivot_table(
+        index="participant", columns="category", values="rating", aggfunc="first"
+    ).reindex(index=participants, columns=categories)
+    figure, axis = plt.subplots(
+        figsize=(1.1 * len(categories) + 2.0, 0.32 * len(participants) + 1.6)
+    )
+    cmap = matplotlib.colors.ListedColormap(_colours(scale))
+    norm = matplotlib.colors.BoundaryNorm(np.arange(scale[0] - 0.5, scale[-1] + 1), cmap.N)
+    axis.imshow(ratings.to_numpy(float), cmap=cmap, norm=norm, aspect="auto")
+    for (row, column), value in np.ndenumerate(ratings.to_numpy(float)):
+        if np.isfinite(value):
+            dark = abs(value - (scale[0] + scale[-1]) / 2) >= (len(scale) - 1) / 3
+            axis.text(
+                column,
+                row,
+                f"{value:g}",
+                ha="center",
+                va="center",
+                fontsize=8,
+                color="white" if dark else "black",
+            )
+    axis.set_xticks(range(len(categories)), categories, rotation=30, ha="right", fontsize=8)
+    axis.set_yticks(range(len(participants)), participants, fontsize=8)
+    axis.set_xticks(np.arange(len(categories) + 1) - 0.5, minor=True)
+    axis.set_yticks(np.arange(len(participants) + 1) - 0.5, minor=True)
+    axis.grid(which="minor", color="white", lw=1.5)
+    axis.tick_params(which="minor", length=0)
     return png(figure)

@@ -1,9 +1,12 @@
 """A stimulus set on disk: what a study shows, exactly reproducible and self-describing.
 
 A set is a folder with, for every image, float32 linear luminance (``NAME.exr``, cd/m²) and
-the display codes that show it through the calibration (``NAME.png``, 16-bit greyscale holding
-the codes); luminance-profile plots through the disk centre (``profiles_*.png``, like Yoshida
-et al.'s Figure 3); and ``manifest.json``: the validated protocol and its hash, the
+the display codes that show it through the calibration (``NAME.png``, 16-bit greyscale:
+the codes scaled to the full 16-bit range, ``round(code × 65535 / (2^bits − 1))``, with an
+``sBIT`` chunk recording the display's bit depth, so any viewer shows the image as the display
+does and :func:`read_codes` gives back the exact codes); luminance-profile plots through the
+disk centre (``profiles_*.png``, like Yoshida et al.'s Figure 3); ``README.md``, an index of
+the files and images; and ``manifest.json``: the validated protocol and its hash, the
 calibration and its hash, the geometry, every image's parameters and encoding report, the
 package versions, and the sha256 of every file. Nothing in it depends on the time or the
 place of the build, so the same protocol and calibration give identical files.
@@ -21,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 from PIL import Image
+from PIL.PngImagePlugin import PngInfo
 
 from protocols import Protocol
 from protocols.folders import check_replaceable, replace_folder, staging_folder
@@ -39,10 +43,15 @@ __all__ = [
     "default_calibration",
     "package_versions",
     "progress_bar",
+    "read_codes",
     "verify_stimulus_set",
+    "write_codes",
 ]
 
 MANIFEST = "manifest.json"
+INDEX = "README.md"
+FORMAT = "glarelab stimulus set v3"  # v3: PNGs scaled to 16 bits with sBIT, README.md
+PNG_MAX = 65535
 PACKAGES = ("numpy", "scipy", "colour-science", "OpenEXR", "matplotlib", "pillow", "glarelab")
 # the stimulus builder of each paradigm (None: the paradigm shows no images)
 BUILDERS = {"matching": build_matching, "staircase": build_staircase, "rating": None}
@@ -61,6 +70,69 @@ def progress_bar(done: int, total: int, what: str, *, stream=None) -> None:
         file=stream,
         flush=True,
     )
+
+
+def write_codes(path: str | Path, codes: np.ndarray, bit_depth: int) -> None:
+    """Write display codes as a 16-bit greyscale PNG that any viewer shows: the codes scaled to
+    the full 16-bit range, ``round(code × 65535 / (2^bit_depth − 1))``, with an ``sBIT`` chunk
+    recording ``bit_depth`` (PNG specification §11.3.4.4: the scaling it recommends, which
+    keeps the code in the top ``bit_depth`` bits).
+
+    Raises
+    ------
+    ValueError
+        For a ``bit_depth`` outside 1-16, or codes outside 0 … 2^bit_depth − 1.
+    """
+    if not 1 <= bit_depth <= 16:
+        raise ValueError(f"bit_depth must be 1-16; got {bit_depth!r}")
+    top = 2**bit_depth - 1
+    codes = np.asarray(codes)
+    if codes.size and (codes.min() < 0 or codes.max() > top):
+        raise ValueError(
+            f"codes must be in [0, {top}] for bit_depth {bit_depth}; got "
+            f"{codes.min()}-{codes.max()}"
+        )
+    scaled = np.floor(codes.astype(np.float64) * PNG_MAX / top + 0.5).astype(np.uint16)
+    info = PngInfo()
+    info.add(b"sBIT", bytes([bit_depth]))
+    Image.fromarray(scaled).save(path, pnginfo=info)
+
+
+def _sbit(data: bytes) -> int | None:
+    """The greyscale significant bits of a PNG's sBIT chunk (None without one)."""
+    position = 8  # after the signature
+    while position + 8 <= len(data):
+        length = int.from_bytes(data[position : position + 4], "big")
+        kind = data[position + 4 : position + 8]
+        if kind == b"sBIT":
+            return data[position + 8]
+        if kind == b"IDAT":
+            return None  # sBIT precedes the image data
+        position += 12 + length
+    return None
+
+
+def read_codes(path: str | Path) -> tuple[np.ndarray, int]:
+    """The display codes of a set's PNG and the bit depth its ``sBIT`` chunk records
+    (:func:`write_codes`); a PNG without one holds the codes unscaled (16 bits).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> path = Path(tempfile.mkdtemp()) / "codes.png"
+    >>> write_codes(path, np.array([[0, 1, 512, 1023]]), 10)
+    >>> codes, bits = read_codes(path)
+    >>> codes.tolist(), bits, np.asarray(Image.open(path)).tolist()
+    ([[0, 1, 512, 1023]], 10, [[0, 64, 32800, 65535]])
+    """
+    data = Path(path).read_bytes()
+    with Image.open(path) as image:
+        values = np.asarray(image).astype(np.int64)
+    bits = _sbit(data)
+    if bits is None or bits == 16:
+        return values.astype(np.uint16), 16
+    top = 2**bits - 1
+    return (values * top * 2 // PNG_MAX + 1) // 2, bits  # round(v × top / 65535), exactly
 
 
 def _sha256(path: Path) -> str:
@@ -186,7 +258,7 @@ def _write_set(out: Path, protocol: Protocol, built: dict, calibration: Calibrat
         record = {k: v for k, v in info.items() if k != "img"}
         if info["kind"] != "component":  # display luminances: encode them for the display
             codes, report = calibration.encode(img)
-            Image.fromarray(codes.astype(np.uint16)).save(out / f"{name}.png")
+            write_codes(out / f"{name}.png", codes, calibration.bit_depth)
             files.append(f"{name}.png")
             record["encoding"] = {
                 "above_max": report.above_max,
@@ -197,9 +269,10 @@ def _write_set(out: Path, protocol: Protocol, built: dict, calibration: Calibrat
         record["shape"] = list(img.shape)
         records[name] = record
     plots = _profile_plots(out, protocol.paradigm, images, built["geometry"])
-    files = sorted(f for r in records.values() for f in r["files"]) + plots
+    (out / INDEX).write_text(_index(protocol, calibration, records, plots, built["geometry"]))
+    files = sorted(f for r in records.values() for f in r["files"]) + plots + [INDEX]
     manifest = {
-        "format": "glarelab stimulus set v2",
+        "format": FORMAT,
         "study": protocol.study,
         "paradigm": protocol.paradigm,
         "protocol": protocol.data,
@@ -218,6 +291,52 @@ def _write_set(out: Path, protocol: Protocol, built: dict, calibration: Calibrat
     }
     (out / MANIFEST).write_text(json.dumps(manifest, indent=2, sort_keys=True) + "\n")
     return manifest
+
+
+def _index(protocol: Protocol, calibration: Calibration, records: dict, plots, geometry) -> str:
+    """The set's README.md: what each file holds, how to read the PNGs, and every image."""
+    top = 2**calibration.bit_depth - 1
+    lines = [
+        f"# Stimulus set: {protocol.title}",
+        "",
+        f"Built by glarelab from the protocol `{protocol.study}` (sha256 "
+        f"`{protocol.sha256[:16]}…`) for a {calibration.bit_depth}-bit display, "
+        f"{calibration.black_cd_m2:.4g}-{calibration.max_cd_m2:.4g} cd/m² (calibration status "
+        f"`{calibration.status}`). `manifest.json` holds every parameter and the sha256 of "
+        "every file; `glarelab stimuli verify FOLDER` checks them.",
+        "",
+        "## Files",
+        "",
+        "- `NAME.exr`: the image's linear luminance in cd/m² (float32 OpenEXR, channel `Y`), "
+        "before the display.",
+        f"- `NAME.png`: the drive codes that show it on the display, 0-{top}, through the "
+        "calibration. 16-bit greyscale scaled to the full 16-bit range, "
+        f"`value = round(code × 65535 / {top})`, with an `sBIT` chunk recording the true bit "
+        f"depth ({calibration.bit_depth}): an image viewer shows the image as the display "
+        f"does (for a display of gamma about 2.2); the codes are `round(value × {top} / "
+        f"65535)` (or `value >> {16 - calibration.bit_depth}`), as "
+        "`stimuli.stimulus_set.read_codes` reads them. Images the sessions compose from "
+        "parts (kind `component`) have no PNG.",
+        "- `profiles_*.png`: the images with their luminance profile through the centre.",
+        "",
+        "## Images",
+        "",
+        "| file | kind | parameters | size (px) |",
+        "| --- | --- | --- | --- |",
+    ]
+    for record in records.values():
+        parameters = ", ".join(
+            f"{k} = {v:g}" if isinstance(v, float) else f"{k} = {v}"
+            for k, v in record.items()
+            if k not in ("kind", "files", "shape", "encoding")
+        )
+        files = ", ".join(f"`{f}`" for f in record["files"])
+        shape = " × ".join(str(x) for x in record["shape"][:2][::-1])
+        lines.append(f"| {files} | {record['kind']} | {parameters} | {shape} |")
+    lines += ["", f"Geometry: {', '.join(f'{k} = {v}' for k, v in geometry.items())}.", ""]
+    if plots:
+        lines += ["Profile plots: " + ", ".join(f"`{p}`" for p in plots) + ".", ""]
+    return "\n".join(lines)
 
 
 def _manifest_of(folder: Path) -> dict:

@@ -4,6 +4,7 @@ that never lose a file, a memory check before large work, and the progress log."
 from __future__ import annotations
 
 import argparse
+import copy
 import math
 import sys
 from pathlib import Path
@@ -32,18 +33,28 @@ def log(message: str) -> None:
 
 
 class HelpFormatter(argparse.HelpFormatter):
-    """Help that shows every option's default (when it has one worth saying)."""
+    """Help that shows every option's default (when it has one worth saying), also for an
+    option without a help text (argparse prints nothing for those)."""
+
+    @staticmethod
+    def _default(action: argparse.Action) -> str | None:
+        default = action.default
+        if not action.option_strings or default in (None, False, "", argparse.SUPPRESS):
+            return None
+        shown = " ".join(map(str, default)) if isinstance(default, list | tuple) else default
+        return str(shown).replace("%", "%%")  # the help text is a %-format
+
+    def _format_action(self, action: argparse.Action) -> str:
+        if action.help is None and self._default(action) is not None:
+            action = copy.copy(action)
+            action.help = f"default {self._default(action)}"
+        return super()._format_action(action)
 
     def _get_help_string(self, action: argparse.Action) -> str:
         text = action.help or ""
-        default = action.default
-        if (
-            not action.option_strings
-            or default in (None, False, argparse.SUPPRESS)
-            or "default" in text
-        ):
+        shown = self._default(action)
+        if shown is None or "default" in text:
             return text
-        shown = " ".join(map(str, default)) if isinstance(default, list | tuple) else default
         return f"{text} (default {shown})" if text else f"default {shown}"
 
 

@@ -209,7 +209,9 @@ def add(commands) -> None:
         help="folder for the session files (default data)",
     )
     run.add_argument("--resume", action="store_true", help="continue an interrupted session")
-    run.add_argument("--fullscreen", action="store_true")
+    run.add_argument(
+        "--fullscreen", action="store_true", help="full screen on the lab display (else a window)"
+    )
     run.add_argument(
         "--counterbalance", type=int, choices=(0, 1), default=None, help="Spencer block order"
     )
