@@ -302,7 +302,9 @@ def write_report(
         For bad input: the data, or a stimulus set that fails its manifest or was built from
         another protocol (nothing is written).
     """
-    out = check_replaceable(out, marker=REPORT, what="report")
+    out = check_replaceable(
+        out, kind="report", what="report", inputs=[*paths, *([stimuli] if stimuli else [])]
+    )
     stimuli = Path(stimuli) if stimuli is not None else None
     dataset, result = analyse(
         protocol, paths, exclude_incomplete=exclude_incomplete, include_aborted=include_aborted
@@ -339,7 +341,7 @@ def write_report(
             _html(protocol, dataset, result, methods, origin, rows, shown, stimuli is not None),
             encoding="utf-8",
         )
-        replace_folder(staging, out)
+        replace_folder(staging, out, kind="report")
     finally:
         shutil.rmtree(staging, ignore_errors=True)
     return out / REPORT

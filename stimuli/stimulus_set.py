@@ -27,7 +27,13 @@ from PIL import Image
 from PIL.PngImagePlugin import PngInfo
 
 from protocols import Protocol
-from protocols.folders import check_replaceable, replace_folder, staging_folder
+from protocols.folders import (
+    LISTING,
+    check_replaceable,
+    record_files,
+    replace_folder,
+    staging_folder,
+)
 
 from .calibration import Calibration, synthetic_calibration
 from .exr import read_exr, write_exr
@@ -237,12 +243,19 @@ def build_stimulus_set(
             f"the calibration is for a {calibration.bit_depth}-bit display, the protocol's "
             f"display is {protocol['display']['bit_depth']}-bit"
         )
-    final = check_replaceable(out, marker=MANIFEST, what="stimulus set")
+    if (
+        Path(out).is_dir()
+        and not (Path(out) / LISTING).exists()
+        and (Path(out) / MANIFEST).is_file()
+        and not verify_stimulus_set(out)
+    ):
+        record_files(Path(out), "stimulus set")  # a whole set of an earlier version: its own
+    final = check_replaceable(out, kind="stimulus set", what="stimulus set")
     built = BUILDERS[protocol.paradigm](protocol, progress=progress)
     out = staging_folder(final)
     try:
         manifest = _write_set(out, protocol, built, calibration)
-        replace_folder(out, final)
+        replace_folder(out, final, kind="stimulus set")
     finally:
         shutil.rmtree(out, ignore_errors=True)
     return manifest
@@ -386,7 +399,7 @@ def verify_stimulus_set(folder: str | Path) -> list[str]:
         elif _sha256(path) != expected:
             problems.append(f"{name}: changed (sha256 differs from the manifest)")
     for path in sorted(folder.iterdir()):
-        if path.name not in listed and path.name != MANIFEST:
+        if path.name not in listed and path.name not in (MANIFEST, LISTING):
             problems.append(f"{path.name}: not in the manifest (added after the build?)")
     images = manifest.get("images")
     if isinstance(images, dict):

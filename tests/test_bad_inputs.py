@@ -20,6 +20,7 @@ import pytest
 from experiments.session import SimulatedFrontend, make_observer, run_session
 from glarelab.cli import main
 from protocols import load_protocol
+from protocols.folders import record_files
 from stimuli.exr import write_exr
 from stimuli.stimulus_set import cached_stimulus_set, verify_stimulus_set
 
@@ -322,7 +323,7 @@ CASES = [
     (
         "build-into-foreign",
         "stimuli build yoshida2008 --out {box}/foreign",
-        "foreign holds files but no stimulus set",
+        "foreign holds files that are not an earlier stimulus set",
     ),
     (
         "build-calibration-text",
@@ -486,7 +487,7 @@ CASES = [
     (
         "analyse-out-foreign",
         "analyse yoshida2008 {box}/bad-data/second.csv --out {box}/report-here",
-        "report-here holds files but no report",
+        "report-here holds files that are not an earlier report",
     ),
     (
         "analyse-stimuli",
@@ -498,7 +499,7 @@ CASES = [
     (
         "demo-foreign",
         "demo --protocol luidolt2020 --out {box}/foreign",
-        "foreign holds files the demo did not write",
+        "foreign holds files that are not an earlier demo folder",
     ),
     ("demo-file", "demo --out {box}/afile.txt", "afile.txt is a file"),
     (
@@ -588,7 +589,7 @@ def test_the_demo_never_deletes_a_participants_data(sandbox, tmp_path, capsys):
         sidecar.write_text(json.dumps(record | {"simulated": False}))
     before = snapshot(lab)
     status, err = refused(["demo", "--protocol", "luidolt2020", "--out", str(lab)], capsys)
-    assert status == 2 and "did not write" in err
+    assert status == 2 and "not an earlier demo folder" in err
     assert snapshot(lab) == before
     # a folder the demo made, where a real session has been recorded since
     demo = tmp_path / "demo"
@@ -601,7 +602,7 @@ def test_the_demo_never_deletes_a_participants_data(sandbox, tmp_path, capsys):
         shutil.copy(path, demo / "data" / path.name.replace("sim01", "P07"))
     before = snapshot(demo)
     status, err = refused(["demo", "--protocol", "luidolt2020", "--out", str(demo)], capsys)
-    assert status == 2 and "is not a simulated session" in err, err
+    assert status == 2 and "P07_luidolt2020_s1_" in err, err
     assert snapshot(demo) == before
     # the demo's own folder, as it left it, is replaced
     shutil.rmtree(demo / "data")
@@ -609,6 +610,91 @@ def test_the_demo_never_deletes_a_participants_data(sandbox, tmp_path, capsys):
         main(["demo", "--protocol", "luidolt2020", "--out", str(demo), "--participants", "1"]) == 0
     )
     assert len(list((demo / "data").glob("*.csv"))) == 1
+
+
+def _lab_folder(root: Path, *files: str) -> Path:
+    """A folder of someone else's files, named relative to it."""
+    for name in files:
+        (root / name).parent.mkdir(parents=True, exist_ok=True)
+        (root / name).write_text(f"{name}: someone else's\n")
+    return root
+
+
+@pytest.mark.parametrize(
+    ("command", "files"),
+    [
+        # a folder holding a file of the output's name is not therefore an earlier output
+        ("analyse yoshida2008 {data} --out {lab}", ["report.html", "chapter1.tex"]),
+        ("stimuli build yoshida2008 --out {lab}", ["manifest.json", "src/app.js"]),
+        ("demo --protocol luidolt2020 --out {lab}", ["report/report.html", "data/P01.csv"]),
+        ("docs --out {lab}", ["protocols.md"]),
+        ("looks --out {lab}", ["manifest.json"]),
+        ("gallery --out {lab} --size 33", ["wave_daylight_pupil.png"]),
+    ],
+)
+def test_no_command_overwrites_files_it_did_not_write(sandbox, tmp_path, capsys, command, files):
+    lab = _lab_folder(tmp_path / "lab", *files)
+    data = sorted(str(p) for p in (sandbox / "data").glob("*_yoshida2008_*.csv"))
+    argv = command.format(lab=lab, data=" ".join(data)).split()
+    before = snapshot(lab)
+    status, err = refused(argv, capsys)
+    assert status == 2 and "Traceback" not in err, err
+    assert any(name.split("/")[-1] in err for name in files) or str(lab) in err, err
+    assert snapshot(lab) == before
+
+
+def test_an_analysis_never_replaces_the_folder_of_its_inputs(sandbox, tmp_path, capsys):
+    data = tmp_path / "study"
+    shutil.copytree(sandbox / "data", data / "data")
+    csvs = sorted(str(p) for p in (data / "data").glob("*_yoshida2008_*.csv"))
+    before = snapshot(data)
+    for out in (data, data / "data"):
+        status, err = refused(["analyse", "yoshida2008", *csvs, "--out", str(out)], capsys)
+        assert status == 2 and "replaces whole" in err, err
+        assert snapshot(data) == before
+    # its own earlier report is replaced whole, and a note added to it since is refused
+    report = tmp_path / "report"
+    assert main(["analyse", "yoshida2008", *csvs, "--out", str(report)]) == 0
+    assert main(["analyse", "yoshida2008", *csvs, "--out", str(report)]) == 0
+    (report / "notes.txt").write_text("my notes\n")
+    capsys.readouterr()
+    status, err = refused(["analyse", "yoshida2008", *csvs, "--out", str(report)], capsys)
+    assert status == 2 and "notes.txt" in err, err
+    assert (report / "notes.txt").read_text() == "my notes\n"
+
+
+def test_the_demo_refuses_a_session_without_sidecar_and_a_linked_data_folder(
+    sandbox, tmp_path, capsys
+):
+    demo = tmp_path / "demo"
+    argv = ["demo", "--protocol", "luidolt2020", "--out", str(demo), "--participants", "1"]
+    assert main(argv) == 0
+    capsys.readouterr()
+    (demo / "data" / "P01_luidolt2020_s1_2026-01-01_0900.csv").write_text("study\nluidolt2020\n")
+    before = snapshot(demo)
+    status, err = refused(argv, capsys)
+    assert status == 2 and "P01_luidolt2020" in err, err
+    assert snapshot(demo) == before
+    # a data folder that is a link to a lab's data
+    lab = _lab_folder(tmp_path / "lab", "P02_luidolt2020_s1_2026-01-01_0900.csv")
+    linked = tmp_path / "linked"
+    linked.mkdir()
+    (linked / "data").symlink_to(lab)
+    status, err = refused(["demo", "--protocol", "luidolt2020", "--out", str(linked)], capsys)
+    assert status == 2 and "data" in err, err
+    assert sorted(p.name for p in lab.iterdir()) == ["P02_luidolt2020_s1_2026-01-01_0900.csv"]
+
+
+def test_render_never_writes_over_its_input_through_a_hard_link(sandbox, tmp_path, capsys):
+    source = tmp_path / "scene.exr"
+    shutil.copy(sandbox / "good.exr", source)
+    os.link(source, tmp_path / "linked.exr")
+    before = snapshot(tmp_path)
+    status, err = refused(
+        ["render", str(source), str(tmp_path / "linked.exr"), "--pixel-deg", "0.02"], capsys
+    )
+    assert status == 2 and "also an input" in err, err
+    assert snapshot(tmp_path) == before
 
 
 @pytest.mark.parametrize(
@@ -675,6 +761,7 @@ def test_verify_names_every_missing_extra_and_changed_file(sandbox, tmp_path):
 def test_a_rebuild_replaces_the_set_whole_and_a_failed_one_keeps_it(sandbox, tmp_path, capsys):
     folder = _copy_set(sandbox, tmp_path)
     (folder / "stale.exr").write_bytes(b"left from an older build")
+    record_files(folder, "stimulus set")  # as an older build of another protocol would list it
     manifest = json.loads((folder / "manifest.json").read_text())
     assert main(["stimuli", "build", "yoshida2008", "--out", str(folder)]) == 0
     assert not (folder / "stale.exr").exists() and verify_stimulus_set(folder) == []

@@ -6,8 +6,11 @@ from __future__ import annotations
 import argparse
 import copy
 import math
+import os
 import sys
 from pathlib import Path
+
+from protocols.folders import claim_files
 
 __all__ = [
     "MARKER",
@@ -138,11 +141,13 @@ def output_folder(path: Path, command: str) -> Path:
 
 def writes_into(path: Path, names: list[str], command: str) -> Path:
     """A folder a command writes a fixed set of named files into (``docs``, ``gallery``, …):
-    created if new; an existing file is refused; other files in it are left alone."""
+    created if new; a file of that name glarelab did not write there is refused
+    (``protocols.folders.claim_files``); other files in it are left alone."""
     path = Path(path)
     if path.exists() and not path.is_dir():
         raise ValueError(f"{path} is a file; give a folder for {', '.join(names)}")
     path.mkdir(parents=True, exist_ok=True)
+    claim_files(path, names, command)
     return path
 
 
@@ -157,7 +162,10 @@ def output_file(path: Path, suffixes: tuple[str, ...], what: str, *, inputs=()) 
     if path.is_dir():
         raise ValueError(f"{path} is a folder; give a file name for the {what}")
     for source in inputs:
-        if Path(source).resolve() == path.resolve():
+        same = Path(source).resolve() == path.resolve() or (
+            path.exists() and Path(source).exists() and os.path.samefile(source, path)
+        )
+        if same:
             raise ValueError(f"{path} is also an input: the {what} would overwrite it")
     if not path.parent.is_dir():
         raise ValueError(f"{path}: no folder {path.parent} to write the {what} into")
