@@ -151,6 +151,29 @@ def _read_file(path: Path, protocol, problems: list[str]) -> list[dict]:
     return rows
 
 
+def _sidecar_contradictions(path: Path, sidecar: dict, rows: list[dict], protocol) -> list[str]:
+    """Where a session's sidecar disagrees with its CSV or the protocol (a file of another
+    session or study put beside it, or edited by hand)."""
+    problems = []
+    if sidecar.get("study") != protocol.study:
+        problems.append(
+            f"{path}: study {sidecar.get('study')!r}, but the data are analysed as "
+            f"{protocol.study!r}"
+        )
+    if not isinstance(sidecar.get("simulated"), bool):
+        problems.append(
+            f"{path}: simulated is {sidecar.get('simulated')!r}; must be true or false"
+        )
+    for key in ("participant", "session"):
+        values = {str(row.get(key)) for row in rows}
+        if rows and values != {str(sidecar.get(key))}:
+            problems.append(
+                f"{path}: {key} {sidecar.get(key)!r}, but its CSV's rows say "
+                f"{', '.join(sorted(values))}"
+            )
+    return problems
+
+
 def _session(path: Path, rows: list[dict], sidecar: dict | None) -> dict:
     """What the report says of one session file: who, how many trials, how it ended."""
     first = rows[0] if rows else {}
@@ -223,6 +246,8 @@ def load_sessions(
                 if not isinstance(sidecar, dict):
                     problems.append(f"{sidecar_path}: a sidecar must be a JSON object")
                     sidecar = None
+        if sidecar is not None:
+            problems += _sidecar_contradictions(sidecar_path, sidecar, read, protocol)
         if len(problems) > found:
             continue
         session = _session(path, read, sidecar)

@@ -32,14 +32,15 @@ def provenance(
     encoding, packages, simulated or not; and what the sessions share or not.
 
     ``simulated`` is true when every session is simulated, false when none is, and
-    ``"mixed"`` otherwise (``sessions`` says which)."""
+    ``"mixed"`` otherwise (``sessions`` says which); a session whose CSV came without its
+    sidecar is listed with status ``"no sidecar"`` and ``simulated`` null (unknown)."""
     sessions = [
         {
             "file": Path(name).name,
             "participant": s.get("participant"),
             "session": s.get("session"),
             "status": s.get("status"),
-            "simulated": bool(s.get("simulated")),
+            "simulated": s.get("simulated") if isinstance(s.get("simulated"), bool) else None,
             "protocol_sha256": s.get("protocol_sha256"),
             "calibration": s.get("calibration"),
             "images_encoded_with": s.get("images_encoded_with"),
@@ -48,7 +49,7 @@ def provenance(
         for name, s in sidecars.items()
     ]
     flags = {s["simulated"] for s in sessions}
-    simulated = (flags == {True}) if len(flags) < 2 else "mixed"
+    simulated = next(iter(flags)) if len(flags) == 1 else "mixed"  # None: no sidecar says
     calibrations = {json.dumps(s["calibration"], sort_keys=True, default=str) for s in sessions}
     record = {
         "protocol_sha256": protocol_sha256,
@@ -92,9 +93,10 @@ def session_rows(
     protocol_sha256: str | None,
     stimuli_sha256: str | None,
 ) -> list[dict]:
-    """One row per session file with a sidecar, as the report's Sessions table shows it: who,
-    when, how it ended, and the hashes and versions it ran with, shortened (a ✓ after a hash
-    that matches the analysis's protocol or stimulus set). :func:`provenance` keeps them whole."""
+    """One row per session file, as the report's Sessions table shows it: who, when, how it
+    ended (status "no sidecar" where the CSV came without one), and the hashes and versions it
+    ran with, shortened (a ✓ after a hash that matches the analysis's protocol or stimulus
+    set). :func:`provenance` keeps them whole."""
     rows = []
     for file in files:
         sidecar = sidecars.get(file)

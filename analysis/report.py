@@ -325,10 +325,15 @@ def write_report(
         )
         simulated = True if simulated_ids == len(flags) else simulated_ids
         methods = methods_paragraph(protocol, dataset.trials["participant"].nunique(), simulated)
-        origin = provenance(dataset.sidecars, protocol.sha256, stimuli)
+        unknown = {  # a CSV without its sidecar: listed, its origin unknown
+            file: {"status": "no sidecar", "participant": participant, "simulated": None}
+            for file, participant in dataset.trials.groupby("_file")["participant"].first().items()
+            if file not in dataset.sidecars
+        }
+        origin = provenance(unknown | dataset.sidecars, protocol.sha256, stimuli)
         rows = session_rows(
             dataset.files,
-            dataset.sidecars,
+            unknown | dataset.sidecars,
             protocol.sha256,
             origin.get("stimulus_set_manifest_sha256"),
         )

@@ -767,3 +767,35 @@ def test_a_rebuild_replaces_the_set_whole_and_a_failed_one_keeps_it(sandbox, tmp
     assert not (folder / "stale.exr").exists() and verify_stimulus_set(folder) == []
     assert json.loads((folder / "manifest.json").read_text())["files"] == manifest["files"]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["set"]  # no staging folder left
+
+
+def test_a_sidecar_that_contradicts_its_csv_is_refused(sandbox, tmp_path, capsys):
+    source = next((sandbox / "data").glob("sim01_yoshida2008_*.csv"))
+    for change, named in [
+        ({"participant": "P77"}, "participant 'P77'"),
+        ({"study": "spencer1995"}, "study 'spencer1995'"),
+        ({"simulated": "no"}, "simulated is 'no'"),
+        ({"session": 2}, "session 2"),
+    ]:
+        csv = shutil.copy(source, tmp_path / source.name)
+        sidecar = json.loads(source.with_suffix(".json").read_text())
+        Path(csv).with_suffix(".json").write_text(json.dumps(sidecar | change))
+        status, err = refused(
+            ["analyse", "yoshida2008", str(csv), "--out", str(tmp_path / "report")], capsys
+        )
+        assert status == 2 and named in err, err
+        assert not (tmp_path / "report").exists()
+
+
+def test_a_csv_without_sidecar_is_listed_with_its_origin_unknown(sandbox, tmp_path, capsys):
+    csvs = []
+    for source in sorted((sandbox / "data").glob("sim0*_yoshida2008_*.csv")):
+        csvs.append(shutil.copy(source, tmp_path / source.name))
+        if len(csvs) > 1:
+            shutil.copy(source.with_suffix(".json"), tmp_path / source.with_suffix(".json").name)
+    assert main(["analyse", "yoshida2008", *map(str, csvs), "--out", str(tmp_path / "r")]) == 0
+    origin = json.loads((tmp_path / "r" / "provenance.json").read_text())
+    assert origin["simulated"] == "mixed"
+    first = next(s for s in origin["sessions"] if s["file"] == Path(csvs[0]).name)
+    assert first["status"] == "no sidecar" and first["simulated"] is None
+    assert "no sidecar" in (tmp_path / "r" / "report.html").read_text()
