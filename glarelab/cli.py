@@ -76,7 +76,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         return args.run(args)
     except (SessionAborted, KeyboardInterrupt) as stop:
         why = stop.args[0] if stop.args else "SIGINT"
-        _log(f"{args.command}: stopped by {why} before the first trial; nothing was recorded")
+        # a session's own trials are on disk and its sidecar says how it ended; a build or an
+        # analysis writes into a staging folder, so an interruption leaves the output as it was
+        _log(f"{args.command}: stopped by {why}; nothing more was written")
         return 3
     except Exception as error:
         message = _refusal(error)

@@ -11,6 +11,10 @@ from __future__ import annotations
 import json
 import os
 import shutil
+import signal
+import subprocess
+import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -799,3 +803,21 @@ def test_a_csv_without_sidecar_is_listed_with_its_origin_unknown(sandbox, tmp_pa
     first = next(s for s in origin["sessions"] if s["file"] == Path(csvs[0]).name)
     assert first["status"] == "no sidecar" and first["simulated"] is None
     assert "no sidecar" in (tmp_path / "r" / "report.html").read_text()
+
+
+def test_ctrl_c_stops_a_batch_of_simulated_participants(tmp_path):
+    command = [sys.executable, "-m", "glarelab", "run", "luidolt2020", "--simulate"]
+    command += ["--participants", "3", "--trial-delay-ms", "1000", "--out", str(tmp_path)]
+    batch = subprocess.Popen(command, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+    def rows() -> int:  # sim01's trials on disk so far
+        found = list(tmp_path.glob("sim01_*.csv"))
+        return len(found[0].read_text().splitlines()) - 1 if found else 0
+
+    while rows() < 1 and time.monotonic() < deadline:  # within sim01's session
+        time.sleep(0.05)
+    batch.send_signal(signal.SIGINT)
+    _, err = batch.communicate(timeout=120)
+    assert batch.returncode == 3, err
+    assert "Traceback" not in err and "not run" in err, err
+    assert not list(tmp_path.glob("sim02_*"))

@@ -119,6 +119,11 @@ def _run(args: argparse.Namespace) -> int:
             )
             done = f"{sidecar['trials']} trials, {sidecar['status']}"
             _log(f"[{number}/{len(ids)}] {participant}: {done}")
+            if sidecar["status"] != "completed":  # stopped (Ctrl-C, a signal): the batch too
+                left = len(ids) - number
+                _log(f"stopped; {left} simulated participant(s) not run")
+                print(out.resolve())
+                return 3
         print(out.resolve())
         return 0
     if args.participant is None:
