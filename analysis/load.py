@@ -11,6 +11,7 @@ case they are excluded and listed (the report shows the list).
 from __future__ import annotations
 
 import csv
+import io
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -102,8 +103,13 @@ def _read_file(path: Path, protocol, problems: list[str]) -> list[dict]:
     expected = columns(protocol)
     names = [c.name for c in expected]
     rows = []
-    with path.open(newline="", encoding="utf-8") as handle:
-        reader = csv.reader(handle)
+    try:  # utf-8-sig: a spreadsheet's "CSV UTF-8" starts with a byte-order mark
+        text = path.read_text(encoding="utf-8-sig")
+    except UnicodeDecodeError as error:
+        problems.append(f"{path}: not UTF-8 text ({error.reason} at byte {error.start})")
+        return rows
+    reader = csv.reader(io.StringIO(text, newline=""))
+    try:
         header = next(reader, None)
         if header is None:
             problems.append(f"{path}: empty file, no header")
@@ -148,6 +154,8 @@ def _read_file(path: Path, protocol, problems: list[str]) -> list[dict]:
             }
             parsed["_file"], parsed["_line"] = str(path), line
             rows.append(parsed)
+    except csv.Error as error:  # e.g. a cell over the csv module's field size limit
+        problems.append(f"{path}, line {reader.line_num}: not readable as CSV ({error})")
     return rows
 
 

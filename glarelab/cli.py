@@ -61,6 +61,8 @@ def _refusal(error: BaseException) -> str | None:
     if isinstance(error, OSError) and error.errno in (errno.ENOSPC, errno.EFBIG, errno.EDQUOT):
         where = f" writing {error.filename}" if error.filename else ""
         return f"the disk is full{where} ({error.strerror}); what was written before stays"
+    if isinstance(error, OSError) and error.filename:  # a file that cannot be read or written
+        return f"{error.filename}: {error.strerror or error}"
     if isinstance(error, MemoryError):
         return "not enough memory for this size; try a smaller image or kernel"
     return None

@@ -329,7 +329,7 @@ def read_readings(path: str | Path) -> list[tuple[int, float]]:
     if not path.is_file():
         raise FileNotFoundError(f"no readings file at {path}")
     rows = []
-    with path.open(newline="") as handle:
+    with path.open(newline="", encoding="utf-8-sig") as handle:
         reader = csv.DictReader(handle)
         missing = {"code", "luminance_cd_m2"} - set(reader.fieldnames or [])
         if missing:

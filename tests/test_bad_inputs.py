@@ -810,6 +810,7 @@ def test_ctrl_c_stops_a_batch_of_simulated_participants(tmp_path):
     command += ["--participants", "3", "--trial-delay-ms", "1000", "--out", str(tmp_path)]
     batch = subprocess.Popen(command, stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + 120
+
     def rows() -> int:  # sim01's trials on disk so far
         found = list(tmp_path.glob("sim01_*.csv"))
         return len(found[0].read_text().splitlines()) - 1 if found else 0
@@ -821,3 +822,37 @@ def test_ctrl_c_stops_a_batch_of_simulated_participants(tmp_path):
     assert batch.returncode == 3, err
     assert "Traceback" not in err and "not run" in err, err
     assert not list(tmp_path.glob("sim02_*"))
+
+
+def test_spreadsheet_text_files_are_read_or_named(sandbox, tmp_path, capsys):
+    source = next((sandbox / "data").glob("sim01_yoshida2008_*.csv"))
+    sidecar = source.with_suffix(".json")
+    # Excel's "CSV UTF-8" starts with a byte-order mark: read as any CSV
+    bom = tmp_path / "bom" / source.name
+    bom.parent.mkdir()
+    bom.write_bytes(b"\xef\xbb\xbf" + source.read_bytes())
+    shutil.copy(sidecar, bom.with_suffix(".json"))
+    assert main(["analyse", "yoshida2008", str(bom), "--out", str(tmp_path / "r")]) == 0
+    capsys.readouterr()
+    # a file in another encoding, and a cell beyond the csv module's limit, are named
+    for name, content in [
+        ("latin1", source.read_bytes().replace(b"sim01", b"sim\xe901", 1)),
+        ("long", source.read_bytes() + b'"' + b"x" * 200_000 + b'"\n'),
+    ]:
+        bad = tmp_path / name / source.name
+        bad.parent.mkdir()
+        bad.write_bytes(content)
+        shutil.copy(sidecar, bad.with_suffix(".json"))
+        status, err = refused(
+            ["analyse", "yoshida2008", str(bad), "--out", str(tmp_path / name / "r")], capsys
+        )
+        assert status == 2 and str(bad) in err and "Traceback" not in err, err
+    # a protocol and photometer readings saved with a byte-order mark
+    protocol = tmp_path / "bom.toml"
+    protocol.write_bytes(b"\xef\xbb\xbf" + (PROTOCOLS / "luidolt2020.toml").read_bytes())
+    assert main(["protocol", "check", str(protocol)]) == 0
+    readings = tmp_path / "readings.csv"
+    readings.write_bytes(
+        b"\xef\xbb\xbf" + (ROOT / "calibrations" / "example-readings.csv").read_bytes()
+    )
+    assert main(["calibrate", "fit", str(readings), "--out", str(tmp_path / "c.json")]) == 0

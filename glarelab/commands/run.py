@@ -135,7 +135,12 @@ def _run(args: argparse.Namespace) -> int:
     if args.scripted_keys is not None:
         if not Path(args.scripted_keys).is_file():
             raise FileNotFoundError(f"--scripted-keys {args.scripted_keys}: no such file")
-        scripted = Path(args.scripted_keys).read_text().split()
+        try:
+            scripted = Path(args.scripted_keys).read_text(encoding="utf-8").split()
+        except UnicodeDecodeError:
+            raise ValueError(
+                f"--scripted-keys {args.scripted_keys}: not a text file of key names"
+            ) from None
         if not scripted:
             raise ValueError(f"--scripted-keys {args.scripted_keys}: the file names no keys")
     if args.screenshot is not None:
