@@ -705,6 +705,7 @@ def test_render_never_writes_over_its_input_through_a_hard_link(sandbox, tmp_pat
     ("labels", "problem"),
     [
         ('["A", "A", "C", "D", "E", "F"]', "repeats 'A'"),
+        ('["A", "a", "C", "D", "E", "F"]', "repeats 'A', 'a'"),
         ('["../../../escaped", "B", "C", "D", "E", "F"]', "'../../../escaped'"),
         ('["A", "B", "C", "D", "E", "F/G"]', "'F/G'"),
         ('["A", "B", "C", "D", "E", ""]', "''"),
@@ -856,3 +857,31 @@ def test_spreadsheet_text_files_are_read_or_named(sandbox, tmp_path, capsys):
         b"\xef\xbb\xbf" + (ROOT / "calibrations" / "example-readings.csv").read_bytes()
     )
     assert main(["calibrate", "fit", str(readings), "--out", str(tmp_path / "c.json")]) == 0
+
+
+def test_absurd_readings_and_repeated_follow_up_names_are_refused(tmp_path, capsys):
+    readings = tmp_path / "readings.csv"
+    readings.write_text("code,luminance_cd_m2\n0,0.5\n300,50\n600,200\n1023,1e308\n")
+    status, err = refused(
+        [
+            "calibrate",
+            "fit",
+            str(readings),
+            "--bit-depth",
+            "10",
+            "--out",
+            str(tmp_path / "c.json"),
+        ],
+        capsys,
+    )
+    assert status == 2 and "code 1023" in err and "1e+308" in err, err
+    text = (PROTOCOLS / "yoshida2008.toml").read_text()
+    assert text.count("[[analysis.followups]]") >= 2
+    start = text.index("[[analysis.followups]]")
+    name_line = next(line for line in text[start:].splitlines() if line.startswith("name"))
+    second = text.index(name_line, start) + len(name_line)
+    second_name = next(line for line in text[second:].splitlines() if line.startswith("name"))
+    twice = tmp_path / "twice.toml"
+    twice.write_text(text[:second] + text[second:].replace(second_name, name_line, 1))
+    status, err = refused(["protocol", "check", str(twice)], capsys)
+    assert status == 2 and "used twice" in err, err
