@@ -11,6 +11,7 @@ case they are excluded and listed (the report shows the list).
 from __future__ import annotations
 
 import csv
+import io
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -102,8 +103,13 @@ def _read_file(path: Path, protocol, problems: list[str]) -> list[dict]:
     expected = columns(protocol)
     names = [c.name for c in expected]
     rows = []
-    with path.open(newline="", encoding="utf-8") as handle:
-        reader = csv.reader(handle)
+    try:  # utf-8-sig: a spreadsheet's "CSV UTF-8" starts with a byte-order mark
+        text = path.read_text(encoding="utf-8-sig")
+    except UnicodeDecodeError as error:
+        problems.append(f"{path}: not UTF-8 text ({error.reason} at byte {error.start})")
+        return rows
+    reader = csv.reader(io.StringIO(text, newline=""))
+    try:
         header = next(reader, None)
         if header is None:
             problems.append(f"{path}: empty file, no header")
@@ -148,7 +154,32 @@ def _read_file(path: Path, protocol, problems: list[str]) -> list[dict]:
             }
             parsed["_file"], parsed["_line"] = str(path), line
             rows.append(parsed)
+    except csv.Error as error:  # e.g. a cell over the csv module's field size limit
+        problems.append(f"{path}, line {reader.line_num}: not readable as CSV ({error})")
     return rows
+
+
+def _sidecar_contradictions(path: Path, sidecar: dict, rows: list[dict], protocol) -> list[str]:
+    """Where a session's sidecar disagrees with its CSV or the protocol (a file of another
+    session or study put beside it, or edited by hand)."""
+    problems = []
+    if sidecar.get("study") != protocol.study:
+        problems.append(
+            f"{path}: study {sidecar.get('study')!r}, but the data are analysed as "
+            f"{protocol.study!r}"
+        )
+    if not isinstance(sidecar.get("simulated"), bool):
+        problems.append(
+            f"{path}: simulated is {sidecar.get('simulated')!r}; must be true or false"
+        )
+    for key in ("participant", "session"):
+        values = {str(row.get(key)) for row in rows}
+        if rows and values != {str(sidecar.get(key))}:
+            problems.append(
+                f"{path}: {key} {sidecar.get(key)!r}, but its CSV's rows say "
+                f"{', '.join(sorted(values))}"
+            )
+    return problems
 
 
 def _session(path: Path, rows: list[dict], sidecar: dict | None) -> dict:
@@ -223,6 +254,8 @@ def load_sessions(
                 if not isinstance(sidecar, dict):
                     problems.append(f"{sidecar_path}: a sidecar must be a JSON object")
                     sidecar = None
+        if sidecar is not None:
+            problems += _sidecar_contradictions(sidecar_path, sidecar, read, protocol)
         if len(problems) > found:
             continue
         session = _session(path, read, sidecar)

@@ -29,7 +29,8 @@ import numpy as np
 import pandas as pd
 from scipy import stats as sps
 
-from .figures import plt, png
+from .apa import anova_effect, corrected_p, series, unit_interval
+from .figures import Figure, plt, png, small_multiples
 from .load import Dataset, where
 from .methods import display_text
 from .stats import (
@@ -42,9 +43,10 @@ from .stats import (
     ttest_welch,
 )
 
-__all__ = ["analyse", "check", "design", "methods"]
+__all__ = ["analyse", "check", "design", "methods", "stimulus_figures"]
 
 MARKERS = "osD^v<>p*"
+ALPHA = 0.05  # the significance level the results text uses
 ONE_PARTICIPANT = (
     "one participant: the tables describe their settings; no ANOVA, t-test or contrast, as "
     "each tests differences between participants' means and needs at least two participants"
@@ -160,7 +162,7 @@ def _anova(data: pd.DataFrame, label: str) -> pd.DataFrame:
     return table
 
 
-def analyse(dataset: Dataset, protocol, *, stimuli=None) -> dict:
+def analyse(dataset: Dataset, protocol) -> dict:
     """Every analysis of Yoshida §5 for the protocol's methods and levels: tables (DataFrames),
     figures (PNG bytes) and text."""
     g = protocol["glare"]
@@ -186,10 +188,10 @@ def analyse(dataset: Dataset, protocol, *, stimuli=None) -> dict:
         tables["anova"] = pd.concat(anovas, ignore_index=True)
         main = tables["anova"][tables["anova"]["analysis"] == anovas[0]["analysis"].iloc[0]]
         main = main.set_index("source")
-        text["main_effect_level"] = main.loc["L_disk", "apa_gg"]
+        text["main_effect_level"] = anova_effect(main.loc["L_disk"])
         if len(names) > 1:
-            text["main_effect_method"] = main.loc["method", "apa_gg"]
-            text["interaction"] = main.loc["L_disk × method", "apa_gg"]
+            text["main_effect_method"] = anova_effect(main.loc["method"])
+            text["interaction"] = anova_effect(main.loc["L_disk × method"])
     else:
         text["inference"] = ONE_PARTICIPANT
 
@@ -286,13 +288,253 @@ def analyse(dataset: Dataset, protocol, *, stimuli=None) -> dict:
         tables["questionnaire"] = summary[
             ["method", "level", *(f"{c}_percent" for c in questions)]
         ]
+    n = trials["participant"].nunique()
     figures = {
-        "figure4_bounds_and_match.png": _figure4(
-            summary, names, titles, g["l_dmax_cd_m2"], bounds
+        "figure4_bounds_and_match.png": Figure(
+            _figure4(summary, names, titles, g["l_dmax_cd_m2"], bounds),
+            "Settings and matches at each level of L_disk"
+            if bounds
+            else "Matches at each level of L_disk",
+            (
+                "Lower and upper bounds (the darker and the brighter setting) and their mean, "
+                "the match, "
+                if bounds
+                else "The matched luminance "
+            )
+            + f"in cd/m², mean ± SEM over n = {n} participants, one panel per glare method; "
+            f"the dashed line is L_dmax = {g['l_dmax_cd_m2']:g} cd/m², the most the display "
+            "showed of the disk.",
         ),
-        "figure5_boost.png": _figure5(summary, names, titles),
+        "figure5_boost.png": Figure(
+            _figure5(summary, names, titles),
+            "Brightness boost of the glare",
+            "The match above the displayed disk luminance min(L_disk, L_dmax), in per cent of "
+            f"it, mean ± SEM over n = {n} participants, per glare method; 0 % (the line) is no "
+            "boost.",
+        ),
+        "participants_matches.png": Figure(
+            _participants(trials, names, titles, labels),
+            "Every participant's matches",
+            "The matched luminance (cd/m²) of each participant at each level, one line per "
+            f"glare method, one panel per participant (n = {n}); the pale wide lines are the "
+            "means over all participants, so a participant who matched differently stands "
+            "out.",
+        ),
     }
-    return {"tables": tables, "figures": figures, "text": text}
+    captions = {
+        "anova": "Repeated-measures ANOVAs on the matched luminance",
+        "methods_at_levels": "The glare methods compared at the levels the protocol names "
+        "(t-tests, two- and one-sided)",
+        "pairwise_contrasts": "Paired contrasts between the levels of each method "
+        "(Holm-corrected)",
+        "similarity_groups": "Similarity groups: levels sharing a letter do not differ "
+        "(Holm-corrected contrasts)",
+        "bounds_and_match": "Settings and matches per level (cd/m², mean and SEM)",
+        "boost": "Brightness boost over the displayed disk (%, mean and SEM)",
+        "questionnaire": "Answers to the questions (% yes)",
+    }
+    return {
+        "tables": tables,
+        "figures": figures,
+        "text": text,
+        "results": _results(tables, summary, protocol, n),
+        "captions": {k: v for k, v in captions.items() if k in tables},
+    }
+
+
+def _verdict(row) -> str:
+    return "was significant" if corrected_p(row) < ALPHA else "was not significant"
+
+
+EFFECT_NAMES = {
+    "L_disk": "the main effect of level",
+    "method": "the main effect of glare method",
+    "L_disk × method": "the level × method interaction",
+}
+
+
+def _effects(table: pd.DataFrame) -> str:
+    return "; ".join(
+        f"{EFFECT_NAMES[row['source']]} {_verdict(row)}, {anova_effect(row)}"
+        for _, row in table.iterrows()
+    )
+
+
+def _results(tables: dict, summary: pd.DataFrame, protocol, n: int) -> list[str]:
+    """The results section as paragraphs: the ANOVAs, the methods compared at chosen levels,
+    and the boost at the highest level, generated from the tables."""
+    methods_ = protocol["glare"]["methods"]
+    titles = {m["name"]: m["title"] or m["name"] for m in methods_}
+    if "anova" not in tables:
+        return [
+            f"With {n} participant{'s' if n != 1 else ''} no inferential statistics can be "
+            "computed; the figures and tables describe the settings."
+        ]
+    anova = tables["anova"]
+    analyses = list(dict.fromkeys(anova["analysis"]))
+    design = "level × glare method" if len(methods_) > 1 else "level"
+    first = anova[anova["analysis"] == analyses[0]]
+    text = (
+        f"The matched luminance of the {n} participants was analysed with a "
+        f"{analyses[0].split(' (')[0]} repeated-measures ANOVA ({design}): "
+        f"{_effects(first)}."
+    )
+    for followup, analysis in zip(protocol["analysis"]["followups"], analyses[1:], strict=True):
+        part = anova[anova["analysis"] == analysis]
+        text += (
+            f" On the levels {followup['name']} alone ({analysis.split(' (')[0]}), "
+            f"{_effects(part)}."
+        )
+    text += (
+        f" Effects with more than one degree of freedom are reported with Greenhouse–Geisser "
+        f"corrected degrees of freedom where its ε < .75 and Huynh–Feldt corrected ones "
+        f"otherwise; α = {unit_interval(ALPHA)}."
+    )
+    paragraphs = [text]
+    if "methods_at_levels" in tables:
+        tests = tables["methods_at_levels"]
+        sentences = []
+        for (level, pair), part in tests.groupby(["level", "methods"], sort=False):
+            paired = part[part["test"] == "paired"].iloc[0]
+            welch = part[part["test"] == "Welch"].iloc[0]
+            first_name, second_name = pair.split(" > ")
+            first_label, second_label = level.split("/")
+            mean = summary.set_index(["method", "level"])["match_mean"]
+            differ = "differed" if paired["p_two_sided"] < ALPHA else "did not differ"
+            sentences.append(
+                f"at {level} the matches under {titles[first_name]} "
+                f"(M = {mean[(first_name, first_label)]:.1f} cd/m²) and "
+                f"{titles[second_name]} (M = {mean[(second_name, second_label)]:.1f} cd/m²) "
+                f"{differ}, {paired['apa']} (paired, two-sided; Welch, one-sided: "
+                f"{welch['apa_one_sided']})"
+            )
+        paragraphs.append(
+            "Comparing the glare methods at single levels: "
+            + "; ".join(sentences)
+            + ". The paired test fits the repeated-measures design; Welch's one-sided test is "
+            "listed for comparison with published values."
+        )
+    top = summary[summary["level_index"] == summary["level_index"].max()]
+    boosts = [
+        f"{row['boost_percent_mean']:.1f} % (SEM {row['boost_percent_sem']:.1f}) with "
+        f"{titles[row['method']]} at {row['level']} ({row['l_disk_cd_m2']:,.0f} cd/m²)"
+        for _, row in top.iterrows()
+    ]
+    paragraphs.append(
+        "At the highest level the matches exceeded the luminance the display showed of the "
+        f"disk by {series(boosts)}."
+    )
+    return paragraphs
+
+
+def stimulus_figures(protocol, shown) -> list[Figure]:
+    """The stimuli as the display showed them: the references of each glare method, the
+    targets at their start luminances, and the references' profiles through the disk centre
+    (Yoshida Fig. 3). ``shown`` is an :class:`analysis.stimulus_figures.DisplayedSet`."""
+    from .stimulus_figures import image_grid, profiles, radial_profile
+
+    g, s = protocol["glare"], protocol["stimulus"]
+    geometry = shown.geometry
+    pixel_deg = geometry["pixel_deg"]
+    size = geometry["size_px"]
+    where = (
+        f"Each image is {s['size_deg']:g}° ({size} px) square at {60 * pixel_deg:.2f} arcmin "
+        f"per pixel, the disk {s['disk_deg']:g}° ({geometry['disk_diameter_px']:.0f} px), shown "
+        f"here pixel for pixel: the luminance the {shown.describe_display()} showed, "
+        "decode(encode(image)) through the set's calibration, relative to its maximum and "
+        "encoded for an sRGB screen."
+    )
+    by_key = {
+        (info.get("method"), info.get("label")): name
+        for name, info in shown.images.items()
+        if info["kind"] == "reference"
+    }
+    figures, rows = [], {}
+    for method in g["methods"]:
+        title = method["title"] or method["name"]
+        names = [by_key[(method["name"], label)] for label in method["labels"]]
+        pictures = [
+            (shown.picture(name), f"{label}: L_disk = {shown.images[name]['disk_cd_m2']:g} cd/m²")
+            for name, label in zip(names, method["labels"], strict=True)
+        ]
+        rows[title] = [
+            (label, *radial_profile(shown.luminance(name), geometry["centre_px"], pixel_deg))
+            for name, label in zip(names, method["labels"], strict=True)
+        ]
+        figures.append(
+            Figure(
+                image_grid(pictures),
+                f"The references of {title} as the display showed them",
+                f"{title} (model {method['model']}) at its {len(names)} levels "
+                f"{method['labels'][0]}-{method['labels'][-1]} of the disk luminance L_disk; "
+                f"above L_dmax = {g['l_dmax_cd_m2']:g} cd/m² the disk is clipped and the glare "
+                f"added. {where}",
+            )
+        )
+    targets = [n for n, info in shown.images.items() if info["kind"] == "target"]
+    if targets:
+        figures.append(
+            Figure(
+                image_grid(
+                    [
+                        (shown.picture(n), f"disk {shown.images[n]['disk_cd_m2']:g} cd/m²")
+                        for n in sorted(targets, key=lambda n: shown.images[n]["disk_cd_m2"])
+                    ]
+                ),
+                "The glare-free targets at their start luminances",
+                "The targets the participants adjusted, at the luminances each trial started "
+                f"from. {where}",
+            )
+        )
+    figures.append(
+        Figure(
+            profiles(rows, lines={"L_dmax": g["l_dmax_cd_m2"]}),
+            "Glare profiles of the references",
+            "The displayed luminance (cd/m²) against the distance from the disk centre, "
+            "averaged over all directions (one-pixel rings, so the background's clouds average "
+            "out), one curve per level, one panel per glare method (Yoshida et al.'s Figure 3 "
+            "shows one row); the dashed line is L_dmax, the most the display shows of the "
+            "disk.",
+        )
+    )
+    return figures
+
+
+def _participants(trials: pd.DataFrame, names: list[str], titles: dict, labels: dict) -> bytes:
+    participants = sorted(trials["participant"].unique())
+    figure, axes = small_multiples(len(participants))
+    means = trials.groupby(["method", "L_disk"])["match_cd_m2"].mean()
+    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    for axis, participant in zip(axes, participants, strict=True):
+        part = trials[trials["participant"] == participant]
+        for index, (method, marker) in enumerate(zip(names, MARKERS, strict=False)):
+            colour = colours[index % len(colours)]
+            levels = sorted(means.loc[method].index)
+            axis.plot(
+                levels, means.loc[method].to_numpy(), color=colour, alpha=0.3, lw=3, zorder=1
+            )
+            own = part[part["method"] == method].sort_values("L_disk")
+            axis.plot(
+                own["L_disk"],
+                own["match_cd_m2"],
+                marker=marker,
+                ms=3.5,
+                lw=1.2,
+                color=colour,
+                label=titles[method],
+                zorder=2,
+            )
+        axis.set_title(participant, fontsize=9)
+        axis.tick_params(labelsize=7)
+    positions = sorted(trials["L_disk"].unique())
+    ticks = ["/".join(labels[(m, k)] for m in names) for k in positions]
+    axes[0].set_xticks(positions, ticks)
+    for axis in axes:
+        axis.tick_params(axis="x", labelrotation=45 if len(names) > 2 else 0)
+    axes[0].set_ylabel("match (cd/m²)", fontsize=8)
+    axes[0].legend(fontsize=6, frameon=False)
+    figure.supxlabel("level of L_disk", fontsize=9)
+    return png(figure)
 
 
 def _figure4(

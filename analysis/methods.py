@@ -7,7 +7,7 @@ import hashlib
 import json
 from pathlib import Path
 
-__all__ = ["display_text", "provenance"]
+__all__ = ["display_text", "provenance", "session_rows"]
 
 
 def display_text(protocol) -> str:
@@ -32,14 +32,15 @@ def provenance(
     encoding, packages, simulated or not; and what the sessions share or not.
 
     ``simulated`` is true when every session is simulated, false when none is, and
-    ``"mixed"`` otherwise (``sessions`` says which)."""
+    ``"mixed"`` otherwise (``sessions`` says which); a session whose CSV came without its
+    sidecar is listed with status ``"no sidecar"`` and ``simulated`` null (unknown)."""
     sessions = [
         {
             "file": Path(name).name,
             "participant": s.get("participant"),
             "session": s.get("session"),
             "status": s.get("status"),
-            "simulated": bool(s.get("simulated")),
+            "simulated": s.get("simulated") if isinstance(s.get("simulated"), bool) else None,
             "protocol_sha256": s.get("protocol_sha256"),
             "calibration": s.get("calibration"),
             "images_encoded_with": s.get("images_encoded_with"),
@@ -48,7 +49,7 @@ def provenance(
         for name, s in sidecars.items()
     ]
     flags = {s["simulated"] for s in sessions}
-    simulated = (flags == {True}) if len(flags) < 2 else "mixed"
+    simulated = next(iter(flags)) if len(flags) == 1 else "mixed"  # None: no sidecar says
     calibrations = {json.dumps(s["calibration"], sort_keys=True, default=str) for s in sessions}
     record = {
         "protocol_sha256": protocol_sha256,
@@ -70,3 +71,62 @@ def provenance(
         record["stimulus_set_calibration_sha256"] = data.get("calibration_sha256")
         record["stimulus_set_calibration_status"] = data.get("calibration", {}).get("status")
     return record
+
+
+def _hash(value: str | None, expected: str | None) -> str:
+    if not value:
+        return "—"
+    return f"{value[:12]}{' ✓' if expected and value == expected else ''}"
+
+
+def _time(value: str | None, since: str | None = None) -> str:
+    """An ISO time as ``2026-11-30 14:32:05+01:00``; only the time if on ``since``'s date."""
+    if not value:
+        return "—"
+    date, _, time = value.partition("T")
+    return time if since and since.startswith(date) else f"{date} {time}"
+
+
+def session_rows(
+    files: list[str],
+    sidecars: dict[str, dict],
+    protocol_sha256: str | None,
+    stimuli_sha256: str | None,
+) -> list[dict]:
+    """One row per session file, as the report's Sessions table shows it: who, when, how it
+    ended (status "no sidecar" where the CSV came without one), and the hashes and versions it
+    ran with, shortened (a ✓ after a hash that matches the analysis's protocol or stimulus
+    set). :func:`provenance` keeps them whole."""
+    rows = []
+    for file in files:
+        sidecar = sidecars.get(file)
+        if sidecar is None:
+            continue
+        calibration = sidecar.get("calibration") or {}
+        packages = sidecar.get("packages") or {}
+        runs = sidecar.get("runs") or []
+        rows.append(
+            {
+                "file": Path(file).name,
+                "participant": sidecar.get("participant"),
+                "session": sidecar.get("session"),
+                "status": sidecar.get("status"),
+                "started": _time(sidecar.get("started")),
+                "ended": _time(sidecar.get("ended"), sidecar.get("started")),
+                "trials": sidecar.get("trials"),
+                "runs": len(runs),
+                "simulated": "yes" if sidecar.get("simulated") else "no",
+                "host": ", ".join(sorted({str(r.get("host")) for r in runs if r.get("host")}))
+                or "—",
+                "protocol": _hash(sidecar.get("protocol_sha256"), protocol_sha256),
+                "stimulus set": _hash(sidecar.get("stimulus_set_manifest_sha256"), stimuli_sha256),
+                "calibration": f"{calibration.get('status', '—')}"
+                + (
+                    f" {calibration['readings_sha256'][:12]}"
+                    if calibration.get("readings_sha256")
+                    else ""
+                ),
+                "glarelab": packages.get("glarelab", "—"),
+            }
+        )
+    return rows

@@ -7,22 +7,25 @@ A study that shows conditions (the night-vision pipeline with and without each e
 summarised per condition and category; each condition is compared with the first (the
 reference: the full pipeline) category by category, by a Wilcoxon signed-rank test of the
 participants' paired differences against 0, Holm-corrected across all comparisons. Its figure
-shows each condition's ratings next to the stimulus that was rated (the set's preview of the
-frames: first, …, last), when the stimulus set is given."""
+shows each condition's ratings; given the stimulus set, the report's Method section shows each
+condition's frames as the display showed them (:func:`stimulus_figures`)."""
 
 from __future__ import annotations
 
-from pathlib import Path
-
+import matplotlib.colors
 import numpy as np
 import pandas as pd
 
-from .figures import plt, png
+from .apa import unit_interval
+from .figures import Figure, plt, png
 from .load import Dataset
 from .methods import display_text
 from .stats import apa_p, holm, wilcoxon_signed_rank
 
-__all__ = ["analyse", "check", "design", "methods"]
+__all__ = ["analyse", "check", "design", "methods", "stimulus_figures"]
+
+ALPHA = 0.05  # the significance level the results text uses
+NEUTRAL = "#9e9e9e"  # the scale's middle category: a grey that shows on white
 
 
 def _conditions(protocol) -> list[dict]:
@@ -80,11 +83,9 @@ def check(trials: pd.DataFrame, protocol) -> list[str]:
     return []
 
 
-def analyse(dataset: Dataset, protocol, *, stimuli: str | Path | None = None) -> dict:
-    """Summaries, tests and figures; ``stimuli`` (the set's folder) puts the stimulus next to
-    its ratings."""
+def analyse(dataset: Dataset, protocol) -> dict:
     if _conditions(protocol):
-        return _analyse_conditions(dataset, protocol, stimuli)
+        return _analyse_conditions(dataset, protocol)
     q = protocol["questionnaire"]
     scale = range(q["scale_min"], q["scale_max"] + 1)
     midpoint = (q["scale_min"] + q["scale_max"]) / 2
@@ -120,11 +121,60 @@ def analyse(dataset: Dataset, protocol, *, stimuli: str | Path | None = None) ->
     comments = trials.loc[
         trials["comment"].notna(), ["participant", "category", "rating", "comment"]
     ]
+    n = trials["participant"].nunique()
+    neutral = f" (grey: the neutral {scale[len(scale) // 2]})" if len(scale) % 2 else ""
     return {
         "tables": {"summary": summary, "comments": comments},
-        "figures": {"figure7_ratings.png": _diverging(summary, scale, q["anchors"])},
-        "text": {},
+        "figures": {
+            "figure7_ratings.png": Figure(
+                _diverging(summary, scale, q["anchors"]),
+                "Ratings per category",
+                f"The share of the {n} participants giving each rating from {scale[0]} "
+                f"({q['anchors'][0]}) to {scale[-1]} ({q['anchors'][1]}), as diverging bars: "
+                f"ratings below the middle of the scale extend left of 0, ratings above it "
+                f"right{neutral}, the middle category split across 0.",
+            ),
+            "participants_ratings.png": Figure(
+                _participants(trials, categories, scale),
+                "Every participant's ratings",
+                f"The rating of each participant (rows, n = {n}) in each category (columns), "
+                f"coloured as in the diverging bars; a participant whose row differs from "
+                f"the others stands out.",
+            ),
+        },
+        "text": dict(zip(summary["category"], summary["apa"], strict=True)),
+        "results": _results(summary, midpoint, n),
+        "captions": {
+            "summary": "Ratings per category: mean, SD, median, IQR, Wilcoxon signed-rank test "
+            f"against the midpoint {midpoint:g} (Holm-corrected) and the count of each rating",
+            "comments": "The participants' comments",
+        },
     }
+
+
+def _results(summary: pd.DataFrame, midpoint: float, n: int) -> list[str]:
+    """The results section as one paragraph, generated from the summary table."""
+    parts = []
+    for _, row in summary.iterrows():
+        side = "above" if row["median"] > midpoint else "below"
+        verdict = (
+            f"differed from the midpoint ({side} it)"
+            if row["p_holm"] < ALPHA
+            else "did not differ from the midpoint"
+        )
+        parts.append(
+            f"{row['category']} (Mdn = {row['median']:g}, IQR = {row['iqr']:g}; M = "
+            f"{row['mean']:.2f}, SD = {row['sd']:.2f}) {verdict}, {row['apa']}"
+        )
+    return [
+        f"The {n} participants' ratings of each category were compared with the scale's "
+        f"midpoint, {midpoint:g}, by Wilcoxon signed-rank tests, Holm-corrected across the "
+        f"{len(summary)} categories (α = {unit_interval(ALPHA)}): "
+        + "; ".join(parts[:-1])
+        + ("; and " if len(parts) > 1 else "")
+        + parts[-1]
+        + "."
+    ]
 
 
 def _summary_row(ratings: pd.Series, scale: range, midpoint: float) -> dict:
@@ -147,7 +197,7 @@ def _summary_row(ratings: pd.Series, scale: range, midpoint: float) -> dict:
     return row
 
 
-def _analyse_conditions(dataset: Dataset, protocol, stimuli) -> dict:
+def _analyse_conditions(dataset: Dataset, protocol) -> dict:
     q = protocol["questionnaire"]
     scale = range(q["scale_min"], q["scale_max"] + 1)
     midpoint = (q["scale_min"] + q["scale_max"]) / 2
@@ -211,36 +261,89 @@ def _analyse_conditions(dataset: Dataset, protocol, stimuli) -> dict:
                 f"{'lower' if row.mean_difference < 0 else 'higher'} than {row.reference} "
                 f"({row.apa})"
             )
-    figure = _by_condition(summary, conditions, categories, scale, q["anchors"], stimuli)
+    n = trials["participant"].nunique()
+    figure = Figure(
+        _by_condition(summary, conditions, categories, scale, q["anchors"]),
+        "Ratings per category in each condition",
+        f"The share of the {n} participants giving each rating from {scale[0]} "
+        f"({q['anchors'][0]}) to {scale[-1]} ({q['anchors'][1]}) in each condition (rows: the "
+        "effects of the pipeline shown), as diverging bars; the number at the right of each "
+        "bar is the mean rating. The stimulus each condition showed is in the Stimuli figures "
+        "(given the stimulus set).",
+    )
+    results = [
+        f"Compared with {reference}, "
+        + "; ".join(
+            f"{r.condition} was rated {abs(r.mean_difference):.2f} points "
+            f"{'lower' if r.mean_difference < 0 else 'higher'} in {r.category} ({r.apa})"
+            for r in compared.itertuples()
+            if r.p < ALPHA
+        )
+        + "."
+        if not compared.empty and (compared["p"] < ALPHA).any()
+        else f"No condition was rated differently from {reference} at uncorrected p < "
+        f"{ALPHA:g} in any category."
+    ]
     return {
         "tables": {"summary": summary, "comparisons": compared, "comments": comments},
         "figures": {"ratings_by_condition.png": figure},
         "text": text,
+        "results": results,
+        "captions": {
+            "summary": "Ratings per condition and category: mean, SD, median, IQR, Wilcoxon "
+            f"signed-rank test against the midpoint {midpoint:g} (Holm-corrected) and the count "
+            "of each rating",
+            "comparisons": f"Each condition against {reference}: the participants' paired "
+            "differences, Wilcoxon signed-rank test against 0, Holm-corrected across all "
+            "comparisons",
+            "comments": "The participants' comments",
+        },
     }
 
 
-def _by_condition(summary, conditions, categories, scale, anchors, stimuli) -> bytes:
-    """One row per condition: the stimulus rated (its preview strip) and the ratings of each
-    category as diverging stacked bars."""
+def stimulus_figures(protocol, shown) -> list[Figure]:
+    """Each condition's scene as the display showed it: its first, middle and last frame.
+    ``shown`` is an :class:`analysis.stimulus_figures.DisplayedSet`; a questionnaire without a
+    scene shows none."""
+    from .stimulus_figures import image_grid
+
+    conditions = _conditions(protocol)
+    if not conditions:
+        return []
+    plan = shown.manifest["parameters"]["sequences"]
+    time_s = shown.manifest["parameters"]["frame_time_s"]
+    panels = []
+    for condition in conditions:
+        frames = plan[condition["name"]]["frames"]
+        for index in sorted({0, len(frames) // 2, len(frames) - 1}):
+            label = f"{condition['name']}, {index * time_s:.1f} s" if len(frames) > 1 else ""
+            panels.append((shown.picture(frames[index]), label or condition["name"]))
+    columns = min(3, len(plan[conditions[0]["name"]]["frames"]))
+    scene = protocol["scene"]
+    rows = "; ".join(f"{c['name']}: {', '.join(c['effects']) or 'no effect'}" for c in conditions)
+    return [
+        Figure(
+            image_grid(panels, columns=columns),
+            "The scene of each condition",
+            f"The night {scene['kind']} each condition showed before its questions (rows: "
+            f"{rows}), at its first, middle and last frame, pixel for pixel: the luminance the "
+            f"{shown.describe_display()} showed, relative to its maximum and encoded for an "
+            "sRGB screen.",
+        )
+    ]
+
+
+def _by_condition(summary, conditions, categories, scale, anchors) -> bytes:
+    """One row per condition: the ratings of each category as diverging stacked bars."""
     rows = len(conditions)
     figure, axes = plt.subplots(
-        rows,
-        2,
-        figsize=(12, (0.32 * len(categories) + 0.9) * rows + 0.8),
-        gridspec_kw={"width_ratios": [1.25, 1.0]},
-        squeeze=False,
+        rows, 1, figsize=(7, (0.32 * len(categories) + 0.9) * rows + 0.8), squeeze=False
     )
-    colours = plt.cm.RdBu(np.linspace(0.1, 0.9, len(scale)))
+    colours = _colours(scale)
     for index, condition in enumerate(conditions):
-        picture, bars = axes[index]
+        bars = axes[index, 0]
         name = condition["name"]
-        preview = Path(stimuli) / f"preview_{name}.png" if stimuli is not None else None
-        if preview is not None and preview.is_file():
-            picture.imshow(plt.imread(preview), interpolation="lanczos")
-        else:
-            picture.text(0.5, 0.5, "(stimulus set not given)", ha="center", va="center")
-        picture.set_axis_off()
-        picture.set_title(
+        bars.set_title(
             f"{name}: {', '.join(condition['effects']) or 'no effect'}", fontsize=9, loc="left"
         )
         part = summary[summary["condition"] == name].set_index("category")
@@ -251,7 +354,6 @@ def _by_condition(summary, conditions, categories, scale, anchors, stimuli) -> b
                 ncol=len(scale), fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.45),
                 frameon=False,
             )  # fmt: skip
-    figure.suptitle("Ratings per category, next to the stimulus rated (first … last frame)")
     return png(figure)
 
 
@@ -277,14 +379,16 @@ def _bars(axis, summary: pd.DataFrame, scale: range, colours) -> None:
 
 def _diverging(summary: pd.DataFrame, scale: range, anchors: list[str]) -> bytes:
     figure, axis = plt.subplots(figsize=(7, 0.5 * len(summary) + 1.5))
-    colours = plt.cm.RdBu(np.linspace(0.1, 0.9, len(scale)))
+    colours = _colours(scale)
     y = np.arange(len(summary))[::-1]
     below = len(scale) // 2  # ratings left of the middle; an odd scale has a neutral one
+    reach = 0.0
     for index, row in enumerate(summary.itertuples()):
         counts = np.array([getattr(row, f"count_{k}") for k in scale], float)
         share = 100 * counts / counts.sum()
         neutral = share[below] if len(scale) % 2 else 0.0
         left = -share[:below].sum() - neutral / 2  # the middle of the scale on 0
+        reach = max(reach, -left, left + share.sum())
         for k in range(len(scale)):
             axis.barh(
                 y[index],
@@ -296,9 +400,53 @@ def _diverging(summary: pd.DataFrame, scale: range, anchors: list[str]) -> bytes
             )
             left += share[k]
     axis.axvline(0, color="k", lw=0.8)
+    axis.set_xlim(-reach - 5, reach + 5)  # symmetric, no bar touching the frame
+    axis.xaxis.set_major_formatter(lambda x, _: f"{abs(x):g}")  # shares, left and right
     axis.set_yticks(y, summary["category"])
     axis.set_xlabel(f"% of participants ({scale[0]} = {anchors[0]} … {scale[-1]} = {anchors[1]})")
     axis.legend(
         ncol=len(scale), fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.25), frameon=False
     )
+    return png(figure)
+
+
+def _colours(scale: range) -> list:
+    """Reds below the middle of the scale, blues above it, and a grey middle category that
+    shows against white (a diverging map's own middle is nearly white)."""
+    below = len(scale) // 2
+    reds = plt.cm.RdBu(np.linspace(0.08, 0.35, below)) if below else []
+    blues = plt.cm.RdBu(np.linspace(0.65, 0.92, below)) if below else []
+    middle = [matplotlib.colors.to_rgba(NEUTRAL)] if len(scale) % 2 else []
+    return [*reds, *middle, *blues]
+
+
+def _participants(trials: pd.DataFrame, categories: list[str], scale: range) -> bytes:
+    participants = sorted(trials["participant"].unique())
+    ratings = trials.pivot_table(
+        index="participant", columns="category", values="rating", aggfunc="first"
+    ).reindex(index=participants, columns=categories)
+    figure, axis = plt.subplots(
+        figsize=(1.1 * len(categories) + 2.0, 0.32 * len(participants) + 1.6)
+    )
+    cmap = matplotlib.colors.ListedColormap(_colours(scale))
+    norm = matplotlib.colors.BoundaryNorm(np.arange(scale[0] - 0.5, scale[-1] + 1), cmap.N)
+    axis.imshow(ratings.to_numpy(float), cmap=cmap, norm=norm, aspect="auto")
+    for (row, column), value in np.ndenumerate(ratings.to_numpy(float)):
+        if np.isfinite(value):
+            dark = abs(value - (scale[0] + scale[-1]) / 2) >= (len(scale) - 1) / 3
+            axis.text(
+                column,
+                row,
+                f"{value:g}",
+                ha="center",
+                va="center",
+                fontsize=8,
+                color="white" if dark else "black",
+            )
+    axis.set_xticks(range(len(categories)), categories, rotation=30, ha="right", fontsize=8)
+    axis.set_yticks(range(len(participants)), participants, fontsize=8)
+    axis.set_xticks(np.arange(len(categories) + 1) - 0.5, minor=True)
+    axis.set_yticks(np.arange(len(participants) + 1) - 0.5, minor=True)
+    axis.grid(which="minor", color="white", lw=1.5)
+    axis.tick_params(which="minor", length=0)
     return png(figure)

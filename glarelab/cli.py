@@ -61,6 +61,8 @@ def _refusal(error: BaseException) -> str | None:
     if isinstance(error, OSError) and error.errno in (errno.ENOSPC, errno.EFBIG, errno.EDQUOT):
         where = f" writing {error.filename}" if error.filename else ""
         return f"the disk is full{where} ({error.strerror}); what was written before stays"
+    if isinstance(error, OSError) and error.filename:  # a file that cannot be read or written
+        return f"{error.filename}: {error.strerror or error}"
     if isinstance(error, MemoryError):
         return "not enough memory for this size; try a smaller image or kernel"
     return None
@@ -76,7 +78,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         return args.run(args)
     except (SessionAborted, KeyboardInterrupt) as stop:
         why = stop.args[0] if stop.args else "SIGINT"
-        _log(f"{args.command}: stopped by {why} before the first trial; nothing was recorded")
+        # a session's own trials are on disk and its sidecar says how it ended; a build or an
+        # analysis writes into a staging folder, so an interruption leaves the output as it was
+        _log(f"{args.command}: stopped by {why}; nothing more was written")
         return 3
     except Exception as error:
         message = _refusal(error)

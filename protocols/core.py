@@ -151,7 +151,7 @@ def load_protocol(path: str | Path) -> Protocol:
     if not path.is_file():
         raise FileNotFoundError(f"no protocol file at {path}")
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
+        data = tomllib.loads(path.read_text(encoding="utf-8-sig"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
         raise ProtocolError(str(path), [f"not valid TOML: {error}"]) from None
     return parse_protocol(data, source=str(path), folder=path.resolve().parent)

@@ -1,43 +1,137 @@
-"""Output folders that are replaced whole or not at all, and never over someone else's files.
+"""Output folders that never take someone else's files.
 
-A stimulus set or a report is written into a staging folder next to its destination and moved
-into place only when complete: a failed build leaves the earlier output as it was, and a
-rebuild leaves no file of the earlier output behind. The destination must be new, empty, or an
-earlier output of the same kind (it holds the kind's ``marker`` file); anything else is refused
-before anything is written.
+Every folder a command writes holds a listing, ``.glarelab-files.json``, of the files glarelab
+wrote there (and of what kind of output they are). A command may replace or overwrite only
+files in that listing: a folder holding anything else — a participant's data, a user's notes,
+another program's ``manifest.json``, a symbolic link — is refused before anything is written.
+
+A stimulus set or a report is built in a staging folder next to its destination and moved into
+place only when complete: a failed build leaves the earlier output as it was, and a rebuild
+leaves no file of the earlier output behind. Commands that add named files to a folder shared
+with other files (``docs``, ``looks``, ``gallery``) overwrite only files the listing names.
 """
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
+from collections.abc import Iterable
 from pathlib import Path
 
-__all__ = ["check_replaceable", "replace_folder", "staging_folder"]
+__all__ = [
+    "LISTING",
+    "check_replaceable",
+    "claim_files",
+    "record_files",
+    "replace_folder",
+    "staging_folder",
+]
+
+LISTING = ".glarelab-files.json"  # the files glarelab wrote into a folder, by kind of output
 
 
-def check_replaceable(out: str | Path, *, marker: str, what: str) -> Path:
-    """``out`` as the folder of a ``what`` (a stimulus set, a report): new, empty, or an earlier
-    one (it holds ``marker``).
+def _listing(folder: Path) -> dict[str, str]:
+    """``{relative path: kind}`` of the files glarelab wrote into ``folder`` (empty if none)."""
+    try:
+        listing = json.loads((folder / LISTING).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    files = listing.get("files") if isinstance(listing, dict) else None
+    if not isinstance(files, dict):
+        return {}
+    return {str(name): str(kind) for name, kind in files.items()}
+
+
+def _entries(folder: Path) -> list[str]:
+    """Every file, folder link and file link under ``folder`` (symbolic links not followed)."""
+    found = []
+    for root, dirs, files in os.walk(folder, followlinks=False):
+        here = Path(root)
+        links = [d for d in dirs if (here / d).is_symlink()]
+        dirs[:] = [d for d in dirs if d not in links]
+        for name in [*files, *links]:
+            found.append((here / name).relative_to(folder).as_posix())
+    return sorted(entry for entry in found if entry != LISTING)
+
+
+def _inside(path: Path, folder: Path) -> bool:
+    path, folder = path.resolve(), folder.resolve()
+    return path == folder or folder in path.parents
+
+
+def check_replaceable(
+    out: str | Path, *, kind: str, what: str, inputs: Iterable[str | Path] = ()
+) -> Path:
+    """``out`` as the folder of a ``what`` that replaces it whole: new, empty, or holding only
+    files an earlier output of the same ``kind`` wrote (as its listing says).
 
     Raises
     ------
     ValueError
-        If ``out`` is a file, or a folder holding files but no ``marker``.
+        If ``out`` is a file, holds a file glarelab did not write there (named), or holds one of
+        the command's ``inputs``.
     """
     out = Path(out)
     if out.exists() and not out.is_dir():
         raise ValueError(f"{out} is a file; a {what} needs a folder")
-    if out.is_dir() and any(out.iterdir()) and not (out / marker).is_file():
+    for source in inputs:
+        if _inside(Path(source), out):
+            raise ValueError(
+                f"{source} is inside {out}, which the {what} replaces whole: give another "
+                "folder (nothing was changed)"
+            )
+    if not out.is_dir():
+        return out
+    listed = _listing(out)
+    foreign = [e for e in _entries(out) if listed.get(e) != kind]
+    if foreign:
+        shown = ", ".join(foreign[:3]) + (
+            f" and {len(foreign) - 3} more" if len(foreign) > 3 else ""
+        )
         raise ValueError(
-            f"{out} holds files but no {what} (no {marker}): give a new or empty folder "
-            "(nothing was changed)"
+            f"{out} holds files that are not an earlier {what} glarelab wrote ({shown}); the "
+            f"{what} replaces its folder whole, so give a new or empty folder (nothing was "
+            "changed)"
         )
     return out
 
 
+def record_files(folder: Path, kind: str) -> None:
+    """List every file now in ``folder`` as written by glarelab, as output of ``kind``."""
+    files = {entry: kind for entry in _entries(folder)}
+    _write_listing(folder, files)
+
+
+def claim_files(folder: Path, names: Iterable[str], kind: str) -> None:
+    """Before writing ``names`` into a shared ``folder``: refuse if one exists and glarelab did
+    not write it there; otherwise list them as glarelab's.
+
+    Raises
+    ------
+    ValueError
+        Naming the first existing file the listing does not hold.
+    """
+    names = list(names)
+    listed = _listing(folder)
+    for name in names:
+        path = folder / name
+        if (path.exists() or path.is_symlink()) and name not in listed:
+            raise ValueError(
+                f"{path} exists and glarelab did not write it there; {kind} would overwrite "
+                "it, so give another folder or move the file (nothing was changed)"
+            )
+    _write_listing(folder, listed | dict.fromkeys(names, kind))
+
+
+def _write_listing(folder: Path, files: dict[str, str]) -> None:
+    text = json.dumps({"written_by": "glarelab", "files": dict(sorted(files.items()))}, indent=1)
+    (folder / LISTING).write_text(text + "\n", encoding="utf-8")
+
+
 def staging_folder(final: Path) -> Path:
     """A new, empty folder next to ``final`` to build its replacement in."""
+    final = Path(final).resolve()
     final.parent.mkdir(parents=True, exist_ok=True)
     staging = final.with_name(f".{final.name}.building-{os.getpid()}")
     shutil.rmtree(staging, ignore_errors=True)  # a build of this process that was cut short
@@ -45,9 +139,11 @@ def staging_folder(final: Path) -> Path:
     return staging
 
 
-def replace_folder(staging: Path, final: Path) -> None:
-    """Move the finished ``staging`` folder to ``final``; the earlier ``final`` is removed only
-    once the new one is in place."""
+def replace_folder(staging: Path, final: Path, *, kind: str) -> None:
+    """List the finished ``staging`` folder's files and move it to ``final``; the earlier
+    ``final`` is removed only once the new one is in place."""
+    record_files(staging, kind)
+    final = Path(final).resolve()
     old = None
     if final.exists():
         old = final.with_name(f".{final.name}.old-{os.getpid()}")

@@ -169,9 +169,16 @@ def _check_key(value: Any, key: Key, path: str, problems: list[str]) -> Any:
     ]
     if key.item and any(i is None for i in items):
         return None
-    if key.unique and len(set(items)) != len(items):
-        repeated = sorted({v for v in items if items.count(v) > 1}, key=str)
-        problems.append(f"{path} repeats {', '.join(map(repr, repeated))}: must be all different")
+    # case folded: labels name files, and macOS's and Windows's file names ignore case
+    folded = [v.casefold() if isinstance(v, str) else v for v in items]
+    if key.unique and len(set(folded)) != len(folded):
+        repeated = sorted(
+            {v for v, f in zip(items, folded, strict=True) if folded.count(f) > 1}, key=str
+        )
+        problems.append(
+            f"{path} repeats {', '.join(map(repr, repeated))}: must be all different "
+            "(ignoring case)"
+        )
         return None
     return items
 

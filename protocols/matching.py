@@ -196,6 +196,9 @@ def check(p: dict, problems: list[str], folder: Path | None) -> None:
         seen.add(column)
     n_levels = max(counts) if counts else 0
     a = p["analysis"]
+    names = [followup.get("name") for followup in a["followups"] or []]
+    for name in sorted({n for n in names if names.count(n) > 1}, key=str):
+        problems.append(f"analysis.followups: the name {name!r} is used twice; must be unique")
     for i, followup in enumerate(a["followups"] or []):
         for level in followup.get("levels") or []:
             if level > n_levels:

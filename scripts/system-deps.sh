@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Debian packages the PsychoPy sessions and their tests need: a virtual X server, OpenGL, the
 # JACK library Psychtoolbox's keyboard loads (PsychoPy's Keyboard times key presses with it),
-# Qt's X11 libraries for the participant dialog, and xdotool to send real key events in tests.
+# Qt's X11 libraries for the participant dialog, xdotool to send real key events in tests, and
+# Chromium with its WebDriver for the test that opens the reports in a real browser.
 # Installs them with apt-get where it is available and we may use it; otherwise says what is
 # missing and leaves the decision to the caller (the window tests then fail with that message).
 set -euo pipefail
@@ -9,6 +10,8 @@ needed=()
 have_lib() { ldconfig -p 2>/dev/null | grep -q "$1"; }
 command -v xvfb-run >/dev/null 2>&1 || needed+=(xvfb xauth)
 command -v xdotool >/dev/null 2>&1 || needed+=(xdotool)
+command -v chromium >/dev/null 2>&1 || needed+=(chromium)
+command -v chromedriver >/dev/null 2>&1 || needed+=(chromium-driver)
 have_lib 'libGL.so.1' || needed+=(libgl1)
 have_lib 'libGLU.so.1' || needed+=(libglu1-mesa)
 have_lib 'libjack.so.0' || needed+=(libjack-jackd2-0)
@@ -35,5 +38,5 @@ elif command -v apt-get >/dev/null 2>&1 && command -v sudo >/dev/null 2>&1; then
     sudo apt-get update -qq
     sudo DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${needed[@]}" >/dev/null
 else
-    echo "warning: cannot install ${needed[*]} (no apt-get or no root); install them to run the window tests" >&2
+    echo "warning: cannot install ${needed[*]} (no apt-get or no root); install them to run the window and browser tests" >&2
 fi

@@ -44,6 +44,10 @@ FORMAT = "glarelab display calibration v1"
 SYNTHETIC_GAMMA = 2.2  # the synthetic displays follow L = black + (max - black) (c/cmax)^2.2
 LINEARISING_GAMMA = 2.2  # PCHIP interpolates in (normalised luminance)^(1/2.2)
 
+# the brightest displays reach about 1e4 cd/m² (HDR reference monitors); a reading ten
+# times that is a typo or a reading in another unit, never a display
+MAX_DISPLAY_CD_M2 = 1e5
+
 
 @dataclass(frozen=True)
 class EncodeReport:
@@ -306,8 +310,11 @@ def _check_readings(
             raise ValueError(
                 f"{source}: code {code} is outside 0-{top} for a {bit_depth}-bit display"
             )
-        if not (np.isfinite(value) and value >= 0):
-            raise ValueError(f"{source}: code {code} has luminance {value!r}; must be >= 0 cd/m²")
+        if not (np.isfinite(value) and 0 <= value <= MAX_DISPLAY_CD_M2):
+            raise ValueError(
+                f"{source}: code {code} has luminance {value!r}; must be 0-"
+                f"{MAX_DISPLAY_CD_M2:g} cd/m² (no display is brighter: a typo or a unit slip?)"
+            )
     for (c0, v0), (c1, v1) in itertools.pairwise(ordered):
         if c1 == c0:
             raise ValueError(f"{source}: code {c0} is measured twice; average the readings first")
@@ -329,7 +336,7 @@ def read_readings(path: str | Path) -> list[tuple[int, float]]:
     if not path.is_file():
         raise FileNotFoundError(f"no readings file at {path}")
     rows = []
-    with path.open(newline="") as handle:
+    with path.open(newline="", encoding="utf-8-sig") as handle:
         reader = csv.DictReader(handle)
         missing = {"code", "luminance_cd_m2"} - set(reader.fieldnames or [])
         if missing:

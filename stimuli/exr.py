@@ -6,6 +6,7 @@ Half floats overflow at 65,504, far below the luminance of a lamp or the sun (Sp
 
 from __future__ import annotations
 
+import errno
 from pathlib import Path
 
 import numpy as np
@@ -49,8 +50,13 @@ def write_exr(path: str | Path, image: np.ndarray) -> Path:
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    with OpenEXR.File(header, channels) as exr:
-        exr.write(str(path))
+    try:
+        with OpenEXR.File(header, channels) as exr:
+            exr.write(str(path))
+    except RuntimeError as error:  # OpenEXR reports a full disk or a closed folder this way
+        text = str(error)
+        code = errno.ENOSPC if "space" in text.lower() else errno.EIO
+        raise OSError(code, f"could not write the EXR file ({text})", str(path)) from None
     return path
 
 

@@ -1,9 +1,12 @@
 """A stimulus set on disk: what a study shows, exactly reproducible and self-describing.
 
 A set is a folder with, for every image, float32 linear luminance (``NAME.exr``, cd/m²) and
-the display codes that show it through the calibration (``NAME.png``, 16-bit greyscale holding
-the codes); luminance-profile plots through the disk centre (``profiles_*.png``, like Yoshida
-et al.'s Figure 3); and ``manifest.json``: the validated protocol and its hash, the
+the display codes that show it through the calibration (``NAME.png``, 16-bit greyscale:
+the codes scaled to the full 16-bit range, ``round(code × 65535 / (2^bits − 1))``, with an
+``sBIT`` chunk recording the display's bit depth, so any viewer shows the image as the display
+does and :func:`read_codes` gives back the exact codes); luminance-profile plots through the
+disk centre (``profiles_*.png``, like Yoshida et al.'s Figure 3); ``README.md``, an index of
+the files and images; and ``manifest.json``: the validated protocol and its hash, the
 calibration and its hash, the geometry, every image's parameters and encoding report, the
 package versions, and the sha256 of every file. Nothing in it depends on the time or the
 place of the build, so the same protocol and calibration give identical files.
@@ -23,9 +26,16 @@ from pathlib import Path
 
 import numpy as np
 from PIL import Image
+from PIL.PngImagePlugin import PngInfo
 
 from protocols import Protocol
-from protocols.folders import check_replaceable, replace_folder, staging_folder
+from protocols.folders import (
+    LISTING,
+    check_replaceable,
+    record_files,
+    replace_folder,
+    staging_folder,
+)
 
 from .calibration import Calibration, synthetic_calibration
 from .exr import read_exr, write_exr
@@ -42,12 +52,16 @@ __all__ = [
     "default_calibration",
     "package_versions",
     "progress_bar",
+    "read_codes",
     "shows_images",
     "verify_stimulus_set",
-    "write_codes_png",
+    "write_codes",
 ]
 
 MANIFEST = "manifest.json"
+INDEX = "README.md"
+FORMAT = "glarelab stimulus set v3"  # v3: PNGs scaled to 16 bits with sBIT, README.md
+PNG_MAX = 65535
 PACKAGES = ("numpy", "scipy", "colour-science", "OpenEXR", "matplotlib", "pillow", "glarelab")
 # the stimulus builder of each paradigm (None: the paradigm shows no images); a builder's
 # ``shows(protocol)``, where it has one, says whether a protocol of the paradigm shows images
@@ -66,34 +80,6 @@ def shows_images(protocol: Protocol) -> bool:
     return True if shows is None else bool(shows(protocol))
 
 
-def write_codes_png(path: Path, codes: np.ndarray) -> None:
-    """Display codes as a 16-bit PNG: greyscale for ``(H, W)``, RGB for ``(H, W, 3)``.
-
-    Pillow writes 16-bit greyscale but not 16-bit RGB, so RGB is written here (PNG
-    specification, ISO/IEC 15948: IHDR with bit depth 16 and colour type 2, big-endian samples,
-    filter type 0 on every row, zlib-compressed IDAT).
-    """
-    codes = np.asarray(codes, dtype=np.uint16)
-    if codes.ndim == 2:
-        Image.fromarray(codes).save(path)
-        return
-    height, width, _ = codes.shape
-    rows = np.ascontiguousarray(codes.astype(">u2")).reshape(height, width * 3).view(np.uint8)
-    raw = np.concatenate([np.zeros((height, 1), np.uint8), rows], axis=1).tobytes()
-
-    def chunk(kind: bytes, data: bytes) -> bytes:
-        body = kind + data
-        return struct.pack(">I", len(data)) + body + struct.pack(">I", zlib.crc32(body))
-
-    header = struct.pack(">IIBBBBB", width, height, 16, 2, 0, 0, 0)
-    Path(path).write_bytes(
-        b"\x89PNG\r\n\x1a\n"
-        + chunk(b"IHDR", header)
-        + chunk(b"IDAT", zlib.compress(raw, 6))
-        + chunk(b"IEND", b"")
-    )
-
-
 def progress_bar(done: int, total: int, what: str, *, stream=None) -> None:
     """A one-line text progress bar on stderr."""
     stream = stream or sys.stderr
@@ -105,6 +91,96 @@ def progress_bar(done: int, total: int, what: str, *, stream=None) -> None:
         file=stream,
         flush=True,
     )
+
+
+def _write_rgb16_png(path: str | Path, scaled: np.ndarray, bit_depth: int) -> None:
+    """``(H, W, 3)`` uint16 as a 16-bit RGB PNG with an ``sBIT`` chunk (Pillow writes 16-bit
+    greyscale but not 16-bit RGB): PNG specification (ISO/IEC 15948) IHDR with bit depth 16 and
+    colour type 2, sBIT of three channels, big-endian samples, filter type 0 on every row, one
+    zlib-compressed IDAT."""
+    height, width, _ = scaled.shape
+    rows = np.ascontiguousarray(scaled.astype(">u2")).reshape(height, width * 3).view(np.uint8)
+    raw = np.concatenate([np.zeros((height, 1), np.uint8), rows], axis=1).tobytes()
+
+    def chunk(kind: bytes, data: bytes) -> bytes:
+        body = kind + data
+        return struct.pack(">I", len(data)) + body + struct.pack(">I", zlib.crc32(body))
+
+    header = struct.pack(">IIBBBBB", width, height, 16, 2, 0, 0, 0)
+    Path(path).write_bytes(
+        b"\x89PNG\r\n\x1a\n"
+        + chunk(b"IHDR", header)
+        + chunk(b"sBIT", bytes([bit_depth] * 3))
+        + chunk(b"IDAT", zlib.compress(raw, 6))
+        + chunk(b"IEND", b"")
+    )
+
+
+def write_codes(path: str | Path, codes: np.ndarray, bit_depth: int) -> None:
+    """Write display codes as a 16-bit PNG that any viewer shows (greyscale; RGB for an
+    ``(H, W, 3)`` colour image): the codes scaled to
+    the full 16-bit range, ``round(code × 65535 / (2^bit_depth − 1))``, with an ``sBIT`` chunk
+    recording ``bit_depth`` (PNG specification §11.3.4.4: the scaling it recommends, which
+    keeps the code in the top ``bit_depth`` bits).
+
+    Raises
+    ------
+    ValueError
+        For a ``bit_depth`` outside 1-16, or codes outside 0 … 2^bit_depth − 1.
+    """
+    if not 1 <= bit_depth <= 16:
+        raise ValueError(f"bit_depth must be 1-16; got {bit_depth!r}")
+    top = 2**bit_depth - 1
+    codes = np.asarray(codes)
+    if codes.size and (codes.min() < 0 or codes.max() > top):
+        raise ValueError(
+            f"codes must be in [0, {top}] for bit_depth {bit_depth}; got "
+            f"{codes.min()}-{codes.max()}"
+        )
+    scaled = np.floor(codes.astype(np.float64) * PNG_MAX / top + 0.5).astype(np.uint16)
+    if scaled.ndim == 3:  # a colour image: 16-bit RGB
+        _write_rgb16_png(path, scaled, bit_depth)
+        return
+    info = PngInfo()
+    info.add(b"sBIT", bytes([bit_depth]))
+    Image.fromarray(scaled).save(path, pnginfo=info)
+
+
+def _sbit(data: bytes) -> int | None:
+    """The greyscale significant bits of a PNG's sBIT chunk (None without one)."""
+    position = 8  # after the signature
+    while position + 8 <= len(data):
+        length = int.from_bytes(data[position : position + 4], "big")
+        kind = data[position + 4 : position + 8]
+        if kind == b"sBIT":
+            return data[position + 8]
+        if kind == b"IDAT":
+            return None  # sBIT precedes the image data
+        position += 12 + length
+    return None
+
+
+def read_codes(path: str | Path) -> tuple[np.ndarray, int]:
+    """The display codes of a set's PNG and the bit depth its ``sBIT`` chunk records
+    (:func:`write_codes`); a PNG without one holds the codes unscaled (16 bits).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> path = Path(tempfile.mkdtemp()) / "codes.png"
+    >>> write_codes(path, np.array([[0, 1, 512, 1023]]), 10)
+    >>> codes, bits = read_codes(path)
+    >>> codes.tolist(), bits, np.asarray(Image.open(path)).tolist()
+    ([[0, 1, 512, 1023]], 10, [[0, 64, 32800, 65535]])
+    """
+    data = Path(path).read_bytes()
+    with Image.open(path) as image:
+        values = np.asarray(image).astype(np.int64)
+    bits = _sbit(data)
+    if bits is None or bits == 16:
+        return values.astype(np.uint16), 16
+    top = 2**bits - 1
+    return (values * top * 2 // PNG_MAX + 1) // 2, bits  # round(v × top / 65535), exactly
 
 
 def _sha256(path: Path) -> str:
@@ -209,12 +285,19 @@ def build_stimulus_set(
             f"the calibration is for a {calibration.bit_depth}-bit display, the protocol's "
             f"display is {protocol['display']['bit_depth']}-bit"
         )
-    final = check_replaceable(out, marker=MANIFEST, what="stimulus set")
+    if (
+        Path(out).is_dir()
+        and not (Path(out) / LISTING).exists()
+        and (Path(out) / MANIFEST).is_file()
+        and not verify_stimulus_set(out)
+    ):
+        record_files(Path(out), "stimulus set")  # a whole set of an earlier version: its own
+    final = check_replaceable(out, kind="stimulus set", what="stimulus set")
     built = BUILDERS[protocol.paradigm](protocol, progress=progress)
     out = staging_folder(final)
     try:
         manifest = _write_set(out, protocol, built, calibration)
-        replace_folder(out, final)
+        replace_folder(out, final, kind="stimulus set")
     finally:
         shutil.rmtree(out, ignore_errors=True)
     return manifest
@@ -230,7 +313,7 @@ def _write_set(out: Path, protocol: Protocol, built: dict, calibration: Calibrat
         record = {k: v for k, v in info.items() if k != "img"}
         if info["kind"] != "component":  # display luminances: encode them for the display
             codes, report = calibration.encode(img)
-            write_codes_png(out / f"{name}.png", codes)
+            write_codes(out / f"{name}.png", codes, calibration.bit_depth)
             files.append(f"{name}.png")
             record["encoding"] = {
                 "above_max": report.above_max,
@@ -245,12 +328,13 @@ def _write_set(out: Path, protocol: Protocol, built: dict, calibration: Calibrat
         if protocol.paradigm in PROFILE_GROUPS
         else []
     )
-    for name, pixels in sorted(built.get("previews", {}).items()):  # what a report shows
+    for name, pixels in sorted(built.get("previews", {}).items()):  # a sequence at a glance
         Image.fromarray(pixels).save(out / name)
         plots.append(name)
-    files = sorted(f for r in records.values() for f in r["files"]) + plots
+    (out / INDEX).write_text(_index(protocol, calibration, records, plots, built["geometry"]))
+    files = sorted(f for r in records.values() for f in r["files"]) + plots + [INDEX]
     manifest = {
-        "format": "glarelab stimulus set v2",
+        "format": FORMAT,
         "study": protocol.study,
         "paradigm": protocol.paradigm,
         "protocol": protocol.data,
@@ -269,6 +353,52 @@ def _write_set(out: Path, protocol: Protocol, built: dict, calibration: Calibrat
     }
     (out / MANIFEST).write_text(json.dumps(manifest, indent=2, sort_keys=True) + "\n")
     return manifest
+
+
+def _index(protocol: Protocol, calibration: Calibration, records: dict, plots, geometry) -> str:
+    """The set's README.md: what each file holds, how to read the PNGs, and every image."""
+    top = 2**calibration.bit_depth - 1
+    lines = [
+        f"# Stimulus set: {protocol.title}",
+        "",
+        f"Built by glarelab from the protocol `{protocol.study}` (sha256 "
+        f"`{protocol.sha256[:16]}…`) for a {calibration.bit_depth}-bit display, "
+        f"{calibration.black_cd_m2:.4g}-{calibration.max_cd_m2:.4g} cd/m² (calibration status "
+        f"`{calibration.status}`). `manifest.json` holds every parameter and the sha256 of "
+        "every file; `glarelab stimuli verify FOLDER` checks them.",
+        "",
+        "## Files",
+        "",
+        "- `NAME.exr`: the image's linear luminance in cd/m² (float32 OpenEXR, channel `Y`), "
+        "before the display.",
+        f"- `NAME.png`: the drive codes that show it on the display, 0-{top}, through the "
+        "calibration. 16-bit greyscale scaled to the full 16-bit range, "
+        f"`value = round(code × 65535 / {top})`, with an `sBIT` chunk recording the true bit "
+        f"depth ({calibration.bit_depth}): an image viewer shows the image as the display "
+        f"does (for a display of gamma about 2.2); the codes are `round(value × {top} / "
+        f"65535)` (or `value >> {16 - calibration.bit_depth}`), as "
+        "`stimuli.stimulus_set.read_codes` reads them. Images the sessions compose from "
+        "parts (kind `component`) have no PNG.",
+        "- `profiles_*.png`: the images with their luminance profile through the centre.",
+        "",
+        "## Images",
+        "",
+        "| file | kind | parameters | size (px) |",
+        "| --- | --- | --- | --- |",
+    ]
+    for record in records.values():
+        parameters = ", ".join(
+            f"{k} = {v:g}" if isinstance(v, float) else f"{k} = {v}"
+            for k, v in record.items()
+            if k not in ("kind", "files", "shape", "encoding")
+        )
+        files = ", ".join(f"`{f}`" for f in record["files"])
+        shape = " × ".join(str(x) for x in record["shape"][:2][::-1])
+        lines.append(f"| {files} | {record['kind']} | {parameters} | {shape} |")
+    lines += ["", f"Geometry: {', '.join(f'{k} = {v}' for k, v in geometry.items())}.", ""]
+    if plots:
+        lines += ["Profile plots: " + ", ".join(f"`{p}`" for p in plots) + ".", ""]
+    return "\n".join(lines)
 
 
 def _manifest_of(folder: Path) -> dict:
@@ -318,7 +448,7 @@ def verify_stimulus_set(folder: str | Path) -> list[str]:
         elif _sha256(path) != expected:
             problems.append(f"{name}: changed (sha256 differs from the manifest)")
     for path in sorted(folder.iterdir()):
-        if path.name not in listed and path.name != MANIFEST:
+        if path.name not in listed and path.name not in (MANIFEST, LISTING):
             problems.append(f"{path.name}: not in the manifest (added after the build?)")
     images = manifest.get("images")
     if isinstance(images, dict):

@@ -11,6 +11,10 @@ from __future__ import annotations
 import json
 import os
 import shutil
+import signal
+import subprocess
+import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -20,6 +24,7 @@ import pytest
 from experiments.session import SimulatedFrontend, make_observer, run_session
 from glarelab.cli import main
 from protocols import load_protocol
+from protocols.folders import record_files
 from stimuli.exr import write_exr
 from stimuli.stimulus_set import cached_stimulus_set, verify_stimulus_set
 
@@ -343,7 +348,7 @@ CASES = [
     (
         "build-into-foreign",
         "stimuli build yoshida2008 --out {box}/foreign",
-        "foreign holds files but no stimulus set",
+        "foreign holds files that are not an earlier stimulus set",
     ),
     (
         "build-calibration-text",
@@ -522,7 +527,7 @@ CASES = [
     (
         "analyse-out-foreign",
         "analyse yoshida2008 {box}/bad-data/second.csv --out {box}/report-here",
-        "report-here holds files but no report",
+        "report-here holds files that are not an earlier report",
     ),
     (
         "analyse-stimuli",
@@ -534,7 +539,7 @@ CASES = [
     (
         "demo-foreign",
         "demo --protocol luidolt2020 --out {box}/foreign",
-        "foreign holds files the demo did not write",
+        "foreign holds files that are not an earlier demo folder",
     ),
     ("demo-file", "demo --out {box}/afile.txt", "afile.txt is a file"),
     (
@@ -627,7 +632,7 @@ def test_the_demo_never_deletes_a_participants_data(sandbox, tmp_path, capsys):
         sidecar.write_text(json.dumps(record | {"simulated": False}))
     before = snapshot(lab)
     status, err = refused(["demo", "--protocol", "luidolt2020", "--out", str(lab)], capsys)
-    assert status == 2 and "did not write" in err
+    assert status == 2 and "not an earlier demo folder" in err
     assert snapshot(lab) == before
     # a folder the demo made, where a real session has been recorded since
     demo = tmp_path / "demo"
@@ -640,7 +645,7 @@ def test_the_demo_never_deletes_a_participants_data(sandbox, tmp_path, capsys):
         shutil.copy(path, demo / "data" / path.name.replace("sim01", "P07"))
     before = snapshot(demo)
     status, err = refused(["demo", "--protocol", "luidolt2020", "--out", str(demo)], capsys)
-    assert status == 2 and "is not a simulated session" in err, err
+    assert status == 2 and "P07_luidolt2020_s1_" in err, err
     assert snapshot(demo) == before
     # the demo's own folder, as it left it, is replaced
     shutil.rmtree(demo / "data")
@@ -650,10 +655,96 @@ def test_the_demo_never_deletes_a_participants_data(sandbox, tmp_path, capsys):
     assert len(list((demo / "data").glob("*.csv"))) == 1
 
 
+def _lab_folder(root: Path, *files: str) -> Path:
+    """A folder of someone else's files, named relative to it."""
+    for name in files:
+        (root / name).parent.mkdir(parents=True, exist_ok=True)
+        (root / name).write_text(f"{name}: someone else's\n")
+    return root
+
+
+@pytest.mark.parametrize(
+    ("command", "files"),
+    [
+        # a folder holding a file of the output's name is not therefore an earlier output
+        ("analyse yoshida2008 {data} --out {lab}", ["report.html", "chapter1.tex"]),
+        ("stimuli build yoshida2008 --out {lab}", ["manifest.json", "src/app.js"]),
+        ("demo --protocol luidolt2020 --out {lab}", ["report/report.html", "data/P01.csv"]),
+        ("docs --out {lab}", ["protocols.md"]),
+        ("looks --out {lab}", ["manifest.json"]),
+        ("gallery --out {lab} --size 33", ["wave_daylight_pupil.png"]),
+    ],
+)
+def test_no_command_overwrites_files_it_did_not_write(sandbox, tmp_path, capsys, command, files):
+    lab = _lab_folder(tmp_path / "lab", *files)
+    data = sorted(str(p) for p in (sandbox / "data").glob("*_yoshida2008_*.csv"))
+    argv = command.format(lab=lab, data=" ".join(data)).split()
+    before = snapshot(lab)
+    status, err = refused(argv, capsys)
+    assert status == 2 and "Traceback" not in err, err
+    assert any(name.split("/")[-1] in err for name in files) or str(lab) in err, err
+    assert snapshot(lab) == before
+
+
+def test_an_analysis_never_replaces_the_folder_of_its_inputs(sandbox, tmp_path, capsys):
+    data = tmp_path / "study"
+    shutil.copytree(sandbox / "data", data / "data")
+    csvs = sorted(str(p) for p in (data / "data").glob("*_yoshida2008_*.csv"))
+    before = snapshot(data)
+    for out in (data, data / "data"):
+        status, err = refused(["analyse", "yoshida2008", *csvs, "--out", str(out)], capsys)
+        assert status == 2 and "replaces whole" in err, err
+        assert snapshot(data) == before
+    # its own earlier report is replaced whole, and a note added to it since is refused
+    report = tmp_path / "report"
+    assert main(["analyse", "yoshida2008", *csvs, "--out", str(report)]) == 0
+    assert main(["analyse", "yoshida2008", *csvs, "--out", str(report)]) == 0
+    (report / "notes.txt").write_text("my notes\n")
+    capsys.readouterr()
+    status, err = refused(["analyse", "yoshida2008", *csvs, "--out", str(report)], capsys)
+    assert status == 2 and "notes.txt" in err, err
+    assert (report / "notes.txt").read_text() == "my notes\n"
+
+
+def test_the_demo_refuses_a_session_without_sidecar_and_a_linked_data_folder(
+    sandbox, tmp_path, capsys
+):
+    demo = tmp_path / "demo"
+    argv = ["demo", "--protocol", "luidolt2020", "--out", str(demo), "--participants", "1"]
+    assert main(argv) == 0
+    capsys.readouterr()
+    (demo / "data" / "P01_luidolt2020_s1_2026-01-01_0900.csv").write_text("study\nluidolt2020\n")
+    before = snapshot(demo)
+    status, err = refused(argv, capsys)
+    assert status == 2 and "P01_luidolt2020" in err, err
+    assert snapshot(demo) == before
+    # a data folder that is a link to a lab's data
+    lab = _lab_folder(tmp_path / "lab", "P02_luidolt2020_s1_2026-01-01_0900.csv")
+    linked = tmp_path / "linked"
+    linked.mkdir()
+    (linked / "data").symlink_to(lab)
+    status, err = refused(["demo", "--protocol", "luidolt2020", "--out", str(linked)], capsys)
+    assert status == 2 and "data" in err, err
+    assert sorted(p.name for p in lab.iterdir()) == ["P02_luidolt2020_s1_2026-01-01_0900.csv"]
+
+
+def test_render_never_writes_over_its_input_through_a_hard_link(sandbox, tmp_path, capsys):
+    source = tmp_path / "scene.exr"
+    shutil.copy(sandbox / "good.exr", source)
+    os.link(source, tmp_path / "linked.exr")
+    before = snapshot(tmp_path)
+    status, err = refused(
+        ["render", str(source), str(tmp_path / "linked.exr"), "--pixel-deg", "0.02"], capsys
+    )
+    assert status == 2 and "also an input" in err, err
+    assert snapshot(tmp_path) == before
+
+
 @pytest.mark.parametrize(
     ("labels", "problem"),
     [
         ('["A", "A", "C", "D", "E", "F"]', "repeats 'A'"),
+        ('["A", "a", "C", "D", "E", "F"]', "repeats 'A', 'a'"),
         ('["../../../escaped", "B", "C", "D", "E", "F"]', "'../../../escaped'"),
         ('["A", "B", "C", "D", "E", "F/G"]', "'F/G'"),
         ('["A", "B", "C", "D", "E", ""]', "''"),
@@ -714,8 +805,122 @@ def test_verify_names_every_missing_extra_and_changed_file(sandbox, tmp_path):
 def test_a_rebuild_replaces_the_set_whole_and_a_failed_one_keeps_it(sandbox, tmp_path, capsys):
     folder = _copy_set(sandbox, tmp_path)
     (folder / "stale.exr").write_bytes(b"left from an older build")
+    record_files(folder, "stimulus set")  # as an older build of another protocol would list it
     manifest = json.loads((folder / "manifest.json").read_text())
     assert main(["stimuli", "build", "yoshida2008", "--out", str(folder)]) == 0
     assert not (folder / "stale.exr").exists() and verify_stimulus_set(folder) == []
     assert json.loads((folder / "manifest.json").read_text())["files"] == manifest["files"]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["set"]  # no staging folder left
+
+
+def test_a_sidecar_that_contradicts_its_csv_is_refused(sandbox, tmp_path, capsys):
+    source = next((sandbox / "data").glob("sim01_yoshida2008_*.csv"))
+    for change, named in [
+        ({"participant": "P77"}, "participant 'P77'"),
+        ({"study": "spencer1995"}, "study 'spencer1995'"),
+        ({"simulated": "no"}, "simulated is 'no'"),
+        ({"session": 2}, "session 2"),
+    ]:
+        csv = shutil.copy(source, tmp_path / source.name)
+        sidecar = json.loads(source.with_suffix(".json").read_text())
+        Path(csv).with_suffix(".json").write_text(json.dumps(sidecar | change))
+        status, err = refused(
+            ["analyse", "yoshida2008", str(csv), "--out", str(tmp_path / "report")], capsys
+        )
+        assert status == 2 and named in err, err
+        assert not (tmp_path / "report").exists()
+
+
+def test_a_csv_without_sidecar_is_listed_with_its_origin_unknown(sandbox, tmp_path, capsys):
+    csvs = []
+    for source in sorted((sandbox / "data").glob("sim0*_yoshida2008_*.csv")):
+        csvs.append(shutil.copy(source, tmp_path / source.name))
+        if len(csvs) > 1:
+            shutil.copy(source.with_suffix(".json"), tmp_path / source.with_suffix(".json").name)
+    assert main(["analyse", "yoshida2008", *map(str, csvs), "--out", str(tmp_path / "r")]) == 0
+    origin = json.loads((tmp_path / "r" / "provenance.json").read_text())
+    assert origin["simulated"] == "mixed"
+    first = next(s for s in origin["sessions"] if s["file"] == Path(csvs[0]).name)
+    assert first["status"] == "no sidecar" and first["simulated"] is None
+    assert "no sidecar" in (tmp_path / "r" / "report.html").read_text()
+
+
+def test_ctrl_c_stops_a_batch_of_simulated_participants(tmp_path):
+    command = [sys.executable, "-m", "glarelab", "run", "luidolt2020", "--simulate"]
+    command += ["--participants", "3", "--trial-delay-ms", "1000", "--out", str(tmp_path)]
+    batch = subprocess.Popen(command, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+
+    def rows() -> int:  # sim01's trials on disk so far
+        found = list(tmp_path.glob("sim01_*.csv"))
+        return len(found[0].read_text().splitlines()) - 1 if found else 0
+
+    while rows() < 1 and time.monotonic() < deadline:  # within sim01's session
+        time.sleep(0.05)
+    batch.send_signal(signal.SIGINT)
+    _, err = batch.communicate(timeout=120)
+    assert batch.returncode == 3, err
+    assert "Traceback" not in err and "not run" in err, err
+    assert not list(tmp_path.glob("sim02_*"))
+
+
+def test_spreadsheet_text_files_are_read_or_named(sandbox, tmp_path, capsys):
+    source = next((sandbox / "data").glob("sim01_yoshida2008_*.csv"))
+    sidecar = source.with_suffix(".json")
+    # Excel's "CSV UTF-8" starts with a byte-order mark: read as any CSV
+    bom = tmp_path / "bom" / source.name
+    bom.parent.mkdir()
+    bom.write_bytes(b"\xef\xbb\xbf" + source.read_bytes())
+    shutil.copy(sidecar, bom.with_suffix(".json"))
+    assert main(["analyse", "yoshida2008", str(bom), "--out", str(tmp_path / "r")]) == 0
+    capsys.readouterr()
+    # a file in another encoding, and a cell beyond the csv module's limit, are named
+    for name, content in [
+        ("latin1", source.read_bytes().replace(b"sim01", b"sim\xe901", 1)),
+        ("long", source.read_bytes() + b'"' + b"x" * 200_000 + b'"\n'),
+    ]:
+        bad = tmp_path / name / source.name
+        bad.parent.mkdir()
+        bad.write_bytes(content)
+        shutil.copy(sidecar, bad.with_suffix(".json"))
+        status, err = refused(
+            ["analyse", "yoshida2008", str(bad), "--out", str(tmp_path / name / "r")], capsys
+        )
+        assert status == 2 and str(bad) in err and "Traceback" not in err, err
+    # a protocol and photometer readings saved with a byte-order mark
+    protocol = tmp_path / "bom.toml"
+    protocol.write_bytes(b"\xef\xbb\xbf" + (PROTOCOLS / "luidolt2020.toml").read_bytes())
+    assert main(["protocol", "check", str(protocol)]) == 0
+    readings = tmp_path / "readings.csv"
+    readings.write_bytes(
+        b"\xef\xbb\xbf" + (ROOT / "calibrations" / "example-readings.csv").read_bytes()
+    )
+    assert main(["calibrate", "fit", str(readings), "--out", str(tmp_path / "c.json")]) == 0
+
+
+def test_absurd_readings_and_repeated_follow_up_names_are_refused(tmp_path, capsys):
+    readings = tmp_path / "readings.csv"
+    readings.write_text("code,luminance_cd_m2\n0,0.5\n300,50\n600,200\n1023,1e308\n")
+    status, err = refused(
+        [
+            "calibrate",
+            "fit",
+            str(readings),
+            "--bit-depth",
+            "10",
+            "--out",
+            str(tmp_path / "c.json"),
+        ],
+        capsys,
+    )
+    assert status == 2 and "code 1023" in err and "1e+308" in err, err
+    text = (PROTOCOLS / "yoshida2008.toml").read_text()
+    assert text.count("[[analysis.followups]]") >= 2
+    start = text.index("[[analysis.followups]]")
+    name_line = next(line for line in text[start:].splitlines() if line.startswith("name"))
+    second = text.index(name_line, start) + len(name_line)
+    second_name = next(line for line in text[second:].splitlines() if line.startswith("name"))
+    twice = tmp_path / "twice.toml"
+    twice.write_text(text[:second] + text[second:].replace(second_name, name_line, 1))
+    status, err = refused(["protocol", "check", str(twice)], capsys)
+    assert status == 2 and "used twice" in err, err

@@ -60,7 +60,7 @@ def add(commands) -> None:
         "--stimuli",
         type=Path,
         default=None,
-        help="the stimulus set: its hash in the provenance, its previews in the figures",
+        help="the stimulus set: its hash in the provenance, its images in the report",
     )
     analyse.add_argument(
         "--exclude-incomplete",

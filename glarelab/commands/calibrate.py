@@ -77,10 +77,23 @@ def add(commands) -> None:
     calibrate = commands.add_parser("calibrate", help="display calibration")
     calibrate_commands = calibrate.add_subparsers(dest="calibrate_command", required=True)
     fit = calibrate_commands.add_parser("fit", help="fit a calibration to photometer readings")
-    fit.add_argument("readings", type=Path, help="CSV with columns code, luminance_cd_m2")
-    fit.add_argument("--out", type=Path, required=True)
-    fit.add_argument("--bit-depth", type=int, default=10, choices=(8, 10, 12, 16))
-    fit.add_argument("--method", choices=("pchip", "gog"), default="pchip")
+    fit.add_argument(
+        "readings",
+        type=Path,
+        help="CSV with a header row 'code,luminance_cd_m2' and one row per code measured "
+        "(calibrations/example-readings.csv is one)",
+    )
+    fit.add_argument("--out", type=Path, required=True, help="calibration JSON to write")
+    fit.add_argument(
+        "--bit-depth", type=int, default=10, choices=(8, 10, 12, 16), help="the display's bits"
+    )
+    fit.add_argument(
+        "--method",
+        choices=("pchip", "gog"),
+        default="pchip",
+        help="pchip: monotone interpolation in a gamma-linearised space; gog: a fitted "
+        "gain-offset-gamma curve with its residuals",
+    )
     fit.add_argument("--label", default="", help="display, photometer, operator")
     fit.set_defaults(run=_calibrate_fit)
 
@@ -88,9 +101,13 @@ def add(commands) -> None:
         "measure", help="measure a display with a photometer (PsychoPy, full-field patches)"
     )
     measure.add_argument("--out", type=Path, required=True, help="calibration JSON to write")
-    measure.add_argument("--bit-depth", type=int, default=10, choices=(8, 10, 12, 16))
+    measure.add_argument(
+        "--bit-depth", type=int, default=10, choices=(8, 10, 12, 16), help="the display's bits"
+    )
     measure.add_argument("--points", type=count(4, 4096), default=33, help="codes measured")
-    measure.add_argument("--order", choices=("random", "reversed"), default="random")
+    measure.add_argument(
+        "--order", choices=("random", "reversed"), default="random", help="order of the codes"
+    )
     measure.add_argument(
         "--verify-points", type=count(0, 1024), default=5, help="codes measured again to verify"
     )
@@ -101,8 +118,8 @@ def add(commands) -> None:
         help="relative error allowed for 'passed'",
     )
     measure.add_argument("--seed", type=count(0), default=0, help="seed of the code order")
-    measure.add_argument("--label", default="")
-    measure.add_argument("--windowed", action="store_true")
+    measure.add_argument("--label", default="", help="display, photometer, operator")
+    measure.add_argument("--windowed", action="store_true", help="a window, not full screen")
     measure.add_argument(
         "--allow-fewer-bits",
         action="store_true",

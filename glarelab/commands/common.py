@@ -4,9 +4,13 @@ that never lose a file, a memory check before large work, and the progress log."
 from __future__ import annotations
 
 import argparse
+import copy
 import math
+import os
 import sys
 from pathlib import Path
+
+from protocols.folders import claim_files
 
 __all__ = [
     "MARKER",
@@ -32,18 +36,28 @@ def log(message: str) -> None:
 
 
 class HelpFormatter(argparse.HelpFormatter):
-    """Help that shows every option's default (when it has one worth saying)."""
+    """Help that shows every option's default (when it has one worth saying), also for an
+    option without a help text (argparse prints nothing for those)."""
+
+    @staticmethod
+    def _default(action: argparse.Action) -> str | None:
+        default = action.default
+        if not action.option_strings or default in (None, False, "", argparse.SUPPRESS):
+            return None
+        shown = " ".join(map(str, default)) if isinstance(default, list | tuple) else default
+        return str(shown).replace("%", "%%")  # the help text is a %-format
+
+    def _format_action(self, action: argparse.Action) -> str:
+        if action.help is None and self._default(action) is not None:
+            action = copy.copy(action)
+            action.help = f"default {self._default(action)}"
+        return super()._format_action(action)
 
     def _get_help_string(self, action: argparse.Action) -> str:
         text = action.help or ""
-        default = action.default
-        if (
-            not action.option_strings
-            or default in (None, False, argparse.SUPPRESS)
-            or "default" in text
-        ):
+        shown = self._default(action)
+        if shown is None or "default" in text:
             return text
-        shown = " ".join(map(str, default)) if isinstance(default, list | tuple) else default
         return f"{text} (default {shown})" if text else f"default {shown}"
 
 
@@ -127,11 +141,13 @@ def output_folder(path: Path, command: str) -> Path:
 
 def writes_into(path: Path, names: list[str], command: str) -> Path:
     """A folder a command writes a fixed set of named files into (``docs``, ``gallery``, …):
-    created if new; an existing file is refused; other files in it are left alone."""
+    created if new; a file of that name glarelab did not write there is refused
+    (``protocols.folders.claim_files``); other files in it are left alone."""
     path = Path(path)
     if path.exists() and not path.is_dir():
         raise ValueError(f"{path} is a file; give a folder for {', '.join(names)}")
     path.mkdir(parents=True, exist_ok=True)
+    claim_files(path, names, command)
     return path
 
 
@@ -146,7 +162,10 @@ def output_file(path: Path, suffixes: tuple[str, ...], what: str, *, inputs=()) 
     if path.is_dir():
         raise ValueError(f"{path} is a folder; give a file name for the {what}")
     for source in inputs:
-        if Path(source).resolve() == path.resolve():
+        same = Path(source).resolve() == path.resolve() or (
+            path.exists() and Path(source).exists() and os.path.samefile(source, path)
+        )
+        if same:
             raise ValueError(f"{path} is also an input: the {what} would overwrite it")
     if not path.parent.is_dir():
         raise ValueError(f"{path}: no folder {path.parent} to write the {what} into")

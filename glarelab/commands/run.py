@@ -119,6 +119,11 @@ def _run(args: argparse.Namespace) -> int:
             )
             done = f"{sidecar['trials']} trials, {sidecar['status']}"
             _log(f"[{number}/{len(ids)}] {participant}: {done}")
+            if sidecar["status"] != "completed":  # stopped (Ctrl-C, a signal): the batch too
+                left = len(ids) - number
+                _log(f"stopped; {left} simulated participant(s) not run")
+                print(out.resolve())
+                return 3
         print(out.resolve())
         return 0
     if args.participant is None:
@@ -130,7 +135,12 @@ def _run(args: argparse.Namespace) -> int:
     if args.scripted_keys is not None:
         if not Path(args.scripted_keys).is_file():
             raise FileNotFoundError(f"--scripted-keys {args.scripted_keys}: no such file")
-        scripted = Path(args.scripted_keys).read_text().split()
+        try:
+            scripted = Path(args.scripted_keys).read_text(encoding="utf-8").split()
+        except UnicodeDecodeError:
+            raise ValueError(
+                f"--scripted-keys {args.scripted_keys}: not a text file of key names"
+            ) from None
         if not scripted:
             raise ValueError(f"--scripted-keys {args.scripted_keys}: the file names no keys")
     if args.screenshot is not None:
@@ -209,7 +219,9 @@ def add(commands) -> None:
         help="folder for the session files (default data)",
     )
     run.add_argument("--resume", action="store_true", help="continue an interrupted session")
-    run.add_argument("--fullscreen", action="store_true")
+    run.add_argument(
+        "--fullscreen", action="store_true", help="full screen on the lab display (else a window)"
+    )
     run.add_argument(
         "--counterbalance", type=int, choices=(0, 1), default=None, help="Spencer block order"
     )

@@ -251,8 +251,11 @@ def test_a_scripted_dry_run_shows_the_calibrated_codes(tmp_path, sets, study):
     if study == "luidolt2020":
         assert sidecar["calibration"]["status"] == "not needed"
         return
-    accepted = {"resolution", "refresh"} | ({"bit-depth"} if study == "yoshida2008" else set())
-    assert set(sidecar["runs"][0]["accepted_mismatches"]) == accepted
+    accepted = {"resolution"} | ({"bit-depth"} if study == "yoshida2008" else set())
+    # Xvfb's refresh is either measured (and unlike the protocol's) or, on a loaded machine,
+    # not measurable: one of the two findings, never both, is recorded as accepted
+    recorded = set(sidecar["runs"][0]["accepted_mismatches"])
+    assert recorded in (accepted | {"refresh"}, accepted | {"refresh-unmeasured"})
     frame = np.asarray(Image.open(shot))
     protocol_calibration = Calibration.load(
         ROOT

@@ -25,7 +25,7 @@ from stimuli.stimulus_set import (
     build_stimulus_set,
     shows_images,
     verify_stimulus_set,
-    write_codes_png,
+    write_codes,
 )
 from tests.conftest import small_night_protocol
 
@@ -122,12 +122,15 @@ def test_a_preview_strip_shows_the_first_and_the_last_frame():
     assert strip[0, 0, 0] == 0 and strip[0, -1, 0] == 255
 
 
-def test_rgb_codes_are_written_as_16_bit_png(tmp_path):
+def test_rgb_codes_are_written_as_16_bit_png_scaled_with_sbit(tmp_path):
     cv2 = pytest.importorskip("cv2")
     codes = np.random.default_rng(0).integers(0, 1024, (7, 9, 3)).astype(np.uint16)
-    write_codes_png(tmp_path / "c.png", codes)
-    back = cv2.imread(str(tmp_path / "c.png"), cv2.IMREAD_UNCHANGED)
-    assert back.dtype == np.uint16 and np.array_equal(back[..., ::-1], codes)
+    codes[0, 0] = (0, 1, 1023)
+    write_codes(tmp_path / "c.png", codes, 10)
+    back = cv2.imread(str(tmp_path / "c.png"), cv2.IMREAD_UNCHANGED)[..., ::-1]
+    assert back.dtype == np.uint16 and back[0, 0].tolist() == [0, 64, 65535]
+    assert np.array_equal((back.astype(np.int64) * 1023 * 2 // 65535 + 1) // 2, codes)
+    assert b"sBIT\n\n\n" in (tmp_path / "c.png").read_bytes()
     assert Image.open(tmp_path / "c.png").size == (9, 7)
 
 

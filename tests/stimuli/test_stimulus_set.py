@@ -5,11 +5,20 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from numpy.testing import assert_array_equal
 from PIL import Image
 
 from protocols import load_protocol
 from stimuli.exr import read_exr
-from stimuli.stimulus_set import build_stimulus_set, default_calibration, verify_stimulus_set
+from stimuli.stimulus_set import (
+    build_stimulus_set,
+    default_calibration,
+    read_codes,
+    verify_stimulus_set,
+    write_codes,
+)
 
 PROTOCOLS = Path(__file__).parents[2] / "protocols"
 
@@ -65,12 +74,60 @@ def test_codes_decode_to_the_luminance_within_half_a_step(tmp_path):
     assert manifest["calibration"]["readings_sha256"] == calibration.readings_sha256
     for name in ("reference_vos_f", "target_start_brighter"):
         luminance = read_exr(tmp_path / f"{name}.exr").astype(float)
-        codes = np.asarray(Image.open(tmp_path / f"{name}.png"))
-        assert codes.dtype == np.uint16 and codes.max() <= 1023
+        codes, bits = read_codes(tmp_path / f"{name}.png")
+        assert bits == 10 and codes.max() <= 1023
+        # the file itself spans the 16-bit range, so a viewer shows the image, not black
+        shown = np.asarray(Image.open(tmp_path / f"{name}.png"))
+        assert shown.dtype == np.uint16
+        assert_array_equal(shown >> 6, codes)  # the codes are the top 10 bits
         decoded = calibration.decode(codes)
         step = calibration.step_cd_m2(codes)
         assert (np.abs(decoded - luminance) <= step / 2 + 1e-6).all()
     assert manifest["images"]["reference_vos_f"]["encoding"]["above_max"] == 0
+    index = (tmp_path / "README.md").read_text()
+    assert "README.md" in manifest["files"]  # hashed with the rest
+    assert "value = round(code × 65535 / 1023)" in index and "sBIT" in index
+    for name in manifest["images"]:
+        assert f"`{name}.exr`" in index, name
+
+
+@pytest.mark.parametrize("bits", [1, 8, 10, 12, 16])
+def test_every_code_survives_the_png_and_fills_the_16_bit_range(tmp_path, bits):
+    codes = np.arange(2**bits, dtype=np.uint16).reshape(1, -1)
+    write_codes(tmp_path / "all.png", codes, bits)
+    back, found = read_codes(tmp_path / "all.png")
+    assert found == bits
+    assert_array_equal(back, codes)
+    shown = np.asarray(Image.open(tmp_path / "all.png")).astype(np.int64)
+    assert shown[0, 0] == 0 and shown[0, -1] == 65535  # black and white, in any viewer
+    assert_array_equal(shown >> (16 - bits), codes)  # an sBIT-aware reader's shift works too
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    bits=st.sampled_from([8, 10, 12]),
+    seed=st.integers(0, 2**32 - 1),
+    shape=st.tuples(st.integers(1, 9), st.integers(1, 9)),
+)
+def test_random_code_images_round_trip(tmp_path_factory, bits, seed, shape):
+    rng = np.random.default_rng(seed)
+    codes = rng.integers(0, 2**bits, size=shape).astype(np.uint16)
+    codes.flat[0] = 2**bits - 1  # the extremes, wherever the draw fell
+    codes.flat[-1] = 0
+    path = tmp_path_factory.mktemp("png") / "codes.png"
+    write_codes(path, codes, bits)
+    back, found = read_codes(path)
+    assert found == bits
+    assert_array_equal(back, codes)
+
+
+def test_codes_outside_the_bit_depth_are_refused(tmp_path):
+    with pytest.raises(
+        ValueError, match=r"codes must be in \[0, 255\] for bit_depth 8; got 0-256"
+    ):
+        write_codes(tmp_path / "x.png", np.array([[0, 256]]), 8)
+    with pytest.raises(ValueError, match="bit_depth must be 1-16; got 17"):
+        write_codes(tmp_path / "x.png", np.array([[0]]), 17)
 
 
 def test_a_calibration_for_another_bit_depth_is_refused(tmp_path):

@@ -1,0 +1,251 @@
+"""The report as a results section: numbered figures with captions, the stimuli as the display
+showed them, a results paragraph from the numbers, APA tables, provenance per session, and
+nothing outside the one HTML file."""
+
+import base64
+import io
+import json
+import re
+import shutil
+from html import unescape
+
+import numpy as np
+import pytest
+from PIL import Image
+
+import analysis.paradigms
+from analysis.load import DataError
+from analysis.report import write_report
+from analysis.stimulus_figures import DisplayedSet, to_srgb8
+from protocols import load_protocol
+from stimuli.stimulus_set import cached_stimulus_set, read_codes
+
+SCIENTIFIC = re.compile(r"\b\d+(\.\d+)?[eE][+-]?\d+\b")  # 1e+04, 2.5E-3
+
+
+def csvs(folder, study):
+    return sorted(folder.glob(f"*_{study}_s*.csv"))
+
+
+def without_images(html):
+    return re.sub(r"data:image/png;base64,[A-Za-z0-9+/=]+", "data:", html)
+
+
+def figures(html):
+    """(number, title) of every figure, in page order."""
+    found = re.findall(r"<b>Figure (\d+)\.</b> <i>([^<]*)\.</i>", html)
+    return [(int(n), unescape(t)) for n, t in found]
+
+
+@pytest.fixture(scope="module")
+def yoshida(simulated, tmp_path_factory):
+    protocol = load_protocol("yoshida2008")
+    stimuli = cached_stimulus_set(protocol, progress=None)  # the set the sessions looked at
+    out = tmp_path_factory.mktemp("yoshida") / "report"
+    report = write_report(protocol, csvs(simulated, "yoshida2008"), out, stimuli=stimuli)
+    return report, stimuli
+
+
+def test_the_yoshida_report_shows_the_stimuli_and_numbers_its_figures(yoshida):
+    report, _ = yoshida
+    html = report.read_text()
+    found = figures(html)
+    assert [n for n, _ in found] == list(range(1, len(found) + 1))
+    assert len(found) >= 5
+    titles = [t for _, t in found]
+    assert titles[:4] == [
+        "The references of Method I (Gaussian) as the display showed them",
+        "The references of Method II (Vos PSF) as the display showed them",
+        "The glare-free targets at their start luminances",
+        "Glare profiles of the references",
+    ]
+    assert "Every participant's matches" in titles
+    assert html.count("<img ") == html.count("data:image/png;base64,") == len(found)
+    # the stimuli come before the results, under the Method
+    assert html.index("id='stimuli'") < html.index("Figure 1.") < html.index("id='results'")
+    for number in range(1, 5):
+        assert (report.parent / f"stimulus_{number:02d}.png").is_file()
+    # every caption says what is plotted, and the result figures the n
+    for caption in re.findall(r"</i>([^<]*)</figcaption>", html):
+        assert len(caption) > 60, caption
+    assert html.count("n = 10 participants") >= 2
+
+
+def test_the_references_are_shown_pixel_for_pixel_as_the_display_showed_them(yoshida):
+    report, stimuli = yoshida
+    protocol = load_protocol("yoshida2008")
+    shown = DisplayedSet(stimuli, protocol)
+    # the luminance shown is the set's own codes decoded: the codes the sessions drew
+    codes, bits = read_codes(stimuli / "reference_vos_f.png")
+    assert bits == 10
+    decoded = shown.calibration.decode(codes)
+    luminance = shown.luminance("reference_vos_f")
+    assert np.mean(luminance == decoded) > 0.999  # float32 EXR vs float64 at the build
+    assert np.all(np.abs(luminance - decoded) <= shown.calibration.step_cd_m2(codes) + 1e-9)
+    # the first stimulus figure holds the six references at their own size
+    picture = shown.picture("reference_gaussian_A")
+    assert picture.shape == (271, 271) and picture.dtype == np.uint8
+    html = report.read_text()
+    first = re.search(r"data:image/png;base64,([A-Za-z0-9+/=]+)", html).group(1)
+    grid = np.asarray(Image.open(io.BytesIO(base64.b64decode(first))).convert("L"))
+    assert grid.shape[1] >= 3 * 271 and grid.shape[0] >= 2 * 271
+    # the image appears in the grid exactly, one screen pixel per display pixel
+    assert _find(grid, picture) is not None
+
+
+def _find(grid, picture):
+    """The position of ``picture`` inside ``grid``, exactly, or None."""
+    h, w = picture.shape
+    first = picture[0]
+    for top in range(grid.shape[0] - h + 1):
+        row = grid[top]
+        for left in np.flatnonzero(row[: grid.shape[1] - w + 1] == first[0]):
+            if np.array_equal(row[left : left + w], first) and np.array_equal(
+                grid[top : top + h, left : left + w], picture
+            ):
+                return top, left
+    return None
+
+
+def test_to_srgb8_encodes_relative_luminance():
+    # sRGB (IEC 61966-2-1): 18 % grey is 118 of 255, 1 % is 25
+    assert to_srgb8(np.array([0.0, 1.0, 18.0, 100.0]), 100.0).tolist() == [0, 25, 118, 255]
+    assert to_srgb8(np.array([-1.0, 200.0]), 100.0).tolist() == [0, 255]  # clipped
+
+
+def test_the_results_paragraph_and_tables_read_as_a_paper(yoshida):
+    report, _ = yoshida
+    html = report.read_text()
+    results = (report.parent / "results.md").read_text()
+    assert "6 × 2 repeated-measures ANOVA" in results
+    assert re.search(r"the main effect of level was (not )?significant, F\(\d", results)
+    assert re.search(r"η²p = \.\d\d", results)
+    assert "Greenhouse–Geisser" in results and "ε < .75" in results
+    assert re.search(r"t\(9\) = -?\d+\.\d\d, p [=<>] ", results)
+    for paragraph in results.split("\n\n"):
+        assert paragraph.strip() and paragraph.strip() in unescape(html)
+    text = without_images(html)
+    assert not SCIENTIFIC.search(text), SCIENTIFIC.search(text)
+    assert "nan" not in re.sub(r"<[^>]+>", " ", text).split()
+    numbers = re.findall(r"<b>Table (\d+)\.</b>", html)
+    assert [int(n) for n in numbers] == list(range(1, 8))
+    # p-values as APA writes them in the tables: no leading zero, < .001
+    cells = [unescape(c) for c in re.findall(r"<td class='num'>([^<]*)</td>", html)]
+    assert "< .001" in cells and not [c for c in cells if c.startswith("0.0") and len(c) > 6]
+
+
+def test_the_report_is_one_file_with_nothing_outside(yoshida):
+    report, _ = yoshida
+    html = without_images(report.read_text())
+    assert not re.search(r"(src|href)\s*=\s*['\"](?!#|data:)", html)
+    assert "http://" not in html and "https://" not in html and "<script" not in html
+    moved = report.parent.parent / "alone.html"
+    shutil.copy(report, moved)  # a copy on its own holds every image
+    assert moved.read_text().count("data:image/png;base64,") >= 5
+
+
+def test_every_session_has_its_provenance(yoshida, simulated):
+    report, _ = yoshida
+    origin = json.loads((report.parent / "provenance.json").read_text())
+    assert len(origin["sessions"]) == 10 == len(csvs(simulated, "yoshida2008"))
+    protocol = load_protocol("yoshida2008")
+    assert origin["simulated"] is True
+    html = report.read_text()
+    sessions = html[html.index("id='sessions'") : html.index("id='provenance'")]
+    rows = re.findall(r"<tr>(<td>.*?)</tr>", sessions)
+    assert len(rows) == 10
+    for row, record in zip(rows, origin["sessions"], strict=True):
+        cells = [unescape(c) for c in re.findall(r"<td>(.*?)</td>", row)]
+        assert record["file"] in cells and "completed" in cells and "yes" in cells
+        assert f"{protocol.sha256[:12]} ✓" in cells  # the protocol this report analysed
+        assert any(c.endswith(" ✓") and c != f"{protocol.sha256[:12]} ✓" for c in cells)
+
+
+def test_a_changed_or_foreign_stimulus_set_is_refused(yoshida, simulated, tmp_path):
+    _, stimuli = yoshida
+    changed = tmp_path / "changed"
+    shutil.copytree(stimuli, changed)
+    (changed / "reference_vos_f.exr").write_bytes(b"not an image")
+    protocol = load_protocol("yoshida2008")
+    with pytest.raises(DataError, match=r"reference_vos_f\.exr: changed"):
+        write_report(protocol, csvs(simulated, "yoshida2008"), tmp_path / "r", stimuli=changed)
+    spencer = cached_stimulus_set(load_protocol("spencer1995"), progress=None)
+    with pytest.raises(DataError, match="built from the spencer1995 protocol"):
+        write_report(protocol, csvs(simulated, "yoshida2008"), tmp_path / "r", stimuli=spencer)
+    assert not (tmp_path / "r").exists()
+
+
+def test_the_spencer_report_shows_the_glare_images_of_every_context(simulated, tmp_path):
+    protocol = load_protocol("spencer1995")
+    stimuli = cached_stimulus_set(protocol, progress=None)
+    report = write_report(protocol, csvs(simulated, "spencer1995"), tmp_path, stimuli=stimuli)
+    html = report.read_text()
+    titles = [t for _, t in figures(html)]
+    assert titles == [
+        "The glare images of context none as the display showed them",
+        "The glare images of context lamp as the display showed them",
+        "Glare profiles of the glare images",
+        "Matched disc intensity at each glare level",
+        "Every participant's matches",
+    ]
+    assert "uncorrected; sphericity not estimable" in (tmp_path / "results.md").read_text()
+    assert not SCIENTIFIC.search(without_images(html))
+
+
+def test_the_rating_report_has_a_visible_neutral_category_and_every_participant(
+    simulated, tmp_path
+):
+    protocol = load_protocol("luidolt2020")
+    report = write_report(protocol, csvs(simulated, "luidolt2020"), tmp_path)
+    html = report.read_text()
+    assert [t for _, t in figures(html)] == ["Ratings per category", "Every participant's ratings"]
+    assert "grey: the neutral 4" in html
+    results = (tmp_path / "results.md").read_text()
+    assert "Wilcoxon signed-rank tests, Holm-corrected across the 6 categories" in results
+    # the neutral bar is drawn in a grey that differs from white and from its neighbours
+    from analysis.rating import NEUTRAL, _colours
+
+    colours = _colours(range(1, 8))
+    assert len(colours) == 7 and tuple(colours[3][:3]) != (1.0, 1.0, 1.0)
+    grey = np.array(Image.open(tmp_path / "figure7_ratings.png").convert("RGB"))
+    target = np.round(255 * np.array(_rgb(NEUTRAL))).astype(int)
+    assert (np.abs(grey.astype(int) - target).sum(axis=2) < 6).sum() > 200  # visible area
+
+
+def _rgb(colour):
+    import matplotlib.colors
+
+    return matplotlib.colors.to_rgb(colour)
+
+
+def test_a_paradigm_may_show_its_own_stimuli(simulated, tmp_path, monkeypatch):
+    """The contract for a paradigm without a stimulus set (a rendered scene that was rated):
+    ``result["stimuli"]``, a list of mappings with png, title and caption."""
+    module = analysis.paradigms.PARADIGMS["rating"]
+    original = module.analyse
+    buffer = io.BytesIO()
+    Image.fromarray(np.full((40, 60), 90, np.uint8)).save(buffer, format="PNG")
+
+    def analyse(dataset, protocol):
+        result = original(dataset, protocol)
+        result["stimuli"] = [
+            {"title": "The scene that was rated", "png": buffer.getvalue(), "caption": "A test."}
+        ]
+        return result
+
+    monkeypatch.setattr(module, "analyse", analyse)
+    protocol = load_protocol("luidolt2020")
+    report = write_report(protocol, csvs(simulated, "luidolt2020"), tmp_path)
+    html = report.read_text()
+    assert figures(html)[0] == (1, "The scene that was rated")
+    assert "width='60' height='40'" in html
+    assert (tmp_path / "stimulus_01.png").read_bytes() == buffer.getvalue()
+    assert html.index("Figure 1.") < html.index("id='results'") < html.index("Figure 2.")
+
+
+def test_one_participant_gets_a_report_that_says_why_there_are_no_tests(simulated, tmp_path):
+    protocol = load_protocol("yoshida2008")
+    report = write_report(protocol, csvs(simulated, "yoshida2008")[:1], tmp_path)
+    results = (tmp_path / "results.md").read_text()
+    assert results.startswith("With 1 participant no inferential statistics can be computed")
+    assert "nan" not in re.sub(r"<[^>]+>", " ", without_images(report.read_text())).split()
