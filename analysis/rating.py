@@ -271,19 +271,7 @@ def _analyse_conditions(dataset: Dataset, protocol) -> dict:
         "bar is the mean rating. The stimulus each condition showed is in the Stimuli figures "
         "(given the stimulus set).",
     )
-    results = [
-        f"Compared with {reference}, "
-        + "; ".join(
-            f"{r.condition} was rated {abs(r.mean_difference):.2f} points "
-            f"{'lower' if r.mean_difference < 0 else 'higher'} in {r.category} ({r.apa})"
-            for r in compared.itertuples()
-            if r.p < ALPHA
-        )
-        + "."
-        if not compared.empty and (compared["p"] < ALPHA).any()
-        else f"No condition was rated differently from {reference} at uncorrected p < "
-        f"{ALPHA:g} in any category."
-    ]
+    results = [_compared_text(compared, reference)]
     return {
         "tables": {"summary": summary, "comparisons": compared, "comments": comments},
         "figures": {"ratings_by_condition.png": figure},
@@ -299,6 +287,36 @@ def _analyse_conditions(dataset: Dataset, protocol) -> dict:
             "comments": "The participants' comments",
         },
     }
+
+
+def _compared_text(compared: pd.DataFrame, reference: str) -> str:
+    """The comparisons with the reference condition as one paragraph."""
+    if compared.empty:
+        return f"Only {reference} was rated: there is nothing to compare."
+    uncorrected = compared[compared["p"] < ALPHA]
+    held = compared[compared["p_holm"] < ALPHA]
+    if uncorrected.empty:
+        return (
+            f"No condition was rated differently from {reference} in any category "
+            f"(uncorrected p ≥ {ALPHA:g} in all {len(compared)} comparisons)."
+        )
+    listed = "; ".join(
+        f"{r.condition} {abs(r.mean_difference):.2f} points "
+        f"{'lower' if r.mean_difference < 0 else 'higher'} in {r.category} "
+        f"(V = {r.wilcoxon_V:g}, uncorrected {apa_p(r.p)})"
+        for r in uncorrected.itertuples()
+    )
+    after = (
+        "none of them remains significant"
+        if held.empty
+        else f"{len(held)} remain significant: "
+        + "; ".join(f"{r.condition} in {r.category} ({r.apa})" for r in held.itertuples())
+    )
+    return (
+        f"Compared with {reference}, {len(uncorrected)} of the {len(compared)} comparisons "
+        f"differed at uncorrected p < {ALPHA:g}: {listed}. After Holm's correction over all "
+        f"{len(compared)}, {after}."
+    )
 
 
 def stimulus_figures(protocol, shown) -> list[Figure]:
