@@ -281,6 +281,26 @@ def _html(
     return "\n".join(parts)
 
 
+FORMULA_STARTS = ("=", "+", "@", "\t", "\r")  # a spreadsheet runs such a cell as a formula
+
+
+def _spreadsheet_safe(table: pd.DataFrame) -> pd.DataFrame:
+    """The table with text cells that a spreadsheet would run as a formula (a participant's
+    comment "=HYPERLINK(…)") prefixed by an apostrophe, as OWASP advises for CSV export; the
+    session CSVs keep the text verbatim."""
+
+    def safe(value):
+        if isinstance(value, str) and (
+            value.startswith(FORMULA_STARTS)
+            or (value.startswith("-") and not value[1:2].isdigit() and value[1:2] != ".")
+        ):
+            return "'" + value
+        return value
+
+    text = table.select_dtypes(include=["object", "string"]).columns
+    return table.assign(**{column: table[column].map(safe) for column in text})
+
+
 def write_report(
     protocol,
     paths: list[str | Path],
@@ -313,7 +333,7 @@ def write_report(
     staging = staging_folder(out)
     try:
         for name, table in result["tables"].items():
-            table.to_csv(staging / f"{name}.csv", index=False)
+            _spreadsheet_safe(table).to_csv(staging / f"{name}.csv", index=False)
             (staging / f"{name}.md").write_text(_markdown(table))
         for name, item in result["figures"].items():
             (staging / name).write_bytes(as_figure(item, name).png)

@@ -885,3 +885,18 @@ def test_absurd_readings_and_repeated_follow_up_names_are_refused(tmp_path, caps
     twice.write_text(text[:second] + text[second:].replace(second_name, name_line, 1))
     status, err = refused(["protocol", "check", str(twice)], capsys)
     assert status == 2 and "used twice" in err, err
+
+
+def test_a_comment_never_runs_as_a_spreadsheet_formula(sandbox, tmp_path):
+    source = next((sandbox / "data").glob("sim01_luidolt2020_*.csv"))
+    frame = pd.read_csv(source, keep_default_na=False)
+    frame.loc[0, "comment"] = '=HYPERLINK("http://example.org","click")'
+    frame.loc[1, "comment"] = "-2 is what I'd say"
+    csv = tmp_path / source.name
+    frame.to_csv(csv, index=False)
+    shutil.copy(source.with_suffix(".json"), csv.with_suffix(".json"))
+    assert main(["analyse", "luidolt2020", str(csv), "--out", str(tmp_path / "r")]) == 0
+    comments = pd.read_csv(tmp_path / "r" / "comments.csv", keep_default_na=False)
+    assert '\'=HYPERLINK("http://example.org","click")' in set(comments["comment"])
+    assert "-2 is what I'd say" in set(comments["comment"])  # a number's sign stays
+    assert pd.read_csv(csv, keep_default_na=False).loc[0, "comment"].startswith("=HYPERLINK")
