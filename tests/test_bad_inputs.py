@@ -498,6 +498,16 @@ CASES = [
         "analyse yoshida2008 {box}/bad-data/second.csv --out {box}/report --stimuli {box}/foreign",
         "--stimuli",
     ),
+    (
+        "render-option-of-another-model",
+        "render {box}/good.exr {box}/out.exr --pixel-deg 0.02 --model gaussian --pupil-mm 3",
+        "--pupil-mm: not an option of --model gaussian",
+    ),
+    (
+        "render-aperture-not-an-image",
+        "render {box}/good.exr {box}/out.exr --pixel-deg 0.02 --model wave --aperture-image {box}/afile.txt",
+        "afile.txt: not an image",
+    ),
     # demo, check-display, bench, docs
     ("demo-participants", "demo --out {box}/demo --participants 0", "--participants: 0"),
     (

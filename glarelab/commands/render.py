@@ -27,8 +27,40 @@ PSF_BYTES_PER_PIXEL = 128
 PSF_FIXED_BYTES = 0.5 * 2**30
 
 
+# the options each model takes; one given to a model that ignores it is refused
+MODEL_OPTIONS = {
+    "gaussian": {"sigma_deg"},
+    "vos": {"regime", "age", "flare_lines", "seed", "wavelength_nm"},
+    "wave": {
+        "pupil_mm", "no_eyelashes", "no_eyelid", "particles", "fresnel", "spectral", "seed",
+        "source_x_deg", "diaphragm_sides", "cross_screen", "aperture_image",
+        "aperture_spacing_mm",
+    },
+}  # fmt: skip
+MODEL_OPTIONS["hybrid"] = MODEL_OPTIONS["wave"] | {"regime", "age"}
+
+
+def _check_options(args: argparse.Namespace) -> None:
+    """Refuse an option the chosen model would ignore (``--pupil-mm`` with the Gaussian)."""
+    defaults = argparse.ArgumentParser()
+    _add_model_options(defaults)
+    default = vars(defaults.parse_args([]))
+    every = set().union(*MODEL_OPTIONS.values())
+    ignored = sorted(
+        name
+        for name in every - MODEL_OPTIONS[args.model]
+        if getattr(args, name, default[name]) != default[name]
+    )
+    if ignored:
+        shown = ", ".join("--" + name.replace("_", "-") for name in ignored)
+        raise ValueError(f"{shown}: not an option of --model {args.model}, which would ignore it")
+
+
 def build_model(args: argparse.Namespace) -> glare.GlareModel:
     """The glare model named by the command-line options."""
+    if args.model not in MODEL_OPTIONS:
+        raise ValueError(f"--model must be one of {MODEL_CHOICES}; got {args.model!r}")
+    _check_options(args)
     if args.model == "gaussian":
         return glare.GaussianGlare(sigma_deg=args.sigma_deg)
     if args.model == "vos":
