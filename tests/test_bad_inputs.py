@@ -910,3 +910,24 @@ def test_a_comment_never_runs_as_a_spreadsheet_formula(sandbox, tmp_path):
     assert '\'=HYPERLINK("http://example.org","click")' in set(comments["comment"])
     assert "-2 is what I'd say" in set(comments["comment"])  # a number's sign stays
     assert pd.read_csv(csv, keep_default_na=False).loc[0, "comment"].startswith("=HYPERLINK")
+
+
+def test_verify_finds_an_edited_manifest(sandbox, tmp_path, capsys):
+    folder = _copy_set(sandbox, tmp_path)
+    original = (folder / "manifest.json").read_text()
+    manifest = json.loads(original)
+    manifest["protocol"]["display"]["max_cd_m2"] = 1000.0  # the hash kept
+    (folder / "manifest.json").write_text(json.dumps(manifest))
+    assert any("protocol_sha256" in p for p in verify_stimulus_set(folder))
+    manifest = json.loads(original)
+    first, second = sorted(manifest["images"])[:2]
+    images = manifest["images"]
+    images[first]["files"], images[second]["files"] = (
+        images[second]["files"],
+        images[first]["files"],
+    )
+    (folder / "manifest.json").write_text(json.dumps(manifest))
+    problems = verify_stimulus_set(folder)
+    assert any(f"image {first} points at" in p for p in problems), problems
+    status, err = refused(["stimuli", "verify", str(folder)], capsys)
+    assert status == 1, err
