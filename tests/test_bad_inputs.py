@@ -931,3 +931,27 @@ def test_verify_finds_an_edited_manifest(sandbox, tmp_path, capsys):
     assert any(f"image {first} points at" in p for p in problems), problems
     status, err = refused(["stimuli", "verify", str(folder)], capsys)
     assert status == 1, err
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "named"),
+    [
+        ("distance_m = 1.0", "distance_m = 20.0", "more than the display's 2048 × 1536"),
+        ("supersample = 2 ", "supersample = 8 ", None),  # fits: 271 px × 8
+        (
+            "target_start_cd_m2 = [100.0, 400.0]",
+            "target_start_cd_m2 = [400.0, 100.0]",
+            "the darker target must start below",
+        ),
+    ],
+)
+def test_a_protocol_whose_stimuli_cannot_be_shown_is_refused(tmp_path, capsys, old, new, named):
+    text = (PROTOCOLS / "yoshida2008.toml").read_text()
+    assert old in text
+    changed = tmp_path / "changed.toml"
+    changed.write_text(text.replace(old, new, 1))
+    status, err = refused(["protocol", "check", str(changed)], capsys)
+    if named is None:
+        assert status == 0, err
+    else:
+        assert status == 2 and named in err, err
