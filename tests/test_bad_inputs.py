@@ -75,6 +75,12 @@ def sandbox(tmp_path_factory) -> Path:
     write_exr(box / "a" / "same.exr", image)
     write_exr(box / "b" / "same.exr", image)
     (box / "afolder").mkdir()
+    import OpenEXR
+
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    both = {"Y": image, "R": image, "G": image, "B": image}
+    with OpenEXR.File(header, both) as exr:
+        exr.write(str(box / "y-and-rgb.exr"))
     (box / "afile.txt").write_text("a file\n")
     (box / "foreign").mkdir()
     (box / "foreign" / "notes.txt").write_text("someone else's\n")
@@ -507,6 +513,31 @@ CASES = [
         "render-aperture-not-an-image",
         "render {box}/good.exr {box}/out.exr --pixel-deg 0.02 --model wave --aperture-image {box}/afile.txt",
         "afile.txt: not an image",
+    ),
+    (
+        "psf-tiny-pixels",
+        "psf --out {box}/k.png --pixel-deg 1e-300 --size 11 --model gaussian",
+        "--pixel-deg: 1e-300",
+    ),
+    (
+        "render-tiny-sigma",
+        "render {box}/good.exr {box}/out.exr --pixel-deg 0.02 --model gaussian --sigma-deg 1e-300",
+        "--sigma-deg: 1e-300",
+    ),
+    (
+        "render-many-particles",
+        "render {box}/good.exr {box}/out.exr --pixel-deg 0.02 --model wave --particles 100000000",
+        "--particles: 100000000",
+    ),
+    (
+        "render-many-sides",
+        "render {box}/good.exr {box}/out.exr --pixel-deg 0.02 --model wave --diaphragm-sides 100000",
+        "--diaphragm-sides: 100000",
+    ),
+    (
+        "render-y-and-rgb",
+        "render {box}/y-and-rgb.exr {box}/out.exr --pixel-deg 0.02",
+        "both a Y channel and R, G, B",
     ),
     # demo, check-display, bench, docs
     ("demo-participants", "demo --out {box}/demo --participants 0", "--participants: 0"),

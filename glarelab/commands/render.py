@@ -96,13 +96,15 @@ def build_model(args: argparse.Namespace) -> glare.GlareModel:
 
 
 MODEL_CHOICES = ("gaussian", "vos", "wave", "hybrid")
+MIN_PIXEL_DEG = 1e-5  # 0.04 arcsec, far below the eye's resolution; smaller is a typo
+MAX_PARTICLES = 100_000  # 100 times Luidolt's 1000 (Fig. 5.6); each is drawn into the pupil
 
 
 def _add_model_options(parser: argparse.ArgumentParser, default: str = "vos") -> None:
     group = parser.add_argument_group("glare model")
     group.add_argument("--model", choices=MODEL_CHOICES, default=default)
     group.add_argument(
-        "--sigma-deg", type=number(0, 90, above=True), default=0.34, help="Gaussian σ (deg)"
+        "--sigma-deg", type=number(MIN_PIXEL_DEG, 90), default=0.34, help="Gaussian σ (deg)"
     )
     group.add_argument("--regime", choices=glare.vos.REGIMES, default="photopic")
     group.add_argument(
@@ -122,11 +124,11 @@ def _add_model_options(parser: argparse.ArgumentParser, default: str = "vos") ->
     )
     wave.add_argument("--no-eyelashes", action="store_true")
     wave.add_argument("--no-eyelid", action="store_true")
-    wave.add_argument("--particles", type=count(0), default=1000)
+    wave.add_argument("--particles", type=count(0, MAX_PARTICLES), default=1000)
     wave.add_argument("--fresnel", action="store_true", help="Luidolt eq. 5.6 Fresnel term")
     wave.add_argument("--spectral", choices=glare.wave.SPECTRAL_METHODS, default="scaled")
     wave.add_argument("--source-x-deg", type=number(-90, 90), default=0.0)
-    wave.add_argument("--diaphragm-sides", type=count(3), default=None)
+    wave.add_argument("--diaphragm-sides", type=count(3, 360), default=None)
     wave.add_argument("--cross-screen", choices=("4-point", "trigonal"), default=None)
     wave.add_argument("--aperture-image", type=Path, default=None, help="obstacle PNG/EXR")
     wave.add_argument("--aperture-spacing-mm", type=number(0, above=True), default=None)
@@ -396,7 +398,7 @@ def add(commands) -> None:
     )
     render.add_argument(
         "--pixel-deg",
-        type=number(0, 10, above=True),
+        type=number(MIN_PIXEL_DEG, 10),
         required=True,
         help="visual angle of a pixel, degrees (0-10)",
     )
@@ -424,7 +426,7 @@ def add(commands) -> None:
     psf.add_argument("--out", type=Path, required=True, help="PNG (Kakimoto's tone curve)")
     psf.add_argument("--exr", type=Path, default=None, help="also write the kernel as EXR")
     psf.add_argument(
-        "--pixel-deg", type=number(0, 10, above=True), default=0.01, help="degrees per pixel"
+        "--pixel-deg", type=number(MIN_PIXEL_DEG, 10), default=0.01, help="degrees per pixel"
     )
     psf.add_argument(
         "--size", type=odd_size, default=401, help="kernel size in pixels (odd, 3-16385)"
@@ -436,7 +438,7 @@ def add(commands) -> None:
     gallery = commands.add_parser("gallery", help="render the wave-optics PSF gallery")
     gallery.add_argument("--out", type=Path, default=Path("docs/gallery"))
     gallery.add_argument(
-        "--pixel-deg", type=number(0, 10, above=True), default=0.01, help="degrees per pixel"
+        "--pixel-deg", type=number(MIN_PIXEL_DEG, 10), default=0.01, help="degrees per pixel"
     )
     gallery.add_argument(
         "--size", type=odd_size, default=401, help="kernel size in pixels (odd, 3-16385)"
