@@ -986,3 +986,15 @@ def test_a_protocol_whose_stimuli_cannot_be_shown_is_refused(tmp_path, capsys, o
         assert status == 0, err
     else:
         assert status == 2 and named in err, err
+
+
+def test_one_session_in_two_files_is_one_line(sandbox, tmp_path, capsys):
+    source = next((sandbox / "data").glob("sim01_yoshida2008_*.csv"))
+    copy = tmp_path / ("copy_" + source.name)
+    shutil.copy(source, copy)
+    shutil.copy(source.with_suffix(".json"), copy.with_suffix(".json"))
+    status, err = refused(
+        ["analyse", "yoshida2008", str(source), str(copy), "--out", str(tmp_path / "r")], capsys
+    )
+    assert status == 2 and "session 1 is in 2 files" in err, err
+    assert "duplicated trial" not in err, err
