@@ -283,7 +283,21 @@ def load_sessions(
 
     problems += PARADIGMS[protocol.paradigm].check(trials, protocol)
     key = ["participant", "session", "trial"]
+    spread = trials.groupby(["participant", "session"])["_file"].unique()
+    for (participant, session), in_files in spread.items():
+        if len(in_files) > 1:  # one line, not one per trial
+            problems.append(
+                f"participant {participant}, session {session} is in {len(in_files)} files: "
+                f"{', '.join(map(str, in_files))} (the same CSV given twice, or a copy?)"
+            )
+    twice = {pair for pair, in_files in spread.items() if len(in_files) > 1}
     duplicated = trials[trials.duplicated(key, keep="first")]
+    duplicated = duplicated[
+        [
+            pair not in twice
+            for pair in zip(duplicated["participant"], duplicated["session"], strict=True)
+        ]
+    ]
     for _, row in duplicated.iterrows():
         problems.append(
             f"{row['_file']}, line {row['_line']}: duplicated trial (participant "

@@ -76,8 +76,11 @@ def methods(protocol, participants: int, who: str) -> str:
 
 def check(trials: pd.DataFrame, protocol) -> list[str]:
     """Values no session of this protocol can write: a strength that is not the protocol's at
-    the trial's glare level."""
+    the trial's glare level, a presentation time or a step it does not have, a failed
+    presentation counted; and a participant none of whose trials counted."""
     strengths = protocol["glare"]["strengths"]
+    durations = protocol["trials"]["presentation_ms"]
+    steps = protocol["trials"]["step_fractions"]
     problems = []
     for _, row in trials.iterrows():
         expected = strengths[int(row["glare_level"]) - 1]
@@ -86,6 +89,27 @@ def check(trials: pd.DataFrame, protocol) -> list[str]:
                 f"{where(row)}, column strength: {row['strength']!r}; the protocol's glare "
                 f"level {int(row['glare_level'])} has strength {expected:g}"
             )
+        if not np.isclose(durations, row["duration_ms"]).any():
+            problems.append(
+                f"{where(row)}, column duration_ms: {row['duration_ms']!r}; the protocol "
+                f"presents for {', '.join(f'{d:g}' for d in durations)} ms"
+            )
+        if not np.isclose(steps, row["step_fraction"]).any():
+            problems.append(
+                f"{where(row)}, column step_fraction: {row['step_fraction']!r}; the protocol's "
+                f"steps are {', '.join(f'{s:g}' for s in steps)}"
+            )
+        if bool(row["counted"]) and not bool(row["presentation_ok"]):
+            problems.append(
+                f"{where(row)}: counted, but its presentation failed (presentation_ok false); "
+                "a failed flash never moves a staircase"
+            )
+    counted = trials.groupby("participant")["counted"].apply(lambda c: c.astype(bool).any())
+    for participant in counted.index[~counted.to_numpy()]:
+        problems.append(
+            f"participant {participant}: none of their trials counted (every presentation "
+            "failed?); leave their files out of the analysis, or the report cannot show them"
+        )
     return problems
 
 

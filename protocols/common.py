@@ -4,6 +4,7 @@ instructions, backgrounds and glare methods (any registered glare model with its
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -23,6 +24,7 @@ __all__ = [
     "check_display",
     "check_glare_model",
     "check_methods",
+    "display_pixel_deg",
     "glare_model",
 ]
 
@@ -216,3 +218,14 @@ def check_methods(methods: list[dict] | None, where: str, problems: list[str]) -
             problems.append(f"{at}: {len(labels)} labels for {len(levels)} levels_cd_m2")
         if method.get("model") is not None:
             check_glare_model(method["model"], method.get("parameters"), at, problems)
+
+
+def display_pixel_deg(display: dict, distance_m: float) -> float:
+    """Visual angle of one pixel of ``display`` (a protocol's validated ``[display]``) seen
+    from ``distance_m``, degrees: from its pixel pitch, or its diagonal and resolution."""
+    width, height = display["resolution_px"]
+    if display.get("pixel_pitch_mm") is not None:
+        pitch_mm = display["pixel_pitch_mm"]
+    else:
+        pitch_mm = display["diagonal_in"] * 25.4 / math.hypot(width, height)
+    return math.degrees(math.atan(pitch_mm / (distance_m * 1000.0)))

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import math
 import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -21,6 +20,7 @@ from types import ModuleType
 from typing import Any
 
 from . import matching, rating, staircase
+from .common import display_pixel_deg
 from .keys import Key, ProtocolError, Schema, Tables, validate
 
 __all__ = [
@@ -159,13 +159,7 @@ def load_protocol(path: str | Path) -> Protocol:
 
 def pixel_deg(protocol: Protocol) -> float:
     """Visual angle of one display pixel at the viewing distance, degrees."""
-    display = protocol["display"]
-    width, height = display["resolution_px"]
-    if display["pixel_pitch_mm"] is not None:
-        pitch_mm = display["pixel_pitch_mm"]
-    else:
-        pitch_mm = display["diagonal_in"] * 25.4 / math.hypot(width, height)
-    return math.degrees(math.atan(pitch_mm / (protocol["viewing"]["distance_m"] * 1000.0)))
+    return display_pixel_deg(protocol["display"], protocol["viewing"]["distance_m"])
 
 
 def describe_schema(paradigm: str) -> list[tuple[str, str, str, str, str]]:

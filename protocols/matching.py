@@ -23,6 +23,7 @@ from .common import (
     check_background,
     check_display,
     check_methods,
+    display_pixel_deg,
 )
 from .keys import Key, Schema, Tables
 
@@ -138,6 +139,34 @@ def reference_name(method: str, label: str) -> str:
     return f"reference_{method}_{label}"
 
 
+MAX_RENDER_PX = 16384  # a side rendered (with supersampling) beyond this needs > 20 GB
+
+
+def _check_layout(p: dict, problems: list[str]) -> None:
+    """The reference and its targets, side by side, must fit the display's pixels; the
+    supersampled render must fit in memory."""
+    display, s = p["display"], p["stimulus"]
+    width_px, height_px = display["resolution_px"]
+    try:
+        deg = display_pixel_deg(display, p["viewing"]["distance_m"])
+    except (KeyError, TypeError, ValueError, ZeroDivisionError):
+        return  # the display's own problems are reported by check_display
+    side = s["size_deg"] / deg
+    width = (3 * s["size_deg"] + 2 * s["gap_deg"]) / deg
+    if width > width_px or side > height_px:
+        problems.append(
+            f"stimulus.size_deg = {s['size_deg']!r} with gap_deg = {s['gap_deg']!r}: the three "
+            f"images take {width:.0f} × {side:.0f} px at viewing.distance_m = "
+            f"{p['viewing']['distance_m']!r} ({deg:.4g}°/px), more than the display's "
+            f"{width_px} × {height_px}"
+        )
+    if side * s["supersample"] > MAX_RENDER_PX:
+        problems.append(
+            f"stimulus.size_deg = {s['size_deg']!r} at supersample = {s['supersample']!r}: "
+            f"{side * s['supersample']:.0f} px a side to render, above {MAX_RENDER_PX}"
+        )
+
+
 def check(p: dict, problems: list[str], folder: Path | None) -> None:
     """Rules between keys: geometry, display limits, methods, questions, analyses."""
     display = p["display"]
@@ -162,8 +191,14 @@ def check(p: dict, problems: list[str], folder: Path | None) -> None:
                 f"stimulus.target_start_cd_m2[{i}] = {start!r}: above what the display "
                 f"shows (display.max_cd_m2 = {maximum!r})"
             )
+    if len(starts) == 2 and starts[0] >= starts[1]:
+        problems.append(
+            f"stimulus.target_start_cd_m2 = {starts!r}: the darker target must start below "
+            "the brighter one"
+        )
     if s["disk_deg"] >= s["size_deg"]:
         problems.append("stimulus.disk_deg: must be smaller than stimulus.size_deg")
+    _check_layout(p, problems)
     background = check_background(p["background"], "background", problems, folder)
     if background is not None:
         p["background"] = background

@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-from PIL import Image
+from PIL import Image, UnidentifiedImageError
 
 from glare.apertures import aperture_from_image
 
@@ -31,8 +31,13 @@ def load_aperture_image(path: str | Path) -> np.ndarray:
     if path.suffix.lower() == ".exr":
         image = read_exr(path).astype(float)
     else:
-        with Image.open(path) as handle:
-            raw = np.asarray(handle)
+        try:
+            with Image.open(path) as handle:
+                raw = np.asarray(handle)
+        except UnidentifiedImageError:
+            raise ValueError(
+                f"{path}: not an image PIL can read (PNG, TIFF, …) or an EXR"
+            ) from None
         scale = 65535.0 if raw.dtype == np.uint16 or raw.max() > 255 else 255.0
         image = raw.astype(float) / scale
     if image.ndim == 3:

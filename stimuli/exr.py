@@ -86,6 +86,11 @@ def read_exr(path: str | Path) -> np.ndarray:
         raise ValueError(
             f"{path} cannot be read as OpenEXR (truncated or damaged?): {error}"
         ) from None
+    if {"R", "G", "B"} <= channels.keys() and "Y" in channels:
+        raise ValueError(
+            f"{path} holds both a Y channel and R, G, B channels; glarelab reads one scene, "
+            "so write the file with either (not both)"
+        )
     if {"R", "G", "B"} <= channels.keys():
         return np.stack([channels[c] for c in "RGB"], axis=-1).astype(np.float32, copy=False)
     if "Y" in channels:

@@ -456,8 +456,16 @@ def verify_stimulus_set(folder: str | Path) -> list[str]:
             for file in record.get("files", []) if isinstance(record, dict) else []:
                 if file not in listed:
                     problems.append(f"{file}: image {name}'s file is not hashed in the manifest")
+                if Path(file).stem != name:  # a build names each image's file after it
+                    problems.append(f"{MANIFEST}: image {name} points at {file} (edited?)")
     else:
         problems.append(f"{MANIFEST}: has no table of images")
+    # the protocol the set was built from is hashed as protocols.core hashes it
+    canonical = json.dumps(manifest.get("protocol"), sort_keys=True, separators=(",", ":"))
+    if hashlib.sha256(canonical.encode()).hexdigest() != manifest.get("protocol_sha256"):
+        problems.append(
+            f"{MANIFEST}: its protocol table does not hash to its protocol_sha256 (edited?)"
+        )
     return problems
 
 

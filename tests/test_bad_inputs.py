@@ -75,6 +75,12 @@ def sandbox(tmp_path_factory) -> Path:
     write_exr(box / "a" / "same.exr", image)
     write_exr(box / "b" / "same.exr", image)
     (box / "afolder").mkdir()
+    import OpenEXR
+
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    both = {"Y": image, "R": image, "G": image, "B": image}
+    with OpenEXR.File(header, both) as exr:
+        exr.write(str(box / "y-and-rgb.exr"))
     (box / "afile.txt").write_text("a file\n")
     (box / "foreign").mkdir()
     (box / "foreign" / "notes.txt").write_text("someone else's\n")
@@ -534,6 +540,41 @@ CASES = [
         "analyse yoshida2008 {box}/bad-data/second.csv --out {box}/report --stimuli {box}/foreign",
         "--stimuli",
     ),
+    (
+        "render-option-of-another-model",
+        "render {box}/good.exr {box}/out.exr --pixel-deg 0.02 --model gaussian --pupil-mm 3",
+        "--pupil-mm: not an option of --model gaussian",
+    ),
+    (
+        "render-aperture-not-an-image",
+        "render {box}/good.exr {box}/out.exr --pixel-deg 0.02 --model wave --aperture-image {box}/afile.txt",
+        "afile.txt: not an image",
+    ),
+    (
+        "psf-tiny-pixels",
+        "psf --out {box}/k.png --pixel-deg 1e-300 --size 11 --model gaussian",
+        "--pixel-deg: 1e-300",
+    ),
+    (
+        "render-tiny-sigma",
+        "render {box}/good.exr {box}/out.exr --pixel-deg 0.02 --model gaussian --sigma-deg 1e-300",
+        "--sigma-deg: 1e-300",
+    ),
+    (
+        "render-many-particles",
+        "render {box}/good.exr {box}/out.exr --pixel-deg 0.02 --model wave --particles 100000000",
+        "--particles: 100000000",
+    ),
+    (
+        "render-many-sides",
+        "render {box}/good.exr {box}/out.exr --pixel-deg 0.02 --model wave --diaphragm-sides 100000",
+        "--diaphragm-sides: 100000",
+    ),
+    (
+        "render-y-and-rgb",
+        "render {box}/y-and-rgb.exr {box}/out.exr --pixel-deg 0.02",
+        "both a Y channel and R, G, B",
+    ),
     # demo, check-display, bench, docs
     ("demo-participants", "demo --out {box}/demo --participants 0", "--participants: 0"),
     (
@@ -924,3 +965,75 @@ def test_absurd_readings_and_repeated_follow_up_names_are_refused(tmp_path, caps
     twice.write_text(text[:second] + text[second:].replace(second_name, name_line, 1))
     status, err = refused(["protocol", "check", str(twice)], capsys)
     assert status == 2 and "used twice" in err, err
+
+
+def test_a_comment_never_runs_as_a_spreadsheet_formula(sandbox, tmp_path):
+    source = next((sandbox / "data").glob("sim01_luidolt2020_*.csv"))
+    frame = pd.read_csv(source, keep_default_na=False)
+    frame.loc[0, "comment"] = '=HYPERLINK("http://example.org","click")'
+    frame.loc[1, "comment"] = "-2 is what I'd say"
+    csv = tmp_path / source.name
+    frame.to_csv(csv, index=False)
+    shutil.copy(source.with_suffix(".json"), csv.with_suffix(".json"))
+    assert main(["analyse", "luidolt2020", str(csv), "--out", str(tmp_path / "r")]) == 0
+    comments = pd.read_csv(tmp_path / "r" / "comments.csv", keep_default_na=False)
+    assert '\'=HYPERLINK("http://example.org","click")' in set(comments["comment"])
+    assert "-2 is what I'd say" in set(comments["comment"])  # a number's sign stays
+    assert pd.read_csv(csv, keep_default_na=False).loc[0, "comment"].startswith("=HYPERLINK")
+
+
+def test_verify_finds_an_edited_manifest(sandbox, tmp_path, capsys):
+    folder = _copy_set(sandbox, tmp_path)
+    original = (folder / "manifest.json").read_text()
+    manifest = json.loads(original)
+    manifest["protocol"]["display"]["max_cd_m2"] = 1000.0  # the hash kept
+    (folder / "manifest.json").write_text(json.dumps(manifest))
+    assert any("protocol_sha256" in p for p in verify_stimulus_set(folder))
+    manifest = json.loads(original)
+    first, second = sorted(manifest["images"])[:2]
+    images = manifest["images"]
+    images[first]["files"], images[second]["files"] = (
+        images[second]["files"],
+        images[first]["files"],
+    )
+    (folder / "manifest.json").write_text(json.dumps(manifest))
+    problems = verify_stimulus_set(folder)
+    assert any(f"image {first} points at" in p for p in problems), problems
+    status, err = refused(["stimuli", "verify", str(folder)], capsys)
+    assert status == 1, err
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "named"),
+    [
+        ("distance_m = 1.0", "distance_m = 20.0", "more than the display's 2048 × 1536"),
+        ("supersample = 2 ", "supersample = 8 ", None),  # fits: 271 px × 8
+        (
+            "target_start_cd_m2 = [100.0, 400.0]",
+            "target_start_cd_m2 = [400.0, 100.0]",
+            "the darker target must start below",
+        ),
+    ],
+)
+def test_a_protocol_whose_stimuli_cannot_be_shown_is_refused(tmp_path, capsys, old, new, named):
+    text = (PROTOCOLS / "yoshida2008.toml").read_text()
+    assert old in text
+    changed = tmp_path / "changed.toml"
+    changed.write_text(text.replace(old, new, 1))
+    status, err = refused(["protocol", "check", str(changed)], capsys)
+    if named is None:
+        assert status == 0, err
+    else:
+        assert status == 2 and named in err, err
+
+
+def test_one_session_in_two_files_is_one_line(sandbox, tmp_path, capsys):
+    source = next((sandbox / "data").glob("sim01_yoshida2008_*.csv"))
+    copy = tmp_path / ("copy_" + source.name)
+    shutil.copy(source, copy)
+    shutil.copy(source.with_suffix(".json"), copy.with_suffix(".json"))
+    status, err = refused(
+        ["analyse", "yoshida2008", str(source), str(copy), "--out", str(tmp_path / "r")], capsys
+    )
+    assert status == 2 and "session 1 is in 2 files" in err, err
+    assert "duplicated trial" not in err, err

@@ -101,7 +101,7 @@ def test_render_reports_bad_arguments_by_name(tmp_path, capsys):
     with pytest.raises(SystemExit) as stop:  # argparse's refusal
         main(["render", str(source), str(tmp_path / "o.exr"), "--pixel-deg", "-1"])
     assert stop.value.code == 2
-    assert "--pixel-deg: -1 must be a finite number in (0, 10]" in capsys.readouterr().err
+    assert "--pixel-deg: -1 must be a finite number in [1e-05, 10]" in capsys.readouterr().err
     assert (
         main(["render", str(tmp_path / "none.exr"), str(tmp_path / "o.exr"), "--pixel-deg", "1"])
         == 2

@@ -27,8 +27,40 @@ PSF_BYTES_PER_PIXEL = 128
 PSF_FIXED_BYTES = 0.5 * 2**30
 
 
+# the options each model takes; one given to a model that ignores it is refused
+MODEL_OPTIONS = {
+    "gaussian": {"sigma_deg"},
+    "vos": {"regime", "age", "flare_lines", "seed", "wavelength_nm"},
+    "wave": {
+        "pupil_mm", "no_eyelashes", "no_eyelid", "particles", "fresnel", "spectral", "seed",
+        "source_x_deg", "diaphragm_sides", "cross_screen", "aperture_image",
+        "aperture_spacing_mm",
+    },
+}  # fmt: skip
+MODEL_OPTIONS["hybrid"] = MODEL_OPTIONS["wave"] | {"regime", "age"}
+
+
+def _check_options(args: argparse.Namespace) -> None:
+    """Refuse an option the chosen model would ignore (``--pupil-mm`` with the Gaussian)."""
+    defaults = argparse.ArgumentParser()
+    _add_model_options(defaults)
+    default = vars(defaults.parse_args([]))
+    every = set().union(*MODEL_OPTIONS.values())
+    ignored = sorted(
+        name
+        for name in every - MODEL_OPTIONS[args.model]
+        if getattr(args, name, default[name]) != default[name]
+    )
+    if ignored:
+        shown = ", ".join("--" + name.replace("_", "-") for name in ignored)
+        raise ValueError(f"{shown}: not an option of --model {args.model}, which would ignore it")
+
+
 def build_model(args: argparse.Namespace) -> glare.GlareModel:
     """The glare model named by the command-line options."""
+    if args.model not in MODEL_OPTIONS:
+        raise ValueError(f"--model must be one of {MODEL_CHOICES}; got {args.model!r}")
+    _check_options(args)
     if args.model == "gaussian":
         return glare.GaussianGlare(sigma_deg=args.sigma_deg)
     if args.model == "vos":
@@ -64,13 +96,15 @@ def build_model(args: argparse.Namespace) -> glare.GlareModel:
 
 
 MODEL_CHOICES = ("gaussian", "vos", "wave", "hybrid")
+MIN_PIXEL_DEG = 1e-5  # 0.04 arcsec, far below the eye's resolution; smaller is a typo
+MAX_PARTICLES = 100_000  # 100 times Luidolt's 1000 (Fig. 5.6); each is drawn into the pupil
 
 
 def _add_model_options(parser: argparse.ArgumentParser, default: str = "vos") -> None:
     group = parser.add_argument_group("glare model")
     group.add_argument("--model", choices=MODEL_CHOICES, default=default)
     group.add_argument(
-        "--sigma-deg", type=number(0, 90, above=True), default=0.34, help="Gaussian σ (deg)"
+        "--sigma-deg", type=number(MIN_PIXEL_DEG, 90), default=0.34, help="Gaussian σ (deg)"
     )
     group.add_argument("--regime", choices=glare.vos.REGIMES, default="photopic")
     group.add_argument(
@@ -90,11 +124,11 @@ def _add_model_options(parser: argparse.ArgumentParser, default: str = "vos") ->
     )
     wave.add_argument("--no-eyelashes", action="store_true")
     wave.add_argument("--no-eyelid", action="store_true")
-    wave.add_argument("--particles", type=count(0), default=1000)
+    wave.add_argument("--particles", type=count(0, MAX_PARTICLES), default=1000)
     wave.add_argument("--fresnel", action="store_true", help="Luidolt eq. 5.6 Fresnel term")
     wave.add_argument("--spectral", choices=glare.wave.SPECTRAL_METHODS, default="scaled")
     wave.add_argument("--source-x-deg", type=number(-90, 90), default=0.0)
-    wave.add_argument("--diaphragm-sides", type=count(3), default=None)
+    wave.add_argument("--diaphragm-sides", type=count(3, 360), default=None)
     wave.add_argument("--cross-screen", choices=("4-point", "trigonal"), default=None)
     wave.add_argument("--aperture-image", type=Path, default=None, help="obstacle PNG/EXR")
     wave.add_argument("--aperture-spacing-mm", type=number(0, above=True), default=None)
@@ -460,7 +494,7 @@ def add(commands) -> None:
     )
     render.add_argument(
         "--pixel-deg",
-        type=number(0, 10, above=True),
+        type=number(MIN_PIXEL_DEG, 10),
         required=True,
         help="visual angle of a pixel, degrees (0-10)",
     )
@@ -488,7 +522,7 @@ def add(commands) -> None:
     psf.add_argument("--out", type=Path, required=True, help="PNG (Kakimoto's tone curve)")
     psf.add_argument("--exr", type=Path, default=None, help="also write the kernel as EXR")
     psf.add_argument(
-        "--pixel-deg", type=number(0, 10, above=True), default=0.01, help="degrees per pixel"
+        "--pixel-deg", type=number(MIN_PIXEL_DEG, 10), default=0.01, help="degrees per pixel"
     )
     psf.add_argument(
         "--size", type=odd_size, default=401, help="kernel size in pixels (odd, 3-16385)"
@@ -500,7 +534,7 @@ def add(commands) -> None:
     gallery = commands.add_parser("gallery", help="render the wave-optics PSF gallery")
     gallery.add_argument("--out", type=Path, default=Path("docs/gallery"))
     gallery.add_argument(
-        "--pixel-deg", type=number(0, 10, above=True), default=0.01, help="degrees per pixel"
+        "--pixel-deg", type=number(MIN_PIXEL_DEG, 10), default=0.01, help="degrees per pixel"
     )
     gallery.add_argument(
         "--size", type=odd_size, default=401, help="kernel size in pixels (odd, 3-16385)"

@@ -1,4 +1,5 @@
 import csv
+import re
 import shutil
 
 import numpy as np
@@ -181,3 +182,25 @@ def test_files_of_the_first_data_format_still_load(simulated, tmp_path):
     assert dataset.trials["onset_s"].isna().all()
     new = load_sessions(load_protocol("spencer1995"), csvs(simulated, "spencer1995"))
     assert len(dataset.trials) == len(new.trials)
+
+
+@pytest.mark.parametrize(
+    ("change", "named"),
+    [
+        ({"duration_ms": "500.0"}, "column duration_ms: 500.0"),
+        ({"step_fraction": "7"}, "column step_fraction: 7.0"),
+        ({"presentation_ok": "false", "counted": "true"}, "its presentation failed"),
+        ({"counted": "false", "__all__": True}, "none of their trials counted"),
+    ],
+)
+def test_staircase_rows_the_protocol_cannot_write_are_refused(simulated, tmp_path, change, named):
+    source = csvs(simulated, "spencer1995")[0]
+    frame = pd.read_csv(source, keep_default_na=False, dtype=str)
+    rows = slice(None) if change.pop("__all__", False) else 3
+    for column, value in change.items():
+        frame.loc[rows, column] = value
+    bad = tmp_path / source.name
+    frame.to_csv(bad, index=False)
+    shutil.copy(source.with_suffix(".json"), bad.with_suffix(".json"))
+    with pytest.raises(DataError, match=re.escape(named)):
+        load_sessions(load_protocol("spencer1995"), [bad])
