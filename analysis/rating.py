@@ -1,7 +1,14 @@
 """The analysis of a rating questionnaire (Luidolt 2020, §7.2.1): per category mean, SD,
 median, IQR and the count of each rating; the distributions as diverging stacked bars
 (Figures 7.1-7.7); and a Wilcoxon signed-rank test of each category against the scale's
-midpoint (Luidolt's 1-7 scale: 4), Holm-corrected across categories."""
+midpoint (Luidolt's 1-7 scale: 4), Holm-corrected across categories.
+
+A study that shows conditions (the night-vision pipeline with and without each effect) is
+summarised per condition and category; each condition is compared with the first (the
+reference: the full pipeline) category by category, by a Wilcoxon signed-rank test of the
+participants' paired differences against 0, Holm-corrected across all comparisons. Its figure
+shows each condition's ratings; given the stimulus set, the report's Method section shows each
+condition's frames as the display showed them (:func:`stimulus_figures`)."""
 
 from __future__ import annotations
 
@@ -12,26 +19,61 @@ import pandas as pd
 from .apa import unit_interval
 from .figures import Figure, plt, png
 from .load import Dataset
+from .methods import display_text
 from .stats import apa_p, holm, wilcoxon_signed_rank
 
-__all__ = ["analyse", "check", "design", "methods"]
+__all__ = ["analyse", "check", "design", "methods", "stimulus_figures"]
 
 ALPHA = 0.05  # the significance level the results text uses
 NEUTRAL = "#9e9e9e"  # the scale's middle category: a grey that shows on white
 
 
+def _conditions(protocol) -> list[dict]:
+    return protocol.data.get("conditions") or []
+
+
 def design(protocol) -> tuple[list[str], list[tuple], str | None]:
     """Within factors, the cells every participant needs, and the block analysed (all)."""
-    return ["category"], [(c,) for c in protocol["questionnaire"]["categories"]], None
+    categories = protocol["questionnaire"]["categories"]
+    conditions = _conditions(protocol)
+    if conditions:
+        cells = [(c["name"], k) for c in conditions for k in categories]
+        return ["condition", "category"], cells, None
+    return ["category"], [(c,) for c in categories], None
 
 
 def methods(protocol, participants: int, who: str) -> str:
     """Methods text naming the protocol's actual parameters."""
     q = protocol["questionnaire"]
+    conditions = _conditions(protocol)
+    shown = ""
+    if conditions:
+        scene = protocol["scene"]
+        listed = "; ".join(
+            f"{c['name']}: {', '.join(c['effects']) or 'no effect'}" for c in conditions
+        )
+        shown = (
+            f" Before each condition's questions a procedural night {scene['kind']} "
+            f"({scene['size_px'][0]} × {scene['size_px'][1]} px, {scene['lamps']} lamps of "
+            f"{scene['lamp_cd_m2']:g} cd/m², ambient {scene['ambient_cd_m2']:g} cd/m²) was shown "
+            f"on {display_text(protocol)} for {scene['seconds']:g} s "
+            + {
+                "still": "as a still, ",
+                "enter_dark": f"as the eye adapts after leaving {scene['start_cd_m2']:g} cd/m² "
+                f"({scene['frame_rate_hz']:g} frames/s), ",
+                "gaze": "with the gaze moving from the road to a lamp and back "
+                f"({scene['frame_rate_hz']:g} frames/s), ",
+            }[scene["sequence"]]
+            + "rendered through the night-vision pipeline with the condition's effects "
+            f"({listed}), "
+            "the conditions in an order of each participant's own; each condition was compared "
+            f"with {conditions[0]['name']} by a Wilcoxon signed-rank test of the paired "
+            "differences, Holm-corrected."
+        )
     return (
         f"{who} rated {len(q['categories'])} categories ({', '.join(q['categories'])}) on a "
         f"{q['scale_min']}-{q['scale_max']} scale from “{q['anchors'][0]}” to "
-        f"“{q['anchors'][1]}”{', each with an optional comment' if q['comments'] else ''}."
+        f"“{q['anchors'][1]}”{', each with an optional comment' if q['comments'] else ''}." + shown
     )
 
 
@@ -42,6 +84,8 @@ def check(trials: pd.DataFrame, protocol) -> list[str]:
 
 
 def analyse(dataset: Dataset, protocol) -> dict:
+    if _conditions(protocol):
+        return _analyse_conditions(dataset, protocol)
     q = protocol["questionnaire"]
     scale = range(q["scale_min"], q["scale_max"] + 1)
     midpoint = (q["scale_min"] + q["scale_max"]) / 2
@@ -131,6 +175,224 @@ def _results(summary: pd.DataFrame, midpoint: float, n: int) -> list[str]:
         + parts[-1]
         + "."
     ]
+
+
+def _summary_row(ratings: pd.Series, scale: range, midpoint: float) -> dict:
+    q1, q3 = np.percentile(ratings, [25, 75])
+    if (ratings != midpoint).any():
+        test = wilcoxon_signed_rank(ratings, mu=midpoint)
+        statistic, p = test["V"], test["p"]
+    else:
+        statistic, p = 0.0, 1.0
+    row = {
+        "n": int(ratings.count()),
+        "mean": ratings.mean(),
+        "sd": ratings.std(ddof=1),
+        "median": ratings.median(),
+        "iqr": q3 - q1,
+        "wilcoxon_V": statistic,
+        "p": p,
+    }
+    row.update({f"count_{k}": int((ratings == k).sum()) for k in scale})
+    return row
+
+
+def _analyse_conditions(dataset: Dataset, protocol) -> dict:
+    q = protocol["questionnaire"]
+    scale = range(q["scale_min"], q["scale_max"] + 1)
+    midpoint = (q["scale_min"] + q["scale_max"]) / 2
+    trials = dataset.trials
+    conditions = [c for c in _conditions(protocol) if (trials["condition"] == c["name"]).any()]
+    categories = [c for c in q["categories"] if (trials["category"] == c).any()]
+    rows = []
+    for condition in conditions:
+        for category in categories:
+            chosen = (trials["condition"] == condition["name"]) & (trials["category"] == category)
+            cell = trials[chosen]
+            ratings = cell["rating"].astype(float)
+            rows.append(
+                {"condition": condition["name"], "category": category}
+                | _summary_row(ratings, scale, midpoint)
+            )
+    summary = pd.DataFrame(rows)
+    summary["p_holm"] = holm(summary["p"])
+    reference = conditions[0]["name"]
+    wide = trials.pivot_table(
+        index="participant", columns=["condition", "category"], values="rating", aggfunc="mean"
+    )
+    comparisons = []
+    for condition in conditions[1:]:
+        for category in categories:
+            difference = (
+                wide[(condition["name"], category)] - wide[(reference, category)]
+            ).dropna()
+            if (difference != 0).any():
+                test = wilcoxon_signed_rank(difference, mu=0.0)
+                statistic, p = test["V"], test["p"]
+            else:  # no participant rated them differently
+                statistic, p = 0.0, 1.0
+            comparisons.append(
+                {
+                    "condition": condition["name"],
+                    "reference": reference,
+                    "category": category,
+                    "n": int(difference.size),
+                    "mean_difference": float(difference.mean()),
+                    "median_difference": float(difference.median()),
+                    "wilcoxon_V": statistic,
+                    "p": p,
+                }
+            )
+    compared = pd.DataFrame(comparisons)
+    if not compared.empty:
+        compared["p_holm"] = holm(compared["p"])
+        compared["apa"] = [
+            f"V = {v:g}, {apa_p(p)} (Holm)"
+            for v, p in zip(compared["wilcoxon_V"], compared["p_holm"], strict=True)
+        ]
+    comments = trials.loc[
+        trials["comment"].notna(), ["participant", "condition", "category", "rating", "comment"]
+    ]
+    text = {}
+    for row in compared.itertuples() if not compared.empty else []:
+        if row.p_holm < 0.05:
+            text[f"{row.condition}, {row.category}"] = (
+                f"rated {abs(row.mean_difference):.2f} points "
+                f"{'lower' if row.mean_difference < 0 else 'higher'} than {row.reference} "
+                f"({row.apa})"
+            )
+    n = trials["participant"].nunique()
+    figure = Figure(
+        _by_condition(summary, conditions, categories, scale, q["anchors"]),
+        "Ratings per category in each condition",
+        f"The share of the {n} participants giving each rating from {scale[0]} "
+        f"({q['anchors'][0]}) to {scale[-1]} ({q['anchors'][1]}) in each condition (rows: the "
+        "effects of the pipeline shown), as diverging bars; the number at the right of each "
+        "bar is the mean rating. The stimulus each condition showed is in the Stimuli figures "
+        "(given the stimulus set).",
+    )
+    results = [_compared_text(compared, reference)]
+    return {
+        "tables": {"summary": summary, "comparisons": compared, "comments": comments},
+        "figures": {"ratings_by_condition.png": figure},
+        "text": text,
+        "results": results,
+        "captions": {
+            "summary": "Ratings per condition and category: mean, SD, median, IQR, Wilcoxon "
+            f"signed-rank test against the midpoint {midpoint:g} (Holm-corrected) and the count "
+            "of each rating",
+            "comparisons": f"Each condition against {reference}: the participants' paired "
+            "differences, Wilcoxon signed-rank test against 0, Holm-corrected across all "
+            "comparisons",
+            "comments": "The participants' comments",
+        },
+    }
+
+
+def _compared_text(compared: pd.DataFrame, reference: str) -> str:
+    """The comparisons with the reference condition as one paragraph."""
+    if compared.empty:
+        return f"Only {reference} was rated: there is nothing to compare."
+    uncorrected = compared[compared["p"] < ALPHA]
+    held = compared[compared["p_holm"] < ALPHA]
+    if uncorrected.empty:
+        return (
+            f"No condition was rated differently from {reference} in any category "
+            f"(uncorrected p ≥ {ALPHA:g} in all {len(compared)} comparisons)."
+        )
+    listed = "; ".join(
+        f"{r.condition} {abs(r.mean_difference):.2f} points "
+        f"{'lower' if r.mean_difference < 0 else 'higher'} in {r.category} "
+        f"(V = {r.wilcoxon_V:g}, uncorrected {apa_p(r.p)})"
+        for r in uncorrected.itertuples()
+    )
+    after = (
+        "none of them remains significant"
+        if held.empty
+        else f"{len(held)} remain significant: "
+        + "; ".join(f"{r.condition} in {r.category} ({r.apa})" for r in held.itertuples())
+    )
+    return (
+        f"Compared with {reference}, {len(uncorrected)} of the {len(compared)} comparisons "
+        f"differed at uncorrected p < {ALPHA:g}: {listed}. After Holm's correction over all "
+        f"{len(compared)}, {after}."
+    )
+
+
+def stimulus_figures(protocol, shown) -> list[Figure]:
+    """Each condition's scene as the display showed it: its first, middle and last frame.
+    ``shown`` is an :class:`analysis.stimulus_figures.DisplayedSet`; a questionnaire without a
+    scene shows none."""
+    from .stimulus_figures import image_grid
+
+    conditions = _conditions(protocol)
+    if not conditions:
+        return []
+    plan = shown.manifest["parameters"]["sequences"]
+    time_s = shown.manifest["parameters"]["frame_time_s"]
+    panels = []
+    for condition in conditions:
+        frames = plan[condition["name"]]["frames"]
+        for index in sorted({0, len(frames) // 2, len(frames) - 1}):
+            label = f"{condition['name']}, {index * time_s:.1f} s" if len(frames) > 1 else ""
+            panels.append((shown.picture(frames[index]), label or condition["name"]))
+    columns = min(3, len(plan[conditions[0]["name"]]["frames"]))
+    scene = protocol["scene"]
+    rows = "; ".join(f"{c['name']}: {', '.join(c['effects']) or 'no effect'}" for c in conditions)
+    return [
+        Figure(
+            image_grid(panels, columns=columns),
+            "The scene of each condition",
+            f"The night {scene['kind']} each condition showed before its questions (rows: "
+            f"{rows}), at its first, middle and last frame, pixel for pixel: the luminance the "
+            f"{shown.describe_display()} showed, relative to its maximum and encoded for an "
+            "sRGB screen.",
+        )
+    ]
+
+
+def _by_condition(summary, conditions, categories, scale, anchors) -> bytes:
+    """One row per condition: the ratings of each category as diverging stacked bars."""
+    rows = len(conditions)
+    figure, axes = plt.subplots(
+        rows, 1, figsize=(7, (0.32 * len(categories) + 0.9) * rows + 0.8), squeeze=False
+    )
+    colours = _colours(scale)
+    for index, condition in enumerate(conditions):
+        bars = axes[index, 0]
+        name = condition["name"]
+        bars.set_title(
+            f"{name}: {', '.join(condition['effects']) or 'no effect'}", fontsize=9, loc="left"
+        )
+        part = summary[summary["condition"] == name].set_index("category")
+        _bars(bars, part.loc[categories], scale, colours)
+        if index == rows - 1:
+            bars.set_xlabel(f"% ({scale[0]} = {anchors[0]} … {scale[-1]} = {anchors[1]})")
+            bars.legend(
+                ncol=len(scale), fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.45),
+                frameon=False,
+            )  # fmt: skip
+    return png(figure)
+
+
+def _bars(axis, summary: pd.DataFrame, scale: range, colours) -> None:
+    y = np.arange(len(summary))[::-1]
+    below = len(scale) // 2
+    for index, (_category, row) in enumerate(summary.iterrows()):
+        counts = np.array([row[f"count_{k}"] for k in scale], float)
+        share = 100 * counts / counts.sum()
+        neutral = share[below] if len(scale) % 2 else 0.0
+        left = -share[:below].sum() - neutral / 2
+        for k in range(len(scale)):
+            axis.barh(
+                y[index], share[k], left=left, color=colours[k], edgecolor="white",
+                label=str(scale[k]) if index == 0 else None,
+            )  # fmt: skip
+            left += share[k]
+        axis.text(104, y[index], f"{row['mean']:.1f}", va="center", fontsize=7)
+    axis.axvline(0, color="k", lw=0.8)
+    axis.set_xlim(-100, 115)
+    axis.set_yticks(y, list(summary.index), fontsize=8)
 
 
 def _diverging(summary: pd.DataFrame, scale: range, anchors: list[str]) -> bytes:

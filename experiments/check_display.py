@@ -111,7 +111,7 @@ def check_display(
     fullscreen
         Measure a full-screen window (as a session runs); default True.
     """
-    if "display" not in protocol.data:
+    if not protocol.data.get("display"):
         raise ValueError(f"the {protocol.study} protocol describes no display to check")
     if frames < 10:
         raise ValueError(f"frames must be at least 10; got {frames!r}")

@@ -86,7 +86,7 @@ def check_calibration(protocol, calibration) -> list[Check]:
     """The calibration belongs to the protocol's display: bit depth, and white luminance within
     ``display.white_tolerance`` (a fraction) of ``display.max_cd_m2``. No calibration, no check
     (an uncalibrated session is refused or recorded elsewhere)."""
-    if calibration is None or "display" not in protocol.data:
+    if calibration is None or not protocol.data.get("display"):
         return []
     display = protocol["display"]
     tolerance = display["white_tolerance"]
@@ -106,7 +106,7 @@ def check_calibration(protocol, calibration) -> list[Check]:
 
 def check_screen(protocol, facts: ScreenFacts) -> list[Check]:
     """Resolution, refresh rate and bits per channel of the open window against the protocol."""
-    if "display" not in protocol.data:
+    if not protocol.data.get("display"):
         return []
     display = protocol["display"]
     width, height = display["resolution_px"]
@@ -188,7 +188,7 @@ def enforce(checks: Iterable[Check], *, accept: Iterable[str] = ()) -> list[dict
 def timing_rate_hz(protocol, facts: ScreenFacts | None, records: list[dict]) -> float:
     """The frame rate presentations are timed at: the measured one when the refresh check
     passed, else the protocol's nominal rate (the window then paces frames by the clock)."""
-    nominal = protocol["display"]["refresh_hz"] if "display" in protocol.data else 60.0
+    nominal = (protocol.data.get("display") or {}).get("refresh_hz", 60.0)
     passed = any(r["name"] == "refresh" and r["passed"] for r in records)
     if passed and facts is not None and facts.refresh_hz is not None:
         return float(facts.refresh_hz)

@@ -7,7 +7,9 @@ clears them. The loop decides what each press means:
 - every press is handled once, in the order pressed, however many arrive between two redraws
   (three quick ↑ are three steps);
 - a press counts only from the onset of the trial's stimulus (the flip that first showed it;
-  for a screen that is not part of a trial, its own onset) and only on a key the screen takes;
+  for a screen that is not part of a trial, its own onset; for a presentation whose screen
+  says ``answer_after_presentation``, the flip that ended it) and only on a key the screen
+  takes;
   every other press is recorded in the next row's ``ignored_keys``, with its time from that
   trial's onset (negative: before it), so no press is lost without a trace;
 - ``time_s`` is the time from the trial's onset to the press, on the device's clock
@@ -221,6 +223,13 @@ class SessionLoop:
             t = press.t_s - anchor
             if t < 0:
                 self._ignore(press.name, press.t_s, "before the trial's onset")
+                continue
+            if (
+                screen.get("answer_after_presentation")
+                and shown.offset_s is not None
+                and press.t_s < shown.offset_s
+            ):
+                self._ignore(press.name, press.t_s, "during the presentation")
                 continue
             if name not in screen["keys"]:
                 if not screen.get("text_entry"):

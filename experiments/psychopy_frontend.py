@@ -10,7 +10,8 @@ image is encoded and uploaded once: the set's images when first needed, a target
 setting changes, Spencer's comparison once per trial before its first frame. Frames only draw.
 
 **Timing.** ``show`` returns the time of the flip that showed a screen; ``present`` shows a
-blank for ``blank_before_ms``, then the flash for exactly ``frames`` flips, then the answer
+blank for ``blank_before_ms``, then the flash for exactly ``frames`` flips (or a sequence of
+images, each for its own number of flips: a night scene as the eye adapts), then the answer
 prompt, and returns the onset and offset flip times and the frames dropped (counted from the
 flip times). On a display whose refresh was verified, flips follow its vertical sync; on one
 that was not (``--accept-mismatch refresh``, ``--allow-unmeasured-refresh``), flips are paced by
@@ -115,7 +116,8 @@ class PsychoPyFrontend:
         self.size = size
         self.scripted = scripted_keys
         self.screenshot = Path(screenshot) if screenshot else None
-        self.display_bits = protocol["display"]["bit_depth"] if "display" in protocol.data else 8
+        display = protocol.data.get("display")
+        self.display_bits = display["bit_depth"] if display else 8
         self.calibration = calibration or self._set_calibration()
         self.calibration_used = (
             None
@@ -131,7 +133,7 @@ class PsychoPyFrontend:
         self.should_stop = None  # the session's check for a stop signal (raises when stopped)
         self._logfile = None
         self.keys = None
-        self.refresh_hz = protocol["display"]["refresh_hz"] if "display" in protocol.data else 60.0
+        self.refresh_hz = display["refresh_hz"] if display else 60.0
         self.pace = False
         self.facts: ScreenFacts | None = None
         self.frames_path: Path | None = None
@@ -280,8 +282,8 @@ class PsychoPyFrontend:
     def _image_stim(self, luminance: np.ndarray):
         from psychopy import visual
 
-        levels = self._levels(luminance)
-        h, w = levels.shape
+        levels = self._levels(luminance)  # (H, W), or (H, W, 3) for a colour image
+        h, w = levels.shape[:2]
         return visual.ImageStim(
             self.window,
             image=levels,
@@ -310,6 +312,14 @@ class PsychoPyFrontend:
                 stim.image = self._levels(luminance)
             self._roles[role] = (terms, stim)
         return stim
+
+    def _frame_stims(self, step: dict) -> list:
+        """A sequence frame's images, centred, uploaded now and not cached."""
+        stims = []
+        for image in step["images"]:
+            ((name, weight),) = image["terms"]
+            stims.append(self._image_stim(self.set.read(name) * float(weight)))
+        return stims
 
     def _place(self, screen: dict) -> list:
         """The screen's images, uploaded and laid out in a row, centred, the set's gap apart."""
@@ -400,29 +410,42 @@ class PsychoPyFrontend:
         return onset
 
     def present(self, screen: dict) -> Shown:
+        """A still for ``frames`` flips, or a sequence (``screen['sequence']``: images, each for
+        its ``frames`` flips), after a blank of ``blank_before_ms``; then the answer prompt."""
         self._screen = screen
-        stims = self._place(screen)  # encoded and uploaded before the first frame
+        sequence = screen.get("sequence")
+        steps = sequence or [{"images": screen["images"], "frames": screen["frames"]}]
+        placed = []
+        for step in steps:  # encoded and uploaded before the first frame
+            # a sequence's frames are shown once: uploaded for it, not kept for the session
+            stims = self._place(step) if not sequence else self._frame_stims(step)
+            for stim in stims:  # a first draw: textures on the GPU before frame one
+                stim.draw()
+            placed.append((stims, step["frames"]))
+        total = sum(frames for _, frames in placed)
         period = 1.0 / self.refresh_hz
-        for stim in stims:  # a first draw outside the flash: textures on the GPU before frame one
-            stim.draw()
         self.window.clearBuffer()
         blank = self.window.flip()
         self._wait_until(blank + screen["blank_before_ms"] / 1000.0 - (0 if self.pace else period))
         flips = []
-        for frame in range(screen["frames"]):
-            for stim in stims:
-                stim.draw()
-            if self.pace and flips:
-                self._wait_until(flips[0] + frame * period)
-            flips.append(self._flip(capture=frame == 0))
-        self._draw_text(screen.get("prompt", ""), pos=(0, -stims[0].size[1] / 2 - 60))
+        frame = 0
+        for stims, frames in placed:
+            for _ in range(frames):
+                for stim in stims:
+                    stim.draw()
+                if self.pace and flips:
+                    self._wait_until(flips[0] + frame * period)
+                flips.append(self._flip(capture=frame == 0))
+                frame += 1
+        height = max(s.size[1] for stims, _ in placed for s in stims)
+        self._draw_text(screen.get("prompt", ""), pos=(0, -height / 2 - 60))
         if self.pace:
-            self._wait_until(flips[0] + screen["frames"] * period)
+            self._wait_until(flips[0] + total * period)
         flips.append(self.window.flip())
         shown = Shown(
             onset_s=flips[0],
             offset_s=flips[-1],
-            frames=screen["frames"],
+            frames=total,
             dropped_frames=count_dropped_frames(flips, self.refresh_hz),
         )
         self._write_intervals(f"trial {screen['trial']} flash", flips)

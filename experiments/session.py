@@ -37,7 +37,8 @@ from pathlib import Path
 
 from protocols import DATA_FORMAT
 from stimuli.calibration import Calibration, usable_calibration
-from stimuli.stimulus_set import BUILDERS, package_versions, verify_stimulus_set
+from stimuli.stimulus_set import package_versions, verify_stimulus_set
+from stimuli.stimulus_set import shows_images as _shows_images
 
 from .data import SessionError, SessionFiles, check_session_id
 from .display import check_calibration, check_screen, enforce, timing_rate_hz
@@ -60,8 +61,8 @@ END_TEXT = "The session is complete. Thank you!\n\nPlease tell the experimenter.
 
 
 def shows_images(protocol) -> bool:
-    """Whether the protocol's paradigm shows images (and so needs a stimulus set)."""
-    return BUILDERS.get(protocol.paradigm) is not None
+    """Whether the protocol shows images (and so needs a stimulus set)."""
+    return _shows_images(protocol)
 
 
 def make_engine(

@@ -7,9 +7,15 @@ scattering). Digitise one with :func:`kernel` / :func:`digitise_kernel`,
 apply it with :func:`add_glare` / :func:`render_glare`, or to many images of one shape with
 a :class:`GlareRenderer`. The eye state is in :mod:`glare.eye`,
 the PSF components in :mod:`glare.vos`.
+
+Night vision around the glare (Spencer 1995 §5, Luidolt 2020 ch. 5): temporal adaptation
+(:mod:`glare.adaptation`), acuity loss (:mod:`glare.acuity`), scotopic colour
+(:mod:`glare.scotopic`), and all of them with glare in Luidolt's order, :func:`render_night`.
 """
 
-from . import apertures, eye, vos, wave
+from . import acuity, adaptation, apertures, eye, night, scotopic, vos, wave
+from .acuity import acuity_blur, blur_sigma_deg
+from .adaptation import adaptation_luminance, frame_luminance
 from .base import TailBound
 from .digitise import Kernel, kernel_shape_for
 from .display import Display
@@ -25,9 +31,11 @@ from .models import (
     kernel,
     make_model,
 )
+from .night import NightResult, render_night
 from .plan import GlarePlan, plan_glare
 from .render import L_DMAX_YOSHIDA2008_CD_M2, add_glare, render_glare, render_planned
 from .renderer import GlareRenderer, GlareResult, PlannedGlare
+from .scotopic import scotopic_colour
 from .spectral import HaloSpectrum, Spectrum
 from .wave import WaveOpticsGlare
 
@@ -43,24 +51,35 @@ __all__ = [
     "HaloSpectrum",
     "HybridGlare",
     "Kernel",
+    "NightResult",
     "PlannedGlare",
     "Spectrum",
     "TailBound",
     "VosGlare",
     "WaveOpticsGlare",
+    "acuity",
+    "acuity_blur",
+    "adaptation",
+    "adaptation_luminance",
     "add_glare",
     "apertures",
+    "blur_sigma_deg",
     "digitise_kernel",
     "eye",
     "flare_line_pattern",
+    "frame_luminance",
     "kernel",
     "kernel_shape_for",
     "make_model",
+    "night",
     "plan_glare",
     "pupil_diameter_mm",
     "regime",
     "render_glare",
+    "render_night",
     "render_planned",
+    "scotopic",
+    "scotopic_colour",
     "vos",
     "wave",
 ]

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from protocols import COMMON, DATA_FORMAT, PARADIGMS, columns, describe_schema, load_protocol
 from protocols.common import BACKGROUNDS
+from protocols.rating import SCENE
 
 __all__ = ["data_reference", "protocol_reference"]
 
@@ -44,6 +45,21 @@ def protocol_reference() -> str:
                 lines.append(
                     f"| `{kind}` | `{key}` | {spec.unit} | {spec.allowed()} | {spec.doc} |"
                 )
+    lines += [
+        "",
+        "## Night scenes",
+        "",
+        "A rating study's `[scene]` (`stimuli.night`), shown once per `[[conditions]]` before its",
+        "questions, rendered through `glare.render_night` with the condition's effects; it",
+        "needs `[display]` and `[viewing]` as the other paradigms have them:",
+        "",
+        "| key | unit | default | allowed | meaning |",
+        "| --- | --- | --- | --- | --- |",
+    ]
+    for key, spec in SCENE.items():
+        default = "required" if spec.required else repr(spec.default)
+        allowed = spec.allowed()
+        lines.append(f"| `scene.{key}` | {spec.unit} | {default} | {allowed} | {spec.doc} |")
     lines += [
         "",
         "## Glare models",
@@ -86,11 +102,14 @@ def data_reference() -> str:
         "when the program read them), and screens the time of the flip that showed them.",
         "",
         "- `onset_s`: the flip that first showed the trial's stimulus (Yoshida: the reference",
-        "  and targets; Spencer: the first frame of the flash; Luidolt: the rating screen).",
+        "  and targets; Spencer: the first frame of the flash; Luidolt: the rating screen; a",
+        "  rating study with a scene: the first frame of the condition's scene for the",
+        "  condition's first category, the rating screen for the others).",
         "- `time_s`: from `onset_s` to the key press that ended the trial (Yoshida: the Enter",
         "  that confirms both settings, however many redraws came between; Spencer: the answer,",
         "  which may come during the flash; Luidolt: the rating key).",
-        "- `offset_s`, `shown_ms` (Spencer): the flip that replaced the flash, and the measured",
+        "- `offset_s`, `shown_ms` (Spencer, and a rating study's scene): the flip that replaced",
+        "  the flash, and the measured",
         "  duration `offset_s - onset_s`; `frames` is what was asked at the timing rate.",
         "- `dropped_frames`: frame intervals longer than 1.5 periods during the flash, counted",
         "  in lost frames; `presentation_ok` is false when any was lost or `shown_ms` is more",
@@ -140,7 +159,7 @@ def data_reference() -> str:
         "questions, contexts and scale). For the shipped studies:",
         "",
     ]
-    for name in ("yoshida2008", "spencer1995", "luidolt2020"):
+    for name in ("yoshida2008", "spencer1995", "luidolt2020", "night2026"):
         protocol = load_protocol(name)
         lines += [
             f"## `{name}` ({protocol.paradigm})",

@@ -2,6 +2,11 @@
 
 Each category is rated on a scale of number keys (Luidolt: 1 = completely different, 7 =
 exactly the same), optionally with a typed comment.
+
+A study that shows what it asks about adds a ``[scene]`` (a rendered night scene, still or a
+sequence, see :mod:`stimuli.night`) and ``[[conditions]]``: the pipeline of
+:func:`glare.render_night` with a set of its effects each. Every condition's scene is shown,
+frame-exact, before its questions; the rows name the condition.
 """
 
 from __future__ import annotations
@@ -9,13 +14,92 @@ from __future__ import annotations
 from pathlib import Path
 
 from .columns import Column
-from .common import INSTRUCTIONS
-from .keys import Key, Schema
+from .common import DISPLAY, INSTRUCTIONS, VIEWING, check_display
+from .keys import Key, Schema, Tables, validate
 
-__all__ = ["SCHEMA", "check", "columns"]
+__all__ = ["CONDITION", "EFFECTS", "SCENE", "SCHEMA", "check", "columns"]
+
+EFFECTS = ("adaptation", "glare", "acuity", "scotopic")  # glare.night.EFFECTS, Luidolt's order
+SCENE: Schema = {
+    "kind": Key(str, "the procedural scene (stimuli.night)", choices=("street",)),
+    "size_px": Key(list, "scene size (width, height)", item=int, length=2, low=16, high=4096),
+    "pixel_deg": Key(
+        float,
+        "visual angle of a pixel (0: from the display geometry)",
+        unit="deg",
+        low=0.0,
+        high=1.0,
+        default=0.0,
+    ),
+    "lamps": Key(int, "street lamps along the street", low=1, high=12),
+    "lamp_cd_m2": Key(float, "luminance of a lamp's bulb", unit="cd/m²", low=1.0, high=1e9),
+    "ambient_cd_m2": Key(
+        float, "the night's ambient luminance (sky, far walls)", unit="cd/m²", low=0.0, high=1e3
+    ),
+    "sequence": Key(
+        str,
+        "what is shown: one still frame, the eye adapting after entering the dark, or a "
+        "gaze that moves from the dark to a lamp and back",
+        choices=("still", "enter_dark", "gaze"),
+    ),
+    "seconds": Key(float, "how long the scene is shown", unit="s", low=0.05, high=60.0),
+    "frame_rate_hz": Key(
+        float,
+        "rendered frames per second of a sequence (each shown for a whole number of refreshes)",
+        unit="Hz",
+        low=1.0,
+        high=240.0,
+        default=10.0,
+    ),
+    "start_cd_m2": Key(
+        float,
+        "enter_dark: the luminance the eye was adapted to before",
+        unit="cd/m²",
+        low=0.0,
+        high=1e6,
+        default=100.0,
+    ),
+    "adapted_display_cd_m2": Key(
+        float,
+        "display luminance of the adapting luminance (the exposure's key)",
+        unit="cd/m²",
+        low=0.001,
+        high=1e5,
+        default=10.0,
+    ),
+    "glare_model": Key(str, "a glare model of glare.GLARE_MODELS", default="vos"),
+    "glare_parameters": Key(dict, "the glare model's parameters", default={}),
+    "seed": Key(int, "seed of the scene's random details", low=0, default=0),
+    "blank_before_ms": Key(
+        float,
+        "blank screen before each showing",
+        unit="ms",
+        low=0.0,
+        high=10_000.0,
+        default=500.0,
+    ),
+}
+CONDITION: Schema = {
+    "name": Key(str, "the condition's name in the data", token=True),
+    "title": Key(str, "the condition's name in figures", default=""),
+    "effects": Key(
+        list,
+        "the effects of the pipeline applied",
+        item=str,
+        length=(0, 4),
+        unique=True,
+        choices=EFFECTS,
+    ),
+}
 
 SCHEMA: Schema = {
     "instructions": INSTRUCTIONS,
+    "display": Key(dict, "the display (needed with a scene): as in every protocol", default=None),
+    "viewing": Key(dict, "the viewing geometry (needed with a scene)", default=None),
+    "scene": Key(dict, "a night scene shown before each condition's questions", default=None),
+    "conditions": Tables(
+        CONDITION, "the pipeline's effects per condition (needs a scene)", (1, 20), default=[]
+    ),
     "questionnaire": {
         "scale_min": Key(int, "lowest rating (a number key)", low=0, high=8),
         "scale_max": Key(int, "highest rating (a number key)", low=1, high=9),
@@ -31,17 +115,36 @@ SCHEMA: Schema = {
             "category (category = [p, …]); a category not given: every rating alike",
             default={},
         ),
+        "category_effects": Key(
+            dict,
+            "simulated observers: the effect each category is about (category = effect)",
+            default={},
+        ),
+        "missing_effect_shift": Key(
+            float,
+            "simulated observers: how much lower a category is rated when its effect is off",
+            low=0.0,
+            high=8.0,
+            default=0.0,
+        ),
     },
 }
 
 
 def check(p: dict, problems: list[str], folder: Path | None) -> None:
     q = p["questionnaire"]
+    _check_scene(p, problems)
     if q["scale_min"] >= q["scale_max"]:
         problems.append("questionnaire.scale_min: must be below questionnaire.scale_max")
     if len(q["categories"]) != len(q["prompts"]):
         problems.append("questionnaire.prompts: one prompt per category is needed")
     size = q["scale_max"] - q["scale_min"] + 1
+    for category, effect in p["observer"]["category_effects"].items():
+        where = f"observer.category_effects.{category!r}"
+        if category not in q["categories"]:
+            problems.append(f"{where}: not a category of questionnaire.categories")
+        elif effect not in EFFECTS:
+            problems.append(f"{where} = {effect!r}: must be one of {', '.join(EFFECTS)}")
     for category, probabilities in p["observer"]["ratings"].items():
         where = f"observer.ratings.{category!r}"
         if category not in q["categories"]:
@@ -58,11 +161,76 @@ def check(p: dict, problems: list[str], folder: Path | None) -> None:
             )
 
 
+def _check_scene(p: dict, problems: list[str]) -> None:
+    """A scene needs the display, the viewing geometry and conditions; conditions need a
+    scene; the tables are validated in place (defaults filled in)."""
+    scene, conditions = p["scene"], p["conditions"]
+    if scene is None:
+        if conditions:
+            problems.append("[[conditions]]: need a [scene] to show")
+        for name in ("display", "viewing"):
+            if p[name] is not None:
+                problems.append(f"[{name}]: only a study with a [scene] uses it")
+        return
+    p["scene"] = validate(scene, SCENE, "scene", problems)
+    for name, schema in (("display", DISPLAY), ("viewing", VIEWING)):
+        if p[name] is None:
+            problems.append(f"[{name}]: missing (a study with a [scene] shows it on a display)")
+        else:
+            p[name] = validate(p[name], schema, name, problems)
+    if problems:
+        return
+    check_display(p["display"], problems)
+    if not conditions:
+        problems.append("[[conditions]]: missing (a [scene] is shown once per condition)")
+        return
+    names = [c["name"] for c in conditions]
+    if len(set(names)) != len(names):
+        repeated = sorted({n for n in names if names.count(n) > 1})
+        problems.append(f"conditions: names repeat {repeated}: each must be different")
+    model = p["scene"]["glare_model"]
+    if any("glare" in c["effects"] for c in conditions):
+        from .common import check_glare_model
+
+        check_glare_model(model, p["scene"]["glare_parameters"], "scene", problems)
+    width, height = p["scene"]["size_px"]
+    screen_w, screen_h = p["display"]["resolution_px"]
+    if width > screen_w or height > screen_h:
+        problems.append(
+            f"scene.size_px = {[width, height]}: must fit the display's "
+            f"{[screen_w, screen_h]} pixels"
+        )
+
+
 def columns(protocol) -> tuple[Column, ...]:
     """The paradigm's CSV columns for this protocol (after the common ones)."""
-    q = (protocol.data if hasattr(protocol, "data") else protocol)["questionnaire"]
+    data = protocol.data if hasattr(protocol, "data") else protocol
+    q = data["questionnaire"]
     low, high = q["anchors"]
+    condition = ()
+    if data.get("conditions"):
+        names = tuple(c["name"] for c in data["conditions"])
+        condition = (
+            Column("condition", str, "the pipeline whose scene was rated", choices=names),
+            Column(
+                "offset_s",
+                float,
+                "the flip that ended the scene's presentation (the condition's first category)",
+                unit="s",
+                low=0.0,
+                optional=True,
+            ),
+            Column(
+                "shown_ms",
+                float,
+                "measured presentation of the scene: offset flip minus onset flip",
+                unit="ms",
+                low=0.0,
+                optional=True,
+            ),
+        )
     return (
+        *condition,
         Column("category", str, "questionnaire category", choices=tuple(q["categories"])),
         Column(
             "rating",

@@ -18,7 +18,9 @@ import hashlib
 import json
 import os
 import shutil
+import struct
 import sys
+import zlib
 from importlib import metadata
 from pathlib import Path
 
@@ -38,6 +40,7 @@ from protocols.folders import (
 from .calibration import Calibration, synthetic_calibration
 from .exr import read_exr, write_exr
 from .matching import build_matching
+from .night import build_night
 from .staircase import build_staircase
 
 __all__ = [
@@ -50,6 +53,7 @@ __all__ = [
     "package_versions",
     "progress_bar",
     "read_codes",
+    "shows_images",
     "verify_stimulus_set",
     "write_codes",
 ]
@@ -59,10 +63,21 @@ INDEX = "README.md"
 FORMAT = "glarelab stimulus set v3"  # v3: PNGs scaled to 16 bits with sBIT, README.md
 PNG_MAX = 65535
 PACKAGES = ("numpy", "scipy", "colour-science", "OpenEXR", "matplotlib", "pillow", "glarelab")
-# the stimulus builder of each paradigm (None: the paradigm shows no images)
-BUILDERS = {"matching": build_matching, "staircase": build_staircase, "rating": None}
+# the stimulus builder of each paradigm (None: the paradigm shows no images); a builder's
+# ``shows(protocol)``, where it has one, says whether a protocol of the paradigm shows images
+BUILDERS = {"matching": build_matching, "staircase": build_staircase, "rating": build_night}
 # how the profile plots group a paradigm's images: (image kind, the key that names a group)
 PROFILE_GROUPS = {"matching": ("reference", "method"), "staircase": ("glare", "context")}
+
+
+def shows_images(protocol: Protocol) -> bool:
+    """Whether the protocol shows images (and so has a stimulus set): its paradigm has a
+    builder, and the builder takes this protocol (a questionnaire without a scene shows none)."""
+    builder = BUILDERS.get(protocol.paradigm)
+    if builder is None:
+        return False
+    shows = getattr(builder, "shows", None)
+    return True if shows is None else bool(shows(protocol))
 
 
 def progress_bar(done: int, total: int, what: str, *, stream=None) -> None:
@@ -78,8 +93,32 @@ def progress_bar(done: int, total: int, what: str, *, stream=None) -> None:
     )
 
 
+def _write_rgb16_png(path: str | Path, scaled: np.ndarray, bit_depth: int) -> None:
+    """``(H, W, 3)`` uint16 as a 16-bit RGB PNG with an ``sBIT`` chunk (Pillow writes 16-bit
+    greyscale but not 16-bit RGB): PNG specification (ISO/IEC 15948) IHDR with bit depth 16 and
+    colour type 2, sBIT of three channels, big-endian samples, filter type 0 on every row, one
+    zlib-compressed IDAT."""
+    height, width, _ = scaled.shape
+    rows = np.ascontiguousarray(scaled.astype(">u2")).reshape(height, width * 3).view(np.uint8)
+    raw = np.concatenate([np.zeros((height, 1), np.uint8), rows], axis=1).tobytes()
+
+    def chunk(kind: bytes, data: bytes) -> bytes:
+        body = kind + data
+        return struct.pack(">I", len(data)) + body + struct.pack(">I", zlib.crc32(body))
+
+    header = struct.pack(">IIBBBBB", width, height, 16, 2, 0, 0, 0)
+    Path(path).write_bytes(
+        b"\x89PNG\r\n\x1a\n"
+        + chunk(b"IHDR", header)
+        + chunk(b"sBIT", bytes([bit_depth] * 3))
+        + chunk(b"IDAT", zlib.compress(raw, 6))
+        + chunk(b"IEND", b"")
+    )
+
+
 def write_codes(path: str | Path, codes: np.ndarray, bit_depth: int) -> None:
-    """Write display codes as a 16-bit greyscale PNG that any viewer shows: the codes scaled to
+    """Write display codes as a 16-bit PNG that any viewer shows (greyscale; RGB for an
+    ``(H, W, 3)`` colour image): the codes scaled to
     the full 16-bit range, ``round(code × 65535 / (2^bit_depth − 1))``, with an ``sBIT`` chunk
     recording ``bit_depth`` (PNG specification §11.3.4.4: the scaling it recommends, which
     keeps the code in the top ``bit_depth`` bits).
@@ -99,6 +138,9 @@ def write_codes(path: str | Path, codes: np.ndarray, bit_depth: int) -> None:
             f"{codes.min()}-{codes.max()}"
         )
     scaled = np.floor(codes.astype(np.float64) * PNG_MAX / top + 0.5).astype(np.uint16)
+    if scaled.ndim == 3:  # a colour image: 16-bit RGB
+        _write_rgb16_png(path, scaled, bit_depth)
+        return
     info = PngInfo()
     info.add(b"sBIT", bytes([bit_depth]))
     Image.fromarray(scaled).save(path, pnginfo=info)
@@ -232,7 +274,7 @@ def build_stimulus_set(
         For a protocol without stimuli, a calibration whose bit depth is not the display's,
         or an ``out`` that is a file or a folder holding something other than a stimulus set.
     """
-    if BUILDERS.get(protocol.paradigm) is None:
+    if not shows_images(protocol):
         raise ValueError(
             f"the {protocol.study} protocol's paradigm ({protocol.paradigm}) shows no images: "
             "there is no stimulus set to build"
@@ -281,7 +323,14 @@ def _write_set(out: Path, protocol: Protocol, built: dict, calibration: Calibrat
         record["files"] = files
         record["shape"] = list(img.shape)
         records[name] = record
-    plots = _profile_plots(out, protocol.paradigm, images, built["geometry"])
+    plots = (
+        _profile_plots(out, protocol.paradigm, images, built["geometry"])
+        if protocol.paradigm in PROFILE_GROUPS
+        else []
+    )
+    for name, pixels in sorted(built.get("previews", {}).items()):  # a sequence at a glance
+        Image.fromarray(pixels).save(out / name)
+        plots.append(name)
     (out / INDEX).write_text(_index(protocol, calibration, records, plots, built["geometry"]))
     files = sorted(f for r in records.values() for f in r["files"]) + plots + [INDEX]
     manifest = {
@@ -450,8 +499,12 @@ class StimulusSet:
 
     def image(self, name: str) -> np.ndarray:
         if name not in self._images:
-            self._images[name] = read_exr(self.folder / f"{name}.exr").astype(np.float64)
+            self._images[name] = self.read(name)
         return self._images[name]
+
+    def read(self, name: str) -> np.ndarray:
+        """An image read from its file, not kept (a sequence's frames are shown once)."""
+        return read_exr(self.folder / f"{name}.exr").astype(np.float64)
 
     def compose(self, terms) -> np.ndarray:
         return compose(terms, self.image)

@@ -16,3 +16,43 @@ def stimulus_set_cache(tmp_path_factory):
         os.environ.pop("GLARELAB_CACHE", None)
     else:
         os.environ["GLARELAB_CACHE"] = previous
+
+
+def small_night_protocol(**scene) -> str:
+    """protocols/night2026.toml with a small, short scene (tests render it in seconds):
+    64 × 48 px, three frames of 0.1 s, and ``scene`` keys replaced (a value of None drops the
+    key)."""
+    from pathlib import Path
+
+    text = (Path(__file__).parents[1] / "protocols" / "night2026.toml").read_text()
+    values = {
+        "size_px": "[64, 48]",
+        "pixel_deg": "0.1",
+        "seconds": "0.3",
+        "start_cd_m2": "100.0",
+    } | {k: (None if v is None else repr(v).replace("'", '"')) for k, v in scene.items()}
+    lines = []
+    in_scene = False
+    for line in text.splitlines():
+        if line.startswith("["):
+            if in_scene:  # keys not in the file go at the end of [scene]
+                lines += [f"{k} = {v}" for k, v in values.items() if v is not None]
+                values = {}
+            in_scene = line.strip() == "[scene]"
+        key = line.split("=")[0].strip()
+        if in_scene and key in values:
+            if values[key] is not None:
+                lines.append(f"{key} = {values.pop(key)}")
+            else:
+                values.pop(key)
+            continue
+        lines.append(line)
+    return "\n".join(lines) + "\n"
+
+
+@pytest.fixture
+def night_toml(tmp_path):
+    """A small night study's protocol file (see :func:`small_night_protocol`)."""
+    path = tmp_path / "night_small.toml"
+    path.write_text(small_night_protocol())
+    return path

@@ -109,6 +109,16 @@ def sandbox(tmp_path_factory) -> Path:
     assert "scale_max = 7" in luidolt
     (box / "scale10.toml").write_text(luidolt.replace("scale_max = 7", "scale_max = 10"))
     (box / "syntax.toml").write_text("[study\nname = 'x'\n")
+    from tests.conftest import small_night_protocol
+
+    night = small_night_protocol()
+    (box / "night-small.toml").write_text(night)
+    display = night[night.index("[display]") : night.index("[viewing]")]
+    (box / "night-no-display.toml").write_text(night.replace(display, ""))
+    assert 'effects = ["glare", "acuity", "scotopic"]' in night
+    (box / "night-bad-effect.toml").write_text(
+        night.replace('effects = ["glare", "acuity", "scotopic"]', 'effects = ["glow"]')
+    )
     # a stimulus set and session data
     protocol = load_protocol("yoshida2008")
     shutil.copytree(cached_stimulus_set(protocol, progress=None), box / "set")
@@ -317,8 +327,19 @@ CASES = [
     ("gallery-file", "gallery --out {box}/afile.txt --size 11", "afile.txt is a file"),
     ("gallery-size", "gallery --out {box}/gallery --size 2", "--size: 2"),
     ("looks-file", "looks --out {box}/afile.txt", "afile.txt is a file"),
+    ("looks-night-file", "looks --night --out {box}/afile.txt", "afile.txt is a file"),
     # stimuli
     ("build-unknown", "stimuli build yoshida2009 --out {box}/newset", "yoshida2009"),
+    (
+        "build-night-no-display",
+        "stimuli build {box}/night-no-display.toml --out {box}/newset",
+        "[display]: missing",
+    ),
+    (
+        "build-night-bad-effect",
+        "stimuli build {box}/night-bad-effect.toml --out {box}/newset",
+        "'glow'",
+    ),
     (
         "build-duplicate-labels",
         "stimuli build {box}/duplicate-labels.toml --out {box}/newset",
@@ -411,6 +432,21 @@ CASES = [
     ("run-session", "run luidolt2020 --simulate --session 0 --out {box}/runs", "--session: 0"),
     ("run-out-file", "run luidolt2020 --simulate --out {box}/afile.txt", "afile.txt is a file"),
     ("run-unknown-study", "run yoshida2009 --simulate --out {box}/runs", "yoshida2009"),
+    (
+        "run-night-no-set",
+        "run {box}/night-small.toml --participant P01 --out {box}/runs",
+        "--stimuli",
+    ),
+    (
+        "run-night-other-set",
+        "run {box}/night-small.toml --participant P01 --stimuli {box}/set --out {box}/runs",
+        "built from another protocol",
+    ),
+    (
+        "analyse-night-other-data",
+        "analyse {box}/night-small.toml {box}/data/*luidolt2020*.csv --out {box}/nightreport",
+        "columns do not match",
+    ),
     (
         "run-scripted-none",
         "run luidolt2020 --participant P1 --scripted-keys {box}/none.txt --out {box}/runs",
@@ -560,6 +596,9 @@ CASES = [
     ),
     ("bench-repeats", "bench --repeats 0 --out {box}/bench", "--repeats: 0"),
     ("bench-only", "bench --only nothing --out {box}/bench", "nothing"),
+    ("bench-acuity-only", "bench --acuity --only yoshida2008 --out {box}/bench", "yoshida2008"),
+    ("bench-acuity-large", "bench --acuity --large --out {box}/bench", "--large"),
+    ("bench-acuity-foreign", "bench --acuity --out {box}/foreign", "foreign is a folder"),
     (
         "bench-foreign",
         "bench --only street_256 --out {box}/foreign",

@@ -66,3 +66,19 @@ def test_workloads_are_the_scenes_the_issues_name():
     leaves, _ = workload("leaves_2048")
     assert (leaves == 4000.0).mean() > 0.05  # many bright pixels: the sky through the leaves
     assert workload("night_1280x1024")[0].shape == (1024, 1280)
+
+
+def test_acuity_bench_measures_every_way_against_the_exact_blur():
+    from glarelab.bench_acuity import acuity_bench, acuity_table
+
+    rows = acuity_bench(repeats=1, only=("street_0.0297deg",), log=lambda line: None)
+    errors = {r["variant"]: r["max_codes"] for r in rows}
+    assert errors["exact"] == 0.0
+    ladder = [errors[f"layers, {n}/octave"] for n in (1, 2, 4, 8, 16)]
+    assert ladder == sorted(ladder, reverse=True)  # more levels, less error
+    # the default (glare.acuity.LEVELS_PER_OCTAVE) keeps within half a code
+    from glare.acuity import LEVELS_PER_OCTAVE
+
+    assert errors[f"layers, {LEVELS_PER_OCTAVE}/octave"] < 0.5
+    assert errors["uniform σ (gaussian_filter)"] > 10  # ignoring the variation is visible
+    assert "| street_0.0297deg |" in acuity_table(rows)

@@ -127,6 +127,24 @@ def test_looks_writes_exr_and_png_for_each_model(tmp_path):
     assert "[4/4]" in status.stderr
 
 
+def test_looks_night_shows_each_effect_off_and_on(tmp_path, capsys):
+    assert main(["looks", "--night", "--out", str(tmp_path)]) == 0
+    manifest = json.loads((tmp_path / "manifest.json").read_text())
+    pipelines = manifest["pipelines"]
+    assert list(pipelines) == ["all", *(f"no_{e}" for e in glare.night.EFFECTS)]
+    adapting = pipelines["all"]["adaptation_cd_m2"]
+    assert adapting == sorted(adapting, reverse=True)  # entering the dark: falling
+    assert len(set(pipelines["no_adaptation"]["adaptation_cd_m2"])) == 1  # adapted at once
+    assert pipelines["no_glare"]["pupil_mm"] == [None] * len(adapting)
+    frames = {name: read_exr(tmp_path / f"{name}.exr") for name in pipelines}
+    for name, frame in frames.items():
+        assert frame.shape == (300, 480, 3) and 0.0 <= frame.min() and frame.max() <= 200.0
+        if name != "all":  # each effect changes what is shown
+            assert np.abs(frame - frames["all"]).max() > 1.0, name
+    assert Image.open(tmp_path / "night.png").size == (960, 1280)
+    assert "[5/5] no_scotopic" in capsys.readouterr().err
+
+
 def test_psf_command_writes_a_png_and_exr(tmp_path):
     png, exr = tmp_path / "psf.png", tmp_path / "psf.exr"
     assert (

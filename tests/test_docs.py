@@ -43,6 +43,9 @@ NOT_RUN = {
     "glarelab bench --out out/bench": "takes minutes; the documented quick run (--only "
     "yoshida2008) runs, and tests/test_bench.py checks the rows of the full one",
     "glarelab bench --out out/bench-large --large": "takes a quarter of an hour, as above",
+    "glarelab bench --acuity --out docs/bench-acuity": "takes a minute or more; the "
+    "documented quick run (--only street_0.0297deg) runs, and tests/test_bench.py checks its "
+    "rows",
 }
 LAB_SESSIONS = [  # README.md and docs/workflow.md: a participant's sessions
     "glarelab run yoshida2008 --participant P01 --stimuli sets/yoshida2008 --calibration "
@@ -59,6 +62,10 @@ LAB_SESSIONS = [  # README.md and docs/workflow.md: a participant's sessions
     "glarelab run yoshida2008 --participant P01 --stimuli sets/yoshida2008 --calibration "
     "calibrations/my-display.json --fullscreen --resume --out data",
     "glarelab run luidolt2020 --participant P01 --fullscreen --out data",
+    "glarelab run night2026 --participant P04 --stimuli sets/night2026 --calibration "
+    "calibrations/my-display.json --fullscreen",
+    "glarelab run night2026 --participant P01 --stimuli sets/night2026 --calibration "
+    "calibrations/my-display.json --fullscreen",
 ]
 NOT_RUN |= dict.fromkeys(LAB_SESSIONS, LAB_SESSION)
 # a dry run's key script runs out into Escape: the session ends aborted, status 3, as documented

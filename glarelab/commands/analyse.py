@@ -56,7 +56,12 @@ def add(commands) -> None:
     analyse.add_argument(
         "--protocol", type=Path, default=None, help="a protocol TOML file (instead of STUDY)"
     )
-    analyse.add_argument("--stimuli", type=Path, default=None, help="the set, for provenance")
+    analyse.add_argument(
+        "--stimuli",
+        type=Path,
+        default=None,
+        help="the stimulus set: its hash in the provenance, its images in the report",
+    )
     analyse.add_argument(
         "--exclude-incomplete",
         action="store_true",

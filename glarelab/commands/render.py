@@ -333,7 +333,103 @@ DEMO_DISK = {  # Yoshida 2008 §3: a 0.3° disk; level "E" = 4000 cd/m²
 }
 
 
+NIGHT_LOOKS = {  # the street of protocols/night2026.toml at three quarters of its size
+    "size_px": (480, 300),
+    "pixel_deg": 0.05,
+    "lamps": 3,
+    "lamp_cd_m2": 1e4,
+    "ambient_cd_m2": 0.05,
+    "start_cd_m2": 100.0,
+    "seconds": 2.0,  # adapted by then; adaptation is shown at its first frame after 0.5 s
+    "adapting_s": 0.5,
+    "frame_rate_hz": 4.0,
+    "display_max_cd_m2": 200.0,
+    "adapted_display_cd_m2": 3.0,
+}
+
+
+def _looks_night(args: argparse.Namespace) -> int:
+    """The night street with each effect of the pipeline on and off, side by side."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from stimuli.night import night_sequence, night_street
+    from stimuli.preview import to_display
+
+    effects = glare.night.EFFECTS
+    pipelines = {"all": effects} | {
+        f"no_{e}": tuple(x for x in effects if x != e) for e in effects
+    }
+    names = [f"{n}{end}" for n in pipelines for end in (".exr", ".png")]
+    out = writes_into(Path(args.out), [*names, "night.png", "manifest.json"], "looks --night")
+    spec = NIGHT_LOOKS
+    street = night_street(
+        spec["size_px"], pixel_deg=spec["pixel_deg"], lamps=spec["lamps"],
+        lamp_cd_m2=spec["lamp_cd_m2"], ambient_cd_m2=spec["ambient_cd_m2"],
+        rng=np.random.default_rng(0),
+    )  # fmt: skip
+    shown = night_sequence(
+        street, "enter_dark", seconds=spec["seconds"], frame_rate_hz=spec["frame_rate_hz"],
+        start_cd_m2=spec["start_cd_m2"],
+    )  # fmt: skip
+    l_dmax = spec["display_max_cd_m2"]
+    adapting = max(round(spec["adapting_s"] / shown["frame_time_s"]) - 1, 0)
+    frames, manifest = {}, {"scene": {k: v for k, v in spec.items()}, "pipelines": {}}
+    for index, (name, chosen) in enumerate(pipelines.items(), start=1):
+        _log(f"[{index}/{len(pipelines)}] {name}: {', '.join(chosen)}")
+        start = time.perf_counter()
+        night = glare.render_night(
+            shown["frames"], pixel_deg=spec["pixel_deg"], effects=chosen,
+            display_max_cd_m2=l_dmax, adapted_display_cd_m2=spec["adapted_display_cd_m2"],
+            frame_time_s=shown["frame_time_s"],
+            initial_adaptation_cd_m2=shown["initial_adaptation_cd_m2"],
+        )  # fmt: skip
+        # the adaptation's pair while the eye adapts, the others once it has
+        at = adapting if name in ("all", "no_adaptation") else len(night.frames) - 1
+        frames[name] = night.frames[-1]
+        frames[name, "adapting"] = night.frames[adapting]
+        write_exr(out / f"{name}.exr", night.frames[-1].astype(np.float32))
+        preview_png(out / f"{name}.png", night.frames[at], l_dmax_cd_m2=l_dmax)
+        manifest["pipelines"][name] = {
+            "effects": list(chosen),
+            "seconds": round(time.perf_counter() - start, 3),
+            "adaptation_cd_m2": night.adaptation_cd_m2.tolist(),
+            "pupil_mm": [None if np.isnan(p) else float(p) for p in night.pupil_mm],
+        }
+    figure, axes = plt.subplots(len(effects), 2, figsize=(9.6, 3.2 * len(effects)), dpi=100)
+    for row, effect in enumerate(effects):
+        when = (
+            f"{spec['adapting_s']:g} s after leaving {spec['start_cd_m2']:g} cd/m²"
+            if effect == "adaptation"
+            else f"after {spec['seconds']:g} s"
+        )
+        for column, (name, title) in enumerate(
+            ((f"no_{effect}", f"without {effect}"), ("all", "all effects"))
+        ):
+            axis = axes[row, column]
+            image = frames[name, "adapting"] if effect == "adaptation" else frames[name]
+            axis.imshow(to_display(image, l_dmax_cd_m2=l_dmax), interpolation="none")
+            axis.set_title(f"{title}, {when}", fontsize=9)
+            axis.set_axis_off()
+    figure.suptitle(
+        f"A night street entered from {spec['start_cd_m2']:g} cd/m² (lamps "
+        f"{spec['lamp_cd_m2']:g} cd/m², display {l_dmax:g} cd/m²): each effect off and on",
+        fontsize=10,
+    )
+    figure.tight_layout()
+    figure.savefig(out / "night.png", metadata={"Software": None})
+    plt.close(figure)
+    (out / "manifest.json").write_text(json.dumps(manifest, indent=2, default=str))
+    _log(f"wrote {out / 'night.png'} and {out / 'manifest.json'}")
+    print(out.resolve())
+    return 0
+
+
 def _looks(args: argparse.Namespace) -> int:
+    if args.night:
+        return _looks_night(args)
     import matplotlib
 
     matplotlib.use("Agg")
@@ -447,4 +543,10 @@ def add(commands) -> None:
 
     looks = commands.add_parser("looks", help="render a glare stimulus with each model")
     looks.add_argument("--out", type=Path, default=Path("out/looks"), help="output folder")
+    looks.add_argument(
+        "--night",
+        action="store_true",
+        help="instead: a night street through the night-vision pipeline, each effect off and "
+        "on side by side (night.png)",
+    )
     looks.set_defaults(run=_looks)

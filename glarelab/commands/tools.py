@@ -32,6 +32,22 @@ def _docs(args: argparse.Namespace) -> int:
 def _bench(args: argparse.Namespace) -> int:
     from glarelab.bench import WORKLOADS, run_bench
 
+    if args.acuity:
+        from glarelab.bench_acuity import ACUITY_WORKLOADS, acuity_bench, write_acuity_bench
+
+        unknown = sorted(set(args.only or ()) - set(ACUITY_WORKLOADS))
+        if unknown or args.large:
+            raise ValueError(
+                f"--acuity runs its own workloads: --only {' '.join(unknown or ['--large'])} "
+                f"is not one; choose from {', '.join(ACUITY_WORKLOADS)}"
+            )
+        out = output_folder(args.out, "bench")
+        only = tuple(args.only) if args.only else None
+        write_acuity_bench(out, acuity_bench(repeats=args.repeats, only=only, log=_log))
+        _log(f"wrote {out / 'acuity.csv'} and acuity.md")
+        print(out.resolve())
+        return 0
+
     unknown = sorted(set(args.only or ()) - set(WORKLOADS))
     if unknown:
         raise ValueError(
@@ -63,6 +79,12 @@ def add(commands) -> None:
         "--no-spectral", action="store_true", help="skip the wave-optics spectral section"
     )
     bench.add_argument("--repeats", type=count(1, 100), default=3, help="timings per case")
+    bench.add_argument(
+        "--acuity",
+        action="store_true",
+        help="instead: the acuity blur's fast ways against the exact per-pixel blur "
+        "(acuity.csv, acuity.md)",
+    )
     bench.set_defaults(run=_bench)
 
     docs = commands.add_parser("docs", help="regenerate docs/protocols.md and docs/data.md")

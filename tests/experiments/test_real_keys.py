@@ -425,3 +425,64 @@ def test_a_resume_with_another_block_order_is_refused_before_anything_is_written
     assert "--counterbalance 1 contradicts the 0" in again.stderr
     after = {p.name: p.read_bytes() for p in out.iterdir() if not p.name.startswith(".")}
     assert after == before
+
+
+# --- a rating study that shows its scene ------------------------------------------------------
+
+
+def test_night_study_shows_the_scene_frame_exact_before_its_questions(screen, tmp_path):
+    from glarelab.cli import main
+    from tests.conftest import small_night_protocol
+
+    protocol = tmp_path / "night_small.toml"  # three frames of 0.5 s: 30 refreshes each
+    protocol.write_text(
+        small_night_protocol(size_px=[320, 200], pixel_deg=0.05, seconds=1.5, frame_rate_hz=2.0)
+    )
+    assert main(["stimuli", "build", str(protocol), "--out", str(tmp_path / "set")]) == 0
+    out = tmp_path / "data"
+    shot = tmp_path / "first_frame.png"
+    screen.run(
+        "run", protocol, "--participant", "P01", "--stimuli", tmp_path / "set",
+        "--allow-uncalibrated", *XVFB_MISMATCH, "--screenshot", shot, "--out", out,
+    )  # fmt: skip
+    screen.wait_for_log(out, r"session log")
+    screen.focus_window()
+    time.sleep(0.3)
+    screen.key("space")
+    time.sleep(1.2)  # the blank (0.5 s), then the scene: its frames for 1.5 s
+    during = screen.screenshot()
+    save(during, tmp_path / "during.png")
+    screen.wait_for_log(out, r"trial 1 onset")
+    after = screen.screenshot()
+    save(after, tmp_path / "prompt.png")
+    screen.key("6")
+    screen.wait_for_log(out, r"screen comment of trial 1")
+    screen.key("Return")
+    screen.wait_for_log(out, r"trial 2 onset")
+    screen.key("4")
+    screen.wait_for_log(out, r"screen comment of trial 2")
+    screen.key("Return")
+    screen.wait_for_log(out, r"trial 3 onset")
+    screen.key("Escape")
+    assert screen.wait() == 3, screen.stderr[-2000:]
+    path, rows = rows_of(out)
+    assert [r["rating"] for r in rows] == ["6", "4"]
+    first = rows[0]
+    assert first["condition"] == rows[1]["condition"] != ""
+    # Xvfb has no vertical sync: dropped frames are counted (the column), not ruled out
+    assert int(first["dropped_frames"]) >= 0
+    assert abs(float(first["shown_ms"]) - 1500.0) < 60.0, first["shown_ms"]
+    assert first["time_s"] and float(first["time_s"]) > 1.5  # rated after the scene ended
+    assert rows[1]["shown_ms"] == ""
+    intervals = (path.parent / (path.stem + "_frames.tsv")).read_text().splitlines()
+    flashed = [line for line in intervals if line.startswith("trial 1 flash")]
+    assert len(flashed) == 90  # 3 frames × 30 refreshes, then the prompt's flip
+    # the first frame as drawn (the back buffer), and the X screen while the scene showed:
+    # the eye still adapted to the lit room, so the lamps, within the 320 × 200 scene, centred
+    drawn = np.asarray(Image.open(shot).convert("L"))
+    for image, (x, y) in ((drawn, (640, 400)), (during, CENTRE)):  # a 1280 × 800 window
+        h, w = image.shape[:2]
+        rows, columns = np.nonzero(image.reshape(h, w, -1).max(axis=2) > 200)
+        assert rows.size > 0
+        assert np.abs(rows - y).max() <= 100 and np.abs(columns - x).max() <= 160
+    assert after[CENTRE[1] + 60 :].max() > 150  # then the question, below the scene's place
