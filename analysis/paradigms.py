@@ -1,6 +1,7 @@
 """The analysis of each paradigm: one registry for the layer (see docs/extending.md).
 
-Each module gives ``analyse(dataset, protocol)`` (tables, figures, text), ``design(protocol)``
+Each module gives ``analyse(dataset, protocol, *, tests_only=False)`` (tables, figures, text;
+``tests_only``: the tables of statistical tests alone), ``design(protocol)``
 (the within factors and the cells every participant needs) and ``methods(protocol,
 participants, who)`` (the methods paragraph).
 """

@@ -30,7 +30,13 @@ def methods(protocol, participants: int, who: str) -> str:
     )
 
 
-def analyse(dataset: Dataset, protocol) -> dict:
+def analyse(dataset: Dataset, protocol, *, tests_only: bool = False) -> dict:
+    """Per-category summaries with the Wilcoxon tests, the comments and the diverging bars:
+    tables (DataFrames), figures (PNG bytes) and text.
+
+    ``tests_only`` returns only the tables of statistical tests (no figures, no descriptive
+    tables or fits), what a power analysis needs for each of thousands of simulated studies.
+    """
     q = protocol["questionnaire"]
     scale = range(q["scale_min"], q["scale_max"] + 1)
     midpoint = (q["scale_min"] + q["scale_max"]) / 2
@@ -63,6 +69,8 @@ def analyse(dataset: Dataset, protocol) -> dict:
         f"V = {v:g}, {apa_p(p)} (Holm)"
         for v, p in zip(summary["wilcoxon_V"], summary["p_holm"], strict=True)
     ]
+    if tests_only:
+        return {"tables": {"summary": summary}, "figures": {}, "text": {}}
     comments = trials.loc[
         trials["comment"].notna(), ["participant", "category", "rating", "comment"]
     ]

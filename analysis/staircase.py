@@ -93,7 +93,13 @@ def psychometric_match(staircase: pd.DataFrame) -> float:
     return centre if 0.0 <= centre <= 1.0 else float("nan")
 
 
-def analyse(dataset: Dataset, protocol) -> dict:
+def analyse(dataset: Dataset, protocol, *, tests_only: bool = False) -> dict:
+    """Matched intensities, their summary, the ANOVA and Figure 13: tables (DataFrames),
+    figures (PNG bytes) and text.
+
+    ``tests_only`` returns only the tables of statistical tests (no figures, no descriptive
+    tables or fits), what a power analysis needs for each of thousands of simulated studies.
+    """
     every = dataset.trials
     trials = every[every["counted"].astype(bool)]  # repeated flashes did not move a staircase
     rows = []
@@ -109,7 +115,9 @@ def analyse(dataset: Dataset, protocol) -> dict:
                 "trials": len(staircase),
                 "reversals": int(staircase["reversal"].astype(bool).sum()),
                 "match_reversals": reversal_match(staircase),
-                "match_psychometric": psychometric_match(staircase),
+                "match_psychometric": float("nan")
+                if tests_only
+                else psychometric_match(staircase),
             }
         )
     matches = pd.DataFrame(rows)
@@ -135,6 +143,9 @@ def analyse(dataset: Dataset, protocol) -> dict:
         anova["apa_hf"] = apa_anova(anova, correction="HF")
         tables["anova"] = anova
         text = {row.source: row.apa_gg for row in anova.itertuples()}
+    if tests_only:
+        tested = {"anova": tables["anova"]} if "anova" in tables else {}
+        return {"tables": tested, "figures": {}, "text": text}
     repeated = len(every) - len(trials)
     text["repeated_presentations"] = (
         f"{repeated} of {len(every)} flashes missed their frames or timing and were shown "
