@@ -173,7 +173,7 @@ def chosen_p(row: Mapping, correction: Correction) -> tuple[float, str]:
     ...        "p_gg": None, "p_hf": None, "eps_gg": None}
     >>> p, how = chosen_p(row, "gg")
     >>> round(p, 4), how
-    (0.0593, 'lower bound')
+    (0.1161, 'lower bound')
     """
     if correction not in CORRECTIONS:
         raise ValueError(f"correction must be one of {', '.join(CORRECTIONS)}; got {correction!r}")
