@@ -1,0 +1,113 @@
+"""Measure glarelab power on this machine: replications per second on 1 and 2 workers of a
+local Dask cluster, the scheduler's cost per task, and the memory of a worker.
+
+    python scripts/measure_power.py --out docs/power/measurements.json
+
+Each measurement runs a fresh cluster; the replications are the same in every run (seed 1),
+so the runs differ only in how they are executed. The cost per task is measured with tasks
+that do nothing (a job whose run returns at once) as wall time × workers / tasks.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import tempfile
+import time
+from pathlib import Path
+
+from planning.execute import ResultLog, dask_client, run_tasks
+from planning.simulate import PowerJob
+from protocols import load_protocol
+from stimuli.stimulus_set import cached_stimulus_set
+
+
+class NothingJob:
+    """Tasks that do nothing: what the scheduler and the result log cost."""
+
+    kind = "nothing"
+
+    def run(self, task: int) -> dict:
+        return {"task": task}
+
+
+def _rss_mb() -> float:
+    import psutil
+
+    return psutil.Process().memory_info().rss / 2**20
+
+
+def replications_per_second(protocol, *, workers: int, replications: int, participants) -> dict:
+    stimuli = cached_stimulus_set(protocol, progress=None)
+    job = PowerJob(protocol, participants=participants, seed=1, stimuli=stimuli)
+    with dask_client(workers=workers) as client, tempfile.TemporaryDirectory() as folder:
+        client.run(_rss_mb)  # workers up
+        warm = ResultLog(Path(folder) / "warm.jsonl")
+        run_tasks(job, range(10_000, 10_000 + workers), warm, client=client, progress=None)
+        log = ResultLog(Path(folder) / "log.jsonl")
+        start = time.perf_counter()
+        run_tasks(job, range(replications), log, client=client, progress=None)
+        seconds = time.perf_counter() - start
+        memory = client.run(_rss_mb)
+    return {
+        "study": protocol.study,
+        "workers": workers,
+        "replications": replications,
+        "participants": list(participants),
+        "seconds": seconds,
+        "replications_per_s": replications / seconds,
+        "worker_rss_mb": sorted(memory.values()),
+    }
+
+
+def task_overhead(*, workers: int, tasks: int) -> dict:
+    with dask_client(workers=workers) as client, tempfile.TemporaryDirectory() as folder:
+        run_tasks(
+            NothingJob(),
+            range(-workers, 0),
+            ResultLog(Path(folder) / "w"),
+            client=client,
+            progress=None,
+        )
+        log = ResultLog(Path(folder) / "log.jsonl")
+        start = time.perf_counter()
+        run_tasks(NothingJob(), range(tasks), log, client=client, progress=None)
+        seconds = time.perf_counter() - start
+        idle = client.run(_rss_mb)
+    return {
+        "workers": workers,
+        "tasks": tasks,
+        "seconds": seconds,
+        "ms_per_task": 1000 * seconds * workers / tasks,
+        "idle_worker_rss_mb": sorted(idle.values()),
+    }
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--out", type=Path, required=True)
+    parser.add_argument("--study", default="yoshida2008")
+    parser.add_argument("--replications", type=int, default=24)
+    parser.add_argument("--participants", type=int, nargs="+", default=[6, 8, 10, 12, 16, 20])
+    args = parser.parse_args()
+    protocol = load_protocol(args.study)
+    results = {"overhead": [task_overhead(workers=w, tasks=400) for w in (1, 2)], "throughput": []}
+    for workers in (1, 2):
+        results["throughput"].append(
+            replications_per_second(
+                protocol,
+                workers=workers,
+                replications=args.replications,
+                participants=args.participants,
+            )
+        )
+        print(json.dumps(results["throughput"][-1]), flush=True)
+    one, two = (r["replications_per_s"] for r in results["throughput"])
+    results["speed_up"] = two / one
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps(results, indent=2) + "\n")
+    print(json.dumps(results, indent=2))
+
+
+if __name__ == "__main__":
+    main()
