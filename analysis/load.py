@@ -19,7 +19,7 @@ import pandas as pd
 
 from protocols import columns
 
-__all__ = ["DataError", "Dataset", "load_sessions"]
+__all__ = ["DataError", "Dataset", "load_sessions", "where"]
 
 # columns added after the first data format, as files written before them are read: every
 # trial of those files counted (no presentation was repeated); the others are missing
@@ -46,6 +46,17 @@ class Dataset:
     files: list[str]
     sidecars: dict[str, dict] = field(default_factory=dict)
     excluded: dict[str, str] = field(default_factory=dict)
+    sessions: list[dict] = field(default_factory=list)
+
+    @property
+    def incomplete_sessions(self) -> list[dict]:
+        """The sessions that did not complete (aborted, interrupted, header only), analysed or
+        skipped at the caller's request: the report lists them."""
+        return [
+            s
+            for s in self.sessions
+            if s["trials"] == 0 or s["status"] not in ("completed", "no sidecar")
+        ]
 
 
 def _parse(cell: str, column, where: str, problems: list[str]):
@@ -101,8 +112,15 @@ def _read_file(path: Path, protocol, problems: list[str]) -> list[dict]:
         missing = [n for n in names if n not in header and n not in added]
         extra = [n for n in header if n not in names]
         if missing or extra:
+            first = dict(zip(header, next(reader, []), strict=False))
+            other = first.get("study")
             problems.append(
                 f"{path}, line 1: columns do not match the {study} schema"
+                + (
+                    f" (its study column says {other!r}: a CSV of another study?)"
+                    if other and other != study
+                    else ""
+                )
                 + (f"; missing {missing}" if missing else "")
                 + (f"; unexpected {extra}" if extra else "")
             )
@@ -133,21 +151,57 @@ def _read_file(path: Path, protocol, problems: list[str]) -> list[dict]:
     return rows
 
 
+def _session(path: Path, rows: list[dict], sidecar: dict | None) -> dict:
+    """What the report says of one session file: who, how many trials, how it ended."""
+    first = rows[0] if rows else {}
+    status = "no sidecar" if sidecar is None else str(sidecar.get("status", "unknown"))
+    return {
+        "file": str(path),
+        "participant": first.get("participant", (sidecar or {}).get("participant")),
+        "session": first.get("session", (sidecar or {}).get("session")),
+        "trials": len(rows),
+        "status": status if rows or sidecar is not None else "header only",
+        "sidecar": sidecar is not None,
+        "simulated": None if sidecar is None else bool(sidecar.get("simulated")),
+    }
+
+
 def load_sessions(
-    protocol, paths: list[str | Path], *, exclude_incomplete: bool = False
+    protocol,
+    paths: list[str | Path],
+    *,
+    exclude_incomplete: bool = False,
+    include_aborted: bool = False,
 ) -> Dataset:
-    """Load and validate session CSVs of one study (its protocol sets the columns and the
-    design).
+    """Load and validate session CSVs of one study (its protocol sets the columns, the design
+    and the values a trial can hold).
+
+    Parameters
+    ----------
+    protocol
+        The study's validated protocol.
+    paths
+        Session CSV files; each one's JSON sidecar (same name) is read where it exists.
+    exclude_incomplete
+        Drop participants with a missing design cell (listed in ``Dataset.excluded``) instead
+        of refusing the data.
+    include_aborted
+        Analyse sessions that did not complete (their sidecar says aborted or running) and
+        skip files without trials, instead of refusing them; either way they are listed in
+        ``Dataset.sessions`` for the report.
 
     Raises
     ------
     DataError
-        Naming file, line and column of every bad cell; duplicated trials; a CSV of another
-        study; and (unless ``exclude_incomplete``) every participant missing a design cell.
+        Naming file, line and column of every bad cell; values the protocol or its display
+        cannot produce; duplicated trials; a CSV of another study; sessions that did not
+        complete or hold no trials (unless ``include_aborted``); and (unless
+        ``exclude_incomplete``) every participant missing a design cell.
     """
     problems: list[str] = []
     rows: list[dict] = []
     sidecars: dict[str, dict] = {}
+    sessions: list[dict] = []
     files = []
     if not paths:
         raise DataError(["no CSV files given"])
@@ -156,19 +210,45 @@ def load_sessions(
         if not path.is_file():
             problems.append(f"{path}: no such file")
             continue
-        files.append(str(path))
-        rows += _read_file(path, protocol, problems)
-        sidecar = path.with_suffix(".json")
-        if sidecar.is_file():
+        found = len(problems)
+        read = _read_file(path, protocol, problems)
+        sidecar_path = path.with_suffix(".json")
+        sidecar = None
+        if sidecar_path.is_file():
             try:
-                sidecars[str(path)] = json.loads(sidecar.read_text())
-            except json.JSONDecodeError as error:
-                problems.append(f"{sidecar}: not valid JSON ({error})")
+                sidecar = json.loads(sidecar_path.read_text())
+            except (json.JSONDecodeError, UnicodeDecodeError) as error:
+                problems.append(f"{sidecar_path}: not valid JSON ({error})")
+            else:
+                if not isinstance(sidecar, dict):
+                    problems.append(f"{sidecar_path}: a sidecar must be a JSON object")
+                    sidecar = None
+        if len(problems) > found:
+            continue
+        session = _session(path, read, sidecar)
+        sessions.append(session)
+        ended = session["status"] in ("completed", "no sidecar")
+        if not (read and ended) and not include_aborted:
+            why = "holds no trials" if not read else f"did not complete ({session['status']})"
+            problems.append(
+                f"{path}: the session {why}; --include-aborted analyses the sessions that did "
+                "not complete and skips those without trials, and the report lists them"
+            )
+            continue
+        if not read:
+            continue
+        files.append(str(path))
+        rows += read
+        if sidecar is not None:
+            sidecars[str(path)] = sidecar
     if problems:
         raise DataError(problems)
     trials = pd.DataFrame(rows)
     if trials.empty:
-        raise DataError([f"{', '.join(files)}: no trials"])
+        raise DataError([f"{', '.join(s['file'] for s in sessions)}: no trials"])
+    from .paradigms import PARADIGMS
+
+    problems += PARADIGMS[protocol.paradigm].check(trials, protocol)
     key = ["participant", "session", "trial"]
     duplicated = trials[trials.duplicated(key, keep="first")]
     for _, row in duplicated.iterrows():
@@ -176,8 +256,6 @@ def load_sessions(
             f"{row['_file']}, line {row['_line']}: duplicated trial (participant "
             f"{row['participant']}, session {row['session']}, trial {row['trial']})"
         )
-    from .paradigms import PARADIGMS
-
     factors, cells, block = PARADIGMS[protocol.paradigm].design(protocol)
     analysed = trials[trials["block"] == block] if block else trials
     excluded: dict[str, str] = {}
@@ -205,5 +283,15 @@ def load_sessions(
         raise DataError(problems)
     kept = trials[~trials["participant"].isin(excluded)].reset_index(drop=True)
     return Dataset(
-        study=protocol.study, trials=kept, files=files, sidecars=sidecars, excluded=excluded
+        study=protocol.study,
+        trials=kept,
+        files=files,
+        sidecars=sidecars,
+        excluded=excluded,
+        sessions=sessions,
     )
+
+
+def where(row) -> str:
+    """The file and line of a trial, as problems name them."""
+    return f"{row['_file']}, line {row['_line']}"

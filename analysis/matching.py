@@ -30,7 +30,7 @@ import pandas as pd
 from scipy import stats as sps
 
 from .figures import plt, png
-from .load import Dataset
+from .load import Dataset, where
 from .methods import display_text
 from .stats import (
     apa_anova,
@@ -42,9 +42,13 @@ from .stats import (
     ttest_welch,
 )
 
-__all__ = ["analyse", "design", "methods"]
+__all__ = ["analyse", "check", "design", "methods"]
 
 MARKERS = "osD^v<>p*"
+ONE_PARTICIPANT = (
+    "one participant: the tables describe their settings; no ANOVA, t-test or contrast, as "
+    "each tests differences between participants' means and needs at least two participants"
+)
 
 
 def design(protocol) -> tuple[list[str], list[tuple], str | None]:
@@ -55,6 +59,53 @@ def design(protocol) -> tuple[list[str], list[tuple], str | None]:
         for index in range(1, len(m["labels"]) + 1)
     ]
     return ["method", "level_index"], cells, "main"
+
+
+def check(trials: pd.DataFrame, protocol) -> list[str]:
+    """Values no session of this protocol can write: a level label or disk luminance that is
+    not the protocol's at that level, a setting outside the display's range (a match above its
+    maximum cannot be shown), a match that is not the mean of its settings."""
+    display = protocol["display"]
+    low, high = display["black_cd_m2"], display["max_cd_m2"]
+    methods = {m["name"]: m for m in protocol["glare"]["methods"]}
+    bounds = protocol["trials"]["settings"] == "bounds"
+    settings = ["darker_cd_m2", "brighter_cd_m2", "match_cd_m2"] if bounds else ["match_cd_m2"]
+    problems = []
+    for _, row in trials.iterrows():
+        method = methods[row["method"]]
+        index = int(row["level_index"])
+        if index > len(method["labels"]):
+            problems.append(
+                f"{where(row)}: level_index {index}: method {row['method']} has "
+                f"{len(method['labels'])} levels"
+            )
+            continue
+        label, level = method["labels"][index - 1], method["levels_cd_m2"][index - 1]
+        if row["level"] != label:
+            problems.append(
+                f"{where(row)}, column level: {row['level']!r} at level_index {index} of "
+                f"method {row['method']}; the protocol's label there is {label!r}"
+            )
+        if not np.isclose(row["l_disk_cd_m2"], level, rtol=1e-6):
+            problems.append(
+                f"{where(row)}, column l_disk_cd_m2: {row['l_disk_cd_m2']!r} cd/m²; the "
+                f"protocol's level {label} is {level:g} cd/m²"
+            )
+        for column in settings:
+            value = row[column]
+            if not low * (1 - 1e-9) <= value <= high * (1 + 1e-9):
+                problems.append(
+                    f"{where(row)}, column {column}: {value!r} cd/m² cannot be shown on the "
+                    f"protocol's display ({low:g}-{high:g} cd/m²)"
+                )
+        if bounds:
+            mean = (row["darker_cd_m2"] + row["brighter_cd_m2"]) / 2
+            if not np.isclose(row["match_cd_m2"], mean, rtol=1e-9, atol=1e-12):
+                problems.append(
+                    f"{where(row)}, column match_cd_m2: {row['match_cd_m2']!r} is not the mean "
+                    f"of the settings ({mean!r})"
+                )
+    return problems
 
 
 def methods(protocol, participants: int, who: str) -> str:
@@ -97,15 +148,6 @@ def methods(protocol, participants: int, who: str) -> str:
 
 def _sem(x: pd.Series) -> float:
     return float(x.std(ddof=1) / np.sqrt(x.count())) if x.count() > 1 else float("nan")
-
-
-def _anova(data: pd.DataFrame, label: str) -> pd.DataFrame:
-    table = rm_anova(data, "match_cd_m2", ["L_disk", "method"], "participant")
-    table.insert(0, "analysis", label)
-    table["apa"] = apa_anova(table, correction="none")
-    table["apa_gg"] = apa_anova(table, correction="GG")
-    table["apa_hf"] = apa_anova(table, correction="HF")
-    return table
 
 
 def _anova(data: pd.DataFrame, label: str) -> pd.DataFrame:
@@ -152,6 +194,8 @@ def analyse(dataset: Dataset, protocol, *, tests_only: bool = False) -> dict:
         if len(names) > 1:
             text["main_effect_method"] = main.loc["method", "apa_gg"]
             text["interaction"] = main.loc["L_disk × method", "apa_gg"]
+    else:
+        text["inference"] = ONE_PARTICIPANT
 
     wide = trials.pivot_table(
         index="participant", columns=["method", "L_disk"], values="match_cd_m2"

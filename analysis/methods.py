@@ -28,19 +28,43 @@ def display_text(protocol) -> str:
 def provenance(
     sidecars: dict[str, dict], protocol_sha256: str | None, stimuli: Path | None
 ) -> dict:
-    """Hashes and versions behind the data: protocol, stimulus-set manifest, calibration."""
-    first = next(iter(sidecars.values()), {})
-    protocols = {s.get("protocol_sha256") for s in sidecars.values()}
+    """Hashes and versions behind the data, session by session: protocol, calibration,
+    encoding, packages, simulated or not; and what the sessions share or not.
+
+    ``simulated`` is true when every session is simulated, false when none is, and
+    ``"mixed"`` otherwise (``sessions`` says which)."""
+    sessions = [
+        {
+            "file": Path(name).name,
+            "participant": s.get("participant"),
+            "session": s.get("session"),
+            "status": s.get("status"),
+            "simulated": bool(s.get("simulated")),
+            "protocol_sha256": s.get("protocol_sha256"),
+            "calibration": s.get("calibration"),
+            "images_encoded_with": s.get("images_encoded_with"),
+            "glarelab": (s.get("packages") or {}).get("glarelab"),
+        }
+        for name, s in sidecars.items()
+    ]
+    flags = {s["simulated"] for s in sessions}
+    simulated = (flags == {True}) if len(flags) < 2 else "mixed"
+    calibrations = {json.dumps(s["calibration"], sort_keys=True, default=str) for s in sessions}
     record = {
         "protocol_sha256": protocol_sha256,
-        "protocol_sha256_in_sessions": sorted(p for p in protocols if p),
-        "calibration": first.get("calibration"),
-        "images_encoded_with": first.get("images_encoded_with"),
-        "packages": first.get("packages"),
-        "simulated": first.get("simulated"),
+        "protocol_sha256_in_sessions": sorted({s["protocol_sha256"] for s in sessions} - {None}),
+        "simulated": simulated if sessions else None,
+        "calibrations_in_sessions": len(calibrations),
+        "packages": {
+            name: sorted({(s.get("packages") or {}).get(name) or "?" for s in sidecars.values()})
+            for name in sorted({k for s in sidecars.values() for k in s.get("packages") or {}})
+        },
+        "sessions": sessions,
     }
     if stimuli is not None:
         manifest = Path(stimuli) / "manifest.json"
+        if not manifest.is_file():
+            raise ValueError(f"--stimuli {stimuli}: no manifest.json (not a stimulus set?)")
         data = json.loads(manifest.read_text())
         record["stimulus_set_manifest_sha256"] = hashlib.sha256(manifest.read_bytes()).hexdigest()
         record["stimulus_set_calibration_sha256"] = data.get("calibration_sha256")

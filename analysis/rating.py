@@ -12,7 +12,7 @@ from .figures import plt, png
 from .load import Dataset
 from .stats import apa_p, holm, wilcoxon_signed_rank
 
-__all__ = ["analyse", "design", "methods"]
+__all__ = ["analyse", "check", "design", "methods"]
 
 
 def design(protocol) -> tuple[list[str], list[tuple], str | None]:
@@ -28,6 +28,12 @@ def methods(protocol, participants: int, who: str) -> str:
         f"{q['scale_min']}-{q['scale_max']} scale from “{q['anchors'][0]}” to "
         f"“{q['anchors'][1]}”{', each with an optional comment' if q['comments'] else ''}."
     )
+
+
+def check(trials: pd.DataFrame, protocol) -> list[str]:
+    """Values no session of this protocol can write beyond the columns' own checks (category
+    and rating range): none."""
+    return []
 
 
 def analyse(dataset: Dataset, protocol, *, tests_only: bool = False) -> dict:

@@ -1,7 +1,9 @@
 """Writing an analysis: tables (CSV and Markdown), figures (PNG) and one self-contained HTML.
 
-Everything is written to a temporary folder next to the destination and moved into place only
-when all of it succeeded, so a failing analysis leaves no partial report behind.
+Everything is written to a staging folder next to the destination and moved into place only
+when all of it succeeded, so a failing analysis leaves no partial report behind; an earlier
+report in the destination is replaced whole, and a folder holding anything else is refused
+(:mod:`protocols.folders`).
 """
 
 from __future__ import annotations
@@ -9,18 +11,20 @@ from __future__ import annotations
 import base64
 import html
 import json
-import os
 import shutil
-import tempfile
 from pathlib import Path
 
 import pandas as pd
+
+from protocols.folders import check_replaceable, replace_folder, staging_folder
 
 from .load import Dataset, load_sessions
 from .methods import provenance
 from .paradigms import PARADIGMS
 
 __all__ = ["analyse", "methods_paragraph", "write_report"]
+
+REPORT = "report.html"
 
 
 def _markdown(table: pd.DataFrame) -> str:
@@ -35,16 +39,28 @@ def _markdown(table: pd.DataFrame) -> str:
 
 
 def analyse(
-    protocol, paths: list[str | Path], *, exclude_incomplete: bool = False
+    protocol,
+    paths: list[str | Path],
+    *,
+    exclude_incomplete: bool = False,
+    include_aborted: bool = False,
 ) -> tuple[Dataset, dict]:
     """Load the sessions of the protocol's study and run its paradigm's analysis."""
-    dataset = load_sessions(protocol, paths, exclude_incomplete=exclude_incomplete)
+    dataset = load_sessions(
+        protocol, paths, exclude_incomplete=exclude_incomplete, include_aborted=include_aborted
+    )
     return dataset, PARADIGMS[protocol.paradigm].analyse(dataset, protocol)
 
 
-def methods_paragraph(protocol, participants: int, simulated: bool) -> str:
-    """Methods text naming the protocol's actual parameters."""
-    who = f"{participants} {'simulated observers' if simulated else 'participants'}"
+def methods_paragraph(protocol, participants: int, simulated: bool | int) -> str:
+    """Methods text naming the protocol's actual parameters; ``simulated`` is true when every
+    participant was a simulated observer, or the number of them among the participants."""
+    if simulated is True:
+        who = f"{participants} simulated observers"
+    elif not simulated:
+        who = f"{participants} participants"
+    else:
+        who = f"{participants} participants ({simulated} of them simulated observers)"
     return PARADIGMS[protocol.paradigm].methods(protocol, participants, who)
 
 
@@ -68,6 +84,14 @@ def _html(title: str, dataset: Dataset, result: dict, methods: str | None, origi
     )
     if methods:
         parts.append(f"<h2>Methods</h2><p>{html.escape(methods)}</p>")
+    if dataset.incomplete_sessions:
+        items = "".join(
+            f"<li><code>{html.escape(Path(s['file']).name)}</code>: {html.escape(s['status'])}, "
+            f"{s['trials']} trials{' (analysed)' if s['trials'] else ' (nothing to analyse)'}"
+            "</li>"
+            for s in dataset.incomplete_sessions
+        )
+        parts.append(f"<h2>Sessions that did not complete</h2><ul>{items}</ul>")
     if dataset.excluded:
         items = "".join(
             f"<li>{html.escape(p)}: {html.escape(w)}</li>" for p, w in dataset.excluded.items()
@@ -104,6 +128,7 @@ def write_report(
     out: str | Path,
     *,
     exclude_incomplete: bool = False,
+    include_aborted: bool = False,
     stimuli: str | Path | None = None,
 ) -> Path:
     """Analyse session CSVs and write the report folder; returns the path of report.html.
@@ -116,28 +141,31 @@ def write_report(
     analysis.load.DataError
         For bad input (nothing is written).
     """
-    out = Path(out)
-    dataset, result = analyse(protocol, paths, exclude_incomplete=exclude_incomplete)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    staging = Path(tempfile.mkdtemp(prefix=".report-", dir=out.parent))
+    out = check_replaceable(out, marker=REPORT, what="report")
+    dataset, result = analyse(
+        protocol, paths, exclude_incomplete=exclude_incomplete, include_aborted=include_aborted
+    )
+    staging = staging_folder(out)
     try:
         for name, table in result["tables"].items():
             table.to_csv(staging / f"{name}.csv", index=False)
             (staging / f"{name}.md").write_text(_markdown(table))
         for name, data in result["figures"].items():
             (staging / name).write_bytes(data)
-        simulated = any(s.get("simulated") for s in dataset.sidecars.values())
+        flags = dataset.trials.groupby("participant")["_file"].first()
+        simulated_ids = sum(
+            bool(dataset.sidecars.get(file, {}).get("simulated")) for file in flags
+        )
+        simulated = True if simulated_ids == len(flags) else simulated_ids
         methods = methods_paragraph(protocol, dataset.trials["participant"].nunique(), simulated)
         origin = provenance(dataset.sidecars, protocol.sha256, Path(stimuli) if stimuli else None)
         (staging / "provenance.json").write_text(json.dumps(origin, indent=2, default=str))
         if methods:
             (staging / "methods.md").write_text(methods + "\n")
-        (staging / "report.html").write_text(
+        (staging / REPORT).write_text(
             _html(protocol.title, dataset, result, methods, origin), encoding="utf-8"
         )
-        out.mkdir(parents=True, exist_ok=True)
-        for item in staging.iterdir():
-            os.replace(item, out / item.name)
+        replace_folder(staging, out)
     finally:
         shutil.rmtree(staging, ignore_errors=True)
-    return out / "report.html"
+    return out / REPORT

@@ -22,11 +22,11 @@ from scipy.optimize import minimize
 from scipy.special import expit
 
 from .figures import plt, png
-from .load import Dataset
+from .load import Dataset, where
 from .methods import display_text
 from .stats import apa_anova, rm_anova
 
-__all__ = ["analyse", "design", "methods", "psychometric_match", "reversal_match"]
+__all__ = ["analyse", "check", "design", "methods", "psychometric_match", "reversal_match"]
 
 DISCARDED_REVERSALS = 2
 MARKERS = "osD^v<>"
@@ -55,6 +55,21 @@ def methods(protocol, participants: int, who: str) -> str:
         f"({t['reversals']} reversals, steps {', '.join(f'{x:g}' for x in t['step_fractions'])} "
         f"of the maximum; 'neither': {t['neither']}) set the disc."
     )
+
+
+def check(trials: pd.DataFrame, protocol) -> list[str]:
+    """Values no session of this protocol can write: a strength that is not the protocol's at
+    the trial's glare level."""
+    strengths = protocol["glare"]["strengths"]
+    problems = []
+    for _, row in trials.iterrows():
+        expected = strengths[int(row["glare_level"]) - 1]
+        if not np.isclose(row["strength"], expected, rtol=1e-6):
+            problems.append(
+                f"{where(row)}, column strength: {row['strength']!r}; the protocol's glare "
+                f"level {int(row['glare_level'])} has strength {expected:g}"
+            )
+    return problems
 
 
 def reversal_match(staircase: pd.DataFrame) -> float:
@@ -121,6 +136,8 @@ def analyse(dataset: Dataset, protocol, *, tests_only: bool = False) -> dict:
             }
         )
     matches = pd.DataFrame(rows)
+    needed = protocol["trials"]["reversals"]
+    matches["converged"] = matches["reversals"] >= needed
     summary = (
         matches.groupby(["context", "glare_level"])
         .agg(
@@ -142,7 +159,32 @@ def analyse(dataset: Dataset, protocol, *, tests_only: bool = False) -> dict:
         anova["apa_gg"] = apa_anova(anova, correction="GG")
         anova["apa_hf"] = apa_anova(anova, correction="HF")
         tables["anova"] = anova
-        text = {row.source: row.apa_gg for row in anova.itertuples()}
+        text |= {row.source: row.apa_gg for row in anova.itertuples()}
+    else:
+        text["inference"] = (
+            "one participant: the tables describe their staircases; no ANOVA, which tests "
+            "differences between participants' means and needs at least two participants"
+        )
+    unconverged = matches[~matches["converged"]]
+    if len(unconverged):
+        none = unconverged[unconverged["reversals"] == 0]
+        listed = "; ".join(
+            f"{r.participant} {r.context} level {r.glare_level} ({r.reversals} reversals, "
+            f"{r.trials} trials)"
+            for r in unconverged.itertuples()
+        )
+        text["unconverged_staircases"] = (
+            f"{len(unconverged)} of {len(matches)} staircases ended before their {needed} "
+            f"reversals (at the trial cap or with the session){': ' + listed}. "
+            + (
+                f"{len(none)} had no reversal at all: their match is the last disc intensity, "
+                "a bound (the staircase ran into the end of its range), not a threshold. "
+                if len(none)
+                else ""
+            )
+            + "They are in the means and the ANOVA; the matches table marks them "
+            "(converged = false)."
+        )
     if tests_only:
         tested = {"anova": tables["anova"]} if "anova" in tables else {}
         return {"tables": tested, "figures": {}, "text": text}

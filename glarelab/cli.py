@@ -1,46 +1,91 @@
 """The ``glarelab`` command: its parser, made of the command modules of
-:mod:`glarelab.commands`, and the one place errors become messages and exit statuses."""
+:mod:`glarelab.commands`, and the one place errors become messages and exit statuses.
+
+Exit statuses: 0 done; 1 a check that found problems (``stimuli verify``, ``check-display``,
+``calibrate measure`` whose calibration failed); 2 refused: a bad argument, file or value, named
+in one line on stderr, nothing written; 3 a session stopped before it completed (Escape,
+Ctrl-C, kill). An unexpected error prints its traceback and asks for a bug report.
+"""
 
 from __future__ import annotations
 
 import argparse
+import errno
 import sys
+import traceback
 from collections.abc import Sequence
-
-from protocols import ProtocolError
+from importlib import metadata
 
 from .commands import MODULES
+from .commands.common import HelpFormatter, Parser
 from .commands.common import log as _log
 from .commands.render import build_model
 
 __all__ = ["build_model", "main"]
 
+ISSUES = "a bug in glarelab: please report it with the command you ran and the lines above"
+
+
+def _version() -> str:
+    try:
+        return metadata.version("glarelab")
+    except metadata.PackageNotFoundError:  # pragma: no cover - run from a source tree
+        return "unknown"
+
 
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
-        prog="glarelab", description="Glare illusion psychophysics suite"
+    parser = Parser(
+        prog="glarelab",
+        description="Glare illusion psychophysics suite",
+        formatter_class=HelpFormatter,
     )
-    commands = parser.add_subparsers(dest="command", required=True)
+    parser.add_argument("--version", action="version", version=f"glarelab {_version()}")
+    commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for module in MODULES:
         module.add(commands)
     return parser
 
 
+def _refusal(error: BaseException) -> str | None:
+    """The one-line message of an anticipated error, or None for a bug."""
+    from analysis.load import DataError
+    from protocols import ProtocolError
+
+    if isinstance(error, ProtocolError | DataError):
+        return str(error)
+    if isinstance(error, ValueError | FileNotFoundError | IsADirectoryError):
+        return str(error)
+    if isinstance(error, NotADirectoryError | PermissionError | FileExistsError):
+        where = f" ({error.filename})" if error.filename else ""
+        return f"{error.strerror or error}{where}"
+    if isinstance(error, OSError) and error.errno in (errno.ENOSPC, errno.EFBIG, errno.EDQUOT):
+        where = f" writing {error.filename}" if error.filename else ""
+        return f"the disk is full{where} ({error.strerror}); what was written before stays"
+    if isinstance(error, MemoryError):
+        return "not enough memory for this size; try a smaller image or kernel"
+    return None
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``glarelab`` command; returns the exit status."""
-    parser = _parser()
-    args = parser.parse_args(argv)
     from experiments.loop import SessionAborted
 
+    parser = _parser()
+    args = parser.parse_args(argv)
     try:
         return args.run(args)
-    except (ValueError, FileNotFoundError, ProtocolError) as error:
-        parser.error(f"{args.command}: {error}")
     except (SessionAborted, KeyboardInterrupt) as stop:
         why = stop.args[0] if stop.args else "SIGINT"
         _log(f"{args.command}: stopped by {why} before the first trial; nothing was recorded")
         return 3
-    return 2
+    except Exception as error:
+        message = _refusal(error)
+        if message is None:
+            traceback.print_exc()
+            print(f"glarelab {args.command}: {ISSUES}", file=sys.stderr)
+            return 70
+        print(f"glarelab {args.command}: {message}", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":

@@ -251,20 +251,30 @@ class Calibration:
     def from_json(cls, data: dict, *, source: str = "calibration") -> Calibration:
         """A calibration from its JSON form (a file, or a stimulus-set manifest), checking its
         format and the hash of its readings."""
+        if not isinstance(data, dict):
+            raise ValueError(
+                f"{source}: not a glarelab calibration (a JSON {type(data).__name__}, "
+                "not an object)"
+            )
         if data.get("format") != FORMAT:
             raise ValueError(
                 f"{source}: not a glarelab calibration (format {data.get('format')!r})"
             )
-        calibration = cls(
-            bit_depth=int(data["bit_depth"]),
-            readings=tuple((int(c), float(v)) for c, v in data["readings"]),
-            method=data["method"],
-            created=data["created"],
-            status=data["status"],
-            label=data.get("label", ""),
-            model=data.get("model", {}),
-            verification=data.get("verification", {}),
-        )
+        try:
+            calibration = cls(
+                bit_depth=int(data["bit_depth"]),
+                readings=tuple((int(c), float(v)) for c, v in data["readings"]),
+                method=data["method"],
+                created=data["created"],
+                status=data["status"],
+                label=data.get("label", ""),
+                model=data.get("model", {}),
+                verification=data.get("verification", {}),
+            )
+        except KeyError as error:
+            raise ValueError(f"{source}: the calibration has no {error.args[0]!r}") from None
+        except (TypeError, ValueError) as error:
+            raise ValueError(f"{source}: a malformed calibration ({error})") from None
         if calibration.readings_sha256 != data.get("readings_sha256"):
             raise ValueError(f"{source}: the readings do not match their recorded hash (edited?)")
         return calibration
@@ -275,7 +285,11 @@ class Calibration:
         path = Path(path)
         if not path.is_file():
             raise FileNotFoundError(f"no calibration file at {path}")
-        return cls.from_json(json.loads(path.read_text()), source=str(path))
+        try:
+            data = json.loads(path.read_text())
+        except (json.JSONDecodeError, UnicodeDecodeError) as error:
+            raise ValueError(f"{path}: a calibration must be a JSON file; {error}") from None
+        return cls.from_json(data, source=str(path))
 
 
 def _check_readings(

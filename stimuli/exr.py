@@ -13,6 +13,8 @@ import OpenEXR
 
 __all__ = ["read_exr", "write_exr"]
 
+EXR_MAGIC = bytes((0x76, 0x2F, 0x31, 0x01))  # the first four bytes of every OpenEXR file
+
 
 def write_exr(path: str | Path, image: np.ndarray) -> Path:
     """Write a linear image as a float32 OpenEXR file (ZIP compression, lossless).
@@ -58,15 +60,26 @@ def read_exr(path: str | Path) -> np.ndarray:
     Raises
     ------
     ValueError
-        If the file holds neither a ``Y`` channel nor ``R``, ``G`` and ``B``.
+        If the file is not OpenEXR, is damaged, or holds neither a ``Y`` channel nor ``R``,
+        ``G`` and ``B``.
     FileNotFoundError
         If the file does not exist.
     """
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"no EXR file at {path}")
-    with OpenEXR.File(str(path), separate_channels=True) as exr:
-        channels = {name: np.asarray(c.pixels) for name, c in exr.channels().items()}
+    with path.open("rb") as stream:
+        magic = stream.read(4)
+    if magic != EXR_MAGIC:
+        what = "an empty file" if not magic else "not an OpenEXR file (its first bytes differ)"
+        raise ValueError(f"{path} is {what}; give a linear float OpenEXR image")
+    try:
+        with OpenEXR.File(str(path), separate_channels=True) as exr:
+            channels = {name: np.asarray(c.pixels) for name, c in exr.channels().items()}
+    except RuntimeError as error:  # OpenEXR's way of saying the file is damaged
+        raise ValueError(
+            f"{path} cannot be read as OpenEXR (truncated or damaged?): {error}"
+        ) from None
     if {"R", "G", "B"} <= channels.keys():
         return np.stack([channels[c] for c in "RGB"], axis=-1).astype(np.float32, copy=False)
     if "Y" in channels:

@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
+import shutil
 import sys
 from importlib import metadata
 from pathlib import Path
@@ -21,6 +23,7 @@ import numpy as np
 from PIL import Image
 
 from protocols import Protocol
+from protocols.folders import check_replaceable, replace_folder, staging_folder
 
 from .calibration import Calibration, synthetic_calibration
 from .exr import read_exr, write_exr
@@ -137,7 +140,8 @@ def build_stimulus_set(
     protocol
         A validated protocol of a paradigm that shows images (matching, staircase).
     out
-        Output folder (created; existing files of the same names are replaced).
+        Output folder: new, empty, or an earlier stimulus set, which is replaced whole once
+        the new set is complete (a folder holding anything else is refused).
     calibration
         The display calibration; default: the protocol display's synthetic calibration, which
         the manifest marks as synthetic.
@@ -147,7 +151,8 @@ def build_stimulus_set(
     Raises
     ------
     ValueError
-        For a protocol without stimuli, or a calibration whose bit depth is not the display's.
+        For a protocol without stimuli, a calibration whose bit depth is not the display's,
+        or an ``out`` that is a file or a folder holding something other than a stimulus set.
     """
     if BUILDERS.get(protocol.paradigm) is None:
         raise ValueError(
@@ -160,9 +165,18 @@ def build_stimulus_set(
             f"the calibration is for a {calibration.bit_depth}-bit display, the protocol's "
             f"display is {protocol['display']['bit_depth']}-bit"
         )
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+    final = check_replaceable(out, marker=MANIFEST, what="stimulus set")
     built = BUILDERS[protocol.paradigm](protocol, progress=progress)
+    out = staging_folder(final)
+    try:
+        manifest = _write_set(out, protocol, built, calibration)
+        replace_folder(out, final)
+    finally:
+        shutil.rmtree(out, ignore_errors=True)
+    return manifest
+
+
+def _write_set(out: Path, protocol: Protocol, built: dict, calibration: Calibration) -> dict:
     images = built["images"]
     records = {}
     for name, info in images.items():
@@ -206,23 +220,63 @@ def build_stimulus_set(
     return manifest
 
 
-def verify_stimulus_set(folder: str | Path) -> list[str]:
-    """Re-hash every file of a stimulus set; return the problems (empty if it is intact)."""
-    folder = Path(folder)
-    manifest_path = folder / MANIFEST
-    if not manifest_path.is_file():
-        return [f"{manifest_path}: missing (not a stimulus set?)"]
+def _manifest_of(folder: Path) -> dict:
+    """The set's manifest, checked to be a JSON object that lists its files."""
+    path = folder / MANIFEST
+    if not path.is_file():
+        raise ValueError(f"{path}: missing (not a stimulus set?)")
     try:
-        manifest = json.loads(manifest_path.read_text())
-    except json.JSONDecodeError as error:
-        return [f"{manifest_path}: not valid JSON ({error})"]
+        manifest = json.loads(path.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError) as error:
+        raise ValueError(f"{path}: not valid JSON ({error})") from None
+    if not isinstance(manifest, dict):
+        raise ValueError(f"{path}: must be a JSON object; it is a {type(manifest).__name__}")
+    files = manifest.get("files")
+    if not isinstance(files, dict) or not files:
+        raise ValueError(f"{path}: must list the set's files and their sha256 under 'files'")
+    for name, digest in files.items():
+        unsafe = Path(name).is_absolute() or len(Path(name).parts) != 1 or name in (".", "..")
+        if unsafe or not isinstance(digest, str):
+            raise ValueError(f"{path}: the file entry {name!r} is not a file name of the set")
+    return manifest
+
+
+def verify_stimulus_set(folder: str | Path) -> list[str]:
+    """Check a stimulus set: the manifest is a JSON object listing every file, and the folder
+    holds exactly those files, each with its recorded sha256.
+
+    Returns
+    -------
+    list of str
+        The problems, each naming the file: missing, changed, or not in the manifest (empty
+        when the set is intact).
+    """
+    folder = Path(folder)
+    if not folder.is_dir():
+        return [f"{folder}: not a folder"]
+    try:
+        manifest = _manifest_of(folder)
+    except ValueError as error:
+        return [str(error)]
     problems = []
-    for name, expected in sorted(manifest.get("files", {}).items()):
+    listed = manifest["files"]
+    for name, expected in sorted(listed.items()):
         path = folder / name
         if not path.is_file():
             problems.append(f"{name}: missing")
         elif _sha256(path) != expected:
             problems.append(f"{name}: changed (sha256 differs from the manifest)")
+    for path in sorted(folder.iterdir()):
+        if path.name not in listed and path.name != MANIFEST:
+            problems.append(f"{path.name}: not in the manifest (added after the build?)")
+    images = manifest.get("images")
+    if isinstance(images, dict):
+        for name, record in sorted(images.items()):
+            for file in record.get("files", []) if isinstance(record, dict) else []:
+                if file not in listed:
+                    problems.append(f"{file}: image {name}'s file is not hashed in the manifest")
+    else:
+        problems.append(f"{MANIFEST}: has no table of images")
     return problems
 
 
@@ -250,7 +304,7 @@ class StimulusSet:
 
     def __init__(self, folder: str | Path):
         self.folder = Path(folder)
-        self.manifest = json.loads((self.folder / MANIFEST).read_text())
+        self.manifest = _manifest_of(self.folder)
         self.geometry = self.manifest["geometry"]
         self._images: dict[str, np.ndarray] = {}
 
@@ -273,23 +327,13 @@ def cached_stimulus_set(
     ``root`` defaults to ``$GLARELAB_CACHE`` or ``~/.cache/glarelab``; the set is
     ``ROOT/sets/STUDY-SHA``, named by the protocol's hash.
     """
-    import os
-    import shutil
-    import tempfile
-
     if root is None:
         root = Path(os.environ.get("GLARELAB_CACHE") or Path.home() / ".cache" / "glarelab")
     folder = Path(root) / "sets" / f"{protocol.study}-{protocol.sha256[:16]}"
     if (folder / MANIFEST).is_file() and not verify_stimulus_set(folder):
         return folder
-    folder.parent.mkdir(parents=True, exist_ok=True)
-    staging = Path(tempfile.mkdtemp(prefix=".building-", dir=folder.parent))
-    try:
-        build_stimulus_set(
-            protocol, staging, calibration=default_calibration(protocol), progress=progress
-        )
-        shutil.rmtree(folder, ignore_errors=True)
-        os.replace(staging, folder)
-    finally:
-        shutil.rmtree(staging, ignore_errors=True)
+    shutil.rmtree(folder, ignore_errors=True)  # the cache's own folder, damaged: rebuilt
+    build_stimulus_set(
+        protocol, folder, calibration=default_calibration(protocol), progress=progress
+    )
     return folder

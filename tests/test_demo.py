@@ -55,4 +55,11 @@ def test_demo_report_matches_a_fresh_analysis_and_names_the_protocol(tmp_path):
     assert provenance["protocol_sha256_in_sessions"] == [protocol.sha256]
     assert len(provenance["stimulus_set_manifest_sha256"]) == 64
     assert provenance["stimulus_set_calibration_status"] == "synthetic"
-    assert provenance["packages"]["glarelab"] != "not installed"
+    assert (
+        provenance["packages"]["glarelab"]
+        and "not installed" not in provenance["packages"]["glarelab"]
+    )
+    assert provenance["simulated"] is True
+    assert [s["participant"] for s in provenance["sessions"]] == [
+        f"sim{n:02d}" for n in range(1, 11)
+    ]

@@ -15,11 +15,26 @@ def _analyse(args: argparse.Namespace) -> int:
     from analysis.report import write_report
 
     protocol = load_protocol(args.protocol or args.study)
+    if args.protocol is not None and protocol.study != args.study:
+        named = load_protocol(args.study).study if Path(args.study).suffix else args.study
+        if named != protocol.study:
+            raise ValueError(
+                f"--protocol {args.protocol} is the protocol of study {protocol.study!r}, not "
+                f"of {args.study!r}; give the study's own protocol"
+            )
+    for csv in args.csv:
+        if Path(csv).suffix.lower() != ".csv":
+            raise ValueError(
+                f"{csv}: session data are CSV files (each one's .json sidecar is read with it)"
+            )
+    if args.stimuli is not None and not (Path(args.stimuli) / "manifest.json").is_file():
+        raise ValueError(f"--stimuli {args.stimuli}: no manifest.json (not a stimulus set)")
     report = write_report(
         protocol,
         args.csv,
         args.out,
         exclude_incomplete=args.exclude_incomplete,
+        include_aborted=args.include_aborted,
         stimuli=args.stimuli,
     )
     _log(f"wrote {report} with its tables and figures")
@@ -32,7 +47,12 @@ def add(commands) -> None:
     analyse = commands.add_parser("analyse", help="analyse session CSVs: tables, figures, report")
     analyse.add_argument("study", help=f"the protocol: {PROTOCOL_HELP}")
     analyse.add_argument("csv", nargs="+", type=Path, help="session CSV files")
-    analyse.add_argument("--out", type=Path, required=True, help="report folder")
+    analyse.add_argument(
+        "--out",
+        type=Path,
+        required=True,
+        help="report folder: new, empty, or an earlier report (replaced whole)",
+    )
     analyse.add_argument(
         "--protocol", type=Path, default=None, help="a protocol TOML file (instead of STUDY)"
     )
@@ -41,5 +61,11 @@ def add(commands) -> None:
         "--exclude-incomplete",
         action="store_true",
         help="drop participants with a missing design cell (listed in the report)",
+    )
+    analyse.add_argument(
+        "--include-aborted",
+        action="store_true",
+        help="analyse sessions that did not complete and skip files without trials (both "
+        "listed in the report) instead of refusing them",
     )
     analyse.set_defaults(run=_analyse)

@@ -9,10 +9,12 @@ import numpy as np
 
 from stimuli.calibration import fit_calibration, read_readings
 
+from .common import count, number, output_file
 from .common import log as _log
 
 
 def _calibrate_fit(args: argparse.Namespace) -> int:
+    output_file(args.out, (".json",), "calibration", inputs=[args.readings])
     readings = read_readings(args.readings)
     calibration = fit_calibration(
         readings,
@@ -36,6 +38,8 @@ def _calibrate_fit(args: argparse.Namespace) -> int:
 def _calibrate_measure(args: argparse.Namespace) -> int:
     from stimuli.measure import MeasurementSession
     from stimuli.measure_psychopy import run_measurement
+
+    output_file(args.out, (".json",), "calibration")
 
     session = MeasurementSession(
         bit_depth=args.bit_depth,
@@ -85,11 +89,18 @@ def add(commands) -> None:
     )
     measure.add_argument("--out", type=Path, required=True, help="calibration JSON to write")
     measure.add_argument("--bit-depth", type=int, default=10, choices=(8, 10, 12, 16))
-    measure.add_argument("--points", type=int, default=33)
+    measure.add_argument("--points", type=count(4, 4096), default=33, help="codes measured")
     measure.add_argument("--order", choices=("random", "reversed"), default="random")
-    measure.add_argument("--verify-points", type=int, default=5)
-    measure.add_argument("--tolerance", type=float, default=0.03, help="relative, for 'passed'")
-    measure.add_argument("--seed", type=int, default=0)
+    measure.add_argument(
+        "--verify-points", type=count(0, 1024), default=5, help="codes measured again to verify"
+    )
+    measure.add_argument(
+        "--tolerance",
+        type=number(0, 1, above=True),
+        default=0.03,
+        help="relative error allowed for 'passed'",
+    )
+    measure.add_argument("--seed", type=count(0), default=0, help="seed of the code order")
     measure.add_argument("--label", default="")
     measure.add_argument("--windowed", action="store_true")
     measure.add_argument(
@@ -99,7 +110,7 @@ def add(commands) -> None:
     )
     measure.add_argument(
         "--simulate",
-        type=float,
+        type=number(0),
         nargs=3,
         metavar=("WHITE", "BLACK", "GAMMA"),
         default=None,

@@ -8,6 +8,7 @@ from pathlib import Path
 from protocols import load_protocol
 from stimuli.calibration import Calibration
 
+from .common import count, output_file
 from .common import log as _log
 
 
@@ -22,6 +23,9 @@ def _check_display(args: argparse.Namespace) -> int:
         out = args.calibration.with_suffix(".display-check.json")
     else:
         raise ValueError("give --out FILE, or --calibration (the check is written next to it)")
+    output_file(
+        out, (".json",), "display check", inputs=[args.calibration] if args.calibration else ()
+    )
     result = check_display(
         protocol,
         stimuli=args.stimuli,
@@ -69,7 +73,7 @@ def add(commands) -> None:
         "--out", type=Path, default=None, help="JSON to write (default: next to --calibration)"
     )
     check.add_argument(
-        "--frames", type=int, default=600, help="flips per measurement (default 600)"
+        "--frames", type=count(30, 100_000), default=600, help="flips per measurement"
     )
     check.add_argument("--windowed", action="store_true", help="a window, not full screen")
     check.set_defaults(run=_check_display)

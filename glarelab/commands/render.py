@@ -16,7 +16,15 @@ from stimuli.exr import read_exr, write_exr
 from stimuli.preview import preview_png, psf_png
 from stimuli.shapes import disk
 
+from .common import check_memory, count, number, output_file, writes_into
 from .common import log as _log
+
+# bytes per pixel a render needs at its peak (measured on 512²-2048² scenes, exact and planned
+# renders: 230-240 for luminance, 300 for RGB; with headroom)
+RENDER_BYTES_PER_PIXEL = {1: 260, 3: 340}
+# a kernel's digitisation: about 110 bytes per pixel, plus the wave model's pupil spectra
+PSF_BYTES_PER_PIXEL = 128
+PSF_FIXED_BYTES = 0.5 * 2**30
 
 
 def build_model(args: argparse.Namespace) -> glare.GlareModel:
@@ -61,26 +69,43 @@ MODEL_CHOICES = ("gaussian", "vos", "wave", "hybrid")
 def _add_model_options(parser: argparse.ArgumentParser, default: str = "vos") -> None:
     group = parser.add_argument_group("glare model")
     group.add_argument("--model", choices=MODEL_CHOICES, default=default)
-    group.add_argument("--sigma-deg", type=float, default=0.34, help="Gaussian σ (deg)")
-    group.add_argument("--regime", choices=glare.vos.REGIMES, default="photopic")
-    group.add_argument("--age", type=float, default=None, help="observer age, years (eq. 10)")
-    group.add_argument("--flare-lines", action="store_true", help="add Spencer's flare lines")
-    group.add_argument("--seed", type=int, default=0, help="seed of the flare lines")
     group.add_argument(
-        "--wavelength-nm", type=float, default=None, help="monochromatic halo (default: white)"
+        "--sigma-deg", type=number(0, 90, above=True), default=0.34, help="Gaussian σ (deg)"
+    )
+    group.add_argument("--regime", choices=glare.vos.REGIMES, default="photopic")
+    group.add_argument(
+        "--age", type=number(0, 120), default=None, help="observer age, years (eq. 10)"
+    )
+    group.add_argument("--flare-lines", action="store_true", help="add Spencer's flare lines")
+    group.add_argument("--seed", type=count(0), default=0, help="seed of the flare lines")
+    group.add_argument(
+        "--wavelength-nm",
+        type=number(0, above=True),
+        default=None,
+        help="monochromatic halo (default: white)",
     )
     wave = parser.add_argument_group("wave optics (--model wave|hybrid)")
-    wave.add_argument("--pupil-mm", type=float, default=None, help="default: Moon-Spencer")
+    wave.add_argument(
+        "--pupil-mm", type=number(0, above=True), default=None, help="default: Moon-Spencer"
+    )
     wave.add_argument("--no-eyelashes", action="store_true")
     wave.add_argument("--no-eyelid", action="store_true")
-    wave.add_argument("--particles", type=int, default=1000)
+    wave.add_argument("--particles", type=count(0), default=1000)
     wave.add_argument("--fresnel", action="store_true", help="Luidolt eq. 5.6 Fresnel term")
     wave.add_argument("--spectral", choices=glare.wave.SPECTRAL_METHODS, default="scaled")
-    wave.add_argument("--source-x-deg", type=float, default=0.0)
-    wave.add_argument("--diaphragm-sides", type=int, default=None)
+    wave.add_argument("--source-x-deg", type=number(-90, 90), default=0.0)
+    wave.add_argument("--diaphragm-sides", type=count(3), default=None)
     wave.add_argument("--cross-screen", choices=("4-point", "trigonal"), default=None)
     wave.add_argument("--aperture-image", type=Path, default=None, help="obstacle PNG/EXR")
-    wave.add_argument("--aperture-spacing-mm", type=float, default=None)
+    wave.add_argument("--aperture-spacing-mm", type=number(0, above=True), default=None)
+
+
+def odd_size(text: str) -> int:
+    """An argparse type: a kernel's odd size in pixels (its centre is a pixel)."""
+    size = count(3, 16385)(text)
+    if size % 2 == 0:
+        raise argparse.ArgumentTypeError(f"{size} must be odd, so the kernel has a centre pixel")
+    return size
 
 
 def _render(args: argparse.Namespace) -> int:
@@ -88,18 +113,37 @@ def _render(args: argparse.Namespace) -> int:
     *inputs, output = args.paths
     if not inputs:
         raise ValueError("render needs an input EXR and an output EXR (or folder)")
-    targets = [Path(output)]
+    for source in inputs:
+        if not Path(source).is_file():
+            raise FileNotFoundError(f"input {source}: no such file")
     folder = len(inputs) > 1 or output.endswith(("/", "\\")) or Path(output).is_dir()
     if folder:  # many files: one renderer per image shape, its kernel made once
-        Path(output).mkdir(parents=True, exist_ok=True)
-        targets = [Path(output) / Path(name).name for name in inputs]
         if args.preview:
             raise ValueError("--preview is for one output file; render that file on its own")
+        names = [Path(name).name for name in inputs]
+        if len(set(names)) < len(names):
+            raise ValueError(
+                "inputs of the same file name would write the same output: "
+                f"{sorted({n for n in names if names.count(n) > 1})}"
+            )
+        writes_into(Path(output), names, "render")
+        targets = [Path(output) / name for name in names]
+    else:
+        targets = [Path(output)]
+    for target in targets:
+        output_file(target, (".exr",), "rendered image", inputs=inputs)
+    if args.preview:
+        output_file(args.preview, (".png",), "preview", inputs=inputs)
     display = Calibration.load(args.calibration) if args.calibration else None
     renderers: dict[tuple, glare.GlareRenderer] = {}
-    for number, (source, target) in enumerate(zip(inputs, targets, strict=True), start=1):
-        _log(f"[{number}/{len(inputs)}] reading {source}")
+    for index, (source, target) in enumerate(zip(inputs, targets, strict=True), start=1):
+        _log(f"[{index}/{len(inputs)}] reading {source}")
         image = read_exr(source)
+        channels = 1 if image.ndim == 2 else image.shape[2]
+        check_memory(
+            RENDER_BYTES_PER_PIXEL[channels] * image.shape[0] * image.shape[1],
+            f"rendering {source} ({image.shape[1]} × {image.shape[0]} px)",
+        )
         _log(f"{image.shape} image, max {float(image.max()):.4g} cd/m²; rendering with {model}")
         start = time.perf_counter()
         key = image.shape[:2]
@@ -144,7 +188,14 @@ def _render(args: argparse.Namespace) -> int:
 
 def _psf(args: argparse.Namespace) -> int:
     model = build_model(args)
+    output_file(args.out, (".png",), "kernel image")
+    if args.exr is not None:
+        output_file(args.exr, (".exr",), "kernel")
     shape = (args.size, args.size)
+    check_memory(
+        PSF_FIXED_BYTES + PSF_BYTES_PER_PIXEL * (1 if args.luminance else 3) * args.size**2,
+        f"a {args.size}² kernel",
+    )
     _log(f"computing the {args.size}² kernel of {type(model).__name__} at {args.pixel_deg}°/px")
     start = time.perf_counter()
     kernel = glare.digitise_kernel(model, args.pixel_deg, shape, colour=not args.luminance)
@@ -153,10 +204,12 @@ def _psf(args: argparse.Namespace) -> int:
         f"{np.max(kernel.energy_outside):.3g}"
     )
     psf_png(args.out, kernel.values)
-    _log(f"wrote {args.out}")
+    written = [args.out]
     if args.exr is not None:
         write_exr(args.exr, kernel.values.astype(np.float32))
-        _log(f"wrote {args.exr}")
+        written.append(args.exr)
+    for path in written:
+        print(Path(path).resolve())
     return 0
 
 
@@ -199,9 +252,13 @@ def gallery_models() -> dict[str, tuple[str, glare.GlareModel]]:
 
 
 def _gallery(args: argparse.Namespace) -> int:
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
     models = gallery_models()
+    out = writes_into(
+        Path(args.out), [f"{n}.png" for n in models] + ["wave_gallery.json"], "gallery"
+    )
+    check_memory(
+        PSF_FIXED_BYTES + PSF_BYTES_PER_PIXEL * 3 * args.size**2, f"a {args.size}² kernel"
+    )
     captions = {}
     for index, (name, (caption, model)) in enumerate(models.items(), start=1):
         _log(f"[{index}/{len(models)}] {caption}")
@@ -211,6 +268,7 @@ def _gallery(args: argparse.Namespace) -> int:
         captions[name] = {"caption": caption, "seconds": round(time.perf_counter() - start, 2)}
         _log(f"    {captions[name]['seconds']} s → {out / name}.png")
     (out / "wave_gallery.json").write_text(json.dumps(captions, indent=2))
+    print(out.resolve())
     return 0
 
 
@@ -247,8 +305,10 @@ def _looks(args: argparse.Namespace) -> int:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    names = [f"{n}{end}" for n in DEMO_MODELS for end in (".exr", ".png", "_log.png")]
+    out = writes_into(
+        Path(args.out), ["stimulus.exr", *names, "profiles.png", "manifest.json"], "looks"
+    )
     stimulus = disk(**DEMO_DISK)
     write_exr(out / "stimulus.exr", stimulus["img"].astype(np.float32))
     pixel_deg = stimulus["pixel_deg"]
@@ -302,13 +362,20 @@ def add(commands) -> None:
         help="linear luminance EXRs (Y or RGB), cd/m², then the output EXR (float32), or an "
         "output folder (several inputs, or a name ending in /) for files of the same names",
     )
-    render.add_argument("--pixel-deg", type=float, required=True, help="visual angle of a pixel")
-    render.add_argument("--l-dmax", type=float, default=220.0, help="display maximum, cd/m²")
+    render.add_argument(
+        "--pixel-deg",
+        type=number(0, 10, above=True),
+        required=True,
+        help="visual angle of a pixel, degrees (0-10)",
+    )
+    render.add_argument(
+        "--l-dmax", type=number(0, 1e9, above=True), default=220.0, help="display maximum, cd/m²"
+    )
     render.add_argument("--method", choices=("Yoshida2008", "Spencer1995"), default="Yoshida2008")
     render.add_argument("--precision", choices=("float64", "float32"), default="float64")
     render.add_argument(
         "--tolerance-codes",
-        type=float,
+        type=number(0),
         default=0.5,
         help="largest error allowed, display codes (default 0.5; 0 = exact, full kernel)",
     )
@@ -324,16 +391,24 @@ def add(commands) -> None:
     psf = commands.add_parser("psf", help="render a glare model's kernel as a PNG")
     psf.add_argument("--out", type=Path, required=True, help="PNG (Kakimoto's tone curve)")
     psf.add_argument("--exr", type=Path, default=None, help="also write the kernel as EXR")
-    psf.add_argument("--pixel-deg", type=float, default=0.01)
-    psf.add_argument("--size", type=int, default=401, help="kernel size in pixels (odd)")
+    psf.add_argument(
+        "--pixel-deg", type=number(0, 10, above=True), default=0.01, help="degrees per pixel"
+    )
+    psf.add_argument(
+        "--size", type=odd_size, default=401, help="kernel size in pixels (odd, 3-16385)"
+    )
     psf.add_argument("--luminance", action="store_true", help="luminance only, no colour")
     _add_model_options(psf, default="wave")
     psf.set_defaults(run=_psf)
 
     gallery = commands.add_parser("gallery", help="render the wave-optics PSF gallery")
     gallery.add_argument("--out", type=Path, default=Path("docs/gallery"))
-    gallery.add_argument("--pixel-deg", type=float, default=0.01)
-    gallery.add_argument("--size", type=int, default=401)
+    gallery.add_argument(
+        "--pixel-deg", type=number(0, 10, above=True), default=0.01, help="degrees per pixel"
+    )
+    gallery.add_argument(
+        "--size", type=odd_size, default=401, help="kernel size in pixels (odd, 3-16385)"
+    )
     gallery.set_defaults(run=_gallery)
 
     looks = commands.add_parser("looks", help="render a glare stimulus with each model")

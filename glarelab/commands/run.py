@@ -9,7 +9,7 @@ from pathlib import Path
 from protocols import load_protocol
 from stimuli.calibration import Calibration
 
-from .common import PROTOCOL_HELP
+from .common import PROTOCOL_HELP, count, number, output_file
 from .common import log as _log
 
 VISION = ("none", "glasses", "lenses", "other")
@@ -24,6 +24,17 @@ def _age(text: str) -> int:
     if not 0 <= age <= 120:
         raise argparse.ArgumentTypeError(f"age must be 0-120 years; got {age}")
     return age
+
+
+def _participant(text: str) -> str:
+    """A participant id: file-name safe, as the session files are named by it."""
+    from experiments.data import check_session_id
+
+    try:
+        check_session_id(text, 1)
+    except ValueError as error:
+        raise argparse.ArgumentTypeError(str(error).replace("participant must", "must")) from None
+    return text
 
 
 def _detail(text: str) -> str | None:
@@ -75,13 +86,15 @@ def _run(args: argparse.Namespace) -> int:
     protocol = load_protocol(args.protocol or args.study)
     args.title = protocol.study
     out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"--out {out} is a file; session files go into a folder")
     if args.simulate:
         from experiments.session import make_observer, shows_images
         from stimuli.stimulus_set import cached_stimulus_set
 
         ids = (
             [args.participant]
-            if args.participant
+            if args.participant is not None
             else [f"sim{index:02d}" for index in range(1, args.participants + 1)]
         )
         stimuli = args.stimuli
@@ -113,7 +126,15 @@ def _run(args: argparse.Namespace) -> int:
     from experiments.psychopy_frontend import PsychoPyFrontend
 
     calibration = Calibration.load(args.calibration) if args.calibration else None
-    scripted = Path(args.scripted_keys).read_text().split() if args.scripted_keys else None
+    scripted = None
+    if args.scripted_keys is not None:
+        if not Path(args.scripted_keys).is_file():
+            raise FileNotFoundError(f"--scripted-keys {args.scripted_keys}: no such file")
+        scripted = Path(args.scripted_keys).read_text().split()
+        if not scripted:
+            raise ValueError(f"--scripted-keys {args.scripted_keys}: the file names no keys")
+    if args.screenshot is not None:
+        output_file(args.screenshot, (".png",), "screenshot")
     frontend = PsychoPyFrontend(
         protocol,
         stimuli=args.stimuli,
@@ -152,10 +173,11 @@ def add(commands) -> None:
     run.add_argument("study", help=f"the protocol: {PROTOCOL_HELP}")
     run.add_argument(
         "--participant",
+        type=_participant,
         default=None,
         help="participant id (file-name safe); without it, a dialog asks for the details",
     )
-    run.add_argument("--session", type=int, default=1, help="session number (default 1)")
+    run.add_argument("--session", type=count(1), default=1, help="session number, from 1")
     run.add_argument(
         "--protocol", type=Path, default=None, help="a protocol TOML file (instead of STUDY)"
     )
@@ -211,10 +233,8 @@ def add(commands) -> None:
     run.add_argument("--screenshot", type=Path, default=None, help="save the first trial's screen")
     run.add_argument("--simulate", action="store_true", help="simulated observers, no screen")
     run.add_argument(
-        "--participants", type=int, default=10, help="simulated participants (default 10)"
+        "--participants", type=count(1, 999), default=10, help="simulated participants (1-999)"
     )
-    run.add_argument(
-        "--seed", type=int, default=0, help="seed of the simulated observers (default 0)"
-    )
-    run.add_argument("--trial-delay-ms", type=float, default=0.0, help=argparse.SUPPRESS)
+    run.add_argument("--seed", type=count(0), default=0, help="seed of the simulated observers")
+    run.add_argument("--trial-delay-ms", type=number(0), default=0.0, help=argparse.SUPPRESS)
     run.set_defaults(run=_run)

@@ -39,7 +39,7 @@ def _stimuli_verify(args: argparse.Namespace) -> int:
         for problem in problems:
             print(f"{args.folder}: {problem}", file=sys.stderr)
         return 1
-    print(f"{args.folder}: every file matches its manifest")
+    print(f"{args.folder}: the folder holds exactly the manifest's files, each unchanged")
     return 0
 
 
@@ -49,9 +49,17 @@ def add(commands) -> None:
     stimuli_commands = stimuli.add_subparsers(dest="stimuli_command", required=True)
     build = stimuli_commands.add_parser("build", help="build a stimulus set from a protocol")
     build.add_argument("protocol", help=PROTOCOL_HELP)
-    build.add_argument("--out", type=Path, required=True)
+    build.add_argument(
+        "--out",
+        type=Path,
+        required=True,
+        help="folder for the set: new, empty, or an earlier set (replaced whole)",
+    )
     build.add_argument("--calibration", type=Path, default=None, help="display calibration JSON")
     build.set_defaults(run=_stimuli_build)
-    verify = stimuli_commands.add_parser("verify", help="re-hash a stimulus set")
+    verify = stimuli_commands.add_parser(
+        "verify",
+        help="check a stimulus set: exactly the manifest's files, each with its sha256",
+    )
     verify.add_argument("folder", type=Path)
     verify.set_defaults(run=_stimuli_verify)

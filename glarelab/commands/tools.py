@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from .common import PROTOCOL_HELP
+from .common import PROTOCOL_HELP, count, output_folder, writes_into
 from .common import log as _log
 
 
@@ -22,26 +22,34 @@ def _demo(args: argparse.Namespace) -> int:
 def _docs(args: argparse.Namespace) -> int:
     from glarelab.docs import data_reference, protocol_reference
 
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "protocols.md").write_text(protocol_reference())
-    (out / "data.md").write_text(data_reference())
-    _log(f"wrote {out / 'protocols.md'} and {out / 'data.md'}")
+    out = writes_into(Path(args.out), ["protocols.md", "data.md"], "docs")
+    for name, text in (("protocols.md", protocol_reference()), ("data.md", data_reference())):
+        (out / name).write_text(text)
+        print((out / name).resolve())
     return 0
 
 
 def _bench(args: argparse.Namespace) -> int:
     from glarelab.bench import run_bench
 
+    from glarelab.bench import WORKLOADS
+
+    unknown = sorted(set(args.only or ()) - set(WORKLOADS))
+    if unknown:
+        raise ValueError(
+            f"--only {' '.join(unknown)}: no such workload; choose from {', '.join(WORKLOADS)}"
+        )
+    out = output_folder(args.out, "bench")
     run_bench(
-        args.out,
+        out,
         large=args.large,
         only=tuple(args.only) if args.only else None,
         spectral=not args.no_spectral,
         repeats=args.repeats,
         log=_log,
     )
-    _log(f"wrote {args.out / 'bench.csv'}, bench.md and the Pareto plots")
+    _log(f"wrote {out / 'bench.csv'}, bench.md and the Pareto plots")
+    print(out.resolve())
     return 0
 
 
@@ -56,7 +64,7 @@ def add(commands) -> None:
     bench.add_argument(
         "--no-spectral", action="store_true", help="skip the wave-optics spectral section"
     )
-    bench.add_argument("--repeats", type=int, default=3)
+    bench.add_argument("--repeats", type=count(1, 100), default=3, help="timings per case")
     bench.set_defaults(run=_bench)
 
     docs = commands.add_parser("docs", help="regenerate docs/protocols.md and docs/data.md")
@@ -70,8 +78,11 @@ def add(commands) -> None:
         "--protocol", default="yoshida2008", help=f"{PROTOCOL_HELP} (default yoshida2008)"
     )
     demo.add_argument(
-        "--out", type=Path, default=Path("out/demo"), help="output folder (replaced)"
+        "--out",
+        type=Path,
+        default=Path("out/demo"),
+        help="the demo's folder: new, empty, or an earlier demo's (its output is replaced)",
     )
-    demo.add_argument("--participants", type=int, default=10)
-    demo.add_argument("--seed", type=int, default=1, help="seed of the simulated observers")
+    demo.add_argument("--participants", type=count(1, 999), default=10, help="simulated (1-999)")
+    demo.add_argument("--seed", type=count(0), default=1, help="seed of the simulated observers")
     demo.set_defaults(run=_demo)

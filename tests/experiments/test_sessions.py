@@ -103,7 +103,7 @@ def test_existing_data_is_never_overwritten(tmp_path):
     bad_id = glarelab(
         "run", "luidolt2020", "--simulate", "--participant", "../P01", "--out", tmp_path
     )
-    assert bad_id.returncode == 2 and "participant must be" in bad_id.stderr
+    assert bad_id.returncode == 2 and "--participant: must be" in bad_id.stderr
 
 
 def test_a_killed_session_keeps_its_trials_and_resumes_to_the_same_file(tmp_path):
@@ -161,15 +161,14 @@ def test_sessions_refuse_bad_stimuli_and_calibration_before_any_trial(tmp_path, 
     data = bytearray(victim.read_bytes())
     data[-3] ^= 0xFF
     victim.write_bytes(bytes(data))
-    with pytest.raises(SystemExit):
-        main([*base, "--stimuli", str(corrupt), "--allow-uncalibrated"])
+    assert main([*base, "--stimuli", str(corrupt), "--allow-uncalibrated"]) == 2
     assert "reference_vos_c.exr: changed" in capsys.readouterr().err
     # a set built from another protocol
     other = tmp_path / "other.toml"
     other.write_text(
         (PROTOCOLS / "yoshida2008.toml").read_text().replace("seed = 2008", "seed = 7")
     )
-    with pytest.raises(SystemExit):
+    assert (
         main(
             [
                 *base,
@@ -180,12 +179,13 @@ def test_sessions_refuse_bad_stimuli_and_calibration_before_any_trial(tmp_path, 
                 "--allow-uncalibrated",
             ]
         )
+        == 2
+    )
     assert "built from another protocol" in capsys.readouterr().err
     # no calibration, a missing calibration file, a synthetic one
-    with pytest.raises(SystemExit):
-        main([*base, "--stimuli", str(sets / "yoshida2008")])
+    assert main([*base, "--stimuli", str(sets / "yoshida2008")]) == 2
     assert "calibration is missing" in capsys.readouterr().err
-    with pytest.raises(SystemExit):
+    assert (
         main(
             [
                 *base,
@@ -195,10 +195,13 @@ def test_sessions_refuse_bad_stimuli_and_calibration_before_any_trial(tmp_path, 
                 str(tmp_path / "none.json"),
             ]
         )
+        == 2
+    )
     assert "no calibration file" in capsys.readouterr().err
     synthetic = ROOT / "calibrations" / "SYNTHETIC-yoshida2008-433cd-10bit.json"
-    with pytest.raises(SystemExit):
-        main([*base, "--stimuli", str(sets / "yoshida2008"), "--calibration", str(synthetic)])
+    assert (
+        main([*base, "--stimuli", str(sets / "yoshida2008"), "--calibration", str(synthetic)]) == 2
+    )
     assert "calibration is synthetic" in capsys.readouterr().err
     assert not out.exists() or not any(out.iterdir())  # nothing was written
 
