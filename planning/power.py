@@ -43,15 +43,20 @@ from .effects import CORRECTIONS, Correction, chosen_p
 
 __all__ = [
     "binomial_interval",
+    "check_run_folder",
     "effect_size_figure",
     "power_analysis",
     "power_figure",
     "recommend",
+    "run_inputs",
     "summarise",
     "write_summary",
 ]
 
 RUN_FORMAT = "glarelab power run v1"
+MAX_PARTICIPANTS = 999
+"""The largest sample size: participants are numbered with three digits
+(:func:`planning.simulate.participant_id`)."""
 QUANTILES = (0.05, 0.25, 0.5, 0.75, 0.95)
 
 
@@ -306,24 +311,64 @@ def write_summary(
     return recommended
 
 
-def _check_run(out: Path, run: dict) -> None:
-    """Refuse to add to a folder whose replications were made with other inputs."""
-    path = out / "run.json"
-    if path.is_file():
+def run_inputs(protocol, *, seed: int, participants: Sequence[int]) -> dict:
+    """What a folder's replications depend on (its ``run.json``): the protocol, the seed and
+    the sample sizes. The number of replications is not among them: more can be added later,
+    and fewer summarised."""
+    return {
+        "format": RUN_FORMAT,
+        "study": protocol.study,
+        "protocol_sha256": protocol.sha256,
+        "seed": seed,
+        "participants": sorted(set(int(n) for n in participants)),
+    }
+
+
+def check_run_folder(out: str | Path, run: dict) -> None:
+    """Refuse a folder whose replications were made with other inputs (writes nothing).
+
+    Raises
+    ------
+    ValueError
+        Naming the folder and each input that differs.
+    """
+    path = Path(out) / "run.json"
+    if not path.is_file():
+        return
+    try:
         before = json.loads(path.read_text())
-        changed = [
-            f"{key} {before.get(key)!r} then, {value!r} now"
-            for key, value in run.items()
-            if before.get(key) != value
-        ]
-        if changed:
-            raise ValueError(
-                f"{out} holds replications made with other inputs ({'; '.join(changed)}): give "
-                "another --out, or delete it to start again"
-            )
-    else:
-        out.mkdir(parents=True, exist_ok=True)
-        path.write_text(json.dumps(run, indent=2, sort_keys=True) + "\n")
+    except (json.JSONDecodeError, UnicodeDecodeError) as error:
+        raise ValueError(
+            f"{path} is not valid JSON ({error}): delete the folder to start again"
+        ) from None
+    if not isinstance(before, dict):
+        raise ValueError(f"{path} must be a JSON object: delete the folder to start again")
+    changed = [
+        f"{key} {before.get(key)!r} then, {value!r} now"
+        for key, value in run.items()
+        if before.get(key) != value
+    ]
+    if changed:
+        raise ValueError(
+            f"{out} holds replications made with other inputs ({'; '.join(changed)}): give "
+            "another --out, or delete it to start again"
+        )
+
+
+def _check_stimuli(stimuli: Path, protocol) -> None:
+    """Refuse a stimulus set that is damaged or of another protocol."""
+    from stimuli.stimulus_set import verify_stimulus_set
+
+    problems = verify_stimulus_set(stimuli)
+    if problems:
+        more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
+        raise ValueError(f"stimuli {stimuli}: not an intact stimulus set: {problems[0]}{more}")
+    manifest = json.loads((Path(stimuli) / "manifest.json").read_text())
+    if manifest.get("protocol_sha256") != protocol.sha256:
+        raise ValueError(
+            f"stimuli {stimuli}: built from another protocol than {protocol.study}'s (its "
+            "manifest's protocol_sha256 differs); give the set of this protocol, or none"
+        )
 
 
 def power_analysis(
@@ -391,8 +436,13 @@ def power_analysis(
     from .simulate import PowerJob
 
     sizes = sorted(set(int(n) for n in participants))
-    if not sizes or sizes[0] < 2:
-        raise ValueError(f"participants must be sample sizes >= 2; got {list(participants)!r}")
+    if not sizes or sizes[0] < 2 or sizes[-1] > MAX_PARTICIPANTS:
+        raise ValueError(
+            f"participants must be sample sizes from 2 to {MAX_PARTICIPANTS}; got "
+            f"{list(participants)!r}"
+        )
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise ValueError(f"seed must be a whole number >= 0; got {seed!r}")
     if isinstance(replications, bool) or not isinstance(replications, int) or replications < 1:
         raise ValueError(f"replications must be an integer >= 1; got {replications!r}")
     _check_alpha(alpha)
@@ -400,17 +450,19 @@ def power_analysis(
         raise ValueError(f"correction must be one of {', '.join(CORRECTIONS)}; got {correction!r}")
     if not 0 < target < 1:
         raise ValueError(f"target must be in (0, 1); got {target!r}")
+    if stimuli is not None and not shows_images(protocol):
+        raise ValueError(
+            f"stimuli: the {protocol.study} protocol's paradigm ({protocol.paradigm}) shows no "
+            "images; give no stimulus set"
+        )
+    if stimuli is not None:
+        _check_stimuli(Path(stimuli), protocol)
     out = Path(out)
-    _check_run(
-        out,
-        {
-            "format": RUN_FORMAT,
-            "study": protocol.study,
-            "protocol_sha256": protocol.sha256,
-            "seed": seed,
-            "participants": sizes,
-        },
-    )
+    run = run_inputs(protocol, seed=seed, participants=sizes)
+    check_run_folder(out, run)
+    out.mkdir(parents=True, exist_ok=True)
+    if not (out / "run.json").is_file():
+        (out / "run.json").write_text(json.dumps(run, indent=2, sort_keys=True) + "\n")
     if shows_images(protocol) and stimuli is None:
         log(f"building (or reusing) the {protocol.study} stimulus set the observers look at")
         stimuli = cached_stimulus_set(protocol, progress=None)

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import os
 import shutil
 import tempfile
@@ -30,7 +31,10 @@ import pandas as pd
 
 from .grid import Point, Setting, grid
 
-__all__ = ["SweepJob", "sweep"]
+__all__ = ["MAX_POINTS", "SweepJob", "prepare", "sweep"]
+
+MAX_POINTS = 1000
+"""The most points a sweep builds (the sets are numbered with three digits, ``sets/iii``)."""
 
 
 def _manifest_sha(folder: Path) -> str:
@@ -131,6 +135,70 @@ class SweepJob:
         return effects(protocol, tables, self.simulate)
 
 
+def prepare(
+    protocol: str | Path,
+    settings: Sequence[Setting],
+    out: str | Path,
+    *,
+    simulate: int = 0,
+    seed: int = 1,
+) -> tuple[list[Point], dict]:
+    """Check a sweep before it runs, writing nothing: the grid's points, each validated, and
+    the sweep's record (``sweep.json``).
+
+    Raises
+    ------
+    planning.grid.GridError
+        For a bad key or value, or points that do not validate.
+    ValueError
+        For a protocol that shows no images without ``simulate``, ``simulate`` of 1, a point
+        whose observers cannot be simulated, or an ``out`` holding a sweep of other inputs.
+    """
+    from experiments.paradigms import PARADIGMS
+    from experiments.session import shows_images
+
+    if isinstance(simulate, bool) or not isinstance(simulate, int) or simulate < 0:
+        raise ValueError(f"simulate must be a whole number >= 0; got {simulate!r}")
+    if simulate == 1:
+        raise ValueError("simulate: the analysis needs at least 2 simulated observers; got 1")
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise ValueError(f"seed must be a whole number >= 0; got {seed!r}")
+    size = math.prod(len(s.values) for s in settings)
+    if size > MAX_POINTS:
+        raise ValueError(
+            f"the grid has {size} points ({' × '.join(str(len(s.values)) for s in settings)}); "
+            f"a sweep builds at most {MAX_POINTS}: split it into several"
+        )
+    points = grid(protocol, settings)
+    first = points[0].protocol
+    if not shows_images(first) and not simulate:
+        raise ValueError(
+            f"the {first.study} protocol's paradigm ({first.paradigm}) shows no images: there "
+            "are no stimulus sets to build; add --simulate N to simulate each point"
+        )
+    if simulate:
+        for point in points:
+            PARADIGMS[point.protocol.paradigm].observer.check(point.protocol)
+    config = {
+        "format": "glarelab sweep v1",
+        "points": [{"point": p.index, "protocol_sha256": p.protocol.sha256} for p in points],
+        "simulate": simulate,
+        "seed": seed,
+    }
+    path = Path(out) / "sweep.json"
+    if path.is_file():
+        try:
+            before = json.loads(path.read_text())
+        except (json.JSONDecodeError, UnicodeDecodeError):
+            before = None
+        if before != config:
+            raise ValueError(
+                f"{out} holds a sweep of another grid, protocol or simulation: give another "
+                "--out, or delete it to start again"
+            )
+    return points, config
+
+
 def sweep(
     protocol: str | Path,
     settings: Sequence[Setting],
@@ -161,45 +229,15 @@ def sweep(
 
     Raises
     ------
-    planning.grid.GridError
-        For a bad key or value, or points that do not validate (before anything is built).
-    ValueError
-        For a protocol that shows no images without ``simulate``, or ``simulate`` of 1.
+    planning.grid.GridError, ValueError
+        As :func:`prepare`, before anything is built or written.
     """
-    from experiments.paradigms import PARADIGMS
-    from experiments.session import shows_images
-
     from .execute import Progress, ResultLog, run_tasks
 
-    if isinstance(simulate, bool) or not isinstance(simulate, int) or simulate < 0:
-        raise ValueError(f"simulate must be a whole number >= 0; got {simulate!r}")
-    if simulate == 1:
-        raise ValueError("simulate: the analysis needs at least 2 simulated observers; got 1")
-    points = grid(protocol, settings)
-    first = points[0].protocol
-    if not shows_images(first) and not simulate:
-        raise ValueError(
-            f"the {first.study} protocol's paradigm ({first.paradigm}) shows no images: there "
-            "are no stimulus sets to build; add --simulate N to simulate each point"
-        )
-    if simulate:
-        for point in points:
-            PARADIGMS[point.protocol.paradigm].observer.check(point.protocol)
+    points, config = prepare(protocol, settings, out, simulate=simulate, seed=seed)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    config = {
-        "format": "glarelab sweep v1",
-        "points": [{"point": p.index, "protocol_sha256": p.protocol.sha256} for p in points],
-        "simulate": simulate,
-        "seed": seed,
-    }
-    config_path = out / "sweep.json"
-    if config_path.is_file() and json.loads(config_path.read_text()) != config:
-        raise ValueError(
-            f"{out} holds a sweep of another grid, protocol or simulation: give another --out, "
-            "or delete it to start again"
-        )
-    config_path.write_text(json.dumps(config, indent=2, sort_keys=True) + "\n")
+    (out / "sweep.json").write_text(json.dumps(config, indent=2, sort_keys=True) + "\n")
     log(f"{len(points)} points on the grid of {', '.join(s.key for s in settings)}")
     job = SweepJob(points, out, simulate=simulate, seed=seed)
     with ResultLog(out / "points.jsonl") as results:

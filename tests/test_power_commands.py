@@ -1,5 +1,5 @@
 """glarelab power and sweep as a user runs them: killed and resumed, against a Dask cluster
-started apart, with bad input."""
+started apart (their bad inputs are in tests/test_bad_inputs.py)."""
 
 import json
 import signal
@@ -9,7 +9,6 @@ import time
 from pathlib import Path
 
 import psutil
-import pytest
 
 from glarelab.cli import main
 
@@ -125,49 +124,22 @@ def test_power_on_a_dask_cluster_started_apart(tmp_path):
                 _stop(process)
 
 
-@pytest.mark.parametrize(
-    "args, message",
-    [
-        (
-            ["power", "luidolt2020", "--participants", "1", "--out", "x"],
-            "a sample size must be at least 2",
-        ),
-        (
-            [
-                "power",
-                "luidolt2020",
-                "--participants",
-                "4",
-                "--workers",
-                "0",
-                "--scheduler",
-                "tcp://127.0.0.1:1",
-                "--out",
-                "x",
-            ],
-            "give no --scheduler",
-        ),
-        (["sweep", "yoshida2008", "--set", "stimulus.disk_deg", "--out", "x"], "give KEY=V1,V2"),
-        (
-            [
-                "sweep",
-                "yoshida2008",
-                "--set",
-                "glare.methods.nope.labels=1",
-                "--workers",
-                "0",
-                "--out",
-                "x",
-            ],
-            "no table named 'nope'",
-        ),
-    ],
-)
-def test_bad_input_is_an_error_naming_it(capsys, tmp_path, args, message):
-    with pytest.raises(SystemExit) as stop:
-        main([*args[:-1], str(tmp_path / args[-1])])
-    assert stop.value.code == 2
-    assert message in capsys.readouterr().err
+def test_a_scheduler_that_does_not_answer_is_refused_by_name(tmp_path, capsys, monkeypatch):
+    import contextlib
+
+    import planning.execute
+
+    @contextlib.contextmanager
+    def unreachable(**kwargs):
+        raise OSError("Timed out trying to connect to tcp://127.0.0.1:1 after 30 s")
+        yield
+
+    monkeypatch.setattr(planning.execute, "dask_client", unreachable)
+    args = ["luidolt2020", "--participants", "4", "--scheduler", "tcp://127.0.0.1:1"]
+    assert main(["power", *args, "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert "--scheduler tcp://127.0.0.1:1: no Dask scheduler answered (Timed out" in err, err
+    assert not (tmp_path / "out").exists()
 
 
 def test_sweep_command_prints_its_index(capsys, tmp_path):

@@ -30,9 +30,7 @@ def _docs(args: argparse.Namespace) -> int:
 
 
 def _bench(args: argparse.Namespace) -> int:
-    from glarelab.bench import run_bench
-
-    from glarelab.bench import WORKLOADS
+    from glarelab.bench import WORKLOADS, run_bench
 
     unknown = sorted(set(args.only or ()) - set(WORKLOADS))
     if unknown:

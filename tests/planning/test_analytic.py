@@ -2,6 +2,8 @@
 sphericity holding (noncentral F), through the same tasks, result log and summary as a
 protocol's power analysis."""
 
+import itertools
+
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose
@@ -27,7 +29,7 @@ def test_noncentrality_scales_with_subjects_and_error_variance():
 
 def test_power_is_the_noncentral_f_tail_and_grows_with_subjects():
     powers = [one_way_power(MEANS, error_sd=1.0, subjects=n) for n in (4, 8, 16, 32)]
-    assert all(a < b for a, b in zip(powers, powers[1:], strict=False))
+    assert all(a < b for a, b in itertools.pairwise(powers))
     critical = sps.f.isf(0.05, 3, 3 * 15)
     assert_allclose(powers[2], sps.ncf.sf(critical, 3, 45, 16 * 0.45), rtol=1e-12)
 

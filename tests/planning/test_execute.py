@@ -39,7 +39,8 @@ def test_a_line_cut_short_is_dropped_and_the_rest_kept(tmp_path_factory, done, c
 
 def test_tasks_in_the_log_are_not_run_again(tmp_path):
     class Counting(Squares):
-        calls: list = []
+        def __init__(self):
+            self.calls = []
 
         def run(self, task):
             self.calls.append(task)

@@ -82,7 +82,7 @@ def test_a_grid_point_that_does_not_validate_names_the_key_and_values():
         "stimulus.disk_deg = 99.0" in text
         and "stimulus.disk_deg = 99.0: must be float, in [0.01, 10] deg" in text
     )
-    with pytest.raises(GridError, match="each key once; repeated stimulus.disk_deg"):
+    with pytest.raises(GridError, match=r"each key once; repeated stimulus\.disk_deg"):
         grid(
             "yoshida2008",
             [parse_setting("stimulus.disk_deg=0.3"), parse_setting("stimulus.disk_deg=0.2")],

@@ -67,7 +67,9 @@ def test_recommended_sample_sizes():
 @pytest.mark.parametrize(
     "bad, message",
     [
-        ({"participants": [1, 4]}, "participants must be sample sizes >= 2"),
+        ({"participants": [1, 4]}, "participants must be sample sizes from 2 to 999"),
+        ({"participants": [4, 1000]}, "participants must be sample sizes from 2 to 999"),
+        ({"seed": -1}, "seed must be a whole number >= 0"),
         ({"replications": 0}, "replications must be an integer >= 1"),
         ({"alpha": 0.0}, "alpha must be in"),
         ({"correction": "greenhouse"}, "correction must be one of"),
@@ -78,7 +80,7 @@ def test_bad_arguments_are_refused_before_anything_runs(tmp_path, bad, message):
     arguments = {"participants": [4], "replications": 2, "seed": 1} | bad
     with pytest.raises(ValueError, match=message):
         power_analysis(load_protocol("luidolt2020"), tmp_path / "out", **arguments, **SILENT)
-    assert not (tmp_path / "out" / "replications.jsonl").exists()
+    assert not (tmp_path / "out").exists()  # refused before anything is written
 
 
 def test_the_same_power_on_one_or_two_workers_or_none(tmp_path):

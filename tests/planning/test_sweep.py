@@ -32,7 +32,7 @@ def test_a_sweep_builds_one_verified_set_per_point_and_resumes(tmp_path):
 
 def test_a_questionnaire_sweep_needs_simulation_and_gives_its_tests(tmp_path):
     setting = [parse_setting("study.seed=1,2")]
-    with pytest.raises(ValueError, match="shows no images.*--simulate N"):
+    with pytest.raises(ValueError, match=r"shows no images.*--simulate N"):
         sweep("luidolt2020", setting, tmp_path / "a", **SILENT)
     sweep("luidolt2020", setting, tmp_path / "b", simulate=5, **SILENT)
     effects = pd.read_csv(tmp_path / "b" / "effects.csv")
