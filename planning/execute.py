@@ -195,7 +195,10 @@ def dask_client(*, workers: int | None = None, scheduler: str | None = None) -> 
             n_workers=workers or available_cores(),
             threads_per_worker=1,
             processes=True,
-            dashboard_address=None,
+            # the scheduler's HTTP server (health, metrics; the dashboard where bokeh is
+            # installed) runs whatever this says: on a free port, two runs at once do not
+            # fight over Dask's default 8787
+            dashboard_address=":0",
             silence_logs=logging.ERROR,
         ) as cluster,
         Client(cluster) as client,
