@@ -35,7 +35,7 @@ def _stop(process):
 def test_a_killed_power_run_resumes_to_the_uninterrupted_result(tmp_path):
     whole = tmp_path / "whole"
     assert (
-        main(["power", *TINY, "--replications", "12", "--workers", "1", "--out", str(whole)]) == 0
+        main(["power", *TINY, "--replications", "8", "--workers", "1", "--out", str(whole)]) == 0
     )
     killed = tmp_path / "killed"
     process = subprocess.Popen(
@@ -44,7 +44,7 @@ def test_a_killed_power_run_resumes_to_the_uninterrupted_result(tmp_path):
             "power",
             *TINY,
             "--replications",
-            "12",
+            "8",
             "--workers",
             "1",
             "--out",
@@ -67,13 +67,13 @@ def test_a_killed_power_run_resumes_to_the_uninterrupted_result(tmp_path):
     process.wait(timeout=30)
     psutil.wait_procs(workers, timeout=30)
     done = len(log.read_bytes().splitlines())
-    assert 3 <= done < 12 and not (killed / "power.csv").exists()
+    assert 3 <= done < 8 and not (killed / "power.csv").exists()
     assert (
-        main(["power", *TINY, "--replications", "12", "--workers", "1", "--out", str(killed)]) == 0
+        main(["power", *TINY, "--replications", "8", "--workers", "1", "--out", str(killed)]) == 0
     )
     for name in ("power.csv", "effect_sizes.csv", "recommended.csv"):
         assert (killed / name).read_bytes() == (whole / name).read_bytes(), name
-    assert len(log.read_bytes().splitlines()) == 12  # only the missing ones were run
+    assert len(log.read_bytes().splitlines()) == 8  # only the missing ones were run
 
 
 def test_power_on_a_dask_cluster_started_apart(tmp_path):

@@ -85,7 +85,7 @@ def test_bad_arguments_are_refused_before_anything_runs(tmp_path, bad, message):
 
 def test_the_same_power_on_one_or_two_workers_or_none(tmp_path):
     protocol = load_protocol("luidolt2020")
-    arguments = {"participants": [5, 8], "replications": 12, "seed": 2} | SILENT
+    arguments = {"participants": [5, 8], "replications": 8, "seed": 2} | SILENT
     power_analysis(protocol, tmp_path / "here", **arguments)
     for workers in (1, 2):
         with dask_client(workers=workers) as client:
@@ -96,12 +96,12 @@ def test_the_same_power_on_one_or_two_workers_or_none(tmp_path):
             here == (tmp_path / "w1" / name).read_bytes() == (tmp_path / "w2" / name).read_bytes()
         )
     power = pd.read_csv(tmp_path / "here" / "power.csv")
-    assert len(power) == 6 * 2 and (power["replications"] == 12).all()
-    # more replications later: the first twelve are reused, not run again
+    assert len(power) == 6 * 2 and (power["replications"] == 8).all()
+    # more replications later: the first eight are reused, not run again
     before = (tmp_path / "here" / "replications.jsonl").read_text().splitlines()
-    power_analysis(protocol, tmp_path / "here", **(arguments | {"replications": 15}))
+    power_analysis(protocol, tmp_path / "here", **(arguments | {"replications": 10}))
     after = (tmp_path / "here" / "replications.jsonl").read_text().splitlines()
-    assert after[:12] == before and len(after) == 15
+    assert after[:8] == before and len(after) == 10
 
 
 def test_a_folder_of_other_inputs_is_refused(tmp_path):
