@@ -251,8 +251,8 @@ def power_figure(power: pd.DataFrame, *, target: float, alpha: float, title: str
         axis.set_ylabel("power")
     replications = int(power["replications"].iloc[0])
     figure.suptitle(
-        f"{title}: power (α = {alpha:g}, {replications} simulated studies per point, "
-        f"95 % CI; dashed: target {target:g})",
+        f"{title}: power (α = {alpha:g}; dashed: target {target:g})\n"
+        f"{replications} simulated studies per point, 95 % CI",
         fontsize=10,
     )
     return png(figure)
@@ -280,10 +280,10 @@ def effect_size_figure(sizes: pd.DataFrame, *, title: str) -> bytes:
         axis.set_title(group, fontsize=9)
         axis.set_xlabel("participants")
         axis.set_ylabel(sizes.loc[sizes["effect"] == members[0], "size"].iloc[0], fontsize=8)
-        axis.legend(fontsize=6)
+        axis.legend(fontsize=6, loc="best")
     for axis in axes.flat[len(groups) :]:
         axis.set_axis_off()
-    figure.suptitle(f"{title}: effect sizes (median, 25-75 %, 5-95 %)", fontsize=10)
+    figure.suptitle(f"{title}: effect sizes\n(median, 25-75 %, 5-95 %)", fontsize=10)
     return png(figure)
 
 
