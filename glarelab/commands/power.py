@@ -196,7 +196,7 @@ def _sweep(args: argparse.Namespace) -> int:
     return 0
 
 
-def _cluster_arguments(parser: argparse.ArgumentParser) -> None:
+def _cluster_arguments(parser: argparse.ArgumentParser, workers_need: str) -> None:
     where = parser.add_mutually_exclusive_group()
     where.add_argument(
         "--workers",
@@ -210,7 +210,7 @@ def _cluster_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         metavar="ADDRESS",
         help="the address of an existing Dask scheduler (tcp://HOST:PORT) instead of a local "
-        "cluster; its workers need glarelab installed and the output folder on their file system",
+        f"cluster; its workers need glarelab installed{workers_need}",
     )
 
 
@@ -271,9 +271,12 @@ def add(commands) -> None:
         help="folder for the simulated sessions' files (default /dev/shm where writable)",
     )
     power.add_argument(
-        "--out", type=Path, required=True, help="output folder (a rerun resumes it)"
+        "--out",
+        type=Path,
+        required=True,
+        help="output folder: new, empty, or an earlier run of this command (resumed)",
     )
-    _cluster_arguments(power)
+    _cluster_arguments(power, " (a worker that cannot read the stimulus set builds its own)")
     power.add_argument(
         "--task-delay-ms", type=number(0, 60_000), default=0.0, help=argparse.SUPPRESS
     )
@@ -306,7 +309,10 @@ def add(commands) -> None:
         "--seed", type=count(0), default=1, help="seed of the simulated observers (default 1)"
     )
     sweep.add_argument(
-        "--out", type=Path, required=True, help="output folder (a rerun resumes it)"
+        "--out",
+        type=Path,
+        required=True,
+        help="output folder: new, empty, or an earlier run of this command (resumed)",
     )
-    _cluster_arguments(sweep)
+    _cluster_arguments(sweep, ", and --out on a file system they share (they write the sets)")
     sweep.set_defaults(run=_sweep)
