@@ -14,8 +14,9 @@ from .common import PROTOCOL_HELP, check_memory, count, number, output_folder
 from .common import log as _log
 
 WORKER_MEMORY_BYTES = 400 * 2**20
-"""What one worker of a local cluster holds at most in a power run (its Python, the stimulus
-set as displayed and its percepts; the largest measured in docs/power.md, rounded up)."""
+"""What one worker of a local cluster holds in a power run, with room to spare: about 260 MB
+of Python and its libraries and 40-50 MB for Yoshida's stimulus set as displayed with its
+percepts (measured in docs/power.md)."""
 MAX_WORKERS = 256
 
 
