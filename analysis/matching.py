@@ -162,9 +162,13 @@ def _anova(data: pd.DataFrame, label: str) -> pd.DataFrame:
     return table
 
 
-def analyse(dataset: Dataset, protocol) -> dict:
+def analyse(dataset: Dataset, protocol, *, tests_only: bool = False) -> dict:
     """Every analysis of Yoshida §5 for the protocol's methods and levels: tables (DataFrames),
-    figures (PNG bytes) and text."""
+    figures (PNG bytes) and text.
+
+    ``tests_only`` returns only the tables of statistical tests (no figures, no descriptive
+    tables or fits), what a power analysis needs for each of thousands of simulated studies.
+    """
     g = protocol["glare"]
     names = [m["name"] for m in g["methods"]]
     titles = {m["name"]: m["title"] or m["name"] for m in g["methods"]}
@@ -219,6 +223,8 @@ def analyse(dataset: Dataset, protocol) -> dict:
                 )
     if rows:
         tables["methods_at_levels"] = pd.DataFrame(rows)
+    if tests_only:
+        return {"tables": tables, "figures": {}, "text": text}
 
     if several:
         contrasts, groups = [], []

@@ -83,7 +83,15 @@ def check(trials: pd.DataFrame, protocol) -> list[str]:
     return []
 
 
-def analyse(dataset: Dataset, protocol) -> dict:
+def analyse(dataset: Dataset, protocol, *, tests_only: bool = False) -> dict:
+    """Per-category summaries with the Wilcoxon tests, the comments and the diverging bars:
+    tables (DataFrames), figures (PNG bytes) and text; with ``[[conditions]]``, each condition
+    against the full one.
+
+    ``tests_only`` returns only the tables of statistical tests (no figures, no descriptive
+    tables or fits), what a power analysis needs for each of thousands of simulated studies
+    (a study of conditions returns everything).
+    """
     if _conditions(protocol):
         return _analyse_conditions(dataset, protocol)
     q = protocol["questionnaire"]
@@ -118,6 +126,8 @@ def analyse(dataset: Dataset, protocol) -> dict:
         f"V = {v:g}, {apa_p(p)} (Holm)"
         for v, p in zip(summary["wilcoxon_V"], summary["p_holm"], strict=True)
     ]
+    if tests_only:
+        return {"tables": {"summary": summary}, "figures": {}, "text": {}}
     comments = trials.loc[
         trials["comment"].notna(), ["participant", "category", "rating", "comment"]
     ]

@@ -149,7 +149,9 @@ def psychometric_match(staircase: pd.DataFrame) -> float:
     return centre if 0.0 <= centre <= 1.0 else float("nan")
 
 
-def _staircase_row(participant, context, level, staircase: pd.DataFrame) -> dict:
+def _staircase_row(
+    participant, context, level, staircase: pd.DataFrame, *, tests_only: bool
+) -> dict:
     return {
         "participant": participant,
         "context": context,
@@ -158,18 +160,24 @@ def _staircase_row(participant, context, level, staircase: pd.DataFrame) -> dict
         "trials": len(staircase),
         "reversals": int(staircase["reversal"].astype(bool).sum()),
         "match_reversals": reversal_match(staircase),
-        "match_psychometric": psychometric_match(staircase),
+        "match_psychometric": float("nan") if tests_only else psychometric_match(staircase),
     }
 
 
-def analyse(dataset: Dataset, protocol) -> dict:
+def analyse(dataset: Dataset, protocol, *, tests_only: bool = False) -> dict:
+    """Matched intensities, their summary, the ANOVA and Figure 13: tables (DataFrames),
+    figures (PNG bytes) and text.
+
+    ``tests_only`` returns only the tables of statistical tests (no figures, no descriptive
+    tables or fits), what a power analysis needs for each of thousands of simulated studies.
+    """
     every = dataset.trials
     trials = every[every["counted"].astype(bool)]  # repeated flashes did not move a staircase
     # one BLAS thread: the fits are tiny, and on a busy machine OpenBLAS's idle threads made
     # scipy's L-BFGS-B 30x slower (0.1 s a fit instead of 3 ms, measured with scipy 1.17)
     with threadpool_limits(limits=1, user_api="blas"):
         rows = [
-            _staircase_row(participant, context, level, staircase)
+            _staircase_row(participant, context, level, staircase, tests_only=tests_only)
             for (participant, context, level), staircase in trials.groupby(
                 ["participant", "context", "glare_level"]
             )
@@ -225,6 +233,9 @@ def analyse(dataset: Dataset, protocol) -> dict:
             + "They are in the means and the ANOVA; the matches table marks them "
             "(converged = false)."
         )
+    if tests_only:
+        tested = {"anova": tables["anova"]} if "anova" in tables else {}
+        return {"tables": tested, "figures": {}, "text": text}
     repeated = len(every) - len(trials)
     text["repeated_presentations"] = (
         f"{repeated} of {len(every)} flashes missed their frames or timing and were shown "

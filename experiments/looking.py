@@ -4,6 +4,10 @@ The set's images are luminances in cd/m²; the display shows the codes its calib
 them, so an observer looks at ``decode(encode(image))``: quantised to the display's codes and
 clipped to its range, as a participant would see them. Images are composed from the set's
 components exactly as the session composes them (:func:`stimuli.stimulus_set.compose`).
+
+A percept depends only on the image, the brightness model and the geometry judged, so it is
+remembered here: observers given the same :class:`DisplayedSet` (the simulated participants of
+a power analysis) compute each percept once.
 """
 
 from __future__ import annotations
@@ -36,6 +40,7 @@ class DisplayedSet:
             stimuli.manifest["calibration"], source=f"{stimuli.folder} calibration"
         )
         self._shown: OrderedDict[tuple, np.ndarray] = OrderedDict()
+        self._percepts: dict[tuple, object] = {}
 
     def shows(self, terms) -> np.ndarray:
         """The luminance (cd/m²) the display shows for an image given as ``[(name, weight)]``."""
@@ -49,3 +54,13 @@ class DisplayedSet:
         if len(self._shown) > CACHE_SIZE:
             self._shown.popitem(last=False)
         return shown
+
+    def percept(self, model, terms, **geometry):
+        """What ``model`` (a :class:`experiments.perception.BrightnessModel`) perceives of the
+        image ``[(name, weight)]`` with ``geometry`` (its ``percept`` keywords); computed once
+        per model, image and geometry."""
+        image = tuple((name, float(weight)) for name, weight in terms)
+        key = (model, image, tuple(sorted(geometry.items())))
+        if key not in self._percepts:
+            self._percepts[key] = model.percept(self.shows(image), **geometry)
+        return self._percepts[key]

@@ -259,7 +259,8 @@ class MatchingObserver:
     seed
         The simulation's seed.
     stimuli
-        The stimulus set it looks at.
+        The stimulus set it looks at, or the set as displayed
+        (:class:`experiments.looking.DisplayedSet`, shared by observers to share percepts).
     """
 
     @staticmethod
@@ -278,7 +279,7 @@ class MatchingObserver:
         self.seed = seed
         self.model, noise = observer_parameters(protocol["observer"])
         self.observer = noise.draw(participant_rng(protocol.seed, participant, f"observer {seed}"))
-        self.display = DisplayedSet(stimuli)
+        self.display = stimuli if isinstance(stimuli, DisplayedSet) else DisplayedSet(stimuli)
         g = self.display.geometry
         self.geometry = {
             "centre_px": tuple(g["centre_px"]),
@@ -288,15 +289,11 @@ class MatchingObserver:
         t = protocol["trials"]
         self.coarse, self.fine = t["coarse_step_cd_m2"], t["fine_step_cd_m2"]
         self.questions = protocol["questionnaire"]["questions"]
-        self._percepts: dict[tuple, object] = {}
         self._targets: dict[int, float] = {}  # the brighter (or only) setting per trial
         self._references: dict[int, list] = {}
 
     def _percept(self, terms):
-        key = tuple((name, float(weight)) for name, weight in terms)
-        if key not in self._percepts:
-            self._percepts[key] = self.model.percept(self.display.shows(key), **self.geometry)
-        return self._percepts[key]
+        return self.display.percept(self.model, terms, **self.geometry)
 
     def _rng(self, screen: dict) -> np.random.Generator:
         return participant_rng(

@@ -78,9 +78,13 @@ def make_engine(
     )
 
 
-def make_observer(protocol, participant: str, *, seed: int, stimuli: Path | None):
-    """A simulated observer of the protocol's paradigm; it looks at the set in ``stimuli``."""
+def make_observer(protocol, participant: str, *, seed: int, stimuli):
+    """A simulated observer of the protocol's paradigm; it looks at the set in ``stimuli`` (a
+    folder, or an :class:`experiments.looking.DisplayedSet` that observers share, and with it
+    their percepts)."""
     from stimuli.stimulus_set import StimulusSet
+
+    from .looking import DisplayedSet
 
     observer = PARADIGMS[protocol.paradigm].observer
     if observer is None:
@@ -93,7 +97,9 @@ def make_observer(protocol, participant: str, *, seed: int, stimuli: Path | None
         protocol,
         participant,
         seed=seed,
-        stimuli=StimulusSet(stimuli) if stimuli is not None else None,
+        stimuli=stimuli
+        if stimuli is None or isinstance(stimuli, DisplayedSet)
+        else StimulusSet(stimuli),
     )
 
 

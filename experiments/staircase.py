@@ -318,7 +318,8 @@ class StaircaseObserver:
     participant, seed
         Who, and the simulation's seed (they fix the observer and every trial's noise).
     stimuli
-        The stimulus set it looks at.
+        The stimulus set it looks at, or the set as displayed
+        (:class:`experiments.looking.DisplayedSet`, shared by observers to share percepts).
     """
 
     @staticmethod
@@ -339,24 +340,21 @@ class StaircaseObserver:
         self.observer = self.noise.draw(
             participant_rng(protocol.seed, participant, f"observer {seed}")
         )
-        self.display = DisplayedSet(stimuli)
+        self.display = stimuli if isinstance(stimuli, DisplayedSet) else DisplayedSet(stimuli)
         g = self.display.geometry
         self.centre = tuple(g["centre_px"])
         self.pixel_deg = g["pixel_deg"]
         self.diameters = {"glare": g["source_diameter_deg"], "comparison": g["disc_diameter_deg"]}
-        self._percepts: dict[tuple, object] = {}
         self._shifts: dict[str, float] = {}
 
     def _percept(self, image: dict):
-        key = (image["role"], *((n, float(w)) for n, w in image["terms"]))
-        if key not in self._percepts:
-            self._percepts[key] = self.model.percept(
-                self.display.shows(image["terms"]),
-                centre_px=self.centre,
-                diameter_deg=self.diameters[image["role"]],
-                pixel_deg=self.pixel_deg,
-            )
-        return self._percepts[key]
+        return self.display.percept(
+            self.model,
+            image["terms"],
+            centre_px=self.centre,
+            diameter_deg=self.diameters[image["role"]],
+            pixel_deg=self.pixel_deg,
+        )
 
     def keys(self, screen: dict) -> list[tuple[str, float]]:
         """The answer (with its time from the flash's onset) to a flash."""

@@ -68,6 +68,18 @@ LAB_SESSIONS = [  # README.md and docs/workflow.md: a participant's sessions
     "calibrations/my-display.json --fullscreen",
 ]
 NOT_RUN |= dict.fromkeys(LAB_SESSIONS, LAB_SESSION)
+NOT_RUN |= dict.fromkeys(
+    [
+        "glarelab power spencer1995 --participants 4 6 8 --replications 1000 --scheduler "
+        "tcp://10.0.0.5:8786 --out power/spencer1995",
+        "glarelab power spencer1995 --participants 4 6 8 --replications 1000 --scheduler "
+        "tcp://10.0.0.5:8786 --out /shared/power/spencer",
+        "glarelab power yoshida2008 --participants 6 8 10 --replications 1000 --scheduler "
+        "tcp://10.0.0.5:8786 --out /shared/power/yoshida",
+    ],
+    "needs the lab's Dask cluster; tests/test_power_commands.py starts a scheduler and a "
+    "worker and runs the command against them",
+)
 # a dry run's key script runs out into Escape: the session ends aborted, status 3, as documented
 EXIT_STATUS = {"--scripted-keys": 3}
 # Xvfb is not the protocol's display, and the example calibration is unverified: say so, as a
@@ -199,6 +211,10 @@ def test_documented_commands_run_in_a_fresh_clone(document, tmp_path):
             ran.append(command)
             continue
         words = fill_placeholders(shlex.split(command), clone)
+        if words[1] == "power":
+            # a documented run is a thousand replications on every core: the same command on
+            # two, without a cluster (tests/planning check the estimates themselves)
+            words += ["--replications", "2", "--workers", "0"]
         argv = [sys.executable, "-m", "glarelab", *words[1:]]
         if "--scripted-keys" in words:
             argv += ON_XVFB

@@ -1,0 +1,280 @@
+"""Running many independent tasks on Dask, streaming each result to disk as it finishes.
+
+A *job* is a picklable object with ``run(task) -> dict`` (a task is a number: a replication,
+a grid point) that keeps what its worker may reuse between tasks (a stimulus set read once,
+its percepts). The job is sent to every worker once, as a worker plugin
+(:class:`distributed.diagnostics.plugin.WorkerPlugin`, Dask's place for per-worker state);
+each task then sends only its number. Tasks are whole replications or stimulus sets, seconds
+each, so the scheduler's cost per task (milliseconds; ``docs/power.md``) is negligible.
+
+Results go to a :class:`ResultLog`, one JSON line per task, flushed and fsync'ed as each task
+finishes, in whatever order they finish. A run that is interrupted (Ctrl-C, SIGKILL, a lost
+cluster) keeps every finished task; run again, it does only the tasks missing. Everything
+computed from the log is sorted by task first, so the order in which tasks finished (and so
+the number of workers) never shows in a result.
+
+:func:`dask_client` starts a :class:`distributed.LocalCluster` (one single-threaded worker
+process per core by default: the work is Python and numpy on small arrays, bound by the GIL, so
+processes scale and threads do not) or connects to an existing scheduler by address.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import logging
+import os
+import sys
+import time
+import uuid
+from collections.abc import Callable, Iterable, Iterator
+from pathlib import Path
+
+from distributed.diagnostics.plugin import WorkerPlugin
+
+__all__ = ["JobPlugin", "Progress", "ResultLog", "available_cores", "dask_client", "run_tasks"]
+
+
+def available_cores() -> int:
+    """The cores this process may run on (the machine's size for a local cluster)."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
+class ResultLog:
+    """Finished tasks' results as JSON lines, each one on disk before the next is written.
+
+    A line cut short by a kill (the only line that can be: each is written and fsync'ed
+    whole) is dropped when the log is opened again.
+
+    Parameters
+    ----------
+    path
+        The log file (created with its folder).
+    """
+
+    def __init__(self, path: str | Path):
+        self.path = Path(path)
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self.results: dict[int, dict] = {}
+        good = 0
+        if self.path.is_file():
+            data = self.path.read_bytes()
+            offset = 0
+            for line in data.splitlines(keepends=True):
+                if not line.endswith(b"\n"):
+                    break  # cut short: dropped below
+                try:
+                    record = json.loads(line)
+                except json.JSONDecodeError:
+                    break
+                self.results[int(record["task"])] = record["result"]
+                offset += len(line)
+                good = offset
+            if good < len(data):
+                with self.path.open("r+b") as handle:
+                    handle.truncate(good)
+        self._handle = self.path.open("ab")
+
+    def __contains__(self, task: int) -> bool:
+        return task in self.results
+
+    def add(self, task: int, result: dict) -> None:
+        """Write a finished task's result (flushed and fsync'ed before returning)."""
+        line = json.dumps({"task": task, "result": result}, sort_keys=True, allow_nan=False)
+        self._handle.write(line.encode() + b"\n")
+        self._handle.flush()
+        os.fsync(self._handle.fileno())
+        self.results[task] = json.loads(line)["result"]  # as a resumed run reads it
+
+    def sorted(self, tasks: Iterable[int] | None = None) -> list[dict]:
+        """The results of ``tasks`` (default: all) in task order."""
+        keys = sorted(self.results if tasks is None else set(tasks) & set(self.results))
+        return [self.results[k] for k in keys]
+
+    def close(self) -> None:
+        self._handle.close()
+
+    def __enter__(self) -> ResultLog:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+class Progress:
+    """A one-line progress bar on stderr: tasks done, rate and the estimated time left (from
+    the tasks finished in this run).
+
+    Parameters
+    ----------
+    total
+        Tasks in the whole run.
+    done
+        Tasks already finished before this run (a resumed run).
+    what
+        What a task is, plural ("replications").
+    stream
+        Default stderr.
+    """
+
+    def __init__(self, total: int, *, done: int = 0, what: str = "tasks", stream=None):
+        self.total, self.done, self.what = total, done, what
+        self.before = done
+        self.stream = stream or sys.stderr
+        self.start = time.perf_counter()
+        self.show()
+
+    def update(self, count: int = 1) -> None:
+        self.done += count
+        self.show()
+
+    def line(self) -> str:
+        width = 30
+        filled = round(width * self.done / self.total) if self.total else width
+        elapsed = time.perf_counter() - self.start
+        new = self.done - self.before
+        parts = [f"[{'#' * filled}{'-' * (width - filled)}] {self.done}/{self.total} {self.what}"]
+        if new and elapsed > 0:
+            rate = new / elapsed
+            left = (self.total - self.done) / rate
+            parts.append(f"{rate:.3g}/s, {_duration(left)} left")
+        return ", ".join(parts)
+
+    def show(self) -> None:
+        end = "\n" if self.done >= self.total else ""
+        print(f"\r{self.line():<90}", end=end, file=self.stream, flush=True)
+
+
+def _duration(seconds: float) -> str:
+    """``1h02m``, ``3m05s`` or ``12s``.
+
+    Examples
+    --------
+    >>> _duration(3725), _duration(185), _duration(12.4)
+    ('1h02m', '3m05s', '12s')
+    """
+    seconds = round(seconds)
+    if seconds >= 3600:
+        return f"{seconds // 3600}h{seconds % 3600 // 60:02d}m"
+    if seconds >= 60:
+        return f"{seconds // 60}m{seconds % 60:02d}s"
+    return f"{seconds}s"
+
+
+@contextlib.contextmanager
+def dask_client(*, workers: int | None = None, scheduler: str | None = None) -> Iterator:
+    """A :class:`distributed.Client`: of the scheduler at ``scheduler`` (an address such as
+    ``tcp://10.0.0.5:8786``), or of a new :class:`distributed.LocalCluster` of ``workers``
+    single-threaded worker processes (default: one per core), closed on exit.
+
+    Raises
+    ------
+    ValueError
+        For both ``workers`` and ``scheduler``, or ``workers`` < 1.
+    OSError
+        If no scheduler answers at ``scheduler`` (within 30 s).
+    """
+    from distributed import Client, LocalCluster
+
+    if scheduler is not None and workers is not None:
+        raise ValueError("give the number of workers or a scheduler's address, not both")
+    if workers is not None and workers < 1:
+        raise ValueError(f"workers must be >= 1; got {workers!r}")
+    if scheduler is not None:
+        client = Client(scheduler, timeout="30s")
+        try:
+            yield client
+        finally:
+            client.close()
+        return
+    with (
+        LocalCluster(
+            n_workers=workers or available_cores(),
+            threads_per_worker=1,
+            processes=True,
+            # the scheduler's HTTP server (health, metrics; the dashboard where bokeh is
+            # installed) runs whatever this says: on a free port, two runs at once do not
+            # fight over Dask's default 8787
+            dashboard_address=":0",
+            silence_logs=logging.ERROR,
+        ) as cluster,
+        Client(cluster) as client,
+    ):
+        yield client
+
+
+class JobPlugin(WorkerPlugin):
+    """Holds a job on each worker for its tasks (Dask's place for per-worker state)."""
+
+    def __init__(self, job, name: str):
+        self.job = job
+        self.name = name
+
+
+def _run_on_worker(name: str, task: int) -> dict:
+    from distributed import get_worker
+
+    return get_worker().plugins[name].job.run(task)
+
+
+def run_tasks(
+    job,
+    tasks: Iterable[int],
+    log: ResultLog,
+    *,
+    client=None,
+    what: str = "tasks",
+    progress: Callable[..., Progress] | None = Progress,
+) -> None:
+    """Run the tasks not yet in ``log`` and add each result to it as it finishes.
+
+    Parameters
+    ----------
+    job
+        Has ``run(task) -> dict`` (JSON-serialisable) and pickles.
+    tasks
+        Task numbers.
+    log
+        Where results go; tasks already in it are not run again.
+    client
+        A :class:`distributed.Client` (:func:`dask_client`), or None to run the tasks here,
+        one after the other (no Dask).
+    what, progress
+        The progress bar (None for none) and what it counts.
+
+    Raises
+    ------
+    Exception
+        The first task's error (the results before it are kept).
+    """
+    tasks = list(tasks)
+    todo = [t for t in tasks if t not in log]
+    bar = progress(len(tasks), done=len(tasks) - len(todo), what=what) if progress else None
+    if client is None:
+        for task in todo:
+            log.add(task, job.run(task))
+            if bar:
+                bar.update()
+        return
+    from distributed import as_completed
+
+    name = f"glarelab-{getattr(job, 'kind', 'job')}-{uuid.uuid4().hex[:12]}"
+    client.register_plugin(JobPlugin(job, name), name=name)
+    try:
+        futures = {
+            client.submit(_run_on_worker, name, task, key=f"{name}-{task}", pure=False): task
+            for task in todo
+        }
+        try:
+            for future in as_completed(futures):
+                log.add(futures[future], future.result())
+                if bar:
+                    bar.update()
+        finally:
+            client.cancel(list(futures))
+    finally:
+        with contextlib.suppress(Exception):
+            client.unregister_worker_plugin(name)

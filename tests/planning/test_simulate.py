@@ -1,0 +1,71 @@
+import pandas as pd
+import pytest
+
+from analysis.load import load_sessions
+from analysis.paradigms import PARADIGMS
+from experiments.data import session_files
+from experiments.looking import DisplayedSet
+from experiments.session import SimulatedFrontend, make_observer, run_session
+from planning.simulate import participant_id, simulate_replication
+from protocols import load_protocol
+from stimuli.stimulus_set import StimulusSet, cached_stimulus_set
+
+
+@pytest.fixture(scope="module")
+def yoshida():
+    protocol = load_protocol("yoshida2008")
+    return protocol, cached_stimulus_set(protocol, progress=None)
+
+
+def _session(protocol, participant, stimuli, looked, out):
+    observer = make_observer(protocol, participant, seed=4, stimuli=looked)
+    run_session(
+        protocol,
+        participant,
+        out=out,
+        frontend=SimulatedFrontend(observer),
+        stimuli=stimuli,
+        simulated=True,
+    )
+    (csv,) = [f for f in session_files(out, participant, protocol.study, 1) if f.suffix == ".csv"]
+    return pd.read_csv(csv)
+
+
+def test_observers_sharing_a_displayed_set_answer_as_observers_alone(yoshida, tmp_path):
+    protocol, stimuli = yoshida
+    shared = DisplayedSet(StimulusSet(stimuli))
+    for participant in ("a1", "a2"):
+        alone = _session(protocol, participant, stimuli, stimuli, tmp_path / "alone")
+        together = _session(protocol, participant, stimuli, shared, tmp_path / "shared")
+        pd.testing.assert_frame_equal(alone, together)
+    assert shared._percepts  # they did share
+
+
+def test_the_tests_alone_are_the_full_analysis_tests(yoshida, tmp_path):
+    protocol, stimuli = yoshida
+    for number in range(1, 4):
+        _session(protocol, f"s{number}", stimuli, stimuli, tmp_path)
+    dataset = load_sessions(protocol, sorted(tmp_path.glob("*.csv")))
+    full = PARADIGMS["matching"].analyse(dataset, protocol)["tables"]
+    tests = PARADIGMS["matching"].analyse(dataset, protocol, tests_only=True)["tables"]
+    assert set(tests) == {"anova", "methods_at_levels"}
+    for name, table in tests.items():
+        pd.testing.assert_frame_equal(table, full[name])
+
+
+def test_a_replication_is_fixed_by_the_seed_and_its_number(yoshida):
+    protocol, stimuli = yoshida
+    first = simulate_replication(protocol, 3, participants=(2, 3), seed=5, stimuli=stimuli)
+    again = simulate_replication(protocol, 3, participants=(3, 2), seed=5, stimuli=stimuli)
+    other = simulate_replication(protocol, 4, participants=(2, 3), seed=5, stimuli=stimuli)
+    assert first == again and first["results"] != other["results"]
+    effects = {r["effect"] for r in first["results"]}
+    assert "6 × 2 (all levels): L_disk" in effects
+    assert "t-test F/f: gaussian > vos (Welch, one-sided)" in effects
+    assert {r["n"] for r in first["results"]} == {2, 3} and not first["failures"]
+
+
+def test_participant_ids_are_file_name_safe_and_refuse_bad_numbers():
+    assert participant_id(0, 1) == "rep000000-p001"
+    with pytest.raises(ValueError, match="replication must be >= 0 and number >= 1"):
+        participant_id(-1, 1)

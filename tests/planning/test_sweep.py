@@ -1,0 +1,41 @@
+import json
+
+import pandas as pd
+import pytest
+
+from planning.grid import parse_setting
+from planning.sweep import sweep
+from stimuli.stimulus_set import verify_stimulus_set
+
+SILENT = {"log": lambda message: None, "progress": False}
+
+
+def test_a_sweep_builds_one_verified_set_per_point_and_resumes(tmp_path):
+    settings = [parse_setting("stimulus.disk_deg=0.2,0.4")]
+    index = sweep("yoshida2008", settings, tmp_path, **SILENT)
+    assert list(index["stimulus.disk_deg"]) == ["0.2", "0.4"]
+    for row in index.itertuples():
+        folder = tmp_path / row.folder
+        assert not verify_stimulus_set(folder)
+        manifest = json.loads((folder / "manifest.json").read_text())
+        assert manifest["protocol_sha256"] == row.protocol_sha256
+        assert manifest["protocol"]["stimulus"]["disk_deg"] == [0.2, 0.4][row.point]
+    assert index["manifest_sha256"].nunique() == 2
+    written = (tmp_path / "sets" / "000" / "manifest.json").stat().st_mtime_ns
+    (tmp_path / "points.jsonl").unlink()  # the sets stay: they are verified, not rebuilt
+    again = sweep("yoshida2008", settings, tmp_path, **SILENT)
+    assert (tmp_path / "sets" / "000" / "manifest.json").stat().st_mtime_ns == written
+    pd.testing.assert_frame_equal(again.drop(columns="build_s"), index.drop(columns="build_s"))
+    with pytest.raises(ValueError, match="holds a sweep of another grid"):
+        sweep("yoshida2008", [parse_setting("stimulus.disk_deg=0.3")], tmp_path, **SILENT)
+
+
+def test_a_questionnaire_sweep_needs_simulation_and_gives_its_tests(tmp_path):
+    setting = [parse_setting("study.seed=1,2")]
+    with pytest.raises(ValueError, match=r"shows no images.*--simulate N"):
+        sweep("luidolt2020", setting, tmp_path / "a", **SILENT)
+    sweep("luidolt2020", setting, tmp_path / "b", simulate=5, **SILENT)
+    effects = pd.read_csv(tmp_path / "b" / "effects.csv")
+    assert set(effects["point"]) == {0, 1}
+    assert "Wilcoxon Overall vs 4 (Holm)" in set(effects["effect"])
+    assert (tmp_path / "b" / "simulated" / "001" / "report" / "report.html").is_file()
