@@ -358,6 +358,13 @@ def _write_set(out: Path, protocol: Protocol, built: dict, calibration: Calibrat
 def _index(protocol: Protocol, calibration: Calibration, records: dict, plots, geometry) -> str:
     """The set's README.md: what each file holds, how to read the PNGs, and every image."""
     top = 2**calibration.bit_depth - 1
+    colour = any(len(record["shape"]) == 3 for record in records.values())
+    exr = (
+        "linear RGB in cd/m², channels `R`, `G`, `B`"
+        if colour
+        else ("linear luminance in cd/m², channel `Y`")
+    )
+    png = "16-bit RGB" if colour else "16-bit greyscale"
     lines = [
         f"# Stimulus set: {protocol.title}",
         "",
@@ -369,10 +376,9 @@ def _index(protocol: Protocol, calibration: Calibration, records: dict, plots, g
         "",
         "## Files",
         "",
-        "- `NAME.exr`: the image's linear luminance in cd/m² (float32 OpenEXR, channel `Y`), "
-        "before the display.",
+        f"- `NAME.exr`: the image's {exr} (float32 OpenEXR), before the display.",
         f"- `NAME.png`: the drive codes that show it on the display, 0-{top}, through the "
-        "calibration. 16-bit greyscale scaled to the full 16-bit range, "
+        f"calibration. {png} scaled to the full 16-bit range, "
         f"`value = round(code × 65535 / {top})`, with an `sBIT` chunk recording the true bit "
         f"depth ({calibration.bit_depth}): an image viewer shows the image as the display "
         f"does (for a display of gamma about 2.2); the codes are `round(value × {top} / "
