@@ -578,6 +578,11 @@ CASES = [
         "render {box}/y-and-rgb.exr {box}/out.exr --pixel-deg 0.02",
         "both a Y channel and R, G, B",
     ),
+    (
+        "run-participant-and-count",
+        "run luidolt2020 --simulate --participant P9 --participants 3 --out {box}/sim-data",
+        "--participants 3 with --participant P9",
+    ),
     # demo, check-display, bench, docs
     ("demo-participants", "demo --out {box}/demo --participants 0", "--participants: 0"),
     (

@@ -80,6 +80,9 @@ def _experiment_info(args: argparse.Namespace) -> None:
     args.vision = info["vision"] or None
 
 
+SIMULATED_PARTICIPANTS = 10  # Yoshida 2008's study had ten participants (§5: F(1, 9))
+
+
 def _run(args: argparse.Namespace) -> int:
     from experiments.session import SimulatedFrontend, run_session
 
@@ -92,10 +95,16 @@ def _run(args: argparse.Namespace) -> int:
         from experiments.session import make_observer, shows_images
         from stimuli.stimulus_set import cached_stimulus_set
 
+        if args.participant is not None and args.participants is not None:
+            raise ValueError(
+                f"--participants {args.participants} with --participant {args.participant}: "
+                "give one participant's id, or a number of simulated participants"
+            )
+        count = SIMULATED_PARTICIPANTS if args.participants is None else args.participants
         ids = (
             [args.participant]
             if args.participant is not None
-            else [f"sim{index:02d}" for index in range(1, args.participants + 1)]
+            else [f"sim{index:02d}" for index in range(1, count + 1)]
         )
         stimuli = args.stimuli
         if stimuli is None and shows_images(protocol):
@@ -245,7 +254,10 @@ def add(commands) -> None:
     run.add_argument("--screenshot", type=Path, default=None, help="save the first trial's screen")
     run.add_argument("--simulate", action="store_true", help="simulated observers, no screen")
     run.add_argument(
-        "--participants", type=count(1, 999), default=10, help="simulated participants (1-999)"
+        "--participants",
+        type=count(1, 999),
+        default=None,
+        help="simulated participants sim01… (1-999; default 10); not with --participant",
     )
     run.add_argument("--seed", type=count(0), default=0, help="seed of the simulated observers")
     run.add_argument("--trial-delay-ms", type=number(0), default=0.0, help=argparse.SUPPRESS)
