@@ -99,7 +99,8 @@ def check(trials: pd.DataFrame, protocol) -> list[str]:
                 f"{where(row)}, column step_fraction: {row['step_fraction']!r}; the protocol's "
                 f"steps are {', '.join(f'{s:g}' for s in steps)}"
             )
-        if bool(row["counted"]) and not bool(row["presentation_ok"]):
+        failed = pd.notna(row["presentation_ok"]) and not bool(row["presentation_ok"])
+        if bool(row["counted"]) and failed:  # (files before format 0.2 have no presentation_ok)
             problems.append(
                 f"{where(row)}: counted, but its presentation failed (presentation_ok false); "
                 "a failed flash never moves a staircase"
