@@ -76,6 +76,8 @@ NOT_RUN |= dict.fromkeys(
         "tcp://10.0.0.5:8786 --out /shared/power/spencer",
         "glarelab power yoshida2008 --participants 6 8 10 --replications 1000 --scheduler "
         "tcp://10.0.0.5:8786 --out /shared/power/yoshida",
+        "dask scheduler --port 8786",
+        "dask worker tcp://10.0.0.5:8786 --nthreads 1",
     ],
     "needs the lab's Dask cluster; tests/test_power_commands.py starts a scheduler and a "
     "worker and runs the command against them",
