@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Engine", "Press", "normalise_key", "participant_rng"]
+__all__ = ["Engine", "LookingObserver", "Press", "normalise_key", "participant_rng"]
 
 # a keypad key is a digit with Num Lock on and an arrow or page key with it off; Psychtoolbox
 # names it by its position (num_8) either way, so a screen takes whichever meaning it uses
@@ -106,3 +106,30 @@ def participant_rng(seed: int, participant: str, purpose: str) -> np.random.Gene
     participant's trial order is the same in every run and resumed session."""
     digest = hashlib.sha256(f"{participant}/{purpose}".encode()).digest()
     return np.random.default_rng([seed, int.from_bytes(digest[:8], "little")])
+
+
+class LookingObserver:
+    """What the simulated observers that look at a stimulus set share: the brightness model
+    and noise of the protocol's ``[observer]`` table, this participant's draw of the noise,
+    and the set as its display shows it (:class:`experiments.looking.DisplayedSet`, which
+    observers given the same one share percepts through)."""
+
+    @staticmethod
+    def check(protocol) -> None:
+        """Refuse an ``[observer]`` table the model and the noise do not take (ValueError)."""
+        from .perception import observer_parameters
+
+        observer_parameters(protocol["observer"])
+
+    def __init__(self, protocol, participant: str, *, seed: int, stimuli):
+        from .looking import DisplayedSet
+        from .perception import observer_parameters
+
+        self.protocol = protocol
+        self.participant = participant
+        self.seed = seed
+        self.model, self.noise = observer_parameters(protocol["observer"])
+        self.observer = self.noise.draw(
+            participant_rng(protocol.seed, participant, f"observer {seed}")
+        )
+        self.display = stimuli if isinstance(stimuli, DisplayedSet) else DisplayedSet(stimuli)

@@ -20,7 +20,7 @@ import numpy as np
 from protocols.matching import reference_name
 from stimuli.matching import target_terms
 
-from .engine import Engine, participant_rng
+from .engine import Engine, LookingObserver, participant_rng
 
 __all__ = ["MatchingEngine", "MatchingObserver"]
 
@@ -244,7 +244,7 @@ class MatchingEngine(Engine):
             self.phase = "adjust" if self.index < len(self.trials) else "done"
 
 
-class MatchingObserver:
+class MatchingObserver(LookingObserver):
     """A simulated observer of a matching study: looks at each reference as the display shows
     it (:mod:`experiments.perception`), sets the targets around the brightness it perceives
     and answers the questions from the glow, the ring or the sizes it sees.
@@ -263,23 +263,8 @@ class MatchingObserver:
         (:class:`experiments.looking.DisplayedSet`, shared by observers to share percepts).
     """
 
-    @staticmethod
-    def check(protocol) -> None:
-        """Refuse an ``[observer]`` table the model and the noise do not take (ValueError)."""
-        from .perception import observer_parameters
-
-        observer_parameters(protocol["observer"])
-
     def __init__(self, protocol, participant: str, *, seed: int, stimuli):
-        from .looking import DisplayedSet
-        from .perception import observer_parameters
-
-        self.protocol = protocol
-        self.participant = participant
-        self.seed = seed
-        self.model, noise = observer_parameters(protocol["observer"])
-        self.observer = noise.draw(participant_rng(protocol.seed, participant, f"observer {seed}"))
-        self.display = stimuli if isinstance(stimuli, DisplayedSet) else DisplayedSet(stimuli)
+        super().__init__(protocol, participant, seed=seed, stimuli=stimuli)
         g = self.display.geometry
         self.geometry = {
             "centre_px": tuple(g["centre_px"]),

@@ -37,7 +37,7 @@ from dataclasses import dataclass, field
 
 from protocols.staircase import comparison_terms, glare_name
 
-from .engine import Engine, participant_rng
+from .engine import Engine, LookingObserver, participant_rng
 
 __all__ = ["Staircase", "StaircaseEngine", "StaircaseObserver", "counterbalance_for"]
 
@@ -305,7 +305,7 @@ class StaircaseEngine(Engine):
             self._respond(row["response"], float(row["time_s"]), presentation_ok=ok)
 
 
-class StaircaseObserver:
+class StaircaseObserver(LookingObserver):
     """A simulated observer of a staircase study: looks at the glare image and the comparison
     as the display shows them (:mod:`experiments.perception`) and says which looked brighter,
     or neither, with the noise of one brief comparison and a shift of its own per block.
@@ -322,25 +322,8 @@ class StaircaseObserver:
         (:class:`experiments.looking.DisplayedSet`, shared by observers to share percepts).
     """
 
-    @staticmethod
-    def check(protocol) -> None:
-        """Refuse an ``[observer]`` table the model and the noise do not take (ValueError)."""
-        from .perception import observer_parameters
-
-        observer_parameters(protocol["observer"])
-
     def __init__(self, protocol, participant: str, *, seed: int, stimuli):
-        from .looking import DisplayedSet
-        from .perception import observer_parameters
-
-        self.protocol = protocol
-        self.participant = participant
-        self.seed = seed
-        self.model, self.noise = observer_parameters(protocol["observer"])
-        self.observer = self.noise.draw(
-            participant_rng(protocol.seed, participant, f"observer {seed}")
-        )
-        self.display = stimuli if isinstance(stimuli, DisplayedSet) else DisplayedSet(stimuli)
+        super().__init__(protocol, participant, seed=seed, stimuli=stimuli)
         g = self.display.geometry
         self.centre = tuple(g["centre_px"])
         self.pixel_deg = g["pixel_deg"]
