@@ -1,0 +1,345 @@
+"""The photometers through PsychoPy's own plugin code, against a simulated LS-100 / CS-100A on
+a pseudo-terminal (tests/stimuli/fake_photometer.py), faults included."""
+
+import json
+import os
+import subprocess
+import sys
+import termios
+import time
+
+import numpy as np
+import pytest
+
+from stimuli.calibration import Calibration
+from stimuli.measure import MeasurementSession
+from stimuli.photometer import (
+    Disconnected,
+    Garbled,
+    NoAnswer,
+    OutOfRange,
+    PatchProtocol,
+    PhotometerError,
+    measure_patch,
+    open_photometer,
+)
+from tests.stimuli.fake_photometer import FakeMinolta
+from tests.stimuli.pty_line import keeping_tcsetattr
+
+pytest.importorskip("psychopy_minolta", reason="the photometer extra: pip install '.[photometer]'")
+
+WHITE, BLACK, GAMMA = 150.0, 0.5, 2.2  # the known display
+
+
+def display(code, top=255):
+    return BLACK + (WHITE - BLACK) * (code / top) ** GAMMA
+
+
+@pytest.fixture
+def line(tmp_path, monkeypatch):
+    """Pseudo-terminals take the serial line settings the plugin asks for (and tell the fake)."""
+    folder = tmp_path / "lines"
+    folder.mkdir()
+    monkeypatch.setattr(termios, "tcsetattr", keeping_tcsetattr(folder))
+    return folder
+
+
+@pytest.fixture
+def shown():
+    return {"code": 255}
+
+
+@pytest.fixture
+def fake(line, shown):
+    device = FakeMinolta(lambda: display(shown["code"]), line_folder=line, seed=1)
+    yield device
+    device.close()
+
+
+@pytest.mark.parametrize("model", ["LS-100", "CS-100A"])
+def test_the_plugin_reads_the_display(line, shown, model):
+    device = FakeMinolta(lambda: display(shown["code"]), model=model, line_folder=line)
+    try:
+        meter = open_photometer(model, device.port, serial_number="40211007")
+        for code in (0, 64, 255):
+            shown["code"] = code
+            value, reply = meter.read()
+            assert reply.startswith("OK00, ")
+            np.testing.assert_allclose(value, display(code), rtol=0.005)  # noise 0.1 %, 4 digits
+        meter.close()
+    finally:
+        device.close()
+    assert device.commands == ["MDS,04", "MES", "MES", "MES"]  # as the plugin speaks to it
+    assert device.line_ok()  # it set the line to 4800 baud, 7E2
+    assert meter.describe() == {
+        "model": model,
+        "port": device.port,
+        "serial_number": "40211007",
+        "plugin": "psychopy-minolta 0.0.2",
+    }
+
+
+def test_faults_have_their_own_message(fake, shown):
+    meter = open_photometer("LS-100", fake.port)
+    fake.garble = True
+    with pytest.raises(Garbled, match=r"answered '\\x1b7#;~\?\\r\\n', which is not a reading"):
+        meter.read()
+    fake.garble = False
+    fake.ceiling_cd_m2 = 100.0
+    with pytest.raises(OutOfRange, match=r"reports over range \(ER10"):
+        meter.read()
+    fake.ceiling_cd_m2 = 1e6
+    device = FakeMinolta(lambda: 0.0004, line_folder=fake.line_file.parent)  # an OLED's black
+    try:
+        with pytest.raises(OutOfRange, match=r"read 0.000\d+ cd/m², under its range \(0.001"):
+            open_photometer("LS-100", device.port).read()
+    finally:
+        device.close()
+    fake.unplug_after = fake.readings
+    with pytest.raises(Disconnected, match=r"lost the LS-100 on /dev/pts/.*plug the cable back"):
+        meter.read()
+    with pytest.raises(Disconnected, match="cannot open the serial port '/dev/nonexistent'"):
+        open_photometer("LS-100", "/dev/nonexistent")
+    with pytest.raises(ValueError, match="photometer must be one of LS-100, LS-110, CS-100A"):
+        open_photometer("LS-1000", fake.port)
+
+
+def test_a_photometer_that_does_not_answer(fake):
+    meter = open_photometer("LS-100", fake.port)
+    fake.mute = True
+    with pytest.raises(NoAnswer, match=r"the LS-100 on /dev/pts/\d+ does not answer.*holding F"):
+        meter.read()  # the plugin waits 5 s for a reply
+    fake.garble = True
+    fake.mute = False
+    with pytest.raises(Garbled, match=r"something on /dev/pts/.* answers .*not as a LS-100 does"):
+        open_photometer("LS-100", fake.port)
+
+
+def test_a_patch_is_read_after_it_settles_and_again_when_its_readings_disagree(line, shown):
+    device = FakeMinolta(lambda: display(shown["code"]), line_folder=line, settle_tau_s=0.4)
+    try:
+        meter = open_photometer("LS-100", device.port)
+        shown["code"] = 0  # a step from white to black: the LCD takes its time
+        time.sleep(0.05)
+        hasty = measure_patch(meter.read, PatchProtocol(readings=3, settle_s=0, repeats=3))
+        shown["code"] = 255
+        time.sleep(0.05)
+        patient = measure_patch(meter.read, PatchProtocol(readings=2, settle_s=2.5))
+    finally:
+        device.close()
+    assert hasty.sets > 1 and len(hasty.readings) == 3 * hasty.sets
+    assert hasty.readings[0] > 2 * hasty.readings[-1]  # still falling
+    assert patient.sets == 1
+    np.testing.assert_allclose(patient.luminance_cd_m2, WHITE, rtol=0.005)
+
+
+def measure(session, meter, shown, protocol):
+    """The measurement loop of the front-end, without the window."""
+    while session.phase != "done":
+        shown["code"] = session.current()["code"]
+        time.sleep(0.02)  # the fake sees the new patch
+        patch = measure_patch(meter.read, protocol, keep=session.keep_reading, wait=time.sleep)
+        session.record(patch.luminance_cd_m2, readings=patch.readings, source="photometer")
+
+
+def test_an_unplugged_photometer_loses_no_reading_and_the_session_resumes(tmp_path, line, shown):
+    protocol = PatchProtocol(readings=2, settle_s=0.0)
+    out = tmp_path / "display.json"
+    session = MeasurementSession(
+        bit_depth=8, out=out, rng=np.random.default_rng(3), points=5, verify_points=3
+    )
+    first = FakeMinolta(lambda: display(shown["code"]), line_folder=line, seed=2)
+    first.unplug_after = 5  # in the middle of the third patch
+    meter = open_photometer("LS-100", first.port, serial_number="A1")
+    session.instrument = meter.describe()
+    with pytest.raises(Disconnected) as fault:
+        measure(session, meter, shown, protocol)
+    session.interrupted(str(fault.value))
+    first.close()
+    saved = json.loads(session.session_path.read_text())
+    replied = [r.strip() for r in first.replies if r.startswith("OK00, ")]
+    assert [r["reply"] for r in saved["raw"]] == replied  # every reading, the last one's too
+    assert len(saved["raw"]) == 5 and len(saved["log"]) == 2
+    assert saved["interruptions"][0]["message"].startswith("lost the LS-100")
+
+    resumed = MeasurementSession.resume(session.session_path, out)
+    assert resumed.current()["code"] == session.current()["code"]  # where it stopped
+    second = FakeMinolta(lambda: display(shown["code"]), line_folder=line, seed=3)
+    try:
+        measure(resumed, open_photometer("LS-100", second.port), shown, protocol)
+    finally:
+        second.close()
+    done = json.loads(session.session_path.read_text())
+    assert done["raw"][:5] == saved["raw"]
+    assert len(done["raw"]) == 5 + 2 * (5 - 2 + 1 + 3)  # the rest of the patches, 2 readings each
+    calibration = Calibration.load(out)
+    assert calibration.status == "passed"
+    codes = np.arange(256)
+    np.testing.assert_allclose(calibration.decode(codes), display(codes), rtol=0.01, atol=0.005)
+
+
+def test_drift_shows_when_the_first_patch_is_read_again(tmp_path, line, shown):
+    device = FakeMinolta(lambda: display(shown["code"]), line_folder=line)
+    device.drift_per_reading = 0.004  # the photometer warms up
+    session = MeasurementSession(
+        bit_depth=8, out=tmp_path / "d.json", rng=np.random.default_rng(0), points=5
+    )
+    try:
+        meter = open_photometer("LS-100", device.port)
+        while session.phase == "measure":
+            shown["code"] = session.current()["code"]
+            time.sleep(0.02)
+            patch = measure_patch(meter.read, PatchProtocol(readings=1, settle_s=0))
+            session.record(patch.luminance_cd_m2, readings=patch.readings, source="photometer")
+    finally:
+        device.close()
+    assert any(flag.startswith("drift: code") for flag in session.flags), session.flags
+
+
+def test_every_fault_reaches_the_caller_as_a_photometer_error():
+    for fault in (NoAnswer, Garbled, OutOfRange, Disconnected):
+        assert issubclass(fault, PhotometerError)
+    assert issubclass(PhotometerError, RuntimeError)
+
+
+# --- a full measurement in a PsychoPy window under Xvfb, the fake looking at the screen -----------
+
+
+def glarelab_on(x, line, *args):
+    """``glarelab ARGS`` on the X screen, its serial lines set up as the fake expects."""
+    log = open(x.tmp_path / f"glarelab-{time.monotonic_ns()}.stderr", "w")
+    process = subprocess.Popen(
+        [sys.executable, "-m", "tests.stimuli.pty_line", str(line), "-m", "glarelab", *args],
+        env={**x.env, "PYTHONPATH": os.getcwd()},
+        stdout=subprocess.DEVNULL,
+        stderr=log,
+    )
+    return process, log
+
+
+class ScreenPixel:
+    """The drive code the X screen shows at its centre: what the photometer looks at.
+
+    One connection for the whole test (libX11 through ctypes), shared by the fake's threads.
+    """
+
+    def __init__(self, display: str, at=(960, 540)):
+        import ctypes
+        import ctypes.util
+        import threading
+
+        self.x11 = ctypes.CDLL(ctypes.util.find_library("X11"))
+        self.x11.XOpenDisplay.restype = ctypes.c_void_p
+        self.x11.XOpenDisplay.argtypes = [ctypes.c_char_p]
+        self.x11.XDefaultRootWindow.restype = ctypes.c_ulong
+        self.x11.XDefaultRootWindow.argtypes = [ctypes.c_void_p]
+        self.x11.XGetImage.restype = ctypes.c_void_p
+        self.x11.XGetImage.argtypes = [ctypes.c_void_p, ctypes.c_ulong, ctypes.c_int,
+                                       ctypes.c_int, ctypes.c_uint, ctypes.c_uint,
+                                       ctypes.c_ulong, ctypes.c_int]  # fmt: skip
+        self.x11.XGetPixel.restype = ctypes.c_ulong
+        self.x11.XGetPixel.argtypes = [ctypes.c_void_p, ctypes.c_int, ctypes.c_int]
+        self.x11.XDestroyImage.argtypes = [ctypes.c_void_p]
+        self.x11.XCloseDisplay.argtypes = [ctypes.c_void_p]
+        self.connection = self.x11.XOpenDisplay(display.encode())
+        assert self.connection, f"cannot connect to the X screen {display}"
+        self.root = self.x11.XDefaultRootWindow(self.connection)
+        self.at = at
+        self.lock = threading.Lock()
+
+    def __call__(self) -> int:
+        with self.lock:
+            image = self.x11.XGetImage(self.connection, self.root, *self.at, 1, 1, 0xFFFFFF, 2)
+            pixel = self.x11.XGetPixel(image, 0, 0)
+            self.x11.XDestroyImage(image)
+        return int((pixel >> 16) & 0xFF)  # red, as the patch is grey
+
+    def close(self) -> None:
+        with self.lock:
+            self.x11.XCloseDisplay(self.connection)
+
+
+def test_a_full_measurement_in_a_window_gives_the_known_display(tmp_path, line):
+    from tests.experiments.xscreen import XScreen
+
+    x = XScreen(tmp_path)
+    out = tmp_path / "display.json"
+    pixel = ScreenPixel(x.display)
+    device = FakeMinolta(lambda: display(pixel()), line_folder=line, seed=4)
+    common = ["--out", out, "--bit-depth", "8", "--points", "9", "--verify-points", "3"]
+    meter = ["--photometer", "LS-100", "--port", device.port, "--readings", "2"]
+    try:
+        process, log = glarelab_on(
+            x, line, "calibrate", "measure", *common, *meter, "--settle-s", "0.2",
+            "--photometer-serial", "40211007",
+        )  # fmt: skip
+        assert process.wait(timeout=240) == 0, (x.tmp_path / log.name).read_text()[-3000:]
+    finally:
+        device.close()
+        pixel.close()
+        x.close()
+    calibration = Calibration.load(out)
+    assert calibration.status == "passed"
+    codes = np.arange(256)
+    np.testing.assert_allclose(calibration.decode(codes), display(codes), rtol=0.01, atol=0.005)
+    session = json.loads(out.with_suffix(".session.json").read_text())
+    assert session["instrument"]["serial_number"] == "40211007"
+    assert session["instrument"]["model"] == "LS-100"
+    assert len(session["raw"]) == 2 * (9 + 1 + 3)
+    for entry in session["log"]:
+        assert entry["source"] == "photometer" and len(entry["readings_cd_m2"]) == 2
+
+
+def test_a_cable_pulled_mid_measurement_loses_nothing_and_the_measurement_resumes(tmp_path, line):
+    from tests.experiments.xscreen import XScreen
+
+    x = XScreen(tmp_path)
+    out = tmp_path / "display.json"
+    session_path = out.with_suffix(".session.json")
+    pixel = ScreenPixel(x.display)
+    common = ["--out", out, "--bit-depth", "8", "--points", "5", "--verify-points", "3"]
+    devices = []
+    try:
+        first = FakeMinolta(lambda: display(pixel()), line_folder=line, seed=5)
+        devices.append(first)
+        first.unplug_after = 5
+        process, log = glarelab_on(
+            x, line, "calibrate", "measure", *common, "--photometer", "LS-100",
+            "--port", first.port, "--readings", "2", "--settle-s", "0",
+        )  # fmt: skip
+        deadline = time.time() + 120
+        while time.time() < deadline and not (
+            session_path.exists() and json.loads(session_path.read_text())["interruptions"]
+        ):
+            assert process.poll() is None, (x.tmp_path / log.name).read_text()[-3000:]
+            time.sleep(0.1)
+        stopped = json.loads(session_path.read_text())
+        assert stopped["interruptions"][0]["message"].startswith("lost the LS-100")
+        shot = x.screenshot()
+        assert (shot[540, 960] == shot[100, 100]).all()  # the patch stays on the screen
+        x.focus_window()
+        x.key("Escape")
+        assert process.wait(timeout=60) == 1
+        stderr = (x.tmp_path / log.name).read_text()
+        assert "photometer fault at measure code" in stderr
+        assert "the same command with --resume goes on from there" in stderr
+        first.close()
+        replied = [r.strip() for r in first.replies if r.startswith("OK00, ")]
+        assert [r["reply"] for r in stopped["raw"]] == replied and len(replied) == 5
+
+        second = FakeMinolta(lambda: display(pixel()), line_folder=line, seed=6)
+        devices.append(second)
+        process, log = glarelab_on(
+            x, line, "calibrate", "measure", *common, "--photometer", "LS-100",
+            "--port", second.port, "--resume",
+        )  # fmt: skip
+        assert process.wait(timeout=240) == 0, (x.tmp_path / log.name).read_text()[-3000:]
+    finally:
+        for device in devices:
+            device.close()
+        pixel.close()
+        x.close()
+    done = json.loads(session_path.read_text())
+    assert done["raw"][:5] == stopped["raw"]
+    assert len(done["raw"]) == 5 + 2 * (5 - 2 + 1 + 3)
+    assert Calibration.load(out).status == "passed"
