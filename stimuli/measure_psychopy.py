@@ -204,6 +204,7 @@ def run_measurement(
                     )
                     continue
             recorded = False
+            drawn = None if fault is not None else f"reading (cd/m²): {typed}_"
             while not recorded:  # every key since the patch appeared, typed ones included
                 if fault is not None:
                     line = (
@@ -213,11 +214,13 @@ def run_measurement(
                     )
                 else:
                     line = f"reading (cd/m²): {typed}_"
+                if line != drawn:  # what the operator typed (or the fault) changed
+                    draw(line)
+                    window.flip()
+                    drawn = line
                 if not pending:
                     pending = [key for key, _ in keys.read()]
                     if not pending:
-                        draw(line)
-                        window.flip()
                         dispatch_events(window)
                         time.sleep(0.002)
                         continue

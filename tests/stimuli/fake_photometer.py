@@ -9,8 +9,8 @@ screen shows), with the display's settling after a change (first order, time con
 ``settle_tau_s``), the instrument's noise (relative, from a seeded generator), its four
 significant digits, its line settings (garbage back when the driver set the line
 up otherwise: see :mod:`tests.stimuli.pty_line`), and the faults of a lab: no answer (``mute``), garbage (``garble``), a pulled
-cable (``unplug_after`` readings: the pseudo-terminal's master side is closed), and drift
-(``drift_per_reading``, relative).
+cable (``unplug_after`` readings: the pseudo-terminal's master side is closed), drift
+(``drift_per_reading``, relative), and any reply in place of the next readings (``faults``).
 """
 
 from __future__ import annotations
@@ -53,6 +53,7 @@ class FakeMinolta:
         self.garble = False
         self.unplug_after: int | None = None
         self.drift_per_reading = 0.0
+        self.faults: list[str] = []  # replies to the next MES commands instead of readings
         self.readings = 0
         self.commands: list[str] = []
         self.replies: list[str] = []
@@ -127,6 +128,8 @@ class FakeMinolta:
             return
         if command.startswith("MDS,") or command == "CLE":
             self._send("OK00\r\n")
+        elif command == "MES" and self.faults:
+            self._send(self.faults.pop(0))
         elif command == "MES":
             value = self.measure()
             if self.unplug_after is not None and self.readings > self.unplug_after:

@@ -116,7 +116,7 @@ def test_a_photometer_that_does_not_answer(fake):
 
 
 def test_a_patch_is_read_after_it_settles_and_again_when_its_readings_disagree(line, shown):
-    device = FakeMinolta(lambda: display(shown["code"]), line_folder=line, settle_tau_s=0.4)
+    device = FakeMinolta(lambda: display(shown["code"]), line_folder=line, settle_tau_s=0.2)
     try:
         meter = open_photometer("LS-100", device.port)
         shown["code"] = 0  # a step from white to black: the LCD takes its time
@@ -124,7 +124,7 @@ def test_a_patch_is_read_after_it_settles_and_again_when_its_readings_disagree(l
         hasty = measure_patch(meter.read, PatchProtocol(readings=3, settle_s=0, repeats=3))
         shown["code"] = 255
         time.sleep(0.05)
-        patient = measure_patch(meter.read, PatchProtocol(readings=2, settle_s=2.5))
+        patient = measure_patch(meter.read, PatchProtocol(readings=2, settle_s=1.5))
     finally:
         device.close()
     assert hasty.sets > 1 and len(hasty.readings) == 3 * hasty.sets
@@ -259,65 +259,55 @@ class ScreenPixel:
             self.x11.XCloseDisplay(self.connection)
 
 
-def test_a_full_measurement_in_a_window_gives_the_known_display(tmp_path, line):
-    from tests.experiments.xscreen import XScreen
-
-    x = XScreen(tmp_path)
-    out = tmp_path / "display.json"
-    pixel = ScreenPixel(x.display)
-    device = FakeMinolta(lambda: display(pixel()), line_folder=line, seed=4)
-    common = ["--out", out, "--bit-depth", "8", "--points", "9", "--verify-points", "3"]
-    meter = ["--photometer", "LS-100", "--port", device.port, "--readings", "2"]
-    try:
-        process, log = glarelab_on(
-            x, line, "calibrate", "measure", *common, *meter, "--settle-s", "0.2",
-            "--photometer-serial", "40211007",
-        )  # fmt: skip
-        assert process.wait(timeout=240) == 0, (x.tmp_path / log.name).read_text()[-3000:]
-    finally:
-        device.close()
-        pixel.close()
-        x.close()
-    calibration = Calibration.load(out)
-    assert calibration.status == "passed"
-    codes = np.arange(256)
-    np.testing.assert_allclose(calibration.decode(codes), display(codes), rtol=0.01, atol=0.005)
-    session = json.loads(out.with_suffix(".session.json").read_text())
-    assert session["instrument"]["serial_number"] == "40211007"
-    assert session["instrument"]["model"] == "LS-100"
-    assert len(session["raw"]) == 2 * (9 + 1 + 3)
-    for entry in session["log"]:
-        assert entry["source"] == "photometer" and len(entry["readings_cd_m2"]) == 2
+def wait_for_faults(session_path, count, process, x, log, timeout=120):
+    """The session's faults, once there are ``count`` of them."""
+    deadline = time.time() + timeout
+    while time.time() < deadline:
+        if session_path.exists():
+            faults = json.loads(session_path.read_text())["interruptions"]
+            if len(faults) >= count:
+                return faults
+        assert process.poll() is None, (x.tmp_path / log.name).read_text()[-3000:]
+        time.sleep(0.1)
+    raise AssertionError(f"no fault {count} after {timeout} s")
 
 
-def test_a_cable_pulled_mid_measurement_loses_nothing_and_the_measurement_resumes(tmp_path, line):
+def test_a_measurement_in_a_window_survives_a_pulled_cable_and_gives_the_known_display(
+    tmp_path, line
+):
+    """``calibrate measure --photometer LS-100`` in a full-screen PsychoPy window, the fake
+    photometer looking at the screen's centre. The first reading is garbage (R reads again), the
+    cable is pulled in the third patch (Escape; plugged in again, --resume), the first reading
+    after resuming is over range (the operator types the reading)."""
     from tests.experiments.xscreen import XScreen
 
     x = XScreen(tmp_path)
     out = tmp_path / "display.json"
     session_path = out.with_suffix(".session.json")
     pixel = ScreenPixel(x.display)
-    common = ["--out", out, "--bit-depth", "8", "--points", "5", "--verify-points", "3"]
+    common = ["--out", out, "--bit-depth", "8", "--points", "9", "--verify-points", "3"]
     devices = []
     try:
         first = FakeMinolta(lambda: display(pixel()), line_folder=line, seed=5)
         devices.append(first)
-        first.unplug_after = 5
+        first.faults = ["?\x7f\x13\r\n"]  # garbage for the first reading: R reads again
+        first.unplug_after = 5  # then the cable comes out in the third patch
         process, log = glarelab_on(
             x, line, "calibrate", "measure", *common, "--photometer", "LS-100",
-            "--port", first.port, "--readings", "2", "--settle-s", "0",
+            "--port", first.port, "--readings", "2", "--settle-s", "0.2",
+            "--photometer-serial", "40211007",
         )  # fmt: skip
-        deadline = time.time() + 120
-        while time.time() < deadline and not (
-            session_path.exists() and json.loads(session_path.read_text())["interruptions"]
-        ):
-            assert process.poll() is None, (x.tmp_path / log.name).read_text()[-3000:]
-            time.sleep(0.1)
-        stopped = json.loads(session_path.read_text())
-        assert stopped["interruptions"][0]["message"].startswith("lost the LS-100")
-        shot = x.screenshot()
-        assert (shot[540, 960] == shot[100, 100]).all()  # the patch stays on the screen
+        faults = wait_for_faults(session_path, 1, process, x, log)
+        assert "which is not a reading" in faults[0]["message"]
         x.focus_window()
+        x.key("r")
+        faults = wait_for_faults(session_path, 2, process, x, log)
+        assert faults[1]["message"].startswith("lost the LS-100")
+        stopped = json.loads(session_path.read_text())
+        time.sleep(0.5)
+        shot = x.screenshot()
+        assert (shot[540, 960] == shot[100, 1800]).all()  # the patch stays on the screen
+        assert (shot[900:1080, :900] != shot[540, 960]).any(axis=-1).sum() > 500  # the message
         x.key("Escape")
         assert process.wait(timeout=60) == 1
         stderr = (x.tmp_path / log.name).read_text()
@@ -329,10 +319,16 @@ def test_a_cable_pulled_mid_measurement_loses_nothing_and_the_measurement_resume
 
         second = FakeMinolta(lambda: display(pixel()), line_folder=line, seed=6)
         devices.append(second)
+        second.faults = ["ER10\r\n"]  # over range: the operator types the reading instead
         process, log = glarelab_on(
             x, line, "calibrate", "measure", *common, "--photometer", "LS-100",
             "--port", second.port, "--resume",
         )  # fmt: skip
+        faults = wait_for_faults(session_path, 3, process, x, log)
+        assert "reports over range (ER10" in faults[2]["message"]
+        typed = f"{display(pixel()):.4g}"
+        x.focus_window()
+        x.key(*["period" if c == "." else c for c in typed], "Return")
         assert process.wait(timeout=240) == 0, (x.tmp_path / log.name).read_text()[-3000:]
     finally:
         for device in devices:
@@ -340,6 +336,14 @@ def test_a_cable_pulled_mid_measurement_loses_nothing_and_the_measurement_resume
         pixel.close()
         x.close()
     done = json.loads(session_path.read_text())
-    assert done["raw"][:5] == stopped["raw"]
-    assert len(done["raw"]) == 5 + 2 * (5 - 2 + 1 + 3)
-    assert Calibration.load(out).status == "passed"
+    assert done["raw"][:5] == stopped["raw"]  # nothing lost, nothing changed
+    assert len(done["raw"]) == 5 + 2 * (9 - 2 + 1 + 3 - 1)  # the rest, 2 readings each, but…
+    sources = [entry["source"] for entry in done["log"]]
+    assert sources.count("typed") == 1 and sources.count("photometer") == 9 + 1 + 3 - 1
+    assert done["log"][2]["source"] == "typed" and done["log"][2]["cd_m2"] == float(typed)
+    assert done["instrument"]["serial_number"] == "40211007"
+    assert done["instrument"]["model"] == "LS-100"
+    calibration = Calibration.load(out)
+    assert calibration.status == "passed"
+    codes = np.arange(256)
+    np.testing.assert_allclose(calibration.decode(codes), display(codes), rtol=0.01, atol=0.005)
