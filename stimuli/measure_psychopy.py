@@ -27,7 +27,7 @@ from .measure import MeasurementSession
 from .photometer import PatchProtocol, Photometer, PhotometerError, measure_patch
 from .psychopy_window import KeyReader, dispatch_events, grab_screen, open_window
 
-__all__ = ["run_measurement"]
+__all__ = ["read_codes", "run_measurement"]
 
 DECIMAL_KEYS = ("period", "comma", "num_decimal")
 
@@ -277,3 +277,63 @@ def _read_patch(session, meter, protocol, window, draw, keys):
 
     step = session.current()
     return measure_patch(meter.read, protocol, wait=hold, keep=keep, what=f"code {step['code']}")
+
+
+def read_codes(
+    window,
+    meter: Photometer,
+    codes: list[int],
+    *,
+    bit_depth: int,
+    patch_protocol: PatchProtocol | None = None,
+    keep: Callable[[dict], None] = lambda row: None,
+    log: Callable[[str], None] = lambda line: None,
+) -> list[dict]:
+    """Show each drive code full-field in an open window and read it with the photometer.
+
+    Returns
+    -------
+    list of dict
+        ``code``, ``cd_m2`` (the median), ``readings_cd_m2``, ``flags`` per code.
+
+    Raises
+    ------
+    PhotometerError
+        On a fault; ``keep`` has had every reading taken before it.
+    """
+    from psychopy import visual
+
+    protocol = patch_protocol or PatchProtocol()
+    patch = visual.Rect(
+        window, width=2, height=2, units="norm", lineColor=None, colorSpace="rgb", autoLog=False
+    )
+    results = []
+    for code in codes:
+        level = _level(int(code), bit_depth)
+        patch.fillColor = (level, level, level)
+
+        def hold(seconds: float) -> None:
+            end = time.monotonic() + seconds
+            while time.monotonic() < end:
+                patch.draw()
+                window.flip()
+
+        patch.draw()
+        window.flip()
+        read = measure_patch(
+            meter.read,
+            protocol,
+            wait=hold,
+            keep=lambda row, code=code: keep({"code": int(code), **row}),
+            what=f"code {code}",
+        )
+        log(f"code {code}: {read.luminance_cd_m2:.4g} cd/m²")
+        results.append(
+            {
+                "code": int(code),
+                "cd_m2": read.luminance_cd_m2,
+                "readings_cd_m2": read.readings,
+                "flags": read.flags,
+            }
+        )
+    return results

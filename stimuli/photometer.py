@@ -38,6 +38,7 @@ __all__ = [
     "PatchResult",
     "Photometer",
     "PhotometerError",
+    "PluginMissing",
     "measure_patch",
     "open_photometer",
 ]
@@ -61,6 +62,10 @@ class OutOfRange(PhotometerError):
 
 class Disconnected(PhotometerError):
     """The serial port went away (cable pulled, adapter unplugged, instrument off)."""
+
+
+class PluginMissing(ImportError):
+    """The PsychoPy plugin of a photometer is not installed."""
 
 
 @dataclass(frozen=True)
@@ -236,7 +241,7 @@ def _load_class(model: str):
     try:
         module = importlib.import_module(spec.module)
     except ImportError as error:
-        raise ImportError(
+        raise PluginMissing(
             f"the {model} is driven by PsychoPy's {spec.plugin} plugin, which is not installed "
             f"({error}); pip install 'glarelab[photometer]'"
         ) from None
@@ -261,8 +266,8 @@ def open_photometer(model: str, port: str, *, serial_number: str | None = None) 
     ------
     ValueError
         For an unknown model.
-    ImportError
-        When the model's plugin is not installed (names the package).
+    PluginMissing
+        When the model's plugin is not installed (names the package; an ImportError).
     NoAnswer, Garbled
         When the port opens but no photometer answers on it as the model would.
     Disconnected

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from stimuli.calibration import fit_calibration, read_readings
+from stimuli.photometer import PHOTOMETERS
 
 from .common import count, number, output_file
 from .common import log as _log
@@ -221,7 +222,7 @@ def add(commands) -> None:
     )
     measure.add_argument(
         "--photometer",
-        choices=("LS-100", "LS-110", "CS-100A", "PR-655", "ColorCAL"),
+        choices=tuple(PHOTOMETERS),
         default=None,
         help="read the patches with this photometer (PsychoPy's plugins: pip install "
         "'glarelab[photometer]'); without it the operator types the readings",

@@ -116,7 +116,7 @@ def test_a_photometer_that_does_not_answer(fake):
 
 
 def test_a_patch_is_read_after_it_settles_and_again_when_its_readings_disagree(line, shown):
-    device = FakeMinolta(lambda: display(shown["code"]), line_folder=line, settle_tau_s=0.2)
+    device = FakeMinolta(lambda: display(shown["code"]), line_folder=line, settle_tau_s=0.15)
     try:
         meter = open_photometer("LS-100", device.port)
         shown["code"] = 0  # a step from white to black: the LCD takes its time
@@ -124,7 +124,7 @@ def test_a_patch_is_read_after_it_settles_and_again_when_its_readings_disagree(l
         hasty = measure_patch(meter.read, PatchProtocol(readings=3, settle_s=0, repeats=3))
         shown["code"] = 255
         time.sleep(0.05)
-        patient = measure_patch(meter.read, PatchProtocol(readings=2, settle_s=1.5))
+        patient = measure_patch(meter.read, PatchProtocol(readings=2, settle_s=1.2))
     finally:
         device.close()
     assert hasty.sets > 1 and len(hasty.readings) == 3 * hasty.sets
@@ -347,3 +347,67 @@ def test_a_measurement_in_a_window_survives_a_pulled_cable_and_gives_the_known_d
     assert calibration.status == "passed"
     codes = np.arange(256)
     np.testing.assert_allclose(calibration.decode(codes), display(codes), rtol=0.01, atol=0.005)
+
+
+def test_check_display_reads_black_white_and_the_calibration(tmp_path, line):
+    from stimuli.calibration import fit_calibration
+    from tests.experiments.xscreen import XScreen
+
+    codes = np.unique(np.round(np.linspace(0, 255, 33)).astype(int))
+    calibration = tmp_path / "display.json"
+    fit_calibration(list(zip(codes, display(codes), strict=True)), bit_depth=8).save(calibration)
+    out = tmp_path / "check.json"
+    x = XScreen(tmp_path)
+    pixel = ScreenPixel(x.display)
+    device = FakeMinolta(lambda: display(pixel()), line_folder=line, seed=7)
+    try:
+        process, log = glarelab_on(
+            x, line, "check-display", "spencer1995", "--calibration", calibration, "--out", out,
+            "--frames", "30", "--photometer", "LS-100", "--port", device.port,
+            "--readings", "2", "--settle-s", "0.1",
+        )  # fmt: skip
+        status = process.wait(timeout=240)
+        assert status == 1, (x.tmp_path / log.name).read_text()[-3000:]  # Xvfb's resolution
+    finally:
+        device.close()
+        pixel.close()
+        x.close()
+    result = json.loads(out.read_text())
+    found = result["photometer"]
+    assert found["fault"] is None and found["instrument"]["model"] == "LS-100"
+    assert len(found["readings"]) == 2 * 7  # black, white, five codes across the range
+    np.testing.assert_allclose(found["white_cd_m2"], WHITE, rtol=0.005)
+    np.testing.assert_allclose(found["black_cd_m2"], BLACK, rtol=0.005)
+    assert found["max_relative_error"] < 0.01
+    checks = {check["name"]: check["passed"] for check in result["checks"]}
+    assert checks["white luminance"] and checks["luminance against the calibration"]
+
+
+def test_the_command_refuses_what_it_cannot_do(tmp_path, line, capsys):
+    from glarelab.cli import main
+
+    out = str(tmp_path / "d.json")
+    cases = [
+        (["--port", "/dev/ttyUSB0"], "--port needs --photometer MODEL"),
+        (["--photometer", "LS-100"], "--photometer LS-100 needs --port (e.g. /dev/ttyUSB0"),
+        (["--photometer", "LS-100", "--port", "/dev/nonexistent"], "cannot open the serial port"),
+        (["--resume"], "no measurement session at"),
+        (["--simulate", "100", "0.1", "2.2", "--photometer", "LS-100", "--port", "x"], "not both"),
+    ]
+    for extra, message in cases:
+        assert main(["calibrate", "measure", "--out", out, *extra]) == 2
+        assert message in capsys.readouterr().err
+    device = FakeMinolta(lambda: 1.0, line_folder=line)
+    device.garble = True  # a photometer fault is a message, not a bug (exit 2, not 70)
+    try:
+        assert main(["calibrate", "measure", "--out", out, "--photometer", "LS-100",
+                     "--port", device.port]) == 2  # fmt: skip
+    finally:
+        device.close()
+    assert f"something on {device.port} answers" in capsys.readouterr().err
+    session = MeasurementSession(
+        bit_depth=8, out=tmp_path / "d.json", rng=np.random.default_rng(0), points=5
+    )
+    session.record(1.0)
+    assert main(["calibrate", "measure", "--out", out, "--bit-depth", "8"]) == 2
+    assert "stopped before its end (1 patches done); --resume goes on" in capsys.readouterr().err
