@@ -169,7 +169,8 @@ class Photometer:
         }
 
     def read(self) -> tuple[float, str]:
-        """One luminance reading, cd/m², and the instrument's raw reply.
+        """One luminance reading, cd/m², and the instrument's raw replies (`` | `` between
+        the replies of a reading that takes several commands, as the PR-655's).
 
         Raises
         ------
@@ -180,7 +181,12 @@ class Photometer:
         self.replies.clear()
         try:
             value = self.device.getLum()
-        except (KeyError, ValueError, IndexError, TypeError) as error:
+        except (KeyError, ValueError, IndexError, TypeError, AttributeError) as error:
+            if not any(reply.strip(" \r\n>[]'") for reply in self.replies):
+                raise NoAnswer(
+                    f"the {self.model} on {self.port} does not answer; check that it is on and "
+                    f"in remote mode ({spec.switch_on}) and the cable is in"
+                ) from None
             # the Minolta plugin looks unknown replies up in its table of error codes (KeyError)
             # or parses them as a number (ValueError); a wrong baud rate gives bytes that are
             # not text (UnicodeDecodeError, a ValueError)
@@ -195,6 +201,11 @@ class Photometer:
                 "check the instrument is on: the measurement goes on from this patch"
             ) from None
         reply = self.last_reply.strip()
+        if getattr(self.device, "ok", True) is False:  # the ColorCAL's status of its reading
+            raise Garbled(
+                f"the {self.model} on {self.port} answered {reply!r} instead of a reading; "
+                "check the instrument, then try again"
+            )
         if value is None or value == -1:
             if not reply:
                 raise NoAnswer(
@@ -225,7 +236,7 @@ class Photometer:
                 "cd/m²): too little light for it (a dark patch of an OLED, or the lens cap "
                 "on); type the reading from a more sensitive instrument, or check the cap"
             )
-        return value, reply
+        return value, " | ".join(r.strip() for r in self.replies)
 
     def close(self) -> None:
         com = getattr(self.device, "com", None)
@@ -294,15 +305,20 @@ def open_photometer(model: str, port: str, *, serial_number: str | None = None) 
             f"lost the serial port {port!r} while opening the {model} ({error})"
         ) from None
     except Exception as error:  # a plugin that trips over an unexpected answer
+        if not any(reply.strip(" \r\n>[]'") for reply in replies):
+            raise NoAnswer(
+                f"no {model} answers on {port}; check that it is on and in remote mode "
+                f"({spec.switch_on}), the cable ({spec.serial_settings}) and the port"
+            ) from None
         raise Garbled(
             f"the {spec.plugin} plugin could not open a {model} on {port} (it answered "
             f"{replies[-1] if replies else 'nothing'!r}; {type(error).__name__}: {error}); "
             f"check the model, the serial settings ({spec.serial_settings}) and the port"
         ) from None
     photometer = Photometer(model, port, device, serial_number, version, replies=replies)
-    if not getattr(device, "OK", False) and not getattr(device, "ok", False):
+    if not (getattr(device, "OK", False) and getattr(device, "ok", True)):
         photometer.close()
-        answered = [reply for reply in replies if reply]
+        answered = [reply for reply in replies if reply.strip(" \r\n>[]'")]
         if answered:
             raise Garbled(
                 f"something on {port} answers {answered[-1]!r}, not as a {model} does; check "
@@ -323,7 +339,8 @@ def _recording(cls, replies: list[str]):
 
     def send_and_keep(self, message, *args, **kwargs):
         reply = cls.sendMessage(self, message, *args, **kwargs)
-        replies.append(reply if isinstance(reply, str) else repr(reply))
+        # a spectrum (the PR-655's D5) comes as a list of lines: kept as its length
+        replies.append(reply if isinstance(reply, str) else f"<{len(reply)} lines>")
         return reply
 
     return type(cls.__name__, (cls,), {"sendMessage": send_and_keep})

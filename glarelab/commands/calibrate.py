@@ -101,7 +101,8 @@ def _calibrate_measure(args: argparse.Namespace) -> int:
     else:
         if session_path.exists():
             previous = json.loads(session_path.read_text())
-            if previous.get("phase") not in (None, "done"):
+            begun = previous.get("log") or previous.get("raw")
+            if previous.get("phase") not in (None, "done") and begun:
                 raise ValueError(
                     f"{session_path}: a measurement of this calibration stopped before its end "
                     f"({len(previous.get('log', []))} patches done); --resume goes on with it, or "
@@ -122,8 +123,7 @@ def _calibrate_measure(args: argparse.Namespace) -> int:
     meter, reopen = _open_meter(args, session.instrument)
     if meter is not None:
         session.instrument = meter.describe()
-        session.patch_protocol = dataclasses.asdict(protocol)
-        session.save()
+        session.patch_protocol = dataclasses.asdict(protocol)  # saved with the first reading
     photometer = None
     if args.simulate is not None:  # a display following L = black + (white - black) x^gamma
         white, black, gamma = args.simulate

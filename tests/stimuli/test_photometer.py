@@ -23,7 +23,7 @@ from stimuli.photometer import (
     measure_patch,
     open_photometer,
 )
-from tests.stimuli.fake_photometer import FakeMinolta
+from tests.stimuli.fake_photometer import FakeMinolta, FakePR655
 from tests.stimuli.pty_line import keeping_tcsetattr
 
 pytest.importorskip("psychopy_minolta", reason="the photometer extra: pip install '.[photometer]'")
@@ -77,6 +77,28 @@ def test_the_plugin_reads_the_display(line, shown, model):
         "serial_number": "40211007",
         "plugin": "psychopy-minolta 0.0.2",
     }
+
+
+def test_the_pr655_plugin_reads_the_display_and_its_serial_number(line, shown):
+    device = FakePR655(lambda: display(shown["code"]), line_folder=line, serial_number="65551234")
+    try:
+        meter = open_photometer("PR-655", device.port)
+        assert meter.serial_number == "65551234"
+        shown["code"] = 128
+        value, reply = meter.read()  # M0, then the plugin fetches D3, D1, D2, D5, D4
+        np.testing.assert_allclose(value, display(128), rtol=0.005)
+        assert reply.startswith("0000 | 0000,0,") and "<103 lines>" in reply
+        device.garble = True
+        with pytest.raises(Garbled, match=r"the PR-655 on /dev/pts/.* which is not a reading"):
+            meter.read()
+        device.garble = False
+        device.unplug_after = device.readings
+        with pytest.raises(Disconnected, match="lost the PR-655"):
+            meter.read()
+    finally:
+        device.close()
+    assert device.commands[:9] == ["PHOTO", "D111", "D110", "M0", "D3", "D1", "D2", "D5", "D4"]
+    assert device.line_ok()  # 9600 baud, 8N1
 
 
 def test_faults_have_their_own_message(fake, shown):
