@@ -267,6 +267,7 @@ def _read_patch(session, meter, protocol, window, draw, keys):
             draw(f"settling ({protocol.settle_s:g} s), then {protocol.readings} readings")
             window.flip()
             check_keys()
+            time.sleep(0.005)  # a screen without vertical sync would flip as fast as it can
 
     def keep(row: dict) -> None:
         taken[0] += 1
@@ -317,6 +318,7 @@ def read_codes(
             while time.monotonic() < end:
                 patch.draw()
                 window.flip()
+                time.sleep(0.005)
 
         patch.draw()
         window.flip()

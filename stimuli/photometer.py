@@ -44,6 +44,9 @@ __all__ = [
 ]
 
 
+PhotometerModel = Literal["LS-100", "LS-110", "CS-100A", "PR-655", "ColorCAL"]
+
+
 class PhotometerError(RuntimeError):
     """A photometer fault, with what to do about it in the message."""
 
@@ -259,7 +262,9 @@ def _load_class(model: str):
     return getattr(module, spec.name), metadata.version(spec.plugin)
 
 
-def open_photometer(model: str, port: str, *, serial_number: str | None = None) -> Photometer:
+def open_photometer(
+    model: PhotometerModel, port: str, *, serial_number: str | None = None
+) -> Photometer:
     """Open a photometer through its PsychoPy plugin.
 
     Parameters
@@ -463,6 +468,3 @@ def measure_patch(
                 "the median is used"
             )
     return PatchResult(median, everything, sets, flags)
-
-
-PhotometerModel = Literal["LS-100", "LS-110", "CS-100A", "PR-655", "ColorCAL"]
