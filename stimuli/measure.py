@@ -158,7 +158,9 @@ class MeasurementSession:
                 if drift > DRIFT_TOLERANCE:
                     new.append(
                         f"drift: code {code} read {first:g} cd/m² first and {value:g} at the end "
-                        f"({100 * drift:.1f} %)"
+                        f"({100 * drift:.1f} %, more than {100 * DRIFT_TOLERANCE:g} %): the "
+                        "display or the photometer changed during the session; let the display "
+                        "warm up longer (30 min or more) and measure again"
                     )
             else:
                 self.readings[code] = value
