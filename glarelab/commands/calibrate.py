@@ -39,14 +39,14 @@ def _calibrate_fit(args: argparse.Namespace) -> int:
 
 
 def _open_meter(args: argparse.Namespace, instrument: dict | None):
-    """The photometer asked for (None for typed readings); on a resumed session, the one
-    that began it."""
+    """The photometer asked for (None for typed readings; on a resumed session, the one that
+    began it), a function that opens it anew, and the list of those opened."""
     from stimuli.photometer import open_photometer
 
     if args.photometer is None:
         if args.port is not None:
             raise ValueError("--port needs --photometer MODEL (the photometer on that port)")
-        return None, None
+        return None, None, []
     if args.port is None:
         raise ValueError(f"--photometer {args.photometer} needs --port (e.g. /dev/ttyUSB0, COM3)")
     if instrument and instrument.get("model") != args.photometer:
@@ -56,8 +56,11 @@ def _open_meter(args: argparse.Namespace, instrument: dict | None):
         )
     serial_number = args.photometer_serial or (instrument or {}).get("serial_number")
 
+    opened = []  # every photometer opened (R after a fault opens it anew), closed at the end
+
     def reopen():
-        return open_photometer(args.photometer, args.port, serial_number=serial_number)
+        opened.append(open_photometer(args.photometer, args.port, serial_number=serial_number))
+        return opened[-1]
 
     meter = reopen()
     if instrument and instrument.get("serial_number") not in (None, meter.serial_number):
@@ -73,7 +76,7 @@ def _open_meter(args: argparse.Namespace, instrument: dict | None):
             "--photometer-serial (it is printed on the instrument) so the calibration names it"
         )
     _log(f"photometer: {meter.model} on {meter.port}, serial number {meter.serial_number}")
-    return meter, reopen
+    return meter, reopen, opened
 
 
 def _calibrate_measure(args: argparse.Namespace) -> int:
@@ -120,7 +123,7 @@ def _calibrate_measure(args: argparse.Namespace) -> int:
         )
     if args.simulate is not None and args.photometer is not None:
         raise ValueError("give --simulate or --photometer, not both")
-    meter, reopen = _open_meter(args, session.instrument)
+    meter, reopen, opened = _open_meter(args, session.instrument)
     if meter is not None:
         session.instrument = meter.describe()
         session.patch_protocol = dataclasses.asdict(protocol)  # saved with the first reading
@@ -144,8 +147,8 @@ def _calibrate_measure(args: argparse.Namespace) -> int:
             log=_log,
         )
     finally:
-        if meter is not None:
-            meter.close()
+        for each in opened:
+            each.close()
     for flag in result["flags"]:
         _log(f"flag: {flag}")
     if result["status"] == "stopped":
