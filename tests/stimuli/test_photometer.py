@@ -433,3 +433,19 @@ def test_the_command_refuses_what_it_cannot_do(tmp_path, line, capsys):
     session.record(1.0)
     assert main(["calibrate", "measure", "--out", out, "--bit-depth", "8"]) == 2
     assert "stopped before its end (1 patches done); --resume goes on" in capsys.readouterr().err
+
+
+def test_a_session_is_finished_with_the_instrument_that_began_it(tmp_path, fake, capsys):
+    from glarelab.cli import main
+
+    out = tmp_path / "d.json"
+    session = MeasurementSession(bit_depth=8, out=out, rng=np.random.default_rng(0), points=5)
+    session.instrument = {"model": "LS-100", "serial_number": "A1", "port": fake.port}
+    session.record(1.0, readings=[1.0], source="photometer")
+    resume = ["calibrate", "measure", "--out", str(out), "--port", fake.port, "--resume"]
+    assert main([*resume, "--photometer", "CS-100A"]) == 2
+    assert "this session was measured with a LS-100; finish it with" in capsys.readouterr().err
+    assert main([*resume, "--photometer", "LS-100", "--photometer-serial", "B2"]) == 2
+    err = capsys.readouterr().err
+    assert "is serial number B2, this session was measured with A1" in err
+    assert json.loads(session.session_path.read_text())["log"] == session.log  # unchanged
