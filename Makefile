@@ -15,7 +15,7 @@ $(VENV)/.installed-core: pyproject.toml | $(BIN)/python
 	touch $@
 
 $(VENV)/.installed-test: pyproject.toml $(VENV)/.installed-core
-	$(BIN)/python -m pip install --quiet -e ".[test,psychopy]"
+	$(BIN)/python -m pip install --quiet -e ".[test,psychopy,photometer]"
 	touch $@
 
 demo: $(VENV)/.installed-core

@@ -12,6 +12,11 @@ participant:
 - the bits per channel the window was given, and what the frame buffer really holds: a ramp of
   every code of the protocol's bit depth is drawn and read back at 16 bits, and the distinct
   levels found give the effective bits;
+- with a photometer (``photometer``, :func:`stimuli.photometer.open_photometer`), the
+  luminance of black and white, full-field, against the protocol's ``max_cd_m2``, and with a
+  calibration, of five codes across its range against the luminance the calibration gives
+  them (its verification pass, repeated: a display that changed since it was calibrated
+  fails); every reading is kept in the findings, and a photometer fault is one of them;
 - with a stimulus set of a protocol that flashes its stimuli (a staircase), the cost of one
   frame of the first flash a session shows:
   the time to draw its images (CPU) and the flip-to-flip time while drawing them, against the
@@ -94,6 +99,8 @@ def check_display(
     calibration=None,
     frames: int = 600,
     fullscreen: bool = True,
+    photometer=None,
+    patch_protocol=None,
     log=print,
 ) -> dict:
     """Measure the display a protocol's sessions will run on; return the findings.
@@ -110,6 +117,10 @@ def check_display(
         Flips per measurement; default 600 (10 s at 60 Hz).
     fullscreen
         Measure a full-screen window (as a session runs); default True.
+    photometer
+        An open :class:`~stimuli.photometer.Photometer`: also measure luminances.
+    patch_protocol
+        How the photometer reads each patch (:class:`~stimuli.photometer.PatchProtocol`).
     """
     if not protocol.data.get("display"):
         raise ValueError(f"the {protocol.study} protocol describes no display to check")
@@ -151,12 +162,74 @@ def check_display(
             if calibration is None
             else {"label": calibration.label, "status": calibration.status},
         }
+        if photometer is not None:
+            result["photometer"] = _photometer_check(
+                protocol, window, photometer, calibration, patch_protocol, records, log
+            )
         flash = _first_flash(protocol, 1.0 / period) if stimuli is not None else None
         if flash is not None:
             result["flash"] = _flash_cost(device, flash, frames, period, log)
         return result
     finally:
         device.close()
+
+
+PHOTOMETER_TOLERANCE = 0.03  # as the calibration's verification pass (stimuli.measure)
+
+
+def _photometer_check(protocol, window, meter, calibration, patch_protocol, records, log) -> dict:
+    """Black, white and (with a calibration) five codes across its range, read by the
+    photometer; adds its checks to ``records``."""
+    from stimuli.measure_psychopy import read_codes
+    from stimuli.photometer import PhotometerError
+
+    from .display import Check
+
+    bits = calibration.bit_depth if calibration is not None else protocol["display"]["bit_depth"]
+    top = 2**bits - 1
+    codes = [0, top]
+    if calibration is not None:
+        black, white = calibration.black_cd_m2, calibration.max_cd_m2
+        targets = np.geomspace(max(2 * black, 0.01 * white), 0.9 * white, 5)
+        codes += [int(c) for c in calibration.encode(targets)[0]]
+    kept: list[dict] = []
+    found = {"instrument": meter.describe(), "readings": kept, "fault": None}
+    log(f"reading {len(codes)} patches with the {meter.model}")
+    try:
+        read = read_codes(
+            window, meter, codes, bit_depth=bits, patch_protocol=patch_protocol, keep=kept.append
+        )
+    except PhotometerError as fault:
+        found["fault"] = str(fault)
+        records.append(Check("photometer", "readings", f"fault: {fault}", False).__dict__)
+        return found
+    found["patches"] = read
+    found["black_cd_m2"], found["white_cd_m2"] = read[0]["cd_m2"], read[1]["cd_m2"]
+    wanted = float(protocol["display"]["max_cd_m2"])
+    records.append(
+        Check(
+            "white luminance",
+            f">= {wanted:g} cd/m²",
+            f"{read[1]['cd_m2']:.4g} cd/m²",
+            read[1]["cd_m2"] >= (1 - PHOTOMETER_TOLERANCE) * wanted,
+        ).__dict__
+    )
+    if calibration is not None:
+        for patch in read:
+            expected = float(calibration.decode(np.array([patch["code"]]))[0])
+            patch["calibration_cd_m2"] = expected
+            patch["relative_error"] = abs(patch["cd_m2"] - expected) / max(expected, 1e-12)
+        worst = max(patch["relative_error"] for patch in read)
+        found["max_relative_error"] = worst
+        records.append(
+            Check(
+                "luminance against the calibration",
+                f"within {100 * PHOTOMETER_TOLERANCE:g} %",
+                f"worst {100 * worst:.2f} %",
+                worst <= PHOTOMETER_TOLERANCE,
+            ).__dict__
+        )
+    return found
 
 
 def _flash_cost(device, screen: dict, frames: int, period: float, log) -> dict:

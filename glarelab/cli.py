@@ -50,8 +50,9 @@ def _refusal(error: BaseException) -> str | None:
     """The one-line message of an anticipated error, or None for a bug."""
     from analysis.load import DataError
     from protocols import ProtocolError
+    from stimuli.photometer import PhotometerError, PluginMissing
 
-    if isinstance(error, ProtocolError | DataError):
+    if isinstance(error, ProtocolError | DataError | PhotometerError | PluginMissing):
         return str(error)
     if isinstance(error, ValueError | FileNotFoundError | IsADirectoryError):
         return str(error)

@@ -9,10 +9,16 @@ are flagged at once and measured once more before the fit. A verification pass t
 target luminances through the new calibration and records what the photometer reads; a
 calibration whose worst error exceeds the tolerance is marked ``failed`` (as HRL's LUT tool
 does), and experiments refuse it.
+
+With a photometer on a serial port (:mod:`stimuli.photometer`), every single reading is kept
+in the session file as it is taken (:meth:`MeasurementSession.keep_reading`), with the
+instrument's model and serial number, and so is every fault; a session stopped by a fault
+goes on where it stopped (:meth:`MeasurementSession.resume`).
 """
 
 from __future__ import annotations
 
+import datetime as dt
 import itertools
 import json
 import os
@@ -27,6 +33,7 @@ from .calibration import Calibration, fit_calibration
 __all__ = ["MeasurementSession"]
 
 DRIFT_TOLERANCE = 0.02  # repeat of the first code within 2 % of the first reading
+SESSION_FORMAT = "glarelab measurement session v2"
 
 
 @dataclass
@@ -55,6 +62,10 @@ class MeasurementSession:
         Largest relative verification error for ``passed``; default 0.03.
     label
         Display, photometer, operator.
+    instrument
+        The photometer (model, port, serial number, plugin), when one measures.
+    patch_protocol
+        How each patch is read (readings, settling, spread), when a photometer measures.
     """
 
     bit_depth: int
@@ -73,7 +84,13 @@ class MeasurementSession:
     calibration: Calibration | None = None
     targets: list[float] = field(default_factory=list)
     verification: list[tuple[float, int, float]] = field(default_factory=list)
+    instrument: dict | None = None
+    patch_protocol: dict | None = None
+    raw: list[dict] = field(default_factory=list)  # every photometer reading, as taken
+    interruptions: list[dict] = field(default_factory=list)
+    codes: list[int] = field(default_factory=list)  # the order of the codes
     _retried: set[int] = field(default_factory=set)
+    _replaying: bool = False
 
     def __post_init__(self) -> None:
         if self.bit_depth not in (8, 10, 12, 16):
@@ -86,6 +103,7 @@ class MeasurementSession:
         top = 2**self.bit_depth - 1
         codes = np.unique(np.round(np.linspace(0, top, self.points)).astype(int)).tolist()
         codes = codes[::-1] if self.order == "reversed" else list(self.rng.permutation(codes))
+        self.codes = [int(c) for c in codes]
         self.queue = [(int(c), "measure") for c in codes] + [(int(codes[0]), "drift")]
 
     @property
@@ -114,13 +132,24 @@ class MeasurementSession:
             }
         return {"phase": "done"}
 
-    def record(self, luminance_cd_m2: float) -> list[str]:
-        """Enter the photometer's reading for the code shown; returns new flags."""
+    def record(
+        self,
+        luminance_cd_m2: float,
+        *,
+        readings: list[float] | None = None,
+        source: Literal["typed", "photometer", "simulated"] = "typed",
+        flags: list[str] = (),
+    ) -> list[str]:
+        """Enter the luminance of the code shown; returns new flags.
+
+        ``readings`` are the photometer's readings it was made of (recorded with it), and
+        ``flags`` what the reading of the patch found (unsteady readings).
+        """
         value = float(luminance_cd_m2)
         if not (np.isfinite(value) and value >= 0):
             raise ValueError(f"luminance must be a number >= 0 cd/m²; got {luminance_cd_m2!r}")
         step = self.current()
-        new: list[str] = []
+        new: list[str] = list(flags)
         if step["phase"] == "measure":
             code, purpose = self.queue.pop(0)
             if purpose == "drift":
@@ -129,35 +158,151 @@ class MeasurementSession:
                 if drift > DRIFT_TOLERANCE:
                     new.append(
                         f"drift: code {code} read {first:g} cd/m² first and {value:g} at the end "
-                        f"({100 * drift:.1f} %)"
+                        f"({100 * drift:.1f} %, more than {100 * DRIFT_TOLERANCE:g} %): the "
+                        "display or the photometer changed during the session; let the display "
+                        "warm up longer (30 min or more) and measure again"
                     )
             else:
                 self.readings[code] = value
                 new += self._monotonicity(code)
-            self.log.append({"phase": "measure", "code": code, "purpose": purpose, "cd_m2": value})
+            entry = {"phase": "measure", "code": code, "purpose": purpose, "cd_m2": value}
+            self.log.append(self._entry(entry, readings, source, flags))
             if not self.queue:
                 self._finish_measurement(new)
         elif step["phase"] == "verify":
             self.verification.append((step["target_cd_m2"], step["code"], value))
-            self.log.append(
-                {
-                    "phase": "verify",
-                    "code": step["code"],
-                    "cd_m2": value,
-                    "target_cd_m2": step["target_cd_m2"],
-                }
-            )
+            entry = {
+                "phase": "verify",
+                "code": step["code"],
+                "cd_m2": value,
+                "target_cd_m2": step["target_cd_m2"],
+            }
+            self.log.append(self._entry(entry, readings, source, flags))
             if len(self.verification) == len(self.targets):
                 self.calibration = self.calibration.verified(
                     self.verification, tolerance_fraction=self.tolerance_fraction
                 )
-                self.calibration.save(self.out)
+                if not self._replaying:
+                    self.calibration.save(self.out)
                 self.phase = "done"
         else:
             raise ValueError("the session is finished; nothing more to record")
         self.flags += new
-        self.save()
+        if not self._replaying:
+            self.save()
         return new
+
+    @staticmethod
+    def _entry(entry: dict, readings: list[float] | None, source: str, flags) -> dict:
+        if source not in ("typed", "photometer", "simulated"):
+            raise ValueError(
+                f"source must be 'typed', 'photometer' or 'simulated'; got {source!r}"
+            )
+        entry["source"] = source
+        if readings is not None:
+            entry["readings_cd_m2"] = [float(r) for r in readings]
+        if flags:
+            entry["flags"] = list(flags)
+        return entry
+
+    def keep_reading(self, row: dict) -> None:
+        """Keep one photometer reading of the patch shown now, at once (saved before the next).
+
+        ``row`` holds ``cd_m2``, the instrument's raw ``reply`` and the reading's ``set``.
+        """
+        step = self.current()
+        purpose = step.get("purpose", "verify")
+        self.raw.append(
+            {
+                "time": dt.datetime.now().astimezone().isoformat(timespec="milliseconds"),
+                "phase": step["phase"],
+                "code": step["code"],
+                "purpose": purpose,
+                **row,
+            }
+        )
+        self.save()
+
+    def interrupted(self, message: str) -> None:
+        """Keep a fault that stopped the reading of the patch shown now."""
+        step = self.current()
+        self.interruptions.append(
+            {
+                "time": dt.datetime.now().astimezone().isoformat(timespec="seconds"),
+                "phase": step["phase"],
+                "code": step.get("code"),
+                "readings_kept": len(self.raw),
+                "message": message,
+            }
+        )
+        self.save()
+
+    @classmethod
+    def resume(cls, session_path: str | Path, out: str | Path) -> MeasurementSession:
+        """The session saved in ``session_path``, ready to go on where it stopped.
+
+        Its entries are played again through the same steps (so the re-measured codes, the
+        fit and the verification targets come out as they did); the raw readings and the
+        faults are kept as they were.
+
+        Raises
+        ------
+        FileNotFoundError
+            Without a session file.
+        ValueError
+            For a file that is not a session, one already finished, or entries that do not
+            follow the session's steps (an edited file).
+        """
+        path = Path(session_path)
+        if not path.is_file():
+            raise FileNotFoundError(f"no measurement session at {path} to resume")
+        try:
+            data = json.loads(path.read_text())
+        except (json.JSONDecodeError, UnicodeDecodeError) as error:
+            raise ValueError(f"{path}: a measurement session must be JSON; {error}") from None
+        if not isinstance(data, dict) or data.get("format") != SESSION_FORMAT:
+            raise ValueError(
+                f"{path}: not a resumable measurement session (format "
+                f"{data.get('format') if isinstance(data, dict) else None!r}, need "
+                f"{SESSION_FORMAT!r})"
+            )
+        if data["phase"] == "done":
+            raise ValueError(f"{path}: the session is finished (status {data['status']!r})")
+        session = cls(
+            bit_depth=data["bit_depth"],
+            out=Path(out),
+            rng=np.random.default_rng(0),
+            points=data["points"],
+            order=data["order"],
+            verify_points=data["verify_points"],
+            tolerance_fraction=data["tolerance_fraction"],
+            label=data["label"],
+            instrument=data.get("instrument"),
+            patch_protocol=data.get("patch_protocol"),
+        )
+        session.codes = [int(c) for c in data["codes"]]
+        session.queue = [(c, "measure") for c in session.codes] + [(session.codes[0], "drift")]
+        session._replaying = True
+        try:
+            for line, entry in enumerate(data["log"]):
+                step = session.current()
+                if step["phase"] != entry["phase"] or step["code"] != entry["code"]:
+                    raise ValueError(
+                        f"{path}: entry {line} is {entry['phase']} of code {entry['code']}, but "
+                        f"the session's step is {step['phase']} of code {step.get('code')}"
+                        " (an edited file?)"
+                    )
+                session.record(
+                    entry["cd_m2"],
+                    readings=entry.get("readings_cd_m2"),
+                    source=entry.get("source", "typed"),
+                    flags=entry.get("flags", []),
+                )
+        finally:
+            session._replaying = False
+        session.raw = list(data.get("raw", []))
+        session.interruptions = list(data.get("interruptions", []))
+        return session
 
     def _monotonicity(self, code: int) -> list[str]:
         value = self.readings[code]
@@ -196,24 +341,37 @@ class MeasurementSession:
         fine = np.flatnonzero(half_step <= self.tolerance_fraction / 3)
         low = max(2 * black, float(lut[fine[0]]) if fine.size else 0.5 * white)
         self.targets = np.geomspace(low, 0.9 * white, self.verify_points).tolist()
-        self.calibration.save(self.out)  # unverified until the verification pass is done
+        if not self._replaying:  # unverified until the verification pass is done
+            self.calibration.save(self.out)
         self.phase = "verify"
 
     def save(self) -> Path:
         """Write the session so far (atomically: a crash leaves the previous file intact)."""
         data = {
+            "format": SESSION_FORMAT,
             "bit_depth": self.bit_depth,
             "label": self.label,
             "order": self.order,
+            "points": self.points,
+            "verify_points": self.verify_points,
+            "tolerance_fraction": self.tolerance_fraction,
+            "codes": self.codes,
+            "instrument": self.instrument,
+            "patch_protocol": self.patch_protocol,
             "phase": self.phase,
             "log": self.log,
             "flags": self.flags,
             "readings": sorted(self.readings.items()),
             "verification": self.verification,
             "status": self.calibration.status if self.calibration else None,
+            "raw": self.raw,
+            "interruptions": self.interruptions,
         }
         self.session_path.parent.mkdir(parents=True, exist_ok=True)
-        temporary = self.session_path.with_suffix(".tmp")
-        temporary.write_text(json.dumps(data, indent=1))
+        temporary = self.session_path.with_name(self.session_path.name + ".tmp")
+        with temporary.open("w") as handle:
+            json.dump(data, handle, indent=1)
+            handle.flush()
+            os.fsync(handle.fileno())
         os.replace(temporary, self.session_path)
         return self.session_path

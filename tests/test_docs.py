@@ -36,6 +36,14 @@ NOT_RUN = {
     "out/demo`, which tests/test_demo.py runs (test_make_demo_runs_the_tested_command)",
     "glarelab calibrate measure --out calibrations/my-display.json --bit-depth 10": "needs a "
     "photometer; tests/stimuli/test_measure.py runs it with a simulated one",
+    "glarelab calibrate measure --out calibrations/my-display.json --bit-depth 10 --photometer "
+    "LS-100 --port /dev/ttyUSB0 --photometer-serial 40211007": "needs a photometer; "
+    "tests/stimuli/test_photometer.py runs it against a simulated LS-100 under Xvfb",
+    "glarelab calibrate measure --out calibrations/my-display.json --photometer LS-100 --port "
+    "/dev/ttyUSB0 --resume": "needs a photometer, as above (the same test resumes a session)",
+    "glarelab check-display yoshida2008 --calibration calibrations/my-display.json --photometer "
+    "LS-100 --port /dev/ttyUSB0": "needs a photometer; tests/stimuli/test_photometer.py runs "
+    "it against a simulated LS-100 under Xvfb",
     "glarelab check-display yoshida2008 --calibration calibrations/my-display.json": "measures "
     "the lab's display; tests/test_bad_inputs.py and tests/experiments/ check it on Xvfb",
     "glarelab check-display spencer1995 --stimuli sets/spencer1995 --calibration "

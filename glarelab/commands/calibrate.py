@@ -3,11 +3,14 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
+import json
 from pathlib import Path
 
 import numpy as np
 
 from stimuli.calibration import fit_calibration, read_readings
+from stimuli.photometer import PHOTOMETERS
 
 from .common import count, number, output_file
 from .common import log as _log
@@ -35,39 +38,126 @@ def _calibrate_fit(args: argparse.Namespace) -> int:
     return 0
 
 
+def _open_meter(args: argparse.Namespace, instrument: dict | None):
+    """The photometer asked for (None for typed readings; on a resumed session, the one that
+    began it), a function that opens it anew, and the list of those opened."""
+    from stimuli.photometer import open_photometer
+
+    if args.photometer is None:
+        if args.port is not None:
+            raise ValueError("--port needs --photometer MODEL (the photometer on that port)")
+        return None, None, []
+    if args.port is None:
+        raise ValueError(f"--photometer {args.photometer} needs --port (e.g. /dev/ttyUSB0, COM3)")
+    if instrument and instrument.get("model") != args.photometer:
+        raise ValueError(
+            f"--photometer {args.photometer}: this session was measured with a "
+            f"{instrument.get('model')}; finish it with the same instrument"
+        )
+    serial_number = args.photometer_serial or (instrument or {}).get("serial_number")
+
+    opened = []  # every photometer opened (R after a fault opens it anew), closed at the end
+
+    def reopen():
+        opened.append(open_photometer(args.photometer, args.port, serial_number=serial_number))
+        return opened[-1]
+
+    meter = reopen()
+    if instrument and instrument.get("serial_number") not in (None, meter.serial_number):
+        meter.close()
+        raise ValueError(
+            f"the {meter.model} on {args.port} is serial number {meter.serial_number}, this "
+            f"session was measured with {instrument['serial_number']}: finish it with the same "
+            "instrument"
+        )
+    if meter.serial_number is None:
+        _log(
+            f"warning: the {meter.model} does not report its serial number; give it with "
+            "--photometer-serial (it is printed on the instrument) so the calibration names it"
+        )
+    _log(f"photometer: {meter.model} on {meter.port}, serial number {meter.serial_number}")
+    return meter, reopen, opened
+
+
 def _calibrate_measure(args: argparse.Namespace) -> int:
     from stimuli.measure import MeasurementSession
     from stimuli.measure_psychopy import run_measurement
+    from stimuli.photometer import PatchProtocol
 
     output_file(args.out, (".json",), "calibration")
-
-    session = MeasurementSession(
-        bit_depth=args.bit_depth,
-        out=args.out,
-        rng=np.random.default_rng(args.seed),
-        points=args.points,
-        order=args.order,
-        verify_points=args.verify_points,
-        tolerance_fraction=args.tolerance,
-        label=args.label,
+    session_path = args.out.with_suffix(".session.json")
+    protocol = PatchProtocol(
+        readings=args.readings,
+        settle_s=args.settle_s,
+        spread_fraction=args.spread,
+        repeats=args.repeats,
     )
+    if args.resume:
+        session = MeasurementSession.resume(session_path, args.out)
+        if session.patch_protocol:  # the session goes on reading patches as it began
+            protocol = PatchProtocol(**session.patch_protocol)
+        _log(
+            f"resuming {session_path}: {len(session.log)} patches done, "
+            f"{len(session.raw)} photometer readings kept, {session.current()['phase']} "
+            f"code {session.current()['code']} next"
+        )
+    else:
+        if session_path.exists():
+            previous = json.loads(session_path.read_text())
+            begun = previous.get("log") or previous.get("raw")
+            if previous.get("phase") not in (None, "done") and begun:
+                raise ValueError(
+                    f"{session_path}: a measurement of this calibration stopped before its end "
+                    f"({len(previous.get('log', []))} patches done); --resume goes on with it, or "
+                    "move the file away to start again"
+                )
+        session = MeasurementSession(
+            bit_depth=args.bit_depth,
+            out=args.out,
+            rng=np.random.default_rng(args.seed),
+            points=args.points,
+            order=args.order,
+            verify_points=args.verify_points,
+            tolerance_fraction=args.tolerance,
+            label=args.label,
+        )
+    if args.simulate is not None and args.photometer is not None:
+        raise ValueError("give --simulate or --photometer, not both")
+    meter, reopen, opened = _open_meter(args, session.instrument)
+    if meter is not None:
+        session.instrument = meter.describe()
+        session.patch_protocol = dataclasses.asdict(protocol)  # saved with the first reading
     photometer = None
     if args.simulate is not None:  # a display following L = black + (white - black) x^gamma
         white, black, gamma = args.simulate
-        top = 2**args.bit_depth - 1
+        top = 2**session.bit_depth - 1
 
         def photometer(code: int) -> float:
             return black + (white - black) * (code / top) ** gamma
 
-    result = run_measurement(
-        session,
-        photometer=photometer,
-        fullscr=not args.windowed,
-        allow_fewer_bits=args.allow_fewer_bits,
-        log=_log,
-    )
+    try:
+        result = run_measurement(
+            session,
+            photometer=photometer,
+            meter=meter,
+            patch_protocol=protocol,
+            reopen=reopen,
+            fullscr=not args.windowed,
+            allow_fewer_bits=args.allow_fewer_bits,
+            log=_log,
+        )
+    finally:
+        for each in opened:
+            each.close()
     for flag in result["flags"]:
         _log(f"flag: {flag}")
+    if result["status"] == "stopped":
+        step = session.current()
+        _log(
+            f"stopped at {step['phase']} code {step['code']}; every reading so far is in "
+            f"{session.session_path}: the same command with --resume goes on from there"
+        )
+        return 1
     _log(f"calibration status: {result['status']}; session saved at {session.session_path}")
     return 0 if result["status"] == "passed" else 1
 
@@ -132,5 +222,46 @@ def add(commands) -> None:
         metavar=("WHITE", "BLACK", "GAMMA"),
         default=None,
         help="a simulated photometer instead of typed readings (dry runs)",
+    )
+    measure.add_argument(
+        "--photometer",
+        choices=tuple(PHOTOMETERS),
+        default=None,
+        help="read the patches with this photometer (PsychoPy's plugins: pip install "
+        "'glarelab[photometer]'); without it the operator types the readings",
+    )
+    measure.add_argument(
+        "--port", default=None, help="the photometer's serial port (/dev/ttyUSB0, COM3, …)"
+    )
+    measure.add_argument(
+        "--photometer-serial",
+        default=None,
+        help="the photometer's serial number, recorded (for models that do not report it)",
+    )
+    measure.add_argument(
+        "--readings", type=count(1, 100), default=3, help="photometer readings per patch"
+    )
+    measure.add_argument(
+        "--settle-s",
+        type=number(0, 600),
+        default=1.0,
+        help="seconds a patch is shown before its first reading",
+    )
+    measure.add_argument(
+        "--spread",
+        type=number(0, 1, above=True),
+        default=0.01,
+        help="largest (max - min) / median of a patch's readings before it is read again",
+    )
+    measure.add_argument(
+        "--repeats",
+        type=count(0, 20),
+        default=2,
+        help="times a patch whose readings disagree is read again",
+    )
+    measure.add_argument(
+        "--resume",
+        action="store_true",
+        help="go on with the session of --out that stopped (a fault, Escape, a crash)",
     )
     measure.set_defaults(run=_calibrate_measure)

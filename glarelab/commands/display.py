@@ -7,8 +7,9 @@ from pathlib import Path
 
 from protocols import load_protocol
 from stimuli.calibration import Calibration
+from stimuli.photometer import PHOTOMETERS
 
-from .common import count, output_file
+from .common import count, number, output_file
 from .common import log as _log
 
 
@@ -26,14 +27,27 @@ def _check_display(args: argparse.Namespace) -> int:
     output_file(
         out, (".json",), "display check", inputs=[args.calibration] if args.calibration else ()
     )
-    result = check_display(
-        protocol,
-        stimuli=args.stimuli,
-        calibration=calibration,
-        frames=args.frames,
-        fullscreen=not args.windowed,
-        log=_log,
-    )
+    meter = None
+    if args.photometer is not None or args.port is not None:
+        from stimuli.photometer import open_photometer
+
+        if args.photometer is None or args.port is None:
+            raise ValueError("give --photometer MODEL and --port PORT together")
+        meter = open_photometer(args.photometer, args.port, serial_number=args.photometer_serial)
+    try:
+        result = check_display(
+            protocol,
+            stimuli=args.stimuli,
+            calibration=calibration,
+            frames=args.frames,
+            fullscreen=not args.windowed,
+            photometer=meter,
+            patch_protocol=_patch_protocol(args),
+            log=_log,
+        )
+    finally:
+        if meter is not None:
+            meter.close()
     empty = result["frame_intervals_empty"]
     print(
         f"screen {result['resolution_px'][0]} × {result['resolution_px'][1]} px, refresh "
@@ -56,8 +70,23 @@ def _check_display(args: argparse.Namespace) -> int:
             f"{flash['frame_period_ms']:.2f} ms frame; flip to flip "
             f"{flash['frame_intervals_drawing']['median_ms']:.2f} ms"
         )
+    if "photometer" in result:
+        found = result["photometer"]
+        if found["fault"]:
+            print(f"photometer fault: {found['fault']}")
+        else:
+            print(
+                f"photometer ({found['instrument']['model']}): black "
+                f"{found['black_cd_m2']:.4g} cd/m², white {found['white_cd_m2']:.4g} cd/m²"
+            )
     _log(f"wrote {write_check(result, out)}")
     return 0 if all(c["passed"] for c in result["checks"]) else 1
+
+
+def _patch_protocol(args: argparse.Namespace):
+    from stimuli.photometer import PatchProtocol
+
+    return PatchProtocol(readings=args.readings, settle_s=args.settle_s)
 
 
 def add(commands) -> None:
@@ -76,4 +105,20 @@ def add(commands) -> None:
         "--frames", type=count(30, 100_000), default=600, help="flips per measurement"
     )
     check.add_argument("--windowed", action="store_true", help="a window, not full screen")
+    check.add_argument(
+        "--photometer",
+        choices=tuple(PHOTOMETERS),
+        default=None,
+        help="also measure black, white and the calibration's luminances with this photometer",
+    )
+    check.add_argument("--port", default=None, help="the photometer's serial port")
+    check.add_argument(
+        "--photometer-serial", default=None, help="the photometer's serial number, recorded"
+    )
+    check.add_argument(
+        "--readings", type=count(1, 100), default=3, help="photometer readings per patch"
+    )
+    check.add_argument(
+        "--settle-s", type=number(0, 600), default=1.0, help="seconds before a patch is read"
+    )
     check.set_defaults(run=_check_display)
