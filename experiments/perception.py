@@ -74,6 +74,7 @@ Whittle (1986). Increments and decrements: luminance discrimination. Vision Rese
 
 from __future__ import annotations
 
+import functools
 import math
 import warnings
 from dataclasses import dataclass
@@ -343,6 +344,33 @@ class Percept:
         return self.brightness_cd_m2 / self.disk_cd_m2 - 1.0 if self.disk_cd_m2 > 0 else 0.0
 
 
+@functools.lru_cache(maxsize=8)
+def _ring_geometry(
+    shape: tuple[int, int], centre_px: tuple[float, float], pixel_deg: float, sectors: int
+):
+    """Pixels sorted by radius (deg) around the centre, whole and per sector: what every image
+    of one geometry shares (a study's images all do), computed once for the last few
+    geometries. Returns ``(order, sorted radius, its cumulative sum, [(sector's pixels
+    sorted, their radii)])``, the arrays read-only."""
+    rows = (np.arange(shape[0]) - centre_px[0])[:, None]
+    cols = (np.arange(shape[1]) - centre_px[1])[None, :]
+    radius = (np.sqrt(rows**2 + cols**2) * pixel_deg).ravel()
+    angle = np.arctan2(np.broadcast_to(rows, shape), np.broadcast_to(cols, shape))
+    sector = (np.floor((angle.ravel() + np.pi) / (2 * np.pi) * sectors).astype(int)) % sectors
+    order = np.argsort(radius, kind="stable")
+    sorted_radius = radius[order]
+    cumulative_radius = np.concatenate(([0.0], np.cumsum(sorted_radius)))
+    in_sector = sector[order]
+    parts = []
+    for s in range(sectors):
+        part = order[in_sector == s]
+        parts.append((part, radius[part]))
+    arrays = [order, sorted_radius, cumulative_radius, *(a for pair in parts for a in pair)]
+    for array in arrays:
+        array.flags.writeable = False
+    return order, sorted_radius, cumulative_radius, tuple(parts)
+
+
 class _Rings:
     """Mean luminance over rings around a centre, whole or in equal sectors, from pixels sorted
     by radius."""
@@ -350,20 +378,14 @@ class _Rings:
     def __init__(
         self, image: np.ndarray, centre_px: tuple[float, float], pixel_deg: float, sectors: int
     ):
-        rows = (np.arange(image.shape[0]) - centre_px[0])[:, None]
-        cols = (np.arange(image.shape[1]) - centre_px[1])[None, :]
-        radius = (np.sqrt(rows**2 + cols**2) * pixel_deg).ravel()
-        angle = np.arctan2(np.broadcast_to(rows, image.shape), np.broadcast_to(cols, image.shape))
-        sector = (np.floor((angle.ravel() + np.pi) / (2 * np.pi) * sectors).astype(int)) % sectors
+        order, self.radius, self.cumulative_radius, parts = _ring_geometry(
+            image.shape, (float(centre_px[0]), float(centre_px[1])), float(pixel_deg), sectors
+        )
         values = image.ravel()
-        order = np.argsort(radius, kind="stable")
-        self.radius = radius[order]
         self.cumulative = np.concatenate(([0.0], np.cumsum(values[order])))
-        self.cumulative_radius = np.concatenate(([0.0], np.cumsum(self.radius)))
-        self.sectors = []
-        for s in range(sectors):
-            part = order[sector[order] == s]
-            self.sectors.append((radius[part], np.concatenate(([0.0], np.cumsum(values[part])))))
+        self.sectors = [
+            (radius, np.concatenate(([0.0], np.cumsum(values[part])))) for part, radius in parts
+        ]
 
     @property
     def extent_deg(self) -> float:
