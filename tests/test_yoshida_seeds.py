@@ -88,3 +88,23 @@ def test_the_papers_pattern_of_significance_is_counted(script):
     # the first matches, the second has a significant method effect, the third differs
     # only in a t-test (not one of the seven F tests)
     assert_allclose(script.pattern_rate(frame), 2 / 3, rtol=1e-12)
+
+
+def test_the_docs_show_the_committed_studies(script, tmp_path):
+    root = SCRIPT.parents[1]
+    committed = root / "docs" / "observers"
+    assert (
+        script.main(["--summarise", str(committed / "yoshida_seeds.csv"), "--out", str(tmp_path)])
+        == 0
+    )
+    table = (tmp_path / "yoshida_seeds.md").read_text()
+    assert table == (committed / "yoshida_seeds.md").read_text()
+    assert table in (root / "docs" / "observers.md").read_text()
+    frame = pd.read_csv(committed / "yoshida_seeds.csv")
+    assert len(frame) >= 100 and (frame["participants"] == 10).all()
+    summary = script.summarise(frame).set_index("statistic")
+    readme = " ".join((root / "README.md").read_text().split())
+    for key, df in (("level", "F(5, 45)"), ("interaction", "F(5, 45)"), ("method_DEF", "F(1, 9)")):
+        row = summary.loc[key]
+        numbers = f"{df} = {row['median']:.1f} [{row['p05']:.1f}, {row['p95']:.1f}]"
+        assert f"{numbers}, {100 * row['significant']:.0f} %" in readme, key
