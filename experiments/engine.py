@@ -123,7 +123,7 @@ class LookingObserver:
 
     def __init__(self, protocol, participant: str, *, seed: int, stimuli):
         from .looking import DisplayedSet
-        from .perception import observer_parameters
+        from .perception import observer_parameters, warn_outside_fitted_range
 
         self.protocol = protocol
         self.participant = participant
@@ -133,3 +133,5 @@ class LookingObserver:
             participant_rng(protocol.seed, participant, f"observer {seed}")
         )
         self.display = stimuli if isinstance(stimuli, DisplayedSet) else DisplayedSet(stimuli)
+        # once per observer: the stimuli it will be asked about, against what it was fitted on
+        self.departures = warn_outside_fitted_range(protocol, self.display.geometry)

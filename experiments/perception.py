@@ -74,6 +74,7 @@ Whittle (1986). Increments and decrements: luminance discrimination. Vision Rese
 
 from __future__ import annotations
 
+import functools
 import math
 import warnings
 from dataclasses import dataclass
@@ -84,11 +85,19 @@ import numpy as np
 from glare._validation import check_image, check_in_range, check_positive, check_positive_int
 
 __all__ = [
+    "FITTED_DISK_CD_M2",
+    "FITTED_DISK_DIAMETER_DEG",
+    "FITTED_GAUSSIAN_SIGMA_DEG",
+    "FITTED_LEVEL_RATIO",
+    "FITTED_VOS_REGIMES",
     "BrightnessModel",
     "Observer",
     "ObserverNoise",
+    "OutsideFittedRangeWarning",
     "Percept",
+    "fitted_range_departures",
     "observer_parameters",
+    "warn_outside_fitted_range",
 ]
 
 # --- geometry of the judgement (set from the literature; the glow band fitted) -------------
@@ -152,6 +161,157 @@ smallest on a grid under which Spencer's non-significant context effect (§4.1) 
 likely as a significant one (fitted; without it, 100 %; ``docs/observers.md``)."""
 
 
+# --- the stimuli the fit saw (Yoshida 2008 §3 and Spencer 1995 §4 as this suite renders them) -
+FITTED_GAUSSIAN_SIGMA_DEG = (0.34, 0.34)
+"""Gaussian kernel widths ``σ`` (deg) the fit saw: Yoshida 2008 §3 Method I, 0.34° only. The
+glow band ``w`` was fitted on it, so a wider kernel's ramp is judged over a part of it."""
+FITTED_VOS_REGIMES = ("photopic",)
+"""Vos PSF regimes the fit saw: photopic, at the default age (Yoshida Method II, eqs. 3-6;
+Spencer §4, with and without flare lines)."""
+FITTED_LEVEL_RATIO = {"gaussian": (1.0, 7000.0 / 220.0), "vos": (1.0, 285.0)}
+"""Glare source luminance over the clamp it is rendered against, per kernel: Yoshida's levels
+over ``L_dmax`` = 220 cd/m² (A-F: 1-31.8; a-f: 1-45.5) and Spencer's ``1 + strength`` (1.01-285,
+Vos only)."""
+FITTED_DISK_DIAMETER_DEG = (0.1065, 0.3)
+"""Diameters (deg) of the disks judged: Spencer's 4-pixel source at 0.0266°/px and Yoshida's
+0.3° disk."""
+FITTED_DISK_CD_M2 = (75.0, 220.0)
+"""Luminance (cd/m²) of the judged disk as displayed, the clamp: Spencer's peak (75 % of
+100 cd/m²) and Yoshida's ``L_dmax``."""
+_RELATIVE = 1e-3  # a value within 0.1 % of a fitted bound is inside it (rounded geometry)
+
+
+class OutsideFittedRangeWarning(UserWarning):
+    """Simulated observers are asked about stimuli unlike those their parameters were fitted on
+    (the ``FITTED_*`` constants, ``docs/observers.md``): their answers are an extrapolation."""
+
+
+def _inside(value: float, bounds: tuple[float, float]) -> bool:
+    low, high = bounds
+    return low * (1 - _RELATIVE) <= value <= high * (1 + _RELATIVE)
+
+
+def _bounds(bounds: tuple[float, float], unit: str = "") -> str:
+    low, high = bounds
+    if math.isclose(low, high):
+        return f"{low:.4g}{unit} only"
+    return f"{low:.4g}-{high:.4g}{unit}"
+
+
+def _kernel_departures(where: str, model: str, parameters, ratios: list[float]) -> list[str]:
+    """Departures of one glare method (``model`` with ``parameters``, its levels as ratios of
+    source luminance to the clamp) from what the fit saw."""
+    from protocols.common import glare_model
+
+    if model not in FITTED_LEVEL_RATIO:
+        return [f"{where}: glare model {model!r} (fitted on {', '.join(FITTED_LEVEL_RATIO)} only)"]
+    out = []
+    kernel = glare_model(model, parameters or {})
+    if model == "gaussian" and not _inside(kernel.sigma_deg, FITTED_GAUSSIAN_SIGMA_DEG):
+        out.append(
+            f"{where}: Gaussian sigma_deg = {kernel.sigma_deg:.4g}° (fitted on "
+            f"{_bounds(FITTED_GAUSSIAN_SIGMA_DEG, '°')})"
+        )
+    if model == "vos":
+        if kernel.regime not in FITTED_VOS_REGIMES:
+            out.append(
+                f"{where}: Vos regime {kernel.regime!r} (fitted on "
+                f"{', '.join(FITTED_VOS_REGIMES)} only)"
+            )
+        if kernel.age is not None:
+            out.append(f"{where}: Vos age = {kernel.age:g} years (fitted at the default age)")
+    outside = [r for r in ratios if not _inside(r, FITTED_LEVEL_RATIO[model])]
+    if outside:
+        shown = ", ".join(f"{r:.4g}" for r in outside)
+        out.append(
+            f"{where}: levels of {shown} × the clamp luminance "
+            f"(fitted on {_bounds(FITTED_LEVEL_RATIO[model], ' ×')} for {model})"
+        )
+    return out
+
+
+def fitted_range_departures(protocol, geometry: dict) -> list[str]:
+    """How a protocol's stimuli depart from those the observers were fitted on.
+
+    Parameters
+    ----------
+    protocol
+        A matching or staircase protocol (:func:`protocols.load_protocol`, or its data as a
+        dict); other paradigms show no glare to judge and have no departures.
+    geometry
+        Its stimulus set's geometry (``manifest.json``): the judged disk's diameter
+        (``disk_diameter_deg`` or ``source_diameter_deg``, deg).
+
+    Returns
+    -------
+    list of str
+        One line per departure (kernel width or model, levels, disk size, disk luminance),
+        naming the value and the fitted range; empty inside it.
+
+    Examples
+    --------
+    >>> from protocols import load_protocol
+    >>> yoshida = load_protocol("yoshida2008")
+    >>> fitted_range_departures(yoshida, {"disk_diameter_deg": 0.3})
+    []
+    >>> fitted_range_departures(yoshida, {"disk_diameter_deg": 1.0})
+    ['disk diameter 1° (fitted on 0.1065-0.3°)']
+    """
+    paradigm = getattr(protocol, "paradigm", None) or protocol["study"]["paradigm"]
+    if paradigm not in ("matching", "staircase"):
+        return []
+    glare_table = protocol["glare"]
+    out: list[str] = []
+    if paradigm == "matching":
+        clamp = glare_table["l_dmax_cd_m2"]
+        diameter = geometry["disk_diameter_deg"]
+        for method in glare_table["methods"]:
+            ratios = [level / clamp for level in method["levels_cd_m2"]]
+            where = f"method {method['name']!r}"
+            out += _kernel_departures(where, method["model"], method.get("parameters"), ratios)
+    elif paradigm == "staircase":
+        clamp = glare_table["peak_fraction"] * protocol["display"]["max_cd_m2"]
+        diameter = geometry["source_diameter_deg"]
+        ratios = [1.0 + strength for strength in glare_table["strengths"]]
+        out += _kernel_departures(
+            "glare", glare_table["model"], glare_table.get("parameters"), ratios
+        )
+    else:
+        raise ValueError(f"paradigm {paradigm!r}: expected matching or staircase")
+    if not _inside(diameter, FITTED_DISK_DIAMETER_DEG):
+        out.append(
+            f"disk diameter {diameter:.4g}° (fitted on {_bounds(FITTED_DISK_DIAMETER_DEG, '°')})"
+        )
+    if not _inside(clamp, FITTED_DISK_CD_M2):
+        out.append(
+            f"disk luminance {clamp:.4g} cd/m² (the clamp; fitted on "
+            f"{_bounds(FITTED_DISK_CD_M2, ' cd/m²')})"
+        )
+    return out
+
+
+def warn_outside_fitted_range(protocol, geometry: dict) -> list[str]:
+    """Warn once, with every departure, when a protocol's stimuli lie outside what the
+    observers were fitted on (:func:`fitted_range_departures`); return the departures.
+
+    Warns
+    -----
+    OutsideFittedRangeWarning
+        Naming each value and its fitted range.
+    """
+    departures = fitted_range_departures(protocol, geometry)
+    if departures:
+        study = getattr(protocol, "study", None) or protocol["study"]["name"]
+        warnings.warn(
+            f"the simulated observers of {study} are asked about stimuli outside those they "
+            f"were fitted on (docs/observers.md), so their answers are an extrapolation: "
+            + "; ".join(departures),
+            OutsideFittedRangeWarning,
+            stacklevel=2,
+        )
+    return departures
+
+
 @dataclass(frozen=True)
 class Percept:
     """What an observer perceives of the disk in one image.
@@ -184,6 +344,33 @@ class Percept:
         return self.brightness_cd_m2 / self.disk_cd_m2 - 1.0 if self.disk_cd_m2 > 0 else 0.0
 
 
+@functools.lru_cache(maxsize=8)
+def _ring_geometry(
+    shape: tuple[int, int], centre_px: tuple[float, float], pixel_deg: float, sectors: int
+):
+    """Pixels sorted by radius (deg) around the centre, whole and per sector: what every image
+    of one geometry shares (a study's images all do), computed once for the last few
+    geometries. Returns ``(order, sorted radius, its cumulative sum, [(sector's pixels
+    sorted, their radii)])``, the arrays read-only."""
+    rows = (np.arange(shape[0]) - centre_px[0])[:, None]
+    cols = (np.arange(shape[1]) - centre_px[1])[None, :]
+    radius = (np.sqrt(rows**2 + cols**2) * pixel_deg).ravel()
+    angle = np.arctan2(np.broadcast_to(rows, shape), np.broadcast_to(cols, shape))
+    sector = (np.floor((angle.ravel() + np.pi) / (2 * np.pi) * sectors).astype(int)) % sectors
+    order = np.argsort(radius, kind="stable")
+    sorted_radius = radius[order]
+    cumulative_radius = np.concatenate(([0.0], np.cumsum(sorted_radius)))
+    in_sector = sector[order]
+    parts = []
+    for s in range(sectors):
+        part = order[in_sector == s]
+        parts.append((part, radius[part]))
+    arrays = [order, sorted_radius, cumulative_radius, *(a for pair in parts for a in pair)]
+    for array in arrays:
+        array.flags.writeable = False
+    return order, sorted_radius, cumulative_radius, tuple(parts)
+
+
 class _Rings:
     """Mean luminance over rings around a centre, whole or in equal sectors, from pixels sorted
     by radius."""
@@ -191,20 +378,14 @@ class _Rings:
     def __init__(
         self, image: np.ndarray, centre_px: tuple[float, float], pixel_deg: float, sectors: int
     ):
-        rows = (np.arange(image.shape[0]) - centre_px[0])[:, None]
-        cols = (np.arange(image.shape[1]) - centre_px[1])[None, :]
-        radius = (np.sqrt(rows**2 + cols**2) * pixel_deg).ravel()
-        angle = np.arctan2(np.broadcast_to(rows, image.shape), np.broadcast_to(cols, image.shape))
-        sector = (np.floor((angle.ravel() + np.pi) / (2 * np.pi) * sectors).astype(int)) % sectors
+        order, self.radius, self.cumulative_radius, parts = _ring_geometry(
+            image.shape, (float(centre_px[0]), float(centre_px[1])), float(pixel_deg), sectors
+        )
         values = image.ravel()
-        order = np.argsort(radius, kind="stable")
-        self.radius = radius[order]
         self.cumulative = np.concatenate(([0.0], np.cumsum(values[order])))
-        self.cumulative_radius = np.concatenate(([0.0], np.cumsum(self.radius)))
-        self.sectors = []
-        for s in range(sectors):
-            part = order[sector[order] == s]
-            self.sectors.append((radius[part], np.concatenate(([0.0], np.cumsum(values[part])))))
+        self.sectors = [
+            (radius, np.concatenate(([0.0], np.cumsum(values[part])))) for part, radius in parts
+        ]
 
     @property
     def extent_deg(self) -> float:

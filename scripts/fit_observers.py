@@ -1,10 +1,15 @@
 """Fit the simulated observers' few parameters to Yoshida 2008 §5 / Table 1 and Spencer 1995 §4.1.
 
-Build the two stimulus sets first, then run this script from the repository's root:
+Run it from a clone of the repository:
 
-    glarelab stimuli build protocols/yoshida2008.toml --out out/stimuli/yoshida2008
-    glarelab stimuli build protocols/spencer1995.toml --out out/stimuli/spencer1995
-    python scripts/fit_observers.py
+    python scripts/fit_observers.py                    # fit, then report; writes out/observers
+    python scripts/fit_observers.py --no-fit           # report the module's fitted defaults
+
+The two stimulus sets are built on first use into the cache (``$GLARELAB_CACHE`` or
+``~/.cache/glarelab``; synthetic calibration, as ``glarelab demo`` builds them), or read from
+``--yoshida`` / ``--spencer`` folders built with ``glarelab stimuli build``. A reduced fit
+(``--glow-bands 0.16 --fit-studies 40 --max-evaluations 20 --studies 100``) runs in seconds
+and is what ``tests/test_fit_observers.py`` runs.
 
 What it does, deterministically (fixed seeds, common random numbers), in about two minutes:
 
@@ -102,6 +107,22 @@ def _manifest(folder: Path) -> dict:
     return json.loads(path.read_text())
 
 
+def _labels(protocol: dict) -> dict:
+    """The level labels of each of the protocol's methods, checked against :data:`METHODS`."""
+    labels = {m["name"]: m["labels"] for m in protocol["glare"]["methods"]}
+    if tuple(labels) != METHODS or any(len(v) != 6 for v in labels.values()):
+        raise SystemExit(
+            f"the Yoshida set must have the methods {', '.join(METHODS)} with 6 levels each; "
+            f"got {labels}"
+        )
+    return labels
+
+
+def _contexts(protocol: dict) -> list[str]:
+    """The names of the Spencer protocol's contexts (their scenes are ``scene_NAME``)."""
+    return [context["name"] for context in protocol["contexts"]]
+
+
 def _centre_of(coverage: np.ndarray) -> tuple[float, float]:
     """The disk's centre in pixel indices: the centroid of its coverage image."""
     rows, cols = np.indices(coverage.shape)
@@ -130,9 +151,10 @@ def look_at_yoshida(folder: Path, model: BrightnessModel) -> dict:
         "diameter_deg": protocol["stimulus"]["disk_deg"],
         "pixel_deg": manifest["geometry"]["pixel_deg"],
     }
+    labels = _labels(protocol)
     references = {}
     for method in METHODS:
-        for label in protocol["glare"][method]["labels"]:
+        for label in labels[method]:
             image = read_exr(folder / f"reference_{method}_{label}.exr")
             references[(method, label)] = _features(model, image, geometry)
     display = protocol["display"]
@@ -141,6 +163,7 @@ def look_at_yoshida(folder: Path, model: BrightnessModel) -> dict:
     targets = [_features(model, background + level * coverage, geometry) for level in grid]
     return {
         "protocol": protocol,
+        "labels": labels,
         "geometry": geometry,
         "references": references,
         "target_levels": grid,
@@ -165,7 +188,8 @@ def look_at_spencer(folder: Path, model: BrightnessModel) -> dict:
     cover = np.clip(disc + annulus, 0.0, 1.0)
     fractions = np.linspace(0.0, 1.0, 51)[1:]
     glare, comparison = {}, {}
-    for context in protocol["stimulus"]["context"]:
+    contexts = _contexts(protocol)
+    for context in contexts:
         scene = read_exr(folder / f"scene_{context}.exr").astype(np.float64)
         for level in range(1, len(protocol["glare"]["strengths"]) + 1):
             image = read_exr(folder / f"glare_{context}_{level:02d}.exr")
@@ -178,6 +202,7 @@ def look_at_spencer(folder: Path, model: BrightnessModel) -> dict:
         ]
     return {
         "protocol": protocol,
+        "contexts": contexts,
         "geometry": geometry,
         "glare": glare,
         "fractions": fractions,
@@ -292,8 +317,7 @@ class YoshidaSimulation:
         self.low, self.high = display["black_cd_m2"], display["max_cd_m2"]
         self.fine = seen["protocol"]["trials"]["fine_step_cd_m2"]
         self.references = [
-            [seen["references"][(m, seen["protocol"]["glare"][m]["labels"][i])] for m in METHODS]
-            for i in range(6)
+            [seen["references"][(m, seen["labels"][m][i])] for m in METHODS] for i in range(6)
         ]
 
     def run(self, theta: dict) -> dict:
@@ -353,7 +377,7 @@ def yoshida_loss(result: dict, seen: dict) -> tuple[float, dict]:
 
 
 def _q_measure(seen: dict, model: BrightnessModel, question: str, method: str) -> np.ndarray:
-    labels = seen["protocol"]["glare"][method]["labels"]
+    labels = seen["labels"][method]
     features = [seen["references"][(method, label)] for label in labels]
     if question == "q1_glow":
         return np.array([f["glow"] for f in features])
@@ -407,7 +431,7 @@ def table1_expected(seen: dict, model: BrightnessModel, criteria: dict) -> dict:
 def spencer_brightness(seen: dict, model: BrightnessModel) -> tuple[np.ndarray, np.ndarray]:
     """Glare images ``(context, level)`` and comparisons ``(context, fraction)``: brightness
     and disk luminance, stacked as ``[..., 0]`` brightness and ``[..., 1]`` disk."""
-    contexts = seen["protocol"]["stimulus"]["context"]
+    contexts = seen["contexts"]
     levels = len(seen["protocol"]["glare"]["strengths"])
     glare = np.array(
         [
@@ -516,8 +540,17 @@ def _unpack(x: np.ndarray, band: float) -> dict:
     return dict(zip(FITTED, np.exp(x).tolist(), strict=True), glow_band_deg=band)
 
 
-def fit_band(yoshida: dict, spencer: dict, band: float, studies: int, seed: int):
-    """Nelder–Mead over :data:`FITTED` for one glow band (images already looked at with it)."""
+def fit_band(
+    yoshida: dict,
+    spencer: dict,
+    band: float,
+    studies: int,
+    seed: int,
+    *,
+    max_evaluations: int = 800,
+):
+    """Nelder–Mead over :data:`FITTED` for one glow band (images already looked at with it),
+    from :data:`START` and from it with half its ``G_50``; the better of the two."""
     simulation = YoshidaSimulation(yoshida, studies, seed)
 
     def loss(x):
@@ -535,25 +568,40 @@ def fit_band(yoshida: dict, spencer: dict, band: float, studies: int, seed: int)
             loss,
             _pack(start),
             method="Nelder-Mead",
-            options={"maxiter": 800, "xatol": 1e-3, "fatol": 1e-5},
+            options={"maxiter": max_evaluations, "xatol": 1e-3, "fatol": 1e-5},
         )
         if best is None or result.fun < best.fun:
             best = result
     theta = _unpack(best.x, band)
     _, parts = yoshida_loss(simulation.run(theta), yoshida)
-    return theta, {"loss": float(best.fun), "parts": parts, "evaluations": int(best.nfev)}
+    return theta, {
+        "loss": float(best.fun),
+        "loss_at_start": float(loss(_pack(START))),
+        "parts": parts,
+        "evaluations": int(best.nfev),
+    }
 
 
-def fit(yoshida_dir: Path, spencer_dir: Path, studies: int, seed: int) -> tuple[dict, dict]:
-    """The glow band on :data:`GLOW_BANDS_DEG` (each band changes what the model sees, so the
-    images are looked at again), the other parameters by Nelder–Mead within each band."""
+def fit(
+    yoshida_dir: Path,
+    spencer_dir: Path,
+    studies: int,
+    seed: int,
+    *,
+    bands: tuple[float, ...] = GLOW_BANDS_DEG,
+    max_evaluations: int = 800,
+) -> tuple[dict, dict]:
+    """The glow band on ``bands`` (each band changes what the model sees, so the images are
+    looked at again), the other parameters by Nelder–Mead within each band."""
     started = time.time()
     results = []
-    for band in GLOW_BANDS_DEG:
+    for band in bands:
         model = BrightnessModel(glow_band_deg=band)
         yoshida = look_at_yoshida(yoshida_dir, model)
         spencer = look_at_spencer(spencer_dir, model)
-        theta, info = fit_band(yoshida, spencer, band, studies, seed)
+        theta, info = fit_band(
+            yoshida, spencer, band, studies, seed, max_evaluations=max_evaluations
+        )
         results.append((info["loss"], band, theta, info))
         print(
             f"  glow band {band:.2f} deg: loss {info['loss']:.3f} ({time.time() - started:.0f} s)",
@@ -581,7 +629,7 @@ def similarity_letters(result: dict, seen: dict, studies: int) -> dict:
     found: dict = {m: {} for m in METHODS}
     for k in range(studies):
         for j, method in enumerate(METHODS):
-            labels = seen["protocol"]["glare"][method]["labels"]
+            labels = seen["labels"][method]
             rows = [
                 {"participant": s, "level": labels[i], "match": result["match"][k, s, i, j]}
                 for s in range(YOSHIDA_OBSERVERS)
@@ -597,7 +645,14 @@ def similarity_letters(result: dict, seen: dict, studies: int) -> dict:
 
 
 def report(
-    yoshida: dict, spencer: dict, theta: dict, criteria: dict, studies: int, seed: int
+    yoshida: dict,
+    spencer: dict,
+    theta: dict,
+    criteria: dict,
+    studies: int,
+    seed: int,
+    *,
+    similarity_studies: int = 200,
 ) -> dict:
     noise = ObserverNoise(
         gain_sd=theta["gain_sd"],
@@ -668,9 +723,9 @@ def report(
             for (m, label), f in yoshida["references"].items()
             for f in [{k: v for k, v in f.items() if k != "diameter_deg"}]
         },
-        "similarity_groups": similarity_letters(result, yoshida, min(studies, 200)),
+        "similarity_groups": similarity_letters(result, yoshida, min(studies, similarity_studies)),
         "spencer": {
-            "contexts": spencer["protocol"]["stimulus"]["context"],
+            "contexts": spencer["contexts"],
             "strengths": spencer["protocol"]["glare"]["strengths"],
             "match_mean": spencer_match.mean((0, 1)).T.tolist(),
             "match_sem": (spencer_match.std(1, ddof=1) / math.sqrt(SPENCER_OBSERVERS))
@@ -682,15 +737,13 @@ def report(
             "context_significant_rate_by_block_sd": with_blocks,
             "studies": int(spencer_match.shape[0]),
             "features": {f"{c} {k}": f for (c, k), f in spencer["glare"].items()},
-            "comparison_full": {
-                c: spencer["comparison"][c][-1] for c in spencer["protocol"]["stimulus"]["context"]
-            },
+            "comparison_full": {c: spencer["comparison"][c][-1] for c in spencer["contexts"]},
         },
     }
 
 
 def figures(out: Path, summary: dict, yoshida: dict) -> None:
-    labels = {m: yoshida["protocol"]["glare"][m]["labels"] for m in METHODS}
+    labels = {m: yoshida["labels"][m] for m in METHODS}
     figure, axis = plt.subplots(figsize=(5.5, 3.8))
     for method, marker in zip(METHODS, "os", strict=True):
         axis.errorbar(
@@ -707,7 +760,7 @@ def figures(out: Path, summary: dict, yoshida: dict) -> None:
     axis.set_xlabel("level of L_disk")
     axis.set_ylabel("boost over 220 cd/m² (%)")
     axis.legend(fontsize=7)
-    (out / "figure5_simulated_boost.png").write_bytes(png(figure))
+    _write(out / "figure5_simulated_boost.png", png(figure))
 
     figure, axes = plt.subplots(1, 5, figsize=(13, 2.8))
     for axis, key in zip(axes, YOSHIDA_F, strict=True):
@@ -725,7 +778,7 @@ def figures(out: Path, summary: dict, yoshida: dict) -> None:
         axis.set_xticks([])
         axis.set_title(key.replace("_", " "), fontsize=9)
     axes[0].legend(fontsize=7)
-    (out / "yoshida_f_values.png").write_bytes(png(figure))
+    _write(out / "yoshida_f_values.png", png(figure))
 
     s = summary["spencer"]
     figure, axis = plt.subplots(figsize=(5.5, 3.8))
@@ -742,7 +795,7 @@ def figures(out: Path, summary: dict, yoshida: dict) -> None:
     axis.set_xlabel("glare level (strength rises)")
     axis.set_ylabel("matched disc intensity (fraction of max)")
     axis.legend(fontsize=8)
-    (out / "figure13_simulated.png").write_bytes(png(figure))
+    _write(out / "figure13_simulated.png", png(figure))
 
 
 def markdown(summary: dict, yoshida: dict) -> str:
@@ -778,7 +831,7 @@ def markdown(summary: dict, yoshida: dict) -> str:
             f"{'' if rate is None else f'{rate:.2f}'} |"
         )
     lines += ["", "| level | Gaussian boost % | Vos boost % |", "|---|---|---|"]
-    labels = {m: yoshida["protocol"]["glare"][m]["labels"] for m in METHODS}
+    labels = {m: yoshida["labels"][m] for m in METHODS}
     for i in range(6):
         lines.append(
             f"| {labels['gaussian'][i]}/{labels['vos'][i]} | "
@@ -804,19 +857,81 @@ def markdown(summary: dict, yoshida: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _stimuli(folder: Path | None, study: str) -> Path:
+    """The given set's folder, or the study's set built once into the cache with the synthetic
+    calibration ``glarelab demo`` uses (:func:`stimuli.stimulus_set.cached_stimulus_set`)."""
+    if folder is not None:
+        return folder
+    from protocols import load_protocol
+    from stimuli.stimulus_set import cached_stimulus_set
+
+    print(f"the {study} stimulus set (built once into the cache) ...", flush=True)
+    return cached_stimulus_set(load_protocol(ROOT / "protocols" / f"{study}.toml"))
+
+
+def _write(path: Path, data: bytes) -> None:
+    """Write to a temporary name and rename when complete."""
+    partial = path.with_name(f".{path.name}.partial")
+    partial.write_bytes(data)
+    partial.replace(path)
+
+
+def _positive(text: str) -> int:
+    value = int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be an integer >= 1; got {text}")
+    return value
+
+
+def _band(text: str) -> float:
+    value = float(text)
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(
+            f"a glow band must be a number of degrees > 0; got {text}"
+        )
+    return value
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--yoshida", type=Path, default=Path("out/stimuli/yoshida2008"))
-    parser.add_argument("--spencer", type=Path, default=Path("out/stimuli/spencer1995"))
+    parser.add_argument(
+        "--yoshida", type=Path, default=None, help="a built Yoshida set (default: the cache's)"
+    )
+    parser.add_argument(
+        "--spencer", type=Path, default=None, help="a built Spencer set (default: the cache's)"
+    )
     parser.add_argument("--out", type=Path, default=Path("out/observers"))
-    parser.add_argument("--fit-studies", type=int, default=300, help="studies per evaluation")
-    parser.add_argument("--studies", type=int, default=2000, help="studies in the report")
+    parser.add_argument(
+        "--fit-studies", type=_positive, default=300, help="studies per evaluation"
+    )
+    parser.add_argument("--studies", type=_positive, default=2000, help="studies in the report")
+    parser.add_argument(
+        "--similarity-studies",
+        type=_positive,
+        default=200,
+        help="studies whose Figure 6 similarity groups are counted",
+    )
+    parser.add_argument(
+        "--glow-bands",
+        type=_band,
+        nargs="+",
+        default=list(GLOW_BANDS_DEG),
+        help="the grid of glow bands (deg) the fit tries",
+    )
+    parser.add_argument(
+        "--max-evaluations",
+        type=_positive,
+        default=800,
+        help="Nelder-Mead iterations per start and band",
+    )
     parser.add_argument("--seed", type=int, default=2008)
     parser.add_argument(
         "--no-fit", action="store_true", help="report the module's defaults without fitting"
     )
     args = parser.parse_args(argv)
     started = time.time()
+    yoshida_dir = _stimuli(args.yoshida, "yoshida2008")
+    spencer_dir = _stimuli(args.spencer, "spencer1995")
     if args.no_fit:
         defaults, noise = BrightnessModel(), ObserverNoise()
         theta = {
@@ -830,26 +945,42 @@ def main(argv=None) -> int:
             f"({args.fit_studies} simulated studies per evaluation) ...",
             flush=True,
         )
-        theta, info = fit(args.yoshida, args.spencer, args.fit_studies, args.seed)
+        theta, info = fit(
+            yoshida_dir,
+            spencer_dir,
+            args.fit_studies,
+            args.seed,
+            bands=tuple(args.glow_bands),
+            max_evaluations=args.max_evaluations,
+        )
     print("looking at the images with the fitted glow band ...", flush=True)
     model = BrightnessModel(glow_band_deg=theta["glow_band_deg"])
-    yoshida = look_at_yoshida(args.yoshida, model)
-    spencer = look_at_spencer(args.spencer, model)
+    yoshida = look_at_yoshida(yoshida_dir, model)
+    spencer = look_at_spencer(spencer_dir, model)
     criteria = fit_table1(yoshida, _model(theta))
     print("reporting with fresh seeds ...", flush=True)
-    summary = report(yoshida, spencer, theta, criteria, args.studies, args.seed + 1000)
+    summary = report(
+        yoshida,
+        spencer,
+        theta,
+        criteria,
+        args.studies,
+        args.seed + 1000,
+        similarity_studies=args.similarity_studies,
+    )
     summary["fit"] = info
     summary["seconds"] = time.time() - started
     args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "fit.json").write_text(json.dumps(summary, indent=1, default=float))
-    (args.out / "report.md").write_text(markdown(summary, yoshida))
+    _write(args.out / "fit.json", json.dumps(summary, indent=1, default=float).encode())
+    text = markdown(summary, yoshida)
+    _write(args.out / "report.md", text.encode())
     figures(args.out, summary, yoshida)
     print(
         json.dumps(
             {"theta": theta, "criteria": criteria, "block_sd": summary["block_sd"]}, indent=1
         )
     )
-    print((args.out / "report.md").read_text())
+    print(text)
     print(f"done in {summary['seconds']:.0f} s; wrote {args.out}")
     return 0
 
