@@ -740,7 +740,7 @@ def run_bench(
     startup_rows = []
     if startup:
         log("start-up: imports and processes against import numpy, scipy.fft")
-        startup_rows = startup_bench(repeats=max(repeats, 3), log=log)
+        startup_rows = startup_bench(repeats=repeats, log=log)
     write_plots(rows, out)
     for file, table in (
         ("bench.csv", rows),
