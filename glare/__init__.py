@@ -13,9 +13,9 @@ Night vision around the glare (Spencer 1995 §5, Luidolt 2020 ch. 5): temporal a
 (:mod:`glare.scotopic`), and all of them with glare in Luidolt's order, :func:`render_night`.
 """
 
-from . import acuity, adaptation, apertures, eye, night, scotopic, vos, wave
-from .acuity import acuity_blur, blur_sigma_deg
-from .adaptation import adaptation_luminance, frame_luminance
+import importlib
+
+from . import eye, vos
 from .base import TailBound
 from .digitise import Kernel, kernel_shape_for
 from .display import Display
@@ -25,19 +25,44 @@ from .models import (
     GLARE_MODELS,
     GaussianGlare,
     GlareModel,
-    HybridGlare,
     VosGlare,
     digitise_kernel,
     kernel,
     make_model,
 )
-from .night import NightResult, render_night
 from .plan import GlarePlan, plan_glare
 from .render import L_DMAX_YOSHIDA2008_CD_M2, add_glare, render_glare, render_planned
 from .renderer import GlareRenderer, GlareResult, PlannedGlare
-from .scotopic import scotopic_colour
 from .spectral import HaloSpectrum, Spectrum
-from .wave import WaveOpticsGlare
+
+# Imported on first use: these need colour-science (which imports matplotlib) or SciPy's
+# interpolation and statistics, a second or more that a render of the Vos or the Gaussian
+# kernel never needs.
+_LAZY_MODULES = ("acuity", "adaptation", "apertures", "cache", "night", "scotopic", "wave")
+_LAZY_NAMES = {
+    "acuity_blur": "acuity",
+    "blur_sigma_deg": "acuity",
+    "adaptation_luminance": "adaptation",
+    "frame_luminance": "adaptation",
+    "NightResult": "night",
+    "render_night": "night",
+    "scotopic_colour": "scotopic",
+    "WaveOpticsGlare": "wave",
+    "HybridGlare": "hybrid",
+}
+
+
+def __getattr__(name: str):
+    if name in _LAZY_MODULES:
+        return importlib.import_module(f".{name}", __name__)
+    if name in _LAZY_NAMES:
+        return getattr(importlib.import_module(f".{_LAZY_NAMES[name]}", __name__), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))
+
 
 __all__ = [
     "GLARE_MODELS",
@@ -64,6 +89,7 @@ __all__ = [
     "add_glare",
     "apertures",
     "blur_sigma_deg",
+    "cache",
     "digitise_kernel",
     "eye",
     "flare_line_pattern",

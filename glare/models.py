@@ -9,14 +9,15 @@ lives in a module named for its paper (:mod:`glare.yoshida2008`, :mod:`glare.spe
 
 from __future__ import annotations
 
+import importlib
+from collections.abc import Iterator, Mapping
+
 import numpy as np
 
 from ._validation import check_choice
 from .base import GlareModel, TailBound, as_model
 from .digitise import Kernel
-from .hybrid import HybridGlare
 from .spencer1995 import HALO_MAX_SPACING_DEG, PUPIL_RANGE_MM, TAIL_MARGIN, VosGlare
-from .wave import WaveOpticsGlare
 from .yoshida2008 import SIGMA_DEG_YOSHIDA2008, GaussianGlare
 
 __all__ = [
@@ -27,25 +28,53 @@ __all__ = [
     "TAIL_MARGIN",
     "GaussianGlare",
     "GlareModel",
-    "HybridGlare",
     "TailBound",
     "VosGlare",
-    "WaveOpticsGlare",
     "digitise_kernel",
     "kernel",
     "make_model",
 ]
 
 
-GLARE_MODELS: dict[str, type] = {
-    "Yoshida2008": GaussianGlare,
-    "gaussian": GaussianGlare,
-    "Spencer1995": VosGlare,
-    "vos": VosGlare,
-    "Kakimoto2004": WaveOpticsGlare,
-    "wave": WaveOpticsGlare,
-    "hybrid": HybridGlare,
-}
+class _Registry(Mapping):
+    """Model classes by name, each module imported the first time its class is asked for
+    (the wave-optics model needs colour-science, whose import takes a second or more)."""
+
+    def __init__(self, entries: dict[str, str]) -> None:
+        self._entries = entries
+
+    def __getitem__(self, name: str) -> type:
+        module, _, attribute = self._entries[name].rpartition(".")
+        return getattr(importlib.import_module(module, __package__), attribute)
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._entries)
+
+    def __len__(self) -> int:
+        return len(self._entries)
+
+    def __repr__(self) -> str:
+        return f"GLARE_MODELS({', '.join(self._entries)})"
+
+
+GLARE_MODELS: Mapping[str, type] = _Registry(
+    {
+        "Yoshida2008": ".yoshida2008.GaussianGlare",
+        "gaussian": ".yoshida2008.GaussianGlare",
+        "Spencer1995": ".spencer1995.VosGlare",
+        "vos": ".spencer1995.VosGlare",
+        "Kakimoto2004": ".wave.WaveOpticsGlare",
+        "wave": ".wave.WaveOpticsGlare",
+        "hybrid": ".hybrid.HybridGlare",
+    }
+)
+_LAZY = {"WaveOpticsGlare": ".wave", "HybridGlare": ".hybrid"}  # importable, imported on use
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        return getattr(importlib.import_module(_LAZY[name], __package__), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def make_model(method: str, **parameters) -> GlareModel:
@@ -72,9 +101,18 @@ def _resolve(model: GlareModel | str) -> GlareModel:
 
 
 def digitise_kernel(
-    model: GlareModel | str, pixel_deg: float, shape: tuple[int, int], *, colour: bool = False
+    model: GlareModel | str,
+    pixel_deg: float,
+    shape: tuple[int, int],
+    *,
+    colour: bool = False,
+    cache=None,
 ) -> Kernel:
     """Digitise a glare model into a :class:`~glare.digitise.Kernel` with its energy account.
+
+    ``cache``: ``None`` (default) or ``True``, the kernel is read from (or kept in) the user's
+    kernel cache (:mod:`glare.cache`, off when ``GLARELAB_NO_CACHE`` is set); ``False``,
+    always digitised; a :class:`glare.cache.KernelCache` or a folder, that cache.
 
     Examples
     --------
@@ -82,7 +120,13 @@ def digitise_kernel(
     >>> k.values.shape, round(float(k.energy_outside), 3)
     ((21, 21), 0.094)
     """
-    return _resolve(model).kernel(pixel_deg, shape, colour=colour)
+    from .cache import resolve_cache
+
+    resolved = _resolve(model)
+    chosen = resolve_cache(cache)
+    if chosen is None:
+        return resolved.kernel(pixel_deg, shape, colour=colour)
+    return chosen.kernel(resolved, pixel_deg, shape, colour=colour)
 
 
 def kernel(model: GlareModel | str, pixel_deg: float, shape: tuple[int, int]) -> np.ndarray:

@@ -40,6 +40,7 @@ def render_glare(
     precision: Literal["float64", "float32"] = "float64",
     kernel_shape: tuple[int, int] | None = None,
     kernel: Kernel | None = None,
+    cache=None,
 ) -> GlareResult:
     """Add glare to a linear luminance image and account for every bit of energy.
 
@@ -67,6 +68,9 @@ def render_glare(
     kernel
         A kernel already digitised by ``model`` for this ``pixel_deg`` (and colour), to reuse
         across images; its ``pixel_deg`` must match. Default None: digitise one.
+    cache
+        Where digitised kernels are kept between runs: ``None`` (default), the user's kernel
+        cache (:mod:`glare.cache`); ``False``, none; a :class:`glare.cache.KernelCache`.
 
     Returns
     -------
@@ -112,6 +116,7 @@ def render_glare(
         tolerance_codes=0,
         kernel_shape=kernel_shape,
         kernel=kernel,
+        cache=cache,
     )
     return renderer.render(image)
 
@@ -127,6 +132,7 @@ def add_glare(
     kernel_shape: tuple[int, int] | None = None,
     tolerance_codes: float | None = 0.5,
     display=None,
+    cache=None,
 ) -> np.ndarray:
     """Add glare to a linear luminance image, doing only the work the scene and display need.
 
@@ -145,6 +151,9 @@ def add_glare(
     display
         The display the error is counted on: a calibration, a :class:`glare.plan.Display`,
         or ``None`` for a 10-bit, gamma-2.2, 1000:1 display whose white is ``l_dmax_cd_m2``.
+    cache
+        As for :func:`render_glare`: the second call with the same model, pixel size and
+        image shape, in this process or another, reads its kernels from the cache.
 
     Returns
     -------
@@ -194,6 +203,7 @@ def add_glare(
         tolerance_codes=tolerance_codes if kernel_shape is None else 0,
         display=display,
         kernel_shape=kernel_shape,
+        cache=cache,
     )
     return renderer.render(image).image
 
@@ -209,6 +219,7 @@ def render_planned(
     tolerance_codes: float = 0.5,
     display=None,
     log=None,
+    cache=None,
 ) -> GlareResult:
     """Add glare as :func:`glare.plan_glare` plans it, and bound the error reached: the
     one-call form of :meth:`GlareRenderer.render`.
@@ -221,6 +232,8 @@ def render_planned(
         ``'float64'`` or ``'float32'``, as for :func:`glare.render_glare`.
     log
         Called with one line per step, or ``None``.
+    cache
+        As for :func:`glare.render_glare`.
 
     Returns
     -------
@@ -251,5 +264,6 @@ def render_planned(
         tolerance_codes=tolerance_codes,
         display=display,
         log=log,
+        cache=cache,
     )
     return renderer.render(image)

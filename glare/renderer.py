@@ -30,6 +30,7 @@ from ._convolve import (
 )
 from ._validation import check_choice, check_image, check_positive
 from .base import GlareModel, TailBound
+from .cache import resolve_cache
 from .compose import METHODS, compose
 from .digitise import Kernel, check_kernel_shape, kernel_shape_for
 from .display import CodeBound, display_lut
@@ -90,6 +91,10 @@ class GlareRenderer:
         fits.
     log
         Called with one line per step, or ``None``.
+    cache
+        Where digitised kernels are kept between runs (:mod:`glare.cache`): ``None``
+        (default) or ``True``, the user's kernel cache (off when ``GLARELAB_NO_CACHE`` is
+        set); ``False``, none; a :class:`glare.cache.KernelCache` or a folder.
 
     Raises
     ------
@@ -124,8 +129,10 @@ class GlareRenderer:
         kernel: Kernel | None = None,
         paths: tuple[str, ...] = PATHS,
         log=None,
+        cache=None,
     ) -> None:
         self.model = _resolve(model)
+        self.cache = resolve_cache(cache)
         self.pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
         self.l_dmax = check_positive("l_dmax_cd_m2", l_dmax_cd_m2, unit="cd/m²")
         check_choice("method", method, METHODS)
@@ -181,11 +188,24 @@ class GlareRenderer:
                 return replace(self._given, values=self._given.values[..., 0])
             return self._given
         if colour not in self._kernels:
-            self.say(f"digitising a {self.kernel_shape[0]} × {self.kernel_shape[1]} kernel")
-            self._kernels[colour] = self.model.kernel(
-                self.pixel_deg, self.kernel_shape, colour=colour
-            )
+            self._kernels[colour] = self._digitised(self.pixel_deg, self.kernel_shape, colour)
         return self._kernels[colour]
+
+    def _digitised(
+        self, pixel_deg: float, shape: tuple[int, int], colour: bool, *, say: bool = True
+    ) -> Kernel:
+        """The model's kernel, from the kernel cache when it holds it (``say``: one log line
+        saying which)."""
+        log = self.say if say else None
+
+        def build() -> Kernel:
+            if log is not None:
+                log(f"digitising a {shape[0]} × {shape[1]} kernel")
+            return self.model.kernel(pixel_deg, shape, colour=colour)
+
+        if self.cache is None:
+            return build()
+        return self.cache.kernel(self.model, pixel_deg, shape, colour=colour, build=build, log=log)
 
     def kernel_peak(self, colour: bool = False) -> float:
         """The reference kernel's largest value (found once)."""
@@ -213,9 +233,8 @@ class GlareRenderer:
         key = (factor, colour)
         if key not in self._coarse:
             shape = tuple(2 * (-(-h // factor) + FOOTPRINT_NODES) + 1 for h in self.kernel_half)
-            self._coarse[key] = self.model.kernel(
-                self.pixel_deg * factor, shape, colour=colour
-            ).values
+            coarse = self._digitised(self.pixel_deg * factor, shape, colour, say=False)
+            self._coarse[key] = coarse.values
         return self._coarse[key]
 
     def multires(self, factor: int, split_px: int, colour: bool) -> MultiresKernels:

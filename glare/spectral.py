@@ -30,7 +30,6 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Literal
 
-import colour
 import numpy as np
 
 from ._validation import check_choice, check_in_range, check_positive_int
@@ -48,6 +47,7 @@ HALO_WAVELENGTHS_NM = (400.0, 700.0)  # Spencer 1995 §3.2: 50 wavelengths from 
 HALO_TABLE_MAX_DEG = 8.0
 _HALO_TABLE_STEP_DEG = 0.0005
 _OBSERVER = "CIE 1931 2 Degree Standard Observer"
+_DEFAULT_NAMES = ("ITU-R BT.709", "D65")  # a colourspace and an illuminant of colour-science
 
 
 @dataclass(frozen=True)
@@ -84,8 +84,11 @@ class Spectrum:
         low, high = self.wavelength_range_nm
         check_in_range("wavelength_range_nm[0]", low, 380.0, 780.0, unit="nm")
         check_in_range("wavelength_range_nm[1]", high, low, 780.0, unit="nm", low_inclusive=False)
-        check_choice("colourspace", self.colourspace, sorted(colour.RGB_COLOURSPACES))
-        check_choice("illuminant", self.illuminant, sorted(colour.SDS_ILLUMINANTS))
+        if (self.colourspace, self.illuminant) != _DEFAULT_NAMES:  # valid names, colour unread
+            import colour  # imported when needed: it imports matplotlib (about 1.5 s)
+
+            check_choice("colourspace", self.colourspace, sorted(colour.RGB_COLOURSPACES))
+            check_choice("illuminant", self.illuminant, sorted(colour.SDS_ILLUMINANTS))
 
     @property
     def wavelengths_nm(self) -> np.ndarray:
@@ -93,6 +96,8 @@ class Spectrum:
 
     def channel_weights(self, channels: Literal["Y", "XYZ", "RGB"]) -> np.ndarray:
         """Weights ``(C, n_wavelengths)`` turning ``f3(θ, λ)`` into channel profiles."""
+        import colour
+
         wavelengths = self.wavelengths_nm
         cmfs = np.asarray(colour.MSDS_CMFS[_OBSERVER][wavelengths])  # (n, 3): x̄, ȳ, z̄
         spectrum = np.asarray(colour.SDS_ILLUMINANTS[self.illuminant][wavelengths])

@@ -16,9 +16,10 @@ from .base import GlareModel, TailBound
 from .digitise import (
     Kernel,
     check_kernel_shape,
-    digitise_radial,
+    digitise_radial_quadrant,
     gaussian_pixel_energies,
     mirror_quadrant,
+    quadrant_sum,
 )
 from .eye import HALO_PUPIL_MM, Regime, regime
 from .flare import CORONA_LINES, HALO_LINES, flare_line_pattern
@@ -218,14 +219,11 @@ class VosGlare(GlareModel):
             "center_radius_px": self.center_radius_px,
         }
 
-    def parts(self, pixel_deg: float, shape: tuple[int, int], *, colour: bool = False) -> dict:
-        """The digitised parts of the PSF, each with its energy outside the support.
-
-        Returns a dict with ``weights`` ``(w0, w1, w2, w3)``; ``core`` (``f0``, unit volume,
-        ``(KH, KW)``) and ``core_outside``; ``scatter`` (``w1 f1 + w2 f2``, flare lines
-        applied, ``(KH, KW)``) and ``scatter_outside``; ``halo`` (``w3 f3``, ``(C, KH, KW)``)
-        and ``halo_outside`` ``(C,)``; and ``errors``, ``(energy, quadrature error)`` pairs.
-        """
+    def _quadrant_parts(
+        self, pixel_deg: float, shape: tuple[int, int], *, colour: bool, symmetric: bool = True
+    ) -> dict:
+        """The smooth parts of the PSF (no flare lines) as quadrants ``i, j >= 0``: each is
+        symmetric in both axes, so the kernel is unfolded once, after they are added."""
         pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
         shape = check_kernel_shape(shape)
         w0, w1, w2, w3 = self.weights
@@ -234,52 +232,75 @@ class VosGlare(GlareModel):
         # f0: exact, separable (Spencer: a delta when narrower than a pixel)
         gy = gaussian_pixel_energies(vos.F0_WIDTH_DEG, pixel_deg, shape[0] // 2)
         gx = gaussian_pixel_energies(vos.F0_WIDTH_DEG, pixel_deg, shape[1] // 2)
-        core = mirror_quadrant(np.outer(gy, gx))
+        core = np.outer(gy, gx)
 
         # f1, f2: the corona, one sampling pass for both
-        (k1, k2), inside, total, error = digitise_radial([vos.f1, vos.f2], **settings)
-        scatter = w1 * k1 / total[0] + w2 * k2 / total[1]
+        (k1, k2), inside, total, error = digitise_radial_quadrant(
+            [vos.f1, vos.f2], **settings, symmetric=symmetric
+        )
+        scatter = k1
+        scatter *= w1 / total[0]
+        scatter += (w2 / total[1]) * k2
+        del k1, k2
         scatter_outside = w1 * (1 - inside[0] / total[0]) + w2 * (1 - inside[1] / total[1])
         # each part's quadrature error, weighted by the energy it holds inside the support
         held = (w1 * inside[0] / total[0], w2 * inside[1] / total[1])
         errors = [(held[0], abs(float(error[0]))), (held[1], abs(float(error[1])))]
-        rng_corona, rng_halo = np.random.default_rng(self.seed).spawn(2)
-        if self.flare_lines:
-            scatter = _streak(scatter, rng_corona, self.corona_lines)
 
         n_channels = 3 if colour else 1
-        halo = np.zeros((n_channels, *shape))
+        halo = None
         halo_outside = np.zeros(n_channels)
         if w3 > 0:
             channels = "RGB" if colour else "Y"
             profiles = halo_profiles(
                 channels, self.halo_spectrum, wavelength_nm=self.wavelength_nm
             )
-            pieces, inside, total, error = digitise_radial(
+            pieces, inside, total, error = digitise_radial_quadrant(
                 profiles,
                 **settings,
                 max_spacing_deg=self.halo_spacing_deg,
                 breakpoints=(2.0, 3.0, 4.0),
                 support_deg=HALO_TABLE_MAX_DEG,
+                symmetric=symmetric,
             )
             halo = w3 * pieces / total[:, None, None]
             halo_outside = w3 * (1 - inside / total)
             errors += [
                 (w3 * i / t, abs(float(e))) for i, t, e in zip(inside, total, error, strict=True)
             ]
-            if self.flare_lines:
-                pattern = flare_line_pattern(shape, rng=rng_halo, n_lines=self.halo_lines)
-                halo = np.stack([_rescaled(h, h * pattern) for h in halo])
         return {
             "weights": (w0, w1, w2, w3),
             "core": core,
-            "core_outside": 1.0 - core.sum(),
+            "core_outside": 1.0 - float(quadrant_sum(core)),
             "scatter": scatter,
             "scatter_outside": scatter_outside,
             "halo": halo,
             "halo_outside": halo_outside,
             "errors": errors,
         }
+
+    def parts(self, pixel_deg: float, shape: tuple[int, int], *, colour: bool = False) -> dict:
+        """The digitised parts of the PSF, each with its energy outside the support.
+
+        Returns a dict with ``weights`` ``(w0, w1, w2, w3)``; ``core`` (``f0``, unit volume,
+        ``(KH, KW)``) and ``core_outside``; ``scatter`` (``w1 f1 + w2 f2``, flare lines
+        applied, ``(KH, KW)``) and ``scatter_outside``; ``halo`` (``w3 f3``, ``(C, KH, KW)``)
+        and ``halo_outside`` ``(C,)``; and ``errors``, ``(energy, quadrature error)`` pairs.
+        """
+        p = self._quadrant_parts(pixel_deg, shape, colour=colour)
+        shape = check_kernel_shape(shape)
+        scatter = mirror_quadrant(p["scatter"])
+        rng_corona, rng_halo = np.random.default_rng(self.seed).spawn(2)
+        if self.flare_lines:
+            scatter = _streak(scatter, rng_corona, self.corona_lines)
+        if p["halo"] is None:
+            halo = np.zeros((len(p["halo_outside"]), *shape))
+        else:
+            halo = np.stack([mirror_quadrant(h) for h in p["halo"]])
+            if self.flare_lines:
+                pattern = flare_line_pattern(shape, rng=rng_halo, n_lines=self.halo_lines)
+                halo = np.stack([_rescaled(h, h * pattern) for h in halo])
+        return {**p, "core": mirror_quadrant(p["core"]), "scatter": scatter, "halo": halo}
 
     def description(self, colour: bool) -> dict:
         return {
@@ -303,14 +324,38 @@ class VosGlare(GlareModel):
             ``False``: a luminance kernel ``(KH, KW)``. ``True``: ``(KH, KW, 3)`` in the linear
             RGB of ``halo_spectrum.colourspace``; only the halo differs between channels.
         """
-        p = self.parts(pixel_deg, shape, colour=colour)
+        return self._kernel(pixel_deg, shape, colour=colour)
+
+    def _kernel(
+        self, pixel_deg: float, shape: tuple[int, int], *, colour: bool, symmetric: bool = True
+    ) -> Kernel:
+        if self.flare_lines:  # the streaks break the symmetry: the parts are unfolded first
+            p = self.parts(pixel_deg, shape, colour=colour)
+            w0 = p["weights"][0]
+            return _combine(
+                w0 * p["core"],
+                w0 * p["core_outside"],
+                p,
+                pixel_deg=pixel_deg,
+                colour=colour,
+                description=self.description(colour),
+            )
+        p = self._quadrant_parts(pixel_deg, shape, colour=colour, symmetric=symmetric)
         w0 = p["weights"][0]
-        return _combine(
-            w0 * p["core"],
-            w0 * p["core_outside"],
-            p,
+        quadrant = p["scatter"]
+        quadrant += w0 * p["core"]
+        if p["halo"] is not None:
+            quadrant = quadrant[None] + p["halo"]  # (C, h, w)
+            quadrant = np.moveaxis(quadrant, 0, -1) if colour else quadrant[0]
+        elif colour:
+            quadrant = np.repeat(quadrant[..., None], 3, axis=-1)
+        energy_outside = w0 * p["core_outside"] + p["scatter_outside"] + p["halo_outside"]
+        errors = p["errors"]
+        return Kernel(
+            values=mirror_quadrant(quadrant),
             pixel_deg=pixel_deg,
-            colour=colour,
+            energy_outside=float(energy_outside[0]) if not colour else energy_outside.copy(),
+            quadrature_error=sum(w * e for w, e in errors) / sum(w for w, _ in errors),
             description=self.description(colour),
         )
 

@@ -121,9 +121,10 @@ class GaussianGlare(GlareModel):
                 )
             else:
                 raise ValueError(f"sampling must be 'point' or 'pixel'; got {self.sampling!r}")
-        quadrant = np.outer(profiles[0], profiles[1])
-        values = mirror_quadrant(quadrant)
-        values /= values.sum()
+        # the kernel's sum is the product of the mirrored profiles' sums: normalise those
+        # (eq. 2's k), then unfold the quadrant once
+        rows, cols = (p / (2.0 * p.sum() - p[0]) for p in profiles)
+        values = mirror_quadrant(np.outer(rows, cols))
         reach = [(n // 2 + 0.5) * pixel_deg / (self.sigma_deg * math.sqrt(2.0)) for n in shape]
         tail = 1.0 - math.erf(reach[0]) * math.erf(reach[1])
         return Kernel(

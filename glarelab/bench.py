@@ -277,7 +277,13 @@ class _Prepared:
 
     def __init__(self, model, image, pixel, lut, **options) -> None:
         self.renderer = glare.GlareRenderer(
-            model, pixel_deg=pixel, shape=image.shape, l_dmax_cd_m2=L_DMAX, display=lut, **options
+            model,
+            pixel_deg=pixel,
+            shape=image.shape,
+            l_dmax_cd_m2=L_DMAX,
+            display=lut,
+            cache=False,
+            **options,
         )
         self.image = image
         self()
@@ -299,7 +305,7 @@ def _variants(image, pixel, model, lut, kernel) -> dict[str, Callable[[], np.nda
     variants = {
         DEFAULT: prepared(),
         "add_glare, one call (kernel digitised)": lambda: glare.add_glare(
-            image, model, pixel_deg=pixel, l_dmax_cd_m2=L_DMAX, display=lut
+            image, model, pixel_deg=pixel, l_dmax_cd_m2=L_DMAX, display=lut, cache=False
         ),
         "plan, 2 codes": prepared(tolerance_codes=2.0),
         "plan, 0.1 codes": prepared(tolerance_codes=0.1),
@@ -414,6 +420,173 @@ def _reference(image, pixel, model):
     return glare.add_glare(image, model, pixel_deg=pixel, tolerance_codes=None)
 
 
+FRESH_WORKLOADS = ("night_sun_2048",)  # the one-call workload, timed in fresh processes
+FRESH_EMPTY = "add_glare, one call, fresh process, empty kernel cache"
+FRESH_WARM = "add_glare, one call, fresh process, warm kernel cache"
+_FRESH_CALL = """
+import sys, time
+import numpy as np
+import glare
+from glarelab.bench import CALIBRATION, L_DMAX, _model, workload
+from stimuli.calibration import Calibration
+
+name, model_name, out = sys.argv[1:4]
+image, pixel = workload(name)
+model = _model(model_name, pixel)
+lut = Calibration.load(CALIBRATION).lut
+start = time.perf_counter()
+result = glare.add_glare(image, model, pixel_deg=pixel, l_dmax_cd_m2=L_DMAX, display=lut)
+seconds = time.perf_counter() - start
+np.save(out, result)
+print(repr(seconds))
+"""
+
+
+def _fresh_call(
+    name: str, model_name: str, cache_dir: Path, out: Path
+) -> tuple[float, np.ndarray]:
+    """One ``add_glare`` in a new Python process whose kernel cache is ``cache_dir``: the
+    seconds of the call alone (the process's start-up is timed by :func:`startup_bench`)."""
+    import os
+    import subprocess
+    import sys
+
+    root = str(Path(__file__).resolve().parents[1])
+    path = os.environ.get("PYTHONPATH")
+    env = {**os.environ, "GLARELAB_CACHE": str(cache_dir), "PYTHONPATH": root}
+    env.pop("GLARELAB_NO_CACHE", None)
+    if path:
+        env["PYTHONPATH"] = os.pathsep.join([root, path])
+    done = subprocess.run(
+        [sys.executable, "-c", _FRESH_CALL, name, model_name, str(out)],
+        env=env,
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    if done.returncode != 0:
+        raise RuntimeError(f"the fresh-process call failed:\n{done.stderr}")
+    return float(done.stdout.strip().splitlines()[-1]), np.load(out)
+
+
+def fresh_bench(name: str, model_name: str, repeats: int, log=print) -> dict:
+    """The one-call workload: ``add_glare`` in a fresh process with an empty kernel cache
+    (a new folder each time) and with a warm one (filled by an earlier process); the best
+    of ``repeats`` each, and the last image of each."""
+    import tempfile
+
+    results = {}
+    with tempfile.TemporaryDirectory(prefix="glarelab-bench-") as folder:
+        folder = Path(folder)
+        empty = []
+        for index in range(repeats):
+            seconds, image = _fresh_call(
+                name, model_name, folder / f"empty{index}", folder / "out.npy"
+            )
+            empty.append(seconds)
+            log(f"  fresh process, empty cache: {seconds:.3f} s")
+        results[FRESH_EMPTY] = (min(empty), image)
+        warm = []
+        for _ in range(repeats):
+            seconds, image = _fresh_call(name, model_name, folder / "empty0", folder / "out.npy")
+            warm.append(seconds)
+            log(f"  fresh process, warm cache: {seconds:.3f} s")
+        results[FRESH_WARM] = (min(warm), image)
+    return results
+
+
+STARTUP_BASELINE = "import numpy, scipy.fft"
+STARTUP_CASES = {  # label → Python code, or None for the console command
+    STARTUP_BASELINE: "import numpy, scipy.fft",
+    "import glare": "import glare",
+    "glarelab --version": None,
+}
+
+
+def _import_seconds(code: str) -> float:
+    """Seconds of the imports in ``code`` in a new interpreter (``python -X importtime``:
+    the sum of the top-level imports' cumulative times)."""
+    import subprocess
+    import sys
+
+    done = subprocess.run(
+        [sys.executable, "-X", "importtime", "-c", code],
+        capture_output=True,
+        text=True,
+        check=True,
+        env=_source_env(),
+    )
+    total = 0
+    for line in done.stderr.splitlines():
+        if not line.startswith("import time:") or "|" not in line:
+            continue
+        fields = line.split("|")
+        if fields[-1].startswith(" ") and not fields[-1].startswith("  "):  # top level
+            try:
+                total += int(fields[1])
+            except ValueError:  # the header line
+                continue
+    return total * 1e-6
+
+
+def _source_env() -> dict:
+    import os
+
+    root = str(Path(__file__).resolve().parents[1])
+    path = os.environ.get("PYTHONPATH")
+    return {**os.environ, "PYTHONPATH": os.pathsep.join([root, path]) if path else root}
+
+
+def _wall_seconds(arguments: list[str]) -> float:
+    import subprocess
+    import sys
+
+    start = time.perf_counter()
+    subprocess.run(
+        [sys.executable, *arguments], capture_output=True, check=True, env=_source_env()
+    )
+    return time.perf_counter() - start
+
+
+def startup_bench(repeats: int = 5, log=print) -> list[dict]:
+    """Start-up: the imports of ``import numpy, scipy.fft``, ``import glare`` and
+    ``glarelab --version`` (``python -X importtime``), and each process's wall time; the
+    median of ``repeats`` runs, the cases in turn, with each case's ratio to numpy and
+    scipy.fft (the median of the per-round ratios)."""
+    rounds = []
+    for _ in range(repeats):
+        measured = {}
+        for label, code in STARTUP_CASES.items():
+            if code is None:
+                imports = _import_seconds("from glarelab.cli import main")
+                wall = _wall_seconds(["-m", "glarelab", "--version"])
+            else:
+                imports = _import_seconds(code)
+                wall = _wall_seconds(["-c", code])
+            measured[label] = (imports, wall)
+        rounds.append(measured)
+    rows = []
+    for label in STARTUP_CASES:
+        imports = [r[label][0] for r in rounds]
+        walls = [r[label][1] for r in rounds]
+        ratios = [r[label][0] / r[STARTUP_BASELINE][0] for r in rounds]
+        wall_ratios = [r[label][1] / r[STARTUP_BASELINE][1] for r in rounds]
+        rows.append(
+            {
+                "case": label,
+                "import_s": float(np.median(imports)),
+                "process_s": float(np.median(walls)),
+                "import_ratio": float(np.median(ratios)),
+                "process_ratio": float(np.median(wall_ratios)),
+            }
+        )
+        log(
+            f"  {label}: imports {rows[-1]['import_s']:.3f} s ({rows[-1]['import_ratio']:.2f}×), "
+            f"process {rows[-1]['process_s']:.3f} s ({rows[-1]['process_ratio']:.2f}×)"
+        )
+    return rows
+
+
 def memory_bench(name: str, log=print) -> list[dict]:
     """Peak memory (MiB) of one Vos render of a workload, allocated through Python and NumPy
     (``tracemalloc``; FFT scratch inside pocketfft is not counted) on top of the image and the
@@ -485,10 +658,13 @@ def run_bench(
     only: tuple[str, ...] | None = None,
     spectral: bool = True,
     repeats: int = 3,
+    fresh: bool = True,
+    startup: bool = True,
     log=print,
 ) -> list[dict]:
     """Run the benchmark; write ``bench.csv``, ``bench.md`` and one Pareto PNG per workload
-    (and ``memory.csv`` when a workload of :data:`MEMORY_WORKLOADS` is run).
+    (and ``memory.csv`` when a workload of :data:`MEMORY_WORKLOADS` is run, ``startup.csv``
+    with the start-up times).
 
     Parameters
     ----------
@@ -500,6 +676,11 @@ def run_bench(
         Run only these workloads (names of :data:`WORKLOADS`).
     spectral
         Also run :func:`spectral_bench`.
+    fresh
+        Time the one-call workload (:data:`FRESH_WORKLOADS`) in fresh processes, with an
+        empty and a warm kernel cache (:func:`fresh_bench`).
+    startup
+        Time the start-up (:func:`startup_bench`).
     repeats
         Rounds of timings (the contenders in turn); the best is reported.
     log
@@ -524,7 +705,10 @@ def run_bench(
             kernel = model.kernel(pixel, kernel_shape_for(image.shape), colour=image.ndim == 3)
             variants = _variants(image, pixel, model, lut, kernel)
             results = []
-            for variant, (seconds, result) in _timed(variants, repeats).items():
+            timed = _timed(variants, repeats)
+            if fresh and name in FRESH_WORKLOADS:
+                timed |= fresh_bench(name, model_name, repeats, log=log)
+            for variant, (seconds, result) in timed.items():
                 error = np.abs(display_codes(result, lut) - reference_codes)
                 results.append(
                     {
@@ -553,19 +737,24 @@ def run_bench(
         spectral_rows = spectral_bench(repeats=1)
         for r in spectral_rows:
             log(f"  {r['variant']}: {r['seconds']:.2f} s, ΔE00 {r['delta_e_mean']:.3g}")
+    startup_rows = []
+    if startup:
+        log("start-up: imports and processes against import numpy, scipy.fft")
+        startup_rows = startup_bench(repeats=repeats, log=log)
     write_plots(rows, out)
     for file, table in (
         ("bench.csv", rows),
         ("spectral.csv", spectral_rows),
         ("memory.csv", memory_rows),
+        ("startup.csv", startup_rows),
     ):
         if table:
             with (out / file).open("w", newline="") as handle:
                 writer = csv.DictWriter(handle, fieldnames=list(table[0]))
                 writer.writeheader()
                 writer.writerows(table)
-    (out / "bench.md").write_text(tables(rows, spectral_rows, memory_rows))
-    return rows + spectral_rows + memory_rows
+    (out / "bench.md").write_text(tables(rows, spectral_rows, memory_rows, startup_rows))
+    return rows + spectral_rows + memory_rows + startup_rows
 
 
 def _best_peer(mine: list[dict], bound: float) -> dict | None:
@@ -576,7 +765,12 @@ def _best_peer(mine: list[dict], bound: float) -> dict | None:
     return min(peers, key=lambda r: float(r["seconds"]), default=None)
 
 
-def tables(rows: list[dict], spectral_rows: list[dict] = (), memory_rows: list[dict] = ()) -> str:
+def tables(
+    rows: list[dict],
+    spectral_rows: list[dict] = (),
+    memory_rows: list[dict] = (),
+    startup_rows: list[dict] = (),
+) -> str:
     """Markdown: a summary per workload and model (the default against the exact render and
     the peers, as ratios of times measured in the same run), then every variant, then peak
     memory and the spectral section."""
@@ -612,6 +806,17 @@ def tables(rows: list[dict], spectral_rows: list[dict] = (), memory_rows: list[d
         f"{float(r['max_error_codes']):.3g} | {float(r['rms_error_codes']):.3g} |"
         for r in rows
     ]
+    if startup_rows:
+        lines += [
+            "",
+            "| start-up | imports (s) | × import numpy, scipy.fft | process (s) | × its process |",
+            "| --- | --- | --- | --- | --- |",
+        ]
+        lines += [
+            f"| {r['case']} | {float(r['import_s']):.3f} | {float(r['import_ratio']):.2f} | "
+            f"{float(r['process_s']):.3f} | {float(r['process_ratio']):.2f} |"
+            for r in startup_rows
+        ]
     if memory_rows:
         lines += ["", "| workload | variant | peak memory (MiB) |", "| --- | --- | --- |"]
         lines += [

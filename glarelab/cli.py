@@ -11,17 +11,25 @@ from __future__ import annotations
 
 import argparse
 import errno
+import os
 import sys
 import traceback
 from collections.abc import Sequence
 from importlib import metadata
 
-from .commands import MODULES
+from .commands import COMMANDS, MODULE_NAMES, load
 from .commands.common import HelpFormatter, Parser
 from .commands.common import log as _log
-from .commands.render import build_model
 
-__all__ = ["build_model", "main"]
+__all__ = ["main"]  # and build_model, the render command's, imported on use
+NO_CACHE_ENV = "GLARELAB_NO_CACHE"  # glare.cache.NO_CACHE_ENV, without importing glare
+
+
+def __getattr__(name: str):
+    if name == "build_model":  # the render command's, imported with it
+        return load("render").build_model
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 ISSUES = "a bug in glarelab: please report it with the command you ran and the lines above"
 
@@ -33,16 +41,34 @@ def _version() -> str:
         return "unknown"
 
 
-def _parser() -> argparse.ArgumentParser:
+def _chosen(argv: Sequence[str]) -> str | None:
+    """The command named in ``argv``: its first argument that is not an option."""
+    return next((a for a in argv if not a.startswith("-")), None)
+
+
+def _parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
+    """The parser. Only the module of the command in ``argv`` is imported (all of them when
+    ``argv`` is None); the other commands are listed with their help from the table."""
     parser = Parser(
         prog="glarelab",
         description="Glare illusion psychophysics suite",
         formatter_class=HelpFormatter,
     )
     parser.add_argument("--version", action="version", version=f"glarelab {_version()}")
+    parser.add_argument(
+        "--no-cache",
+        action="store_true",
+        help="digitise every kernel instead of reading the kernel cache (glarelab cache info)",
+    )
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    for module in MODULES:
-        module.add(commands)
+    chosen = None if argv is None else _chosen(argv)
+    for name in MODULE_NAMES:
+        if argv is None or (chosen in COMMANDS and COMMANDS[chosen][0] == name):
+            load(name).add(commands)
+        else:
+            for command, (module, text) in COMMANDS.items():
+                if module == name:
+                    commands.add_parser(command, help=text, add_help=False)
     return parser
 
 
@@ -71,10 +97,14 @@ def _refusal(error: BaseException) -> str | None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``glarelab`` command; returns the exit status."""
+    argv = sys.argv[1:] if argv is None else list(argv)
+    parser = _parser(argv)
+    args = parser.parse_args(argv)
     from experiments.loop import SessionAborted
 
-    parser = _parser()
-    args = parser.parse_args(argv)
+    previous = os.environ.get(NO_CACHE_ENV)
+    if args.no_cache:  # for this command and the processes it starts (Dask workers)
+        os.environ[NO_CACHE_ENV] = "1"
     try:
         return args.run(args)
     except (SessionAborted, KeyboardInterrupt) as stop:
@@ -91,6 +121,12 @@ def main(argv: Sequence[str] | None = None) -> int:
             return 70
         print(f"glarelab {args.command}: {message}", file=sys.stderr)
         return 2
+    finally:
+        if args.no_cache:
+            if previous is None:
+                os.environ.pop(NO_CACHE_ENV, None)
+            else:
+                os.environ[NO_CACHE_ENV] = previous
 
 
 if __name__ == "__main__":

@@ -106,7 +106,7 @@ def build_matching(protocol: Protocol, *, progress=None) -> dict:
     for method in g["methods"]:
         model = glare_model(method["model"], method["parameters"])
         models[method["name"]] = repr(model)
-        kernel = model.kernel(fine_p, shape)
+        kernel = glare.digitise_kernel(model, fine_p, shape)  # from the kernel cache
         renderer = glare.GlareRenderer(  # exact; the kernel's spectrum is kept across levels
             model,
             pixel_deg=fine_p,

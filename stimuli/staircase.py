@@ -69,7 +69,7 @@ def build_staircase(protocol: Protocol, *, progress=None) -> dict:
     annulus = _circle_coverage(size, s["annulus_outer_px"]) - disc
     cover = np.clip(disc + annulus, 0.0, 1.0)
     model = glare_model(g["model"], g["parameters"])
-    kernel = model.kernel(p, kernel_shape_for((size, size)))
+    kernel = glare.digitise_kernel(model, p, kernel_shape_for((size, size)))  # kernel cache
     renderer = glare.GlareRenderer(  # exact; the kernel's spectrum is kept across images
         model, pixel_deg=p, shape=(size, size), l_dmax_cd_m2=peak, tolerance_codes=0, kernel=kernel
     )

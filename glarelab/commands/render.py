@@ -297,7 +297,7 @@ def _gallery(args: argparse.Namespace) -> int:
     for index, (name, (caption, model)) in enumerate(models.items(), start=1):
         _log(f"[{index}/{len(models)}] {caption}")
         start = time.perf_counter()
-        kernel = model.kernel(args.pixel_deg, (args.size, args.size), colour=True)
+        kernel = glare.digitise_kernel(model, args.pixel_deg, (args.size, args.size), colour=True)
         psf_png(out / f"{name}.png", kernel.values)
         captions[name] = {"caption": caption, "seconds": round(time.perf_counter() - start, 2)}
         _log(f"    {captions[name]['seconds']} s → {out / name}.png")

@@ -60,6 +60,8 @@ def _bench(args: argparse.Namespace) -> int:
         only=tuple(args.only) if args.only else None,
         spectral=not args.no_spectral,
         repeats=args.repeats,
+        fresh=not args.no_fresh,
+        startup=not args.no_startup,
         log=_log,
     )
     _log(f"wrote {out / 'bench.csv'}, bench.md and the Pareto plots")
@@ -78,6 +80,12 @@ def add(commands) -> None:
     bench.add_argument(
         "--no-spectral", action="store_true", help="skip the wave-optics spectral section"
     )
+    bench.add_argument(
+        "--no-fresh",
+        action="store_true",
+        help="skip the one-call workload in fresh processes (empty and warm kernel cache)",
+    )
+    bench.add_argument("--no-startup", action="store_true", help="skip the start-up times")
     bench.add_argument("--repeats", type=count(1, 100), default=3, help="timings per case")
     bench.add_argument(
         "--acuity",
