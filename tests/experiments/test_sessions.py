@@ -263,7 +263,7 @@ def test_a_scripted_dry_run_shows_the_calibrated_codes(tmp_path, sets, study):
         / (
             "SYNTHETIC-yoshida2008-433cd-10bit.json"
             if study == "yoshida2008"
-            else "SYNTHETIC-spencer1995-100cd-8bit.json"
+            else "SYNTHETIC-spencer1995-50cd-8bit.json"
         )
     )
     expected_lut = default_calibration(load_protocol(PROTOCOLS / f"{study}.toml")).lut
