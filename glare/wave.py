@@ -30,7 +30,8 @@ measures the shadow.
 References
 ----------
 Kakimoto, M., Matsuoka, K., Nishita, T., Naemura, T., Harashima, H. (2004). Glare generation
-based on wave optics. Computer Graphics International, eqs. 1-7.
+based on wave optics. Pacific Graphics 2004 (12th Pacific Conference on Computer Graphics and
+Applications), eqs. 1-7.
 Luidolt, L. (2020). Perception of light in virtual reality. TU Wien, §5.2, eqs. 5.5-5.13.
 Ritschel, T., Ihrke, M., Frisvad, J. R., et al. (2009). Temporal glare. Eurographics.
 """
@@ -74,6 +75,7 @@ __all__ = [
     "MIN_APERTURE_SAMPLES",
     "PIXEL_INTEGRATION_METHODS",
     "PUPIL_CONVENTIONS",
+    "SIGMOID_FORMS",
     "SPECTRAL_METHODS",
     "DiffractionPSF",
     "WaveOpticsGlare",
@@ -98,29 +100,58 @@ LUIDOLT2020_PUPIL_RANGE_MM = (2.0, 8.0)  # Luidolt 2020 §5.2.1 ii: "our predefi
 _MM_PER_NM = 1e-6
 
 
+SIGMOID_FORMS = ("contrast k²", "as printed")
+
+
 def sigmoid_Kakimoto2004(
     x: np.ndarray,
     *,
     D: float = SIGMOID_D_KAKIMOTO2004,
     k: float = SIGMOID_K_KAKIMOTO2004,
     g: float = SIGMOID_G_KAKIMOTO2004,
+    form: Literal["contrast k²", "as printed"] = "contrast k²",
 ) -> np.ndarray:
-    """Kakimoto's sigmoid tone curve for viewing glare images (eqs. 6-7).
+    """Kakimoto's sigmoid tone curve for viewing glare images (eqs. 6-7, after Tumblin et al.).
 
-    .. math:: \\mathrm{sig}(x) = \\frac{x^g + 1}{x^g + k} D
+    .. math:: \\mathrm{sig}(x) = \\frac{x^g + 1/k}{x^g + k} D
 
     Parameters default to the paper's D = 640, k = 20, g = 0.465 (§3.4).
 
+    Parameters
+    ----------
+    x
+        Linear input, >= 0.
+    D, k, g
+        Maximum, contrast and slope parameters.
+    form
+        ``'contrast k²'`` (default): the curve above, which has the properties §3.3 gives it:
+        "D defines the maximum limit of the output, k² defines the contrast between the
+        minimum and the maximum value" (``D/k²`` at 0, ``D`` at infinity, ``D/k`` at
+        ``x = 1``, an S symmetric on log-log axes). ``'as printed'``: eq. 7 as printed,
+        ``(x^g + 1)/(x^g + k) D``, whose contrast is ``k`` (a floor of 32 on the [0, 255]
+        output, a grey where Kakimoto's figures are black): a ``1/k`` lost in print.
+
+    Raises
+    ------
+    ValueError
+        For negative or non-finite ``x`` or an unknown ``form``.
+
     Examples
     --------
-    >>> float(sigmoid_Kakimoto2004(np.array(0.0)))  # D / k
+    >>> float(sigmoid_Kakimoto2004(np.array(0.0)))  # D / k²
+    1.6
+    >>> float(sigmoid_Kakimoto2004(np.array(0.0), form="as printed"))  # D / k
     32.0
     """
     x = np.asarray(x, dtype=float)
     if (x < 0).any() or not np.isfinite(x).all():
         raise ValueError("x must be finite and >= 0")
     power = x**g
-    return (power + 1.0) / (power + k) * D
+    if form == "contrast k²":
+        return (power + 1.0 / k) / (power + k) * D
+    if form == "as printed":
+        return (power + 1.0) / (power + k) * D
+    raise ValueError(f"form must be one of {SIGMOID_FORMS}; got {form!r}")
 
 
 def _luminance_weights(colourspace: str) -> np.ndarray:
