@@ -321,7 +321,8 @@ class WaveOpticsGlare(GlareModel):
         return self.spectrum.wavelengths_nm
 
     def _extent_deg(self, pixel_deg: float, shape: tuple[int, int]) -> float:
-        return min(max(shape) * pixel_deg, self.psf_extent_deg)
+        # at least one pixel: the PSF's period (twice this) must hold two pixels
+        return max(min(max(shape) * pixel_deg, self.psf_extent_deg), pixel_deg)
 
     def grid_for(self, pixel_deg: float, shape: tuple[int, int]) -> ap.ApertureGrid:
         """The aperture grid that resolves the obstacles and covers the kernel.

@@ -195,3 +195,13 @@ def test_yoshida_display_centre_pixel():
         pupil_mm=3.0, **CAMERA, spectral="kakimoto", pixel_integration="rebin"
     ).monochromatic_kernels(0.0118, (21, 21))[0][1]
     assert rebinned[10, 10] < 0.95 * reference[10, 10]  # the old path: 0.582
+
+
+def test_huge_and_tiny_pixels():
+    # a pixel wider than psf_extent_deg still gets a PSF period of two pixels
+    model = WaveOpticsGlare(pupil_mm=3.0, **CAMERA, spectral="kakimoto", psf_extent_deg=0.5)
+    huge = model.kernel(1.0, (3, 3))
+    assert huge.values[1, 1] > 0.99  # the whole PSF in one pixel
+    assert_allclose(huge.values.sum() + huge.energy_outside, 1.0, atol=1e-9)
+    tiny = model.monochromatic_kernels(1e-5, (3, 3))[0][1]  # 530 nm, a fiftieth of the core
+    assert_allclose(tiny, airy_pixels(3.0, 530.0, 1e-5, 1), rtol=0.01)
