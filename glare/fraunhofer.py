@@ -434,7 +434,7 @@ def pixel_integrated_psf(
               W_{ck} = \\mathrm{sinc}(k \\beta p)\\, e^{-2\\pi i k \\beta c},
 
     with ``β = δ / λ`` (radians⁻¹), ``p`` the pixel and ``c`` its centre in radians. The
-    products are formed in blocks of output columns (memory bounded by about 100 MB beyond
+    products are formed in blocks of output columns (memory bounded by about 32 MB beyond
     the matrices ``W``); a real aperture's kernel is centro-symmetric and only half of it is
     computed.
 

@@ -99,3 +99,16 @@ def test_spencer_protocol_uses_the_papers_regime_and_display():
     after = VosGlare(regime="mesopic", normalisation="Spencer1995").kernel(p, shape).values
     assert after[far].sum() > 1.5 * before
     assert math.isclose(after.sum(), 1.0, rel_tol=1e-12)
+
+
+def test_luidolt_convention_follows_the_night_pupil():
+    # render_night sets the pupil from the adapted luminance: Luidolt's kernel then holds more
+    # of the source's light in the dark (§5.2.1 ii), the unit-energy one the same
+    from glare.night import adapted_model
+
+    for convention, grows in (("Luidolt2020", True), ("unit-energy", False)):
+        model = WaveOpticsGlare(pupil_convention=convention)
+        dark, bright = (adapted_model(model, level) for level in (0.01, 100.0))
+        assert dark.pupil_convention == convention
+        assert dark.pupil_mm > bright.pupil_mm
+        assert (dark.pupil_share() > bright.pupil_share()) is grows
