@@ -15,7 +15,10 @@ radians and its extent ``λ / δ``. Two conditions keep it honest:
 - the aperture must be resolved (``D / δ`` samples), else its sampled spectrum is aliased.
 
 :func:`psf_fraunhofer` enforces both (padding automatically, refusing what it cannot fix).
-:func:`rebin` then integrates the PSF exactly (area-weighted) onto the stimulus' pixels.
+The kernel integrates each wavelength's PSF exactly over each stimulus pixel
+(:func:`glare.fraunhofer.pixel_integrated_psf`: the aperture's autocorrelation through a
+matrix DFT); ``pixel_integration='rebin'`` spreads the DFT's samples over the pixels instead
+(:func:`rebin`: exact for the energy, not for the pattern when a pixel spans few samples).
 
 **The Fresnel term** of Luidolt eq. 5.6, ``exp(iπ r² / (λ d))`` with ``d = 24 mm``, is the
 quadratic phase of free propagation from the pupil to the retina *without* a lens (after
