@@ -7,11 +7,15 @@ returns what a display shows of it, frame by frame, in the order of Luidolt 2020
 1. **Temporal adaptation** (§5.1, eqs. 5.1-5.4; :mod:`glare.adaptation`): the luminance of the
    frame around the gaze, and the adapted luminance ``L_i`` following it over time. Without
    this effect the eye is adapted at once (``L_i`` = the frame's luminance).
-2. **Exposure** (§5.1: "this adaptation luminance ... multiplying it with the linear RGB
-   values"): the scene is scaled by ``adapted_display_cd_m2 / L_i``, so that an adapted eye
-   sees the adapting luminance at ``adapted_display_cd_m2`` on the display. A scale commutes
-   with the glare's convolution and the blur's weights, so scaling first and stating the
-   display's maximum in display units is Luidolt's order with tone mapping moved forward.
+2. **Exposure**: the scene is scaled by ``adapted_display_cd_m2 / L_i``, so that an adapted
+   eye sees the adapting luminance at ``adapted_display_cd_m2`` on the display. This departs
+   from the words of §5.1, "This adaptation luminance L_i can then be applied to the image
+   by multiplying it with the linear RGB values": multiplying by ``L_i`` would make a bright
+   scene brighter still and a dark one darker, the opposite of adaptation; the suite divides
+   by it, as an exposure does (Krawczyk et al. 2005, whom §5.1 follows, scale by the inverse
+   of the adapting luminance). A scale commutes with the glare's convolution and the blur's
+   weights, so scaling first and stating the display's maximum in display units is Luidolt's
+   order with tone mapping moved forward.
 3. **Glare** (§5.2; any model of :data:`glare.GLARE_MODELS`): its pupil from the adapted
    luminance (Moon & Spencer, :func:`glare.eye.pupil_diameter_mm`, as Ritschel et al. 2009;
    Luidolt measures it with an eye tracker) and, for the Vos PSF, its regime (Spencer §3.1);

@@ -6,12 +6,13 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
+from typing import Literal
 
 import numpy as np
 
 from . import vos
 from ._radial import radial_mass
-from ._validation import check_in_range, check_positive, check_positive_int
+from ._validation import check_choice, check_in_range, check_positive, check_positive_int
 from .base import GlareModel, TailBound
 from .digitise import (
     Kernel,
@@ -25,7 +26,9 @@ from .eye import HALO_PUPIL_MM, Regime, regime
 from .flare import CORONA_LINES, HALO_LINES, flare_line_pattern
 from .spectral import HALO_TABLE_MAX_DEG, HaloSpectrum, halo_profiles
 
-__all__ = ["HALO_MAX_SPACING_DEG", "PUPIL_RANGE_MM", "TAIL_MARGIN", "VosGlare"]
+__all__ = ["HALO_MAX_SPACING_DEG", "NORMALISATIONS", "PUPIL_RANGE_MM", "TAIL_MARGIN", "VosGlare"]
+
+NORMALISATIONS = ("psf", "Spencer1995")  # Spencer 1995 §3.2: "renormalize the filter"
 
 PUPIL_RANGE_MM = (0.5, 10.0)  # accepted pupil diameters; the eye spans about 2-8 mm
 # Sample spacing in the halo ring (σ = 0.159°): σ/16. At σ/4 the 0.03°/px night scene was
@@ -67,8 +70,13 @@ class VosGlare(GlareModel):
         Below 3 mm the lenticular halo is dropped and its weight returned to ``f0``: a beam
         narrower than 3 mm passes the clear centre of the lens (Spencer §2.1), and eq. 8's
         halo weight is "diverted from the central peak" (§3.1.1).
-
-    Notes
+    normalisation
+        ``'psf'`` (default): each component holds the PSF's energy inside the kernel, and the
+        energy beyond it is reported as ``energy_outside`` (not spread). ``'Spencer1995'``:
+        as Spencer §3.2 does, "calculate each filter proportional to a given function, and
+        then renormalize the filter so that all pixels sum to one": each of ``f0``-``f3``
+        sums to 1 over the kernel, so the light the PSF sends beyond the kernel is put back
+        inside it, in proportion (``energy_outside`` 0).
     -----
     The kernel is ``w0 K0 + (w1 K1 + w2 K2) S_c + w3 K3 S_h`` with ``K_i`` the digitised
     unit-volume components, weights from :func:`glare.vos.weights` and ``S`` the flare-line
@@ -99,9 +107,11 @@ class VosGlare(GlareModel):
     corona_lines: int = CORONA_LINES
     halo_lines: int = HALO_LINES
     pupil_mm: float | None = None
+    normalisation: Literal["psf", "Spencer1995"] = "psf"
 
     def __post_init__(self) -> None:
         vos.weights(self.regime, self.age)  # validates regime and age
+        check_choice("normalisation", self.normalisation, NORMALISATIONS)
         if self.pupil_mm is not None:
             check_in_range("pupil_mm", self.pupil_mm, *PUPIL_RANGE_MM, unit="mm")
         if self.wavelength_nm is not None:
@@ -177,9 +187,10 @@ class VosGlare(GlareModel):
         PSF's largest value beyond that angle times the pixel's area (the measure of eq. 4
         has ``sin θ ≤ θ``), and the energy outside the square at most that outside the disc
         of radius ``θ``. Every channel's halo profile is bounded separately. ``None`` with
-        flare lines, whose streaks are not bounded by the smooth PSF.
+        flare lines, whose streaks are not bounded by the smooth PSF, and with Spencer's
+        renormalisation, which scales the kernel by a factor that depends on its shape.
         """
-        if self.flare_lines:
+        if self.flare_lines or self.normalisation != "psf":
             return None
         pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
         radius = np.asarray(radius_px, dtype=float)
@@ -238,6 +249,10 @@ class VosGlare(GlareModel):
         (k1, k2), inside, total, error = digitise_radial_quadrant(
             [vos.f1, vos.f2], **settings, symmetric=symmetric
         )
+        spencer = self.normalisation == "Spencer1995"
+        if spencer:  # Spencer §3.2: every filter renormalised to sum to one over the kernel
+            core = core / quadrant_sum(core)
+            total = inside
         scatter = k1
         scatter *= w1 / total[0]
         scatter += (w2 / total[1]) * k2
@@ -263,6 +278,8 @@ class VosGlare(GlareModel):
                 support_deg=HALO_TABLE_MAX_DEG,
                 symmetric=symmetric,
             )
+            if spencer:
+                total = inside
             halo = w3 * pieces / total[:, None, None]
             halo_outside = w3 * (1 - inside / total)
             errors += [

@@ -15,7 +15,10 @@ radians and its extent ``λ / δ``. Two conditions keep it honest:
 - the aperture must be resolved (``D / δ`` samples), else its sampled spectrum is aliased.
 
 :func:`psf_fraunhofer` enforces both (padding automatically, refusing what it cannot fix).
-:func:`rebin` then integrates the PSF exactly (area-weighted) onto the stimulus' pixels.
+The kernel integrates each wavelength's PSF exactly over each stimulus pixel
+(:func:`glare.fraunhofer.pixel_integrated_psf`: the aperture's autocorrelation through a
+matrix DFT); ``pixel_integration='rebin'`` spreads the DFT's samples over the pixels instead
+(:func:`rebin`: exact for the energy, not for the pattern when a pixel spans few samples).
 
 **The Fresnel term** of Luidolt eq. 5.6, ``exp(iπ r² / (λ d))`` with ``d = 24 mm``, is the
 quadratic phase of free propagation from the pupil to the retina *without* a lens (after
@@ -30,7 +33,8 @@ measures the shadow.
 References
 ----------
 Kakimoto, M., Matsuoka, K., Nishita, T., Naemura, T., Harashima, H. (2004). Glare generation
-based on wave optics. Computer Graphics International, eqs. 1-7.
+based on wave optics. Pacific Graphics 2004 (12th Pacific Conference on Computer Graphics and
+Applications), eqs. 1-7.
 Luidolt, L. (2020). Perception of light in virtual reality. TU Wien, §5.2, eqs. 5.5-5.13.
 Ritschel, T., Ihrke, M., Frisvad, J. R., et al. (2009). Temporal glare. Eurographics.
 """
@@ -39,6 +43,7 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from dataclasses import asdict, dataclass, field, replace
 from typing import Literal
 
@@ -57,7 +62,10 @@ from .fraunhofer import (
     MIN_APERTURE_SAMPLES,
     DiffractionPSF,
     _crop_to_reach,
+    _fresnel_field,
     _rebin_cropped,
+    aperture_autocorrelation,
+    pixel_integrated_psf,
     psf_fraunhofer,
     rebin,
 )
@@ -66,7 +74,11 @@ from .spectral import Spectrum
 __all__ = [
     "FRESNEL_DISTANCE_MM_LUIDOLT2020",
     "KAKIMOTO2004_WAVELENGTHS_NM",
+    "LUIDOLT2020_PUPIL_RANGE_MM",
     "MIN_APERTURE_SAMPLES",
+    "PIXEL_INTEGRATION_METHODS",
+    "PUPIL_CONVENTIONS",
+    "SIGMOID_FORMS",
     "SPECTRAL_METHODS",
     "DiffractionPSF",
     "WaveOpticsGlare",
@@ -85,7 +97,13 @@ SIGMOID_K_KAKIMOTO2004 = 20.0  # Kakimoto 2004 §3.4
 SIGMOID_G_KAKIMOTO2004 = 0.465  # Kakimoto 2004 §3.4
 PUPIL_SAMPLES = 64  # samples across the pupil the model asks for
 SPECTRAL_METHODS = ("reference", "scaled", "kakimoto")
+PIXEL_INTEGRATION_METHODS = ("exact", "rebin")
+PUPIL_CONVENTIONS = ("unit-energy", "Luidolt2020")
+LUIDOLT2020_PUPIL_RANGE_MM = (2.0, 8.0)  # Luidolt 2020 §5.2.1 ii: "our predefined range of 2–8 mm"
 _MM_PER_NM = 1e-6
+
+
+SIGMOID_FORMS = ("contrast k²", "as printed")
 
 
 def sigmoid_Kakimoto2004(
@@ -94,23 +112,49 @@ def sigmoid_Kakimoto2004(
     D: float = SIGMOID_D_KAKIMOTO2004,
     k: float = SIGMOID_K_KAKIMOTO2004,
     g: float = SIGMOID_G_KAKIMOTO2004,
+    form: Literal["contrast k²", "as printed"] = "contrast k²",
 ) -> np.ndarray:
-    """Kakimoto's sigmoid tone curve for viewing glare images (eqs. 6-7).
+    """Kakimoto's sigmoid tone curve for viewing glare images (eqs. 6-7, after Tumblin et al.).
 
-    .. math:: \\mathrm{sig}(x) = \\frac{x^g + 1}{x^g + k} D
+    .. math:: \\mathrm{sig}(x) = \\frac{x^g + 1/k}{x^g + k} D
 
     Parameters default to the paper's D = 640, k = 20, g = 0.465 (§3.4).
 
+    Parameters
+    ----------
+    x
+        Linear input, >= 0.
+    D, k, g
+        Maximum, contrast and slope parameters.
+    form
+        ``'contrast k²'`` (default): the curve above, which has the properties §3.3 gives it:
+        "D defines the maximum limit of the output, k² defines the contrast between the
+        minimum and the maximum value" (``D/k²`` at 0, ``D`` at infinity, ``D/k`` at
+        ``x = 1``, an S symmetric on log-log axes). ``'as printed'``: eq. 7 as printed,
+        ``(x^g + 1)/(x^g + k) D``, whose contrast is ``k`` (a floor of 32 on the [0, 255]
+        output, a grey where Kakimoto's figures are black): a ``1/k`` lost in print.
+
+    Raises
+    ------
+    ValueError
+        For negative or non-finite ``x`` or an unknown ``form``.
+
     Examples
     --------
-    >>> float(sigmoid_Kakimoto2004(np.array(0.0)))  # D / k
+    >>> float(sigmoid_Kakimoto2004(np.array(0.0)))  # D / k²
+    1.6
+    >>> float(sigmoid_Kakimoto2004(np.array(0.0), form="as printed"))  # D / k
     32.0
     """
     x = np.asarray(x, dtype=float)
     if (x < 0).any() or not np.isfinite(x).all():
         raise ValueError("x must be finite and >= 0")
     power = x**g
-    return (power + 1.0) / (power + k) * D
+    if form == "contrast k²":
+        return (power + 1.0 / k) / (power + k) * D
+    if form == "as printed":
+        return (power + 1.0) / (power + k) * D
+    raise ValueError(f"form must be one of {SIGMOID_FORMS}; got {form!r}")
 
 
 def _luminance_weights(colourspace: str) -> np.ndarray:
@@ -156,6 +200,9 @@ class WaveOpticsGlare(GlareModel):
         Distance of eyelashes and lids in front of the pupil; default 10 mm.
     diaphragm_sides
         A regular polygon of this many sides instead of a round pupil (camera); default None.
+    diaphragm_rotation_deg
+        Rotation of the polygon, degrees anticlockwise; default 0 (the first edge's normal at
+        ``180° / sides``; 45° turns a square's edges onto the axes).
     cross_screen
         ``'4-point'`` or ``'trigonal'`` cross-screen filter; default None.
     eye
@@ -167,6 +214,29 @@ class WaveOpticsGlare(GlareModel):
         A user-supplied obstacle transmittance (hand-drawn or photographed, Kakimoto §5), 2-D
         in [0, 1], centred on the optical axis, with its sample spacing in mm; it multiplies
         the other obstacles. Default None.
+    pixel_integration
+        ``'exact'`` (default): each wavelength's PSF integrated exactly over each pixel
+        (:func:`glare.fraunhofer.pixel_integrated_psf`); ``'rebin'``: the PSF sampled by an
+        FFT every ``λ / (2.1 D)`` and the samples spread over the pixels, as before (the centre
+        pixel of a 3 mm pupil at 0.0118°/px 8 % low; docs/speed-accuracy.md measures both).
+    pupil_convention
+        ``'unit-energy'`` (default): the kernel holds the light that passes the aperture, all
+        of the source's excess, whatever the pupil; a larger pupil only narrows the PSF.
+        ``'Luidolt2020'``: Luidolt's kernel, whose energy grows with the pupil's area (his
+        eq. 5.11 normalises by the grid, not by the aperture; §5.2.4: "A bigger pupil admits
+        more light into the eye than a smaller one. Therefore, the resulting glare is more
+        intense"): the unit-energy kernel times the open area over the 8 mm disc's
+        (:meth:`pupil_share`). Particles are spread at one density over the 8 mm disc in both,
+        as Luidolt's fixed particle texture is cut by the pupil. Pupils outside 2-8 mm warn.
+
+    Notes
+    -----
+    Why unit energy is the default: a pupil twice as wide lets four times the light of the
+    source onto the retina, but also four times the light of everything around it, so the
+    glare relative to the scene, which is what a display can show, does not grow with the
+    pupil's area; the PSF is the distribution of where the light lands, and every other model
+    of the suite (Gaussian, Vos) is one. Luidolt's growth with area is how his renderer makes
+    glare "more intense at night time"; the option reproduces it.
 
     Examples
     --------
@@ -195,11 +265,14 @@ class WaveOpticsGlare(GlareModel):
     source_x_deg: float = 0.0
     obstacle_distance_mm: float = 10.0
     diaphragm_sides: int | None = None
+    diaphragm_rotation_deg: float = 0.0
     cross_screen: Literal["4-point", "trigonal"] | None = None
     eye: Literal["left", "right"] = "right"
     psf_extent_deg: float = 4.0
     obstacle_image: np.ndarray | None = field(default=None, compare=False, repr=False)
     obstacle_spacing_mm: float | None = None
+    pixel_integration: Literal["exact", "rebin"] = "exact"
+    pupil_convention: Literal["unit-energy", "Luidolt2020"] = "unit-energy"
 
     def __post_init__(self) -> None:
         if self.obstacle_image is not None:
@@ -220,9 +293,21 @@ class WaveOpticsGlare(GlareModel):
         check_positive("obstacle_distance_mm", self.obstacle_distance_mm, unit="mm")
         if self.diaphragm_sides is not None:
             check_positive_int("diaphragm_sides", self.diaphragm_sides, minimum=3)
+        check_in_range("diaphragm_rotation_deg", self.diaphragm_rotation_deg, -360.0, 360.0)
         check_choice("cross_screen", self.cross_screen, (None, "4-point", "trigonal"))
         check_choice("eye", self.eye, ("left", "right"))
         check_positive("psf_extent_deg", self.psf_extent_deg, unit="deg")
+        check_choice("pixel_integration", self.pixel_integration, PIXEL_INTEGRATION_METHODS)
+        check_choice("pupil_convention", self.pupil_convention, PUPIL_CONVENTIONS)
+        if self.pupil_convention == "Luidolt2020":
+            low, high = LUIDOLT2020_PUPIL_RANGE_MM
+            if not low <= self.pupil_diameter <= high:
+                warnings.warn(
+                    f"pupil {self.pupil_diameter:g} mm is outside Luidolt's 2-8 mm range; "
+                    "pupil_convention='Luidolt2020' scales the kernel by the pupil's area over "
+                    "the 8 mm disc's, which exceeds 1 above 8 mm",
+                    stacklevel=3,
+                )
 
     # --- aperture -----------------------------------------------------------------------
 
@@ -238,6 +323,10 @@ class WaveOpticsGlare(GlareModel):
             return np.array(KAKIMOTO2004_WAVELENGTHS_NM)
         return self.spectrum.wavelengths_nm
 
+    def _extent_deg(self, pixel_deg: float, shape: tuple[int, int]) -> float:
+        # at least one pixel: the PSF's period (twice this) must hold two pixels
+        return max(min(max(shape) * pixel_deg, self.psf_extent_deg), pixel_deg)
+
     def grid_for(self, pixel_deg: float, shape: tuple[int, int]) -> ap.ApertureGrid:
         """The aperture grid that resolves the obstacles and covers the kernel.
 
@@ -251,7 +340,7 @@ class WaveOpticsGlare(GlareModel):
         ValueError
             If that grid would exceed 8192² samples.
         """
-        extent_deg = min(max(shape) * pixel_deg, self.psf_extent_deg)
+        extent_deg = self._extent_deg(pixel_deg, shape)
         shortest_mm = float(self._wavelengths().min()) * _MM_PER_NM
         diameter = self.pupil_diameter
         limits = {
@@ -284,6 +373,15 @@ class WaveOpticsGlare(GlareModel):
 
         Obstacles are drawn only over the pupil's bounding box: outside it ``P = 0``.
         """
+        t = self._aperture_crop(grid)
+        n_crop = t.shape[0]
+        full = np.zeros((grid.n, grid.n))
+        offset = grid.n // 2 - n_crop // 2
+        full[offset : offset + n_crop, offset : offset + n_crop] = t
+        return full
+
+    def _aperture_crop(self, grid: ap.ApertureGrid) -> np.ndarray:
+        """The aperture over the pupil's bounding box (odd size, centred on ``grid``'s centre)."""
         rng_lashes, rng_particles = np.random.default_rng(self.seed).spawn(2)
         diameter = self.pupil_diameter
         n_crop = min(grid.n, 2 * (math.ceil(diameter / 2 / grid.spacing_mm) + 2) + 1)
@@ -291,7 +389,9 @@ class WaveOpticsGlare(GlareModel):
         if self.diaphragm_sides is None:
             t = ap.aperture_pupil(crop, diameter)
         else:
-            t = ap.aperture_diaphragm(crop, diameter, self.diaphragm_sides)
+            t = ap.aperture_diaphragm(
+                crop, diameter, self.diaphragm_sides, rotation_deg=self.diaphragm_rotation_deg
+            )
         shift = self.obstacle_distance_mm * math.tan(math.radians(self.source_x_deg))
         if self.eyelid:
             t = t * ap.aperture_eyelid(crop, shift_x_mm=shift)
@@ -313,10 +413,7 @@ class WaveOpticsGlare(GlareModel):
             t = t * ap.aperture_cross_screen(crop, self.cross_screen)
         if self.obstacle_image is not None:
             t = t * _resample_obstacle(self.obstacle_image, self.obstacle_spacing_mm, crop)
-        full = np.zeros((grid.n, grid.n))
-        offset = grid.n // 2 - n_crop // 2
-        full[offset : offset + n_crop, offset : offset + n_crop] = t
-        return full
+        return t
 
     # --- PSFs ---------------------------------------------------------------------------
 
@@ -324,32 +421,79 @@ class WaveOpticsGlare(GlareModel):
         self, pixel_deg: float, shape: tuple[int, int]
     ) -> tuple[np.ndarray, np.ndarray]:
         """Kernels ``(n_wavelengths, KH, KW)`` on ``pixel_deg``, one per wavelength, and the
-        wavelengths. 'reference' transforms once per wavelength, 'scaled' once in all."""
+        wavelengths, each the fraction of the light through the aperture in each pixel
+        (times the pupil's share of the light under ``pupil_convention='Luidolt2020'``).
+
+        ``pixel_integration='exact'`` integrates each wavelength's PSF over the pixels
+        (:func:`glare.fraunhofer.pixel_integrated_psf`; one autocorrelation serves every
+        wavelength unless the Fresnel term differs between them, 'reference' with
+        ``fresnel``); ``'rebin'`` samples the PSF by FFT and rebins the samples, 'reference'
+        transforming once per wavelength and 'scaled' once in all."""
         pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
         shape = check_kernel_shape(shape)
         grid = self.grid_for(pixel_deg, shape)
-        t = self.aperture(grid)
         d = self.fresnel_distance_mm if self.fresnel else None
         wavelengths = self._wavelengths()
+        check_choice("spectral", self.spectral, SPECTRAL_METHODS)
         kernels = np.empty((wavelengths.size, *shape))
-        if self.spectral == "scaled":
-            base = psf_fraunhofer(
-                t, grid.spacing_mm, LUIDOLT2020_REFERENCE_NM, fresnel_distance_mm=d
-            )
-            # one contiguous crop wide enough for the shortest wavelength serves them all
-            spacings = base.spacing_deg * wavelengths / LUIDOLT2020_REFERENCE_NM
-            crop = np.ascontiguousarray(
-                _crop_to_reach(base.values, float(spacings.min()), pixel_deg, shape)
-            )
-            for i, spacing in enumerate(spacings):
-                kernels[i] = _rebin_cropped(crop, float(spacing), pixel_deg, shape)
-        elif self.spectral in ("reference", "kakimoto"):
+        if self.pixel_integration == "exact":
+            reach_deg = self._extent_deg(pixel_deg, shape)
+            t = self._aperture_crop(grid)
+            per_wavelength = self.fresnel and self.spectral != "scaled"
+            acf = None
+            if not per_wavelength:
+                field_ = t if d is None else _fresnel_field(t, grid.spacing_mm, 575.0, d)
+                acf = aperture_autocorrelation(field_, grid.spacing_mm)
             for i, wavelength in enumerate(wavelengths):
-                psf = psf_fraunhofer(t, grid.spacing_mm, wavelength, fresnel_distance_mm=d)
-                kernels[i] = rebin(psf.values, psf.spacing_deg, pixel_deg, shape)
+                if per_wavelength:
+                    field_ = _fresnel_field(t, grid.spacing_mm, float(wavelength), d)
+                    acf = aperture_autocorrelation(field_, grid.spacing_mm)
+                kernels[i] = pixel_integrated_psf(
+                    acf, float(wavelength), pixel_deg, shape, reach_deg=reach_deg
+                )
+            open_area_mm2 = float(np.abs(t).sum()) * grid.spacing_mm**2
+        elif self.pixel_integration == "rebin":
+            t = self.aperture(grid)
+            open_area_mm2 = float(np.abs(t).sum()) * grid.spacing_mm**2
+            if self.spectral == "scaled":
+                base = psf_fraunhofer(
+                    t, grid.spacing_mm, LUIDOLT2020_REFERENCE_NM, fresnel_distance_mm=d
+                )
+                # one contiguous crop wide enough for the shortest wavelength serves them all
+                spacings = base.spacing_deg * wavelengths / LUIDOLT2020_REFERENCE_NM
+                crop = np.ascontiguousarray(
+                    _crop_to_reach(base.values, float(spacings.min()), pixel_deg, shape)
+                )
+                for i, spacing in enumerate(spacings):
+                    kernels[i] = _rebin_cropped(crop, float(spacing), pixel_deg, shape)
+            else:
+                for i, wavelength in enumerate(wavelengths):
+                    psf = psf_fraunhofer(t, grid.spacing_mm, wavelength, fresnel_distance_mm=d)
+                    kernels[i] = rebin(psf.values, psf.spacing_deg, pixel_deg, shape)
         else:
-            raise ValueError(f"spectral must be one of {SPECTRAL_METHODS}; got {self.spectral!r}")
+            raise ValueError(
+                f"pixel_integration must be one of {PIXEL_INTEGRATION_METHODS}; "
+                f"got {self.pixel_integration!r}"
+            )
+        kernels *= self.pupil_share(open_area_mm2)
         return kernels, wavelengths
+
+    def pupil_share(self, open_area_mm2: float | None = None) -> float:
+        """The factor on the unit-energy PSF that ``pupil_convention`` asks for.
+
+        1 for ``'unit-energy'``; for ``'Luidolt2020'`` the open area of the aperture over the
+        area of the 8 mm disc the particles are spread over (Luidolt's largest pupil, §5.2.1
+        ii): a 2 mm pupil 1/16, an 8 mm pupil 1 (less what lids, lashes and particles stop).
+        """
+        if self.pupil_convention == "unit-energy":
+            return 1.0
+        if self.pupil_convention == "Luidolt2020":
+            if open_area_mm2 is None:
+                open_area_mm2 = math.pi * self.pupil_diameter**2 / 4
+            return open_area_mm2 / (math.pi * LUIDOLT2020_PUPIL_RANGE_MM[1] ** 2 / 4)
+        raise ValueError(
+            f"pupil_convention must be one of {PUPIL_CONVENTIONS}; got {self.pupil_convention!r}"
+        )
 
     def halo(self) -> str:
         return "none in this model"

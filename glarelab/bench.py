@@ -623,10 +623,12 @@ def spectral_bench(
     """Wave-optics PSF (6 mm eye, lashes, lid, particles) as an RGB kernel: one FFT per
     wavelength (the reference, 61 wavelengths) against exactly rescaled copies of one FFT,
     Kakimoto's three wavelengths, and fewer wavelengths; time and CIEDE2000 against the
-    reference (:func:`glare.wave.kernel_colour_error`)."""
+    reference (:func:`glare.wave.kernel_colour_error`). The kernels are FFT samples rebinned
+    (``pixel_integration='rebin'``), the path whose cost these methods differ in: with exact
+    pixel integration one autocorrelation serves every wavelength (docs/speed-accuracy.md)."""
 
     def kernel(**options):
-        model = glare.WaveOpticsGlare(pupil_mm=6.0, **options)
+        model = glare.WaveOpticsGlare(pupil_mm=6.0, pixel_integration="rebin", **options)
         return lambda: model.kernel(pixel_deg, shape, colour=True).values
 
     variants = {

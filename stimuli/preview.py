@@ -66,23 +66,34 @@ def preview_png(
     return path
 
 
-def psf_to_display(values: np.ndarray, *, dynamic_range: float = 1e6) -> np.ndarray:
+def psf_to_display(
+    values: np.ndarray, *, dynamic_range: float = 1e6, peak: float | None = None
+) -> np.ndarray:
     """A glare kernel as 8-bit codes through Kakimoto's sigmoid (eqs. 6-7).
 
-    The kernel is scaled so that its peak is ``dynamic_range`` (the bright centre is clipped,
-    as Kakimoto §3.3 does) and 1 is ``dynamic_range`` below the peak; the sigmoid's output
-    (32 to 640) is shown as codes 0-255, clipped. Each channel of a colour kernel is mapped
-    with the same scale.
+    The kernel is scaled so that ``peak`` (default: its own peak) is ``dynamic_range`` (the
+    bright centre is clipped, as Kakimoto §3.3 does) and 1 is ``dynamic_range`` below it; the
+    sigmoid's output (1.6 to 640) is shown as codes 0-255, clipped. Each channel of a colour
+    kernel is mapped with the same scale; give several kernels one ``peak`` to compare their
+    intensities.
     """
     array = np.asarray(values, dtype=float)
-    peak = float(array.max())
+    if peak is None:
+        peak = float(array.max())
     x = np.clip(array, 0.0, None) / (peak if peak > 0 else 1.0) * dynamic_range
     return np.round(np.clip(sigmoid_Kakimoto2004(x), 0.0, 255.0)).astype(np.uint8)
 
 
-def psf_png(path: str | Path, values: np.ndarray, *, dynamic_range: float = 1e6) -> Path:
+def psf_png(
+    path: str | Path,
+    values: np.ndarray,
+    *,
+    dynamic_range: float = 1e6,
+    peak: float | None = None,
+) -> Path:
     """Write :func:`psf_to_display` of a kernel to a PNG file and return its path."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    Image.fromarray(psf_to_display(values, dynamic_range=dynamic_range)).save(path)
+    image = psf_to_display(values, dynamic_range=dynamic_range, peak=peak)
+    Image.fromarray(image).save(path)
     return path

@@ -87,7 +87,7 @@ def sandbox(tmp_path_factory) -> Path:
     # calibrations
     (box / "calibration-text.json").write_text("not json\n")
     (box / "calibration-list.json").write_text("[1, 2, 3]\n")
-    shutil.copy(ROOT / "calibrations" / "SYNTHETIC-spencer1995-100cd-8bit.json", box / "8bit.json")
+    shutil.copy(ROOT / "calibrations" / "SYNTHETIC-spencer1995-50cd-8bit.json", box / "8bit.json")
     (box / "readings-down.csv").write_text(
         "code,luminance_cd_m2\n0,0.5\n300,50\n600,40\n1023,400\n"
     )

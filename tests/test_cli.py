@@ -216,6 +216,13 @@ def test_gallery_command_renders_every_configuration(tmp_path):
     assert len(captions) == 10
     for name in captions:
         assert Image.open(tmp_path / f"{name}.png").size == (41, 41)
+    # Luidolt Fig. 5.6: the pupil series is on one scale, so a larger pupil shows more glare
+    glow = []
+    for pupil in (2, 4, 6, 8):
+        codes = np.asarray(Image.open(tmp_path / f"wave_particles_pupil_{pupil}mm.png"))
+        y, x = np.indices(codes.shape[:2]) - 20
+        glow.append(codes[np.hypot(x, y) > 3].astype(float).mean())
+    assert np.all(np.diff(glow) > 0)
 
 
 def test_calibrate_fit_writes_a_dated_calibration_with_the_readings_hash(tmp_path):

@@ -277,12 +277,19 @@ def gallery_models() -> dict[str, tuple[str, glare.GlareModel]]:
             glare.WaveOpticsGlare(pupil_mm=6.0, diaphragm_sides=6, **camera),
         ),
     }
-    for pupil in (2, 4, 6, 8):
+    for pupil in (2, 4, 6, 8):  # Luidolt's kernel grows with the pupil: one scale for all four
         models[f"wave_particles_pupil_{pupil}mm"] = (
-            f"pupil {pupil} mm and 1000 particles (Luidolt Fig. 5.6)",
-            glare.WaveOpticsGlare(pupil_mm=float(pupil), eyelashes=False, eyelid=False),
-        )
+            f"pupil {pupil} mm and 1000 particles, Luidolt's convention (energy ∝ pupil area; "
+            "one scale for the series, his Fig. 5.6)",
+            glare.WaveOpticsGlare(
+                pupil_mm=float(pupil), eyelashes=False, eyelid=False,
+                pupil_convention="Luidolt2020",
+            ),
+        )  # fmt: skip
     return models
+
+
+GALLERY_SERIES = "wave_particles_pupil_"  # kernels shown on one scale, that of the brightest
 
 
 def _gallery(args: argparse.Namespace) -> int:
@@ -294,13 +301,21 @@ def _gallery(args: argparse.Namespace) -> int:
         PSF_FIXED_BYTES + PSF_BYTES_PER_PIXEL * 3 * args.size**2, f"a {args.size}² kernel"
     )
     captions = {}
+    series = {}
     for index, (name, (caption, model)) in enumerate(models.items(), start=1):
         _log(f"[{index}/{len(models)}] {caption}")
         start = time.perf_counter()
         kernel = glare.digitise_kernel(model, args.pixel_deg, (args.size, args.size), colour=True)
-        psf_png(out / f"{name}.png", kernel.values)
         captions[name] = {"caption": caption, "seconds": round(time.perf_counter() - start, 2)}
+        if name.startswith(GALLERY_SERIES):
+            series[name] = kernel.values
+            continue
+        psf_png(out / f"{name}.png", kernel.values)
         _log(f"    {captions[name]['seconds']} s → {out / name}.png")
+    peak = max((float(v.max()) for v in series.values()), default=None)
+    for name, values in series.items():
+        psf_png(out / f"{name}.png", values, peak=peak)
+        _log(f"    {captions[name]['seconds']} s → {out / name}.png (the series' scale)")
     (out / "wave_gallery.json").write_text(json.dumps(captions, indent=2))
     print(out.resolve())
     return 0
@@ -537,7 +552,7 @@ def add(commands) -> None:
         "--pixel-deg", type=number(MIN_PIXEL_DEG, 10), default=0.01, help="degrees per pixel"
     )
     gallery.add_argument(
-        "--size", type=odd_size, default=401, help="kernel size in pixels (odd, 3-16385)"
+        "--size", type=odd_size, default=201, help="kernel size in pixels (odd, 3-16385)"
     )
     gallery.set_defaults(run=_gallery)
 

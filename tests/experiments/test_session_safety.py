@@ -112,7 +112,7 @@ def test_a_calibration_of_another_display_is_refused_before_the_window(tmp_path,
                 calibration=yoshida,
             )
     message = str(refused.value)
-    assert "calibration: the protocol asks for a 8-bit calibration with white 100 cd/m²" in message
+    assert "calibration: the protocol asks for a 8-bit calibration with white 50 cd/m²" in message
     assert "a 10-bit calibration with white 433 cd/m² (Barco, 433 cd/m²)" in message
     assert "--accept-mismatch calibration" in message
     assert data_files(out) == {} and path.exists()

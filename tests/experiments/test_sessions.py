@@ -263,7 +263,7 @@ def test_a_scripted_dry_run_shows_the_calibrated_codes(tmp_path, sets, study):
         / (
             "SYNTHETIC-yoshida2008-433cd-10bit.json"
             if study == "yoshida2008"
-            else "SYNTHETIC-spencer1995-100cd-8bit.json"
+            else "SYNTHETIC-spencer1995-50cd-8bit.json"
         )
     )
     expected_lut = default_calibration(load_protocol(PROTOCOLS / f"{study}.toml")).lut
@@ -272,7 +272,8 @@ def test_a_scripted_dry_run_shows_the_calibrated_codes(tmp_path, sets, study):
     if study == "yoshida2008":
         luminance, x = 220.0, width // 2  # the reference disk, clamped at L_dmax, in the middle
     else:
-        luminance = 75.0  # the source's peak: 75 % of 100 cd/m²
+        protocol = load_protocol(PROTOCOLS / f"{study}.toml")  # the source's peak: 75 % of
+        luminance = protocol["glare"]["peak_fraction"] * protocol["display"]["max_cd_m2"]
         x = width // 2 + (-1 if rows[0]["glare_side"] == "left" else 1) * (300 + 60) // 2
     code = int(protocol_calibration.encode(np.array([luminance]))[0][0])
     bits = sidecar["bit_depth"]

@@ -231,13 +231,23 @@ def test_hybrid_keeps_vos_scattering_and_spreads_the_core_by_diffraction():
 
 
 def test_sigmoid_tone_curve_of_kakimoto():
-    # eq. 7 with D = 640, k = 20, g = 0.465 (§3.4): D / k at 0, rising towards D
+    # eq. 7 with D = 640, k = 20, g = 0.465 (§3.4), in the form §3.3 describes: D the maximum,
+    # k² the contrast between minimum and maximum: D / k² at 0, D / k at 1, rising towards D
     x = np.array([0.0, 1.0, 1e3, 1e12])
     y = sigmoid_Kakimoto2004(x)
-    assert_allclose(y[:2], [32.0, 640 * 2 / 21], rtol=1e-12)
+    assert_allclose(y[:2], [640 / 400, 640 / 20], rtol=1e-12)
     assert np.all(np.diff(y) > 0) and y[-1] < 640.0
+    assert_allclose(sigmoid_Kakimoto2004(np.array(1e300)) / y[0], 20.0**2, rtol=1e-9)
+    # log-log symmetric about x = 1: sig(x) sig(1/x) = (D / k)²
+    assert_allclose(sigmoid_Kakimoto2004(np.array(7.0)) * sigmoid_Kakimoto2004(np.array(1 / 7)),
+                    32.0**2, rtol=1e-12)  # fmt: skip
+    # eq. 7 as printed: contrast k, a floor of 32
+    printed = sigmoid_Kakimoto2004(x, form="as printed")
+    assert_allclose(printed[:2], [32.0, 640 * 2 / 21], rtol=1e-12)
     with pytest.raises(ValueError, match=">= 0"):
         sigmoid_Kakimoto2004(np.array([-1.0]))
+    with pytest.raises(ValueError, match="form must be one of"):
+        sigmoid_Kakimoto2004(x, form="tumblin")
 
 
 def test_eyelash_parameters_reach_the_aperture():

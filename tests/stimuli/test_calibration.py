@@ -126,7 +126,7 @@ def test_shipped_synthetic_calibrations_match_their_protocols():
     from stimuli.stimulus_set import default_calibration
 
     root = Path(__file__).parents[2]
-    for study, name in (("yoshida2008", "433cd-10bit"), ("spencer1995", "100cd-8bit")):
+    for study, name in (("yoshida2008", "433cd-10bit"), ("spencer1995", "50cd-8bit")):
         shipped = Calibration.load(root / "calibrations" / f"SYNTHETIC-{study}-{name}.json")
         assert shipped.status == "synthetic" and "SYNTHETIC" in shipped.label
         expected = default_calibration(load_protocol(root / "protocols" / f"{study}.toml"))
