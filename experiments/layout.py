@@ -120,3 +120,81 @@ def row_layout(
         placements.append(Placement(left, (height - h) // 2, w, h, (width, height)))
         left += w + gap
     return placements
+
+
+def protocol_drawing(protocol) -> tuple[list[str], bool]:
+    """How a protocol's first trial is drawn on the protocol's own display: lines to print and
+    whether every image is drawn 1:1 (each image pixel on one screen pixel, the whole row on
+    the screen). A protocol that shows no images: no lines, True.
+
+    The lines also say where whole pixels depart from the protocol's angles: an image size or
+    gap in degrees rounded to pixels, and a ``pixel_deg`` that is not the display's pixel.
+    """
+    from protocols import pixel_deg
+
+    data = protocol.data
+    display = data.get("display")
+    s = data.get("stimulus") or data.get("scene")
+    if not display or not s or protocol.paradigm not in ("matching", "staircase", "rating"):
+        return [], True
+    screen = tuple(display["resolution_px"])
+    display_deg = pixel_deg(protocol)
+    notes = []
+    if protocol.paradigm == "matching":
+        from stimuli.matching import _odd
+
+        size = _odd(s["size_deg"] / display_deg)
+        gap = round(s["gap_deg"] / display_deg)
+        count = 3 if data["trials"]["settings"] == "bounds" else 2
+        sizes = [(size, size)] * count
+        notes.append(
+            f"stimulus.size_deg = {s['size_deg']:g} is {s['size_deg'] / display_deg:.2f} "
+            f"display pixels: rendered and drawn as {size} px ({size * display_deg:.4g}°, odd "
+            "so the disk has a centre pixel)"
+        )
+        notes.append(
+            f"stimulus.gap_deg = {s['gap_deg']:g} is drawn as {gap} px ({gap * display_deg:.4g}°)"
+        )
+        own_deg = None
+    elif protocol.paradigm == "staircase":
+        sizes, gap = [(s["window_px"], s["window_px"])] * 2, s["window_gap_px"]
+        own_deg = s["pixel_deg"]
+    elif "size_px" in s:  # a rating study's scene
+        sizes, gap = [tuple(s["size_px"])], 0
+        own_deg = s["pixel_deg"]
+    else:
+        return [], True
+    if own_deg:  # a pixel angle of the protocol's own
+        departure = own_deg / display_deg - 1.0
+        if abs(departure) > 0.01:
+            notes.append(
+                f"pixel_deg = {own_deg:g}° is not the display's pixel ({display_deg:.4g}° at "
+                f"viewing.distance_m = {data['viewing']['distance_m']:g}): images are drawn "
+                f"1:1, so every angle on this display is {100 * departure:+.1f} % off the "
+                "protocol's"
+            )
+    placements = row_layout(screen, sizes, gap_px=gap)
+    exact = all(p.inside for p in placements)
+    width = sum(w for w, _ in sizes) + gap * (len(sizes) - 1)
+    what = (
+        f"{len(sizes)} image{'s' if len(sizes) > 1 else ''} of "
+        + " and ".join(sorted({f"{w} × {h} px" for w, h in sizes}))
+        + (f", {gap} px apart" if len(sizes) > 1 else "")
+    )
+    if exact:
+        columns = ", ".join(str(p.left_px) for p in placements)
+        left = screen[0] / 2 - (placements[0].left_px + width / 2)
+        tallest = max(placements, key=lambda p: p.height_px)
+        below = -tallest.pos[1]
+        off = [f"{v:g} px {side}" for v, side in ((left, "left of"), (below, "below")) if v]
+        lines = [
+            f"drawn 1:1 on the display's {screen[0]} × {screen[1]} px: {what}; every edge on a "
+            f"whole pixel (left columns {columns})"
+            + (f"; the row's centre is {' and '.join(off)} the screen's" if off else "")
+        ]
+    else:
+        lines = [
+            f"CANNOT be drawn 1:1 on the display's {screen[0]} × {screen[1]} px: {what} take "
+            f"{width} × {max(h for _, h in sizes)} px, more than the screen"
+        ]
+    return lines + notes, exact
