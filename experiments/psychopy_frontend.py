@@ -4,8 +4,12 @@ Only this module (and :mod:`stimuli.psychopy_window`, :mod:`stimuli.measure_psyc
 PsychoPy.
 
 **Images.** Luminance images (cd/m²) from the stimulus set are turned into display codes
-through the calibration (the set's own when the session runs uncalibrated) and drawn pixel for
-pixel (``units='pix'``, no interpolation, rows flipped to PsychoPy's bottom-up order). Every
+through the calibration (the set's own when the session runs uncalibrated), rounded to the
+window's bits here (not by the graphics card), and drawn pixel for pixel (``units='pix'``, no
+interpolation, rows flipped to PsychoPy's bottom-up order) with every edge on a whole screen
+pixel (:mod:`experiments.layout`), so each image pixel is one screen pixel for odd and even
+sizes alike; :meth:`PsychoPyFrontend.check_presentation` reads a screen's images back from
+the frame buffer to prove it. Every
 image is encoded and uploaded once: the set's images when first needed, a target when its
 setting changes, Spencer's comparison once per trial before its first frame. Frames only draw.
 

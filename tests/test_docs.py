@@ -36,7 +36,8 @@ NOT_RUN = {
     "out/demo`, which tests/test_demo.py runs (test_make_demo_runs_the_tested_command)",
     "glarelab calibrate measure --out calibrations/my-display.json --bit-depth 10": "needs a "
     "photometer; tests/stimuli/test_measure.py runs it with a simulated one",
-    "glarelab check-display yoshida2008 --calibration calibrations/my-display.json": "measures "
+    "glarelab check-display yoshida2008 --stimuli sets/yoshida2008 --calibration "
+    "calibrations/my-display.json": "measures "
     "the lab's display; tests/test_bad_inputs.py and tests/experiments/ check it on Xvfb",
     "glarelab check-display spencer1995 --stimuli sets/spencer1995 --calibration "
     "calibrations/my-spencer-display.json": "measures the lab's display, as above",
