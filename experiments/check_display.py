@@ -17,6 +17,13 @@ participant:
   calibration, of five codes across its range against the luminance the calibration gives
   them (its verification pass, repeated: a display that changed since it was calibrated
   fails); every reading is kept in the findings, and a photometer fault is one of them;
+- with a stimulus set, what the screen shows of it: every image a session shows as it is
+  (references, targets, glare and comparison images, scenes), drawn by the session's own
+  front-end in each place of the first trial's row (:mod:`experiments.layout`), read back from
+  the frame buffer (:func:`stimuli.psychopy_window.read_codes`, at 16 bits per channel, so a
+  10-bit window's codes come back whole) and compared with the set's codes rounded to the
+  window's bits: the share of pixels exactly equal and the worst difference in codes, per
+  image (:func:`read_back_images`);
 - with a stimulus set of a protocol that flashes its stimuli (a staircase), the cost of one
   frame of the first flash a session shows:
   the time to draw its images (CPU) and the flip-to-flip time while drawing them, against the
@@ -41,10 +48,13 @@ import numpy as np
 from stimuli.psychopy_window import measure_frame_intervals
 
 from .display import check_screen, timing_rate_hz
+from .layout import row_layout
 from .loop import DROPPED_INTERVAL
 from .psychopy_frontend import PsychoPyFrontend
 
-__all__ = ["check_display", "write_check"]
+__all__ = ["check_display", "first_screen", "read_back_images", "write_check"]
+
+SHOWN_KINDS = ("reference", "target", "glare", "comparison", "scene")  # not the components
 
 
 def _interval_summary(intervals_s: np.ndarray, period_s: float) -> dict:
@@ -166,6 +176,11 @@ def check_display(
             result["photometer"] = _photometer_check(
                 protocol, window, photometer, calibration, patch_protocol, records, log
             )
+        if stimuli is not None:
+            log("drawing every image of the stimulus set and reading the screen back")
+            screen = first_screen(_engine(protocol, 1.0 / period))
+            result["images"] = read_back_images(device, screen)
+            result["images_exact"] = all(r["exact_fraction"] == 1.0 for r in result["images"])
         flash = _first_flash(protocol, 1.0 / period) if stimuli is not None else None
         if flash is not None:
             result["flash"] = _flash_cost(device, flash, frames, period, log)
@@ -253,16 +268,119 @@ def _flash_cost(device, screen: dict, frames: int, period: float, log) -> dict:
     }
 
 
-def _first_flash(protocol, refresh_hz: float) -> dict | None:
-    """The first timed presentation a session of this protocol shows, if any."""
+def _engine(protocol, refresh_hz: float):
     from .paradigms import PARADIGMS
 
-    engine = PARADIGMS[protocol.paradigm].engine(
+    return PARADIGMS[protocol.paradigm].engine(
         protocol, "check1", counterbalance=0, refresh_hz=refresh_hz
     )
+
+
+def _first_flash(protocol, refresh_hz: float) -> dict | None:
+    """The first timed presentation a session of this protocol shows, if any."""
+    engine = _engine(protocol, refresh_hz)
     engine.press("space", 0.0)
     screen = engine.screen()
     return screen if screen.get("frames") else None
+
+
+def first_screen(engine, *, presses: int = 50) -> dict | None:
+    """The first screen with images an engine shows, Space pressed through the screens before
+    it (instructions, a block's start); None if it shows none (a questionnaire). The engine is
+    used up: give it one of its own."""
+    for _ in range(presses):
+        screen = engine.screen()
+        if screen.get("images"):
+            return screen
+        if "space" not in screen.get("keys", {}):
+            return None
+        engine.press("space", 0.0)
+    return None
+
+
+def read_back_images(device, screen: dict | None, *, names: list[str] | None = None) -> list[dict]:
+    """Draw each image of the device's stimulus set in each place of ``screen``'s row, read it
+    back from the frame buffer and compare it with the set's codes.
+
+    Parameters
+    ----------
+    device
+        An open :class:`experiments.psychopy_frontend.PsychoPyFrontend` with a stimulus set.
+    screen
+        The screen whose row gives the places (the first trial's, :func:`first_screen`); None:
+        each image alone at the centre.
+    names
+        The set's images to draw; default every image a session shows as it is (not the
+        components it composes images from).
+
+    Returns
+    -------
+    list of dict
+        Per image: ``image``, ``places`` (how many it was drawn in), ``pixels`` (per place),
+        ``exact_fraction`` (the share of pixels whose three channels equal the expected codes,
+        the lowest over the places), ``worst_code_difference`` (at the window's bits),
+        ``first_difference`` (``[row, column, shown, expected]`` of the first pixel that
+        differs, in the image's own coordinates, or None), ``expected`` (what the codes were
+        compared with) and ``window_bits``.
+    """
+    images = device.set.manifest["images"]
+    if names is None:
+        names = sorted(n for n, r in images.items() if r["kind"] in SHOWN_KINDS)
+    slots = [] if screen is None else [device.image_size(i) for i in screen["images"]]
+    gap = device.set.geometry.get("gap_px", 40)
+    window = device.window
+    size = tuple(int(v) for v in window.size)
+    framebuffer = tuple(int(v) for v in getattr(window, "frameBufferSize", size))
+    records = []
+    for name in names:
+        terms = [(name, 1.0)]
+        stim = device.image_stim(terms)
+        expected, source = device.expected_codes(terms)
+        own = (int(stim.size[0]), int(stim.size[1]))
+        places = [[*slots[:i], own, *slots[i + 1 :]] for i in range(len(slots))] or [[own]]
+        record = {
+            "image": name,
+            "places": len(places),
+            "pixels": own[0] * own[1],
+            "exact_fraction": 1.0,
+            "worst_code_difference": 0,
+            "first_difference": None,
+            "expected": source,
+            "window_bits": device.facts.bits_per_channel,
+        }
+        for index, sizes in enumerate(places):
+            placement = row_layout(size, sizes, gap_px=gap)[index]
+            if framebuffer != size:  # a HiDPI scale: the window's pixels are not the screen's
+                record |= {
+                    "exact_fraction": 0.0,
+                    "first_difference": None,
+                    "problem": f"the {size[0]} × {size[1]} px window has {framebuffer[0]} × "
+                    f"{framebuffer[1]} frame-buffer pixels: images are scaled, not drawn 1:1",
+                }
+                break
+            if not placement.inside:
+                record |= {
+                    "exact_fraction": 0.0,
+                    "problem": f"place {index + 1} of the row is off the {size[0]} × {size[1]} "
+                    "px window",
+                }
+                break
+            shown = device.read_back(stim, placement)
+            equal = np.all(shown == expected, axis=-1)
+            worst = int(np.abs(shown - expected).max())
+            if equal.mean() < record["exact_fraction"]:
+                record["exact_fraction"] = float(equal.mean())
+            record["worst_code_difference"] = max(record["worst_code_difference"], worst)
+            if record["first_difference"] is None and not equal.all():
+                row, column = (int(v) for v in np.argwhere(~equal)[0])
+                record["first_difference"] = [
+                    row,
+                    column,
+                    shown[row, column].tolist(),
+                    expected[row, column].tolist(),
+                ]
+        records.append(record)
+    return records
 
 
 def write_check(result: dict, path: Path) -> Path:

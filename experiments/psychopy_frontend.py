@@ -4,8 +4,12 @@ Only this module (and :mod:`stimuli.psychopy_window`, :mod:`stimuli.measure_psyc
 PsychoPy.
 
 **Images.** Luminance images (cd/m²) from the stimulus set are turned into display codes
-through the calibration (the set's own when the session runs uncalibrated) and drawn pixel for
-pixel (``units='pix'``, no interpolation, rows flipped to PsychoPy's bottom-up order). Every
+through the calibration (the set's own when the session runs uncalibrated), rounded to the
+window's bits here (not by the graphics card), and drawn pixel for pixel (``units='pix'``, no
+interpolation, rows flipped to PsychoPy's bottom-up order) with every edge on a whole screen
+pixel (:mod:`experiments.layout`), so each image pixel is one screen pixel for odd and even
+sizes alike; :meth:`PsychoPyFrontend.check_presentation` reads a screen's images back from
+the frame buffer to prove it. Every
 image is encoded and uploaded once: the set's images when first needed, a target when its
 setting changes, Spencer's comparison once per trial before its first frame. Frames only draw.
 
@@ -44,21 +48,45 @@ from stimuli.psychopy_window import (
     measure_frame_intervals,
     measure_refresh,
     open_window,
+    read_codes,
     screen_resolution,
     typed_text,
 )
 from stimuli.stimulus_set import StimulusSet
+from stimuli.stimulus_set import read_codes as read_set_codes
 
 from .display import ScreenFacts
 from .engine import Press
+from .layout import Placement, row_layout
 from .loop import Shown, count_dropped_frames
 
-__all__ = ["PsychoPyFrontend", "ScriptedKeys"]
+__all__ = ["PsychoPyFrontend", "ScriptedKeys", "codes_at_bits"]
 
 TEXT_RGB = (0.5, 0.5, 0.5)  # instructions and prompts: a mid grey on black
 DIM_RGB = (-0.4, -0.4, -0.4)  # labels next to the stimuli: dim, to leave the judgement alone
 MARKER_RGB = (0.2, 0.2, 0.2)  # the bar under the selected target
 PAUSE_KINDS = ("instructions", "block", "break", "continue", "end")
+
+
+def codes_at_bits(codes: np.ndarray, bits: int, window_bits: int) -> np.ndarray:
+    """``bits``-bit codes as the nearest codes of a ``window_bits``-bit window:
+    ``round(code × (2^window_bits − 1) / (2^bits − 1))``; the same codes when the bits agree.
+
+    Examples
+    --------
+    >>> codes_at_bits(np.array([0, 43, 255]), 8, 10).tolist()
+    [0, 173, 1023]
+    >>> codes_at_bits(np.array([0, 2, 1023]), 10, 8).tolist()
+    [0, 0, 255]
+    """
+    codes = np.asarray(codes)
+    if bits == window_bits:
+        return codes.astype(np.int64)
+    return np.rint(codes * ((2**window_bits - 1) / (2**bits - 1))).astype(np.int64)
+
+
+def _box(placement: Placement) -> tuple[int, int, int, int]:
+    return placement.left_px, placement.bottom_px, placement.width_px, placement.height_px
 
 
 class ScriptedKeys:
@@ -268,7 +296,17 @@ class PsychoPyFrontend:
 
     # --- images -----------------------------------------------------------------------------
 
-    def _levels(self, luminance: np.ndarray) -> np.ndarray:
+    @property
+    def window_bits(self) -> int:
+        """Bits per channel of the open window (the calibration's before it opens)."""
+        if self.facts is not None:
+            return self.facts.bits_per_channel
+        return self.calibration.bit_depth if self.calibration else self.display_bits
+
+    def _codes(self, luminance: np.ndarray) -> np.ndarray:
+        """The codes the window shows for ``luminance`` (cd/m²): the calibration's, rounded to
+        the window's bits here (:func:`codes_at_bits`), not by the graphics card, which
+        rounds a value near a tie either way."""
         if self.calibration is None:
             self.calibration = synthetic_calibration(
                 max_cd_m2=self.protocol["display"]["max_cd_m2"],
@@ -276,7 +314,10 @@ class PsychoPyFrontend:
                 bit_depth=self.display_bits,
             )
         codes, _ = self.calibration.encode(luminance)
-        level = codes.astype(np.float64) / (2**self.calibration.bit_depth - 1) * 2.0 - 1.0
+        return codes_at_bits(codes, self.calibration.bit_depth, self.window_bits)
+
+    def _levels(self, luminance: np.ndarray) -> np.ndarray:
+        level = self._codes(luminance).astype(np.float64) / (2**self.window_bits - 1) * 2.0 - 1.0
         return np.flipud(level)
 
     def _image_stim(self, luminance: np.ndarray):
@@ -319,18 +360,114 @@ class PsychoPyFrontend:
         for image in step["images"]:
             ((name, weight),) = image["terms"]
             stims.append(self._image_stim(self.set.read(name) * float(weight)))
+        self._lay_out(stims)
         return stims
 
     def _place(self, screen: dict) -> list:
         """The screen's images, uploaded and laid out in a row, centred, the set's gap apart."""
         stims = [self._stim(image) for image in screen.get("images", [])]
-        gap = self.set.geometry.get("gap_px", 40) if self.set else 0
-        width = sum(s.size[0] for s in stims) + gap * max(len(stims) - 1, 0)
-        x = -width / 2
-        for stim in stims:
-            stim.pos = (x + stim.size[0] / 2, 0)
-            x += stim.size[0] + gap
+        self._lay_out(stims)
         return stims
+
+    def _lay_out(self, stims: list) -> list[Placement]:
+        """Put ``stims`` in a row on whole pixels (:func:`experiments.layout.row_layout`): each
+        image pixel on one screen pixel."""
+        gap = self.set.geometry.get("gap_px", 40) if self.set else 0
+        placements = row_layout(
+            tuple(int(v) for v in self.window.size),
+            [(int(s.size[0]), int(s.size[1])) for s in stims],
+            gap_px=gap,
+        )
+        for stim, placement in zip(stims, placements, strict=True):
+            stim.pos = placement.pos
+        return placements
+
+    # --- what the screen shows --------------------------------------------------------------
+
+    def image_stim(self, terms):
+        """The stimulus a session draws for an image ``[(name, weight), …]`` of the set."""
+        return self._stim({"role": "read back", "terms": [tuple(t) for t in terms]})
+
+    def image_size(self, image: dict) -> tuple[int, int]:
+        """(width, height) in pixels of a screen's image."""
+        stim = self._stim(image)
+        return int(stim.size[0]), int(stim.size[1])
+
+    def expected_codes(self, terms) -> tuple[np.ndarray, str]:
+        """The codes the window must show for an image, (height, width, 3), top row first, at
+        the window's bits, and where they come from: a set image as it is, encoded with the
+        set's own calibration, has the codes of its PNG; any other image the calibration's
+        encoding of its luminance."""
+        terms = [tuple(t) for t in terms]
+        set_image = len(terms) == 1 and float(terms[0][1]) == 1.0
+        png = self.set.folder / f"{terms[0][0]}.png"
+        if set_image and self._set_calibration_used() and png.is_file():
+            codes, bits = read_set_codes(png)
+            source = f"{png.name} (the set's codes)"
+        else:
+            codes, _ = self.calibration.encode(self.set.compose(terms))
+            bits = self.calibration.bit_depth
+            source = "the calibration's codes of its luminance"
+        codes = codes_at_bits(codes, bits, self.window_bits)
+        if codes.ndim == 2:
+            codes = np.repeat(codes[..., None], 3, axis=-1)
+        return codes, source
+
+    def _set_calibration_used(self) -> bool:
+        self._codes(np.zeros((1, 1)))  # the calibration of an uncalibrated session, if none yet
+        return self.calibration.to_json() == self.set.manifest["calibration"]
+
+    def read_back(self, stim, placement: Placement) -> np.ndarray:
+        """Draw ``stim`` alone at ``placement`` and read its pixels back from the frame buffer
+        (codes at the window's bits, top row first); the back buffer is cleared after."""
+        self.window.clearBuffer()
+        stim.pos = placement.pos
+        stim.draw()
+        shown = read_codes(self.window, _box(placement), bits=self.window_bits)
+        self.window.clearBuffer()
+        return shown
+
+    def check_presentation(self, screen: dict | None) -> dict | None:
+        """Draw ``screen``'s images as a session places them, read them back from the frame
+        buffer and compare each with its codes (:meth:`expected_codes`); None without images.
+        The back buffer is cleared after."""
+        if screen is None or self.set is None or not screen.get("images"):
+            return None
+        stims = self._place(screen)
+        placements = self._lay_out(stims)
+        self.window.clearBuffer()
+        for stim in stims:
+            stim.draw()
+        images = []
+        for image, placement in zip(screen["images"], placements, strict=True):
+            expected, source = self.expected_codes(image["terms"])
+            if not placement.inside:
+                images.append({"role": image["role"], "exact_fraction": 0.0, "off_window": True})
+                continue
+            shown = read_codes(self.window, _box(placement), bits=self.window_bits)
+            equal = np.all(shown == expected, axis=-1)
+            images.append(
+                {
+                    "role": image["role"],
+                    "terms": [[str(n), float(w)] for n, w in image["terms"]],
+                    "size_px": [placement.width_px, placement.height_px],
+                    "left_bottom_px": [placement.left_px, placement.bottom_px],
+                    "exact_fraction": float(equal.mean()),
+                    "worst_code_difference": int(np.abs(shown - expected).max()),
+                    "expected": source,
+                }
+            )
+        self.window.clearBuffer()
+        size = [int(v) for v in self.window.size]
+        framebuffer = [int(v) for v in getattr(self.window, "frameBufferSize", size)]
+        return {
+            "screen": f"{screen['kind']} of trial {screen.get('trial')}",
+            "window_px": size,
+            "framebuffer_px": framebuffer,
+            "window_bits": self.window_bits,
+            "images": images,
+            "exact": framebuffer == size and all(i["exact_fraction"] == 1.0 for i in images),
+        }
 
     # --- screens ----------------------------------------------------------------------------
 

@@ -396,6 +396,9 @@ def run_session(
                         engine.replay(files.rows)
                     except ValueError as error:
                         raise SessionError(f"{files.csv_path.name}: {error}") from None
+                presentation = _check_presentation(
+                    frontend, protocol, participant, session, counterbalance, rate
+                )
                 files.open()
                 sidecar = _start_run(
                     sidecar,
@@ -412,6 +415,7 @@ def run_session(
                     calibration_record=calibration_record,
                     simulated=simulated,
                 )
+                sidecar["runs"][-1]["presentation_check"] = presentation
                 try:
                     files.write_sidecar(sidecar)
                 except OSError as error:
@@ -440,6 +444,33 @@ def run_session(
         finally:
             files.close()
     return sidecar
+
+
+def _check_presentation(frontend, protocol, participant, session, counterbalance, rate):
+    """The first trial's images drawn in the session's window and read back (a front-end that
+    can, with a stimulus set): what the sidecar records; a warning if the screen does not show
+    their codes."""
+    check = getattr(frontend, "check_presentation", None)
+    if check is None:
+        return None
+    from .check_display import first_screen
+
+    engine = make_engine(
+        protocol, participant, session=session, counterbalance=counterbalance, refresh_hz=rate
+    )
+    result = check(first_screen(engine))
+    if result is not None and not result["exact"]:
+        shown = ", ".join(
+            f"{image['role']} {100 * image['exact_fraction']:.2f} %" for image in result["images"]
+        )
+        print(
+            f"[glarelab] warning: the screen does not show the stimulus set's codes (pixels "
+            f"exact: {shown}); run glarelab check-display {protocol.study} --stimuli SET on "
+            "this display",
+            file=sys.stderr,
+            flush=True,
+        )
+    return result
 
 
 def _refresh_verified(checks: list[dict]) -> bool:

@@ -133,6 +133,14 @@ def data_reference() -> str:
         "rate and whether flips followed vertical sync or the clock), every display check with",
         "the mismatches accepted, and the count of key presses not taken.",
         "",
+        "A session with a stimulus set draws its first trial's images in its window before",
+        "the first trial and reads them back from the frame buffer: the run's",
+        "`presentation_check` gives, per image, the share of pixels exactly equal to its codes",
+        "(`exact_fraction`, the set's PNG codes or the calibration's, rounded to the window's",
+        "bits), the worst difference in codes, its place in whole pixels, and `exact` for the",
+        "screen (a warning is printed when it is false; `glarelab check-display --stimuli`",
+        "reads every image of the set).",
+        "",
     ]
 
     def table(columns) -> list[str]:

@@ -30,6 +30,7 @@ __all__ = [
     "measure_frame_intervals",
     "measure_refresh",
     "open_window",
+    "read_codes",
     "screen_resolution",
     "typed_text",
     "window_bits",
@@ -113,6 +114,36 @@ def measure_frame_intervals(window, frames: int = 300, draw=None) -> np.ndarray:
 def grab_screen(window, *, buffer: str = "back") -> np.ndarray:
     """The window's pixels (height, width, 3) as uint8, from the back or front buffer."""
     return np.asarray(window.getMovieFrame(buffer=buffer))
+
+
+def read_codes(
+    window, box: tuple[int, int, int, int], *, bits: int, buffer: str = "back"
+) -> np.ndarray:
+    """The codes of the window's pixels in ``box`` at ``bits`` per channel: (height, width, 3)
+    integers, top row first.
+
+    ``box`` is (left, bottom, width, height) in frame-buffer pixels from the lower-left corner
+    (OpenGL's). The pixels are read at 16 bits per channel (``glReadPixels`` with
+    ``GL_UNSIGNED_SHORT``), the one read that holds an 8-, 10- or 12-bit frame buffer without
+    loss, and turned back into codes: ``round(value × (2^bits − 1) / 65535)``; a ``bits``-bit
+    code ``c`` reads as ``round(c × 65535 / (2^bits − 1))``, within half a 16-bit step, so it
+    comes back exactly.
+    """
+    from pyglet import gl
+
+    left, bottom, width, height = (int(v) for v in box)
+    if not 1 <= bits <= 16:
+        raise ValueError(f"bits must be 1-16; got {bits!r}")
+    if width < 1 or height < 1:
+        raise ValueError(f"box must have a width and a height of at least 1 pixel; got {box!r}")
+    if buffer not in ("back", "front"):
+        raise ValueError(f"buffer must be 'back' or 'front'; got {buffer!r}")
+    values = (ctypes.c_ushort * (width * height * 3))()
+    gl.glReadBuffer({"back": gl.GL_BACK, "front": gl.GL_FRONT}[buffer])
+    gl.glPixelStorei(gl.GL_PACK_ALIGNMENT, 1)
+    gl.glReadPixels(left, bottom, width, height, gl.GL_RGB, gl.GL_UNSIGNED_SHORT, values)
+    pixels = np.frombuffer(values, dtype=np.uint16).reshape(height, width, 3)[::-1]
+    return np.rint(pixels * ((2**bits - 1) / 65535.0)).astype(np.int64)
 
 
 class KeyReader:

@@ -307,7 +307,9 @@ def _write_set(out: Path, protocol: Protocol, built: dict, calibration: Calibrat
     images = built["images"]
     records = {}
     for name, info in images.items():
-        img = np.asarray(info["img"], dtype=np.float64)
+        # the luminances as the EXR keeps them (float32): its PNG codes are their encoding,
+        # the codes a session encodes from the EXR
+        img = np.asarray(info["img"], dtype=np.float32).astype(np.float64)
         write_exr(out / f"{name}.exr", img.astype(np.float32))
         files = [f"{name}.exr"]
         record = {k: v for k, v in info.items() if k != "img"}

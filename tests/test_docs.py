@@ -44,7 +44,8 @@ NOT_RUN = {
     "glarelab check-display yoshida2008 --calibration calibrations/my-display.json --photometer "
     "LS-100 --port /dev/ttyUSB0": "needs a photometer; tests/stimuli/test_photometer.py runs "
     "it against a simulated LS-100 under Xvfb",
-    "glarelab check-display yoshida2008 --calibration calibrations/my-display.json": "measures "
+    "glarelab check-display yoshida2008 --stimuli sets/yoshida2008 --calibration "
+    "calibrations/my-display.json": "measures "
     "the lab's display; tests/test_bad_inputs.py and tests/experiments/ check it on Xvfb",
     "glarelab check-display spencer1995 --stimuli sets/spencer1995 --calibration "
     "calibrations/my-spencer-display.json": "measures the lab's display, as above",

@@ -62,6 +62,26 @@ def _check_display(args: argparse.Namespace) -> int:
             f"  {'ok  ' if check['passed'] else 'FAIL'} {check['name']}: protocol "
             f"{check['expected']}, display {check['actual']}"
         )
+    if "images" in result:
+        images = result["images"]
+        print(
+            f"read back {len(images)} images of {args.stimuli} at "
+            f"{result['bits_per_channel']} bits per channel:"
+        )
+        for image in images:
+            exact = image["exact_fraction"] == 1.0 and image["worst_code_difference"] == 0
+            line = (
+                f"  {'ok  ' if exact else 'FAIL'} {image['image']}: "
+                f"{100 * image['exact_fraction']:.3f} % of {image['pixels']} px exact in "
+                f"{image['places']} place(s), worst difference {image['worst_code_difference']} "
+                "codes"
+            )
+            if image.get("problem"):
+                line += f" ({image['problem']})"
+            elif image["first_difference"] is not None:
+                row, column, shown, expected = image["first_difference"]
+                line += f"; first at row {row}, column {column}: {shown}, not {expected}"
+            print(line)
     if "flash" in result:
         flash = result["flash"]
         print(
@@ -80,7 +100,8 @@ def _check_display(args: argparse.Namespace) -> int:
                 f"{found['black_cd_m2']:.4g} cd/m², white {found['white_cd_m2']:.4g} cd/m²"
             )
     _log(f"wrote {write_check(result, out)}")
-    return 0 if all(c["passed"] for c in result["checks"]) else 1
+    passed = all(c["passed"] for c in result["checks"]) and result.get("images_exact", True)
+    return 0 if passed else 1
 
 
 def _patch_protocol(args: argparse.Namespace):
@@ -93,10 +114,17 @@ def add(commands) -> None:
     """Add the commands to the ``glarelab`` parser."""
     check = commands.add_parser(
         "check-display",
-        help="measure the display: resolution, refresh, frame jitter, bits, a flash's cost",
+        help="measure the display: resolution, refresh, frame jitter, bits, a flash's cost, and "
+        "read every image of a stimulus set back from the screen",
     )
     check.add_argument("protocol", help="a shipped protocol's name or a protocol TOML file")
-    check.add_argument("--stimuli", type=Path, default=None, help="also time a flash of this set")
+    check.add_argument(
+        "--stimuli",
+        type=Path,
+        default=None,
+        help="also draw every image of this set, read the screen back and compare it with the "
+        "set's codes (and time a flash of it)",
+    )
     check.add_argument("--calibration", type=Path, default=None, help="the display calibration")
     check.add_argument(
         "--out", type=Path, default=None, help="JSON to write (default: next to --calibration)"

@@ -28,7 +28,12 @@ def _protocol_check(args: argparse.Namespace) -> int:
         f"{args.protocol}: valid protocol of the {protocol.paradigm} paradigm (study "
         f"{protocol.study}), sha256 {protocol.sha256}"
     )
-    return 0
+    from experiments.layout import protocol_drawing
+
+    lines, exact = protocol_drawing(protocol)
+    for line in lines:
+        print(f"  {line}")
+    return 0 if exact else 1
 
 
 def add(commands) -> None:

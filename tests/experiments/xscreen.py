@@ -31,9 +31,10 @@ def _need(tool: str) -> str:
 
 
 class XScreen:
-    """An Xvfb display with one ``glarelab`` process on it."""
+    """An Xvfb display with one ``glarelab`` process on it; ``depth`` bits per pixel (24: 8 bits
+    per channel, 30: 10 bits)."""
 
-    def __init__(self, tmp_path: Path):
+    def __init__(self, tmp_path: Path, *, depth: int = 24):
         self.tmp_path = Path(tmp_path)
         read, write = os.pipe()
         self.server = subprocess.Popen(
@@ -43,7 +44,7 @@ class XScreen:
                 str(write),
                 "-screen",
                 "0",
-                f"{SCREEN[0]}x{SCREEN[1]}x24",
+                f"{SCREEN[0]}x{SCREEN[1]}x{depth}",
                 "-nolisten",
                 "tcp",
             ],

@@ -1,0 +1,132 @@
+"""The read-back proof as a lab runs it: ``glarelab check-display PROTOCOL --stimuli SET``
+lists every image with its exact pixels and worst code difference and writes them next to the
+calibration; a session records its first trial's read-back in its sidecar; and the check finds
+an image drawn half a pixel off (it is not a check that cannot fail).
+"""
+
+import json
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+
+from .xscreen import XScreen, sidecar_of
+
+ROOT = Path(__file__).parents[2]
+XVFB_MISMATCH = ("--accept-mismatch", "resolution", "refresh", "--allow-unmeasured-refresh")
+
+
+@pytest.fixture(scope="module")
+def yoshida_set():
+    from protocols import load_protocol
+    from stimuli.stimulus_set import cached_stimulus_set
+
+    return cached_stimulus_set(load_protocol("yoshida2008"), progress=None)
+
+
+@pytest.fixture
+def screen30(tmp_path):
+    x = XScreen(tmp_path, depth=30)
+    x.env["PYTHONPATH"] = os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])
+    yield x
+    x.close()
+
+
+def test_check_display_lists_every_image_read_back_next_to_the_calibration(
+    screen30, yoshida_set, tmp_path
+):
+    manifest = json.loads((yoshida_set / "manifest.json").read_text())
+    calibration = tmp_path / "lab-display.json"
+    calibration.write_text(json.dumps(manifest["calibration"]))  # the set's own calibration
+    done = screen30.glarelab(
+        "check-display", "yoshida2008", "--stimuli", yoshida_set, "--calibration", calibration,
+        "--frames", "30", "--windowed",
+    )  # fmt: skip
+    assert done.returncode == 1, done.stderr[-3000:]  # Xvfb is not the protocol's display
+    assert "ok   bit-depth: protocol 10 bits per channel, display 10 bits" in done.stdout
+    shown = sorted(n for n, r in manifest["images"].items() if r["kind"] != "component")
+    assert len(shown) == 14
+    for name in shown:
+        assert (
+            f"ok   {name}: 100.000 % of 73441 px exact in 3 place(s), worst difference 0 codes"
+            in done.stdout
+        ), done.stdout
+    result = json.loads((tmp_path / "lab-display.display-check.json").read_text())
+    assert result["images_exact"] is True
+    assert [r["image"] for r in result["images"]] == shown
+    for record in result["images"]:
+        assert record["exact_fraction"] == 1.0 and record["worst_code_difference"] == 0
+        assert record["window_bits"] == 10 and record["expected"].endswith("(the set's codes)")
+
+
+def test_a_session_records_its_first_trials_read_back(screen30, yoshida_set, tmp_path):
+    keys = tmp_path / "keys.txt"
+    keys.write_text("space up up return y n y escape\n")
+    out = tmp_path / "data"
+    done = screen30.glarelab(
+        "run", "yoshida2008", "--participant", "dry", "--stimuli", yoshida_set,
+        "--allow-uncalibrated", "--scripted-keys", keys, "--out", out, *XVFB_MISMATCH,
+    )  # fmt: skip
+    assert done.returncode == 3, done.stderr[-3000:]  # aborted by the key script's Escape
+    assert "does not show the stimulus set's codes" not in done.stderr
+    (csv,) = out.glob("dry_yoshida2008_s1_*.csv")
+    check = sidecar_of(csv)["runs"][-1]["presentation_check"]
+    assert check["exact"] is True and check["window_bits"] == 10
+    assert check["screen"] == "adjust of trial 1"
+    assert [image["role"] for image in check["images"]] == ["left", "reference", "right"]
+    for image in check["images"]:
+        assert image["exact_fraction"] == 1.0 and image["worst_code_difference"] == 0
+        assert image["size_px"] == [271, 271]
+    assert check["images"][1]["expected"].endswith("(the set's codes)")  # a set image as is
+    lefts = [image["left_bottom_px"][0] for image in check["images"]]
+    assert [lefts[1] - lefts[0], lefts[2] - lefts[1]] == [271 + 34] * 2  # Yoshida's gap
+
+
+HALF_PIXEL = textwrap.dedent(
+    """
+    import json, sys
+    from pathlib import Path
+
+    from experiments import layout
+    from experiments.check_display import check_display
+    from protocols import load_protocol
+
+    whole = layout.Placement.pos.fget
+    # the old placement: the row centred at whole pixels, edges on half pixels
+    layout.Placement.pos = property(lambda p: (whole(p)[0] + 0.5, whole(p)[1] + 0.5))
+    result = check_display(load_protocol("yoshida2008"), stimuli=Path(sys.argv[1]), frames=10,
+                           fullscreen=False, log=lambda *a: None)
+    print("RESULT " + json.dumps(result["images"]))
+    """
+)
+
+
+def test_the_read_back_finds_images_drawn_half_a_pixel_off(tmp_path, yoshida_set):
+    script = tmp_path / "half_pixel.py"
+    script.write_text(HALF_PIXEL)
+    x = XScreen(tmp_path, depth=24)
+    try:
+        env = {
+            **x.env,
+            "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]),
+        }
+        done = subprocess.run(
+            [sys.executable, str(script), str(yoshida_set)],
+            env=env,
+            capture_output=True,
+            text=True,
+            timeout=300,
+            check=False,
+        )
+    finally:
+        x.close()
+    lines = [line for line in done.stdout.splitlines() if line.startswith("RESULT ")]
+    assert lines, done.stderr[-3000:]
+    images = json.loads(lines[0].removeprefix("RESULT "))
+    assert len(images) == 14
+    for image in images:  # each resampled: rows and columns doubled and dropped
+        assert image["exact_fraction"] < 0.99 and image["worst_code_difference"] > 0
+        assert image["first_difference"] is not None
