@@ -41,6 +41,7 @@ from stimuli.psychopy_window import (
     TextCapture,
     dispatch_events,
     grab_screen,
+    key_symbols,
     measure_frame_intervals,
     measure_refresh,
     open_window,
@@ -375,12 +376,21 @@ class PsychoPyFrontend:
             self.typed_stim.draw()
 
     def _start_comment(self, screen: dict) -> None:
-        """Where the comment begins: after the rating key's own character, typed since the
-        rating screen appeared (characters typed before the box showed are kept)."""
+        """Where the comment begins: after the rating key's press and its own character (in
+        the keyboard's layout: ``(`` for the 5 of a French keyboard), typed since the rating
+        screen appeared; characters typed before the box showed are kept."""
         dispatch_events(self.window)
         events = self.typing.events
         rating = str(screen.get("rating", ""))
+        symbols = {str(s) for s in key_symbols(self.window, (rating, f"num_{rating}"))}
         for index in range(self._typing_mark, len(events)):
+            if events[index][0] == "key" and events[index][1] in symbols:
+                index += 1
+                if index < len(events) and events[index][0] == "text":
+                    index += 1  # the rating key's own character
+                self._comment_start = index
+                return
+        for index in range(self._typing_mark, len(events)):  # no key events: by its text
             if events[index] == ("text", rating):
                 self._comment_start = index + 1
                 return

@@ -27,6 +27,7 @@ __all__ = [
     "KeyReader",
     "TextCapture",
     "grab_screen",
+    "key_symbols",
     "measure_frame_intervals",
     "measure_refresh",
     "open_window",
@@ -175,7 +176,8 @@ class KeyReader:
 
 class TextCapture:
     """Every text event of a window, in order: ``("text", characters)`` and
-    ``("motion", name)`` (Backspace, Delete, arrows, Home, End), as pyglet reports them.
+    ``("motion", name)`` (Backspace, Delete, arrows, Home, End), as pyglet reports them, each
+    after ``("key", symbol)`` of the key press that made it (pyglet's symbols are X keysyms).
 
     PsychoPy's own handlers keep running; this one only listens.
     """
@@ -193,6 +195,7 @@ class TextCapture:
     def _on_key(self, symbol: int, modifiers: int) -> None:
         from pyglet.window import key
 
+        self.events.append(("key", str(symbol)))  # which key made the text that follows
         if symbol == key.TAB:
             self.events.append(("text", "\t"))
 
@@ -239,6 +242,40 @@ def typed_text(events: list[tuple[str, str]], start: int = 0) -> tuple[str, int,
         elif value in ("MOTION_END_OF_LINE", "MOTION_END_OF_FILE"):
             cursor = len(text)
     return "".join(text), cursor, False
+
+
+def key_symbols(window, names) -> set[int]:
+    """The pyglet symbols (X keysyms) that the keys PsychoPy's keyboard calls ``names`` make
+    in the keyboard layout now in use, at every shift level: on a French AZERTY layout the key
+    named ``5`` makes ``parenleft`` unshifted and ``5`` shifted.
+
+    Psychtoolbox names a key by its position (on Linux its X key code + 1, by
+    ``psychopy.hardware.keyboard.keyNamesLinux``), whatever the layout; the window system's text
+    events follow the layout. Elsewhere than on X11 only the symbols of the names' own
+    characters are given (a digit's key and its keypad key).
+    """
+    from pyglet.window import key
+
+    symbols = set()
+    for name in names:
+        character = name.removeprefix("num_")
+        if len(character) == 1:
+            symbols.add(ord(character))
+            if character.isdigit():
+                symbols.add(getattr(key, f"NUM_{character}"))
+    if not sys.platform.startswith("linux"):
+        return symbols
+    from psychopy.hardware.keyboard import keyNamesLinux
+    from pyglet.libs.x11 import xlib
+
+    display = window.winHandle._x_display
+    for code, name in keyNamesLinux.items():
+        if name in names:
+            for level in range(6):  # unshifted, Shift, AltGr levels
+                symbol = xlib.XKeycodeToKeysym(display, code - 1, level)
+                if symbol:
+                    symbols.add(int(symbol))
+    return symbols
 
 
 def dispatch_events(window) -> None:
