@@ -16,9 +16,10 @@ In order, before any file is written:
 Then the CSV header and the sidecar (status ``running``, start time) are written and fsync'ed,
 and :class:`experiments.loop.SessionLoop` runs the trials, each row fsync'ed as it ends. The
 sidecar ends as ``completed`` or ``aborted`` (Escape, SIGINT, SIGTERM, SIGHUP), with the end
-time. A session killed outright keeps its rows and a ``running`` sidecar; resuming it records
-that run as ``interrupted``, ended at the CSV's last write. Simulated sessions take the same
-path with a simulated device.
+time; a session ended before its first trial keeps its header, log and sidecar (``aborted``). A
+session killed outright keeps its rows and a ``running`` sidecar; resuming it records that run
+as ``interrupted``, its end unknown (``ended`` null), with its trials counted from the CSV and
+the last write of its files. Simulated sessions take the same path with a simulated device.
 """
 
 from __future__ import annotations
@@ -130,7 +131,16 @@ class SimulatedFrontend:
     def open(self):
         return None
 
-    def start(self, *, refresh_hz: float, pace: bool, frames_path, log_path) -> None:
+    def start(
+        self,
+        *,
+        run: int = 1,
+        started: str = "",
+        refresh_hz: float,
+        pace: bool,
+        frames_path,
+        log_path,
+    ) -> None:
         self.refresh_hz = refresh_hz
 
     def close(self) -> None:
@@ -359,6 +369,7 @@ def run_session(
         calibration_record = usable_calibration(calibration, allow_uncalibrated=allow_uncalibrated)
         checks = enforce(check_calibration(protocol, calibration), accept=accept)
     stop = _StopRequest()
+    started_run = False
     with _signals(stop):  # Ctrl-C or kill before the first trial: stopped, nothing written
         files = SessionFiles(
             protocol, participant, session, Path(out), resume=resume, started=started
@@ -421,20 +432,19 @@ def run_session(
                         "session did not start"
                     ) from None
                 frontend.start(
+                    run=len(sidecar["runs"]),
+                    started=_iso(started),
                     refresh_hz=rate,
                     pace=facts is not None and not _refresh_verified(checks),
                     frames_path=files.frames_path if facts is not None else None,
                     log_path=files.log_path if facts is not None else None,
                 )
+                started_run = True  # from here the files are the run's record, kept
                 _run_trials(engine, frontend, files, sidecar, protocol, rate, resume, stop)
             finally:
                 frontend.close()
-            if files.created and not files.rows and sidecar["status"] == "aborted":
-                # ended before its first trial: a new session that recorded nothing leaves
-                # nothing (the participant can start it again)
-                raise SessionAborted(sidecar["runs"][-1]["ended_by"] or "escape")
         except SessionAborted:
-            if files.created and not files.rows:  # stopped before its first trial
+            if files.created and not files.rows and not started_run:  # stopped before its start
                 files.discard()
             raise
         finally:
@@ -465,8 +475,7 @@ def _start_run(
     """The sidecar of a run that starts now (earlier runs kept; a killed one marked)."""
     runs = list(sidecar.get("runs", []))
     if runs and runs[-1].get("status") == "running":  # killed: it never wrote its end
-        mtime = datetime.fromtimestamp(files.csv_path.stat().st_mtime, UTC).astimezone()
-        runs[-1] |= {"status": "interrupted", "ended": _iso(mtime)}
+        runs[-1] |= _interrupted(runs[-1], files)
     runs.append(
         {
             "started": _iso(started),
@@ -515,6 +524,26 @@ def _start_run(
         "runs": runs,
         "resumed": len(runs) - 1,
         "trials": len(files.rows),
+    }
+
+
+def _interrupted(run: dict, files: SessionFiles) -> dict:
+    """What is known of a run that ended without writing its end (killed, crashed, power
+    lost): its trials, counted from the CSV, and the last time one of its files was written;
+    when it ended is not known."""
+    started = datetime.fromisoformat(run["started"]) if run.get("started") else None
+    writes = []
+    for path in (files.csv_path, files.log_path, files.frames_path):
+        with contextlib.suppress(OSError):
+            moment = datetime.fromtimestamp(path.stat().st_mtime, UTC).astimezone()
+            if started is None or moment >= started:  # a write of this run, not an earlier one
+                writes.append(moment)
+    return {
+        "status": "interrupted",
+        "ended": None,
+        "ended_by": "unknown: the process ended without recording its end (killed or crashed)",
+        "last_write": _iso(max(writes)) if writes else None,
+        "trials_after": len(files.rows),
     }
 
 

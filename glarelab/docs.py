@@ -88,8 +88,11 @@ def data_reference() -> str:
         "| --- | --- |",
         "| `STEM.csv` | one row per trial, written and fsync'ed when the trial ends |",
         "| `STEM.json` | the sidecar: who, what, how and when (below), rewritten atomically |",
-        "| `STEM.log` | the PsychoPy log: every key press, onset and flash (session clock) |",
-        "| `STEM_frames.tsv` | frame intervals: at window opening and of every timed flash |",
+        "| `STEM.log` | the PsychoPy log: every key press, onset and flash, every pause screen's "
+        "onset and offset (session clock; each run begins with a line `run N started TIME; log "
+        "time 0 = Unix time T s`) |",
+        "| `STEM_frames.tsv` | frame intervals: at window opening and of every timed flash "
+        "(each run begins with its `run N started ...` line) |",
         "| `.PARTICIPANT_STUDY_sN.lock` | the lock a running session holds (its process id) |",
         "",
         "Simulated sessions write the CSV and the sidecar only. Booleans are `true`/`false`; an",
@@ -127,8 +130,10 @@ def data_reference() -> str:
         "manifest and calibration readings (a resume is refused if any differs), package",
         "versions, `trial_order`, `counterbalance`, and `runs`: one entry per run of the",
         "session (a resume adds one) with its start and end, status (`interrupted` for a run",
-        "that was killed, ended at the CSV's last write), what ended it (`escape`, `SIGINT`,",
-        "`SIGTERM`), the trials before and after it, process id and host, the keyboard, the",
+        "that was killed: `ended` null, as its end is not known, `last_write` the last write",
+        "of its files, its trials counted from the CSV when the session resumed), what ended",
+        "it (`escape`, `SIGINT`, `SIGTERM`), the trials before and after it, process id and",
+        "host, the keyboard, the",
         "clock epoch, the display measured (resolution, refresh, bits per channel, the timing",
         "rate and whether flips followed vertical sync or the clock), every display check with",
         "the mismatches accepted, and the count of key presses not taken.",

@@ -310,6 +310,20 @@ def columns(protocol) -> tuple[Column, ...]:
     """The paradigm's CSV columns for this protocol (after the common ones)."""
     p = protocol.data if hasattr(protocol, "data") else protocol
     questions = tuple(
-        Column(q["column"], bool, q["text"]) for q in p["questionnaire"]["questions"] or []
+        column
+        for q in p["questionnaire"]["questions"] or []
+        for column in (
+            Column(q["column"], bool, q["text"]),
+            Column(
+                f"{q['column']}_time_s",
+                float,
+                "response time of the answer: from the key press that brought up the "
+                "question (the Enter confirming the settings, or the previous question's "
+                "answer) to the Y or N key",
+                unit="s",
+                low=0.0,
+                since="0.4",
+            ),
+        )
     )
     return _fixed_columns(p) + questions

@@ -178,17 +178,24 @@ class TextCapture:
     """Every text event of a window, in order: ``("text", characters)`` and
     ``("motion", name)`` (Backspace, Delete, arrows, Home, End), as pyglet reports them, each
     after ``("key", symbol)`` of the key press that made it (pyglet's symbols are X keysyms).
+    Shift+Enter types a new line (``"\\n"``); :attr:`returns` says of each Enter pressed
+    whether Shift was down.
 
     PsychoPy's own handlers keep running; this one only listens.
     """
 
     def __init__(self, window):
         self.events: list[tuple[str, str]] = []
+        self.returns: list[bool] = []  # each Enter pressed: whether with Shift
+        self._shift_return = False
         window.winHandle.push_handlers(
             on_text=self._on_text, on_text_motion=self._on_motion, on_key_press=self._on_key
         )
 
     def _on_text(self, text: str) -> None:
+        if text == "\r" and self._shift_return:  # Shift+Enter: a new line, not the end
+            text = "\n"
+        self._shift_return = False
         if text != "\t":  # a tab comes as its key (PsychoPy takes the text event for itself)
             self.events.append(("text", text))
 
@@ -196,6 +203,9 @@ class TextCapture:
         from pyglet.window import key
 
         self.events.append(("key", str(symbol)))  # which key made the text that follows
+        self._shift_return = symbol in (key.RETURN, key.ENTER) and bool(modifiers & key.MOD_SHIFT)
+        if symbol in (key.RETURN, key.ENTER):
+            self.returns.append(self._shift_return)
         if symbol == key.TAB:
             self.events.append(("text", "\t"))
 
@@ -206,7 +216,7 @@ class TextCapture:
 
 
 def typed_text(events: list[tuple[str, str]], start: int = 0) -> tuple[str, int, bool]:
-    r"""The text typed by ``events[start:]`` up to the first Enter.
+    r"""The text typed by ``events[start:]`` up to the first Enter (``"\r"``).
 
     Returns the text, the cursor's position in it, and whether an Enter ended it. Backspace and
     Delete remove a character, the arrows, Home and End move the cursor; every other character
@@ -224,7 +234,7 @@ def typed_text(events: list[tuple[str, str]], start: int = 0) -> tuple[str, int,
     cursor = 0
     for kind, value in events[start:]:
         if kind == "text":
-            if value in ("\r", "\n"):
+            if value == "\r":  # Enter (Shift+Enter comes as a new line, "\n")
                 return "".join(text), cursor, True
             text[cursor:cursor] = list(value)
             cursor += len(value)

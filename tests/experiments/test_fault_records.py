@@ -1,0 +1,190 @@
+"""What the session files say when a session is killed, resumed, paused or stopped at once,
+driven as a participant drives it: a real window on an X server and real key events (xdotool).
+"""
+
+import csv
+import re
+import time
+from pathlib import Path
+
+import pytest
+from PIL import Image
+
+from .xscreen import SCREEN, XScreen, sidecar_of
+
+ROOT = Path(__file__).parents[2]
+CENTRE = (SCREEN[0] // 2, SCREEN[1] // 2)
+XVFB = ("--accept-mismatch", "resolution", "refresh", "--allow-unmeasured-refresh")
+
+
+@pytest.fixture
+def screen(tmp_path):
+    x = XScreen(tmp_path)
+    yield x
+    x.close()
+
+
+def session_csv(folder: Path) -> Path:
+    (path,) = sorted(Path(folder).glob("*.csv"))
+    return path
+
+
+def rows_of(path: Path) -> list[dict]:
+    with path.open(newline="") as handle:
+        return list(csv.DictReader(handle))
+
+
+def test_killed_runs_resume_with_a_truthful_record(screen, tmp_path):
+    out = tmp_path / "data"
+    run = ("run", "luidolt2020", "--participant", "P01", "--out", out)
+    screen.run(*run)
+    screen.wait_for_log(out, r"session log")
+    screen.focus_window()
+    time.sleep(0.3)
+    screen.key("space")
+    screen.wait_for_log(out, r"trial 1 onset")
+    screen.key("4")
+    screen.wait_for_log(out, r"screen comment of trial 1")
+    # Shift+Enter is a new line in the comment, not its end: the 5 after it is typed text,
+    # not the next category's rating
+    screen.type("one")
+    screen.key("shift+Return")
+    screen.type("5 two")
+    time.sleep(0.3)
+    Image.fromarray(screen.screenshot()).save(tmp_path / "comment_two_lines.png")
+    screen.key("Return")
+    screen.wait_for_log(out, r"trial 2 onset")
+    screen.key("5")
+    screen.wait_for_log(out, r"screen comment of trial 2")
+    screen.process.kill()  # killed outright: no end written
+    screen.wait()
+    path = session_csv(out)
+    assert sidecar_of(path)["status"] == "running"
+
+    screen.run(*run, "--resume")  # a second run, killed before any trial of its own
+    screen.wait_for_log(out, r"session log", count=2)
+    time.sleep(1.1)  # its start a second later than the first run's last write
+    screen.process.kill()
+    screen.wait()
+
+    screen.run(*run, "--resume")
+    screen.wait_for_log(out, r"session log", count=3)
+    time.sleep(0.3)
+    Image.fromarray(screen.screenshot()).save(tmp_path / "continue.png")
+    screen.key("space")
+    screen.wait_for_log(out, r"continue screen offset at")
+    screen.wait_for_log(out, r"trial 2 onset", count=2)
+    screen.key("Escape")
+    assert screen.wait() == 3, screen.stderr[-2000:]
+
+    rows = rows_of(path)
+    assert [(r["rating"], r["comment"]) for r in rows] == [("4", "one\n5 two")]
+    sidecar = sidecar_of(path)
+    first, second, third = sidecar["runs"]
+    for killed in (first, second):
+        assert killed["status"] == "interrupted"
+        assert killed["ended"] is None and killed["ended_by"].startswith("unknown")
+        assert killed["trials_after"] == 1  # counted from the CSV when the next run started
+        assert killed["last_write"] >= killed["started"]  # never before its own start
+    assert second["trials_before"] == 1
+    assert third["status"] == "aborted" and third["ended"] >= third["started"]
+    log = path.with_suffix(".log").read_text()
+    # the log's clock restarts with every run: each begins with its wall-clock marker
+    markers = re.findall(r"run (\d) started (\S+); log time 0 = Unix time ([\d.]+) s", log)
+    assert [m[0] for m in markers] == ["1", "2", "3"]
+    assert [m[1] for m in markers] == [r["started"] for r in sidecar["runs"]]
+    assert float(markers[2][2]) == pytest.approx(third["clock_epoch_s"], abs=1e-3)
+    assert "continue screen onset at" in log and "instructions screen offset at" in log
+    frames = path.parent / (path.stem + "_frames.tsv")
+    runs = [line for line in frames.read_text().splitlines() if line.startswith("run ")]
+    assert [line.split()[1] for line in runs] == ["1", "2", "3"]
+
+
+def test_escape_before_the_first_trial_keeps_the_log_and_an_aborted_sidecar(screen, tmp_path):
+    out = tmp_path / "data"
+    screen.run("run", "luidolt2020", "--participant", "P02", "--out", out)
+    screen.wait_for_log(out, r"instructions screen onset")
+    screen.key("Escape")
+    assert screen.wait() == 3, screen.stderr[-2000:]
+    assert "0 trials, aborted (escape)" in screen.stderr
+    path = session_csv(out)
+    assert rows_of(path) == []  # the header, no trial
+    sidecar = sidecar_of(path)
+    assert sidecar["status"] == "aborted" and sidecar["trials"] == 0
+    assert sidecar["runs"][0]["ended_by"] == "escape"
+    assert sidecar["ended"] >= sidecar["started"]
+    log = path.with_suffix(".log").read_text()
+    assert "instructions screen onset" in log and "escape at" in log
+
+
+@pytest.fixture(scope="module")
+def spencer_breaks(tmp_path_factory):
+    """Spencer 1995 with a break after every trial, and its stimulus set."""
+    from glarelab.cli import main
+
+    folder = tmp_path_factory.mktemp("spencer")
+    text = (ROOT / "protocols" / "spencer1995.toml").read_text()
+    protocol = folder / "spencer_breaks.toml"
+    protocol.write_text(re.sub(r"(?m)^break_every = \d+", "break_every = 1", text))
+    assert main(["stimuli", "build", str(protocol), "--out", str(folder / "set")]) == 0
+    return protocol, folder / "set"
+
+
+def _flash_visible(screen: XScreen) -> bool:
+    strip = (CENTRE[0] - 200, CENTRE[1] - 6, CENTRE[0] + 200, CENTRE[1] + 6)
+    return screen.screenshot(strip).max() > 40
+
+
+def _wait_for_flash(screen: XScreen, timeout: float = 15.0) -> None:
+    """Wait for the screen to go dark (the text before), then for the flash."""
+    deadline = time.time() + timeout
+    while _flash_visible(screen):
+        assert time.time() < deadline, "the screen never went dark"
+        time.sleep(0.002)
+    while not _flash_visible(screen):
+        assert time.time() < deadline, "no flash appeared"
+        time.sleep(0.002)
+
+
+def test_breaks_are_logged_and_escape_ends_a_flash_within_a_frame(
+    screen, spencer_breaks, tmp_path
+):
+    protocol, stimuli = spencer_breaks
+    out = tmp_path / "data"
+    screen.run(
+        "run", protocol, "--participant", "P01", "--stimuli", stimuli, "--allow-uncalibrated",
+        *XVFB, "--out", out,
+    )  # fmt: skip
+    screen.wait_for_log(out, r"session log")
+    time.sleep(0.3)
+    screen.key("space")
+    _wait_for_flash(screen)
+    time.sleep(0.1)
+    screen.key("Left")
+    screen.wait_for_log(out, r"break screen onset at")
+    time.sleep(0.3)
+    Image.fromarray(screen.screenshot()).save(tmp_path / "break.png")
+    screen.key("space")  # (the log is written when the session waits for keys: not now)
+    _wait_for_flash(screen)
+    screen.key("Escape")  # during the second flash (400 or 700 ms)
+    assert screen.wait() == 3, screen.stderr[-2000:]
+    path = session_csv(out)
+    assert len(rows_of(path)) == 1
+    log = path.with_suffix(".log").read_text()
+    onset, offset = (
+        float(re.search(rf"break screen {what} at ([\d.]+)", log).group(1))
+        for what in ("onset", "offset")
+    )
+    assert offset > onset
+    aborted = re.search(
+        r"trial 2 aborted: escape at ([\d.]+) during its presentation, ended at ([\d.]+) "
+        r"after (\d+) of (\d+) frames \((\d+) shown after the escape\)",
+        log,
+    )
+    assert aborted, log[-2000:]
+    escape, ended, shown, planned, after = map(float, aborted.groups())
+    # the frame being drawn when Escape went down is the last: then the screen goes black
+    assert ended > escape and after <= 1 and shown < planned
+    sidecar = sidecar_of(path)
+    assert sidecar["status"] == "aborted"
+    assert sidecar["runs"][0]["ended_by"] == "escape during the presentation of trial 2"
