@@ -102,6 +102,9 @@ class PsychoPyFrontend:
         Save the first trial's screen here (PNG of the back buffer, before its flip).
     size
         Window size in pixels when not full screen; default (1280, 800).
+    pilot
+        A pilot run (PsychoPy's piloting mode): a window, never full screen, with "PILOT" in
+        its top-left corner on every frame, and the log's run line says so.
     """
 
     def __init__(
@@ -114,8 +117,11 @@ class PsychoPyFrontend:
         scripted_keys: list[str] | None = None,
         screenshot=None,
         size: tuple[int, int] = (1280, 800),
+        pilot: bool = False,
     ):
         self.protocol = protocol
+        self.pilot = pilot
+        fullscreen = fullscreen and not pilot
         self.stimuli = Path(stimuli) if stimuli else None
         self.fullscreen = fullscreen
         self.size = size
@@ -196,6 +202,20 @@ class PsychoPyFrontend:
             colorSpace="rgb",
             autoLog=False,
         )
+        if self.pilot:  # drawn on every flip: no screen of a pilot passes for a session's
+            width, height = self.window.size
+            visual.TextStim(
+                self.window,
+                text="PILOT",
+                height=20,
+                pos=(-width / 2 + 12, height / 2 - 10),
+                anchorHoriz="left",
+                anchorVert="top",
+                alignText="left",
+                color=(0.6, -0.6, -0.6),
+                colorSpace="rgb",
+                autoLog=False,
+            ).autoDraw = True
         self.typing = TextCapture(self.window)
         self._returns_seen = 0  # Enter presses Psychtoolbox reported (see _without_shift_enter)
         self._typing_mark = 0  # where the current screen's typing began
@@ -257,6 +277,7 @@ class PsychoPyFrontend:
         self.frames_path = frames_path
         marker = (
             f"run {run} started {started}; log time 0 = Unix time {self.clock_epoch_s():.3f} s"
+            + ("; PILOT run, not a session's data" if self.pilot else "")
         )
         if log_path is not None:
             self._logfile = logging.LogFile(str(log_path), level=logging.EXP, filemode="a")

@@ -323,6 +323,7 @@ def run_session(
     simulated: bool = False,
     accept_mismatch: tuple[str, ...] = (),
     allow_unmeasured_refresh: bool = False,
+    pilot: bool = False,
 ) -> dict:
     """Run (or resume) one session; return its sidecar.
 
@@ -349,6 +350,12 @@ def run_session(
         ``bit-depth``, ``calibration``.
     allow_unmeasured_refresh
         Run although the refresh rate could not be measured (recorded).
+    pilot
+        A pilot run, as PsychoPy's piloting mode: the display's resolution, refresh and bit
+        depth checks and an unverified calibration are accepted (recorded), and every file
+        says it is a pilot (``_pilot`` in the names, ``pilot`` in the sidecar, the log's and
+        frame file's run lines). A real session refuses an unverified calibration unless
+        ``allow_uncalibrated``.
 
     Raises
     ------
@@ -358,6 +365,8 @@ def run_session(
     started = _now()
     check_session_id(participant, session)
     accept = set(accept_mismatch) | ({"refresh-unmeasured"} if allow_unmeasured_refresh else set())
+    if pilot:
+        accept |= {"resolution", "refresh", "bit-depth", "refresh-unmeasured"}
     manifest_sha = _check_stimuli(protocol, stimuli)
     if simulated:
         calibration_record = {"calibrated": False, "status": "simulated", "readings_sha256": None}
@@ -368,11 +377,21 @@ def run_session(
     else:
         calibration_record = usable_calibration(calibration, allow_uncalibrated=allow_uncalibrated)
         checks = enforce(check_calibration(protocol, calibration), accept=accept)
+        if calibration_record["status"] == "unverified":  # as the README promises
+            if not (pilot or allow_uncalibrated):
+                raise ValueError(
+                    "the display calibration is unverified (it has no verification pass): "
+                    "measure the display with glarelab calibrate measure, run a pilot "
+                    "(--pilot), or accept it explicitly (--allow-uncalibrated, recorded)"
+                )
+            calibration_record["accepted_unverified_by"] = (
+                "--pilot" if pilot else "--allow-uncalibrated"
+            )
     stop = _StopRequest()
     started_run = False
     with _signals(stop):  # Ctrl-C or kill before the first trial: stopped, nothing written
         files = SessionFiles(
-            protocol, participant, session, Path(out), resume=resume, started=started
+            protocol, participant, session, Path(out), resume=resume, started=started, pilot=pilot
         )
         try:
             info = {key: (participant_info or {}).get(key) for key in INFO_KEYS}
@@ -422,6 +441,7 @@ def run_session(
                     manifest_sha=manifest_sha,
                     calibration_record=calibration_record,
                     simulated=simulated,
+                    pilot=pilot,
                 )
                 try:
                     files.write_sidecar(sidecar)
@@ -471,6 +491,7 @@ def _start_run(
     manifest_sha: str | None,
     calibration_record: dict,
     simulated: bool,
+    pilot: bool = False,
 ) -> dict:
     """The sidecar of a run that starts now (earlier runs kept; a killed one marked)."""
     runs = list(sidecar.get("runs", []))
@@ -481,6 +502,7 @@ def _start_run(
             "started": _iso(started),
             "ended": None,
             "status": "running",
+            "pilot": pilot,
             "trials_before": len(files.rows),
             "pid": os.getpid(),
             "host": socket.gethostname(),
@@ -515,6 +537,7 @@ def _start_run(
         "refresh_hz": rate,
         "bit_depth": None if facts is None else facts.bits_per_channel,
         "simulated": simulated,
+        "pilot": pilot,
         "images_encoded_with": getattr(frontend, "calibration_used", None),
         "counterbalance": getattr(engine, "counterbalance", None),
         "trial_order": getattr(engine, "order", None),

@@ -4,6 +4,7 @@ driven as a participant drives it: a real window on an X server and real key eve
 
 import csv
 import re
+import subprocess
 import time
 from pathlib import Path
 
@@ -188,3 +189,33 @@ def test_breaks_are_logged_and_escape_ends_a_flash_within_a_frame(
     sidecar = sidecar_of(path)
     assert sidecar["status"] == "aborted"
     assert sidecar["runs"][0]["ended_by"] == "escape during the presentation of trial 2"
+
+
+def test_the_participant_dialog_asks_again_after_a_bad_entry(screen, tmp_path):
+    out = tmp_path / "data"
+    screen.run("run", "luidolt2020", "--out", out)
+    screen.focus_window("glarelab luidolt2020")
+    time.sleep(0.5)
+    screen.type("P09")
+    screen.key("Tab", "Tab")
+    screen.type("abc")  # not an age
+    screen.key("Return")
+    time.sleep(1.5)  # the dialog again, naming the problem, what was typed kept
+    shown = screen.screenshot()
+    Image.fromarray(shown).save(tmp_path / "dialog_again.png")
+    rows, columns = (shown.max(axis=2) > 0).nonzero()
+    left, top = columns.min(), rows.min()
+    screen.focus_window("glarelab luidolt2020")
+    # the age field: the fourth line of the dialog, under the problem, participant, session
+    subprocess.run(
+        ["xdotool", "mousemove", str(left + 200), str(top + 117), "click", "--repeat", "3", "1"],
+        env=screen.env,
+        check=True,
+    )
+    screen.type("31")
+    screen.key("Return")
+    screen.wait_for_log(out, r"session log")
+    screen.key("Escape")
+    assert screen.wait() == 3, screen.stderr[-2000:]
+    (path,) = out.glob("P09_luidolt2020_s1_*.csv")
+    assert sidecar_of(path)["participant_info"]["age"] == 31
