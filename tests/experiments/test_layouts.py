@@ -7,6 +7,7 @@ layout typed, accents included, from the character after the rating key's own.
 """
 
 import csv
+import re
 import time
 from pathlib import Path
 
@@ -90,3 +91,22 @@ def test_french_keyboard_rates_by_key_position_and_keeps_every_accent(french, tm
         ("3", "ça été"),
         ("7", ""),
     ]
+
+
+def test_on_linux_keys_are_named_by_their_us_position_whatever_the_layout(tmp_path):
+    """As the README says: on a German keyboard the key labelled Y is ``z`` (and Z is ``y``)."""
+    german = XScreen(tmp_path, layout="de")
+    try:
+        out = tmp_path / "data"
+        german.run("run", "luidolt2020", "--participant", "P01", "--out", out)
+        german.wait_for_log(out, r"instructions screen onset")
+        german.key("y")  # the key that types y in the German layout
+        german.wait_for_log(out, r"key \w+ down")
+        german.key("z")
+        german.wait_for_log(out, r"key \w+ down", count=2)
+        german.key("Escape")
+        assert german.wait() == 3, german.stderr[-2000:]
+        (log,) = out.glob("*.log")
+        assert re.findall(r"key (\w+) down", log.read_text())[:2] == ["z", "y"]
+    finally:
+        german.close()
