@@ -1,6 +1,6 @@
 """What the session files say when a session is killed, resumed, paused or stopped at once,
 driven as a participant drives it: a real window on an X server and real key events (xdotool).
-"""
+Breaks and Escape during a flash are in test_pilot.py (one Spencer session shows both)."""
 
 import csv
 import re
@@ -11,11 +11,7 @@ from pathlib import Path
 import pytest
 from PIL import Image
 
-from .xscreen import SCREEN, XScreen, sidecar_of
-
-ROOT = Path(__file__).parents[2]
-CENTRE = (SCREEN[0] // 2, SCREEN[1] // 2)
-XVFB = ("--accept-mismatch", "resolution", "refresh", "--allow-unmeasured-refresh")
+from .xscreen import XScreen, sidecar_of
 
 
 @pytest.fixture
@@ -101,97 +97,9 @@ def test_killed_runs_resume_with_a_truthful_record(screen, tmp_path):
     assert [line.split()[1] for line in runs] == ["1", "2", "3"]
 
 
-def test_escape_before_the_first_trial_keeps_the_log_and_an_aborted_sidecar(screen, tmp_path):
-    out = tmp_path / "data"
-    screen.run("run", "luidolt2020", "--participant", "P02", "--out", out)
-    screen.wait_for_log(out, r"instructions screen onset")
-    screen.key("Escape")
-    assert screen.wait() == 3, screen.stderr[-2000:]
-    assert "0 trials, aborted (escape)" in screen.stderr
-    path = session_csv(out)
-    assert rows_of(path) == []  # the header, no trial
-    sidecar = sidecar_of(path)
-    assert sidecar["status"] == "aborted" and sidecar["trials"] == 0
-    assert sidecar["runs"][0]["ended_by"] == "escape"
-    assert sidecar["ended"] >= sidecar["started"]
-    log = path.with_suffix(".log").read_text()
-    assert "instructions screen onset" in log and "escape at" in log
-
-
-@pytest.fixture(scope="module")
-def spencer_breaks(tmp_path_factory):
-    """Spencer 1995 with a break after every trial, and its stimulus set."""
-    from glarelab.cli import main
-
-    folder = tmp_path_factory.mktemp("spencer")
-    text = (ROOT / "protocols" / "spencer1995.toml").read_text()
-    protocol = folder / "spencer_breaks.toml"
-    protocol.write_text(re.sub(r"(?m)^break_every = \d+", "break_every = 1", text))
-    assert main(["stimuli", "build", str(protocol), "--out", str(folder / "set")]) == 0
-    return protocol, folder / "set"
-
-
-def _flash_visible(screen: XScreen) -> bool:
-    strip = (CENTRE[0] - 200, CENTRE[1] - 6, CENTRE[0] + 200, CENTRE[1] + 6)
-    return screen.screenshot(strip).max() > 40
-
-
-def _wait_for_flash(screen: XScreen, timeout: float = 15.0) -> None:
-    """Wait for the screen to go dark (the text before), then for the flash."""
-    deadline = time.time() + timeout
-    while _flash_visible(screen):
-        assert time.time() < deadline, "the screen never went dark"
-        time.sleep(0.002)
-    while not _flash_visible(screen):
-        assert time.time() < deadline, "no flash appeared"
-        time.sleep(0.002)
-
-
-def test_breaks_are_logged_and_escape_ends_a_flash_within_a_frame(
-    screen, spencer_breaks, tmp_path
+def test_the_dialog_asks_again_after_a_bad_entry_and_escape_before_a_trial_keeps_the_run(
+    screen, tmp_path
 ):
-    protocol, stimuli = spencer_breaks
-    out = tmp_path / "data"
-    screen.run(
-        "run", protocol, "--participant", "P01", "--stimuli", stimuli, "--allow-uncalibrated",
-        *XVFB, "--out", out,
-    )  # fmt: skip
-    screen.wait_for_log(out, r"session log")
-    time.sleep(0.3)
-    screen.key("space")
-    _wait_for_flash(screen)
-    time.sleep(0.1)
-    screen.key("Left")
-    screen.wait_for_log(out, r"break screen onset at")
-    time.sleep(0.3)
-    Image.fromarray(screen.screenshot()).save(tmp_path / "break.png")
-    screen.key("space")  # (the log is written when the session waits for keys: not now)
-    _wait_for_flash(screen)
-    screen.key("Escape")  # during the second flash (400 or 700 ms)
-    assert screen.wait() == 3, screen.stderr[-2000:]
-    path = session_csv(out)
-    assert len(rows_of(path)) == 1
-    log = path.with_suffix(".log").read_text()
-    onset, offset = (
-        float(re.search(rf"break screen {what} at ([\d.]+)", log).group(1))
-        for what in ("onset", "offset")
-    )
-    assert offset > onset
-    aborted = re.search(
-        r"trial 2 aborted: escape at ([\d.]+) during its presentation, ended at ([\d.]+) "
-        r"after (\d+) of (\d+) frames \((\d+) shown after the escape\)",
-        log,
-    )
-    assert aborted, log[-2000:]
-    escape, ended, shown, planned, after = map(float, aborted.groups())
-    # the frame being drawn when Escape went down is the last: then the screen goes black
-    assert ended > escape and after <= 1 and shown < planned
-    sidecar = sidecar_of(path)
-    assert sidecar["status"] == "aborted"
-    assert sidecar["runs"][0]["ended_by"] == "escape during the presentation of trial 2"
-
-
-def test_the_participant_dialog_asks_again_after_a_bad_entry(screen, tmp_path):
     out = tmp_path / "data"
     screen.run("run", "luidolt2020", "--out", out)
     screen.focus_window("glarelab luidolt2020")
@@ -214,8 +122,15 @@ def test_the_participant_dialog_asks_again_after_a_bad_entry(screen, tmp_path):
     )
     screen.type("31")
     screen.key("Return")
-    screen.wait_for_log(out, r"session log")
-    screen.key("Escape")
+    screen.wait_for_log(out, r"instructions screen onset")
+    screen.key("Escape")  # before the first trial: the run is kept, aborted
     assert screen.wait() == 3, screen.stderr[-2000:]
+    assert "0 trials, aborted (escape)" in screen.stderr
     (path,) = out.glob("P09_luidolt2020_s1_*.csv")
-    assert sidecar_of(path)["participant_info"]["age"] == 31
+    assert rows_of(path) == []  # the header, no trial
+    sidecar = sidecar_of(path)
+    assert sidecar["participant_info"]["age"] == 31
+    assert sidecar["status"] == "aborted" and sidecar["trials"] == 0
+    assert sidecar["runs"][0]["ended_by"] == "escape" and sidecar["ended"] >= sidecar["started"]
+    log = path.with_suffix(".log").read_text()
+    assert "instructions screen onset" in log and "escape at" in log
