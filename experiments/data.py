@@ -1,9 +1,10 @@
 """Writing session data so that nothing collected is ever lost.
 
 A session's files share one stem, ``PARTICIPANT_STUDY_sN_YYYY-MM-DD_HHMM`` (the date and time the
-session first started, as PsychoPy names its data files): the CSV, one row per trial, written,
-flushed and fsync'ed the moment the trial ends; the JSON sidecar (who, what, how, when),
-rewritten atomically whenever the session's state changes; the PsychoPy log (``.log``) and the
+session first started, as PsychoPy names its data files; ``_pilot`` follows for a pilot run):
+the CSV, one row per trial, written, flushed and fsync'ed the moment the trial ends; the JSON
+sidecar (who, what, how, when), rewritten atomically whenever the session's state changes; the
+PsychoPy log (``.log``) and the
 frame intervals (``_frames.tsv``) of sessions run on a screen.
 
 A session is held by one process at a time: an exclusive lock on a small lock file
@@ -66,7 +67,7 @@ def session_files(out: Path, participant: str, study: str, session: int) -> list
     check_session_id(participant, session)
     pattern = re.compile(
         re.escape(_prefix(participant, study, session))
-        + r"_\d{4}-\d{2}-\d{2}_\d{4}(\.csv|\.json|\.log|_frames\.tsv)$"
+        + r"_\d{4}-\d{2}-\d{2}_\d{4}(_pilot)?(\.csv|\.json|\.log|_frames\.tsv)$"
     )
     folder = Path(out)
     if not folder.is_dir():
@@ -180,6 +181,7 @@ class SessionFiles:
         *,
         resume: bool,
         started: datetime,
+        pilot: bool = False,
     ):
         study = protocol.study
         self.study = study
@@ -196,6 +198,12 @@ class SessionFiles:
             existing = session_files(out, participant, study, session)
             if resume:
                 self.csv_path = self._existing_csv(existing, out, participant, study, session)
+                was_pilot = self.csv_path.stem.endswith("_pilot")
+                if was_pilot != pilot:
+                    raise SessionError(
+                        f"{self.csv_path.name} is {'a pilot' if was_pilot else 'a real'} "
+                        f"session: resume it {'with' if was_pilot else 'without'} --pilot"
+                    )
             elif existing:
                 raise SessionError(
                     f"{existing[0]} exists: participant {participant!r} session {session} "
@@ -203,6 +211,7 @@ class SessionFiles:
                 )
             else:
                 stem = f"{_prefix(participant, study, session)}_{started:%Y-%m-%d_%H%M}"
+                stem += "_pilot" if pilot else ""  # a pilot's files say so in their names
                 self.csv_path = out / f"{stem}.csv"
         except BaseException:
             self.lock.release()

@@ -17,6 +17,8 @@ clears them. The loop decides what each press means:
 - a timed presentation (Spencer's flash) is judged from its flip times: frames dropped, the
   measured duration against its frames; the engine is told, and the row records it;
 - Escape ends the session at once (:class:`SessionAborted`); what was recorded stays;
+- every screen that waits for the space bar (instructions, blocks, breaks) logs its onset and
+  the press that ended it;
 - a break screen after every ``break_every`` trials, a "continue" screen when a session is
   resumed, an end screen when it is complete.
 """
@@ -169,9 +171,11 @@ class SessionLoop:
     def pause(self, screen: dict) -> None:
         """Show a screen that waits for one of its keys (presses before it are not taken)."""
         anchor = self.device.show(screen)
+        self.log(f"{screen['kind']} screen onset at {anchor:.4f}")
         while True:
             press = self._next_press(anchor)
             if press.t_s >= anchor and normalise_key(press.name, screen["keys"]) in screen["keys"]:
+                self.log(f"{screen['kind']} screen offset at {press.t_s:.4f} ({press.name})")
                 return
             self._ignore(press.name, press.t_s, f"on the {screen['kind']} screen")
 
@@ -246,8 +250,8 @@ class SessionLoop:
                     self.pause(
                         _pause_screen(
                             "break",
-                            f"Time for a short break ({row['trial']} trials done). Press "
-                            "space when you are ready to go on.",
+                            f"Time for a short break ({row['trial']} "
+                            f"{'trial' if row['trial'] == 1 else 'trials'} done).",
                         )
                     )
 

@@ -86,6 +86,8 @@ class MatchingEngine(Engine):
         self.selected = self.sides[0]
         self.adjustments = 0
         self.answers: list[bool] = []
+        self.answer_times: list[float] = []  # each answer's time from the press before it
+        self.last_press_time = 0.0
         self.confirm_time = 0.0
 
     @property
@@ -192,7 +194,7 @@ class MatchingEngine(Engine):
                 self.values[self.selected] = min(max(before + step[key], self.low), self.high)
                 self.adjustments += self.values[self.selected] != before
             elif key == "return":
-                self.confirm_time = t
+                self.confirm_time = self.last_press_time = t
                 if not self.questions:
                     return self._finish()
                 self.phase = "question"
@@ -200,6 +202,8 @@ class MatchingEngine(Engine):
         if self.phase == "question":
             if key in ("y", "n"):
                 self.answers.append(key == "y")
+                self.answer_times.append(max(t - self.last_press_time, 0.0))
+                self.last_press_time = t
                 if len(self.answers) == len(self.questions):
                     return self._finish()
             return None
@@ -230,8 +234,11 @@ class MatchingEngine(Engine):
             **settings,
             "adjustments": self.adjustments,
         }
-        for question, answer in zip(self.questions, self.answers, strict=True):
+        for question, answer, seconds in zip(
+            self.questions, self.answers, self.answer_times, strict=True
+        ):
             row[question["column"]] = answer
+            row[f"{question['column']}_time_s"] = seconds
         self.index += 1
         self.phase = "adjust" if self.index < len(self.trials) else "done"
         self._new_trial()
@@ -276,6 +283,7 @@ class MatchingObserver(LookingObserver):
         self.questions = protocol["questionnaire"]["questions"]
         self._targets: dict[int, float] = {}  # the brighter (or only) setting per trial
         self._references: dict[int, list] = {}
+        self._confirmed: dict[int, float] = {}  # the Enter's time, from the trial's onset
 
     def _percept(self, terms):
         return self.display.percept(self.model, terms, **self.geometry)
@@ -325,6 +333,7 @@ class MatchingObserver(LookingObserver):
                 clock += 0.25
                 keys.append(("pageup" if up else "pagedown", clock))
         keys.append(("return", clock + 1.0 + float(rng.exponential(2.0))))
+        self._confirmed[screen["trial"]] = keys[-1][1]
         return keys
 
     def _answer(self, screen: dict, rng: np.random.Generator) -> list[tuple[str, float]]:
@@ -339,4 +348,5 @@ class MatchingObserver(LookingObserver):
         answer = {"glow": glow, "ring": ring, "same_size": same}.get(measure)
         if answer is None:
             answer = bool(rng.random() < 0.5)
-        return [("y" if answer else "n", 1.0 + 0.1 * screen["number"])]
+        # half a second per question after the Enter (times are from the trial's onset)
+        return [("y" if answer else "n", self._confirmed[trial] + 0.5 * screen["number"])]

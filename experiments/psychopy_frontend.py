@@ -23,10 +23,14 @@ the clock at the protocol's nominal rate. The frame intervals of each flash are 
 session's ``_frames.tsv``, and every onset, offset and key press goes to its PsychoPy log.
 
 **Keys.** One :class:`stimuli.psychopy_window.KeyReader` for the session, never cleared after
-the first screen. Comments are read from the window system's text events (the keyboard's layout,
-case, punctuation and accents as typed, Backspace and the arrows as editing): what was typed
-after the rating key and before the Enter that ends the comment, even before the comment box
-appeared.
+the first screen. Psychtoolbox names keys by their position on a US keyboard on Linux and macOS
+(a French keyboard's unshifted ``&`` key is ``1``), so a rating is its key's digit in any layout;
+the keypad's digits count too. Comments are read from the window system's text events (the
+keyboard's layout, case, punctuation and accents as typed, Backspace and the arrows as editing):
+what was typed after the rating key's own character and before the Enter that ends the comment,
+even before the comment box appeared; Shift+Enter is a new line in it. During a presentation
+the keyboard is read after every frame: Escape ends it at once (the trial is logged as aborted,
+the session as aborted by that Escape); other presses wait, in order, for the session loop.
 """
 
 from __future__ import annotations
@@ -45,6 +49,7 @@ from stimuli.psychopy_window import (
     TextCapture,
     dispatch_events,
     grab_screen,
+    key_symbols,
     measure_frame_intervals,
     measure_refresh,
     open_window,
@@ -125,6 +130,9 @@ class PsychoPyFrontend:
         Save the first trial's screen here (PNG of the back buffer, before its flip).
     size
         Window size in pixels when not full screen; default (1280, 800).
+    pilot
+        A pilot run (PsychoPy's piloting mode): a window, never full screen, with "PILOT" in
+        its top-left corner on every frame, and the log's run line says so.
     """
 
     def __init__(
@@ -137,8 +145,11 @@ class PsychoPyFrontend:
         scripted_keys: list[str] | None = None,
         screenshot=None,
         size: tuple[int, int] = (1280, 800),
+        pilot: bool = False,
     ):
         self.protocol = protocol
+        self.pilot = pilot
+        fullscreen = fullscreen and not pilot
         self.stimuli = Path(stimuli) if stimuli else None
         self.fullscreen = fullscreen
         self.size = size
@@ -170,6 +181,7 @@ class PsychoPyFrontend:
         self._roles: dict[str, tuple[tuple, object]] = {}  # images that change: by role
         self._screen: dict | None = None
         self._screenshot_taken = False
+        self._held: list[tuple[str, float]] = []  # presses read during a presentation
 
     def _set_calibration(self) -> Calibration | None:
         if self.stimuli is None:
@@ -218,7 +230,22 @@ class PsychoPyFrontend:
             colorSpace="rgb",
             autoLog=False,
         )
+        if self.pilot:  # drawn on every flip: no screen of a pilot passes for a session's
+            width, height = self.window.size
+            visual.TextStim(
+                self.window,
+                text="PILOT",
+                height=20,
+                pos=(-width / 2 + 12, height / 2 - 10),
+                anchorHoriz="left",
+                anchorVert="top",
+                alignText="left",
+                color=(0.6, -0.6, -0.6),
+                colorSpace="rgb",
+                autoLog=False,
+            ).autoDraw = True
         self.typing = TextCapture(self.window)
+        self._returns_seen = 0  # Enter presses Psychtoolbox reported (see _without_shift_enter)
         self._typing_mark = 0  # where the current screen's typing began
         self._comment_start: int | None = None
         self.box = visual.Rect(
@@ -258,18 +285,31 @@ class PsychoPyFrontend:
         return float(logging.defaultClock.getLastResetTime())
 
     def start(
-        self, *, refresh_hz: float, pace: bool, frames_path: Path | None, log_path: Path | None
+        self,
+        *,
+        run: int = 1,
+        started: str = "",
+        refresh_hz: float,
+        pace: bool,
+        frames_path: Path | None,
+        log_path: Path | None,
     ) -> None:
         """Time presentations at ``refresh_hz`` (pacing flips by the clock if ``pace``); log
-        to ``log_path`` and frame intervals to ``frames_path``; from now on every key press
-        counts."""
+        to ``log_path`` and frame intervals to ``frames_path``, each from a line that names the
+        session's ``run`` (1, or the resume's number) and the wall-clock time it ``started``
+        (the log's times restart at zero in every run); from now on every key press counts."""
         from psychopy import logging
 
         self.refresh_hz = refresh_hz
         self.pace = pace
         self.frames_path = frames_path
+        marker = (
+            f"run {run} started {started}; log time 0 = Unix time {self.clock_epoch_s():.3f} s"
+            + ("; PILOT run, not a session's data" if self.pilot else "")
+        )
         if log_path is not None:
             self._logfile = logging.LogFile(str(log_path), level=logging.EXP, filemode="a")
+            logging.exp(marker)
             logging.exp(
                 f"session log: timing at {refresh_hz:g} Hz, flips paced by "
                 f"{'the clock' if pace else 'vertical sync'}; screen {self.facts}"
@@ -279,12 +319,15 @@ class PsychoPyFrontend:
                 with frames_path.open("a", encoding="utf-8") as handle:
                     if handle.tell() == 0:
                         handle.write("what\tframe\tinterval_ms\n")
+                    handle.write(f"{marker}\t\t\n")
                     for index, interval in enumerate(self._refresh_intervals, start=1):
                         handle.write(f"window opened\t{index}\t{1000 * interval:.3f}\n")
             except OSError as error:
                 self._warn(f"frame intervals not written to {frames_path}", error)
                 self.frames_path = None
         self.keys.clear()
+        dispatch_events(self.window)  # Enter pressed before now is not counted by either
+        self._returns_seen = len(self.typing.returns)
 
     def close(self) -> None:
         if self.window is not None:
@@ -512,12 +555,21 @@ class PsychoPyFrontend:
             self.typed_stim.draw()
 
     def _start_comment(self, screen: dict) -> None:
-        """Where the comment begins: after the rating key's own character, typed since the
-        rating screen appeared (characters typed before the box showed are kept)."""
+        """Where the comment begins: after the rating key's press and its own character (in
+        the keyboard's layout: ``(`` for the 5 of a French keyboard), typed since the rating
+        screen appeared; characters typed before the box showed are kept."""
         dispatch_events(self.window)
         events = self.typing.events
         rating = str(screen.get("rating", ""))
+        symbols = {str(s) for s in key_symbols(self.window, (rating, f"num_{rating}"))}
         for index in range(self._typing_mark, len(events)):
+            if events[index][0] == "key" and events[index][1] in symbols:
+                index += 1
+                if index < len(events) and events[index][0] == "text":
+                    index += 1  # the rating key's own character
+                self._comment_start = index
+                return
+        for index in range(self._typing_mark, len(events)):  # no key events: by its text
             if events[index] == ("text", rating):
                 self._comment_start = index + 1
                 return
@@ -563,7 +615,10 @@ class PsychoPyFrontend:
         period = 1.0 / self.refresh_hz
         self.window.clearBuffer()
         blank = self.window.flip()
-        self._wait_until(blank + screen["blank_before_ms"] / 1000.0 - (0 if self.pace else period))
+        self._wait_until(
+            blank + screen["blank_before_ms"] / 1000.0 - (0 if self.pace else period),
+            during=lambda: self._escape_during(screen, []),
+        )
         flips = []
         frame = 0
         for stims, frames in placed:
@@ -574,6 +629,7 @@ class PsychoPyFrontend:
                     self._wait_until(flips[0] + frame * period)
                 flips.append(self._flip(capture=frame == 0))
                 frame += 1
+                self._escape_during(screen, flips)
         height = max(s.size[1] for stims, _ in placed for s in stims)
         self._draw_text(screen.get("prompt", ""), pos=(0, -height / 2 - 60))
         if self.pace:
@@ -593,13 +649,69 @@ class PsychoPyFrontend:
         )
         return shown
 
+    def _read(self, *, text_entry: bool) -> list[tuple[str, float]]:
+        """New presses; on a text-entry screen without those of Shift+Enter."""
+        presses = self.keys.read()
+        if self.scripted is not None or not any(
+            name in ("return", "num_enter") for name, _ in presses
+        ):
+            return presses
+        kept = self._without_shift_enter(presses)
+        return kept if text_entry else presses
+
+    def _without_shift_enter(self, presses: list[tuple[str, float]]) -> list:
+        """A comment's presses without an Enter pressed with Shift: that is a new line in the
+        comment (its text event), not its end. Psychtoolbox does not report modifiers, so the
+        n-th Enter it reports is the window system's n-th Enter key event, whose modifiers
+        say."""
+        if self.scripted is not None:
+            return presses
+        kept = []
+        for name, t in presses:
+            if name not in ("return", "num_enter"):
+                kept.append((name, t))
+                continue
+            index = self._returns_seen
+            self._returns_seen += 1
+            deadline = time.monotonic() + 0.2
+            while len(self.typing.returns) <= index and time.monotonic() < deadline:
+                dispatch_events(self.window)  # its key event, a moment behind Psychtoolbox's
+                time.sleep(0.001)
+            if index < len(self.typing.returns) and self.typing.returns[index]:
+                self._log(f"key {name} with shift at {t:.4f}: a new line in the comment")
+            else:
+                kept.append((name, t))
+        return kept
+
+    def _escape_during(self, screen: dict, flips: list[float]) -> None:
+        """After each frame of a presentation: Escape ends it now (the trial is logged as
+        aborted); other presses wait for the loop, in order."""
+        if self.scripted is not None:  # a dry run's keys answer screens, one per read
+            return
+        self._held += self._read(text_entry=False)
+        escape = next((t for name, t in self._held if name == "escape"), None)
+        if escape is None:
+            return
+        from .loop import SessionAborted
+
+        self.window.clearBuffer()
+        end = self.window.flip()
+        self._write_intervals(f"trial {screen['trial']} flash (aborted)", [*flips, end])
+        self._log(
+            f"trial {screen['trial']} aborted: escape at {escape:.4f} during its presentation, "
+            f"ended at {end:.4f} after {len(flips)} of {screen['frames']} frames "
+            f"({sum(flip > escape for flip in flips)} shown after the escape)"
+        )
+        self._flush_log()
+        raise SessionAborted(f"escape during the presentation of trial {screen['trial']}")
+
     def wait_keys(self, anchor_s: float) -> list[Press]:
         self._flush_log()
         text_entry = bool((self._screen or {}).get("text_entry"))
         while True:
             if self.should_stop is not None:
                 self.should_stop()
-            presses = self.keys.read()
+            presses, self._held = self._held + self._read(text_entry=text_entry), []
             if presses:
                 break
             if text_entry:  # the box shows what is typed: redraw it every frame
@@ -620,10 +732,7 @@ class PsychoPyFrontend:
         start = self._comment_start if self._comment_start is not None else len(self.typing.events)
         text, _, _ = typed_text(self.typing.events, start)
         end = start
-        while end < len(self.typing.events) and self.typing.events[end] not in (
-            ("text", "\r"),
-            ("text", "\n"),
-        ):
+        while end < len(self.typing.events) and self.typing.events[end] != ("text", "\r"):
             end += 1
         self._typing_mark = min(end + 1, len(self.typing.events))  # the next screen's typing
         self._comment_start = None
@@ -631,13 +740,15 @@ class PsychoPyFrontend:
 
     # --- records ----------------------------------------------------------------------------
 
-    def _wait_until(self, deadline: float) -> None:
+    def _wait_until(self, deadline: float, *, during=None) -> None:
         from psychopy import logging
 
         while True:
             left = deadline - logging.defaultClock.getTime()
             if left <= 0:
                 return
+            if during is not None:
+                during()
             time.sleep(min(left, 0.002) if left > 0.003 else 0)
 
     def _write_intervals(self, what: str, flips: list[float]) -> None:

@@ -91,7 +91,7 @@ class RatingEngine(Engine):
         base = {
             "trial": self.index + 1,
             "category": self.categories[self.category_index],
-            "prompt": self.prompts[self.category_index],
+            "question": self.prompts[self.category_index],  # drawn once, in the screen's text
             "anchors": self.protocol["questionnaire"]["anchors"],
             "scale": (self.low, self.high),
         }
@@ -101,7 +101,7 @@ class RatingEngine(Engine):
         if self.phase == "rate":
             keys = {str(r): f"rate {r}" for r in range(self.low, self.high + 1)}
             text = (
-                f"{base['category']}\n\n{base['prompt']}\n\n{self.low} = {low}   …   "
+                f"{base['category']}\n\n{base['question']}\n\n{self.low} = {low}   …   "
                 f"{self.high} = {high}\n\nPress a number key from {self.low} to {self.high}."
             )
             if self.condition is not None and self.category_index == 0:

@@ -16,9 +16,10 @@ In order, before any file is written:
 Then the CSV header and the sidecar (status ``running``, start time) are written and fsync'ed,
 and :class:`experiments.loop.SessionLoop` runs the trials, each row fsync'ed as it ends. The
 sidecar ends as ``completed`` or ``aborted`` (Escape, SIGINT, SIGTERM, SIGHUP), with the end
-time. A session killed outright keeps its rows and a ``running`` sidecar; resuming it records
-that run as ``interrupted``, ended at the CSV's last write. Simulated sessions take the same
-path with a simulated device.
+time; a session ended before its first trial keeps its header, log and sidecar (``aborted``). A
+session killed outright keeps its rows and a ``running`` sidecar; resuming it records that run
+as ``interrupted``, its end unknown (``ended`` null), with its trials counted from the CSV and
+the last write of its files. Simulated sessions take the same path with a simulated device.
 """
 
 from __future__ import annotations
@@ -130,7 +131,16 @@ class SimulatedFrontend:
     def open(self):
         return None
 
-    def start(self, *, refresh_hz: float, pace: bool, frames_path, log_path) -> None:
+    def start(
+        self,
+        *,
+        run: int = 1,
+        started: str = "",
+        refresh_hz: float,
+        pace: bool,
+        frames_path,
+        log_path,
+    ) -> None:
         self.refresh_hz = refresh_hz
 
     def close(self) -> None:
@@ -313,6 +323,7 @@ def run_session(
     simulated: bool = False,
     accept_mismatch: tuple[str, ...] = (),
     allow_unmeasured_refresh: bool = False,
+    pilot: bool = False,
 ) -> dict:
     """Run (or resume) one session; return its sidecar.
 
@@ -339,6 +350,12 @@ def run_session(
         ``bit-depth``, ``calibration``.
     allow_unmeasured_refresh
         Run although the refresh rate could not be measured (recorded).
+    pilot
+        A pilot run, as PsychoPy's piloting mode: the display's resolution, refresh and bit
+        depth checks and an unverified calibration are accepted (recorded), and every file
+        says it is a pilot (``_pilot`` in the names, ``pilot`` in the sidecar, the log's and
+        frame file's run lines). A real session refuses an unverified calibration unless
+        ``allow_uncalibrated``.
 
     Raises
     ------
@@ -348,6 +365,8 @@ def run_session(
     started = _now()
     check_session_id(participant, session)
     accept = set(accept_mismatch) | ({"refresh-unmeasured"} if allow_unmeasured_refresh else set())
+    if pilot:
+        accept |= {"resolution", "refresh", "bit-depth", "refresh-unmeasured"}
     manifest_sha = _check_stimuli(protocol, stimuli)
     if simulated:
         calibration_record = {"calibrated": False, "status": "simulated", "readings_sha256": None}
@@ -358,10 +377,21 @@ def run_session(
     else:
         calibration_record = usable_calibration(calibration, allow_uncalibrated=allow_uncalibrated)
         checks = enforce(check_calibration(protocol, calibration), accept=accept)
+        if calibration_record["status"] == "unverified":  # as the README promises
+            if not (pilot or allow_uncalibrated):
+                raise ValueError(
+                    "the display calibration is unverified (it has no verification pass): "
+                    "measure the display with glarelab calibrate measure, run a pilot "
+                    "(--pilot), or accept it explicitly (--allow-uncalibrated, recorded)"
+                )
+            calibration_record["accepted_unverified_by"] = (
+                "--pilot" if pilot else "--allow-uncalibrated"
+            )
     stop = _StopRequest()
+    started_run = False
     with _signals(stop):  # Ctrl-C or kill before the first trial: stopped, nothing written
         files = SessionFiles(
-            protocol, participant, session, Path(out), resume=resume, started=started
+            protocol, participant, session, Path(out), resume=resume, started=started, pilot=pilot
         )
         try:
             info = {key: (participant_info or {}).get(key) for key in INFO_KEYS}
@@ -414,6 +444,7 @@ def run_session(
                     manifest_sha=manifest_sha,
                     calibration_record=calibration_record,
                     simulated=simulated,
+                    pilot=pilot,
                 )
                 sidecar["runs"][-1]["presentation_check"] = presentation
                 try:
@@ -425,20 +456,19 @@ def run_session(
                         "session did not start"
                     ) from None
                 frontend.start(
+                    run=len(sidecar["runs"]),
+                    started=_iso(started),
                     refresh_hz=rate,
                     pace=facts is not None and not _refresh_verified(checks),
                     frames_path=files.frames_path if facts is not None else None,
                     log_path=files.log_path if facts is not None else None,
                 )
+                started_run = True  # from here the files are the run's record, kept
                 _run_trials(engine, frontend, files, sidecar, protocol, rate, resume, stop)
             finally:
                 frontend.close()
-            if files.created and not files.rows and sidecar["status"] == "aborted":
-                # ended before its first trial: a new session that recorded nothing leaves
-                # nothing (the participant can start it again)
-                raise SessionAborted(sidecar["runs"][-1]["ended_by"] or "escape")
         except SessionAborted:
-            if files.created and not files.rows:  # stopped before its first trial
+            if files.created and not files.rows and not started_run:  # stopped before its start
                 files.discard()
             raise
         finally:
@@ -492,17 +522,18 @@ def _start_run(
     manifest_sha: str | None,
     calibration_record: dict,
     simulated: bool,
+    pilot: bool = False,
 ) -> dict:
     """The sidecar of a run that starts now (earlier runs kept; a killed one marked)."""
     runs = list(sidecar.get("runs", []))
     if runs and runs[-1].get("status") == "running":  # killed: it never wrote its end
-        mtime = datetime.fromtimestamp(files.csv_path.stat().st_mtime, UTC).astimezone()
-        runs[-1] |= {"status": "interrupted", "ended": _iso(mtime)}
+        runs[-1] |= _interrupted(runs[-1], files)
     runs.append(
         {
             "started": _iso(started),
             "ended": None,
             "status": "running",
+            "pilot": pilot,
             "trials_before": len(files.rows),
             "pid": os.getpid(),
             "host": socket.gethostname(),
@@ -537,6 +568,7 @@ def _start_run(
         "refresh_hz": rate,
         "bit_depth": None if facts is None else facts.bits_per_channel,
         "simulated": simulated,
+        "pilot": pilot,
         "images_encoded_with": getattr(frontend, "calibration_used", None),
         "counterbalance": getattr(engine, "counterbalance", None),
         "trial_order": getattr(engine, "order", None),
@@ -546,6 +578,26 @@ def _start_run(
         "runs": runs,
         "resumed": len(runs) - 1,
         "trials": len(files.rows),
+    }
+
+
+def _interrupted(run: dict, files: SessionFiles) -> dict:
+    """What is known of a run that ended without writing its end (killed, crashed, power
+    lost): its trials, counted from the CSV, and the last time one of its files was written;
+    when it ended is not known."""
+    started = datetime.fromisoformat(run["started"]) if run.get("started") else None
+    writes = []
+    for path in (files.csv_path, files.log_path, files.frames_path):
+        with contextlib.suppress(OSError):
+            moment = datetime.fromtimestamp(path.stat().st_mtime, UTC).astimezone()
+            if started is None or moment >= started:  # a write of this run, not an earlier one
+                writes.append(moment)
+    return {
+        "status": "interrupted",
+        "ended": None,
+        "ended_by": "unknown: the process ended without recording its end (killed or crashed)",
+        "last_write": _iso(max(writes)) if writes else None,
+        "trials_after": len(files.rows),
     }
 
 

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 __all__ = ["COMMON", "DATA_FORMAT", "Column", "columns", "format_value"]
 
-DATA_FORMAT = "0.3"  # the version of the session files written now (recorded in the sidecar)
+DATA_FORMAT = "0.4"  # the version of the session files written now (recorded in the sidecar)
 
 
 @dataclass(frozen=True)

@@ -309,7 +309,20 @@ def _fixed_columns(p: dict) -> tuple[Column, ...]:
 def columns(protocol) -> tuple[Column, ...]:
     """The paradigm's CSV columns for this protocol (after the common ones)."""
     p = protocol.data if hasattr(protocol, "data") else protocol
-    questions = tuple(
-        Column(q["column"], bool, q["text"]) for q in p["questionnaire"]["questions"] or []
+    asked = p["questionnaire"]["questions"] or []
+    answers = tuple(Column(q["column"], bool, q["text"]) for q in asked)
+    times = tuple(
+        Column(
+            f"{q['column']}_time_s",
+            float,
+            f"response time of {q['column']}: from the key press that brought up the question "
+            "(the Enter confirming the settings, or the previous question's answer) to the Y "
+            "or N key",
+            unit="s",
+            low=0.0,
+            since="0.4",
+        )
+        for q in asked
     )
+    questions = answers + times
     return _fixed_columns(p) + questions

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Debian packages the PsychoPy sessions and their tests need: a virtual X server, OpenGL, the
 # JACK library Psychtoolbox's keyboard loads (PsychoPy's Keyboard times key presses with it),
-# Qt's X11 libraries for the participant dialog, xdotool to send real key events in tests, and
+# Qt's X11 libraries for the participant dialog, xdotool to send real key events in tests
+# (setxkbmap to give them another keyboard layout), and
 # Chromium with its WebDriver for the test that opens the reports in a real browser.
 # Installs them with apt-get where it is available and we may use it; otherwise says what is
 # missing and leaves the decision to the caller (the window tests then fail with that message).
@@ -10,6 +11,7 @@ needed=()
 have_lib() { ldconfig -p 2>/dev/null | grep -q "$1"; }
 command -v xvfb-run >/dev/null 2>&1 || needed+=(xvfb xauth)
 command -v xdotool >/dev/null 2>&1 || needed+=(xdotool)
+command -v setxkbmap >/dev/null 2>&1 || needed+=(x11-xkb-utils xkb-data)
 command -v chromium >/dev/null 2>&1 || needed+=(chromium)
 command -v chromedriver >/dev/null 2>&1 || needed+=(chromium-driver)
 have_lib 'libGL.so.1' || needed+=(libgl1)

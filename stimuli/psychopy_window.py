@@ -27,6 +27,7 @@ __all__ = [
     "KeyReader",
     "TextCapture",
     "grab_screen",
+    "key_symbols",
     "measure_frame_intervals",
     "measure_refresh",
     "open_window",
@@ -206,24 +207,36 @@ class KeyReader:
 
 class TextCapture:
     """Every text event of a window, in order: ``("text", characters)`` and
-    ``("motion", name)`` (Backspace, Delete, arrows, Home, End), as pyglet reports them.
+    ``("motion", name)`` (Backspace, Delete, arrows, Home, End), as pyglet reports them, each
+    after ``("key", symbol)`` of the key press that made it (pyglet's symbols are X keysyms).
+    Shift+Enter types a new line (``"\\n"``); :attr:`returns` says of each Enter pressed
+    whether Shift was down.
 
     PsychoPy's own handlers keep running; this one only listens.
     """
 
     def __init__(self, window):
         self.events: list[tuple[str, str]] = []
+        self.returns: list[bool] = []  # each Enter pressed: whether with Shift
+        self._shift_return = False
         window.winHandle.push_handlers(
             on_text=self._on_text, on_text_motion=self._on_motion, on_key_press=self._on_key
         )
 
     def _on_text(self, text: str) -> None:
+        if text == "\r" and self._shift_return:  # Shift+Enter: a new line, not the end
+            text = "\n"
+        self._shift_return = False
         if text != "\t":  # a tab comes as its key (PsychoPy takes the text event for itself)
             self.events.append(("text", text))
 
     def _on_key(self, symbol: int, modifiers: int) -> None:
         from pyglet.window import key
 
+        self.events.append(("key", str(symbol)))  # which key made the text that follows
+        self._shift_return = symbol in (key.RETURN, key.ENTER) and bool(modifiers & key.MOD_SHIFT)
+        if symbol in (key.RETURN, key.ENTER):
+            self.returns.append(self._shift_return)
         if symbol == key.TAB:
             self.events.append(("text", "\t"))
 
@@ -234,7 +247,7 @@ class TextCapture:
 
 
 def typed_text(events: list[tuple[str, str]], start: int = 0) -> tuple[str, int, bool]:
-    r"""The text typed by ``events[start:]`` up to the first Enter.
+    r"""The text typed by ``events[start:]`` up to the first Enter (``"\r"``).
 
     Returns the text, the cursor's position in it, and whether an Enter ended it. Backspace and
     Delete remove a character, the arrows, Home and End move the cursor; every other character
@@ -252,7 +265,7 @@ def typed_text(events: list[tuple[str, str]], start: int = 0) -> tuple[str, int,
     cursor = 0
     for kind, value in events[start:]:
         if kind == "text":
-            if value in ("\r", "\n"):
+            if value == "\r":  # Enter (Shift+Enter comes as a new line, "\n")
                 return "".join(text), cursor, True
             text[cursor:cursor] = list(value)
             cursor += len(value)
@@ -270,6 +283,40 @@ def typed_text(events: list[tuple[str, str]], start: int = 0) -> tuple[str, int,
         elif value in ("MOTION_END_OF_LINE", "MOTION_END_OF_FILE"):
             cursor = len(text)
     return "".join(text), cursor, False
+
+
+def key_symbols(window, names) -> set[int]:
+    """The pyglet symbols (X keysyms) that the keys PsychoPy's keyboard calls ``names`` make
+    in the keyboard layout now in use, at every shift level: on a French AZERTY layout the key
+    named ``5`` makes ``parenleft`` unshifted and ``5`` shifted.
+
+    Psychtoolbox names a key by its position (on Linux its X key code + 1, by
+    ``psychopy.hardware.keyboard.keyNamesLinux``), whatever the layout; the window system's text
+    events follow the layout. Elsewhere than on X11 only the symbols of the names' own
+    characters are given (a digit's key and its keypad key).
+    """
+    from pyglet.window import key
+
+    symbols = set()
+    for name in names:
+        character = name.removeprefix("num_")
+        if len(character) == 1:
+            symbols.add(ord(character))
+            if character.isdigit():
+                symbols.add(getattr(key, f"NUM_{character}"))
+    if not sys.platform.startswith("linux"):
+        return symbols
+    from psychopy.hardware.keyboard import keyNamesLinux
+    from pyglet.libs.x11 import xlib
+
+    display = window.winHandle._x_display
+    for code, name in keyNamesLinux.items():
+        if name in names:
+            for level in range(6):  # unshifted, Shift, AltGr levels
+                symbol = xlib.XKeycodeToKeysym(display, code - 1, level)
+                if symbol:
+                    symbols.add(int(symbol))
+    return symbols
 
 
 def dispatch_events(window) -> None:

@@ -57,27 +57,77 @@ def _experiment_info(args: argparse.Namespace) -> None:
         )
     from psychopy import gui
 
-    info = {
+    from experiments.data import check_session_id
+
+    entered = {
         "participant": "",
         "session": args.session,
-        "age": "" if args.age is None else args.age,
-        "sex": ["", "f", "m", "x"],
-        "vision": list(VISION),
+        "age": args.age,
+        "sex": "",
+        "vision": "",
     }
-    dialog = gui.DlgFromDict(info, title=f"glarelab {args.title}", order=list(info))
-    if not dialog.OK:
-        raise ValueError("the participant dialog was cancelled: nothing was run or written")
-    args.participant = str(info["participant"]).strip()
-    try:
-        args.session = int(info["session"])
-        args.age = _age(str(info["age"])) if str(info["age"]).strip() else None
-    except (ValueError, argparse.ArgumentTypeError) as error:
-        raise ValueError(
-            f"the dialog's session {info['session']!r} must be a whole number and its age "
-            f"0-120 years ({error})"
-        ) from None
+    problem = None
+    while True:  # a bad entry is named and asked again, with what was typed kept
+        info = {"problem": problem} if problem else {}
+        info |= {
+            "participant": entered["participant"],
+            "session": entered["session"],
+            "age": "" if entered["age"] is None else entered["age"],
+            "sex": _first(["", "f", "m", "x"], entered["sex"]),
+            "vision": _first(list(VISION), entered["vision"]),
+        }
+        dialog = gui.DlgFromDict(
+            info,
+            title=f"glarelab {args.title}",
+            order=list(info),
+            fixed=["problem"] if problem else [],
+        )
+        if not dialog.OK:
+            raise ValueError("the participant dialog was cancelled: nothing was run or written")
+        entered = {key: info[key] for key in ("participant", "session", "age", "sex", "vision")}
+        entered["participant"] = str(entered["participant"]).strip()
+        try:
+            session = int(str(entered["session"]).strip())
+            if session < 1:
+                raise ValueError(f"session must be a whole number from 1; got {session}")
+            age = _age(str(entered["age"]).strip()) if str(entered["age"]).strip() else None
+            check_session_id(entered["participant"], session)
+        except (ValueError, argparse.ArgumentTypeError) as error:
+            message = str(error)
+            if "invalid literal" in message:
+                message = f"session must be a whole number from 1; got {entered['session']!r}"
+            problem = message
+            continue
+        args.participant, args.session, args.age = entered["participant"], session, age
+        info = entered
+        break
     args.sex = info["sex"] or None
     args.vision = info["vision"] or None
+
+
+def _protocol(study: str | None, path: Path | None):
+    """The session's protocol: STUDY, or ``--protocol FILE`` instead; both only when they name
+    the same study."""
+    if study is None and path is None:
+        raise ValueError(
+            "give the study (STUDY: a shipped study's name or a TOML file) or --protocol FILE"
+        )
+    if path is None:
+        return load_protocol(study)
+    protocol = load_protocol(path)
+    if study is not None:
+        named = load_protocol(study).study if Path(study).suffix else study
+        if named != protocol.study:
+            raise ValueError(
+                f"STUDY {study!r} and --protocol {path} (the protocol of study "
+                f"{protocol.study!r}) name two studies; give one of them"
+            )
+    return protocol
+
+
+def _first(choices: list[str], chosen: str) -> list[str]:
+    """A dialog's choices with the one chosen before first (the dialog's default)."""
+    return [chosen] + [c for c in choices if c != chosen] if chosen in choices else choices
 
 
 SIMULATED_PARTICIPANTS = 10  # Yoshida 2008's study had ten participants (§5: F(1, 9))
@@ -86,7 +136,7 @@ SIMULATED_PARTICIPANTS = 10  # Yoshida 2008's study had ten participants (§5: F
 def _run(args: argparse.Namespace) -> int:
     from experiments.session import SimulatedFrontend, run_session
 
-    protocol = load_protocol(args.protocol or args.study)
+    protocol = _protocol(args.study, args.protocol)
     args.title = protocol.study
     out = Path(args.out)
     if out.exists() and not out.is_dir():
@@ -125,6 +175,7 @@ def _run(args: argparse.Namespace) -> int:
                 counterbalance=args.counterbalance,
                 simulated=True,
                 participant_info={"simulated_observer_seed": args.seed},
+                pilot=args.pilot,
             )
             done = f"{sidecar['trials']} trials, {sidecar['status']}"
             _log(f"[{number}/{len(ids)}] {participant}: {done}")
@@ -135,6 +186,10 @@ def _run(args: argparse.Namespace) -> int:
                 return 3
         print(out.resolve())
         return 0
+    if args.pilot and args.fullscreen:
+        raise ValueError(
+            "--pilot runs in a window (PsychoPy's piloting mode); --fullscreen is for sessions"
+        )
     if args.participant is None:
         _experiment_info(args)
     from experiments.psychopy_frontend import PsychoPyFrontend
@@ -161,6 +216,7 @@ def _run(args: argparse.Namespace) -> int:
         fullscreen=args.fullscreen,
         scripted_keys=scripted,
         screenshot=args.screenshot,
+        pilot=args.pilot,
     )
     sidecar = run_session(
         protocol,
@@ -176,6 +232,7 @@ def _run(args: argparse.Namespace) -> int:
         participant_info={"age": args.age, "sex": args.sex, "vision_correction": args.vision},
         accept_mismatch=tuple(args.accept_mismatch or ()),
         allow_unmeasured_refresh=args.allow_unmeasured_refresh,
+        pilot=args.pilot,
     )
     run = sidecar["runs"][-1]
     _log(
@@ -189,7 +246,9 @@ def _run(args: argparse.Namespace) -> int:
 def add(commands) -> None:
     """Add the commands to the ``glarelab`` parser."""
     run = commands.add_parser("run", help="run a study session (PsychoPy) or simulated sessions")
-    run.add_argument("study", help=f"the protocol: {PROTOCOL_HELP}")
+    run.add_argument(
+        "study", nargs="?", default=None, help=f"the protocol: {PROTOCOL_HELP} (or --protocol)"
+    )
     run.add_argument(
         "--participant",
         type=_participant,
@@ -205,7 +264,7 @@ def add(commands) -> None:
     run.add_argument(
         "--allow-uncalibrated",
         action="store_true",
-        help="run without a valid calibration (recorded)",
+        help="run without a valid calibration, or on an unverified one (recorded)",
     )
     run.add_argument(
         "--accept-mismatch",
@@ -220,6 +279,13 @@ def add(commands) -> None:
         action="store_true",
         help="run although the refresh rate could not be measured (recorded; flips are then "
         "paced by the clock at the protocol's rate)",
+    )
+    run.add_argument(
+        "--pilot",
+        action="store_true",
+        help="a pilot run, as PsychoPy's piloting mode: in a window marked PILOT, accepting a "
+        "display that is not the protocol's (resolution, refresh, bit depth, an unmeasured "
+        "refresh) and an unverified calibration; every file says it is a pilot (recorded)",
     )
     run.add_argument(
         "--out",

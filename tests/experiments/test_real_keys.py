@@ -111,6 +111,10 @@ def test_yoshida_every_quick_press_counts_the_marker_shows_and_rt_runs_from_onse
     assert float(row["brighter_cd_m2"]) == 400.0 + 3 * 10.0  # and of the three
     assert int(row["adjustments"]) == 13
     assert (row["q1_glow"], row["q2_ring"], row["q3_same_size"]) == ("true", "false", "true")
+    # each answer timed from the press before it: the Enter, then the keys 150 ms apart
+    assert 0 < float(row["q1_glow_time_s"]) < 1.0
+    for later in ("q2_ring_time_s", "q3_same_size_time_s"):
+        assert abs(float(row[later]) - 0.15) < 0.05, row[later]
     # time_s: from the onset flip to the Enter, however many redraws came between
     sidecar = sidecar_of(path)
     onset = sidecar["runs"][0]["clock_epoch_s"] + float(row["onset_s"])

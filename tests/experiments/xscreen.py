@@ -34,7 +34,7 @@ class XScreen:
     """An Xvfb display with one ``glarelab`` process on it; ``depth`` bits per pixel (24: 8 bits
     per channel, 30: 10 bits)."""
 
-    def __init__(self, tmp_path: Path, *, depth: int = 24):
+    def __init__(self, tmp_path: Path, *, depth: int = 24, layout: str | None = None):
         self.tmp_path = Path(tmp_path)
         read, write = os.pipe()
         self.server = subprocess.Popen(
@@ -47,6 +47,7 @@ class XScreen:
                 f"{SCREEN[0]}x{SCREEN[1]}x{depth}",
                 "-nolisten",
                 "tcp",
+                "-noreset",  # Xvfb resets its keyboard layout when its last client leaves
             ],
             pass_fds=(write,),
             stdout=subprocess.DEVNULL,
@@ -60,6 +61,8 @@ class XScreen:
         os.close(read)
         self.display = f":{number.decode().strip()}"
         self.env = {**os.environ, "DISPLAY": self.display}
+        if layout is not None:  # e.g. "fr": the keys then make what a French keyboard's make
+            subprocess.run([_need("setxkbmap"), layout], env=self.env, check=True)
         self.process: subprocess.Popen | None = None
         self.stderr_path = self.tmp_path / "glarelab.stderr"
 

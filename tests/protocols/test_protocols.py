@@ -187,7 +187,8 @@ def test_schema_documents_every_key(paradigm):
 def test_the_csv_columns_follow_the_protocol():
     yoshida = load_protocol("yoshida2008")
     names = [c.name for c in columns(yoshida)]
-    assert names[-3:] == ["q1_glow", "q2_ring", "q3_same_size"]
+    assert names[-6:-3] == ["q1_glow", "q2_ring", "q3_same_size"]
+    assert names[-3:] == ["q1_glow_time_s", "q2_ring_time_s", "q3_same_size_time_s"]
     data = raw("yoshida2008")
     data["questionnaire"]["questions"] = [
         *data["questionnaire"]["questions"][:2],
@@ -198,7 +199,7 @@ def test_the_csv_columns_follow_the_protocol():
     data["stimulus"]["target_start_cd_m2"] = [150.0]
     five = parse_protocol(data)
     names = [c.name for c in columns(five)]
-    assert names[-4:] == ["q1_glow", "q2_ring", "q4_flicker", "q5_colour"]
+    assert names[-8:-4] == ["q1_glow", "q2_ring", "q4_flicker", "q5_colour"]
     assert "darker_cd_m2" not in names and "match_cd_m2" in names
     method = {c.name: c for c in columns(five)}["method"]
     assert method.choices == ("gaussian", "vos")
