@@ -38,6 +38,14 @@ def _calibrate_fit(args: argparse.Namespace) -> int:
     return 0
 
 
+_PROTOCOL_OPTIONS = {
+    "readings": "--readings",
+    "settle_s": "--settle-s",
+    "spread_fraction": "--spread",
+    "repeats": "--repeats",
+}
+
+
 def _open_meter(args: argparse.Namespace, instrument: dict | None):
     """The photometer asked for (None for typed readings; on a resumed session, the one that
     began it), a function that opens it anew, and the list of those opened."""
@@ -80,22 +88,42 @@ def _open_meter(args: argparse.Namespace, instrument: dict | None):
 
 
 def _calibrate_measure(args: argparse.Namespace) -> int:
+    from stimuli.measure import MeasurementLock
+
+    output_file(args.out, (".json",), "calibration")
+    with MeasurementLock(args.out):  # one process per session file, until it ends
+        return _measure_locked(args)
+
+
+def _measure_locked(args: argparse.Namespace) -> int:
     from stimuli.measure import MeasurementSession
     from stimuli.measure_psychopy import run_measurement
     from stimuli.photometer import PatchProtocol
 
-    output_file(args.out, (".json",), "calibration")
     session_path = args.out.with_suffix(".session.json")
-    protocol = PatchProtocol(
-        readings=args.readings,
-        settle_s=args.settle_s,
-        spread_fraction=args.spread,
-        repeats=args.repeats,
-    )
+    given = {  # the reading protocol's options given on the command line
+        name: value
+        for name, value in (
+            ("readings", args.readings),
+            ("settle_s", args.settle_s),
+            ("spread_fraction", args.spread),
+            ("repeats", args.repeats),
+        )
+        if value is not None
+    }
+    protocol = PatchProtocol(**given)
     if args.resume:
         session = MeasurementSession.resume(session_path, args.out)
         if session.patch_protocol:  # the session goes on reading patches as it began
             protocol = PatchProtocol(**session.patch_protocol)
+            for name, value in given.items():
+                if value != session.patch_protocol[name]:
+                    option = _PROTOCOL_OPTIONS[name]
+                    raise ValueError(
+                        f"{option} {value:g}: this session reads its patches with {option} "
+                        f"{session.patch_protocol[name]:g}; resume without {option} (or with "
+                        f"{session.patch_protocol[name]:g}) so every patch is read alike"
+                    )
         _log(
             f"resuming {session_path}: {len(session.log)} patches done, "
             f"{len(session.raw)} photometer readings kept, {session.current()['phase']} "
@@ -146,6 +174,15 @@ def _calibrate_measure(args: argparse.Namespace) -> int:
             allow_fewer_bits=args.allow_fewer_bits,
             log=_log,
         )
+    except KeyboardInterrupt:  # Ctrl-C: the session says so, and how to go on
+        if session.phase != "done" and (session.log or session.raw):
+            session.interrupted("stopped by Ctrl-C (SIGINT)")
+            step = session.current()
+            _log(
+                f"stopped at {step['phase']} code {step['code']}; every reading so far is in "
+                f"{session.session_path}: the same command with --resume goes on from there"
+            )
+        raise
     finally:
         for each in opened:
             each.close()
@@ -239,25 +276,29 @@ def add(commands) -> None:
         help="the photometer's serial number, recorded (for models that do not report it)",
     )
     measure.add_argument(
-        "--readings", type=count(1, 100), default=3, help="photometer readings per patch"
+        "--readings",
+        type=count(1, 100),
+        default=None,
+        help="photometer readings per patch (default 3)",
     )
     measure.add_argument(
         "--settle-s",
         type=number(0, 600),
-        default=1.0,
-        help="seconds a patch is shown before its first reading",
+        default=None,
+        help="seconds a patch is shown before its first reading (default 1)",
     )
     measure.add_argument(
         "--spread",
         type=number(0, 1, above=True),
-        default=0.01,
-        help="largest (max - min) / median of a patch's readings before it is read again",
+        default=None,
+        help="largest (max - min) / median of a patch's readings before it is read again "
+        "(default 0.01)",
     )
     measure.add_argument(
         "--repeats",
         type=count(0, 20),
-        default=2,
-        help="times a patch whose readings disagree is read again",
+        default=None,
+        help="times a patch whose readings disagree is read again (default 2)",
     )
     measure.add_argument(
         "--resume",
