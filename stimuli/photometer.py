@@ -172,8 +172,9 @@ class Photometer:
         }
 
     def read(self) -> tuple[float, str]:
-        """One luminance reading, cd/m², and the instrument's raw replies (`` | `` between
-        the replies of a reading that takes several commands, as the PR-655's).
+        """One luminance reading, cd/m², and the instrument's raw replies exactly as they came
+        (line ends included; `` | `` between the replies of a reading that takes several
+        commands, as the PR-655's).
 
         Raises
         ------
@@ -233,13 +234,15 @@ class Photometer:
                 f"the {self.model} read {value:g} cd/m², over its range "
                 f"({spec.ceiling_cd_m2:g} cd/m²); check the range setting and any filter"
             )
-        if value < spec.floor_cd_m2 or value < 0:
+        # no instrument reads a display as 0 (dark current, noise): 0 is "nothing measured"
+        if value < spec.floor_cd_m2 or value <= 0:
+            below = f"{spec.floor_cd_m2:g} cd/m²" if spec.floor_cd_m2 > 0 else "no light measured"
             raise OutOfRange(
-                f"the {self.model} read {value:g} cd/m², under its range ({spec.floor_cd_m2:g} "
-                "cd/m²): too little light for it (a dark patch of an OLED, or the lens cap "
-                "on); type the reading from a more sensitive instrument, or check the cap"
+                f"the {self.model} read {value:g} cd/m², under its range ({below}): too "
+                "little light for it (a dark patch of an OLED, or the lens cap on); type the "
+                "reading from a more sensitive instrument, or check the cap"
             )
-        return value, " | ".join(r.strip() for r in self.replies)
+        return value, " | ".join(self.replies)  # as they came, line ends included
 
     def close(self) -> None:
         com = getattr(self.device, "com", None)

@@ -142,3 +142,20 @@ def test_ctrl_c_ends_quietly_keeps_the_session_and_says_how_to_go_on(
     assert saved["interruptions"][-1]["message"] == "stopped by Ctrl-C (SIGINT)"
     resumed = MeasurementSession.resume(out.with_suffix(".session.json"), out)
     assert len(resumed.interruptions) == 1  # the stop is known: not "no fault recorded"
+
+
+@pytest.mark.parametrize("model", ["LS-100", "PR-655"])
+def test_a_reading_of_zero_is_no_reading(line, model):  # noqa: F811
+    """An LS-100 reads down to 0.001 cd/m², and the PR-655 has no floor in the table: a 0
+    from either is light too faint to measure, not a black of 0 cd/m² to fit."""
+    from stimuli.photometer import OutOfRange, open_photometer
+    from tests.stimuli.fake_photometer import FakePR655
+
+    kind = FakePR655 if model == "PR-655" else FakeMinolta
+    device = kind(lambda: 0.0, line_folder=line)
+    try:
+        meter = open_photometer(model, device.port)
+        with pytest.raises(OutOfRange, match=rf"the {model} read 0 cd/m², under its range"):
+            meter.read()
+    finally:
+        device.close()
