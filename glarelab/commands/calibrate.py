@@ -124,6 +124,24 @@ def _measure_locked(args: argparse.Namespace) -> int:
                         f"{session.patch_protocol[name]:g}; resume without {option} (or with "
                         f"{session.patch_protocol[name]:g}) so every patch is read alike"
                     )
+        for option, value, kept in (
+            ("--bit-depth", args.bit_depth, session.bit_depth),
+            ("--points", args.points, session.points),
+            ("--order", args.order, session.order),
+            ("--verify-points", args.verify_points, session.verify_points),
+            ("--tolerance", args.tolerance, session.tolerance_fraction),
+            ("--label", args.label, session.label),
+        ):
+            if value is not None and value != kept:
+                raise ValueError(
+                    f"{option} {value}: this session was begun with {option} {kept}; resume "
+                    f"without {option}, the session goes on as it began"
+                )
+        if args.seed is not None:
+            raise ValueError(
+                f"--seed {args.seed}: this session's order of codes is in its file; resume "
+                "without --seed"
+            )
         _log(
             f"resuming {session_path}: {len(session.log)} patches done, "
             f"{len(session.raw)} photometer readings kept, {session.current()['phase']} "
@@ -140,14 +158,14 @@ def _measure_locked(args: argparse.Namespace) -> int:
                     "move the file away to start again"
                 )
         session = MeasurementSession(
-            bit_depth=args.bit_depth,
+            bit_depth=10 if args.bit_depth is None else args.bit_depth,
             out=args.out,
-            rng=np.random.default_rng(args.seed),
-            points=args.points,
-            order=args.order,
-            verify_points=args.verify_points,
-            tolerance_fraction=args.tolerance,
-            label=args.label,
+            rng=np.random.default_rng(0 if args.seed is None else args.seed),
+            points=33 if args.points is None else args.points,
+            order=args.order or "random",
+            verify_points=5 if args.verify_points is None else args.verify_points,
+            tolerance_fraction=0.03 if args.tolerance is None else args.tolerance,
+            label=args.label or "",
         )
     if args.simulate is not None and args.photometer is not None:
         raise ValueError("give --simulate or --photometer, not both")
@@ -229,23 +247,37 @@ def add(commands) -> None:
     )
     measure.add_argument("--out", type=Path, required=True, help="calibration JSON to write")
     measure.add_argument(
-        "--bit-depth", type=int, default=10, choices=(8, 10, 12, 16), help="the display's bits"
+        "--bit-depth",
+        type=int,
+        default=None,
+        choices=(8, 10, 12, 16),
+        help="the display's bits (default 10)",
     )
-    measure.add_argument("--points", type=count(4, 4096), default=33, help="codes measured")
     measure.add_argument(
-        "--order", choices=("random", "reversed"), default="random", help="order of the codes"
+        "--points", type=count(4, 4096), default=None, help="codes measured (default 33)"
     )
     measure.add_argument(
-        "--verify-points", type=count(0, 1024), default=5, help="codes measured again to verify"
+        "--order",
+        choices=("random", "reversed"),
+        default=None,
+        help="order of the codes (default random)",
+    )
+    measure.add_argument(
+        "--verify-points",
+        type=count(0, 1024),
+        default=None,
+        help="codes measured again to verify (default 5)",
     )
     measure.add_argument(
         "--tolerance",
         type=number(0, 1, above=True),
-        default=0.03,
-        help="relative error allowed for 'passed'",
+        default=None,
+        help="relative error allowed for 'passed' (default 0.03)",
     )
-    measure.add_argument("--seed", type=count(0), default=0, help="seed of the code order")
-    measure.add_argument("--label", default="", help="display, photometer, operator")
+    measure.add_argument(
+        "--seed", type=count(0), default=None, help="seed of the code order (default 0)"
+    )
+    measure.add_argument("--label", default=None, help="display, photometer, operator")
     measure.add_argument("--windowed", action="store_true", help="a window, not full screen")
     measure.add_argument(
         "--allow-fewer-bits",

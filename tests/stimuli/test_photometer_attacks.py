@@ -11,7 +11,7 @@ import pytest
 from stimuli.measure import MeasurementLock, MeasurementSession, SessionInUse
 from stimuli.photometer import PatchProtocol, measure_patch
 from tests.stimuli.fake_photometer import FakeMinolta
-from tests.stimuli.test_photometer import display, line  # noqa: F401 - a fixture
+from tests.stimuli.test_photometer import fake, line, shown  # noqa: F401 - fixtures
 
 pytest.importorskip("psychopy_minolta", reason="the photometer extra: pip install '.[photometer]'")
 
@@ -159,3 +159,68 @@ def test_a_reading_of_zero_is_no_reading(line, model):  # noqa: F811
             meter.read()
     finally:
         device.close()
+
+
+def test_a_resume_with_another_session_setting_is_refused(tmp_path, capsys):
+    from glarelab.cli import main
+
+    begun = session(tmp_path, label="lab display")  # 8 bits, 5 points, random order
+    begun.record(1.0)
+    resume = ["calibrate", "measure", "--out", str(begun.out), "--resume"]
+    for extra, message in [
+        (["--bit-depth", "10"], "--bit-depth 10: this session was begun with --bit-depth 8"),
+        (["--points", "33"], "--points 33: this session was begun with --points 5"),
+        (["--order", "reversed"], "--order reversed: this session was begun with --order random"),
+        (["--verify-points", "9"], "--verify-points 9: this session was begun with"),
+        (["--tolerance", "0.05"], "--tolerance 0.05: this session was begun with --tolerance"),
+        (["--label", "other"], "--label other: this session was begun with --label lab display"),
+        (["--seed", "3"], "--seed 3: this session's order of codes is in its file"),
+    ]:
+        assert main([*resume, *extra]) == 2
+        assert message in capsys.readouterr().err
+    assert json.loads(begun.session_path.read_text())["log"] == begun.log  # unchanged
+
+
+def test_a_pr655_measurement_that_failed_is_not_the_last_reading_again(line):  # noqa: F811
+    """The plugin reads the luminance of the D3 report whatever the measurement's status: after
+    a failed measurement that is the previous patch's luminance."""
+    from stimuli.photometer import Garbled, OutOfRange, open_photometer
+    from tests.stimuli.fake_photometer import FakePR655
+
+    light = {"cd_m2": 120.0}
+    device = FakePR655(lambda: light["cd_m2"], line_folder=line)
+    try:
+        meter = open_photometer("PR-655", device.port)
+        assert meter.read()[0] == pytest.approx(120.0, rel=0.005)
+        light["cd_m2"] = 0.5
+        device.faults = ["-0001\r\n"]  # too little light: no measurement
+        with pytest.raises(OutOfRange, match=r"PR-655 reports too little light \(status -1\)"):
+            meter.read()
+        device.faults = ["0010\r\n"]
+        with pytest.raises(OutOfRange, match=r"too little light \(status 10\)"):
+            meter.read()
+        device.faults = ["-0008\r\n"]  # could not synchronise
+        with pytest.raises(Garbled, match=r"reports status -8 for the measurement"):
+            meter.read()
+        device.faults = ["0018\r\n"]  # a reading (too weak to synchronise to): accepted
+        meter.read()  # (the fake's status stands in for a measurement it did not make)
+        assert meter.read()[0] == pytest.approx(0.5, rel=0.005)  # and a good one again
+    finally:
+        device.close()
+
+
+def test_a_cable_pulled_while_a_command_is_sent_is_a_lost_photometer(fake):  # noqa: F811
+    """Pulled while pyserial drains the line, the port fails with termios.error (EIO), which is
+    not an OSError: it is the same lost photometer, not a crash."""
+    import termios
+
+    from stimuli.photometer import Disconnected, open_photometer
+
+    meter = open_photometer("LS-100", fake.port)
+
+    def pulled():
+        raise termios.error(5, "Input/output error")
+
+    meter.device.com.flush = pulled
+    with pytest.raises(Disconnected, match=r"lost the LS-100 on /dev/pts/\d+ \(.*Input/output"):
+        meter.read()
