@@ -22,6 +22,8 @@ import datetime as dt
 import itertools
 import json
 import os
+import socket
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal
@@ -30,10 +32,75 @@ import numpy as np
 
 from .calibration import Calibration, fit_calibration
 
-__all__ = ["MeasurementSession"]
+__all__ = ["MeasurementLock", "MeasurementSession", "SessionInUse"]
 
 DRIFT_TOLERANCE = 0.02  # repeat of the first code within 2 % of the first reading
 SESSION_FORMAT = "glarelab measurement session v2"
+
+
+class SessionInUse(ValueError):
+    """Another process measures with this session file."""
+
+
+class MeasurementLock:
+    """Hold the session of calibration ``out`` for this process: ``with MeasurementLock(out):``.
+
+    An exclusive, non-blocking lock on ``NAME.session.lock``, as
+    :class:`experiments.data.SessionLock` holds a participant's session: two measurements on
+    one session file would interleave their readings and overwrite each other's saves. The
+    operating system releases the lock when the process ends, however it ends (a killed
+    measurement can be resumed at once).
+
+    Raises
+    ------
+    SessionInUse
+        When another process holds it (names its process id and host).
+    """
+
+    def __init__(self, out: str | Path):
+        self.path = Path(out).with_suffix(".session.lock")
+        self._fd: int | None = None
+
+    def __enter__(self) -> MeasurementLock:
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            _lock(fd)
+        except OSError:
+            holder = os.read(fd, 200).decode("utf-8", "replace").strip() or "unknown"
+            os.close(fd)
+            raise SessionInUse(
+                f"{self.path.with_suffix('.json')} is being measured by another process "
+                f"({holder}; lock file {self.path}): one measurement per session at a time"
+            ) from None
+        try:  # who holds it, for the refusal (a full disk only loses the name)
+            os.ftruncate(fd, 0)
+            os.write(fd, f"pid {os.getpid()} on {socket.gethostname()}\n".encode())
+        except OSError:
+            pass
+        self._fd = fd
+        return self
+
+    def __exit__(self, *exc) -> None:
+        if self._fd is not None:
+            os.close(self._fd)  # closing the descriptor releases the lock
+            self._fd = None
+
+
+if sys.platform == "win32":  # pragma: no cover - the lab machines of CI are Linux
+
+    def _lock(fd: int) -> None:
+        import msvcrt
+
+        os.lseek(fd, 0, os.SEEK_SET)
+        msvcrt.locking(fd, msvcrt.LK_NBLCK, 1)
+
+else:
+
+    def _lock(fd: int) -> None:
+        import fcntl
+
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
 
 
 @dataclass
@@ -192,13 +259,14 @@ class MeasurementSession:
             self.save()
         return new
 
-    @staticmethod
-    def _entry(entry: dict, readings: list[float] | None, source: str, flags) -> dict:
+    def _entry(self, entry: dict, readings: list[float] | None, source: str, flags) -> dict:
         if source not in ("typed", "photometer", "simulated"):
             raise ValueError(
                 f"source must be 'typed', 'photometer' or 'simulated'; got {source!r}"
             )
         entry["source"] = source
+        if source == "photometer" or self.raw:  # the raw readings taken up to this entry
+            entry["readings_kept"] = len(self.raw)
         if readings is not None:
             entry["readings_cd_m2"] = [float(r) for r in readings]
         if flags:
@@ -223,7 +291,7 @@ class MeasurementSession:
         )
         self.save()
 
-    def interrupted(self, message: str) -> None:
+    def interrupted(self, message: str, *, save: bool = True) -> None:
         """Keep a fault that stopped the reading of the patch shown now."""
         step = self.current()
         self.interruptions.append(
@@ -235,7 +303,8 @@ class MeasurementSession:
                 "message": message,
             }
         )
-        self.save()
+        if save:
+            self.save()
 
     @classmethod
     def resume(cls, session_path: str | Path, out: str | Path) -> MeasurementSession:
@@ -298,11 +367,31 @@ class MeasurementSession:
                     source=entry.get("source", "typed"),
                     flags=entry.get("flags", []),
                 )
+                session.log[-1].pop("readings_kept", None)
+                if "readings_kept" in entry:
+                    session.log[-1]["readings_kept"] = entry["readings_kept"]
         finally:
             session._replaying = False
         session.raw = list(data.get("raw", []))
         session.interruptions = list(data.get("interruptions", []))
+        session._unrecorded_stop()
         return session
+
+    def _unrecorded_stop(self) -> None:
+        """Name the readings of a patch that a stop with no fault (a killed process, a crash,
+        power lost) left behind: kept, but not the patch's (it is read again)."""
+        ends = [entry["readings_kept"] for entry in self.log if "readings_kept" in entry]
+        ends += [fault["readings_kept"] for fault in self.interruptions]
+        if self.log and "readings_kept" not in self.log[-1]:  # a file that does not say
+            return
+        left = len(self.raw) - max(ends, default=0)
+        if left > 0 and self.phase != "done":
+            self.interrupted(
+                f"stopped with no fault recorded (the process was killed, crashed or lost "
+                f"power) after {left} reading{'s' if left > 1 else ''} of this patch: kept here, "
+                "not used; the patch is read again",
+                save=False,  # saved with the next reading
+            )
 
     def _monotonicity(self, code: int) -> list[str]:
         value = self.readings[code]
@@ -369,9 +458,13 @@ class MeasurementSession:
         }
         self.session_path.parent.mkdir(parents=True, exist_ok=True)
         temporary = self.session_path.with_name(self.session_path.name + ".tmp")
-        with temporary.open("w") as handle:
-            json.dump(data, handle, indent=1)
-            handle.flush()
-            os.fsync(handle.fileno())
+        try:
+            with temporary.open("w") as handle:
+                json.dump(data, handle, indent=1)
+                handle.flush()
+                os.fsync(handle.fileno())
+        except BaseException:  # a full disk, Ctrl-C: no half-written file left taking space
+            temporary.unlink(missing_ok=True)
+            raise
         os.replace(temporary, self.session_path)
         return self.session_path

@@ -28,6 +28,13 @@ from typing import Literal
 
 import numpy as np
 
+try:  # a pulled cable can fail pyserial's tcdrain with termios.error, which is no OSError
+    from termios import error as _TermiosError
+
+    _LINE_ERRORS: tuple[type[BaseException], ...] = (OSError, _TermiosError)
+except ImportError:  # pragma: no cover - Windows has no termios
+    _LINE_ERRORS = (OSError,)
+
 __all__ = [
     "PHOTOMETERS",
     "Disconnected",
@@ -142,6 +149,12 @@ PHOTOMETERS: dict[str, _Model] = {
 
 # error codes the Minolta instruments answer with (the plugin's table): which are range faults
 _MINOLTA_RANGE_CODES = ("ER10", "ER19")
+# status codes a Photo Research PR-650/655 puts first in its reply to a measurement (M0), as
+# Psychtoolbox's PR655measspd.m reads them: 0 a reading, 18 a reading (the source too weak to
+# synchronise to), -1 or 10 too little light; psychopy-photoresearch (0.0.3) does not look at
+# it and reads the luminance of the D3 report, which after a failed measurement is the last one
+_PR_READING_CODES = (0, 18)
+_PR_LOW_LIGHT_CODES = (-1, 10)
 
 
 @dataclass
@@ -172,8 +185,9 @@ class Photometer:
         }
 
     def read(self) -> tuple[float, str]:
-        """One luminance reading, cd/m², and the instrument's raw replies (`` | `` between
-        the replies of a reading that takes several commands, as the PR-655's).
+        """One luminance reading, cd/m², and the instrument's raw replies exactly as they came
+        (line ends included; `` | `` between the replies of a reading that takes several
+        commands, as the PR-655's).
 
         Raises
         ------
@@ -198,7 +212,7 @@ class Photometer:
                 f"reading ({type(error).__name__}: {error}); check the serial settings "
                 f"({spec.serial_settings}) and that nothing else uses the port"
             ) from None
-        except OSError as error:  # serial.SerialException is an OSError
+        except _LINE_ERRORS as error:  # serial.SerialException is an OSError
             raise Disconnected(
                 f"lost the {self.model} on {self.port} ({error}); plug the cable back in and "
                 "check the instrument is on: the measurement goes on from this patch"
@@ -225,6 +239,8 @@ class Photometer:
                 f"the {self.model} on {self.port} answered {reply!r} instead of a reading; "
                 "check the instrument's display for an error (battery, memory), then try again"
             )
+        if self.model == "PR-655":
+            self._check_pr_status(reply)
         value = float(value)
         if not np.isfinite(value):
             raise Garbled(f"the {self.model} on {self.port} answered {reply!r}: not a number")
@@ -233,13 +249,37 @@ class Photometer:
                 f"the {self.model} read {value:g} cd/m², over its range "
                 f"({spec.ceiling_cd_m2:g} cd/m²); check the range setting and any filter"
             )
-        if value < spec.floor_cd_m2 or value < 0:
+        # no instrument reads a display as 0 (dark current, noise): 0 is "nothing measured"
+        if value < spec.floor_cd_m2 or value <= 0:
+            below = f"{spec.floor_cd_m2:g} cd/m²" if spec.floor_cd_m2 > 0 else "no light measured"
             raise OutOfRange(
-                f"the {self.model} read {value:g} cd/m², under its range ({spec.floor_cd_m2:g} "
-                "cd/m²): too little light for it (a dark patch of an OLED, or the lens cap "
-                "on); type the reading from a more sensitive instrument, or check the cap"
+                f"the {self.model} read {value:g} cd/m², under its range ({below}): too "
+                "little light for it (a dark patch of an OLED, or the lens cap on); type the "
+                "reading from a more sensitive instrument, or check the cap"
             )
-        return value, " | ".join(r.strip() for r in self.replies)
+        return value, " | ".join(self.replies)  # as they came, line ends included
+
+    def _check_pr_status(self, reply: str) -> None:
+        """Refuse a PR-655 reading whose measurement (the first reply, to M0) failed."""
+        first = self.replies[0] if self.replies else ""
+        try:
+            status = int(first.split(",")[0])
+        except ValueError:
+            raise Garbled(
+                f"the {self.model} on {self.port} answered {first!r} to the measurement, not "
+                "a status; check the cable and that nothing else uses the port, then try again"
+            ) from None
+        if status in _PR_LOW_LIGHT_CODES:
+            raise OutOfRange(
+                f"the {self.model} reports too little light (status {status}): under its range; "
+                "check the lens cap and the aim, or type the reading from a more sensitive "
+                "instrument"
+            )
+        if status not in _PR_READING_CODES:
+            raise Garbled(
+                f"the {self.model} on {self.port} reports status {status} for the measurement, "
+                "not a reading (its manual lists the codes); check the instrument, then try again"
+            )
 
     def close(self) -> None:
         com = getattr(self.device, "com", None)
@@ -305,7 +345,7 @@ def open_photometer(
     replies: list[str] = []
     try:
         device = _recording(cls, replies)(port)
-    except OSError as error:  # serial.SerialException
+    except _LINE_ERRORS as error:  # serial.SerialException
         raise Disconnected(
             f"lost the serial port {port!r} while opening the {model} ({error})"
         ) from None

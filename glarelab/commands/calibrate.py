@@ -38,6 +38,14 @@ def _calibrate_fit(args: argparse.Namespace) -> int:
     return 0
 
 
+_PROTOCOL_OPTIONS = {
+    "readings": "--readings",
+    "settle_s": "--settle-s",
+    "spread_fraction": "--spread",
+    "repeats": "--repeats",
+}
+
+
 def _open_meter(args: argparse.Namespace, instrument: dict | None):
     """The photometer asked for (None for typed readings; on a resumed session, the one that
     began it), a function that opens it anew, and the list of those opened."""
@@ -80,22 +88,60 @@ def _open_meter(args: argparse.Namespace, instrument: dict | None):
 
 
 def _calibrate_measure(args: argparse.Namespace) -> int:
+    from stimuli.measure import MeasurementLock
+
+    output_file(args.out, (".json",), "calibration")
+    with MeasurementLock(args.out):  # one process per session file, until it ends
+        return _measure_locked(args)
+
+
+def _measure_locked(args: argparse.Namespace) -> int:
     from stimuli.measure import MeasurementSession
     from stimuli.measure_psychopy import run_measurement
     from stimuli.photometer import PatchProtocol
 
-    output_file(args.out, (".json",), "calibration")
     session_path = args.out.with_suffix(".session.json")
-    protocol = PatchProtocol(
-        readings=args.readings,
-        settle_s=args.settle_s,
-        spread_fraction=args.spread,
-        repeats=args.repeats,
-    )
+    given = {  # the reading protocol's options given on the command line
+        name: value
+        for name, value in (
+            ("readings", args.readings),
+            ("settle_s", args.settle_s),
+            ("spread_fraction", args.spread),
+            ("repeats", args.repeats),
+        )
+        if value is not None
+    }
+    protocol = PatchProtocol(**given)
     if args.resume:
         session = MeasurementSession.resume(session_path, args.out)
         if session.patch_protocol:  # the session goes on reading patches as it began
             protocol = PatchProtocol(**session.patch_protocol)
+            for name, value in given.items():
+                if value != session.patch_protocol[name]:
+                    option = _PROTOCOL_OPTIONS[name]
+                    raise ValueError(
+                        f"{option} {value:g}: this session reads its patches with {option} "
+                        f"{session.patch_protocol[name]:g}; resume without {option} (or with "
+                        f"{session.patch_protocol[name]:g}) so every patch is read alike"
+                    )
+        for option, value, kept in (
+            ("--bit-depth", args.bit_depth, session.bit_depth),
+            ("--points", args.points, session.points),
+            ("--order", args.order, session.order),
+            ("--verify-points", args.verify_points, session.verify_points),
+            ("--tolerance", args.tolerance, session.tolerance_fraction),
+            ("--label", args.label, session.label),
+        ):
+            if value is not None and value != kept:
+                raise ValueError(
+                    f"{option} {value}: this session was begun with {option} {kept}; resume "
+                    f"without {option}, the session goes on as it began"
+                )
+        if args.seed is not None:
+            raise ValueError(
+                f"--seed {args.seed}: this session's order of codes is in its file; resume "
+                "without --seed"
+            )
         _log(
             f"resuming {session_path}: {len(session.log)} patches done, "
             f"{len(session.raw)} photometer readings kept, {session.current()['phase']} "
@@ -112,14 +158,14 @@ def _calibrate_measure(args: argparse.Namespace) -> int:
                     "move the file away to start again"
                 )
         session = MeasurementSession(
-            bit_depth=args.bit_depth,
+            bit_depth=10 if args.bit_depth is None else args.bit_depth,
             out=args.out,
-            rng=np.random.default_rng(args.seed),
-            points=args.points,
-            order=args.order,
-            verify_points=args.verify_points,
-            tolerance_fraction=args.tolerance,
-            label=args.label,
+            rng=np.random.default_rng(0 if args.seed is None else args.seed),
+            points=33 if args.points is None else args.points,
+            order=args.order or "random",
+            verify_points=5 if args.verify_points is None else args.verify_points,
+            tolerance_fraction=0.03 if args.tolerance is None else args.tolerance,
+            label=args.label or "",
         )
     if args.simulate is not None and args.photometer is not None:
         raise ValueError("give --simulate or --photometer, not both")
@@ -146,6 +192,15 @@ def _calibrate_measure(args: argparse.Namespace) -> int:
             allow_fewer_bits=args.allow_fewer_bits,
             log=_log,
         )
+    except KeyboardInterrupt:  # Ctrl-C: the session says so, and how to go on
+        if session.phase != "done" and (session.log or session.raw):
+            session.interrupted("stopped by Ctrl-C (SIGINT)")
+            step = session.current()
+            _log(
+                f"stopped at {step['phase']} code {step['code']}; every reading so far is in "
+                f"{session.session_path}: the same command with --resume goes on from there"
+            )
+        raise
     finally:
         for each in opened:
             each.close()
@@ -192,23 +247,37 @@ def add(commands) -> None:
     )
     measure.add_argument("--out", type=Path, required=True, help="calibration JSON to write")
     measure.add_argument(
-        "--bit-depth", type=int, default=10, choices=(8, 10, 12, 16), help="the display's bits"
+        "--bit-depth",
+        type=int,
+        default=None,
+        choices=(8, 10, 12, 16),
+        help="the display's bits (default 10)",
     )
-    measure.add_argument("--points", type=count(4, 4096), default=33, help="codes measured")
     measure.add_argument(
-        "--order", choices=("random", "reversed"), default="random", help="order of the codes"
+        "--points", type=count(4, 4096), default=None, help="codes measured (default 33)"
     )
     measure.add_argument(
-        "--verify-points", type=count(0, 1024), default=5, help="codes measured again to verify"
+        "--order",
+        choices=("random", "reversed"),
+        default=None,
+        help="order of the codes (default random)",
+    )
+    measure.add_argument(
+        "--verify-points",
+        type=count(0, 1024),
+        default=None,
+        help="codes measured again to verify (default 5)",
     )
     measure.add_argument(
         "--tolerance",
         type=number(0, 1, above=True),
-        default=0.03,
-        help="relative error allowed for 'passed'",
+        default=None,
+        help="relative error allowed for 'passed' (default 0.03)",
     )
-    measure.add_argument("--seed", type=count(0), default=0, help="seed of the code order")
-    measure.add_argument("--label", default="", help="display, photometer, operator")
+    measure.add_argument(
+        "--seed", type=count(0), default=None, help="seed of the code order (default 0)"
+    )
+    measure.add_argument("--label", default=None, help="display, photometer, operator")
     measure.add_argument("--windowed", action="store_true", help="a window, not full screen")
     measure.add_argument(
         "--allow-fewer-bits",
@@ -239,25 +308,29 @@ def add(commands) -> None:
         help="the photometer's serial number, recorded (for models that do not report it)",
     )
     measure.add_argument(
-        "--readings", type=count(1, 100), default=3, help="photometer readings per patch"
+        "--readings",
+        type=count(1, 100),
+        default=None,
+        help="photometer readings per patch (default 3)",
     )
     measure.add_argument(
         "--settle-s",
         type=number(0, 600),
-        default=1.0,
-        help="seconds a patch is shown before its first reading",
+        default=None,
+        help="seconds a patch is shown before its first reading (default 1)",
     )
     measure.add_argument(
         "--spread",
         type=number(0, 1, above=True),
-        default=0.01,
-        help="largest (max - min) / median of a patch's readings before it is read again",
+        default=None,
+        help="largest (max - min) / median of a patch's readings before it is read again "
+        "(default 0.01)",
     )
     measure.add_argument(
         "--repeats",
         type=count(0, 20),
-        default=2,
-        help="times a patch whose readings disagree is read again",
+        default=None,
+        help="times a patch whose readings disagree is read again (default 2)",
     )
     measure.add_argument(
         "--resume",

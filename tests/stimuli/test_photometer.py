@@ -64,7 +64,7 @@ def test_the_plugin_reads_the_display(line, shown, model):
         for code in (0, 64, 255):
             shown["code"] = code
             value, reply = meter.read()
-            assert reply.startswith("OK00, ")
+            assert reply == device.replies[-1]  # exactly as it came, line end included
             np.testing.assert_allclose(value, display(code), rtol=0.005)  # noise 0.1 %, 4 digits
         meter.close()
     finally:
@@ -87,7 +87,7 @@ def test_the_pr655_plugin_reads_the_display_and_its_serial_number(line, shown):
         shown["code"] = 128
         value, reply = meter.read()  # M0, then the plugin fetches D3, D1, D2, D5, D4
         np.testing.assert_allclose(value, display(128), rtol=0.005)
-        assert reply.startswith("0000 | 0000,0,") and "<103 lines>" in reply
+        assert reply.startswith("0000\r\n | 0000,0,") and "<103 lines>" in reply
         device.garble = True
         with pytest.raises(Garbled, match=r"the PR-655 on /dev/pts/.* which is not a reading"):
             meter.read()
@@ -179,7 +179,7 @@ def test_an_unplugged_photometer_loses_no_reading_and_the_session_resumes(tmp_pa
     session.interrupted(str(fault.value))
     first.close()
     saved = json.loads(session.session_path.read_text())
-    replied = [r.strip() for r in first.replies if r.startswith("OK00, ")]
+    replied = [r for r in first.replies if r.startswith("OK00, ")]  # as sent
     assert [r["reply"] for r in saved["raw"]] == replied  # every reading, the last one's too
     assert len(saved["raw"]) == 5 and len(saved["log"]) == 2
     assert saved["interruptions"][0]["message"].startswith("lost the LS-100")
@@ -336,7 +336,7 @@ def test_a_measurement_in_a_window_survives_a_pulled_cable_and_gives_the_known_d
         assert "photometer fault at measure code" in stderr
         assert "the same command with --resume goes on from there" in stderr
         first.close()
-        replied = [r.strip() for r in first.replies if r.startswith("OK00, ")]
+        replied = [r for r in first.replies if r.startswith("OK00, ")]  # as sent
         assert [r["reply"] for r in stopped["raw"]] == replied and len(replied) == 5
 
         second = FakeMinolta(lambda: display(pixel()), line_folder=line, seed=6)
