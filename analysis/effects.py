@@ -150,9 +150,9 @@ def paired_effect(
 
     Examples
     --------
-    >>> result = paired_effect([5.1, 6.0, 5.8, 6.4, 5.5], [4.2, 5.1, 5.9, 5.0, 4.8])
+    >>> result = paired_effect([5.1, 6.0, 5.8, 6.4, 5.5], [4.2, 5.1, 5.9, 5.0, 4.8])  # R: n5
     >>> round(result["d_z"], 3), round(result["dz_ci_low"], 3), round(result["dz_ci_high"], 3)
-    (1.392, 0.081, 2.635)  # R: 1.392, .081, 2.635
+    (1.392, 0.081, 2.635)
     """
     confidence = _confidence(confidence, "paired_effect")
     d = _pairs(a, b, "paired_effect")

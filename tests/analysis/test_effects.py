@@ -197,7 +197,9 @@ def test_importing_the_analysis_leaves_numpys_print_options_as_they_were():
         "import analysis.stimulus_figures; assert np.get_printoptions() == before, "
         "np.get_printoptions()"
     )
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False)
+    done = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=False
+    )
     assert done.returncode == 0, done.stderr
 
 
