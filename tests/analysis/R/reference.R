@@ -440,3 +440,35 @@ write_reference(
   data.frame(level = names(letters), letters = unname(letters)),
   "letters_27.csv", "multcompView::multcompLetters(p, threshold = 0.05)$Letters"
 )
+
+# ---------------------------------------------------------------- psychometric fits
+# glm(y ~ disc_fraction, binomial) per staircase of psychometric_staircases.csv (written by a
+# simulated study, see its header); "neither" is y = 0.5, which glm fits with a warning.
+staircases <- read.csv("psychometric_staircases.csv", comment.char = "#",
+                       stringsAsFactors = FALSE)
+rows <- list()
+for (name in unique(staircases$staircase)) {
+  s <- staircases[staircases$staircase == name, ]
+  warned <- FALSE
+  fit <- withCallingHandlers(
+    glm(y ~ disc_fraction, family = binomial, data = s,
+        control = glm.control(epsilon = 1e-14, maxit = 200)),
+    warning = function(w) {
+      if (grepl("fitted probabilities numerically 0 or 1", conditionMessage(w))) warned <<- TRUE
+      invokeRestart("muffleWarning")
+    }
+  )
+  b <- coef(fit)
+  rows[[length(rows) + 1]] <- data.frame(
+    staircase = name, trials = nrow(s), b0 = number(b[1]), b1 = number(b[2]),
+    centre = number(-b[1] / b[2]),
+    lr_p = number(pchisq(fit$null.deviance - fit$deviance, 1, lower.tail = FALSE)),
+    converged = fit$converged, fitted_0_or_1 = warned
+  )
+}
+write_reference(
+  do.call(rbind, rows), "psychometric_glm.csv",
+  paste("glm(y ~ disc_fraction, family = binomial, control = glm.control(epsilon = 1e-14,",
+        "maxit = 200)); centre = -b0 / b1; lr_p: the likelihood-ratio test of b1 = 0;",
+        "fitted_0_or_1: glm warned 'fitted probabilities numerically 0 or 1' (separation)")
+)
