@@ -42,6 +42,8 @@ from scipy import optimize
 from scipy import stats as sps
 
 __all__ = [
+    "anova_residuals",
+    "assumptions",
     "eta2_partial_ci",
     "hodges_lehmann",
     "marginal_means",
@@ -381,3 +383,63 @@ def anova_residuals(data: pd.DataFrame, dv: str, within: Sequence[str], subject:
         values - values.mean(axis=1, keepdims=True) - values.mean(axis=0, keepdims=True)
     ) + values.mean()
     return residuals.ravel()
+
+
+def assumptions(
+    anova: pd.DataFrame, residuals: Sequence[float], differences: Sequence[tuple] = ()
+) -> pd.DataFrame:
+    """The assumption report of an analysis: for each ANOVA effect the sphericity correction it
+    is reported with and why (:func:`analysis.apa.correction`, with Mauchly's test), then
+    Shapiro–Wilk of the ANOVA's residuals and of each ``(name, paired differences)``.
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``check, of, decision, mauchly_W, mauchly_p, shapiro_W, shapiro_p, n``.
+    """
+    from .apa import GG_BELOW, correction
+
+    nan = float("nan")
+    rows = []
+    for _, row in anova.iterrows():
+        chosen = correction(row)
+        if chosen == "none":
+            why = (
+                "none needed: 1 df, sphericity holds"
+                if row["df1"] <= 1
+                else f"uncorrected: sphericity {row['sphericity']}"
+            )
+        elif chosen == "GG":
+            why = f"Greenhouse–Geisser corrected: ε (GG) = {row['eps_gg']:.3f} < {GG_BELOW:g}"
+        else:
+            why = f"Huynh–Feldt corrected: ε (GG) = {row['eps_gg']:.3f} ≥ {GG_BELOW:g}"
+        where = f"{row['analysis']}: " if "analysis" in row.index else ""
+        rows.append(
+            {
+                "check": "sphericity",
+                "of": f"{where}{row['source']}",
+                "decision": why,
+                "mauchly_W": row["mauchly_W"],
+                "mauchly_p": row["mauchly_p"],
+                "shapiro_W": nan,
+                "shapiro_p": nan,
+                "n": nan,
+            }
+        )
+    checks = [("residuals of the ANOVA (participant + cell model)", residuals)]
+    checks += [(f"paired differences {name}", values) for name, values in differences]
+    for name, values in checks:
+        test = normality(np.asarray(values, dtype=float))
+        rows.append(
+            {
+                "check": "normality",
+                "of": name,
+                "decision": "Shapiro–Wilk",
+                "mauchly_W": nan,
+                "mauchly_p": nan,
+                "shapiro_W": test["W"],
+                "shapiro_p": test["p"],
+                "n": float(test["n"]),
+            }
+        )
+    return pd.DataFrame(rows)

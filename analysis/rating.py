@@ -125,7 +125,7 @@ def analyse(dataset: Dataset, protocol, *, tests_only: bool = False) -> dict:
     return {
         "tables": {"summary": summary, "comments": comments},
         "figures": {
-            "figure7_ratings.png": Figure(
+            "ratings.png": Figure(
                 _diverging(summary, scale, q["anchors"]),
                 "Ratings per category",
                 f"The share of the {n} participants giving each rating from {scale[0]} "

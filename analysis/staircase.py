@@ -10,8 +10,9 @@ point is the match where the data locate one, and the matches table says why not
 (``psychometric_identified`` counts the staircases with one). Each staircase's reversal match
 has a bootstrap interval (:func:`reversal_interval`) where it has enough reversals.
 
-**Figure 13**: matched intensity against glare level, per context, mean ± SEM over
-participants, with the line of the glare image's actual peak (Spencer: 75 %). **The context
+**Figure 13** (Spencer's): matched intensity against glare level, per context, mean over
+participants with 95 % Cousineau–Morey within-subject intervals, with the line of the glare
+image's actual peak (Spencer: 75 %). **The context
 effect**: a level × context repeated-measures ANOVA on the matched intensity (with one
 context, a one-way ANOVA over the levels).
 """
@@ -27,6 +28,7 @@ from scipy import stats as sps
 from threadpoolctl import threadpool_limits
 
 from .apa import anova_effect, corrected_p, series, unit_interval
+from .effects import anova_residuals, assumptions, marginal_means, within_subject_ci
 from .figures import Figure, plt, png, small_multiples
 from .load import Dataset, where
 from .methods import display_text
@@ -341,15 +343,34 @@ def analyse(dataset: Dataset, protocol, *, tests_only: bool = False) -> dict:
         )
         .reset_index()
     )
+    several = matches["participant"].nunique() > 1
+    if several and not tests_only:  # Cousineau–Morey, over every context × level cell
+        within = within_subject_ci(
+            matches, "match_reversals", ["context", "glare_level"], "participant"
+        ).set_index(["context", "glare_level"])["ci_half"]
+        summary["match_ci_within"] = [
+            within[key] for key in zip(summary["context"], summary["glare_level"], strict=True)
+        ]
+    else:
+        summary["match_ci_within"] = float("nan")
     tables = {"matches": matches, "summary": summary}
     text = {}
     data = matches.rename(columns={"match_reversals": "match"}).astype({"glare_level": str})
     factors = ["glare_level", "context"] if matches["context"].nunique() > 1 else ["glare_level"]
     if data["participant"].nunique() > 1:
-        anova = rm_anova(data, "match", factors, "participant")
+        anova = rm_anova(data, "match", factors, "participant", eta2_ci=not tests_only)
         anova["apa_gg"] = apa_anova(anova, correction="GG")
         anova["apa_hf"] = apa_anova(anova, correction="HF")
         tables["anova"] = anova
+        if not tests_only:
+            means = marginal_means(data, "match", factors, "participant")
+            means["factor"] = (
+                means["factor"].map({"glare_level": "glare level"}).fillna(means["factor"])
+            )
+            tables["marginal_means"] = means.rename(columns={"emmean": "mean_match"})
+            tables["assumptions"] = assumptions(
+                anova, anova_residuals(data, "match", factors, "participant")
+            )
         text |= {row["source"]: anova_effect(row) for _, row in anova.iterrows()}
     else:
         text["inference"] = (
@@ -390,12 +411,14 @@ def analyse(dataset: Dataset, protocol, *, tests_only: bool = False) -> dict:
     return {
         "tables": tables,
         "figures": {
-            "figure13_matches.png": Figure(
+            "matches_by_glare_level.png": Figure(
                 _figure13(summary, contexts, peak),
                 "Matched disc intensity at each glare level",
                 "The disc intensity matched to the glare image (per cent of the display "
                 f"maximum; each staircase's mean over its reversals after the first "
-                f"{DISCARDED_REVERSALS}), mean ± SEM over n = {n} participants, one line per "
+                f"{DISCARDED_REVERSALS}), mean over n = {n} participants with 95 % "
+                "within-subject confidence intervals (Cousineau 2005 with Morey's 2008 "
+                "correction, over every context × level cell), one line per "
                 f"context; the dashed line is the glare image's actual peak "
                 f"({100 * peak:g} %). Above it the glare looked brighter than the source "
                 "was.",
@@ -416,10 +439,15 @@ def analyse(dataset: Dataset, protocol, *, tests_only: bool = False) -> dict:
             k: v
             for k, v in {
                 "matches": "Matched disc intensity of every staircase (fraction of the display "
-                "maximum)",
+                "maximum): the reversal mean with its bootstrap 95 % interval, and the "
+                "psychometric fit's 50 % point, or why it is not estimable",
                 "summary": "Matched disc intensity per context and glare level (fraction of "
-                "the display maximum, mean and SEM)",
+                "the display maximum, mean, SEM and half the 95 % within-subject CI)",
                 "anova": "Repeated-measures ANOVA on the matched disc intensity",
+                "marginal_means": "Estimated marginal means of the matched disc intensity "
+                "(fraction of the maximum) per level of each factor, with 95 % CIs",
+                "assumptions": "Assumptions: the sphericity correction of each effect and "
+                "why, and Shapiro–Wilk of the ANOVA's residuals",
             }.items()
             if k in tables
         },
@@ -615,7 +643,7 @@ def _figure13(summary: pd.DataFrame, contexts: list[str], peak_fraction: float) 
         axis.errorbar(
             part["glare_level"],
             100 * part["match_mean"],
-            yerr=100 * part["match_sem"],
+            yerr=100 * part["match_ci_within"],
             marker=marker,
             capsize=3,
             label=f"context: {context}",
@@ -628,6 +656,6 @@ def _figure13(summary: pd.DataFrame, contexts: list[str], peak_fraction: float) 
         label=f"actual peak ({100 * peak_fraction:g} %)",
     )
     axis.set_xlabel("glare level (1 = weakest glare)")
-    axis.set_ylabel("matched disc intensity (% of max), mean ± SEM")
+    axis.set_ylabel("matched disc intensity (% of max)\nmean, 95 % within-subject CI")
     axis.legend(fontsize=8)
     return png(figure)

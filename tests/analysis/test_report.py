@@ -207,7 +207,7 @@ def test_the_rating_report_has_a_visible_neutral_category_and_every_participant(
 
     colours = _colours(range(1, 8))
     assert len(colours) == 7 and tuple(colours[3][:3]) != (1.0, 1.0, 1.0)
-    grey = np.array(Image.open(tmp_path / "figure7_ratings.png").convert("RGB"))
+    grey = np.array(Image.open(tmp_path / "ratings.png").convert("RGB"))
     target = np.round(255 * np.array(_rgb(NEUTRAL))).astype(int)
     assert (np.abs(grey.astype(int) - target).sum(axis=2) < 6).sum() > 200  # visible area
 

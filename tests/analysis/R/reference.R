@@ -446,6 +446,15 @@ write_reference(
 # simulated study, see its header); "neither" is y = 0.5, which glm fits with a warning.
 staircases <- read.csv("psychometric_staircases.csv", comment.char = "#",
                        stringsAsFactors = FALSE)
+staircases$disc_fraction <- number(staircases$disc_fraction)
+write_reference(
+  staircases, "psychometric_staircases.csv",
+  paste("staircases of a simulated study (glarelab run spencer1995 --simulate --participants",
+        "42 --seed 7): a sample of its 1008, those without a psychometric match, steep ones and",
+        "others, then five made by hand; y: glare brighter 1, disc brighter 0, neither 0.5")
+)
+staircases <- read.csv("psychometric_staircases.csv", comment.char = "#",
+                       stringsAsFactors = FALSE)
 rows <- list()
 for (name in unique(staircases$staircase)) {
   s <- staircases[staircases$staircase == name, ]
