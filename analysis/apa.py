@@ -63,6 +63,8 @@ STATISTICS = {
     "V",
     "wilcoxon_V",
     "mean_difference",
+    "md_ci_low",
+    "md_ci_high",
     "d_z",
     "dz_ci_low",
     "dz_ci_high",
@@ -102,7 +104,14 @@ HEADERS = {
     "n": "n",
     "l_disk_cd_m2": "L_disk (cd/m²)",  # Yoshida et al.'s symbol
 }
-WORDS = {"sem": "SEM", "sd": "SD", "iqr": "IQR"}  # abbreviations in headings
+WORDS = {  # abbreviations in headings
+    "sem": "SEM",
+    "sd": "SD",
+    "se": "SE",
+    "iqr": "IQR",
+    "ci": "95 % CI",
+    "within": "± (within)",
+}
 
 
 def correction(row) -> Literal["none", "GG", "HF"]:
@@ -235,7 +244,7 @@ def _decimals(values: np.ndarray) -> int:
 def _spread_of(name: str, columns) -> str | None:
     """The mean column a spread column (``X_sem``, ``X_sd``) belongs to, if the table has it:
     a mean and its spread are printed with the same decimals (APA §6.36)."""
-    for suffix in ("_sem", "_sd"):
+    for suffix in ("_sem", "_sd", "_se", "_ci_within", "_ci_low", "_ci_high"):
         if name.endswith(suffix) and f"{name.removesuffix(suffix)}_mean" in columns:
             return f"{name.removesuffix(suffix)}_mean"
     return None

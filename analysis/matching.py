@@ -356,7 +356,10 @@ def analyse(dataset: Dataset, protocol, *, tests_only: bool = False) -> dict:
             for f, v in zip(means["factor"], means["level"], strict=True)
         ]
         means["factor"] = means["factor"].map({"L_disk": "level", "method": "glare method"})
-        tables["marginal_means"] = means.rename(columns={"emmean": "mean_match_cd_m2"})
+        tables["marginal_means"] = means.rename(
+            columns={"emmean": "match_mean", "se": "match_se", "ci_low": "match_ci_low",
+                     "ci_high": "match_ci_high"}
+        )  # fmt: skip
         tables["assumptions"] = assumptions(
             tables["anova"],
             anova_residuals(trials, "match_cd_m2", factors, "participant"),
@@ -671,7 +674,10 @@ def _figure4(
         axis.set_title(titles[method])
         axis.set_xlabel("L_disk (cd/m²)")
     axes[0, 0].set_ylabel("perceived luminance (cd/m²)\nmean, 95 % within-subject CI")
-    axes[0, 0].legend(fontsize=8)
+    # below the panels: inside, it covered the error bars of the first levels
+    axes[0, 0].legend(
+        fontsize=8, loc="upper left", bbox_to_anchor=(0, -0.3), ncol=3, frameon=False
+    )
     return png(figure)
 
 
@@ -695,5 +701,5 @@ def _figure5(summary: pd.DataFrame, names: list[str], titles: dict) -> bytes:
     axis.set_xticks(positions, ticks)
     axis.set_ylabel("boost over the displayed disk (%)\nmean, 95 % within-subject CI")
     axis.set_xlabel("level of L_disk")
-    axis.legend(fontsize=8)
+    axis.legend(fontsize=8, loc="upper left", bbox_to_anchor=(0, -0.2), ncol=2, frameon=False)
     return png(figure)

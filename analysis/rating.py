@@ -234,10 +234,15 @@ def _wilcoxon(values: pd.Series, mu: float, reason: str) -> dict:
 def _apa(row) -> str:
     if np.isnan(row["p"]):
         return f"no test ({row['test'].removeprefix('not computed: ')})"
+    if abs(row["r_rb"]) == 1:  # every difference on one side: effectsize's CI is [±1, ±1]
+        interval = " (every rating on one side: no interval)"
+    else:
+        interval = (
+            f", 95 % CI [{unit_interval(row['rb_ci_low'])}, {unit_interval(row['rb_ci_high'])}]"
+        )
     return (
         f"V = {row['wilcoxon_V']:g}, {apa_p(row['p_holm'])} (Holm), r_rb = "
-        f"{unit_interval(row['r_rb'])}, 95 % CI [{unit_interval(row['rb_ci_low'])}, "
-        f"{unit_interval(row['rb_ci_high'])}]"
+        f"{unit_interval(row['r_rb'])}{interval}"
     )
 
 

@@ -229,12 +229,13 @@ def psychometric_fit(staircase: pd.DataFrame) -> dict:
         warnings.simplefilter("ignore")
         fit = model.fit(method="IRLS", tol=1e-14, maxiter=200)
         score = model.score(fit.params)
+        deviance_drop = float(fit.null_deviance - fit.deviance)  # (lazy: fits the null model)
     b0, b1 = (float(v) for v in fit.params)
     # at the maximum the score (the gradient of the log-likelihood) vanishes; statsmodels'
     # own convergence flag (relative change of the deviance < 1e-14) can miss it by rounding
     if not np.all(np.isfinite(fit.params)) or not np.all(np.abs(score) < SCORE_TOLERANCE):
         return result("not estimable: the fit did not converge", slope=b1)
-    slope_p = float(sps.chi2.sf(max(0.0, fit.null_deviance - fit.deviance), 1))
+    slope_p = float(sps.chi2.sf(max(0.0, deviance_drop), 1))
     if b1 >= 0:  # "glare brighter" more often as the disc brightens
         return result(
             f"not estimable: the slope has the wrong sign (b1 = {b1:.3g})",
@@ -367,7 +368,10 @@ def analyse(dataset: Dataset, protocol, *, tests_only: bool = False) -> dict:
             means["factor"] = (
                 means["factor"].map({"glare_level": "glare level"}).fillna(means["factor"])
             )
-            tables["marginal_means"] = means.rename(columns={"emmean": "mean_match"})
+            tables["marginal_means"] = means.rename(
+            columns={"emmean": "match_mean", "se": "match_se", "ci_low": "match_ci_low",
+                     "ci_high": "match_ci_high"}
+        )  # fmt: skip
             tables["assumptions"] = assumptions(
                 anova, anova_residuals(data, "match", factors, "participant")
             )
@@ -657,5 +661,5 @@ def _figure13(summary: pd.DataFrame, contexts: list[str], peak_fraction: float) 
     )
     axis.set_xlabel("glare level (1 = weakest glare)")
     axis.set_ylabel("matched disc intensity (% of max)\nmean, 95 % within-subject CI")
-    axis.legend(fontsize=8)
+    axis.legend(fontsize=8, loc="upper left", bbox_to_anchor=(0, -0.2), ncol=3, frameon=False)
     return png(figure)
