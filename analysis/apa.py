@@ -56,6 +56,7 @@ UNIT_INTERVAL_DECIMALS = {
     "rb_ci_low": 2,
     "rb_ci_high": 2,
     "shapiro_W": 3,
+    "confidence": 2,
 }
 STATISTICS = {
     "F",

@@ -50,6 +50,7 @@ __all__ = [
     "normality",
     "paired_effect",
     "rank_biserial",
+    "with_eta2_ci",
     "within_subject_ci",
 ]
 
@@ -132,7 +133,11 @@ def _pairs(a: Sequence[float], b: Sequence[float] | None, caller: str) -> np.nda
 
 
 def paired_effect(
-    a: Sequence[float], b: Sequence[float], *, confidence: float = CONFIDENCE
+    a: Sequence[float],
+    b: Sequence[float],
+    *,
+    confidence: float = CONFIDENCE,
+    dz_interval: bool = True,
 ) -> dict:
     """The mean difference ``a - b`` with its t interval, and Cohen's d_z with its interval.
 
@@ -142,7 +147,7 @@ def paired_effect(
         ``mean_difference``, ``md_ci_low``, ``md_ci_high`` (``t.test(a, b, paired = TRUE)``),
         ``d_z`` (mean / SD of the differences), ``dz_ci_low``, ``dz_ci_high`` (the noncentral
         t interval: ``λ / √n`` for the ``λ`` at which the observed t is the ``(1 ± conf) / 2``
-        quantile).
+        quantile; about 20 ms: ``dz_interval=False`` leaves it out, NaN).
 
     Raises
     ------
@@ -168,6 +173,16 @@ def paired_effect(
     half = sps.t.ppf(1 - (1 - confidence) / 2, n - 1) * sd / math.sqrt(n)
     t = mean / (sd / math.sqrt(n))
     alpha = 1 - confidence
+    result = {
+        "mean_difference": mean,
+        "md_ci_low": mean - half,
+        "md_ci_high": mean + half,
+        "d_z": mean / sd,
+        "dz_ci_low": float("nan"),
+        "dz_ci_high": float("nan"),
+    }
+    if not dz_interval:
+        return result
 
     def cdf(x, ncp):
         # scipy's noncentral t gives NaN deep in its tails (scipy 1.17, |ncp - t| > 10
@@ -182,14 +197,7 @@ def paired_effect(
         float(optimize.brentq(lambda x, p=p: cdf(t, x) - p, t - span, t + span, xtol=1e-14))
         for p in (1 - alpha / 2, alpha / 2)
     ]
-    return {
-        "mean_difference": mean,
-        "md_ci_low": mean - half,
-        "md_ci_high": mean + half,
-        "d_z": mean / sd,
-        "dz_ci_low": limits[0] / math.sqrt(n),
-        "dz_ci_high": limits[1] / math.sqrt(n),
-    }
+    return result | {"dz_ci_low": limits[0] / math.sqrt(n), "dz_ci_high": limits[1] / math.sqrt(n)}
 
 
 def rank_biserial(x: Sequence[float], *, mu: float = 0.0, confidence: float = CONFIDENCE) -> dict:
@@ -443,3 +451,14 @@ def assumptions(
             }
         )
     return pd.DataFrame(rows)
+
+
+def with_eta2_ci(anova: pd.DataFrame, *, confidence: float = ETA2_CONFIDENCE) -> pd.DataFrame:
+    """An ``rm_anova`` table with the interval of each η²p (:func:`eta2_partial_ci`) in
+    ``eta2p_ci_low`` and ``eta2p_ci_high``."""
+    limits = [
+        eta2_partial_ci(r.F, r.df1, r.df2, confidence=confidence) for r in anova.itertuples()
+    ]
+    return anova.assign(
+        eta2p_ci_low=[low for low, _ in limits], eta2p_ci_high=[high for _, high in limits]
+    )

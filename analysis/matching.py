@@ -42,6 +42,7 @@ from .effects import (
     assumptions,
     marginal_means,
     paired_effect,
+    with_eta2_ci,
     within_subject_ci,
 )
 from .figures import Figure, plt, png, small_multiples
@@ -174,9 +175,9 @@ def _sem(x: pd.Series) -> float:
     return float(x.std(ddof=1) / np.sqrt(x.count())) if x.count() > 1 else float("nan")
 
 
-def _anova(data: pd.DataFrame, label: str, *, tests_only: bool = False) -> pd.DataFrame:
+def _anova(data: pd.DataFrame, label: str) -> pd.DataFrame:
     factors = ["L_disk", "method"] if data["method"].nunique() > 1 else ["L_disk"]
-    table = rm_anova(data, "match_cd_m2", factors, "participant", eta2_ci=not tests_only)
+    table = rm_anova(data, "match_cd_m2", factors, "participant")
     table.insert(0, "analysis", label)
     table["apa"] = apa_anova(table, correction="none")
     table["apa_gg"] = apa_anova(table, correction="GG")
@@ -206,11 +207,11 @@ def analyse(dataset: Dataset, protocol, *, tests_only: bool = False) -> dict:
     tables: dict[str, pd.DataFrame] = {}
     text: dict[str, str] = {}
     if several:
-        anovas = [_anova(trials, f"{n_levels} × {len(names)} (all levels)", tests_only=tests_only)]
+        anovas = [_anova(trials, f"{n_levels} × {len(names)} (all levels)")]
         for followup in protocol["analysis"]["followups"]:
             subset = trials[trials["L_disk"].isin(followup["levels"])]
             label = f"{len(followup['levels'])} × {len(names)} ({followup['name']})"
-            anovas.append(_anova(subset, label, tests_only=tests_only))
+            anovas.append(_anova(subset, label))
         tables["anova"] = pd.concat(anovas, ignore_index=True)
         main = tables["anova"][tables["anova"]["analysis"] == anovas[0]["analysis"].iloc[0]]
         main = main.set_index("source")
@@ -224,13 +225,14 @@ def analyse(dataset: Dataset, protocol, *, tests_only: bool = False) -> dict:
     wide = trials.pivot_table(
         index="participant", columns=["method", "L_disk"], values="match_cd_m2"
     )
-    rows, differences = [], []
+    rows, differences, pairs = [], [], []
     for level in protocol["analysis"]["compare_methods_at"] if several else []:
         for first, second in itertools.combinations(names, 2):
             a, b = wide[(first, level)], wide[(second, level)]
-            effect = paired_effect(a, b)
+            effect = paired_effect(a, b, dz_interval=False)
             where = f"{labels[(first, level)]}/{labels[(second, level)]}"
             differences.append((f"{first} − {second} at {where}", a - b))
+            pairs.append((where, f"{first} > {second}", a, b))
             for name, result in (("paired", ttest_paired(a, b)), ("Welch", ttest_welch(a, b))):
                 one_sided = sps.t.sf(result["t"], result["df"])  # H1: the first is brighter
                 rows.append(
@@ -246,8 +248,6 @@ def analyse(dataset: Dataset, protocol, *, tests_only: bool = False) -> dict:
                         "md_ci_low": effect["md_ci_low"],
                         "md_ci_high": effect["md_ci_high"],
                         "d_z": effect["d_z"] if name == "paired" else float("nan"),
-                        "dz_ci_low": effect["dz_ci_low"] if name == "paired" else float("nan"),
-                        "dz_ci_high": effect["dz_ci_high"] if name == "paired" else float("nan"),
                         "apa": apa_t(result["df"], result["t"], result["p"]),
                         "apa_one_sided": apa_t(result["df"], result["t"], one_sided),
                     }
@@ -262,6 +262,32 @@ def analyse(dataset: Dataset, protocol, *, tests_only: bool = False) -> dict:
         tables["methods_at_levels"] = compared
     if tests_only:
         return {"tables": tables, "figures": {}, "text": text}
+    # the intervals of the effect sizes (root finding on noncentral distributions, ms each):
+    # in the full analysis only, so that a power analysis's tests are the report's tests
+    intervals_shown = dict(tables)
+    if several:
+        intervals_shown["anova"] = with_eta2_ci(tables["anova"])
+        main = intervals_shown["anova"][
+            intervals_shown["anova"]["analysis"] == anovas[0]["analysis"].iloc[0]
+        ]
+        main = main.set_index("source")
+        text["main_effect_level"] = anova_effect(main.loc["L_disk"])
+        if len(names) > 1:
+            text["main_effect_method"] = anova_effect(main.loc["method"])
+            text["interaction"] = anova_effect(main.loc["L_disk × method"])
+    if rows:
+        intervals = {
+            (where, pair): paired_effect(a, b) for where, pair, a, b in pairs
+        }  # fmt: skip
+        compared = tables["methods_at_levels"].copy()
+        for column in ("dz_ci_low", "dz_ci_high"):
+            compared[column] = [
+                intervals[(r.level, r.methods)][column] if r.test == "paired" else float("nan")
+                for r in compared.itertuples()
+            ]
+        intervals_shown["methods_at_levels"] = compared
+    if several:
+        tables["effect_sizes"] = _effect_sizes(intervals_shown)
 
     if several:
         contrasts, groups = [], []
@@ -406,8 +432,9 @@ def analyse(dataset: Dataset, protocol, *, tests_only: bool = False) -> dict:
         "anova": "Repeated-measures ANOVAs on the matched luminance",
         "methods_at_levels": "The glare methods compared at the levels the protocol names: "
         "paired t-tests (two-sided, Holm-corrected over the comparisons; the conclusions "
-        "follow these) with the mean difference (cd/m², 95 % CI) and d_z (95 % CI), and "
-        "Welch's unpaired tests, two- and one-sided, uncorrected",
+        "follow these) with the mean difference (cd/m², 95 % CI) and d_z (its CI in the "
+        "effect sizes), and Welch's unpaired tests, two- and one-sided, uncorrected (the "
+        "paper's)",
         "pairwise_contrasts": "Paired contrasts between the levels of each method "
         "(Holm-corrected)",
         "similarity_groups": "Similarity groups: levels sharing a letter do not differ "
@@ -419,6 +446,9 @@ def analyse(dataset: Dataset, protocol, *, tests_only: bool = False) -> dict:
         "marginal_means": "Estimated marginal means of the match (cd/m²) per level of each "
         "factor, averaged over the other, with 95 % CIs (t, n − 1 df; emmeans' multivariate "
         "model)",
+        "effect_sizes": "Effect sizes with their confidence intervals: η²p (90 %, Steiger "
+        "2004) and η²G of every ANOVA effect, the mean difference and d_z (95 %) of every "
+        "paired comparison of the methods",
         "assumptions": "Assumptions: the sphericity correction of each effect and why "
         "(Mauchly's test), and Shapiro–Wilk tests of the ANOVA's residuals and of the "
         "paired differences of the method comparisons",
@@ -428,9 +458,34 @@ def analyse(dataset: Dataset, protocol, *, tests_only: bool = False) -> dict:
         "tables": tables,
         "figures": figures,
         "text": text,
-        "results": _results(tables, summary, protocol, n),
+        "results": _results(tables | intervals_shown, summary, protocol, n),
         "captions": {k: v for k, v in captions.items() if k in tables},
     }
+
+
+def _effect_sizes(shown: dict) -> pd.DataFrame:
+    """Every effect size with its interval, one row each: η²p (90 % CI) and η²G of the ANOVA
+    effects, the mean difference and d_z (95 % CIs) of the paired comparisons."""
+    nan = float("nan")
+    rows = []
+    for r in shown["anova"].itertuples():
+        of = f"{r.analysis}: {r.source}"
+        rows += [
+            {"of": of, "effect_size": "η²p", "value": r.eta2_partial,
+             "ci_low": r.eta2p_ci_low, "ci_high": r.eta2p_ci_high, "confidence": 0.90},
+            {"of": of, "effect_size": "η²G", "value": r.eta2_generalized,
+             "ci_low": nan, "ci_high": nan, "confidence": nan},
+        ]  # fmt: skip
+    if "methods_at_levels" in shown:
+        for r in shown["methods_at_levels"].query("test == 'paired'").itertuples():
+            of = f"{r.methods} at {r.level} (paired)"
+            rows += [
+                {"of": of, "effect_size": "mean difference (cd/m²)", "value": r.mean_difference,
+                 "ci_low": r.md_ci_low, "ci_high": r.md_ci_high, "confidence": 0.95},
+                {"of": of, "effect_size": "d_z", "value": r.d_z,
+                 "ci_low": r.dz_ci_low, "ci_high": r.dz_ci_high, "confidence": 0.95},
+            ]  # fmt: skip
+    return pd.DataFrame(rows)
 
 
 def _verdict(row) -> str:

@@ -153,6 +153,11 @@ def analyse(dataset: Dataset, protocol, *, tests_only: bool = False) -> dict:
     }
 
 
+def _count(n: int, one: str, many: str | None = None) -> str:
+    """``the 1 category``, ``the 3 categories``."""
+    return f"the {n} {one if n == 1 else many or one + 's'}"
+
+
 def _not_computed(table: pd.DataFrame, name) -> str:
     """The sentence naming the tests that could not be computed, or nothing."""
     missing = table[table["p"].isna()]
@@ -163,8 +168,9 @@ def _not_computed(table: pd.DataFrame, name) -> str:
     return (
         f" No test could be computed for {listed} ({why}"
         f"{'' if missing['test'].nunique() == 1 else ', or as the table says'}; R's "
-        "wilcox.test gives no p either); the Holm family holds the "
-        f"{int(table['p'].notna().sum())} computed tests."
+        "wilcox.test gives no p either); the Holm family holds "
+        + _count(int(table["p"].notna().sum()), "computed test")
+        + "."
     )
 
 
@@ -190,7 +196,8 @@ def _results(summary: pd.DataFrame, midpoint: float, n: int) -> list[str]:
         f"Luidolt (2020, §7.2.1) reports the mean rating of each category; as an addition to "
         f"his analysis, the {n} participants' ratings of each category were compared with "
         f"the scale's midpoint, {midpoint:g}, by Wilcoxon signed-rank tests, Holm-corrected "
-        f"across the {tested} categories that could be tested (α = {unit_interval(ALPHA)}), "
+        f"across {_count(tested, 'category', 'categories')} that could be tested "
+        f"(α = {unit_interval(ALPHA)}), "
         "with the matched-pairs rank-biserial correlation r_rb (95 % CI) and the "
         "Hodges–Lehmann (HL) shift from the midpoint as effect sizes: "
         + "; ".join(parts[:-1])
@@ -354,9 +361,10 @@ def _compared_text(compared: pd.DataFrame, reference: str) -> str:
     if tested.empty:
         return f"No comparison with {reference} could be tested.{missing}"
     family = (
-        f"Each condition was compared with {reference} category by category (Wilcoxon "
-        f"signed-rank tests of the paired differences, Holm-corrected over the {len(tested)} "
-        f"computed comparisons, α = {unit_interval(ALPHA)})"
+        f"Each condition was compared with the reference condition, {reference}, category by "
+        "category (Wilcoxon "
+        "signed-rank tests of the paired differences, Holm-corrected over "
+        f"{_count(len(tested), 'computed comparison')}, α = {unit_interval(ALPHA)})"
     )
     if held.empty:
         uncorrected = int((tested["p"] < ALPHA).sum())
@@ -364,7 +372,7 @@ def _compared_text(compared: pd.DataFrame, reference: str) -> str:
             f"{family}: no condition was rated differently from {reference} in any category"
             + (
                 f" ({uncorrected} comparison{'s' if uncorrected != 1 else ''} had an "
-                f"uncorrected p < {ALPHA:g}, none held after the correction)"
+                f"uncorrected p < {unit_interval(ALPHA)}, none held after the correction)"
                 if uncorrected
                 else ""
             )

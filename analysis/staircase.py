@@ -28,7 +28,13 @@ from scipy import stats as sps
 from threadpoolctl import threadpool_limits
 
 from .apa import anova_effect, corrected_p, series, unit_interval
-from .effects import anova_residuals, assumptions, marginal_means, within_subject_ci
+from .effects import (
+    anova_residuals,
+    assumptions,
+    marginal_means,
+    with_eta2_ci,
+    within_subject_ci,
+)
 from .figures import Figure, plt, png, small_multiples
 from .load import Dataset, where
 from .methods import display_text
@@ -359,7 +365,7 @@ def analyse(dataset: Dataset, protocol, *, tests_only: bool = False) -> dict:
     data = matches.rename(columns={"match_reversals": "match"}).astype({"glare_level": str})
     factors = ["glare_level", "context"] if matches["context"].nunique() > 1 else ["glare_level"]
     if data["participant"].nunique() > 1:
-        anova = rm_anova(data, "match", factors, "participant", eta2_ci=not tests_only)
+        anova = rm_anova(data, "match", factors, "participant")
         anova["apa_gg"] = apa_anova(anova, correction="GG")
         anova["apa_hf"] = apa_anova(anova, correction="HF")
         tables["anova"] = anova
@@ -375,7 +381,14 @@ def analyse(dataset: Dataset, protocol, *, tests_only: bool = False) -> dict:
             tables["assumptions"] = assumptions(
                 anova, anova_residuals(data, "match", factors, "participant")
             )
-        text |= {row["source"]: anova_effect(row) for _, row in anova.iterrows()}
+        # the η²p intervals in the full analysis only (ms each; a power analysis's tests are
+        # the report's tests without them)
+        shown = anova if tests_only else with_eta2_ci(anova)
+        text |= {row["source"]: anova_effect(row) for _, row in shown.iterrows()}
+        if not tests_only:
+            tables["effect_sizes"] = shown[
+                ["source", "eta2_partial", "eta2p_ci_low", "eta2p_ci_high", "eta2_generalized"]
+            ]
     else:
         text["inference"] = (
             "one participant: the tables describe their staircases; no ANOVA, which tests "
@@ -437,7 +450,14 @@ def analyse(dataset: Dataset, protocol, *, tests_only: bool = False) -> dict:
             ),
         },
         "text": text,
-        "results": _results(tables, summary, matches, protocol, repeated, len(every))
+        "results": _results(
+            tables | ({"anova": shown} if "anova" in tables else {}),
+            summary,
+            matches,
+            protocol,
+            repeated,
+            len(every),
+        )
         + ([text["unconverged_staircases"]] if "unconverged_staircases" in text else []),
         "captions": {
             k: v
@@ -450,6 +470,8 @@ def analyse(dataset: Dataset, protocol, *, tests_only: bool = False) -> dict:
                 "anova": "Repeated-measures ANOVA on the matched disc intensity",
                 "marginal_means": "Estimated marginal means of the matched disc intensity "
                 "(fraction of the maximum) per level of each factor, with 95 % CIs",
+                "effect_sizes": "Effect sizes of the ANOVA effects: η²p with its 90 % CI "
+                "(Steiger 2004) and η²G",
                 "assumptions": "Assumptions: the sphericity correction of each effect and "
                 "why, and Shapiro–Wilk of the ANOVA's residuals",
             }.items()
