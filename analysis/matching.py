@@ -690,7 +690,10 @@ def _participants(trials: pd.DataFrame, names: list[str], titles: dict, labels: 
     for axis in axes:
         axis.tick_params(axis="x", labelrotation=45 if len(names) > 2 else 0)
     axes[0].set_ylabel("match (cd/m²)", fontsize=8)
-    axes[0].legend(fontsize=6, frameon=False)
+    handles, names_ = axes[0].get_legend_handles_labels()
+    # below the panels (in the first panel it covered that participant's lines)
+    figure.legend(handles, names_, loc="upper center", bbox_to_anchor=(0.5, 0.0),
+                  ncol=min(len(names_), 2), fontsize=8, frameon=False)  # fmt: skip
     figure.supxlabel("level of L_disk", fontsize=9)
     return png(figure)
 
@@ -756,5 +759,11 @@ def _figure5(summary: pd.DataFrame, names: list[str], titles: dict) -> bytes:
     axis.set_xticks(positions, ticks)
     axis.set_ylabel("boost over the displayed disk (%)\nmean, 95 % within-subject CI")
     axis.set_xlabel("level of L_disk")
-    axis.legend(fontsize=8, loc="upper left", bbox_to_anchor=(0, -0.2), ncol=2, frameon=False)
+    axis.legend(
+        fontsize=8,
+        loc="upper left",
+        bbox_to_anchor=(0, -0.2),
+        frameon=False,
+        ncol=2 if len(names) <= 2 else 1,
+    )  # long names: one a line, none cut off
     return png(figure)

@@ -655,7 +655,10 @@ def _participants(matches: pd.DataFrame, contexts: list[str]) -> bytes:
         axis.tick_params(labelsize=7)
     axes[0].xaxis.set_major_locator(MaxNLocator(integer=True))
     axes[0].set_ylabel("match (% of max)", fontsize=8)
-    axes[0].legend(fontsize=7, frameon=False)
+    handles, names = axes[0].get_legend_handles_labels()
+    # below the panels (in the first panel it covered that participant's lines)
+    figure.legend(handles, names, loc="upper center", bbox_to_anchor=(0.5, 0.0),
+                  ncol=len(names), fontsize=8, frameon=False)  # fmt: skip
     figure.supxlabel("glare level (1 = weakest glare)", fontsize=9)
     return png(figure)
 

@@ -226,7 +226,7 @@ def rm_anova(
         Column identifying subjects.
     eta2_ci
         Add the 90 % interval of η²p (about 7 ms an effect, so off by default: a power
-        analysis of thousands of simulated studies does without); NaN without it.
+        analysis of thousands of simulated studies does without).
 
     Returns
     -------
@@ -234,7 +234,7 @@ def rm_anova(
         One row per effect (main effects, then interactions, as ``a × b``) with columns
         ``source, df1, df2, F, p, eps_gg, p_gg, eps_hf, p_hf, eta2_partial,
         eta2_generalized, eta2p_ci_low, eta2p_ci_high`` (the 90 % interval of η²p,
-        :func:`analysis.effects.eta2_partial_ci`; NaN unless ``eta2_ci``), ``mauchly_W,
+        :func:`analysis.effects.eta2_partial_ci`; only with ``eta2_ci``), ``mauchly_W,
         mauchly_p, sphericity``. For effects with one degree of freedom sphericity holds:
         epsilons 1, corrected p = p, Mauchly NaN. Where sphericity is not estimable (fewer
         than df + 1 subjects, or a singular covariance of the effect's contrast scores) the
@@ -314,7 +314,6 @@ def rm_anova(
             float(np.sum(centred**2)),
         )
     all_errors = sum(error for _, error in sums.values())
-    nan = float("nan")
     rows = []
     for order in range(1, len(factors) + 1):
         for effect in itertools.combinations(range(len(factors)), order):
@@ -346,12 +345,16 @@ def rm_anova(
                     "p_hf": _corrected_p(f_value, df1, df2, eps_hf, p_value),
                     "eta2_partial": f_value * df1 / (f_value * df1 + df2),
                     "eta2_generalized": sums[effect][0] / (sums[effect][0] + all_errors),
-                    **dict(
-                        zip(
-                            ("eta2p_ci_low", "eta2p_ci_high"),
-                            eta2_partial_ci(f_value, df1, df2) if eta2_ci else (nan, nan),
-                            strict=True,
+                    **(
+                        dict(
+                            zip(
+                                ("eta2p_ci_low", "eta2p_ci_high"),
+                                eta2_partial_ci(f_value, df1, df2),
+                                strict=True,
+                            )
                         )
+                        if eta2_ci
+                        else {}
                     ),
                     "mauchly_W": sphericity["mauchly_W"],
                     "mauchly_p": sphericity["mauchly_p"],
