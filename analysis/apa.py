@@ -44,10 +44,52 @@ __all__ = [
 GG_BELOW = 0.75  # Girden (1992): Greenhouse–Geisser's ε below .75, Huynh–Feldt's above
 CORRECTION_NAMES = {"GG": "Greenhouse–Geisser", "HF": "Huynh–Feldt"}
 # columns whose values cannot exceed 1 in magnitude: no leading zero (APA §6.36)
-UNIT_INTERVAL_DECIMALS = {"eta2_partial": 2, "eps_gg": 3, "eps_hf": 3, "mauchly_W": 3}
-STATISTICS = {"F", "t", "V", "wilcoxon_V", "mean_difference"}  # two decimals
+UNIT_INTERVAL_DECIMALS = {
+    "eta2_partial": 2,
+    "eta2_generalized": 2,
+    "eta2p_ci_low": 2,
+    "eta2p_ci_high": 2,
+    "eps_gg": 3,
+    "eps_hf": 3,
+    "mauchly_W": 3,
+    "r_rb": 2,
+    "rb_ci_low": 2,
+    "rb_ci_high": 2,
+    "shapiro_W": 3,
+    "confidence": 2,
+}
+STATISTICS = {
+    "F",
+    "t",
+    "V",
+    "wilcoxon_V",
+    "mean_difference",
+    "md_ci_low",
+    "md_ci_high",
+    "d_z",
+    "dz_ci_low",
+    "dz_ci_high",
+}  # two decimals
+# columns of log-spaced values (the glare strengths), printed with significant digits; any
+# other column gets one number of decimals, however far its values spread
+LOG_SPACED = {"strength"}
 HEADERS = {
     "eta2_partial": "η²p",
+    "eta2_generalized": "η²G",
+    "eta2p_ci_low": "η²p 90 % CI low",
+    "eta2p_ci_high": "η²p 90 % CI high",
+    "md_ci_low": "M diff 95 % CI low",
+    "md_ci_high": "M diff 95 % CI high",
+    "d_z": "d_z",
+    "dz_ci_low": "d_z 95 % CI low",
+    "dz_ci_high": "d_z 95 % CI high",
+    "r_rb": "r_rb",
+    "rb_ci_low": "r_rb 95 % CI low",
+    "rb_ci_high": "r_rb 95 % CI high",
+    "hl_shift": "HL shift",
+    "shapiro_W": "Shapiro–Wilk W",
+    "shapiro_p": "p (Shapiro–Wilk)",
+    "sem_within": "SEM (within)",
     "eps_gg": "ε (GG)",
     "eps_hf": "ε (HF)",
     "p_gg": "p (GG)",
@@ -63,7 +105,14 @@ HEADERS = {
     "n": "n",
     "l_disk_cd_m2": "L_disk (cd/m²)",  # Yoshida et al.'s symbol
 }
-WORDS = {"sem": "SEM", "sd": "SD", "iqr": "IQR"}  # abbreviations in headings
+WORDS = {  # abbreviations in headings
+    "sem": "SEM",
+    "sd": "SD",
+    "se": "SE",
+    "iqr": "IQR",
+    "ci": "95 % CI",
+    "within": "± (within)",
+}
 
 
 def correction(row) -> Literal["none", "GG", "HF"]:
@@ -92,7 +141,16 @@ def unit_interval(value: float, decimals: int = 2) -> str:
     --------
     >>> unit_interval(0.6912), unit_interval(0.4217, 3), unit_interval(1.0), unit_interval(-0.05)
     ('.69', '.422', '1.00', '-.05')
+    >>> unit_interval(0.996), unit_interval(0.99996)  # never rounded up to 1
+    ('.996', '> .999')
     """
+    if not math.isfinite(value):
+        return ""
+    if abs(value) < 1:  # APA: a value below 1 is never printed as 1 (.996 is not 1.00)
+        while abs(round(value, decimals)) >= 1 and decimals < 3:
+            decimals += 1
+        if abs(round(value, decimals)) >= 1:
+            return "> .999" if value > 0 else "< -.999"
     text = f"{value:.{decimals}f}"
     return text.replace("0.", ".", 1) if abs(round(value, decimals)) < 1 else text
 
@@ -111,6 +169,13 @@ def anova_effect(row) -> str:
     """
     chosen = correction(row)
     eta = f"η²p = {unit_interval(float(row['eta2_partial']))}"
+    if "eta2p_ci_low" in row.index and math.isfinite(float(row["eta2p_ci_low"])):
+        eta += (
+            f", 90 % CI [{unit_interval(float(row['eta2p_ci_low']))}, "
+            f"{unit_interval(float(row['eta2p_ci_high']))}]"
+        )
+    if "eta2_generalized" in row.index:
+        eta += f", η²G = {unit_interval(float(row['eta2_generalized']))}"
     if chosen == "none":
         test = apa_F(row["df1"], row["df2"], row["F"], row["p"])
         if float(row["df1"]) > 1:  # sphericity not estimable
@@ -180,7 +245,7 @@ def _decimals(values: np.ndarray) -> int:
 def _spread_of(name: str, columns) -> str | None:
     """The mean column a spread column (``X_sem``, ``X_sd``) belongs to, if the table has it:
     a mean and its spread are printed with the same decimals (APA §6.36)."""
-    for suffix in ("_sem", "_sd"):
+    for suffix in ("_sem", "_sd", "_se", "_ci_within", "_ci_low", "_ci_high"):
         if name.endswith(suffix) and f"{name.removesuffix(suffix)}_mean" in columns:
             return f"{name.removesuffix(suffix)}_mean"
     return None
@@ -243,7 +308,7 @@ def format_table(table: pd.DataFrame) -> pd.DataFrame:
             out[name] = [number(v, 0 if float(v).is_integer() else 2) for v in values]
         elif finite.size and np.all(finite == np.round(finite)):
             out[name] = [number(v, 0) for v in values]
-        elif _decades(finite) > 3:  # log-spaced values (strengths): significant digits
+        elif name in LOG_SPACED and _decades(finite) > 3:  # strengths: significant digits
             out[name] = [significant(v, 3) for v in values]
         else:
             mean = _spread_of(str(name), shown.columns)

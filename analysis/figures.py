@@ -55,7 +55,8 @@ def png(figure) -> bytes:
     """The figure as PNG bytes (no timestamps), closed afterwards."""
     buffer = io.BytesIO()
     figure.tight_layout()
-    figure.savefig(buffer, format="png", dpi=110, metadata={"Software": None})
+    # bbox "tight": a legend placed below the axes is kept whole
+    figure.savefig(buffer, format="png", dpi=110, metadata={"Software": None}, bbox_inches="tight")
     plt.close(figure)
     return buffer.getvalue()
 

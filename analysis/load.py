@@ -306,7 +306,10 @@ def load_sessions(
     factors, cells, block = PARADIGMS[protocol.paradigm].design(protocol)
     analysed = trials[trials["block"] == block] if block else trials
     excluded: dict[str, str] = {}
-    for participant, group in analysed.groupby("participant"):
+    # every participant, also one with no trial in the analysed block (a session aborted
+    # during training): they miss every cell
+    for participant in sorted(trials["participant"].unique(), key=str):
+        group = analysed[analysed["participant"] == participant]
         counts = group.groupby(factors).size()
         for cell in cells:
             if counts.get(cell if len(cell) > 1 else cell[0], 0) == 0:
@@ -329,6 +332,14 @@ def load_sessions(
     if problems:
         raise DataError(problems)
     kept = trials[~trials["participant"].isin(excluded)].reset_index(drop=True)
+    if kept.empty:
+        raise DataError(
+            [
+                f"every participant ({len(excluded)}) misses a cell of the design and was "
+                "excluded (--exclude-incomplete): nothing is left to analyse; "
+                + "; ".join(excluded.values())
+            ]
+        )
     return Dataset(
         study=protocol.study,
         trials=kept,

@@ -13,12 +13,19 @@
   one-sided Student test with 18 df fits them too). We report paired and Welch, two- and
   one-sided (H1: the method listed first in the protocol is the brighter); **Welch,
   one-sided** is consistent with the paper, **paired, two-sided** is the test that fits the
-  repeated-measures design.
+  repeated-measures design, and the one the conclusions follow: Holm-corrected over every
+  level and pair compared, with the mean difference and Cohen's d_z, each with its 95 % CI.
+  The results text quotes the paper's test, labelled as the paper's, only for the paper's own
+  study (``yoshida2008``).
 - **Pairwise contrasts** between levels within each method (paired t-tests, Holm) and the
   similarity groups they imply (compact letter display; Figure 6).
 - **Boost** over the displayed disk luminance ``min(L_disk, L_dmax)`` (Yoshida: 220 cd/m²) in
-  per cent with SEM (Figure 5); **settings and match** with SEM per level (Figure 4); the
+  per cent (Yoshida's Figure 5); **settings and match** per level (Yoshida's Figure 4), each
+  with SEM and, in the figures, 95 % Cousineau–Morey within-subject intervals; the
   **questionnaire**: per cent "yes" per question (Table 1).
+- **Estimated marginal means** of each factor's levels with 95 % CIs, and the **assumptions**:
+  the sphericity correction of each effect and why, Shapiro–Wilk of the ANOVA's residuals and
+  of the paired differences.
 """
 
 from __future__ import annotations
@@ -30,12 +37,22 @@ import pandas as pd
 from scipy import stats as sps
 
 from .apa import anova_effect, corrected_p, series, unit_interval
+from .effects import (
+    anova_residuals,
+    assumptions,
+    marginal_means,
+    paired_effect,
+    with_eta2_ci,
+    within_subject_ci,
+)
 from .figures import Figure, plt, png, small_multiples
 from .load import Dataset, where
 from .methods import display_text
 from .stats import (
     apa_anova,
+    apa_p,
     apa_t,
+    holm,
     pairwise_tests,
     rm_anova,
     similarity_groups,
@@ -46,7 +63,13 @@ from .stats import (
 __all__ = ["analyse", "check", "design", "methods", "stimulus_figures"]
 
 MARKERS = "osD^v<>p*"
+PAPER_STUDY = "yoshida2008"  # the study whose paper's own tests the results quote
 ALPHA = 0.05  # the significance level the results text uses
+ERROR_BARS = (
+    "95 % within-subject confidence intervals (Cousineau 2005 with Morey's 2008 correction, "
+    "over every method × level cell): the spread left after each participant's own mean is "
+    "removed, which is what the repeated-measures tests compare"
+)
 ONE_PARTICIPANT = (
     "one participant: the tables describe their settings; no ANOVA, t-test or contrast, as "
     "each tests differences between participants' means and needs at least two participants"
@@ -187,8 +210,8 @@ def analyse(dataset: Dataset, protocol, *, tests_only: bool = False) -> dict:
         anovas = [_anova(trials, f"{n_levels} × {len(names)} (all levels)")]
         for followup in protocol["analysis"]["followups"]:
             subset = trials[trials["L_disk"].isin(followup["levels"])]
-            anovas.append(_anova(subset, f"{len(followup['levels'])} × {len(names)} "
-                                         f"({followup['name']})"))  # fmt: skip
+            label = f"{len(followup['levels'])} × {len(names)} ({followup['name']})"
+            anovas.append(_anova(subset, label))
         tables["anova"] = pd.concat(anovas, ignore_index=True)
         main = tables["anova"][tables["anova"]["analysis"] == anovas[0]["analysis"].iloc[0]]
         main = main.set_index("source")
@@ -202,10 +225,14 @@ def analyse(dataset: Dataset, protocol, *, tests_only: bool = False) -> dict:
     wide = trials.pivot_table(
         index="participant", columns=["method", "L_disk"], values="match_cd_m2"
     )
-    rows = []
+    rows, differences, pairs = [], [], []
     for level in protocol["analysis"]["compare_methods_at"] if several else []:
         for first, second in itertools.combinations(names, 2):
             a, b = wide[(first, level)], wide[(second, level)]
+            effect = paired_effect(a, b, dz_interval=False)
+            where = f"{labels[(first, level)]}/{labels[(second, level)]}"
+            differences.append((f"{first} − {second} at {where}", a - b))
+            pairs.append((where, f"{first} > {second}", a, b))
             for name, result in (("paired", ttest_paired(a, b)), ("Welch", ttest_welch(a, b))):
                 one_sided = sps.t.sf(result["t"], result["df"])  # H1: the first is brighter
                 rows.append(
@@ -217,14 +244,50 @@ def analyse(dataset: Dataset, protocol, *, tests_only: bool = False) -> dict:
                         "df": result["df"],
                         "p_two_sided": result["p"],
                         "p_one_sided": one_sided,
+                        "mean_difference": effect["mean_difference"],
+                        "md_ci_low": effect["md_ci_low"],
+                        "md_ci_high": effect["md_ci_high"],
+                        "d_z": effect["d_z"] if name == "paired" else float("nan"),
                         "apa": apa_t(result["df"], result["t"], result["p"]),
                         "apa_one_sided": apa_t(result["df"], result["t"], one_sided),
                     }
                 )
     if rows:
-        tables["methods_at_levels"] = pd.DataFrame(rows)
+        compared = pd.DataFrame(rows)
+        # the family the conclusions follow: the paired two-sided tests, Holm-corrected over
+        # every level and pair compared; Welch's tests are the paper's, shown uncorrected
+        paired = compared["test"] == "paired"
+        compared["p_holm"] = float("nan")
+        compared.loc[paired, "p_holm"] = holm(compared.loc[paired, "p_two_sided"])
+        tables["methods_at_levels"] = compared
     if tests_only:
         return {"tables": tables, "figures": {}, "text": text}
+    # the intervals of the effect sizes (root finding on noncentral distributions, ms each):
+    # in the full analysis only, so that a power analysis's tests are the report's tests
+    intervals_shown = dict(tables)
+    if several:
+        intervals_shown["anova"] = with_eta2_ci(tables["anova"])
+        main = intervals_shown["anova"][
+            intervals_shown["anova"]["analysis"] == anovas[0]["analysis"].iloc[0]
+        ]
+        main = main.set_index("source")
+        text["main_effect_level"] = anova_effect(main.loc["L_disk"])
+        if len(names) > 1:
+            text["main_effect_method"] = anova_effect(main.loc["method"])
+            text["interaction"] = anova_effect(main.loc["L_disk × method"])
+    if rows:
+        intervals = {
+            (where, pair): paired_effect(a, b) for where, pair, a, b in pairs
+        }  # fmt: skip
+        compared = tables["methods_at_levels"].copy()
+        for column in ("dz_ci_low", "dz_ci_high"):
+            compared[column] = [
+                intervals[(r.level, r.methods)][column] if r.test == "paired" else float("nan")
+                for r in compared.itertuples()
+            ]
+        intervals_shown["methods_at_levels"] = compared
+    if several:
+        tables["effect_sizes"] = _effect_sizes(intervals_shown)
 
     if several:
         contrasts, groups = [], []
@@ -282,21 +345,59 @@ def analyse(dataset: Dataset, protocol, *, tests_only: bool = False) -> dict:
             row[f"{column}_percent"] = 100 * answers.mean() if len(answers) else float("nan")
         summary.append(row)
     summary = pd.DataFrame(summary)
+    # Cousineau–Morey 95 % within-subject intervals (each over every method × level cell)
+    columns = (["darker_cd_m2", "brighter_cd_m2"] if bounds else []) + ["match_cd_m2"]
+    prefixes = dict(
+        zip(columns, ["lower", "upper", "match"] if bounds else ["match"], strict=True)
+    )
+    prefixes["boost_percent"] = "boost_percent"
+    for column, prefix in prefixes.items():
+        if not several:
+            summary[f"{prefix}_ci_within"] = float("nan")
+            continue
+        within = within_subject_ci(trials, column, ["method", "L_disk"], "participant")
+        half = within.set_index(["method", "L_disk"])["ci_half"]
+        summary[f"{prefix}_ci_within"] = [
+            half[(m, k)] for m, k in zip(summary["method"], summary["level_index"], strict=True)
+        ]
     summary["order"] = summary["method"].map(names.index)
     summary = summary.sort_values(["order", "level_index"]).drop(columns="order")
     summary = summary.reset_index(drop=True)
-    settings = ["lower_mean", "lower_sem", "upper_mean", "upper_sem"] if bounds else []
+    settings = [
+        c for c in ("lower_mean", "lower_sem", "lower_ci_within", "upper_mean", "upper_sem",
+                    "upper_ci_within") if bounds
+    ]  # fmt: skip
     tables["bounds_and_match"] = summary[
-        ["method", "level", "l_disk_cd_m2", "n", *settings, "match_mean", "match_sem"]
+        ["method", "level", "l_disk_cd_m2", "n", *settings, "match_mean", "match_sem",
+         "match_ci_within"]
+    ]  # fmt: skip
+    tables["boost"] = summary[
+        ["method", "level", "boost_percent_mean", "boost_percent_sem", "boost_percent_ci_within"]
     ]
-    tables["boost"] = summary[["method", "level", "boost_percent_mean", "boost_percent_sem"]]
+    if several:
+        factors = ["L_disk", "method"] if len(names) > 1 else ["L_disk"]
+        means = marginal_means(trials, "match_cd_m2", factors, "participant")
+        means["level"] = [
+            "/".join(labels[(m, int(v))] for m in names) if f == "L_disk" else titles[v]
+            for f, v in zip(means["factor"], means["level"], strict=True)
+        ]
+        means["factor"] = means["factor"].map({"L_disk": "level", "method": "glare method"})
+        tables["marginal_means"] = means.rename(
+            columns={"emmean": "match_mean", "se": "match_se", "ci_low": "match_ci_low",
+                     "ci_high": "match_ci_high"}
+        )  # fmt: skip
+        tables["assumptions"] = assumptions(
+            tables["anova"],
+            anova_residuals(trials, "match_cd_m2", factors, "participant"),
+            differences,
+        )
     if questions:
         tables["questionnaire"] = summary[
             ["method", "level", *(f"{c}_percent" for c in questions)]
         ]
     n = trials["participant"].nunique()
     figures = {
-        "figure4_bounds_and_match.png": Figure(
+        "bounds_and_match.png": Figure(
             _figure4(summary, names, titles, g["l_dmax_cd_m2"], bounds),
             "Settings and matches at each level of L_disk"
             if bounds
@@ -307,16 +408,16 @@ def analyse(dataset: Dataset, protocol, *, tests_only: bool = False) -> dict:
                 if bounds
                 else "The matched luminance "
             )
-            + f"in cd/m², mean ± SEM over n = {n} participants, one panel per glare method; "
-            f"the dashed line is L_dmax = {g['l_dmax_cd_m2']:g} cd/m², the most the display "
-            "showed of the disk.",
+            + f"in cd/m², mean over n = {n} participants with {ERROR_BARS}, one panel per glare "
+            f"method; the dashed line is L_dmax = {g['l_dmax_cd_m2']:g} cd/m², the most the "
+            "display showed of the disk.",
         ),
-        "figure5_boost.png": Figure(
+        "boost.png": Figure(
             _figure5(summary, names, titles),
             "Brightness boost of the glare",
             "The match above the displayed disk luminance min(L_disk, L_dmax), in per cent of "
-            f"it, mean ± SEM over n = {n} participants, per glare method; 0 % (the line) is no "
-            "boost.",
+            f"it, mean over n = {n} participants with {ERROR_BARS}, per glare method; 0 % (the "
+            "line) is no boost.",
         ),
         "participants_matches.png": Figure(
             _participants(trials, names, titles, labels),
@@ -329,23 +430,62 @@ def analyse(dataset: Dataset, protocol, *, tests_only: bool = False) -> dict:
     }
     captions = {
         "anova": "Repeated-measures ANOVAs on the matched luminance",
-        "methods_at_levels": "The glare methods compared at the levels the protocol names "
-        "(t-tests, two- and one-sided)",
+        "methods_at_levels": "The glare methods compared at the levels the protocol names: "
+        "paired t-tests (two-sided, Holm-corrected over the comparisons; the conclusions "
+        "follow these) with the mean difference (cd/m², 95 % CI) and d_z (its CI in the "
+        "effect sizes), and Welch's unpaired tests, two- and one-sided, uncorrected (the "
+        "paper's)",
         "pairwise_contrasts": "Paired contrasts between the levels of each method "
         "(Holm-corrected)",
         "similarity_groups": "Similarity groups: levels sharing a letter do not differ "
         "(Holm-corrected contrasts)",
-        "bounds_and_match": "Settings and matches per level (cd/m², mean and SEM)",
-        "boost": "Brightness boost over the displayed disk (%, mean and SEM)",
+        "bounds_and_match": "Settings and matches per level (cd/m², mean, SEM, and half the "
+        "95 % within-subject CI of the figures)",
+        "boost": "Brightness boost over the displayed disk (%, mean, SEM, half the 95 % "
+        "within-subject CI)",
+        "marginal_means": "Estimated marginal means of the match (cd/m²) per level of each "
+        "factor, averaged over the other, with 95 % CIs (t, n − 1 df; emmeans' multivariate "
+        "model)",
+        "effect_sizes": "Effect sizes with their confidence intervals: η²p (90 %, Steiger "
+        "2004) and η²G of every ANOVA effect, the mean difference and d_z (95 %) of every "
+        "paired comparison of the methods",
+        "assumptions": "Assumptions: the sphericity correction of each effect and why "
+        "(Mauchly's test), and Shapiro–Wilk tests of the ANOVA's residuals and of the "
+        "paired differences of the method comparisons",
         "questionnaire": "Answers to the questions (% yes)",
     }
     return {
         "tables": tables,
         "figures": figures,
         "text": text,
-        "results": _results(tables, summary, protocol, n),
+        "results": _results(tables | intervals_shown, summary, protocol, n),
         "captions": {k: v for k, v in captions.items() if k in tables},
     }
+
+
+def _effect_sizes(shown: dict) -> pd.DataFrame:
+    """Every effect size with its interval, one row each: η²p (90 % CI) and η²G of the ANOVA
+    effects, the mean difference and d_z (95 % CIs) of the paired comparisons."""
+    nan = float("nan")
+    rows = []
+    for r in shown["anova"].itertuples():
+        of = f"{r.analysis}: {r.source}"
+        rows += [
+            {"of": of, "effect_size": "η²p", "value": r.eta2_partial,
+             "ci_low": r.eta2p_ci_low, "ci_high": r.eta2p_ci_high, "confidence": 0.90},
+            {"of": of, "effect_size": "η²G", "value": r.eta2_generalized,
+             "ci_low": nan, "ci_high": nan, "confidence": nan},
+        ]  # fmt: skip
+    if "methods_at_levels" in shown:
+        for r in shown["methods_at_levels"].query("test == 'paired'").itertuples():
+            of = f"{r.methods} at {r.level} (paired)"
+            rows += [
+                {"of": of, "effect_size": "mean difference (cd/m²)", "value": r.mean_difference,
+                 "ci_low": r.md_ci_low, "ci_high": r.md_ci_high, "confidence": 0.95},
+                {"of": of, "effect_size": "d_z", "value": r.d_z,
+                 "ci_low": r.dz_ci_low, "ci_high": r.dz_ci_high, "confidence": 0.95},
+            ]  # fmt: skip
+    return pd.DataFrame(rows)
 
 
 def _verdict(row) -> str:
@@ -387,10 +527,9 @@ def _results(tables: dict, summary: pd.DataFrame, protocol, n: int) -> list[str]
     )
     for followup, analysis in zip(protocol["analysis"]["followups"], analyses[1:], strict=True):
         part = anova[anova["analysis"] == analysis]
-        text += (
-            f" On the levels {followup['name']} alone ({analysis.split(' (')[0]}), "
-            f"{_effects(part)}."
-        )
+        name = followup["name"]
+        which = f"the levels {name}" if name.startswith("{") else f"the {name}"
+        text += f" On {which} alone ({analysis.split(' (')[0]}), {_effects(part)}."
     text += (
         f" Effects with more than one degree of freedom are reported with Greenhouse–Geisser "
         f"corrected degrees of freedom where its ε < .75 and Huynh–Feldt corrected ones "
@@ -399,30 +538,43 @@ def _results(tables: dict, summary: pd.DataFrame, protocol, n: int) -> list[str]
     paragraphs = [text]
     if "methods_at_levels" in tables:
         tests = tables["methods_at_levels"]
-        sentences = []
+        family = int((tests["test"] == "paired").sum())
+        mean = summary.set_index(["method", "level"])["match_mean"]
+        sentences, papers = [], []
         for (level, pair), part in tests.groupby(["level", "methods"], sort=False):
             paired = part[part["test"] == "paired"].iloc[0]
             welch = part[part["test"] == "Welch"].iloc[0]
             first_name, second_name = pair.split(" > ")
             first_label, second_label = level.split("/")
-            mean = summary.set_index(["method", "level"])["match_mean"]
-            differ = "differed" if paired["p_two_sided"] < ALPHA else "did not differ"
+            differ = "differed" if paired["p_holm"] < ALPHA else "did not differ"
             sentences.append(
                 f"at {level} the matches under {titles[first_name]} "
                 f"(M = {mean[(first_name, first_label)]:.1f} cd/m²) and "
                 f"{titles[second_name]} (M = {mean[(second_name, second_label)]:.1f} cd/m²) "
-                f"{differ}, {paired['apa']} (paired, two-sided; Welch, one-sided: "
-                f"{welch['apa_one_sided']})"
+                f"{differ}, t({paired['df']:.0f}) = {paired['t']:.2f}, "
+                f"{apa_p(paired['p_holm'])} (Holm), M_diff = {paired['mean_difference']:.1f} "
+                f"cd/m², 95 % CI [{paired['md_ci_low']:.1f}, {paired['md_ci_high']:.1f}], "
+                f"d_z = {paired['d_z']:.2f}, 95 % CI [{paired['dz_ci_low']:.2f}, "
+                f"{paired['dz_ci_high']:.2f}]"
             )
-        paragraphs.append(
-            "Comparing the glare methods at single levels: "
-            + "; ".join(sentences)
-            + ". The paired test fits the repeated-measures design; Welch's one-sided test is "
-            "listed for comparison with published values."
+            papers.append(f"at {level}, {welch['apa_one_sided']}")
+        paragraph = (
+            "The glare methods were compared at single levels by paired t-tests (two-sided), "
+            f"Holm-corrected over the {family} comparisons: " + "; ".join(sentences) + "."
         )
+        if protocol.study == PAPER_STUDY:
+            paragraph += (
+                " Yoshida et al. (2008) report these comparisons as t(14), uncorrected; their "
+                "p-values fit Welch's unpaired one-sided test, which gives here "
+                + "; ".join(papers)
+                + " (the paper's test, uncorrected; it ignores that each participant saw both "
+                "methods, and the conclusions above do not rest on it)."
+            )
+        paragraphs.append(paragraph)
     top = summary[summary["level_index"] == summary["level_index"].max()]
     boosts = [
-        f"{row['boost_percent_mean']:.1f} % (SEM {row['boost_percent_sem']:.1f}) with "
+        f"{row['boost_percent_mean']:.1f} % (95 % within-subject CI ± "
+        f"{row['boost_percent_ci_within']:.1f}) with "
         f"{titles[row['method']]} at {row['level']} ({row['l_disk_cd_m2']:,.0f} cd/m²)"
         for _, row in top.iterrows()
     ]
@@ -538,7 +690,10 @@ def _participants(trials: pd.DataFrame, names: list[str], titles: dict, labels: 
     for axis in axes:
         axis.tick_params(axis="x", labelrotation=45 if len(names) > 2 else 0)
     axes[0].set_ylabel("match (cd/m²)", fontsize=8)
-    axes[0].legend(fontsize=6, frameon=False)
+    handles, names_ = axes[0].get_legend_handles_labels()
+    # below the panels (in the first panel it covered that participant's lines)
+    figure.legend(handles, names_, loc="upper center", bbox_to_anchor=(0.5, 0.0),
+                  ncol=min(len(names_), 2), fontsize=8, frameon=False)  # fmt: skip
     figure.supxlabel("level of L_disk", fontsize=9)
     return png(figure)
 
@@ -561,7 +716,7 @@ def _figure4(
             axis.errorbar(
                 x,
                 part[f"{column}_mean"],
-                yerr=part[f"{column}_sem"],
+                yerr=part[f"{column}_ci_within"],
                 fmt=style,
                 capsize=3,
                 label=name,
@@ -576,8 +731,11 @@ def _figure4(
         )
         axis.set_title(titles[method])
         axis.set_xlabel("L_disk (cd/m²)")
-    axes[0, 0].set_ylabel("perceived luminance (cd/m²), mean ± SEM")
-    axes[0, 0].legend(fontsize=8)
+    axes[0, 0].set_ylabel("perceived luminance (cd/m²)\nmean, 95 % within-subject CI")
+    # below the panels: inside, it covered the error bars of the first levels
+    axes[0, 0].legend(
+        fontsize=8, loc="upper left", bbox_to_anchor=(0, -0.3), ncol=3, frameon=False
+    )
     return png(figure)
 
 
@@ -588,7 +746,7 @@ def _figure5(summary: pd.DataFrame, names: list[str], titles: dict) -> bytes:
         axis.errorbar(
             part["level_index"],
             part["boost_percent_mean"],
-            yerr=part["boost_percent_sem"],
+            yerr=part["boost_percent_ci_within"],
             marker=marker,
             capsize=3,
             label=titles[method],
@@ -599,7 +757,13 @@ def _figure5(summary: pd.DataFrame, names: list[str], titles: dict) -> bytes:
         "/".join(summary.loc[summary["level_index"] == k, "level"].astype(str)) for k in positions
     ]
     axis.set_xticks(positions, ticks)
-    axis.set_ylabel("boost over the displayed disk (%), mean ± SEM")
+    axis.set_ylabel("boost over the displayed disk (%)\nmean, 95 % within-subject CI")
     axis.set_xlabel("level of L_disk")
-    axis.legend(fontsize=8)
+    axis.legend(
+        fontsize=8,
+        loc="upper left",
+        bbox_to_anchor=(0, -0.2),
+        frameon=False,
+        ncol=2 if len(names) <= 2 else 1,
+    )  # long names: one a line, none cut off
     return png(figure)

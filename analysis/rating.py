@@ -1,7 +1,15 @@
-"""The analysis of a rating questionnaire (Luidolt 2020, §7.2.1): per category mean, SD,
-median, IQR and the count of each rating; the distributions as diverging stacked bars
-(Figures 7.1-7.7); and a Wilcoxon signed-rank test of each category against the scale's
-midpoint (Luidolt's 1-7 scale: 4), Holm-corrected across categories.
+"""The analysis of a rating questionnaire. Luidolt (2020, §7.2.1) reports the mean rating of
+each category (five participants) and shows the distributions as diverging stacked bars
+(Figures 7.1-7.7); he ran no test. This analysis gives those means and bars, with SD, median,
+IQR and the count of each rating, and adds what a paper needs beyond them: a Wilcoxon
+signed-rank test of each category against the scale's midpoint (Luidolt's 1-7 scale: 4),
+Holm-corrected across categories, with the rank-biserial correlation (95 % CI) and the
+Hodges–Lehmann estimate of the shift from the midpoint.
+
+A category that every participant rated at the midpoint (or, in a comparison, that no
+participant rated differently) has no test: R's ``wilcox.test`` gives ``NaN``; its p is NaN,
+the Holm family holds only the computed tests (as R's ``p.adjust`` leaves ``NA`` out), and the
+results say which tests could not be computed and why.
 
 A study that shows conditions (the night-vision pipeline with and without each effect) is
 summarised per condition and category; each condition is compared with the first (the
@@ -16,7 +24,8 @@ import matplotlib.colors
 import numpy as np
 import pandas as pd
 
-from .apa import unit_interval
+from .apa import series, unit_interval
+from .effects import hodges_lehmann, rank_biserial
 from .figures import Figure, plt, png
 from .load import Dataset
 from .methods import display_text
@@ -102,30 +111,10 @@ def analyse(dataset: Dataset, protocol, *, tests_only: bool = False) -> dict:
     rows = []
     for category in categories:
         ratings = trials.loc[trials["category"] == category, "rating"].astype(float)
-        q1, q3 = np.percentile(ratings, [25, 75])
-        if (ratings != midpoint).any():
-            test = wilcoxon_signed_rank(ratings, mu=midpoint)
-            statistic, p = test["V"], test["p"]
-        else:  # every rating at the midpoint: no evidence of a difference (R: V = 0, p = NA)
-            statistic, p = 0.0, 1.0
-        row = {
-            "category": category,
-            "n": int(ratings.count()),
-            "mean": ratings.mean(),
-            "sd": ratings.std(ddof=1),
-            "median": ratings.median(),
-            "iqr": q3 - q1,
-            "wilcoxon_V": statistic,
-            "p": p,
-        }
-        row.update({f"count_{k}": int((ratings == k).sum()) for k in scale})
-        rows.append(row)
+        rows.append({"category": category} | _summary_row(ratings, scale, midpoint))
     summary = pd.DataFrame(rows)
-    summary["p_holm"] = holm(summary["p"])
-    summary["apa"] = [
-        f"V = {v:g}, {apa_p(p)} (Holm)"
-        for v, p in zip(summary["wilcoxon_V"], summary["p_holm"], strict=True)
-    ]
+    summary["p_holm"] = holm(summary["p"], missing="omit")
+    summary["apa"] = [_apa(row) for _, row in summary.iterrows()]
     if tests_only:
         return {"tables": {"summary": summary}, "figures": {}, "text": {}}
     comments = trials.loc[
@@ -136,7 +125,7 @@ def analyse(dataset: Dataset, protocol, *, tests_only: bool = False) -> dict:
     return {
         "tables": {"summary": summary, "comments": comments},
         "figures": {
-            "figure7_ratings.png": Figure(
+            "ratings.png": Figure(
                 _diverging(summary, scale, q["anchors"]),
                 "Ratings per category",
                 f"The share of the {n} participants giving each rating from {scale[0]} "
@@ -155,11 +144,34 @@ def analyse(dataset: Dataset, protocol, *, tests_only: bool = False) -> dict:
         "text": dict(zip(summary["category"], summary["apa"], strict=True)),
         "results": _results(summary, midpoint, n),
         "captions": {
-            "summary": "Ratings per category: mean, SD, median, IQR, Wilcoxon signed-rank test "
-            f"against the midpoint {midpoint:g} (Holm-corrected) and the count of each rating",
+            "summary": "Ratings per category: mean, SD, median, IQR (Luidolt reports the means), "
+            f"and this suite's Wilcoxon signed-rank test against the midpoint {midpoint:g} "
+            "(Holm-corrected over the computed tests) with the rank-biserial r (95 % CI) and "
+            "the Hodges–Lehmann shift, and the count of each rating",
             "comments": "The participants' comments",
         },
     }
+
+
+def _count(n: int, one: str, many: str | None = None) -> str:
+    """``the 1 category``, ``the 3 categories``."""
+    return f"the {n} {one if n == 1 else many or one + 's'}"
+
+
+def _not_computed(table: pd.DataFrame, name) -> str:
+    """The sentence naming the tests that could not be computed, or nothing."""
+    missing = table[table["p"].isna()]
+    if missing.empty:
+        return ""
+    listed = series([name(r) for _, r in missing.iterrows()])
+    why = missing["test"].iloc[0].removeprefix("not computed: ")
+    return (
+        f" No test could be computed for {listed} ({why}"
+        f"{'' if missing['test'].nunique() == 1 else ', or as the table says'}; R's "
+        "wilcox.test gives no p either); the Holm family holds "
+        + _count(int(table["p"].notna().sum()), "computed test")
+        + "."
+    )
 
 
 def _results(summary: pd.DataFrame, midpoint: float, n: int) -> list[str]:
@@ -167,42 +179,89 @@ def _results(summary: pd.DataFrame, midpoint: float, n: int) -> list[str]:
     parts = []
     for _, row in summary.iterrows():
         side = "above" if row["median"] > midpoint else "below"
-        verdict = (
-            f"differed from the midpoint ({side} it)"
-            if row["p_holm"] < ALPHA
-            else "did not differ from the midpoint"
-        )
+        if np.isnan(row["p"]):
+            verdict = "was not tested (every rating at the midpoint)"
+        elif row["p_holm"] < ALPHA:
+            verdict = f"differed from the midpoint ({side} it)"
+        else:
+            verdict = "did not differ from the midpoint"
+        shift = "" if np.isnan(row["p"]) else f", HL shift = {row['hl_shift']:g}"
         parts.append(
             f"{row['category']} (Mdn = {row['median']:g}, IQR = {row['iqr']:g}; M = "
-            f"{row['mean']:.2f}, SD = {row['sd']:.2f}) {verdict}, {row['apa']}"
+            f"{row['mean']:.2f}, SD = {row['sd']:.2f}) {verdict}"
+            + ("" if np.isnan(row["p"]) else f", {row['apa']}{shift}")
         )
+    tested = int(summary["p"].notna().sum())
     return [
-        f"The {n} participants' ratings of each category were compared with the scale's "
-        f"midpoint, {midpoint:g}, by Wilcoxon signed-rank tests, Holm-corrected across the "
-        f"{len(summary)} categories (α = {unit_interval(ALPHA)}): "
+        f"Luidolt (2020, §7.2.1) reports the mean rating of each category; as an addition to "
+        f"his analysis, the {n} participants' ratings of each category were compared with "
+        f"the scale's midpoint, {midpoint:g}, by Wilcoxon signed-rank tests, Holm-corrected "
+        f"across {_count(tested, 'category', 'categories')} that could be tested "
+        f"(α = {unit_interval(ALPHA)}), "
+        "with the matched-pairs rank-biserial correlation r_rb (95 % CI) and the "
+        "Hodges–Lehmann (HL) shift from the midpoint as effect sizes: "
         + "; ".join(parts[:-1])
         + ("; and " if len(parts) > 1 else "")
         + parts[-1]
         + "."
+        + _not_computed(summary, lambda r: r["category"])
     ]
+
+
+NOT_COMPUTED = "not computed: every rating at the midpoint"
+NO_DIFFERENCE = "not computed: no participant rated the two conditions differently"
+
+
+def _wilcoxon(values: pd.Series, mu: float, reason: str) -> dict:
+    """The Wilcoxon test of ``values`` against ``mu`` with its effect sizes; NaN and the
+    reason where every value equals ``mu`` (R's ``wilcox.test`` gives NaN there)."""
+    if (values != mu).any():
+        test = wilcoxon_signed_rank(values, mu=mu)
+        effect = rank_biserial(values, mu=mu)
+        return {
+            "wilcoxon_V": test["V"],
+            "p": test["p"],
+            "test": test["method"]
+            + (f", {test['zeros']} zero(s) dropped" if test["zeros"] else ""),
+            **effect,
+            "hl_shift": hodges_lehmann(values, mu=mu),
+        }
+    nan = float("nan")
+    return {
+        "wilcoxon_V": nan,
+        "p": nan,
+        "test": reason,
+        "r_rb": nan,
+        "rb_ci_low": nan,
+        "rb_ci_high": nan,
+        "hl_shift": 0.0,
+    }
+
+
+def _apa(row) -> str:
+    if np.isnan(row["p"]):
+        return f"no test ({row['test'].removeprefix('not computed: ')})"
+    if abs(row["r_rb"]) == 1:  # every difference on one side: effectsize's CI is [±1, ±1]
+        interval = " (every rating on one side: no interval)"
+    else:
+        interval = (
+            f", 95 % CI [{unit_interval(row['rb_ci_low'])}, {unit_interval(row['rb_ci_high'])}]"
+        )
+    return (
+        f"V = {row['wilcoxon_V']:g}, {apa_p(row['p_holm'])} (Holm), r_rb = "
+        f"{unit_interval(row['r_rb'])}{interval}"
+    )
 
 
 def _summary_row(ratings: pd.Series, scale: range, midpoint: float) -> dict:
     q1, q3 = np.percentile(ratings, [25, 75])
-    if (ratings != midpoint).any():
-        test = wilcoxon_signed_rank(ratings, mu=midpoint)
-        statistic, p = test["V"], test["p"]
-    else:
-        statistic, p = 0.0, 1.0
     row = {
         "n": int(ratings.count()),
         "mean": ratings.mean(),
         "sd": ratings.std(ddof=1),
         "median": ratings.median(),
         "iqr": q3 - q1,
-        "wilcoxon_V": statistic,
-        "p": p,
-    }
+    } | _wilcoxon(ratings, midpoint, NOT_COMPUTED)
     row.update({f"count_{k}": int((ratings == k).sum()) for k in scale})
     return row
 
@@ -225,7 +284,7 @@ def _analyse_conditions(dataset: Dataset, protocol) -> dict:
                 | _summary_row(ratings, scale, midpoint)
             )
     summary = pd.DataFrame(rows)
-    summary["p_holm"] = holm(summary["p"])
+    summary["p_holm"] = holm(summary["p"], missing="omit")
     reference = conditions[0]["name"]
     wide = trials.pivot_table(
         index="participant", columns=["condition", "category"], values="rating", aggfunc="mean"
@@ -236,11 +295,6 @@ def _analyse_conditions(dataset: Dataset, protocol) -> dict:
             difference = (
                 wide[(condition["name"], category)] - wide[(reference, category)]
             ).dropna()
-            if (difference != 0).any():
-                test = wilcoxon_signed_rank(difference, mu=0.0)
-                statistic, p = test["V"], test["p"]
-            else:  # no participant rated them differently
-                statistic, p = 0.0, 1.0
             comparisons.append(
                 {
                     "condition": condition["name"],
@@ -249,23 +303,19 @@ def _analyse_conditions(dataset: Dataset, protocol) -> dict:
                     "n": int(difference.size),
                     "mean_difference": float(difference.mean()),
                     "median_difference": float(difference.median()),
-                    "wilcoxon_V": statistic,
-                    "p": p,
                 }
+                | _wilcoxon(difference, 0.0, NO_DIFFERENCE)
             )
     compared = pd.DataFrame(comparisons)
     if not compared.empty:
-        compared["p_holm"] = holm(compared["p"])
-        compared["apa"] = [
-            f"V = {v:g}, {apa_p(p)} (Holm)"
-            for v, p in zip(compared["wilcoxon_V"], compared["p_holm"], strict=True)
-        ]
+        compared["p_holm"] = holm(compared["p"], missing="omit")
+        compared["apa"] = [_apa(row) for _, row in compared.iterrows()]
     comments = trials.loc[
         trials["comment"].notna(), ["participant", "condition", "category", "rating", "comment"]
     ]
     text = {}
     for row in compared.itertuples() if not compared.empty else []:
-        if row.p_holm < 0.05:
+        if row.p_holm < ALPHA:
             text[f"{row.condition}, {row.category}"] = (
                 f"rated {abs(row.mean_difference):.2f} points "
                 f"{'lower' if row.mean_difference < 0 else 'higher'} than {row.reference} "
@@ -292,40 +342,51 @@ def _analyse_conditions(dataset: Dataset, protocol) -> dict:
             f"signed-rank test against the midpoint {midpoint:g} (Holm-corrected) and the count "
             "of each rating",
             "comparisons": f"Each condition against {reference}: the participants' paired "
-            "differences, Wilcoxon signed-rank test against 0, Holm-corrected across all "
-            "comparisons",
+            "differences, Wilcoxon signed-rank test against 0 (Holm-corrected over the "
+            "computed comparisons) with the rank-biserial r (95 % CI) and the Hodges–Lehmann "
+            "shift",
             "comments": "The participants' comments",
         },
     }
 
 
 def _compared_text(compared: pd.DataFrame, reference: str) -> str:
-    """The comparisons with the reference condition as one paragraph."""
+    """The comparisons with the reference condition as one paragraph: the conclusion follows
+    the Holm-corrected family; uncorrected p-values are only listed."""
     if compared.empty:
         return f"Only {reference} was rated: there is nothing to compare."
-    uncorrected = compared[compared["p"] < ALPHA]
-    held = compared[compared["p_holm"] < ALPHA]
-    if uncorrected.empty:
+    tested = compared[compared["p"].notna()]
+    held = tested[tested["p_holm"] < ALPHA]
+    missing = _not_computed(compared, lambda r: f"{r['condition']} in {r['category']}")
+    if tested.empty:
+        return f"No comparison with {reference} could be tested.{missing}"
+    family = (
+        f"Each condition was compared with the reference condition, {reference}, category by "
+        "category (Wilcoxon "
+        "signed-rank tests of the paired differences, Holm-corrected over "
+        f"{_count(len(tested), 'computed comparison')}, α = {unit_interval(ALPHA)})"
+    )
+    if held.empty:
+        uncorrected = int((tested["p"] < ALPHA).sum())
         return (
-            f"No condition was rated differently from {reference} in any category "
-            f"(uncorrected p ≥ {ALPHA:g} in all {len(compared)} comparisons)."
+            f"{family}: no condition was rated differently from {reference} in any category"
+            + (
+                f" ({uncorrected} comparison{'s' if uncorrected != 1 else ''} had an "
+                f"uncorrected p < {unit_interval(ALPHA)}, none held after the correction)"
+                if uncorrected
+                else ""
+            )
+            + f".{missing}"
         )
     listed = "; ".join(
-        f"{r.condition} {abs(r.mean_difference):.2f} points "
-        f"{'lower' if r.mean_difference < 0 else 'higher'} in {r.category} "
-        f"(V = {r.wilcoxon_V:g}, uncorrected {apa_p(r.p)})"
-        for r in uncorrected.itertuples()
-    )
-    after = (
-        "none of them remains significant"
-        if held.empty
-        else f"{len(held)} remain significant: "
-        + "; ".join(f"{r.condition} in {r.category} ({r.apa})" for r in held.itertuples())
+        f"{r.condition} was rated {abs(r.mean_difference):.2f} points "
+        f"{'lower' if r.mean_difference < 0 else 'higher'} in {r.category} ({r.apa}, "
+        f"HL shift = {r.hl_shift:g})"
+        for r in held.itertuples()
     )
     return (
-        f"Compared with {reference}, {len(uncorrected)} of the {len(compared)} comparisons "
-        f"differed at uncorrected p < {ALPHA:g}: {listed}. After Holm's correction over all "
-        f"{len(compared)}, {after}."
+        f"{family}: {len(held)} of the {len(tested)} differed: {listed}; the others did not "
+        f"differ after the correction.{missing}"
     )
 
 

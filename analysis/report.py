@@ -57,6 +57,8 @@ from .paradigms import PARADIGMS
 __all__ = ["analyse", "methods_paragraph", "write_report"]
 
 REPORT = "report.html"
+CSV_FLOAT_FORMAT = "%.17g"  # every digit: reads back as the same double, whatever numpy's
+# print options (pandas writes floats with them otherwise)
 COLLAPSE_ROWS = 30  # longer tables are folded (<details>), their title stays visible
 STYLE = """
 body{font-family:system-ui,-apple-system,"Segoe UI",Roboto,sans-serif;max-width:1100px;
@@ -333,7 +335,9 @@ def write_report(
     staging = staging_folder(out)
     try:
         for name, table in result["tables"].items():
-            _spreadsheet_safe(table).to_csv(staging / f"{name}.csv", index=False)
+            _spreadsheet_safe(table).to_csv(
+                staging / f"{name}.csv", index=False, float_format=CSV_FLOAT_FORMAT
+            )
             (staging / f"{name}.md").write_text(_markdown(table))
         for name, item in result["figures"].items():
             (staging / name).write_bytes(as_figure(item, name).png)

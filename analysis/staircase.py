@@ -5,25 +5,36 @@ intensity at its reversals after the first two (the first reversals still carry 
 value's bias), as a fraction of the display maximum; with fewer than three reversals, the mean
 of all reversal points. As an alternative, a **psychometric fit**: a logistic function of the
 disc intensity fitted by maximum likelihood to the answers "glare brighter" (1), "disc
-brighter" (0) and "neither" (½); its 50 % point is the match, reported only where it lies
-inside the tested range (``psychometric_identified`` counts those staircases).
+brighter" (0) and "neither" (½), as R's ``glm`` fits it (:func:`psychometric_fit`); its 50 %
+point is the match where the data locate one, and the matches table says why not elsewhere
+(``psychometric_identified`` counts the staircases with one). Each staircase's reversal match
+has a bootstrap interval (:func:`reversal_interval`) where it has enough reversals.
 
-**Figure 13**: matched intensity against glare level, per context, mean ± SEM over
-participants, with the line of the glare image's actual peak (Spencer: 75 %). **The context
+**Figure 13** (Spencer's): matched intensity against glare level, per context, mean over
+participants with 95 % Cousineau–Morey within-subject intervals, with the line of the glare
+image's actual peak (Spencer: 75 %). **The context
 effect**: a level × context repeated-measures ANOVA on the matched intensity (with one
 context, a one-way ANOVA over the levels).
 """
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pandas as pd
 from matplotlib.ticker import MaxNLocator
-from scipy.optimize import minimize
-from scipy.special import expit
+from scipy import stats as sps
 from threadpoolctl import threadpool_limits
 
 from .apa import anova_effect, corrected_p, series, unit_interval
+from .effects import (
+    anova_residuals,
+    assumptions,
+    marginal_means,
+    with_eta2_ci,
+    within_subject_ci,
+)
 from .figures import Figure, plt, png, small_multiples
 from .load import Dataset, where
 from .methods import display_text
@@ -34,7 +45,9 @@ __all__ = [
     "check",
     "design",
     "methods",
+    "psychometric_fit",
     "psychometric_match",
+    "reversal_interval",
     "reversal_match",
     "stimulus_figures",
 ]
@@ -123,37 +136,164 @@ def reversal_match(staircase: pd.DataFrame) -> float:
     return float(kept.mean())
 
 
-def psychometric_match(staircase: pd.DataFrame) -> float:
-    """50 % point of a logistic fit of P('glare brighter') against the disc intensity.
+PSYCHOMETRIC_SLOPE_ALPHA = 0.05  # a slope whose likelihood-ratio test gives p above: none
+BOOTSTRAP_RESAMPLES = 2000
+BOOTSTRAP_SEED = 1995  # the report's intervals are the same on every run
+MIN_REVERSALS_FOR_INTERVAL = 4  # kept reversals a bootstrap interval needs to be shown
+SCORE_TOLERANCE = 1e-6  # |∂ log L / ∂b| at the fit's maximum (answers are 0, ½, 1)
+RESPONSE_CODES = {"glare": 1.0, "disc": 0.0, "neither": 0.5}
 
-    NaN when it is not identified inside the tested range (0-1 of the maximum): a staircase
-    whose answers never change (at the ceiling, the glare image looks brighter than the
-    brightest disc) bounds the match but does not locate it.
+
+def psychometric_fit(staircase: pd.DataFrame) -> dict:
+    """A logistic psychometric function of the disc intensity fitted by maximum likelihood,
+    with its 50 % point where the data locate one, and why not where they do not.
+
+    The model is R's ``glm(y ~ disc_fraction, family = binomial)``: ``P(glare brighter) =
+    1 / (1 + exp(-(b0 + b1 x)))`` with the answers "glare brighter" 1, "disc brighter" 0 and
+    "neither" ½ (a fractional response, as R takes it with a warning); the match is
+    ``-b0 / b1``. It is fitted by iteratively reweighted least squares (statsmodels ``GLM``,
+    the algorithm of R's ``glm``). The logistic log-likelihood is concave in ``(b0, b1)``, so
+    a maximum it converges to is the only one and no other starting point can find a better
+    one; what can go wrong is that there is none: where the answers are separated by the disc
+    intensity (every "glare" below every "disc"), the likelihood grows without bound as the
+    slope steepens, and a bounded optimiser stops on its bound. That is checked before the
+    fit (Albert & Anderson 1984), and the fit's score is checked to vanish afterwards.
+
+    Returns
+    -------
+    dict
+        ``match`` (NaN where not estimable), ``slope`` (``b1``, per unit of the display
+        maximum), ``slope_p`` (likelihood-ratio test of ``b1 = 0``) and ``status``:
+        ``"estimated"`` (or ``"estimated: the answers change at one disc intensity"``, where
+        only "neither" answers at one intensity keep them from being separated: the slope is
+        unbounded and the match is that intensity, the limit of the fit) or ``"not
+        estimable: …"`` naming why: the answers never change; they are separated (no finite
+        maximum; the interval the match lies in is named); a slope of the wrong sign (the
+        glare looks brighter as the disc brightens) or none (likelihood-ratio p ≥ .05); the
+        50 % point outside the tested range 0-1.
+
+    Notes
+    -----
+    psignifit (Schütt et al. 2016) fits psychometric functions with guess and lapse rates by
+    Bayesian inference; it is not used here because the staircase's three answers, "neither"
+    as ½, are not the binomial counts it models, and the match is the point of subjective
+    equality of a two-alternative judgement without a guess rate, which is the logistic
+    regression that R's ``glm`` and this function fit, and the check against R can be exact.
+
+    References
+    ----------
+    Albert & Anderson (1984), Biometrika 71, 1-10 (existence of the maximum likelihood
+    estimate); McCullagh & Nelder (1989), Generalized Linear Models, §4.4 (IRLS).
+
+    Examples
+    --------
+    >>> staircase = pd.DataFrame({"disc_fraction": [0.2, 0.4, 0.6, 0.5, 0.45, 0.55, 0.3, 0.7],
+    ...     "response": ["glare", "glare", "disc", "glare", "disc", "disc", "glare", "disc"]})
+    >>> fit = psychometric_fit(staircase)
+    >>> fit["status"], round(fit["match"], 3), round(fit["slope"], 1)  # R's glm: .473, -23.6
+    ('estimated', 0.473, -23.6)
     """
+    import statsmodels.api as sm
+
     x = staircase["disc_fraction"].to_numpy(float)
-    y = staircase["response"].map({"glare": 1.0, "disc": 0.0, "neither": 0.5}).to_numpy(float)
-    if np.all(y == y[0]):
-        return float("nan")
+    y = staircase["response"].map(RESPONSE_CODES).to_numpy(float)
+    nan = float("nan")
 
-    def negative_log_likelihood(params):
-        centre, log_scale = params
-        p = np.clip(expit((centre - x) / np.exp(log_scale)), 1e-9, 1 - 1e-9)
-        return -np.sum(y * np.log(p) + (1 - y) * np.log(1 - p))
+    def result(status: str, match=nan, slope=nan, slope_p=nan) -> dict:
+        return {"match": match, "slope": slope, "slope_p": slope_p, "status": status}
 
-    result = minimize(
-        negative_log_likelihood,
-        [float(np.mean(x)), np.log(0.05)],
-        method="L-BFGS-B",
-        bounds=[(-1.0, 2.0), (np.log(1e-3), np.log(1.0))],
-    )
-    centre = float(result.x[0])
-    return centre if 0.0 <= centre <= 1.0 else float("nan")
+    if np.all(y == y[0]) or np.ptp(x) == 0:
+        return result("not estimable: the answers never change (a bound, not a threshold)")
+    some_glare, some_disc = y > 0, y < 1  # "neither" (½) is both
+    # separation (Albert & Anderson 1984): where no "glare" answer lies above a "disc" answer,
+    # the likelihood grows without bound as the slope steepens
+    highest_glare, lowest_disc = x[some_glare].max(), x[some_disc].min()
+    if x[some_glare].min() >= x[some_disc].max():
+        return result("not estimable: the slope has the wrong sign (every \"glare\" answer "
+                      "at a brighter disc than every \"disc\" answer)")  # fmt: skip
+    if highest_glare < lowest_disc:
+        return result(
+            'not estimable: the answers are separated (every "glare brighter" below every '
+            f'"disc brighter"): the likelihood has no maximum; the match lies between '
+            f"{highest_glare:.4g} and {lowest_disc:.4g}"
+        )
+    if highest_glare == lowest_disc:
+        # quasi-complete separation: separated but for "neither" answers at one intensity;
+        # the slope is unbounded and the 50 % point is that intensity (the limit of the fit)
+        return result(
+            "estimated: the answers change at one disc intensity (the slope is unbounded)",
+            match=float(highest_glare),
+            slope=float("-inf"),
+            slope_p=0.0,
+        )
+    design = sm.add_constant(x, prepend=True)
+    model = sm.GLM(y, design, family=sm.families.Binomial())
+    with warnings.catch_warnings():  # restored on leaving: no filter left changed
+        # statsmodels warns of "perfect separation" wherever a fitted probability reaches
+        # 1e-10 of 0 or 1 (a steep slope), and of overflow in exp there; separation itself
+        # is tested above
+        warnings.simplefilter("ignore")
+        fit = model.fit(method="IRLS", tol=1e-14, maxiter=200)
+        score = model.score(fit.params)
+        deviance_drop = float(fit.null_deviance - fit.deviance)  # (lazy: fits the null model)
+    b0, b1 = (float(v) for v in fit.params)
+    # at the maximum the score (the gradient of the log-likelihood) vanishes; statsmodels'
+    # own convergence flag (relative change of the deviance < 1e-14) can miss it by rounding
+    if not np.all(np.isfinite(fit.params)) or not np.all(np.abs(score) < SCORE_TOLERANCE):
+        return result("not estimable: the fit did not converge", slope=b1)
+    slope_p = float(sps.chi2.sf(max(0.0, deviance_drop), 1))
+    if b1 >= 0:  # "glare brighter" more often as the disc brightens
+        return result(
+            f"not estimable: the slope has the wrong sign (b1 = {b1:.3g})",
+            slope=b1,
+            slope_p=slope_p,
+        )
+    if slope_p >= PSYCHOMETRIC_SLOPE_ALPHA:
+        return result(
+            f"not estimable: no slope (b1 = {b1:.3g} per unit of the maximum, "
+            f"likelihood-ratio p = {slope_p:.2g})",
+            slope=b1,
+            slope_p=slope_p,
+        )
+    centre = -b0 / b1
+    if not 0.0 <= centre <= 1.0:
+        return result(
+            f"not estimable: the 50 % point {centre:.3g} lies outside the tested range 0-1",
+            slope=b1,
+            slope_p=slope_p,
+        )
+    return result("estimated", match=centre, slope=b1, slope_p=slope_p)
+
+
+def psychometric_match(staircase: pd.DataFrame) -> float:
+    """The 50 % point of :func:`psychometric_fit`; NaN where it is not estimable."""
+    return psychometric_fit(staircase)["match"]
+
+
+def reversal_interval(
+    staircase: pd.DataFrame, *, rng: np.random.Generator, confidence: float = 0.95
+) -> tuple[float, float]:
+    """A percentile bootstrap interval of :func:`reversal_match`: the kept reversals
+    resampled with replacement; NaN with fewer than ``MIN_REVERSALS_FOR_INTERVAL`` kept ones.
+
+    Successive reversals of a staircase are not independent (each starts where the last one
+    ended); the interval describes the spread of the reversal points, and is too narrow where
+    they drift.
+    """
+    reversals = staircase.loc[staircase["reversal"].astype(bool), "disc_fraction"].to_numpy(float)
+    kept = reversals[DISCARDED_REVERSALS:] if reversals.size > DISCARDED_REVERSALS else reversals
+    if kept.size < MIN_REVERSALS_FOR_INTERVAL:
+        return float("nan"), float("nan")
+    means = rng.choice(kept, size=(BOOTSTRAP_RESAMPLES, kept.size)).mean(axis=1)
+    tail = 100 * (1 - confidence) / 2
+    low, high = np.percentile(means, [tail, 100 - tail])
+    return float(low), float(high)
 
 
 def _staircase_row(
-    participant, context, level, staircase: pd.DataFrame, *, tests_only: bool
+    participant, context, level, staircase: pd.DataFrame, *, tests_only: bool, rng
 ) -> dict:
-    return {
+    row = {
         "participant": participant,
         "context": context,
         "glare_level": int(level),
@@ -161,7 +301,17 @@ def _staircase_row(
         "trials": len(staircase),
         "reversals": int(staircase["reversal"].astype(bool).sum()),
         "match_reversals": reversal_match(staircase),
-        "match_psychometric": float("nan") if tests_only else psychometric_match(staircase),
+    }
+    if tests_only:
+        return row | {"match_psychometric": float("nan")}
+    low, high = reversal_interval(staircase, rng=rng)
+    fit = psychometric_fit(staircase)
+    return row | {
+        "match_ci_low": low,
+        "match_ci_high": high,
+        "match_psychometric": fit["match"],
+        "psychometric_slope": fit["slope"],
+        "psychometric": fit["status"],
     }
 
 
@@ -176,9 +326,10 @@ def analyse(dataset: Dataset, protocol, *, tests_only: bool = False) -> dict:
     trials = every[every["counted"].astype(bool)]  # repeated flashes did not move a staircase
     # one BLAS thread: the fits are tiny, and on a busy machine OpenBLAS's idle threads made
     # scipy's L-BFGS-B 30x slower (0.1 s a fit instead of 3 ms, measured with scipy 1.17)
+    rng = np.random.default_rng(BOOTSTRAP_SEED)
     with threadpool_limits(limits=1, user_api="blas"):
         rows = [
-            _staircase_row(participant, context, level, staircase, tests_only=tests_only)
+            _staircase_row(participant, context, level, staircase, tests_only=tests_only, rng=rng)
             for (participant, context, level), staircase in trials.groupby(
                 ["participant", "context", "glare_level"]
             )
@@ -199,6 +350,16 @@ def analyse(dataset: Dataset, protocol, *, tests_only: bool = False) -> dict:
         )
         .reset_index()
     )
+    several = matches["participant"].nunique() > 1
+    if several and not tests_only:  # Cousineau–Morey, over every context × level cell
+        within = within_subject_ci(
+            matches, "match_reversals", ["context", "glare_level"], "participant"
+        ).set_index(["context", "glare_level"])["ci_half"]
+        summary["match_ci_within"] = [
+            within[key] for key in zip(summary["context"], summary["glare_level"], strict=True)
+        ]
+    else:
+        summary["match_ci_within"] = float("nan")
     tables = {"matches": matches, "summary": summary}
     text = {}
     data = matches.rename(columns={"match_reversals": "match"}).astype({"glare_level": str})
@@ -208,7 +369,26 @@ def analyse(dataset: Dataset, protocol, *, tests_only: bool = False) -> dict:
         anova["apa_gg"] = apa_anova(anova, correction="GG")
         anova["apa_hf"] = apa_anova(anova, correction="HF")
         tables["anova"] = anova
-        text |= {row["source"]: anova_effect(row) for _, row in anova.iterrows()}
+        if not tests_only:
+            means = marginal_means(data, "match", factors, "participant")
+            means["factor"] = (
+                means["factor"].map({"glare_level": "glare level"}).fillna(means["factor"])
+            )
+            tables["marginal_means"] = means.rename(
+            columns={"emmean": "match_mean", "se": "match_se", "ci_low": "match_ci_low",
+                     "ci_high": "match_ci_high"}
+        )  # fmt: skip
+            tables["assumptions"] = assumptions(
+                anova, anova_residuals(data, "match", factors, "participant")
+            )
+        # the η²p intervals in the full analysis only (ms each; a power analysis's tests are
+        # the report's tests without them)
+        shown = anova if tests_only else with_eta2_ci(anova)
+        text |= {row["source"]: anova_effect(row) for _, row in shown.iterrows()}
+        if not tests_only:
+            tables["effect_sizes"] = shown[
+                ["source", "eta2_partial", "eta2p_ci_low", "eta2p_ci_high", "eta2_generalized"]
+            ]
     else:
         text["inference"] = (
             "one participant: the tables describe their staircases; no ANOVA, which tests "
@@ -248,12 +428,14 @@ def analyse(dataset: Dataset, protocol, *, tests_only: bool = False) -> dict:
     return {
         "tables": tables,
         "figures": {
-            "figure13_matches.png": Figure(
+            "matches_by_glare_level.png": Figure(
                 _figure13(summary, contexts, peak),
                 "Matched disc intensity at each glare level",
                 "The disc intensity matched to the glare image (per cent of the display "
                 f"maximum; each staircase's mean over its reversals after the first "
-                f"{DISCARDED_REVERSALS}), mean ± SEM over n = {n} participants, one line per "
+                f"{DISCARDED_REVERSALS}), mean over n = {n} participants with 95 % "
+                "within-subject confidence intervals (Cousineau 2005 with Morey's 2008 "
+                "correction, over every context × level cell), one line per "
                 f"context; the dashed line is the glare image's actual peak "
                 f"({100 * peak:g} %). Above it the glare looked brighter than the source "
                 "was.",
@@ -268,16 +450,30 @@ def analyse(dataset: Dataset, protocol, *, tests_only: bool = False) -> dict:
             ),
         },
         "text": text,
-        "results": _results(tables, summary, matches, protocol, repeated, len(every))
+        "results": _results(
+            tables | ({"anova": shown} if "anova" in tables else {}),
+            summary,
+            matches,
+            protocol,
+            repeated,
+            len(every),
+        )
         + ([text["unconverged_staircases"]] if "unconverged_staircases" in text else []),
         "captions": {
             k: v
             for k, v in {
                 "matches": "Matched disc intensity of every staircase (fraction of the display "
-                "maximum)",
+                "maximum): the reversal mean with its bootstrap 95 % interval, and the "
+                "psychometric fit's 50 % point, or why it is not estimable",
                 "summary": "Matched disc intensity per context and glare level (fraction of "
-                "the display maximum, mean and SEM)",
+                "the display maximum, mean, SEM and half the 95 % within-subject CI)",
                 "anova": "Repeated-measures ANOVA on the matched disc intensity",
+                "marginal_means": "Estimated marginal means of the matched disc intensity "
+                "(fraction of the maximum) per level of each factor, with 95 % CIs",
+                "effect_sizes": "Effect sizes of the ANOVA effects: η²p with its 90 % CI "
+                "(Steiger 2004) and η²G",
+                "assumptions": "Assumptions: the sphericity correction of each effect and "
+                "why, and Shapiro–Wilk of the ANOVA's residuals",
             }.items()
             if k in tables
         },
@@ -334,13 +530,27 @@ def _results(
             f"(SEM {100 * part.loc[strongest, 'match_sem']:.1f}) in context {context}"
         )
     identified = int(matches["match_psychometric"].notna().sum())
+    reasons = (
+        matches.loc[matches["match_psychometric"].isna(), "psychometric"]
+        .str.removeprefix("not estimable: ")
+        .str.split(r" \(|:", regex=True)
+        .str[0]
+        .value_counts()
+    )
+    why = (
+        " (not estimable: "
+        + series([f"{count} {reason}" for reason, count in reasons.items()])
+        + "; the matches table gives each staircase's reason)"
+        if len(reasons)
+        else ""
+    )
     paragraphs.append(
         "From the weakest to the strongest glare the matched intensity (per cent of the "
         f"display maximum) rose {series(ranges)}; the glare image's actual peak was "
         f"{100 * peak:g} %. The "
-        f"logistic fits located the match inside the tested range for {identified} of "
-        f"{len(matches)} staircases. {repeated} of {flashes} flashes missed their frames or "
-        "timing and were shown again; the staircases use only the counted ones."
+        f"logistic fits (maximum likelihood, as R's glm) located the match for {identified} "
+        f"of {len(matches)} staircases{why}. {repeated} of {flashes} flashes missed their "
+        "frames or timing and were shown again; the staircases use only the counted ones."
     )
     return paragraphs
 
@@ -445,7 +655,10 @@ def _participants(matches: pd.DataFrame, contexts: list[str]) -> bytes:
         axis.tick_params(labelsize=7)
     axes[0].xaxis.set_major_locator(MaxNLocator(integer=True))
     axes[0].set_ylabel("match (% of max)", fontsize=8)
-    axes[0].legend(fontsize=7, frameon=False)
+    handles, names = axes[0].get_legend_handles_labels()
+    # below the panels (in the first panel it covered that participant's lines)
+    figure.legend(handles, names, loc="upper center", bbox_to_anchor=(0.5, 0.0),
+                  ncol=len(names), fontsize=8, frameon=False)  # fmt: skip
     figure.supxlabel("glare level (1 = weakest glare)", fontsize=9)
     return png(figure)
 
@@ -459,7 +672,7 @@ def _figure13(summary: pd.DataFrame, contexts: list[str], peak_fraction: float) 
         axis.errorbar(
             part["glare_level"],
             100 * part["match_mean"],
-            yerr=100 * part["match_sem"],
+            yerr=100 * part["match_ci_within"],
             marker=marker,
             capsize=3,
             label=f"context: {context}",
@@ -472,6 +685,6 @@ def _figure13(summary: pd.DataFrame, contexts: list[str], peak_fraction: float) 
         label=f"actual peak ({100 * peak_fraction:g} %)",
     )
     axis.set_xlabel("glare level (1 = weakest glare)")
-    axis.set_ylabel("matched disc intensity (% of max), mean ± SEM")
-    axis.legend(fontsize=8)
+    axis.set_ylabel("matched disc intensity (% of max)\nmean, 95 % within-subject CI")
+    axis.legend(fontsize=8, loc="upper left", bbox_to_anchor=(0, -0.2), ncol=3, frameon=False)
     return png(figure)

@@ -168,7 +168,8 @@ def test_significant_digits_round_trip(value, digits):
     ("value", "decimals", "text"),
     [
         (0.6912, 2, ".69"),
-        (0.999, 2, "1.00"),
+        (0.999, 2, ".999"),  # APA: a value below 1 never printed as 1
+        (0.9999, 2, "> .999"),
         (1.0, 3, "1.000"),
         (-0.049, 2, "-.05"),
         (0, 2, ".00"),

@@ -35,8 +35,8 @@ def test_yoshida_report_holds_every_analysis(simulated, tmp_path):
         assert (tmp_path / "report" / f"{table}.md").is_file()
         assert f"<code>{table}.csv</code>" in text  # each table's title names its file
     for figure in (
-        "figure4_bounds_and_match.png",
-        "figure5_boost.png",
+        "bounds_and_match.png",
+        "boost.png",
         "participants_matches.png",
     ):
         assert (tmp_path / "report" / figure).stat().st_size > 5000

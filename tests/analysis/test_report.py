@@ -128,7 +128,7 @@ def test_the_results_paragraph_and_tables_read_as_a_paper(yoshida):
     assert not SCIENTIFIC.search(text), SCIENTIFIC.search(text)
     assert "nan" not in re.sub(r"<[^>]+>", " ", text).split()
     numbers = re.findall(r"<b>Table (\d+)\.</b>", html)
-    assert [int(n) for n in numbers] == list(range(1, 8))
+    assert [int(n) for n in numbers] == list(range(1, 11))  # effect sizes, means, assumptions
     # p-values as APA writes them in the tables: no leading zero, < .001
     cells = [unescape(c) for c in re.findall(r"<td class='num'>([^<]*)</td>", html)]
     assert "< .001" in cells and not [c for c in cells if c.startswith("0.0") and len(c) > 6]
@@ -207,7 +207,7 @@ def test_the_rating_report_has_a_visible_neutral_category_and_every_participant(
 
     colours = _colours(range(1, 8))
     assert len(colours) == 7 and tuple(colours[3][:3]) != (1.0, 1.0, 1.0)
-    grey = np.array(Image.open(tmp_path / "figure7_ratings.png").convert("RGB"))
+    grey = np.array(Image.open(tmp_path / "ratings.png").convert("RGB"))
     target = np.round(255 * np.array(_rgb(NEUTRAL))).astype(int)
     assert (np.abs(grey.astype(int) - target).sum(axis=2) < 6).sum() > 200  # visible area
 

@@ -229,7 +229,7 @@ def test_apa_strings():
 
 def test_every_stored_r_output_names_r_and_its_packages():
     outputs = sorted(R_FOLDER.glob("*.csv"))
-    assert len(outputs) == 15  # 10 designs and their results, 4 more
+    assert len(outputs) == 29  # 10 + 4 designs and their results, 13 more
     for path in outputs:
         first, second = path.read_text().splitlines()[:2]
         assert re.fullmatch(

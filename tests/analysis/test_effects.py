@@ -1,0 +1,218 @@
+"""Effect sizes, their intervals, marginal means, within-subject error bars, the Holm family
+without the tests that could not be computed, and letters beyond the alphabet, against R
+(``tests/analysis/R/reference.R``: afex, emmeans, effectsize, stats, multcompView) on designs
+other than those of the ANOVA references."""
+
+import subprocess
+import sys
+
+import numpy as np
+import pandas as pd
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from numpy.testing import assert_allclose
+
+from analysis.effects import (
+    anova_residuals,
+    eta2_partial_ci,
+    hodges_lehmann,
+    marginal_means,
+    normality,
+    paired_effect,
+    rank_biserial,
+    within_subject_ci,
+)
+from analysis.stats import group_letters, holm, rm_anova, similarity_groups, wilcoxon_signed_rank
+
+from .test_stats import read_r
+
+R_TOLERANCE = 1e-9  # the same method as R's: agreement to rounding
+OPTIM_TOLERANCE = 1e-6  # effectsize's own limits: Nelder–Mead to 1e-9 on the probabilities
+DESIGNS = ["es_3x5", "es_one_way_4", "es_2x2x3", "es_2x6_n3"]
+FACTORS = {
+    "es_3x5": ["a", "b"],
+    "es_one_way_4": ["cue"],
+    "es_2x2x3": ["p", "q", "r"],
+    "es_2x6_n3": ["level", "method"],
+}
+
+
+def split(text):
+    return [float(v) for v in str(text).split(";")]
+
+
+@pytest.mark.parametrize("design", DESIGNS)
+def test_generalized_eta2_and_the_eta2p_interval_match_afex_and_effectsize(design):
+    data = read_r(f"effects_{design}.csv")
+    theirs = read_r("effects_anova.csv")
+    theirs = theirs[theirs["design"] == design].reset_index(drop=True)
+    ours = rm_anova(data, "y", FACTORS[design], "subject")
+    assert [s.replace(" × ", ":") for s in ours["source"]] == list(theirs["source"])
+    for column in ("F", "eta2_partial", "eta2_generalized"):
+        assert_allclose(ours[column], theirs[column], rtol=R_TOLERANCE, err_msg=column)
+    for row, (_, r) in zip(ours.itertuples(), theirs.iterrows(), strict=True):
+        low, high = eta2_partial_ci(row.F, row.df1, row.df2)
+        assert_allclose([low, high], [r["eta2p_ci_low"], r["eta2p_ci_high"]], atol=R_TOLERANCE)
+        assert_allclose(
+            [low, high], [r["effectsize_ci_low"], r["effectsize_ci_high"]], atol=OPTIM_TOLERANCE
+        )
+
+
+def test_generalized_eta2_is_far_below_partial_where_subjects_differ_much():
+    """The issue's 3 × 5 case: η²p = .41 where η²G is near 0, because the subjects' own
+    variance (in η²G's denominator) dwarfs the effect's."""
+    rng = np.random.default_rng(3)
+    subjects = np.repeat(np.arange(12), 15)
+    cells = np.tile(np.arange(15), 12)
+    y = 100 * rng.normal(size=12)[subjects] + 0.4 * (cells % 5) + rng.normal(0, 0.6, cells.size)
+    data = pd.DataFrame({"s": subjects, "a": cells // 5, "b": cells % 5, "y": y})
+    table = rm_anova(data, "y", ["a", "b"], "s").set_index("source")
+    assert table.loc["b", "eta2_partial"] > 0.3
+    assert table.loc["b", "eta2_generalized"] < 0.01
+
+
+@pytest.mark.parametrize("design", DESIGNS)
+def test_marginal_means_match_emmeans(design):
+    data = read_r(f"effects_{design}.csv")
+    theirs = read_r("effects_emmeans.csv")
+    theirs = theirs[theirs["design"] == design].reset_index(drop=True)
+    ours = marginal_means(data, "y", FACTORS[design], "subject")
+    assert list(ours["level"]) == list(theirs["level"])
+    for column in ("emmean", "se", "df", "ci_low", "ci_high"):
+        assert_allclose(ours[column], theirs[column], rtol=R_TOLERANCE, err_msg=column)
+
+
+@pytest.mark.parametrize("design", DESIGNS)
+def test_within_subject_intervals_and_residual_normality_match_r(design):
+    data = read_r(f"effects_{design}.csv")
+    theirs = read_r("effects_within_ci.csv")
+    theirs = theirs[theirs["design"] == design].reset_index(drop=True)
+    ours = within_subject_ci(data, "y", FACTORS[design], "subject")
+    cells = [":".join(map(str, row)) for row in ours[FACTORS[design]].to_numpy()]
+    assert cells == list(theirs["cell"])
+    for column in ("mean", "sem_within", "ci_half"):
+        assert_allclose(ours[column], theirs[column], rtol=R_TOLERANCE, err_msg=column)
+    test = normality(anova_residuals(data, "y", FACTORS[design], "subject"))
+    # scipy and R both run Royston's swilk; they agree to about 1e-7 (single precision there)
+    assert_allclose(test["W"], theirs["residuals_shapiro_W"].iloc[0], rtol=1e-6)
+    assert_allclose(test["p"], theirs["residuals_shapiro_p"].iloc[0], rtol=1e-4)
+
+
+def test_within_subject_intervals_are_narrower_than_between_where_subjects_differ():
+    rng = np.random.default_rng(4)
+    subjects = np.repeat(np.arange(10), 4)
+    y = 50 * rng.normal(size=10)[subjects] + np.tile([0, 1, 2, 3], 10) + rng.normal(0, 0.5, 40)
+    data = pd.DataFrame({"s": subjects, "c": np.tile(list("wxyz"), 10), "y": y})
+    within = within_subject_ci(data, "y", ["c"], "s")
+    between = data.groupby("c")["y"].sem().to_numpy()
+    assert np.all(within["sem_within"].to_numpy() < between / 10)
+
+
+@pytest.mark.parametrize("case", ["n5", "n12", "n40_small", "offset_1e6", "negative"])
+def test_paired_effects_match_t_test_and_the_noncentral_t(case):
+    row = read_r("effects_paired.csv").set_index("case").loc[case]
+    ours = paired_effect(split(row["a"]), split(row["b"]))
+    for column in ("mean_difference", "md_ci_low", "md_ci_high", "d_z"):
+        # a 1e6 offset leaves ten digits of the differences: rounding at 1e-10 relative
+        assert_allclose(ours[column], row[column], rtol=1e-8, err_msg=column)
+    assert_allclose([ours["dz_ci_low"], ours["dz_ci_high"]], [row["dz_ci_low"], row["dz_ci_high"]],
+                    rtol=1e-8)  # fmt: skip
+    assert_allclose(ours["d_z"], row["effectsize_d"], rtol=1e-8)
+    assert_allclose(
+        [ours["dz_ci_low"], ours["dz_ci_high"]],
+        [row["effectsize_ci_low"], row["effectsize_ci_high"]],
+        atol=OPTIM_TOLERANCE,
+    )
+
+
+@pytest.mark.parametrize(
+    "case",
+    ["exact_n9", "exact_n25", "likert_ties_zeros", "likert_n30", "all_above", "differences"],
+)
+def test_rank_biserial_and_hodges_lehmann_match_effectsize_and_wilcox_test(case):
+    row = read_r("effects_wilcoxon.csv").set_index("case").loc[case]
+    x, mu = split(row["x"]), float(row["mu"])
+    ours = rank_biserial(x, mu=mu)
+    for column in ("r_rb", "rb_ci_low", "rb_ci_high"):
+        assert_allclose(ours[column], row[column], rtol=R_TOLERANCE, err_msg=column)
+    shift = hodges_lehmann(x, mu=mu)
+    assert_allclose(shift, row["walsh_median"], rtol=R_TOLERANCE, atol=1e-12)
+    if row["exact"]:  # R's estimate is the Walsh median of x where its test is exact
+        assert_allclose(shift + mu, row["wilcox_estimate"], rtol=R_TOLERANCE)
+
+
+def test_the_holm_family_holds_only_the_tests_r_could_compute():
+    theirs = read_r("holm_family.csv")
+    p = []
+    for ratings in theirs["ratings"]:
+        values = split(ratings)
+        p.append(
+            wilcoxon_signed_rank(values, mu=4)["p"] if np.any(np.array(values) != 4) else np.nan
+        )
+    assert_allclose(p, theirs["p"], rtol=R_TOLERANCE)  # NaN where R has NA
+    assert_allclose(holm(p, missing="omit"), theirs["p_holm"], rtol=R_TOLERANCE)
+    with pytest.raises(ValueError, match="p-values must be numbers"):
+        holm(p)
+
+
+def test_the_issues_questionnaire_keeps_rs_decision():
+    """Glare Appearance all 4 and Overall 7 5 3 6 6 6 6 4: R's Holm p for Overall is .0385."""
+    overall = wilcoxon_signed_rank([7, 5, 3, 6, 6, 6, 6, 4], mu=4)["p"]
+    adjusted = holm([np.nan, overall], missing="omit")
+    assert np.isnan(adjusted[0])
+    assert_allclose(adjusted[1], 0.038506040175992767, rtol=R_TOLERANCE)
+
+
+def test_similarity_groups_beyond_the_alphabet_match_multcompview():
+    pairs = read_r("letters_27_pairs.csv")
+    theirs = read_r("letters_27.csv").set_index("level")["letters"].to_dict()
+    levels = sorted(set(pairs["a"]) | set(pairs["b"]))
+    means = {level: -i for i, level in enumerate(levels)}  # decreasing in R's level order
+    ours = similarity_groups(
+        means, {(r.a, r.b): r.p_adjusted for r in pairs.itertuples()}
+    )  # fmt: skip
+
+    def groups(display):
+        names = {name for v in display.values() for name in v}
+        return {frozenset(k for k, v in display.items() if name in v) for name in names}
+
+    assert groups(ours) == groups(theirs)
+    assert len(groups(ours)) == 27
+    # the same names (a … z, then A); multcompView orders its columns differently
+    assert {n for v in ours.values() for n in v} == {n for v in theirs.values() for n in v}
+
+
+@given(st.integers(0, 400))
+@settings(max_examples=60, deadline=None)
+def test_group_letters_are_distinct_and_none_is_a_prefix_issue(count):
+    names = group_letters(count)
+    assert len(names) == len(set(names)) == count
+    assert names[:26] == list("abcdefghijklmnopqrstuvwxyz")[: min(count, 26)]
+
+
+def test_importing_the_analysis_leaves_numpys_print_options_as_they_were():
+    code = (
+        "import numpy as np; before = np.get_printoptions(); import analysis.report; "
+        "import analysis.stimulus_figures; assert np.get_printoptions() == before, "
+        "np.get_printoptions()"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=False
+    )
+    assert done.returncode == 0, done.stderr
+
+
+def test_report_csvs_hold_every_digit_whatever_numpys_print_options(tmp_path):
+    from analysis.report import CSV_FLOAT_FORMAT
+
+    table = pd.DataFrame({"F": [20.077025396150553, 1 / 3, 1e-300, 12345678.901234567]})
+    before = np.get_printoptions()
+    np.set_printoptions(legacy="1.13")  # what colour-science sets
+    try:
+        table.to_csv(tmp_path / "t.csv", index=False, float_format=CSV_FLOAT_FORMAT)
+    finally:
+        np.set_printoptions(**before)
+    lines = (tmp_path / "t.csv").read_text().split()[1:]
+    assert [float(v) for v in lines] == table["F"].tolist()
+    assert lines[0] == "20.077025396150553"
