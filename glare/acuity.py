@@ -53,10 +53,10 @@ import math
 from functools import cache
 from typing import Literal
 
-import colour
 import numpy as np
 from scipy import ndimage
 
+from ._colour import colour
 from ._validation import check_choice, check_image, check_in_range, check_positive
 
 __all__ = [

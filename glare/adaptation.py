@@ -28,9 +28,9 @@ from __future__ import annotations
 import math
 from typing import Literal
 
-import colour
 import numpy as np
 
+from ._colour import colour
 from ._validation import check_choice, check_image, check_in_range, check_positive
 
 __all__ = [

@@ -42,10 +42,10 @@ from __future__ import annotations
 from functools import cache
 from typing import Literal
 
-import colour
 import numpy as np
 from colour.recovery import MSDS_BASIS_FUNCTIONS_sRGB_MALLETT2019
 
+from ._colour import colour
 from ._validation import check_choice, check_in_range
 from .adaptation import rod_sensitivity
 

@@ -85,7 +85,7 @@ class Spectrum:
         check_in_range("wavelength_range_nm[0]", low, 380.0, 780.0, unit="nm")
         check_in_range("wavelength_range_nm[1]", high, low, 780.0, unit="nm", low_inclusive=False)
         if (self.colourspace, self.illuminant) != _DEFAULT_NAMES:  # valid names, colour unread
-            import colour  # imported when needed: it imports matplotlib (about 1.5 s)
+            from ._colour import colour  # imported when needed: it imports matplotlib (1.5 s)
 
             check_choice("colourspace", self.colourspace, sorted(colour.RGB_COLOURSPACES))
             check_choice("illuminant", self.illuminant, sorted(colour.SDS_ILLUMINANTS))
@@ -96,7 +96,7 @@ class Spectrum:
 
     def channel_weights(self, channels: Literal["Y", "XYZ", "RGB"]) -> np.ndarray:
         """Weights ``(C, n_wavelengths)`` turning ``f3(θ, λ)`` into channel profiles."""
-        import colour
+        from ._colour import colour
 
         wavelengths = self.wavelengths_nm
         cmfs = np.asarray(colour.MSDS_CMFS[_OBSERVER][wavelengths])  # (n, 3): x̄, ȳ, z̄

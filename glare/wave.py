@@ -47,12 +47,12 @@ import warnings
 from dataclasses import asdict, dataclass, field, replace
 from typing import Literal
 
-import colour
 import numpy as np
 import scipy.fft
 import scipy.sparse
 
 from . import apertures as ap
+from ._colour import colour
 from ._validation import check_choice, check_in_range, check_positive, check_positive_int
 from .base import GlareModel
 from .digitise import Kernel, check_kernel_shape

@@ -5,10 +5,10 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Literal
 
-import colour
 import numpy as np
 from PIL import Image
 
+from glare._colour import colour
 from glare.wave import sigmoid_Kakimoto2004
 
 __all__ = ["preview_png", "psf_png", "psf_to_display", "to_display"]
