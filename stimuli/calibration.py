@@ -31,6 +31,8 @@ import numpy as np
 from scipy.interpolate import PchipInterpolator
 from scipy.optimize import curve_fit
 
+from protocols.atomic import write_text
+
 __all__ = [
     "Calibration",
     "EncodeReport",
@@ -248,7 +250,7 @@ class Calibration:
     def save(self, path: str | Path) -> Path:
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(json.dumps(self.to_json(), indent=2) + "\n")
+        write_text(path, json.dumps(self.to_json(), indent=2) + "\n")  # whole or not at all
         return path
 
     @classmethod

@@ -12,13 +12,16 @@ from pathlib import Path
 import numpy as np
 import OpenEXR
 
+from protocols.atomic import atomic_path
+
 __all__ = ["read_exr", "write_exr"]
 
 EXR_MAGIC = bytes((0x76, 0x2F, 0x31, 0x01))  # the first four bytes of every OpenEXR file
 
 
 def write_exr(path: str | Path, image: np.ndarray) -> Path:
-    """Write a linear image as a float32 OpenEXR file (ZIP compression, lossless).
+    """Write a linear image as a float32 OpenEXR file (ZIP compression, lossless), whole or
+    not at all (:func:`protocols.atomic.atomic_path`).
 
     Parameters
     ----------
@@ -51,8 +54,8 @@ def write_exr(path: str | Path, image: np.ndarray) -> Path:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     try:
-        with OpenEXR.File(header, channels) as exr:
-            exr.write(str(path))
+        with atomic_path(path) as temporary, OpenEXR.File(header, channels) as exr:
+            exr.write(str(temporary))  # whole or not at all: an earlier file stays as it was
     except RuntimeError as error:  # OpenEXR reports a full disk or a closed folder this way
         text = str(error)
         code = errno.ENOSPC if "space" in text.lower() else errno.EIO

@@ -15,12 +15,13 @@ from __future__ import annotations
 
 import itertools
 import json
-import os
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal
 
 import numpy as np
+
+from protocols.atomic import write_text
 
 from .calibration import Calibration, fit_calibration
 
@@ -213,7 +214,5 @@ class MeasurementSession:
             "status": self.calibration.status if self.calibration else None,
         }
         self.session_path.parent.mkdir(parents=True, exist_ok=True)
-        temporary = self.session_path.with_suffix(".tmp")
-        temporary.write_text(json.dumps(data, indent=1))
-        os.replace(temporary, self.session_path)
+        write_text(self.session_path, json.dumps(data, indent=1))
         return self.session_path

@@ -10,6 +10,7 @@ import numpy as np
 from PIL import Image
 
 from glare.wave import sigmoid_Kakimoto2004
+from protocols.atomic import atomic_path
 
 __all__ = ["preview_png", "psf_png", "psf_to_display", "to_display"]
 
@@ -62,7 +63,9 @@ def preview_png(
     """Write :func:`to_display` of an image to a PNG file and return its path."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    Image.fromarray(to_display(luminance_cd_m2, l_dmax_cd_m2=l_dmax_cd_m2, scale=scale)).save(path)
+    pixels = to_display(luminance_cd_m2, l_dmax_cd_m2=l_dmax_cd_m2, scale=scale)
+    with atomic_path(path) as temporary:
+        Image.fromarray(pixels).save(temporary, format="PNG")
     return path
 
 
@@ -84,5 +87,7 @@ def psf_png(path: str | Path, values: np.ndarray, *, dynamic_range: float = 1e6)
     """Write :func:`psf_to_display` of a kernel to a PNG file and return its path."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    Image.fromarray(psf_to_display(values, dynamic_range=dynamic_range)).save(path)
+    pixels = psf_to_display(values, dynamic_range=dynamic_range)
+    with atomic_path(path) as temporary:
+        Image.fromarray(pixels).save(temporary, format="PNG")
     return path

@@ -10,6 +10,7 @@ import os
 import sys
 from pathlib import Path
 
+from protocols.atomic import write_text
 from protocols.folders import claim_files
 
 __all__ = [
@@ -135,7 +136,7 @@ def output_folder(path: Path, command: str) -> Path:
                 "give a new or empty folder — nothing was changed"
             )
     path.mkdir(parents=True, exist_ok=True)
-    (path / MARKER).write_text(command + "\n")
+    write_text(path / MARKER, command + "\n")
     return path
 
 

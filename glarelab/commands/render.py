@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 import glare
+from protocols.atomic import atomic_path, write_text
 from stimuli.apertures import load_aperture_image
 from stimuli.calibration import Calibration
 from stimuli.exr import read_exr, write_exr
@@ -301,7 +302,7 @@ def _gallery(args: argparse.Namespace) -> int:
         psf_png(out / f"{name}.png", kernel.values)
         captions[name] = {"caption": caption, "seconds": round(time.perf_counter() - start, 2)}
         _log(f"    {captions[name]['seconds']} s → {out / name}.png")
-    (out / "wave_gallery.json").write_text(json.dumps(captions, indent=2))
+    write_text(out / "wave_gallery.json", json.dumps(captions, indent=2))
     print(out.resolve())
     return 0
 
@@ -419,9 +420,10 @@ def _looks_night(args: argparse.Namespace) -> int:
         fontsize=10,
     )
     figure.tight_layout()
-    figure.savefig(out / "night.png", metadata={"Software": None})
+    with atomic_path(out / "night.png") as temporary:
+        figure.savefig(temporary, format="png", metadata={"Software": None})
     plt.close(figure)
-    (out / "manifest.json").write_text(json.dumps(manifest, indent=2, default=str))
+    write_text(out / "manifest.json", json.dumps(manifest, indent=2, default=str))
     _log(f"wrote {out / 'night.png'} and {out / 'manifest.json'}")
     print(out.resolve())
     return 0
@@ -472,9 +474,10 @@ def _looks(args: argparse.Namespace) -> int:
     )
     axis.legend(fontsize=8)
     figure.tight_layout()
-    figure.savefig(out / "profiles.png")
+    with atomic_path(out / "profiles.png") as temporary:
+        figure.savefig(temporary, format="png")
     plt.close(figure)
-    (out / "manifest.json").write_text(json.dumps(manifest, indent=2, default=str))
+    write_text(out / "manifest.json", json.dumps(manifest, indent=2, default=str))
     _log(f"wrote {out / 'profiles.png'} and {out / 'manifest.json'}")
     print(out.resolve())
     return 0
