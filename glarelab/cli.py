@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import argparse
 import errno
+import os
+import signal
 import sys
 import traceback
 from collections.abc import Sequence
@@ -68,28 +70,52 @@ def _refusal(error: BaseException) -> str | None:
     return None
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    """Run the ``glarelab`` command; returns the exit status."""
-    from experiments.loop import SessionAborted
+def _quiet_stdout() -> None:
+    """The reader of stdout went away (``glarelab … | head``): send the rest nowhere, so
+    that Python's own flush at exit does not fail again."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, sys.stdout.fileno())
+    os.close(devnull)
 
-    parser = _parser()
-    args = parser.parse_args(argv)
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the ``glarelab`` command; returns the exit status.
+
+    Ctrl-C (SIGINT) ends any command with status 3 and one line, whenever it comes; a closed
+    pipe on stdout (SIGPIPE, ``| head``) ends it quietly with status 0.
+    """
+    command = "glarelab"
     try:
-        return args.run(args)
-    except (SessionAborted, KeyboardInterrupt) as stop:
-        why = stop.args[0] if stop.args else "SIGINT"
-        # a session's own trials are on disk and its sidecar says how it ended; a build or an
-        # analysis writes into a staging folder, so an interruption leaves the output as it was
-        _log(f"{args.command}: stopped by {why}; nothing more was written")
+        from experiments.loop import SessionAborted
+
+        parser = _parser()
+        args = parser.parse_args(argv)
+        command = args.command
+        try:
+            return args.run(args)
+        except SessionAborted as stop:
+            why = stop.args[0] if stop.args else "SIGINT"
+            _log(f"{args.command}: stopped by {why}; nothing more was written")
+            return 3
+        except (KeyboardInterrupt, BrokenPipeError):
+            raise
+        except Exception as error:
+            message = _refusal(error)
+            if message is None:
+                traceback.print_exc()
+                print(f"glarelab {args.command}: {ISSUES}", file=sys.stderr)
+                return 70
+            print(f"glarelab {args.command}: {message}", file=sys.stderr)
+            return 2
+    except KeyboardInterrupt:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)  # a second Ctrl-C while cleaning up
+        # a session's own trials are on disk and its sidecar says how it ended; every other
+        # file is written whole or not at all, so an interruption leaves the output as it was
+        _log(f"{command}: stopped by SIGINT; nothing more was written")
         return 3
-    except Exception as error:
-        message = _refusal(error)
-        if message is None:
-            traceback.print_exc()
-            print(f"glarelab {args.command}: {ISSUES}", file=sys.stderr)
-            return 70
-        print(f"glarelab {args.command}: {message}", file=sys.stderr)
-        return 2
+    except BrokenPipeError:
+        _quiet_stdout()
+        return 0
 
 
 if __name__ == "__main__":

@@ -29,6 +29,8 @@ __all__ = [
     "LISTING",
     "check_replaceable",
     "claim_files",
+    "list_files",
+    "listed_files",
     "record_files",
     "replace_folder",
     "staging_folder",
@@ -128,6 +130,17 @@ def claim_files(folder: Path, names: Iterable[str], kind: str) -> None:
                 "it, so give another folder or move the file (nothing was changed)"
             )
     _write_listing(folder, listed | dict.fromkeys(names, kind))
+
+
+def listed_files(folder: Path) -> dict[str, str]:
+    """``{relative path: kind}`` of the files glarelab wrote into ``folder`` (empty if none)."""
+    return _listing(Path(folder))
+
+
+def list_files(folder: Path, names: Iterable[str], kind: str) -> None:
+    """List ``names`` in ``folder`` as written by glarelab (checked by the caller)."""
+    folder = Path(folder)
+    _write_listing(folder, _listing(folder) | dict.fromkeys(names, kind))
 
 
 def _write_listing(folder: Path, files: dict[str, str]) -> None:

@@ -193,6 +193,18 @@ def _check_scene(p: dict, problems: list[str]) -> None:
         from .common import check_glare_model
 
         check_glare_model(model, p["scene"]["glare_parameters"], "scene", problems)
+    rate_hz, refresh_hz = p["scene"]["frame_rate_hz"], p["display"]["refresh_hz"]
+    if rate_hz > refresh_hz:
+        problems.append(
+            f"scene.frame_rate_hz = {rate_hz:g}: above the display's refresh "
+            f"(display.refresh_hz = {refresh_hz:g}); each frame is shown for whole refreshes"
+        )
+    elif abs(refresh_hz / rate_hz - round(refresh_hz / rate_hz)) > 1e-6:
+        problems.append(
+            f"scene.frame_rate_hz = {rate_hz:g}: each frame must last a whole number of "
+            f"refreshes of the {refresh_hz:g} Hz display (e.g. {refresh_hz / 2:g} or "
+            f"{refresh_hz / 6:g} Hz)"
+        )
     width, height = p["scene"]["size_px"]
     screen_w, screen_h = p["display"]["resolution_px"]
     if width > screen_w or height > screen_h:

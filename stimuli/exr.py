@@ -85,7 +85,7 @@ def read_exr(path: str | Path) -> np.ndarray:
     try:
         with OpenEXR.File(str(path), separate_channels=True) as exr:
             channels = {name: np.asarray(c.pixels) for name, c in exr.channels().items()}
-    except RuntimeError as error:  # OpenEXR's way of saying the file is damaged
+    except (RuntimeError, ValueError, IndexError) as error:  # OpenEXR: the file is damaged
         raise ValueError(
             f"{path} cannot be read as OpenEXR (truncated or damaged?): {error}"
         ) from None

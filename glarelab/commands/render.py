@@ -17,7 +17,15 @@ from stimuli.exr import read_exr, write_exr
 from stimuli.preview import preview_png, psf_png
 from stimuli.shapes import disk
 
-from .common import check_memory, count, number, output_file, writes_into
+from .common import (
+    FORCE_HELP,
+    check_memory,
+    claim_output,
+    count,
+    number,
+    output_file,
+    writes_into,
+)
 from .common import log as _log
 
 # bytes per pixel a render needs at its peak (measured on 512²-2048² scenes, exact and planned
@@ -165,10 +173,13 @@ def _render(args: argparse.Namespace) -> int:
         targets = [Path(output) / name for name in names]
     else:
         targets = [Path(output)]
+    sources = [*inputs, args.aperture_image, args.calibration]
     for target in targets:
-        output_file(target, (".exr",), "rendered image", inputs=inputs)
+        output_file(target, (".exr",), "rendered image", inputs=sources, force=args.force,
+                    shared=folder)  # fmt: skip
     if args.preview:
-        output_file(args.preview, (".png",), "preview", inputs=inputs)
+        output_file(args.preview, (".png",), "preview", inputs=[*sources, *targets],
+                    force=args.force)  # fmt: skip
     display = Calibration.load(args.calibration) if args.calibration else None
     renderers: dict[tuple, glare.GlareRenderer] = {}
     for index, (source, target) in enumerate(zip(inputs, targets, strict=True), start=1):
@@ -211,9 +222,12 @@ def _render(args: argparse.Namespace) -> int:
             )
         else:
             _log(f"done in {seconds:.2f} s; error bound {result.error_bound_codes:.3g} codes")
+        if not folder:
+            claim_output(target, "render")
         write_exr(target, result.image.astype(np.float32))
         _log(f"wrote {target}")
         if args.preview:
+            claim_output(args.preview, "render --preview")
             preview_png(
                 args.preview, result.image, l_dmax_cd_m2=args.l_dmax, scale=args.preview_scale
             )
@@ -223,9 +237,10 @@ def _render(args: argparse.Namespace) -> int:
 
 def _psf(args: argparse.Namespace) -> int:
     model = build_model(args)
-    output_file(args.out, (".png",), "kernel image")
+    sources = [args.aperture_image]
+    output_file(args.out, (".png",), "kernel image", inputs=sources, force=args.force)
     if args.exr is not None:
-        output_file(args.exr, (".exr",), "kernel")
+        output_file(args.exr, (".exr",), "kernel", inputs=[*sources, args.out], force=args.force)
     shape = (args.size, args.size)
     check_memory(
         PSF_FIXED_BYTES + PSF_BYTES_PER_PIXEL * (1 if args.luminance else 3) * args.size**2,
@@ -238,9 +253,11 @@ def _psf(args: argparse.Namespace) -> int:
         f"done in {time.perf_counter() - start:.2f} s; energy outside the kernel "
         f"{np.max(kernel.energy_outside):.3g}"
     )
+    claim_output(args.out, "psf")
     psf_png(args.out, kernel.values)
     written = [args.out]
     if args.exr is not None:
+        claim_output(args.exr, "psf --exr")
         write_exr(args.exr, kernel.values.astype(np.float32))
         written.append(args.exr)
     for path in written:
@@ -518,6 +535,7 @@ def add(commands) -> None:
     render.add_argument("--explain", action="store_true", help="print the plan and its bound")
     render.add_argument("--preview", type=Path, help="also write a PNG preview here")
     render.add_argument("--preview-scale", choices=("display", "log"), default="display")
+    render.add_argument("--force", action="store_true", help=FORCE_HELP)
     _add_model_options(render)
     render.set_defaults(run=_render)
 
@@ -531,6 +549,7 @@ def add(commands) -> None:
         "--size", type=odd_size, default=401, help="kernel size in pixels (odd, 3-16385)"
     )
     psf.add_argument("--luminance", action="store_true", help="luminance only, no colour")
+    psf.add_argument("--force", action="store_true", help=FORCE_HELP)
     _add_model_options(psf, default="wave")
     psf.set_defaults(run=_psf)
 
