@@ -65,6 +65,11 @@ def _refusal(error: BaseException) -> str | None:
         return f"the disk is full{where} ({error.strerror}); what was written before stays"
     if isinstance(error, OSError) and error.filename:  # a file that cannot be read or written
         return f"{error.filename}: {error.strerror or error}"
+    if type(error).__name__ == "NoSuchDisplayException":  # pyglet, opening a window
+        return (
+            f"no display to open a window on (DISPLAY={os.environ.get('DISPLAY', '')!r}): run "
+            "it on the lab's screen, or under xvfb-run for a dry run"
+        )
     if isinstance(error, MemoryError):
         return "not enough memory for this size; try a smaller image or kernel"
     return None

@@ -66,7 +66,12 @@ def load_aperture_image(path: str | Path) -> np.ndarray:
             raise ValueError(
                 f"{path}: not an image PIL can read (PNG, TIFF, …) or an EXR"
             ) from None
-        except (Image.DecompressionBombError, OSError, SyntaxError) as error:
+        except Image.DecompressionBombError:
+            raise ValueError(
+                f"{path}: an aperture image may have at most {MAX_APERTURE_PIXELS:,} pixels "
+                "(8192²); this one claims far more (a decompression bomb?)"
+            ) from None
+        except (OSError, SyntaxError) as error:
             if isinstance(error, FileNotFoundError):
                 raise
             raise ValueError(f"{path}: not a readable image ({error})") from None

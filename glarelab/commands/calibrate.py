@@ -10,7 +10,7 @@ import numpy as np
 from protocols.atomic import write_bytes
 from stimuli.calibration import Calibration, fit_calibration, read_readings
 
-from .common import count, need_display, number, output_file
+from .common import count, number, output_file
 from .common import log as _log
 
 REPLACE_HELP = (
@@ -83,7 +83,6 @@ def _calibrate_measure(args: argparse.Namespace) -> int:
     from stimuli.measure import MeasurementSession
     from stimuli.measure_psychopy import run_measurement
 
-    need_display("calibrate measure")
     args.out = calibration_out(args.out, replace=args.replace)
 
     session = MeasurementSession(

@@ -25,7 +25,6 @@ __all__ = [
     "count",
     "inside_whole_output",
     "log",
-    "need_display",
     "number",
     "output_file",
     "output_folder",
@@ -269,23 +268,6 @@ def claim_output(path: Path, kind: str) -> Path:
     path = Path(path)
     list_files(path.parent, [path.name], kind)
     return path
-
-
-def need_display(what: str) -> None:
-    """Refuse a command that opens a PsychoPy window where there is no screen to open it on.
-
-    Raises
-    ------
-    ValueError
-        On Linux without ``DISPLAY`` (X11) or ``WAYLAND_DISPLAY``.
-    """
-    if sys.platform.startswith("linux") and not (
-        os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")
-    ):
-        raise ValueError(
-            f"{what} opens a window, and there is no display (DISPLAY is not set): run it on "
-            "the lab's screen, or under xvfb-run for a dry run"
-        )
 
 
 def available_memory() -> int | None:

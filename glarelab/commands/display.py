@@ -8,7 +8,7 @@ from pathlib import Path
 from protocols import load_protocol
 from stimuli.calibration import Calibration
 
-from .common import count, need_display, output_file
+from .common import count, output_file
 from .common import log as _log
 
 
@@ -16,7 +16,6 @@ def _check_display(args: argparse.Namespace) -> int:
     from experiments.check_display import check_display, write_check
 
     protocol = load_protocol(args.protocol)
-    need_display("check-display")
     calibration = Calibration.load(args.calibration) if args.calibration else None
     if args.out is not None:
         out = args.out

@@ -143,6 +143,23 @@ def _add_model_options(parser: argparse.ArgumentParser, default: str = "vos") ->
     wave.add_argument("--aperture-spacing-mm", type=number(0, above=True), default=None)
 
 
+def _short(model: glare.GlareModel) -> str:
+    """A model's name and the parameters that differ from its defaults (its repr is long)."""
+    import dataclasses
+
+    if not dataclasses.is_dataclass(model):
+        return type(model).__name__
+    changed = []
+    for item in dataclasses.fields(model):
+        value = getattr(model, item.name)
+        default = item.default if item.default is not dataclasses.MISSING else None
+        simple = isinstance(value, int | float | str | bool | None)
+        if item.repr and simple and value != default:
+            changed.append(f"{item.name}={value!r}")
+    text = f"{type(model).__name__}({', '.join(changed)})"
+    return text if len(text) <= 120 else text[:117] + "..."
+
+
 def odd_size(text: str) -> int:
     """An argparse type: a kernel's odd size in pixels (its centre is a pixel)."""
     size = count(3, 16385)(text)
@@ -152,7 +169,6 @@ def odd_size(text: str) -> int:
 
 
 def _render(args: argparse.Namespace) -> int:
-    model = build_model(args)
     *inputs, output = args.paths
     if not inputs:
         raise ValueError("render needs an input EXR and an output EXR (or folder)")
@@ -180,6 +196,7 @@ def _render(args: argparse.Namespace) -> int:
     if args.preview:
         output_file(args.preview, (".png",), "preview", inputs=[*sources, *targets],
                     force=args.force)  # fmt: skip
+    model = build_model(args)  # reads the aperture image: after the outputs are checked
     display = Calibration.load(args.calibration) if args.calibration else None
     renderers: dict[tuple, glare.GlareRenderer] = {}
     for index, (source, target) in enumerate(zip(inputs, targets, strict=True), start=1):
@@ -190,7 +207,10 @@ def _render(args: argparse.Namespace) -> int:
             RENDER_BYTES_PER_PIXEL[channels] * image.shape[0] * image.shape[1],
             f"rendering {source} ({image.shape[1]} × {image.shape[0]} px)",
         )
-        _log(f"{image.shape} image, max {float(image.max()):.4g} cd/m²; rendering with {model}")
+        _log(
+            f"{image.shape} image, max {float(image.max()):.4g} cd/m²; rendering with "
+            f"{_short(model)}"
+        )
         start = time.perf_counter()
         key = image.shape[:2]
         if key not in renderers:
@@ -236,11 +256,11 @@ def _render(args: argparse.Namespace) -> int:
 
 
 def _psf(args: argparse.Namespace) -> int:
-    model = build_model(args)
     sources = [args.aperture_image]
     output_file(args.out, (".png",), "kernel image", inputs=sources, force=args.force)
     if args.exr is not None:
         output_file(args.exr, (".exr",), "kernel", inputs=[*sources, args.out], force=args.force)
+    model = build_model(args)  # reads the aperture image: after the outputs are checked
     shape = (args.size, args.size)
     check_memory(
         PSF_FIXED_BYTES + PSF_BYTES_PER_PIXEL * (1 if args.luminance else 3) * args.size**2,

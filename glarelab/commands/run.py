@@ -14,7 +14,6 @@ from .common import (
     claim_output,
     count,
     inside_whole_output,
-    need_display,
     number,
     output_file,
 )
@@ -149,7 +148,6 @@ def _run(args: argparse.Namespace) -> int:
                 return 3
         print(out.resolve())
         return 0
-    need_display(f"run {protocol.study} (a session on the screen; --simulate needs none)")
     if args.participant is None:
         _experiment_info(args)
     from experiments.psychopy_frontend import PsychoPyFrontend
