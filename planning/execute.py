@@ -165,6 +165,24 @@ def _duration(seconds: float) -> str:
 
 
 @contextlib.contextmanager
+def _workers_ignore_ctrl_c() -> Iterator[None]:
+    """While the cluster's processes start, SIGINT is ignored, which they inherit: Ctrl-C
+    (sent to the terminal's whole process group) then stops this process alone, which closes
+    the cluster, instead of printing each worker's traceback. Restored when they run."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+@contextlib.contextmanager
 def dask_client(*, workers: int | None = None, scheduler: str | None = None) -> Iterator:
     """A :class:`distributed.Client`: of the scheduler at ``scheduler`` (an address such as
     ``tcp://10.0.0.5:8786``), or of a new :class:`distributed.LocalCluster` of ``workers``
@@ -190,8 +208,8 @@ def dask_client(*, workers: int | None = None, scheduler: str | None = None) -> 
         finally:
             client.close()
         return
-    with (
-        LocalCluster(
+    with _workers_ignore_ctrl_c():  # the worker processes start here
+        cluster = LocalCluster(
             n_workers=workers or available_cores(),
             threads_per_worker=1,
             processes=True,
@@ -200,9 +218,8 @@ def dask_client(*, workers: int | None = None, scheduler: str | None = None) -> 
             # fight over Dask's default 8787
             dashboard_address=":0",
             silence_logs=logging.ERROR,
-        ) as cluster,
-        Client(cluster) as client,
-    ):
+        )
+    with cluster, Client(cluster) as client:
         yield client
 
 

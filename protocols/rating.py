@@ -131,6 +131,11 @@ SCHEMA: Schema = {
 }
 
 
+# a sequence's frames are float32 RGB in memory (12 bytes a pixel) while its set is built:
+# 1e8 pixel-frames is 1.1 GiB, thirteen times the night2026 scene (640 × 400 px × 30 frames)
+MAX_PIXEL_FRAMES = 1e8
+
+
 def check(p: dict, problems: list[str], folder: Path | None) -> None:
     q = p["questionnaire"]
     _check_scene(p, problems)
@@ -206,6 +211,14 @@ def _check_scene(p: dict, problems: list[str]) -> None:
             f"{refresh_hz / 6:g} Hz)"
         )
     width, height = p["scene"]["size_px"]
+    frames = max(1, round(p["scene"]["seconds"] * rate_hz))
+    if width * height * frames > MAX_PIXEL_FRAMES:
+        problems.append(
+            f"scene: {width} × {height} px × {frames} frames ({p['scene']['seconds']:g} s at "
+            f"{rate_hz:g} Hz) is {width * height * frames:.3g} pixel-frames, about "
+            f"{width * height * frames * 12 / 2**30:.0f} GiB per condition; at most "
+            f"{MAX_PIXEL_FRAMES:.0e} (a smaller scene, a shorter or slower sequence)"
+        )
     screen_w, screen_h = p["display"]["resolution_px"]
     if width > screen_w or height > screen_h:
         problems.append(

@@ -180,6 +180,7 @@ QUESTION = '\n[[questionnaire.questions]]\ntext = "Did it glow?"\ncolumn = "tria
         ("yoshida2008", "[analysis]", QUESTION + "\n[analysis]", "column = 'trial'"),
         ("night2026", "frame_rate_hz = 10.0", "frame_rate_hz = 240.0", "frame_rate_hz = 240"),
         ("night2026", "frame_rate_hz = 10.0", "frame_rate_hz = 7.0", "whole number of"),
+        ("night2026", "seconds = 3.0", "seconds = 60.0", "pixel-frames"),
         (
             "spencer1995",
             "presentation_ms = [400.0, 700.0]",
@@ -341,3 +342,31 @@ def test_ctrl_c_ends_a_stimulus_build_quietly_with_status_3(tmp_path):
     assert "stopped by SIGINT" in err
     assert not (tmp_path / "set").exists()
     assert not list(tmp_path.glob(".set.*"))
+
+
+def test_ctrl_c_to_the_terminal_ends_a_power_run_without_worker_tracebacks(tmp_path):
+    """Ctrl-C reaches the whole process group, the Dask workers too: one line, status 3."""
+    import threading
+
+    process = subprocess.Popen(
+        [*PYTHON, "power", "luidolt2020", "--participants", "4", "--replications", "500",
+         "--workers", "1", "--out", str(tmp_path / "power")],
+        env=_env(), stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, start_new_session=True,
+    )  # fmt: skip
+    chunks: list[bytes] = []
+    running = threading.Event()
+
+    def read() -> None:
+        while chunk := process.stderr.read1(4096):
+            chunks.append(chunk)
+            if b"1/500 replications" in b"".join(chunks):
+                running.set()
+
+    threading.Thread(target=read, daemon=True).start()
+    assert running.wait(240), b"".join(chunks).decode(errors="replace")[-2000:]
+    os.killpg(process.pid, signal.SIGINT)
+    process.wait(timeout=120)
+    time.sleep(0.5)
+    err = b"".join(chunks).decode(errors="replace")
+    assert process.returncode == 3, err[-2000:]
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err, err[-2000:]
