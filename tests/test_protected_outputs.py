@@ -370,3 +370,9 @@ def test_ctrl_c_to_the_terminal_ends_a_power_run_without_worker_tracebacks(tmp_p
     err = b"".join(chunks).decode(errors="replace")
     assert process.returncode == 3, err[-2000:]
     assert "Traceback" not in err and "KeyboardInterrupt" not in err, err[-2000:]
+
+
+def test_a_sky_contrast_the_ceiling_cuts_is_refused_not_stated(box, capsys):
+    path = _protocol(box, "contrast", "contrast = 0.15 ", "contrast = 1.0 ", "yoshida2008")
+    refused(["stimuli", "build", str(path), "--out", str(box / "set")], capsys, box,
+            "background.contrast = 1: the sky reaches only 0.4")  # fmt: skip
