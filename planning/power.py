@@ -31,6 +31,7 @@ the binomial. Biometrika 26.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 from collections.abc import Callable, Sequence
@@ -479,7 +480,8 @@ def power_analysis(
         scratch=scratch,
         task_delay_s=task_delay_s,
     )
-    with ResultLog(out / "replications.jsonl") as results:
+    key = hashlib.sha256(json.dumps(run, sort_keys=True).encode()).hexdigest()
+    with ResultLog(out / "replications.jsonl", key=key) as results:
         done = sum(r in results for r in range(replications))
         if done:
             log(f"resuming: {done} of {replications} replications already in {out}")

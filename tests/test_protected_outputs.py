@@ -376,3 +376,24 @@ def test_a_sky_contrast_the_ceiling_cuts_is_refused_not_stated(box, capsys):
     path = _protocol(box, "contrast", "contrast = 0.15 ", "contrast = 1.0 ", "yoshida2008")
     refused(["stimuli", "build", str(path), "--out", str(box / "set")], capsys, box,
             "background.contrast = 1: the sky reaches only 0.4")  # fmt: skip
+
+
+def test_an_edited_power_log_or_run_file_is_refused_on_resume(tmp_path, capsys):
+    out = tmp_path / "power"
+    power = ["power", "luidolt2020", "--participants", "4", "--workers", "0", "--out", str(out)]
+    assert main([*power, "--replications", "2"]) == 0
+    log = out / "replications.jsonl"
+    lines = log.read_text().splitlines()
+    record = json.loads(lines[0])
+    assert "sha256" in record and "run" in record
+    original = log.read_text()
+    edited = original.replace(lines[0], lines[0].replace('"task": 0', '"task": 7'), 1)
+    assert edited != original
+    log.write_text(edited)
+    refused([*power, "--replications", "3"], capsys, tmp_path, "line 1: edited")
+    log.write_text(original)
+    run = json.loads((out / "run.json").read_text())
+    run["seed"] = 5
+    (out / "run.json").write_text(json.dumps(run, indent=2, sort_keys=True) + "\n")
+    refused([*power, "--replications", "3", "--seed", "5"], capsys, tmp_path,
+            "made with other inputs")  # fmt: skip

@@ -143,7 +143,9 @@ def output_folder(path: Path, command: str) -> Path:
                 "give a new or empty folder — nothing was changed"
             )
     path.mkdir(parents=True, exist_ok=True)
-    write_text(path / MARKER, command + "\n")
+    marker = path / MARKER
+    if not marker.is_file() or marker.read_text() != command + "\n":  # unchanged if so
+        write_text(marker, command + "\n")
     return path
 
 
