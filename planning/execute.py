@@ -163,10 +163,13 @@ class Progress:
         self.before = done
         self.stream = stream or sys.stderr
         self.start = time.perf_counter()
+        self.first: tuple[float, int] | None = None  # when the first task of this run ended
         self.show()
 
     def update(self, count: int = 1) -> None:
         self.done += count
+        if self.first is None:
+            self.first = (time.perf_counter(), self.done)
         self.show()
 
     def line(self) -> str:
@@ -176,7 +179,12 @@ class Progress:
         new = self.done - self.before
         parts = [f"[{'#' * filled}{'-' * (width - filled)}] {self.done}/{self.total} {self.what}"]
         if new and elapsed > 0:
+            # from the first finished task on: the time before it is the workers' start-up
+            # and set-up (seconds to minutes), which the remaining tasks do not pay again
             rate = new / elapsed
+            if self.first is not None and self.done > self.first[1]:
+                since = time.perf_counter() - self.first[0]
+                rate = (self.done - self.first[1]) / since if since > 0 else rate
             left = (self.total - self.done) / rate
             parts.append(f"{rate:.3g}/s, {_duration(left)} left")
         return ", ".join(parts)

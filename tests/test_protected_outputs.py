@@ -391,3 +391,19 @@ def test_an_edited_power_log_or_run_file_is_refused_on_resume(tmp_path, capsys):
     (out / "run.json").write_text(json.dumps(run, indent=2, sort_keys=True) + "\n")
     refused([*power, "--replications", "3", "--seed", "5"], capsys, tmp_path,
             "made with other inputs")  # fmt: skip
+
+
+def test_the_time_left_leaves_out_the_workers_start_up(monkeypatch):
+    """100 s of start-up, then a task a second: 97 tasks left are 1m37s, not an hour."""
+    import io
+
+    import planning.execute as execute
+
+    now = [0.0]
+    clock = type("Clock", (), {"perf_counter": staticmethod(lambda: now[0])})
+    monkeypatch.setattr(execute, "time", clock)  # this module's clock only
+    bar = execute.Progress(100, what="replications", stream=io.StringIO())
+    for t in (100.0, 101.0, 102.0):
+        now[0] = t
+        bar.update()
+    assert bar.line().endswith("1/s, 1m37s left"), bar.line()
