@@ -103,6 +103,8 @@ def test_nothing_is_written_into_a_stimulus_set(box, capsys):
              "--model", "gaussian"], capsys, box, "inside the stimulus set")  # fmt: skip
     refused(["run", "luidolt2020", "--simulate", "--participants", "2", "--out",
              str(stimuli / "data")], capsys, box, "inside the stimulus set")  # fmt: skip
+    refused(["run", "luidolt2020", "--participant", "P1", "--out", str(box / "data"),
+             "--screenshot", str(stimuli / "a.png")], capsys, box, "inside the stimulus set")  # fmt: skip
 
 
 def test_a_new_calibration_never_replaces_a_verified_one(box, capsys):
