@@ -13,12 +13,19 @@ from __future__ import annotations
 import csv
 import io
 import json
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import pandas as pd
 
 from protocols import columns
+from protocols.keys import TOKEN
+
+# the numbers a session CSV holds, as format_value writes them (int() and float() also read
+# "2_50" as 250 and surrounding spaces)
+_INTEGER = re.compile(r"[+-]?\d+")
+_NUMBER = re.compile(r"[+-]?(\d+(\.\d*)?|\.\d+)([eE][+-]?\d+)?|[+-]?(nan|inf|infinity)", re.I)
 
 __all__ = ["DataError", "Dataset", "load_sessions", "where"]
 
@@ -71,9 +78,19 @@ def _parse(cell: str, column, where: str, problems: list[str]):
                 raise ValueError
             value = cell == "true"
         elif column.kind is int:
+            if not _INTEGER.fullmatch(cell):  # int() reads "2_50" as 250 and " 7" as 7
+                raise ValueError
             value = int(cell)
         elif column.kind is float:
+            if not _NUMBER.fullmatch(cell):  # float() reads "2_50" as 250.0
+                raise ValueError
             value = float(cell)
+        elif column.name == "participant" and not TOKEN.match(cell):
+            problems.append(
+                f"{where}: {cell!r} is not a participant id (letters, digits, '_', '-', '.'; "
+                "no spaces or line breaks)"
+            )
+            return None
         else:
             value = cell
     except ValueError:
@@ -113,6 +130,13 @@ def _read_file(path: Path, protocol, problems: list[str]) -> list[dict]:
         header = next(reader, None)
         if header is None:
             problems.append(f"{path}: empty file, no header")
+            return rows
+        twice = sorted({n for n in header if header.count(n) > 1})
+        if twice:
+            problems.append(
+                f"{path}, line 1: column(s) {', '.join(twice)} appear more than once; each "
+                "column must appear once (which one holds the data?)"
+            )
             return rows
         added = {c.name for c in expected if c.since != "0.1"}  # older files lack these
         missing = [n for n in names if n not in header and n not in added]

@@ -45,6 +45,7 @@ from pathlib import Path
 
 import numpy as np
 
+from protocols.atomic import write_text
 from stimuli.psychopy_window import measure_frame_intervals
 
 from .display import check_screen, timing_rate_hz
@@ -388,5 +389,5 @@ def write_check(result: dict, path: Path) -> Path:
     path = Path(path)
     if path.exists():
         path.replace(path.with_suffix(".previous.json"))
-    path.write_text(json.dumps(result, indent=2) + "\n")
+    write_text(path, json.dumps(result, indent=2) + "\n")
     return path

@@ -40,7 +40,7 @@ __all__ = [
     "session_files",
 ]
 
-_ID = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")
+_ID = re.compile(r"[A-Za-z0-9][A-Za-z0-9_-]{0,63}\Z")  # \Z: "$" admits a final newline
 
 
 class SessionError(ValueError):
@@ -51,7 +51,7 @@ def check_session_id(participant: str, session: int) -> None:
     """Refuse a participant id that is not file-name safe, or a session number below 1."""
     if not isinstance(participant, str) or not _ID.match(participant):
         raise SessionError(
-            "participant must be 1-64 letters, digits, '_', '-' or '.', starting with a letter "
+            "participant must be 1-64 letters, digits, '_' or '-', starting with a letter "
             f"or digit; got {participant!r}"
         )
     if isinstance(session, bool) or not isinstance(session, int) or session < 1:
@@ -67,7 +67,7 @@ def session_files(out: Path, participant: str, study: str, session: int) -> list
     check_session_id(participant, session)
     pattern = re.compile(
         re.escape(_prefix(participant, study, session))
-        + r"_\d{4}-\d{2}-\d{2}_\d{4}(_pilot)?(\.csv|\.json|\.log|_frames\.tsv)$"
+        + r"_\d{4}-\d{2}-\d{2}_\d{4}(_pilot)?(\.csv|\.json|\.log|_frames\.tsv)\Z"
     )
     folder = Path(out)
     if not folder.is_dir():

@@ -579,8 +579,11 @@ class PsychoPyFrontend:
         if capture and self.screenshot is not None and not self._screenshot_taken:
             from PIL import Image
 
+            from protocols.atomic import atomic_path
+
             self.screenshot.parent.mkdir(parents=True, exist_ok=True)
-            Image.fromarray(grab_screen(self.window)).save(self.screenshot)
+            with atomic_path(self.screenshot) as temporary:
+                Image.fromarray(grab_screen(self.window)).save(temporary, format="PNG")
             self._screenshot_taken = True
         return self.window.flip()
 

@@ -21,6 +21,7 @@ from .digitise import (
 __all__ = ["SIGMA_DEG_YOSHIDA2008", "GaussianGlare"]
 
 SIGMA_DEG_YOSHIDA2008 = 0.34  # Yoshida 2008 §3: σ = 0.34 visual degrees (Method I)
+MAX_SIGMA_DEG = 90.0  # as the command line: a halo wider than the visual field is a typo
 
 
 @dataclass(frozen=True)
@@ -59,6 +60,11 @@ class GaussianGlare(GlareModel):
 
     def __post_init__(self) -> None:
         check_positive("sigma_deg", self.sigma_deg, unit="deg")
+        if self.sigma_deg > MAX_SIGMA_DEG:
+            raise ValueError(
+                f"sigma_deg must be at most {MAX_SIGMA_DEG:g} deg (a halo wider than the visual "
+                f"field); got {self.sigma_deg!r}"
+            )
         check_choice("sampling", self.sampling, ("point", "pixel"))
 
     @property

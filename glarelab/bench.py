@@ -43,6 +43,7 @@ import glare
 from glare._convolve import FFT_WORKERS
 from glare.digitise import kernel_shape_for
 from glare.display import display_codes
+from protocols.atomic import atomic_open, write_bytes, write_text
 from stimuli.calibration import Calibration
 
 __all__ = ["WORKLOADS", "run_bench", "spectral_bench", "workload", "workload_names"]
@@ -751,11 +752,11 @@ def run_bench(
         ("startup.csv", startup_rows),
     ):
         if table:
-            with (out / file).open("w", newline="") as handle:
+            with atomic_open(out / file, "w", newline="") as handle:
                 writer = csv.DictWriter(handle, fieldnames=list(table[0]))
                 writer.writeheader()
                 writer.writerows(table)
-    (out / "bench.md").write_text(tables(rows, spectral_rows, memory_rows, startup_rows))
+    write_text(out / "bench.md", tables(rows, spectral_rows, memory_rows, startup_rows))
     return rows + spectral_rows + memory_rows + startup_rows
 
 
@@ -891,4 +892,4 @@ def _pareto(results: list[dict], title: str, path: Path) -> None:
     axis.xaxis.set_major_formatter(FuncFormatter(lambda value, _: f"{value:g}"))
     axis.xaxis.set_minor_formatter(NullFormatter())  # minor labels collide on short spans
     axis.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.02, 0.5), frameon=False)
-    path.write_bytes(png(figure))
+    write_bytes(path, png(figure))

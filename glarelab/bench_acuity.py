@@ -29,6 +29,7 @@ from scipy import ndimage
 import glare
 from glare.acuity import blur_sigma_deg, layers_error_bound
 from glare.display import display_codes
+from protocols.atomic import atomic_open, write_text
 from stimuli.calibration import synthetic_calibration
 from stimuli.night import night_street
 
@@ -136,8 +137,8 @@ def acuity_table(rows: list[dict]) -> str:
 
 def write_acuity_bench(out: Path, rows: list[dict]) -> None:
     """``acuity.csv`` and ``acuity.md`` in ``out``."""
-    with (out / "acuity.csv").open("w", newline="") as handle:
+    with atomic_open(out / "acuity.csv", "w", newline="") as handle:
         writer = csv.DictWriter(handle, fieldnames=list(rows[0]))
         writer.writeheader()
         writer.writerows(rows)
-    (out / "acuity.md").write_text(acuity_table(rows))
+    write_text(out / "acuity.md", acuity_table(rows))

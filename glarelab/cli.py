@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 import errno
 import os
+import signal
 import sys
 import traceback
 from collections.abc import Sequence
@@ -90,39 +91,69 @@ def _refusal(error: BaseException) -> str | None:
         return f"the disk is full{where} ({error.strerror}); what was written before stays"
     if isinstance(error, OSError) and error.filename:  # a file that cannot be read or written
         return f"{error.filename}: {error.strerror or error}"
+    if type(error).__name__ == "NoSuchDisplayException":  # pyglet, opening a window
+        return (
+            f"no display to open a window on (DISPLAY={os.environ.get('DISPLAY', '')!r}): run "
+            "it on the lab's screen, or under xvfb-run for a dry run"
+        )
     if isinstance(error, MemoryError):
         return "not enough memory for this size; try a smaller image or kernel"
     return None
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    """Run the ``glarelab`` command; returns the exit status."""
-    argv = sys.argv[1:] if argv is None else list(argv)
-    parser = _parser(argv)
-    args = parser.parse_args(argv)
-    from experiments.loop import SessionAborted
+def _quiet_stdout() -> None:
+    """The reader of stdout went away (``glarelab … | head``): send the rest nowhere, so
+    that Python's own flush at exit does not fail again."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, sys.stdout.fileno())
+    os.close(devnull)
 
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the ``glarelab`` command; returns the exit status.
+
+    Ctrl-C (SIGINT) ends any command with status 3 and one line, whenever it comes; a closed
+    pipe on stdout (SIGPIPE, ``| head``) ends it quietly with status 0.
+    """
+    command = "glarelab"
+    argv = sys.argv[1:] if argv is None else list(argv)
     previous = os.environ.get(NO_CACHE_ENV)
-    if args.no_cache:  # for this command and the processes it starts (Dask workers)
-        os.environ[NO_CACHE_ENV] = "1"
+    args = None
     try:
-        return args.run(args)
-    except (SessionAborted, KeyboardInterrupt) as stop:
-        why = stop.args[0] if stop.args else "SIGINT"
-        # a session's own trials are on disk and its sidecar says how it ended; a build or an
-        # analysis writes into a staging folder, so an interruption leaves the output as it was
-        _log(f"{args.command}: stopped by {why}; nothing more was written")
+        parser = _parser(argv)
+        args = parser.parse_args(argv)
+        command = args.command
+        from experiments.loop import SessionAborted
+
+        if args.no_cache:  # for this command and the processes it starts (Dask workers)
+            os.environ[NO_CACHE_ENV] = "1"
+        try:
+            return args.run(args)
+        except SessionAborted as stop:
+            why = stop.args[0] if stop.args else "SIGINT"
+            _log(f"{args.command}: stopped by {why}; nothing more was written")
+            return 3
+        except (KeyboardInterrupt, BrokenPipeError):
+            raise
+        except Exception as error:
+            message = _refusal(error)
+            if message is None:
+                traceback.print_exc()
+                print(f"glarelab {args.command}: {ISSUES}", file=sys.stderr)
+                return 70
+            print(f"glarelab {args.command}: {message}", file=sys.stderr)
+            return 2
+    except KeyboardInterrupt:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)  # a second Ctrl-C while cleaning up
+        # a session's own trials are on disk and its sidecar says how it ended; every other
+        # file is written whole or not at all, so an interruption leaves the output as it was
+        _log(f"{command}: stopped by SIGINT; nothing more was written")
         return 3
-    except Exception as error:
-        message = _refusal(error)
-        if message is None:
-            traceback.print_exc()
-            print(f"glarelab {args.command}: {ISSUES}", file=sys.stderr)
-            return 70
-        print(f"glarelab {args.command}: {message}", file=sys.stderr)
-        return 2
+    except BrokenPipeError:
+        _quiet_stdout()
+        return 0
     finally:
-        if args.no_cache:
+        if args is not None and args.no_cache:
             if previous is None:
                 os.environ.pop(NO_CACHE_ENV, None)
             else:

@@ -21,6 +21,7 @@ processes scale and threads do not) or connects to an existing scheduler by addr
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import json
 import logging
 import os
@@ -53,10 +54,21 @@ class ResultLog:
     ----------
     path
         The log file (created with its folder).
+    key
+        What the results depend on (a hash of the run's inputs): with it, every line carries
+        the key and a checksum, and a log holding a line of another key or an edited line is
+        refused when opened.
+
+    Raises
+    ------
+    ValueError
+        When opened with a ``key``: naming the first line that was edited or made with other
+        inputs.
     """
 
-    def __init__(self, path: str | Path):
+    def __init__(self, path: str | Path, *, key: str | None = None):
         self.path = Path(path)
+        self.key = key
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self.results: dict[int, dict] = {}
         good = 0
@@ -70,6 +82,8 @@ class ResultLog:
                     record = json.loads(line)
                 except json.JSONDecodeError:
                     break
+                if key is not None:
+                    self._check(record, len(self.results) + 1)
                 self.results[int(record["task"])] = record["result"]
                 offset += len(line)
                 good = offset
@@ -78,12 +92,36 @@ class ResultLog:
                     handle.truncate(good)
         self._handle = self.path.open("ab")
 
+    @staticmethod
+    def _checksum(record: dict) -> str:
+        body = {k: record.get(k) for k in ("task", "result", "run")}
+        text = json.dumps(body, sort_keys=True, allow_nan=False)
+        return hashlib.sha256(text.encode()).hexdigest()
+
+    def _check(self, record: dict, number: int) -> None:
+        if not isinstance(record, dict) or "sha256" not in record:
+            return  # a line of a log written before lines had checksums
+        if record["sha256"] != self._checksum(record):
+            raise ValueError(
+                f"{self.path}, line {number}: edited after it was written (its checksum "
+                "differs); delete the folder to start again"
+            )
+        if record.get("run") != self.key:
+            raise ValueError(
+                f"{self.path}, line {number}: made with other inputs than this run's (run.json "
+                "edited?); give another --out, or delete it to start again"
+            )
+
     def __contains__(self, task: int) -> bool:
         return task in self.results
 
     def add(self, task: int, result: dict) -> None:
         """Write a finished task's result (flushed and fsync'ed before returning)."""
-        line = json.dumps({"task": task, "result": result}, sort_keys=True, allow_nan=False)
+        record = {"task": task, "result": result}
+        if self.key is not None:
+            record["run"] = self.key
+            record["sha256"] = self._checksum(json.loads(json.dumps(record, allow_nan=False)))
+        line = json.dumps(record, sort_keys=True, allow_nan=False)
         self._handle.write(line.encode() + b"\n")
         self._handle.flush()
         os.fsync(self._handle.fileno())
@@ -125,10 +163,13 @@ class Progress:
         self.before = done
         self.stream = stream or sys.stderr
         self.start = time.perf_counter()
+        self.first: tuple[float, int] | None = None  # when the first task of this run ended
         self.show()
 
     def update(self, count: int = 1) -> None:
         self.done += count
+        if self.first is None:
+            self.first = (time.perf_counter(), self.done)
         self.show()
 
     def line(self) -> str:
@@ -138,7 +179,12 @@ class Progress:
         new = self.done - self.before
         parts = [f"[{'#' * filled}{'-' * (width - filled)}] {self.done}/{self.total} {self.what}"]
         if new and elapsed > 0:
+            # from the first finished task on: the time before it is the workers' start-up
+            # and set-up (seconds to minutes), which the remaining tasks do not pay again
             rate = new / elapsed
+            if self.first is not None and self.done > self.first[1]:
+                since = time.perf_counter() - self.first[0]
+                rate = (self.done - self.first[1]) / since if since > 0 else rate
             left = (self.total - self.done) / rate
             parts.append(f"{rate:.3g}/s, {_duration(left)} left")
         return ", ".join(parts)
@@ -162,6 +208,24 @@ def _duration(seconds: float) -> str:
     if seconds >= 60:
         return f"{seconds // 60}m{seconds % 60:02d}s"
     return f"{seconds}s"
+
+
+@contextlib.contextmanager
+def _workers_ignore_ctrl_c() -> Iterator[None]:
+    """While the cluster's processes start, SIGINT is ignored, which they inherit: Ctrl-C
+    (sent to the terminal's whole process group) then stops this process alone, which closes
+    the cluster, instead of printing each worker's traceback. Restored when they run."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 @contextlib.contextmanager
@@ -190,8 +254,8 @@ def dask_client(*, workers: int | None = None, scheduler: str | None = None) -> 
         finally:
             client.close()
         return
-    with (
-        LocalCluster(
+    with _workers_ignore_ctrl_c():  # the worker processes start here
+        cluster = LocalCluster(
             n_workers=workers or available_cores(),
             threads_per_worker=1,
             processes=True,
@@ -200,9 +264,8 @@ def dask_client(*, workers: int | None = None, scheduler: str | None = None) -> 
             # fight over Dask's default 8787
             dashboard_address=":0",
             silence_logs=logging.ERROR,
-        ) as cluster,
-        Client(cluster) as client,
-    ):
+        )
+    with cluster, Client(cluster) as client:
         yield client
 
 

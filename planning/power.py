@@ -31,6 +31,7 @@ the binomial. Biometrika 26.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 from collections.abc import Callable, Sequence
@@ -38,6 +39,8 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+
+from protocols.atomic import write_bytes, write_text
 
 from .effects import CORRECTIONS, Correction, chosen_p
 
@@ -301,13 +304,16 @@ def write_summary(
     power, sizes = summarise(records, alpha=alpha, correction=correction)
     recommended = recommend(power, target=target)
     out.mkdir(parents=True, exist_ok=True)
-    power.to_csv(out / "power.csv", index=False, float_format="%.6g")
-    sizes.to_csv(out / "effect_sizes.csv", index=False, float_format="%.6g")
-    recommended.to_csv(out / "recommended.csv", index=False, float_format="%.6g")
-    (out / "power_curves.png").write_bytes(
-        power_figure(power, target=target, alpha=alpha, title=title)
-    )
-    (out / "effect_sizes.png").write_bytes(effect_size_figure(sizes, title=title))
+    # each file whole or not at all; all made before the first is written
+    files = {
+        "power.csv": power.to_csv(index=False, float_format="%.6g").encode(),
+        "effect_sizes.csv": sizes.to_csv(index=False, float_format="%.6g").encode(),
+        "recommended.csv": recommended.to_csv(index=False, float_format="%.6g").encode(),
+        "power_curves.png": power_figure(power, target=target, alpha=alpha, title=title),
+        "effect_sizes.png": effect_size_figure(sizes, title=title),
+    }
+    for name, data in files.items():
+        write_bytes(out / name, data)
     return recommended
 
 
@@ -462,7 +468,7 @@ def power_analysis(
     check_run_folder(out, run)
     out.mkdir(parents=True, exist_ok=True)
     if not (out / "run.json").is_file():
-        (out / "run.json").write_text(json.dumps(run, indent=2, sort_keys=True) + "\n")
+        write_text(out / "run.json", json.dumps(run, indent=2, sort_keys=True) + "\n")
     if shows_images(protocol) and stimuli is None:
         log(f"building (or reusing) the {protocol.study} stimulus set the observers look at")
         stimuli = cached_stimulus_set(protocol, progress=None)
@@ -474,7 +480,8 @@ def power_analysis(
         scratch=scratch,
         task_delay_s=task_delay_s,
     )
-    with ResultLog(out / "replications.jsonl") as results:
+    key = hashlib.sha256(json.dumps(run, sort_keys=True).encode()).hexdigest()
+    with ResultLog(out / "replications.jsonl", key=key) as results:
         done = sum(r in results for r in range(replications))
         if done:
             log(f"resuming: {done} of {replications} replications already in {out}")

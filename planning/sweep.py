@@ -29,6 +29,8 @@ from pathlib import Path
 
 import pandas as pd
 
+from protocols.atomic import write_bytes, write_text
+
 from .grid import Point, Setting, grid
 
 __all__ = ["MAX_POINTS", "SweepJob", "prepare", "sweep"]
@@ -237,7 +239,7 @@ def sweep(
     points, config = prepare(protocol, settings, out, simulate=simulate, seed=seed)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    (out / "sweep.json").write_text(json.dumps(config, indent=2, sort_keys=True) + "\n")
+    write_text(out / "sweep.json", json.dumps(config, indent=2, sort_keys=True) + "\n")
     log(f"{len(points)} points on the grid of {', '.join(s.key for s in settings)}")
     job = SweepJob(points, out, simulate=simulate, seed=seed)
     with ResultLog(out / "points.jsonl") as results:
@@ -259,8 +261,9 @@ def sweep(
         rows.append(row)
         effect_rows += [{"point": record["point"], **e} for e in record["effects"]]
     index = pd.DataFrame(rows)
-    index.to_csv(out / "index.csv", index=False)
-    (out / "index.json").write_text(json.dumps(records, indent=2, sort_keys=True) + "\n")
+    write_bytes(out / "index.csv", index.to_csv(index=False).encode())
+    write_text(out / "index.json", json.dumps(records, indent=2, sort_keys=True) + "\n")
     if effect_rows:
-        pd.DataFrame(effect_rows).to_csv(out / "effects.csv", index=False, float_format="%.6g")
+        table = pd.DataFrame(effect_rows).to_csv(index=False, float_format="%.6g")
+        write_bytes(out / "effects.csv", table.encode())
     return index

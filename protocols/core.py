@@ -86,7 +86,7 @@ def parse_protocol(
     """
     study_table = data.get("study")
     paradigm = study_table.get("paradigm") if isinstance(study_table, Mapping) else None
-    if paradigm not in PARADIGMS:
+    if not isinstance(paradigm, str) or paradigm not in PARADIGMS:
         raise ProtocolError(
             source,
             [
@@ -154,7 +154,15 @@ def load_protocol(path: str | Path) -> Protocol:
         data = tomllib.loads(path.read_text(encoding="utf-8-sig"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
         raise ProtocolError(str(path), [f"not valid TOML: {error}"]) from None
-    return parse_protocol(data, source=str(path), folder=path.resolve().parent)
+    except RecursionError:
+        raise ProtocolError(str(path), [NESTED_TOO_DEEPLY]) from None
+    try:
+        return parse_protocol(data, source=str(path), folder=path.resolve().parent)
+    except RecursionError:
+        raise ProtocolError(str(path), [NESTED_TOO_DEEPLY]) from None
+
+
+NESTED_TOO_DEEPLY = "arrays or tables nested too deeply (a protocol nests a few levels)"
 
 
 def pixel_deg(protocol: Protocol) -> float:

@@ -13,16 +13,24 @@ with other files (``docs``, ``looks``, ``gallery``) overwrite only files the lis
 
 from __future__ import annotations
 
+import contextlib
+import ctypes
+import ctypes.util
+import errno
 import json
 import os
 import shutil
 from collections.abc import Iterable
 from pathlib import Path
 
+from .atomic import _alive, fsync_folder, glob_escape, write_text
+
 __all__ = [
     "LISTING",
     "check_replaceable",
     "claim_files",
+    "list_files",
+    "listed_files",
     "record_files",
     "replace_folder",
     "staging_folder",
@@ -124,31 +132,95 @@ def claim_files(folder: Path, names: Iterable[str], kind: str) -> None:
     _write_listing(folder, listed | dict.fromkeys(names, kind))
 
 
+def listed_files(folder: Path) -> dict[str, str]:
+    """``{relative path: kind}`` of the files glarelab wrote into ``folder`` (empty if none)."""
+    return _listing(Path(folder))
+
+
+def list_files(folder: Path, names: Iterable[str], kind: str) -> None:
+    """List ``names`` in ``folder`` as written by glarelab (checked by the caller)."""
+    folder = Path(folder)
+    _write_listing(folder, _listing(folder) | dict.fromkeys(names, kind))
+
+
 def _write_listing(folder: Path, files: dict[str, str]) -> None:
     text = json.dumps({"written_by": "glarelab", "files": dict(sorted(files.items()))}, indent=1)
-    (folder / LISTING).write_text(text + "\n", encoding="utf-8")
+    write_text(folder / LISTING, text + "\n")
+
+
+def _leftovers(final: Path) -> None:
+    """Remove the staging and replaced folders of ``final`` that killed processes left, and
+    put back an earlier ``final`` that a process killed between two renames left aside."""
+    for kind in ("old", "building"):
+        pattern = f".{glob_escape(final.name)}.{kind}-*"
+        for leftover in sorted(final.parent.glob(pattern)):
+            pid = leftover.name.rsplit("-", 1)[-1]
+            if not pid.isdigit() or int(pid) == os.getpid() or _alive(int(pid)):
+                continue
+            if kind == "old" and not final.exists() and not final.is_symlink():
+                leftover.rename(final)  # the earlier output, complete
+            else:
+                shutil.rmtree(leftover, ignore_errors=True)
 
 
 def staging_folder(final: Path) -> Path:
     """A new, empty folder next to ``final`` to build its replacement in."""
     final = Path(final).resolve()
     final.parent.mkdir(parents=True, exist_ok=True)
+    _leftovers(final)
     staging = final.with_name(f".{final.name}.building-{os.getpid()}")
     shutil.rmtree(staging, ignore_errors=True)  # a build of this process that was cut short
     staging.mkdir()
     return staging
 
 
+RENAME_EXCHANGE = 2  # linux/fs.h: swap two paths in one step
+
+
+def _exchange(first: Path, second: Path) -> bool:
+    """Swap two existing paths atomically (Linux ``renameat2``); False where unsupported."""
+    name = ctypes.util.find_library("c")
+    try:
+        libc = ctypes.CDLL(name, use_errno=True)
+        renameat2 = libc.renameat2
+    except (OSError, AttributeError, TypeError):
+        return False
+    at_cwd = -100
+    result = renameat2(at_cwd, os.fsencode(first), at_cwd, os.fsencode(second), RENAME_EXCHANGE)
+    if result == 0:
+        return True
+    code = ctypes.get_errno()
+    if code in (errno.EINVAL, errno.ENOSYS, errno.ENOTSUP):
+        return False
+    raise OSError(code, os.strerror(code), str(second))
+
+
 def replace_folder(staging: Path, final: Path, *, kind: str) -> None:
-    """List the finished ``staging`` folder's files and move it to ``final``; the earlier
-    ``final`` is removed only once the new one is in place."""
+    """List the finished ``staging`` folder's files and move it to ``final`` in one step (the
+    two folders are swapped atomically where the system can; elsewhere the earlier ``final``
+    is moved aside first and put back by the next build if the process dies in between). The
+    earlier ``final`` is removed only once the new one is in place."""
     record_files(staging, kind)
+    for root, _, files in os.walk(staging):
+        for name in files:
+            with contextlib.suppress(OSError):
+                handle = os.open(Path(root) / name, os.O_RDONLY)
+                try:
+                    os.fsync(handle)
+                finally:
+                    os.close(handle)
+        fsync_folder(root)
     final = Path(final).resolve()
+    if final.is_dir() and not final.is_symlink() and _exchange(staging, final):
+        fsync_folder(final.parent)
+        shutil.rmtree(staging, ignore_errors=True)  # now the earlier output
+        return
     old = None
     if final.exists():
         old = final.with_name(f".{final.name}.old-{os.getpid()}")
         shutil.rmtree(old, ignore_errors=True)
         final.rename(old)
     staging.rename(final)
+    fsync_folder(final.parent)
     if old is not None:
         shutil.rmtree(old, ignore_errors=True)

@@ -16,7 +16,7 @@ from typing import Any
 __all__ = ["TOKEN", "Key", "ProtocolError", "Schema", "Tables", "check_token", "validate"]
 
 # a label that is safe in a file name and a CSV cell: letters, digits, '_', '-', '.'
-TOKEN = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")
+TOKEN = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,63}\Z")  # \Z: "$" admits a final newline
 
 
 class ProtocolError(ValueError):

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .columns import Column
+from .columns import COMMON, Column
 from .common import (
     BREAK_EVERY,
     DISPLAY,
@@ -219,7 +219,7 @@ def check(p: dict, problems: list[str], folder: Path | None) -> None:
     if t["fine_step_cd_m2"] > t["coarse_step_cd_m2"]:
         problems.append("trials.fine_step_cd_m2: must not exceed trials.coarse_step_cd_m2")
     questions = p["questionnaire"]["questions"] or []
-    taken = {c.name for c in _fixed_columns(p)}
+    taken = {c.name for c in COMMON + _fixed_columns(p)}  # the CSV's own columns
     seen: set[str] = set()
     for i, question in enumerate(questions):
         column = question.get("column")

@@ -131,6 +131,11 @@ SCHEMA: Schema = {
 }
 
 
+# a sequence's frames are float32 RGB in memory (12 bytes a pixel) while its set is built:
+# 1e8 pixel-frames is 1.1 GiB, thirteen times the night2026 scene (640 × 400 px × 30 frames)
+MAX_PIXEL_FRAMES = 1e8
+
+
 def check(p: dict, problems: list[str], folder: Path | None) -> None:
     q = p["questionnaire"]
     _check_scene(p, problems)
@@ -193,7 +198,27 @@ def _check_scene(p: dict, problems: list[str]) -> None:
         from .common import check_glare_model
 
         check_glare_model(model, p["scene"]["glare_parameters"], "scene", problems)
+    rate_hz, refresh_hz = p["scene"]["frame_rate_hz"], p["display"]["refresh_hz"]
+    if rate_hz > refresh_hz:
+        problems.append(
+            f"scene.frame_rate_hz = {rate_hz:g}: above the display's refresh "
+            f"(display.refresh_hz = {refresh_hz:g}); each frame is shown for whole refreshes"
+        )
+    elif abs(refresh_hz / rate_hz - round(refresh_hz / rate_hz)) > 1e-6:
+        problems.append(
+            f"scene.frame_rate_hz = {rate_hz:g}: each frame must last a whole number of "
+            f"refreshes of the {refresh_hz:g} Hz display (e.g. {refresh_hz / 2:g} or "
+            f"{refresh_hz / 6:g} Hz)"
+        )
     width, height = p["scene"]["size_px"]
+    frames = max(1, round(p["scene"]["seconds"] * rate_hz))
+    if width * height * frames > MAX_PIXEL_FRAMES:
+        problems.append(
+            f"scene: {width} × {height} px × {frames} frames ({p['scene']['seconds']:g} s at "
+            f"{rate_hz:g} Hz) is {width * height * frames:.3g} pixel-frames, about "
+            f"{width * height * frames * 12 / 2**30:.0f} GiB per condition; at most "
+            f"{MAX_PIXEL_FRAMES:.0e} (a smaller scene, a shorter or slower sequence)"
+        )
     screen_w, screen_h = p["display"]["resolution_px"]
     if width > screen_w or height > screen_h:
         problems.append(

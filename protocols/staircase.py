@@ -168,6 +168,23 @@ def check(p: dict, problems: list[str], folder: Path | None) -> None:
     width, height = p["display"]["resolution_px"]
     if 2 * s["window_px"] + s["window_gap_px"] > width or s["window_px"] > height:
         problems.append("stimulus.window_px: two windows and their gap do not fit the display")
+    refresh_hz = p["display"]["refresh_hz"]
+    frame_ms = 1000.0 / refresh_hz
+    tolerance_ms = p["trials"]["timing_tolerance_ms"]
+    for i, shown_ms in enumerate(p["trials"]["presentation_ms"]):
+        frames = round(shown_ms / frame_ms)
+        where = f"trials.presentation_ms[{i}] = {shown_ms:g}"
+        if shown_ms < frame_ms:
+            problems.append(
+                f"{where}: shorter than one frame of the {refresh_hz:g} Hz display "
+                f"({frame_ms:.2f} ms); the flash would last a whole frame"
+            )
+        elif abs(frames * frame_ms - shown_ms) > tolerance_ms:
+            problems.append(
+                f"{where}: not a whole number of {frame_ms:.2f} ms frames at "
+                f"{refresh_hz:g} Hz within trials.timing_tolerance_ms = {tolerance_ms:g} "
+                f"(nearest: {frames} frames, {frames * frame_ms:.2f} ms)"
+            )
     contexts = p["contexts"] or []
     names = [c["name"] for c in contexts if c.get("name")]
     if len(set(names)) != len(names):

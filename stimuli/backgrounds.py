@@ -27,6 +27,11 @@ __all__ = ["ROOM_CD_M2", "background", "lamp_scene"]
 ROOM_CD_M2 = 0.05  # a darkened room (Spencer §4)
 
 
+# the RMS contrast a sky delivers may differ from the one asked by sampling (1-2 % at 0.15);
+# more means the ceiling cut its clouds, and the manifest would state a contrast not shown
+CONTRAST_TOLERANCE = 0.1
+
+
 def background(
     spec: dict,
     shape: tuple[int, int],
@@ -73,6 +78,14 @@ def background(
             slope=spec["spectrum_slope"],
             ceiling_cd_m2=0.98 * ceiling_cd_m2,
         )
+        asked, given = spec["contrast"], float(image.std() / image.mean())
+        if asked > 0 and abs(given - asked) > CONTRAST_TOLERANCE * asked:
+            raise ValueError(
+                f"background.contrast = {asked:g}: the sky reaches only {given:.3g} under the "
+                f"ceiling of {0.98 * ceiling_cd_m2:.4g} cd/m² at a mean of "
+                f"{spec['mean_cd_m2']:g} cd/m² (its bright clouds are cut); ask a lower "
+                "contrast or a lower mean"
+            )
     elif kind == "uniform":
         image = np.full(shape, float(spec["cd_m2"]))
     elif kind == "lamp":

@@ -31,6 +31,8 @@ import numpy as np
 from scipy.interpolate import PchipInterpolator
 from scipy.optimize import curve_fit
 
+from protocols.atomic import write_text
+
 __all__ = [
     "Calibration",
     "EncodeReport",
@@ -248,7 +250,7 @@ class Calibration:
     def save(self, path: str | Path) -> Path:
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(json.dumps(self.to_json(), indent=2) + "\n")
+        write_text(path, json.dumps(self.to_json(), indent=2) + "\n")  # whole or not at all
         return path
 
     @classmethod
@@ -281,6 +283,7 @@ class Calibration:
             raise ValueError(f"{source}: a malformed calibration ({error})") from None
         if calibration.readings_sha256 != data.get("readings_sha256"):
             raise ValueError(f"{source}: the readings do not match their recorded hash (edited?)")
+        _check_consistent(calibration, data, source)
         return calibration
 
     @classmethod
@@ -294,6 +297,101 @@ class Calibration:
         except (json.JSONDecodeError, UnicodeDecodeError) as error:
             raise ValueError(f"{path}: a calibration must be a JSON file; {error}") from None
         return cls.from_json(data, source=str(path))
+
+
+STATUSES = ("unverified", "passed", "failed", "synthetic")
+MODEL_TOLERANCE = 1e-6  # relative: a model re-fitted from the same readings agrees to 1e-9
+
+
+def _close(a, b) -> bool:
+    return abs(a - b) <= MODEL_TOLERANCE * max(abs(a), abs(b), 1e-12)
+
+
+def _check_consistent(calibration: Calibration, data: dict, source: str) -> None:
+    """Refuse a calibration whose method, model, range or status its readings and its
+    verification pass do not give (an edited file).
+
+    Raises
+    ------
+    ValueError
+        Naming the field that disagrees, its value and the value the readings give.
+    """
+    if calibration.status not in STATUSES:
+        raise ValueError(
+            f"{source}: status {calibration.status!r} is not one of {', '.join(STATUSES)}"
+        )
+    if calibration.method not in ("pchip", "gog"):
+        raise ValueError(f"{source}: method {calibration.method!r} is not 'pchip' or 'gog'")
+    if not isinstance(calibration.model, dict) or not isinstance(calibration.verification, dict):
+        raise ValueError(f"{source}: model and verification must be JSON objects")
+    try:
+        ordered = _check_readings(list(calibration.readings), calibration.bit_depth, source)
+    except ValueError as error:
+        raise ValueError(f"{source}: its readings are not a calibration's ({error})") from None
+    if calibration.method == "gog":
+        refit = fit_calibration(ordered, bit_depth=calibration.bit_depth, method="gog").model
+        for name in ("gain", "offset", "gamma", "black_cd_m2", "max_cd_m2"):
+            value = calibration.model.get(name)
+            if isinstance(value, bool) or not isinstance(value, int | float):
+                raise ValueError(
+                    f"{source}: the model's {name} is {value!r}; its readings give "
+                    f"{refit[name]:.6g} (a gain-offset-gamma model needs numbers)"
+                )
+            if not _close(float(value), refit[name]):
+                raise ValueError(
+                    f"{source}: the model's {name} is {value!r}, its readings give "
+                    f"{refit[name]:.6g} (edited? fit the readings again)"
+                )
+    elif calibration.model:
+        raise ValueError(f"{source}: a pchip calibration has no model; it holds one (edited?)")
+    lut = calibration.lut
+    for name, value in (("black_cd_m2", float(lut[0])), ("max_cd_m2", float(lut[-1]))):
+        recorded = data.get(name, value)
+        if isinstance(recorded, bool) or not isinstance(recorded, int | float):
+            raise ValueError(f"{source}: {name} is {recorded!r}; its readings give {value:.6g}")
+        if not _close(float(recorded), value):
+            raise ValueError(
+                f"{source}: {name} is {recorded!r}, its readings give {value:.6g} (edited?)"
+            )
+    _check_status(calibration, source)
+
+
+def _check_status(calibration: Calibration, source: str) -> None:
+    """The status must be the one the verification data give."""
+    verification = calibration.verification
+    status = calibration.status
+    if status in ("unverified", "synthetic"):
+        if verification:
+            raise ValueError(
+                f"{source}: status {status!r} but it holds a verification pass; its status "
+                "comes from that pass (edited?)"
+            )
+        if status == "synthetic" and not calibration.label.startswith("SYNTHETIC"):
+            raise ValueError(f"{source}: status 'synthetic' for a display not labelled SYNTHETIC")
+        return
+    rows = verification.get("measurements")
+    tolerance = verification.get("tolerance_fraction")
+    if not isinstance(rows, list) or not rows or not isinstance(tolerance, int | float):
+        raise ValueError(
+            f"{source}: status {status!r} without verification measurements; the status of a "
+            "calibration comes only from its verification pass (glarelab calibrate measure)"
+        )
+    try:
+        worst = max(
+            abs(float(r["measured_cd_m2"]) - float(r["target_cd_m2"])) / float(r["target_cd_m2"])
+            for r in rows
+        )
+        codes = [int(r["code"]) for r in rows]
+    except (KeyError, TypeError, ValueError, ZeroDivisionError):
+        raise ValueError(f"{source}: a malformed verification measurement") from None
+    if any(not 0 <= code < calibration.n_codes for code in codes):
+        raise ValueError(f"{source}: a verification code is outside the display's codes")
+    given = "passed" if worst <= tolerance else "failed"
+    if given != status:
+        raise ValueError(
+            f"{source}: status {status!r}, but its verification measurements (worst error "
+            f"{100 * worst:.2f} %, tolerance {100 * tolerance:.2f} %) give {given!r} (edited?)"
+        )
 
 
 def _check_readings(

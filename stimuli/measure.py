@@ -30,6 +30,8 @@ from typing import Literal
 
 import numpy as np
 
+from protocols.atomic import write_text
+
 from .calibration import Calibration, fit_calibration
 
 __all__ = ["MeasurementLock", "MeasurementSession", "SessionInUse"]
@@ -457,14 +459,5 @@ class MeasurementSession:
             "interruptions": self.interruptions,
         }
         self.session_path.parent.mkdir(parents=True, exist_ok=True)
-        temporary = self.session_path.with_name(self.session_path.name + ".tmp")
-        try:
-            with temporary.open("w") as handle:
-                json.dump(data, handle, indent=1)
-                handle.flush()
-                os.fsync(handle.fileno())
-        except BaseException:  # a full disk, Ctrl-C: no half-written file left taking space
-            temporary.unlink(missing_ok=True)
-            raise
-        os.replace(temporary, self.session_path)
+        write_text(self.session_path, json.dumps(data, indent=1))
         return self.session_path

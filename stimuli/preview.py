@@ -10,6 +10,7 @@ from PIL import Image
 
 from glare._colour import colour
 from glare.wave import sigmoid_Kakimoto2004
+from protocols.atomic import atomic_path
 
 __all__ = ["preview_png", "psf_png", "psf_to_display", "to_display"]
 
@@ -62,7 +63,9 @@ def preview_png(
     """Write :func:`to_display` of an image to a PNG file and return its path."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    Image.fromarray(to_display(luminance_cd_m2, l_dmax_cd_m2=l_dmax_cd_m2, scale=scale)).save(path)
+    pixels = to_display(luminance_cd_m2, l_dmax_cd_m2=l_dmax_cd_m2, scale=scale)
+    with atomic_path(path) as temporary:
+        Image.fromarray(pixels).save(temporary, format="PNG")
     return path
 
 
@@ -94,6 +97,7 @@ def psf_png(
     """Write :func:`psf_to_display` of a kernel to a PNG file and return its path."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    image = psf_to_display(values, dynamic_range=dynamic_range, peak=peak)
-    Image.fromarray(image).save(path)
+    pixels = psf_to_display(values, dynamic_range=dynamic_range, peak=peak)
+    with atomic_path(path) as temporary:
+        Image.fromarray(pixels).save(temporary, format="PNG")
     return path

@@ -29,6 +29,7 @@ from PIL import Image
 from PIL.PngImagePlugin import PngInfo
 
 from protocols import Protocol
+from protocols.atomic import atomic_path, write_bytes, write_text
 from protocols.folders import (
     LISTING,
     check_replaceable,
@@ -107,12 +108,13 @@ def _write_rgb16_png(path: str | Path, scaled: np.ndarray, bit_depth: int) -> No
         return struct.pack(">I", len(data)) + body + struct.pack(">I", zlib.crc32(body))
 
     header = struct.pack(">IIBBBBB", width, height, 16, 2, 0, 0, 0)
-    Path(path).write_bytes(
+    write_bytes(
+        path,
         b"\x89PNG\r\n\x1a\n"
         + chunk(b"IHDR", header)
         + chunk(b"sBIT", bytes([bit_depth] * 3))
         + chunk(b"IDAT", zlib.compress(raw, 6))
-        + chunk(b"IEND", b"")
+        + chunk(b"IEND", b""),
     )
 
 
@@ -143,7 +145,8 @@ def write_codes(path: str | Path, codes: np.ndarray, bit_depth: int) -> None:
         return
     info = PngInfo()
     info.add(b"sBIT", bytes([bit_depth]))
-    Image.fromarray(scaled).save(path, pnginfo=info)
+    with atomic_path(path) as temporary:
+        Image.fromarray(scaled).save(temporary, format="PNG", pnginfo=info)
 
 
 def _sbit(data: bytes) -> int | None:
@@ -240,7 +243,8 @@ def _profile_plots(out: Path, paradigm: str, images: dict, geometry: dict) -> li
         figure.suptitle(f"{key} {group}: images and profiles through the centre", fontsize=10)
         figure.tight_layout()
         name = f"profiles_{group}.png"
-        figure.savefig(out / name, metadata={"Software": None})
+        with atomic_path(out / name) as temporary:
+            figure.savefig(temporary, format="png", metadata={"Software": None})
         plt.close(figure)
         written.append(name)
     return written
@@ -331,9 +335,10 @@ def _write_set(out: Path, protocol: Protocol, built: dict, calibration: Calibrat
         else []
     )
     for name, pixels in sorted(built.get("previews", {}).items()):  # a sequence at a glance
-        Image.fromarray(pixels).save(out / name)
+        with atomic_path(out / name) as temporary:
+            Image.fromarray(pixels).save(temporary, format="PNG")
         plots.append(name)
-    (out / INDEX).write_text(_index(protocol, calibration, records, plots, built["geometry"]))
+    write_text(out / INDEX, _index(protocol, calibration, records, plots, built["geometry"]))
     files = sorted(f for r in records.values() for f in r["files"]) + plots + [INDEX]
     manifest = {
         "format": FORMAT,
@@ -353,7 +358,7 @@ def _write_set(out: Path, protocol: Protocol, built: dict, calibration: Calibrat
         "packages": package_versions(),
         "files": {f: _sha256(out / f) for f in files},
     }
-    (out / MANIFEST).write_text(json.dumps(manifest, indent=2, sort_keys=True) + "\n")
+    write_text(out / MANIFEST, json.dumps(manifest, indent=2, sort_keys=True) + "\n")
     return manifest
 
 

@@ -9,15 +9,58 @@ from pathlib import Path
 
 import numpy as np
 
-from stimuli.calibration import fit_calibration, read_readings
+from protocols.atomic import write_bytes
+from stimuli.calibration import Calibration, fit_calibration, read_readings
 from stimuli.photometer import PHOTOMETERS
 
 from .common import count, number, output_file
 from .common import log as _log
 
+REPLACE_HELP = (
+    "write over the --out calibration (kept as STEM.replaced-N.json); without it an existing "
+    "--out is kept and the new calibration gets a new name"
+)
+
+
+def _free_name(path: Path, tag: str) -> Path:
+    """``STEM-TAG2.json``, ``STEM-TAG3.json``, … : the first that does not exist."""
+    for index in range(2, 10_000):
+        candidate = path.with_name(f"{path.stem}{tag}{index}{path.suffix}")
+        if not candidate.exists() and not candidate.is_symlink():
+            return candidate
+    raise ValueError(f"{path}: 10,000 calibrations of this name; give another --out")
+
+
+def calibration_out(path: Path, *, replace: bool, inputs=()) -> Path:
+    """Where a new calibration goes: ``path`` if it is free; beside it under a new name if a
+    file is there (which is kept as it was); over it with ``replace``, when it is a glarelab
+    calibration, which is then kept as ``STEM.replaced-N.json``."""
+    path = Path(path)
+    if not (path.exists() or path.is_symlink()):
+        return output_file(path, (".json",), "calibration", inputs=inputs)
+    if not replace:
+        new = _free_name(path, "-")
+        output_file(new, (".json",), "calibration", inputs=inputs)
+        _log(f"{path} exists and is kept; the new calibration is {new} (--replace replaces it)")
+        return new
+    if path.is_symlink() or not path.is_file():
+        raise ValueError(f"--replace {path}: not a file (a link or a folder); give another --out")
+    try:
+        Calibration.load(path)
+    except ValueError as error:
+        raise ValueError(
+            f"--replace {path}: it is not a glarelab calibration ({error}); give another --out"
+        ) from None
+    output_file(path, (".json",), "calibration", inputs=inputs, force=True, verified_ok=True)
+    kept = _free_name(path, ".replaced-")
+    write_bytes(kept, path.read_bytes())
+    _log(f"the calibration {path} is replaced; it is kept as {kept}")
+    return path
+
 
 def _calibrate_fit(args: argparse.Namespace) -> int:
-    output_file(args.out, (".json",), "calibration", inputs=[args.readings])
+    if Path(args.out).suffix.lower() != ".json":
+        output_file(args.out, (".json",), "calibration")  # refuses, naming the suffix
     readings = read_readings(args.readings)
     calibration = fit_calibration(
         readings,
@@ -26,6 +69,7 @@ def _calibrate_fit(args: argparse.Namespace) -> int:
         label=args.label,
         source=str(args.readings),
     )
+    args.out = calibration_out(args.out, replace=args.replace, inputs=[args.readings])
     calibration.save(args.out)
     _log(
         f"{len(readings)} readings → {args.method} calibration, {calibration.black_cd_m2:.4g}-"
@@ -91,6 +135,7 @@ def _calibrate_measure(args: argparse.Namespace) -> int:
     from stimuli.measure import MeasurementLock
 
     output_file(args.out, (".json",), "calibration")
+    args.out = calibration_out(args.out, replace=args.replace)
     with MeasurementLock(args.out):  # one process per session file, until it ends
         return _measure_locked(args)
 
@@ -240,6 +285,7 @@ def add(commands) -> None:
         "gain-offset-gamma curve with its residuals",
     )
     fit.add_argument("--label", default="", help="display, photometer, operator")
+    fit.add_argument("--replace", action="store_true", help=REPLACE_HELP)
     fit.set_defaults(run=_calibrate_fit)
 
     measure = calibrate_commands.add_parser(
@@ -278,6 +324,7 @@ def add(commands) -> None:
         "--seed", type=count(0), default=None, help="seed of the code order (default 0)"
     )
     measure.add_argument("--label", default=None, help="display, photometer, operator")
+    measure.add_argument("--replace", action="store_true", help=REPLACE_HELP)
     measure.add_argument("--windowed", action="store_true", help="a window, not full screen")
     measure.add_argument(
         "--allow-fewer-bits",

@@ -5,20 +5,25 @@ from __future__ import annotations
 
 import argparse
 import copy
+import json
 import math
 import os
 import sys
 from pathlib import Path
 
-from protocols.folders import claim_files
+from protocols.atomic import write_text
+from protocols.folders import claim_files, list_files, listed_files
 
 __all__ = [
+    "FORCE_HELP",
     "MARKER",
     "PROTOCOL_HELP",
     "HelpFormatter",
     "Parser",
     "check_memory",
+    "claim_output",
     "count",
+    "inside_whole_output",
     "log",
     "number",
     "output_file",
@@ -27,7 +32,10 @@ __all__ = [
 ]
 
 PROTOCOL_HELP = "a shipped study's name (yoshida2008, spencer1995, luidolt2020, …) or a TOML file"
+WHOLE_OUTPUTS = {"stimulus set", "report", "demo"}  # folders replaced and checked whole
+CALIBRATION_FORMAT = "glarelab display calibration v1"  # stimuli.calibration.FORMAT
 MARKER = ".glarelab"  # names the command that made a folder, so it may replace its own output
+FORCE_HELP = "overwrite an existing file glarelab did not write, or replace a symbolic link"
 
 
 def log(message: str) -> None:
@@ -135,7 +143,9 @@ def output_folder(path: Path, command: str) -> Path:
                 "give a new or empty folder — nothing was changed"
             )
     path.mkdir(parents=True, exist_ok=True)
-    (path / MARKER).write_text(command + "\n")
+    marker = path / MARKER
+    if not marker.is_file() or marker.read_text() != command + "\n":  # unchanged if so
+        write_text(marker, command + "\n")
     return path
 
 
@@ -151,9 +161,73 @@ def writes_into(path: Path, names: list[str], command: str) -> Path:
     return path
 
 
-def output_file(path: Path, suffixes: tuple[str, ...], what: str, *, inputs=()) -> Path:
-    """A file a command writes: its suffix must say what it holds, it must not be an input, and
-    its folder must exist."""
+def _same_file(first: Path, second: Path) -> bool:
+    try:
+        return first.resolve() == second.resolve() or (
+            first.exists() and second.exists() and os.path.samefile(first, second)
+        )
+    except OSError:
+        return False
+
+
+def inside_whole_output(path: Path) -> str | None:
+    """What kind of whole output (a stimulus set, a report) holds ``path``, if one does."""
+    for folder in Path(path).absolute().parents:
+        kinds = set(listed_files(folder).values())
+        whole = sorted(kinds & WHOLE_OUTPUTS)
+        if whole:
+            return f"{whole[0]} {folder}"
+        manifest = folder / "manifest.json"
+        if manifest.is_file() and manifest.stat().st_size < 2**26:
+            try:
+                data = json.loads(manifest.read_text(encoding="utf-8"))
+            except (OSError, ValueError):
+                continue
+            if isinstance(data, dict) and str(data.get("format", "")).startswith(
+                "glarelab stimulus set"
+            ):
+                return f"stimulus set {folder}"
+    return None
+
+
+def verified_calibration(path: Path) -> str | None:
+    """The status of the glarelab calibration at ``path`` if it holds one with a
+    verification pass (``passed`` or ``failed``), else None."""
+    path = Path(path)
+    if not path.is_file() or path.stat().st_size > 2**26:
+        return None
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    if isinstance(data, dict) and data.get("format") == CALIBRATION_FORMAT:
+        status = data.get("status")
+        if status in ("passed", "failed") or data.get("verification"):
+            return str(status)
+    return None
+
+
+def output_file(
+    path: Path,
+    suffixes: tuple[str, ...],
+    what: str,
+    *,
+    inputs=(),
+    force: bool = False,
+    shared: bool = False,
+    verified_ok: bool = False,
+) -> Path:
+    """A file a command writes: its suffix must say what it holds, it must not be an input,
+    a file of a stimulus set or report, or a verified calibration; its folder must exist.
+    Without ``force`` it must not be a symbolic link, nor a file glarelab did not write there
+    (as the folder's listing, :mod:`protocols.folders`, says); ``shared`` says the caller has
+    checked the folder's listing itself (a batch of outputs).
+
+    Raises
+    ------
+    ValueError
+        Naming the file and why (nothing is written).
+    """
     path = Path(path)
     if path.suffix.lower() not in suffixes:
         raise ValueError(
@@ -162,13 +236,39 @@ def output_file(path: Path, suffixes: tuple[str, ...], what: str, *, inputs=()) 
     if path.is_dir():
         raise ValueError(f"{path} is a folder; give a file name for the {what}")
     for source in inputs:
-        same = Path(source).resolve() == path.resolve() or (
-            path.exists() and Path(source).exists() and os.path.samefile(source, path)
-        )
-        if same:
+        if source is not None and _same_file(Path(source), path):
             raise ValueError(f"{path} is also an input: the {what} would overwrite it")
     if not path.parent.is_dir():
         raise ValueError(f"{path}: no folder {path.parent} to write the {what} into")
+    whole = inside_whole_output(path)
+    if whole is not None:
+        raise ValueError(
+            f"{path} is inside the {whole}, which glarelab writes and checks as a whole: write "
+            f"the {what} elsewhere (nothing was changed)"
+        )
+    status = None if verified_ok else verified_calibration(path)
+    if status is not None:
+        raise ValueError(
+            f"{path} is a display calibration with a verification pass ({status}): the {what} "
+            "would overwrite it; give another name (nothing was changed)"
+        )
+    if path.is_symlink() and not force:
+        raise ValueError(
+            f"{path} is a symbolic link (to {os.readlink(path)}); glarelab does not write "
+            f"through links: give another name, or --force to replace the link with the {what}"
+        )
+    if path.exists() and not force and not shared and path.name not in listed_files(path.parent):
+        raise ValueError(
+            f"{path} exists and glarelab did not write it there; give another name, or --force "
+            f"to overwrite it with the {what} (nothing was changed)"
+        )
+    return path
+
+
+def claim_output(path: Path, kind: str) -> Path:
+    """Just before writing ``path``: list it as glarelab's (so a later run may replace it)."""
+    path = Path(path)
+    list_files(path.parent, [path.name], kind)
     return path
 
 

@@ -10,13 +10,22 @@ from pathlib import Path
 import numpy as np
 
 import glare
+from protocols.atomic import atomic_path, write_text
 from stimuli.apertures import load_aperture_image
 from stimuli.calibration import Calibration
 from stimuli.exr import read_exr, write_exr
 from stimuli.preview import preview_png, psf_png
 from stimuli.shapes import disk
 
-from .common import check_memory, count, number, output_file, writes_into
+from .common import (
+    FORCE_HELP,
+    check_memory,
+    claim_output,
+    count,
+    number,
+    output_file,
+    writes_into,
+)
 from .common import log as _log
 
 # bytes per pixel a render needs at its peak (measured on 512²-2048² scenes, exact and planned
@@ -134,6 +143,23 @@ def _add_model_options(parser: argparse.ArgumentParser, default: str = "vos") ->
     wave.add_argument("--aperture-spacing-mm", type=number(0, above=True), default=None)
 
 
+def _short(model: glare.GlareModel) -> str:
+    """A model's name and the parameters that differ from its defaults (its repr is long)."""
+    import dataclasses
+
+    if not dataclasses.is_dataclass(model):
+        return type(model).__name__
+    changed = []
+    for item in dataclasses.fields(model):
+        value = getattr(model, item.name)
+        default = item.default if item.default is not dataclasses.MISSING else None
+        simple = isinstance(value, int | float | str | bool | None)
+        if item.repr and simple and value != default:
+            changed.append(f"{item.name}={value!r}")
+    text = f"{type(model).__name__}({', '.join(changed)})"
+    return text if len(text) <= 120 else text[:117] + "..."
+
+
 def odd_size(text: str) -> int:
     """An argparse type: a kernel's odd size in pixels (its centre is a pixel)."""
     size = count(3, 16385)(text)
@@ -143,7 +169,6 @@ def odd_size(text: str) -> int:
 
 
 def _render(args: argparse.Namespace) -> int:
-    model = build_model(args)
     *inputs, output = args.paths
     if not inputs:
         raise ValueError("render needs an input EXR and an output EXR (or folder)")
@@ -164,10 +189,14 @@ def _render(args: argparse.Namespace) -> int:
         targets = [Path(output) / name for name in names]
     else:
         targets = [Path(output)]
+    sources = [*inputs, args.aperture_image, args.calibration]
     for target in targets:
-        output_file(target, (".exr",), "rendered image", inputs=inputs)
+        output_file(target, (".exr",), "rendered image", inputs=sources, force=args.force,
+                    shared=folder)  # fmt: skip
     if args.preview:
-        output_file(args.preview, (".png",), "preview", inputs=inputs)
+        output_file(args.preview, (".png",), "preview", inputs=[*sources, *targets],
+                    force=args.force)  # fmt: skip
+    model = build_model(args)  # reads the aperture image: after the outputs are checked
     display = Calibration.load(args.calibration) if args.calibration else None
     renderers: dict[tuple, glare.GlareRenderer] = {}
     for index, (source, target) in enumerate(zip(inputs, targets, strict=True), start=1):
@@ -178,7 +207,10 @@ def _render(args: argparse.Namespace) -> int:
             RENDER_BYTES_PER_PIXEL[channels] * image.shape[0] * image.shape[1],
             f"rendering {source} ({image.shape[1]} × {image.shape[0]} px)",
         )
-        _log(f"{image.shape} image, max {float(image.max()):.4g} cd/m²; rendering with {model}")
+        _log(
+            f"{image.shape} image, max {float(image.max()):.4g} cd/m²; rendering with "
+            f"{_short(model)}"
+        )
         start = time.perf_counter()
         key = image.shape[:2]
         if key not in renderers:
@@ -210,9 +242,12 @@ def _render(args: argparse.Namespace) -> int:
             )
         else:
             _log(f"done in {seconds:.2f} s; error bound {result.error_bound_codes:.3g} codes")
+        if not folder:
+            claim_output(target, "render")
         write_exr(target, result.image.astype(np.float32))
         _log(f"wrote {target}")
         if args.preview:
+            claim_output(args.preview, "render --preview")
             preview_png(
                 args.preview, result.image, l_dmax_cd_m2=args.l_dmax, scale=args.preview_scale
             )
@@ -221,10 +256,11 @@ def _render(args: argparse.Namespace) -> int:
 
 
 def _psf(args: argparse.Namespace) -> int:
-    model = build_model(args)
-    output_file(args.out, (".png",), "kernel image")
+    sources = [args.aperture_image]
+    output_file(args.out, (".png",), "kernel image", inputs=sources, force=args.force)
     if args.exr is not None:
-        output_file(args.exr, (".exr",), "kernel")
+        output_file(args.exr, (".exr",), "kernel", inputs=[*sources, args.out], force=args.force)
+    model = build_model(args)  # reads the aperture image: after the outputs are checked
     shape = (args.size, args.size)
     check_memory(
         PSF_FIXED_BYTES + PSF_BYTES_PER_PIXEL * (1 if args.luminance else 3) * args.size**2,
@@ -237,9 +273,11 @@ def _psf(args: argparse.Namespace) -> int:
         f"done in {time.perf_counter() - start:.2f} s; energy outside the kernel "
         f"{np.max(kernel.energy_outside):.3g}"
     )
+    claim_output(args.out, "psf")
     psf_png(args.out, kernel.values)
     written = [args.out]
     if args.exr is not None:
+        claim_output(args.exr, "psf --exr")
         write_exr(args.exr, kernel.values.astype(np.float32))
         written.append(args.exr)
     for path in written:
@@ -316,7 +354,7 @@ def _gallery(args: argparse.Namespace) -> int:
     for name, values in series.items():
         psf_png(out / f"{name}.png", values, peak=peak)
         _log(f"    {captions[name]['seconds']} s → {out / name}.png (the series' scale)")
-    (out / "wave_gallery.json").write_text(json.dumps(captions, indent=2))
+    write_text(out / "wave_gallery.json", json.dumps(captions, indent=2))
     print(out.resolve())
     return 0
 
@@ -434,9 +472,10 @@ def _looks_night(args: argparse.Namespace) -> int:
         fontsize=10,
     )
     figure.tight_layout()
-    figure.savefig(out / "night.png", metadata={"Software": None})
+    with atomic_path(out / "night.png") as temporary:
+        figure.savefig(temporary, format="png", metadata={"Software": None})
     plt.close(figure)
-    (out / "manifest.json").write_text(json.dumps(manifest, indent=2, default=str))
+    write_text(out / "manifest.json", json.dumps(manifest, indent=2, default=str))
     _log(f"wrote {out / 'night.png'} and {out / 'manifest.json'}")
     print(out.resolve())
     return 0
@@ -487,9 +526,10 @@ def _looks(args: argparse.Namespace) -> int:
     )
     axis.legend(fontsize=8)
     figure.tight_layout()
-    figure.savefig(out / "profiles.png")
+    with atomic_path(out / "profiles.png") as temporary:
+        figure.savefig(temporary, format="png")
     plt.close(figure)
-    (out / "manifest.json").write_text(json.dumps(manifest, indent=2, default=str))
+    write_text(out / "manifest.json", json.dumps(manifest, indent=2, default=str))
     _log(f"wrote {out / 'profiles.png'} and {out / 'manifest.json'}")
     print(out.resolve())
     return 0
@@ -530,6 +570,7 @@ def add(commands) -> None:
     render.add_argument("--explain", action="store_true", help="print the plan and its bound")
     render.add_argument("--preview", type=Path, help="also write a PNG preview here")
     render.add_argument("--preview-scale", choices=("display", "log"), default="display")
+    render.add_argument("--force", action="store_true", help=FORCE_HELP)
     _add_model_options(render)
     render.set_defaults(run=_render)
 
@@ -543,6 +584,7 @@ def add(commands) -> None:
         "--size", type=odd_size, default=401, help="kernel size in pixels (odd, 3-16385)"
     )
     psf.add_argument("--luminance", action="store_true", help="luminance only, no colour")
+    psf.add_argument("--force", action="store_true", help=FORCE_HELP)
     _add_model_options(psf, default="wave")
     psf.set_defaults(run=_psf)
 

@@ -9,7 +9,14 @@ from pathlib import Path
 from protocols import load_protocol
 from stimuli.calibration import Calibration
 
-from .common import PROTOCOL_HELP, count, number, output_file
+from .common import (
+    PROTOCOL_HELP,
+    claim_output,
+    count,
+    inside_whole_output,
+    number,
+    output_file,
+)
 from .common import log as _log
 
 VISION = ("none", "glasses", "lenses", "other")
@@ -141,6 +148,12 @@ def _run(args: argparse.Namespace) -> int:
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise ValueError(f"--out {out} is a file; session files go into a folder")
+    whole = inside_whole_output(out / "session.csv")
+    if whole is not None:
+        raise ValueError(
+            f"--out {out} is inside the {whole}, which glarelab replaces and checks as a "
+            "whole: give a folder of its own for the session files (nothing was written)"
+        )
     if args.simulate:
         from experiments.session import make_observer, shows_images
         from stimuli.stimulus_set import cached_stimulus_set
@@ -208,7 +221,13 @@ def _run(args: argparse.Namespace) -> int:
         if not scripted:
             raise ValueError(f"--scripted-keys {args.scripted_keys}: the file names no keys")
     if args.screenshot is not None:
-        output_file(args.screenshot, (".png",), "screenshot")
+        output_file(
+            args.screenshot,
+            (".png",),
+            "screenshot",
+            inputs=[args.calibration, args.scripted_keys],
+        )
+        claim_output(args.screenshot, "run --screenshot")
     frontend = PsychoPyFrontend(
         protocol,
         stimuli=args.stimuli,

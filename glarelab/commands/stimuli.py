@@ -21,19 +21,22 @@ def _stimuli_build(args: argparse.Namespace) -> int:
     _log(f"building the {protocol.study} stimulus set into {args.out}")
     start = time.perf_counter()
     manifest = build_stimulus_set(protocol, args.out, calibration=calibration)
-    clipped = sum(
-        r.get("encoding", {}).get("above_max", 0) + r.get("encoding", {}).get("below_black", 0)
-        for r in manifest["images"].values()
-    )
+    encodings = [r.get("encoding", {}) for r in manifest["images"].values()]
+    above = sum(e.get("above_max", 0) for e in encodings)
+    below = sum(e.get("below_black", 0) for e in encodings)
     _log(
         f"{len(manifest['files'])} files in {time.perf_counter() - start:.1f} s; calibration "
-        f"status '{manifest['calibration']['status']}'; {clipped} pixels clipped by the display"
+        f"status '{manifest['calibration']['status']}'; {above + below} pixels clipped by the "
+        f"display ({above} above its white, {below} below its black)"
     )
     print(Path(args.out).resolve())
     return 0
 
 
 def _stimuli_verify(args: argparse.Namespace) -> int:
+    if not Path(args.folder).is_dir():  # one line, exit 2: there is nothing to verify
+        what = "not a folder" if Path(args.folder).exists() else "no such folder"
+        raise FileNotFoundError(f"{args.folder}: {what} (give a stimulus set's folder)")
     problems = verify_stimulus_set(args.folder)
     if problems:
         for problem in problems:

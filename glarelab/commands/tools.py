@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from protocols.atomic import write_text
+
 from .common import PROTOCOL_HELP, count, output_folder, writes_into
 from .common import log as _log
 
@@ -24,7 +26,7 @@ def _docs(args: argparse.Namespace) -> int:
 
     out = writes_into(Path(args.out), ["protocols.md", "data.md"], "docs")
     for name, text in (("protocols.md", protocol_reference()), ("data.md", data_reference())):
-        (out / name).write_text(text)
+        write_text(out / name, text)
         print((out / name).resolve())
     return 0
 
