@@ -83,6 +83,31 @@ def read_rows(path: Path) -> list[dict[str, str]]:
     return list(csv.DictReader(io.StringIO(text)))
 
 
+def _check_trial_sequence(path: Path, rows: list[dict[str, str]]) -> None:
+    """A resumed CSV's trials run 1, 2, 3, … (a trial's rows together): a gap or a step back
+    means rows were deleted or moved by hand, and resuming would record a trial twice.
+
+    Raises
+    ------
+    SessionError
+        Naming the line and the trial number that breaks the sequence.
+    """
+    previous = 0
+    for line, row in enumerate(rows, start=2):
+        value = row.get("trial", "")
+        try:
+            trial = int(value)
+        except ValueError:
+            trial = None
+        if trial is None or trial < 1 or trial not in (previous, previous + 1):
+            raise SessionError(
+                f"{path}, line {line}: trial {value!r} after trial {previous} (expected "
+                f"{previous + 1}): rows were deleted or moved, so resuming would record a trial "
+                "twice; keep the file for the record and start a new session number"
+            )
+        previous = trial
+
+
 def _fsync_folder(folder: Path) -> None:
     if sys.platform == "win32":  # pragma: no cover - folders cannot be opened there
         return
@@ -242,6 +267,7 @@ class SessionFiles:
                 "for the record and start a new session number"
             )
         self.rows = read_rows(path)
+        _check_trial_sequence(path, self.rows)
         return path
 
     def open(self) -> None:
