@@ -262,7 +262,7 @@ def rebin(
     Examples
     --------
     >>> a = np.zeros((5, 5)); a[2, 2] = 1.0
-    >>> rebin(a, 1.0, 2.0, (3, 3))[1, 1]
+    >>> float(rebin(a, 1.0, 2.0, (3, 3))[1, 1])
     1.0
     """
     values = np.ascontiguousarray(_crop_to_reach(values, from_spacing_deg, to_spacing_deg, shape))

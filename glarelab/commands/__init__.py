@@ -28,7 +28,8 @@ COMMANDS = {  # command → (its module, its help), in the order of ``glarelab -
     "run": ("run", "run a study session (PsychoPy) or simulated sessions"),
     "check-display": (
         "display",
-        "measure the display: resolution, refresh, frame jitter, bits, a flash's cost",
+        "measure the display: resolution, refresh, frame jitter, bits, a flash's cost, and read "
+        "every image of a stimulus set back from the screen",
     ),
     "analyse": ("analyse", "analyse session CSVs: tables, figures, report"),
     "power": ("power", "power and sample size of a study's effects from simulated studies (Dask)"),
