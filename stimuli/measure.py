@@ -18,6 +18,7 @@ goes on where it stopped (:meth:`MeasurementSession.resume`).
 
 from __future__ import annotations
 
+import contextlib
 import datetime as dt
 import itertools
 import json
@@ -65,16 +66,24 @@ class MeasurementLock:
 
     def __enter__(self) -> MeasurementLock:
         self.path.parent.mkdir(parents=True, exist_ok=True)
-        fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
-        try:
-            _lock(fd)
-        except OSError:
-            holder = os.read(fd, 200).decode("utf-8", "replace").strip() or "unknown"
+        while True:
+            fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+            try:
+                _lock(fd)
+            except OSError:
+                holder = os.read(fd, 200).decode("utf-8", "replace").strip() or "unknown"
+                os.close(fd)
+                raise SessionInUse(
+                    f"{self.path.with_suffix('.json')} is being measured by another process "
+                    f"({holder}; lock file {self.path}): one measurement per session at a time"
+                ) from None
+            try:  # the holder before us removes the file as it leaves: lock the one there now
+                same = os.path.samestat(os.fstat(fd), os.stat(self.path))
+            except FileNotFoundError:
+                same = False
+            if same:
+                break
             os.close(fd)
-            raise SessionInUse(
-                f"{self.path.with_suffix('.json')} is being measured by another process "
-                f"({holder}; lock file {self.path}): one measurement per session at a time"
-            ) from None
         try:  # who holds it, for the refusal (a full disk only loses the name)
             os.ftruncate(fd, 0)
             os.write(fd, f"pid {os.getpid()} on {socket.gethostname()}\n".encode())
@@ -85,6 +94,10 @@ class MeasurementLock:
 
     def __exit__(self, *exc) -> None:
         if self._fd is not None:
+            # removed while still held, so that a measurement that never began leaves its
+            # folder as it was; a process waiting on the old file sees it gone and retries
+            with contextlib.suppress(OSError):
+                os.unlink(self.path)
             os.close(self._fd)  # closing the descriptor releases the lock
             self._fd = None
 
