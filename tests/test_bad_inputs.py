@@ -804,6 +804,7 @@ CASES = [
         "sweep yoshida2008 --set stimulus.disk_deg=0.2 --out {box}/foreign",
         "foreign is a folder with files glarelab sweep did not write",
     ),
+    ("cache-unknown-action", "cache purge", "invalid choice: 'purge'"),
 ]
 
 

@@ -46,10 +46,15 @@ def _outside_warnings(record) -> list:
     return [w for w in record if issubclass(w.category, OutsideFittedRangeWarning)]
 
 
-def test_the_papers_studies_are_inside_the_fitted_range():
+def test_the_papers_studies_are_inside_the_fitted_range_but_spencers_own_conditions():
     assert fitted_range_departures(load_protocol("yoshida2008"), YOSHIDA_GEOMETRY) == []
-    assert fitted_range_departures(load_protocol("spencer1995"), SPENCER_GEOMETRY) == []
     assert fitted_range_departures(load_protocol("luidolt2020"), {}) == []  # rating: no glare
+    # the observers were fitted on Spencer's Figure 13 through a photopic PSF on a 100 cd/m²
+    # display; the protocol now follows the paper (mesopic by §3.1's rule, 50 cd/m² as §1)
+    assert fitted_range_departures(load_protocol("spencer1995"), SPENCER_GEOMETRY) == [
+        "glare: Vos regime 'mesopic' (fitted on photopic only)",
+        "disk luminance 37.5 cd/m² (the clamp; fitted on 75-220 cd/m²)",
+    ]
 
 
 def test_the_issue_study_of_two_gaussian_widths_is_named():
@@ -91,9 +96,10 @@ def test_a_staircase_study_is_checked_on_its_glare_and_source():
     data = {**data, "glare": {**data["glare"], "strengths": strengths, "peak_fraction": 0.5}}
     found = fitted_range_departures(data, {"source_diameter_deg": 0.05})
     assert found == [
+        "glare: Vos regime 'mesopic' (fitted on photopic only)",
         "glare: levels of 1001 × the clamp luminance (fitted on 1-285 × for vos)",
         "disk diameter 0.05° (fitted on 0.1065-0.3°)",
-        "disk luminance 50 cd/m² (the clamp; fitted on 75-220 cd/m²)",
+        "disk luminance 25 cd/m² (the clamp; fitted on 75-220 cd/m²)",
     ]
 
 

@@ -24,7 +24,8 @@ CENTRE = (SCREEN[0] // 2, SCREEN[1] // 2)
 @pytest.fixture(scope="module")
 def spencer(tmp_path_factory):
     """Spencer 1995 with a break after every trial, its stimulus set, and an unverified
-    calibration of its display (8 bits, white 100 cd/m²: fitted readings, no verification)."""
+    calibration of its display (8 bits, white 50 cd/m² as §1 and the protocol say: fitted
+    readings, no verification)."""
     from glarelab.cli import main
 
     folder = tmp_path_factory.mktemp("spencer")
@@ -32,8 +33,8 @@ def spencer(tmp_path_factory):
     protocol = folder / "spencer_breaks.toml"
     protocol.write_text(re.sub(r"(?m)^break_every = \d+", "break_every = 1", text))
     assert main(["stimuli", "build", str(protocol), "--out", str(folder / "set")]) == 0
-    readings = [(c, 0.1 + 99.9 * (c / 255) ** 2.2) for c in range(0, 255, 17)] + [(255, 100.0)]
-    calibration = fit_calibration(readings, bit_depth=8, label="a CRT, 100 cd/m²")
+    readings = [(c, 0.1 + 49.9 * (c / 255) ** 2.2) for c in range(0, 255, 17)] + [(255, 50.0)]
+    calibration = fit_calibration(readings, bit_depth=8, label="a CRT, 50 cd/m²")
     assert calibration.status == "unverified"
     return protocol, folder / "set", calibration.save(folder / "crt.json")
 
