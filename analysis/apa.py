@@ -1,9 +1,10 @@
 """Numbers as a results section prints them (APA, 7th edition): effects with their corrected
 degrees of freedom and effect size, p-values, and tables with fixed decimals.
 
-The test strings themselves (``F(5, 45) = 23.68, p < .001``) come from :mod:`analysis.stats`;
-this module chooses the sphericity correction an effect is reported with, adds partial eta
-squared, and formats whole tables for reading (the CSV files keep every digit).
+The test strings themselves (``F(5, 45) = 23.68, p < .001``) come from
+:mod:`glarelab.analysis.stats`; this module chooses the sphericity correction an effect is reported
+with, adds partial eta squared, and formats whole tables for reading (the CSV files keep every
+digit).
 
 **Which correction.** Effects with one degree of freedom need none (sphericity holds). For the
 others the degrees of freedom are corrected: with Greenhouse–Geisser's ε when ε < .75, with
@@ -25,8 +26,7 @@ from typing import Literal
 
 import numpy as np
 import pandas as pd
-
-from .stats import apa_F, apa_p
+from glarelab.analysis.stats import apa_F, apa_p
 
 __all__ = [
     "GG_BELOW",

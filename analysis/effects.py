@@ -397,7 +397,7 @@ def assumptions(
     anova: pd.DataFrame, residuals: Sequence[float], differences: Sequence[tuple] = ()
 ) -> pd.DataFrame:
     """The assumption report of an analysis: for each ANOVA effect the sphericity correction it
-    is reported with and why (:func:`analysis.apa.correction`, with Mauchly's test), then
+    is reported with and why (:func:`glarelab.analysis.apa.correction`, with Mauchly's test), then
     Shapiro–Wilk of the ANOVA's residuals and of each ``(name, paired differences)``.
 
     Returns
@@ -405,7 +405,7 @@ def assumptions(
     pandas.DataFrame
         ``check, of, decision, mauchly_W, mauchly_p, shapiro_W, shapiro_p, n``.
     """
-    from .apa import GG_BELOW, correction
+    from glarelab.analysis.apa import GG_BELOW, correction
 
     nan = float("nan")
     rows = []

@@ -1,7 +1,7 @@
 """Reading session CSVs: every cell checked, every problem named, nothing dropped silently.
 
-The columns are the protocol's (:func:`protocols.columns`), the ones the experiments write;
-files written before a column was added (its ``since``) are read with that column missing. A
+The columns are the protocol's (:func:`glarelab.protocols.columns`), the ones the experiments
+write; files written before a column was added (its ``since``) are read with that column missing. A
 problem is reported with its file, line and column; all problems of all files are collected
 and raised together (:class:`DataError`). A design with a missing cell is refused naming the
 participant and the cell, unless the caller asks to exclude incomplete participants, in which
@@ -18,9 +18,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import pandas as pd
-
-from protocols import columns
-from protocols.keys import TOKEN
+from glarelab.protocols import columns
+from glarelab.protocols.keys import TOKEN
 
 # the numbers a session CSV holds, as format_value writes them (int() and float() also read
 # "2_50" as 250 and surrounding spaces)
@@ -303,7 +302,7 @@ def load_sessions(
     trials = pd.DataFrame(rows)
     if trials.empty:
         raise DataError([f"{', '.join(s['file'] for s in sessions)}: no trials"])
-    from .paradigms import PARADIGMS
+    from glarelab.analysis.paradigms import PARADIGMS
 
     problems += PARADIGMS[protocol.paradigm].check(trials, protocol)
     key = ["participant", "session", "trial"]

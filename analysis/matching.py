@@ -34,10 +34,8 @@ import itertools
 
 import numpy as np
 import pandas as pd
-from scipy import stats as sps
-
-from .apa import anova_effect, corrected_p, series, unit_interval
-from .effects import (
+from glarelab.analysis.apa import anova_effect, corrected_p, series, unit_interval
+from glarelab.analysis.effects import (
     anova_residuals,
     assumptions,
     marginal_means,
@@ -45,10 +43,10 @@ from .effects import (
     with_eta2_ci,
     within_subject_ci,
 )
-from .figures import Figure, plt, png, small_multiples
-from .load import Dataset, where
-from .methods import display_text
-from .stats import (
+from glarelab.analysis.figures import Figure, plt, png, small_multiples
+from glarelab.analysis.load import Dataset, where
+from glarelab.analysis.methods import display_text
+from glarelab.analysis.stats import (
     apa_anova,
     apa_p,
     apa_t,
@@ -59,6 +57,7 @@ from .stats import (
     ttest_paired,
     ttest_welch,
 )
+from scipy import stats as sps
 
 __all__ = ["analyse", "check", "design", "methods", "stimulus_figures"]
 
@@ -588,8 +587,8 @@ def _results(tables: dict, summary: pd.DataFrame, protocol, n: int) -> list[str]
 def stimulus_figures(protocol, shown) -> list[Figure]:
     """The stimuli as the display showed them: the references of each glare method, the
     targets at their start luminances, and the references' profiles through the disk centre
-    (Yoshida Fig. 3). ``shown`` is an :class:`analysis.stimulus_figures.DisplayedSet`."""
-    from .stimulus_figures import image_grid, profiles, radial_profile
+    (Yoshida Fig. 3). ``shown`` is an :class:`glarelab.analysis.stimulus_figures.DisplayedSet`."""
+    from glarelab.analysis.stimulus_figures import image_grid, profiles, radial_profile
 
     g, s = protocol["glare"], protocol["stimulus"]
     geometry = shown.geometry

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from types import ModuleType
 
-from . import matching, rating, staircase
+from glarelab.analysis import matching, rating, staircase
 
 __all__ = ["PARADIGMS"]
 

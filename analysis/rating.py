@@ -23,13 +23,12 @@ from __future__ import annotations
 import matplotlib.colors
 import numpy as np
 import pandas as pd
-
-from .apa import series, unit_interval
-from .effects import hodges_lehmann, rank_biserial
-from .figures import Figure, plt, png
-from .load import Dataset
-from .methods import display_text
-from .stats import apa_p, holm, wilcoxon_signed_rank
+from glarelab.analysis.apa import series, unit_interval
+from glarelab.analysis.effects import hodges_lehmann, rank_biserial
+from glarelab.analysis.figures import Figure, plt, png
+from glarelab.analysis.load import Dataset
+from glarelab.analysis.methods import display_text
+from glarelab.analysis.stats import apa_p, holm, wilcoxon_signed_rank
 
 __all__ = ["analyse", "check", "design", "methods", "stimulus_figures"]
 
@@ -392,9 +391,9 @@ def _compared_text(compared: pd.DataFrame, reference: str) -> str:
 
 def stimulus_figures(protocol, shown) -> list[Figure]:
     """Each condition's scene as the display showed it: its first, middle and last frame.
-    ``shown`` is an :class:`analysis.stimulus_figures.DisplayedSet`; a questionnaire without a
-    scene shows none."""
-    from .stimulus_figures import image_grid
+    ``shown`` is an :class:`glarelab.analysis.stimulus_figures.DisplayedSet`; a questionnaire
+    without a scene shows none."""
+    from glarelab.analysis.stimulus_figures import image_grid
 
     conditions = _conditions(protocol)
     if not conditions:

@@ -1,13 +1,14 @@
 """Writing an analysis: a results section to read and paste from, in one self-contained HTML
 file, with its tables (CSV, Markdown) and figures (PNG) beside it.
 
-A paradigm's ``analyse(dataset, protocol)`` (:mod:`analysis.paradigms`) returns a dict:
+A paradigm's ``analyse(dataset, protocol)`` (:mod:`glarelab.analysis.paradigms`) returns a dict:
 
 ``tables``
     name → DataFrame. Written as ``NAME.csv`` (every digit) and ``NAME.md``; shown as numbered
-    tables with fixed decimals and p-values as APA prints them (:func:`analysis.apa.format_table`).
+    tables with fixed decimals and p-values as APA prints them
+    (:func:`glarelab.analysis.apa.format_table`).
 ``figures``
-    file name → :class:`analysis.figures.Figure` (``png``, ``title``, ``caption``: what is
+    file name → :class:`glarelab.analysis.figures.Figure` (``png``, ``title``, ``caption``: what is
     plotted, the error bars, n). Written under the file name; shown as numbered figures in the
     Results section. Bare PNG bytes are taken too, titled with the file name.
 ``text``
@@ -18,20 +19,20 @@ A paradigm's ``analyse(dataset, protocol)`` (:mod:`analysis.paradigms`) returns 
 ``captions`` (optional)
     table name → the table's title.
 ``stimuli`` (optional)
-    a list of what the participants were shown: :class:`analysis.figures.Figure`, or mappings
-    with ``png`` (bytes), ``title`` and ``caption``. Shown as numbered figures in the Method
-    section, before the results, and written as ``stimulus_NN.png``.
+    a list of what the participants were shown: :class:`glarelab.analysis.figures.Figure`, or
+    mappings with ``png`` (bytes), ``title`` and ``caption``. Shown as numbered figures in the
+    Method section, before the results, and written as ``stimulus_NN.png``.
 
 Given the stimulus set's folder (``stimuli=``), the report opens it
-(:class:`analysis.stimulus_figures.DisplayedSet`: verified, built from this protocol) and, if
-the paradigm's module has ``stimulus_figures(protocol, shown)``, adds the figures it returns
+(:class:`glarelab.analysis.stimulus_figures.DisplayedSet`: verified, built from this protocol) and,
+if the paradigm's module has ``stimulus_figures(protocol, shown)``, adds the figures it returns
 (the set's images as the display showed them) after the analysis's own ``stimuli``.
 
 The page holds everything (images as data URLs, no script, no external address), so it can be
 mailed or archived as one file. Everything is written to a staging folder next to the
 destination and moved into place only when all of it succeeded, so a failing analysis leaves no
 partial report behind; an earlier report in the destination is replaced whole, and a folder
-holding anything else is refused (:mod:`protocols.folders`).
+holding anything else is refused (:mod:`glarelab.protocols.folders`).
 """
 
 from __future__ import annotations
@@ -44,15 +45,13 @@ import shutil
 from pathlib import Path
 
 import pandas as pd
+from glarelab.analysis.apa import format_table, header
+from glarelab.analysis.figures import Figure, as_figure
+from glarelab.analysis.load import Dataset, load_sessions
+from glarelab.analysis.methods import provenance, session_rows
+from glarelab.analysis.paradigms import PARADIGMS
+from glarelab.protocols.folders import check_replaceable, replace_folder, staging_folder
 from PIL import Image
-
-from protocols.folders import check_replaceable, replace_folder, staging_folder
-
-from .apa import format_table, header
-from .figures import Figure, as_figure
-from .load import Dataset, load_sessions
-from .methods import provenance, session_rows
-from .paradigms import PARADIGMS
 
 __all__ = ["analyse", "methods_paragraph", "write_report"]
 
@@ -118,7 +117,7 @@ def _stimuli(protocol, result: dict, stimuli: Path | None) -> list[Figure]:
     """The analysis's own stimuli, then the set's images as the display showed them."""
     figures = [as_figure(item, "stimulus") for item in result.get("stimuli", [])]
     if stimuli is not None:
-        from .stimulus_figures import DisplayedSet
+        from glarelab.analysis.stimulus_figures import DisplayedSet
 
         shown = DisplayedSet(stimuli, protocol)  # verified, and built from this protocol
         draw = getattr(PARADIGMS[protocol.paradigm], "stimulus_figures", None)
@@ -320,7 +319,7 @@ def write_report(
 
     Raises
     ------
-    analysis.load.DataError
+    glarelab.analysis.load.DataError
         For bad input: the data, or a stimulus set that fails its manifest or was built from
         another protocol (nothing is written).
     """

@@ -23,22 +23,21 @@ import warnings
 
 import numpy as np
 import pandas as pd
-from matplotlib.ticker import MaxNLocator
-from scipy import stats as sps
-from threadpoolctl import threadpool_limits
-
-from .apa import anova_effect, corrected_p, series, unit_interval
-from .effects import (
+from glarelab.analysis.apa import anova_effect, corrected_p, series, unit_interval
+from glarelab.analysis.effects import (
     anova_residuals,
     assumptions,
     marginal_means,
     with_eta2_ci,
     within_subject_ci,
 )
-from .figures import Figure, plt, png, small_multiples
-from .load import Dataset, where
-from .methods import display_text
-from .stats import apa_anova, rm_anova
+from glarelab.analysis.figures import Figure, plt, png, small_multiples
+from glarelab.analysis.load import Dataset, where
+from glarelab.analysis.methods import display_text
+from glarelab.analysis.stats import apa_anova, rm_anova
+from matplotlib.ticker import MaxNLocator
+from scipy import stats as sps
+from threadpoolctl import threadpool_limits
 
 __all__ = [
     "analyse",
@@ -558,8 +557,8 @@ def _results(
 def stimulus_figures(protocol, shown) -> list[Figure]:
     """The stimuli as the display showed them: the glare images of every strength in each
     context with the comparison at full intensity, and their glare profiles. ``shown`` is an
-    :class:`analysis.stimulus_figures.DisplayedSet`."""
-    from .stimulus_figures import image_grid, profiles, radial_profile
+    :class:`glarelab.analysis.stimulus_figures.DisplayedSet`."""
+    from glarelab.analysis.stimulus_figures import image_grid, profiles, radial_profile
 
     g = protocol["glare"]
     geometry = shown.geometry

@@ -54,11 +54,10 @@ from typing import Literal, get_args
 
 import numpy as np
 import pandas as pd
+from glarelab.analysis.effects import eta2_partial_ci
 from scipy import stats as sps
 from statsmodels.stats.anova import AnovaRM
 from statsmodels.stats.multitest import multipletests
-
-from .effects import eta2_partial_ci
 
 __all__ = [
     "apa_F",
@@ -234,7 +233,7 @@ def rm_anova(
         One row per effect (main effects, then interactions, as ``a × b``) with columns
         ``source, df1, df2, F, p, eps_gg, p_gg, eps_hf, p_hf, eta2_partial,
         eta2_generalized, eta2p_ci_low, eta2p_ci_high`` (the 90 % interval of η²p,
-        :func:`analysis.effects.eta2_partial_ci`; only with ``eta2_ci``), ``mauchly_W,
+        :func:`glarelab.analysis.effects.eta2_partial_ci`; only with ``eta2_ci``), ``mauchly_W,
         mauchly_p, sphericity``. For effects with one degree of freedom sphericity holds:
         epsilons 1, corrected p = p, Mauchly NaN. Where sphericity is not estimable (fewer
         than df + 1 subjects, or a singular covariance of the effect's contrast scores) the

@@ -19,11 +19,9 @@ import json
 from pathlib import Path
 
 import numpy as np
-
-from stimuli.calibration import Calibration
-
-from .figures import plt
-from .load import DataError
+from glarelab.analysis.figures import plt
+from glarelab.analysis.load import DataError
+from glarelab.stimuli.calibration import Calibration
 
 __all__ = ["DisplayedSet", "image_grid", "profiles", "radial_profile", "to_srgb8"]
 
@@ -61,13 +59,13 @@ class DisplayedSet:
 
     Raises
     ------
-    analysis.load.DataError
+    glarelab.analysis.load.DataError
         For a folder that is not a stimulus set, a set that fails its manifest (a file changed
         or missing), or a set built from another protocol.
     """
 
     def __init__(self, folder: str | Path, protocol):
-        from stimuli.stimulus_set import StimulusSet, verify_stimulus_set
+        from glarelab.stimuli.stimulus_set import StimulusSet, verify_stimulus_set
 
         self.folder = Path(folder)
         problems = verify_stimulus_set(self.folder)
@@ -187,7 +185,7 @@ def profiles(
 ) -> bytes:
     """Luminance profiles: one panel per group (a method, a context), one curve per image
     ``(label, x, values)``; ``lines`` adds labelled horizontal lines (as L_dmax)."""
-    from .figures import png
+    from glarelab.analysis.figures import png
 
     figure, axes = plt.subplots(
         1, len(groups), figsize=(4.6 * len(groups), 3.6), sharey=True, squeeze=False

@@ -12,17 +12,17 @@ participant:
 - the bits per channel the window was given, and what the frame buffer really holds: a ramp of
   every code of the protocol's bit depth is drawn and read back at 16 bits, and the distinct
   levels found give the effective bits;
-- with a photometer (``photometer``, :func:`stimuli.photometer.open_photometer`), the
+- with a photometer (``photometer``, :func:`glarelab.stimuli.photometer.open_photometer`), the
   luminance of black and white, full-field, against the protocol's ``max_cd_m2``, and with a
   calibration, of five codes across its range against the luminance the calibration gives
   them (its verification pass, repeated: a display that changed since it was calibrated
   fails); every reading is kept in the findings, and a photometer fault is one of them;
 - with a stimulus set, what the screen shows of it: every image a session shows as it is
   (references, targets, glare and comparison images, scenes), drawn by the session's own
-  front-end in each place of the first trial's row (:mod:`experiments.layout`), read back from
-  the frame buffer (:func:`stimuli.psychopy_window.read_codes`, at 16 bits per channel, so a
-  10-bit window's codes come back whole) and compared with the set's codes rounded to the
-  window's bits: the share of pixels exactly equal and the worst difference in codes, per
+  front-end in each place of the first trial's row (:mod:`glarelab.experiments.layout`), read back
+  from the frame buffer (:func:`glarelab.stimuli.psychopy_window.read_codes`, at 16 bits per
+  channel, so a 10-bit window's codes come back whole) and compared with the set's codes rounded to
+  the window's bits: the share of pixels exactly equal and the worst difference in codes, per
   image (:func:`read_back_images`);
 - with a stimulus set of a protocol that flashes its stimuli (a staircase), the cost of one
   frame of the first flash a session shows:
@@ -44,14 +44,12 @@ from datetime import datetime
 from pathlib import Path
 
 import numpy as np
-
-from protocols.atomic import write_text
-from stimuli.psychopy_window import measure_frame_intervals
-
-from .display import check_screen, timing_rate_hz
-from .layout import row_layout
-from .loop import DROPPED_INTERVAL
-from .psychopy_frontend import PsychoPyFrontend
+from glarelab.experiments.display import check_screen, timing_rate_hz
+from glarelab.experiments.layout import row_layout
+from glarelab.experiments.loop import DROPPED_INTERVAL
+from glarelab.experiments.psychopy_frontend import PsychoPyFrontend
+from glarelab.protocols.atomic import write_text
+from glarelab.stimuli.psychopy_window import measure_frame_intervals
 
 __all__ = ["check_display", "first_screen", "read_back_images", "write_check"]
 
@@ -129,9 +127,9 @@ def check_display(
     fullscreen
         Measure a full-screen window (as a session runs); default True.
     photometer
-        An open :class:`~stimuli.photometer.Photometer`: also measure luminances.
+        An open :class:`~glarelab.stimuli.photometer.Photometer`: also measure luminances.
     patch_protocol
-        How the photometer reads each patch (:class:`~stimuli.photometer.PatchProtocol`).
+        How the photometer reads each patch (:class:`~glarelab.stimuli.photometer.PatchProtocol`).
     """
     if not protocol.data.get("display"):
         raise ValueError(f"the {protocol.study} protocol describes no display to check")
@@ -190,16 +188,15 @@ def check_display(
         device.close()
 
 
-PHOTOMETER_TOLERANCE = 0.03  # as the calibration's verification pass (stimuli.measure)
+PHOTOMETER_TOLERANCE = 0.03  # as the calibration's verification pass (glarelab.stimuli.measure)
 
 
 def _photometer_check(protocol, window, meter, calibration, patch_protocol, records, log) -> dict:
     """Black, white and (with a calibration) five codes across its range, read by the
     photometer; adds its checks to ``records``."""
-    from stimuli.measure_psychopy import read_codes
-    from stimuli.photometer import PhotometerError
-
-    from .display import Check
+    from glarelab.experiments.display import Check
+    from glarelab.stimuli.measure_psychopy import read_codes
+    from glarelab.stimuli.photometer import PhotometerError
 
     bits = calibration.bit_depth if calibration is not None else protocol["display"]["bit_depth"]
     top = 2**bits - 1
@@ -270,7 +267,7 @@ def _flash_cost(device, screen: dict, frames: int, period: float, log) -> dict:
 
 
 def _engine(protocol, refresh_hz: float):
-    from .paradigms import PARADIGMS
+    from glarelab.experiments.paradigms import PARADIGMS
 
     return PARADIGMS[protocol.paradigm].engine(
         protocol, "check1", counterbalance=0, refresh_hz=refresh_hz
@@ -306,7 +303,8 @@ def read_back_images(device, screen: dict | None, *, names: list[str] | None = N
     Parameters
     ----------
     device
-        An open :class:`experiments.psychopy_frontend.PsychoPyFrontend` with a stimulus set.
+        An open :class:`glarelab.experiments.psychopy_frontend.PsychoPyFrontend` with a stimulus
+        set.
     screen
         The screen whose row gives the places (the first trial's, :func:`first_screen`); None:
         each image alone at the centre.

@@ -29,7 +29,7 @@ import sys
 from datetime import datetime
 from pathlib import Path
 
-from protocols import columns, format_value
+from glarelab.protocols import columns, format_value
 
 __all__ = [
     "SessionError",

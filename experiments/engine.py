@@ -9,8 +9,8 @@ flip that first showed it) and returns the finished trial's row (a dict of
 tells the engine whether the last timed presentation kept its frames. ``done`` says the session
 is over. ``replay(rows)`` rebuilds the state after the rows already on disk, to resume.
 
-The session loop (:mod:`experiments.loop`) is the only caller: it decides which key presses
-reach the engine (those made after the onset, on keys the screen takes) and adds the timing
+The session loop (:mod:`glarelab.experiments.loop`) is the only caller: it decides which key
+presses reach the engine (those made after the onset, on keys the screen takes) and adds the timing
 columns to each row.
 """
 
@@ -111,19 +111,19 @@ def participant_rng(seed: int, participant: str, purpose: str) -> np.random.Gene
 class LookingObserver:
     """What the simulated observers that look at a stimulus set share: the brightness model
     and noise of the protocol's ``[observer]`` table, this participant's draw of the noise,
-    and the set as its display shows it (:class:`experiments.looking.DisplayedSet`, which
+    and the set as its display shows it (:class:`glarelab.experiments.looking.DisplayedSet`, which
     observers given the same one share percepts through)."""
 
     @staticmethod
     def check(protocol) -> None:
         """Refuse an ``[observer]`` table the model and the noise do not take (ValueError)."""
-        from .perception import observer_parameters
+        from glarelab.experiments.perception import observer_parameters
 
         observer_parameters(protocol["observer"])
 
     def __init__(self, protocol, participant: str, *, seed: int, stimuli):
-        from .looking import DisplayedSet
-        from .perception import observer_parameters, warn_outside_fitted_range
+        from glarelab.experiments.looking import DisplayedSet
+        from glarelab.experiments.perception import observer_parameters, warn_outside_fitted_range
 
         self.protocol = protocol
         self.participant = participant

@@ -130,7 +130,7 @@ def protocol_drawing(protocol) -> tuple[list[str], bool]:
     The lines also say where whole pixels depart from the protocol's angles: an image size or
     gap in degrees rounded to pixels, and a ``pixel_deg`` that is not the display's pixel.
     """
-    from protocols import pixel_deg
+    from glarelab.protocols import pixel_deg
 
     data = protocol.data
     display = data.get("display")
@@ -141,7 +141,7 @@ def protocol_drawing(protocol) -> tuple[list[str], bool]:
     display_deg = pixel_deg(protocol)
     notes = []
     if protocol.paradigm == "matching":
-        from stimuli.matching import _odd
+        from glarelab.stimuli.matching import _odd
 
         size = _odd(s["size_deg"] / display_deg)
         gap = round(s["gap_deg"] / display_deg)

@@ -3,7 +3,7 @@
 The set's images are luminances in cd/m²; the display shows the codes its calibration gives
 them, so an observer looks at ``decode(encode(image))``: quantised to the display's codes and
 clipped to its range, as a participant would see them. Images are composed from the set's
-components exactly as the session composes them (:func:`stimuli.stimulus_set.compose`).
+components exactly as the session composes them (:func:`glarelab.stimuli.stimulus_set.compose`).
 
 A percept depends only on the image, the brightness model and the geometry judged, so it is
 remembered here: observers given the same :class:`DisplayedSet` (the simulated participants of
@@ -15,9 +15,8 @@ from __future__ import annotations
 from collections import OrderedDict
 
 import numpy as np
-
-from stimuli.calibration import Calibration
-from stimuli.stimulus_set import StimulusSet
+from glarelab.stimuli.calibration import Calibration
+from glarelab.stimuli.stimulus_set import StimulusSet
 
 __all__ = ["DisplayedSet"]
 
@@ -30,7 +29,7 @@ class DisplayedSet:
     Parameters
     ----------
     stimuli
-        The set, read back (:class:`stimuli.stimulus_set.StimulusSet`).
+        The set, read back (:class:`glarelab.stimuli.stimulus_set.StimulusSet`).
     """
 
     def __init__(self, stimuli: StimulusSet):
@@ -56,8 +55,8 @@ class DisplayedSet:
         return shown
 
     def percept(self, model, terms, **geometry):
-        """What ``model`` (a :class:`experiments.perception.BrightnessModel`) perceives of the
-        image ``[(name, weight)]`` with ``geometry`` (its ``percept`` keywords); computed once
+        """What ``model`` (a :class:`glarelab.experiments.perception.BrightnessModel`) perceives of
+        the image ``[(name, weight)]`` with ``geometry`` (its ``percept`` keywords); computed once
         per model, image and geometry."""
         image = tuple((name, float(weight)) for name, weight in terms)
         key = (model, image, tuple(sorted(geometry.items())))

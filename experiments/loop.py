@@ -30,8 +30,7 @@ from dataclasses import dataclass
 from typing import Protocol as TypingProtocol
 
 import numpy as np
-
-from .engine import Engine, Press, normalise_key
+from glarelab.experiments.engine import Engine, Press, normalise_key
 
 __all__ = [
     "Device",

@@ -16,11 +16,9 @@ adjustments and the time from the reference's onset to the confirming Enter.
 from __future__ import annotations
 
 import numpy as np
-
-from protocols.matching import reference_name
-from stimuli.matching import target_terms
-
-from .engine import Engine, LookingObserver, participant_rng
+from glarelab.experiments.engine import Engine, LookingObserver, participant_rng
+from glarelab.protocols.matching import reference_name
+from glarelab.stimuli.matching import target_terms
 
 __all__ = ["MatchingEngine", "MatchingObserver"]
 
@@ -253,21 +251,22 @@ class MatchingEngine(Engine):
 
 class MatchingObserver(LookingObserver):
     """A simulated observer of a matching study: looks at each reference as the display shows
-    it (:mod:`experiments.perception`), sets the targets around the brightness it perceives
-    and answers the questions from the glow, the ring or the sizes it sees.
+    it (:mod:`glarelab.experiments.perception`), sets the targets around the brightness it
+    perceives and answers the questions from the glow, the ring or the sizes it sees.
 
     Parameters
     ----------
     protocol
         A matching protocol; its ``[observer]`` table may change the model's and the noise's
-        parameters (:func:`experiments.perception.observer_parameters`).
+        parameters (:func:`glarelab.experiments.perception.observer_parameters`).
     participant
         Its id (with ``seed``, it fixes the observer's gain and every trial's noise).
     seed
         The simulation's seed.
     stimuli
         The stimulus set it looks at, or the set as displayed
-        (:class:`experiments.looking.DisplayedSet`, shared by observers to share percepts).
+        (:class:`glarelab.experiments.looking.DisplayedSet`, shared by observers to share
+        percepts).
     """
 
     def __init__(self, protocol, participant: str, *, seed: int, stimuli):
@@ -337,7 +336,7 @@ class MatchingObserver(LookingObserver):
         return keys
 
     def _answer(self, screen: dict, rng: np.random.Generator) -> list[tuple[str, float]]:
-        from stimuli.matching import target_terms
+        from glarelab.stimuli.matching import target_terms
 
         trial = screen["trial"]
         question = self.questions[screen["number"] - 1]

@@ -8,10 +8,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .engine import Engine
-from .matching import MatchingEngine, MatchingObserver
-from .rating import RatingEngine, RatingObserver
-from .staircase import StaircaseEngine, StaircaseObserver
+from glarelab.experiments.engine import Engine
+from glarelab.experiments.matching import MatchingEngine, MatchingObserver
+from glarelab.experiments.rating import RatingEngine, RatingObserver
+from glarelab.experiments.staircase import StaircaseEngine, StaircaseObserver
 
 __all__ = ["PARADIGMS", "Paradigm"]
 

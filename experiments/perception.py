@@ -81,8 +81,12 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
-
-from glare._validation import check_image, check_in_range, check_positive, check_positive_int
+from glarelab.glare._validation import (
+    check_image,
+    check_in_range,
+    check_positive,
+    check_positive_int,
+)
 
 __all__ = [
     "FITTED_DISK_CD_M2",
@@ -201,7 +205,7 @@ def _bounds(bounds: tuple[float, float], unit: str = "") -> str:
 def _kernel_departures(where: str, model: str, parameters, ratios: list[float]) -> list[str]:
     """Departures of one glare method (``model`` with ``parameters``, its levels as ratios of
     source luminance to the clamp) from what the fit saw."""
-    from protocols.common import glare_model
+    from glarelab.protocols.common import glare_model
 
     if model not in FITTED_LEVEL_RATIO:
         return [f"{where}: glare model {model!r} (fitted on {', '.join(FITTED_LEVEL_RATIO)} only)"]
@@ -250,7 +254,7 @@ def fitted_range_departures(protocol, geometry: dict) -> list[str]:
 
     Examples
     --------
-    >>> from protocols import load_protocol
+    >>> from glarelab.protocols import load_protocol
     >>> yoshida = load_protocol("yoshida2008")
     >>> fitted_range_departures(yoshida, {"disk_diameter_deg": 0.3})
     []

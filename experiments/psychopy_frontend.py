@@ -1,14 +1,15 @@
-"""The PsychoPy front-end: a device for :class:`experiments.loop.SessionLoop` on a real screen.
+"""The PsychoPy front-end: a device for :class:`glarelab.experiments.loop.SessionLoop` on a real
+screen.
 
-Only this module (and :mod:`stimuli.psychopy_window`, :mod:`stimuli.measure_psychopy`) imports
-PsychoPy.
+Only this module (and :mod:`glarelab.stimuli.psychopy_window`,
+:mod:`glarelab.stimuli.measure_psychopy`) imports PsychoPy.
 
 **Images.** Luminance images (cd/m²) from the stimulus set are turned into display codes
 through the calibration (the set's own when the session runs uncalibrated), rounded to the
 window's bits here (not by the graphics card), and drawn pixel for pixel (``units='pix'``, no
 interpolation, rows flipped to PsychoPy's bottom-up order) with every edge on a whole screen
-pixel (:mod:`experiments.layout`), so each image pixel is one screen pixel for odd and even
-sizes alike; :meth:`PsychoPyFrontend.check_presentation` reads a screen's images back from
+pixel (:mod:`glarelab.experiments.layout`), so each image pixel is one screen pixel for odd and
+even sizes alike; :meth:`PsychoPyFrontend.check_presentation` reads a screen's images back from
 the frame buffer to prove it. Every
 image is encoded and uploaded once: the set's images when first needed, a target when its
 setting changes, Spencer's comparison once per trial before its first frame. Frames only draw.
@@ -22,10 +23,10 @@ that was not (``--accept-mismatch refresh``, ``--allow-unmeasured-refresh``), fl
 the clock at the protocol's nominal rate. The frame intervals of each flash are appended to the
 session's ``_frames.tsv``, and every onset, offset and key press goes to its PsychoPy log.
 
-**Keys.** One :class:`stimuli.psychopy_window.KeyReader` for the session, never cleared after
-the first screen. Psychtoolbox names keys by their position on a US keyboard on Linux and macOS
-(a French keyboard's unshifted ``&`` key is ``1``), so a rating is its key's digit in any layout;
-the keypad's digits count too. Comments are read from the window system's text events (the
+**Keys.** One :class:`glarelab.stimuli.psychopy_window.KeyReader` for the session, never cleared
+after the first screen. Psychtoolbox names keys by their position on a US keyboard on Linux and
+macOS (a French keyboard's unshifted ``&`` key is ``1``), so a rating is its key's digit in any
+layout; the keypad's digits count too. Comments are read from the window system's text events (the
 keyboard's layout, case, punctuation and accents as typed, Backspace and the arrows as editing):
 what was typed after the rating key's own character and before the Enter that ends the comment,
 even before the comment box appeared; Shift+Enter is a new line in it. During a presentation
@@ -42,9 +43,12 @@ import time
 from pathlib import Path
 
 import numpy as np
-
-from stimuli.calibration import Calibration, synthetic_calibration
-from stimuli.psychopy_window import (
+from glarelab.experiments.display import ScreenFacts
+from glarelab.experiments.engine import Press
+from glarelab.experiments.layout import Placement, row_layout
+from glarelab.experiments.loop import Shown, count_dropped_frames
+from glarelab.stimuli.calibration import Calibration, synthetic_calibration
+from glarelab.stimuli.psychopy_window import (
     KeyReader,
     TextCapture,
     dispatch_events,
@@ -57,13 +61,8 @@ from stimuli.psychopy_window import (
     screen_resolution,
     typed_text,
 )
-from stimuli.stimulus_set import StimulusSet
-from stimuli.stimulus_set import read_codes as read_set_codes
-
-from .display import ScreenFacts
-from .engine import Press
-from .layout import Placement, row_layout
-from .loop import Shown, count_dropped_frames
+from glarelab.stimuli.stimulus_set import StimulusSet
+from glarelab.stimuli.stimulus_set import read_codes as read_set_codes
 
 __all__ = ["PsychoPyFrontend", "ScriptedKeys", "codes_at_bits"]
 
@@ -413,8 +412,8 @@ class PsychoPyFrontend:
         return stims
 
     def _lay_out(self, stims: list) -> list[Placement]:
-        """Put ``stims`` in a row on whole pixels (:func:`experiments.layout.row_layout`): each
-        image pixel on one screen pixel."""
+        """Put ``stims`` in a row on whole pixels (:func:`glarelab.experiments.layout.row_layout`):
+        each image pixel on one screen pixel."""
         gap = self.set.geometry.get("gap_px", 40) if self.set else 0
         placements = row_layout(
             tuple(int(v) for v in self.window.size),
@@ -577,9 +576,8 @@ class PsychoPyFrontend:
 
     def _flip(self, *, capture: bool = False) -> float:
         if capture and self.screenshot is not None and not self._screenshot_taken:
+            from glarelab.protocols.atomic import atomic_path
             from PIL import Image
-
-            from protocols.atomic import atomic_path
 
             self.screenshot.parent.mkdir(parents=True, exist_ok=True)
             with atomic_path(self.screenshot) as temporary:
@@ -695,7 +693,7 @@ class PsychoPyFrontend:
         escape = next((t for name, t in self._held if name == "escape"), None)
         if escape is None:
             return
-        from .loop import SessionAborted
+        from glarelab.experiments.loop import SessionAborted
 
         self.window.clearBuffer()
         end = self.window.flip()

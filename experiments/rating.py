@@ -17,8 +17,7 @@ ignored). That row's timing columns are the presentation's (onset, offset, frame
 from __future__ import annotations
 
 import numpy as np
-
-from .engine import Engine, normalise_key, participant_rng
+from glarelab.experiments.engine import Engine, normalise_key, participant_rng
 
 __all__ = ["RatingEngine", "RatingObserver", "shift_down"]
 
@@ -140,9 +139,10 @@ class RatingEngine(Engine):
 
     @property
     def sequences(self) -> dict:
-        """Condition → its frame names and refreshes (:func:`stimuli.night.build_night`)."""
+        """Condition → its frame names and refreshes
+        (:func:`glarelab.stimuli.night.build_night`)."""
         if not hasattr(self, "_sequences"):
-            from stimuli.night import night_plan
+            from glarelab.stimuli.night import night_plan
 
             self._sequences = night_plan(self.protocol, self.refresh_hz)
         return self._sequences

@@ -3,19 +3,19 @@
 In order, before any file is written:
 
 1. the participant id and session number are file-name safe, and the session is not held by
-   another process (a lock, see :mod:`experiments.data`);
+   another process (a lock, see :mod:`glarelab.experiments.data`);
 2. a new session has no files yet; a resumed one has its CSV with a valid header and its
    sidecar, and the protocol, stimulus set and calibration are the ones it started with, and
    the participant's details given now do not contradict the stored ones;
 3. the stimulus set matches its manifest and was built from this protocol; the calibration is
    usable (not missing, failed or synthetic unless the session is explicitly uncalibrated) and
-   is this display's (:func:`experiments.display.check_calibration`);
+   is this display's (:func:`glarelab.experiments.display.check_calibration`);
 4. the window opens and its resolution, refresh rate and bits per channel are the protocol's
-   (:func:`experiments.display.check_screen`), unless a mismatch is accepted.
+   (:func:`glarelab.experiments.display.check_screen`), unless a mismatch is accepted.
 
 Then the CSV header and the sidecar (status ``running``, start time) are written and fsync'ed,
-and :class:`experiments.loop.SessionLoop` runs the trials, each row fsync'ed as it ends. The
-sidecar ends as ``completed`` or ``aborted`` (Escape, SIGINT, SIGTERM, SIGHUP), with the end
+and :class:`glarelab.experiments.loop.SessionLoop` runs the trials, each row fsync'ed as it ends.
+The sidecar ends as ``completed`` or ``aborted`` (Escape, SIGINT, SIGTERM, SIGHUP), with the end
 time; a session ended before its first trial keeps its header, log and sidecar (``aborted``). A
 session killed outright keeps its rows and a ``running`` sidecar; resuming it records that run
 as ``interrupted``, its end unknown (``ended`` null), with its trials counted from the CSV and
@@ -36,16 +36,15 @@ import time
 from datetime import UTC, datetime
 from pathlib import Path
 
-from protocols import DATA_FORMAT
-from stimuli.calibration import Calibration, usable_calibration
-from stimuli.stimulus_set import package_versions, verify_stimulus_set
-from stimuli.stimulus_set import shows_images as _shows_images
-
-from .data import SessionError, SessionFiles, check_session_id
-from .display import check_calibration, check_screen, enforce, timing_rate_hz
-from .engine import Press
-from .loop import SessionAborted, SessionLoop, Shown
-from .paradigms import PARADIGMS
+from glarelab.experiments.data import SessionError, SessionFiles, check_session_id
+from glarelab.experiments.display import check_calibration, check_screen, enforce, timing_rate_hz
+from glarelab.experiments.engine import Press
+from glarelab.experiments.loop import SessionAborted, SessionLoop, Shown
+from glarelab.experiments.paradigms import PARADIGMS
+from glarelab.protocols import DATA_FORMAT
+from glarelab.stimuli.calibration import Calibration, usable_calibration
+from glarelab.stimuli.stimulus_set import package_versions, verify_stimulus_set
+from glarelab.stimuli.stimulus_set import shows_images as _shows_images
 
 __all__ = [
     "SessionAborted",
@@ -81,11 +80,10 @@ def make_engine(
 
 def make_observer(protocol, participant: str, *, seed: int, stimuli):
     """A simulated observer of the protocol's paradigm; it looks at the set in ``stimuli`` (a
-    folder, or an :class:`experiments.looking.DisplayedSet` that observers share, and with it
-    their percepts)."""
-    from stimuli.stimulus_set import StimulusSet
-
-    from .looking import DisplayedSet
+    folder, or an :class:`glarelab.experiments.looking.DisplayedSet` that observers share, and with
+    it their percepts)."""
+    from glarelab.experiments.looking import DisplayedSet
+    from glarelab.stimuli.stimulus_set import StimulusSet
 
     observer = PARADIGMS[protocol.paradigm].observer
     if observer is None:
@@ -332,7 +330,7 @@ def run_session(
     protocol, participant, session, out
         The study, who, which session, and the folder for its files.
     frontend
-        The device: :class:`experiments.psychopy_frontend.PsychoPyFrontend` or
+        The device: :class:`glarelab.experiments.psychopy_frontend.PsychoPyFrontend` or
         :class:`SimulatedFrontend`.
     stimuli, calibration, allow_uncalibrated
         The stimulus set folder and the display calibration (see the module notes).
@@ -483,7 +481,7 @@ def _check_presentation(frontend, protocol, participant, session, counterbalance
     check = getattr(frontend, "check_presentation", None)
     if check is None:
         return None
-    from .check_display import first_screen
+    from glarelab.experiments.check_display import first_screen
 
     engine = make_engine(
         protocol, participant, session=session, counterbalance=counterbalance, refresh_hz=rate

@@ -35,9 +35,8 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass, field
 
-from protocols.staircase import comparison_terms, glare_name
-
-from .engine import Engine, LookingObserver, participant_rng
+from glarelab.experiments.engine import Engine, LookingObserver, participant_rng
+from glarelab.protocols.staircase import comparison_terms, glare_name
 
 __all__ = ["Staircase", "StaircaseEngine", "StaircaseObserver", "counterbalance_for"]
 
@@ -307,8 +306,8 @@ class StaircaseEngine(Engine):
 
 class StaircaseObserver(LookingObserver):
     """A simulated observer of a staircase study: looks at the glare image and the comparison
-    as the display shows them (:mod:`experiments.perception`) and says which looked brighter,
-    or neither, with the noise of one brief comparison and a shift of its own per block.
+    as the display shows them (:mod:`glarelab.experiments.perception`) and says which looked
+    brighter, or neither, with the noise of one brief comparison and a shift of its own per block.
 
     Parameters
     ----------
@@ -319,7 +318,8 @@ class StaircaseObserver(LookingObserver):
         Who, and the simulation's seed (they fix the observer and every trial's noise).
     stimuli
         The stimulus set it looks at, or the set as displayed
-        (:class:`experiments.looking.DisplayedSet`, shared by observers to share percepts).
+        (:class:`glarelab.experiments.looking.DisplayedSet`, shared by observers to share
+        percepts).
     """
 
     def __init__(self, protocol, participant: str, *, seed: int, stimuli):

@@ -39,12 +39,12 @@ import numpy as np
 import scipy.fft
 from scipy.signal import fftconvolve
 
-import glare
-from glare._convolve import FFT_WORKERS
-from glare.digitise import kernel_shape_for
-from glare.display import display_codes
-from protocols.atomic import atomic_open, write_bytes, write_text
-from stimuli.calibration import Calibration
+from glarelab import glare
+from glarelab.glare.models.digitise import kernel_shape_for
+from glarelab.glare.rendering._convolve import FFT_WORKERS
+from glarelab.glare.rendering.display import display_codes
+from glarelab.protocols.atomic import atomic_open, write_bytes, write_text
+from glarelab.stimuli.calibration import Calibration
 
 __all__ = ["WORKLOADS", "run_bench", "spectral_bench", "workload", "workload_names"]
 
@@ -427,9 +427,9 @@ FRESH_WARM = "add_glare, one call, fresh process, warm kernel cache"
 _FRESH_CALL = """
 import sys, time
 import numpy as np
-import glare
+from glarelab import glare
 from glarelab.bench import CALIBRATION, L_DMAX, _model, workload
-from stimuli.calibration import Calibration
+from glarelab.stimuli.calibration import Calibration
 
 name, model_name, out = sys.argv[1:4]
 image, pixel = workload(name)
@@ -499,7 +499,7 @@ def fresh_bench(name: str, model_name: str, repeats: int, log=print) -> dict:
 STARTUP_BASELINE = "import numpy, scipy.fft"
 STARTUP_CASES = {  # label → Python code, or None for the console command
     STARTUP_BASELINE: "import numpy, scipy.fft",
-    "import glare": "import glare",
+    "from glarelab import glare": "from glarelab import glare",
     "glarelab --version": None,
 }
 
@@ -550,7 +550,7 @@ def _wall_seconds(arguments: list[str]) -> float:
 
 
 def startup_bench(repeats: int = 5, log=print) -> list[dict]:
-    """Start-up: the imports of ``import numpy, scipy.fft``, ``import glare`` and
+    """Start-up: the imports of ``import numpy, scipy.fft``, ``from glarelab import glare`` and
     ``glarelab --version`` (``python -X importtime``), and each process's wall time; the
     median of ``repeats`` runs, the cases in turn, with each case's ratio to numpy and
     scipy.fft (the median of the per-round ratios)."""
@@ -624,9 +624,10 @@ def spectral_bench(
     """Wave-optics PSF (6 mm eye, lashes, lid, particles) as an RGB kernel: one FFT per
     wavelength (the reference, 61 wavelengths) against exactly rescaled copies of one FFT,
     Kakimoto's three wavelengths, and fewer wavelengths; time and CIEDE2000 against the
-    reference (:func:`glare.wave.kernel_colour_error`). The kernels are FFT samples rebinned
-    (``pixel_integration='rebin'``), the path whose cost these methods differ in: with exact
-    pixel integration one autocorrelation serves every wavelength (docs/speed-accuracy.md)."""
+    reference (:func:`glarelab.glare.models.wave.kernel_colour_error`). The kernels are FFT samples
+    rebinned (``pixel_integration='rebin'``), the path whose cost these methods differ in: with
+    exact pixel integration one autocorrelation serves every wavelength
+    (docs/speed-accuracy.md)."""
 
     def kernel(**options):
         model = glare.WaveOpticsGlare(pupil_mm=6.0, pixel_integration="rebin", **options)
@@ -855,7 +856,7 @@ def _pareto(results: list[dict], title: str, path: Path) -> None:
     peers are squares, the plan's points are joined (its tolerance is the knob)."""
     from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
-    from analysis.figures import plt, png
+    from glarelab.analysis.figures import plt, png
 
     floor = 1e-4  # errors below this are drawn on it (a log axis has no zero)
     markers = "oD^v<>phX*P"  # squares are for peers

@@ -26,12 +26,12 @@ from pathlib import Path
 import numpy as np
 from scipy import ndimage
 
-import glare
-from glare.acuity import blur_sigma_deg, layers_error_bound
-from glare.display import display_codes
-from protocols.atomic import atomic_open, write_text
-from stimuli.calibration import synthetic_calibration
-from stimuli.night import night_street
+from glarelab import glare
+from glarelab.glare.night.acuity import blur_sigma_deg, layers_error_bound
+from glarelab.glare.rendering.display import display_codes
+from glarelab.protocols.atomic import atomic_open, write_text
+from glarelab.stimuli.calibration import synthetic_calibration
+from glarelab.stimuli.night import night_street
 
 from .bench import _timed
 

@@ -23,7 +23,9 @@ from .commands.common import HelpFormatter, Parser
 from .commands.common import log as _log
 
 __all__ = ["main"]  # and build_model, the render command's, imported on use
-NO_CACHE_ENV = "GLARELAB_NO_CACHE"  # glare.cache.NO_CACHE_ENV, without importing glare
+NO_CACHE_ENV = (
+    "GLARELAB_NO_CACHE"  # glarelab.glare.models.cache.NO_CACHE_ENV, without importing glare
+)
 
 
 def __getattr__(name: str):
@@ -75,9 +77,9 @@ def _parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
 
 def _refusal(error: BaseException) -> str | None:
     """The one-line message of an anticipated error, or None for a bug."""
-    from analysis.load import DataError
-    from protocols import ProtocolError
-    from stimuli.photometer import PhotometerError, PluginMissing
+    from glarelab.analysis.load import DataError
+    from glarelab.protocols import ProtocolError
+    from glarelab.stimuli.photometer import PhotometerError, PluginMissing
 
     if isinstance(error, ProtocolError | DataError | PhotometerError | PluginMissing):
         return str(error)
@@ -123,7 +125,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser = _parser(argv)
         args = parser.parse_args(argv)
         command = args.command
-        from experiments.loop import SessionAborted
+        from glarelab.experiments.loop import SessionAborted
 
         if args.no_cache:  # for this command and the processes it starts (Dask workers)
             os.environ[NO_CACHE_ENV] = "1"

@@ -6,7 +6,7 @@ participants through the same session loop a lab session uses, analyse their CSV
 ``report.html``. The output folder is the demo's own: its stimuli, data and report are
 replaced on each run, and a folder holding any file the demo did not write there (a
 participant's session, a user's notes, a link to another folder) is refused untouched
-(:mod:`protocols.folders`).
+(:mod:`glarelab.protocols.folders`).
 """
 
 from __future__ import annotations
@@ -15,11 +15,20 @@ import shutil
 from collections.abc import Callable
 from pathlib import Path
 
-from analysis.report import write_report
-from experiments.session import SimulatedFrontend, make_observer, run_session, shows_images
-from protocols import load_protocol
-from protocols.folders import check_replaceable, record_files
-from stimuli.stimulus_set import build_stimulus_set, default_calibration, verify_stimulus_set
+from glarelab.analysis.report import write_report
+from glarelab.experiments.session import (
+    SimulatedFrontend,
+    make_observer,
+    run_session,
+    shows_images,
+)
+from glarelab.protocols import load_protocol
+from glarelab.protocols.folders import check_replaceable, record_files
+from glarelab.stimuli.stimulus_set import (
+    build_stimulus_set,
+    default_calibration,
+    verify_stimulus_set,
+)
 
 __all__ = ["run_demo"]
 

@@ -3,9 +3,16 @@
 
 from __future__ import annotations
 
-from protocols import COMMON, DATA_FORMAT, PARADIGMS, columns, describe_schema, load_protocol
-from protocols.common import BACKGROUNDS
-from protocols.rating import SCENE
+from glarelab.protocols import (
+    COMMON,
+    DATA_FORMAT,
+    PARADIGMS,
+    columns,
+    describe_schema,
+    load_protocol,
+)
+from glarelab.protocols.common import BACKGROUNDS
+from glarelab.protocols.rating import SCENE
 
 __all__ = ["data_reference", "protocol_reference"]
 
@@ -34,7 +41,8 @@ def protocol_reference() -> str:
     lines += [
         "## Backgrounds",
         "",
-        "A background is a table with `kind` and the keys of that kind (`stimuli.backgrounds`):",
+        "A background is a table with `kind` and the keys of that kind",
+        "(`glarelab.stimuli.backgrounds`):",
         "",
         "| kind | key | unit | allowed | meaning |",
         "| --- | --- | --- | --- | --- |",
@@ -49,7 +57,8 @@ def protocol_reference() -> str:
         "",
         "## Night scenes",
         "",
-        "A rating study's `[scene]` (`stimuli.night`), shown once per `[[conditions]]` before its",
+        "A rating study's `[scene]` (`glarelab.stimuli.night`), shown once per `[[conditions]]`",
+        "before its",
         "questions, rendered through `glare.render_night` with the condition's effects; it",
         "needs `[display]` and `[viewing]` as the other paradigms have them:",
         "",

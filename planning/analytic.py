@@ -27,9 +27,8 @@ from collections.abc import Sequence
 
 import numpy as np
 import pandas as pd
+from glarelab.planning.effects import anova_effects
 from scipy import stats as sps
-
-from .effects import anova_effects
 
 __all__ = ["OneWayJob", "noncentrality", "one_way_power"]
 
@@ -99,11 +98,12 @@ def one_way_power(
 
 class OneWayJob:
     """Simulated studies of the one-way design of the module docstring, analysed by
-    :func:`analysis.stats.rm_anova` (the function every paradigm's ANOVA uses), as tasks of
-    :func:`planning.execute.run_tasks` whose records :func:`planning.power.summarise` reads.
+    :func:`glarelab.analysis.stats.rm_anova` (the function every paradigm's ANOVA uses), as tasks
+    of :func:`glarelab.planning.execute.run_tasks` whose records
+    :func:`glarelab.planning.power.summarise` reads.
 
     Replication ``r`` draws from ``numpy.random.default_rng([seed, r])``; the sample sizes of
-    one replication share their first subjects, as in :mod:`planning.simulate`.
+    one replication share their first subjects, as in :mod:`glarelab.planning.simulate`.
     """
 
     kind = "one-way"
@@ -129,7 +129,7 @@ class OneWayJob:
         self.seed = seed
 
     def run(self, replication: int) -> dict:
-        from analysis.stats import rm_anova
+        from glarelab.analysis.stats import rm_anova
 
         rng = np.random.default_rng([self.seed, replication])
         n, k = max(self.participants), self.means.size

@@ -11,12 +11,12 @@ test:
   squared.
 - **t-tests** (matching, the methods at the levels the protocol names): the paired two-sided
   test (the one that fits the repeated-measures design) and Welch's one-sided test (the one
-  consistent with Yoshida 2008's ``t(14)``), as :mod:`analysis.matching` reports them; effect
-  size Cohen's ``d`` (paired: ``d_z = t / √n``; Welch with two groups of ``n``:
+  consistent with Yoshida 2008's ``t(14)``), as :mod:`glarelab.analysis.matching` reports them;
+  effect size Cohen's ``d`` (paired: ``d_z = t / √n``; Welch with two groups of ``n``:
   ``d = t √(2 / n)``).
 - **Wilcoxon signed-rank tests** (rating, each category against the scale's midpoint,
-  Holm-corrected across categories, as :mod:`analysis.rating` reports them); effect size the
-  matched-pairs rank-biserial correlation ``r = 4 V / (m (m + 1)) − 1`` over the ``m`` ratings
+  Holm-corrected across categories, as :mod:`glarelab.analysis.rating` reports them); effect size
+  the matched-pairs rank-biserial correlation ``r = 4 V / (m (m + 1)) − 1`` over the ``m`` ratings
   that differ from the midpoint (Kerby 2014).
 
 Which p an ANOVA effect is judged by is chosen later (:func:`chosen_p`), so one simulation
@@ -62,7 +62,7 @@ def _number(value) -> float | None:
 
 
 def anova_effects(table: pd.DataFrame, *, prefix: str | None = None) -> list[dict]:
-    """The rows of an ANOVA table (:func:`analysis.stats.rm_anova`, optionally with an
+    """The rows of an ANOVA table (:func:`glarelab.analysis.stats.rm_anova`, optionally with an
     ``analysis`` column) as effects."""
     rows = []
     for row in table.itertuples(index=False):

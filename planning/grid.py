@@ -28,7 +28,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from protocols import ProtocolError, parse_protocol, protocol_path
+from glarelab.protocols import ProtocolError, parse_protocol, protocol_path
 
 __all__ = ["GridError", "Point", "Setting", "apply_setting", "grid", "parse_setting"]
 

@@ -2,13 +2,13 @@
 effect is significant, with its binomial confidence interval, the distribution of its effect
 size, and the smallest sample size that reaches a target power.
 
-:func:`power_analysis` runs a protocol's replications (:mod:`planning.simulate`) on Dask
-(:mod:`planning.execute`) into a folder, resuming what is there, and writes:
+:func:`power_analysis` runs a protocol's replications (:mod:`glarelab.planning.simulate`) on Dask
+(:mod:`glarelab.planning.execute`) into a folder, resuming what is there, and writes:
 
 - ``power.csv``: one row per effect and sample size: ``effect, participants, power, ci_low,
   ci_high, significant, replications, failed, p_used, lower_bound`` (``p_used``: which p judged
-  it, :func:`planning.effects.chosen_p`; ``lower_bound``: the share of replications in which
-  sphericity was not estimable and the lower-bound correction was used);
+  it, :func:`glarelab.planning.effects.chosen_p`; ``lower_bound``: the share of replications in
+  which sphericity was not estimable and the lower-bound correction was used);
 - ``effect_sizes.csv``: per effect and sample size, the effect size's name, mean, SD and the
   5, 25, 50, 75 and 95 % quantiles over replications;
 - ``recommended.csv``: per effect, the smallest sample size whose power reaches the target,
@@ -39,10 +39,8 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-
-from protocols.atomic import write_bytes, write_text
-
-from .effects import CORRECTIONS, Correction, chosen_p
+from glarelab.planning.effects import CORRECTIONS, Correction, chosen_p
+from glarelab.protocols.atomic import write_bytes, write_text
 
 __all__ = [
     "binomial_interval",
@@ -59,7 +57,7 @@ __all__ = [
 RUN_FORMAT = "glarelab power run v1"
 MAX_PARTICIPANTS = 999
 """The largest sample size: participants are numbered with three digits
-(:func:`planning.simulate.participant_id`)."""
+(:func:`glarelab.planning.simulate.participant_id`)."""
 QUANTILES = (0.05, 0.25, 0.5, 0.75, 0.95)
 
 
@@ -99,11 +97,11 @@ def summarise(
     ----------
     records
         One per replication, in replication order: ``results`` (rows with ``n``, ``effect``
-        and the fields of :func:`planning.effects.effects`) and ``failures``.
+        and the fields of :func:`glarelab.planning.effects.effects`) and ``failures``.
     alpha
         Significance level (default 0.05).
     correction
-        How ANOVA effects are judged (:func:`planning.effects.chosen_p`; default ``"gg"``,
+        How ANOVA effects are judged (:func:`glarelab.planning.effects.chosen_p`; default ``"gg"``,
         the p the suite's reports state).
     level
         Confidence level of the power's interval (default 0.95).
@@ -220,7 +218,7 @@ def _groups(effects: list[str]) -> dict[str, list[str]]:
 
 def power_figure(power: pd.DataFrame, *, target: float, alpha: float, title: str) -> bytes:
     """Power curves with their confidence intervals, one panel per analysis (PNG bytes)."""
-    from analysis.figures import plt, png
+    from glarelab.analysis.figures import plt, png
 
     groups = _groups(list(dict.fromkeys(power["effect"])))
     columns = min(len(groups), 3)
@@ -264,7 +262,7 @@ def power_figure(power: pd.DataFrame, *, target: float, alpha: float, title: str
 def effect_size_figure(sizes: pd.DataFrame, *, title: str) -> bytes:
     """Median effect size with its 5-95 % and 25-75 % ranges against the sample size, one
     panel per analysis (PNG bytes)."""
-    from analysis.figures import plt, png
+    from glarelab.analysis.figures import plt, png
 
     groups = _groups(list(dict.fromkeys(sizes["effect"])))
     columns = min(len(groups), 3)
@@ -363,7 +361,7 @@ def check_run_folder(out: str | Path, run: dict) -> None:
 
 def _check_stimuli(stimuli: Path, protocol) -> None:
     """Refuse a stimulus set that is damaged or of another protocol."""
-    from stimuli.stimulus_set import verify_stimulus_set
+    from glarelab.stimuli.stimulus_set import verify_stimulus_set
 
     problems = verify_stimulus_set(stimuli)
     if problems:
@@ -411,17 +409,18 @@ def power_analysis(
         The simulated observers' seed: with it, the results are the same on any number of
         workers and after any interruption.
     alpha, correction, target
-        Significance level, how ANOVA effects are judged (:func:`planning.effects.chosen_p`)
-        and the power wanted (for ``recommended.csv``).
+        Significance level, how ANOVA effects are judged
+        (:func:`glarelab.planning.effects.chosen_p`) and the power wanted (for
+        ``recommended.csv``).
     stimuli
         The protocol's stimulus set (default: built once into the cache,
-        :func:`stimuli.stimulus_set.cached_stimulus_set`).
+        :func:`glarelab.stimuli.stimulus_set.cached_stimulus_set`).
     client
-        A :class:`distributed.Client` (:func:`planning.execute.dask_client`), or None to run
-        here without Dask.
+        A :class:`distributed.Client` (:func:`glarelab.planning.execute.dask_client`), or None to
+        run here without Dask.
     scratch
         Folder for the simulated sessions' files (default
-        :func:`planning.simulate.default_scratch`, on each worker).
+        :func:`glarelab.planning.simulate.default_scratch`, on each worker).
     log, progress
         Progress messages, and whether to show the progress bar.
 
@@ -435,11 +434,10 @@ def power_analysis(
     ValueError
         For bad arguments (named), or an ``out`` holding replications of other inputs.
     """
-    from experiments.session import shows_images
-    from stimuli.stimulus_set import cached_stimulus_set
-
-    from .execute import Progress, ResultLog, run_tasks
-    from .simulate import PowerJob
+    from glarelab.experiments.session import shows_images
+    from glarelab.planning.execute import Progress, ResultLog, run_tasks
+    from glarelab.planning.simulate import PowerJob
+    from glarelab.stimuli.stimulus_set import cached_stimulus_set
 
     sizes = sorted(set(int(n) for n in participants))
     if not sizes or sizes[0] < 2 or sizes[-1] > MAX_PARTICIPANTS:

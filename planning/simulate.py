@@ -2,16 +2,17 @@
 protocol's analysis, at each sample size.
 
 A replication runs the largest sample size's participants through
-:func:`experiments.session.run_session` (a :class:`experiments.session.SimulatedFrontend` driven
-by :func:`experiments.session.make_observer`, as ``glarelab run --simulate`` does) into a
-scratch folder, then the paradigm's analysis (:mod:`analysis.paradigms`, its tests alone) on the
-first ``n`` participants for each sample size ``n``. The sample sizes of one replication share
-their participants (common random numbers): each sample size's power is estimated from
-independent replications, and the differences between sample sizes are estimated more
-precisely than from separate studies.
+:func:`glarelab.experiments.session.run_session` (a
+:class:`glarelab.experiments.session.SimulatedFrontend` driven by
+:func:`glarelab.experiments.session.make_observer`, as ``glarelab run --simulate`` does) into a
+scratch folder, then the paradigm's analysis (:mod:`glarelab.analysis.paradigms`, its tests alone)
+on the first ``n`` participants for each sample size ``n``. The sample sizes of one replication
+share their participants (common random numbers): each sample size's power is estimated from
+independent replications, and the differences between sample sizes are estimated more precisely
+than from separate studies.
 
 Participant ids, and with them every random draw (the observer's gain, its noise on every
-trial, the trial order; :func:`experiments.engine.participant_rng`), follow from the power
+trial, the trial order; :func:`glarelab.experiments.engine.participant_rng`), follow from the power
 seed, the replication and the participant's number alone, so a replication gives the same
 result on any worker, in any order, in any run.
 """
@@ -24,14 +25,18 @@ import tempfile
 import threading
 from pathlib import Path
 
-from analysis.load import load_sessions
-from analysis.paradigms import PARADIGMS
-from experiments.data import session_files
-from experiments.looking import DisplayedSet
-from experiments.session import SimulatedFrontend, make_observer, run_session, shows_images
-from stimuli.stimulus_set import StimulusSet, cached_stimulus_set, verify_stimulus_set
-
-from .effects import effects
+from glarelab.analysis.load import load_sessions
+from glarelab.analysis.paradigms import PARADIGMS
+from glarelab.experiments.data import session_files
+from glarelab.experiments.looking import DisplayedSet
+from glarelab.experiments.session import (
+    SimulatedFrontend,
+    make_observer,
+    run_session,
+    shows_images,
+)
+from glarelab.planning.effects import effects
+from glarelab.stimuli.stimulus_set import StimulusSet, cached_stimulus_set, verify_stimulus_set
 
 __all__ = ["PowerJob", "default_scratch", "participant_id", "simulate_replication"]
 
@@ -94,8 +99,8 @@ def simulate_replication(
     -------
     dict
         ``replication``; ``results``, one row per sample size and effect
-        (:func:`planning.effects.effects` plus ``n``); ``failures``, the sample sizes whose
-        analysis refused the data, with why.
+        (:func:`glarelab.planning.effects.effects` plus ``n``); ``failures``, the sample sizes
+        whose analysis refused the data, with why.
     """
     largest = max(participants)
     if displayed is None and stimuli is not None:
@@ -133,12 +138,12 @@ def simulate_replication(
 
 
 class PowerJob:
-    """The replications of a power analysis as tasks (see :mod:`planning.execute`).
+    """The replications of a power analysis as tasks (see :mod:`glarelab.planning.execute`).
 
-    Each worker thread looks at its own :class:`experiments.looking.DisplayedSet` of the
+    Each worker thread looks at its own :class:`glarelab.experiments.looking.DisplayedSet` of the
     stimulus set, made once (:meth:`setup`) and kept for every replication it runs. A worker
     that cannot read ``stimuli`` (a cluster without a shared file system) builds the protocol's
-    set into its own cache (:func:`stimuli.stimulus_set.cached_stimulus_set`).
+    set into its own cache (:func:`glarelab.stimuli.stimulus_set.cached_stimulus_set`).
     """
 
     kind = "power"

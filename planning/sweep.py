@@ -1,13 +1,13 @@
 """The stimulus sets of a grid of protocol parameters, each built (and optionally simulated) as
 one task on Dask.
 
-For the grid of :func:`planning.grid.grid`, point ``i`` is built into ``OUT/sets/iii/``: a
+For the grid of :func:`glarelab.planning.grid.grid`, point ``i`` is built into ``OUT/sets/iii/``: a
 stimulus set with its own ``manifest.json`` (the point's validated protocol, its hash, every
-file's sha256; :func:`stimuli.stimulus_set.build_stimulus_set`). With ``simulate = N``,
+file's sha256; :func:`glarelab.stimuli.stimulus_set.build_stimulus_set`). With ``simulate = N``,
 ``N`` simulated observers run on it (``OUT/simulated/iii/data``), are analysed
-(``OUT/simulated/iii/report``, :func:`analysis.report.write_report`) and the tests of the
-analysis are listed in ``OUT/effects.csv`` (:mod:`planning.effects`). ``OUT/index.csv`` (and
-``index.json``) has one row per point: its number, the value of each key varied, its folder,
+(``OUT/simulated/iii/report``, :func:`glarelab.analysis.report.write_report`) and the tests of the
+analysis are listed in ``OUT/effects.csv`` (:mod:`glarelab.planning.effects`). ``OUT/index.csv``
+(and ``index.json``) has one row per point: its number, the value of each key varied, its folder,
 the protocol's and the manifest's sha256, the number of images, and the build time.
 
 A point whose set is already in place, verified against its manifest and built from the same
@@ -28,10 +28,8 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import pandas as pd
-
-from protocols.atomic import write_bytes, write_text
-
-from .grid import Point, Setting, grid
+from glarelab.planning.grid import Point, Setting, grid
+from glarelab.protocols.atomic import write_bytes, write_text
 
 __all__ = ["MAX_POINTS", "SweepJob", "prepare", "sweep"]
 
@@ -44,7 +42,7 @@ def _manifest_sha(folder: Path) -> str:
 
 
 def _in_place(folder: Path, protocol) -> bool:
-    from stimuli.stimulus_set import verify_stimulus_set
+    from glarelab.stimuli.stimulus_set import verify_stimulus_set
 
     if not (folder / "manifest.json").is_file() or verify_stimulus_set(folder):
         return False
@@ -53,7 +51,7 @@ def _in_place(folder: Path, protocol) -> bool:
 
 
 class SweepJob:
-    """The points of a grid as tasks of :func:`planning.execute.run_tasks`."""
+    """The points of a grid as tasks of :func:`glarelab.planning.execute.run_tasks`."""
 
     kind = "sweep"
 
@@ -65,8 +63,8 @@ class SweepJob:
 
     def run(self, index: int) -> dict:
         """Build point ``index``'s set (unless in place), simulate it if asked."""
-        from experiments.session import shows_images
-        from stimuli.stimulus_set import build_stimulus_set, default_calibration
+        from glarelab.experiments.session import shows_images
+        from glarelab.stimuli.stimulus_set import build_stimulus_set, default_calibration
 
         point = self.points[index]
         protocol = point.protocol
@@ -107,12 +105,11 @@ class SweepJob:
         return record
 
     def _simulate(self, index: int, protocol, folder: Path | None) -> list[dict]:
-        from analysis.load import load_sessions
-        from analysis.paradigms import PARADIGMS
-        from analysis.report import write_report
-        from experiments.session import SimulatedFrontend, make_observer, run_session
-
-        from .effects import effects
+        from glarelab.analysis.load import load_sessions
+        from glarelab.analysis.paradigms import PARADIGMS
+        from glarelab.analysis.report import write_report
+        from glarelab.experiments.session import SimulatedFrontend, make_observer, run_session
+        from glarelab.planning.effects import effects
 
         where = self.out / "simulated" / f"{index:03d}"
         shutil.rmtree(where, ignore_errors=True)
@@ -150,14 +147,14 @@ def prepare(
 
     Raises
     ------
-    planning.grid.GridError
+    glarelab.planning.grid.GridError
         For a bad key or value, or points that do not validate.
     ValueError
         For a protocol that shows no images without ``simulate``, ``simulate`` of 1, a point
         whose observers cannot be simulated, or an ``out`` holding a sweep of other inputs.
     """
-    from experiments.paradigms import PARADIGMS
-    from experiments.session import shows_images
+    from glarelab.experiments.paradigms import PARADIGMS
+    from glarelab.experiments.session import shows_images
 
     if isinstance(simulate, bool) or not isinstance(simulate, int) or simulate < 0:
         raise ValueError(f"simulate must be a whole number >= 0; got {simulate!r}")
@@ -219,7 +216,7 @@ def sweep(
     protocol
         A shipped study's name or a protocol TOML file.
     settings
-        The keys varied and their values (:func:`planning.grid.parse_setting`).
+        The keys varied and their values (:func:`glarelab.planning.grid.parse_setting`).
     out
         Output folder (module docstring); a rerun resumes it.
     simulate, seed
@@ -231,10 +228,10 @@ def sweep(
 
     Raises
     ------
-    planning.grid.GridError, ValueError
+    glarelab.planning.grid.GridError, ValueError
         As :func:`prepare`, before anything is built or written.
     """
-    from .execute import Progress, ResultLog, run_tasks
+    from glarelab.planning.execute import Progress, ResultLog, run_tasks
 
     points, config = prepare(protocol, settings, out, simulate=simulate, seed=seed)
     out = Path(out)

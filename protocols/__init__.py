@@ -2,13 +2,13 @@
 
 A protocol is a TOML file that names its paradigm (matching, staircase, rating) and says
 everything the study needs; the shipped studies' files live in this package. The session CSV
-format is derived from the protocol here too (:mod:`protocols.columns`), so the experiments that
-write data and the analysis that reads it agree by construction. This package imports nothing
-of the suite but :mod:`glare` (to check glare models' parameters).
+format is derived from the protocol here too (:mod:`glarelab.protocols.columns`), so the
+experiments that write data and the analysis that reads it agree by construction. This package
+imports nothing of the suite but :mod:`glare` (to check glare models' parameters).
 """
 
-from .columns import COMMON, DATA_FORMAT, Column, columns, format_value
-from .core import (
+from glarelab.protocols.columns import COMMON, DATA_FORMAT, Column, columns, format_value
+from glarelab.protocols.core import (
     PARADIGMS,
     SHIPPED,
     Protocol,
@@ -19,7 +19,7 @@ from .core import (
     protocol_path,
     shipped_protocols,
 )
-from .keys import Key, ProtocolError, Tables
+from glarelab.protocols.keys import Key, ProtocolError, Tables
 
 __all__ = [
     "COMMON",

@@ -8,7 +8,7 @@ a symbolic link at the final name rather than writing through it.
 
 A temporary file of a process that was killed is named ``.NAME.partial-PID.SUFFIX``; the next
 write of the same file removes it. Session CSVs are the one exception: they are appended to
-and flushed trial by trial (:mod:`experiments.data`), so that a crash loses no trial.
+and flushed trial by trial (:mod:`glarelab.experiments.data`), so that a crash loses no trial.
 """
 
 from __future__ import annotations

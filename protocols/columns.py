@@ -81,7 +81,7 @@ COMMON = (
 def columns(protocol) -> tuple[Column, ...]:
     """Every column of a protocol's session CSV, in file order: :data:`COMMON`, then those its
     paradigm derives from the protocol (methods, levels, questions, contexts, scale)."""
-    from .core import PARADIGMS
+    from glarelab.protocols.core import PARADIGMS
 
     return COMMON + PARADIGMS[protocol.paradigm].columns(protocol)
 

@@ -9,7 +9,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from .keys import Key, Schema, validate
+from glarelab.protocols.keys import Key, Schema, validate
 
 __all__ = [
     "BACKGROUNDS",
@@ -155,7 +155,7 @@ def check_background(
 
 
 def _glare_models() -> tuple[str, ...]:
-    from glare import GLARE_MODELS
+    from glarelab.glare import GLARE_MODELS
 
     return tuple(GLARE_MODELS)
 
@@ -175,7 +175,7 @@ def glare_model(model: str, parameters: Mapping[str, Any]):
     of a parameter whose default is one (``hybrid``'s ``wave``)."""
     import dataclasses
 
-    from glare import GLARE_MODELS, make_model
+    from glarelab.glare import GLARE_MODELS, make_model
 
     cls = GLARE_MODELS.get(model)
     values = dict(parameters)

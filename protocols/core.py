@@ -19,9 +19,9 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-from . import matching, rating, staircase
-from .common import display_pixel_deg
-from .keys import Key, ProtocolError, Schema, Tables, validate
+from glarelab.protocols import matching, rating, staircase
+from glarelab.protocols.common import display_pixel_deg
+from glarelab.protocols.keys import Key, ProtocolError, Schema, Tables, validate
 
 __all__ = [
     "PARADIGMS",

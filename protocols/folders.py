@@ -23,7 +23,7 @@ import shutil
 from collections.abc import Iterable
 from pathlib import Path
 
-from .atomic import _alive, fsync_folder, glob_escape, write_text
+from glarelab.protocols.atomic import _alive, fsync_folder, glob_escape, write_text
 
 __all__ = [
     "LISTING",

@@ -13,8 +13,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .columns import COMMON, Column
-from .common import (
+from glarelab.protocols.columns import COMMON, Column
+from glarelab.protocols.common import (
     BREAK_EVERY,
     DISPLAY,
     INSTRUCTIONS,
@@ -25,7 +25,7 @@ from .common import (
     check_methods,
     display_pixel_deg,
 )
-from .keys import Key, Schema, Tables
+from glarelab.protocols.keys import Key, Schema, Tables
 
 __all__ = ["SCHEMA", "check", "columns", "reference_name"]
 
@@ -128,7 +128,8 @@ SCHEMA: Schema = {
     },
     "observer": Key(
         dict,
-        "simulated observers' parameters (experiments.perception); empty: the fitted defaults",
+        "simulated observers' parameters (glarelab.experiments.perception); empty: the fitted"
+        " defaults",
         default={},
     ),
 }

@@ -4,7 +4,7 @@ Each category is rated on a scale of number keys (Luidolt: 1 = completely differ
 exactly the same), optionally with a typed comment.
 
 A study that shows what it asks about adds a ``[scene]`` (a rendered night scene, still or a
-sequence, see :mod:`stimuli.night`) and ``[[conditions]]``: the pipeline of
+sequence, see :mod:`glarelab.stimuli.night`) and ``[[conditions]]``: the pipeline of
 :func:`glare.render_night` with a set of its effects each. Every condition's scene is shown,
 frame-exact, before its questions; the rows name the condition.
 """
@@ -13,15 +13,20 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .columns import Column
-from .common import DISPLAY, INSTRUCTIONS, VIEWING, check_display
-from .keys import Key, Schema, Tables, validate
+from glarelab.protocols.columns import Column
+from glarelab.protocols.common import DISPLAY, INSTRUCTIONS, VIEWING, check_display
+from glarelab.protocols.keys import Key, Schema, Tables, validate
 
 __all__ = ["CONDITION", "EFFECTS", "SCENE", "SCHEMA", "check", "columns"]
 
-EFFECTS = ("adaptation", "glare", "acuity", "scotopic")  # glare.night.EFFECTS, Luidolt's order
+EFFECTS = (
+    "adaptation",
+    "glare",
+    "acuity",
+    "scotopic",
+)  # glarelab.glare.night.EFFECTS, Luidolt's order
 SCENE: Schema = {
-    "kind": Key(str, "the procedural scene (stimuli.night)", choices=("street",)),
+    "kind": Key(str, "the procedural scene (glarelab.stimuli.night)", choices=("street",)),
     "size_px": Key(list, "scene size (width, height)", item=int, length=2, low=16, high=4096),
     "pixel_deg": Key(
         float,
@@ -195,7 +200,7 @@ def _check_scene(p: dict, problems: list[str]) -> None:
         problems.append(f"conditions: names repeat {repeated}: each must be different")
     model = p["scene"]["glare_model"]
     if any("glare" in c["effects"] for c in conditions):
-        from .common import check_glare_model
+        from glarelab.protocols.common import check_glare_model
 
         check_glare_model(model, p["scene"]["glare_parameters"], "scene", problems)
     rate_hz, refresh_hz = p["scene"]["frame_rate_hz"], p["display"]["refresh_hz"]

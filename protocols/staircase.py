@@ -11,8 +11,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .columns import Column
-from .common import (
+from glarelab.protocols.columns import Column
+from glarelab.protocols.common import (
     BREAK_EVERY,
     DISPLAY,
     INSTRUCTIONS,
@@ -21,7 +21,7 @@ from .common import (
     check_display,
     check_glare_model,
 )
-from .keys import Key, Schema, Tables
+from glarelab.protocols.keys import Key, Schema, Tables
 
 __all__ = ["SCHEMA", "check", "columns", "comparison_terms", "glare_name"]
 
@@ -138,7 +138,8 @@ SCHEMA: Schema = {
     "instructions": INSTRUCTIONS,
     "observer": Key(
         dict,
-        "simulated observers' parameters (experiments.perception); empty: the fitted defaults",
+        "simulated observers' parameters (glarelab.experiments.perception); empty: the fitted"
+        " defaults",
         default={},
     ),
 }

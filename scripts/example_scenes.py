@@ -8,9 +8,8 @@ the files are the same on every run.
 from pathlib import Path
 
 import numpy as np
-
-from stimuli.exr import write_exr
-from stimuli.sky import cloudy_sky
+from glarelab.stimuli.exr import write_exr
+from glarelab.stimuli.sky import cloudy_sky
 
 PIXEL_DEG = 0.0119  # the README's --pixel-deg: Yoshida et al.'s display at 1 m
 SHAPE = (160, 240)  # 1.9° × 2.9°

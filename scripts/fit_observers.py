@@ -13,18 +13,19 @@ and is what ``tests/test_fit_observers.py`` runs.
 
 What it does, deterministically (fixed seeds, common random numbers), in about two minutes:
 
-1. **Perceives every image once** with :class:`experiments.perception.BrightnessModel`: the 12
+1. **Perceives every image once** with :class:`glarelab.experiments.perception.BrightnessModel`:
+the 12
    Yoshida references, glare-free targets on a grid of disk luminances (composed from the set's
    background and coverage images, as the experiment shows them), Spencer's 24 glare images and
    the comparison images on a grid of disc intensities. The glow, ring, apparent size and disk
    luminance of an image do not depend on the fitted parameters, so each image is looked at once
    per glow band and only the brightness equation is re-evaluated during the fit.
 2. **Simulates 10-observer Yoshida studies** with the equations of
-   :class:`experiments.perception.Observer` (vectorised): each observer draws a gain, sets the
-   darker and brighter targets, inverted through the targets' own percepts, rounded to the
+   :class:`glarelab.experiments.perception.Observer` (vectorised): each observer draws a gain, sets
+   the darker and brighter targets, inverted through the targets' own percepts, rounded to the
    1 cd/m² fine step and bounded by the display; the match is their mean. The 6 × 2
    repeated-measures ANOVA, the {A, B, C} and {D, E, F} ANOVAs and Welch's t at D, E, F are
-   computed for every study (checked against :func:`analysis.stats.rm_anova`).
+   computed for every study (checked against :func:`glarelab.analysis.stats.rm_anova`).
 3. **Fits** the glow band ``w`` (on a grid) and, within each band, ``β`` (glow gain),
    ``G_50``, ``α`` (size exponent), the gain SD and the setting SD by Nelder–Mead. The misfit
    is the sum of the squared z-scores of the paper's statistics among the simulated studies'
@@ -59,10 +60,10 @@ from scipy.optimize import minimize
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from analysis.figures import plt, png  # noqa: E402
-from analysis.stats import pairwise_tests, rm_anova, similarity_groups  # noqa: E402
-from experiments.perception import BrightnessModel, ObserverNoise  # noqa: E402
-from stimuli.exr import read_exr  # noqa: E402
+from glarelab.analysis.figures import plt, png  # noqa: E402
+from glarelab.analysis.stats import pairwise_tests, rm_anova, similarity_groups  # noqa: E402
+from glarelab.experiments.perception import BrightnessModel, ObserverNoise  # noqa: E402
+from glarelab.stimuli.exr import read_exr  # noqa: E402
 
 # --- the papers' numbers ----------------------------------------------------------------------
 YOSHIDA_F = {  # Yoshida 2008 §5
@@ -233,7 +234,8 @@ def _brightness(model: BrightnessModel, f: dict) -> float:
 def rm_f(y: np.ndarray) -> dict:
     """F of the two-way repeated-measures ANOVA for ``y[study, subject, a, b]``: the main
     effects of ``a`` and ``b`` and their interaction (the sums of squares of a fully within
-    design; equal to :func:`analysis.stats.rm_anova`, see :func:`check_against_rm_anova`)."""
+    design; equal to :func:`glarelab.analysis.stats.rm_anova`, see
+    :func:`check_against_rm_anova`)."""
     _, n, a, b = y.shape
     m = y.mean((1, 2, 3), keepdims=True)
     s = y.mean((2, 3), keepdims=True)
@@ -282,7 +284,7 @@ def yoshida_statistics(match: np.ndarray) -> dict:
 
 
 def check_against_rm_anova(match: np.ndarray, studies: int = 3) -> None:
-    """The vectorised F values equal :func:`analysis.stats.rm_anova` on the same data."""
+    """The vectorised F values equal :func:`glarelab.analysis.stats.rm_anova` on the same data."""
     mine = yoshida_statistics(match[:studies])
     for k in range(studies):
         rows = [
@@ -859,11 +861,12 @@ def markdown(summary: dict, yoshida: dict) -> str:
 
 def _stimuli(folder: Path | None, study: str) -> Path:
     """The given set's folder, or the study's set built once into the cache with the synthetic
-    calibration ``glarelab demo`` uses (:func:`stimuli.stimulus_set.cached_stimulus_set`)."""
+    calibration ``glarelab demo`` uses
+    (:func:`glarelab.stimuli.stimulus_set.cached_stimulus_set`)."""
     if folder is not None:
         return folder
-    from protocols import load_protocol
-    from stimuli.stimulus_set import cached_stimulus_set
+    from glarelab.protocols import load_protocol
+    from glarelab.stimuli.stimulus_set import cached_stimulus_set
 
     print(f"the {study} stimulus set (built once into the cache) ...", flush=True)
     return cached_stimulus_set(load_protocol(ROOT / "protocols" / f"{study}.toml"))

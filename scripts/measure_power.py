@@ -22,10 +22,10 @@ import tempfile
 import time
 from pathlib import Path
 
-from planning.execute import ResultLog, dask_client, run_tasks
-from planning.simulate import PowerJob
-from protocols import load_protocol
-from stimuli.stimulus_set import cached_stimulus_set
+from glarelab.planning.execute import ResultLog, dask_client, run_tasks
+from glarelab.planning.simulate import PowerJob
+from glarelab.protocols import load_protocol
+from glarelab.stimuli.stimulus_set import cached_stimulus_set
 
 
 class TimedJob:

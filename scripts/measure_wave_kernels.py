@@ -28,7 +28,7 @@ from scipy.special import j1
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from glare import WaveOpticsGlare
+from glarelab.glare import WaveOpticsGlare
 
 CAMERA = {"eyelashes": False, "eyelid": False, "particles": 0}
 

@@ -3,10 +3,11 @@
 
 Each seed is one study as ``glarelab demo --protocol yoshida2008`` runs it (seed 1 is the demo):
 participants ``sim01`` … ``sim10`` through the session loop a lab session uses
-(:func:`experiments.session.run_session` driven by :func:`experiments.session.make_observer`),
-their CSVs through the protocol's own analysis (``analyse(..., tests_only=True)``) and its tests
-read as effects (:func:`planning.effects.effects`), as ``glarelab power`` reads them. Run from
-the repository's root (about 1 s per study on one core):
+(:func:`glarelab.experiments.session.run_session` driven by
+:func:`glarelab.experiments.session.make_observer`), their CSVs through the protocol's own analysis
+(``analyse(..., tests_only=True)``) and its tests read as effects
+(:func:`glarelab.planning.effects.effects`), as ``glarelab power`` reads them. Run from the
+repository's root (about 1 s per study on one core):
 
     python scripts/yoshida_seeds.py --seeds 200 --out docs/observers
 
@@ -35,16 +36,16 @@ import pandas as pd
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from analysis.figures import plt, png  # noqa: E402
-from analysis.load import load_sessions  # noqa: E402
-from analysis.paradigms import PARADIGMS  # noqa: E402
-from experiments.data import session_files  # noqa: E402
-from experiments.looking import DisplayedSet  # noqa: E402
-from experiments.session import SimulatedFrontend, make_observer, run_session  # noqa: E402
-from planning.effects import effects  # noqa: E402
-from planning.simulate import default_scratch  # noqa: E402
-from protocols import load_protocol  # noqa: E402
-from stimuli.stimulus_set import StimulusSet, cached_stimulus_set  # noqa: E402
+from glarelab.analysis.figures import plt, png  # noqa: E402
+from glarelab.analysis.load import load_sessions  # noqa: E402
+from glarelab.analysis.paradigms import PARADIGMS  # noqa: E402
+from glarelab.experiments.data import session_files  # noqa: E402
+from glarelab.experiments.looking import DisplayedSet  # noqa: E402
+from glarelab.experiments.session import SimulatedFrontend, make_observer, run_session  # noqa: E402
+from glarelab.planning.effects import effects  # noqa: E402
+from glarelab.planning.simulate import default_scratch  # noqa: E402
+from glarelab.protocols import load_protocol  # noqa: E402
+from glarelab.stimuli.stimulus_set import StimulusSet, cached_stimulus_set  # noqa: E402
 
 ALPHA = 0.05
 STATISTICS = {  # key: (what the analysis calls it, Yoshida 2008 §5, the paper's df)

@@ -5,11 +5,9 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+from glarelab.glare.models.apertures import aperture_from_image
+from glarelab.stimuli.exr import read_exr
 from PIL import Image, UnidentifiedImageError
-
-from glare.apertures import aperture_from_image
-
-from .exr import read_exr
 
 __all__ = ["load_aperture_image"]
 

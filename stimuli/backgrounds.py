@@ -1,6 +1,6 @@
 """Backgrounds a protocol can put behind its stimulus, by ``kind``:
 
-- ``sky``: the procedural cloudy sky of :mod:`stimuli.sky` (Yoshida et al. 2008 used a
+- ``sky``: the procedural cloudy sky of :mod:`glarelab.stimuli.sky` (Yoshida et al. 2008 used a
   photograph of a cloudy sky that is not available);
 - ``uniform``: a field of one luminance (Spencer et al. 1995: "a black field");
 - ``lamp``: a desk lamp on a desk in a dark room, drawn procedurally (Spencer §4's context
@@ -17,10 +17,9 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+from glarelab.stimuli.exr import read_exr
+from glarelab.stimuli.sky import cloudy_sky
 from scipy import ndimage
-
-from .exr import read_exr
-from .sky import cloudy_sky
 
 __all__ = ["ROOM_CD_M2", "background", "lamp_scene"]
 
@@ -46,7 +45,7 @@ def background(
     Parameters
     ----------
     spec
-        ``kind`` and its keys (:data:`protocols.common.BACKGROUNDS`).
+        ``kind`` and its keys (:data:`glarelab.protocols.common.BACKGROUNDS`).
     shape
         (height, width) in pixels.
     pixel_deg

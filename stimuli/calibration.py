@@ -28,10 +28,9 @@ from pathlib import Path
 from typing import Literal
 
 import numpy as np
+from glarelab.protocols.atomic import write_text
 from scipy.interpolate import PchipInterpolator
 from scipy.optimize import curve_fit
-
-from protocols.atomic import write_text
 
 __all__ = [
     "Calibration",

@@ -11,8 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import OpenEXR
-
-from protocols.atomic import atomic_path
+from glarelab.protocols.atomic import atomic_path
 
 __all__ = ["read_exr", "write_exr"]
 
@@ -21,7 +20,7 @@ EXR_MAGIC = bytes((0x76, 0x2F, 0x31, 0x01))  # the first four bytes of every Ope
 
 def write_exr(path: str | Path, image: np.ndarray) -> Path:
     """Write a linear image as a float32 OpenEXR file (ZIP compression, lossless), whole or
-    not at all (:func:`protocols.atomic.atomic_path`).
+    not at all (:func:`glarelab.protocols.atomic.atomic_path`).
 
     Parameters
     ----------

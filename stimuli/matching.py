@@ -15,14 +15,13 @@ glare, so a reference at or below L_dmax equals the target at its level.
 from __future__ import annotations
 
 import numpy as np
+from glarelab.glare.models.digitise import kernel_shape_for
+from glarelab.protocols import Protocol, pixel_deg
+from glarelab.protocols.common import glare_model
+from glarelab.protocols.matching import reference_name
+from glarelab.stimuli.backgrounds import background
 
-import glare
-from glare.digitise import kernel_shape_for
-from protocols import Protocol, pixel_deg
-from protocols.common import glare_model
-from protocols.matching import reference_name
-
-from .backgrounds import background
+from glarelab import glare
 
 __all__ = ["box_filter", "build_matching", "compose_target", "target_terms"]
 
@@ -41,7 +40,7 @@ def compose_target(background: np.ndarray, coverage: np.ndarray, disk_cd_m2: flo
 
 
 def target_terms(disk_cd_m2: float) -> list[tuple[str, float]]:
-    """A target as a sum of set images (:func:`stimuli.stimulus_set.compose`)."""
+    """A target as a sum of set images (:func:`glarelab.stimuli.stimulus_set.compose`)."""
     return [("target_background", 1.0), ("target_coverage", float(disk_cd_m2))]
 
 

@@ -10,8 +10,8 @@ target luminances through the new calibration and records what the photometer re
 calibration whose worst error exceeds the tolerance is marked ``failed`` (as HRL's LUT tool
 does), and experiments refuse it.
 
-With a photometer on a serial port (:mod:`stimuli.photometer`), every single reading is kept
-in the session file as it is taken (:meth:`MeasurementSession.keep_reading`), with the
+With a photometer on a serial port (:mod:`glarelab.stimuli.photometer`), every single reading is
+kept in the session file as it is taken (:meth:`MeasurementSession.keep_reading`), with the
 instrument's model and serial number, and so is every fault; a session stopped by a fault
 goes on where it stopped (:meth:`MeasurementSession.resume`).
 """
@@ -30,10 +30,8 @@ from pathlib import Path
 from typing import Literal
 
 import numpy as np
-
-from protocols.atomic import write_text
-
-from .calibration import Calibration, fit_calibration
+from glarelab.protocols.atomic import write_text
+from glarelab.stimuli.calibration import Calibration, fit_calibration
 
 __all__ = ["MeasurementLock", "MeasurementSession", "SessionInUse"]
 
@@ -49,8 +47,8 @@ class MeasurementLock:
     """Hold the session of calibration ``out`` for this process: ``with MeasurementLock(out):``.
 
     An exclusive, non-blocking lock on ``NAME.session.lock``, as
-    :class:`experiments.data.SessionLock` holds a participant's session: two measurements on
-    one session file would interleave their readings and overwrite each other's saves. The
+    :class:`glarelab.experiments.data.SessionLock` holds a participant's session: two measurements
+    on one session file would interleave their readings and overwrite each other's saves. The
     operating system releases the lock when the process ends, however it ends (a killed
     measurement can be resumed at once).
 

@@ -1,20 +1,20 @@
 """PsychoPy front-end of the photometer session: full-field patches, read by a photometer or
 typed.
 
-Only this module (and :mod:`stimuli.psychopy_window`) imports PsychoPy. It shows each drive code
-of a :class:`~stimuli.measure.MeasurementSession` as a full-field patch, with a small prompt in
-a corner (away from the photometer's spot) where the operator types the reading: digits, ``.``
-or ``,`` as the decimal mark, Backspace, Enter to record, Escape to stop (everything entered so
-far is already saved). Keys come from one never-cleared PsychoPy keyboard, so a reading typed
-quickly, while the patch is still being drawn, keeps every character.
+Only this module (and :mod:`glarelab.stimuli.psychopy_window`) imports PsychoPy. It shows each
+drive code of a :class:`~glarelab.stimuli.measure.MeasurementSession` as a full-field patch, with a
+small prompt in a corner (away from the photometer's spot) where the operator types the reading:
+digits, ``.`` or ``,`` as the decimal mark, Backspace, Enter to record, Escape to stop (everything
+entered so far is already saved). Keys come from one never-cleared PsychoPy keyboard, so a reading
+typed quickly, while the patch is still being drawn, keeps every character.
 
 The window asks for the session's bits per channel; one that gets fewer refuses to measure
 (its codes would be rounded, and the calibration fitted to the wrong codes) unless
 ``allow_fewer_bits``. A ``photometer`` callable can stand in for the operator (tests, dry runs).
 
 With a photometer on a serial port (``meter``), each patch is read automatically
-(:func:`stimuli.photometer.measure_patch`: settle, readings, spread check, repeats) while the
-patch stays on the screen and Escape stops; a photometer fault leaves the patch up with the
+(:func:`glarelab.stimuli.photometer.measure_patch`: settle, readings, spread check, repeats) while
+the patch stays on the screen and Escape stops; a photometer fault leaves the patch up with the
 message, and typing the reading stays possible there.
 """
 
@@ -23,9 +23,9 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 
-from .measure import MeasurementSession
-from .photometer import PatchProtocol, Photometer, PhotometerError, measure_patch
-from .psychopy_window import KeyReader, dispatch_events, grab_screen, open_window
+from glarelab.stimuli.measure import MeasurementSession
+from glarelab.stimuli.photometer import PatchProtocol, Photometer, PhotometerError, measure_patch
+from glarelab.stimuli.psychopy_window import KeyReader, dispatch_events, grab_screen, open_window
 
 __all__ = ["read_codes", "run_measurement"]
 
@@ -83,9 +83,9 @@ def run_measurement(
     photometer
         A simulated photometer: the luminance of a code (tests, dry runs).
     meter
-        A photometer on a serial port (:func:`stimuli.photometer.open_photometer`): each patch
-        is read as ``patch_protocol`` says, every reading kept in the session file at once. On
-        a fault the patch stays on the screen with the message: R tries the photometer again
+        A photometer on a serial port (:func:`glarelab.stimuli.photometer.open_photometer`): each
+        patch is read as ``patch_protocol`` says, every reading kept in the session file at once.
+        On a fault the patch stays on the screen with the message: R tries the photometer again
         (``reopen`` opens it anew after a pulled cable), a typed reading and Enter enters the
         patch by hand, Escape stops (``--resume`` goes on from this patch).
     patch_protocol

@@ -32,14 +32,13 @@ import math
 from typing import Literal
 
 import numpy as np
+from glarelab.glare._validation import check_choice, check_in_range, check_positive
+from glarelab.protocols import Protocol
+from glarelab.protocols import pixel_deg as display_pixel_deg
+from glarelab.protocols.common import glare_model
+from glarelab.stimuli.preview import to_display
 
-import glare
-from glare._validation import check_choice, check_in_range, check_positive
-from protocols import Protocol
-from protocols import pixel_deg as display_pixel_deg
-from protocols.common import glare_model
-
-from .preview import to_display
+from glarelab import glare
 
 __all__ = [
     "SEQUENCES",
@@ -299,7 +298,7 @@ def night_plan(protocol: Protocol, refresh_hz: float) -> dict:
 
     Examples
     --------
-    >>> from protocols import load_protocol
+    >>> from glarelab.protocols import load_protocol
     >>> plan = night_plan(load_protocol("night2026"), 60.0)
     >>> first = plan["full"]
     >>> len(first["frames"]), first["frames"][0], first["refreshes_per_frame"], first["refreshes"]

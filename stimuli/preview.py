@@ -6,11 +6,10 @@ from pathlib import Path
 from typing import Literal
 
 import numpy as np
+from glarelab.glare._colour import colour
+from glarelab.glare.models.wave import sigmoid_Kakimoto2004
+from glarelab.protocols.atomic import atomic_path
 from PIL import Image
-
-from glare._colour import colour
-from glare.wave import sigmoid_Kakimoto2004
-from protocols.atomic import atomic_path
 
 __all__ = ["preview_png", "psf_png", "psf_to_display", "to_display"]
 

@@ -3,8 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
-
-from glare._validation import check_positive
+from glarelab.glare._validation import check_positive
 
 __all__ = ["disk"]
 

@@ -20,15 +20,14 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from glarelab.glare.models.digitise import kernel_shape_for
+from glarelab.protocols import Protocol
+from glarelab.protocols import pixel_deg as display_pixel_deg
+from glarelab.protocols.common import glare_model
+from glarelab.protocols.staircase import glare_name
+from glarelab.stimuli.backgrounds import background
 
-import glare
-from glare.digitise import kernel_shape_for
-from protocols import Protocol
-from protocols import pixel_deg as display_pixel_deg
-from protocols.common import glare_model
-from protocols.staircase import glare_name
-
-from .backgrounds import background
+from glarelab import glare
 
 __all__ = ["build_staircase", "compose_comparison"]
 

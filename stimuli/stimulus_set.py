@@ -25,24 +25,22 @@ from importlib import metadata
 from pathlib import Path
 
 import numpy as np
-from PIL import Image
-from PIL.PngImagePlugin import PngInfo
-
-from protocols import Protocol
-from protocols.atomic import atomic_path, write_bytes, write_text
-from protocols.folders import (
+from glarelab.protocols import Protocol
+from glarelab.protocols.atomic import atomic_path, write_bytes, write_text
+from glarelab.protocols.folders import (
     LISTING,
     check_replaceable,
     record_files,
     replace_folder,
     staging_folder,
 )
-
-from .calibration import Calibration, synthetic_calibration
-from .exr import read_exr, write_exr
-from .matching import build_matching
-from .night import build_night
-from .staircase import build_staircase
+from glarelab.stimuli.calibration import Calibration, synthetic_calibration
+from glarelab.stimuli.exr import read_exr, write_exr
+from glarelab.stimuli.matching import build_matching
+from glarelab.stimuli.night import build_night
+from glarelab.stimuli.staircase import build_staircase
+from PIL import Image
+from PIL.PngImagePlugin import PngInfo
 
 __all__ = [
     "BUILDERS",
@@ -390,7 +388,7 @@ def _index(protocol: Protocol, calibration: Calibration, records: dict, plots, g
         f"depth ({calibration.bit_depth}): an image viewer shows the image as the display "
         f"does (for a display of gamma about 2.2); the codes are `round(value × {top} / "
         f"65535)` (or `value >> {16 - calibration.bit_depth}`), as "
-        "`stimuli.stimulus_set.read_codes` reads them. Images the sessions compose from "
+        "`glarelab.stimuli.stimulus_set.read_codes` reads them. Images the sessions compose from "
         "parts (kind `component`) have no PNG.",
         "- `profiles_*.png`: the images with their luminance profile through the centre.",
         "",
@@ -473,7 +471,7 @@ def verify_stimulus_set(folder: str | Path) -> list[str]:
                     problems.append(f"{MANIFEST}: image {name} points at {file} (edited?)")
     else:
         problems.append(f"{MANIFEST}: has no table of images")
-    # the protocol the set was built from is hashed as protocols.core hashes it
+    # the protocol the set was built from is hashed as glarelab.protocols.core hashes it
     canonical = json.dumps(manifest.get("protocol"), sort_keys=True, separators=(",", ":"))
     if hashlib.sha256(canonical.encode()).hexdigest() != manifest.get("protocol_sha256"):
         problems.append(

@@ -20,13 +20,13 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from glarelab.experiments.session import SimulatedFrontend, make_observer, run_session
+from glarelab.protocols import load_protocol
+from glarelab.protocols.folders import record_files
+from glarelab.stimuli.exr import write_exr
+from glarelab.stimuli.stimulus_set import cached_stimulus_set, verify_stimulus_set
 
-from experiments.session import SimulatedFrontend, make_observer, run_session
 from glarelab.cli import main
-from protocols import load_protocol
-from protocols.folders import record_files
-from stimuli.exr import write_exr
-from stimuli.stimulus_set import cached_stimulus_set, verify_stimulus_set
 
 ROOT = Path(__file__).parents[1]
 PROTOCOLS = ROOT / "protocols"

@@ -78,8 +78,8 @@ def test_acuity_bench_measures_every_way_against_the_exact_blur():
     assert errors["exact"] == 0.0
     ladder = [errors[f"layers, {n}/octave"] for n in (1, 2, 4, 8, 16)]
     assert ladder == sorted(ladder, reverse=True)  # more levels, less error
-    # the default (glare.acuity.LEVELS_PER_OCTAVE) keeps within half a code
-    from glare.acuity import LEVELS_PER_OCTAVE
+    # the default (glarelab.glare.night.acuity.LEVELS_PER_OCTAVE) keeps within half a code
+    from glarelab.glare.night.acuity import LEVELS_PER_OCTAVE
 
     assert errors[f"layers, {LEVELS_PER_OCTAVE}/octave"] < 0.5
     assert errors["uniform σ (gaussian_filter)"] > 10  # ignoring the variation is visible

@@ -4,13 +4,13 @@ import sys
 
 import numpy as np
 import pytest
+from glarelab.stimuli.exr import read_exr, write_exr
+from glarelab.stimuli.shapes import disk
 from numpy.testing import assert_allclose
 from PIL import Image
 
-import glare
+from glarelab import glare
 from glarelab.cli import main
-from stimuli.exr import read_exr, write_exr
-from stimuli.shapes import disk
 
 
 def yoshida_disk():

@@ -1,4 +1,4 @@
-"""Start-up: ``import glare`` and ``glarelab --version`` import no plotting, GUI or cluster
+"""Start-up: ``from glarelab import glare`` and ``glarelab --version`` import no plotting, GUI or cluster
 library, and the command line imports only the module of the command that runs. (How long
 start-up takes is measured by ``glarelab bench``, not here.)"""
 
@@ -33,7 +33,7 @@ def _imported_after(code: str) -> set[str]:
 
 
 def test_import_glare_pulls_no_plotting_gui_or_cluster_library():
-    loaded = _imported_after("import glare")
+    loaded = _imported_after("from glarelab import glare")
     assert sorted(loaded & set(HEAVY)) == []
 
 
@@ -48,7 +48,7 @@ def test_a_vos_render_needs_none_of_them_either():
 
 
 def test_what_glare_offers_lazily_is_there():
-    import glare
+    from glarelab import glare
 
     assert glare.WaveOpticsGlare.__name__ == "WaveOpticsGlare"
     assert glare.HybridGlare.__name__ == "HybridGlare"
@@ -61,8 +61,7 @@ def test_what_glare_offers_lazily_is_there():
 
 def test_the_halo_spectrum_defaults_skipped_unread_are_valid_names():
     import colour
-
-    from glare.spectral import _DEFAULT_NAMES, HaloSpectrum
+    from glarelab.glare.models.spectral import _DEFAULT_NAMES, HaloSpectrum
 
     space, illuminant = _DEFAULT_NAMES
     assert space in colour.RGB_COLOURSPACES and illuminant in colour.SDS_ILLUMINANTS

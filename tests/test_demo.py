@@ -6,10 +6,9 @@ import sys
 from pathlib import Path
 
 import pandas as pd
+from glarelab.analysis.report import write_report
+from glarelab.protocols import load_protocol
 from pandas.testing import assert_frame_equal
-
-from analysis.report import write_report
-from protocols import load_protocol
 
 ROOT = Path(__file__).parents[1]
 

@@ -21,10 +21,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from glarelab.protocols.atomic import PARTIAL
+from glarelab.stimuli.exr import write_exr
 
 from glarelab.cli import main
-from protocols.atomic import PARTIAL
-from stimuli.exr import write_exr
 
 ROOT = Path(__file__).parents[1]
 KILLS = 30
@@ -164,7 +164,7 @@ def memoised(module, name: str, monkeypatch) -> None:
 
 
 def test_a_killed_stimulus_build_leaves_the_earlier_set_or_the_new_one(tmp_path, monkeypatch):
-    import stimuli.stimulus_set as stimulus_set
+    import glarelab.stimuli.stimulus_set as stimulus_set
 
     builders = dict(stimulus_set.BUILDERS)
     for paradigm in builders:
@@ -213,7 +213,7 @@ def sessions(tmp_path_factory):
 def test_a_killed_analysis_leaves_the_earlier_report_or_the_new_one(
     tmp_path, sessions, monkeypatch
 ):
-    import analysis.report
+    from glarelab import analysis
 
     memoised(analysis.report, "analyse", monkeypatch)
     out = tmp_path / "report"
@@ -236,7 +236,7 @@ def test_a_killed_analysis_leaves_the_earlier_report_or_the_new_one(
 
 
 def test_a_killed_power_run_leaves_each_file_complete_and_resumes(tmp_path, monkeypatch):
-    from planning.simulate import PowerJob
+    from glarelab.planning.simulate import PowerJob
 
     run, results = PowerJob.run, {}
 
@@ -247,7 +247,7 @@ def test_a_killed_power_run_leaves_each_file_complete_and_resumes(tmp_path, monk
         return results[key]
 
     monkeypatch.setattr(PowerJob, "run", once)
-    import planning.power
+    from glarelab import planning
 
     memoised(planning.power, "power_figure", monkeypatch)
     memoised(planning.power, "effect_size_figure", monkeypatch)

@@ -3,11 +3,9 @@
 import re
 from pathlib import Path
 
-import analysis.paradigms
-import experiments.paradigms
-import protocols
-import stimuli.stimulus_set
-from protocols import load_protocol, shipped_protocols
+from glarelab.protocols import load_protocol, shipped_protocols
+
+from glarelab import analysis, experiments, protocols, stimuli
 
 ROOT = Path(__file__).parents[1]
 PAPERS = ("yoshida2008", "spencer1995", "luidolt2020")
@@ -53,4 +51,6 @@ def _without_examples(text: str):
 def test_the_analysis_does_not_import_the_experiments():
     for path in sorted((ROOT / "analysis").rglob("*.py")):
         text = path.read_text()
-        assert "import experiments" not in text and "from experiments" not in text, path
+        assert "from glarelab import experiments" not in text and "from experiments" not in text, (
+            path
+        )

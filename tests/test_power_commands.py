@@ -127,7 +127,7 @@ def test_power_on_a_dask_cluster_started_apart(tmp_path):
 def test_a_scheduler_that_does_not_answer_is_refused_by_name(tmp_path, capsys, monkeypatch):
     import contextlib
 
-    import planning.execute
+    from glarelab import planning
 
     @contextlib.contextmanager
     def unreachable(**kwargs):

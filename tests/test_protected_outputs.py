@@ -17,12 +17,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from glarelab.protocols.folders import record_files
+from glarelab.stimuli.calibration import Calibration, fit_calibration, read_readings
+from glarelab.stimuli.exr import write_exr
 from PIL import Image
 
 from glarelab.cli import main
-from protocols.folders import record_files
-from stimuli.calibration import Calibration, fit_calibration, read_readings
-from stimuli.exr import write_exr
 
 ROOT = Path(__file__).parents[1]
 READINGS = ROOT / "calibrations" / "example-readings.csv"
@@ -399,7 +399,7 @@ def test_the_time_left_leaves_out_the_workers_start_up(monkeypatch):
     """100 s of start-up, then a task a second: 97 tasks left are 1m37s, not an hour."""
     import io
 
-    import planning.execute as execute
+    import glarelab.planning.execute as execute
 
     now = [0.0]
     clock = type("Clock", (), {"perf_counter": staticmethod(lambda: now[0])})

@@ -7,11 +7,10 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
-
-from experiments.matching import MatchingObserver
-from protocols import load_protocol
-from stimuli.matching import target_terms
-from stimuli.stimulus_set import StimulusSet
+from glarelab.experiments.matching import MatchingObserver
+from glarelab.protocols import load_protocol
+from glarelab.stimuli.matching import target_terms
+from glarelab.stimuli.stimulus_set import StimulusSet
 
 ROOT = Path(__file__).parents[1]
 

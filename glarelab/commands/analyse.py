@@ -5,14 +5,14 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from protocols import load_protocol
+from glarelab.protocols import load_protocol
 
 from .common import PROTOCOL_HELP
 from .common import log as _log
 
 
 def _analyse(args: argparse.Namespace) -> int:
-    from analysis.report import write_report
+    from glarelab.analysis.report import write_report
 
     protocol = load_protocol(args.protocol or args.study)
     if args.protocol is not None and protocol.study != args.study:

@@ -1,4 +1,5 @@
-"""``glarelab cache info|clear``: the cache of digitised kernels (:mod:`glare.cache`)."""
+"""``glarelab cache info|clear``: the cache of digitised kernels
+(:mod:`glarelab.glare.models.cache`)."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ from .common import log as _log
 
 
 def _info(args: argparse.Namespace) -> int:
-    from glare.cache import KernelCache
+    from glarelab.glare.models.cache import KernelCache
 
     info = KernelCache().info()
     print(f"directory: {info['directory']}")
@@ -18,7 +19,7 @@ def _info(args: argparse.Namespace) -> int:
 
 
 def _clear(args: argparse.Namespace) -> int:
-    from glare.cache import KernelCache
+    from glarelab.glare.models.cache import KernelCache
 
     cache = KernelCache()
     removed = cache.clear()

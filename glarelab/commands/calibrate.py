@@ -9,9 +9,9 @@ from pathlib import Path
 
 import numpy as np
 
-from protocols.atomic import write_bytes
-from stimuli.calibration import Calibration, fit_calibration, read_readings
-from stimuli.photometer import PHOTOMETERS
+from glarelab.protocols.atomic import write_bytes
+from glarelab.stimuli.calibration import Calibration, fit_calibration, read_readings
+from glarelab.stimuli.photometer import PHOTOMETERS
 
 from .common import count, number, output_file
 from .common import log as _log
@@ -93,7 +93,7 @@ _PROTOCOL_OPTIONS = {
 def _open_meter(args: argparse.Namespace, instrument: dict | None):
     """The photometer asked for (None for typed readings; on a resumed session, the one that
     began it), a function that opens it anew, and the list of those opened."""
-    from stimuli.photometer import open_photometer
+    from glarelab.stimuli.photometer import open_photometer
 
     if args.photometer is None:
         if args.port is not None:
@@ -132,7 +132,7 @@ def _open_meter(args: argparse.Namespace, instrument: dict | None):
 
 
 def _calibrate_measure(args: argparse.Namespace) -> int:
-    from stimuli.measure import MeasurementLock
+    from glarelab.stimuli.measure import MeasurementLock
 
     output_file(args.out, (".json",), "calibration")
     args.out = calibration_out(args.out, replace=args.replace)
@@ -141,9 +141,9 @@ def _calibrate_measure(args: argparse.Namespace) -> int:
 
 
 def _measure_locked(args: argparse.Namespace) -> int:
-    from stimuli.measure import MeasurementSession
-    from stimuli.measure_psychopy import run_measurement
-    from stimuli.photometer import PatchProtocol
+    from glarelab.stimuli.measure import MeasurementSession
+    from glarelab.stimuli.measure_psychopy import run_measurement
+    from glarelab.stimuli.photometer import PatchProtocol
 
     session_path = args.out.with_suffix(".session.json")
     given = {  # the reading protocol's options given on the command line

@@ -11,8 +11,8 @@ import os
 import sys
 from pathlib import Path
 
-from protocols.atomic import write_text
-from protocols.folders import claim_files, list_files, listed_files
+from glarelab.protocols.atomic import write_text
+from glarelab.protocols.folders import claim_files, list_files, listed_files
 
 __all__ = [
     "FORCE_HELP",
@@ -33,7 +33,7 @@ __all__ = [
 
 PROTOCOL_HELP = "a shipped study's name (yoshida2008, spencer1995, luidolt2020, …) or a TOML file"
 WHOLE_OUTPUTS = {"stimulus set", "report", "demo"}  # folders replaced and checked whole
-CALIBRATION_FORMAT = "glarelab display calibration v1"  # stimuli.calibration.FORMAT
+CALIBRATION_FORMAT = "glarelab display calibration v1"  # glarelab.stimuli.calibration.FORMAT
 MARKER = ".glarelab"  # names the command that made a folder, so it may replace its own output
 FORCE_HELP = "overwrite an existing file glarelab did not write, or replace a symbolic link"
 
@@ -152,7 +152,7 @@ def output_folder(path: Path, command: str) -> Path:
 def writes_into(path: Path, names: list[str], command: str) -> Path:
     """A folder a command writes a fixed set of named files into (``docs``, ``gallery``, …):
     created if new; a file of that name glarelab did not write there is refused
-    (``protocols.folders.claim_files``); other files in it are left alone."""
+    (``glarelab.protocols.folders.claim_files``); other files in it are left alone."""
     path = Path(path)
     if path.exists() and not path.is_dir():
         raise ValueError(f"{path} is a file; give a folder for {', '.join(names)}")
@@ -220,8 +220,8 @@ def output_file(
     """A file a command writes: its suffix must say what it holds, it must not be an input,
     a file of a stimulus set or report, or a verified calibration; its folder must exist.
     Without ``force`` it must not be a symbolic link, nor a file glarelab did not write there
-    (as the folder's listing, :mod:`protocols.folders`, says); ``shared`` says the caller has
-    checked the folder's listing itself (a batch of outputs).
+    (as the folder's listing, :mod:`glarelab.protocols.folders`, says); ``shared`` says the caller
+    has checked the folder's listing itself (a batch of outputs).
 
     Raises
     ------

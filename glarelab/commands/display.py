@@ -5,16 +5,16 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from protocols import load_protocol
-from stimuli.calibration import Calibration
-from stimuli.photometer import PHOTOMETERS
+from glarelab.protocols import load_protocol
+from glarelab.stimuli.calibration import Calibration
+from glarelab.stimuli.photometer import PHOTOMETERS
 
 from .common import count, number, output_file
 from .common import log as _log
 
 
 def _check_display(args: argparse.Namespace) -> int:
-    from experiments.check_display import check_display, write_check
+    from glarelab.experiments.check_display import check_display, write_check
 
     protocol = load_protocol(args.protocol)
     calibration = Calibration.load(args.calibration) if args.calibration else None
@@ -29,7 +29,7 @@ def _check_display(args: argparse.Namespace) -> int:
     )
     meter = None
     if args.photometer is not None or args.port is not None:
-        from stimuli.photometer import open_photometer
+        from glarelab.stimuli.photometer import open_photometer
 
         if args.photometer is None or args.port is None:
             raise ValueError("give --photometer MODEL and --port PORT together")
@@ -105,7 +105,7 @@ def _check_display(args: argparse.Namespace) -> int:
 
 
 def _patch_protocol(args: argparse.Namespace):
-    from stimuli.photometer import PatchProtocol
+    from glarelab.stimuli.photometer import PatchProtocol
 
     return PatchProtocol(readings=args.readings, settle_s=args.settle_s)
 

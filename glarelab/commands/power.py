@@ -8,7 +8,7 @@ import json
 import os
 from pathlib import Path
 
-from protocols import load_protocol
+from glarelab.protocols import load_protocol
 
 from .common import PROTOCOL_HELP, check_memory, count, number, output_folder
 from .common import log as _log
@@ -63,7 +63,7 @@ def _folder(text: str) -> Path:
 
 def _stimulus_set(text: str) -> Path:
     """An intact stimulus set (its manifest verifies)."""
-    from stimuli.stimulus_set import verify_stimulus_set
+    from glarelab.stimuli.stimulus_set import verify_stimulus_set
 
     problems = verify_stimulus_set(text)
     if problems:
@@ -75,8 +75,8 @@ def _stimulus_set(text: str) -> Path:
 
 
 def _setting(text: str):
-    """``KEY=V1,V2,…`` (:func:`planning.grid.parse_setting`)."""
-    from planning.grid import GridError, parse_setting
+    """``KEY=V1,V2,…`` (:func:`glarelab.planning.grid.parse_setting`)."""
+    from glarelab.planning.grid import GridError, parse_setting
 
     try:
         return parse_setting(text)
@@ -97,7 +97,7 @@ def _simulated(text: str) -> int:
 def _cluster(stack: contextlib.ExitStack, args: argparse.Namespace):
     """The Dask client the arguments ask for (none with ``--workers 0``), closed with
     ``stack``."""
-    from planning.execute import available_cores, dask_client
+    from glarelab.planning.execute import available_cores, dask_client
 
     if args.workers == 0:
         _log("running here, without Dask")
@@ -120,7 +120,7 @@ def _cluster(stack: contextlib.ExitStack, args: argparse.Namespace):
 
 def _check_workers(args: argparse.Namespace) -> None:
     """Refuse a local cluster larger than the memory it needs (before anything is written)."""
-    from planning.execute import available_cores
+    from glarelab.planning.execute import available_cores
 
     if args.scheduler is None and args.workers != 0:
         workers = args.workers or available_cores()
@@ -130,8 +130,8 @@ def _check_workers(args: argparse.Namespace) -> None:
 def _power(args: argparse.Namespace) -> int:
     import pandas as pd
 
-    from experiments.session import shows_images
-    from planning.power import check_run_folder, power_analysis, run_inputs
+    from glarelab.experiments.session import shows_images
+    from glarelab.planning.power import check_run_folder, power_analysis, run_inputs
 
     protocol = load_protocol(args.protocol)
     if args.stimuli is not None:
@@ -176,7 +176,7 @@ def _power(args: argparse.Namespace) -> int:
 
 
 def _sweep(args: argparse.Namespace) -> int:
-    from planning.sweep import prepare, sweep
+    from glarelab.planning.sweep import prepare, sweep
 
     prepare(args.protocol, args.set, args.out, simulate=args.simulate, seed=args.seed)
     _check_workers(args)
@@ -217,8 +217,8 @@ def _cluster_arguments(parser: argparse.ArgumentParser, workers_need: str) -> No
 
 def add(commands) -> None:
     """Add the commands to the ``glarelab`` parser."""
-    from planning.effects import CORRECTIONS
-    from planning.power import MAX_PARTICIPANTS
+    from glarelab.planning.effects import CORRECTIONS
+    from glarelab.planning.power import MAX_PARTICIPANTS
 
     power = commands.add_parser(
         "power",

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from protocols import PARADIGMS, describe_schema, load_protocol
+from glarelab.protocols import PARADIGMS, describe_schema, load_protocol
 
 from .common import PROTOCOL_HELP
 
@@ -20,7 +20,7 @@ def _protocol_keys(args: argparse.Namespace) -> int:
 
 
 def _protocol_check(args: argparse.Namespace) -> int:
-    from experiments.paradigms import PARADIGMS as RUNS
+    from glarelab.experiments.paradigms import PARADIGMS as RUNS
 
     protocol = load_protocol(args.protocol)
     RUNS[protocol.paradigm].observer.check(protocol)  # the simulated observers' parameters
@@ -28,7 +28,7 @@ def _protocol_check(args: argparse.Namespace) -> int:
         f"{args.protocol}: valid protocol of the {protocol.paradigm} paradigm (study "
         f"{protocol.study}), sha256 {protocol.sha256}"
     )
-    from experiments.layout import protocol_drawing
+    from glarelab.experiments.layout import protocol_drawing
 
     lines, exact = protocol_drawing(protocol)
     for line in lines:

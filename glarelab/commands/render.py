@@ -9,13 +9,13 @@ from pathlib import Path
 
 import numpy as np
 
-import glare
-from protocols.atomic import atomic_path, write_text
-from stimuli.apertures import load_aperture_image
-from stimuli.calibration import Calibration
-from stimuli.exr import read_exr, write_exr
-from stimuli.preview import preview_png, psf_png
-from stimuli.shapes import disk
+from glarelab import glare
+from glarelab.protocols.atomic import atomic_path, write_text
+from glarelab.stimuli.apertures import load_aperture_image
+from glarelab.stimuli.calibration import Calibration
+from glarelab.stimuli.exr import read_exr, write_exr
+from glarelab.stimuli.preview import preview_png, psf_png
+from glarelab.stimuli.shapes import disk
 
 from .common import (
     FORCE_HELP,
@@ -408,8 +408,8 @@ def _looks_night(args: argparse.Namespace) -> int:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from stimuli.night import night_sequence, night_street
-    from stimuli.preview import to_display
+    from glarelab.stimuli.night import night_sequence, night_street
+    from glarelab.stimuli.preview import to_display
 
     effects = glare.night.EFFECTS
     pipelines = {"all": effects} | {

@@ -6,8 +6,8 @@ import argparse
 import sys
 from pathlib import Path
 
-from protocols import load_protocol
-from stimuli.calibration import Calibration
+from glarelab.protocols import load_protocol
+from glarelab.stimuli.calibration import Calibration
 
 from .common import (
     PROTOCOL_HELP,
@@ -35,7 +35,7 @@ def _age(text: str) -> int:
 
 def _participant(text: str) -> str:
     """A participant id: file-name safe, as the session files are named by it."""
-    from experiments.data import check_session_id
+    from glarelab.experiments.data import check_session_id
 
     try:
         check_session_id(text, 1)
@@ -53,7 +53,7 @@ def _experiment_info(args: argparse.Namespace) -> None:
     """Ask for the participant's details in a dialog, as PsychoPy's experiment info does."""
     import os
 
-    from stimuli.psychopy_window import qt_dialog_available
+    from glarelab.stimuli.psychopy_window import qt_dialog_available
 
     if sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
         raise ValueError("--participant is required (no display for the participant dialog)")
@@ -64,7 +64,7 @@ def _experiment_info(args: argparse.Namespace) -> None:
         )
     from psychopy import gui
 
-    from experiments.data import check_session_id
+    from glarelab.experiments.data import check_session_id
 
     entered = {
         "participant": "",
@@ -141,7 +141,7 @@ SIMULATED_PARTICIPANTS = 10  # Yoshida 2008's study had ten participants (§5: F
 
 
 def _run(args: argparse.Namespace) -> int:
-    from experiments.session import SimulatedFrontend, run_session
+    from glarelab.experiments.session import SimulatedFrontend, run_session
 
     protocol = _protocol(args.study, args.protocol)
     args.title = protocol.study
@@ -155,8 +155,8 @@ def _run(args: argparse.Namespace) -> int:
             "whole: give a folder of its own for the session files (nothing was written)"
         )
     if args.simulate:
-        from experiments.session import make_observer, shows_images
-        from stimuli.stimulus_set import cached_stimulus_set
+        from glarelab.experiments.session import make_observer, shows_images
+        from glarelab.stimuli.stimulus_set import cached_stimulus_set
 
         if args.participant is not None and args.participants is not None:
             raise ValueError(
@@ -205,7 +205,7 @@ def _run(args: argparse.Namespace) -> int:
         )
     if args.participant is None:
         _experiment_info(args)
-    from experiments.psychopy_frontend import PsychoPyFrontend
+    from glarelab.experiments.psychopy_frontend import PsychoPyFrontend
 
     calibration = Calibration.load(args.calibration) if args.calibration else None
     scripted = None

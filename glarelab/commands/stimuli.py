@@ -7,9 +7,9 @@ import sys
 import time
 from pathlib import Path
 
-from protocols import load_protocol
-from stimuli.calibration import Calibration
-from stimuli.stimulus_set import build_stimulus_set, verify_stimulus_set
+from glarelab.protocols import load_protocol
+from glarelab.stimuli.calibration import Calibration
+from glarelab.stimuli.stimulus_set import build_stimulus_set, verify_stimulus_set
 
 from .common import PROTOCOL_HELP
 from .common import log as _log

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from protocols.atomic import write_text
+from glarelab.protocols.atomic import write_text
 
 from .common import PROTOCOL_HELP, count, output_folder, writes_into
 from .common import log as _log

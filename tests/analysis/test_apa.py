@@ -6,10 +6,7 @@ import re
 import numpy as np
 import pandas as pd
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
-
-from analysis.apa import (
+from glarelab.analysis.apa import (
     anova_effect,
     correction,
     format_table,
@@ -18,7 +15,9 @@ from analysis.apa import (
     significant,
     unit_interval,
 )
-from analysis.stats import rm_anova
+from glarelab.analysis.stats import rm_anova
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 SCIENTIFIC = re.compile(r"\d[eE][+-]?\d")
 P_CELL = re.compile(r"^(< \.001|> \.999|\.\d{3}|)$")

@@ -9,11 +9,7 @@ import sys
 import numpy as np
 import pandas as pd
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
-from numpy.testing import assert_allclose
-
-from analysis.effects import (
+from glarelab.analysis.effects import (
     anova_residuals,
     eta2_partial_ci,
     hodges_lehmann,
@@ -23,7 +19,16 @@ from analysis.effects import (
     rank_biserial,
     within_subject_ci,
 )
-from analysis.stats import group_letters, holm, rm_anova, similarity_groups, wilcoxon_signed_rank
+from glarelab.analysis.stats import (
+    group_letters,
+    holm,
+    rm_anova,
+    similarity_groups,
+    wilcoxon_signed_rank,
+)
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from numpy.testing import assert_allclose
 
 from .test_stats import read_r
 
@@ -193,8 +198,8 @@ def test_group_letters_are_distinct_and_none_is_a_prefix_issue(count):
 
 def test_importing_the_analysis_leaves_numpys_print_options_as_they_were():
     code = (
-        "import numpy as np; before = np.get_printoptions(); import analysis.report; "
-        "import analysis.stimulus_figures; assert np.get_printoptions() == before, "
+        "import numpy as np; before = np.get_printoptions(); import glarelab.analysis.report; "
+        "import glarelab.analysis.stimulus_figures; assert np.get_printoptions() == before, "
         "np.get_printoptions()"
     )
     done = subprocess.run(
@@ -204,7 +209,7 @@ def test_importing_the_analysis_leaves_numpys_print_options_as_they_were():
 
 
 def test_report_csvs_hold_every_digit_whatever_numpys_print_options(tmp_path):
-    from analysis.report import CSV_FLOAT_FORMAT
+    from glarelab.analysis.report import CSV_FLOAT_FORMAT
 
     table = pd.DataFrame({"F": [20.077025396150553, 1 / 3, 1e-300, 12345678.901234567]})
     before = np.get_printoptions()

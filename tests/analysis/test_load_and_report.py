@@ -5,12 +5,12 @@ import shutil
 import numpy as np
 import pandas as pd
 import pytest
+from glarelab.analysis.load import DataError, load_sessions
+from glarelab.analysis.report import write_report
+from glarelab.analysis.stats import rm_anova
+from glarelab.protocols import load_protocol
 
-from analysis.load import DataError, load_sessions
-from analysis.report import write_report
-from analysis.stats import rm_anova
 from glarelab.cli import main
-from protocols import load_protocol
 
 
 def csvs(folder, study):

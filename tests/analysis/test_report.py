@@ -11,14 +11,14 @@ from html import unescape
 
 import numpy as np
 import pytest
+from glarelab.analysis.load import DataError
+from glarelab.analysis.report import write_report
+from glarelab.analysis.stimulus_figures import DisplayedSet, to_srgb8
+from glarelab.protocols import load_protocol
+from glarelab.stimuli.stimulus_set import cached_stimulus_set, read_codes
 from PIL import Image
 
-import analysis.paradigms
-from analysis.load import DataError
-from analysis.report import write_report
-from analysis.stimulus_figures import DisplayedSet, to_srgb8
-from protocols import load_protocol
-from stimuli.stimulus_set import cached_stimulus_set, read_codes
+from glarelab import analysis
 
 SCIENTIFIC = re.compile(r"\b\d+(\.\d+)?[eE][+-]?\d+\b")  # 1e+04, 2.5E-3
 
@@ -203,7 +203,7 @@ def test_the_rating_report_has_a_visible_neutral_category_and_every_participant(
     results = (tmp_path / "results.md").read_text()
     assert "Wilcoxon signed-rank tests, Holm-corrected across the 6 categories" in results
     # the neutral bar is drawn in a grey that differs from white and from its neighbours
-    from analysis.rating import NEUTRAL, _colours
+    from glarelab.analysis.rating import NEUTRAL, _colours
 
     colours = _colours(range(1, 8))
     assert len(colours) == 7 and tuple(colours[3][:3]) != (1.0, 1.0, 1.0)

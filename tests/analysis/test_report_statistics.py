@@ -14,11 +14,10 @@ import sys
 import numpy as np
 import pandas as pd
 import pytest
+from glarelab.analysis.load import DataError, Dataset, load_sessions
+from glarelab.analysis.paradigms import PARADIGMS
+from glarelab.protocols import load_protocol
 from numpy.testing import assert_allclose
-
-from analysis.load import DataError, Dataset, load_sessions
-from analysis.paradigms import PARADIGMS
-from protocols import load_protocol
 
 from .test_stats import read_r
 
@@ -85,7 +84,7 @@ def test_two_categories_keep_rs_decision_on_overall(protocol):
 
 @pytest.fixture(scope="module")
 def yoshida_report(simulated, tmp_path_factory):
-    from analysis.report import write_report
+    from glarelab.analysis.report import write_report
 
     out = tmp_path_factory.mktemp("yoshida") / "report"
     files = sorted(simulated.glob("*yoshida2008*.csv"))

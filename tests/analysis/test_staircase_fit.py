@@ -7,9 +7,8 @@ import math
 import numpy as np
 import pandas as pd
 import pytest
+from glarelab.analysis.staircase import psychometric_fit, reversal_interval, reversal_match
 from numpy.testing import assert_allclose
-
-from analysis.staircase import psychometric_fit, reversal_interval, reversal_match
 
 from .test_stats import read_r
 

@@ -11,12 +11,7 @@ import numpy as np
 import pandas as pd
 import pingouin as pg  # test-only dependency: the independent implementation
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
-from numpy.testing import assert_allclose
-from scipy import stats as sps
-
-from analysis.stats import (
+from glarelab.analysis.stats import (
     apa_anova,
     apa_F,
     apa_p,
@@ -29,6 +24,10 @@ from analysis.stats import (
     ttest_welch,
     wilcoxon_signed_rank,
 )
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from numpy.testing import assert_allclose
+from scipy import stats as sps
 
 R_FOLDER = Path(__file__).parent / "R"
 R_TOLERANCE = 1e-11  # relative; the measured differences are below 1e-13

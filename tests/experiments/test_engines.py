@@ -1,10 +1,9 @@
 import pytest
-
-from experiments.matching import MatchingEngine as BrightnessMatching
-from experiments.rating import RatingEngine as LikertQuestionnaire
-from experiments.staircase import Staircase
-from experiments.staircase import StaircaseEngine as StaircaseExperiment
-from protocols import load_protocol
+from glarelab.experiments.matching import MatchingEngine as BrightnessMatching
+from glarelab.experiments.rating import RatingEngine as LikertQuestionnaire
+from glarelab.experiments.staircase import Staircase
+from glarelab.experiments.staircase import StaircaseEngine as StaircaseExperiment
+from glarelab.protocols import load_protocol
 
 
 @pytest.fixture(scope="module")

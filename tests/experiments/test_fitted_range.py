@@ -8,11 +8,8 @@ import warnings
 from pathlib import Path
 
 import pytest
-from hypothesis import given
-from hypothesis import strategies as st
-
-from experiments.looking import DisplayedSet
-from experiments.perception import (
+from glarelab.experiments.looking import DisplayedSet
+from glarelab.experiments.perception import (
     FITTED_DISK_CD_M2,
     FITTED_DISK_DIAMETER_DEG,
     FITTED_GAUSSIAN_SIGMA_DEG,
@@ -21,9 +18,11 @@ from experiments.perception import (
     fitted_range_departures,
     warn_outside_fitted_range,
 )
-from experiments.session import make_observer
-from protocols import load_protocol
-from stimuli.stimulus_set import StimulusSet, cached_stimulus_set
+from glarelab.experiments.session import make_observer
+from glarelab.protocols import load_protocol
+from glarelab.stimuli.stimulus_set import StimulusSet, cached_stimulus_set
+from hypothesis import given
+from hypothesis import strategies as st
 
 ROOT = Path(__file__).parents[2]
 YOSHIDA_GEOMETRY = {"disk_diameter_deg": 0.3}

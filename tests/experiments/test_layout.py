@@ -1,4 +1,4 @@
-"""Whole-pixel layout (experiments.layout): every edge of every image on a screen pixel
+"""Whole-pixel layout (glarelab.experiments.layout): every edge of every image on a screen pixel
 boundary, for odd and even images on odd and even windows; and what ``protocol check`` says of
 a protocol's drawing."""
 
@@ -7,10 +7,10 @@ import math
 from pathlib import Path
 
 import pytest
+from glarelab.experiments.layout import row_layout
 from hypothesis import given
 from hypothesis import strategies as st
 
-from experiments.layout import row_layout
 from glarelab.cli import main
 
 ROOT = Path(__file__).parents[2]

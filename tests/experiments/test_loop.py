@@ -2,21 +2,20 @@
 what is recorded of the others."""
 
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
-
-from experiments.engine import Press
-from experiments.loop import (
+from glarelab.experiments.engine import Press
+from glarelab.experiments.loop import (
     SessionAborted,
     SessionLoop,
     Shown,
     count_dropped_frames,
     presentation_ok,
 )
-from experiments.matching import MatchingEngine as BrightnessMatching
-from experiments.rating import RatingEngine as LikertQuestionnaire
-from experiments.staircase import StaircaseEngine as StaircaseExperiment
-from protocols import load_protocol
+from glarelab.experiments.matching import MatchingEngine as BrightnessMatching
+from glarelab.experiments.rating import RatingEngine as LikertQuestionnaire
+from glarelab.experiments.staircase import StaircaseEngine as StaircaseExperiment
+from glarelab.protocols import load_protocol
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 
 @pytest.fixture(scope="module")

@@ -6,13 +6,13 @@ import tomllib
 
 import numpy as np
 import pytest
+from glarelab.analysis.report import write_report
+from glarelab.experiments.rating import RatingEngine, RatingObserver, shift_down
+from glarelab.experiments.session import SimulatedFrontend, make_observer, run_session
+from glarelab.protocols import load_protocol, parse_protocol
+from glarelab.stimuli.stimulus_set import build_stimulus_set
 from numpy.testing import assert_allclose
 
-from analysis.report import write_report
-from experiments.rating import RatingEngine, RatingObserver, shift_down
-from experiments.session import SimulatedFrontend, make_observer, run_session
-from protocols import load_protocol, parse_protocol
-from stimuli.stimulus_set import build_stimulus_set
 from tests.conftest import small_night_protocol
 
 
@@ -152,7 +152,7 @@ def test_a_simulated_study_and_its_report_show_the_stimulus_rated(small, tmp_pat
     ],
 )
 def test_a_bad_night_protocol_is_refused_by_key(change, pattern):
-    from protocols.keys import ProtocolError
+    from glarelab.protocols.keys import ProtocolError
 
     data = tomllib.loads(small_night_protocol())
     change(data)
@@ -161,8 +161,8 @@ def test_a_bad_night_protocol_is_refused_by_key(change, pattern):
 
 
 def test_keys_pressed_while_the_scene_shows_are_not_taken(night):
-    from experiments.engine import Press
-    from experiments.loop import SessionLoop, Shown
+    from glarelab.experiments.engine import Press
+    from glarelab.experiments.loop import SessionLoop, Shown
 
     class Device:  # the scene from 1.0 s to 4.0 s; a 3 during it, a 5 after it
         def __init__(self):
@@ -187,7 +187,7 @@ def test_keys_pressed_while_the_scene_shows_are_not_taken(night):
 
     rows = []
     loop = SessionLoop(Device(), rows.append, refresh_hz=60.0)
-    from experiments.loop import SessionAborted
+    from glarelab.experiments.loop import SessionAborted
 
     engine = RatingEngine(night, "P01")
     with pytest.raises(SessionAborted):

@@ -1,4 +1,4 @@
-"""The image-computable brightness model and the observers' noise (experiments.perception),
+"""The image-computable brightness model and the observers' noise (glarelab.experiments.perception),
 and the Luidolt rating defaults: the acceptance properties of issue 14 item 5 as tests."""
 
 import math
@@ -6,21 +6,21 @@ import math
 import numpy as np
 import pandas as pd
 import pytest
-from hypothesis import HealthCheck, given, settings
-from hypothesis import strategies as st
-from numpy.testing import assert_allclose
-from scipy import stats as sps
-
-import glare
-from analysis.stats import rm_anova
-from experiments.perception import (
+from glarelab.analysis.stats import rm_anova
+from glarelab.experiments.perception import (
     GLOW_GAIN,
     BrightnessModel,
     Observer,
     ObserverNoise,
     Percept,
 )
-from stimuli.sky import cloudy_sky
+from glarelab.stimuli.sky import cloudy_sky
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from numpy.testing import assert_allclose
+from scipy import stats as sps
+
+from glarelab import glare
 
 MODEL = BrightnessModel()
 L_DMAX = 220.0  # Yoshida 2008 §3
@@ -369,8 +369,8 @@ def test_identical_methods_give_no_method_effect():
 
 def test_the_luidolt_protocols_rating_observers_follow_7_2_1():
     """Expected values against every statement of §7.2.1 (5 participants)."""
-    from experiments.rating import RatingObserver
-    from protocols import load_protocol
+    from glarelab.experiments.rating import RatingObserver
+    from glarelab.protocols import load_protocol
 
     protocol = load_protocol("luidolt2020")
     observer = RatingObserver(protocol, "sim01", seed=0)

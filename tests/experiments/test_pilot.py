@@ -9,9 +9,8 @@ import time
 from pathlib import Path
 
 import pytest
+from glarelab.stimuli.calibration import fit_calibration
 from PIL import Image
-
-from stimuli.calibration import fit_calibration
 
 from .xscreen import SCREEN, XScreen, sidecar_of
 

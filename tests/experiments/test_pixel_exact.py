@@ -30,9 +30,9 @@ SCRIPT = textwrap.dedent(
 
     import numpy as np
 
-    from experiments.psychopy_frontend import PsychoPyFrontend
+    from glarelab.experiments.psychopy_frontend import PsychoPyFrontend
     from protocols import load_protocol
-    from stimuli.stimulus_set import read_codes
+    from glarelab.stimuli.stimulus_set import read_codes
 
     def frame_codes(window, bits):
         # the 320 rows around the window's middle (the images' row), every column, top row
@@ -132,8 +132,8 @@ SCRIPT = textwrap.dedent(
 
 @pytest.fixture(scope="module")
 def study_sets():
-    from protocols import load_protocol
-    from stimuli.stimulus_set import cached_stimulus_set
+    from glarelab.protocols import load_protocol
+    from glarelab.stimuli.stimulus_set import cached_stimulus_set
 
     return {
         study: str(cached_stimulus_set(load_protocol(study), progress=None)) for study in STUDIES

@@ -21,8 +21,8 @@ XVFB_MISMATCH = ("--accept-mismatch", "resolution", "refresh", "--allow-unmeasur
 
 @pytest.fixture(scope="module")
 def yoshida_set():
-    from protocols import load_protocol
-    from stimuli.stimulus_set import cached_stimulus_set
+    from glarelab.protocols import load_protocol
+    from glarelab.stimuli.stimulus_set import cached_stimulus_set
 
     return cached_stimulus_set(load_protocol("yoshida2008"), progress=None)
 
@@ -91,7 +91,7 @@ HALF_PIXEL = textwrap.dedent(
     from pathlib import Path
 
     from experiments import layout
-    from experiments.check_display import check_display
+    from glarelab.experiments.check_display import check_display
     from protocols import load_protocol
 
     whole = layout.Placement.pos.fget

@@ -10,13 +10,13 @@ from datetime import datetime
 from pathlib import Path
 
 import pytest
+from glarelab.experiments.data import SessionError, SessionFiles, session_files
+from glarelab.experiments.display import DisplayMismatch, ScreenFacts
+from glarelab.experiments.session import SimulatedFrontend, make_observer, run_session
+from glarelab.protocols import load_protocol
+from glarelab.stimuli.calibration import fit_calibration
 
-from experiments.data import SessionError, SessionFiles, session_files
-from experiments.display import DisplayMismatch, ScreenFacts
-from experiments.session import SimulatedFrontend, make_observer, run_session
 from glarelab.cli import main
-from protocols import load_protocol
-from stimuli.calibration import fit_calibration
 
 from .xscreen import XScreen
 

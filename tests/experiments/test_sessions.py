@@ -9,13 +9,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from glarelab.experiments.data import read_rows
+from glarelab.protocols import columns, load_protocol
+from glarelab.stimuli.calibration import Calibration
+from glarelab.stimuli.stimulus_set import default_calibration
 from PIL import Image
 
-from experiments.data import read_rows
 from glarelab.cli import main
-from protocols import columns, load_protocol
-from stimuli.calibration import Calibration
-from stimuli.stimulus_set import default_calibration
 
 ROOT = Path(__file__).parents[2]
 PROTOCOLS = ROOT / "protocols"

@@ -7,10 +7,10 @@ import sys
 USE_EVERY_COLOUR_MODULE = """
 import numpy as np
 before = np.get_printoptions()
-import glare
+from glarelab import glare
 from glare import acuity, adaptation, scotopic, wave
 from stimuli import preview
-import analysis
+from glarelab import analysis
 glare.WaveOpticsGlare(pupil_mm=3.0)
 import colour
 assert "colour" in __import__("sys").modules

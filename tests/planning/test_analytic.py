@@ -6,12 +6,11 @@ import itertools
 
 import numpy as np
 import pytest
+from glarelab.planning.analytic import OneWayJob, noncentrality, one_way_power
+from glarelab.planning.execute import ResultLog, run_tasks
+from glarelab.planning.power import summarise
 from numpy.testing import assert_allclose
 from scipy import stats as sps
-
-from planning.analytic import OneWayJob, noncentrality, one_way_power
-from planning.execute import ResultLog, run_tasks
-from planning.power import summarise
 
 MEANS = [0.0, 0.3, 0.6, 0.9]  # four conditions; σ = 1 within subjects
 

@@ -2,10 +2,9 @@ import io
 import json
 
 import pytest
+from glarelab.planning.execute import Progress, ResultLog, dask_client, run_tasks
 from hypothesis import given, settings
 from hypothesis import strategies as st
-
-from planning.execute import Progress, ResultLog, dask_client, run_tasks
 
 
 class Squares:

@@ -1,8 +1,7 @@
 import pytest
+from glarelab.planning.grid import GridError, apply_setting, grid, parse_setting
 from hypothesis import given, settings
 from hypothesis import strategies as st
-
-from planning.grid import GridError, apply_setting, grid, parse_setting
 
 
 @settings(max_examples=50, deadline=None)

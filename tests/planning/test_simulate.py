@@ -1,14 +1,13 @@
 import pandas as pd
 import pytest
-
-from analysis.load import load_sessions
-from analysis.paradigms import PARADIGMS
-from experiments.data import session_files
-from experiments.looking import DisplayedSet
-from experiments.session import SimulatedFrontend, make_observer, run_session
-from planning.simulate import participant_id, simulate_replication
-from protocols import load_protocol
-from stimuli.stimulus_set import StimulusSet, cached_stimulus_set
+from glarelab.analysis.load import load_sessions
+from glarelab.analysis.paradigms import PARADIGMS
+from glarelab.experiments.data import session_files
+from glarelab.experiments.looking import DisplayedSet
+from glarelab.experiments.session import SimulatedFrontend, make_observer, run_session
+from glarelab.planning.simulate import participant_id, simulate_replication
+from glarelab.protocols import load_protocol
+from glarelab.stimuli.stimulus_set import StimulusSet, cached_stimulus_set
 
 
 @pytest.fixture(scope="module")

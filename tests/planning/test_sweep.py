@@ -2,10 +2,9 @@ import json
 
 import pandas as pd
 import pytest
-
-from planning.grid import parse_setting
-from planning.sweep import sweep
-from stimuli.stimulus_set import verify_stimulus_set
+from glarelab.planning.grid import parse_setting
+from glarelab.planning.sweep import sweep
+from glarelab.stimuli.stimulus_set import verify_stimulus_set
 
 SILENT = {"log": lambda message: None, "progress": False}
 

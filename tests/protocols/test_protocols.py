@@ -3,8 +3,7 @@ import tomllib
 from pathlib import Path
 
 import pytest
-
-from protocols import (
+from glarelab.protocols import (
     PARADIGMS,
     ProtocolError,
     columns,
@@ -226,7 +225,7 @@ def test_any_registered_glare_model_with_its_parameters():
         }
     )
     protocol = parse_protocol(data)
-    from protocols.common import glare_model
+    from glarelab.protocols.common import glare_model
 
     model = glare_model("hybrid", protocol["glare"]["methods"][2]["parameters"])
     assert model.wave.pupil_mm == 4.0 and model.regime == "mesopic"

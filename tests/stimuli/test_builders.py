@@ -3,14 +3,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from glarelab.protocols import load_protocol, parse_protocol, pixel_deg
+from glarelab.stimuli.backgrounds import background
+from glarelab.stimuli.exr import write_exr
+from glarelab.stimuli.matching import build_matching, compose_target
+from glarelab.stimuli.staircase import build_staircase
+from glarelab.stimuli.stimulus_set import compose
 from numpy.testing import assert_allclose
-
-from protocols import load_protocol, parse_protocol, pixel_deg
-from stimuli.backgrounds import background
-from stimuli.exr import write_exr
-from stimuli.matching import build_matching, compose_target
-from stimuli.staircase import build_staircase
-from stimuli.stimulus_set import compose
 
 PROTOCOLS = Path(__file__).parents[2] / "protocols"
 
@@ -89,8 +88,8 @@ def test_spencer_comparison_has_a_one_third_annulus(spencer):
 
 
 def test_the_comparison_is_a_sum_of_set_images(spencer):
-    from protocols.staircase import comparison_terms
-    from stimuli.staircase import compose_comparison
+    from glarelab.protocols.staircase import comparison_terms
+    from glarelab.stimuli.staircase import compose_comparison
 
     protocol, built = spencer
     images = {name: info["img"] for name, info in built["images"].items()}

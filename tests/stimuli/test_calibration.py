@@ -2,9 +2,13 @@ import json
 
 import numpy as np
 import pytest
+from glarelab.stimuli.calibration import (
+    Calibration,
+    fit_calibration,
+    read_readings,
+    synthetic_calibration,
+)
 from numpy.testing import assert_allclose
-
-from stimuli.calibration import Calibration, fit_calibration, read_readings, synthetic_calibration
 
 
 def measured_looking(bit_depth=10):
@@ -122,8 +126,8 @@ def test_readings_csv(tmp_path):
 def test_shipped_synthetic_calibrations_match_their_protocols():
     from pathlib import Path
 
-    from protocols import load_protocol
-    from stimuli.stimulus_set import default_calibration
+    from glarelab.protocols import load_protocol
+    from glarelab.stimuli.stimulus_set import default_calibration
 
     root = Path(__file__).parents[2]
     for study, name in (("yoshida2008", "433cd-10bit"), ("spencer1995", "50cd-8bit")):
@@ -134,7 +138,7 @@ def test_shipped_synthetic_calibrations_match_their_protocols():
 
 
 def test_sessions_refuse_missing_failed_or_synthetic_calibrations():
-    from stimuli.calibration import usable_calibration
+    from glarelab.stimuli.calibration import usable_calibration
 
     synthetic = synthetic_calibration(max_cd_m2=433.0, black_cd_m2=0.5, bit_depth=10)
     fitted = fit_calibration(measured_looking(), bit_depth=10)

@@ -1,10 +1,9 @@
 import numpy as np
 import pytest
+from glarelab.stimuli.exr import read_exr, write_exr
+from glarelab.stimuli.preview import to_display
+from glarelab.stimuli.shapes import disk
 from numpy.testing import assert_array_equal
-
-from stimuli.exr import read_exr, write_exr
-from stimuli.preview import to_display
-from stimuli.shapes import disk
 
 
 @pytest.mark.parametrize("shape", [(7, 5), (7, 5, 3)])

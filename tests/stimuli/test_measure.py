@@ -8,8 +8,7 @@ import time
 
 import numpy as np
 import pytest
-
-from stimuli.measure import MeasurementSession
+from glarelab.stimuli.measure import MeasurementSession
 
 
 def gamma_display(white=300.0, black=0.4, gamma=2.3, top=1023):
@@ -133,8 +132,8 @@ FRONT_END = textwrap.dedent(
     """
     import json, sys
     import numpy as np
-    from stimuli.measure import MeasurementSession
-    from stimuli.measure_psychopy import run_measurement
+    from glarelab.stimuli.measure import MeasurementSession
+    from glarelab.stimuli.measure_psychopy import run_measurement
     session = MeasurementSession(bit_depth=8, out=sys.argv[1], rng=np.random.default_rng(0),
                                  points=9, verify_points=3)
     result = run_measurement(session, photometer=lambda c: 0.1 + 99.9 * (c / 255) ** 2.2,

@@ -5,14 +5,9 @@ import tomllib
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
-from numpy.testing import assert_allclose
-from PIL import Image
-
-from protocols import load_protocol, parse_protocol
-from stimuli.exr import read_exr
-from stimuli.night import (
+from glarelab.protocols import load_protocol, parse_protocol
+from glarelab.stimuli.exr import read_exr
+from glarelab.stimuli.night import (
     LAMP_RGB,
     POOL_FRACTION,
     WINDOW_FRACTION,
@@ -21,12 +16,17 @@ from stimuli.night import (
     night_street,
     preview_strip,
 )
-from stimuli.stimulus_set import (
+from glarelab.stimuli.stimulus_set import (
     build_stimulus_set,
     shows_images,
     verify_stimulus_set,
     write_codes,
 )
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from numpy.testing import assert_allclose
+from PIL import Image
+
 from tests.conftest import small_night_protocol
 
 

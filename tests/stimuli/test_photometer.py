@@ -10,10 +10,9 @@ import time
 
 import numpy as np
 import pytest
-
-from stimuli.calibration import Calibration
-from stimuli.measure import MeasurementSession
-from stimuli.photometer import (
+from glarelab.stimuli.calibration import Calibration
+from glarelab.stimuli.measure import MeasurementSession
+from glarelab.stimuli.photometer import (
     Disconnected,
     Garbled,
     NoAnswer,
@@ -23,6 +22,7 @@ from stimuli.photometer import (
     measure_patch,
     open_photometer,
 )
+
 from tests.stimuli.fake_photometer import FakeMinolta, FakePR655
 from tests.stimuli.pty_line import keeping_tcsetattr
 
@@ -372,7 +372,8 @@ def test_a_measurement_in_a_window_survives_a_pulled_cable_and_gives_the_known_d
 
 
 def test_check_display_reads_black_white_and_the_calibration(tmp_path, line):
-    from stimuli.calibration import fit_calibration
+    from glarelab.stimuli.calibration import fit_calibration
+
     from tests.experiments.xscreen import XScreen
 
     codes = np.unique(np.round(np.linspace(0, 255, 33)).astype(int))

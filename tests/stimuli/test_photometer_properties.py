@@ -3,11 +3,10 @@
 import json
 
 import numpy as np
+from glarelab.stimuli.measure import MeasurementSession
+from glarelab.stimuli.photometer import PatchProtocol, measure_patch
 from hypothesis import given, settings
 from hypothesis import strategies as st
-
-from stimuli.measure import MeasurementSession
-from stimuli.photometer import PatchProtocol, measure_patch
 
 luminances = st.floats(0.0, 1e5, allow_nan=False, allow_infinity=False)
 

@@ -5,20 +5,19 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
-from numpy.testing import assert_array_equal
-from PIL import Image
-
-from protocols import load_protocol
-from stimuli.exr import read_exr
-from stimuli.stimulus_set import (
+from glarelab.protocols import load_protocol
+from glarelab.stimuli.exr import read_exr
+from glarelab.stimuli.stimulus_set import (
     build_stimulus_set,
     default_calibration,
     read_codes,
     verify_stimulus_set,
     write_codes,
 )
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from numpy.testing import assert_array_equal
+from PIL import Image
 
 PROTOCOLS = Path(__file__).parents[2] / "protocols"
 
@@ -131,7 +130,7 @@ def test_codes_outside_the_bit_depth_are_refused(tmp_path):
 
 
 def test_a_calibration_for_another_bit_depth_is_refused(tmp_path):
-    from stimuli.calibration import synthetic_calibration
+    from glarelab.stimuli.calibration import synthetic_calibration
 
     protocol = load_protocol(PROTOCOLS / "yoshida2008.toml")
     eight_bit = synthetic_calibration(max_cd_m2=433.0, black_cd_m2=0.5, bit_depth=8)

@@ -1,0 +1,1 @@
+"""Applying glare: the plan, the renderer, convolution, composition and display maths."""

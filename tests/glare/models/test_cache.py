@@ -1,0 +1,317 @@
+"""The kernel cache on disk (glarelab.glare.models.cache): keys, integrity, concurrency, faults, eviction.
+
+Every test points the cache at its own temporary folder; the suite's default cache is a
+temporary folder too (conftest.py), never the user's.
+"""
+
+import os
+import subprocess
+import sys
+import textwrap
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pytest
+from glarelab.glare.models.cache import KernelCache, default_cache, resolve_cache
+from glarelab.glare.models.digitise import Kernel
+
+from glarelab import glare
+
+ROOT = Path(__file__).resolve().parents[2]
+SHAPE = (41, 41)
+
+
+def _entries(cache: KernelCache) -> list[Path]:
+    return sorted(cache.directory.glob("*.kernel"))
+
+
+def _same(a: Kernel, b: Kernel) -> None:
+    np.testing.assert_array_equal(a.values, b.values)
+    np.testing.assert_array_equal(np.asarray(a.energy_outside), np.asarray(b.energy_outside))
+    assert a.pixel_deg == b.pixel_deg
+    assert a.quadrature_error == b.quadrature_error
+    assert a.description == b.description
+
+
+@pytest.mark.parametrize(
+    "model, colour",
+    [
+        (glare.VosGlare(), False),
+        (glare.VosGlare(regime="mesopic"), True),
+        (glare.VosGlare(flare_lines=True, seed=3), False),  # not symmetric: stored whole
+        (glare.GaussianGlare(sigma_deg=0.2, sampling="pixel"), False),
+    ],
+    ids=["vos", "mesopic-rgb", "flare-lines", "gaussian"],
+)
+def test_a_cached_kernel_is_the_digitised_kernel(tmp_path, model, colour):
+    cache = KernelCache(tmp_path)
+    made = model.kernel(0.05, SHAPE, colour=colour)
+    first = cache.kernel(model, 0.05, SHAPE, colour=colour)
+    _same(first, made)
+    assert len(_entries(cache)) == 1
+    again = cache.kernel(model, 0.05, SHAPE, colour=colour, build=pytest.fail)  # not rebuilt
+    _same(again, made)
+    assert isinstance(again.energy_outside, type(made.energy_outside))
+
+
+def test_every_parameter_is_in_the_key(tmp_path):
+    cache = KernelCache(tmp_path)
+    base = cache.key(glare.VosGlare(), 0.05, SHAPE, colour=False)
+    others = [
+        cache.key(glare.VosGlare(age=40.0), 0.05, SHAPE, colour=False),
+        cache.key(glare.VosGlare(samples_per_pixel=11), 0.05, SHAPE, colour=False),
+        cache.key(
+            glare.VosGlare(halo_spectrum=glare.HaloSpectrum(n_wavelengths=31)),
+            0.05,
+            SHAPE,
+            colour=False,
+        ),
+        cache.key(glare.VosGlare(), np.nextafter(0.05, 1.0), SHAPE, colour=False),
+        cache.key(glare.VosGlare(), 0.05, (41, 43), colour=False),
+        cache.key(glare.VosGlare(), 0.05, SHAPE, colour=True),
+        cache.key(glare.GaussianGlare(), 0.05, SHAPE, colour=False),
+        cache.key(glare.WaveOpticsGlare(pupil_mm=4.0), 0.05, SHAPE, colour=False),
+        cache.key(glare.WaveOpticsGlare(pupil_mm=5.0), 0.05, SHAPE, colour=False),
+    ]
+    assert None not in others
+    assert len({base, *others}) == len(others) + 1
+    assert cache.key(glare.VosGlare(), 0.05, SHAPE, colour=False) == base
+
+
+def test_a_changed_parameter_is_digitised_not_read(tmp_path):
+    cache = KernelCache(tmp_path)
+    cache.kernel(glare.VosGlare(), 0.05, SHAPE)
+    older = glare.VosGlare(age=65.0)
+    got = cache.kernel(older, 0.05, SHAPE)
+    _same(got, older.kernel(0.05, SHAPE))
+    assert len(_entries(cache)) == 2
+
+
+def test_a_model_without_a_faithful_repr_is_not_cached(tmp_path):
+    class Plain:  # repr is an address: two different objects could share nothing
+        def kernel(self, pixel_deg, shape, *, colour=False):
+            return Kernel(values=np.ones((1, 1)), pixel_deg=pixel_deg)
+
+    @dataclass(frozen=True)
+    class WithArray(glare.GlareModel):  # a long array's repr is shortened with "..."
+        weights: np.ndarray
+
+        def kernel(self, pixel_deg, shape, *, colour=False):
+            return Kernel(values=np.ones((1, 1)), pixel_deg=pixel_deg)
+
+    cache = KernelCache(tmp_path)
+    assert cache.key(Plain(), 0.1, (1, 1), colour=False) is None
+    assert cache.key(WithArray(np.arange(5000.0)), 0.1, (1, 1), colour=False) is None
+    renderer = glare.GlareRenderer(Plain(), pixel_deg=0.1, shape=(1, 1), cache=cache)
+    assert renderer.kernel().values.shape == (1, 1)
+    assert _entries(cache) == []
+
+
+@pytest.mark.parametrize("damage", ["flip", "truncate", "empty", "garbage"])
+def test_a_corrupt_entry_is_detected_removed_and_rebuilt(tmp_path, damage):
+    cache = KernelCache(tmp_path)
+    model = glare.VosGlare()
+    made = cache.kernel(model, 0.05, SHAPE)
+    (path,) = _entries(cache)
+    data = bytearray(path.read_bytes())
+    if damage == "flip":  # one bit of one kernel value
+        data[len(data) // 2] ^= 0x10
+    elif damage == "truncate":
+        data = data[: len(data) - 100]
+    elif damage == "empty":
+        data = bytearray()
+    else:
+        data = bytearray(os.urandom(len(data)))
+    path.write_bytes(bytes(data))
+    key = cache.key(model, 0.05, SHAPE, colour=False)
+    assert cache.get(key) is None
+    assert not path.exists()  # removed, so that it is written again
+    rebuilt = cache.kernel(model, 0.05, SHAPE)
+    _same(rebuilt, made)
+    assert cache.get(key) is not None
+
+
+def test_an_entry_under_another_name_is_not_served(tmp_path):
+    """A file copied or renamed onto another key's name holds the wrong kernel: refused."""
+    cache = KernelCache(tmp_path)
+    cache.kernel(glare.VosGlare(), 0.05, SHAPE)
+    (path,) = _entries(cache)
+    other = cache.key(glare.VosGlare(age=50.0), 0.05, SHAPE, colour=False)
+    path.rename(cache.path(other))
+    assert cache.get(other) is None
+
+
+WRITER = textwrap.dedent(
+    """
+    import sys
+    import numpy as np
+    from glarelab import glare
+    from glarelab.glare.models.cache import KernelCache
+
+    cache = KernelCache(sys.argv[1])
+    model = glare.VosGlare(regime=sys.argv[2])
+    for _ in range(int(sys.argv[3])):
+        kernel = cache.kernel(model, 0.02, (301, 301))
+        assert np.array_equal(kernel.values, model.kernel(0.02, (301, 301)).values)
+        key = cache.key(model, 0.02, (301, 301), colour=False)
+        cache.path(key).unlink(missing_ok=True)  # make the next round write again
+    """
+)
+
+
+def test_two_processes_filling_the_cache_at_once(tmp_path):
+    """Two writers of the same entries, each reading back and removing them in a loop: every
+    kernel read is the digitised one, and no partial file is left behind."""
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    writers = [
+        subprocess.Popen([sys.executable, "-c", WRITER, str(tmp_path), "photopic", "6"], env=env)
+        for _ in range(2)
+    ]
+    assert [w.wait(timeout=240) for w in writers] == [0, 0]
+    assert list(tmp_path.glob("*.part")) == []
+    cache = KernelCache(tmp_path)
+    model = glare.VosGlare()
+    _same(cache.kernel(model, 0.02, (301, 301)), model.kernel(0.02, (301, 301)))
+
+
+FULL_DISK = textwrap.dedent(
+    """
+    import resource, signal, sys, warnings
+    import numpy as np
+    from glarelab import glare
+    from glarelab.glare.models.cache import KernelCache
+
+    signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # writes past the limit fail with EFBIG
+    resource.setrlimit(resource.RLIMIT_FSIZE, (200_000, 200_000))
+    cache = KernelCache(sys.argv[1])
+    model = glare.VosGlare()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        kernel = cache.kernel(model, 0.02, (401, 401))  # 645 kB as a quadrant: refused
+    assert np.array_equal(kernel.values, model.kernel(0.02, (401, 401)).values)
+    assert any("could not be written" in str(w.message) for w in caught), caught
+    small = cache.kernel(model, 0.02, (101, 101))  # fits: written
+    print(len(list(cache.directory.glob("*.kernel"))), len(list(cache.directory.glob("*.part"))))
+    """
+)
+
+
+def test_a_full_disk_skips_the_entry_and_returns_the_right_kernel(tmp_path):
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    done = subprocess.run(
+        [sys.executable, "-c", FULL_DISK, str(tmp_path)],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=240,
+    )
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == ["1", "0"]  # the small entry only, no temporary file left
+    cache = KernelCache(tmp_path)
+    model = glare.VosGlare()
+    _same(cache.kernel(model, 0.02, (101, 101), build=pytest.fail), model.kernel(0.02, (101, 101)))
+
+
+def test_an_unwritable_folder_warns_and_renders(tmp_path):
+    blocker = tmp_path / "not-a-folder"
+    blocker.write_text("")
+    cache = KernelCache(blocker / "kernels")
+    with pytest.warns(UserWarning, match="could not be written"):
+        kernel = cache.kernel(glare.VosGlare(), 0.05, SHAPE)
+    _same(kernel, glare.VosGlare().kernel(0.05, SHAPE))
+
+
+def test_least_recently_used_entries_are_evicted(tmp_path):
+    model = glare.VosGlare()
+    one = KernelCache(tmp_path).kernel(model, 0.05, (101, 101))
+    size = next(tmp_path.glob("*.kernel")).stat().st_size
+    cache = KernelCache(tmp_path, max_bytes=int(2.5 * size))
+    keys = []
+    for pixel in (0.05, 0.06, 0.07):
+        cache.kernel(model, pixel, (101, 101))
+        keys.append(cache.key(model, pixel, (101, 101), colour=False))
+        path = cache.path(keys[-1])
+        os.utime(path, (path.stat().st_atime, 1e9 + len(keys)))  # a clear order of use
+    assert cache.get(keys[0]) is None  # the oldest went when the third was written
+    assert cache.get(keys[1]) is not None  # read: now the most recently used
+    os.utime(cache.path(keys[1]), None)
+    cache.kernel(model, 0.08, (101, 101))
+    assert cache.get(keys[2]) is None and cache.get(keys[1]) is not None
+    assert cache.info()["bytes"] <= cache.max_bytes
+    _same(cache.get(keys[1]), model.kernel(0.06, (101, 101)))
+    assert one.values.shape == (101, 101)
+
+
+def test_a_kernel_larger_than_the_cache_is_not_stored(tmp_path):
+    cache = KernelCache(tmp_path, max_bytes=1000)
+    kernel = cache.kernel(glare.VosGlare(), 0.05, (101, 101))
+    assert kernel.values.shape == (101, 101) and _entries(cache) == []
+
+
+def test_clear_and_info(tmp_path):
+    cache = KernelCache(tmp_path)
+    for pixel in (0.05, 0.1):
+        cache.kernel(glare.VosGlare(), pixel, SHAPE)
+    (tmp_path / ".left-over.part").write_bytes(b"x")
+    info = cache.info()
+    assert info["entries"] == 2 and info["bytes"] > 0 and info["directory"] == str(tmp_path)
+    assert cache.clear() == 2
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_bad_sizes_are_refused(tmp_path, monkeypatch):
+    for bad in (0, -1, float("nan"), "lots"):
+        with pytest.raises(ValueError, match="max_bytes"):
+            KernelCache(tmp_path, max_bytes=bad)
+    monkeypatch.setenv("GLARELAB_CACHE_MAX_MB", "many")
+    with pytest.raises(ValueError, match="GLARELAB_CACHE_MAX_MB"):
+        KernelCache(tmp_path)
+    with pytest.raises(ValueError, match="cache must be"):
+        resolve_cache(3)
+
+
+def test_the_environment_chooses_the_folder_and_turns_it_off(tmp_path, monkeypatch):
+    monkeypatch.setenv("GLARELAB_CACHE", str(tmp_path))
+    monkeypatch.delenv("GLARELAB_NO_CACHE", raising=False)
+    assert default_cache().directory == tmp_path / "kernels"
+    monkeypatch.setenv("GLARELAB_NO_CACHE", "1")
+    assert default_cache() is None
+    renderer = glare.GlareRenderer(glare.VosGlare(), pixel_deg=0.05, shape=(21, 21))
+    renderer.kernel()
+    assert not (tmp_path / "kernels").exists()
+    monkeypatch.setenv("GLARELAB_NO_CACHE", "0")
+    assert default_cache() is not None
+
+
+def test_the_user_cache_folder_honours_xdg_cache_home(tmp_path):
+    env = {k: v for k, v in os.environ.items() if k != "GLARELAB_CACHE"}
+    env |= {"PYTHONPATH": str(ROOT), "XDG_CACHE_HOME": str(tmp_path)}
+    code = "from glarelab.glare.models.cache import KernelCache; print(KernelCache().directory)"
+    done = subprocess.run(
+        [sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=60
+    )
+    assert done.returncode == 0, done.stderr
+    assert Path(done.stdout.strip()) == tmp_path / "glarelab" / "kernels"
+
+
+def test_renderers_share_kernels_through_the_cache(tmp_path):
+    """A second renderer (another image set, another run) reads the reference kernel and the
+    coarse far-tail kernels instead of digitising them, and renders the same image."""
+    cache = KernelCache(tmp_path)
+    image = np.full((96, 96), 30.0)
+    image[40:42, 50:52] = 1e7
+    lines = []
+    first = glare.GlareRenderer(
+        glare.VosGlare(), pixel_deg=0.05, shape=image.shape, cache=cache, log=lines.append
+    ).render(image)
+    assert any("digitising" in line for line in lines)
+    lines.clear()
+    second = glare.GlareRenderer(
+        glare.VosGlare(), pixel_deg=0.05, shape=image.shape, cache=cache, log=lines.append
+    ).render(image)
+    assert not any("digitising" in line for line in lines), lines
+    assert any("read from the cache" in line for line in lines)
+    np.testing.assert_array_equal(first.image, second.image)
+    plain = glare.add_glare(image, glare.VosGlare(), pixel_deg=0.05, cache=False)
+    np.testing.assert_array_equal(first.image, plain)

@@ -1,0 +1,207 @@
+"""The night pipeline: glare and night vision in Luidolt's order (Fig. 4.1), each effect on and
+off, any glare model, sequences, and the numerical extremes."""
+
+import math
+
+import numpy as np
+import pytest
+from glarelab.glare import night
+from glarelab.glare.models import eye
+from glarelab.glare.night import acuity, adaptation, scotopic
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from numpy.testing import assert_allclose
+
+from glarelab import glare
+
+PIXEL = 0.05
+
+
+def street(height=24, width=36, *, lamp=5e4, ambient=0.02):
+    rng = np.random.default_rng(7)
+    scene = ambient * rng.uniform(0.3, 1.5, (height, width, 1)) * np.array([1.0, 0.5, 0.3])
+    scene[10:12, 16:18] = lamp
+    return scene
+
+
+def test_without_effects_the_scene_is_exposed_and_clipped_by_the_display():
+    scene = street()
+    out = night.render_night(scene, pixel_deg=PIXEL, effects=(), adapted_display_cd_m2=10.0)
+    target = adaptation.frame_luminance(scene, pixel_deg=PIXEL)
+    assert_allclose(out.adaptation_cd_m2, [target])
+    assert_allclose(out.exposure, [10.0 / target])
+    assert_allclose(out.frames, np.minimum(scene * 10.0 / target, 100.0), rtol=1e-12)
+    assert math.isnan(out.pupil_mm[0]) and out.models == [None]
+
+
+def test_the_pipeline_is_the_effects_in_luidolts_order():
+    # adaptation → exposure → glare (L_dmax clamp) → acuity (σ of the scene) → scotopic (σ(L_i))
+    scene = street()
+    out = night.render_night(scene, pixel_deg=PIXEL, glare_model=glare.GaussianGlare())
+    level = out.adaptation_cd_m2[0]
+    exposed = scene * out.exposure[0]
+    model = night.adapted_model(glare.GaussianGlare(), level)
+    glared = (
+        glare.GlareRenderer(model, pixel_deg=PIXEL, shape=scene.shape[:2], l_dmax_cd_m2=100.0)
+        .render(exposed)
+        .image
+    )
+    blurred = acuity.acuity_blur(
+        np.minimum(glared, 100.0), pixel_deg=PIXEL, white_cd_m2=100.0,
+        luminance_scale=1 / out.exposure[0],
+    )  # fmt: skip
+    coloured = scotopic.scotopic_shift_Luidolt2020(blurred, level)
+    assert_allclose(out.frames, np.clip(coloured, 0, 100.0), rtol=1e-10, atol=1e-12)
+
+
+@pytest.mark.parametrize("effect", night.EFFECTS)
+def test_each_effect_changes_the_image_and_only_when_on(effect):
+    scene = street(lamp=300.0, ambient=0.002)  # a faint glow: the dark street stays dark
+    sequence = [scene, scene]  # adaptation needs time to show
+    others = tuple(e for e in night.EFFECTS if e != effect)
+    options = {"pixel_deg": PIXEL, "frame_time_s": 0.2, "initial_adaptation_cd_m2": 0.1}
+    with_it = night.render_night(sequence, **options)
+    without = night.render_night(sequence, effects=others, **options)
+    assert not np.allclose(with_it.frames[1], without.frames[1], rtol=1e-3, atol=1e-6)
+
+
+def test_adaptation_follows_eq_5_2_over_the_sequence():
+    frames = [street(ambient=0.02)] * 6
+    out = night.render_night(
+        frames, pixel_deg=PIXEL, frame_time_s=0.1, initial_adaptation_cd_m2=20.0,
+        effects=("adaptation",),
+    )  # fmt: skip
+    expected = adaptation.adaptation_luminance(out.targets_cd_m2, 0.1, initial_cd_m2=20.0)
+    assert_allclose(out.adaptation_cd_m2, expected)
+    assert (np.diff(out.adaptation_cd_m2) < 0).all()  # darkening towards the street
+    # the display brightens as the eye adapts: the same scene, more exposure each frame
+    means = [f.mean() for f in out.frames]
+    assert (np.diff(means) > 0).all()
+
+
+def test_without_adaptation_the_eye_is_adapted_at_once():
+    frames = [street(ambient=0.02), street(ambient=2.0)]
+    out = night.render_night(frames, pixel_deg=PIXEL, effects=("glare",))
+    assert_allclose(out.adaptation_cd_m2, out.targets_cd_m2)
+
+
+def test_the_pupil_and_regime_come_from_the_adapted_luminance():
+    scene = street()
+    out = night.render_night(scene, pixel_deg=PIXEL, effects=("glare",))
+    level = out.adaptation_cd_m2[0]
+    assert out.pupil_mm[0] == pytest.approx(round(eye.pupil_diameter_mm(level), 1))
+    assert out.models[0].regime == eye.regime(level)
+    fixed = night.render_night(
+        scene, pixel_deg=PIXEL, effects=("glare",), pupil_from_adaptation=False
+    )
+    assert fixed.models[0] == glare.VosGlare()
+
+
+def test_looking_at_the_lamp_raises_the_adaptation():
+    scene = street()
+    window = {"pixel_deg": PIXEL, "effects": (), "window_sigma_deg": 0.2}
+    away = night.render_night(scene, gaze_px=(2, 2), **window)
+    at = night.render_night(scene, gaze_px=(11, 17), **window)
+    assert at.targets_cd_m2[0] > away.targets_cd_m2[0]
+    per_frame = night.render_night([scene, scene], gaze_px=[(2, 2), (11, 17)], **window)
+    assert_allclose(per_frame.targets_cd_m2, [away.targets_cd_m2[0], at.targets_cd_m2[0]])
+
+
+@pytest.mark.parametrize(
+    "model",
+    [
+        glare.GaussianGlare(sigma_deg=0.1),
+        glare.VosGlare(),
+        glare.WaveOpticsGlare(eyelashes=False, eyelid=False, particles=20, psf_extent_deg=2.0),
+        glare.HybridGlare(
+            glare.WaveOpticsGlare(eyelashes=False, eyelid=False, particles=0, psf_extent_deg=2.0)
+        ),
+    ],
+    ids=["gaussian", "vos", "wave", "hybrid"],
+)
+def test_any_glare_model_takes_its_pupil_from_the_adaptation(model):
+    out = night.render_night(street(), pixel_deg=PIXEL, glare_model=model)
+    frame = out.frames
+    assert np.isfinite(frame).all() and (frame >= 0).all() and (frame <= 100.0).all()
+    used = out.models[0]
+    pupil = round(eye.pupil_diameter_mm(out.adaptation_cd_m2[0]), 1)
+    if hasattr(model, "pupil_mm"):
+        assert used.pupil_mm == pytest.approx(pupil)
+    if hasattr(model, "wave"):
+        assert used.wave.pupil_mm == pytest.approx(pupil)
+
+
+def test_adapted_model_leaves_a_model_without_an_eye_alone():
+    gaussian = glare.GaussianGlare()
+    assert night.adapted_model(gaussian, 0.01) is gaussian
+    vos = night.adapted_model(glare.VosGlare(flare_lines=True, seed=3), 1e-4)
+    assert (vos.regime, vos.flare_lines, vos.seed) == ("scotopic", True, 3)
+
+
+@pytest.mark.parametrize("frames", [1, 3])
+def test_black_frames(frames):
+    out = night.render_night(
+        [np.zeros((5, 6, 3))] * frames, pixel_deg=PIXEL, frame_time_s=1 / 60,
+        initial_adaptation_cd_m2=100.0,
+    )  # fmt: skip
+    assert_allclose(np.array(out.frames), 0.0, atol=0)
+    assert (out.adaptation_cd_m2 > 0).all() and np.isfinite(out.exposure).all()
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    height=st.integers(1, 7),
+    width=st.integers(1, 9),
+    exponents=st.lists(st.floats(-8.0, 9.0), min_size=63 * 3, max_size=63 * 3),
+    black=st.floats(0.0, 1.0),
+    frames=st.integers(1, 3),
+    effects=st.lists(st.sampled_from(night.EFFECTS), unique=True, max_size=4),
+    scotopic_method=st.sampled_from(scotopic.METHODS),
+)
+def test_no_nan_and_no_negative_light_from_0_to_1e9_cd_m2(
+    height, width, exponents, black, frames, effects, scotopic_method
+):
+    values = 10.0 ** np.array(exponents[: height * width * 3]).reshape(height, width, 3)
+    values[values < 10.0 ** (-8 + 17 * black)] = 0.0  # true black pixels, up to all of them
+    values[0, 0] = 1e9 if values.size > 3 else values[0, 0]
+    out = night.render_night(
+        [values] * frames, pixel_deg=0.1, effects=effects, frame_time_s=1 / 60,
+        glare_model=glare.GaussianGlare(sigma_deg=0.2), scotopic_method=scotopic_method,
+    )  # fmt: skip
+    for frame in out.frames:
+        assert np.isfinite(frame).all() and (frame >= 0).all() and (frame <= 100.0).all()
+    assert np.isfinite(out.adaptation_cd_m2).all() and (out.adaptation_cd_m2 >= 0).all()
+
+
+def test_a_luminance_image_is_shown_as_grey_rgb():
+    scene = street()[..., 1]
+    out = night.render_night(scene, pixel_deg=PIXEL, effects=("acuity",))
+    assert out.frames.shape == (*scene.shape, 3)
+    assert_allclose(out.frames[..., 0], out.frames[..., 2], rtol=1e-9)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "pattern"),
+    [
+        ({"scene_cd_m2": []}, "at least one frame"),
+        ({"scene_cd_m2": [np.ones((3, 3)), np.ones((3, 4))]}, "one shape"),
+        ({"scene_cd_m2": "street"}, "scene_cd_m2"),
+        ({"scene_cd_m2": -np.ones((3, 3))}, "scene_cd_m2"),
+        ({"effects": ("bloom",)}, "effects"),
+        ({"pixel_deg": 0.0}, "pixel_deg"),
+        ({"display_max_cd_m2": -1.0}, "display_max_cd_m2"),
+        ({"adapted_display_cd_m2": 200.0}, "adapted_display_cd_m2"),
+        ({"scene_cd_m2": [np.ones((3, 3))] * 2}, "frame_time_s"),
+        (
+            {"scene_cd_m2": [np.ones((3, 3))] * 2, "frame_time_s": 0.1, "gaze_px": [(1, 1)]},
+            "gaze_px",
+        ),
+        ({"acuity_method": "Ferwerda"}, "acuity_method"),
+        ({"scotopic_method": "Krawczyk"}, "scotopic_method"),
+        ({"glare_model": "bloom"}, "method"),
+    ],
+)
+def test_bad_input_is_refused_by_name(kwargs, pattern):
+    arguments = {"scene_cd_m2": np.ones((3, 3)), "pixel_deg": 0.1} | kwargs
+    with pytest.raises(ValueError, match=pattern):
+        night.render_night(arguments.pop("scene_cd_m2"), **arguments)

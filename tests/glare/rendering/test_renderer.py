@@ -1,0 +1,128 @@
+"""GlareRenderer: one kernel and its spectra for many images, exact paths equal to a plain
+convolution, and a model interface that refuses or handles what it does not know."""
+
+from dataclasses import dataclass
+
+import numpy as np
+import pytest
+from glarelab.glare import GaussianGlare, GlareModel, GlareRenderer, VosGlare
+from glarelab.glare.rendering.compose import compose
+from glarelab.glare.rendering.renderer import SPECTRA_BYTES
+from numpy.testing import assert_allclose
+from scipy.signal import fftconvolve
+
+from glarelab import glare
+
+
+def _night(shape, lamps, seed=0):
+    rng = np.random.default_rng(seed)
+    image = 10 ** rng.uniform(-2, 0, shape)
+    for _ in range(lamps):
+        row, col = rng.integers(0, shape[0] - 2), rng.integers(0, shape[1] - 2)
+        image[row : row + 3, col : col + 3] = 10 ** rng.uniform(3, 6)
+    return image
+
+
+@pytest.mark.parametrize("path", ["direct", "fft"])
+@pytest.mark.parametrize("method", ["Yoshida2008", "Spencer1995"])
+def test_the_exact_paths_equal_a_plain_convolution_with_the_full_kernel(path, method):
+    image = _night((57, 90), 3)
+    model = VosGlare(regime="mesopic")
+    kernel = model.kernel(0.05, glare.kernel_shape_for(image.shape))
+    result = GlareRenderer(
+        model, pixel_deg=0.05, shape=image.shape, method=method, tolerance_codes=0,
+        kernel=kernel, paths=(path,),
+    ).render(image)  # fmt: skip
+    assert result.plan.path == path and result.plan.exact
+    spread = fftconvolve(np.maximum(image - 220.0, 0.0), kernel.values, mode="same")
+    assert_allclose(result.spread, spread, rtol=1e-9, atol=1e-9 * spread.max())
+    assert_allclose(result.image, compose(image, spread, 220.0, method), rtol=1e-9, atol=1e-9)
+
+
+def test_a_renderer_digitises_its_kernel_once_and_keeps_its_spectra_bounded():
+    lines = []
+    renderer = GlareRenderer(
+        VosGlare(), pixel_deg=0.05, shape=(96, 128), log=lines.append, cache=False
+    )
+    for seed in range(4):
+        result = renderer.render(_night((96, 128), 40, seed))
+        assert result.plan.path == "fft" and result.error_bound_codes <= 0.5
+    assert sum("digitising" in line for line in lines) == 1
+    assert 1 <= len(renderer._spectra) and all(
+        s.dtype == complex for s in renderer._spectra.values()
+    )
+    assert sum(s.nbytes for s in renderer._spectra.values()) <= SPECTRA_BYTES
+
+
+def test_a_few_glints_take_the_direct_path_and_many_lamps_the_fft():
+    renderer = GlareRenderer(VosGlare(), pixel_deg=0.02, shape=(512, 512))
+    glint = np.full((512, 512), 0.3)
+    glint[3:5, 500:502] = 1e8  # near a corner: the border case of issue 13
+    assert renderer.plan(glint).path == "direct"
+    assert renderer.plan(_night((512, 512), 200)).path == "fft"
+
+
+def test_an_achromatic_rgb_scene_is_convolved_once_and_a_coloured_one_three_times():
+    grey = _night((40, 50), 2)
+    rgb = np.repeat(grey[..., None], 3, axis=2)
+    renderer = GlareRenderer(VosGlare(), pixel_deg=0.05, shape=grey.shape, tolerance_codes=0)
+    one = renderer.render(rgb)
+    assert one.plan.convolutions == 1 and one.image.shape == rgb.shape
+    assert_allclose(one.image[..., 1], renderer.render(grey).image, rtol=1e-12)
+    tinted = rgb * np.array([1.0, 0.8, 0.6])
+    assert renderer.render(tinted).plan.convolutions == 3
+
+
+@pytest.mark.parametrize(
+    ("options", "match"),
+    [
+        ({"shape": (0, 4)}, "shape"),
+        ({"paths": ("fast",)}, "paths"),
+        ({"paths": ()}, "paths"),
+        ({"tolerance_codes": -1}, "tolerance_codes"),
+        ({"precision": "float16"}, "precision"),
+        ({"method": "Kakimoto"}, "method"),
+    ],
+)
+def test_bad_renderer_arguments_are_named(options, match):
+    arguments = {"pixel_deg": 0.05, "shape": (8, 8)} | options
+    with pytest.raises(ValueError, match=match):
+        GlareRenderer(VosGlare(), **arguments)
+
+
+def test_an_image_of_another_shape_is_refused():
+    renderer = GlareRenderer(VosGlare(), pixel_deg=0.05, shape=(8, 8))
+    with pytest.raises(ValueError, match=r"luminance_cd_m2 must have the renderer's shape"):
+        renderer.render(np.zeros((8, 9)))
+
+
+@dataclass(frozen=True)
+class _PlainBox:
+    """A model written to the old protocol: a kernel method and nothing else."""
+
+    def kernel(self, pixel_deg, shape, *, colour=False):
+        values = np.ones(shape) / np.prod(shape)
+        if colour:
+            values = np.repeat(values[..., None], 3, axis=2)
+        return glare.Kernel(values=values, pixel_deg=pixel_deg)
+
+
+def test_a_model_that_declares_nothing_is_rendered_exactly_and_described_truthfully():
+    image = np.full((20, 20, 3), 10.0)
+    image[10, 10] = 1e4
+    result = glare.render_planned(image, _PlainBox(), pixel_deg=0.1, l_dmax_cd_m2=220.0)
+    plan = result.plan
+    assert plan.exact and plan.colour_kernel and plan.convolutions == 3  # kernel may differ
+    assert plan.halo == "not declared by the model (colour kernel)"
+    assert "no tail bound" in str(plan)
+    with pytest.raises(ValueError, match="model must be a glare model"):
+        GlareRenderer(object(), pixel_deg=0.1, shape=(4, 4))
+
+
+def test_the_models_declare_their_capabilities():
+    assert GaussianGlare().achromatic and GaussianGlare().halo() == "none in this model"
+    assert VosGlare().achromatic and not VosGlare(regime="scotopic").achromatic
+    assert VosGlare(regime="scotopic").halo() == "included"
+    assert VosGlare(flare_lines=True).tail_bound(0.1, np.arange(3)) is None
+    assert glare.WaveOpticsGlare().tail_bound(0.1, np.arange(3)) is None
+    assert all(isinstance(m(), GlareModel) for m in set(glare.GLARE_MODELS.values()))
