@@ -24,12 +24,12 @@ import io
 import json
 import os
 import re
-import socket
 import sys
 from datetime import datetime
 from pathlib import Path
 
 from glarelab.protocols import columns, format_value
+from glarelab.protocols.locks import ProcessLock
 
 __all__ = [
     "SessionError",
@@ -118,59 +118,24 @@ def _fsync_folder(folder: Path) -> None:
         os.close(descriptor)
 
 
-class SessionLock:
-    """An exclusive, non-blocking lock on one participant's session of a study.
-
-    The operating system releases it when the process ends, however it ends, so a killed
-    session never leaves a stale lock. The lock file records the holder's process id and host
-    for the refusal message.
+class SessionLock(ProcessLock):
+    """An exclusive, non-blocking lock on one participant's session of a study
+    (:class:`glarelab.protocols.locks.ProcessLock`): the operating system releases it when the
+    process ends, however it ends, so a killed session never leaves a stale lock.
     """
 
     def __init__(self, out: Path, participant: str, study: str, session: int):
         check_session_id(participant, session)
-        self.path = Path(out) / f".{_prefix(participant, study, session)}.lock"
-        self.what = f"participant {participant!r}'s {study} session {session}"
-        self._fd: int | None = None
-
-    def acquire(self) -> None:
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
-        try:
-            _lock(fd)
-        except OSError:
-            holder = os.read(fd, 200).decode("utf-8", "replace").strip() or "unknown"
-            os.close(fd)
-            raise SessionError(
-                f"{self.what} is in use by another process ({holder}; lock file {self.path}): "
+        what = f"participant {participant!r}'s {study} session {session}"
+        path = Path(out) / f".{_prefix(participant, study, session)}.lock"
+        self.what = what
+        super().__init__(
+            path,
+            refusal=lambda holder: SessionError(
+                f"{what} is in use by another process ({holder}; lock file {path}): "
                 "one session is run by one process at a time"
-            ) from None
-        try:  # who holds it, for the refusal message (a full disk only loses the name)
-            os.ftruncate(fd, 0)
-            os.write(fd, f"pid {os.getpid()} on {socket.gethostname()}\n".encode())
-        except OSError:
-            pass
-        self._fd = fd
-
-    def release(self) -> None:
-        if self._fd is not None:
-            os.close(self._fd)  # closing the descriptor releases the lock
-            self._fd = None
-
-
-if sys.platform == "win32":  # pragma: no cover - the lab machines of CI are Linux
-
-    def _lock(fd: int) -> None:
-        import msvcrt
-
-        os.lseek(fd, 0, os.SEEK_SET)
-        msvcrt.locking(fd, msvcrt.LK_NBLCK, 1)
-
-else:
-
-    def _lock(fd: int) -> None:
-        import fcntl
-
-        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            ),
+        )
 
 
 class SessionFiles:

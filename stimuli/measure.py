@@ -18,19 +18,16 @@ goes on where it stopped (:meth:`MeasurementSession.resume`).
 
 from __future__ import annotations
 
-import contextlib
 import datetime as dt
 import itertools
 import json
-import os
-import socket
-import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal
 
 import numpy as np
 from glarelab.protocols.atomic import write_text
+from glarelab.protocols.locks import ProcessLock
 from glarelab.stimuli.calibration import Calibration, fit_calibration
 
 __all__ = ["MeasurementLock", "MeasurementSession", "SessionInUse"]
@@ -43,7 +40,7 @@ class SessionInUse(ValueError):
     """Another process measures with this session file."""
 
 
-class MeasurementLock:
+class MeasurementLock(ProcessLock):
     """Hold the session of calibration ``out`` for this process: ``with MeasurementLock(out):``.
 
     An exclusive, non-blocking lock on ``NAME.session.lock``, as
@@ -59,61 +56,14 @@ class MeasurementLock:
     """
 
     def __init__(self, out: str | Path):
-        self.path = Path(out).with_suffix(".session.lock")
-        self._fd: int | None = None
-
-    def __enter__(self) -> MeasurementLock:
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        while True:
-            fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
-            try:
-                _lock(fd)
-            except OSError:
-                holder = os.read(fd, 200).decode("utf-8", "replace").strip() or "unknown"
-                os.close(fd)
-                raise SessionInUse(
-                    f"{self.path.with_suffix('.json')} is being measured by another process "
-                    f"({holder}; lock file {self.path}): one measurement per session at a time"
-                ) from None
-            try:  # the holder before us removes the file as it leaves: lock the one there now
-                same = os.path.samestat(os.fstat(fd), os.stat(self.path))
-            except FileNotFoundError:
-                same = False
-            if same:
-                break
-            os.close(fd)
-        try:  # who holds it, for the refusal (a full disk only loses the name)
-            os.ftruncate(fd, 0)
-            os.write(fd, f"pid {os.getpid()} on {socket.gethostname()}\n".encode())
-        except OSError:
-            pass
-        self._fd = fd
-        return self
-
-    def __exit__(self, *exc) -> None:
-        if self._fd is not None:
-            # removed while still held, so that a measurement that never began leaves its
-            # folder as it was; a process waiting on the old file sees it gone and retries
-            with contextlib.suppress(OSError):
-                os.unlink(self.path)
-            os.close(self._fd)  # closing the descriptor releases the lock
-            self._fd = None
-
-
-if sys.platform == "win32":  # pragma: no cover - the lab machines of CI are Linux
-
-    def _lock(fd: int) -> None:
-        import msvcrt
-
-        os.lseek(fd, 0, os.SEEK_SET)
-        msvcrt.locking(fd, msvcrt.LK_NBLCK, 1)
-
-else:
-
-    def _lock(fd: int) -> None:
-        import fcntl
-
-        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        path = Path(out).with_suffix(".session.lock")
+        super().__init__(
+            path,
+            refusal=lambda holder: SessionInUse(
+                f"{path.with_suffix('.json')} is being measured by another process "
+                f"({holder}; lock file {path}): one measurement per session at a time"
+            ),
+        )
 
 
 @dataclass
