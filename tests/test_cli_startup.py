@@ -39,7 +39,7 @@ def test_import_glare_pulls_no_plotting_gui_or_cluster_library():
 
 def test_a_vos_render_needs_none_of_them_either():
     code = (
-        "import numpy as np, glare\n"
+        "import numpy as np\nfrom glarelab import glare\n"
         "image = np.full((32, 32), 50.0); image[16, 16] = 1e6\n"
         "glare.add_glare(image, glare.VosGlare(), pixel_deg=0.05, cache=False)\n"
         "glare.add_glare(image, glare.GaussianGlare(), pixel_deg=0.05, cache=False)"

@@ -31,7 +31,7 @@ SCRIPT = textwrap.dedent(
     import numpy as np
 
     from glarelab.experiments.psychopy_frontend import PsychoPyFrontend
-    from protocols import load_protocol
+    from glarelab.protocols import load_protocol
     from glarelab.stimuli.stimulus_set import read_codes
 
     def frame_codes(window, bits):

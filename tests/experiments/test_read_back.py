@@ -90,9 +90,9 @@ HALF_PIXEL = textwrap.dedent(
     import json, sys
     from pathlib import Path
 
-    from experiments import layout
+    from glarelab.experiments import layout
     from glarelab.experiments.check_display import check_display
-    from protocols import load_protocol
+    from glarelab.protocols import load_protocol
 
     whole = layout.Placement.pos.fget
     # the old placement: the row centred at whole pixels, edges on half pixels

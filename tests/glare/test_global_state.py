@@ -8,8 +8,8 @@ USE_EVERY_COLOUR_MODULE = """
 import numpy as np
 before = np.get_printoptions()
 from glarelab import glare
-from glare import acuity, adaptation, scotopic, wave
-from stimuli import preview
+from glarelab.glare import acuity, adaptation, scotopic, wave
+from glarelab.stimuli import preview
 from glarelab import analysis
 glare.WaveOpticsGlare(pupil_mm=3.0)
 import colour
