@@ -15,8 +15,8 @@
   one-sided** is consistent with the paper, **paired, two-sided** is the test that fits the
   repeated-measures design, and the one the conclusions follow: Holm-corrected over every
   level and pair compared, with the mean difference and Cohen's d_z, each with its 95 % CI.
-  The results text quotes the paper's test, labelled as the paper's, only for the paper's own
-  study (``yoshida2008``).
+  The results text quotes the paper's test, labelled as the paper's, where the protocol asks
+  for it (``analysis.quote_welch_tests``; yoshida2008 does).
 - **Pairwise contrasts** between levels within each method (paired t-tests, Holm) and the
   similarity groups they imply (compact letter display; Figure 6).
 - **Boost** over the displayed disk luminance ``min(L_disk, L_dmax)`` (Yoshida: 220 cd/m²) in
@@ -62,7 +62,6 @@ from scipy import stats as sps
 __all__ = ["analyse", "check", "design", "methods", "stimulus_figures"]
 
 MARKERS = "osD^v<>p*"
-PAPER_STUDY = "yoshida2008"  # the study whose paper's own tests the results quote
 ALPHA = 0.05  # the significance level the results text uses
 ERROR_BARS = (
     "95 % within-subject confidence intervals (Cousineau 2005 with Morey's 2008 correction, "
@@ -561,7 +560,7 @@ def _results(tables: dict, summary: pd.DataFrame, protocol, n: int) -> list[str]
             "The glare methods were compared at single levels by paired t-tests (two-sided), "
             f"Holm-corrected over the {family} comparisons: " + "; ".join(sentences) + "."
         )
-        if protocol.study == PAPER_STUDY:
+        if protocol["analysis"]["quote_welch_tests"]:
             paragraph += (
                 " Yoshida et al. (2008) report these comparisons as t(14), uncorrected; their "
                 "p-values fit Welch's unpaired one-sided test, which gives here "

@@ -95,7 +95,7 @@ class ResultLog:
     @staticmethod
     def _checksum(record: dict) -> str:
         body = {k: record.get(k) for k in ("task", "result", "run")}
-        text = json.dumps(body, sort_keys=True, allow_nan=False)
+        text = json.dumps(body, sort_keys=True, allow_nan=True)
         return hashlib.sha256(text.encode()).hexdigest()
 
     def _check(self, record: dict, number: int) -> None:
@@ -120,8 +120,11 @@ class ResultLog:
         record = {"task": task, "result": result}
         if self.key is not None:
             record["run"] = self.key
-            record["sha256"] = self._checksum(json.loads(json.dumps(record, allow_nan=False)))
-        line = json.dumps(record, sort_keys=True, allow_nan=False)
+            record["sha256"] = self._checksum(json.loads(json.dumps(record)))
+        # a replication's test that could not be computed (p = NaN: every rating at the
+        # midpoint, say) is kept as NaN, which Python's json writes and reads back; it counts as
+        # no rejection when the power is taken
+        line = json.dumps(record, sort_keys=True)
         self._handle.write(line.encode() + b"\n")
         self._handle.flush()
         os.fsync(self._handle.fileno())

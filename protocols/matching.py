@@ -125,6 +125,13 @@ SCHEMA: Schema = {
             default=[],
             unique=True,
         ),
+        "quote_welch_tests": Key(
+            bool,
+            "also quote the methods' comparisons as Yoshida et al. 2008 §5 print them (Welch's "
+            "unpaired one-sided t, uncorrected), labelled as the paper's; conclusions follow the "
+            "paired, Holm-corrected tests either way",
+            default=False,
+        ),
     },
     "observer": Key(
         dict,

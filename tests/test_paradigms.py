@@ -3,9 +3,12 @@
 import re
 from pathlib import Path
 
+from glarelab.analysis import paradigms as analysis_paradigms
+from glarelab.experiments import paradigms as experiments_paradigms
 from glarelab.protocols import load_protocol, shipped_protocols
+from glarelab.stimuli import stimulus_set
 
-from glarelab import analysis, experiments, protocols, stimuli
+from glarelab import protocols
 
 ROOT = Path(__file__).parents[1]
 PAPERS = ("yoshida2008", "spencer1995", "luidolt2020")
@@ -14,12 +17,12 @@ PAPERS = ("yoshida2008", "spencer1995", "luidolt2020")
 def test_every_paradigm_is_in_every_layer():
     paradigms = set(protocols.PARADIGMS)
     assert paradigms == {"matching", "staircase", "rating"}
-    assert set(stimuli.stimulus_set.BUILDERS) == paradigms
-    assert set(experiments.paradigms.PARADIGMS) == paradigms
-    assert set(analysis.paradigms.PARADIGMS) == paradigms
-    for name, entry in experiments.paradigms.PARADIGMS.items():
+    assert set(stimulus_set.BUILDERS) == paradigms
+    assert set(experiments_paradigms.PARADIGMS) == paradigms
+    assert set(analysis_paradigms.PARADIGMS) == paradigms
+    for name, entry in experiments_paradigms.PARADIGMS.items():
         assert entry.engine is not None and entry.observer is not None, name
-    for name, module in analysis.paradigms.PARADIGMS.items():
+    for name, module in analysis_paradigms.PARADIGMS.items():
         assert callable(module.analyse) and callable(module.design), name
         assert callable(module.methods), name
 

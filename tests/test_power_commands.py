@@ -127,14 +127,14 @@ def test_power_on_a_dask_cluster_started_apart(tmp_path):
 def test_a_scheduler_that_does_not_answer_is_refused_by_name(tmp_path, capsys, monkeypatch):
     import contextlib
 
-    from glarelab import planning
+    from glarelab.planning import execute
 
     @contextlib.contextmanager
     def unreachable(**kwargs):
         raise OSError("Timed out trying to connect to tcp://127.0.0.1:1 after 30 s")
         yield
 
-    monkeypatch.setattr(planning.execute, "dask_client", unreachable)
+    monkeypatch.setattr(execute, "dask_client", unreachable)
     args = ["luidolt2020", "--participants", "4", "--scheduler", "tcp://127.0.0.1:1"]
     assert main(["power", *args, "--out", str(tmp_path / "out")]) == 2
     err = capsys.readouterr().err

@@ -11,14 +11,13 @@ from html import unescape
 
 import numpy as np
 import pytest
+from glarelab.analysis import paradigms as analysis_paradigms
 from glarelab.analysis.load import DataError
 from glarelab.analysis.report import write_report
 from glarelab.analysis.stimulus_figures import DisplayedSet, to_srgb8
 from glarelab.protocols import load_protocol
 from glarelab.stimuli.stimulus_set import cached_stimulus_set, read_codes
 from PIL import Image
-
-from glarelab import analysis
 
 SCIENTIFIC = re.compile(r"\b\d+(\.\d+)?[eE][+-]?\d+\b")  # 1e+04, 2.5E-3
 
@@ -221,7 +220,7 @@ def _rgb(colour):
 def test_a_paradigm_may_show_its_own_stimuli(simulated, tmp_path, monkeypatch):
     """The contract for a paradigm without a stimulus set (a rendered scene that was rated):
     ``result["stimuli"]``, a list of mappings with png, title and caption."""
-    module = analysis.paradigms.PARADIGMS["rating"]
+    module = analysis_paradigms.PARADIGMS["rating"]
     original = module.analyse
     buffer = io.BytesIO()
     Image.fromarray(np.full((40, 60), 90, np.uint8)).save(buffer, format="PNG")
