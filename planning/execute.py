@@ -266,7 +266,10 @@ def dask_client(*, workers: int | None = None, scheduler: str | None = None) -> 
             # installed) runs whatever this says: on a free port, two runs at once do not
             # fight over Dask's default 8787
             dashboard_address=":0",
-            silence_logs=logging.ERROR,
+            # a task's error reaches this process as its exception; what a worker logs at
+            # ERROR is its lost scheduler as the cluster closes (Ctrl-C), a traceback a person
+            # need not read
+            silence_logs=logging.CRITICAL,
         )
     with cluster, Client(cluster) as client:
         yield client

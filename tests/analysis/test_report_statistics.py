@@ -119,12 +119,16 @@ def test_the_report_csvs_hold_every_digit(yoshida_report):
     assert float(f_text) == table["F"].iloc[0]
 
 
-def test_a_paradigm_other_than_the_papers_does_not_quote_its_tests(simulated, yoshida_report):
+def test_a_study_other_than_the_papers_does_not_quote_its_tests(simulated, yoshida_report):
     text = (yoshida_report / "results.md").read_text()
     assert "Yoshida et al. (2008) report" in text
     protocol = load_protocol("yoshida2008")
     dataset = load_sessions(protocol, sorted(simulated.glob("*yoshida2008*.csv")))
-    other = dataclasses.replace(protocol, study="other2026")  # the same design, another study
+    # the same design, another study that does not ask for the paper's own tests
+    analysis = {**protocol.data["analysis"], "quote_welch_tests": False}
+    other = dataclasses.replace(
+        protocol, study="other2026", data={**protocol.data, "analysis": analysis}
+    )
     joined = " ".join(PARADIGMS["matching"].analyse(dataset, other)["results"])
     assert "Yoshida et al. (2008) report" not in joined
     assert "comparison with published values" not in joined
