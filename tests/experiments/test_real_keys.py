@@ -175,8 +175,10 @@ def test_spencer_answers_during_the_flash_give_their_rows_timed_from_onset(scree
     for row, measured in zip(rows, answers, strict=True):
         assert row["ignored_keys"] == ""
         assert 0 < float(row["time_s"]) < float(row["shown_ms"]) / 1000  # during the flash
-        # the test saw the flash a screenshot later than its flip: within 50 ms
-        assert abs(float(row["time_s"]) - measured) < 0.05, (row["time_s"], measured)
+        # the test sees the flash a screenshot later than its flip: within 100 ms (50 ms held
+        # on a quiet machine, but one screenshot in a busy one took 69-80 ms); an answer timed
+        # from another event than the flip is off by the flash's 400-700 ms
+        assert abs(float(row["time_s"]) - measured) < 0.1, (row["time_s"], measured)
         assert float(row["offset_s"]) > float(row["onset_s"]) > 0
         assert epoch > 0
         if row["presentation_ok"] == "true":  # its frames at 76 Hz, within Spencer's 10 ms
