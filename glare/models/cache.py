@@ -345,12 +345,15 @@ def _encode(kernel: Kernel, key: str) -> bytes | None:
     description = _literal(kernel.description)
     if description is None:
         return None
-    values = np.ascontiguousarray(kernel.values, dtype=np.float64)
-    half = tuple(n // 2 for n in values.shape[:2])
-    quadrant = values[half[0] :, half[1] :]
-    layout = "full"
-    if values.ndim >= 2 and np.array_equal(mirror_quadrant(quadrant), values):
-        values, layout = np.ascontiguousarray(quadrant), "quadrant"
+    if kernel.quadrant is not None:
+        values, layout = np.ascontiguousarray(kernel.quadrant, dtype=np.float64), "quadrant"
+    else:
+        values = np.ascontiguousarray(kernel.values, dtype=np.float64)
+        half = tuple(n // 2 for n in values.shape[:2])
+        quadrant = values[half[0] :, half[1] :]
+        layout = "full"
+        if values.ndim >= 2 and np.array_equal(mirror_quadrant(quadrant), values):
+            values, layout = np.ascontiguousarray(quadrant), "quadrant"
     outside = kernel.energy_outside
     header = {
         "key": key,
@@ -384,17 +387,17 @@ def _decode(data: bytes, key: str) -> Kernel | None:
             return None
         shape = tuple(int(n) for n in header["shape"])
         values = np.frombuffer(body, dtype="<f8", offset=start + length)
-        values = values.reshape(shape)
+        values = values.reshape(shape)  # read-only, over the entry's bytes: no copy
         if header["layout"] == "quadrant":
-            values = mirror_quadrant(values)
+            arrays = {"quadrant": values}
         elif header["layout"] == "full":
-            values = values.copy()
+            arrays = {"values": values}
         else:
             return None
         outside = header["energy_outside"]
         outside = np.asarray(outside, float) if header["energy_outside_array"] else float(outside)
         return Kernel(
-            values=values,
+            **arrays,
             pixel_deg=float(header["pixel_deg"]),
             energy_outside=outside,
             quadrature_error=float(header["quadrature_error"]),

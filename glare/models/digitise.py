@@ -30,7 +30,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
 
 import numpy as np
 from glarelab.glare._validation import check_positive, check_positive_int
@@ -52,15 +51,19 @@ _PIXEL_AREA_SR_PER_DEG2 = (math.pi / 180.0) ** 2
 _SAMPLE_CHUNK = 4_000_000  # samples evaluated at once, bounding memory to ~100 MB
 
 
-@dataclass(frozen=True)
 class Kernel:
     """A digitised glare kernel and its energy account.
 
-    Attributes
+    A kernel symmetric in both axes (every radial model) may be given as its quadrant of
+    offsets ``i, j >= 0`` alone: the full ``values`` are then unfolded on first use only, and
+    the renderer spreads sources straight from the quadrant (a quarter of the memory, and no
+    134 MB array to fill for a 4095² kernel).
+
+    Parameters
     ----------
     values
         Kernel of shape ``(KH, KW)`` (luminance) or ``(KH, KW, C)`` (one per colour channel),
-        odd sizes, centred. Each channel sums to ``1 - energy_outside``.
+        odd sizes, centred; or None when ``quadrant`` is given.
     pixel_deg
         Visual angle of one pixel in degrees.
     energy_outside
@@ -72,21 +75,105 @@ class Kernel:
         samples resolved the PSF (about 6e-5 with the default samples).
     description
         The model and digitisation settings, for logs.
+    quadrant
+        For a kernel symmetric in both axes, instead of ``values``: its part ``(KH // 2 + 1,
+        KW // 2 + 1[, C])`` at offsets ``i, j >= 0`` from the centre.
+
+    Attributes
+    ----------
+    values
+        The full kernel; each channel sums to ``1 - energy_outside``.
+    quadrant
+        The quadrant of a kernel made from one, else None.
+
+    Raises
+    ------
+    ValueError
+        Unless exactly one of ``values`` and ``quadrant`` is given.
+
+    Examples
+    --------
+    >>> kernel = Kernel(quadrant=np.array([[0.4, 0.1], [0.1, 0.05]]), pixel_deg=0.1)
+    >>> kernel.shape, float(kernel.peak), float(kernel.total())
+    ((3, 3), 0.4, 1.0)
+    >>> kernel.values[0]
+    array([0.05, 0.1 , 0.05])
     """
 
-    values: np.ndarray
-    pixel_deg: float
-    energy_outside: float | np.ndarray = 0.0
-    quadrature_error: float = 0.0
-    description: dict = field(default_factory=dict)
+    def __init__(
+        self,
+        values: np.ndarray | None = None,
+        pixel_deg: float | None = None,
+        energy_outside: float | np.ndarray = 0.0,
+        quadrature_error: float = 0.0,
+        description: dict | None = None,
+        *,
+        quadrant: np.ndarray | None = None,
+    ) -> None:
+        if (values is None) == (quadrant is None):
+            raise ValueError("Kernel needs exactly one of values and quadrant")
+        if pixel_deg is None:
+            raise ValueError("Kernel needs pixel_deg")
+        fields = {
+            "_values": values,
+            "quadrant": quadrant,
+            "pixel_deg": pixel_deg,
+            "energy_outside": energy_outside,
+            "quadrature_error": quadrature_error,
+            "description": {} if description is None else description,
+        }
+        for name, value in fields.items():
+            object.__setattr__(self, name, value)
+
+    def __setattr__(self, name: str, value) -> None:
+        raise AttributeError(f"a Kernel is not changed after it is made (setting {name!r})")
+
+    def __repr__(self) -> str:
+        model = self.description.get("model", "kernel")
+        return f"Kernel({model}, shape={self.shape}, pixel_deg={self.pixel_deg!r})"
+
+    @property
+    def values(self) -> np.ndarray:
+        if self._values is None:  # unfolded once, on first use
+            object.__setattr__(self, "_values", mirror_quadrant(self.quadrant))
+        return self._values
 
     @property
     def shape(self) -> tuple[int, ...]:
-        return self.values.shape
+        if self._values is not None:
+            return self._values.shape
+        height, width = self.quadrant.shape[:2]
+        return (2 * height - 1, 2 * width - 1, *self.quadrant.shape[2:])
 
     @property
     def center(self) -> tuple[int, int]:
-        return self.values.shape[0] // 2, self.values.shape[1] // 2
+        return self.shape[0] // 2, self.shape[1] // 2
+
+    @property
+    def peak(self) -> float:
+        """The largest value."""
+        return np.max(self.quadrant if self._values is None else self._values)
+
+    def total(self) -> float | np.ndarray:
+        """The sum over the support, per channel for a colour kernel."""
+        if self._values is not None:
+            return self._values.sum(axis=(0, 1), dtype=np.float64)
+        return quadrant_sum(self.quadrant)
+
+    def replace(self, **changes) -> Kernel:
+        """A copy with ``changes`` (``values`` replaces a quadrant, and the reverse)."""
+        fields = {
+            "pixel_deg": self.pixel_deg,
+            "energy_outside": self.energy_outside,
+            "quadrature_error": self.quadrature_error,
+            "description": self.description,
+        }
+        if "values" not in changes and "quadrant" not in changes:
+            if self.quadrant is not None:
+                fields["quadrant"] = self.quadrant
+            else:
+                fields["values"] = self._values
+        return Kernel(**(fields | changes))
 
 
 def kernel_shape_for(image_shape: Sequence[int]) -> tuple[int, int]:

@@ -374,7 +374,7 @@ class VosGlare(GlareModel):
         energy_outside = w0 * p["core_outside"] + p["scatter_outside"] + p["halo_outside"]
         errors = p["errors"]
         return Kernel(
-            values=mirror_quadrant(quadrant),
+            quadrant=np.ascontiguousarray(quadrant),
             pixel_deg=pixel_deg,
             energy_outside=float(energy_outside[0]) if not colour else energy_outside.copy(),
             quadrature_error=sum(w * e for w, e in errors) / sum(w for w, _ in errors),

@@ -14,7 +14,6 @@ from glarelab.glare.models.digitise import (
     Kernel,
     check_kernel_shape,
     gaussian_pixel_energies,
-    mirror_quadrant,
 )
 
 __all__ = ["SIGMA_DEG_YOSHIDA2008", "GaussianGlare"]
@@ -127,13 +126,12 @@ class GaussianGlare(GlareModel):
             else:
                 raise ValueError(f"sampling must be 'point' or 'pixel'; got {self.sampling!r}")
         # the kernel's sum is the product of the mirrored profiles' sums: normalise those
-        # (eq. 2's k), then unfold the quadrant once
+        # (eq. 2's k); the kernel is their outer product's quadrant, unfolded when used
         rows, cols = (p / (2.0 * p.sum() - p[0]) for p in profiles)
-        values = mirror_quadrant(np.outer(rows, cols))
         reach = [(n // 2 + 0.5) * pixel_deg / (self.sigma_deg * math.sqrt(2.0)) for n in shape]
         tail = 1.0 - math.erf(reach[0]) * math.erf(reach[1])
         return Kernel(
-            values=values,
+            quadrant=np.outer(rows, cols),
             pixel_deg=pixel_deg,
             energy_outside=0.0,
             quadrature_error=0.0,

@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import os
+from concurrent.futures import ThreadPoolExecutor
+from itertools import pairwise
+
 import numpy as np
 import scipy.fft
 from scipy import ndimage
@@ -23,6 +27,7 @@ FLOAT32_NOISE_LIMIT_CD_M2 = 1e-3  # largest FFT round-off the float32 path may a
 DIRECT_PIXEL_S = 2.5e-9
 CORRELATE_S = 4.5e-9
 CORRELATE_WEIGHT_S = 0.4e-9
+DIRECT_THREAD_PIXELS = 256 * 256  # below this, a direct spread runs in one thread
 
 
 def convolution_dtype(excess: np.ndarray, kernel: np.ndarray, requested: np.dtype) -> np.dtype:
@@ -168,49 +173,135 @@ def direct_spread(
     kernel: np.ndarray,
     out_box: tuple[int, int, int, int],
     into: np.ndarray,
+    *,
+    quadrant: bool = False,
+    workers: int | None = None,
 ) -> np.ndarray:
     """Add the spread of the non-zero pixels of ``excess`` (whose first pixel is the image's
     ``origin``) to ``into`` (image-sized) at the pixels of ``out_box``: exact, with no FFT
     round-off. Each compact cluster of bright pixels (a glint, a lamp, a sun) is one
     correlation of the kernel with the cluster's box (``scipy.ndimage.correlate``); the
-    pixels of a sparse one add scaled copies of the kernel."""
+    pixels of a sparse one add scaled copies of the kernel.
+
+    ``kernel`` is the centred odd kernel, or with ``quadrant=True`` the quadrant of offsets
+    ``i, j >= 0`` of a kernel symmetric in both axes, read through reversed views where the
+    offsets are negative (the full kernel is never made). The output rows are shared among
+    ``workers`` threads (default: every core; ``scipy.ndimage`` releases the GIL); each
+    pixel's sum is taken in the same order whatever their number, so the result is the same.
+    """
+    sources = []
     for box, mask in clusters(excess > 0):
         weights = np.where(mask, excess[box], 0)
         pixels = int(np.count_nonzero(mask))
         start = (origin[0] + box[0].start, origin[1] + box[1].start)
         if cluster_cost(weights.size, pixels) < DIRECT_PIXEL_S * pixels:
-            _correlate(weights, start, kernel, out_box, into)
+            sources.append((weights, start))
             continue
         for y, x in zip(*np.nonzero(weights), strict=True):
-            _correlate(
-                weights[y : y + 1, x : x + 1], (start[0] + y, start[1] + x), kernel, out_box, into
-            )
+            sources.append((weights[y : y + 1, x : x + 1], (start[0] + y, start[1] + x)))
+    if not sources:
+        return into
+    workers = _direct_workers(out_box) if workers is None else max(1, int(workers))
+    edges = np.linspace(out_box[0], out_box[1], workers + 1).round().astype(int)
+    bands = [(int(lo), int(hi), out_box[2], out_box[3]) for lo, hi in pairwise(edges) if hi > lo]
+    scratch = max(w.shape[0] for w, _ in sources), max(w.shape[1] for w, _ in sources)
+
+    def spread_band(band) -> None:
+        buffer = np.empty(
+            (band[1] - band[0] + scratch[0]) * (band[3] - band[2] + scratch[1]), dtype=into.dtype
+        )
+        for weights, start in sources:
+            _correlate(weights, start, kernel, band, into, buffer, quadrant=quadrant)
+
+    if len(bands) == 1:
+        spread_band(bands[0])
+    else:
+        with ThreadPoolExecutor(len(bands)) as pool:
+            list(pool.map(spread_band, bands))
     return into
 
 
-def _correlate(weights, start, kernel, out_box, into) -> None:
+def _direct_workers(out_box: tuple[int, int, int, int]) -> int:
+    """Threads for a direct spread: every core, for outputs large enough to gain from it."""
+    pixels = (out_box[1] - out_box[0]) * (out_box[3] - out_box[2])
+    if pixels < DIRECT_THREAD_PIXELS:
+        return 1
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - not Linux
+        cores = os.cpu_count() or 1
+    return max(1, min(cores, (out_box[1] - out_box[0]) // 64))
+
+
+def _parts(lo: int, hi: int, first: int, size: int, half: int, quadrant: bool):
+    """Output pixels ``lo … hi - 1`` of one axis, for a box of ``size`` pixels from ``first``
+    and a kernel reaching ``half`` pixels, cut into runs in which the kernel offsets needed,
+    ``d = output - (first + u)`` for ``u < size``, stay within the support or outside it, and
+    (for a quadrant) keep one sign: ``(start, stop, lowest d, highest d)`` of each run."""
+    cuts = {lo, hi, first + size - 1 - half, first + half + 1}
+    if quadrant:
+        cuts |= {first, first + size}
+    cuts = sorted(c for c in cuts if lo <= c <= hi)
+    return [(a, b, a - first - size + 1, b - 1 - first) for a, b in pairwise(cuts) if b > a]
+
+
+def _select(low: int, high: int, half: int, quadrant: bool):
+    """How to read kernel offsets ``low … high`` along one axis: a slice (a view; reversed
+    for the negative offsets of a quadrant) or, across the centre of a quadrant or past the
+    support, the indices to gather and which of them lie within the support."""
+    if quadrant:
+        if 0 <= low and high <= half:
+            return slice(low, high + 1)
+        if -half <= low and high <= 0:
+            return slice(-low, -high - 1 if high < 0 else None, -1)
+        offsets = np.arange(low, high + 1)
+        return np.minimum(np.abs(offsets), half), np.abs(offsets) <= half
+    if -half <= low and high <= half:
+        return slice(half + low, half + high + 1)
+    offsets = np.arange(low, high + 1)
+    return np.clip(offsets + half, 0, 2 * half), np.abs(offsets) <= half
+
+
+def _window(kernel: np.ndarray, rows, cols) -> np.ndarray:
+    """The kernel offsets of a row and a column selection (:func:`_select`), zero beyond the
+    support: a view where both are slices."""
+    if isinstance(rows, slice) and isinstance(cols, slice):
+        return kernel[rows, cols]
+    row_index = np.arange(kernel.shape[0])[rows] if isinstance(rows, slice) else rows[0]
+    col_index = np.arange(kernel.shape[1])[cols] if isinstance(cols, slice) else cols[0]
+    window = kernel[np.ix_(row_index, col_index)]
+    if not isinstance(rows, slice):
+        window[~rows[1]] = 0
+    if not isinstance(cols, slice):
+        window[:, ~cols[1]] = 0
+    return window
+
+
+def _correlate(weights, start, kernel, out_box, into, buffer, *, quadrant) -> None:
     """Add the spread of ``weights`` (a box whose first pixel is the image's ``start``) to
-    ``into`` at the pixels of ``out_box`` it reaches."""
-    a, b = kernel.shape[0] // 2, kernel.shape[1] // 2
+    ``into`` at the pixels of ``out_box`` it reaches (``buffer``: room for the correlation of
+    the largest window)."""
+    if quadrant:
+        a, b = kernel.shape[0] - 1, kernel.shape[1] - 1
+    else:
+        a, b = kernel.shape[0] // 2, kernel.shape[1] // 2
     (bh, bw), (q0, p0) = weights.shape, start
     r0, r1 = max(out_box[0], q0 - a), min(out_box[1], q0 + bh + a)
     c0, c1 = max(out_box[2], p0 - b), min(out_box[3], p0 + bw + b)
     if r0 >= r1 or c0 >= c1:
         return
-    if weights.size == 1:  # one pixel: a scaled copy
-        into[r0:r1, c0:c1] += (
-            weights[0, 0] * kernel[r0 - q0 + a : r1 - q0 + a, c0 - p0 + b : c1 - p0 + b]
-        )
-        return
-    # kernel rows a + i - (q0 + u) for output rows i and box rows u, zero beyond the kernel
-    lo_r, hi_r = a + r0 - q0 - bh + 1, a + r1 - q0
-    lo_c, hi_c = b + c0 - p0 - bw + 1, b + c1 - p0
-    part = kernel[max(lo_r, 0) : hi_r, max(lo_c, 0) : hi_c]
-    pad = (
-        (max(-lo_r, 0), max(hi_r - kernel.shape[0], 0)),
-        (max(-lo_c, 0), max(hi_c - kernel.shape[1], 0)),
-    )
-    if any(any(p) for p in pad):
-        part = np.pad(part, pad)
-    full = ndimage.correlate(part, weights[::-1, ::-1], mode="constant")
-    into[r0:r1, c0:c1] += full[bh // 2 : bh // 2 + r1 - r0, bw // 2 : bw // 2 + c1 - c0]
+    flipped = weights[::-1, ::-1]
+    columns = [
+        (ca, cb, _select(d0, d1, b, quadrant))
+        for ca, cb, d0, d1 in _parts(c0, c1, p0, bw, b, quadrant)
+    ]
+    for ra, rb, d0, d1 in _parts(r0, r1, q0, bh, a, quadrant):
+        rows = _select(d0, d1, a, quadrant)
+        for ca, cb, cols in columns:
+            window = _window(kernel, rows, cols)
+            if weights.size == 1:  # one pixel: a scaled copy
+                into[ra:rb, ca:cb] += weights[0, 0] * window
+                continue
+            out = buffer[: window.size].reshape(window.shape)
+            ndimage.correlate(window, flipped, output=out, mode="constant")
+            into[ra:rb, ca:cb] += out[bh // 2 : bh // 2 + rb - ra, bw // 2 : bw // 2 + cb - ca]

@@ -158,9 +158,9 @@ class GlareRenderer:
                 raise ValueError(
                     f"kernel was digitised for pixel_deg = {kernel.pixel_deg!r}, not {pixel_deg!r}"
                 )
-            if kernel.values.ndim == 3 and kernel.values.shape[2] != 3:
+            if len(kernel.shape) == 3 and kernel.shape[2] != 3:
                 raise ValueError(f"kernel must have 1 or 3 channels; got {kernel.shape}")
-            kernel_shape = check_kernel_shape(kernel.values.shape[:2])
+            kernel_shape = check_kernel_shape(kernel.shape[:2])
             self._given = kernel
         elif kernel_shape is not None:
             kernel_shape = check_kernel_shape(kernel_shape)
@@ -183,9 +183,12 @@ class GlareRenderer:
     def kernel(self, colour: bool = False) -> Kernel:
         """The reference kernel (digitised on first use)."""
         if self._given is not None:
-            if self._given.values.ndim == 3 and not colour:  # the first channel, as before
-                return replace(self._given, values=self._given.values[..., 0])
-            return self._given
+            given = self._given
+            if len(given.shape) == 3 and not colour:  # the first channel, as before
+                if given.quadrant is not None:
+                    return given.replace(quadrant=given.quadrant[..., 0])
+                return given.replace(values=given.values[..., 0])
+            return given
         if colour not in self._kernels:
             self._kernels[colour] = self._digitised(self.pixel_deg, self.kernel_shape, colour)
         return self._kernels[colour]
@@ -209,7 +212,7 @@ class GlareRenderer:
     def kernel_peak(self, colour: bool = False) -> float:
         """The reference kernel's largest value (found once)."""
         if colour not in self._peaks:
-            self._peaks[colour] = float(np.max(self.kernel(colour).values))
+            self._peaks[colour] = float(self.kernel(colour).peak)
         return self._peaks[colour]
 
     def tail_bound(self, colour: bool) -> TailBound | None:
@@ -438,13 +441,23 @@ class GlareRenderer:
         for c in range(n):
             excess = scene.excess[..., c]
             if plan.path == "direct":
-                k = channels(self.kernel(plan.colour_kernel).values)
+                kernel = self.kernel(plan.colour_kernel)
+                symmetric = kernel.quadrant is not None
+                k = channels(kernel.quadrant if symmetric else kernel.values)
                 k = k[min(c, len(k) - 1)]
-                a, b = self.kernel_half
-                k = k[a - reach[0] : a + reach[0] + 1, b - reach[1] : b + reach[1] + 1]
+                if symmetric:  # spread from the quadrant: the full kernel is never made
+                    k = k[: reach[0] + 1, : reach[1] + 1]
+                else:
+                    a, b = self.kernel_half
+                    k = k[a - reach[0] : a + reach[0] + 1, b - reach[1] : b + reach[1] + 1]
                 used.add(self.dtype.name)
                 direct_spread(
-                    excess, box[::2], k.astype(self.dtype, copy=False), out_box, spread[..., c]
+                    excess,
+                    box[::2],
+                    k.astype(self.dtype, copy=False),
+                    out_box,
+                    spread[..., c],
+                    quadrant=symmetric,
                 )
                 continue
             if plan.path == "fft":

@@ -82,7 +82,7 @@ class GlareResult:
         """Part of ``excess_energy`` the kernel sends beyond the image border."""
         if self.kernel is None or not self.plan.exact:
             return None
-        kernel_sum = self.kernel.values.sum(axis=(0, 1), dtype=np.float64)
+        kernel_sum = self.kernel.total()
         if self.spread.ndim == 3 and np.ndim(kernel_sum) == 0:
             kernel_sum = np.full(3, kernel_sum)
         elif self.spread.ndim == 2 and np.ndim(kernel_sum) == 1:

@@ -315,3 +315,27 @@ def test_renderers_share_kernels_through_the_cache(tmp_path):
     np.testing.assert_array_equal(first.image, second.image)
     plain = glare.add_glare(image, glare.VosGlare(), pixel_deg=0.05, cache=False)
     np.testing.assert_array_equal(first.image, plain)
+
+
+def test_a_symmetric_kernel_is_read_and_spread_as_its_quadrant(tmp_path):
+    """The entry of a radial kernel is its quadrant, read without a copy; a render that takes
+    the direct path spreads from it and never unfolds the full kernel (a 134 MB array at
+    4095²), and gives the same image as the full kernel."""
+    cache = KernelCache(tmp_path)
+    image = np.full((96, 96), 30.0)
+    image[40:42, 50:52] = 1e7
+    model = glare.VosGlare()
+    glare.add_glare(image, model, pixel_deg=0.05, cache=cache)
+    renderer = glare.GlareRenderer(model, pixel_deg=0.05, shape=image.shape, cache=cache)
+    result = renderer.render(image)
+    assert result.plan.path == "direct"
+    kernel = renderer.kernel()
+    assert kernel.quadrant is not None and not kernel.quadrant.flags.writeable
+    assert kernel._values is None  # the full kernel was never made
+    full = glare.GlareRenderer(
+        model,
+        pixel_deg=0.05,
+        shape=image.shape,
+        kernel=model.kernel(0.05, (191, 191)).replace(values=kernel.values),
+    )
+    np.testing.assert_array_equal(full.render(image).image, result.image)

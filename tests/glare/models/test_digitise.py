@@ -142,3 +142,28 @@ def test_energy_account_holds_for_any_geometry(pixel_deg, half, regime):
     k = VosGlare(regime=regime).kernel(pixel_deg, (2 * half + 1, 2 * half + 1))
     assert (k.values >= 0).all()
     assert_allclose(k.values.sum() + k.energy_outside, 1.0, atol=1e-12)
+
+
+def test_a_kernel_made_from_its_quadrant_behaves_as_the_full_kernel():
+    import pickle
+
+    from glarelab.glare.models.digitise import Kernel
+
+    quadrant = np.random.default_rng(0).random((4, 6, 3))
+    half = Kernel(quadrant=quadrant, pixel_deg=0.1, energy_outside=np.full(3, 0.01))
+    whole = Kernel(mirror_quadrant(quadrant), 0.1, np.full(3, 0.01))
+    assert half.shape == whole.shape == (7, 11, 3) and half.center == (3, 5)
+    assert half._values is None  # nothing unfolded for shape, centre, peak and sum
+    assert half.peak == whole.peak
+    assert_allclose(half.total(), whole.total(), rtol=1e-14, atol=0)
+    assert half._values is None
+    np.testing.assert_array_equal(half.values, whole.values)
+    one = half.replace(quadrant=quadrant[..., 0])
+    assert one.shape == (7, 11) and one.pixel_deg == 0.1
+    np.testing.assert_array_equal(pickle.loads(pickle.dumps(half)).values, whole.values)
+    with pytest.raises(AttributeError, match="not changed"):
+        half.pixel_deg = 0.2
+    with pytest.raises(ValueError, match="exactly one of values and quadrant"):
+        Kernel(whole.values, 0.1, quadrant=quadrant)
+    with pytest.raises(ValueError, match="exactly one of values and quadrant"):
+        Kernel(pixel_deg=0.1)

@@ -1,0 +1,77 @@
+"""The direct spread: every way of reading the kernel (full, quadrant, any number of threads)
+gives the same sums as a plain correlation of the kernel with each bright pixel."""
+
+from __future__ import annotations
+
+import numpy as np
+from glarelab.glare.models.digitise import mirror_quadrant
+from glarelab.glare.rendering._convolve import direct_spread
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from numpy.testing import assert_allclose
+
+
+def plain_spread(excess, origin, kernel, out_box, shape):
+    """Σ over bright pixels of the pixel's value times the kernel centred on it, written out
+    pixel by pixel (independent of the implementation's windows and correlations)."""
+    a, b = kernel.shape[0] // 2, kernel.shape[1] // 2
+    into = np.zeros(shape)
+    rows, cols = np.mgrid[out_box[0] : out_box[1], out_box[2] : out_box[3]]
+    for y, x in zip(*np.nonzero(excess), strict=True):
+        dy, dx = rows - (origin[0] + y), cols - (origin[1] + x)
+        inside = (np.abs(dy) <= a) & (np.abs(dx) <= b)
+        part = np.zeros(rows.shape)
+        part[inside] = kernel[dy[inside] + a, dx[inside] + b]
+        into[out_box[0] : out_box[1], out_box[2] : out_box[3]] += excess[y, x] * part
+    return into
+
+
+@st.composite
+def scenes(draw):
+    height, width = draw(st.integers(1, 24)), draw(st.integers(1, 24))
+    quadrant = draw(st.tuples(st.integers(1, 30), st.integers(1, 30)))  # kernel half + 1
+    seed = draw(st.integers(0, 2**32 - 1))
+    rng = np.random.default_rng(seed)
+    excess = np.zeros((height, width))
+    for _ in range(draw(st.integers(1, 4))):  # compact clusters (correlations) ...
+        y, x = rng.integers(0, height), rng.integers(0, width)
+        h, w = rng.integers(1, 6, 2)
+        excess[y : y + h, x : x + w] = rng.uniform(0.5, 10, excess[y : y + h, x : x + w].shape)
+    if draw(st.booleans()):  # ... and scattered pixels (scaled copies)
+        excess[rng.random((height, width)) < 0.2] = 1e9
+    origin = (draw(st.integers(0, 6)), draw(st.integers(0, 6)))
+    shape = (
+        origin[0] + height + draw(st.integers(0, 6)),
+        origin[1] + width + draw(st.integers(0, 6)),
+    )
+    r0 = draw(st.integers(0, shape[0] - 1))
+    c0 = draw(st.integers(0, shape[1] - 1))
+    out_box = (r0, draw(st.integers(r0 + 1, shape[0])), c0, draw(st.integers(c0 + 1, shape[1])))
+    return excess, origin, rng.random(quadrant), out_box, shape
+
+
+@settings(max_examples=150, deadline=None)
+@given(scenes(), st.integers(1, 4))
+def test_a_quadrant_spread_equals_the_full_kernels_at_every_thread_count(scene, workers):
+    excess, origin, quadrant, out_box, shape = scene
+    full = mirror_quadrant(quadrant)
+    reference = plain_spread(excess, origin, full, out_box, shape)
+    one = direct_spread(excess, origin, full, out_box, np.zeros(shape), workers=1)
+    assert_allclose(one, reference, rtol=1e-12, atol=0)
+    for kernel, symmetric in ((full, False), (quadrant, True)):
+        # the same sums in the same order: equal to the bit, not within a tolerance
+        got = direct_spread(
+            excess, origin, kernel, out_box, np.zeros(shape), quadrant=symmetric, workers=workers
+        )
+        assert np.array_equal(got, one)
+
+
+def test_the_spread_from_a_reversed_view_adds_to_what_is_there_and_only_in_the_box():
+    quadrant = np.array([[4.0, 2.0, 1.0], [2.0, 1.0, 0.5]])  # offsets 0..1 rows, 0..2 cols
+    excess = np.zeros((5, 7))
+    excess[2, 3] = 1.0
+    into = np.full((5, 7), 10.0)
+    direct_spread(excess, (0, 0), quadrant, (1, 4, 0, 7), into, quadrant=True, workers=2)
+    expected = np.full((5, 7), 10.0)
+    expected[1:4, 1:6] += mirror_quadrant(quadrant)
+    assert_allclose(into, expected, rtol=0, atol=0)
