@@ -722,7 +722,7 @@ def run_bench(
                         "seconds": seconds,
                         "max_error_codes": float(error.max()),
                         "rms_error_codes": float(np.sqrt(np.mean(error**2))),
-                        "path": getattr(variants[variant], "path", ""),
+                        "path": getattr(variants.get(variant), "path", ""),
                     }
                 )
                 log(f"  {variant}: {seconds:.3f} s, max error {error.max():.3g} codes")

@@ -29,3 +29,16 @@ def test_startup_rows_are_ratios_to_numpy_and_scipy_fft():
     assert baseline["import_ratio"] == 1.0 and baseline["process_ratio"] == 1.0
     assert all(r["import_s"] > 0 and r["process_s"] > 0 for r in rows)
     assert "× import numpy, scipy.fft" in tables([], startup_rows=rows)
+
+
+def test_the_bench_writes_the_fresh_process_rows_beside_the_others(tmp_path, monkeypatch):
+    from glarelab import bench
+
+    monkeypatch.setattr(bench, "FRESH_WORKLOADS", ("street_256",))
+    rows = bench.run_bench(
+        tmp_path, only=["street_256"], spectral=False, startup=False, repeats=1, log=lambda _: None
+    )
+    fresh = {r["variant"]: r for r in rows if r["variant"] in (FRESH_EMPTY, FRESH_WARM)}
+    assert set(fresh) == {FRESH_EMPTY, FRESH_WARM}
+    assert all(r["speed_vs_peer"] > 0 and r["max_error_codes"] <= 0.5 for r in fresh.values())
+    assert FRESH_WARM in (tmp_path / "bench.md").read_text()
