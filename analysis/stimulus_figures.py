@@ -40,7 +40,7 @@ def to_srgb8(luminance_cd_m2: np.ndarray, max_cd_m2: float) -> np.ndarray:
     >>> to_srgb8(np.array([0.0, 21.6, 120.0]), 120.0).tolist()  # 18 % grey → sRGB 118
     [0, 118, 255]
     """
-    import colour
+    from glarelab.glare._colour import colour  # numpy's print options kept
 
     relative = np.clip(np.asarray(luminance_cd_m2, dtype=float) / float(max_cd_m2), 0.0, 1.0)
     return np.round(255 * colour.cctf_encoding(relative, function="sRGB")).astype(np.uint8)

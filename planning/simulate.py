@@ -23,6 +23,7 @@ import os
 import shutil
 import tempfile
 import threading
+from collections.abc import Sequence
 from pathlib import Path
 
 from glarelab.analysis.load import load_sessions
@@ -66,6 +67,33 @@ def default_scratch() -> Path:
     return Path(tempfile.gettempdir())
 
 
+def _simulate_sessions(
+    protocol, participants: Sequence[str], *, seed: int, out: Path, stimuli: Path | None, looks_at
+) -> list[Path]:
+    """Run each participant's first session with a simulated observer into ``out``, as
+    ``glarelab run --simulate`` does; return their CSVs, in the participants' order.
+
+    ``stimuli`` is the set's folder the sessions show (None for a paradigm that shows no
+    images); ``looks_at`` what the observers look at: the folder, or a
+    :class:`glarelab.experiments.looking.DisplayedSet` they share.
+    """
+    csvs = []
+    for participant in participants:
+        observer = make_observer(protocol, participant, seed=seed, stimuli=looks_at)
+        run_session(
+            protocol,
+            participant,
+            out=out,
+            frontend=SimulatedFrontend(observer),
+            stimuli=stimuli,
+            simulated=True,
+            participant_info={"simulated_observer_seed": seed},
+        )
+        files = session_files(out, participant, protocol.study, 1)
+        csvs += [f for f in files if f.suffix == ".csv"]
+    return csvs
+
+
 def simulate_replication(
     protocol,
     replication: int,
@@ -107,21 +135,10 @@ def simulate_replication(
         displayed = DisplayedSet(StimulusSet(stimuli))
     folder = Path(tempfile.mkdtemp(prefix="glarelab-power-", dir=scratch or default_scratch()))
     try:
-        csvs = []
-        for number in range(1, largest + 1):
-            participant = participant_id(replication, number)
-            observer = make_observer(protocol, participant, seed=seed, stimuli=displayed)
-            run_session(
-                protocol,
-                participant,
-                out=folder,
-                frontend=SimulatedFrontend(observer),
-                stimuli=stimuli,
-                simulated=True,
-                participant_info={"simulated_observer_seed": seed},
-            )
-            files = session_files(folder, participant, protocol.study, 1)
-            csvs += [f for f in files if f.suffix == ".csv"]
+        ids = [participant_id(replication, number) for number in range(1, largest + 1)]
+        csvs = _simulate_sessions(
+            protocol, ids, seed=seed, out=folder, stimuli=stimuli, looks_at=displayed
+        )
         results, failures = [], []
         analyse = PARADIGMS[protocol.paradigm].analyse
         for n in sorted(participants):

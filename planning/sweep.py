@@ -108,24 +108,16 @@ class SweepJob:
         from glarelab.analysis.load import load_sessions
         from glarelab.analysis.paradigms import PARADIGMS
         from glarelab.analysis.report import write_report
-        from glarelab.experiments.session import SimulatedFrontend, make_observer, run_session
         from glarelab.planning.effects import effects
+        from glarelab.planning.simulate import _simulate_sessions
 
         where = self.out / "simulated" / f"{index:03d}"
         shutil.rmtree(where, ignore_errors=True)
         data = where / "data"
-        for number in range(1, self.simulate + 1):
-            participant = f"sim{number:02d}"
-            observer = make_observer(protocol, participant, seed=self.seed, stimuli=folder)
-            run_session(
-                protocol,
-                participant,
-                out=data,
-                frontend=SimulatedFrontend(observer),
-                stimuli=folder,
-                simulated=True,
-                participant_info={"simulated_observer_seed": self.seed},
-            )
+        ids = [f"sim{number:02d}" for number in range(1, self.simulate + 1)]
+        _simulate_sessions(
+            protocol, ids, seed=self.seed, out=data, stimuli=folder, looks_at=folder
+        )
         csvs = sorted(data.glob("*.csv"))
         write_report(protocol, csvs, where / "report", stimuli=folder)
         tables = PARADIGMS[protocol.paradigm].analyse(

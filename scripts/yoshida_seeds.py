@@ -39,11 +39,9 @@ sys.path.insert(0, str(ROOT))
 from glarelab.analysis.figures import plt, png  # noqa: E402
 from glarelab.analysis.load import load_sessions  # noqa: E402
 from glarelab.analysis.paradigms import PARADIGMS  # noqa: E402
-from glarelab.experiments.data import session_files  # noqa: E402
 from glarelab.experiments.looking import DisplayedSet  # noqa: E402
-from glarelab.experiments.session import SimulatedFrontend, make_observer, run_session  # noqa: E402
 from glarelab.planning.effects import effects  # noqa: E402
-from glarelab.planning.simulate import default_scratch  # noqa: E402
+from glarelab.planning.simulate import _simulate_sessions, default_scratch  # noqa: E402
 from glarelab.protocols import load_protocol  # noqa: E402
 from glarelab.stimuli.stimulus_set import StimulusSet, cached_stimulus_set  # noqa: E402
 
@@ -110,24 +108,10 @@ def one_study(protocol, seed: int, participants: int, stimuli: Path, displayed) 
     uncorrected and Greenhouse–Geisser p."""
     folder = Path(tempfile.mkdtemp(prefix="glarelab-seeds-", dir=default_scratch()))
     try:
-        csvs = []
-        for number in range(1, participants + 1):
-            participant = f"sim{number:02d}"
-            observer = make_observer(protocol, participant, seed=seed, stimuli=displayed)
-            run_session(
-                protocol,
-                participant,
-                out=folder,
-                frontend=SimulatedFrontend(observer),
-                stimuli=stimuli,
-                simulated=True,
-                participant_info={"simulated_observer_seed": seed},
-            )
-            csvs += [
-                f
-                for f in session_files(folder, participant, protocol.study, 1)
-                if f.suffix == ".csv"
-            ]
+        ids = [f"sim{number:02d}" for number in range(1, participants + 1)]
+        csvs = _simulate_sessions(
+            protocol, ids, seed=seed, out=folder, stimuli=stimuli, looks_at=displayed
+        )
         dataset = load_sessions(protocol, csvs)
         tables = PARADIGMS[protocol.paradigm].analyse(dataset, protocol, tests_only=True)
         rows = effects(protocol, tables["tables"], participants)

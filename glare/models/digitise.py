@@ -303,20 +303,33 @@ def _quadrature_exact(
     profiles, half_h, half_w, pixel_deg, active_deg, sample_options
 ) -> np.ndarray:
     """Every pixel of the quadrant by its own midpoint rule (the reference digitisation)."""
+    quadrant = np.zeros((len(profiles), half_h + 1, half_w + 1))
+    _sample_pixels(
+        quadrant, profiles, half_h, half_w, pixel_deg, active_deg, sample_options, fewest=1
+    )
+    return quadrant
+
+
+def _sample_pixels(
+    quadrant, profiles, box_h, box_w, pixel_deg, active_deg, sample_options, *, fewest
+) -> None:
+    """Write into ``quadrant`` the pixels ``0..box_h × 0..box_w`` that get at least ``fewest``
+    samples per axis, each by its own midpoint rule; the centre pixel (computed exactly by the
+    caller) and pixels beyond ``active_deg`` are left as they are."""
     rows, cols = np.meshgrid(
-        np.arange(half_h + 1, dtype=float), np.arange(half_w + 1, dtype=float), indexing="ij"
+        np.arange(box_h + 1, dtype=float), np.arange(box_w + 1, dtype=float), indexing="ij"
     )
     radius_px = np.hypot(rows, cols)
-    active = np.ones_like(radius_px, dtype=bool)
-    if active_deg is not None:
-        active = radius_px * pixel_deg <= active_deg
-    active[0, 0] = False  # the centre pixel is computed exactly by the caller
     counts = _samples_per_axis(radius_px, pixel_deg=pixel_deg, **sample_options)
-    quadrant = np.zeros((len(profiles), half_h + 1, half_w + 1))
+    active = counts >= fewest
+    if active_deg is not None:
+        active &= radius_px * pixel_deg <= active_deg
+    active[0, 0] = False
     for n in np.unique(counts[active]):
         select = active & (counts == n)
-        quadrant[:, select] = _sampled(profiles, rows[select], cols[select], int(n), pixel_deg)
-    return quadrant
+        quadrant[(slice(None), *np.nonzero(select))] = _sampled(
+            profiles, rows[select], cols[select], int(n), pixel_deg
+        )
 
 
 def _quadrature_symmetric(
@@ -372,21 +385,9 @@ def _quadrature_symmetric(
         quadrant[:, : reach_h + 1, : reach_w + 1][:, radius_px * pixel_deg > limit] = 0.0
     # the pixels sampled several times, exactly as the reference does
     box_h, box_w = min(near, reach_h), min(near, reach_w)
-    box_rows, box_cols = np.meshgrid(
-        np.arange(box_h + 1, dtype=float), np.arange(box_w + 1, dtype=float), indexing="ij"
+    _sample_pixels(
+        quadrant, profiles, box_h, box_w, pixel_deg, active_deg, sample_options, fewest=2
     )
-    box_radius = np.hypot(box_rows, box_cols)
-    counts = _samples_per_axis(box_radius, pixel_deg=pixel_deg, **sample_options)
-    active = counts > 1
-    if active_deg is not None:
-        active &= box_radius * pixel_deg <= active_deg
-    active[0, 0] = False
-    for n in np.unique(counts[active]):
-        select = active & (counts == n)
-        pixels = np.nonzero(select)
-        quadrant[(slice(None), *pixels)] = _sampled(
-            profiles, box_rows[select], box_cols[select], int(n), pixel_deg
-        )
     quadrant[:, 0, 0] = 0.0
     return quadrant
 

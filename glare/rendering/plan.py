@@ -282,14 +282,12 @@ def plan_glare(
     >>> plan.reach_px < plan.geometric_reach_px, plan.path
     (True, 'direct')
     """
-    from glarelab.glare._validation import check_image
-    from glarelab.glare.rendering.renderer import GlareRenderer
+    from glarelab.glare.rendering.renderer import _renderer_for  # it imports this module
 
-    image = check_image("luminance_cd_m2", luminance_cd_m2, channels=(3,))
-    renderer = GlareRenderer(
+    image, renderer = _renderer_for(
+        luminance_cd_m2,
         model,
         pixel_deg=pixel_deg,
-        shape=image.shape[:2],
         l_dmax_cd_m2=l_dmax_cd_m2,
         method=method,
         tolerance_codes=tolerance_codes,

@@ -16,7 +16,12 @@ from glarelab.glare._validation import check_choice, check_image, check_positive
 from glarelab.glare.models import GlareModel, _resolve
 from glarelab.glare.models.digitise import Kernel, check_kernel_shape
 from glarelab.glare.rendering.compose import METHODS
-from glarelab.glare.rendering.renderer import PRECISIONS, GlareRenderer, GlareResult
+from glarelab.glare.rendering.renderer import (
+    PRECISIONS,
+    GlareRenderer,
+    GlareResult,
+    _renderer_for,
+)
 
 __all__ = [
     "L_DMAX_YOSHIDA2008_CD_M2",
@@ -105,11 +110,10 @@ def render_glare(
     >>> float(result.image.max()), round(float(result.excess_energy), 1)
     (220.0, 9780.0)
     """
-    image = check_image("luminance_cd_m2", luminance_cd_m2, channels=(3,))
-    renderer = GlareRenderer(
+    image, renderer = _renderer_for(
+        luminance_cd_m2,
         model,
         pixel_deg=pixel_deg,
-        shape=image.shape[:2],
         l_dmax_cd_m2=l_dmax_cd_m2,
         method=method,
         precision=precision,
@@ -254,11 +258,10 @@ def render_planned(
     >>> result.error_bound_codes <= 0.5
     True
     """
-    image = check_image("luminance_cd_m2", luminance_cd_m2, channels=(3,))
-    renderer = GlareRenderer(
+    image, renderer = _renderer_for(
+        luminance_cd_m2,
         model,
         pixel_deg=pixel_deg,
-        shape=image.shape[:2],
         l_dmax_cd_m2=l_dmax_cd_m2,
         method=method,
         precision=precision,

@@ -509,6 +509,15 @@ class GlareRenderer:
         return spread, used
 
 
+def _renderer_for(
+    luminance_cd_m2: np.ndarray, model: GlareModel | str, **options
+) -> tuple[np.ndarray, GlareRenderer]:
+    """The one-call functions' start: the image checked (``(H, W)`` or ``(H, W, 3)``, finite,
+    >= 0) and a :class:`GlareRenderer` of its shape with ``options``, which it checks."""
+    image = check_image("luminance_cd_m2", luminance_cd_m2, channels=(3,))
+    return image, GlareRenderer(model, shape=image.shape[:2], **options)
+
+
 def _within(out_box, box, half) -> tuple[int, int, int, int]:
     """The part of ``out_box`` within ``half`` pixels of ``box``."""
     return (

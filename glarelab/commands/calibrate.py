@@ -6,6 +6,7 @@ import argparse
 import dataclasses
 import json
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -15,6 +16,9 @@ from glarelab.stimuli.photometer import PHOTOMETERS
 
 from .common import count, number, output_file
 from .common import log as _log
+
+if TYPE_CHECKING:
+    from glarelab.stimuli.measure import MeasurementSession
 
 REPLACE_HELP = (
     "write over the --out calibration (kept as STEM.replaced-N.json); without it an existing "
@@ -140,6 +144,15 @@ def _calibrate_measure(args: argparse.Namespace) -> int:
         return _measure_locked(args)
 
 
+def _log_stopped(session: MeasurementSession) -> None:
+    """Say where a measurement stopped and how to go on with it (Escape, a fault, Ctrl-C)."""
+    step = session.current()
+    _log(
+        f"stopped at {step['phase']} code {step['code']}; every reading so far is in "
+        f"{session.session_path}: the same command with --resume goes on from there"
+    )
+
+
 def _measure_locked(args: argparse.Namespace) -> int:
     from glarelab.stimuli.measure import MeasurementSession
     from glarelab.stimuli.measure_psychopy import run_measurement
@@ -240,11 +253,7 @@ def _measure_locked(args: argparse.Namespace) -> int:
     except KeyboardInterrupt:  # Ctrl-C: the session says so, and how to go on
         if session.phase != "done" and (session.log or session.raw):
             session.interrupted("stopped by Ctrl-C (SIGINT)")
-            step = session.current()
-            _log(
-                f"stopped at {step['phase']} code {step['code']}; every reading so far is in "
-                f"{session.session_path}: the same command with --resume goes on from there"
-            )
+            _log_stopped(session)
         raise
     finally:
         for each in opened:
@@ -252,11 +261,7 @@ def _measure_locked(args: argparse.Namespace) -> int:
     for flag in result["flags"]:
         _log(f"flag: {flag}")
     if result["status"] == "stopped":
-        step = session.current()
-        _log(
-            f"stopped at {step['phase']} code {step['code']}; every reading so far is in "
-            f"{session.session_path}: the same command with --resume goes on from there"
-        )
+        _log_stopped(session)
         return 1
     _log(f"calibration status: {result['status']}; session saved at {session.session_path}")
     return 0 if result["status"] == "passed" else 1
