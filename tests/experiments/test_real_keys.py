@@ -129,21 +129,30 @@ def test_yoshida_every_quick_press_counts_the_marker_shows_and_rt_runs_from_onse
 # --- Spencer 1995: flashes ------------------------------------------------------------------
 
 
+KEY_SLACK_S = 0.02  # an X key event reaching PsychoPy, and a flip reaching the X server
+
+
 def _flash_visible(screen: XScreen) -> bool:
     strip = (CENTRE[0] - 200, CENTRE[1] - 6, CENTRE[0] + 200, CENTRE[1] + 6)
     return screen.screenshot(strip).max() > 40
 
 
-def _next_flash(screen: XScreen, timeout: float = 15.0) -> float:
-    """Wait for the screen to go dark, then for the next flash; its onset as seen (wall clock)."""
+def _next_flash(screen: XScreen, timeout: float = 15.0) -> tuple[float, float]:
+    """Wait for the screen to go dark, then for the next flash: the wall-clock interval its
+    onset lies in, from the start of the last screenshot that saw the screen dark to the end
+    of the first that saw the flash."""
     deadline = time.time() + timeout
-    while _flash_visible(screen):
+    while True:
+        dark = time.time()  # the start of a screenshot that saw the screen dark, at the end
+        if not _flash_visible(screen):
+            break
         assert time.time() < deadline, "the flash never ended"
         time.sleep(0.003)
     while True:
-        before = time.time()
+        started = time.time()
         if _flash_visible(screen):
-            return (before + time.time()) / 2
+            return dark, time.time()
+        dark = started
         assert time.time() < deadline, "no flash appeared"
         time.sleep(0.003)
 
@@ -160,12 +169,12 @@ def test_spencer_answers_during_the_flash_give_their_rows_timed_from_onset(scree
     screen.key("space")
     answers = []
     for trial, key in enumerate(["Left", "Right", "Down", "Left", "Right", "Down"]):
-        onset = _next_flash(screen)
+        earliest, latest = _next_flash(screen)
         if trial == 0:
             save(screen.screenshot(), tmp_path / "flash.png")
         time.sleep(0.12)  # the answer comes during the flash (400 or 700 ms)
         before, after = screen.key(key)
-        answers.append((before + after) / 2 - onset)
+        answers.append((before - latest, after - earliest))  # the answer's time from onset
     _next_flash(screen)
     screen.key("Escape")
     assert screen.wait() == 3, screen.stderr[-2000:]
@@ -175,10 +184,13 @@ def test_spencer_answers_during_the_flash_give_their_rows_timed_from_onset(scree
     for row, measured in zip(rows, answers, strict=True):
         assert row["ignored_keys"] == ""
         assert 0 < float(row["time_s"]) < float(row["shown_ms"]) / 1000  # during the flash
-        # the test sees the flash a screenshot later than its flip: within 100 ms (50 ms held
-        # on a quiet machine, but one screenshot in a busy one took 69-80 ms); an answer timed
+        # the time from the flip to the key lies in what the test saw: between the key's
+        # press less the onset's latest moment and its end less the earliest; an answer timed
         # from another event than the flip is off by the flash's 400-700 ms
-        assert abs(float(row["time_s"]) - measured) < 0.1, (row["time_s"], measured)
+        low, high = measured
+        assert high - low < 0.3, measured  # the check means something: narrower than a flash
+        time_s = float(row["time_s"])
+        assert low - KEY_SLACK_S < time_s < high + KEY_SLACK_S, (time_s, measured)
         assert float(row["offset_s"]) > float(row["onset_s"]) > 0
         assert epoch > 0
         if row["presentation_ok"] == "true":  # its frames at 76 Hz, within Spencer's 10 ms
