@@ -213,9 +213,9 @@ def sessions(tmp_path_factory):
 def test_a_killed_analysis_leaves_the_earlier_report_or_the_new_one(
     tmp_path, sessions, monkeypatch
 ):
-    from glarelab import analysis
+    import glarelab.analysis.report as report
 
-    memoised(analysis.report, "analyse", monkeypatch)
+    memoised(report, "analyse", monkeypatch)
     out = tmp_path / "report"
     assert main(["analyse", "luidolt2020", *map(str, sessions[:2]), "--out", str(out)]) == 0
     before = digest(out)
@@ -247,10 +247,10 @@ def test_a_killed_power_run_leaves_each_file_complete_and_resumes(tmp_path, monk
         return results[key]
 
     monkeypatch.setattr(PowerJob, "run", once)
-    from glarelab import planning
+    import glarelab.planning.power as power
 
-    memoised(planning.power, "power_figure", monkeypatch)
-    memoised(planning.power, "effect_size_figure", monkeypatch)
+    memoised(power, "power_figure", monkeypatch)
+    memoised(power, "effect_size_figure", monkeypatch)
     out = tmp_path / "power"
     common = ["power", "luidolt2020", "--participants", "4", "6", "--workers", "0"]
     common += ["--out", str(out)]
