@@ -17,6 +17,13 @@ size, and the smallest sample size that reaches a target power.
 - ``replications.jsonl`` (every replication's effects, as they finished) and ``run.json``
   (what the replications depend on; a rerun with other values is refused).
 
+The five summaries are replaced together: the new folder is built beside ``out``, with the
+folder's other files (the replications, a user's own files) hard-linked into it, and swapped
+with ``out`` in one step, so that a run killed at any moment leaves the earlier summaries or the
+new ones, never some of each (:func:`write_summary`). One run at a time writes into a folder:
+it holds the lock ``.NAME.power.lock`` beside it (:class:`glarelab.protocols.locks.ProcessLock`,
+released by the system however the process ends), and a second run is refused.
+
 **Power** at sample size ``n`` is ``k / R``, ``k`` of ``R`` replications with ``p < α`` (a
 replication whose analysis refused the data counts as not significant, and is counted in
 ``failed``). Its confidence interval is the exact binomial (Clopper–Pearson) interval,
@@ -34,6 +41,8 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import os
+import shutil
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
@@ -41,6 +50,14 @@ import numpy as np
 import pandas as pd
 from glarelab.planning.effects import CORRECTIONS, Correction, chosen_p
 from glarelab.protocols.atomic import write_bytes, write_text
+from glarelab.protocols.folders import (
+    LISTING,
+    listed_files,
+    replace_folder,
+    restore_folder,
+    staging_folder,
+)
+from glarelab.protocols.locks import ProcessLock
 
 __all__ = [
     "binomial_interval",
@@ -298,11 +315,20 @@ def write_summary(
     title: str,
 ) -> pd.DataFrame:
     """Write ``power.csv``, ``effect_sizes.csv``, ``recommended.csv`` and the two figures into
-    ``out``; return the recommendations."""
+    ``out``, replacing the earlier five together; return the recommendations.
+
+    The new folder is built whole beside ``out``: its other files (``run.json``,
+    ``replications.jsonl``, a user's own) hard-linked into it (copied where the file system
+    cannot link), the five summaries written, and the two folders swapped in one step
+    (:func:`glarelab.protocols.folders.replace_folder`). A process killed at any moment leaves
+    the earlier five or the new five, never some of each; a full disk leaves the earlier ones.
+    Nothing else may write into ``out`` meanwhile (:func:`power_analysis` holds its lock).
+    """
     power, sizes = summarise(records, alpha=alpha, correction=correction)
     recommended = recommend(power, target=target)
+    out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    # each file whole or not at all; all made before the first is written
+    # all made before the first is written
     files = {
         "power.csv": power.to_csv(index=False, float_format="%.6g").encode(),
         "effect_sizes.csv": sizes.to_csv(index=False, float_format="%.6g").encode(),
@@ -310,9 +336,61 @@ def write_summary(
         "power_curves.png": power_figure(power, target=target, alpha=alpha, title=title),
         "effect_sizes.png": effect_size_figure(sizes, title=title),
     }
-    for name, data in files.items():
-        write_bytes(out / name, data)
+    written = {*listed_files(out), *files, "run.json", "replications.jsonl"}
+    staging = staging_folder(out)
+    try:
+        _link_tree(out, staging)
+        for name, data in files.items():
+            write_bytes(staging / name, data)
+        replace_folder(staging, out, kind="power", files=written)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)  # a failed build, or the earlier folder
     return recommended
+
+
+def _link_tree(source: Path, target: Path) -> None:
+    """Every file under ``source`` but its listing, in ``target``: hard-linked (the content is
+    not copied, and a file appended to later stays one file), or copied where the file system
+    cannot link; symbolic links as links."""
+    failed: list[OSError] = []
+
+    def link(source_file: str, target_file: str) -> None:
+        try:
+            os.link(source_file, target_file)
+        except OSError:
+            try:
+                shutil.copy2(source_file, target_file)
+            except OSError as error:
+                failed.append(error)
+                raise
+
+    top = os.fspath(source)
+    try:
+        shutil.copytree(
+            source,
+            target,
+            symlinks=True,
+            copy_function=link,
+            ignore=lambda folder, names: [LISTING] if folder == top else [],
+            dirs_exist_ok=True,
+        )
+    except shutil.Error:
+        if failed:  # with its errno (a full disk), which shutil.Error's summary drops
+            raise failed[0] from None
+        raise
+
+
+def _folder_lock(out: Path) -> ProcessLock:
+    """The lock of a power run's folder: a file beside it (the folder itself is swapped)."""
+    final = out.resolve()
+
+    def refusal(holder: str) -> ValueError:
+        return ValueError(
+            f"{out} is in use by another glarelab power run ({holder}): wait for it to end, "
+            "or give another --out (nothing was changed)"
+        )
+
+    return ProcessLock(final.parent / f".{final.name}.power.lock", refusal=refusal)
 
 
 def run_inputs(protocol, *, seed: int, participants: Sequence[int]) -> dict:
@@ -432,7 +510,8 @@ def power_analysis(
     Raises
     ------
     ValueError
-        For bad arguments (named), or an ``out`` holding replications of other inputs.
+        For bad arguments (named), an ``out`` holding replications of other inputs, or one
+        that another power run is writing into (naming its process and host).
     """
     from glarelab.experiments.session import shows_images
     from glarelab.planning.execute import Progress, ResultLog, run_tasks
@@ -463,40 +542,43 @@ def power_analysis(
         _check_stimuli(Path(stimuli), protocol)
     out = Path(out)
     run = run_inputs(protocol, seed=seed, participants=sizes)
-    check_run_folder(out, run)
-    out.mkdir(parents=True, exist_ok=True)
-    if not (out / "run.json").is_file():
-        write_text(out / "run.json", json.dumps(run, indent=2, sort_keys=True) + "\n")
-    if shows_images(protocol) and stimuli is None:
-        log(f"building (or reusing) the {protocol.study} stimulus set the observers look at")
-        stimuli = cached_stimulus_set(protocol, progress=None)
-    job = PowerJob(
-        protocol,
-        participants=tuple(sizes),
-        seed=seed,
-        stimuli=stimuli,
-        scratch=scratch,
-        task_delay_s=task_delay_s,
-    )
-    key = hashlib.sha256(json.dumps(run, sort_keys=True).encode()).hexdigest()
-    with ResultLog(out / "replications.jsonl", key=key) as results:
-        done = sum(r in results for r in range(replications))
-        if done:
-            log(f"resuming: {done} of {replications} replications already in {out}")
-        run_tasks(
-            job,
-            range(replications),
-            results,
-            client=client,
-            what="replications",
-            progress=Progress if progress else None,
+    with _folder_lock(out):
+        restore_folder(out)
+        check_run_folder(out, run)
+        out.mkdir(parents=True, exist_ok=True)
+        if not (out / "run.json").is_file():
+            write_text(out / "run.json", json.dumps(run, indent=2, sort_keys=True) + "\n")
+        if shows_images(protocol) and stimuli is None:
+            log(f"building (or reusing) the {protocol.study} stimulus set the observers look at")
+            stimuli = cached_stimulus_set(protocol, progress=None)
+        job = PowerJob(
+            protocol,
+            participants=tuple(sizes),
+            seed=seed,
+            stimuli=stimuli,
+            scratch=scratch,
+            task_delay_s=task_delay_s,
         )
-        records = results.sorted(range(replications))
-    return write_summary(
-        out,
-        records,
-        alpha=alpha,
-        correction=correction,
-        target=target,
-        title=protocol.study,
-    )
+        key = hashlib.sha256(json.dumps(run, sort_keys=True).encode()).hexdigest()
+        with ResultLog(out / "replications.jsonl", key=key) as results:
+            done = sum(r in results for r in range(replications))
+            if done:
+                log(f"resuming: {done} of {replications} replications already in {out}")
+            run_tasks(
+                job,
+                range(replications),
+                results,
+                client=client,
+                what="replications",
+                progress=Progress if progress else None,
+            )
+            records = results.sorted(range(replications))
+        # the log is closed: its file is linked into the new folder as it stands
+        return write_summary(
+            out,
+            records,
+            alpha=alpha,
+            correction=correction,
+            target=target,
+            title=protocol.study,
+        )

@@ -33,6 +33,7 @@ __all__ = [
     "listed_files",
     "record_files",
     "replace_folder",
+    "restore_folder",
     "staging_folder",
 ]
 
@@ -158,9 +159,23 @@ def _leftovers(final: Path) -> None:
             if not pid.isdigit() or int(pid) == os.getpid() or _alive(int(pid)):
                 continue
             if kind == "old" and not final.exists() and not final.is_symlink():
-                leftover.rename(final)  # the earlier output, complete
+                with contextlib.suppress(FileNotFoundError):  # another process put it back
+                    leftover.rename(final)  # the earlier output, complete
             else:
                 shutil.rmtree(leftover, ignore_errors=True)
+
+
+def restore_folder(final: str | Path) -> None:
+    """Put back a ``final`` that a process killed between the two renames of
+    :func:`replace_folder` left aside, and remove the folders killed builds left beside it.
+
+    Call it before reading or writing into a folder that is replaced whole while files in it
+    are kept (:func:`staging_folder` calls it too): on a file system that cannot swap two
+    folders in one step, ``final`` is missing until then.
+    """
+    final = Path(final).resolve()
+    if final.parent.is_dir():
+        _leftovers(final)
 
 
 def staging_folder(final: Path) -> Path:
@@ -195,12 +210,20 @@ def _exchange(first: Path, second: Path) -> bool:
     raise OSError(code, os.strerror(code), str(second))
 
 
-def replace_folder(staging: Path, final: Path, *, kind: str) -> None:
+def replace_folder(
+    staging: Path, final: Path, *, kind: str, files: Iterable[str] | None = None
+) -> None:
     """List the finished ``staging`` folder's files and move it to ``final`` in one step (the
     two folders are swapped atomically where the system can; elsewhere the earlier ``final``
     is moved aside first and put back by the next build if the process dies in between). The
-    earlier ``final`` is removed only once the new one is in place."""
-    record_files(staging, kind)
+    earlier ``final`` is removed only once the new one is in place.
+
+    ``files`` are the files glarelab wrote, for the listing, where the folder holds others too
+    (default: every file in ``staging``)."""
+    if files is None:
+        record_files(staging, kind)
+    else:
+        _write_listing(staging, {name: kind for name in files if (staging / name).is_file()})
     for root, _, files in os.walk(staging):
         for name in files:
             with contextlib.suppress(OSError):

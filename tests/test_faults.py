@@ -10,9 +10,11 @@ process and reused by the forked copies, so that the kills fall where files are 
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import os
 import pickle
+import select
 import shutil
 import signal
 import subprocess
@@ -213,9 +215,9 @@ def sessions(tmp_path_factory):
 def test_a_killed_analysis_leaves_the_earlier_report_or_the_new_one(
     tmp_path, sessions, monkeypatch
 ):
-    from glarelab import analysis
+    import glarelab.analysis.report as report
 
-    memoised(analysis.report, "analyse", monkeypatch)
+    memoised(report, "analyse", monkeypatch)
     out = tmp_path / "report"
     assert main(["analyse", "luidolt2020", *map(str, sessions[:2]), "--out", str(out)]) == 0
     before = digest(out)
@@ -235,7 +237,26 @@ def test_a_killed_analysis_leaves_the_earlier_report_or_the_new_one(
     assert sum(seen.values()) == KILLS
 
 
-def test_a_killed_power_run_leaves_each_file_complete_and_resumes(tmp_path, monkeypatch):
+SUMMARIES = (
+    "power.csv",
+    "effect_sizes.csv",
+    "recommended.csv",
+    "power_curves.png",
+    "effect_sizes.png",
+)
+
+
+def summaries(folder: Path) -> tuple[str, ...]:
+    """The digests of a power run's five summaries, together."""
+    return tuple(digest(folder / name) for name in SUMMARIES)
+
+
+@pytest.fixture
+def quick_power(monkeypatch):
+    """``glarelab power`` with its replications and figures computed once per argument, and
+    a pipe on which each run writes ``s`` as it starts writing its first summary file and
+    ``e`` when all are in place (the read end, non-blocking)."""
+    import glarelab.planning.power as power
     from glarelab.planning.simulate import PowerJob
 
     run, results = PowerJob.run, {}
@@ -247,35 +268,200 @@ def test_a_killed_power_run_leaves_each_file_complete_and_resumes(tmp_path, monk
         return results[key]
 
     monkeypatch.setattr(PowerJob, "run", once)
-    from glarelab import planning
+    memoised(power, "power_figure", monkeypatch)
+    memoised(power, "effect_size_figure", monkeypatch)
+    read, write = os.pipe()
+    os.set_blocking(read, False)
+    write_summary, write_bytes, writing = power.write_summary, power.write_bytes, []
 
-    memoised(planning.power, "power_figure", monkeypatch)
-    memoised(planning.power, "effect_size_figure", monkeypatch)
+    def marked(*args, **kwargs):
+        writing.clear()
+        try:
+            return write_summary(*args, **kwargs)
+        finally:
+            os.write(write, b"e")
+
+    def first_marked(path, data):
+        if not writing:
+            writing.append(path)
+            os.write(write, b"s")
+        return write_bytes(path, data)
+
+    monkeypatch.setattr(power, "write_summary", marked)
+    monkeypatch.setattr(power, "write_bytes", first_marked)
+    yield read
+    os.close(read)
+    os.close(write)
+
+
+def drain(pipe: int) -> None:
+    with contextlib.suppress(BlockingIOError):
+        while os.read(pipe, 100):
+            pass
+
+
+def next_mark(pipe: int, timeout_s: float = 60.0) -> tuple[bytes, float]:
+    """The next byte on ``pipe`` and when it came (time.monotonic)."""
+    if not select.select([pipe], [], [], timeout_s)[0]:
+        raise TimeoutError("no mark on the pipe")
+    return os.read(pipe, 1), time.monotonic()
+
+
+def kill_in_summary(argv: list[str], pipe: int, delay_s: float) -> float | None:
+    """Run ``glarelab argv`` forked and SIGKILL it ``delay_s`` after it starts writing its
+    summaries (``quick_power``'s marks). How long they took if they were all written before
+    the kill; None if it came while they were being written."""
+    drain(pipe)
+    pid = os.fork()
+    if pid == 0:  # the child
+        os.setpgid(0, 0)
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, 1)
+        os.dup2(devnull, 2)
+        try:
+            status = main(argv)
+        except BaseException:
+            status = 99
+        os._exit(status)
+    took = None
+    try:
+        mark, began = next_mark(pipe)
+        assert mark == b"s"
+        if select.select([pipe], [], [], delay_s)[0]:
+            mark, ended = next_mark(pipe)
+            assert mark == b"e"
+            took = ended - began
+            time.sleep(max(0.0, began + delay_s - time.monotonic()))
+    finally:
+        os.kill(pid, signal.SIGKILL)  # a child that has ended is a zombie until waited for
+    os.waitpid(pid, 0)
+    return took
+
+
+def test_a_killed_power_run_leaves_the_earlier_summaries_or_the_new_ones_and_resumes(
+    tmp_path, quick_power, capsys
+):
     out = tmp_path / "power"
     common = ["power", "luidolt2020", "--participants", "4", "6", "--workers", "0"]
     common += ["--out", str(out)]
     assert main([*common, "--replications", "4"]) == 0
-    summary = ["power.csv", "effect_sizes.csv", "recommended.csv", "power_curves.png"]
+    (out / "notes.txt").write_text("the lab's own notes\n")  # a user's file, kept throughout
     earlier = tmp_path / "earlier"
     shutil.copytree(out, earlier)
     reference = tmp_path / "reference"
-    argv = [*common, "--replications", "8"]
-    assert argv[-4:-2] == ["--out", str(out)]
-    assert main([*argv[:-3], str(reference), "--replications", "8"]) == 0
-    after = {name: digest(reference / name) for name in summary}
-    before = {name: digest(earlier / name) for name in summary}
-    rng = np.random.default_rng(4)
-    start = time.monotonic()
-    assert run_forked(argv, None) == 0
-    seconds = time.monotonic() - start
-    for _ in range(KILLS):
+    more = ["--replications", "8", "--target-power", "0.9"]  # every summary differs
+    argv = [*common, *more]
+    assert main([*common[:-1], str(reference), *more]) == 0
+    before, after = summaries(earlier), summaries(reference)
+    assert all(old != new for old, new in zip(before, after, strict=True))  # any mix is seen
+
+    def reset():
         shutil.rmtree(out)
         shutil.copytree(earlier, out)
-        run_forked(argv, float(rng.uniform(0.0, 1.1 * seconds)))
-        for name in summary:  # each summary file is the earlier one or the new one, whole
-            assert digest(out / name) in (before[name], after[name]), name
+
+    def check(seen: dict[str, int]) -> None:
+        now = summaries(out)
+        state = "before" if now == before else "after" if now == after else "mixed"
+        seen[state] += 1
+        assert state != "mixed", f"a kill left a mix of summaries: {now}"
+        assert (out / "notes.txt").read_text() == "the lab's own notes\n"
+        visible = [p for p in out.rglob("*") if PARTIAL in p.name and not p.name.startswith(".")]
+        assert not visible, visible
+
+    # the run's time, and the time it takes to write the summaries (median of three)
+    runs, writes = [], []
+    for _ in range(3):
+        reset()
+        drain(quick_power)
+        start = time.monotonic()
+        assert run_forked(argv, None) == 0
+        runs.append(time.monotonic() - start)
+    for _ in range(3):
+        reset()
+        drain(quick_power)
+        pid = os.fork()
+        if pid == 0:  # the child
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, 1)
+            os.dup2(devnull, 2)
+            os._exit(main(argv))
+        (first, began), (second, ended) = next_mark(quick_power), next_mark(quick_power)
+        assert (first, second) == (b"s", b"e")
+        assert os.waitstatus_to_exitcode(os.waitpid(pid, 0)[1]) == 0
+        writes.append(ended - began)
+    seconds, writing = float(np.median(runs)), float(np.median(writes))
+    rng = np.random.default_rng(4)
+    anywhere = {"before": 0, "after": 0, "mixed": 0}
+    tries = killed = 0  # the kills that came after the run had ended do not count
+    while killed < KILLS:  # at random over the whole run
+        tries += 1
+        assert tries <= 4 * KILLS, f"only {killed} of {tries} kills came while the run ran"
+        reset()
+        killed += run_forked(argv, float(rng.uniform(0.0, 1.1 * seconds))) is None
+        check(anywhere)
+    writing_kills = {"before": 0, "after": 0, "mixed": 0}
+    inside = 0  # kills that came while the summaries were being written
+    window = writing  # follows the pace of a shared machine's disk: the delays scale with it
+    for _ in range(KILLS):  # at random from the start of the summaries
+        reset()
+        delay = float(rng.uniform(0.0, 1.5 * window))
+        took = kill_in_summary(argv, quick_power, delay)
+        inside += took is None
+        window = max(window, delay) if took is None else took
+        writes += [] if took is None else [took]
+        check(writing_kills)
+    with capsys.disabled():
+        print(
+            f"\npower run {1e3 * seconds:.0f} ms, its summaries written in "
+            f"{1e3 * float(np.median(writes)):.1f} ms (median); {tries} kills at random "
+            f"({killed} while it ran) left {anywhere}; {KILLS} kills from the start of the "
+            f"summaries ({inside} while they were written) left {writing_kills}"
+        )
+    # the kills fell while the summaries were written, on both sides of the swap
+    assert inside >= KILLS // 4, inside
+    assert writing_kills["before"] >= 3 and writing_kills["after"] >= 3, writing_kills
     assert main(argv) == 0  # a run after the kills resumes to the uninterrupted result
-    assert {name: digest(out / name) for name in summary} == after
+    assert summaries(out) == after
+    assert (out / "notes.txt").read_text() == "the lab's own notes\n"
+    assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(".")) == []
+
+
+def test_a_power_run_killed_between_two_renames_is_put_back_by_the_next_run(
+    tmp_path, quick_power, monkeypatch
+):
+    """Where the file system cannot swap two folders in one step, the earlier folder is moved
+    aside before the new one is moved in: a run killed between the two renames leaves no
+    folder, and the next run puts the earlier one back before it reads it."""
+    import glarelab.protocols.folders as folders
+
+    out = tmp_path / "power"
+    common = ["power", "luidolt2020", "--participants", "4", "--workers", "0"]
+    assert main([*common, "--replications", "2", "--out", str(out)]) == 0
+    (out / "notes.txt").write_text("the lab's own notes\n")
+    before, log = summaries(out), (out / "replications.jsonl").read_bytes()
+    argv = [*common, "--replications", "4", "--out", str(out)]
+    assert main([*common, "--replications", "4", "--out", str(tmp_path / "whole")]) == 0
+    with monkeypatch.context() as patch:
+        patch.setattr(folders, "_exchange", lambda first, second: False)
+        rename = Path.rename
+
+        def rename_then_die(self, target):
+            moved = rename(self, target)
+            if ".old-" in Path(target).name:  # the earlier folder is aside, the new not in
+                os.kill(os.getpid(), signal.SIGKILL)
+            return moved
+
+        patch.setattr(Path, "rename", rename_then_die)
+        assert run_forked(argv, None) is None  # killed
+    assert not out.exists()
+    (aside,) = tmp_path.glob(".power.old-*")
+    assert summaries(aside) == before
+    assert main(argv) == 0
+    assert (out / "notes.txt").read_text() == "the lab's own notes\n"
+    lines = (out / "replications.jsonl").read_bytes()
+    assert lines.startswith(log) and len(lines.splitlines()) == 4  # resumed: none lost
+    assert summaries(out) == summaries(tmp_path / "whole")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["power", "whole"]
 
 
 @pytest.fixture
@@ -294,6 +480,50 @@ def small_disk(tmp_path):
         pytest.skip("cannot mount a small tmpfs here (needs root)")
     yield folder
     subprocess.run(["umount", "-l", str(folder)], check=False, capture_output=True)
+
+
+def fill(disk: Path) -> None:
+    """Take the rest of ``disk``'s space."""
+    handle = os.open(disk / "filler", os.O_WRONLY | os.O_CREAT | os.O_APPEND)
+    try:
+        while True:
+            os.write(handle, b"\0" * 65536)
+    except OSError:
+        pass
+    finally:
+        os.close(handle)
+
+
+def test_a_power_run_on_a_full_disk_leaves_the_earlier_summaries_and_no_partial_file(
+    small_disk, quick_power, monkeypatch, capsys
+):
+    import glarelab.planning.power as power
+
+    out = small_disk / "power"
+    common = ["power", "luidolt2020", "--participants", "4", "--workers", "0"]
+    assert main([*common, "--replications", "2", "--out", str(out)]) == 0
+    before = summaries(out)
+    write_summary = power.write_summary
+
+    def on_a_full_disk(*args, **kwargs):  # the replications are in; the disk fills up
+        fill(small_disk)
+        return write_summary(*args, **kwargs)
+
+    monkeypatch.setattr(power, "write_summary", on_a_full_disk)
+    capsys.readouterr()
+    argv = [*common, "--replications", "3", "--target-power", "0.9", "--out", str(out)]
+    status = main(argv)
+    err = capsys.readouterr().err
+    assert status == 2 and "disk is full" in err and "Traceback" not in err, err
+    assert len([line for line in err.splitlines() if line.startswith("glarelab ")]) == 1
+    assert summaries(out) == before
+    assert sorted(p.name for p in small_disk.iterdir()) == ["filler", "power"]
+    assert not [p for p in small_disk.rglob("*") if PARTIAL in p.name]
+    # with room again, the run completes from the replications it kept
+    (small_disk / "filler").unlink()
+    monkeypatch.setattr(power, "write_summary", write_summary)
+    assert main(argv) == 0
+    assert summaries(out) != before and all(s != "missing" for s in summaries(out))
 
 
 def test_a_full_disk_leaves_the_earlier_file_and_no_partial_one(small_disk, tmp_path, capsys):

@@ -132,6 +132,7 @@ def _power(args: argparse.Namespace) -> int:
 
     from glarelab.experiments.session import shows_images
     from glarelab.planning.power import check_run_folder, power_analysis, run_inputs
+    from glarelab.protocols.folders import restore_folder
 
     protocol = load_protocol(args.protocol)
     if args.stimuli is not None:
@@ -146,6 +147,7 @@ def _power(args: argparse.Namespace) -> int:
                 f"{protocol.study}'s; give that protocol's set, or none"
             )
     _check_workers(args)
+    restore_folder(args.out)  # a run killed mid-swap may have left it aside
     check_run_folder(
         args.out, run_inputs(protocol, seed=args.seed, participants=args.participants)
     )
