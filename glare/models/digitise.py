@@ -227,7 +227,8 @@ def mirror_quadrant(quadrant: np.ndarray) -> np.ndarray:
 
 
 def quadrant_sum(quadrant: np.ndarray) -> np.ndarray:
-    """Sum over the full kernel that :func:`mirror_quadrant` would unfold, per trailing axis.
+    """Sum over the full kernel that :func:`mirror_quadrant` would unfold, per trailing axis,
+    in float64 whatever the quadrant's dtype (as the full kernel's total is taken).
 
     Examples
     --------
@@ -236,10 +237,10 @@ def quadrant_sum(quadrant: np.ndarray) -> np.ndarray:
     (12.0, 12.0)
     """
     return (
-        4.0 * quadrant[1:, 1:].sum(axis=(0, 1))
-        + 2.0 * quadrant[0, 1:].sum(axis=0)
-        + 2.0 * quadrant[1:, 0].sum(axis=0)
-        + quadrant[0, 0]
+        4.0 * quadrant[1:, 1:].sum(axis=(0, 1), dtype=np.float64)
+        + 2.0 * quadrant[0, 1:].sum(axis=0, dtype=np.float64)
+        + 2.0 * quadrant[1:, 0].sum(axis=0, dtype=np.float64)
+        + quadrant[0, 0].astype(np.float64)
     )
 
 
