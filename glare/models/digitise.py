@@ -84,7 +84,9 @@ class Kernel:
     values
         The full kernel; each channel sums to ``1 - energy_outside``.
     quadrant
-        The quadrant of a kernel made from one, else None.
+        The quadrant of a kernel made from one, else None. It and the ``values`` unfolded
+        from it are read-only: the direct path spreads from the one and the FFT path from
+        the other, so an edit to either would render one kernel two ways.
 
     Raises
     ------
@@ -114,6 +116,8 @@ class Kernel:
             raise ValueError("Kernel needs exactly one of values and quadrant")
         if pixel_deg is None:
             raise ValueError("Kernel needs pixel_deg")
+        if quadrant is not None:
+            quadrant = _read_only(quadrant)
         fields = {
             "_values": values,
             "quadrant": quadrant,
@@ -128,6 +132,20 @@ class Kernel:
     def __setattr__(self, name: str, value) -> None:
         raise AttributeError(f"a Kernel is not changed after it is made (setting {name!r})")
 
+    def __getstate__(self) -> dict:
+        """What pickling sends (Dask, to its workers): a quadrant kernel without the full
+        kernel unfolded from it, which is unfolded again where it is asked for."""
+        state = dict(self.__dict__)
+        if state["quadrant"] is not None:
+            state["_values"] = None
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        for name, value in state.items():
+            object.__setattr__(self, name, value)
+        if self.quadrant is not None:
+            object.__setattr__(self, "quadrant", _read_only(self.quadrant))
+
     def __repr__(self) -> str:
         model = self.description.get("model", "kernel")
         return f"Kernel({model}, shape={self.shape}, pixel_deg={self.pixel_deg!r})"
@@ -135,7 +153,7 @@ class Kernel:
     @property
     def values(self) -> np.ndarray:
         if self._values is None:  # unfolded once, on first use
-            object.__setattr__(self, "_values", mirror_quadrant(self.quadrant))
+            object.__setattr__(self, "_values", _read_only(mirror_quadrant(self.quadrant)))
         return self._values
 
     @property
@@ -174,6 +192,13 @@ class Kernel:
             else:
                 fields["values"] = self._values
         return Kernel(**(fields | changes))
+
+
+def _read_only(array) -> np.ndarray:
+    """A read-only view of ``array`` (the caller's own array is left as it is)."""
+    view = np.asarray(array).view()
+    view.flags.writeable = False
+    return view
 
 
 def kernel_shape_for(image_shape: Sequence[int]) -> tuple[int, int]:
