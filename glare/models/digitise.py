@@ -173,10 +173,11 @@ class Kernel:
         return np.max(self.quadrant if self._values is None else self._values)
 
     def total(self) -> float | np.ndarray:
-        """The sum over the support, per channel for a colour kernel."""
-        if self._values is not None:
-            return self._values.sum(axis=(0, 1), dtype=np.float64)
-        return quadrant_sum(self.quadrant)
+        """The sum over the support, per channel for a colour kernel (from the quadrant of a
+        kernel made from one, whether or not it has been unfolded: the same to the bit)."""
+        if self.quadrant is not None:
+            return quadrant_sum(self.quadrant)
+        return self._values.sum(axis=(0, 1), dtype=np.float64)
 
     def replace(self, **changes) -> Kernel:
         """A copy with ``changes`` (``values`` replaces a quadrant, and the reverse)."""

@@ -88,3 +88,24 @@ def test_a_sent_quadrant_kernel_is_the_quadrant_alone_and_stays_read_only(send):
             array[0, 0] = 1.0
     with pytest.raises(AttributeError, match="not changed"):
         sent.pixel_deg = 0.2
+
+
+def test_the_energy_account_of_a_render_does_not_depend_on_what_was_asked_before():
+    """The total is the quadrant's whether or not the full kernel has been unfolded (by an FFT
+    render, a plot): the same image rendered twice gives the same account, to the bit."""
+    image = np.full((40, 40), 10.0)
+    image[3, 5] = 1e9
+    image[30:33, 20:23] = 1e6
+    renderer = glare.GlareRenderer(
+        glare.VosGlare(),
+        pixel_deg=0.05,
+        shape=image.shape,
+        tolerance_codes=0,
+        paths=("direct",),
+        cache=False,
+    )
+    before = renderer.render(image).energy_outside_image
+    total = renderer.kernel().total()
+    renderer.kernel().values  # noqa: B018 - unfolded, as an FFT render does
+    assert renderer.kernel().total() == total
+    assert renderer.render(image).energy_outside_image == before
