@@ -8,6 +8,7 @@ from itertools import pairwise
 
 import numpy as np
 import scipy.fft
+from glarelab.glare.models.digitise import mirror_quadrant
 from scipy import ndimage
 
 __all__ = [
@@ -206,8 +207,6 @@ def direct_spread(
     if not sources:
         return into
     if quadrant and (2 * kernel.shape[0] - 1) * (2 * kernel.shape[1] - 1) <= DIRECT_UNFOLD_PIXELS:
-        from glarelab.glare.models.digitise import mirror_quadrant
-
         kernel, quadrant = mirror_quadrant(kernel), False
     workers = _direct_workers(out_box) if workers is None else max(1, int(workers))
     edges = np.linspace(out_box[0], out_box[1], workers + 1).round().astype(int)
