@@ -84,7 +84,9 @@ class Kernel:
     values
         The full kernel; each channel sums to ``1 - energy_outside``.
     quadrant
-        The quadrant of a kernel made from one, else None.
+        The quadrant of a kernel made from one, else None. It and the ``values`` unfolded
+        from it are read-only: the direct path spreads from the one and the FFT path from
+        the other, so an edit to either would render one kernel two ways.
 
     Raises
     ------
@@ -114,6 +116,8 @@ class Kernel:
             raise ValueError("Kernel needs exactly one of values and quadrant")
         if pixel_deg is None:
             raise ValueError("Kernel needs pixel_deg")
+        if quadrant is not None:
+            quadrant = _read_only(quadrant)
         fields = {
             "_values": values,
             "quadrant": quadrant,
@@ -128,6 +132,20 @@ class Kernel:
     def __setattr__(self, name: str, value) -> None:
         raise AttributeError(f"a Kernel is not changed after it is made (setting {name!r})")
 
+    def __getstate__(self) -> dict:
+        """What pickling sends (Dask, to its workers): a quadrant kernel without the full
+        kernel unfolded from it, which is unfolded again where it is asked for."""
+        state = dict(self.__dict__)
+        if state["quadrant"] is not None:
+            state["_values"] = None
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        for name, value in state.items():
+            object.__setattr__(self, name, value)
+        if self.quadrant is not None:
+            object.__setattr__(self, "quadrant", _read_only(self.quadrant))
+
     def __repr__(self) -> str:
         model = self.description.get("model", "kernel")
         return f"Kernel({model}, shape={self.shape}, pixel_deg={self.pixel_deg!r})"
@@ -135,7 +153,7 @@ class Kernel:
     @property
     def values(self) -> np.ndarray:
         if self._values is None:  # unfolded once, on first use
-            object.__setattr__(self, "_values", mirror_quadrant(self.quadrant))
+            object.__setattr__(self, "_values", _read_only(mirror_quadrant(self.quadrant)))
         return self._values
 
     @property
@@ -155,10 +173,11 @@ class Kernel:
         return np.max(self.quadrant if self._values is None else self._values)
 
     def total(self) -> float | np.ndarray:
-        """The sum over the support, per channel for a colour kernel."""
-        if self._values is not None:
-            return self._values.sum(axis=(0, 1), dtype=np.float64)
-        return quadrant_sum(self.quadrant)
+        """The sum over the support, per channel for a colour kernel (from the quadrant of a
+        kernel made from one, whether or not it has been unfolded: the same to the bit)."""
+        if self.quadrant is not None:
+            return quadrant_sum(self.quadrant)
+        return self._values.sum(axis=(0, 1), dtype=np.float64)
 
     def replace(self, **changes) -> Kernel:
         """A copy with ``changes`` (``values`` replaces a quadrant, and the reverse)."""
@@ -174,6 +193,13 @@ class Kernel:
             else:
                 fields["values"] = self._values
         return Kernel(**(fields | changes))
+
+
+def _read_only(array) -> np.ndarray:
+    """A read-only view of ``array`` (the caller's own array is left as it is)."""
+    view = np.asarray(array).view()
+    view.flags.writeable = False
+    return view
 
 
 def kernel_shape_for(image_shape: Sequence[int]) -> tuple[int, int]:
@@ -227,7 +253,8 @@ def mirror_quadrant(quadrant: np.ndarray) -> np.ndarray:
 
 
 def quadrant_sum(quadrant: np.ndarray) -> np.ndarray:
-    """Sum over the full kernel that :func:`mirror_quadrant` would unfold, per trailing axis.
+    """Sum over the full kernel that :func:`mirror_quadrant` would unfold, per trailing axis,
+    in float64 whatever the quadrant's dtype (as the full kernel's total is taken).
 
     Examples
     --------
@@ -236,10 +263,10 @@ def quadrant_sum(quadrant: np.ndarray) -> np.ndarray:
     (12.0, 12.0)
     """
     return (
-        4.0 * quadrant[1:, 1:].sum(axis=(0, 1))
-        + 2.0 * quadrant[0, 1:].sum(axis=0)
-        + 2.0 * quadrant[1:, 0].sum(axis=0)
-        + quadrant[0, 0]
+        4.0 * quadrant[1:, 1:].sum(axis=(0, 1), dtype=np.float64)
+        + 2.0 * quadrant[0, 1:].sum(axis=0, dtype=np.float64)
+        + 2.0 * quadrant[1:, 0].sum(axis=0, dtype=np.float64)
+        + quadrant[0, 0].astype(np.float64)
     )
 
 

@@ -8,6 +8,7 @@ from itertools import pairwise
 
 import numpy as np
 import scipy.fft
+from glarelab.glare.models.digitise import mirror_quadrant
 from scipy import ndimage
 
 __all__ = [
@@ -28,6 +29,9 @@ DIRECT_PIXEL_S = 2.5e-9
 CORRELATE_S = 4.5e-9
 CORRELATE_WEIGHT_S = 0.4e-9
 DIRECT_THREAD_PIXELS = 256 * 256  # below this, a direct spread runs in one thread
+# A quadrant whose full kernel has at most this many pixels is unfolded for a direct spread
+# (about 0.3 ms): a bright pixel then adds one view of it, not up to nine pieces of the quadrant
+DIRECT_UNFOLD_PIXELS = 512 * 512
 
 
 def convolution_dtype(excess: np.ndarray, kernel: np.ndarray, requested: np.dtype) -> np.dtype:
@@ -185,7 +189,8 @@ def direct_spread(
 
     ``kernel`` is the centred odd kernel, or with ``quadrant=True`` the quadrant of offsets
     ``i, j >= 0`` of a kernel symmetric in both axes, read through reversed views where the
-    offsets are negative (the full kernel is never made). The output rows are shared among
+    offsets are negative (the full kernel is never made, unless it has at most
+    :data:`DIRECT_UNFOLD_PIXELS` pixels). The output rows are shared among
     ``workers`` threads (default: every core; ``scipy.ndimage`` releases the GIL); each
     pixel's sum is taken in the same order whatever their number, so the result is the same.
     """
@@ -201,6 +206,8 @@ def direct_spread(
             sources.append((weights[y : y + 1, x : x + 1], (start[0] + y, start[1] + x)))
     if not sources:
         return into
+    if quadrant and (2 * kernel.shape[0] - 1) * (2 * kernel.shape[1] - 1) <= DIRECT_UNFOLD_PIXELS:
+        kernel, quadrant = mirror_quadrant(kernel), False
     workers = _direct_workers(out_box) if workers is None else max(1, int(workers))
     edges = np.linspace(out_box[0], out_box[1], workers + 1).round().astype(int)
     bands = [(int(lo), int(hi), out_box[2], out_box[3]) for lo, hi in pairwise(edges) if hi > lo]
@@ -289,6 +296,10 @@ def _correlate(weights, start, kernel, out_box, into, buffer, *, quadrant) -> No
     r0, r1 = max(out_box[0], q0 - a), min(out_box[1], q0 + bh + a)
     c0, c1 = max(out_box[2], p0 - b), min(out_box[3], p0 + bw + b)
     if r0 >= r1 or c0 >= c1:
+        return
+    if weights.size == 1 and not quadrant:  # one pixel: a scaled copy, one view
+        window = kernel[r0 - q0 + a : r1 - q0 + a, c0 - p0 + b : c1 - p0 + b]
+        into[r0:r1, c0:c1] += weights[0, 0] * window
         return
     flipped = weights[::-1, ::-1]
     columns = [

@@ -3,9 +3,12 @@ gives the same sums as a plain correlation of the kernel with each bright pixel.
 
 from __future__ import annotations
 
+from unittest.mock import patch
+
 import numpy as np
 from glarelab.glare.models.digitise import mirror_quadrant
-from glarelab.glare.rendering._convolve import direct_spread
+from glarelab.glare.rendering import _convolve
+from glarelab.glare.rendering._convolve import DIRECT_UNFOLD_PIXELS, direct_spread
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
@@ -58,11 +61,17 @@ def test_a_quadrant_spread_equals_the_full_kernels_at_every_thread_count(scene, 
     reference = plain_spread(excess, origin, full, out_box, shape)
     one = direct_spread(excess, origin, full, out_box, np.zeros(shape), workers=1)
     assert_allclose(one, reference, rtol=1e-12, atol=0)
-    for kernel, symmetric in ((full, False), (quadrant, True)):
+    for kernel, symmetric, unfold in (
+        (full, False, 0),
+        (quadrant, True, 0),  # read through its views
+        (quadrant, True, DIRECT_UNFOLD_PIXELS),  # unfolded, as small kernels are
+    ):
         # the same sums in the same order: equal to the bit, not within a tolerance
-        got = direct_spread(
-            excess, origin, kernel, out_box, np.zeros(shape), quadrant=symmetric, workers=workers
-        )
+        with patch.object(_convolve, "DIRECT_UNFOLD_PIXELS", unfold):
+            got = direct_spread(
+                excess, origin, kernel, out_box, np.zeros(shape), quadrant=symmetric,
+                workers=workers,
+            )  # fmt: skip
         assert np.array_equal(got, one)
 
 
@@ -71,7 +80,27 @@ def test_the_spread_from_a_reversed_view_adds_to_what_is_there_and_only_in_the_b
     excess = np.zeros((5, 7))
     excess[2, 3] = 1.0
     into = np.full((5, 7), 10.0)
-    direct_spread(excess, (0, 0), quadrant, (1, 4, 0, 7), into, quadrant=True, workers=2)
+    with patch.object(_convolve, "DIRECT_UNFOLD_PIXELS", 0):
+        direct_spread(excess, (0, 0), quadrant, (1, 4, 0, 7), into, quadrant=True, workers=2)
     expected = np.full((5, 7), 10.0)
     expected[1:4, 1:6] += mirror_quadrant(quadrant)
     assert_allclose(into, expected, rtol=0, atol=0)
+
+
+def test_each_pixel_of_a_sparse_scene_adds_one_view_of_a_small_kernel(monkeypatch):
+    """A scene of many single bright pixels (stars, glints through leaves) adds a scaled copy
+    of the kernel per pixel: read from a small quadrant in up to nine pieces (negative, zero
+    and positive offsets on each axis), that was 2-3 times the time of one view of the full
+    kernel; a small quadrant is unfolded instead, and the sums are the same."""
+    pieces = []
+    window = _convolve._window
+    monkeypatch.setattr(_convolve, "_window", lambda *args: pieces.append(args) or window(*args))
+    rng = np.random.default_rng(1)
+    excess = np.where(rng.random((64, 64)) < 0.02, rng.uniform(1, 2, (64, 64)), 0.0)
+    quadrant = rng.random((11, 11))
+    got = direct_spread(
+        excess, (0, 0), quadrant, (0, 64, 0, 64), np.zeros((64, 64)), quadrant=True, workers=2
+    )
+    assert pieces == []
+    reference = plain_spread(excess, (0, 0), mirror_quadrant(quadrant), (0, 64, 0, 64), (64, 64))
+    assert_allclose(got, reference, rtol=1e-12, atol=0)
