@@ -173,6 +173,7 @@ class GlareRenderer:
             raise ValueError(f"paths must name at least one of {PATHS}; got {paths!r}")
         self.say = log or (lambda line: None)
         self._kernels: dict[bool, Kernel] = {}
+        self._given_grey: Kernel | None = None  # a given colour kernel's first channel
         self._peaks: dict[bool, float] = {}
         self._bounds: dict[bool, TailBound | None] = {}
         self._coarse: dict[tuple, np.ndarray] = {}
@@ -185,9 +186,15 @@ class GlareRenderer:
         if self._given is not None:
             given = self._given
             if len(given.shape) == 3 and not colour:  # the first channel, as before
-                if given.quadrant is not None:
-                    return given.replace(quadrant=given.quadrant[..., 0])
-                return given.replace(values=given.values[..., 0])
+                if self._given_grey is None:  # made once: the result reports it
+                    outside = given.energy_outside
+                    first = {"energy_outside": float(np.asarray(outside).reshape(-1)[0])}
+                    if given.quadrant is not None:
+                        first["quadrant"] = given.quadrant[..., 0]
+                    else:
+                        first["values"] = given.values[..., 0]
+                    self._given_grey = given.replace(**first)
+                return self._given_grey
             return given
         if colour not in self._kernels:
             self._kernels[colour] = self._digitised(self.pixel_deg, self.kernel_shape, colour)
@@ -395,7 +402,7 @@ class GlareRenderer:
         elif spread.shape[2] == 1:
             spread = np.broadcast_to(spread, out.shape)
         return GlareResult(
-            out, plan, **result, kernel=self._kernels.get(plan.colour_kernel, self._given),
+            out, plan, **result, kernel=self.kernel(plan.colour_kernel),
             parameters=parameters, spread=spread, source=source,
         )  # fmt: skip
 

@@ -126,3 +126,17 @@ def test_the_models_declare_their_capabilities():
     assert VosGlare(flare_lines=True).tail_bound(0.1, np.arange(3)) is None
     assert glare.WaveOpticsGlare().tail_bound(0.1, np.arange(3)) is None
     assert all(isinstance(m(), GlareModel) for m in set(glare.GLARE_MODELS.values()))
+
+
+def test_a_grey_scene_given_a_colour_kernel_reports_the_channel_it_was_rendered_with():
+    model = VosGlare(regime="mesopic")
+    rgb = model.kernel(0.05, (63, 63), colour=True)
+    image = np.full((32, 32), 30.0)
+    image[10:12, 20:22] = 1e6
+    result = GlareRenderer(model, pixel_deg=0.05, shape=image.shape, kernel=rgb).render(image)
+    first = rgb.replace(values=rgb.values[..., 0], energy_outside=float(rgb.energy_outside[0]))
+    alone = GlareRenderer(model, pixel_deg=0.05, shape=image.shape, kernel=first).render(image)
+    assert result.kernel.shape == (63, 63) and np.ndim(result.kernel.energy_outside) == 0
+    np.testing.assert_array_equal(result.image, alone.image)
+    assert_allclose(result.energy_outside_image, alone.energy_outside_image, rtol=1e-12, atol=0)
+    assert_allclose(result.energy_outside_kernel, alone.energy_outside_kernel, rtol=1e-12, atol=0)
