@@ -180,6 +180,7 @@ def direct_spread(
     *,
     quadrant: bool = False,
     workers: int | None = None,
+    groups: list[tuple[tuple[slice, slice], np.ndarray]] | None = None,
 ) -> np.ndarray:
     """Add the spread of the non-zero pixels of ``excess`` (whose first pixel is the image's
     ``origin``) to ``into`` (image-sized) at the pixels of ``out_box``: exact, with no FFT
@@ -193,9 +194,10 @@ def direct_spread(
     :data:`DIRECT_UNFOLD_PIXELS` pixels). The output rows are shared among
     ``workers`` threads (default: every core; ``scipy.ndimage`` releases the GIL); each
     pixel's sum is taken in the same order whatever their number, so the result is the same.
+    ``groups`` are the :func:`clusters` of ``excess > 0`` when the caller has them already.
     """
     sources = []
-    for box, mask in clusters(excess > 0):
+    for box, mask in clusters(excess > 0) if groups is None else groups:
         weights = np.where(mask, excess[box], 0)
         pixels = int(np.count_nonzero(mask))
         start = (origin[0] + box[0].start, origin[1] + box[1].start)

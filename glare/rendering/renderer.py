@@ -465,6 +465,8 @@ class GlareRenderer:
                     out_box,
                     spread[..., c],
                     quadrant=symmetric,
+                    # the scene's own groups, where its excess is this one plane
+                    groups=scene.clusters() if scene.excess.shape[2] == 1 else None,
                 )
                 continue
             if plan.path == "fft":
