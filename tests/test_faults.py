@@ -64,9 +64,9 @@ def digest(path: Path) -> str:
     return total.hexdigest()
 
 
-def run_forked(argv: list[str], kill_after_s: float | None) -> int | None:
-    """Run ``glarelab argv`` in a forked child; SIGKILL it after ``kill_after_s`` (None: let
-    it finish). The child's exit status, or None when it was killed."""
+def fork_main(argv: list[str]) -> int:
+    """Start ``glarelab argv`` in a forked child of its own process group, its output
+    discarded (exit status 99 for an exception); the child's pid."""
     pid = os.fork()
     if pid == 0:  # the child
         os.setpgid(0, 0)
@@ -78,6 +78,13 @@ def run_forked(argv: list[str], kill_after_s: float | None) -> int | None:
         except BaseException:
             status = 99
         os._exit(status)
+    return pid
+
+
+def run_forked(argv: list[str], kill_after_s: float | None) -> int | None:
+    """Run ``glarelab argv`` in a forked child; SIGKILL it after ``kill_after_s`` (None: let
+    it finish). The child's exit status, or None when it was killed."""
+    pid = fork_main(argv)
     if kill_after_s is not None:
         deadline = time.monotonic() + kill_after_s
         while time.monotonic() < deadline:
@@ -312,17 +319,7 @@ def kill_in_summary(argv: list[str], pipe: int, delay_s: float) -> float | None:
     summaries (``quick_power``'s marks). How long they took if they were all written before
     the kill; None if it came while they were being written."""
     drain(pipe)
-    pid = os.fork()
-    if pid == 0:  # the child
-        os.setpgid(0, 0)
-        devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, 1)
-        os.dup2(devnull, 2)
-        try:
-            status = main(argv)
-        except BaseException:
-            status = 99
-        os._exit(status)
+    pid = fork_main(argv)
     took = None
     try:
         mark, began = next_mark(pipe)
@@ -379,12 +376,7 @@ def test_a_killed_power_run_leaves_the_earlier_summaries_or_the_new_ones_and_res
     for _ in range(3):
         reset()
         drain(quick_power)
-        pid = os.fork()
-        if pid == 0:  # the child
-            devnull = os.open(os.devnull, os.O_WRONLY)
-            os.dup2(devnull, 1)
-            os.dup2(devnull, 2)
-            os._exit(main(argv))
+        pid = fork_main(argv)
         (first, began), (second, ended) = next_mark(quick_power), next_mark(quick_power)
         assert (first, second) == (b"s", b"e")
         assert os.waitstatus_to_exitcode(os.waitpid(pid, 0)[1]) == 0
