@@ -8,6 +8,7 @@ the files are the same on every run.
 from pathlib import Path
 
 import numpy as np
+
 from glarelab.stimuli.exr import write_exr
 from glarelab.stimuli.sky import cloudy_sky
 

@@ -47,7 +47,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import sys
 import time
 from dataclasses import replace
 from pathlib import Path
@@ -58,7 +57,6 @@ from scipy import stats as sps
 from scipy.optimize import minimize
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
 
 from glarelab.analysis.figures import plt, png  # noqa: E402
 from glarelab.analysis.stats import pairwise_tests, rm_anova, similarity_groups  # noqa: E402
@@ -869,7 +867,7 @@ def _stimuli(folder: Path | None, study: str) -> Path:
     from glarelab.stimuli.stimulus_set import cached_stimulus_set
 
     print(f"the {study} stimulus set (built once into the cache) ...", flush=True)
-    return cached_stimulus_set(load_protocol(ROOT / "protocols" / f"{study}.toml"))
+    return cached_stimulus_set(load_protocol(study))
 
 
 def _write(path: Path, data: bytes) -> None:

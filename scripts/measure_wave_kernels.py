@@ -18,15 +18,12 @@ import argparse
 import csv
 import math
 import os
-import sys
 import time
 import tracemalloc
 from pathlib import Path
 
 import numpy as np
 from scipy.special import j1
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from glarelab.glare import WaveOpticsGlare
 

@@ -8,7 +8,11 @@
 # missing and leaves the decision to the caller (the window tests then fail with that message).
 set -euo pipefail
 needed=()
-have_lib() { ldconfig -p 2>/dev/null | grep -q "$1"; }
+# the library cache read once: `ldconfig -p | grep -q` under pipefail fails at random (grep
+# exits at its first match and ldconfig, still writing, dies of SIGPIPE), which reinstalled
+# packages that were present
+libraries=$(ldconfig -p 2>/dev/null || true)
+have_lib() { [[ $libraries == *"$1"* ]]; }
 command -v xvfb-run >/dev/null 2>&1 || needed+=(xvfb xauth)
 command -v xdotool >/dev/null 2>&1 || needed+=(xdotool)
 command -v setxkbmap >/dev/null 2>&1 || needed+=(x11-xkb-utils xkb-data)

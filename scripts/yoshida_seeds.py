@@ -5,7 +5,7 @@ Each seed is one study as ``glarelab demo --protocol yoshida2008`` runs it (seed
 participants ``sim01`` … ``sim10`` through the session loop a lab session uses
 (:func:`glarelab.experiments.session.run_session` driven by
 :func:`glarelab.experiments.session.make_observer`), their CSVs through the protocol's own analysis
-(``analyse(..., tests_only=True)``) and its tests read as effects
+(``tests(dataset, protocol)``) and its tests read as effects
 (:func:`glarelab.planning.effects.effects`), as ``glarelab power`` reads them. Run from the
 repository's root (about 1 s per study on one core):
 
@@ -25,7 +25,6 @@ import argparse
 import math
 import os
 import shutil
-import sys
 import tempfile
 import time
 from pathlib import Path
@@ -34,7 +33,6 @@ import numpy as np
 import pandas as pd
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
 
 from glarelab.analysis.figures import plt, png  # noqa: E402
 from glarelab.analysis.load import load_sessions  # noqa: E402
@@ -113,8 +111,8 @@ def one_study(protocol, seed: int, participants: int, stimuli: Path, displayed) 
             protocol, ids, seed=seed, out=folder, stimuli=stimuli, looks_at=displayed
         )
         dataset = load_sessions(protocol, csvs)
-        tables = PARADIGMS[protocol.paradigm].analyse(dataset, protocol, tests_only=True)
-        rows = effects(protocol, tables["tables"], participants)
+        tables = PARADIGMS[protocol.paradigm].tests(dataset, protocol)
+        rows = effects(protocol, tables, participants)
     finally:
         shutil.rmtree(folder, ignore_errors=True)
     out: dict = {"seed": seed}
@@ -269,7 +267,7 @@ def main(argv=None) -> int:
         parser.error(f"--seeds must be >= 1; got {args.seeds}")
     if args.participants < 2:
         parser.error(f"--participants must be >= 2; got {args.participants}")
-    protocol = load_protocol(ROOT / "protocols" / "yoshida2008.toml")
+    protocol = load_protocol("yoshida2008")
     stimuli = args.stimuli or cached_stimulus_set(protocol)
     displayed = DisplayedSet(StimulusSet(stimuli))
     started = time.time()

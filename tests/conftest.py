@@ -24,7 +24,9 @@ def small_night_protocol(**scene) -> str:
     key)."""
     from pathlib import Path
 
-    text = (Path(__file__).parents[1] / "protocols" / "night2026.toml").read_text()
+    text = (
+        Path(__file__).parents[1] / "src" / "glarelab" / "protocols" / "night2026.toml"
+    ).read_text()
     values = {
         "size_px": "[64, 48]",
         "pixel_deg": "0.1",

@@ -20,16 +20,16 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+
+from glarelab.cli import main
 from glarelab.experiments.session import SimulatedFrontend, make_observer, run_session
+from glarelab.files.folders import record_files
 from glarelab.protocols import load_protocol
-from glarelab.protocols.folders import record_files
 from glarelab.stimuli.exr import write_exr
 from glarelab.stimuli.stimulus_set import cached_stimulus_set, verify_stimulus_set
 
-from glarelab.cli import main
-
 ROOT = Path(__file__).parents[1]
-PROTOCOLS = ROOT / "protocols"
+PROTOCOLS = ROOT / "src" / "glarelab" / "protocols"
 
 
 def _simulate(protocol, folder: Path, participants: int, stimuli=None) -> list[Path]:
@@ -1236,11 +1236,11 @@ def test_a_protocol_whose_stimuli_cannot_be_shown_is_refused(tmp_path, capsys, o
 
 def test_one_session_in_two_files_is_one_line(sandbox, tmp_path, capsys):
     source = next((sandbox / "data").glob("sim01_yoshida2008_*.csv"))
-    copy = tmp_path / ("copy_" + source.name)
+    copy = tmp_path / source.name  # a copy in another folder (a renamed one names its name)
     shutil.copy(source, copy)
     shutil.copy(source.with_suffix(".json"), copy.with_suffix(".json"))
     status, err = refused(
         ["analyse", "yoshida2008", str(source), str(copy), "--out", str(tmp_path / "r")], capsys
     )
-    assert status == 2 and "session 1 is in 2 files" in err, err
+    assert status == 2 and "participant sim01: the same session in 2 files" in err, err
     assert "duplicated trial" not in err, err

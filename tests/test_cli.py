@@ -4,13 +4,13 @@ import sys
 
 import numpy as np
 import pytest
-from glarelab.stimuli.exr import read_exr, write_exr
-from glarelab.stimuli.shapes import disk
 from numpy.testing import assert_allclose
 from PIL import Image
 
 from glarelab import glare
 from glarelab.cli import main
+from glarelab.stimuli.exr import read_exr, write_exr
+from glarelab.stimuli.shapes import disk
 
 
 def yoshida_disk():
@@ -257,7 +257,7 @@ def test_calibrate_fit_writes_a_dated_calibration_with_the_readings_hash(tmp_pat
 def test_protocol_commands(tmp_path, capsys):
     from pathlib import Path
 
-    root = Path(__file__).parents[1] / "protocols"
+    root = Path(__file__).parents[1] / "src" / "glarelab" / "protocols"
     assert main(["protocol", "check", str(root / "spencer1995.toml")]) == 0
     assert "valid protocol of the staircase paradigm (study spencer1995)" in (
         capsys.readouterr().out

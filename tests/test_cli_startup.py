@@ -61,6 +61,7 @@ def test_what_glare_offers_lazily_is_there():
 
 def test_the_halo_spectrum_defaults_skipped_unread_are_valid_names():
     import colour
+
     from glarelab.glare.models.spectral import _DEFAULT_NAMES, HaloSpectrum
 
     space, illuminant = _DEFAULT_NAMES

@@ -6,9 +6,10 @@ import sys
 from pathlib import Path
 
 import pandas as pd
+from pandas.testing import assert_frame_equal
+
 from glarelab.analysis.report import write_report
 from glarelab.protocols import load_protocol
-from pandas.testing import assert_frame_equal
 
 ROOT = Path(__file__).parents[1]
 

@@ -50,10 +50,10 @@ NOT_RUN = {
     "glarelab check-display spencer1995 --stimuli sets/spencer1995 --calibration "
     "calibrations/my-spencer-display.json": "measures the lab's display, as above",
     "glarelab bench --out out/bench": "takes minutes; the documented quick run (--only "
-    "yoshida2008) runs, and tests/test_bench.py checks the rows of the full one",
+    "yoshida2008) runs, and tests/bench/test_run.py checks the rows of the full one",
     "glarelab bench --out out/bench-large --large": "takes a quarter of an hour, as above",
     "glarelab bench --acuity --out docs/bench-acuity": "takes a minute or more; the "
-    "documented quick run (--only street_0.0297deg) runs, and tests/test_bench.py checks its "
+    "documented quick run (--only street_0.0297deg) runs, and tests/bench/test_acuity.py checks its "
     "rows",
 }
 LAB_SESSIONS = [  # README.md and docs/workflow.md: a participant's sessions

@@ -23,10 +23,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from glarelab.protocols.atomic import PARTIAL
-from glarelab.stimuli.exr import write_exr
 
 from glarelab.cli import main
+from glarelab.files.atomic import PARTIAL
+from glarelab.stimuli.exr import write_exr
 
 ROOT = Path(__file__).parents[1]
 KILLS = 30
@@ -34,7 +34,7 @@ KILLS = 30
 
 def tiny_matching_protocol() -> str:
     """yoshida2008 with one method, two levels and a small image (builds in a second)."""
-    text = (ROOT / "protocols" / "yoshida2008.toml").read_text()
+    text = (ROOT / "src" / "glarelab" / "protocols" / "yoshida2008.toml").read_text()
     text = text.replace("distance_m = 1.0", "distance_m = 0.25")
     text = text.replace("size_deg = 3.2 ", "size_deg = 1.2 ")
     text = text.replace("cloud_max_deg = 3.2", "cloud_max_deg = 1.2")
@@ -428,7 +428,7 @@ def test_a_power_run_killed_between_two_renames_is_put_back_by_the_next_run(
     """Where the file system cannot swap two folders in one step, the earlier folder is moved
     aside before the new one is moved in: a run killed between the two renames leaves no
     folder, and the next run puts the earlier one back before it reads it."""
-    import glarelab.protocols.folders as folders
+    import glarelab.files.folders as folders
 
     out = tmp_path / "power"
     common = ["power", "luidolt2020", "--participants", "4", "--workers", "0"]

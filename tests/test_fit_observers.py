@@ -9,8 +9,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from glarelab.experiments import perception
 from numpy.testing import assert_allclose
+
+from glarelab.experiments import perception
 
 SCRIPT = Path(__file__).parents[1] / "scripts" / "fit_observers.py"
 QUICK = ["--studies", "100", "--similarity-studies", "5"]

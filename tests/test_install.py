@@ -15,7 +15,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 OLD_TOP_LEVEL = {"glare", "stimuli", "experiments", "analysis", "protocols", "planning"}
-SOURCES = ["glarelab", "glare", "stimuli", "experiments", "analysis", "protocols", "planning"]
+SOURCES = ["src"]
 
 
 def _imports(tree: ast.AST):
@@ -147,3 +147,130 @@ def test_glarelab_runs_from_a_folder_holding_a_labs_analysis_py(installed, tmp_p
     )
     assert demo.returncode == 0, demo.stderr[-3000:]
     assert (lab / "out" / "demo" / "report" / "report.html").is_file()
+
+
+# --- a plain `pip install .` serves every tool run in the clone ---------------------------------
+
+
+def _in_clone(installed, *args, timeout=600, input=None):
+    """Run the installed venv's Python in the repository, as a user of a clone does."""
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    return subprocess.run(
+        [str(installed / "bin" / "python"), *args],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=timeout,
+        input=input,
+    )
+
+
+def _readme_python() -> str:
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    start = text.index("```python\n") + len("```python\n")
+    return text[start : text.index("```", start)]
+
+
+def test_the_readme_python_example_runs_in_the_clone(installed):
+    inputs = (
+        "import numpy as np\n"
+        "image = np.full((1080, 1920), 20.0)\n"
+        "image[530:550, 950:970] = 5000.0\n"
+        "luminance_cd_m2 = image\n"
+        "frames = [image]\n"
+    )
+    done = _in_clone(installed, "-", input=inputs + _readme_python() + "\nprint(glare.__file__)\n")
+    assert done.returncode == 0, done.stderr[-3000:]
+    # the installed copy, not the clone's source
+    assert str(ROOT / "src") not in done.stdout.splitlines()[-1]
+    assert "site-packages" in done.stdout.splitlines()[-1]
+
+
+def test_the_module_and_the_scripts_run_in_the_clone(installed, tmp_path):
+    version = _in_clone(installed, "-m", "glarelab", "--version")
+    assert version.returncode == 0, version.stderr
+    assert version.stdout.startswith("glarelab ")
+    seeds = _in_clone(installed, "scripts/yoshida_seeds.py", "--help")
+    assert seeds.returncode == 0, seeds.stderr[-2000:]
+    fit = _in_clone(
+        installed,
+        "scripts/fit_observers.py",
+        "--no-fit",
+        "--studies", "20", "--similarity-studies", "2", "--out", str(tmp_path / "obs"),
+        timeout=900,
+    )  # fmt: skip
+    assert fit.returncode == 0, fit.stderr[-3000:]
+    assert (tmp_path / "obs" / "report.md").is_file()
+
+
+@pytest.mark.parametrize(
+    ("source", "name", "file"),
+    [
+        ("from glarelab import glare\nglare.render_glare", "render_glare", "glare/rendering/render.py"),
+        ("import glarelab.analysis.stats\nglarelab.analysis.stats.rm_anova", "rm_anova", "analysis/stats.py"),
+        ("import glarelab.experiments.session\nglarelab.experiments.session", "session", "experiments/session.py"),
+    ],
+)  # fmt: skip
+def test_an_editor_goes_to_each_definition(source, name, file):
+    jedi = pytest.importorskip("jedi")  # a test dependency: pyproject's [test] extra
+    script = jedi.Script(source, path=ROOT / "example.py", project=jedi.Project(ROOT))
+    line = source.count("\n") + 1
+    column = len(source.splitlines()[-1])
+    (found,) = script.goto(line, column, follow_imports=True)
+    assert found.module_path == ROOT / "src" / "glarelab" / file, found.module_path
+    assert found.name == name
+
+
+def test_mypy_finds_every_module():
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "mypy",
+            "-p",
+            "glarelab",
+            "--ignore-missing-imports",
+            "--no-incremental",
+            "--cache-dir",
+            os.devnull,
+        ],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=900,
+    )
+    # type errors may remain (the summary counts them); no module may be out of its reach
+    assert (
+        'Cannot find implementation or library stub for module named "glarelab' not in done.stdout
+    )
+    assert "can't find package" not in done.stdout + done.stderr
+    summary = done.stdout.strip().splitlines()[-1]
+    assert summary.startswith(("Success", "Found")), done.stdout[-2000:] + done.stderr[-2000:]
+    checked = int(summary.rsplit("(checked ", 1)[1].split()[0])
+    assert checked == len(list((ROOT / "src" / "glarelab").rglob("*.py")))
+
+
+def test_ruff_sorts_glarelab_as_first_party():
+    first_party = "import numpy\n\nimport glarelab\n"
+    third_party = "import glarelab\nimport numpy\n"
+    for source, sorted_ in ((first_party, True), (third_party, False)):
+        done = subprocess.run(
+            [
+                sys.executable,
+                "-m",
+                "ruff",
+                "check",
+                "--select",
+                "I",
+                "--stdin-filename",
+                "src/glarelab/example.py",
+                "-",
+            ],
+            cwd=ROOT,
+            input=source,
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
+        assert (done.returncode == 0) is sorted_, (source, done.stdout)

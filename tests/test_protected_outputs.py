@@ -17,12 +17,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from glarelab.protocols.folders import record_files
-from glarelab.stimuli.calibration import Calibration, fit_calibration, read_readings
-from glarelab.stimuli.exr import write_exr
 from PIL import Image
 
 from glarelab.cli import main
+from glarelab.display.calibration import Calibration, fit_calibration, read_readings
+from glarelab.files.folders import record_files
+from glarelab.stimuli.exr import write_exr
 
 ROOT = Path(__file__).parents[1]
 READINGS = ROOT / "calibrations" / "example-readings.csv"
@@ -166,7 +166,7 @@ def test_the_synthetic_calibration_relabelled_passed_is_refused(box, capsys):
 
 
 def _protocol(box: Path, name: str, old: str, new: str, source: str) -> Path:
-    text = (ROOT / "protocols" / f"{source}.toml").read_text()
+    text = (ROOT / "src" / "glarelab" / "protocols" / f"{source}.toml").read_text()
     assert old in text, old
     path = box / f"{name}.toml"
     path.write_text(text.replace(old, new, 1))

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
+
 from glarelab.experiments.matching import MatchingObserver
 from glarelab.protocols import load_protocol
 from glarelab.stimuli.matching import target_terms

@@ -6,18 +6,18 @@ import re
 import numpy as np
 import pandas as pd
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
 from glarelab.analysis.apa import (
     anova_effect,
-    correction,
     format_table,
     header,
     p_cell,
     significant,
     unit_interval,
 )
-from glarelab.analysis.stats import rm_anova
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from glarelab.analysis.stats import correction, rm_anova
 
 SCIENTIFIC = re.compile(r"\d[eE][+-]?\d")
 P_CELL = re.compile(r"^(< \.001|> \.999|\.\d{3}|)$")
@@ -64,12 +64,13 @@ def dof(x):
     return f"{x:.0f}" if float(x).is_integer() else f"{x:.2f}"
 
 
-def test_an_effect_whose_sphericity_is_not_estimable_is_printed_uncorrected_with_why():
+def test_an_effect_whose_sphericity_is_not_estimable_is_decided_on_the_lower_bound():
     row = _row(11.0, float("nan"), float("nan"), "not estimable: 10 subjects for 11 df")
-    assert correction(row) == "none"
+    row["eps_lb"], row["p_lb"] = 1 / 11, 0.071
+    assert correction(row) == "LB"
     assert anova_effect(row) == (
-        "F(11, 99) = 4.20, p = .004, η²p = .32 (uncorrected; sphericity not estimable: "
-        "10 subjects for 11 df)"
+        "F(1, 9) = 4.20, p = .071, η²p = .32 (lower-bound corrected, ε = 1/11: sphericity not "
+        "estimable: 10 subjects for 11 df; uncorrected F(11, 99) = 4.20, p = .004)"
     )
 
 

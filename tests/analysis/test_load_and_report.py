@@ -5,12 +5,12 @@ import shutil
 import numpy as np
 import pandas as pd
 import pytest
+
 from glarelab.analysis.load import DataError, load_sessions
 from glarelab.analysis.report import write_report
 from glarelab.analysis.stats import rm_anova
-from glarelab.protocols import load_protocol
-
 from glarelab.cli import main
+from glarelab.protocols import load_protocol
 
 
 def csvs(folder, study):
@@ -190,7 +190,17 @@ def test_files_of_the_first_data_format_still_load(simulated, tmp_path):
         ({"duration_ms": "500.0"}, "column duration_ms: 500.0"),
         ({"step_fraction": "7"}, "column step_fraction: 7.0"),
         ({"presentation_ok": "false", "counted": "true"}, "its presentation failed"),
-        ({"counted": "false", "__all__": True}, "none of their trials counted"),
+        (
+            {"counted": "false", "presentation_ok": "false", "reversal": "false", "__all__": True},
+            "none of their trials counted",
+        ),
+        ({"counted": "false"}, "not counted, but its presentation succeeded"),
+        (
+            {"counted": "false", "presentation_ok": "false", "reversal": "true"},
+            "a reversal on a flash that did not count",
+        ),
+        ({"disc_fraction": "0.8500000001"}, "is not on the staircase's grid"),
+        ({"block": "lamp", "context": "none"}, "but the trial's context is 'none'"),
     ],
 )
 def test_staircase_rows_the_protocol_cannot_write_are_refused(simulated, tmp_path, change, named):

@@ -14,10 +14,11 @@ import sys
 import numpy as np
 import pandas as pd
 import pytest
+from numpy.testing import assert_allclose
+
 from glarelab.analysis.load import DataError, Dataset, load_sessions
 from glarelab.analysis.paradigms import PARADIGMS
 from glarelab.protocols import load_protocol
-from numpy.testing import assert_allclose
 
 from .test_stats import read_r
 
@@ -79,7 +80,11 @@ def test_two_categories_keep_rs_decision_on_overall(protocol):
         "Overall (Mdn = 6, IQR = 1.25; M = 5.38, SD = 1.30) differed from the midpoint"
         in (result["results"][0])
     )
-    assert re.search(r"r_rb = \.89, 95 % CI \[\.54, \.98\], HL shift = 1\.5", result["results"][0])
+    # HL as R's wilcox.test(conf.int = TRUE): 5.99996 - 4 on the ratings off the midpoint,
+    # [4.49999862, 6.50006451] - 4 (the Walsh median of every rating is 1.5)
+    assert re.search(
+        r"r_rb = \.89, HL shift = 2\.00, 95 % CI \[0\.50, 2\.50\]", result["results"][0]
+    )
 
 
 @pytest.fixture(scope="module")
@@ -105,7 +110,10 @@ def test_the_methods_comparisons_follow_the_holm_family_and_label_the_papers_tes
         assert f"at {row.level} the matches" in comparisons
         assert re.search(rf"at {row.level} the matches[^;]*{verdict}, t\(9\)", comparisons)
     assert "(the paper's test, uncorrected;" in comparisons
-    assert re.search(r"d_z = -?\d\.\d\d, 95 % CI \[-?\d\.\d\d, -?\d\.\d\d\]", comparisons)
+    assert re.search(r"d_z = -?\d\.\d\d, \d\d(\.\d)? % CI \[-?\d\.\d\d, -?\d\.\d\d\]", comparisons)
+    for row in paired.itertuples():  # each interval agrees with the corrected test beside it
+        excludes = row.md_ci_low > 0 or row.md_ci_high < 0
+        assert excludes == (row.p_holm < 0.05), row
     assert re.search(r"η²p = \.\d\d, 90 % CI \[\.\d\d, \.\d\d\], η²G = \.\d\d", text)
     assert "On the levels {A, B, C} alone" in text
 

@@ -7,8 +7,9 @@ import math
 import numpy as np
 import pandas as pd
 import pytest
-from glarelab.analysis.staircase import psychometric_fit, reversal_interval, reversal_match
 from numpy.testing import assert_allclose
+
+from glarelab.analysis.staircase import psychometric_fit, reversal_match, reversal_range
 
 from .test_stats import read_r
 
@@ -93,7 +94,7 @@ def test_a_flat_staircase_has_no_slope():
     assert "no slope" in fit["status"] and math.isnan(fit["match"])
 
 
-def test_the_reversal_interval_holds_the_match_and_needs_reversals():
+def test_the_reversal_range_is_the_lowest_and_highest_reversal_the_match_averages():
     reversal = [False, True, False, True, True, False, True, True, True, False, True]
     staircase = pd.DataFrame(
         {
@@ -101,9 +102,9 @@ def test_the_reversal_interval_holds_the_match_and_needs_reversals():
             "reversal": reversal,
         }
     )
-    low, high = reversal_interval(staircase, rng=np.random.default_rng(1))
+    low, high = reversal_range(staircase)
+    # the reversals after the first two: 0.6, 0.58, 0.52, 0.6, 0.57
+    assert (low, high) == (0.52, 0.6)
     assert low < reversal_match(staircase) < high
-    again = reversal_interval(staircase, rng=np.random.default_rng(1))
-    assert again == (low, high)
-    few = staircase.assign(reversal=[False] * 6 + [True] * 5)
-    assert all(math.isnan(v) for v in reversal_interval(few, rng=np.random.default_rng(1)))
+    none = staircase.assign(reversal=[False] * 11)
+    assert all(math.isnan(v) for v in reversal_range(none))

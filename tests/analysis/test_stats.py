@@ -11,11 +11,13 @@ import numpy as np
 import pandas as pd
 import pingouin as pg  # test-only dependency: the independent implementation
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from numpy.testing import assert_allclose
+from scipy import stats as sps
+
+from glarelab.analysis.apa import apa_anova, apa_F, apa_p, apa_t
 from glarelab.analysis.stats import (
-    apa_anova,
-    apa_F,
-    apa_p,
-    apa_t,
     holm,
     pairwise_tests,
     rm_anova,
@@ -24,10 +26,6 @@ from glarelab.analysis.stats import (
     ttest_welch,
     wilcoxon_signed_rank,
 )
-from hypothesis import given, settings
-from hypothesis import strategies as st
-from numpy.testing import assert_allclose
-from scipy import stats as sps
 
 R_FOLDER = Path(__file__).parent / "R"
 R_TOLERANCE = 1e-11  # relative; the measured differences are below 1e-13
@@ -228,11 +226,13 @@ def test_apa_strings():
 
 def test_every_stored_r_output_names_r_and_its_packages():
     outputs = sorted(R_FOLDER.glob("*.csv"))
-    assert len(outputs) == 29  # 10 + 4 designs and their results, 13 more
+    # reference.R: 10 + 4 designs and their results, 13 more; real_data.R: 12
+    assert len(outputs) == 41
     for path in outputs:
         first, second = path.read_text().splitlines()[:2]
+        script = "real_data" if path.name.startswith("real_") else "reference"
         assert re.fullmatch(
-            r"# made by tests/analysis/R/reference\.R with R version \d+\.\d+\.\d+.*", first
+            rf"# made by tests/analysis/R/{script}\.R with R version \d+\.\d+\.\d+.*", first
         )
         assert re.fullmatch(
             r"# packages: car [\d.-]+, afex [\d.-]+, multcompView [\d.-]+, stats [\d.]+", second
@@ -292,9 +292,10 @@ def test_spencers_shape_says_why_sphericity_is_not_estimable():
     theirs = R_ANOVA[R_ANOVA["design"] == "spencer_12x2"].set_index("source")
     strings = dict(zip(ours.index, apa_anova(ours.reset_index(), correction="GG"), strict=True))
     level = theirs.loc["glare_level"]
+    lower = sps.f.sf(level["F"], 1, level["df2"] / level["df1"])  # the lower bound ε = 1/11
     assert strings["glare_level"] == (
-        f"{apa_F(level['df1'], level['df2'], level['F'], level['p'])} (uncorrected; sphericity "
-        f"{reason})"
+        f"{apa_F(1, level['df2'] / level['df1'], level['F'], lower)} (lower-bound corrected; "
+        f"sphericity {reason})"
     )
     assert "nan" not in " ".join(strings.values())
 
@@ -315,7 +316,7 @@ def test_apa_anova_prints_rs_corrected_tests(correction):
     assert apa_anova(ours, correction="none") == [
         apa_F(r.df1, r.df2, r.F, r.p) for r in theirs.itertuples()
     ]
-    with pytest.raises(ValueError, match=r"correction must be one of none, GG, HF; got 'gg'"):
+    with pytest.raises(ValueError, match=r"correction must be one of none, GG, HF, LB; got 'gg'"):
         apa_anova(ours, correction="gg")
 
 
@@ -383,7 +384,7 @@ def test_p_values_print_as_apa_including_rs_near_one():
     assert no_difference["paired_p"] >= 0.9995 and no_difference["welch_p"] >= 0.9995
     assert apa_p(no_difference["paired_p"]) == "p > .999"
     assert (
-        apa_t(7, no_difference["paired_t"], no_difference["paired_p"]) == "t(7) = -0.00, p > .999"
+        apa_t(7, no_difference["paired_t"], no_difference["paired_p"]) == "t(7) = 0.00, p > .999"
     )
     symmetric = R_WILCOXON.set_index("case").loc["symmetric_p1"]
     assert symmetric["p"] == 1.0 and apa_p(symmetric["p"]) == "p > .999"

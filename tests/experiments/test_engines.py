@@ -1,4 +1,5 @@
 import pytest
+
 from glarelab.experiments.matching import MatchingEngine as BrightnessMatching
 from glarelab.experiments.rating import RatingEngine as LikertQuestionnaire
 from glarelab.experiments.staircase import Staircase

@@ -8,6 +8,9 @@ import warnings
 from pathlib import Path
 
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
 from glarelab.experiments.looking import DisplayedSet
 from glarelab.experiments.perception import (
     FITTED_DISK_CD_M2,
@@ -21,8 +24,6 @@ from glarelab.experiments.perception import (
 from glarelab.experiments.session import make_observer
 from glarelab.protocols import load_protocol
 from glarelab.stimuli.stimulus_set import StimulusSet, cached_stimulus_set
-from hypothesis import given
-from hypothesis import strategies as st
 
 ROOT = Path(__file__).parents[2]
 YOSHIDA_GEOMETRY = {"disk_diameter_deg": 0.3}
@@ -143,7 +144,7 @@ def yoshida_set():
 
 
 def test_an_observer_outside_the_range_warns_once(tmp_path, yoshida_set):
-    text = (ROOT / "protocols" / "yoshida2008.toml").read_text()
+    text = (ROOT / "src" / "glarelab" / "protocols" / "yoshida2008.toml").read_text()
     text = text.replace("sigma_deg = 0.34", "sigma_deg = 0.5")
     assert "sigma_deg = 0.5" in text
     path = tmp_path / "wide.toml"

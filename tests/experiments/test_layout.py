@@ -7,11 +7,11 @@ import math
 from pathlib import Path
 
 import pytest
-from glarelab.experiments.layout import row_layout
 from hypothesis import given
 from hypothesis import strategies as st
 
 from glarelab.cli import main
+from glarelab.experiments.layout import row_layout
 
 ROOT = Path(__file__).parents[2]
 
@@ -85,7 +85,7 @@ def test_protocol_check_says_how_each_study_is_drawn(capsys):
 def test_protocol_check_says_when_a_row_cannot_be_drawn_1_to_1(tmp_path, capsys):
     # 3 × 8.0654° fits the display's 2048 px in degrees (2046.3 px), but each image is an odd
     # number of whole pixels (683): 2049 px drawn
-    text = (ROOT / "protocols" / "yoshida2008.toml").read_text()
+    text = (ROOT / "src" / "glarelab" / "protocols" / "yoshida2008.toml").read_text()
     text = text.replace("size_deg = 3.2 ", "size_deg = 8.0654 ").replace(
         "gap_deg = 0.4 ", "gap_deg = 0.0 "
     )
@@ -100,7 +100,7 @@ def test_protocol_check_says_when_a_row_cannot_be_drawn_1_to_1(tmp_path, capsys)
 
 
 def test_protocol_check_says_when_pixel_deg_is_not_the_displays(tmp_path, capsys):
-    text = (ROOT / "protocols" / "spencer1995.toml").read_text()
+    text = (ROOT / "src" / "glarelab" / "protocols" / "spencer1995.toml").read_text()
     assert "\npixel_deg" not in text
     text = text.replace("window_px = 300 ", "pixel_deg = 0.03\nwindow_px = 300 ")
     path = tmp_path / "spencer_pixel.toml"

@@ -110,3 +110,107 @@ def test_on_linux_keys_are_named_by_their_us_position_whatever_the_layout(tmp_pa
         assert re.findall(r"key (\w+) down", log.read_text())[:2] == ["z", "y"]
     finally:
         german.close()
+
+
+# dead keys: an accent key that types nothing, then the letter it goes on (real X key events)
+DEAD_KEYS = {
+    "fr": (
+        ["dead_circumflex", "e", "t", "r", "e", "space", "dead_diaeresis", "i", "space",
+         "dead_circumflex", "o", "dead_circumflex", "u", "space", "dead_circumflex", "space"],
+        "être ï ôû ^",
+    ),
+    "de": (
+        ["dead_acute", "e", "t", "dead_grave", "a", "space", "dead_circumflex", "e", "space",
+         "dead_acute", "space"],
+        "étà ê '",  # the Compose table: dead acute, then space, types an apostrophe
+    ),
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("fullscreen", [True, False], ids=["full screen", "windowed"])
+@pytest.mark.parametrize("layout", ["fr", "de"])
+def test_accents_typed_with_dead_keys_are_kept(tmp_path, layout, fullscreen):
+    keys, typed = DEAD_KEYS[layout]
+    x = XScreen(tmp_path, layout=layout)
+    try:
+        out = tmp_path / "data"
+        x.run(
+            "run", "luidolt2020", "--participant", "P01", "--out", out,
+            *(["--fullscreen"] if fullscreen else []),
+        )  # fmt: skip
+        x.wait_for_log(out, r"session log")
+        x.focus_window()
+        time.sleep(0.3)
+        x.key("space")
+        x.wait_for_log(out, r"trial 1 onset")
+        x.key("KP_4")
+        x.wait_for_log(out, r"screen comment of trial 1")
+        x.key(*keys, delay_ms=30)
+        time.sleep(0.3)
+        Image.fromarray(x.screenshot()).save(tmp_path / "comment.png")
+        x.key("Return")
+        x.wait_for_log(out, r"trial 2 onset")
+        x.key("Escape")
+        assert x.wait() == 3, x.stderr[-2000:]
+    finally:
+        x.close()
+    assert [(r["rating"], r["comment"]) for r in rows_of(out)] == [("4", typed)]
+
+
+LEGENDS = """
+import json
+from glarelab.experiments.matching import MatchingEngine
+from glarelab.frontend.screens import ScreenText
+from glarelab.frontend.window import key_labels, open_window
+from glarelab.protocols import load_protocol
+
+win, _ = open_window(bits=8, fullscreen=False, size=(1280, 800))
+text = ScreenText(win, pilot=False)
+engine = MatchingEngine(load_protocol("yoshida2008"), "P01")
+instructions = {**engine.screen(), "legend": engine.key_legend()}
+text.draw(instructions, [])
+legend = text.text.text
+engine.press("space")
+engine.press("return")
+text.draw({**engine.screen(), "images": []}, [])  # its text only
+print("FOUND " + json.dumps({"legend": legend, "question": text.text.text,
+                             "labels": key_labels(win, ["y", "n", "q", "a", "m", "5"])}))
+win.close()
+"""
+
+
+@pytest.mark.parametrize(
+    ("layout", "yes", "labels"),
+    [
+        ("us", "Y", {"y": "Y", "n": "N", "q": "Q", "a": "A", "m": "M", "5": "5"}),
+        ("de", "Z", {"y": "Z", "n": "N", "q": "Q", "a": "A", "m": "M", "5": "5"}),
+        ("fr", "Y", {"y": "Y", "n": "N", "q": "A", "a": "Q", "m": ",", "5": "("}),
+    ],
+)
+def test_the_screens_name_the_keys_as_the_layout_labels_them(tmp_path, layout, yes, labels):
+    import json
+    import os
+    import subprocess
+    import sys
+
+    x = XScreen(tmp_path, layout=layout)
+    try:
+        script = tmp_path / "legends.py"
+        script.write_text(LEGENDS)
+        done = subprocess.run(
+            [sys.executable, str(script)],
+            env={**x.env, "PYTHONPATH": os.pathsep.join([str(Path(__file__).parents[2])])},
+            capture_output=True,
+            text=True,
+            timeout=120,
+            check=False,
+        )
+    finally:
+        x.close()
+    lines = [line for line in done.stdout.splitlines() if line.startswith("FOUND ")]
+    assert lines, done.stderr[-3000:]
+    found = json.loads(lines[0].removeprefix("FOUND "))
+    assert found["labels"] == labels
+    # a German participant is told the key that gives the session's "y": the one labelled Z
+    assert f"{yes} = yes     N = no" in found["question"]
+    assert f"{yes} / N: answer yes or no to the questions after each trial" in found["legend"]

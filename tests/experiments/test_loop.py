@@ -2,6 +2,9 @@
 what is recorded of the others."""
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
 from glarelab.experiments.engine import Press
 from glarelab.experiments.loop import (
     SessionAborted,
@@ -14,8 +17,6 @@ from glarelab.experiments.matching import MatchingEngine as BrightnessMatching
 from glarelab.experiments.rating import RatingEngine as LikertQuestionnaire
 from glarelab.experiments.staircase import StaircaseEngine as StaircaseExperiment
 from glarelab.protocols import load_protocol
-from hypothesis import given, settings
-from hypothesis import strategies as st
 
 
 @pytest.fixture(scope="module")

@@ -6,13 +6,13 @@ import tomllib
 
 import numpy as np
 import pytest
+from numpy.testing import assert_allclose
+
 from glarelab.analysis.report import write_report
 from glarelab.experiments.rating import RatingEngine, RatingObserver, shift_down
 from glarelab.experiments.session import SimulatedFrontend, make_observer, run_session
 from glarelab.protocols import load_protocol, parse_protocol
 from glarelab.stimuli.stimulus_set import build_stimulus_set
-from numpy.testing import assert_allclose
-
 from tests.conftest import small_night_protocol
 
 

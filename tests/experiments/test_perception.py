@@ -6,6 +6,12 @@ import math
 import numpy as np
 import pandas as pd
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from numpy.testing import assert_allclose
+from scipy import stats as sps
+
+from glarelab import glare
 from glarelab.analysis.stats import rm_anova
 from glarelab.experiments.perception import (
     GLOW_GAIN,
@@ -15,12 +21,6 @@ from glarelab.experiments.perception import (
     Percept,
 )
 from glarelab.stimuli.sky import cloudy_sky
-from hypothesis import HealthCheck, given, settings
-from hypothesis import strategies as st
-from numpy.testing import assert_allclose
-from scipy import stats as sps
-
-from glarelab import glare
 
 MODEL = BrightnessModel()
 L_DMAX = 220.0  # Yoshida 2008 §3

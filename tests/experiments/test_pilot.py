@@ -8,9 +8,11 @@ import re
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
-from glarelab.stimuli.calibration import fit_calibration
 from PIL import Image
+
+from glarelab.display.calibration import fit_calibration
 
 from .xscreen import SCREEN, XScreen, sidecar_of
 
@@ -28,7 +30,7 @@ def spencer(tmp_path_factory):
     from glarelab.cli import main
 
     folder = tmp_path_factory.mktemp("spencer")
-    text = (ROOT / "protocols" / "spencer1995.toml").read_text()
+    text = (ROOT / "src" / "glarelab" / "protocols" / "spencer1995.toml").read_text()
     protocol = folder / "spencer_breaks.toml"
     protocol.write_text(re.sub(r"(?m)^break_every = \d+", "break_every = 1", text))
     assert main(["stimuli", "build", str(protocol), "--out", str(folder / "set")]) == 0
@@ -83,9 +85,10 @@ def test_a_pilot_runs_marked_and_recorded_its_breaks_logged_and_escape_ends_a_fl
 ):
     protocol, stimuli, calibration = spencer
     out = tmp_path / "data"
+    shot = tmp_path / "dry_run.png"
     screen.run(
         "run", protocol, "--participant", "P01", "--stimuli", stimuli,
-        "--calibration", calibration, "--pilot", "--out", out,
+        "--calibration", calibration, "--pilot", "--out", out, "--screenshot", shot,
     )  # fmt: skip
     screen.wait_for_log(out, r"instructions screen onset")
     time.sleep(0.3)
@@ -109,6 +112,11 @@ def test_a_pilot_runs_marked_and_recorded_its_breaks_logged_and_escape_ends_a_fl
     screen.key("Escape")  # during the second flash (400 or 700 ms)
     assert screen.wait() == 3, screen.stderr[-2000:]
 
+    # the dry run's own screenshot (the first flash, as drawn) carries the PILOT mark too
+    drawn = np.asarray(Image.open(shot).convert("RGB")).astype(int)
+    mark = (drawn[..., 0] - drawn[..., 1] > 60) & (drawn[..., 0] - drawn[..., 2] > 60)
+    rows, columns = np.nonzero(mark)
+    assert mark.sum() > 50 and rows.max() < 40 and columns.max() < 120, mark.sum()
     files = sorted(p.name for p in out.iterdir() if not p.name.startswith("."))
     assert len(files) == 4 and all(
         name.split(".")[0].removesuffix("_frames").endswith("_pilot") for name in files
@@ -158,13 +166,13 @@ def test_a_pilot_is_never_full_screen(capsys):
 def test_run_takes_study_or_protocol_and_refuses_two_studies(tmp_path, capsys):
     from glarelab.cli import main
 
-    spencer = str(ROOT / "protocols" / "spencer1995.toml")
+    spencer = str(ROOT / "src" / "glarelab" / "protocols" / "spencer1995.toml")
     assert main(["run", "yoshida2008", "--protocol", spencer, "--participant", "P01"]) == 2
     both = capsys.readouterr().err
     assert "STUDY 'yoshida2008' and --protocol" in both and "'spencer1995'" in both
     assert main(["run", "--participant", "P01"]) == 2
     assert "give the study" in capsys.readouterr().err
-    luidolt = str(ROOT / "protocols" / "luidolt2020.toml")
+    luidolt = str(ROOT / "src" / "glarelab" / "protocols" / "luidolt2020.toml")
     simulate = ["--simulate", "--participants", "1", "--out", str(tmp_path)]
     assert main(["run", "--protocol", luidolt, *simulate]) == 0
     (csv,) = tmp_path.glob("sim01_luidolt2020_s1_*.csv")

@@ -1,12 +1,15 @@
 """What the participant sees is the stimulus set, code for code: every image of each shipped
-matching and staircase study, shown by the session's own front-end in a real PsychoPy window on
-an X server of 8 and 10 bits per channel, full screen and windowed, read back from the frame
-buffer as the front-end flips it (the back buffer, just before the flip that shows it) and
-compared pixel for pixel with the set's PNG codes (rounded to the window's bits).
+study's set (the matching references and targets, the staircase's glare and comparison images,
+every colour frame of the night study's scenes), shown by the session's own front-end in a real
+PsychoPy window on an X server of 8 and 10 bits per channel, full screen and windowed, the way a
+session shows it (``show`` for a matching trial, ``present`` for a flash and for a scene's
+sequence), and read back from the X server while it is on the screen.
 
-The read-back here is the test's own (``glReadPixels`` at 16 bits per channel) and the images
-are found where they landed (the best whole-pixel offset near the centred row), so neither the
-front-end's layout nor ``check-display`` is taken on trust.
+The proof owes nothing to glarelab: the screen is read by python-xlib from the X server's root
+window (:meth:`tests.experiments.xscreen.XScreen.codes`, the pixels as shown, at the screen's
+depth), the expected codes are the set's PNGs decoded by OpenCV, and the images are found where
+they landed (the best whole-pixel offset near the centred row), so neither the front-end's
+layout, its frame-buffer read nor its PNG decoder is taken on trust.
 """
 
 import json
@@ -16,118 +19,138 @@ import sys
 import textwrap
 from pathlib import Path
 
+import cv2
+import numpy as np
 import pytest
 
 from .xscreen import XScreen
 
 ROOT = Path(__file__).parents[2]
-STUDIES = ("yoshida2008", "glare_methods2026", "spencer1995")
+STUDIES = ("yoshida2008", "glare_methods2026", "spencer1995", "night2026")
 
+# runs on the X screen: shows each screen as a session does and, after each flip that shows a
+# set image, says which images and waits until the test has read the screen
 SCRIPT = textwrap.dedent(
     """
-    import ctypes, json, sys
+    import json, sys
     from pathlib import Path
 
-    import numpy as np
-
-    from glarelab.experiments.psychopy_frontend import PsychoPyFrontend
+    from glarelab.frontend.session import PsychoPyFrontend
     from glarelab.protocols import load_protocol
-    from glarelab.stimuli.stimulus_set import read_codes
-
-    def frame_codes(window, bits):
-        # the 320 rows around the window's middle (the images' row), every column, top row
-        # first, and the first one's number from the bottom (OpenGL's)
-        from pyglet import gl
-        width, height = (int(v) for v in window.size)
-        bottom, rows = height // 2 - 160, 320
-        buffer = (ctypes.c_ushort * (width * rows * 3))()
-        gl.glReadBuffer(gl.GL_BACK)
-        gl.glPixelStorei(gl.GL_PACK_ALIGNMENT, 1)
-        gl.glReadPixels(0, bottom, width, rows, gl.GL_RGB, gl.GL_UNSIGNED_SHORT, buffer)
-        values = np.frombuffer(buffer, dtype=np.uint16).reshape(rows, width, 3)[::-1]
-        return bottom, np.rint(values * ((2**bits - 1) / 65535)).astype(np.int64)
 
     def screens(manifest):
         kinds = {name: r["kind"] for name, r in manifest["images"].items()}
         one = lambda role, name: {"role": role, "terms": [(name, 1.0)]}
         if manifest["paradigm"] == "matching":
             for name in sorted(n for n, k in kinds.items() if k == "reference"):
-                yield {"kind": "adjust", "trial": 1, "images": [
+                yield "show", {"kind": "adjust", "trial": 1, "images": [
                     one("left", "target_start_darker"), one("reference", name),
                     one("right", "target_start_brighter")],
                     "labels": {"left": "darker", "right": "brighter"}, "marker": "left",
                     "keys": {}}
-        else:
+        elif manifest["paradigm"] == "staircase":
             glare = sorted(n for n, k in kinds.items() if k == "glare")
             for i, name in enumerate(glare):
                 context = manifest["images"][name]["context"]
                 pair = [one("glare", name), one("comparison", f"comparison_{context}_full")]
-                yield {"kind": "adjust", "trial": 1, "images": pair[:: 1 if i % 2 else -1],
-                       "prompt": "Which disc looked brighter?", "keys": {}}
+                yield "present", {"kind": "present", "trial": i + 1,
+                                  "images": pair[:: 1 if i % 2 else -1], "frames": 2,
+                                  "blank_before_ms": 0.0, "prompt": "Which disc?", "keys": {}}
+        else:  # a scene's sequence, frame by frame, as a night session presents it (one
+            # refresh a frame here: the test reads the screen after each frame's first flip)
+            for condition, plan in sorted(manifest["parameters"]["sequences"].items()):
+                steps = [{"images": [one("scene", name)], "frames": 1} for name in plan["frames"]]
+                yield "present", {"kind": "present", "trial": 1, "condition": condition,
+                                  "sequence": steps, "images": steps[0]["images"],
+                                  "frames": sum(s["frames"] for s in steps),
+                                  "blank_before_ms": 0.0, "prompt": "", "keys": {}}
 
-    def find(band, expected, left, bottom):
-        # the best whole-pixel offset near the nominal (possibly half-pixel) edges
-        band_bottom, frame = band
-        height, width = expected.shape[:2]
-        best = (-1.0, None, None)
-        for x in range(int(np.floor(left)) - 1, int(np.ceil(left)) + 2):
-            for y in range(int(np.floor(bottom)) - 1, int(np.ceil(bottom)) + 2):
-                top = band_bottom + frame.shape[0] - y - height
-                if x < 0 or top < 0 or x + width > frame.shape[1] or top + height > frame.shape[0]:
-                    continue
-                shown = frame[top:top + height, x:x + width]
-                equal = np.all(shown == expected, axis=-1)
-                if equal.mean() > best[0]:
-                    rows = int(np.sum(~equal.all(axis=1)))
-                    cols = int(np.sum(~equal.all(axis=0)))
-                    best = (float(equal.mean()), int(np.abs(shown - expected).max()),
-                            [rows, cols])
-        return best
+    def checked_flips(how, screen):
+        # the flips after which set images are on the screen, and the images each shows
+        if how == "show":
+            return {0: screen["images"]}
+        steps = screen.get("sequence") or [{"images": screen["images"],
+                                            "frames": screen["frames"]}]
+        flips, flip = {}, 1  # flip 0 is the blank
+        for step in steps:
+            flips[flip] = step["images"]
+            flip += step["frames"]
+        return flips
 
-    results = []
     for study, folder in json.loads(sys.argv[1]).items():
-        protocol = load_protocol(study)
         manifest = json.loads((Path(folder) / "manifest.json").read_text())
-        gap = manifest["geometry"]["gap_px"]
         for fullscreen in (True, False):
-            device = PsychoPyFrontend(protocol, stimuli=folder, fullscreen=fullscreen,
-                                      scripted_keys=[])
+            device = PsychoPyFrontend(load_protocol(study), stimuli=folder,
+                                      fullscreen=fullscreen, scripted_keys=[])
             facts = device.open()
-            bits = facts.bits_per_channel
-            width, height = (int(v) for v in device.window.size)
-            flip, frames = device.window.flip, []
+            window = device.window
+            flip, count, wanted = window.flip, [0], {}
 
-            def read_then_flip(*args, **kwargs):  # what the flip is about to show
-                frames.append(frame_codes(device.window, bits))
-                return flip(*args, **kwargs)
+            def flip_then_wait(*args, **kwargs):
+                shown = flip(*args, **kwargs)
+                images = wanted.get(count[0])
+                count[0] += 1
+                if images is not None:
+                    left, top = (0, 0) if fullscreen else window.winHandle.get_location()
+                    print("SHOWN " + json.dumps({
+                        "study": study, "fullscreen": fullscreen,
+                        "bits": int(facts.bits_per_channel),
+                        "window": [int(v) for v in window.size],
+                        "origin": [int(left), int(top)],
+                        "names": [image["terms"][0][0] for image in images]}), flush=True)
+                    assert sys.stdin.readline().strip() == "next"
+                return shown
 
-            device.window.flip = read_then_flip
+            window.flip = flip_then_wait
             try:
-                for screen in screens(manifest):
-                    frames.clear()
-                    device.show(screen)
-                    (frame,) = frames
-                    names = [image["terms"][0][0] for image in screen["images"]]
-                    codes = [read_codes(Path(folder) / f"{n}.png") for n in names]
-                    sizes = [c.shape[1] for c, _ in codes]
-                    x = (width - sum(sizes) - gap * (len(sizes) - 1)) / 2
-                    for name, (code, set_bits) in zip(names, codes):
-                        expected = np.rint(code * ((2**bits - 1) / (2**set_bits - 1)))
-                        expected = expected.astype(np.int64)
-                        if expected.ndim == 2:
-                            expected = np.repeat(expected[..., None], 3, axis=-1)
-                        exact, worst, lines = find(
-                            frame, expected, x, (height - expected.shape[0]) / 2)
-                        x += expected.shape[1] + gap
-                        results.append({"study": study, "fullscreen": fullscreen,
-                                        "bits": bits, "window": [width, height],
-                                        "image": name, "exact": exact, "worst": worst,
-                                        "rows_cols_off": lines})
+                for how, screen in screens(manifest):
+                    count[0], wanted = 0, checked_flips(how, screen)
+                    getattr(device, how)(screen)
             finally:
                 device.close()
-    print("RESULTS " + json.dumps(results))
+    print("DONE", flush=True)
     """
 )
+
+
+def png_codes(path: Path, set_bits: int, window_bits: int) -> np.ndarray:
+    """The PNG's codes as OpenCV decodes the file, at the window's bits, (H, W, 3) RGB."""
+    values = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+    assert values is not None and values.dtype == np.uint16, path
+    if values.ndim == 3:
+        values = values[..., ::-1]  # OpenCV gives BGR
+    else:
+        values = np.repeat(values[..., None], 3, axis=-1)
+    codes = np.rint(values.astype(np.float64) * (2**set_bits - 1) / 65535)
+    return np.rint(codes * (2**window_bits - 1) / (2**set_bits - 1)).astype(np.int64)
+
+
+def find(band: np.ndarray, band_left: int, band_top: int, expected, left: float, top: float):
+    """The best whole-pixel offset of ``expected`` in ``band`` near its nominal (possibly
+    half-pixel) top-left corner, the nearest first: (exact fraction, worst difference,
+    [rows, columns] off)."""
+    height, width = expected.shape[:2]
+    best = (-1.0, None, None)
+    offsets = sorted(
+        (
+            (x, y)
+            for x in range(int(np.floor(left)) - 1, int(np.ceil(left)) + 2)
+            for y in range(int(np.floor(top)) - 1, int(np.ceil(top)) + 2)
+        ),
+        key=lambda xy: abs(xy[0] - left) + abs(xy[1] - top),
+    )
+    for x, y in offsets:
+        row, column = y - band_top, x - band_left
+        if min(row, column) < 0 or column + width > band.shape[1] or row + height > band.shape[0]:
+            continue
+        shown = band[row : row + height, column : column + width]
+        equal = np.all(shown == expected, axis=-1)
+        if equal.mean() > best[0]:
+            lines = [int(np.sum(~equal.all(axis=1))), int(np.sum(~equal.all(axis=0)))]
+            best = (float(equal.mean()), int(np.abs(shown - expected).max()), lines)
+        if best[0] == 1.0:
+            break
+    return best
 
 
 @pytest.fixture(scope="module")
@@ -141,38 +164,103 @@ def study_sets():
 
 
 def read_back(tmp_path: Path, depth: int, sets: dict) -> list[dict]:
-    script = tmp_path / "read_back.py"
+    """Every set image shown by the session's front-end, read back from the X server."""
+    script = tmp_path / "show.py"
     script.write_text(SCRIPT)
     x = XScreen(tmp_path, depth=depth)
+    results: list[dict] = []
+    cache: dict = {}
     try:
         env = {
             **x.env,
             "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]),
         }
-        done = subprocess.run(
+        stderr = (tmp_path / "show.stderr").open("w")
+        process = subprocess.Popen(
             [sys.executable, str(script), json.dumps(sets)],
             env=env,
-            capture_output=True,
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            stderr=stderr,
             text=True,
-            timeout=600,
-            check=False,
         )
+        for line in process.stdout:
+            if not line.startswith("SHOWN "):
+                if line.startswith("DONE"):
+                    break
+                continue
+            shown = json.loads(line.removeprefix("SHOWN "))
+            results += compare(x, shown, sets, cache)
+            process.stdin.write("next\n")
+            process.stdin.flush()
+        process.wait(timeout=120)
+        stderr.close()
     finally:
         x.close()
-    lines = [line for line in done.stdout.splitlines() if line.startswith("RESULTS ")]
-    assert lines, f"the read-back failed:\n{done.stdout[-2000:]}\n{done.stderr[-4000:]}"
-    (tmp_path / "results.json").write_text(lines[0].removeprefix("RESULTS "))
-    return json.loads(lines[0].removeprefix("RESULTS "))
+    log = (tmp_path / "show.stderr").read_text()
+    assert process.returncode == 0, f"the front-end failed:\n{log[-4000:]}"
+    (tmp_path / "results.json").write_text(json.dumps(results))
+    return results
+
+
+def compare(x: XScreen, shown: dict, sets: dict, cache: dict) -> list[dict]:
+    """The images of one flip, found on the X screen and compared with their PNGs."""
+    folder = Path(sets[shown["study"]])
+    if folder not in cache:
+        cache[folder] = json.loads((folder / "manifest.json").read_text())
+    manifest = cache[folder]
+    set_bits, bits = manifest["calibration"]["bit_depth"], shown["bits"]
+    expected = [png_codes(folder / f"{n}.png", set_bits, bits) for n in shown["names"]]
+    width, height = shown["window"]
+    left_edge, top_edge = shown["origin"]
+    gap = manifest["geometry"]["gap_px"]
+    sizes = [e.shape[1] for e in expected]
+    left = (width - sum(sizes) - gap * (len(sizes) - 1)) / 2
+    tallest = max(e.shape[0] for e in expected)
+    band_left, band_top = max(int(left) - 2, 0), max(int((height - tallest) // 2) - 2, 0)
+    band_width = min(int(np.ceil(width - 2 * left)) + 4, width - band_left)
+    band_height = min(tallest + 4, height - band_top)
+    band = x.codes((left_edge + band_left, top_edge + band_top, band_width, band_height))
+    found = []
+    for name, codes in zip(shown["names"], expected, strict=True):
+        exact, worst, lines = find(
+            band, band_left, band_top, codes, left, (height - codes.shape[0]) / 2
+        )
+        left += codes.shape[1] + gap
+        found.append(
+            {
+                "study": shown["study"],
+                "fullscreen": shown["fullscreen"],
+                "bits": bits,
+                "window": shown["window"],
+                "image": name,
+                "colour": manifest["images"][name]["shape"][2:] == [3],
+                "exact": exact,
+                "worst": worst,
+                "rows_cols_off": lines,
+            }
+        )
+    return found
 
 
 @pytest.mark.parametrize("depth, bits", [(24, 8), (30, 10)])
-def test_every_image_is_shown_code_for_code(tmp_path, study_sets, depth, bits):
+def test_every_image_of_every_study_is_on_the_screen_code_for_code(
+    tmp_path, study_sets, depth, bits
+):
     results = read_back(tmp_path, depth, study_sets)
     assert {r["bits"] for r in results} == {bits}  # the window has the screen's bits
-    for study in STUDIES:
+    for study, folder in study_sets.items():
+        manifest = json.loads((Path(folder) / "manifest.json").read_text())
+        with_png = {n for n, r in manifest["images"].items() if r["kind"] != "component"}
         for fullscreen in (True, False):
-            shown = [r for r in results if r["study"] == study and r["fullscreen"] == fullscreen]
-            assert len(shown) >= 36, (study, fullscreen)  # every screen of the set, read back
+            shown = {
+                r["image"]
+                for r in results
+                if r["study"] == study and r["fullscreen"] == fullscreen
+            }
+            assert shown == with_png, (study, fullscreen, sorted(with_png - shown))
+    colour = [r for r in results if r["colour"]]
+    assert len(colour) == 2 * 150  # every night frame, full screen and windowed
     wrong = [r for r in results if r["exact"] != 1.0 or r["worst"] != 0]
     summary = "\n".join(
         f"{r['study']} {'fullscreen' if r['fullscreen'] else 'windowed'} {r['window']} "

@@ -91,7 +91,7 @@ HALF_PIXEL = textwrap.dedent(
     from pathlib import Path
 
     from glarelab.experiments import layout
-    from glarelab.experiments.check_display import check_display
+    from glarelab.frontend.check_display import check_display
     from glarelab.protocols import load_protocol
 
     whole = layout.Placement.pos.fget
@@ -104,17 +104,19 @@ HALF_PIXEL = textwrap.dedent(
 )
 
 
-def test_the_read_back_finds_images_drawn_half_a_pixel_off(tmp_path, yoshida_set):
-    script = tmp_path / "half_pixel.py"
-    script.write_text(HALF_PIXEL)
-    x = XScreen(tmp_path, depth=24)
+def result_on_screen(tmp_path: Path, script: str, *args, depth: int = 24):
+    """Run ``script`` with ``args`` on an X screen of its own; the JSON it prints after
+    ``RESULT``."""
+    path = tmp_path / "on_screen.py"
+    path.write_text(script)
+    x = XScreen(tmp_path, depth=depth)
     try:
         env = {
             **x.env,
             "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]),
         }
         done = subprocess.run(
-            [sys.executable, str(script), str(yoshida_set)],
+            [sys.executable, str(path), *map(str, args)],
             env=env,
             capture_output=True,
             text=True,
@@ -125,8 +127,93 @@ def test_the_read_back_finds_images_drawn_half_a_pixel_off(tmp_path, yoshida_set
         x.close()
     lines = [line for line in done.stdout.splitlines() if line.startswith("RESULT ")]
     assert lines, done.stderr[-3000:]
-    images = json.loads(lines[0].removeprefix("RESULT "))
+    return json.loads(lines[0].removeprefix("RESULT "))
+
+
+def test_the_read_back_finds_images_drawn_half_a_pixel_off(tmp_path, yoshida_set):
+    images = result_on_screen(tmp_path, HALF_PIXEL, yoshida_set)
     assert len(images) == 14
     for image in images:  # each resampled: rows and columns doubled and dropped
         assert image["exact_fraction"] < 0.99 and image["worst_code_difference"] > 0
         assert image["first_difference"] is not None
+
+
+# --- colour frames: the night study ----------------------------------------------------------
+
+CHECK_NIGHT = textwrap.dedent(
+    """
+    import json, sys
+    from pathlib import Path
+
+    import numpy as np
+
+    from glarelab.frontend import images
+    from glarelab.frontend.check_display import check_display
+    from glarelab.protocols import load_protocol
+
+    if sys.argv[3] == "broken":  # the old colour path: RGB passed in [-1, 1] like grey
+        def levels(self, luminance):
+            fraction = self.codes(luminance) / (2**self.window_bits - 1)
+            return np.flipud(fraction * 2.0 - 1.0)
+        images.ImageBank.levels = levels
+    result = check_display(load_protocol(Path(sys.argv[1])), stimuli=Path(sys.argv[2]),
+                           frames=10, fullscreen=False, log=lambda *a: None)
+    print("RESULT " + json.dumps({k: result[k] for k in ("images", "images_exact")}))
+    """
+)
+
+
+@pytest.fixture(scope="module")
+def night_set(tmp_path_factory):
+    from glarelab.cli import main
+    from tests.conftest import small_night_protocol
+
+    folder = tmp_path_factory.mktemp("night")
+    protocol = folder / "night_small.toml"
+    protocol.write_text(small_night_protocol())
+    assert main(["stimuli", "build", str(protocol), "--out", str(folder / "set")]) == 0
+    return protocol, folder / "set"
+
+
+def check_night(tmp_path, night_set, how: str, depth: int = 30) -> dict:
+    protocol, folder = night_set
+    return result_on_screen(tmp_path, CHECK_NIGHT, protocol, folder, how, depth=depth)
+
+
+def test_check_display_reads_every_colour_frame_of_a_night_scene(tmp_path, night_set):
+    _, folder = night_set
+    manifest = json.loads((folder / "manifest.json").read_text())
+    frames = sorted(n for n, r in manifest["images"].items() if r["kind"] == "night")
+    assert len(frames) == 5 * 3  # five conditions of three frames
+    result = check_night(tmp_path, night_set, "as shipped")
+    assert [r["image"] for r in result["images"]] == frames
+    for record in result["images"]:
+        assert record["exact_fraction"] == 1.0 and record["worst_code_difference"] == 0
+        assert record["window_bits"] == 10 and record["pixels"] == 64 * 48
+    assert result["images_exact"] is True
+
+
+def test_check_display_fails_when_the_colour_path_is_broken(tmp_path, night_set):
+    result = check_night(tmp_path, night_set, "broken", depth=24)
+    assert result["images_exact"] is False
+    # every code below mid-range is shown black: no frame is exact (the black ones stay black)
+    assert all(r["exact_fraction"] < 1.0 for r in result["images"])
+    assert max(r["worst_code_difference"] for r in result["images"]) > 50
+
+
+def test_a_kind_check_display_cannot_show_is_a_failure(tmp_path, yoshida_set):
+    from types import SimpleNamespace
+
+    import glarelab.frontend.check_display as check
+    from glarelab.stimuli.stimulus_set import StimulusSet
+
+    stimuli = StimulusSet(yoshida_set)  # with an image of a kind no session of today shows
+    stimuli.manifest = {**stimuli.manifest, "images": {"hologram_1": {"kind": "hologram"}}}
+    device = SimpleNamespace(
+        set=stimuli,
+        facts=SimpleNamespace(bits_per_channel=10),
+        window=SimpleNamespace(size=(1920, 1080)),
+    )
+    (record,) = check.read_back_images(device, None)
+    assert record["image"] == "hologram_1" and record["exact_fraction"] == 0.0
+    assert record["problem"].startswith("its kind 'hologram' is not one check-display can show")

@@ -47,7 +47,7 @@ def sets(tmp_path_factory):
                 [
                     "stimuli",
                     "build",
-                    str(ROOT / "protocols" / f"{study}.toml"),
+                    str(ROOT / "src" / "glarelab" / "protocols" / f"{study}.toml"),
                     "--out",
                     str(folder / study),
                 ]
@@ -305,7 +305,7 @@ def test_a_second_process_cannot_run_the_same_session(screen, tmp_path):
     )
     assert second.returncode == 2
     assert f"in use by another process (pid {first.pid}" in second.stderr
-    assert ".P01_luidolt2020_s1.lock" in second.stderr
+    assert "locks/P01_luidolt2020_s1.lock" in second.stderr  # one lock for every --out
     assert path.read_bytes() == before
     screen.key("space")
     screen.wait_for_log(out, r"trial 1 onset")
@@ -343,6 +343,17 @@ def test_without_a_participant_id_a_dialog_asks_for_the_details(screen, tmp_path
     screen.run("run", "luidolt2020", "--out", out)
     screen.focus_window("glarelab luidolt2020")  # the dialog; its first field is the id
     time.sleep(0.5)
+    screen.type("P 09")  # not file-name safe: asked again, the whole message above the fields
+    screen.key("Return")
+    time.sleep(1.0)
+    screen.focus_window("glarelab luidolt2020")
+    time.sleep(0.5)
+    asked = screen.screenshot()
+    save(asked, tmp_path / "dialog_problem.png")
+    red = (asked[..., 0].astype(int) - asked[..., 1] > 80) & (asked[..., 2] < 100)
+    rows = np.flatnonzero(red.any(axis=1))
+    assert rows.size and rows.max() - rows.min() > 20  # the message, on more than one line
+    screen.key("ctrl+a")
     screen.type("P09")
     screen.key("Tab", "Tab")  # session stays 1; on to the age
     screen.type("31")
@@ -359,7 +370,9 @@ def test_without_a_participant_id_a_dialog_asks_for_the_details(screen, tmp_path
     assert screen.wait() == 3, screen.stderr[-2000:]
     path, _ = rows_of(out)
     assert path.name.startswith("P09_luidolt2020_s1_")
-    assert sidecar_of(path)["participant_info"]["age"] == 31
+    info = sidecar_of(path)["participant_info"]
+    assert info["age"] == 31
+    assert info["vision_correction"] is None and info["sex"] is None  # nothing was chosen
 
 
 def test_check_display_measures_the_screen_and_the_cost_of_a_flash(screen, sets, tmp_path):

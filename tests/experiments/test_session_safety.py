@@ -10,18 +10,19 @@ from datetime import datetime
 from pathlib import Path
 
 import pytest
-from glarelab.experiments.data import SessionError, SessionFiles, session_files
-from glarelab.experiments.display import DisplayMismatch, ScreenFacts
-from glarelab.experiments.session import SimulatedFrontend, make_observer, run_session
-from glarelab.protocols import load_protocol
-from glarelab.stimuli.calibration import fit_calibration
 
 from glarelab.cli import main
+from glarelab.display.calibration import fit_calibration
+from glarelab.display.checks import DisplayMismatch, ScreenFacts
+from glarelab.experiments.data import SessionError, SessionFiles, session_files
+from glarelab.experiments.session import SimulatedFrontend, make_observer, run_session
+from glarelab.protocols import load_protocol
+from tests.test_faults import small_disk  # noqa: F401 - a fixture: a 1 MiB tmpfs
 
 from .xscreen import XScreen
 
 ROOT = Path(__file__).parents[2]
-PROTOCOLS = ROOT / "protocols"
+PROTOCOLS = ROOT / "src" / "glarelab" / "protocols"
 DATA = (".csv", ".json", ".log", ".tsv")
 
 
@@ -230,6 +231,52 @@ def test_a_session_held_by_another_process_is_refused(tmp_path):
     assert simulated(tmp_path).returncode == 0  # released: the session can start now
 
 
+def test_a_participants_session_is_held_across_output_folders_before_the_set_is_verified(
+    tmp_path, stimulus_sets, monkeypatch, capsys
+):
+    """A second ``run`` of the same participant and session into another --out is refused at
+    once: before its stimulus set is verified (seconds for a large set), and it leaves no
+    --out folder behind."""
+    from glarelab.experiments import session as sessions
+    from glarelab.experiments.data import SessionLock
+
+    verified = []
+    monkeypatch.setattr(
+        sessions, "verify_stimulus_set", lambda folder: verified.append(folder) or []
+    )
+    holder = SessionLock(tmp_path / "first", "P01", "yoshida2008", 1, across_folders=True)
+    holder.acquire()  # the first run, into another folder
+    try:
+        status = main(
+            ["run", "yoshida2008", "--participant", "P01", "--stimuli",
+             str(stimulus_sets / "yoshida2008"), "--allow-uncalibrated",
+             "--out", str(tmp_path / "second")]
+        )  # fmt: skip
+    finally:
+        holder.release()
+    err = capsys.readouterr().err
+    assert status == 2, err
+    assert "participant 'P01''s yoshida2008 session 1 is in use by another process" in err
+    assert "whatever its output folder" in err
+    assert verified == [] and not (tmp_path / "second").exists()
+    assert simulated(tmp_path / "sim", "luidolt2020", "P01").returncode == 0  # simulations
+    # lock their own folder: the power analyses run the same ids side by side
+
+
+def test_a_refused_run_leaves_no_output_folder(tmp_path, stimulus_sets):
+    out = tmp_path / "new"
+    done = glarelab(  # a synthetic calibration, not accepted: refused before any file
+        "run", "yoshida2008", "--participant", "P02", "--stimuli",
+        stimulus_sets / "yoshida2008", "--out", out,
+    )  # fmt: skip
+    assert done.returncode == 2 and "the display calibration is" in done.stderr, done.stderr
+    assert not out.exists()
+    existing = tmp_path / "data"
+    assert simulated(existing).returncode == 0
+    again = simulated(existing)  # refused: the session has data; the folder is kept
+    assert again.returncode == 2 and existing.is_dir()
+
+
 # --- the disk and the process -----------------------------------------------------------------
 
 
@@ -284,28 +331,50 @@ def test_a_completed_session_is_not_resumed(tmp_path):
     assert data_files(tmp_path) == before
 
 
-def _disk_of(size: int):
-    def limit():
-        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
-        resource.setrlimit(resource.RLIMIT_FSIZE, (size, size))
+def test_a_disk_that_fills_during_a_session_stops_it_with_its_reason(
+    small_disk,  # noqa: F811 - the fixture
+    stimulus_sets,
+    monkeypatch,
+    capsys,
+):
+    """The disk is filled to its last byte after the fifth trial: a later row cannot be
+    written (the CSV's last page of the tmpfs takes a few more), the session stops with status 4 (not 2, which says nothing was written), every
+    trial before is on disk, and the sidecar is not left ``running``: it says why it ended."""
+    import os
 
-    return limit
+    from glarelab.experiments import session as sessions
 
+    answer = sessions.SimulatedFrontend.wait_keys
 
-def test_a_disk_that_fills_during_a_session_stops_it_cleanly(tmp_path, stimulus_sets):
-    """Each file may grow to 3000 bytes: the CSV fills after about a dozen Spencer trials."""
-    done = glarelab(
-        "run", "spencer1995", "--simulate", "--participant", "P01", "--out", tmp_path,
-        "--stimuli", stimulus_sets / "spencer1995", preexec_fn=_disk_of(3000),
+    def fill_after_five(self, anchor_s):
+        if len(list(small_disk.glob("*.csv"))) == 1:
+            (csv,) = small_disk.glob("*.csv")
+            if len(csv.read_text().splitlines()) == 6 and not (small_disk / "filler").exists():
+                handle = os.open(small_disk / "filler", os.O_WRONLY | os.O_CREAT)
+                try:
+                    while True:
+                        os.write(handle, b"\0" * 4096)
+                except OSError:
+                    pass
+                finally:
+                    os.close(handle)
+        return answer(self, anchor_s)
+
+    monkeypatch.setattr(sessions.SimulatedFrontend, "wait_keys", fill_after_five)
+    status = main(
+        ["run", "spencer1995", "--simulate", "--participant", "P01", "--out", str(small_disk),
+         "--stimuli", str(stimulus_sets / "spencer1995")]
     )  # fmt: skip
-    assert done.returncode == 2 and "Traceback" not in done.stderr, done.stderr
-    assert "the session stopped after" in done.stderr and "every trial before it is on disk" in (
-        done.stderr
-    )
-    (csv,) = [p for p in session_files(tmp_path, "P01", "spencer1995", 1) if p.suffix == ".csv"]
+    err = capsys.readouterr().err
+    assert status == 4 and "Traceback" not in err, err
+    (csv,) = [p for p in session_files(small_disk, "P01", "spencer1995", 1) if p.suffix == ".csv"]
     text = csv.read_text()
-    rows = text.splitlines()[1:]
-    assert 5 <= len(rows) < 20 and text.endswith("\n")  # whole rows only
+    trials = len(text.splitlines()) - 1
+    assert 5 <= trials < 60 and text.endswith("\n")  # whole rows only
+    assert f"the session stopped after {trials} trials: could not write" in err
+    assert "No space left on device" in err and f"{csv.stem}.json says why it ended" in err
     sidecar = json.loads(csv.with_suffix(".json").read_text())
-    assert sidecar["status"] == "aborted" and sidecar["trials"] == len(rows)
+    assert sidecar["status"] == "aborted" and sidecar["trials"] == trials and sidecar["ended"]
     assert sidecar["runs"][0]["ended_by"].startswith("could not write")
+    assert "No space left on device" in sidecar["runs"][0]["ended_by"]
+    assert not list(small_disk.glob(".*.reserve"))  # the room set aside is given back

@@ -9,16 +9,16 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from glarelab.experiments.data import read_rows
-from glarelab.protocols import columns, load_protocol
-from glarelab.stimuli.calibration import Calibration
-from glarelab.stimuli.stimulus_set import default_calibration
 from PIL import Image
 
 from glarelab.cli import main
+from glarelab.display.calibration import Calibration
+from glarelab.experiments.data import read_rows
+from glarelab.protocols import columns, load_protocol
+from glarelab.stimuli.stimulus_set import default_calibration
 
 ROOT = Path(__file__).parents[2]
-PROTOCOLS = ROOT / "protocols"
+PROTOCOLS = ROOT / "src" / "glarelab" / "protocols"
 
 
 def glarelab(*args, timeout=600):

@@ -3,7 +3,9 @@
 Each :class:`XScreen` starts its own Xvfb server, runs ``glarelab run ...`` on it as a separate
 process, and sends real key events through the X server with ``xdotool`` (the XTEST extension,
 the same path a USB keyboard's events take into the X server). Screenshots are read back from
-the X server (the front buffer as shown), not from the program.
+the X server (the front buffer as shown), not from the program: :meth:`XScreen.codes` reads the
+root window with python-xlib, at the screen's own depth (8 or 10 bits per channel), through
+neither PsychoPy, OpenGL nor glarelab.
 """
 
 from __future__ import annotations
@@ -178,7 +180,37 @@ class XScreen:
         """What the X server shows now (RGB), optionally a (left, top, right, bottom) box."""
         return np.asarray(ImageGrab.grab(bbox=bbox, xdisplay=self.display).convert("RGB"))
 
+    def codes(self, box: tuple[int, int, int, int]) -> np.ndarray:
+        """The codes the X server shows in ``box`` (left, top, width, height; root-window
+        pixels from the top-left corner): (height, width, 3) integers at the screen's bits per
+        channel (8 at depth 24, 10 at depth 30), each channel cut out of the pixel by the root
+        visual's own masks."""
+        from Xlib import X
+        from Xlib import display as xdisplay
+
+        if getattr(self, "_x", None) is None:
+            self._x = xdisplay.Display(self.display)
+        screen = self._x.screen()
+        visual = next(
+            v
+            for depth in screen.allowed_depths
+            for v in depth.visuals
+            if v.visual_id == screen.root_visual
+        )
+        left, top, width, height = (int(v) for v in box)
+        image = screen.root.get_image(left, top, width, height, X.ZPixmap, 0xFFFFFFFF)
+        assert image.depth == screen.root_depth in (24, 30), image.depth
+        pixels = np.frombuffer(image.data, dtype="<u4").reshape(height, width)
+        channels = []
+        for mask in (visual.red_mask, visual.green_mask, visual.blue_mask):
+            shift = (mask & -mask).bit_length() - 1
+            channels.append((pixels & mask) >> shift)
+        return np.stack(channels, axis=-1).astype(np.int64)
+
     def close(self) -> None:
+        if getattr(self, "_x", None) is not None:
+            self._x.close()
+            self._x = None
         if self.process is not None and self.process.poll() is None:
             self.process.send_signal(signal.SIGKILL)
             self.process.wait()

@@ -6,11 +6,12 @@ import itertools
 
 import numpy as np
 import pytest
+from numpy.testing import assert_allclose
+from scipy import stats as sps
+
 from glarelab.planning.analytic import OneWayJob, noncentrality, one_way_power
 from glarelab.planning.execute import ResultLog, run_tasks
 from glarelab.planning.power import summarise
-from numpy.testing import assert_allclose
-from scipy import stats as sps
 
 MEANS = [0.0, 0.3, 0.6, 0.9]  # four conditions; σ = 1 within subjects
 

@@ -3,14 +3,14 @@ import math
 import numpy as np
 import pandas as pd
 import pytest
-from glarelab.analysis.stats import rm_anova
-from glarelab.planning.effects import CORRECTIONS, PARADIGMS, anova_effects, chosen_p
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 from scipy import stats as sps
 
 from glarelab import protocols
+from glarelab.analysis.stats import rm_anova
+from glarelab.planning.effects import CORRECTIONS, PARADIGMS, anova_effects, chosen_p
 
 
 def test_every_paradigm_has_a_reader_of_its_effects():

@@ -2,9 +2,10 @@ import io
 import json
 
 import pytest
-from glarelab.planning.execute import Progress, ResultLog, dask_client, run_tasks
 from hypothesis import given, settings
 from hypothesis import strategies as st
+
+from glarelab.planning.execute import Progress, ResultLog, dask_client, run_tasks
 
 
 class Squares:

@@ -1,7 +1,8 @@
 import pytest
-from glarelab.planning.grid import GridError, apply_setting, grid, parse_setting
 from hypothesis import given, settings
 from hypothesis import strategies as st
+
+from glarelab.planning.grid import GridError, apply_setting, grid, parse_setting
 
 
 @settings(max_examples=50, deadline=None)

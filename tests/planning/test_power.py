@@ -2,13 +2,14 @@ import json
 
 import pandas as pd
 import pytest
-from glarelab.planning.execute import dask_client
-from glarelab.planning.power import binomial_interval, power_analysis, recommend, summarise
-from glarelab.protocols import load_protocol
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 from scipy import stats as sps
+
+from glarelab.planning.execute import dask_client
+from glarelab.planning.power import binomial_interval, power_analysis, recommend, summarise
+from glarelab.protocols import load_protocol
 
 SILENT = {"log": lambda message: None, "progress": False}
 

@@ -11,10 +11,10 @@ from pathlib import Path
 
 import pandas as pd
 import psutil
-from glarelab.protocols.folders import LISTING, listed_files
-from glarelab.protocols.locks import ProcessLock
 
 from glarelab.cli import main
+from glarelab.files.folders import LISTING, listed_files
+from glarelab.files.locks import ProcessLock
 
 BIN = Path(sys.executable).parent
 TINY = ["power", "luidolt2020", "--participants", "4", "--seed", "5", "--workers", "0"]

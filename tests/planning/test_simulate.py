@@ -1,5 +1,6 @@
 import pandas as pd
 import pytest
+
 from glarelab.analysis.load import load_sessions
 from glarelab.analysis.paradigms import PARADIGMS
 from glarelab.experiments.data import session_files
@@ -46,8 +47,8 @@ def test_the_tests_alone_are_the_full_analysis_tests(yoshida, tmp_path):
         _session(protocol, f"s{number}", stimuli, stimuli, tmp_path)
     dataset = load_sessions(protocol, sorted(tmp_path.glob("*.csv")))
     full = PARADIGMS["matching"].analyse(dataset, protocol)["tables"]
-    tests = PARADIGMS["matching"].analyse(dataset, protocol, tests_only=True)["tables"]
-    assert set(tests) == {"anova", "methods_at_levels"}
+    tests = PARADIGMS["matching"].tests(dataset, protocol)
+    assert set(tests) == {"anova", "methods_at_levels", "boost_test"}
     for name, table in tests.items():
         pd.testing.assert_frame_equal(table, full[name])
 

@@ -2,6 +2,7 @@ import json
 
 import pandas as pd
 import pytest
+
 from glarelab.planning.grid import parse_setting
 from glarelab.planning.sweep import sweep
 from glarelab.stimuli.stimulus_set import verify_stimulus_set

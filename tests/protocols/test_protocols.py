@@ -3,6 +3,7 @@ import tomllib
 from pathlib import Path
 
 import pytest
+
 from glarelab.protocols import (
     PARADIGMS,
     ProtocolError,
@@ -14,7 +15,7 @@ from glarelab.protocols import (
     shipped_protocols,
 )
 
-PROTOCOLS = Path(__file__).parents[2] / "protocols"
+PROTOCOLS = Path(__file__).parents[2] / "src" / "glarelab" / "protocols"
 
 
 def raw(study):

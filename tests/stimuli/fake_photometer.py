@@ -27,6 +27,10 @@ from pathlib import Path
 
 import numpy as np
 
+# what comes back at another baud rate or parity than the instrument's: bytes with the high
+# bit set, no text (a reply "OK00, 12.34" read at 9600 baud where it was sent at 4800)
+WRONG_LINE = "\xf0\x8c\xe6\x9e\xfc\xe0\x80\r\n"
+
 # the line settings each instrument expects
 MINOLTA_LINE = {"baud": 4800, "line": "7E2"}  # RS-232C
 PR655_LINE = {"baud": 9600, "line": "8N1"}  # USB, a virtual serial port
@@ -134,7 +138,7 @@ class FakeSerialPhotometer:
 
     def _send(self, text: str) -> None:
         self.replies.append(text)
-        os.write(self.master, text.encode("ascii"))
+        os.write(self.master, text.encode("latin-1"))  # "\xf0" is the byte 0xF0
 
     def unplug(self) -> None:
         """Pull the cable: the port's other side goes away."""
@@ -159,7 +163,10 @@ class FakeMinolta(FakeSerialPhotometer):
         self.commands.append(command)
         if self.mute:
             return
-        if self.garble or not self.line_ok():
+        if not self.line_ok():
+            self._send(WRONG_LINE)
+            return
+        if self.garble:
             self._send("\x1b7#;~?\r\n")
             return
         if command.startswith("MDS,") or command == "CLE":

@@ -3,15 +3,16 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from numpy.testing import assert_allclose
+
 from glarelab.protocols import load_protocol, parse_protocol, pixel_deg
 from glarelab.stimuli.backgrounds import background
 from glarelab.stimuli.exr import write_exr
 from glarelab.stimuli.matching import build_matching, compose_target
 from glarelab.stimuli.staircase import build_staircase
 from glarelab.stimuli.stimulus_set import compose
-from numpy.testing import assert_allclose
 
-PROTOCOLS = Path(__file__).parents[2] / "protocols"
+PROTOCOLS = Path(__file__).parents[2] / "src" / "glarelab" / "protocols"
 
 
 @pytest.fixture(scope="module")

@@ -2,13 +2,14 @@ import json
 
 import numpy as np
 import pytest
-from glarelab.stimuli.calibration import (
+from numpy.testing import assert_allclose
+
+from glarelab.display.calibration import (
     Calibration,
     fit_calibration,
     read_readings,
     synthetic_calibration,
 )
-from numpy.testing import assert_allclose
 
 
 def measured_looking(bit_depth=10):
@@ -133,12 +134,14 @@ def test_shipped_synthetic_calibrations_match_their_protocols():
     for study, name in (("yoshida2008", "433cd-10bit"), ("spencer1995", "50cd-8bit")):
         shipped = Calibration.load(root / "calibrations" / f"SYNTHETIC-{study}-{name}.json")
         assert shipped.status == "synthetic" and "SYNTHETIC" in shipped.label
-        expected = default_calibration(load_protocol(root / "protocols" / f"{study}.toml"))
+        expected = default_calibration(
+            load_protocol(root / "src" / "glarelab" / "protocols" / f"{study}.toml")
+        )
         assert np.array_equal(shipped.lut, expected.lut)
 
 
 def test_sessions_refuse_missing_failed_or_synthetic_calibrations():
-    from glarelab.stimuli.calibration import usable_calibration
+    from glarelab.display.calibration import usable_calibration
 
     synthetic = synthetic_calibration(max_cd_m2=433.0, black_cd_m2=0.5, bit_depth=10)
     fitted = fit_calibration(measured_looking(), bit_depth=10)

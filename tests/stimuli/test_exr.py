@@ -1,9 +1,10 @@
 import numpy as np
 import pytest
+from numpy.testing import assert_array_equal
+
 from glarelab.stimuli.exr import read_exr, write_exr
 from glarelab.stimuli.preview import to_display
 from glarelab.stimuli.shapes import disk
-from numpy.testing import assert_array_equal
 
 
 @pytest.mark.parametrize("shape", [(7, 5), (7, 5, 3)])

@@ -5,6 +5,11 @@ import tomllib
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from numpy.testing import assert_allclose
+from PIL import Image
+
 from glarelab.protocols import load_protocol, parse_protocol
 from glarelab.stimuli.exr import read_exr
 from glarelab.stimuli.night import (
@@ -22,11 +27,6 @@ from glarelab.stimuli.stimulus_set import (
     verify_stimulus_set,
     write_codes,
 )
-from hypothesis import given, settings
-from hypothesis import strategies as st
-from numpy.testing import assert_allclose
-from PIL import Image
-
 from tests.conftest import small_night_protocol
 
 

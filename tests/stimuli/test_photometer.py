@@ -10,9 +10,10 @@ import time
 
 import numpy as np
 import pytest
-from glarelab.stimuli.calibration import Calibration
-from glarelab.stimuli.measure import MeasurementSession
-from glarelab.stimuli.photometer import (
+
+from glarelab.display.calibration import Calibration
+from glarelab.display.measure import MeasurementSession
+from glarelab.display.photometer import (
     Disconnected,
     Garbled,
     NoAnswer,
@@ -22,7 +23,6 @@ from glarelab.stimuli.photometer import (
     measure_patch,
     open_photometer,
 )
-
 from tests.stimuli.fake_photometer import FakeMinolta, FakePR655
 from tests.stimuli.pty_line import keeping_tcsetattr
 
@@ -124,6 +124,34 @@ def test_faults_have_their_own_message(fake, shown):
         open_photometer("LS-100", "/dev/nonexistent")
     with pytest.raises(ValueError, match="photometer must be one of LS-100, LS-110, CS-100A"):
         open_photometer("LS-1000", fake.port)
+
+
+def test_a_reply_that_is_not_text_is_kept_and_named_a_line_settings_fault(fake, line):
+    from glarelab.display.photometer import LineSettings
+    from tests.stimuli.fake_photometer import WRONG_LINE
+
+    meter = open_photometer("LS-100", fake.port)
+    fake.faults = [WRONG_LINE]  # the adapter was switched to another baud rate meanwhile
+    with pytest.raises(LineSettings) as fault:
+        meter.read()
+    message = str(fault.value)
+    assert message.startswith(
+        f"the LS-100 on {fake.port} answered bytes that are not text "
+        "(b'\\xf0\\x8c\\xe6\\x9e\\xfc\\xe0\\x80\\r\\n'): the serial line's settings"
+    )
+    assert "4800 baud, 7 data bits, even parity, 2 stop bits" in message
+    assert meter.last_reply == "not text: b'\\xf0\\x8c\\xe6\\x9e\\xfc\\xe0\\x80\\r\\n'"
+    assert "does not answer" not in message
+    assert isinstance(fault.value, Garbled)  # a garbled reply, of its own kind
+    assert meter.read()[0] > 0  # set alike again, it reads
+
+    other = FakeMinolta(lambda: 10.0, line_folder=line)
+    other.LINE = {"baud": 9600, "line": "8N1"}  # an instrument set to another line
+    try:
+        with pytest.raises(LineSettings, match=r"answered bytes that are not text \(b'\\xf0"):
+            open_photometer("LS-100", other.port)
+    finally:
+        other.close()
 
 
 def test_a_photometer_that_does_not_answer(fake):
@@ -372,8 +400,7 @@ def test_a_measurement_in_a_window_survives_a_pulled_cable_and_gives_the_known_d
 
 
 def test_check_display_reads_black_white_and_the_calibration(tmp_path, line):
-    from glarelab.stimuli.calibration import fit_calibration
-
+    from glarelab.display.calibration import fit_calibration
     from tests.experiments.xscreen import XScreen
 
     codes = np.unique(np.round(np.linspace(0, 255, 33)).astype(int))
@@ -398,7 +425,10 @@ def test_check_display_reads_black_white_and_the_calibration(tmp_path, line):
     result = json.loads(out.read_text())
     found = result["photometer"]
     assert found["fault"] is None and found["instrument"]["model"] == "LS-100"
-    assert len(found["readings"]) == 2 * 7  # black, white, five codes across the range
+    # black, white, five codes across the range and the luminance Spencer names (its lamp's
+    # 75 cd/m² peak)
+    assert len(found["readings"]) == 2 * 8
+    assert {p["code"] for p in found["patches"]} >= {0, 255}
     np.testing.assert_allclose(found["white_cd_m2"], WHITE, rtol=0.005)
     np.testing.assert_allclose(found["black_cd_m2"], BLACK, rtol=0.005)
     assert found["max_relative_error"] < 0.01
@@ -450,3 +480,58 @@ def test_a_session_is_finished_with_the_instrument_that_began_it(tmp_path, fake,
     err = capsys.readouterr().err
     assert "is serial number B2, this session was measured with A1" in err
     assert json.loads(session.session_path.read_text())["log"] == session.log  # unchanged
+
+
+def _srgb(code, top=255, white=WHITE, black=BLACK):
+    v = np.asarray(code, dtype=float) / top
+    return black + (white - black) * np.where(
+        v <= 0.04045, v / 12.92, ((v + 0.055) / 1.055) ** 2.4
+    )
+
+
+def _toe(code, top=255, white=WHITE, black=BLACK):  # power 2.4, linear below 10 %
+    v = np.asarray(code, dtype=float) / top
+    return black + (white - black) * np.where(v < 0.1, v * 0.1**1.4, v**2.4)
+
+
+@pytest.mark.parametrize("curve", [_srgb, _toe], ids=["sRGB", "power 2.4 with a linear toe"])
+def test_a_photometer_reading_the_screen_calibrates_curves_with_a_linear_toe(
+    tmp_path, line, curve
+):
+    """``calibrate measure`` in a window, the simulated LS-100 reading the screen's centre
+    through the display's curve with 0.3 % noise: the calibration passes, the luminances the
+    studies name verified too, and its curve is the display's within the noise, with codes
+    added where the curve bends. (A gamma display read from the screen: the pulled-cable test
+    above; every curve at 8 and 10 bits without a window: tests/stimuli/test_measure.py.)"""
+    from tests.experiments.xscreen import XScreen
+
+    x = XScreen(tmp_path)
+    out = tmp_path / "display.json"
+    pixel = ScreenPixel(x.display)
+    device = FakeMinolta(lambda: float(curve(pixel())), line_folder=line, seed=3)
+    device.noise_fraction = 0.003
+    try:
+        process, log = glarelab_on(
+            x, line, "calibrate", "measure", "--out", out, "--bit-depth", "8", "--points", "17",
+            "--photometer", "LS-100", "--port", device.port, "--readings", "2",
+            "--settle-s", "0.05", "--photometer-serial", "40211007",
+            "--protocol", "spencer1995", "night2026",
+        )  # fmt: skip
+        status = process.wait(timeout=400)
+    finally:
+        device.close()
+        pixel.close()
+        x.close()
+    stderr = (x.tmp_path / log.name).read_text()
+    assert status == 0, stderr[-3000:]
+    calibration = Calibration.load(out)
+    assert calibration.status == "passed" and calibration.method == "pchip-log"
+    targets = [m["target_cd_m2"] for m in calibration.verification["measurements"]]
+    assert {75.0, 100.0} <= set(targets)  # Spencer's lamp peak, the night's lit room
+    codes = np.arange(256)
+    error = np.abs(calibration.decode(codes) - curve(codes)) / curve(codes)
+    first = calibration.readings[1][0]
+    assert error[first:].max() < 0.012, (error.max(), error.argmax())
+    session = json.loads(out.with_suffix(".session.json").read_text())
+    added = [e["code"] for e in session["log"] if e.get("purpose") == "refine"]
+    assert added and min(added) < 0.15 * 255  # codes added where the curve bends, the toe

@@ -7,9 +7,9 @@ import os
 
 import numpy as np
 import pytest
-from glarelab.stimuli.measure import MeasurementLock, MeasurementSession, SessionInUse
-from glarelab.stimuli.photometer import PatchProtocol, measure_patch
 
+from glarelab.display.measure import MeasurementLock, MeasurementSession, SessionInUse
+from glarelab.display.photometer import PatchProtocol, measure_patch
 from tests.stimuli.fake_photometer import FakeMinolta
 from tests.stimuli.test_photometer import fake, line, shown  # noqa: F401 - fixtures
 
@@ -119,14 +119,14 @@ def test_ctrl_c_ends_quietly_keeps_the_session_and_says_how_to_go_on(
     monkeypatch,
 ):
 
-    from glarelab import stimuli
+    import glarelab.frontend.measure
     from glarelab.cli import main
 
     def measuring_until_ctrl_c(session, *, meter, **kwargs):
         session.keep_reading({"set": 0, "cd_m2": 1.0, "reply": "OK00, 1.000"})
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(stimuli.measure_psychopy, "run_measurement", measuring_until_ctrl_c)
+    monkeypatch.setattr(glarelab.frontend.measure, "run_measurement", measuring_until_ctrl_c)
     out = tmp_path / "d.json"
     device = FakeMinolta(lambda: 1.0, line_folder=line)
     try:
@@ -149,8 +149,7 @@ def test_ctrl_c_ends_quietly_keeps_the_session_and_says_how_to_go_on(
 def test_a_reading_of_zero_is_no_reading(line, model):  # noqa: F811
     """An LS-100 reads down to 0.001 cd/m², and the PR-655 has no floor in the table: a 0
     from either is light too faint to measure, not a black of 0 cd/m² to fit."""
-    from glarelab.stimuli.photometer import OutOfRange, open_photometer
-
+    from glarelab.display.photometer import OutOfRange, open_photometer
     from tests.stimuli.fake_photometer import FakePR655
 
     kind = FakePR655 if model == "PR-655" else FakeMinolta
@@ -186,8 +185,7 @@ def test_a_resume_with_another_session_setting_is_refused(tmp_path, capsys):
 def test_a_pr655_measurement_that_failed_is_not_the_last_reading_again(line):  # noqa: F811
     """The plugin reads the luminance of the D3 report whatever the measurement's status: after
     a failed measurement that is the previous patch's luminance."""
-    from glarelab.stimuli.photometer import Garbled, OutOfRange, open_photometer
-
+    from glarelab.display.photometer import Garbled, OutOfRange, open_photometer
     from tests.stimuli.fake_photometer import FakePR655
 
     light = {"cd_m2": 120.0}
@@ -217,7 +215,7 @@ def test_a_cable_pulled_while_a_command_is_sent_is_a_lost_photometer(fake):  # n
     not an OSError: it is the same lost photometer, not a crash."""
     import termios
 
-    from glarelab.stimuli.photometer import Disconnected, open_photometer
+    from glarelab.display.photometer import Disconnected, open_photometer
 
     meter = open_photometer("LS-100", fake.port)
 

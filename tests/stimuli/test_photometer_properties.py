@@ -3,10 +3,11 @@
 import json
 
 import numpy as np
-from glarelab.stimuli.measure import MeasurementSession
-from glarelab.stimuli.photometer import PatchProtocol, measure_patch
 from hypothesis import given, settings
 from hypothesis import strategies as st
+
+from glarelab.display.measure import MeasurementSession
+from glarelab.display.photometer import PatchProtocol, measure_patch
 
 luminances = st.floats(0.0, 1e5, allow_nan=False, allow_infinity=False)
 

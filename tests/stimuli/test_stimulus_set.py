@@ -5,21 +5,22 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from glarelab.protocols import load_protocol
-from glarelab.stimuli.exr import read_exr
-from glarelab.stimuli.stimulus_set import (
-    build_stimulus_set,
-    default_calibration,
-    read_codes,
-    verify_stimulus_set,
-    write_codes,
-)
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from numpy.testing import assert_array_equal
 from PIL import Image
 
-PROTOCOLS = Path(__file__).parents[2] / "protocols"
+from glarelab.protocols import load_protocol
+from glarelab.stimuli.exr import read_exr
+from glarelab.stimuli.stimulus_set import (
+    build_stimulus_set,
+    default_calibration,
+    read_png_codes,
+    verify_stimulus_set,
+    write_codes,
+)
+
+PROTOCOLS = Path(__file__).parents[2] / "src" / "glarelab" / "protocols"
 
 
 def build_in_process(study, out):
@@ -73,7 +74,7 @@ def test_codes_decode_to_the_luminance_within_half_a_step(tmp_path):
     assert manifest["calibration"]["readings_sha256"] == calibration.readings_sha256
     for name in ("reference_vos_f", "target_start_brighter"):
         luminance = read_exr(tmp_path / f"{name}.exr").astype(float)
-        codes, bits = read_codes(tmp_path / f"{name}.png")
+        codes, bits = read_png_codes(tmp_path / f"{name}.png")
         assert bits == 10 and codes.max() <= 1023
         # the file itself spans the 16-bit range, so a viewer shows the image, not black
         shown = np.asarray(Image.open(tmp_path / f"{name}.png"))
@@ -94,12 +95,40 @@ def test_codes_decode_to_the_luminance_within_half_a_step(tmp_path):
 def test_every_code_survives_the_png_and_fills_the_16_bit_range(tmp_path, bits):
     codes = np.arange(2**bits, dtype=np.uint16).reshape(1, -1)
     write_codes(tmp_path / "all.png", codes, bits)
-    back, found = read_codes(tmp_path / "all.png")
+    back, found = read_png_codes(tmp_path / "all.png")
     assert found == bits
     assert_array_equal(back, codes)
     shown = np.asarray(Image.open(tmp_path / "all.png")).astype(np.int64)
     assert shown[0, 0] == 0 and shown[0, -1] == 65535  # black and white, in any viewer
     assert_array_equal(shown >> (16 - bits), codes)  # an sBIT-aware reader's shift works too
+
+
+@pytest.mark.parametrize("bits", [8, 10, 12, 16])
+def test_every_code_of_every_channel_survives_a_colour_png(tmp_path, bits):
+    # Pillow opens a 16-bit RGB PNG as 8-bit RGB: a colour set's codes need a decoder that
+    # reads 16-bit samples (its top byte would give 3 where the file holds 734 at 10 bits)
+    rng = np.random.default_rng(bits)
+    every = np.arange(2**bits, dtype=np.uint16)
+    codes = np.stack([every, rng.permutation(every), every[::-1]], axis=-1).reshape(1, -1, 3)
+    write_codes(tmp_path / "colour.png", codes, bits)
+    back, found = read_png_codes(tmp_path / "colour.png")
+    assert found == bits and back.shape == codes.shape
+    assert_array_equal(back, codes)
+    cv2 = pytest.importorskip("cv2")  # another decoder reads the same samples
+    values = cv2.imread(str(tmp_path / "colour.png"), cv2.IMREAD_UNCHANGED)[..., ::-1]
+    assert_array_equal(np.rint(values * ((2**bits - 1) / 65535)), codes)
+
+
+def test_a_png_that_holds_no_codes_is_named(tmp_path):
+    Image.new("RGB", (4, 3)).save(tmp_path / "photo.png")  # 8-bit: not a set's codes
+    with pytest.raises(
+        ValueError,
+        match=r"photo.png: a set's codes are 16-bit greyscale or RGB; this PNG has 8-bit samples in 3 channel",
+    ):
+        read_png_codes(tmp_path / "photo.png")
+    (tmp_path / "broken.png").write_bytes(b"\x89PNG\r\n\x1a\nnonsense")
+    with pytest.raises(ValueError, match=r"broken.png: not a PNG of display codes"):
+        read_png_codes(tmp_path / "broken.png")
 
 
 @settings(max_examples=40, deadline=None)
@@ -115,7 +144,7 @@ def test_random_code_images_round_trip(tmp_path_factory, bits, seed, shape):
     codes.flat[-1] = 0
     path = tmp_path_factory.mktemp("png") / "codes.png"
     write_codes(path, codes, bits)
-    back, found = read_codes(path)
+    back, found = read_png_codes(path)
     assert found == bits
     assert_array_equal(back, codes)
 
@@ -130,7 +159,7 @@ def test_codes_outside_the_bit_depth_are_refused(tmp_path):
 
 
 def test_a_calibration_for_another_bit_depth_is_refused(tmp_path):
-    from glarelab.stimuli.calibration import synthetic_calibration
+    from glarelab.display.calibration import synthetic_calibration
 
     protocol = load_protocol(PROTOCOLS / "yoshida2008.toml")
     eight_bit = synthetic_calibration(max_cd_m2=433.0, black_cd_m2=0.5, bit_depth=8)
@@ -139,3 +168,22 @@ def test_a_calibration_for_another_bit_depth_is_refused(tmp_path):
     luidolt = load_protocol(PROTOCOLS / "luidolt2020.toml")
     with pytest.raises(ValueError, match="shows no images: there is no stimulus set to build"):
         build_stimulus_set(luidolt, tmp_path, progress=None)
+
+
+def test_a_calibration_of_another_display_is_refused_at_build(tmp_path):
+    from glarelab.cli import main
+    from glarelab.display.calibration import synthetic_calibration
+
+    protocol = load_protocol(PROTOCOLS / "yoshida2008.toml")  # a 433 cd/m² display
+    dim = synthetic_calibration(max_cd_m2=100.0, black_cd_m2=0.5, bit_depth=10)
+    with pytest.raises(
+        ValueError,
+        match=r"the calibration is not of the yoshida2008 protocol's display: it is a 10-bit calibration with white 100 cd/m²",
+    ):
+        build_stimulus_set(protocol, tmp_path / "set", calibration=dim, progress=None)
+    assert not (tmp_path / "set").exists()
+    dim.save(tmp_path / "dim.json")
+    argv = ["stimuli", "build", "yoshida2008", "--out", str(tmp_path / "set"),
+            "--calibration", str(tmp_path / "dim.json")]  # fmt: skip
+    assert main(argv) == 2 and not (tmp_path / "set").exists()
+    assert main([*argv, "--accept-mismatch", "calibration"]) == 0  # knowingly

@@ -2,8 +2,9 @@ import math
 
 import numpy as np
 import pytest
-from glarelab.glare.models import apertures as ap
 from numpy.testing import assert_allclose
+
+from glarelab.glare.models import apertures as ap
 
 GRID = ap.ApertureGrid(512, 0.02)  # 10.24 mm
 

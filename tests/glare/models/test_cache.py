@@ -13,10 +13,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from glarelab.glare.models.cache import KernelCache, default_cache, resolve_cache
-from glarelab.glare.models.digitise import Kernel
 
 from glarelab import glare
+from glarelab.glare.models.cache import KernelCache, default_cache, resolve_cache
+from glarelab.glare.models.digitise import Kernel
 
 ROOT = Path(__file__).resolve().parents[2]
 SHAPE = (41, 41)

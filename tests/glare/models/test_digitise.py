@@ -2,13 +2,14 @@ import math
 
 import numpy as np
 import pytest
-from glarelab.glare import VosGlare
-from glarelab.glare.models import vos
-from glarelab.glare.models.digitise import digitise_radial, kernel_shape_for, mirror_quadrant
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 from scipy import integrate
+
+from glarelab.glare import VosGlare
+from glarelab.glare.models import vos
+from glarelab.glare.models.digitise import digitise_radial, kernel_shape_for, mirror_quadrant
 
 SR_PER_DEG2 = (math.pi / 180) ** 2
 

@@ -4,11 +4,11 @@ and regime at several pixel sizes: per pixel and in display codes."""
 
 import numpy as np
 import pytest
+
+from glarelab import glare
 from glarelab.glare.models import vos
 from glarelab.glare.models.digitise import digitise_radial, mirror_quadrant, quadrant_sum
 from glarelab.glare.rendering.display import display_codes, display_lut
-
-from glarelab import glare
 
 PIXELS_DEG = (0.003, 0.02, 0.1, 1.0)  # a fine fovea, the night scenes, a coarse far-tail grid
 SYMMETRIC_MODELS = {

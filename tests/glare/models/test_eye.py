@@ -2,10 +2,11 @@ import math
 
 import numpy as np
 import pytest
-from glarelab.glare.models import eye
 from hypothesis import given
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
+
+from glarelab.glare.models import eye
 
 
 def test_pupil_is_about_3_mm_at_10_cd_m2():

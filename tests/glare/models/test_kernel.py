@@ -8,12 +8,12 @@ import pickle
 
 import numpy as np
 import pytest
-from glarelab.glare.models.digitise import Kernel, mirror_quadrant
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from glarelab import glare
+from glarelab.glare.models.digitise import Kernel, mirror_quadrant
 
 # quadrants of 1 × 1 to 40 × 40 (kernels of 1 × 1 to 79 × 79), 1 or 3 channels, values in
 # [0, 1] as a digitised kernel's

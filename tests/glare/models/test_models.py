@@ -2,10 +2,10 @@ import warnings
 
 import numpy as np
 import pytest
-from glarelab.glare import GaussianGlare, VosGlare
 from numpy.testing import assert_allclose
 
 from glarelab import glare
+from glarelab.glare import GaussianGlare, VosGlare
 
 
 def radial_average(image, bin_px=4):

@@ -6,10 +6,11 @@ import warnings
 
 import numpy as np
 import pytest
+from numpy.testing import assert_allclose
+
 from glarelab.glare import VosGlare, WaveOpticsGlare
 from glarelab.glare.models.eye import regime
 from glarelab.protocols import load_protocol, pixel_deg
-from numpy.testing import assert_allclose
 
 PARTICLES = {"eyelashes": False, "eyelid": False, "particles": 1000, "spectral": "kakimoto"}
 PIXEL_DEG, SHAPE = 0.02, (41, 41)  # a 0.82° kernel: small, and wide enough for the glow

@@ -1,10 +1,11 @@
 import colour
 import numpy as np
 import pytest
+from numpy.testing import assert_allclose
+
 from glarelab.glare import HaloSpectrum, VosGlare
 from glarelab.glare.models import vos
 from glarelab.glare.models.spectral import halo_profiles
-from numpy.testing import assert_allclose
 
 THETA = np.linspace(0.0, 8.0, 8001)
 

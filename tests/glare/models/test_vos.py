@@ -4,11 +4,12 @@ import warnings
 
 import numpy as np
 import pytest
-from glarelab.glare.models import vos
 from hypothesis import given
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 from scipy import integrate
+
+from glarelab.glare.models import vos
 
 
 def eq4_volume(profile, upper=90.0):

@@ -2,6 +2,8 @@ import math
 
 import numpy as np
 import pytest
+from numpy.testing import assert_allclose
+
 from glarelab.glare import HybridGlare, VosGlare, WaveOpticsGlare
 from glarelab.glare.models import apertures as ap
 from glarelab.glare.models.wave import (
@@ -10,7 +12,6 @@ from glarelab.glare.models.wave import (
     rebin,
     sigmoid_Kakimoto2004,
 )
-from numpy.testing import assert_allclose
 
 CAMERA = {"eyelashes": False, "eyelid": False, "particles": 0}
 

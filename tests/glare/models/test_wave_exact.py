@@ -11,12 +11,13 @@ everywhere, for pixels of 0.0005° to 0.05°, every wavelength and pupil the mod
 import math
 
 import numpy as np
-from glarelab.glare import WaveOpticsGlare
-from glarelab.glare.models.spectral import Spectrum
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 from scipy.special import j0, j1, sici
+
+from glarelab.glare import WaveOpticsGlare
+from glarelab.glare.models.spectral import Spectrum
 
 CAMERA = {"eyelashes": False, "eyelid": False, "particles": 0}
 SHAPE = (15, 15)  # small kernels: the promise is per pixel, and wave kernels are memory-heavy

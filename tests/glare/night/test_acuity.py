@@ -5,12 +5,13 @@ import math
 
 import numpy as np
 import pytest
-from glarelab.glare.night import acuity
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 from numpy.testing import assert_allclose
 from scipy import ndimage
+
+from glarelab.glare.night import acuity
 
 # --- eq. 5.14: Larson et al. 1997 -------------------------------------------------------------
 

@@ -6,10 +6,11 @@ import math
 import colour
 import numpy as np
 import pytest
-from glarelab.glare.night import adaptation
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
+
+from glarelab.glare.night import adaptation
 
 
 def test_rod_sensitivity_is_one_half_at_0_04_cd_m2():

@@ -5,14 +5,14 @@ import math
 
 import numpy as np
 import pytest
-from glarelab.glare import night
-from glarelab.glare.models import eye
-from glarelab.glare.night import acuity, adaptation, scotopic
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
 from glarelab import glare
+from glarelab.glare import night
+from glarelab.glare.models import eye
+from glarelab.glare.night import acuity, adaptation, scotopic
 
 PIXEL = 0.05
 

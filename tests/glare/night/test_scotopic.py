@@ -4,11 +4,12 @@ towards a tinted rod image), with the rod response from V′(λ) through colour-
 import colour
 import numpy as np
 import pytest
-from glarelab.glare.night import scotopic
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 from numpy.testing import assert_allclose
+
+from glarelab.glare.night import scotopic
 
 REC709 = "ITU-R BT.709"
 Y_ROW = np.asarray(colour.RGB_COLOURSPACES[REC709].matrix_RGB_to_XYZ[1])

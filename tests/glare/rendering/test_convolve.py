@@ -6,12 +6,13 @@ from __future__ import annotations
 from unittest.mock import patch
 
 import numpy as np
-from glarelab.glare.models.digitise import mirror_quadrant
-from glarelab.glare.rendering import _convolve
-from glarelab.glare.rendering._convolve import DIRECT_UNFOLD_PIXELS, direct_spread
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
+
+from glarelab.glare.models.digitise import mirror_quadrant
+from glarelab.glare.rendering import _convolve
+from glarelab.glare.rendering._convolve import DIRECT_UNFOLD_PIXELS, direct_spread
 
 
 def plain_spread(excess, origin, kernel, out_box, shape):

@@ -6,12 +6,12 @@ and RGB, and every path the renderer can take."""
 
 import numpy as np
 import pytest
-from glarelab.glare import GaussianGlare, GlareRenderer, HybridGlare, VosGlare, WaveOpticsGlare
-from glarelab.glare.rendering.display import display_codes, display_lut
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 from glarelab import glare
+from glarelab.glare import GaussianGlare, GlareRenderer, HybridGlare, VosGlare, WaveOpticsGlare
+from glarelab.glare.rendering.display import display_codes, display_lut
 
 L_DMAX = 220.0
 SLACK_CODES = 1e-9  # and the exact render's own FFT round-off: see _check

@@ -6,14 +6,14 @@ import warnings
 
 import numpy as np
 import pytest
-from glarelab.glare import GaussianGlare, VosGlare, WaveOpticsGlare, render_planned
-from glarelab.glare.models.vos import max_age_years
-from glarelab.glare.rendering.display import DISPLAY_CONTRAST, Display, display_codes
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
 from glarelab import glare
+from glarelab.glare import GaussianGlare, VosGlare, WaveOpticsGlare, render_planned
+from glarelab.glare.models.vos import max_age_years
+from glarelab.glare.rendering.display import DISPLAY_CONTRAST, Display, display_codes
 
 L_DMAX = 220.0
 LUT = Display.gamma(L_DMAX, black_cd_m2=L_DMAX / DISPLAY_CONTRAST).lut  # the planner's default

@@ -2,15 +2,15 @@
 
 import numpy as np
 import pytest
+from numpy.testing import assert_allclose
+
+from glarelab import glare
+from glarelab.bench.scenes import CALIBRATION, MODELS, WORKLOADS, bench_model, workload
+from glarelab.display.calibration import Calibration
 from glarelab.glare import GaussianGlare, GlareRenderer, VosGlare, plan_glare, render_planned
 from glarelab.glare.rendering.display import Display, display_codes
 from glarelab.glare.rendering.multires import multires_kernels
 from glarelab.glare.rendering.plan import CUT_SHARE
-from glarelab.stimuli.calibration import Calibration
-from numpy.testing import assert_allclose
-
-from glarelab import glare
-from glarelab.bench import CALIBRATION, MODELS, WORKLOADS, _model, workload
 
 LUT = Calibration.load(CALIBRATION).lut  # the shipped 10-bit, 433 cd/m² synthetic display
 
@@ -30,7 +30,7 @@ def test_default_stays_within_half_a_code_of_the_exact_render_on_every_workload(
     # issue 7: the default add_glare within 0.5 display code everywhere, on every workload
     image, pixel = workload(name)
     for model_name in MODELS[name]:
-        model = _model(model_name, pixel)
+        model = bench_model(model_name, pixel)
         renderer = GlareRenderer(model, pixel_deg=pixel, shape=image.shape, display=LUT)
         planned = renderer.render(image)
         exact = _exact(image, model, pixel, kernel=renderer.kernel()).image

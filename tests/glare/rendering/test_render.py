@@ -1,11 +1,12 @@
 import numpy as np
 import pytest
-from glarelab.glare import GaussianGlare, GlareRenderer, VosGlare, add_glare, render_glare
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 from numpy.testing import assert_allclose
 from scipy.signal import convolve
+
+from glarelab.glare import GaussianGlare, GlareRenderer, VosGlare, add_glare, render_glare
 
 MODELS = [GaussianGlare(sigma_deg=0.2), VosGlare(), VosGlare(regime="mesopic", flare_lines=True)]
 

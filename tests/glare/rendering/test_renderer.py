@@ -5,13 +5,13 @@ from dataclasses import dataclass
 
 import numpy as np
 import pytest
-from glarelab.glare import GaussianGlare, GlareModel, GlareRenderer, VosGlare
-from glarelab.glare.rendering.compose import compose
-from glarelab.glare.rendering.renderer import SPECTRA_BYTES
 from numpy.testing import assert_allclose
 from scipy.signal import fftconvolve
 
 from glarelab import glare
+from glarelab.glare import GaussianGlare, GlareModel, GlareRenderer, VosGlare
+from glarelab.glare.rendering.compose import compose
+from glarelab.glare.rendering.renderer import SPECTRA_BYTES
 
 
 def _night(shape, lamps, seed=0):

@@ -1,0 +1,628 @@
+"""Reading session CSVs: every cell checked, every session vouched for, nothing dropped silently.
+
+The columns are the protocol's (:func:`glarelab.protocols.columns`), the ones the experiments
+write; files written before a column was added (its ``since``) are read with that column
+missing, but only where the session's sidecar names a data format older than the column (or
+there is no sidecar). A problem is reported with its file, line and column; all problems of all
+files are collected and raised together (:class:`DataError`).
+
+A session is counted only if the analysis can vouch for it:
+
+- its sidecar (the ``.json`` beside the CSV) is a file of this study, run with this protocol
+  (its sha256), with the stimulus set and calibration the report is given, and names the
+  participant and session its rows and its file name name;
+- its rows are complete and in order by their own trial numbers (a spreadsheet's sorting does
+  not change the analysis): a trial missing or given twice is named, and so are a header that
+  is not on the first line, a last row cut short, values no session can write (an infinite
+  time, a block the experiment does not have, contradictory flags) and a file of a data format
+  that must have a column it lacks;
+- it is not a pilot (sidecar ``pilot: true``): pilot sessions are left out and listed, or
+  analysed and listed when the caller asks (``include_pilots``);
+- it is the only session of its participant among the files.
+
+A design with a missing cell is refused naming the participant and the cell, unless the caller
+asks to exclude incomplete participants, in which case they are excluded and listed (the report
+shows the list). The paradigm's own rules (its design and the values its sessions can write)
+come from its module in :data:`glarelab.analysis.paradigms.PARADIGMS`, so a new paradigm needs
+no change here.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+import re
+from pathlib import Path
+
+import pandas as pd
+
+from glarelab.analysis.dataset import DataError, Dataset, Design, where
+from glarelab.analysis.paradigms import PARADIGMS
+from glarelab.protocols import columns
+from glarelab.protocols.keys import TOKEN
+
+# the numbers a session CSV holds, as format_value writes them (int() and float() also read
+# "2_50" as 250 and surrounding spaces)
+_INTEGER = re.compile(r"[+-]?\d+")
+_NUMBER = re.compile(r"[+-]?(\d+(\.\d*)?|\.\d+)([eE][+-]?\d+)?|[+-]?(nan|inf|infinity)", re.I)
+# the name a session's files get: PARTICIPANT_STUDY_sN_YYYY-MM-DD_HHMM[_pilot].csv
+_FILE_NAME = (
+    r"(?P<participant>.+)_{study}_s(?P<session>\d+)_\d{{4}}-\d{{2}}-\d{{2}}_\d{{4}}"
+    r"(?P<pilot>_pilot)?\.csv"
+)
+
+__all__ = ["DataError", "Dataset", "Design", "load_sessions", "where"]
+
+# columns added after the first data format, as files written before them are read: every
+# trial of those files counted (no presentation was repeated); the others are missing
+LEGACY_DEFAULTS = {"counted": True}
+
+
+def _version(text) -> tuple[int, ...] | None:
+    """A data-format version as numbers (``"0.4"`` → ``(0, 4)``); None if it is not one."""
+    if not isinstance(text, str) or not re.fullmatch(r"\d+(\.\d+)*", text):
+        return None
+    return tuple(int(part) for part in text.split("."))
+
+
+def _parse(cell: str, column, where: str, problems: list[str]):
+    if cell == "":
+        if not column.optional:
+            problems.append(f"{where}: empty, a {column.kind.__name__} is required ({column.doc})")
+        return None
+    try:
+        if column.kind is bool:
+            if cell not in ("true", "false"):
+                raise ValueError
+            value = cell == "true"
+        elif column.kind is int:
+            if not _INTEGER.fullmatch(cell):  # int() reads "2_50" as 250 and " 7" as 7
+                raise ValueError
+            value = int(cell)
+        elif column.kind is float:
+            if not _NUMBER.fullmatch(cell):  # float() reads "2_50" as 250.0
+                raise ValueError
+            value = float(cell)
+        elif column.name == "participant" and not TOKEN.match(cell):
+            problems.append(
+                f"{where}: {cell!r} is not a participant id (letters, digits, '_', '-', '.'; "
+                "no spaces or line breaks)"
+            )
+            return None
+        else:
+            value = cell
+    except ValueError:
+        problems.append(f"{where}: {cell!r} is not a {column.kind.__name__} ({column.doc})")
+        return None
+    if column.choices is not None and value not in column.choices:
+        problems.append(f"{where}: {cell!r} is not one of {', '.join(column.choices)}")
+        return None
+    if isinstance(value, float) and not math.isfinite(value):
+        problems.append(f"{where}: {cell!r} is not a finite number ({column.doc})")
+        return None
+    if isinstance(value, int | float) and not isinstance(value, bool):
+        if (column.low is not None and value < column.low) or (
+            column.high is not None and value > column.high
+        ):
+            low = "-inf" if column.low is None else column.low
+            high = "inf" if column.high is None else column.high
+            bounds = f"[{low}, {high}]"
+            problems.append(
+                f"{where}: {cell!r} is outside {bounds}{' ' + column.unit if column.unit else ''}"
+            )
+            return None
+    return value
+
+
+def _read_file(path: Path, protocol, sidecar: dict | None, problems: list[str]) -> list[dict]:
+    study = protocol.study
+    expected = columns(protocol)
+    names = [c.name for c in expected]
+    rows: list[dict] = []
+    try:  # utf-8-sig: a spreadsheet's "CSV UTF-8" starts with a byte-order mark
+        text = path.read_text(encoding="utf-8-sig")
+    except UnicodeDecodeError as error:
+        problems.append(f"{path}: not UTF-8 text ({error.reason} at byte {error.start})")
+        return rows
+    if not text:
+        problems.append(f"{path}: empty file, no header")
+        return rows
+    # strict: a quote left open at the end (a row cut inside its comment) is an error, not
+    # a cell that silently runs to the end of the file
+    reader = csv.reader(io.StringIO(text, newline=""), strict=True)
+    records: list[tuple[int, list[str]]] = []
+    try:
+        for cells in reader:
+            records.append((reader.line_num, cells))
+    except csv.Error as error:  # an open quote, or a cell over the csv module's size limit
+        problems.append(
+            f"{path}, line {reader.line_num}: not readable as CSV ({error}): a row cut short "
+            "(a copy interrupted?) or a quote left open"
+        )
+        return rows
+    if not text.endswith(("\n", "\r")):
+        problems.append(
+            f"{path}, line {records[-1][0]}: the file ends inside its last row (no line break "
+            "after it): the row may be cut short (a copy interrupted?); if it is complete "
+            "(an editor saved it without one), add the line break"
+        )
+        return rows
+    header = records[0][1]
+    later = [line for line, cells in records[1:] if cells == names or cells == header]
+    if header != names and later:
+        problems.append(
+            f"{path}, line {later[0]}: the header is on line {later[0]}, not the first line "
+            "(rows sorted in a spreadsheet with the header among them?)"
+        )
+        return rows
+    if later:
+        problems.append(
+            f"{path}, line {later[0]}: the header repeated inside the data (files joined, or "
+            "rows sorted in a spreadsheet?)"
+        )
+        return rows
+    twice = sorted({n for n in header if header.count(n) > 1})
+    if twice:
+        problems.append(
+            f"{path}, line 1: column(s) {', '.join(twice)} appear more than once; each "
+            "column must appear once (which one holds the data?)"
+        )
+        return rows
+    data_format = _version((sidecar or {}).get("data_format"))
+    optional = {  # columns an older file may lack: added after the file's data format
+        c.name
+        for c in expected
+        if c.since != "0.1" and (data_format is None or data_format < _version(c.since))
+    }
+    missing = [n for n in names if n not in header and n not in optional]
+    extra = [n for n in header if n not in names]
+    if missing or extra:
+        first = dict(zip(header, records[1][1], strict=False)) if len(records) > 1 else {}
+        other = first.get("study")
+        newer = [n for n in missing if _since(expected, n) != "0.1"]
+        problems.append(
+            f"{path}, line 1: columns do not match the {study} schema"
+            + (
+                f" (its study column says {other!r}: a CSV of another study?)"
+                if other and other != study
+                else ""
+            )
+            + (f"; missing {missing}" if missing else "")
+            + (f"; unexpected {extra}" if extra else "")
+            + (
+                f" (its sidecar says data format {sidecar.get('data_format')}, whose files "
+                f"have {', '.join(newer)})"
+                if sidecar is not None and newer
+                else ""
+            )
+        )
+        return rows
+    for line, cells in records[1:]:
+        if len(cells) != len(header):
+            problems.append(
+                f"{path}, line {line}: {len(cells)} cells, the header has {len(header)}"
+            )
+            continue
+        record = dict(zip(header, cells, strict=True))
+        if record["study"] != study:
+            problems.append(
+                f"{path}, line {line}, column study: {record['study']!r}: this is not a "
+                f"{study} file (a CSV from another protocol?)"
+            )
+            continue
+        parsed = {
+            c.name: _parse(record[c.name], c, f"{path}, line {line}, column {c.name}", problems)
+            if c.name in record
+            else LEGACY_DEFAULTS.get(c.name)
+            for c in expected
+        }
+        parsed["_file"], parsed["_line"] = str(path), line
+        rows.append(parsed)
+    return rows
+
+
+def _since(expected, name: str) -> str:
+    return next(c.since for c in expected if c.name == name)
+
+
+def _read_sidecar(path: Path, problems: list[str]) -> dict | None:
+    """The session's sidecar (the JSON beside its CSV), or None if there is none."""
+    sidecar_path = path.with_suffix(".json")
+    if not sidecar_path.exists():
+        return None
+    if not sidecar_path.is_file():
+        problems.append(
+            f"{sidecar_path}: not a file (a folder?); a session's sidecar is the JSON file "
+            "its run wrote beside the CSV"
+        )
+        return None
+    try:
+        sidecar = json.loads(sidecar_path.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as error:
+        problems.append(f"{sidecar_path}: not valid JSON ({error})")
+        return None
+    if not isinstance(sidecar, dict):
+        problems.append(f"{sidecar_path}: a sidecar must be a JSON object")
+        return None
+    return sidecar
+
+
+def _short(value) -> str:
+    return f"{str(value)[:12]}…" if value else repr(value)
+
+
+def _sidecar_contradictions(
+    path: Path, sidecar: dict, rows: list[dict], protocol, stimuli: dict | None
+) -> list[str]:
+    """Where a session's sidecar disagrees with its CSV, the protocol or the stimulus set the
+    analysis is given (a file of another session, study or protocol version put beside it, or
+    edited by hand)."""
+    where_ = path.with_suffix(".json")
+    problems = []
+    if sidecar.get("study") != protocol.study:
+        problems.append(
+            f"{where_}: study {sidecar.get('study')!r}, but the data are analysed as "
+            f"{protocol.study!r}"
+        )
+    recorded = sidecar.get("protocol_sha256")
+    if recorded is not None and recorded != protocol.sha256:
+        problems.append(
+            f"{where_}: the session ran with protocol sha256 {_short(recorded)}, the analysis "
+            f"is given {_short(protocol.sha256)}: another version of the protocol (analyse "
+            "it with the protocol file the session ran with, --protocol)"
+        )
+    if not isinstance(sidecar.get("simulated"), bool):
+        problems.append(
+            f"{where_}: simulated is {sidecar.get('simulated')!r}; must be true or false"
+        )
+    if not isinstance(sidecar.get("pilot", False), bool):
+        problems.append(f"{where_}: pilot is {sidecar.get('pilot')!r}; must be true or false")
+    for key in ("participant", "session"):
+        values = {str(row.get(key)) for row in rows}
+        if rows and values != {str(sidecar.get(key))}:
+            problems.append(
+                f"{where_}: {key} {sidecar.get(key)!r}, but its CSV's rows say "
+                f"{', '.join(sorted(values))}"
+            )
+    calibration = (sidecar.get("calibration") or {}).get("readings_sha256")
+    encoded = (sidecar.get("images_encoded_with") or {}).get("readings_sha256")
+    if calibration and encoded and calibration != encoded:
+        problems.append(
+            f"{where_}: the session's calibration (readings {_short(calibration)}) is not the "
+            f"one its images were encoded with ({_short(encoded)})"
+        )
+    if stimuli is not None:
+        used = sidecar.get("stimulus_set_manifest_sha256")
+        if used is not None and used != stimuli["manifest_sha256"]:
+            problems.append(
+                f"{where_}: the session ran on the stimulus set with manifest sha256 "
+                f"{_short(used)}, the analysis is given {_short(stimuli['manifest_sha256'])} "
+                "(another set, or the set was rebuilt since)"
+            )
+        source = (sidecar.get("images_encoded_with") or {}).get("source")
+        if encoded and source == "stimulus set" and encoded != stimuli["readings_sha256"]:
+            problems.append(
+                f"{where_}: the session's images were encoded with the calibration of its "
+                f"stimulus set (readings {_short(encoded)}), the set given has "
+                f"{_short(stimuli['readings_sha256'])}"
+            )
+    return problems
+
+
+def _recorded_trials(path: Path, sidecar: dict | None, rows: list[dict]) -> list[str]:
+    """A completed session's CSV holds the trials its sidecar recorded: name the trials
+    missing at its end (rows deleted, or the file cut at a line break), or the rows beyond
+    them."""
+    recorded = (sidecar or {}).get("trials")
+    if (
+        sidecar is None
+        or sidecar.get("status") != "completed"
+        or not isinstance(recorded, int)
+        or isinstance(recorded, bool)
+        or not rows
+    ):
+        return []
+    last = max(row["trial"] for row in rows if row.get("trial") is not None)
+    if last < recorded:
+        missing = f"{last + 1}" if last + 1 == recorded else f"{last + 1}-{recorded}"
+        return [
+            f"{path}: trial{'s' if last + 1 < recorded else ''} {missing} of the {recorded} the "
+            "completed session recorded missing (rows deleted, or the file cut short?)"
+        ]
+    if last > recorded:
+        return [
+            f"{path}: trial {recorded + 1} and after: the completed session recorded "
+            f"{recorded} trials, its CSV goes on to trial {last} (rows added?)"
+        ]
+    return []
+
+
+def _name_contradictions(
+    path: Path, rows: list[dict], sidecar: dict | None, study: str
+) -> list[str]:
+    """Where a session file's name disagrees with its rows (a file renamed to another
+    participant or session, or a pilot's file renamed to a participant's)."""
+    match = re.fullmatch(_FILE_NAME.format(study=re.escape(study)), path.name)
+    if match is None or not rows:
+        return []
+    problems = []
+    first = rows[0]
+    if match["participant"] != str(first.get("participant")):
+        problems.append(
+            f"{path}: the file name says participant {match['participant']}, its rows say "
+            f"{first.get('participant')} (a file renamed?)"
+        )
+    if int(match["session"]) != first.get("session"):
+        problems.append(
+            f"{path}: the file name says session {match['session']}, its rows say "
+            f"{first.get('session')} (a file renamed?)"
+        )
+    if sidecar is not None and isinstance(sidecar.get("pilot", False), bool):
+        if bool(match["pilot"]) != bool(sidecar.get("pilot", False)):
+            problems.append(
+                f"{path}: the file name says {'a pilot' if match['pilot'] else 'not a pilot'}, "
+                f"its sidecar says pilot {str(bool(sidecar.get('pilot'))).lower()}"
+            )
+    return problems
+
+
+def _trial_sequence(path: Path, rows: list[dict]) -> list[str]:
+    """A session's trials are numbered 1, 2, 3, … once each: name a repeated or missing one
+    (the rows may come in any order)."""
+    problems = []
+    seen: dict[int, int] = {}
+    for row in rows:
+        trial = row.get("trial")
+        if trial is None:
+            continue
+        if trial in seen:
+            problems.append(
+                f"{path}, line {row['_line']}: duplicated trial (participant "
+                f"{row['participant']}, session {row['session']}, trial {trial}), also on line "
+                f"{seen[trial]}"
+            )
+        else:
+            seen[trial] = row["_line"]
+    if seen:
+        absent = sorted(set(range(1, max(seen) + 1)) - set(seen))
+        if absent:
+            listed = ", ".join(map(str, absent[:10])) + (" …" if len(absent) > 10 else "")
+            problems.append(
+                f"{path}: trial{'s' if len(absent) > 1 else ''} {listed} of "
+                f"{max(seen)} missing (rows deleted?)"
+            )
+    return problems
+
+
+def _session(path: Path, rows: list[dict], sidecar: dict | None) -> dict:
+    """What the report says of one session file: who, how many trials, how it ended."""
+    first = rows[0] if rows else {}
+    status = "no sidecar" if sidecar is None else str(sidecar.get("status", "unknown"))
+    pilot = bool((sidecar or {}).get("pilot")) or path.name.endswith("_pilot.csv")
+    return {
+        "file": str(path),
+        "participant": first.get("participant", (sidecar or {}).get("participant")),
+        "session": first.get("session", (sidecar or {}).get("session")),
+        "trials": len(rows),
+        "status": status if rows or sidecar is not None else "header only",
+        "sidecar": sidecar is not None,
+        "simulated": None if sidecar is None else bool(sidecar.get("simulated")),
+        "pilot": pilot,
+    }
+
+
+def load_sessions(
+    protocol,
+    paths: list[str | Path],
+    *,
+    exclude_incomplete: bool = False,
+    include_aborted: bool = False,
+    include_pilots: bool = False,
+    stimuli: dict | None = None,
+) -> Dataset:
+    """Load and validate session CSVs of one study (its protocol sets the columns, the design
+    and the values a trial can hold).
+
+    Parameters
+    ----------
+    protocol
+        The study's validated protocol.
+    paths
+        Session CSV files; each one's JSON sidecar (same name) is read where it exists.
+    exclude_incomplete
+        Drop participants with a missing design cell (listed in ``Dataset.excluded``) instead
+        of refusing the data.
+    include_aborted
+        Analyse sessions that did not complete (their sidecar says aborted or running) and
+        skip files without trials, instead of refusing them; either way they are listed in
+        ``Dataset.sessions`` for the report.
+    include_pilots
+        Analyse pilot sessions (sidecar ``pilot: true``) as participants; by default they
+        are left out. Either way they are listed in ``Dataset.pilots``.
+    stimuli
+        The stimulus set the report is given, as ``{"manifest_sha256": …, "readings_sha256":
+        …}`` (the sha256 of its manifest and of its calibration's readings): sessions that ran
+        on another set, or whose images were encoded with the set's calibration and that is
+        another one, are refused.
+
+    Returns
+    -------
+    Dataset
+        The trials in the order of participant, session and trial number, whatever the
+        order of the files and of their rows.
+
+    Raises
+    ------
+    DataError
+        Naming file, line and column of every bad cell; a sidecar that disagrees with its
+        CSV, its file name, the protocol or the stimulus set; values the protocol or its
+        display cannot produce; trials duplicated or missing; a header not on the first line;
+        a row cut short; a CSV of another study; two sessions of one participant; sessions
+        that did not complete or hold no trials (unless ``include_aborted``); nothing left
+        but pilots; and (unless ``exclude_incomplete``) every participant missing a design
+        cell.
+    """
+    problems: list[str] = []
+    rows: list[dict] = []
+    sidecars: dict[str, dict] = {}
+    sessions: list[dict] = []
+    pilots: list[dict] = []
+    files = []
+    if not paths:
+        raise DataError(["no CSV files given"])
+    paradigm = PARADIGMS[protocol.paradigm]
+    design: Design = paradigm.design(protocol)
+    for raw in paths:
+        path = Path(raw)
+        if not path.is_file():
+            problems.append(
+                f"{path}: no such file" if not path.exists() else f"{path}: not a file"
+            )
+            continue
+        found = len(problems)
+        sidecar = _read_sidecar(path, problems)
+        read = _read_file(path, protocol, sidecar, problems)
+        if len(problems) > found:
+            continue
+        if sidecar is not None:
+            problems += _sidecar_contradictions(path, sidecar, read, protocol, stimuli)
+        problems += _name_contradictions(path, read, sidecar, protocol.study)
+        if len({(row["participant"], row["session"]) for row in read}) > 1:
+            problems.append(
+                f"{path}: rows of {len({row['participant'] for row in read})} participants or "
+                "sessions in one file; a session file holds one participant's session"
+            )
+        problems += _trial_sequence(path, read)
+        if len(problems) > found:
+            continue
+        problems += _recorded_trials(path, sidecar, read)
+        if len(problems) > found:
+            continue
+        session = _session(path, read, sidecar)
+        sessions.append(session)
+        if session["pilot"]:
+            pilots.append(session)
+            if not include_pilots:
+                continue
+        ended = session["status"] in ("completed", "no sidecar")
+        if not (read and ended) and not include_aborted:
+            why = "holds no trials" if not read else f"did not complete ({session['status']})"
+            problems.append(
+                f"{path}: the session {why}; --include-aborted analyses the sessions that did "
+                "not complete and skips those without trials, and the report lists them"
+            )
+            continue
+        if not read:
+            continue
+        files.append(str(path))
+        rows += read
+        if sidecar is not None:
+            sidecars[str(path)] = sidecar
+    if problems:
+        raise DataError(problems)
+    if not rows and pilots and not include_pilots:
+        names = ", ".join(Path(s["file"]).name for s in pilots)
+        raise DataError(
+            [
+                f"every session given is a pilot ({names}); pilot sessions are left out of "
+                "the analysis unless --include-pilots"
+            ]
+        )
+    trials = pd.DataFrame(rows)
+    if trials.empty:
+        raise DataError([f"{', '.join(s['file'] for s in sessions)}: no trials"])
+    problems += _several_sessions(trials)
+    if problems:
+        raise DataError(problems)
+    # the analysis sees the trials in the order of their own numbers, whatever the order of
+    # the files or of their rows (a spreadsheet's sort changes nothing)
+    trials["_order"] = trials["participant"].map(str)
+    trials = trials.sort_values(["_order", "session", "trial"], kind="stable")
+    trials = trials.drop(columns="_order").reset_index(drop=True)
+    problems += _blocks(trials, design)
+    problems += paradigm.check(trials, protocol)
+    analysed = trials[trials["block"] == design.block] if design.block else trials
+    excluded: dict[str, str] = {}
+    factors = list(design.factors)
+    # every participant, also one with no trial in the analysed block (a session aborted
+    # during training): they miss every cell
+    for participant in sorted(trials["participant"].unique(), key=str):
+        group = analysed[analysed["participant"] == participant]
+        counts = group.groupby(factors).size()
+        for cell in design.cells:
+            if counts.get(cell if len(cell) > 1 else cell[0], 0) == 0:
+                cell_where = dict(zip(factors, cell, strict=True))
+                message = f"participant {participant} has no trial at {cell_where}"
+                if exclude_incomplete:
+                    excluded.setdefault(participant, message)
+                else:
+                    problems.append(
+                        message
+                        + " (incomplete design; --exclude-incomplete drops such participants "
+                        "and the report lists them)"
+                    )
+                    break
+        if design.one_trial_per_cell and (counts > 1).any():
+            cell = counts[counts > 1].index[0]
+            problems.append(
+                f"participant {participant} has {counts.max()} trials at {cell}: unbalanced design"
+            )
+    if problems:
+        raise DataError(problems)
+    kept = trials[~trials["participant"].isin(excluded)].reset_index(drop=True)
+    if kept.empty:
+        raise DataError(
+            [
+                f"every participant ({len(excluded)}) misses a cell of the design and was "
+                "excluded (--exclude-incomplete): nothing is left to analyse; "
+                + "; ".join(excluded.values())
+            ]
+        )
+    return Dataset(
+        study=protocol.study,
+        trials=kept,
+        files=files,
+        sidecars=sidecars,
+        excluded=excluded,
+        sessions=sessions,
+        pilots=pilots,
+        pilots_included=include_pilots,
+        flags=paradigm.flags(kept, protocol),
+    )
+
+
+def _several_sessions(trials: pd.DataFrame) -> list[str]:
+    """A participant's trials come from one session file: name the files of a participant
+    given twice (the same CSV twice, a copy, or two sessions)."""
+    problems = []
+    spread = trials.groupby("participant")[["_file", "session"]].agg(
+        lambda column: list(dict.fromkeys(column))
+    )
+    for participant, (in_files, numbers) in spread.iterrows():
+        if len(in_files) < 2:
+            continue
+        listed = ", ".join(
+            f"{name} (session {trials.loc[trials['_file'] == name, 'session'].iloc[0]})"
+            for name in in_files
+        )
+        what = "the same session" if len(numbers) == 1 else f"{len(numbers)} sessions"
+        problems.append(
+            f"participant {participant}: {what} in {len(in_files)} files: {listed}; the "
+            "analysis takes one session per participant (the same CSV given twice, a copy, or "
+            "a second session?): give one of them"
+        )
+    return problems
+
+
+def _blocks(trials: pd.DataFrame, design: Design) -> list[str]:
+    """Trials in a block no session of the protocol writes (``Training`` for ``training``)."""
+    problems = []
+    unknown = trials[~trials["block"].isin(design.blocks)]
+    for _, row in unknown.head(20).iterrows():
+        problems.append(
+            f"{where(row)}, column block: {row['block']!r} is not a block of this protocol "
+            f"({', '.join(design.blocks)})"
+        )
+    return problems

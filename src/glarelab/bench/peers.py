@@ -1,0 +1,115 @@
+"""The peers the renderer is timed against: what a user could write with scipy and OpenCV,
+each given the kernel already digitised.
+
+- :func:`spectrum_peer`: ``irfft2(rfft2(ΔL) · K̂)`` with the kernel's spectrum made once
+  (float64 or float32), the best a user could write with ``scipy.fft``;
+- :func:`fftconvolve_peer`: ``scipy.signal.fftconvolve`` of the whole excess with the full
+  kernel;
+- :func:`gaussian_peers`: for the Gaussian, ``scipy.ndimage.gaussian_filter`` and OpenCV's
+  ``GaussianBlur`` (when ``cv2`` is installed), each truncated at 4-6 σ.
+
+Each returns a function of no arguments that renders the image (Yoshida's clamp at
+:data:`~glarelab.bench.scenes.L_DMAX`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+import scipy.fft
+
+from glarelab.bench.scenes import L_DMAX
+from glarelab.glare.rendering._convolve import FFT_WORKERS
+
+__all__ = [
+    "GAUSSIAN_PEER_TRUNCATE",
+    "PEER",
+    "PEER_SPECTRUM",
+    "PEER_SPECTRUM_32",
+    "fftconvolve_peer",
+    "gaussian_peers",
+    "spectrum_peer",
+]
+
+PEER = "peer: scipy fftconvolve, whole image, full kernel"
+PEER_SPECTRUM = "peer: rfft2 with precomputed kernel spectrum, float64"
+PEER_SPECTRUM_32 = "peer: rfft2 with precomputed kernel spectrum, float32"
+GAUSSIAN_PEER_TRUNCATE = (4.0, 5.0, 6.0)  # 4 σ is both libraries' default
+
+
+def spectrum_peer(image, kernel, dtype) -> Callable[[], np.ndarray]:
+    """The peer a user could write: the kernel's spectrum computed once, then per image
+    ``irfft2(rfft2(ΔL padded to next_fast_len) · K̂)``, every channel at once."""
+    height, width = image.shape[:2]
+    lengths = tuple(scipy.fft.next_fast_len(2 * n - 1, real=True) for n in (height, width))
+    placed = np.zeros(lengths + kernel.shape[2:], dtype=dtype)
+    placed[: 2 * height - 1, : 2 * width - 1] = kernel
+    placed = np.roll(placed, (1 - height, 1 - width), axis=(0, 1))
+    with scipy.fft.set_workers(FFT_WORKERS):
+        spectrum = scipy.fft.rfft2(placed, axes=(0, 1))
+    if image.ndim == 3 and kernel.ndim == 2:
+        spectrum = spectrum[..., None]
+    work = image.astype(dtype)
+
+    def peer():
+        with scipy.fft.set_workers(FFT_WORKERS):
+            excess = np.maximum(work - dtype(L_DMAX), dtype(0))
+            transformed = scipy.fft.rfft2(excess, s=lengths, axes=(0, 1)) * spectrum
+            spread = scipy.fft.irfft2(transformed, s=lengths, axes=(0, 1))[:height, :width]
+        return np.minimum(work + spread, dtype(L_DMAX))
+
+    return peer
+
+
+def fftconvolve_peer(image, kernel) -> Callable[[], np.ndarray]:
+    """``scipy.signal.fftconvolve`` of the whole excess image with the full kernel."""
+
+    from scipy.signal import fftconvolve
+
+    def peer():
+        excess = np.maximum(image - L_DMAX, 0.0)
+        with scipy.fft.set_workers(FFT_WORKERS):
+            if image.ndim == 3:
+                k = kernel if kernel.ndim == 3 else kernel[..., None]
+                spread = fftconvolve(excess, k, mode="same", axes=(0, 1))
+            else:
+                spread = fftconvolve(excess, kernel, mode="same")
+        return np.minimum(image + spread, L_DMAX)
+
+    return peer
+
+
+def gaussian_peers(image, pixel, model) -> dict[str, Callable[[], np.ndarray]]:
+    from scipy.ndimage import gaussian_filter
+
+    sigma_px = model.sigma_deg / pixel
+
+    def excess():
+        return np.maximum(image - L_DMAX, 0.0)
+
+    def scipy_filter(truncate):
+        return lambda: np.minimum(
+            image + gaussian_filter(excess(), sigma_px, mode="constant", truncate=truncate),
+            L_DMAX,
+        )
+
+    def opencv_blur(truncate):
+        size = 2 * math.ceil(truncate * sigma_px) + 1
+        return lambda: np.minimum(
+            image
+            + cv2.GaussianBlur(excess(), (size, size), sigma_px, borderType=cv2.BORDER_CONSTANT),
+            L_DMAX,
+        )
+
+    try:
+        import cv2
+    except ImportError:  # OpenCV is not a dependency; measured where it is installed
+        cv2 = None
+    peers = {}
+    for truncate in GAUSSIAN_PEER_TRUNCATE:
+        peers[f"peer: scipy gaussian_filter ({truncate:g} σ)"] = scipy_filter(truncate)
+        if cv2 is not None:
+            peers[f"peer: OpenCV GaussianBlur ({truncate:g} σ)"] = opencv_blur(truncate)
+    return peers

@@ -1,0 +1,168 @@
+"""The ``glarelab`` command: its parser, made of the command modules of
+:mod:`glarelab.commands`, and the one place errors become messages and exit statuses.
+
+Exit statuses: 0 done; 1 a check that found problems (``stimuli verify``, ``check-display``,
+``calibrate measure`` whose calibration failed); 2 refused: a bad argument, file or value, named
+in one line on stderr, nothing written; 3 a session stopped before it completed (Escape,
+Ctrl-C, kill); 4 a session stopped because its files could not be written (a full disk): its
+trials so far are on disk and its sidecar says why. An unexpected error prints its traceback
+and asks for a bug report.
+"""
+
+from __future__ import annotations
+
+import argparse
+import errno
+import os
+import signal
+import sys
+import traceback
+from collections.abc import Sequence
+from importlib import metadata
+
+from .commands import COMMANDS, MODULE_NAMES, load
+from .commands.common import HelpFormatter, Parser
+from .commands.common import log as _log
+
+__all__ = ["main"]  # and build_model, the render command's, imported on use
+NO_CACHE_ENV = (
+    "GLARELAB_NO_CACHE"  # glarelab.glare.models.cache.NO_CACHE_ENV, without importing glare
+)
+
+
+def __getattr__(name: str):
+    if name == "build_model":  # the render command's, imported with it
+        return load("render").build_model
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+ISSUES = "a bug in glarelab: please report it with the command you ran and the lines above"
+
+
+def _version() -> str:
+    try:
+        return metadata.version("glarelab")
+    except metadata.PackageNotFoundError:  # pragma: no cover - run from a source tree
+        return "unknown"
+
+
+def _chosen(argv: Sequence[str]) -> str | None:
+    """The command named in ``argv``: its first argument that is not an option."""
+    return next((a for a in argv if not a.startswith("-")), None)
+
+
+def _parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
+    """The parser. Only the module of the command in ``argv`` is imported (all of them when
+    ``argv`` is None); the other commands are listed with their help from the table."""
+    parser = Parser(
+        prog="glarelab",
+        description="Glare illusion psychophysics suite",
+        formatter_class=HelpFormatter,
+    )
+    parser.add_argument("--version", action="version", version=f"glarelab {_version()}")
+    parser.add_argument(
+        "--no-cache",
+        action="store_true",
+        help="digitise every kernel instead of reading the kernel cache (glarelab cache info)",
+    )
+    commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    chosen = None if argv is None else _chosen(argv)
+    for name in MODULE_NAMES:
+        if argv is None or (chosen in COMMANDS and COMMANDS[chosen][0] == name):
+            load(name).add(commands)
+        else:
+            for command, (module, text) in COMMANDS.items():
+                if module == name:
+                    commands.add_parser(command, help=text, add_help=False)
+    return parser
+
+
+def _refusal(error: BaseException) -> str | None:
+    """The one-line message of an anticipated error, or None for a bug."""
+    from glarelab.analysis.load import DataError
+    from glarelab.display.photometer import PhotometerError, PluginMissing
+    from glarelab.protocols import ProtocolError
+
+    if isinstance(error, ProtocolError | DataError | PhotometerError | PluginMissing):
+        return str(error)
+    if isinstance(error, ValueError | FileNotFoundError | IsADirectoryError):
+        return str(error)
+    if isinstance(error, NotADirectoryError | PermissionError | FileExistsError):
+        where = f" ({error.filename})" if error.filename else ""
+        return f"{error.strerror or error}{where}"
+    if isinstance(error, OSError) and error.errno in (errno.ENOSPC, errno.EFBIG, errno.EDQUOT):
+        where = f" writing {error.filename}" if error.filename else ""
+        return f"the disk is full{where} ({error.strerror}); what was written before stays"
+    if isinstance(error, OSError) and error.filename:  # a file that cannot be read or written
+        return f"{error.filename}: {error.strerror or error}"
+    if type(error).__name__ == "NoSuchDisplayException":  # pyglet, opening a window
+        return (
+            f"no display to open a window on (DISPLAY={os.environ.get('DISPLAY', '')!r}): run "
+            "it on the lab's screen, or under xvfb-run for a dry run"
+        )
+    if isinstance(error, MemoryError):
+        return "not enough memory for this size; try a smaller image or kernel"
+    return None
+
+
+def _quiet_stdout() -> None:
+    """The reader of stdout went away (``glarelab … | head``): send the rest nowhere, so
+    that Python's own flush at exit does not fail again."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, sys.stdout.fileno())
+    os.close(devnull)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the ``glarelab`` command; returns the exit status.
+
+    Ctrl-C (SIGINT) ends any command with status 3 and one line, whenever it comes; a closed
+    pipe on stdout (SIGPIPE, ``| head``) ends it quietly with status 0.
+    """
+    command = "glarelab"
+    argv = sys.argv[1:] if argv is None else list(argv)
+    previous = os.environ.get(NO_CACHE_ENV)
+    args = None
+    try:
+        parser = _parser(argv)
+        args = parser.parse_args(argv)
+        command = args.command
+        from glarelab.experiments.loop import SessionAborted
+
+        if args.no_cache:  # for this command and the processes it starts (Dask workers)
+            os.environ[NO_CACHE_ENV] = "1"
+        try:
+            return args.run(args)
+        except SessionAborted as stop:
+            why = stop.args[0] if stop.args else "SIGINT"
+            _log(f"{args.command}: stopped by {why}; nothing more was written")
+            return 3
+        except (KeyboardInterrupt, BrokenPipeError):
+            raise
+        except Exception as error:
+            message = _refusal(error)
+            if message is None:
+                traceback.print_exc()
+                print(f"glarelab {args.command}: {ISSUES}", file=sys.stderr)
+                return 70
+            print(f"glarelab {args.command}: {message}", file=sys.stderr)
+            return 2
+    except KeyboardInterrupt:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)  # a second Ctrl-C while cleaning up
+        # a session's own trials are on disk and its sidecar says how it ended; every other
+        # file is written whole or not at all, so an interruption leaves the output as it was
+        _log(f"{command}: stopped by SIGINT; nothing more was written")
+        return 3
+    except BrokenPipeError:
+        _quiet_stdout()
+        return 0
+    finally:
+        if args is not None and args.no_cache:
+            if previous is None:
+                os.environ.pop(NO_CACHE_ENV, None)
+            else:
+                os.environ[NO_CACHE_ENV] = previous
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,293 @@
+"""What every command shares: the parser's manners, checked argument types, output folders
+that never lose a file, a memory check before large work, and the progress log."""
+
+from __future__ import annotations
+
+import argparse
+import copy
+import json
+import math
+import os
+import sys
+from pathlib import Path
+
+from glarelab.files.atomic import write_text
+from glarelab.files.folders import claim_files, list_files, listed_files
+
+__all__ = [
+    "FORCE_HELP",
+    "MARKER",
+    "PROTOCOL_HELP",
+    "HelpFormatter",
+    "Parser",
+    "check_memory",
+    "claim_output",
+    "count",
+    "inside_whole_output",
+    "log",
+    "number",
+    "output_file",
+    "output_folder",
+    "writes_into",
+]
+
+PROTOCOL_HELP = "a shipped study's name (yoshida2008, spencer1995, luidolt2020, …) or a TOML file"
+WHOLE_OUTPUTS = {"stimulus set", "report", "demo"}  # folders replaced and checked whole
+CALIBRATION_FORMAT = "glarelab display calibration v1"  # glarelab.display.calibration.FORMAT
+MARKER = ".glarelab"  # names the command that made a folder, so it may replace its own output
+FORCE_HELP = "overwrite an existing file glarelab did not write, or replace a symbolic link"
+
+
+def log(message: str) -> None:
+    """A progress line on stderr (stdout keeps what a command prints as its result)."""
+    print(f"[glarelab] {message}", file=sys.stderr, flush=True)
+
+
+class HelpFormatter(argparse.HelpFormatter):
+    """Help that shows every option's default (when it has one worth saying), also for an
+    option without a help text (argparse prints nothing for those)."""
+
+    @staticmethod
+    def _default(action: argparse.Action) -> str | None:
+        default = action.default
+        if not action.option_strings or default in (None, False, "", argparse.SUPPRESS):
+            return None
+        shown = " ".join(map(str, default)) if isinstance(default, list | tuple) else default
+        return str(shown).replace("%", "%%")  # the help text is a %-format
+
+    def _format_action(self, action: argparse.Action) -> str:
+        if action.help is None and self._default(action) is not None:
+            action = copy.copy(action)
+            action.help = f"default {self._default(action)}"
+        return super()._format_action(action)
+
+    def _get_help_string(self, action: argparse.Action) -> str:
+        text = action.help or ""
+        shown = self._default(action)
+        if shown is None or "default" in text:
+            return text
+        return f"{text} (default {shown})" if text else f"default {shown}"
+
+
+class Parser(argparse.ArgumentParser):
+    """An argument parser whose errors are one line, naming the command and the problem."""
+
+    def __init__(self, *args, **kwargs):
+        kwargs.setdefault("formatter_class", HelpFormatter)
+        super().__init__(*args, **kwargs)
+
+    def error(self, message: str):
+        print(f"{self.prog}: {message} (see {self.prog} --help)", file=sys.stderr)
+        raise SystemExit(2)
+
+
+def number(low: float | None = None, high: float | None = None, *, above: bool = False):
+    """An argparse type: a finite number in ``[low, high]`` (``(low, high]`` if ``above``)."""
+
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+        bad = not math.isfinite(value)
+        bad |= low is not None and (value <= low if above else value < low)
+        bad |= high is not None and value > high
+        if bad:
+            left = "(" if above else "["
+            raise argparse.ArgumentTypeError(
+                f"{text} must be a finite number in {left}{low if low is not None else '-inf'}, "
+                f"{high if high is not None else 'inf'}]"
+            )
+        return value
+
+    return parse
+
+
+def count(low: int = 1, high: int | None = None):
+    """An argparse type: a whole number in ``[low, high]``."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+        if value < low or (high is not None and value > high):
+            raise argparse.ArgumentTypeError(
+                f"{value} must be a whole number from {low}{f' to {high}' if high else ' up'}"
+            )
+        return value
+
+    return parse
+
+
+def output_folder(path: Path, command: str) -> Path:
+    """The folder a command fills with files of its choosing: created if new, and reused only
+    when the same command made it (a previous output, which it may replace). A file, or a
+    folder holding anything else, is refused before anything is written.
+
+    Raises
+    ------
+    ValueError
+        Naming the folder and why.
+    """
+    path = Path(path)
+    if path.exists() and not path.is_dir():
+        raise ValueError(f"--out {path} is a file; give a folder for the {command} output")
+    if path.is_dir() and any(path.iterdir()):
+        marker = path / MARKER
+        made_by = marker.read_text().strip() if marker.is_file() else None
+        if made_by != command:
+            raise ValueError(
+                f"--out {path} is a folder with files glarelab {command} did not write "
+                f"({'made by glarelab ' + made_by if made_by else 'not a glarelab output'}); "
+                "give a new or empty folder — nothing was changed"
+            )
+    path.mkdir(parents=True, exist_ok=True)
+    marker = path / MARKER
+    if not marker.is_file() or marker.read_text() != command + "\n":  # unchanged if so
+        write_text(marker, command + "\n")
+    return path
+
+
+def writes_into(path: Path, names: list[str], command: str) -> Path:
+    """A folder a command writes a fixed set of named files into (``docs``, ``gallery``, …):
+    created if new; a file of that name glarelab did not write there is refused
+    (``glarelab.files.folders.claim_files``); other files in it are left alone."""
+    path = Path(path)
+    if path.exists() and not path.is_dir():
+        raise ValueError(f"{path} is a file; give a folder for {', '.join(names)}")
+    path.mkdir(parents=True, exist_ok=True)
+    claim_files(path, names, command)
+    return path
+
+
+def _same_file(first: Path, second: Path) -> bool:
+    try:
+        return first.resolve() == second.resolve() or (
+            first.exists() and second.exists() and os.path.samefile(first, second)
+        )
+    except OSError:
+        return False
+
+
+def inside_whole_output(path: Path) -> str | None:
+    """What kind of whole output (a stimulus set, a report) holds ``path``, if one does."""
+    for folder in Path(path).absolute().parents:
+        kinds = set(listed_files(folder).values())
+        whole = sorted(kinds & WHOLE_OUTPUTS)
+        if whole:
+            return f"{whole[0]} {folder}"
+        manifest = folder / "manifest.json"
+        if manifest.is_file() and manifest.stat().st_size < 2**26:
+            try:
+                data = json.loads(manifest.read_text(encoding="utf-8"))
+            except (OSError, ValueError):
+                continue
+            if isinstance(data, dict) and str(data.get("format", "")).startswith(
+                "glarelab stimulus set"
+            ):
+                return f"stimulus set {folder}"
+    return None
+
+
+def verified_calibration(path: Path) -> str | None:
+    """The status of the glarelab calibration at ``path`` if it holds one with a
+    verification pass (``passed`` or ``failed``), else None."""
+    path = Path(path)
+    if not path.is_file() or path.stat().st_size > 2**26:
+        return None
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    if isinstance(data, dict) and data.get("format") == CALIBRATION_FORMAT:
+        status = data.get("status")
+        if status in ("passed", "failed") or data.get("verification"):
+            return str(status)
+    return None
+
+
+def output_file(
+    path: Path,
+    suffixes: tuple[str, ...],
+    what: str,
+    *,
+    inputs=(),
+    force: bool = False,
+    shared: bool = False,
+    verified_ok: bool = False,
+) -> Path:
+    """A file a command writes: its suffix must say what it holds, it must not be an input,
+    a file of a stimulus set or report, or a verified calibration; its folder must exist.
+    Without ``force`` it must not be a symbolic link, nor a file glarelab did not write there
+    (as the folder's listing, :mod:`glarelab.files.folders`, says); ``shared`` says the caller
+    has checked the folder's listing itself (a batch of outputs).
+
+    Raises
+    ------
+    ValueError
+        Naming the file and why (nothing is written).
+    """
+    path = Path(path)
+    if path.suffix.lower() not in suffixes:
+        raise ValueError(
+            f"{path}: {what} must be named {' or '.join(suffixes)} (got {path.suffix or 'none'})"
+        )
+    if path.is_dir():
+        raise ValueError(f"{path} is a folder; give a file name for the {what}")
+    for source in inputs:
+        if source is not None and _same_file(Path(source), path):
+            raise ValueError(f"{path} is also an input: the {what} would overwrite it")
+    if not path.parent.is_dir():
+        raise ValueError(f"{path}: no folder {path.parent} to write the {what} into")
+    whole = inside_whole_output(path)
+    if whole is not None:
+        raise ValueError(
+            f"{path} is inside the {whole}, which glarelab writes and checks as a whole: write "
+            f"the {what} elsewhere (nothing was changed)"
+        )
+    status = None if verified_ok else verified_calibration(path)
+    if status is not None:
+        raise ValueError(
+            f"{path} is a display calibration with a verification pass ({status}): the {what} "
+            "would overwrite it; give another name (nothing was changed)"
+        )
+    if path.is_symlink() and not force:
+        raise ValueError(
+            f"{path} is a symbolic link (to {os.readlink(path)}); glarelab does not write "
+            f"through links: give another name, or --force to replace the link with the {what}"
+        )
+    if path.exists() and not force and not shared and path.name not in listed_files(path.parent):
+        raise ValueError(
+            f"{path} exists and glarelab did not write it there; give another name, or --force "
+            f"to overwrite it with the {what} (nothing was changed)"
+        )
+    return path
+
+
+def claim_output(path: Path, kind: str) -> Path:
+    """Just before writing ``path``: list it as glarelab's (so a later run may replace it)."""
+    path = Path(path)
+    list_files(path.parent, [path.name], kind)
+    return path
+
+
+def available_memory() -> int | None:
+    """Bytes the system can still give (Linux's MemAvailable); None where unknown."""
+    try:
+        for line in Path("/proc/meminfo").read_text().splitlines():
+            if line.startswith("MemAvailable:"):
+                return int(line.split()[1]) * 1024
+    except OSError:
+        return None
+    return None
+
+
+def check_memory(needed: float, what: str) -> None:
+    """Refuse work that needs more memory than the system has, before allocating it."""
+    free = available_memory()
+    if free is not None and needed > free:
+        raise ValueError(
+            f"{what} needs about {needed / 2**30:.1f} GiB of memory, {free / 2**30:.1f} GiB "
+            "are available; use a smaller size"
+        )

@@ -1,0 +1,609 @@
+"""The ``glarelab`` commands of rendering glare: render, psf, gallery, looks."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+
+from glarelab import glare
+from glarelab.display.calibration import Calibration
+from glarelab.files.atomic import atomic_path, write_text
+from glarelab.stimuli.apertures import load_aperture_image
+from glarelab.stimuli.exr import read_exr, write_exr
+from glarelab.stimuli.preview import preview_png, psf_png
+from glarelab.stimuli.shapes import disk
+
+from .common import (
+    FORCE_HELP,
+    check_memory,
+    claim_output,
+    count,
+    number,
+    output_file,
+    writes_into,
+)
+from .common import log as _log
+
+# bytes per pixel a render needs at its peak (measured on 512²-2048² scenes, exact and planned
+# renders: 230-240 for luminance, 300 for RGB; with headroom)
+RENDER_BYTES_PER_PIXEL = {1: 260, 3: 340}
+# a kernel's digitisation: about 110 bytes per pixel, plus the wave model's pupil spectra
+PSF_BYTES_PER_PIXEL = 128
+PSF_FIXED_BYTES = 0.5 * 2**30
+
+
+# the options each model takes; one given to a model that ignores it is refused
+MODEL_OPTIONS = {
+    "gaussian": {"sigma_deg"},
+    "vos": {"regime", "age", "flare_lines", "seed", "wavelength_nm"},
+    "wave": {
+        "pupil_mm", "no_eyelashes", "no_eyelid", "particles", "fresnel", "spectral", "seed",
+        "source_x_deg", "diaphragm_sides", "cross_screen", "aperture_image",
+        "aperture_spacing_mm",
+    },
+}  # fmt: skip
+MODEL_OPTIONS["hybrid"] = MODEL_OPTIONS["wave"] | {"regime", "age"}
+
+
+def _check_options(args: argparse.Namespace) -> None:
+    """Refuse an option the chosen model would ignore (``--pupil-mm`` with the Gaussian)."""
+    defaults = argparse.ArgumentParser()
+    _add_model_options(defaults)
+    default = vars(defaults.parse_args([]))
+    every = set().union(*MODEL_OPTIONS.values())
+    ignored = sorted(
+        name
+        for name in every - MODEL_OPTIONS[args.model]
+        if getattr(args, name, default[name]) != default[name]
+    )
+    if ignored:
+        shown = ", ".join("--" + name.replace("_", "-") for name in ignored)
+        raise ValueError(f"{shown}: not an option of --model {args.model}, which would ignore it")
+
+
+def build_model(args: argparse.Namespace) -> glare.GlareModel:
+    """The glare model named by the command-line options."""
+    if args.model not in MODEL_OPTIONS:
+        raise ValueError(f"--model must be one of {MODEL_CHOICES}; got {args.model!r}")
+    _check_options(args)
+    if args.model == "gaussian":
+        return glare.GaussianGlare(sigma_deg=args.sigma_deg)
+    if args.model == "vos":
+        return glare.VosGlare(
+            regime=args.regime,
+            age=args.age,
+            flare_lines=args.flare_lines,
+            seed=args.seed,
+            wavelength_nm=args.wavelength_nm,
+        )
+    if args.model in ("wave", "hybrid"):
+        image = None
+        if args.aperture_image is not None:
+            image = load_aperture_image(args.aperture_image)
+        wave = glare.WaveOpticsGlare(
+            pupil_mm=args.pupil_mm,
+            eyelashes=not args.no_eyelashes,
+            eyelid=not args.no_eyelid,
+            particles=args.particles,
+            fresnel=args.fresnel,
+            spectral=args.spectral,
+            seed=args.seed,
+            source_x_deg=args.source_x_deg,
+            diaphragm_sides=args.diaphragm_sides,
+            cross_screen=args.cross_screen,
+            obstacle_image=image,
+            obstacle_spacing_mm=args.aperture_spacing_mm,
+        )
+        if args.model == "wave":
+            return wave
+        return glare.HybridGlare(wave=wave, regime=args.regime, age=args.age)
+    raise ValueError(f"--model must be one of {MODEL_CHOICES}; got {args.model!r}")
+
+
+MODEL_CHOICES = ("gaussian", "vos", "wave", "hybrid")
+MIN_PIXEL_DEG = 1e-5  # 0.04 arcsec, far below the eye's resolution; smaller is a typo
+MAX_PARTICLES = 100_000  # 100 times Luidolt's 1000 (Fig. 5.6); each is drawn into the pupil
+
+
+def _add_model_options(parser: argparse.ArgumentParser, default: str = "vos") -> None:
+    group = parser.add_argument_group("glare model")
+    group.add_argument("--model", choices=MODEL_CHOICES, default=default)
+    group.add_argument(
+        "--sigma-deg", type=number(MIN_PIXEL_DEG, 90), default=0.34, help="Gaussian σ (deg)"
+    )
+    group.add_argument("--regime", choices=glare.vos.REGIMES, default="photopic")
+    group.add_argument(
+        "--age", type=number(0, 120), default=None, help="observer age, years (eq. 10)"
+    )
+    group.add_argument("--flare-lines", action="store_true", help="add Spencer's flare lines")
+    group.add_argument("--seed", type=count(0), default=0, help="seed of the flare lines")
+    group.add_argument(
+        "--wavelength-nm",
+        type=number(0, above=True),
+        default=None,
+        help="monochromatic halo (default: white)",
+    )
+    wave = parser.add_argument_group("wave optics (--model wave|hybrid)")
+    wave.add_argument(
+        "--pupil-mm", type=number(0, above=True), default=None, help="default: Moon-Spencer"
+    )
+    wave.add_argument("--no-eyelashes", action="store_true")
+    wave.add_argument("--no-eyelid", action="store_true")
+    wave.add_argument("--particles", type=count(0, MAX_PARTICLES), default=1000)
+    wave.add_argument("--fresnel", action="store_true", help="Luidolt eq. 5.6 Fresnel term")
+    wave.add_argument("--spectral", choices=glare.wave.SPECTRAL_METHODS, default="scaled")
+    wave.add_argument("--source-x-deg", type=number(-90, 90), default=0.0)
+    wave.add_argument("--diaphragm-sides", type=count(3, 360), default=None)
+    wave.add_argument("--cross-screen", choices=("4-point", "trigonal"), default=None)
+    wave.add_argument("--aperture-image", type=Path, default=None, help="obstacle PNG/EXR")
+    wave.add_argument("--aperture-spacing-mm", type=number(0, above=True), default=None)
+
+
+def _short(model: glare.GlareModel) -> str:
+    """A model's name and the parameters that differ from its defaults (its repr is long)."""
+    import dataclasses
+
+    if not dataclasses.is_dataclass(model):
+        return type(model).__name__
+    changed = []
+    for item in dataclasses.fields(model):
+        value = getattr(model, item.name)
+        default = item.default if item.default is not dataclasses.MISSING else None
+        simple = isinstance(value, int | float | str | bool | None)
+        if item.repr and simple and value != default:
+            changed.append(f"{item.name}={value!r}")
+    text = f"{type(model).__name__}({', '.join(changed)})"
+    return text if len(text) <= 120 else text[:117] + "..."
+
+
+def odd_size(text: str) -> int:
+    """An argparse type: a kernel's odd size in pixels (its centre is a pixel)."""
+    size = count(3, 16385)(text)
+    if size % 2 == 0:
+        raise argparse.ArgumentTypeError(f"{size} must be odd, so the kernel has a centre pixel")
+    return size
+
+
+def _render(args: argparse.Namespace) -> int:
+    *inputs, output = args.paths
+    if not inputs:
+        raise ValueError("render needs an input EXR and an output EXR (or folder)")
+    for source in inputs:
+        if not Path(source).is_file():
+            raise FileNotFoundError(f"input {source}: no such file")
+    folder = len(inputs) > 1 or output.endswith(("/", "\\")) or Path(output).is_dir()
+    if folder:  # many files: one renderer per image shape, its kernel made once
+        if args.preview:
+            raise ValueError("--preview is for one output file; render that file on its own")
+        names = [Path(name).name for name in inputs]
+        if len(set(names)) < len(names):
+            raise ValueError(
+                "inputs of the same file name would write the same output: "
+                f"{sorted({n for n in names if names.count(n) > 1})}"
+            )
+        writes_into(Path(output), names, "render")
+        targets = [Path(output) / name for name in names]
+    else:
+        targets = [Path(output)]
+    sources = [*inputs, args.aperture_image, args.calibration]
+    for target in targets:
+        output_file(target, (".exr",), "rendered image", inputs=sources, force=args.force,
+                    shared=folder)  # fmt: skip
+    if args.preview:
+        output_file(args.preview, (".png",), "preview", inputs=[*sources, *targets],
+                    force=args.force)  # fmt: skip
+    model = build_model(args)  # reads the aperture image: after the outputs are checked
+    display = Calibration.load(args.calibration) if args.calibration else None
+    renderers: dict[tuple, glare.GlareRenderer] = {}
+    for index, (source, target) in enumerate(zip(inputs, targets, strict=True), start=1):
+        _log(f"[{index}/{len(inputs)}] reading {source}")
+        image = read_exr(source)
+        channels = 1 if image.ndim == 2 else image.shape[2]
+        check_memory(
+            RENDER_BYTES_PER_PIXEL[channels] * image.shape[0] * image.shape[1],
+            f"rendering {source} ({image.shape[1]} × {image.shape[0]} px)",
+        )
+        _log(
+            f"{image.shape} image, max {float(image.max()):.4g} cd/m²; rendering with "
+            f"{_short(model)}"
+        )
+        start = time.perf_counter()
+        key = image.shape[:2]
+        if key not in renderers:
+            renderers[key] = glare.GlareRenderer(
+                model,
+                pixel_deg=args.pixel_deg,
+                shape=key,
+                l_dmax_cd_m2=args.l_dmax,
+                method=args.method,
+                precision=args.precision,
+                tolerance_codes=args.tolerance_codes,
+                display=display,
+                log=_log,
+            )
+        result = renderers[key].render(image)
+        if args.explain:
+            print(result.plan)
+            print(
+                f"  result: error bound {result.error_bound_codes:.3g} display codes"
+                + (f" ({result.fallback})" if result.fallback else "")
+            )
+        seconds = time.perf_counter() - start
+        if result.plan.exact and result.energy_outside_image is not None:
+            left = result.energy_outside_image / np.maximum(result.excess_energy, 1e-300)
+            _log(
+                f"done in {seconds:.2f} s (exact); energy outside the kernel "
+                f"{np.max(result.kernel.energy_outside):.3g}, outside the image "
+                f"{float(np.max(left)):.3g} of the excess"
+            )
+        else:
+            _log(f"done in {seconds:.2f} s; error bound {result.error_bound_codes:.3g} codes")
+        if not folder:
+            claim_output(target, "render")
+        write_exr(target, result.image.astype(np.float32))
+        _log(f"wrote {target}")
+        if args.preview:
+            claim_output(args.preview, "render --preview")
+            preview_png(
+                args.preview, result.image, l_dmax_cd_m2=args.l_dmax, scale=args.preview_scale
+            )
+            _log(f"wrote {args.preview}")
+    return 0
+
+
+def _psf(args: argparse.Namespace) -> int:
+    sources = [args.aperture_image]
+    output_file(args.out, (".png",), "kernel image", inputs=sources, force=args.force)
+    if args.exr is not None:
+        output_file(args.exr, (".exr",), "kernel", inputs=[*sources, args.out], force=args.force)
+    model = build_model(args)  # reads the aperture image: after the outputs are checked
+    shape = (args.size, args.size)
+    check_memory(
+        PSF_FIXED_BYTES + PSF_BYTES_PER_PIXEL * (1 if args.luminance else 3) * args.size**2,
+        f"a {args.size}² kernel",
+    )
+    _log(f"computing the {args.size}² kernel of {type(model).__name__} at {args.pixel_deg}°/px")
+    start = time.perf_counter()
+    kernel = glare.digitise_kernel(model, args.pixel_deg, shape, colour=not args.luminance)
+    _log(
+        f"done in {time.perf_counter() - start:.2f} s; energy outside the kernel "
+        f"{np.max(kernel.energy_outside):.3g}"
+    )
+    claim_output(args.out, "psf")
+    psf_png(args.out, kernel.values)
+    written = [args.out]
+    if args.exr is not None:
+        claim_output(args.exr, "psf --exr")
+        write_exr(args.exr, kernel.values.astype(np.float32))
+        written.append(args.exr)
+    for path in written:
+        print(Path(path).resolve())
+    return 0
+
+
+# Kakimoto 2004 Fig. 5 and Luidolt 2020 Fig. 5.6: name → (caption, model)
+def gallery_models() -> dict[str, tuple[str, glare.GlareModel]]:
+    """The configurations of the wave-optics gallery."""
+    camera = {"eyelashes": False, "eyelid": False, "particles": 0}
+    models = {
+        "wave_eyelashes_eyelid": (
+            "eyelashes and eyelid, 5 mm pupil",
+            glare.WaveOpticsGlare(pupil_mm=5.0, particles=0),
+        ),
+        "wave_daylight_pupil": (
+            "small daylight pupil (1000 cd/m², Moon-Spencer)",
+            glare.WaveOpticsGlare(field_luminance_cd_m2=1000.0, particles=0),
+        ),
+        "wave_night_pupil": (
+            "large night pupil (0.01 cd/m², Moon-Spencer)",
+            glare.WaveOpticsGlare(field_luminance_cd_m2=0.01, particles=0),
+        ),
+        "wave_cross_screen_round": (
+            "4-point cross screen, round 6 mm diaphragm",
+            glare.WaveOpticsGlare(pupil_mm=6.0, cross_screen="4-point", **camera),
+        ),
+        "wave_cross_screen_trigonal": (
+            "trigonal cross screen, round 6 mm diaphragm",
+            glare.WaveOpticsGlare(pupil_mm=6.0, cross_screen="trigonal", **camera),
+        ),
+        "wave_hexagonal_diaphragm": (
+            "hexagonal 6 mm diaphragm",
+            glare.WaveOpticsGlare(pupil_mm=6.0, diaphragm_sides=6, **camera),
+        ),
+    }
+    for pupil in (2, 4, 6, 8):  # Luidolt's kernel grows with the pupil: one scale for all four
+        models[f"wave_particles_pupil_{pupil}mm"] = (
+            f"pupil {pupil} mm and 1000 particles, Luidolt's convention (energy ∝ pupil area; "
+            "one scale for the series, his Fig. 5.6)",
+            glare.WaveOpticsGlare(
+                pupil_mm=float(pupil), eyelashes=False, eyelid=False,
+                pupil_convention="Luidolt2020",
+            ),
+        )  # fmt: skip
+    return models
+
+
+GALLERY_SERIES = "wave_particles_pupil_"  # kernels shown on one scale, that of the brightest
+
+
+def _gallery(args: argparse.Namespace) -> int:
+    models = gallery_models()
+    out = writes_into(
+        Path(args.out), [f"{n}.png" for n in models] + ["wave_gallery.json"], "gallery"
+    )
+    check_memory(
+        PSF_FIXED_BYTES + PSF_BYTES_PER_PIXEL * 3 * args.size**2, f"a {args.size}² kernel"
+    )
+    captions = {}
+    series = {}
+    for index, (name, (caption, model)) in enumerate(models.items(), start=1):
+        _log(f"[{index}/{len(models)}] {caption}")
+        start = time.perf_counter()
+        kernel = glare.digitise_kernel(model, args.pixel_deg, (args.size, args.size), colour=True)
+        captions[name] = {"caption": caption, "seconds": round(time.perf_counter() - start, 2)}
+        if name.startswith(GALLERY_SERIES):
+            series[name] = kernel.values
+            continue
+        psf_png(out / f"{name}.png", kernel.values)
+        _log(f"    {captions[name]['seconds']} s → {out / name}.png")
+    peak = max((float(v.max()) for v in series.values()), default=None)
+    for name, values in series.items():
+        psf_png(out / f"{name}.png", values, peak=peak)
+        _log(f"    {captions[name]['seconds']} s → {out / name}.png (the series' scale)")
+    write_text(out / "wave_gallery.json", json.dumps(captions, indent=2))
+    print(out.resolve())
+    return 0
+
+
+# name: (label, model, colour); colour renders a white RGB disk so the halo shows its colours
+DEMO_MODELS = {
+    "gaussian": ("Gaussian, σ = 0.34° (Yoshida 2008)", glare.GaussianGlare(), False),
+    "vos_photopic": ("Vos PSF, photopic (Spencer 1995 eq. 5)", glare.VosGlare(), False),
+    "vos_mesopic": (
+        "Vos PSF, mesopic with lenticular halo (Spencer 1995 eq. 8)",
+        glare.VosGlare(regime="mesopic"),
+        True,
+    ),
+    "vos_scotopic_flare": (
+        "Vos PSF, scotopic with flare lines (Spencer 1995 eq. 9, §3.2)",
+        glare.VosGlare(regime="scotopic", flare_lines=True, seed=1),
+        True,
+    ),
+}
+REC709_LUMINANCE = np.array([0.2126, 0.7152, 0.0722])  # ITU-R BT.709 luminance of linear RGB
+
+
+DEMO_DISK = {  # Yoshida 2008 §3: a 0.3° disk; level "E" = 4000 cd/m²
+    "field_deg": 8.0,
+    "pixel_deg": 0.0125,
+    "disk_diameter_deg": 0.3,
+    "disk_cd_m2": 4000.0,
+    "background_cd_m2": 1.0,
+}
+
+
+NIGHT_LOOKS = {  # the street of the night2026 protocol at three quarters of its size
+    "size_px": (480, 300),
+    "pixel_deg": 0.05,
+    "lamps": 3,
+    "lamp_cd_m2": 1e4,
+    "ambient_cd_m2": 0.05,
+    "start_cd_m2": 100.0,
+    "seconds": 2.0,  # adapted by then; adaptation is shown at its first frame after 0.5 s
+    "adapting_s": 0.5,
+    "frame_rate_hz": 4.0,
+    "display_max_cd_m2": 200.0,
+    "adapted_display_cd_m2": 3.0,
+}
+
+
+def _looks_night(args: argparse.Namespace) -> int:
+    """The night street with each effect of the pipeline on and off, side by side."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from glarelab.stimuli.night import night_sequence, night_street
+    from glarelab.stimuli.preview import to_display
+
+    effects = glare.night.EFFECTS
+    pipelines = {"all": effects} | {
+        f"no_{e}": tuple(x for x in effects if x != e) for e in effects
+    }
+    names = [f"{n}{end}" for n in pipelines for end in (".exr", ".png")]
+    out = writes_into(Path(args.out), [*names, "night.png", "manifest.json"], "looks --night")
+    spec = NIGHT_LOOKS
+    street = night_street(
+        spec["size_px"], pixel_deg=spec["pixel_deg"], lamps=spec["lamps"],
+        lamp_cd_m2=spec["lamp_cd_m2"], ambient_cd_m2=spec["ambient_cd_m2"],
+        rng=np.random.default_rng(0),
+    )  # fmt: skip
+    shown = night_sequence(
+        street, "enter_dark", seconds=spec["seconds"], frame_rate_hz=spec["frame_rate_hz"],
+        start_cd_m2=spec["start_cd_m2"],
+    )  # fmt: skip
+    l_dmax = spec["display_max_cd_m2"]
+    adapting = max(round(spec["adapting_s"] / shown["frame_time_s"]) - 1, 0)
+    frames, manifest = {}, {"scene": {k: v for k, v in spec.items()}, "pipelines": {}}
+    for index, (name, chosen) in enumerate(pipelines.items(), start=1):
+        _log(f"[{index}/{len(pipelines)}] {name}: {', '.join(chosen)}")
+        start = time.perf_counter()
+        night = glare.render_night(
+            shown["frames"], pixel_deg=spec["pixel_deg"], effects=chosen,
+            display_max_cd_m2=l_dmax, adapted_display_cd_m2=spec["adapted_display_cd_m2"],
+            frame_time_s=shown["frame_time_s"],
+            initial_adaptation_cd_m2=shown["initial_adaptation_cd_m2"],
+        )  # fmt: skip
+        # the adaptation's pair while the eye adapts, the others once it has
+        at = adapting if name in ("all", "no_adaptation") else len(night.frames) - 1
+        frames[name] = night.frames[-1]
+        frames[name, "adapting"] = night.frames[adapting]
+        write_exr(out / f"{name}.exr", night.frames[-1].astype(np.float32))
+        preview_png(out / f"{name}.png", night.frames[at], l_dmax_cd_m2=l_dmax)
+        manifest["pipelines"][name] = {
+            "effects": list(chosen),
+            "seconds": round(time.perf_counter() - start, 3),
+            "adaptation_cd_m2": night.adaptation_cd_m2.tolist(),
+            "pupil_mm": [None if np.isnan(p) else float(p) for p in night.pupil_mm],
+        }
+    figure, axes = plt.subplots(len(effects), 2, figsize=(9.6, 3.2 * len(effects)), dpi=100)
+    for row, effect in enumerate(effects):
+        when = (
+            f"{spec['adapting_s']:g} s after leaving {spec['start_cd_m2']:g} cd/m²"
+            if effect == "adaptation"
+            else f"after {spec['seconds']:g} s"
+        )
+        for column, (name, title) in enumerate(
+            ((f"no_{effect}", f"without {effect}"), ("all", "all effects"))
+        ):
+            axis = axes[row, column]
+            image = frames[name, "adapting"] if effect == "adaptation" else frames[name]
+            axis.imshow(to_display(image, l_dmax_cd_m2=l_dmax), interpolation="none")
+            axis.set_title(f"{title}, {when}", fontsize=9)
+            axis.set_axis_off()
+    figure.suptitle(
+        f"A night street entered from {spec['start_cd_m2']:g} cd/m² (lamps "
+        f"{spec['lamp_cd_m2']:g} cd/m², display {l_dmax:g} cd/m²): each effect off and on",
+        fontsize=10,
+    )
+    figure.tight_layout()
+    with atomic_path(out / "night.png") as temporary:
+        figure.savefig(temporary, format="png", metadata={"Software": None})
+    plt.close(figure)
+    write_text(out / "manifest.json", json.dumps(manifest, indent=2, default=str))
+    _log(f"wrote {out / 'night.png'} and {out / 'manifest.json'}")
+    print(out.resolve())
+    return 0
+
+
+def _looks(args: argparse.Namespace) -> int:
+    if args.night:
+        return _looks_night(args)
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    names = [f"{n}{end}" for n in DEMO_MODELS for end in (".exr", ".png", "_log.png")]
+    out = writes_into(
+        Path(args.out), ["stimulus.exr", *names, "profiles.png", "manifest.json"], "looks"
+    )
+    stimulus = disk(**DEMO_DISK)
+    write_exr(out / "stimulus.exr", stimulus["img"].astype(np.float32))
+    pixel_deg = stimulus["pixel_deg"]
+    n = stimulus["img"].shape[0]
+    offsets = (np.arange(n) - n // 2) * pixel_deg
+    figure, axis = plt.subplots(figsize=(7, 4.5), dpi=120)
+    manifest = {"stimulus": {k: v for k, v in stimulus.items() if k not in ("img", "mask")}}
+    for index, (name, (label, model, colour)) in enumerate(DEMO_MODELS.items(), start=1):
+        _log(f"[{index}/{len(DEMO_MODELS)}] {label}")
+        image = np.repeat(stimulus["img"][..., None], 3, axis=2) if colour else stimulus["img"]
+        start = time.perf_counter()
+        result = glare.render_glare(image, model, pixel_deg=pixel_deg, l_dmax_cd_m2=220.0)
+        seconds = time.perf_counter() - start
+        luminance = result.image if not colour else result.image @ REC709_LUMINANCE
+        write_exr(out / f"{name}.exr", result.image.astype(np.float32))
+        preview_png(out / f"{name}.png", result.image, l_dmax_cd_m2=220.0)
+        preview_png(out / f"{name}_log.png", result.image, l_dmax_cd_m2=220.0, scale="log")
+        axis.semilogy(offsets[n // 2 :], luminance[n // 2, n // 2 :], label=label)
+        manifest[name] = {
+            "label": label,
+            "seconds": round(seconds, 3),
+            "energy_outside_kernel": float(np.max(result.kernel.energy_outside)),
+            "parameters": result.parameters,
+        }
+        _log(f"    {seconds:.2f} s → {out / name}.exr, .png, _log.png")
+    axis.axhline(220.0, color="grey", lw=0.8, ls="--", label="L_dmax = 220 cd/m²")
+    axis.set(
+        xlabel="angle from the disk centre (deg)",
+        ylabel="luminance (cd/m²)",
+        title="0.3° disk at 4000 cd/m² on 1 cd/m²: glare by model",
+    )
+    axis.legend(fontsize=8)
+    figure.tight_layout()
+    with atomic_path(out / "profiles.png") as temporary:
+        figure.savefig(temporary, format="png")
+    plt.close(figure)
+    write_text(out / "manifest.json", json.dumps(manifest, indent=2, default=str))
+    _log(f"wrote {out / 'profiles.png'} and {out / 'manifest.json'}")
+    print(out.resolve())
+    return 0
+
+
+def add(commands) -> None:
+    """Add the commands to the ``glarelab`` parser."""
+    render = commands.add_parser(
+        "render", help="add glare to linear float EXR images (one kernel for many files)"
+    )
+    render.add_argument(
+        "paths",
+        nargs="+",
+        metavar="INPUT... OUTPUT",
+        help="linear luminance EXRs (Y or RGB), cd/m², then the output EXR (float32), or an "
+        "output folder (several inputs, or a name ending in /) for files of the same names",
+    )
+    render.add_argument(
+        "--pixel-deg",
+        type=number(MIN_PIXEL_DEG, 10),
+        required=True,
+        help="visual angle of a pixel, degrees (0-10)",
+    )
+    render.add_argument(
+        "--l-dmax", type=number(0, 1e9, above=True), default=220.0, help="display maximum, cd/m²"
+    )
+    render.add_argument("--method", choices=("Yoshida2008", "Spencer1995"), default="Yoshida2008")
+    render.add_argument("--precision", choices=("float64", "float32"), default="float64")
+    render.add_argument(
+        "--tolerance-codes",
+        type=number(0),
+        default=0.5,
+        help="largest error allowed, display codes (default 0.5; 0 = exact, full kernel)",
+    )
+    render.add_argument(
+        "--calibration", type=Path, help="display calibration the error is counted on"
+    )
+    render.add_argument("--explain", action="store_true", help="print the plan and its bound")
+    render.add_argument("--preview", type=Path, help="also write a PNG preview here")
+    render.add_argument("--preview-scale", choices=("display", "log"), default="display")
+    render.add_argument("--force", action="store_true", help=FORCE_HELP)
+    _add_model_options(render)
+    render.set_defaults(run=_render)
+
+    psf = commands.add_parser("psf", help="render a glare model's kernel as a PNG")
+    psf.add_argument("--out", type=Path, required=True, help="PNG (Kakimoto's tone curve)")
+    psf.add_argument("--exr", type=Path, default=None, help="also write the kernel as EXR")
+    psf.add_argument(
+        "--pixel-deg", type=number(MIN_PIXEL_DEG, 10), default=0.01, help="degrees per pixel"
+    )
+    psf.add_argument(
+        "--size", type=odd_size, default=401, help="kernel size in pixels (odd, 3-16385)"
+    )
+    psf.add_argument("--luminance", action="store_true", help="luminance only, no colour")
+    psf.add_argument("--force", action="store_true", help=FORCE_HELP)
+    _add_model_options(psf, default="wave")
+    psf.set_defaults(run=_psf)
+
+    gallery = commands.add_parser("gallery", help="render the wave-optics PSF gallery")
+    gallery.add_argument("--out", type=Path, default=Path("docs/gallery"))
+    gallery.add_argument(
+        "--pixel-deg", type=number(MIN_PIXEL_DEG, 10), default=0.01, help="degrees per pixel"
+    )
+    gallery.add_argument(
+        "--size", type=odd_size, default=201, help="kernel size in pixels (odd, 3-16385)"
+    )
+    gallery.set_defaults(run=_gallery)
+
+    looks = commands.add_parser("looks", help="render a glare stimulus with each model")
+    looks.add_argument("--out", type=Path, default=Path("out/looks"), help="output folder")
+    looks.add_argument(
+        "--night",
+        action="store_true",
+        help="instead: a night street through the night-vision pipeline, each effect off and "
+        "on side by side (night.png)",
+    )
+    looks.set_defaults(run=_looks)

@@ -1,0 +1,296 @@
+"""The ``glarelab`` commands of sessions: run."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from glarelab.display.calibration import Calibration
+from glarelab.protocols import load_protocol
+
+from .common import (
+    PROTOCOL_HELP,
+    claim_output,
+    count,
+    inside_whole_output,
+    number,
+    output_file,
+)
+from .common import log as _log
+
+VISION = ("none", "glasses", "lenses", "other")
+
+
+def _age(text: str) -> int:
+    """An age in whole years, 0-120."""
+    try:
+        age = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"age must be whole years; got {text!r}") from None
+    if not 0 <= age <= 120:
+        raise argparse.ArgumentTypeError(f"age must be 0-120 years; got {age}")
+    return age
+
+
+def _participant(text: str) -> str:
+    """A participant id: file-name safe, as the session files are named by it."""
+    from glarelab.experiments.data import check_session_id
+
+    try:
+        check_session_id(text, 1)
+    except ValueError as error:
+        raise argparse.ArgumentTypeError(str(error).replace("participant must", "must")) from None
+    return text
+
+
+def _detail(text: str) -> str | None:
+    """A participant detail: trimmed text, or none when empty."""
+    return text.strip() or None
+
+
+def _protocol(study: str | None, path: Path | None):
+    """The session's protocol: STUDY, or ``--protocol FILE`` instead; both only when they name
+    the same study."""
+    if study is None and path is None:
+        raise ValueError(
+            "give the study (STUDY: a shipped study's name or a TOML file) or --protocol FILE"
+        )
+    if path is None:
+        return load_protocol(study)
+    protocol = load_protocol(path)
+    if study is not None:
+        named = load_protocol(study).study if Path(study).suffix else study
+        if named != protocol.study:
+            raise ValueError(
+                f"STUDY {study!r} and --protocol {path} (the protocol of study "
+                f"{protocol.study!r}) name two studies; give one of them"
+            )
+    return protocol
+
+
+SIMULATED_PARTICIPANTS = 10  # Yoshida 2008's study had ten participants (§5: F(1, 9))
+WRITE_FAULT = 4  # the exit status of a session stopped because its files could not be written
+
+
+def _run(args: argparse.Namespace) -> int:
+    """``glarelab run``; a session whose files stop being writable (a full disk) ends with
+    :data:`WRITE_FAULT`: its trials so far are on disk and its sidecar says why it ended."""
+    from glarelab.experiments.data import WriteFault
+
+    try:
+        return _run_session(args)
+    except WriteFault as fault:
+        print(f"glarelab run: {fault}", file=sys.stderr)
+        return WRITE_FAULT
+
+
+def _run_session(args: argparse.Namespace) -> int:
+    from glarelab.experiments.session import SimulatedFrontend, run_session
+
+    protocol = _protocol(args.study, args.protocol)
+    args.title = protocol.study
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"--out {out} is a file; session files go into a folder")
+    whole = inside_whole_output(out / "session.csv")
+    if whole is not None:
+        raise ValueError(
+            f"--out {out} is inside the {whole}, which glarelab replaces and checks as a "
+            "whole: give a folder of its own for the session files (nothing was written)"
+        )
+    if args.simulate:
+        from glarelab.experiments.session import make_observer, shows_images
+        from glarelab.stimuli.stimulus_set import cached_stimulus_set
+
+        if args.participant is not None and args.participants is not None:
+            raise ValueError(
+                f"--participants {args.participants} with --participant {args.participant}: "
+                "give one participant's id, or a number of simulated participants"
+            )
+        count = SIMULATED_PARTICIPANTS if args.participants is None else args.participants
+        ids = (
+            [args.participant]
+            if args.participant is not None
+            else [f"sim{index:02d}" for index in range(1, count + 1)]
+        )
+        stimuli = args.stimuli
+        if stimuli is None and shows_images(protocol):
+            _log(f"building (or reusing) the {protocol.study} stimulus set the observers look at")
+            stimuli = cached_stimulus_set(protocol)
+            _log(f"stimulus set: {stimuli}")
+        for number, participant in enumerate(ids, start=1):
+            observer = make_observer(protocol, participant, seed=args.seed, stimuli=stimuli)
+            frontend = SimulatedFrontend(observer, trial_delay_s=args.trial_delay_ms / 1000)
+            sidecar = run_session(
+                protocol,
+                participant,
+                out=out,
+                frontend=frontend,
+                session=args.session,
+                stimuli=stimuli,
+                resume=args.resume,
+                counterbalance=args.counterbalance,
+                simulated=True,
+                participant_info={"simulated_observer_seed": args.seed},
+                pilot=args.pilot,
+            )
+            done = f"{sidecar['trials']} trials, {sidecar['status']}"
+            _log(f"[{number}/{len(ids)}] {participant}: {done}")
+            if sidecar["status"] != "completed":  # stopped (Ctrl-C, a signal): the batch too
+                left = len(ids) - number
+                _log(f"stopped; {left} simulated participant(s) not run")
+                print(out.resolve())
+                return 3
+        print(out.resolve())
+        return 0
+    if args.pilot and args.fullscreen:
+        raise ValueError(
+            "--pilot runs in a window (PsychoPy's piloting mode); --fullscreen is for sessions"
+        )
+    if args.participant is None:
+        from glarelab.frontend.dialog import experiment_info
+
+        experiment_info(args, check_age=_age, vision=VISION)
+    from glarelab.frontend.session import PsychoPyFrontend
+
+    calibration = Calibration.load(args.calibration) if args.calibration else None
+    scripted = None
+    if args.scripted_keys is not None:
+        if not Path(args.scripted_keys).is_file():
+            raise FileNotFoundError(f"--scripted-keys {args.scripted_keys}: no such file")
+        try:
+            scripted = Path(args.scripted_keys).read_text(encoding="utf-8").split()
+        except UnicodeDecodeError:
+            raise ValueError(
+                f"--scripted-keys {args.scripted_keys}: not a text file of key names"
+            ) from None
+        if not scripted:
+            raise ValueError(f"--scripted-keys {args.scripted_keys}: the file names no keys")
+    if args.screenshot is not None:
+        output_file(
+            args.screenshot,
+            (".png",),
+            "screenshot",
+            inputs=[args.calibration, args.scripted_keys],
+        )
+        claim_output(args.screenshot, "run --screenshot")
+    frontend = PsychoPyFrontend(
+        protocol,
+        stimuli=args.stimuli,
+        calibration=calibration,
+        fullscreen=args.fullscreen,
+        scripted_keys=scripted,
+        screenshot=args.screenshot,
+        pilot=args.pilot,
+    )
+    sidecar = run_session(
+        protocol,
+        args.participant,
+        out=out,
+        frontend=frontend,
+        session=args.session,
+        stimuli=args.stimuli,
+        calibration=calibration,
+        allow_uncalibrated=args.allow_uncalibrated,
+        resume=args.resume,
+        counterbalance=args.counterbalance,
+        participant_info={"age": args.age, "sex": args.sex, "vision_correction": args.vision},
+        accept_mismatch=tuple(args.accept_mismatch or ()),
+        allow_unmeasured_refresh=args.allow_unmeasured_refresh,
+        pilot=args.pilot,
+    )
+    run = sidecar["runs"][-1]
+    _log(
+        f"{args.participant}: {sidecar['trials']} trials, {sidecar['status']}"
+        + (f" ({run['ended_by']})" if run.get("ended_by") else "")
+        + f"; data in {out.resolve()}"
+    )
+    return 0 if sidecar["status"] == "completed" else 3
+
+
+def add(commands) -> None:
+    """Add the commands to the ``glarelab`` parser."""
+    run = commands.add_parser("run", help="run a study session (PsychoPy) or simulated sessions")
+    run.add_argument(
+        "study", nargs="?", default=None, help=f"the protocol: {PROTOCOL_HELP} (or --protocol)"
+    )
+    run.add_argument(
+        "--participant",
+        type=_participant,
+        default=None,
+        help="participant id (file-name safe); without it, a dialog asks for the details",
+    )
+    run.add_argument("--session", type=count(1), default=1, help="session number, from 1")
+    run.add_argument(
+        "--protocol", type=Path, default=None, help="a protocol TOML file (instead of STUDY)"
+    )
+    run.add_argument("--stimuli", type=Path, default=None, help="the stimulus set folder")
+    run.add_argument("--calibration", type=Path, default=None, help="display calibration JSON")
+    run.add_argument(
+        "--allow-uncalibrated",
+        action="store_true",
+        help="run without a valid calibration, or on an unverified one (recorded)",
+    )
+    run.add_argument(
+        "--accept-mismatch",
+        nargs="+",
+        choices=("resolution", "refresh", "bit-depth", "calibration"),
+        metavar="CHECK",
+        help="run although the display differs from the protocol in these checks (recorded): "
+        "resolution, refresh, bit-depth, calibration",
+    )
+    run.add_argument(
+        "--allow-unmeasured-refresh",
+        action="store_true",
+        help="run although the refresh rate could not be measured (recorded; flips are then "
+        "paced by the clock at the protocol's rate)",
+    )
+    run.add_argument(
+        "--pilot",
+        action="store_true",
+        help="a pilot run, as PsychoPy's piloting mode: in a window marked PILOT, accepting a "
+        "display that is not the protocol's (resolution, refresh, bit depth, an unmeasured "
+        "refresh) and an unverified calibration; every file says it is a pilot (recorded)",
+    )
+    run.add_argument(
+        "--out",
+        type=Path,
+        default=Path("data"),
+        help="folder for the session files (default data)",
+    )
+    run.add_argument("--resume", action="store_true", help="continue an interrupted session")
+    run.add_argument(
+        "--fullscreen", action="store_true", help="full screen on the lab display (else a window)"
+    )
+    run.add_argument(
+        "--counterbalance", type=int, choices=(0, 1), default=None, help="Spencer block order"
+    )
+    run.add_argument("--age", type=_age, default=None, help="participant's age, years (0-120)")
+    run.add_argument(
+        "--sex", type=_detail, default=None, help="participant's sex (as the lab records it)"
+    )
+    run.add_argument(
+        "--vision",
+        choices=VISION,
+        default=None,
+        help=f"vision correction: {', '.join(VISION)}",
+    )
+    run.add_argument(
+        "--scripted-keys",
+        type=Path,
+        default=None,
+        help="dry run: a text file of PsychoPy key names separated by spaces or lines, one per "
+        "press (e.g. 'space up up return y n y'); Escape when they run out",
+    )
+    run.add_argument("--screenshot", type=Path, default=None, help="save the first trial's screen")
+    run.add_argument("--simulate", action="store_true", help="simulated observers, no screen")
+    run.add_argument(
+        "--participants",
+        type=count(1, 999),
+        default=None,
+        help="simulated participants sim01… (1-999; default 10); not with --participant",
+    )
+    run.add_argument("--seed", type=count(0), default=0, help="seed of the simulated observers")
+    run.add_argument("--trial-delay-ms", type=number(0), default=0.0, help=argparse.SUPPRESS)
+    run.set_defaults(run=_run)

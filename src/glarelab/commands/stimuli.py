@@ -1,0 +1,81 @@
+"""The ``glarelab`` commands of stimulus sets: stimuli build, stimuli verify."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+from glarelab.display.calibration import Calibration
+from glarelab.protocols import load_protocol
+from glarelab.stimuli.stimulus_set import build_stimulus_set, verify_stimulus_set
+
+from .common import PROTOCOL_HELP
+from .common import log as _log
+
+
+def _stimuli_build(args: argparse.Namespace) -> int:
+    protocol = load_protocol(args.protocol)
+    calibration = Calibration.load(args.calibration) if args.calibration else None
+    _log(f"building the {protocol.study} stimulus set into {args.out}")
+    start = time.perf_counter()
+    manifest = build_stimulus_set(
+        protocol,
+        args.out,
+        calibration=calibration,
+        accept_mismatch="calibration" in (args.accept_mismatch or ()),
+    )
+    encodings = [r.get("encoding", {}) for r in manifest["images"].values()]
+    above = sum(e.get("above_max", 0) for e in encodings)
+    below = sum(e.get("below_black", 0) for e in encodings)
+    _log(
+        f"{len(manifest['files'])} files in {time.perf_counter() - start:.1f} s; calibration "
+        f"status '{manifest['calibration']['status']}'; {above + below} pixels clipped by the "
+        f"display ({above} above its white, {below} below its black)"
+    )
+    print(Path(args.out).resolve())
+    return 0
+
+
+def _stimuli_verify(args: argparse.Namespace) -> int:
+    if not Path(args.folder).is_dir():  # one line, exit 2: there is nothing to verify
+        what = "not a folder" if Path(args.folder).exists() else "no such folder"
+        raise FileNotFoundError(f"{args.folder}: {what} (give a stimulus set's folder)")
+    problems = verify_stimulus_set(args.folder)
+    if problems:
+        for problem in problems:
+            print(f"{args.folder}: {problem}", file=sys.stderr)
+        return 1
+    print(f"{args.folder}: the folder holds exactly the manifest's files, each unchanged")
+    return 0
+
+
+def add(commands) -> None:
+    """Add the commands to the ``glarelab`` parser."""
+    stimuli = commands.add_parser("stimuli", help="build or verify a study's stimulus set")
+    stimuli_commands = stimuli.add_subparsers(dest="stimuli_command", required=True)
+    build = stimuli_commands.add_parser("build", help="build a stimulus set from a protocol")
+    build.add_argument("protocol", help=PROTOCOL_HELP)
+    build.add_argument(
+        "--out",
+        type=Path,
+        required=True,
+        help="folder for the set: new, empty, or an earlier set (replaced whole)",
+    )
+    build.add_argument("--calibration", type=Path, default=None, help="display calibration JSON")
+    build.add_argument(
+        "--accept-mismatch",
+        nargs="+",
+        choices=("calibration",),
+        metavar="CHECK",
+        help="build although the calibration's white is not the protocol display's "
+        "(calibration); sessions check again",
+    )
+    build.set_defaults(run=_stimuli_build)
+    verify = stimuli_commands.add_parser(
+        "verify",
+        help="check a stimulus set: exactly the manifest's files, each with its sha256",
+    )
+    verify.add_argument("folder", type=Path)
+    verify.set_defaults(run=_stimuli_verify)

@@ -1,0 +1,119 @@
+"""The ``glarelab`` commands of the demo, the docs and the bench: demo, docs, bench."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from glarelab.files.atomic import write_text
+
+from .common import PROTOCOL_HELP, count, output_folder, writes_into
+from .common import log as _log
+
+
+def _demo(args: argparse.Namespace) -> int:
+    from glarelab.demo import run_demo
+
+    report = run_demo(
+        args.protocol, args.out, participants=args.participants, seed=args.seed, log=_log
+    )
+    print(f"report: {report.resolve()}")
+    return 0
+
+
+def _docs(args: argparse.Namespace) -> int:
+    from glarelab.docs import data_reference, protocol_reference
+
+    out = writes_into(Path(args.out), ["protocols.md", "data.md"], "docs")
+    for name, text in (("protocols.md", protocol_reference()), ("data.md", data_reference())):
+        write_text(out / name, text)
+        print((out / name).resolve())
+    return 0
+
+
+def _bench(args: argparse.Namespace) -> int:
+    from glarelab.bench.run import run_bench
+    from glarelab.bench.scenes import WORKLOADS
+
+    if args.acuity:
+        from glarelab.bench.acuity import ACUITY_WORKLOADS, acuity_bench, write_acuity_bench
+
+        unknown = sorted(set(args.only or ()) - set(ACUITY_WORKLOADS))
+        if unknown or args.large:
+            raise ValueError(
+                f"--acuity runs its own workloads: --only {' '.join(unknown or ['--large'])} "
+                f"is not one; choose from {', '.join(ACUITY_WORKLOADS)}"
+            )
+        out = output_folder(args.out, "bench")
+        only = tuple(args.only) if args.only else None
+        write_acuity_bench(out, acuity_bench(repeats=args.repeats, only=only, log=_log))
+        _log(f"wrote {out / 'acuity.csv'} and acuity.md")
+        print(out.resolve())
+        return 0
+
+    unknown = sorted(set(args.only or ()) - set(WORKLOADS))
+    if unknown:
+        raise ValueError(
+            f"--only {' '.join(unknown)}: no such workload; choose from {', '.join(WORKLOADS)}"
+        )
+    out = output_folder(args.out, "bench")
+    run_bench(
+        out,
+        large=args.large,
+        only=tuple(args.only) if args.only else None,
+        spectral=not args.no_spectral,
+        repeats=args.repeats,
+        fresh=not args.no_fresh,
+        startup=not args.no_startup,
+        log=_log,
+    )
+    _log(f"wrote {out / 'bench.csv'}, bench.md and the Pareto plots")
+    print(out.resolve())
+    return 0
+
+
+def add(commands) -> None:
+    """Add the commands to the ``glarelab`` parser."""
+    bench = commands.add_parser(
+        "bench", help="time each speed knob against its error in display codes"
+    )
+    bench.add_argument("--out", type=Path, default=Path("out/bench"))
+    bench.add_argument("--large", action="store_true", help="add the 4096² scenes")
+    bench.add_argument("--only", nargs="+", metavar="WORKLOAD", help="run only these workloads")
+    bench.add_argument(
+        "--no-spectral", action="store_true", help="skip the wave-optics spectral section"
+    )
+    bench.add_argument(
+        "--no-fresh",
+        action="store_true",
+        help="skip the one-call workload in fresh processes (empty and warm kernel cache)",
+    )
+    bench.add_argument("--no-startup", action="store_true", help="skip the start-up times")
+    bench.add_argument("--repeats", type=count(1, 100), default=3, help="timings per case")
+    bench.add_argument(
+        "--acuity",
+        action="store_true",
+        help="instead: the acuity blur's fast ways against the exact per-pixel blur "
+        "(acuity.csv, acuity.md)",
+    )
+    bench.set_defaults(run=_bench)
+
+    docs = commands.add_parser("docs", help="regenerate docs/protocols.md and docs/data.md")
+    docs.add_argument("--out", type=Path, default=Path("docs"))
+    docs.set_defaults(run=_docs)
+
+    demo = commands.add_parser(
+        "demo", help="the whole study on simulated observers: stimuli, sessions, analysis, report"
+    )
+    demo.add_argument(
+        "--protocol", default="yoshida2008", help=f"{PROTOCOL_HELP} (default yoshida2008)"
+    )
+    demo.add_argument(
+        "--out",
+        type=Path,
+        default=Path("out/demo"),
+        help="the demo's folder: new, empty, or an earlier demo's (its output is replaced)",
+    )
+    demo.add_argument("--participants", type=count(1, 999), default=10, help="simulated (1-999)")
+    demo.add_argument("--seed", type=count(0), default=1, help="seed of the simulated observers")
+    demo.set_defaults(run=_demo)

@@ -1,0 +1,611 @@
+"""Display calibration: from photometer readings to luminance ↔ drive-code conversion.
+
+A calibration maps every drive code of a display (0 … 2^bits - 1) to the luminance it
+produces. It is built from readings (code → cd/m², as from a Minolta LS-100) by a monotone
+piecewise-cubic interpolant (PCHIP) or by a gain-offset-gamma model (with its residuals
+reported). PCHIP comes in two spaces:
+
+- ``'pchip-log'`` (the default): log(L − black) against log(code). A power law (a gamma
+  display) is a straight line there, and so is the linear toe of an sRGB-type curve (sRGB's
+  EOTF, IEC 61966-2-1, is linear below 4 % of the code range; ITU-R BT.1886 displays and
+  monitors' "gamma 2.4 with a linear part" bend likewise), so PCHIP follows both, and the bend
+  between them, from a few readings. Below the first code measured above 0 the curve goes on
+  as the power law of the first two readings (a model of the toe): interpolating from code 0
+  cannot, as log(code) has no value there.
+- ``'pchip'``: ((L − black) / (white − black))^(1/2.2) against the code, the space of earlier
+  calibrations (kept so that their files give the same luminances): it follows a gamma display
+  but misses a linear toe by 20-50 % near black (an sRGB display with 33 or 65 readings).
+
+Encoding picks, for each luminance, the code whose luminance is nearest, so the error is at
+most half the local code step inside the display's range; luminances above the maximum or
+below the black level are clipped to the end codes and counted, never wrapped.
+
+A calibration file (JSON) carries its date, the readings and their hash, the method, and a
+verification status: ``unverified`` after fitting, ``passed`` or ``failed`` after a
+verification pass, ``synthetic`` for the made-up displays shipped for demos.
+"""
+
+from __future__ import annotations
+
+import csv
+import datetime as dt
+import hashlib
+import itertools
+import json
+import warnings
+from dataclasses import dataclass, field, replace
+from functools import cached_property
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+from scipy.interpolate import PchipInterpolator
+from scipy.optimize import curve_fit
+
+from glarelab.files.atomic import write_text
+
+__all__ = [
+    "Calibration",
+    "EncodeReport",
+    "fit_calibration",
+    "read_readings",
+    "synthetic_calibration",
+    "usable_calibration",
+]
+
+FORMAT = "glarelab display calibration v1"
+SYNTHETIC_GAMMA = 2.2  # the synthetic displays follow L = black + (max - black) (c/cmax)^2.2
+LINEARISING_GAMMA = 2.2  # 'pchip' interpolates in (normalised luminance)^(1/2.2)
+TOE_EXPONENTS = (0.5, 5.0)  # the toe's power law, bounded: no display's curve is steeper
+METHODS = ("pchip-log", "pchip", "gog")
+
+# the brightest displays reach about 1e4 cd/m² (HDR reference monitors); a reading ten
+# times that is a typo or a reading in another unit, never a display
+MAX_DISPLAY_CD_M2 = 1e5
+
+
+@dataclass(frozen=True)
+class EncodeReport:
+    """What encoding did to an image: pixels clipped above the maximum or below black."""
+
+    above_max: int
+    below_black: int
+    max_error_cd_m2: float
+    pixels: int
+
+    @property
+    def clipped(self) -> int:
+        return self.above_max + self.below_black
+
+
+def _gog(
+    code_fraction: np.ndarray, gain: float, offset: float, gamma: float, black: float, peak: float
+):
+    drive = np.clip(gain * code_fraction + offset, 0.0, None)
+    return black + (peak - black) * drive**gamma
+
+
+def _log_log_curve(data: np.ndarray, codes: np.ndarray) -> np.ndarray:
+    """Luminance of ``codes`` from ``data`` (code, cd/m² rows from code 0, increasing): PCHIP
+    through log(L − black) against log(code), and below the first code above 0 the power law
+    of the first two readings, ``black + (L1 − black)(c / c1)^k``, its exponent bounded by
+    :data:`TOE_EXPONENTS`.
+
+    Examples
+    --------
+    >>> codes = np.arange(256.0)
+    >>> x = codes / 255
+    >>> srgb = 0.1 + 99.9 * np.where(x <= 0.04045, x / 12.92, ((x + 0.055) / 1.055) ** 2.4)
+    >>> read = [0, 2, 4, 8, 12, 16, 24, 32, 48, 64, 96, 128, 160, 192, 224, 255]  # denser low
+    >>> fitted = _log_log_curve(np.column_stack([read, srgb[read]]), codes)
+    >>> bool(np.all(np.abs(fitted - srgb) <= 0.002 * srgb))  # 0.2 % everywhere, toe included
+    True
+    """
+    black = data[0, 1]
+    measured, excess = data[1:, 0], data[1:, 1] - black
+    x, y = np.log(measured), np.log(excess)
+    curve = PchipInterpolator(x, y, extrapolate=False)
+    values = np.full(codes.shape, black, dtype=float)
+    inside = codes >= measured[0]
+    values[inside] = black + np.exp(curve(np.log(np.minimum(codes[inside], measured[-1]))))
+    exponent = float(np.clip((y[1] - y[0]) / (x[1] - x[0]), *TOE_EXPONENTS))
+    toe = (codes > 0) & ~inside
+    values[toe] = black + excess[0] * (codes[toe] / measured[0]) ** exponent
+    return values
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """Luminance of every drive code of a display.
+
+    Attributes
+    ----------
+    bit_depth
+        Bits per channel (codes 0 … 2^bits - 1).
+    readings
+        ``(code, cd/m²)`` pairs measured (or made up, for a synthetic display).
+    method
+        ``'pchip-log'``, ``'pchip'`` or ``'gog'`` (see the module notes).
+    created
+        ISO date of the fit.
+    status
+        ``'unverified'``, ``'passed'``, ``'failed'`` or ``'synthetic'``.
+    label
+        Free text: display, photometer, who measured.
+    model
+        GOG parameters and residuals when ``method == 'gog'``.
+    verification
+        The verification pass (targets, codes, measured luminances, errors, tolerance).
+    """
+
+    bit_depth: int
+    readings: tuple[tuple[int, float], ...]
+    method: Literal["pchip-log", "pchip", "gog"] = "pchip-log"
+    created: str = ""
+    status: Literal["unverified", "passed", "failed", "synthetic"] = "unverified"
+    label: str = ""
+    model: dict = field(default_factory=dict)
+    verification: dict = field(default_factory=dict)
+
+    @property
+    def n_codes(self) -> int:
+        return 2**self.bit_depth
+
+    @property
+    def readings_sha256(self) -> str:
+        text = json.dumps([[int(c), float(v)] for c, v in self.readings])
+        return hashlib.sha256(text.encode()).hexdigest()
+
+    @cached_property
+    def lut(self) -> np.ndarray:
+        """Luminance of every code, cd/m² (monotone non-decreasing; computed once, read-only)."""
+        codes = np.arange(self.n_codes, dtype=float)
+        data = np.array(self.readings, dtype=float)
+        if self.method == "pchip-log":
+            values = _log_log_curve(data, codes)
+        elif self.method == "pchip":
+            # interpolate in a linearised space, y = ((L - black) / (white - black))^(1/2.2):
+            # a gamma display is nearly a straight line there, so its toe near black is
+            # followed (in plain luminance PCHIP misses it by 18 % at twice black with 9
+            # readings); the transform is monotone, so any measured curve stays monotone
+            black, white = data[0, 1], data[-1, 1]
+            y = ((data[:, 1] - black) / (white - black)) ** (1 / LINEARISING_GAMMA)
+            curve = PchipInterpolator(data[:, 0], y, extrapolate=False)
+            fitted = np.clip(curve(np.clip(codes, data[0, 0], data[-1, 0])), 0.0, 1.0)
+            values = black + (white - black) * fitted**LINEARISING_GAMMA
+        elif self.method == "gog":
+            p = self.model
+            values = _gog(
+                codes / (self.n_codes - 1),
+                p["gain"],
+                p["offset"],
+                p["gamma"],
+                p["black_cd_m2"],
+                p["max_cd_m2"],
+            )
+        else:
+            raise ValueError(f"method must be one of {', '.join(METHODS)}; got {self.method!r}")
+        values = np.maximum.accumulate(values)
+        values.setflags(write=False)
+        return values
+
+    @property
+    def black_cd_m2(self) -> float:
+        return float(self.lut[0])
+
+    @property
+    def max_cd_m2(self) -> float:
+        return float(self.lut[-1])
+
+    def decode(self, codes: np.ndarray) -> np.ndarray:
+        """Luminance (cd/m²) the display shows for drive codes."""
+        codes = np.asarray(codes)
+        if codes.size and (codes.min() < 0 or codes.max() >= self.n_codes):
+            raise ValueError(
+                f"codes must be in [0, {self.n_codes - 1}] for a {self.bit_depth}-bit display"
+            )
+        return self.lut[codes.astype(np.int64)]
+
+    def encode(self, luminance_cd_m2: np.ndarray) -> tuple[np.ndarray, EncodeReport]:
+        """Drive codes (uint16) for a luminance image, and a report of what was clipped.
+
+        Each luminance gets the code whose luminance is nearest: within the display's range
+        the error is at most half the step between neighbouring codes.
+        """
+        values = np.asarray(luminance_cd_m2, dtype=float)
+        if not np.isfinite(values).all():
+            raise ValueError("luminance_cd_m2 must be finite to be encoded")
+        lut = self.lut
+        upper = np.clip(np.searchsorted(lut, values, side="left"), 1, self.n_codes - 1)
+        lower = upper - 1
+        nearer_upper = np.abs(lut[upper] - values) < np.abs(values - lut[lower])
+        codes = np.where(nearer_upper, upper, lower)
+        codes = np.where(values >= lut[-1], self.n_codes - 1, codes)
+        codes = np.where(values <= lut[0], 0, codes)
+        inside = (values >= lut[0]) & (values <= lut[-1])
+        error = np.abs(lut[codes] - values)[inside]
+        report = EncodeReport(
+            above_max=int((values > lut[-1]).sum()),
+            below_black=int((values < lut[0]).sum()),
+            max_error_cd_m2=float(error.max()) if error.size else 0.0,
+            pixels=int(values.size),
+        )
+        return codes.astype(np.uint16), report
+
+    def step_cd_m2(self, codes: np.ndarray) -> np.ndarray:
+        """Luminance step to the neighbouring codes (the larger of the two), cd/m²."""
+        lut = self.lut
+        codes = np.asarray(codes, dtype=np.int64)
+        up = lut[np.minimum(codes + 1, self.n_codes - 1)] - lut[codes]
+        down = lut[codes] - lut[np.maximum(codes - 1, 0)]
+        return np.maximum(up, down)
+
+    def verified(
+        self,
+        measurements: list[tuple[float, int, float]],
+        *,
+        tolerance_fraction: float = 0.03,
+    ) -> Calibration:
+        """This calibration with a verification pass recorded.
+
+        Parameters
+        ----------
+        measurements
+            ``(target cd/m², code shown, measured cd/m²)`` triples.
+        tolerance_fraction
+            Largest allowed ``|measured - target| / target``; default 3 %.
+        """
+        rows = []
+        for target, code, measured in measurements:
+            rows.append(
+                {
+                    "target_cd_m2": float(target),
+                    "code": int(code),
+                    "measured_cd_m2": float(measured),
+                    "relative_error": abs(float(measured) - float(target)) / float(target),
+                }
+            )
+        worst = max(r["relative_error"] for r in rows) if rows else float("inf")
+        status = "passed" if worst <= tolerance_fraction else "failed"
+        verification = {
+            "tolerance_fraction": tolerance_fraction,
+            "max_relative_error": worst,
+            "measurements": rows,
+            "date": dt.date.today().isoformat(),
+        }
+        return replace(self, status=status, verification=verification)
+
+    def to_json(self) -> dict:
+        return {
+            "format": FORMAT,
+            "label": self.label,
+            "created": self.created,
+            "status": self.status,
+            "method": self.method,
+            "bit_depth": self.bit_depth,
+            "readings": [[int(c), float(v)] for c, v in self.readings],
+            "readings_sha256": self.readings_sha256,
+            "model": self.model,
+            "verification": self.verification,
+            "black_cd_m2": self.black_cd_m2,
+            "max_cd_m2": self.max_cd_m2,
+        }
+
+    def save(self, path: str | Path) -> Path:
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        write_text(path, json.dumps(self.to_json(), indent=2) + "\n")  # whole or not at all
+        return path
+
+    @classmethod
+    def from_json(cls, data: dict, *, source: str = "calibration") -> Calibration:
+        """A calibration from its JSON form (a file, or a stimulus-set manifest), checking its
+        format and the hash of its readings."""
+        if not isinstance(data, dict):
+            raise ValueError(
+                f"{source}: not a glarelab calibration (a JSON {type(data).__name__}, "
+                "not an object)"
+            )
+        if data.get("format") != FORMAT:
+            raise ValueError(
+                f"{source}: not a glarelab calibration (format {data.get('format')!r})"
+            )
+        try:
+            calibration = cls(
+                bit_depth=int(data["bit_depth"]),
+                readings=tuple((int(c), float(v)) for c, v in data["readings"]),
+                method=data["method"],
+                created=data["created"],
+                status=data["status"],
+                label=data.get("label", ""),
+                model=data.get("model", {}),
+                verification=data.get("verification", {}),
+            )
+        except KeyError as error:
+            raise ValueError(f"{source}: the calibration has no {error.args[0]!r}") from None
+        except (TypeError, ValueError) as error:
+            raise ValueError(f"{source}: a malformed calibration ({error})") from None
+        if calibration.readings_sha256 != data.get("readings_sha256"):
+            raise ValueError(f"{source}: the readings do not match their recorded hash (edited?)")
+        _check_consistent(calibration, data, source)
+        return calibration
+
+    @classmethod
+    def load(cls, path: str | Path) -> Calibration:
+        """Read a calibration file, checking its format and the hash of its readings."""
+        path = Path(path)
+        if not path.is_file():
+            raise FileNotFoundError(f"no calibration file at {path}")
+        try:
+            data = json.loads(path.read_text())
+        except (json.JSONDecodeError, UnicodeDecodeError) as error:
+            raise ValueError(f"{path}: a calibration must be a JSON file; {error}") from None
+        return cls.from_json(data, source=str(path))
+
+
+STATUSES = ("unverified", "passed", "failed", "synthetic")
+MODEL_TOLERANCE = 1e-6  # relative: a model re-fitted from the same readings agrees to 1e-9
+
+
+def _close(a, b) -> bool:
+    return abs(a - b) <= MODEL_TOLERANCE * max(abs(a), abs(b), 1e-12)
+
+
+def _check_consistent(calibration: Calibration, data: dict, source: str) -> None:
+    """Refuse a calibration whose method, model, range or status its readings and its
+    verification pass do not give (an edited file).
+
+    Raises
+    ------
+    ValueError
+        Naming the field that disagrees, its value and the value the readings give.
+    """
+    if calibration.status not in STATUSES:
+        raise ValueError(
+            f"{source}: status {calibration.status!r} is not one of {', '.join(STATUSES)}"
+        )
+    if calibration.method not in METHODS:
+        raise ValueError(
+            f"{source}: method {calibration.method!r} is not one of {', '.join(METHODS)}"
+        )
+    if not isinstance(calibration.model, dict) or not isinstance(calibration.verification, dict):
+        raise ValueError(f"{source}: model and verification must be JSON objects")
+    try:
+        ordered = _check_readings(list(calibration.readings), calibration.bit_depth, source)
+    except ValueError as error:
+        raise ValueError(f"{source}: its readings are not a calibration's ({error})") from None
+    if calibration.method == "gog":
+        refit = fit_calibration(ordered, bit_depth=calibration.bit_depth, method="gog").model
+        for name in ("gain", "offset", "gamma", "black_cd_m2", "max_cd_m2"):
+            value = calibration.model.get(name)
+            if isinstance(value, bool) or not isinstance(value, int | float):
+                raise ValueError(
+                    f"{source}: the model's {name} is {value!r}; its readings give "
+                    f"{refit[name]:.6g} (a gain-offset-gamma model needs numbers)"
+                )
+            if not _close(float(value), refit[name]):
+                raise ValueError(
+                    f"{source}: the model's {name} is {value!r}, its readings give "
+                    f"{refit[name]:.6g} (edited? fit the readings again)"
+                )
+    elif calibration.model:
+        raise ValueError(
+            f"{source}: a {calibration.method} calibration has no model; it holds one (edited?)"
+        )
+    lut = calibration.lut
+    for name, value in (("black_cd_m2", float(lut[0])), ("max_cd_m2", float(lut[-1]))):
+        recorded = data.get(name, value)
+        if isinstance(recorded, bool) or not isinstance(recorded, int | float):
+            raise ValueError(f"{source}: {name} is {recorded!r}; its readings give {value:.6g}")
+        if not _close(float(recorded), value):
+            raise ValueError(
+                f"{source}: {name} is {recorded!r}, its readings give {value:.6g} (edited?)"
+            )
+    _check_status(calibration, source)
+
+
+def _check_status(calibration: Calibration, source: str) -> None:
+    """The status must be the one the verification data give."""
+    verification = calibration.verification
+    status = calibration.status
+    if status in ("unverified", "synthetic"):
+        if verification:
+            raise ValueError(
+                f"{source}: status {status!r} but it holds a verification pass; its status "
+                "comes from that pass (edited?)"
+            )
+        if status == "synthetic" and not calibration.label.startswith("SYNTHETIC"):
+            raise ValueError(f"{source}: status 'synthetic' for a display not labelled SYNTHETIC")
+        return
+    rows = verification.get("measurements")
+    tolerance = verification.get("tolerance_fraction")
+    if not isinstance(rows, list) or not rows or not isinstance(tolerance, int | float):
+        raise ValueError(
+            f"{source}: status {status!r} without verification measurements; the status of a "
+            "calibration comes only from its verification pass (glarelab calibrate measure)"
+        )
+    try:
+        worst = max(
+            abs(float(r["measured_cd_m2"]) - float(r["target_cd_m2"])) / float(r["target_cd_m2"])
+            for r in rows
+        )
+        codes = [int(r["code"]) for r in rows]
+    except (KeyError, TypeError, ValueError, ZeroDivisionError):
+        raise ValueError(f"{source}: a malformed verification measurement") from None
+    if any(not 0 <= code < calibration.n_codes for code in codes):
+        raise ValueError(f"{source}: a verification code is outside the display's codes")
+    given = "passed" if worst <= tolerance else "failed"
+    if given != status:
+        raise ValueError(
+            f"{source}: status {status!r}, but its verification measurements (worst error "
+            f"{100 * worst:.2f} %, tolerance {100 * tolerance:.2f} %) give {given!r} (edited?)"
+        )
+
+
+def _check_readings(
+    readings: list[tuple[int, float]], bit_depth: int, source: str
+) -> list[tuple[int, float]]:
+    if bit_depth not in (8, 10, 12, 16):
+        raise ValueError(f"bit_depth must be one of 8, 10, 12, 16; got {bit_depth!r}")
+    if len(readings) < 4:
+        raise ValueError(f"{source}: at least 4 readings are needed, got {len(readings)}")
+    ordered = sorted(readings)
+    top = 2**bit_depth - 1
+    for code, value in ordered:
+        if not 0 <= code <= top:
+            raise ValueError(
+                f"{source}: code {code} is outside 0-{top} for a {bit_depth}-bit display"
+            )
+        if not (np.isfinite(value) and 0 <= value <= MAX_DISPLAY_CD_M2):
+            raise ValueError(
+                f"{source}: code {code} has luminance {value!r}; must be 0-"
+                f"{MAX_DISPLAY_CD_M2:g} cd/m² (no display is brighter: a typo or a unit slip?)"
+            )
+    for (c0, v0), (c1, v1) in itertools.pairwise(ordered):
+        if c1 == c0:
+            raise ValueError(f"{source}: code {c0} is measured twice; average the readings first")
+        if v1 <= v0:
+            raise ValueError(
+                f"{source}: luminance is not increasing: code {c1} → {v1:g} cd/m² is not above "
+                f"code {c0} → {v0:g} cd/m² (photometer drift or a misread value?)"
+            )
+    if ordered[0][0] != 0 or ordered[-1][0] != top:
+        raise ValueError(
+            f"{source}: readings must include code 0 and code {top} (black and white)"
+        )
+    return ordered
+
+
+def read_readings(path: str | Path) -> list[tuple[int, float]]:
+    """Read photometer readings from a CSV with columns ``code`` and ``luminance_cd_m2``."""
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"no readings file at {path}")
+    rows = []
+    with path.open(newline="", encoding="utf-8-sig") as handle:
+        reader = csv.DictReader(handle)
+        missing = {"code", "luminance_cd_m2"} - set(reader.fieldnames or [])
+        if missing:
+            raise ValueError(
+                f"{path}: missing column(s) {sorted(missing)}; need code, luminance_cd_m2"
+            )
+        for line, row in enumerate(reader, start=2):
+            try:
+                rows.append((int(row["code"]), float(row["luminance_cd_m2"])))
+            except ValueError:
+                raise ValueError(
+                    f"{path}, line {line}: code and luminance_cd_m2 must be numbers; got {row}"
+                ) from None
+    return rows
+
+
+def fit_calibration(
+    readings: list[tuple[int, float]],
+    *,
+    bit_depth: int,
+    method: Literal["pchip-log", "pchip", "gog"] = "pchip-log",
+    label: str = "",
+    source: str = "readings",
+) -> Calibration:
+    """Build a calibration from ``(code, cd/m²)`` readings.
+
+    Raises
+    ------
+    ValueError
+        For fewer than 4 readings, codes outside the bit depth, a repeated code, readings that
+        do not increase with code (named), or readings without code 0 and the top code.
+    """
+    ordered = _check_readings(list(readings), bit_depth, source)
+    model: dict = {}
+    if method == "gog":
+        data = np.array(ordered, dtype=float)
+        fraction = data[:, 0] / (2**bit_depth - 1)
+        black, peak = data[0, 1], data[-1, 1]
+
+        def curve(x, gain, offset, gamma):
+            return _gog(x, gain, offset, gamma, black, peak)
+
+        params, _ = curve_fit(curve, fraction, data[:, 1], p0=(1.0, 0.0, 2.2), maxfev=20_000)
+        residuals = curve(fraction, *params) - data[:, 1]
+        model = {
+            "gain": float(params[0]),
+            "offset": float(params[1]),
+            "gamma": float(params[2]),
+            "black_cd_m2": float(black),
+            "max_cd_m2": float(peak),
+            "rms_residual_cd_m2": float(np.sqrt(np.mean(residuals**2))),
+            "max_residual_cd_m2": float(np.abs(residuals).max()),
+            "residuals_cd_m2": [float(r) for r in residuals],
+        }
+    elif method not in METHODS:
+        raise ValueError(f"method must be one of {', '.join(METHODS)}; got {method!r}")
+    return Calibration(
+        bit_depth=bit_depth,
+        readings=tuple(ordered),
+        method=method,
+        created=dt.date.today().isoformat(),
+        status="unverified",
+        label=label,
+        model=model,
+    )
+
+
+def synthetic_calibration(
+    *, max_cd_m2: float, black_cd_m2: float, bit_depth: int, label: str = ""
+) -> Calibration:
+    """A made-up display following a 2.2 gamma, marked ``synthetic`` (for demos and tests,
+    never for a real study: experiments treat it as uncalibrated)."""
+    top = 2**bit_depth - 1
+    codes = np.unique(np.round(np.linspace(0, top, 33)).astype(int))
+    values = black_cd_m2 + (max_cd_m2 - black_cd_m2) * (codes / top) ** SYNTHETIC_GAMMA
+    text = (
+        label
+        or f"SYNTHETIC display: {max_cd_m2:g} cd/m², black {black_cd_m2:g}, "
+        f"{bit_depth}-bit, gamma 2.2"
+    )
+    calibration = fit_calibration(  # the space of the shipped synthetic calibrations
+        list(zip(codes.tolist(), values.tolist(), strict=True)),
+        bit_depth=bit_depth,
+        label=text,
+        method="pchip",
+    )
+    return replace(calibration, status="synthetic", created="synthetic")
+
+
+def usable_calibration(
+    calibration: Calibration | None, *, allow_uncalibrated: bool = False
+) -> dict:
+    """Decide whether a session may run on this calibration; return what to record.
+
+    A missing, failed or synthetic calibration is refused unless ``allow_uncalibrated`` (and
+    the session data then say it ran uncalibrated); an unverified one runs with a warning.
+
+    Returns
+    -------
+    dict
+        ``calibrated`` (bool), ``status``, ``readings_sha256`` (None without a calibration).
+
+    Raises
+    ------
+    ValueError
+        If the calibration is missing, failed or synthetic and ``allow_uncalibrated`` is False.
+    """
+    status = calibration.status if calibration is not None else "missing"
+    record = {
+        "calibrated": status in ("passed", "unverified"),
+        "status": status,
+        "readings_sha256": calibration.readings_sha256 if calibration is not None else None,
+    }
+    if status in ("missing", "failed", "synthetic") and not allow_uncalibrated:
+        raise ValueError(
+            f"the display calibration is {status}: measure the display "
+            "(glarelab calibrate measure) or run explicitly uncalibrated "
+            "(--allow-uncalibrated, recorded in the data)"
+        )
+    if status == "unverified":
+        warnings.warn(
+            "the display calibration has not been verified (no verification pass)",
+            UserWarning,
+            stacklevel=2,
+        )
+    return record

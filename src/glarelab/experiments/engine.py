@@ -1,0 +1,158 @@
+"""What every protocol engine shares: the interface, key presses, seeded randomness.
+
+An engine is a plain state machine. ``screen()`` says what to show now: a dict with ``kind``,
+``keys`` (the key names this screen takes, each with what it does, for the key legend) and what
+the front-end needs to draw it; screens of a trial carry its number in ``trial``. ``press(key,
+t)`` takes a key press at ``t`` seconds after the onset of the current trial's stimulus (the
+flip that first showed it) and returns the finished trial's row (a dict of
+:mod:`experiments.schema` columns) when that key ended a trial, else None. ``presented(ok)``
+tells the engine whether the last timed presentation kept its frames. ``done`` says the session
+is over. ``replay(rows)`` rebuilds the state after the rows already on disk, to resume.
+
+The session loop (:mod:`glarelab.experiments.loop`) is the only caller: it decides which key
+presses reach the engine (those made after the onset, on keys the screen takes) and adds the timing
+columns to each row.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = [
+    "Engine",
+    "LookingObserver",
+    "Press",
+    "first_screen",
+    "normalise_key",
+    "participant_rng",
+]
+
+# a keypad key is a digit with Num Lock on and an arrow or page key with it off; Psychtoolbox
+# names it by its position (num_8) either way, so a screen takes whichever meaning it uses
+KEYPAD = {
+    "num_0": ("0", "insert"),
+    "num_1": ("1", "end"),
+    "num_2": ("2", "down"),
+    "num_3": ("3", "pagedown"),
+    "num_4": ("4", "left"),
+    "num_5": ("5",),
+    "num_6": ("6", "right"),
+    "num_7": ("7", "home"),
+    "num_8": ("8", "up"),
+    "num_9": ("9", "pageup"),
+    "num_enter": ("return",),
+    "num_decimal": ("period", "delete"),
+    "num_subtract": ("minus",),
+}
+
+
+def normalise_key(name: str, taken=()) -> str:
+    """A key name as a screen takes it: a keypad key becomes the main-block key the screen
+    takes (a digit, or an arrow or page key), else its first meaning.
+
+    Examples
+    --------
+    >>> normalise_key("num_8", {"up": "brighter"}), normalise_key("num_8", {"8": "rate 8"})
+    ('up', '8')
+    """
+    meanings = KEYPAD.get(name)
+    if meanings is None:
+        return name
+    return next((m for m in meanings if m in taken), meanings[0])
+
+
+@dataclass(frozen=True)
+class Press:
+    """One key press: its name and the time it went down (s, on the session clock)."""
+
+    name: str
+    t_s: float
+
+
+class Engine(ABC):
+    """Base of the protocol engines: the interface, and defaults where one fits all."""
+
+    study: str = ""
+
+    @property
+    @abstractmethod
+    def done(self) -> bool:
+        """The session is over."""
+
+    @abstractmethod
+    def screen(self) -> dict:
+        """What to show now."""
+
+    @abstractmethod
+    def press(self, key: str, t: float = 0.0) -> dict | None:
+        """Take a key press ``t`` s after the trial's onset; the finished row, or None."""
+
+    @abstractmethod
+    def replay(self, rows: list[dict]) -> None:
+        """Continue after the rows already recorded."""
+
+    def presented(self, ok: bool) -> None:  # noqa: B027 - a hook most engines ignore
+        """The last timed presentation kept its frames (``ok``) or not; default: no effect."""
+
+    @property
+    def total_trials(self) -> int | None:
+        """Trials in the session when known in advance (None for adaptive procedures)."""
+        return None
+
+    def key_legend(self) -> list[tuple[str, str]]:
+        """``(keys, what they do)`` for the instructions screen."""
+        return []
+
+
+def participant_rng(seed: int, participant: str, purpose: str) -> np.random.Generator:
+    """A generator fixed by the protocol seed, the participant and what it is for, so that a
+    participant's trial order is the same in every run and resumed session."""
+    digest = hashlib.sha256(f"{participant}/{purpose}".encode()).digest()
+    return np.random.default_rng([seed, int.from_bytes(digest[:8], "little")])
+
+
+class LookingObserver:
+    """What the simulated observers that look at a stimulus set share: the brightness model
+    and noise of the protocol's ``[observer]`` table, this participant's draw of the noise,
+    and the set as its display shows it (:class:`glarelab.experiments.looking.DisplayedSet`, which
+    observers given the same one share percepts through)."""
+
+    @staticmethod
+    def check(protocol) -> None:
+        """Refuse an ``[observer]`` table the model and the noise do not take (ValueError)."""
+        from glarelab.experiments.perception import observer_parameters
+
+        observer_parameters(protocol["observer"])
+
+    def __init__(self, protocol, participant: str, *, seed: int, stimuli):
+        from glarelab.experiments.looking import DisplayedSet
+        from glarelab.experiments.perception import observer_parameters, warn_outside_fitted_range
+
+        self.protocol = protocol
+        self.participant = participant
+        self.seed = seed
+        self.model, self.noise = observer_parameters(protocol["observer"])
+        self.observer = self.noise.draw(
+            participant_rng(protocol.seed, participant, f"observer {seed}")
+        )
+        self.display = stimuli if isinstance(stimuli, DisplayedSet) else DisplayedSet(stimuli)
+        # once per observer: the stimuli it will be asked about, against what it was fitted on
+        self.departures = warn_outside_fitted_range(protocol, self.display.geometry)
+
+
+def first_screen(engine, *, presses: int = 50) -> dict | None:
+    """The first screen with images an engine shows, Space pressed through the screens before
+    it (instructions, a block's start); None if it shows none (a questionnaire). The engine is
+    used up: give it one of its own."""
+    for _ in range(presses):
+        screen = engine.screen()
+        if screen.get("images"):
+            return screen
+        if "space" not in screen.get("keys", {}):
+            return None
+        engine.press("space", 0.0)
+    return None

@@ -1,0 +1,175 @@
+"""Files written whole or not at all.
+
+Every file glarelab writes (images, tables, reports, manifests, calibrations, kernels) is
+written to a temporary name in its own folder, flushed to the disk (``fsync``) and renamed over
+its final name only when complete: an interrupted or failed write (a full disk, Ctrl-C, a
+killed process) leaves the earlier file, or no file, never a partial one. The rename replaces
+a symbolic link at the final name rather than writing through it.
+
+A temporary file is named ``.NAME.partial-PID-THREAD.SUFFIX`` (so two threads, or two
+processes, writing one file never share it); one left by a process that was killed is removed by
+the next write of the same file. Session CSVs are the one exception: they are appended to
+and flushed trial by trial (:mod:`glarelab.experiments.data`), so that a crash loses no trial.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import threading
+from collections.abc import Iterator
+from pathlib import Path
+from typing import IO
+
+__all__ = ["atomic_open", "atomic_path", "fsync_folder", "write_bytes", "write_text"]
+
+PARTIAL = ".partial-"  # in the name of a file being written
+
+
+def _temporary(path: Path) -> Path:
+    # the suffix stays last: Pillow, matplotlib and pandas choose the format by it
+    owner = f"{os.getpid()}-{threading.get_ident()}"
+    return path.with_name(f".{path.stem}{PARTIAL}{owner}{path.suffix}")
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def _remove_stale(path: Path) -> None:
+    """Remove the temporary files of ``path`` left by processes that were killed."""
+    prefix = f".{path.stem}{PARTIAL}"
+    try:
+        candidates = list(path.parent.glob(f"{glob_escape(prefix)}*{glob_escape(path.suffix)}"))
+    except OSError:
+        return
+    for candidate in candidates:
+        owner = candidate.name[len(prefix) : len(candidate.name) - len(path.suffix)]
+        pid = owner.split("-")[0]
+        if pid.isdigit() and int(pid) != os.getpid() and not _alive(int(pid)):
+            with contextlib.suppress(OSError):
+                candidate.unlink()
+
+
+def glob_escape(text: str) -> str:
+    """``text`` with the glob pattern characters quoted."""
+    return "".join(f"[{c}]" if c in "*?[" else c for c in text)
+
+
+def fsync_folder(folder: str | Path) -> None:
+    """Flush a folder's entries (a rename into it) to the disk, where the system allows."""
+    try:
+        handle = os.open(folder, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0))
+    except OSError:
+        return
+    try:
+        os.fsync(handle)
+    except OSError:
+        pass
+    finally:
+        os.close(handle)
+
+
+def _fsync_file(path: Path) -> None:
+    handle = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(handle)
+    finally:
+        os.close(handle)
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | Path) -> Iterator[Path]:
+    """A temporary path to write ``path``'s new content to; renamed over ``path`` when the
+    block ends without an error, removed when it does not.
+
+    Parameters
+    ----------
+    path
+        The file to write. Its folder must exist.
+
+    Yields
+    ------
+    pathlib.Path
+        A new name in the same folder, ending in the same suffix (so that writers choosing a
+        format by the suffix choose the same one).
+
+    Raises
+    ------
+    OSError
+        When the content cannot be written or renamed (a full disk: nothing is left behind,
+        and an earlier ``path`` is as it was).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> with atomic_path(folder / "table.csv") as temporary:
+    ...     _ = temporary.write_text("a,b\\n1,2\\n")
+    >>> (folder / "table.csv").read_text()
+    'a,b\\n1,2\\n'
+    >>> sorted(p.name for p in folder.iterdir())
+    ['table.csv']
+    """
+    path = Path(path)
+    _remove_stale(path)
+    temporary = _temporary(path)
+    try:
+        yield temporary
+        if not temporary.is_file():
+            raise FileNotFoundError(f"{path}: nothing was written")
+        _fsync_file(temporary)
+        os.replace(temporary, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            temporary.unlink()
+        raise
+    fsync_folder(path.parent)
+
+
+@contextlib.contextmanager
+def atomic_open(
+    path: str | Path,
+    mode: str = "w",
+    *,
+    encoding: str | None = "utf-8",
+    newline: str | None = None,
+) -> Iterator[IO]:
+    """``open(path, mode)`` whose content replaces ``path`` only when the block completes.
+
+    >>> import tempfile
+    >>> path = Path(tempfile.mkdtemp()) / "notes.txt"
+    >>> with atomic_open(path) as handle:
+    ...     _ = handle.write("complete\\n")
+    >>> path.read_text()
+    'complete\\n'
+    """
+    if mode not in ("w", "wb"):
+        raise ValueError(f"mode must be 'w' or 'wb'; got {mode!r}")
+    with atomic_path(path) as temporary:
+        if mode == "wb":
+            with temporary.open("wb") as handle:
+                yield handle
+        else:
+            with temporary.open("w", encoding=encoding, newline=newline) as handle:
+                yield handle
+
+
+def write_text(path: str | Path, text: str, *, encoding: str = "utf-8") -> Path:
+    """Write ``text`` to ``path`` whole or not at all (:func:`atomic_path`)."""
+    with atomic_open(path, "w", encoding=encoding) as handle:
+        handle.write(text)
+    return Path(path)
+
+
+def write_bytes(path: str | Path, data: bytes) -> Path:
+    """Write ``data`` to ``path`` whole or not at all (:func:`atomic_path`)."""
+    with atomic_open(path, "wb") as handle:
+        handle.write(data)
+    return Path(path)

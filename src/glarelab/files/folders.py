@@ -1,0 +1,249 @@
+"""Output folders that never take someone else's files.
+
+Every folder a command writes holds a listing, ``.glarelab-files.json``, of the files glarelab
+wrote there (and of what kind of output they are). A command may replace or overwrite only
+files in that listing: a folder holding anything else — a participant's data, a user's notes,
+another program's ``manifest.json``, a symbolic link — is refused before anything is written.
+
+A stimulus set or a report is built in a staging folder next to its destination and moved into
+place only when complete: a failed build leaves the earlier output as it was, and a rebuild
+leaves no file of the earlier output behind. Commands that add named files to a folder shared
+with other files (``docs``, ``looks``, ``gallery``) overwrite only files the listing names.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import ctypes.util
+import errno
+import json
+import os
+import shutil
+from collections.abc import Iterable
+from pathlib import Path
+
+from glarelab.files.atomic import _alive, fsync_folder, glob_escape, write_text
+
+__all__ = [
+    "LISTING",
+    "check_replaceable",
+    "claim_files",
+    "list_files",
+    "listed_files",
+    "record_files",
+    "replace_folder",
+    "restore_folder",
+    "staging_folder",
+]
+
+LISTING = ".glarelab-files.json"  # the files glarelab wrote into a folder, by kind of output
+
+
+def _listing(folder: Path) -> dict[str, str]:
+    """``{relative path: kind}`` of the files glarelab wrote into ``folder`` (empty if none)."""
+    try:
+        listing = json.loads((folder / LISTING).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    files = listing.get("files") if isinstance(listing, dict) else None
+    if not isinstance(files, dict):
+        return {}
+    return {str(name): str(kind) for name, kind in files.items()}
+
+
+def _entries(folder: Path) -> list[str]:
+    """Every file, folder link and file link under ``folder`` (symbolic links not followed)."""
+    found = []
+    for root, dirs, files in os.walk(folder, followlinks=False):
+        here = Path(root)
+        links = [d for d in dirs if (here / d).is_symlink()]
+        dirs[:] = [d for d in dirs if d not in links]
+        for name in [*files, *links]:
+            found.append((here / name).relative_to(folder).as_posix())
+    return sorted(entry for entry in found if entry != LISTING)
+
+
+def _inside(path: Path, folder: Path) -> bool:
+    path, folder = path.resolve(), folder.resolve()
+    return path == folder or folder in path.parents
+
+
+def check_replaceable(
+    out: str | Path, *, kind: str, what: str, inputs: Iterable[str | Path] = ()
+) -> Path:
+    """``out`` as the folder of a ``what`` that replaces it whole: new, empty, or holding only
+    files an earlier output of the same ``kind`` wrote (as its listing says).
+
+    Raises
+    ------
+    ValueError
+        If ``out`` is a file, holds a file glarelab did not write there (named), or holds one of
+        the command's ``inputs``.
+    """
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"{out} is a file; a {what} needs a folder")
+    for source in inputs:
+        if _inside(Path(source), out):
+            raise ValueError(
+                f"{source} is inside {out}, which the {what} replaces whole: give another "
+                "folder (nothing was changed)"
+            )
+    if not out.is_dir():
+        return out
+    listed = _listing(out)
+    foreign = [e for e in _entries(out) if listed.get(e) != kind]
+    if foreign:
+        shown = ", ".join(foreign[:3]) + (
+            f" and {len(foreign) - 3} more" if len(foreign) > 3 else ""
+        )
+        raise ValueError(
+            f"{out} holds files that are not an earlier {what} glarelab wrote ({shown}); the "
+            f"{what} replaces its folder whole, so give a new or empty folder (nothing was "
+            "changed)"
+        )
+    return out
+
+
+def record_files(folder: Path, kind: str) -> None:
+    """List every file now in ``folder`` as written by glarelab, as output of ``kind``."""
+    files = {entry: kind for entry in _entries(folder)}
+    _write_listing(folder, files)
+
+
+def claim_files(folder: Path, names: Iterable[str], kind: str) -> None:
+    """Before writing ``names`` into a shared ``folder``: refuse if one exists and glarelab did
+    not write it there; otherwise list them as glarelab's.
+
+    Raises
+    ------
+    ValueError
+        Naming the first existing file the listing does not hold.
+    """
+    names = list(names)
+    listed = _listing(folder)
+    for name in names:
+        path = folder / name
+        if (path.exists() or path.is_symlink()) and name not in listed:
+            raise ValueError(
+                f"{path} exists and glarelab did not write it there; {kind} would overwrite "
+                "it, so give another folder or move the file (nothing was changed)"
+            )
+    _write_listing(folder, listed | dict.fromkeys(names, kind))
+
+
+def listed_files(folder: Path) -> dict[str, str]:
+    """``{relative path: kind}`` of the files glarelab wrote into ``folder`` (empty if none)."""
+    return _listing(Path(folder))
+
+
+def list_files(folder: Path, names: Iterable[str], kind: str) -> None:
+    """List ``names`` in ``folder`` as written by glarelab (checked by the caller)."""
+    folder = Path(folder)
+    _write_listing(folder, _listing(folder) | dict.fromkeys(names, kind))
+
+
+def _write_listing(folder: Path, files: dict[str, str]) -> None:
+    text = json.dumps({"written_by": "glarelab", "files": dict(sorted(files.items()))}, indent=1)
+    write_text(folder / LISTING, text + "\n")
+
+
+def _leftovers(final: Path) -> None:
+    """Remove the staging and replaced folders of ``final`` that killed processes left, and
+    put back an earlier ``final`` that a process killed between two renames left aside."""
+    for kind in ("old", "building"):
+        pattern = f".{glob_escape(final.name)}.{kind}-*"
+        for leftover in sorted(final.parent.glob(pattern)):
+            pid = leftover.name.rsplit("-", 1)[-1]
+            if not pid.isdigit() or int(pid) == os.getpid() or _alive(int(pid)):
+                continue
+            if kind == "old" and not final.exists() and not final.is_symlink():
+                with contextlib.suppress(FileNotFoundError):  # another process put it back
+                    leftover.rename(final)  # the earlier output, complete
+            else:
+                shutil.rmtree(leftover, ignore_errors=True)
+
+
+def restore_folder(final: str | Path) -> None:
+    """Put back a ``final`` that a process killed between the two renames of
+    :func:`replace_folder` left aside, and remove the folders killed builds left beside it.
+
+    Call it before reading or writing into a folder that is replaced whole while files in it
+    are kept (:func:`staging_folder` calls it too): on a file system that cannot swap two
+    folders in one step, ``final`` is missing until then.
+    """
+    final = Path(final).resolve()
+    if final.parent.is_dir():
+        _leftovers(final)
+
+
+def staging_folder(final: Path) -> Path:
+    """A new, empty folder next to ``final`` to build its replacement in."""
+    final = Path(final).resolve()
+    final.parent.mkdir(parents=True, exist_ok=True)
+    _leftovers(final)
+    staging = final.with_name(f".{final.name}.building-{os.getpid()}")
+    shutil.rmtree(staging, ignore_errors=True)  # a build of this process that was cut short
+    staging.mkdir()
+    return staging
+
+
+RENAME_EXCHANGE = 2  # linux/fs.h: swap two paths in one step
+
+
+def _exchange(first: Path, second: Path) -> bool:
+    """Swap two existing paths atomically (Linux ``renameat2``); False where unsupported."""
+    name = ctypes.util.find_library("c")
+    try:
+        libc = ctypes.CDLL(name, use_errno=True)
+        renameat2 = libc.renameat2
+    except (OSError, AttributeError, TypeError):
+        return False
+    at_cwd = -100
+    result = renameat2(at_cwd, os.fsencode(first), at_cwd, os.fsencode(second), RENAME_EXCHANGE)
+    if result == 0:
+        return True
+    code = ctypes.get_errno()
+    if code in (errno.EINVAL, errno.ENOSYS, errno.ENOTSUP):
+        return False
+    raise OSError(code, os.strerror(code), str(second))
+
+
+def replace_folder(
+    staging: Path, final: Path, *, kind: str, files: Iterable[str] | None = None
+) -> None:
+    """List the finished ``staging`` folder's files and move it to ``final`` in one step (the
+    two folders are swapped atomically where the system can; elsewhere the earlier ``final``
+    is moved aside first and put back by the next build if the process dies in between). The
+    earlier ``final`` is removed only once the new one is in place.
+
+    ``files`` are the files glarelab wrote, for the listing, where the folder holds others too
+    (default: every file in ``staging``)."""
+    if files is None:
+        record_files(staging, kind)
+    else:
+        _write_listing(staging, {name: kind for name in files if (staging / name).is_file()})
+    for root, _, files in os.walk(staging):
+        for name in files:
+            with contextlib.suppress(OSError):
+                handle = os.open(Path(root) / name, os.O_RDONLY)
+                try:
+                    os.fsync(handle)
+                finally:
+                    os.close(handle)
+        fsync_folder(root)
+    final = Path(final).resolve()
+    if final.is_dir() and not final.is_symlink() and _exchange(staging, final):
+        fsync_folder(final.parent)
+        shutil.rmtree(staging, ignore_errors=True)  # now the earlier output
+        return
+    old = None
+    if final.exists():
+        old = final.with_name(f".{final.name}.old-{os.getpid()}")
+        shutil.rmtree(old, ignore_errors=True)
+        final.rename(old)
+    staging.rename(final)
+    fsync_folder(final.parent)
+    if old is not None:
+        shutil.rmtree(old, ignore_errors=True)

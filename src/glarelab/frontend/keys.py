@@ -1,0 +1,155 @@
+"""A session's key presses and typed comments.
+
+One :class:`glarelab.frontend.window.KeyReader` for the session, never cleared after the first
+screen. Psychtoolbox names keys by their position on a US keyboard on Linux and macOS (a French
+keyboard's unshifted ``&`` key is ``1``), so a rating is its key's digit in any layout; the
+keypad's digits count too. Comments are read from the window system's text events (the
+keyboard's layout, case, punctuation and accents as typed, Backspace and the arrows as editing):
+what was typed after the rating key's own character and before the Enter that ends the comment,
+even before the comment box appeared; Shift+Enter is a new line in it.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+from glarelab.frontend.window import (
+    KeyReader,
+    TextCapture,
+    dispatch_events,
+    key_symbols,
+    typed_text,
+)
+
+__all__ = ["ScriptedKeys", "SessionKeys"]
+
+
+class ScriptedKeys:
+    """Key names read from a list instead of the keyboard (dry runs): one press per read, at
+    the time it is read; ``escape`` when the list is used up."""
+
+    def __init__(self, names: list[str]):
+        self.names = list(names)
+
+    def read(self) -> list[tuple[str, float]]:
+        from psychopy import logging
+
+        name = self.names.pop(0) if self.names else "escape"
+        return [(name, logging.defaultClock.getTime())]
+
+    def clear(self) -> None:
+        pass
+
+
+class SessionKeys:
+    """The presses and the typing of a session's window.
+
+    Parameters
+    ----------
+    window
+        The open PsychoPy window.
+    scripted
+        Key names to use instead of the keyboard (dry runs), consumed in order; None: the
+        keyboard.
+    log
+        Where a line of the session's log goes.
+    """
+
+    def __init__(self, window, scripted: list[str] | None, *, log: Callable[[str], None]):
+        self.window = window
+        self.scripted = scripted
+        self.reader = ScriptedKeys(scripted) if scripted is not None else KeyReader()
+        self.typing = TextCapture(window)
+        self._log = log
+        self._returns_seen = 0  # Enter presses Psychtoolbox reported (see without_shift_enter)
+        self._typing_mark = 0  # where the current screen's typing began
+        self._comment_start: int | None = None
+        self.held: list[tuple[str, float]] = []  # presses read during a presentation
+
+    def start(self) -> None:
+        """From now on every key press counts: Enter pressed before now is not counted by
+        either reader."""
+        self.reader.clear()
+        dispatch_events(self.window)
+        self._returns_seen = len(self.typing.returns)
+
+    def showing(self, screen: dict) -> None:
+        """A screen is shown: a comment's box starts its comment, any other screen its own
+        typing."""
+        if screen.get("text_entry") and self._comment_start is None:
+            self._start_comment(screen)
+        elif not screen.get("text_entry"):
+            self._typing_mark = max(self._typing_mark, len(self.typing.events))
+
+    def read(self, *, text_entry: bool) -> list[tuple[str, float]]:
+        """New presses; on a text-entry screen without those of Shift+Enter."""
+        presses = self.reader.read()
+        if self.scripted is not None or not any(
+            name in ("return", "num_enter") for name, _ in presses
+        ):
+            return presses
+        kept = self._without_shift_enter(presses)
+        return kept if text_entry else presses
+
+    def _without_shift_enter(self, presses: list[tuple[str, float]]) -> list:
+        """A comment's presses without an Enter pressed with Shift: that is a new line in the
+        comment (its text event), not its end. Psychtoolbox does not report modifiers, so the
+        n-th Enter it reports is the window system's n-th Enter key event, whose modifiers
+        say."""
+        if self.scripted is not None:
+            return presses
+        kept = []
+        for name, t in presses:
+            if name not in ("return", "num_enter"):
+                kept.append((name, t))
+                continue
+            index = self._returns_seen
+            self._returns_seen += 1
+            deadline = time.monotonic() + 0.2
+            while len(self.typing.returns) <= index and time.monotonic() < deadline:
+                dispatch_events(self.window)  # its key event, a moment behind Psychtoolbox's
+                time.sleep(0.001)
+            if index < len(self.typing.returns) and self.typing.returns[index]:
+                self._log(f"key {name} with shift at {t:.4f}: a new line in the comment")
+            else:
+                kept.append((name, t))
+        return kept
+
+    def _start_comment(self, screen: dict) -> None:
+        """Where the comment begins: after the rating key's press and its own character (in
+        the keyboard's layout: ``(`` for the 5 of a French keyboard), typed since the rating
+        screen appeared; characters typed before the box showed are kept."""
+        dispatch_events(self.window)
+        events = self.typing.events
+        rating = str(screen.get("rating", ""))
+        symbols = {str(s) for s in key_symbols(self.window, (rating, f"num_{rating}"))}
+        for index in range(self._typing_mark, len(events)):
+            if events[index][0] == "key" and events[index][1] in symbols:
+                index += 1
+                if index < len(events) and events[index][0] == "text":
+                    index += 1  # the rating key's own character
+                self._comment_start = index
+                return
+        for index in range(self._typing_mark, len(events)):  # no key events: by its text
+            if events[index] == ("text", rating):
+                self._comment_start = index + 1
+                return
+        self._comment_start = len(events)
+
+    def comment_so_far(self) -> tuple[str, int]:
+        """The comment typed so far and the cursor's place in it (for its box)."""
+        text, cursor, _ = typed_text(self.typing.events, self._comment_start or 0)
+        return text, cursor
+
+    def typed(self) -> str:
+        """The comment typed since the comment screen's rating key, up to its Enter."""
+        dispatch_events(self.window)  # the characters typed before Enter
+        start = self._comment_start if self._comment_start is not None else len(self.typing.events)
+        text, _, _ = typed_text(self.typing.events, start)
+        end = start
+        while end < len(self.typing.events) and self.typing.events[end] != ("text", "\r"):
+            end += 1
+        self._typing_mark = min(end + 1, len(self.typing.events))  # the next screen's typing
+        self._comment_start = None
+        return text

@@ -1,0 +1,103 @@
+"""What a session's window records beside its trials: the PsychoPy log (every onset, offset and
+key press) and the frame intervals of every presentation (``_frames.tsv``).
+
+The trials matter more than these records: a record that can no longer be written (a full disk)
+is warned about once and given up, never the session.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import sys
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["SessionRecords"]
+
+
+class SessionRecords:
+    """The session's PsychoPy log and frame-interval file, each from a line naming its run."""
+
+    def __init__(self):
+        self.frames_path: Path | None = None
+        self._logfile = None
+
+    def start(
+        self,
+        marker: str,
+        *,
+        frames_path: Path | None,
+        log_path: Path | None,
+        log_lines: list[str],
+        window_intervals: list[float],
+    ) -> None:
+        """Begin both records with ``marker`` (the run and when it started): the log, with
+        ``log_lines`` after it; the frame intervals, with those measured as the window opened."""
+        from psychopy import logging
+
+        self.frames_path = frames_path
+        if log_path is not None:
+            self._logfile = logging.LogFile(str(log_path), level=logging.EXP, filemode="a")
+            logging.exp(marker)
+            for line in log_lines:
+                logging.exp(line)
+        if frames_path is not None:
+            try:
+                with frames_path.open("a", encoding="utf-8") as handle:
+                    if handle.tell() == 0:
+                        handle.write("what\tframe\tinterval_ms\n")
+                    handle.write(f"{marker}\t\t\n")
+                    for index, interval in enumerate(window_intervals, start=1):
+                        handle.write(f"window opened\t{index}\t{1000 * interval:.3f}\n")
+            except OSError as error:
+                self._warn(f"frame intervals not written to {frames_path}", error)
+                self.frames_path = None
+
+    def write_intervals(self, what: str, flips: list[float]) -> None:
+        """The intervals between ``flips``, each a line ``what``, frame, milliseconds."""
+        if self.frames_path is None:
+            return
+        try:
+            with self.frames_path.open("a", encoding="utf-8") as handle:
+                for index, interval in enumerate(np.diff(flips), start=1):
+                    handle.write(f"{what}\t{index}\t{1000 * interval:.3f}\n")
+        except OSError as error:  # the trials matter more than the frame intervals
+            self._warn(f"frame intervals no longer written to {self.frames_path}", error)
+            self.frames_path = None
+
+    def flush(self) -> None:
+        """Write the log's lines so far to its file."""
+        from psychopy import logging
+
+        try:
+            logging.flush()
+        except OSError as error:  # the trials matter more than the log
+            self._warn("the session log is no longer written", error)
+            self.close()
+
+    def close(self) -> None:
+        """Stop writing the log (its lines so far are flushed by :meth:`flush`)."""
+        from psychopy import logging
+
+        if self._logfile is not None:
+            logging.root.removeTarget(self._logfile)
+            with contextlib.suppress(OSError):
+                self._logfile.stream.close()
+            self._logfile = None
+
+    @property
+    def logging(self) -> bool:
+        """Whether a log file is being written."""
+        return self._logfile is not None
+
+    @staticmethod
+    def _warn(what: str, error: OSError) -> None:
+        print(f"[glarelab] {what} ({error.strerror or error})", file=sys.stderr, flush=True)
+
+    @staticmethod
+    def log(message: str) -> None:
+        """A line in the session's PsychoPy log (written when the loop waits for keys)."""
+        from psychopy import logging
+
+        logging.exp(message)

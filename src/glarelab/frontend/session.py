@@ -1,0 +1,407 @@
+"""The PsychoPy front-end: a device for :class:`glarelab.experiments.loop.SessionLoop` on a real
+screen, made of one part per job:
+
+- :mod:`glarelab.frontend.images`: the images, code for code, and their proof read back from
+  the frame buffer;
+- :mod:`glarelab.frontend.screens`: the text around them (instructions, labels, prompts, the
+  comment box, the PILOT mark);
+- :mod:`glarelab.frontend.keys`: key presses and typed comments;
+- :mod:`glarelab.frontend.records`: the PsychoPy log and the frame intervals;
+- here: the window, and the timing of screens and presentations.
+
+**Timing.** ``show`` returns the time of the flip that showed a screen; ``present`` shows a
+blank for ``blank_before_ms``, then the flash for exactly ``frames`` flips (or a sequence of
+images, each for its own number of flips: a night scene as the eye adapts), then the answer
+prompt, and returns the onset and offset flip times and the frames dropped (counted from the
+flip times). On a display whose refresh was verified, flips follow its vertical sync; on one
+that was not (``--accept-mismatch refresh``, ``--allow-unmeasured-refresh``), flips are paced by
+the clock at the protocol's nominal rate. The frame intervals of each flash are appended to the
+session's ``_frames.tsv``, and every onset, offset and key press goes to its PsychoPy log.
+During a presentation the keyboard is read after every frame: Escape ends it at once (the
+trial is logged as aborted, the session as aborted by that Escape); other presses wait, in
+order, for the session loop.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+
+from glarelab.display.calibration import Calibration
+from glarelab.display.checks import ScreenFacts
+from glarelab.experiments.engine import Press
+from glarelab.experiments.layout import Placement
+from glarelab.experiments.loop import Shown, count_dropped_frames
+from glarelab.frontend.images import ImageBank
+from glarelab.frontend.keys import SessionKeys
+from glarelab.frontend.records import SessionRecords
+from glarelab.frontend.screens import ScreenText
+from glarelab.frontend.window import (
+    dispatch_events,
+    grab_screen,
+    measure_frame_intervals,
+    measure_refresh,
+    open_window,
+    screen_resolution,
+)
+from glarelab.stimuli.stimulus_set import StimulusSet
+
+__all__ = ["PsychoPyFrontend"]
+
+
+class PsychoPyFrontend:
+    """Draws an engine's screens in a PsychoPy window and reads the keyboard.
+
+    Parameters
+    ----------
+    protocol
+        The session's protocol.
+    stimuli
+        The stimulus set folder (Yoshida, Spencer); None for a questionnaire.
+    calibration
+        The display calibration; None uses the set's (an uncalibrated session).
+    fullscreen
+        Full-screen window (lab sessions); default a ``size`` window.
+    scripted_keys
+        Key names to use instead of the keyboard (dry runs), consumed in order.
+    screenshot
+        Save the first trial's screen here (PNG of the back buffer, before its flip).
+    size
+        Window size in pixels when not full screen; default (1280, 800).
+    pilot
+        A pilot run (PsychoPy's piloting mode): a window, never full screen, with "PILOT" in
+        its top-left corner on every frame, and the log's run line says so.
+    """
+
+    def __init__(
+        self,
+        protocol,
+        *,
+        stimuli=None,
+        calibration: Calibration | None = None,
+        fullscreen: bool = False,
+        scripted_keys: list[str] | None = None,
+        screenshot=None,
+        size: tuple[int, int] = (1280, 800),
+        pilot: bool = False,
+    ):
+        self.protocol = protocol
+        self.pilot = pilot
+        fullscreen = fullscreen and not pilot
+        self.stimuli = Path(stimuli) if stimuli else None
+        self.fullscreen = fullscreen
+        self.size = size
+        self.scripted = scripted_keys
+        self.screenshot = Path(screenshot) if screenshot else None
+        display = protocol.data.get("display")
+        self.display_bits = display["bit_depth"] if display else 8
+        used = calibration or self._set_calibration()
+        self.calibration_used = (
+            None
+            if used is None
+            else {
+                "status": used.status,
+                "label": used.label,
+                "readings_sha256": used.readings_sha256,
+                "source": "session" if calibration is not None else "stimulus set",
+            }
+        )
+        self.images = ImageBank(
+            StimulusSet(self.stimuli) if self.stimuli else None,
+            used,
+            display=display,
+            display_bits=self.display_bits,
+        )
+        self.records = SessionRecords()
+        self.window = None
+        self.should_stop = None  # the session's check for a stop signal (raises when stopped)
+        self.keys: SessionKeys | None = None
+        self.screen_text: ScreenText | None = None
+        self.refresh_hz = display["refresh_hz"] if display else 60.0
+        self.pace = False
+        self.facts: ScreenFacts | None = None
+        self._screen: dict | None = None
+        self._screenshot_taken = False
+
+    def _set_calibration(self) -> Calibration | None:
+        if self.stimuli is None:
+            return None
+        manifest_path = self.stimuli / "manifest.json"
+        manifest = json.loads(manifest_path.read_text())
+        return Calibration.from_json(
+            manifest["calibration"], source=f"{manifest_path} calibration"
+        )
+
+    # --- window ---------------------------------------------------------------------------
+
+    def open(self) -> ScreenFacts:
+        """Open the window, measure it and start reading the keyboard."""
+        self.window, bits = open_window(
+            bits=self.display_bits, fullscreen=self.fullscreen, size=self.size
+        )
+        self._refresh_intervals = measure_frame_intervals(self.window, frames=60)
+        self.facts = ScreenFacts(
+            resolution_px=screen_resolution(self.window),
+            refresh_hz=measure_refresh(self.window),
+            bits_per_channel=bits,
+        )
+        self.images.attach(self.window, self.facts)
+        self.keys = SessionKeys(self.window, self.scripted, log=self.log)
+        self.screen_text = ScreenText(self.window, pilot=self.pilot)
+        return self.facts
+
+    @property
+    def keyboard(self) -> str:
+        return "scripted keys" if self.scripted is not None else "psychtoolbox"
+
+    def clock_epoch_s(self) -> float:
+        """Unix time at zero of the session clock (onset_s + this = wall-clock time)."""
+        from psychopy import logging
+
+        return float(logging.defaultClock.getLastResetTime())
+
+    def start(
+        self,
+        *,
+        run: int = 1,
+        started: str = "",
+        refresh_hz: float,
+        pace: bool,
+        frames_path: Path | None,
+        log_path: Path | None,
+    ) -> None:
+        """Time presentations at ``refresh_hz`` (pacing flips by the clock if ``pace``); log
+        to ``log_path`` and frame intervals to ``frames_path``, each from a line that names the
+        session's ``run`` (1, or the resume's number) and the wall-clock time it ``started``
+        (the log's times restart at zero in every run); from now on every key press counts."""
+        self.refresh_hz = refresh_hz
+        self.pace = pace
+        marker = (
+            f"run {run} started {started}; log time 0 = Unix time {self.clock_epoch_s():.3f} s"
+            + ("; PILOT run, not a session's data" if self.pilot else "")
+        )
+        self.records.start(
+            marker,
+            frames_path=frames_path,
+            log_path=log_path,
+            log_lines=[
+                f"session log: timing at {refresh_hz:g} Hz, flips paced by "
+                f"{'the clock' if pace else 'vertical sync'}; screen {self.facts}"
+            ],
+            window_intervals=self._refresh_intervals,
+        )
+        self.keys.start()
+
+    @property
+    def frames_path(self) -> Path | None:
+        """The session's frame-interval file (None when not, or no longer, written)."""
+        return self.records.frames_path
+
+    def close(self) -> None:
+        if self.window is not None:
+            self.window.close()
+            self.window = None
+        if self.records.logging:
+            self.records.flush()
+            self.records.close()
+
+    # --- images (:mod:`glarelab.frontend.images`) --------------------------------------------
+
+    @property
+    def set(self) -> StimulusSet | None:
+        """The session's stimulus set."""
+        return self.images.set
+
+    @property
+    def window_bits(self) -> int:
+        """Bits per channel of the open window (the calibration's before it opens)."""
+        return self.images.window_bits
+
+    @property
+    def calibration(self) -> Calibration | None:
+        """The calibration the images are encoded with (the protocol display's synthetic one
+        once an image was encoded without one)."""
+        return self.images.calibration
+
+    def image_stim(self, terms):
+        """The stimulus a session draws for an image ``[(name, weight), …]`` of the set."""
+        return self.images.stim({"role": "read back", "terms": [tuple(t) for t in terms]})
+
+    def image_size(self, image: dict) -> tuple[int, int]:
+        """(width, height) in pixels of a screen's image."""
+        return self.images.image_size(image)
+
+    def expected_codes(self, terms) -> tuple[np.ndarray, str]:
+        """The codes the window must show for an image (:meth:`ImageBank.expected_codes`)."""
+        return self.images.expected_codes(terms)
+
+    def read_back(self, stim, placement: Placement) -> np.ndarray:
+        """Draw ``stim`` alone at ``placement`` and read its pixels back
+        (:meth:`ImageBank.read_back`)."""
+        return self.images.read_back(stim, placement)
+
+    def check_presentation(self, screen: dict | None) -> dict | None:
+        """``screen``'s images drawn as a session places them and read back
+        (:meth:`ImageBank.check_presentation`); None without images."""
+        return self.images.check_presentation(screen)
+
+    # --- screens ----------------------------------------------------------------------------
+
+    def _draw(self, screen: dict) -> None:
+        """Images with their labels and marker; the screen's text, or its answer prompt; the
+        text box of a typed answer."""
+        stims = self.images.place(screen)
+        for stim in stims:
+            stim.draw()
+        comment = self.keys.comment_so_far() if screen.get("text_entry") else None
+        self.screen_text.draw(screen, stims, comment=comment)
+
+    def _flip(self, *, capture: bool = False) -> float:
+        if capture and self.screenshot is not None and not self._screenshot_taken:
+            from PIL import Image
+
+            from glarelab.files.atomic import atomic_path
+
+            mark = self.screen_text.pilot_mark  # drawn by the flip: here before the grab
+            if mark is not None:
+                mark.autoDraw = False
+                mark.draw()
+            self.screenshot.parent.mkdir(parents=True, exist_ok=True)
+            with atomic_path(self.screenshot) as temporary:
+                Image.fromarray(grab_screen(self.window)).save(temporary, format="PNG")
+            self._screenshot_taken = True
+            shown = self.window.flip()
+            if mark is not None:
+                mark.autoDraw = True
+            return shown
+        return self.window.flip()
+
+    # --- the device interface ---------------------------------------------------------------
+
+    def show(self, screen: dict) -> float:
+        self.keys.showing(screen)
+        self._screen = screen
+        self._draw(screen)
+        onset = self._flip(capture="trial" in screen)
+        if "trial" in screen:
+            self.log(f"screen {screen['kind']} of trial {screen['trial']} at {onset:.4f}")
+        return onset
+
+    def present(self, screen: dict) -> Shown:
+        """A still for ``frames`` flips, or a sequence (``screen['sequence']``: images, each for
+        its ``frames`` flips), after a blank of ``blank_before_ms``; then the answer prompt."""
+        self._screen = screen
+        sequence = screen.get("sequence")
+        steps = sequence or [{"images": screen["images"], "frames": screen["frames"]}]
+        placed = []
+        for step in steps:  # encoded and uploaded before the first frame
+            # a sequence's frames are shown once: uploaded for it, not kept for the session
+            stims = self.images.place(step) if not sequence else self.images.frame_stims(step)
+            for stim in stims:  # a first draw: textures on the GPU before frame one
+                stim.draw()
+            placed.append((stims, step["frames"]))
+        total = sum(frames for _, frames in placed)
+        period = 1.0 / self.refresh_hz
+        self.window.clearBuffer()
+        blank = self.window.flip()
+        self._wait_until(
+            blank + screen["blank_before_ms"] / 1000.0 - (0 if self.pace else period),
+            during=lambda: self._escape_during(screen, []),
+        )
+        flips = []
+        frame = 0
+        for stims, frames in placed:
+            for _ in range(frames):
+                for stim in stims:
+                    stim.draw()
+                if self.pace and flips:
+                    self._wait_until(flips[0] + frame * period)
+                flips.append(self._flip(capture=frame == 0))
+                frame += 1
+                self._escape_during(screen, flips)
+        height = max(s.size[1] for stims, _ in placed for s in stims)
+        self.screen_text.draw_text(screen.get("prompt", ""), pos=(0, -height / 2 - 60))
+        if self.pace:
+            self._wait_until(flips[0] + total * period)
+        flips.append(self.window.flip())
+        shown = Shown(
+            onset_s=flips[0],
+            offset_s=flips[-1],
+            frames=total,
+            dropped_frames=count_dropped_frames(flips, self.refresh_hz),
+        )
+        self.records.write_intervals(f"trial {screen['trial']} flash", flips)
+        self.log(
+            f"trial {screen['trial']} flash: onset {shown.onset_s:.4f}, offset "
+            f"{shown.offset_s:.4f}, {shown.shown_ms:.1f} ms for {shown.frames} frames, "
+            f"{shown.dropped_frames} dropped"
+        )
+        return shown
+
+    def _escape_during(self, screen: dict, flips: list[float]) -> None:
+        """After each frame of a presentation: Escape ends it now (the trial is logged as
+        aborted); other presses wait for the loop, in order."""
+        if self.scripted is not None:  # a dry run's keys answer screens, one per read
+            return
+        self.keys.held += self.keys.read(text_entry=False)
+        escape = next((t for name, t in self.keys.held if name == "escape"), None)
+        if escape is None:
+            return
+        from glarelab.experiments.loop import SessionAborted
+
+        self.window.clearBuffer()
+        end = self.window.flip()
+        self.records.write_intervals(f"trial {screen['trial']} flash (aborted)", [*flips, end])
+        self.log(
+            f"trial {screen['trial']} aborted: escape at {escape:.4f} during its presentation, "
+            f"ended at {end:.4f} after {len(flips)} of {screen['frames']} frames "
+            f"({sum(flip > escape for flip in flips)} shown after the escape)"
+        )
+        self.records.flush()
+        raise SessionAborted(f"escape during the presentation of trial {screen['trial']}")
+
+    def wait_keys(self, anchor_s: float) -> list[Press]:
+        self.records.flush()
+        text_entry = bool((self._screen or {}).get("text_entry"))
+        while True:
+            if self.should_stop is not None:
+                self.should_stop()
+            presses = self.keys.held + self.keys.read(text_entry=text_entry)
+            self.keys.held = []
+            if presses:
+                break
+            if text_entry:  # the box shows what is typed: redraw it every frame
+                self._draw(self._screen)
+                self.window.flip()
+            else:
+                dispatch_events(self.window)
+                time.sleep(0.001)
+        result = []
+        for name, t in presses:
+            self.log(f"key {name} down at {t:.4f}")
+            result.append(Press(name, t))
+        return result
+
+    def typed(self) -> str:
+        """The comment typed since the comment screen's rating key, up to its Enter."""
+        return self.keys.typed()
+
+    # --- timing -----------------------------------------------------------------------------
+
+    def _wait_until(self, deadline: float, *, during=None) -> None:
+        from psychopy import logging
+
+        while True:
+            left = deadline - logging.defaultClock.getTime()
+            if left <= 0:
+                return
+            if during is not None:
+                during()
+            time.sleep(min(left, 0.002) if left > 0.003 else 0)
+
+    def log(self, message: str) -> None:
+        """A line in the session's PsychoPy log (written when the loop waits for keys)."""
+        self.records.log(message)

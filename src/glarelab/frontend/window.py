@@ -1,0 +1,393 @@
+"""The PsychoPy window and keyboard of every glarelab screen: photometer sessions, experiment
+sessions and the display check. Only the front-end modules import this one, and it imports
+PsychoPy only when called.
+
+- :func:`open_window` asks for the bits per channel the display needs (10 on a 10-bit display)
+  and reports the bits the window was given; it never silently runs at fewer.
+- :func:`measure_refresh` measures the frame interval on the open window (PsychoPy's
+  ``getActualFrameRate``) and returns None when no stable interval was found: a failed
+  measurement is never taken for a nominal rate.
+- :class:`KeyReader` is one ``psychopy.hardware.keyboard.Keyboard`` (Psychtoolbox backend,
+  key-down times stamped by the operating system's input thread) whose presses are each
+  returned once, in the order pressed, and never cleared: a key pressed while a screen redraws,
+  or during a flash, is kept.
+- :class:`TextCapture` keeps every character the window system types into the window (its
+  text events: the keyboard's layout, case, punctuation and accents as typed), in order, and
+  :func:`typed_text` turns a stretch of them into the text they type.
+- :func:`compose_typed_text`: accents typed with dead keys (French ``^`` then ``e`` for ê,
+  German ``´`` then ``e`` for é) and Compose sequences reach the text events composed, by the X
+  input method, windowed and full screen (:func:`open_window` calls it).
+"""
+
+from __future__ import annotations
+
+import ctypes
+import sys
+
+import numpy as np
+
+__all__ = [
+    "KeyReader",
+    "TextCapture",
+    "compose_typed_text",
+    "grab_screen",
+    "key_labels",
+    "key_symbols",
+    "measure_frame_intervals",
+    "measure_refresh",
+    "open_window",
+    "read_framebuffer_codes",
+    "screen_resolution",
+    "typed_text",
+    "window_bits",
+]
+
+BACKGROUND = (-1.0, -1.0, -1.0)  # black, in PsychoPy's rgb (-1 .. 1)
+
+
+def open_window(
+    *,
+    bits: int,
+    fullscreen: bool,
+    size: tuple[int, int] = (1280, 800),
+    units: str = "pix",
+    screen: int = 0,
+):
+    """A PsychoPy window asking for ``bits`` per channel (10 or more: a deep frame buffer).
+
+    Returns
+    -------
+    (window, bits_given)
+    """
+    from psychopy import visual
+
+    common = dict(
+        size=size,
+        fullscr=fullscreen,
+        screen=screen,
+        units=units,
+        color=BACKGROUND,
+        colorSpace="rgb",
+        allowGUI=False,
+        useFBO=False,
+        checkTiming=False,
+        waitBlanking=True,
+    )
+    window = None
+    if bits > 8:
+        try:
+            window = visual.Window(bpc=(bits, bits, bits), **common)
+        except RuntimeError:  # no deep frame buffer on this screen: an 8-bit one
+            window = None
+    if window is None:
+        window = visual.Window(**common)
+    window.mouseVisible = False
+    compose_typed_text(window)
+    return window, window_bits()
+
+
+def compose_typed_text(window) -> bool:
+    """Let the X input method compose what is typed into ``window`` (dead keys, Compose
+    sequences); whether it was set up (only pyglet's X11 windows need it).
+
+    pyglet (1.5) creates the window's input context for its top-level window but receives key
+    events in a child window (its view), so the input method never sees them: a dead key then
+    types nothing and the letter after it comes without its accent (``^`` ``e`` gives ``e``).
+    The input context's focus window is set to the view, where the key events arrive; the X
+    input method then composes them as in any X program (Xlib's Compose tables of the locale).
+    """
+    handle = getattr(window, "winHandle", None)
+    context, view = getattr(handle, "_x_ic", None), getattr(handle, "_view", None)
+    if not (sys.platform.startswith("linux") and context and view):
+        return False
+    from pyglet.libs.x11 import xlib
+
+    set_values = xlib.XSetICValues  # variadic: name, value, …, NULL
+    set_values.argtypes = [xlib.XIC, ctypes.c_char_p, xlib.Window, ctypes.c_void_p]
+    set_values.restype = ctypes.c_char_p  # the first name not set, or NULL
+    return set_values(context, b"focusWindow", view, None) is None
+
+
+def window_bits() -> int:
+    """Bits per channel of the current OpenGL frame buffer."""
+    from pyglet import gl
+
+    value = ctypes.c_int()
+    gl.glGetIntegerv(gl.GL_RED_BITS, ctypes.byref(value))
+    return int(value.value) or 8
+
+
+def screen_resolution(window) -> tuple[int, int]:
+    """The (width, height) in pixels of the screen the window is on."""
+    screen = window.winHandle.screen
+    return int(screen.width), int(screen.height)
+
+
+def measure_refresh(window) -> float | None:
+    """The refresh rate (Hz) from frame intervals on the open window, or None when the
+    intervals never settled (no vertical sync, a busy machine)."""
+    rate = window.getActualFrameRate(nIdentical=20, nMaxFrames=240, nWarmUpFrames=20)
+    return float(rate) if rate else None
+
+
+def measure_frame_intervals(window, frames: int = 300, draw=None) -> np.ndarray:
+    """Intervals (s) between ``frames`` consecutive flips, each after ``draw()`` if given."""
+    times = []
+    for _ in range(frames + 1):
+        if draw is not None:
+            draw()
+        times.append(window.flip())
+    return np.diff(np.asarray(times, dtype=float))
+
+
+def grab_screen(window, *, buffer: str = "back") -> np.ndarray:
+    """The window's pixels (height, width, 3) as uint8, from the back or front buffer."""
+    return np.asarray(window.getMovieFrame(buffer=buffer))
+
+
+def read_framebuffer_codes(
+    window, box: tuple[int, int, int, int], *, bits: int, buffer: str = "back"
+) -> np.ndarray:
+    """The codes of the window's pixels in ``box`` at ``bits`` per channel: (height, width, 3)
+    integers, top row first.
+
+    ``box`` is (left, bottom, width, height) in frame-buffer pixels from the lower-left corner
+    (OpenGL's). The pixels are read at 16 bits per channel (``glReadPixels`` with
+    ``GL_UNSIGNED_SHORT``), the one read that holds an 8-, 10- or 12-bit frame buffer without
+    loss, and turned back into codes: ``round(value × (2^bits − 1) / 65535)``; a ``bits``-bit
+    code ``c`` reads as ``round(c × 65535 / (2^bits − 1))``, within half a 16-bit step, so it
+    comes back exactly.
+    """
+    from pyglet import gl
+
+    left, bottom, width, height = (int(v) for v in box)
+    if not 1 <= bits <= 16:
+        raise ValueError(f"bits must be 1-16; got {bits!r}")
+    if width < 1 or height < 1:
+        raise ValueError(f"box must have a width and a height of at least 1 pixel; got {box!r}")
+    if buffer not in ("back", "front"):
+        raise ValueError(f"buffer must be 'back' or 'front'; got {buffer!r}")
+    values = (ctypes.c_ushort * (width * height * 3))()
+    gl.glReadBuffer({"back": gl.GL_BACK, "front": gl.GL_FRONT}[buffer])
+    gl.glPixelStorei(gl.GL_PACK_ALIGNMENT, 1)
+    gl.glReadPixels(left, bottom, width, height, gl.GL_RGB, gl.GL_UNSIGNED_SHORT, values)
+    pixels = np.frombuffer(values, dtype=np.uint16).reshape(height, width, 3)[::-1]
+    return np.rint(pixels * ((2**bits - 1) / 65535.0)).astype(np.int64)
+
+
+class KeyReader:
+    """Every key press of a session, each returned once, in the order pressed.
+
+    Wraps one ``psychopy.hardware.keyboard.Keyboard`` on the Psychtoolbox backend. PsychoPy's
+    ``getKeys`` returns a press either while the key is down (``waitRelease=False``) or after
+    its release (``waitRelease=True``), never both ways at once, so a press that goes down and
+    up between two reads would be missed by the first and a held key delayed by the second.
+    :meth:`read` asks both ways and returns each press once, as soon as it went down.
+
+    Times are key-down times on PsychoPy's clock (``psychopy.logging.defaultClock``, the clock
+    ``window.flip()`` returns), stamped by the input thread, not when they were read.
+
+    Raises
+    ------
+    RuntimeError
+        If Psychtoolbox's keyboard is not available (on Linux it needs the JACK library,
+        Debian's ``libjack-jackd2-0``).
+    """
+
+    def __init__(self):
+        from psychopy.hardware import keyboard
+
+        if not keyboard.havePTB:
+            raise RuntimeError(
+                "PsychoPy's keyboard needs Psychtoolbox (the psychtoolbox package; on Linux "
+                "also the JACK library, e.g. apt install libjack-jackd2-0): without it key "
+                "presses are time-stamped only when read, and some are lost"
+            )
+        self.keyboard = keyboard.Keyboard(backend="ptb")
+        if self.keyboard.getBackend() != "ptb":
+            raise RuntimeError(
+                f"PsychoPy's keyboard runs on its {self.keyboard.getBackend()!r} backend, "
+                "not Psychtoolbox's (another part of the program chose it first)"
+            )
+        self._down: list = []  # presses returned while down, until they come back released
+
+    def read(self) -> list[tuple[str, float]]:
+        """``(key name, key-down time)`` of every press not returned before, in order."""
+        down = self.keyboard.getKeys(waitRelease=False, clear=True)
+        released = self.keyboard.getKeys(waitRelease=True, clear=True)
+        new, still_down = list(down), list(down)
+        for press in released:
+            if any(press is seen for seen in self._down):  # returned while down before
+                self._down = [seen for seen in self._down if seen is not press]
+            elif any(press is seen for seen in still_down):  # went down and up since
+                still_down = [seen for seen in still_down if seen is not press]
+            else:
+                new.append(press)
+        self._down += still_down
+        new.sort(key=lambda press: press.tDown)
+        return [(str(press.name), float(press.tDown)) for press in new]
+
+    def clear(self) -> None:
+        """Forget presses made so far (only before the first screen of a session)."""
+        self.keyboard.clearEvents()
+        self._down = []
+
+
+class TextCapture:
+    """Every text event of a window, in order: ``("text", characters)`` and
+    ``("motion", name)`` (Backspace, Delete, arrows, Home, End), as pyglet reports them, each
+    after ``("key", symbol)`` of the key press that made it (pyglet's symbols are X keysyms).
+    Shift+Enter types a new line (``"\\n"``); :attr:`returns` says of each Enter pressed
+    whether Shift was down.
+
+    PsychoPy's own handlers keep running; this one only listens.
+    """
+
+    def __init__(self, window):
+        self.events: list[tuple[str, str]] = []
+        self.returns: list[bool] = []  # each Enter pressed: whether with Shift
+        self._shift_return = False
+        window.winHandle.push_handlers(
+            on_text=self._on_text, on_text_motion=self._on_motion, on_key_press=self._on_key
+        )
+
+    def _on_text(self, text: str) -> None:
+        if text == "\r" and self._shift_return:  # Shift+Enter: a new line, not the end
+            text = "\n"
+        self._shift_return = False
+        if text != "\t":  # a tab comes as its key (PsychoPy takes the text event for itself)
+            self.events.append(("text", text))
+
+    def _on_key(self, symbol: int, modifiers: int) -> None:
+        from pyglet.window import key
+
+        self.events.append(("key", str(symbol)))  # which key made the text that follows
+        self._shift_return = symbol in (key.RETURN, key.ENTER) and bool(modifiers & key.MOD_SHIFT)
+        if symbol in (key.RETURN, key.ENTER):
+            self.returns.append(self._shift_return)
+        if symbol == key.TAB:
+            self.events.append(("text", "\t"))
+
+    def _on_motion(self, motion: int) -> None:
+        from pyglet.window import key
+
+        self.events.append(("motion", key.motion_string(motion)))
+
+
+def typed_text(events: list[tuple[str, str]], start: int = 0) -> tuple[str, int, bool]:
+    r"""The text typed by ``events[start:]`` up to the first Enter (``"\r"``).
+
+    Returns the text, the cursor's position in it, and whether an Enter ended it. Backspace and
+    Delete remove a character, the arrows, Home and End move the cursor; every other character
+    (tabs included) is kept as typed.
+
+    Examples
+    --------
+    >>> keys = [("text", "T"), ("text", "o"), ("text", "o"), ("motion", "MOTION_BACKSPACE"),
+    ...         ("text", "o,"), ("motion", "MOTION_LEFT"), ("text", "!"), ("text", "\r"),
+    ...         ("text", "7")]
+    >>> typed_text(keys)
+    ('Too!,', 4, True)
+    """
+    text: list[str] = []
+    cursor = 0
+    for kind, value in events[start:]:
+        if kind == "text":
+            if value == "\r":  # Enter (Shift+Enter comes as a new line, "\n")
+                return "".join(text), cursor, True
+            text[cursor:cursor] = list(value)
+            cursor += len(value)
+        elif value == "MOTION_BACKSPACE" and cursor > 0:
+            del text[cursor - 1]
+            cursor -= 1
+        elif value == "MOTION_DELETE" and cursor < len(text):
+            del text[cursor]
+        elif value == "MOTION_LEFT":
+            cursor = max(cursor - 1, 0)
+        elif value == "MOTION_RIGHT":
+            cursor = min(cursor + 1, len(text))
+        elif value in ("MOTION_BEGINNING_OF_LINE", "MOTION_BEGINNING_OF_FILE"):
+            cursor = 0
+        elif value in ("MOTION_END_OF_LINE", "MOTION_END_OF_FILE"):
+            cursor = len(text)
+    return "".join(text), cursor, False
+
+
+def key_symbols(window, names) -> set[int]:
+    """The pyglet symbols (X keysyms) that the keys PsychoPy's keyboard calls ``names`` make
+    in the keyboard layout now in use, at every shift level: on a French AZERTY layout the key
+    named ``5`` makes ``parenleft`` unshifted and ``5`` shifted.
+
+    Psychtoolbox names a key by its position (on Linux its X key code + 1, by
+    ``psychopy.hardware.keyboard.keyNamesLinux``), whatever the layout; the window system's text
+    events follow the layout. Elsewhere than on X11 only the symbols of the names' own
+    characters are given (a digit's key and its keypad key).
+    """
+    from pyglet.window import key
+
+    symbols = set()
+    for name in names:
+        character = name.removeprefix("num_")
+        if len(character) == 1:
+            symbols.add(ord(character))
+            if character.isdigit():
+                symbols.add(getattr(key, f"NUM_{character}"))
+    if not sys.platform.startswith("linux"):
+        return symbols
+    from psychopy.hardware.keyboard import keyNamesLinux
+    from pyglet.libs.x11 import xlib
+
+    display = window.winHandle._x_display
+    for code, name in keyNamesLinux.items():
+        if name in names:
+            for level in range(6):  # unshifted, Shift, AltGr levels
+                symbol = xlib.XKeycodeToKeysym(display, code - 1, level)
+                if symbol:
+                    symbols.add(int(symbol))
+    return symbols
+
+
+def key_labels(window, names) -> dict[str, str]:
+    """What each key PsychoPy's keyboard calls ``names`` is labelled with in the keyboard
+    layout in use: the character it types unshifted, upper case (on a German layout the key
+    named ``y``, the US layout's Y, is labelled ``Z``; on a French one ``q`` is ``A``). A key
+    that types no character keeps its name, upper case; elsewhere than on X11 every name does.
+
+    Psychtoolbox names keys by their position on a US keyboard on Linux
+    (:data:`psychopy.hardware.keyboard.keyNamesLinux`), so a screen that takes the key named
+    ``y`` must tell a German participant to press Z.
+    """
+    labels = {name: name.upper() for name in names}
+    if not sys.platform.startswith("linux"):
+        return labels
+    from psychopy.hardware.keyboard import keyNamesLinux
+    from pyglet.libs.x11 import xlib
+
+    display = window.winHandle._x_display
+    for code, name in keyNamesLinux.items():
+        if name in labels:
+            symbol = int(xlib.XKeycodeToKeysym(display, code - 1, 0))
+            if 0x20 < symbol < 0x100:  # Latin-1 keysyms are their characters
+                labels[name] = chr(symbol).upper()
+            elif symbol >> 24 == 0x01:  # Unicode keysyms: 0x01000000 + the code point
+                labels[name] = chr(symbol & 0xFFFFFF).upper()
+    return labels
+
+
+def dispatch_events(window) -> None:
+    """Let the window process its events (keeps it responsive while waiting)."""
+    window.winHandle.dispatch_events()
+
+
+if sys.platform.startswith("linux"):  # pragma: no branch
+
+    def qt_dialog_available() -> bool:
+        """Whether Qt can open a dialog on this X display (it aborts the process if not)."""
+        import ctypes.util
+
+        return ctypes.util.find_library("xcb-cursor") is not None
+
+else:  # pragma: no cover
+
+    def qt_dialog_available() -> bool:
+        return True

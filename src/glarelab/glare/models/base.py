@@ -1,0 +1,115 @@
+"""What the renderer and the planner need from a glare model: :class:`GlareModel`.
+
+Every model of :mod:`glare` subclasses :class:`GlareModel`. It must digitise its kernel
+(:meth:`GlareModel.kernel`); the other capabilities have safe defaults, so that a model which
+says nothing about them is rendered exactly and described truthfully:
+
+- :meth:`~GlareModel.tail_bound` (default ``None``): rigorous bounds on what a kernel cut to a
+  square leaves out. Without them the planner neither cuts the kernel nor approximates its
+  far tail.
+- :attr:`~GlareModel.achromatic` (default ``False``): the kernel is the same in every colour
+  channel, so an achromatic RGB scene needs one convolution.
+- :meth:`~GlareModel.halo` (default: "not declared by the model"): what the model does with
+  the lenticular halo, as the plan reports it.
+- :meth:`~GlareModel.description`: the model and its parameters, for logs.
+
+An object that only has a ``kernel`` method (the protocol of earlier versions) is wrapped by
+:func:`as_model` with those defaults.
+"""
+
+from __future__ import annotations
+
+import abc
+from dataclasses import dataclass, fields, is_dataclass
+
+import numpy as np
+
+from glarelab.glare.models.digitise import Kernel
+
+__all__ = ["GlareModel", "TailBound", "as_model"]
+
+
+@dataclass(frozen=True)
+class TailBound:
+    """Upper bounds on what a kernel cut to a centred square leaves out, per radius.
+
+    Attributes
+    ----------
+    peak
+        Largest value of a kernel pixel outside the square (fraction of the source's energy).
+    energy
+        Energy of the PSF outside the square (fraction).
+    renormalised
+        Whether the model normalises its kernel over the support, so that cutting it also
+        scales what is kept by ``1 / (1 - energy)``.
+    """
+
+    peak: np.ndarray
+    energy: np.ndarray
+    renormalised: bool = False
+
+
+class GlareModel(abc.ABC):
+    """Base class of the glare models: a kernel, and what the planner may rely on.
+
+    Examples
+    --------
+    >>> from glarelab.glare import VosGlare, WaveOpticsGlare
+    >>> VosGlare().achromatic, VosGlare(regime="mesopic").achromatic
+    (True, False)
+    >>> WaveOpticsGlare().halo()
+    'none in this model'
+    """
+
+    @abc.abstractmethod
+    def kernel(self, pixel_deg: float, shape: tuple[int, int], *, colour: bool = False) -> Kernel:
+        """The kernel for pixels of ``pixel_deg`` degrees in an odd ``shape``."""
+
+    def tail_bound(
+        self, pixel_deg: float, radius_px: np.ndarray, *, colour: bool = False
+    ) -> TailBound | None:
+        """Bounds on what a cut at each radius leaves out, or ``None`` (none known)."""
+        return None
+
+    @property
+    def achromatic(self) -> bool:
+        """True when the colour kernel is the same in every channel."""
+        return False
+
+    def halo(self) -> str:
+        """What the model does with the lenticular halo, in a few words."""
+        return "not declared by the model"
+
+    def description(self, colour: bool) -> dict:
+        """The model's name and parameters, for logs."""
+        parameters = (
+            {f.name: getattr(self, f.name) for f in fields(self)} if is_dataclass(self) else {}
+        )
+        return {"model": type(self).__name__, **parameters, "colour": colour}
+
+
+@dataclass(frozen=True)
+class _Declared(GlareModel):
+    """A model that only has a ``kernel`` method: rendered exactly, described truthfully."""
+
+    wrapped: object
+
+    def kernel(self, pixel_deg: float, shape: tuple[int, int], *, colour: bool = False) -> Kernel:
+        return self.wrapped.kernel(pixel_deg, shape, colour=colour)
+
+    def description(self, colour: bool) -> dict:
+        return {"model": type(self.wrapped).__name__, "colour": colour}
+
+
+def as_model(model: object) -> GlareModel:
+    """``model`` as a :class:`GlareModel`: itself, or an object with a ``kernel`` method
+    wrapped with the safe defaults (no tail bound, a colour kernel, halo not declared)."""
+    if isinstance(model, GlareModel):
+        return model
+    if callable(getattr(model, "kernel", None)):
+        return _Declared(model)
+    raise ValueError(
+        "model must be a glare model (a glare.GlareModel such as GaussianGlare() or "
+        f"VosGlare(), or an object with a kernel(pixel_deg, shape, *, colour) method); got "
+        f"{model!r}"
+    )

@@ -1,0 +1,431 @@
+"""Digitised kernels kept on disk between runs: :class:`KernelCache`.
+
+Digitising a kernel costs far more than using it (a 4095² Vos kernel takes longer than the
+render it serves), and a lab renders the same model at the same pixel size again and again:
+every image of a stimulus set, every run of ``glarelab render``, every worker of a sweep. The
+cache keeps each kernel in a file of the user's cache folder (``platformdirs``; on Linux
+``$XDG_CACHE_HOME/glarelab/kernels``, by default ``~/.cache/glarelab/kernels``).
+
+What makes a cached kernel the kernel that would be digitised:
+
+- **The key** is a SHA-256 of the model's class and ``repr`` (a frozen dataclass lists every
+  parameter), the pixel size (exactly, as ``float.hex``), the kernel shape, colour or
+  luminance, glarelab's version and a fingerprint of the ``glare`` package's source (so a
+  change to the digitisation in a development tree is never served stale kernels). A model
+  whose ``repr`` does not pin down its parameters (an object address ``at 0x…``, or an array
+  shortened with ``...``) is not cached.
+- **Every file is checked**: a CRC-32 of the whole entry is stored at its end (zlib's, 2.6×
+  faster than SHA-256 on a 33 MB entry, and made for catching accidental damage); an entry
+  that does not match (a torn write, a flipped bit, a truncated file) is removed and the
+  kernel is digitised again.
+- **Writes are atomic** (:mod:`glarelab.files.atomic`, as every file the suite writes): a
+  kernel is written to a temporary file in the cache folder, flushed to the disk and renamed
+  onto its name, so two processes filling the cache at once each leave a complete entry, and a
+  reader never sees half of one.
+- **A full disk** (or any other failure to write) skips the entry with a warning; the kernel
+  just digitised is returned as it is.
+- **The size is bounded** (:data:`DEFAULT_MAX_BYTES`, or ``GLARELAB_CACHE_MAX_MB``): after a
+  write the least recently used entries (by modification time, refreshed on every hit) are
+  removed until the folder fits.
+
+A kernel symmetric in both axes (every radial model) is stored as its quadrant, a quarter of
+the bytes. Environment: ``GLARELAB_CACHE`` moves the cache (to its ``kernels`` folder);
+``GLARELAB_NO_CACHE=1`` turns it off (the command line's ``--no-cache``). ``glarelab cache
+info`` and ``glarelab cache clear`` show and empty it.
+"""
+
+from __future__ import annotations
+
+import ast
+import hashlib
+import json
+import math
+import os
+import struct
+import time
+import warnings
+import zlib
+from collections.abc import Callable
+from importlib import metadata
+from pathlib import Path
+
+import numpy as np
+
+from glarelab.files.atomic import PARTIAL, atomic_path
+from glarelab.glare.models.digitise import Kernel, mirror_quadrant
+
+__all__ = [
+    "CACHE_DIR_ENV",
+    "DEFAULT_MAX_BYTES",
+    "MAX_MB_ENV",
+    "NO_CACHE_ENV",
+    "KernelCache",
+    "default_cache",
+    "resolve_cache",
+]
+
+CACHE_DIR_ENV = "GLARELAB_CACHE"  # the suite's cache root (stimulus sets of observers too)
+NO_CACHE_ENV = "GLARELAB_NO_CACHE"
+MAX_MB_ENV = "GLARELAB_CACHE_MAX_MB"
+DEFAULT_MAX_BYTES = 2 * 2**30  # 2 GiB: about sixty 4095² kernels (stored as quadrants)
+FORMAT = 1  # raise when the file layout or the meaning of a key changes
+SUFFIX = ".kernel"
+_MAGIC = b"GLAREKERNEL\x00"
+_DIGEST_BYTES = 4
+_STALE_PART_S = 3600.0  # temporary files older than this are left over from a crash
+
+
+def _source_fingerprint(model: object) -> str:
+    """SHA-256 of the ``glare`` package's modules (and of the model's own module when it
+    lives elsewhere): kernels digitised by other code are never served."""
+    digest = hashlib.sha256()
+    package = Path(__file__).resolve().parents[1]  # glarelab.glare, its subpackages too
+    files = sorted(package.rglob("*.py"))
+    module = getattr(type(model), "__module__", "")
+    try:
+        import sys
+
+        extra = getattr(sys.modules.get(module), "__file__", None)
+    except Exception:  # pragma: no cover - a module without a file
+        extra = None
+    if extra and Path(extra).resolve().parent != package:
+        files.append(Path(extra).resolve())
+    for path in files:
+        digest.update(path.name.encode())
+        digest.update(path.read_bytes())
+    return digest.hexdigest()
+
+
+def _version() -> str:
+    try:
+        return metadata.version("glarelab")
+    except metadata.PackageNotFoundError:  # pragma: no cover - run from a bare source tree
+        return "unknown"
+
+
+def _literal(description: dict) -> str | None:
+    """``repr`` of a description that reads back equal (``ast.literal_eval``), else None."""
+    text = repr(description)
+    try:
+        same = ast.literal_eval(text) == description
+    except (ValueError, SyntaxError, TypeError):
+        return None
+    return text if same is True else None
+
+
+class KernelCache:
+    """A folder of digitised kernels, keyed by everything that decides them.
+
+    Parameters
+    ----------
+    directory
+        The folder; ``None``: ``kernels`` in ``$GLARELAB_CACHE``, else in the user's cache
+        folder (``platformdirs.user_cache_dir('glarelab')``, which honours
+        ``XDG_CACHE_HOME``).
+    max_bytes
+        Largest total size of the entries, bytes, > 0; ``None``: ``$GLARELAB_CACHE_MAX_MB``
+        MiB, else :data:`DEFAULT_MAX_BYTES`.
+
+    Raises
+    ------
+    ValueError
+        For a size that is not a positive number.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from glarelab.glare import VosGlare
+    >>> cache = KernelCache(tempfile.mkdtemp())
+    >>> first = cache.kernel(VosGlare(), 0.1, (21, 21))
+    >>> again = cache.kernel(VosGlare(), 0.1, (21, 21))  # read back, not digitised
+    >>> bool(np.array_equal(first.values, again.values)), cache.info()["entries"]
+    (True, 1)
+    """
+
+    def __init__(self, directory: str | os.PathLike | None = None, *, max_bytes=None) -> None:
+        if directory is None:
+            root = os.environ.get(CACHE_DIR_ENV)
+            if not root:
+                import platformdirs
+
+                root = platformdirs.user_cache_dir("glarelab")
+            directory = Path(root) / "kernels"
+        self.directory = Path(directory)
+        if max_bytes is None:
+            megabytes = os.environ.get(MAX_MB_ENV)
+            max_bytes = DEFAULT_MAX_BYTES if not megabytes else _megabytes(megabytes)
+        try:
+            limit = float(max_bytes)
+        except (TypeError, ValueError):
+            limit = math.nan
+        if not math.isfinite(limit) or limit <= 0:
+            raise ValueError(f"max_bytes must be a positive number of bytes, got {max_bytes!r}")
+        self.max_bytes = int(limit)
+        self._fingerprints: dict[str, str] = {}
+        self._warned = False
+
+    def __repr__(self) -> str:
+        return f"KernelCache({str(self.directory)!r}, max_bytes={self.max_bytes})"
+
+    # keys ---------------------------------------------------------------------------------
+    def key(
+        self, model: object, pixel_deg: float, shape: tuple[int, int], *, colour: bool
+    ) -> str | None:
+        """The entry's name for a model's kernel, or ``None`` when the model cannot be keyed
+        (its ``repr`` does not pin down its parameters)."""
+        described = repr(model)
+        if " at 0x" in described or "..." in described:
+            return None
+        module = type(model).__module__
+        if module not in self._fingerprints:
+            self._fingerprints[module] = _source_fingerprint(model)
+        parts = [
+            FORMAT,
+            _version(),
+            self._fingerprints[module],
+            f"{module}.{type(model).__qualname__}",
+            described,
+            float(pixel_deg).hex(),
+            [int(n) for n in shape],
+            bool(colour),
+        ]
+        return hashlib.sha256(json.dumps(parts).encode()).hexdigest()
+
+    def path(self, key: str) -> Path:
+        return self.directory / f"{key}{SUFFIX}"
+
+    # entries ------------------------------------------------------------------------------
+    def get(self, key: str) -> Kernel | None:
+        """The kernel stored under ``key``, or ``None`` (missing, or corrupt and removed)."""
+        path = self.path(key)
+        try:
+            data = path.read_bytes()
+        except OSError:
+            return None
+        kernel = _decode(data, key)
+        if kernel is None:  # corrupt: never served, removed so that it is written again
+            try:
+                path.unlink()
+            except OSError:
+                pass
+            return None
+        try:
+            os.utime(path)  # most recently used
+        except OSError:
+            pass
+        return kernel
+
+    def put(self, key: str, kernel: Kernel) -> bool:
+        """Store a kernel under ``key``; False (and a warning) when it could not be written."""
+        encoded = _encode(kernel, key)
+        if encoded is None or len(encoded) > self.max_bytes:
+            return False
+        try:
+            self.directory.mkdir(parents=True, exist_ok=True)
+            with atomic_path(self.path(key)) as temporary:
+                temporary.write_bytes(encoded)
+        except OSError as error:
+            if not self._warned:
+                warnings.warn(
+                    f"the kernel cache in {self.directory} could not be written ({error}); "
+                    "kernels are digitised without it",
+                    UserWarning,
+                    stacklevel=3,
+                )
+                self._warned = True
+            return False
+        self._evict(keep=self.path(key))
+        return True
+
+    def kernel(
+        self,
+        model,
+        pixel_deg: float,
+        shape: tuple[int, int],
+        *,
+        colour: bool = False,
+        build: Callable[[], Kernel] | None = None,
+        log: Callable[[str], None] | None = None,
+    ) -> Kernel:
+        """The model's kernel from the cache, or digitised (``build()``, by default
+        ``model.kernel(pixel_deg, shape, colour=colour)``) and stored."""
+        key = self.key(model, pixel_deg, shape, colour=colour)
+        if key is not None:
+            cached = self.get(key)
+            if cached is not None:
+                if log is not None:
+                    log(f"kernel {shape[0]} × {shape[1]} read from the cache ({self.directory})")
+                return cached
+        made = build() if build is not None else model.kernel(pixel_deg, shape, colour=colour)
+        if key is not None:
+            self.put(key, made)
+        return made
+
+    # the folder ---------------------------------------------------------------------------
+    def _entries(self) -> list[tuple[float, int, Path]]:
+        try:
+            listing = list(os.scandir(self.directory))
+        except OSError:
+            return []
+        entries = []
+        now = time.time()
+        for item in listing:
+            try:
+                stat = item.stat()
+            except OSError:
+                continue
+            if item.name.endswith(SUFFIX):
+                entries.append((stat.st_mtime, stat.st_size, Path(item.path)))
+            elif _temporary(item.name) and now - stat.st_mtime > _STALE_PART_S:
+                _remove(Path(item.path))
+        return entries
+
+    def _evict(self, keep: Path | None = None) -> None:
+        entries = sorted(self._entries(), key=lambda e: e[0])
+        total = sum(size for _, size, _ in entries)
+        for _, size, path in entries:
+            if total <= self.max_bytes:
+                break
+            if path == keep:
+                continue
+            if _remove(path):
+                total -= size
+
+    def info(self) -> dict:
+        """``directory``, ``entries``, ``bytes`` and ``max_bytes`` of the cache."""
+        entries = self._entries()
+        return {
+            "directory": str(self.directory),
+            "entries": len(entries),
+            "bytes": sum(size for _, size, _ in entries),
+            "max_bytes": self.max_bytes,
+        }
+
+    def clear(self) -> int:
+        """Remove every entry (and left-over temporary files); returns how many entries."""
+        removed = 0
+        try:
+            listing = list(os.scandir(self.directory))
+        except OSError:
+            return 0
+        for item in listing:
+            if item.name.endswith(SUFFIX):
+                removed += _remove(Path(item.path))
+            elif _temporary(item.name):
+                _remove(Path(item.path))
+        return removed
+
+
+def _temporary(name: str) -> bool:
+    """Whether ``name`` is an entry being written (or left by a crash while written)."""
+    return PARTIAL in name or name.endswith(".part")  # .part: written by glarelab < 0.3
+
+
+def _remove(path: Path) -> bool:
+    try:
+        path.unlink()
+    except OSError:
+        return False
+    return True
+
+
+def _megabytes(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise ValueError(f"{MAX_MB_ENV} must be a positive number of MiB, got {text!r}") from None
+    return value * 2**20
+
+
+def _encode(kernel: Kernel, key: str) -> bytes | None:
+    """The file of an entry: magic, header length, JSON header, array bytes, CRC-32."""
+    description = _literal(kernel.description)
+    if description is None:
+        return None
+    if kernel.quadrant is not None:
+        values, layout = np.ascontiguousarray(kernel.quadrant, dtype=np.float64), "quadrant"
+    else:
+        values = np.ascontiguousarray(kernel.values, dtype=np.float64)
+        half = tuple(n // 2 for n in values.shape[:2])
+        quadrant = values[half[0] :, half[1] :]
+        layout = "full"
+        if values.ndim >= 2 and np.array_equal(mirror_quadrant(quadrant), values):
+            values, layout = np.ascontiguousarray(quadrant), "quadrant"
+    outside = kernel.energy_outside
+    header = {
+        "key": key,
+        "format": FORMAT,
+        "layout": layout,
+        "shape": list(values.shape),
+        "pixel_deg": float(kernel.pixel_deg),
+        "energy_outside": np.asarray(outside, float).tolist(),
+        "energy_outside_array": isinstance(outside, np.ndarray),
+        "quadrature_error": float(kernel.quadrature_error),
+        "description": description,
+    }
+    text = json.dumps(header).encode()
+    text += b" " * (-(len(_MAGIC) + 8 + len(text)) % 8)  # the array starts 8-byte aligned
+    body = b"".join([_MAGIC, struct.pack("<Q", len(text)), text, values.tobytes()])
+    return body + struct.pack("<I", zlib.crc32(body))
+
+
+def _decode(data: bytes, key: str) -> Kernel | None:
+    """The kernel of an entry's bytes, or None when they are not a whole, matching entry."""
+    if len(data) < len(_MAGIC) + 8 + _DIGEST_BYTES or not data.startswith(_MAGIC):
+        return None
+    body = memoryview(data)[:-_DIGEST_BYTES]  # no copy of the array's bytes
+    if struct.pack("<I", zlib.crc32(body)) != data[-_DIGEST_BYTES:]:
+        return None
+    try:
+        (length,) = struct.unpack_from("<Q", data, len(_MAGIC))
+        start = len(_MAGIC) + 8
+        header = json.loads(bytes(body[start : start + length]))
+        if header["key"] != key or header["format"] != FORMAT:
+            return None
+        shape = tuple(int(n) for n in header["shape"])
+        values = np.frombuffer(body, dtype="<f8", offset=start + length)
+        values = values.reshape(shape)  # read-only, over the entry's bytes: no copy
+        if header["layout"] == "quadrant":
+            arrays = {"quadrant": values}
+        elif header["layout"] == "full":
+            arrays = {"values": values}
+        else:
+            return None
+        outside = header["energy_outside"]
+        outside = np.asarray(outside, float) if header["energy_outside_array"] else float(outside)
+        return Kernel(
+            **arrays,
+            pixel_deg=float(header["pixel_deg"]),
+            energy_outside=outside,
+            quadrature_error=float(header["quadrature_error"]),
+            description=ast.literal_eval(header["description"]),
+        )
+    except (KeyError, TypeError, ValueError, SyntaxError, struct.error):
+        return None
+
+
+def default_cache() -> KernelCache | None:
+    """The user's kernel cache, or ``None`` when ``GLARELAB_NO_CACHE`` is set (not ``0``)."""
+    if os.environ.get(NO_CACHE_ENV, "") not in ("", "0"):
+        return None
+    return KernelCache()
+
+
+def resolve_cache(cache) -> KernelCache | None:
+    """``True`` or ``None``: :func:`default_cache`; ``False``: no cache; a
+    :class:`KernelCache` or a folder: that cache.
+
+    Raises
+    ------
+    ValueError
+        For anything else.
+    """
+    if cache is None or cache is True:
+        return default_cache()
+    if cache is False:
+        return None
+    if isinstance(cache, KernelCache):
+        return cache
+    if isinstance(cache, str | os.PathLike):
+        return KernelCache(cache)
+    raise ValueError(f"cache must be True, False, None, a KernelCache or a folder; got {cache!r}")

@@ -1,0 +1,377 @@
+"""Night vision around the glare: adaptation, glare, acuity and colour in Luidolt's order.
+
+:func:`render_night` takes a linear HDR scene (one image or a sequence of frames, cd/m²) and
+returns what a display shows of it, frame by frame, in the order of Luidolt 2020's pipeline
+(Fig. 4.1, §6 and Fig. 6.1):
+
+1. **Temporal adaptation** (§5.1, eqs. 5.1-5.4; :mod:`glarelab.glare.night.adaptation`): the
+luminance of the
+   frame around the gaze, and the adapted luminance ``L_i`` following it over time. Without
+   this effect the eye is adapted at once (``L_i`` = the frame's luminance).
+2. **Exposure**: the scene is scaled by ``adapted_display_cd_m2 / L_i``, so that an adapted
+   eye sees the adapting luminance at ``adapted_display_cd_m2`` on the display. This departs
+   from the words of §5.1, "This adaptation luminance L_i can then be applied to the image
+   by multiplying it with the linear RGB values": multiplying by ``L_i`` would make a bright
+   scene brighter still and a dark one darker, the opposite of adaptation; the suite divides
+   by it, as an exposure does (Krawczyk et al. 2005, whom §5.1 follows, scale by the inverse
+   of the adapting luminance). A scale commutes with the glare's convolution and the blur's
+   weights, so scaling first and stating the display's maximum in display units is Luidolt's
+   order with tone mapping moved forward.
+3. **Glare** (§5.2; any model of :data:`glare.GLARE_MODELS`): its pupil from the adapted
+   luminance (Moon & Spencer, :func:`glarelab.glare.models.eye.pupil_diameter_mm`, as Ritschel et
+   al. 2009; Luidolt measures it with an eye tracker) and, for the Vos PSF, its regime (Spencer
+   §3.1); the excess over the display's maximum spread and clamped (Yoshida eq. 1). Without glare
+   the excess is clipped, as the display clips it.
+4. **Acuity** (§5.3, eqs. 5.14-5.16; :mod:`glarelab.glare.night.acuity`): each pixel blurred by the
+σ of its
+   scene luminance (display luminance / exposure), in CIE L* for the display's white.
+5. **Scotopic colour** (§5.4, eq. 5.18, "after tone mapping";
+:mod:`glarelab.glare.night.scotopic`): the blend
+   towards the tinted rod image by σ(``L_i``), or Spencer's 70 % desaturation.
+
+The output is linear display RGB in cd/m² (channels of a white of equal R, G, B), within
+``[0, display_max_cd_m2]``: never negative, never NaN, from black frames to 1e9 cd/m² suns.
+
+References
+----------
+Luidolt, L. (2020). Perception of light in virtual reality. TU Wien, Fig. 4.1, ch. 5, §6.
+Spencer et al. (1995), §3.1, §5; Yoshida et al. (2008), eq. 1; Krawczyk et al. (2005);
+Ritschel, T. et al. (2009). Temporal glare. Eurographics.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+
+from glarelab.glare._validation import check_choice, check_image, check_in_range, check_positive
+from glarelab.glare.models import _resolve
+from glarelab.glare.models.base import GlareModel
+from glarelab.glare.models.eye import pupil_diameter_mm, regime
+from glarelab.glare.night.acuity import (
+    LEVELS_PER_OCTAVE,
+    MIN_LUMINANCE_CD_M2,
+    SIGMA_METHODS,
+    acuity_blur,
+)
+from glarelab.glare.night.adaptation import (
+    TAU_CONE_S,
+    TAU_ROD_S,
+    WINDOW_SIGMA_DEG,
+    adaptation_luminance,
+    frame_luminance,
+)
+from glarelab.glare.night.scotopic import METHODS as SCOTOPIC_METHODS
+from glarelab.glare.night.scotopic import SPENCER1995_DESATURATION, scotopic_colour
+from glarelab.glare.rendering.renderer import GlareRenderer
+
+__all__ = [
+    "EFFECTS",
+    "PUPIL_STEP_MM",
+    "NightResult",
+    "adapted_model",
+    "render_night",
+]
+
+EFFECTS = ("adaptation", "glare", "acuity", "scotopic")  # Luidolt 2020 ch. 4, in his order
+PUPIL_STEP_MM = 0.1  # pupils are rounded to this, so that a sequence reuses its kernels
+
+
+@dataclass(frozen=True)
+class NightResult:
+    """What :func:`render_night` made of a scene, frame by frame.
+
+    Attributes
+    ----------
+    frames
+        Display RGB (cd/m²), ``(H, W, 3)`` per frame: one array for one image, a list for a
+        sequence.
+    targets_cd_m2
+        ``(N,)`` each frame's luminance around the gaze (eq. 5.1, §5.1).
+    adaptation_cd_m2
+        ``(N,)`` the adapted luminance ``L_i`` (eq. 5.2).
+    exposure
+        ``(N,)`` display cd/m² per scene cd/m².
+    pupil_mm
+        ``(N,)`` pupil diameter of each frame's glare model (NaN without glare).
+    models
+        The glare model of each frame (None without glare).
+    error_bound_codes
+        ``(N,)`` the glare renderer's error bound, display codes.
+    effects
+        The effects applied.
+    """
+
+    frames: np.ndarray | list[np.ndarray]
+    targets_cd_m2: np.ndarray
+    adaptation_cd_m2: np.ndarray
+    exposure: np.ndarray
+    pupil_mm: np.ndarray
+    models: list = field(repr=False)
+    error_bound_codes: np.ndarray
+    effects: tuple[str, ...]
+
+
+def adapted_model(
+    model: GlareModel, adaptation_luminance_cd_m2: float, *, pupil_step_mm: float = PUPIL_STEP_MM
+) -> GlareModel:
+    """A glare model with the eye state of an adaptation luminance.
+
+    Parameters
+    ----------
+    model
+        A glare model. Fields it has are replaced: ``pupil_mm`` by the Moon & Spencer pupil
+        of the luminance (rounded to ``pupil_step_mm``), ``regime`` (the Vos PSF's) by the
+        luminance's regime (Spencer §3.1), and a nested model (``HybridGlare.wave``) likewise.
+        A model without them (the Gaussian) is returned as it is.
+    adaptation_luminance_cd_m2
+        The adapted luminance, cd/m², >= 0.
+    pupil_step_mm
+        Pupils are rounded to this (default 0.1 mm) to reuse kernels across frames.
+
+    Examples
+    --------
+    >>> from glarelab.glare import VosGlare
+    >>> m = adapted_model(VosGlare(), 0.05)
+    >>> m.regime, m.pupil_mm
+    ('mesopic', 5.3)
+    """
+    luminance = float(
+        check_image("adaptation_luminance_cd_m2", [[adaptation_luminance_cd_m2]])[0, 0]
+    )
+    step = check_positive("pupil_step_mm", pupil_step_mm, unit="mm")
+    if not dataclasses.is_dataclass(model):
+        return model
+    names = {f.name for f in dataclasses.fields(model)}
+    changes = {}
+    if "pupil_mm" in names:
+        pupil = float(pupil_diameter_mm(luminance))
+        changes["pupil_mm"] = round(round(pupil / step) * step, 6)
+    if "regime" in names:
+        changes["regime"] = regime(luminance)
+    for name in names:
+        value = getattr(model, name)
+        if isinstance(value, GlareModel) and dataclasses.is_dataclass(value):
+            changes[name] = adapted_model(value, luminance, pupil_step_mm=step)
+    return dataclasses.replace(model, **changes) if changes else model
+
+
+def render_night(
+    scene_cd_m2: np.ndarray | Sequence[np.ndarray],
+    *,
+    pixel_deg: float,
+    effects: Sequence[str] = EFFECTS,
+    glare_model: GlareModel | str | None = None,
+    display_max_cd_m2: float = 100.0,
+    adapted_display_cd_m2: float = 10.0,
+    frame_time_s: float | Sequence[float] | None = None,
+    gaze_px: tuple[float, float] | Sequence[tuple[float, float] | None] | None = None,
+    initial_adaptation_cd_m2: float | None = None,
+    pupil_from_adaptation: bool = True,
+    window_sigma_deg: float = WINDOW_SIGMA_DEG,
+    adaptation_mean: Literal["log", "arithmetic"] = "log",
+    tau_rod_s: float = TAU_ROD_S,
+    tau_cone_s: float = TAU_CONE_S,
+    glare_method: Literal["Yoshida2008", "Spencer1995"] = "Yoshida2008",
+    tolerance_codes: float = 0.5,
+    acuity_method: Literal["Krawczyk2005", "Luidolt2020"] = "Krawczyk2005",
+    blur: Literal["layers", "separable", "exact"] = "layers",
+    levels_per_octave: int = LEVELS_PER_OCTAVE,
+    acuity_space: Literal["lightness", "linear"] = "lightness",
+    scotopic_method: Literal["Luidolt2020", "Spencer1995"] = "Luidolt2020",
+    desaturation: float = SPENCER1995_DESATURATION,
+    colourspace: str = "ITU-R BT.709",
+    progress=None,
+) -> NightResult:
+    """Glare and night vision of a linear HDR scene, in Luidolt's order (see the module notes).
+
+    Parameters
+    ----------
+    scene_cd_m2
+        One ``(H, W)`` luminance or ``(H, W, 3)`` linear RGB image (cd/m², channels of a white
+        of equal R, G, B), or a sequence (list) of such frames of one shape.
+    pixel_deg
+        Visual angle of a pixel, degrees, > 0.
+    effects
+        Which of ``'adaptation'``, ``'glare'``, ``'acuity'``, ``'scotopic'`` to apply; default
+        all. The exposure is always applied.
+    glare_model
+        The glare model (an object or a name of :data:`glare.GLARE_MODELS`); default the Vos
+        PSF (Spencer 1995).
+    display_max_cd_m2
+        The display's white, cd/m², > 0: the most it shows (``L_dmax``); default 100.
+    adapted_display_cd_m2
+        Display luminance of the adapting luminance, cd/m², in (0, ``display_max_cd_m2``];
+        default 10.
+    frame_time_s
+        Duration of each frame (a number, or one per frame), seconds; needed for a sequence
+        with adaptation.
+    gaze_px
+        ``(row, column)`` of the gaze, one for all frames or one per frame (None: the whole
+        frame alike).
+    initial_adaptation_cd_m2
+        Adapted luminance before the first frame, cd/m²; default: adapted to the first frame.
+    pupil_from_adaptation
+        Set the glare model's pupil (and Vos regime) from ``L_i`` (:func:`adapted_model`);
+        default True.
+    window_sigma_deg, adaptation_mean, tau_rod_s, tau_cone_s
+        Adaptation (:func:`glarelab.glare.night.adaptation.frame_luminance`, eqs. 5.2-5.4).
+    glare_method, tolerance_codes
+        Glare composition (``'Yoshida2008'`` clamp or ``'Spencer1995'`` sum) and the
+        renderer's error tolerance in display codes (:class:`glare.GlareRenderer`).
+    acuity_method, blur, levels_per_octave, acuity_space
+        Acuity (:func:`glarelab.glare.night.acuity.acuity_blur`); the lightness is taken for the
+        display's white.
+    scotopic_method, desaturation
+        Colour (:func:`glarelab.glare.night.scotopic.scotopic_colour`).
+    colourspace
+        The RGB colourspace of the scene and the display; default Rec. 709.
+    progress
+        ``progress(done, total, what)`` after each frame, or None.
+
+    Returns
+    -------
+    NightResult
+
+    Raises
+    ------
+    ValueError
+        For a bad image or sequence (empty, shapes differ, negative or non-finite values),
+        an unknown effect or method, or a bad number, each named.
+
+    Examples
+    --------
+    >>> scene = np.full((32, 48, 3), 0.02)
+    >>> scene[10:12, 20:22] = 5e4  # a lamp in a dark street
+    >>> night = render_night(scene, pixel_deg=0.05, display_max_cd_m2=100.0)
+    >>> night.frames.shape, bool(night.frames.max() <= 100.0), night.pupil_mm.tolist()
+    ((32, 48, 3), True, [5.7])
+    """
+    frames, single = _frames(scene_cd_m2)
+    n = len(frames)
+    pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
+    chosen = tuple(effects)
+    for effect in chosen:
+        check_choice("effects", effect, EFFECTS)
+    l_dmax = check_positive("display_max_cd_m2", display_max_cd_m2, unit="cd/m²")
+    key = check_in_range(
+        "adapted_display_cd_m2", adapted_display_cd_m2, 0.0, l_dmax, unit="cd/m²",
+        low_inclusive=False,
+    )  # fmt: skip
+    check_choice("acuity_method", acuity_method, SIGMA_METHODS)
+    check_choice("scotopic_method", scotopic_method, SCOTOPIC_METHODS)
+    gazes = _gazes(gaze_px, n)
+    targets = np.array(
+        [
+            frame_luminance(
+                f, pixel_deg=pixel_deg, gaze_px=g, window_sigma_deg=window_sigma_deg,
+                mean=adaptation_mean, colourspace=colourspace,
+            )
+            for f, g in zip(frames, gazes, strict=True)
+        ]
+    )  # fmt: skip
+    if "adaptation" in chosen:
+        if frame_time_s is None and (n > 1 or initial_adaptation_cd_m2 is not None):
+            raise ValueError(
+                "frame_time_s is needed to adapt over a sequence (or from an initial state): "
+                "give the duration of each frame in seconds"
+            )
+        adapted = adaptation_luminance(
+            targets,
+            0.0 if frame_time_s is None else frame_time_s,
+            initial_cd_m2=initial_adaptation_cd_m2,
+            tau_rod_s=tau_rod_s,
+            tau_cone_s=tau_cone_s,
+        )
+    else:
+        adapted = targets.copy()
+    exposure = key / np.maximum(adapted, MIN_LUMINANCE_CD_M2)
+    base = None
+    if "glare" in chosen:
+        base = _resolve(glare_model if glare_model is not None else "vos")
+    renderers: dict = {}
+    out_frames, pupils, models, bounds = [], [], [], []
+    for index, (frame, level, scale) in enumerate(zip(frames, adapted, exposure, strict=True)):
+        rgb = frame if frame.ndim == 3 else np.repeat(frame[..., None], 3, axis=2)
+        display = rgb.astype(np.float64) * scale
+        model, bound = None, 0.0
+        if base is not None:
+            model = adapted_model(base, float(level)) if pupil_from_adaptation else base
+            renderer = renderers.get(model)
+            if renderer is None:
+                renderer = GlareRenderer(
+                    model, pixel_deg=pixel_deg, shape=display.shape[:2], l_dmax_cd_m2=l_dmax,
+                    method=glare_method, tolerance_codes=tolerance_codes,
+                )  # fmt: skip
+                renderers[model] = renderer
+            result = renderer.render(display)
+            display, bound = np.asarray(result.image, dtype=np.float64), result.error_bound_codes
+        display = np.minimum(display, l_dmax)  # what the display can show (Spencer's sum too)
+        if "acuity" in chosen:
+            display = acuity_blur(
+                display, pixel_deg=pixel_deg, method=acuity_method, blur=blur,
+                space=acuity_space, white_cd_m2=l_dmax, luminance_scale=1.0 / scale,
+                levels_per_octave=levels_per_octave, colourspace=colourspace,
+            )  # fmt: skip
+        if "scotopic" in chosen:
+            options = (
+                {"adaptation_luminance_cd_m2": float(level), "colourspace": colourspace}
+                if scotopic_method == "Luidolt2020"
+                else {"desaturation": desaturation}
+            )
+            display = scotopic_colour(display, method=scotopic_method, **options)
+        out_frames.append(np.clip(display, 0.0, l_dmax))
+        pupils.append(getattr(model, "pupil_mm", None) if model is not None else None)
+        models.append(model)
+        bounds.append(bound)
+        if progress is not None:
+            progress(index + 1, n, "night frames")
+    return NightResult(
+        frames=out_frames[0] if single else out_frames,
+        targets_cd_m2=targets,
+        adaptation_cd_m2=adapted,
+        exposure=exposure,
+        pupil_mm=np.array([math.nan if p is None else float(p) for p in pupils]),
+        models=models,
+        error_bound_codes=np.array(bounds),
+        effects=chosen,
+    )
+
+
+def _frames(scene) -> tuple[list[np.ndarray], bool]:
+    if isinstance(scene, np.ndarray):
+        return [check_image("scene_cd_m2", scene, channels=(3,))], True
+    if not isinstance(scene, Sequence) or isinstance(scene, str):
+        raise ValueError(
+            "scene_cd_m2 must be an image ((H, W) or (H, W, 3) array) or a sequence (list) of "
+            f"them; got {type(scene).__name__}"
+        )
+    if len(scene) == 0:
+        raise ValueError("scene_cd_m2 must hold at least one frame; got an empty sequence")
+    frames = [check_image(f"scene_cd_m2[{i}]", f, channels=(3,)) for i, f in enumerate(scene)]
+    shapes = {f.shape[:2] for f in frames}
+    if len(shapes) > 1:
+        raise ValueError(f"the frames of scene_cd_m2 must have one shape; got {sorted(shapes)}")
+    return frames, False
+
+
+def _gazes(gaze_px, n: int) -> list:
+    if gaze_px is None:
+        return [None] * n
+    if (
+        isinstance(gaze_px, Sequence)
+        and len(gaze_px) == 2
+        and all(isinstance(v, int | float | np.number) for v in gaze_px)
+    ):
+        return [tuple(float(v) for v in gaze_px)] * n
+    gazes = list(gaze_px)
+    if len(gazes) != n:
+        raise ValueError(
+            f"gaze_px must be one (row, column) or one per frame ({n}); got {len(gazes)}"
+        )
+    return gazes

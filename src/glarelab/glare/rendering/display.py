@@ -1,0 +1,257 @@
+"""Display maths: codes of luminances, code steps, and errors in display codes.
+
+The error that matters is the one a display shows: an error below half a code step cannot be
+seen. A display is its code → luminance table (``lut``, cd/m², increasing); a
+:class:`glarelab.display.calibration.Calibration` serves as well. :class:`CodeBound` turns a bound
+on the spread (cd/m², per pixel) into a bound in display codes, block by block, looking up
+code steps directly in the table (no interpolation over the image).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from glarelab.glare._validation import check_positive
+from glarelab.glare.rendering.compose import METHODS, compose
+
+__all__ = [
+    "DISPLAY_BITS",
+    "DISPLAY_CONTRAST",
+    "DISPLAY_GAMMA",
+    "CodeBound",
+    "Display",
+    "display_codes",
+    "display_lut",
+    "steps_above",
+]
+
+# The reference display used when none is given: a 10-bit (Yoshida 2008 and Luidolt 2020 ask
+# for 10 bits), gamma 2.2, 1000:1 display whose white is L_dmax.
+DISPLAY_BITS = 10
+DISPLAY_GAMMA = 2.2
+DISPLAY_CONTRAST = 1000.0
+BLOCK_PX = 16  # the check bounds blocks of 16 × 16 pixels first, then pixels of failing blocks
+STEP_TABLE_SIZE = 2**16  # log-luminance bins of the step table (ratio 1.0001 over 1000:1)
+
+
+@dataclass(frozen=True)
+class Display:
+    """A display as its code → luminance table (cd/m², increasing).
+
+    A :class:`glarelab.display.calibration.Calibration` serves as well: the planner reads ``lut``.
+    """
+
+    lut: np.ndarray
+
+    @classmethod
+    def gamma(
+        cls,
+        white_cd_m2: float,
+        *,
+        black_cd_m2: float,
+        bits: int = DISPLAY_BITS,
+        gamma: float = DISPLAY_GAMMA,
+    ) -> Display:
+        """A gain-offset-gamma display: ``L = black + (white - black) (code / max)^γ``.
+
+        Examples
+        --------
+        >>> d = Display.gamma(220.0, black_cd_m2=0.22)
+        >>> d.lut.size, float(d.lut[0]), float(d.lut[-1])
+        (1024, 0.22, 220.0)
+        """
+        white = check_positive("white_cd_m2", white_cd_m2, unit="cd/m²")
+        black = float(black_cd_m2)
+        if not 0.0 <= black < white:
+            raise ValueError(f"black_cd_m2 must lie in [0, {white:g}) cd/m², got {black_cd_m2!r}")
+        levels = np.linspace(0.0, 1.0, 2**bits)
+        return cls(lut=black + (white - black) * levels**gamma)
+
+
+def display_lut(display, l_dmax_cd_m2: float) -> np.ndarray:
+    """The display's code → cd/m² table; for ``None`` the reference display: 10-bit, gamma
+    2.2, 1000:1, white at ``l_dmax_cd_m2``."""
+    if display is None:
+        l_dmax = check_positive("l_dmax_cd_m2", l_dmax_cd_m2, unit="cd/m²")
+        return Display.gamma(l_dmax, black_cd_m2=l_dmax / DISPLAY_CONTRAST).lut
+    lut = np.asarray(getattr(display, "lut", display), dtype=float)
+    if lut.ndim != 1 or lut.size < 2 or not np.all(np.diff(lut) > 0):
+        raise ValueError(
+            "display must have a 1-D increasing code → cd/m² table (.lut) of >= 2 codes"
+        )
+    return lut
+
+
+def display_codes(luminance_cd_m2: np.ndarray, lut: np.ndarray) -> np.ndarray:
+    """Continuous display codes of luminances (clipped to the display's range).
+
+    Examples
+    --------
+    >>> display_codes(np.array([0.0, 1.5, 9.0]), np.array([1.0, 2.0, 4.0])).tolist()
+    [0.0, 0.5, 2.0]
+    """
+    values = np.clip(luminance_cd_m2, lut[0], lut[-1])
+    return np.interp(values, lut, np.arange(lut.size, dtype=float))
+
+
+def steps_above(lut: np.ndarray) -> np.ndarray:
+    """For each code, the smallest step (cd/m²) between it and white (non-decreasing)."""
+    steps = np.diff(lut)
+    return np.minimum.accumulate(steps[::-1])[::-1]
+
+
+class CodeBound:
+    """Bounds, in display codes, on the error of an image whose spread is uncertain.
+
+    The exact spread ``S`` lies within ``S̃ ± b`` with ``b = absolute + relative · S̃``
+    (cd/m²). A pixel's output moves by at most ``b`` cd/m², and never beyond its lowest and
+    highest possible outputs ``lo, hi`` inside the display's range (Yoshida's clamp and the
+    display's black and white cut it), so its error is at most
+    ``min(b, hi - lo) / step(lo)`` codes, with ``step(lo)`` the smallest code step at or
+    above ``lo`` (the codes of a piecewise linear table move by at most ``Δ / min step`` over
+    an interval of ``Δ`` cd/m²).
+
+    The bound is taken per block of :data:`BLOCK_PX` pixels first (the block's darkest pixel,
+    smallest and largest spread), and per pixel only in blocks whose bound exceeds the
+    tolerance. Steps are looked up directly: a table of :data:`STEP_TABLE_SIZE` bins in
+    log-luminance holds, for each bin, the smallest step at or above its lower edge.
+    """
+
+    def __init__(self, lut: np.ndarray, l_dmax_cd_m2: float, method: str) -> None:
+        if method not in METHODS:
+            raise ValueError(f"method must be one of {METHODS}; got {method!r}")
+        self.lut = np.asarray(lut, dtype=float)
+        self.steps = steps_above(self.lut)
+        self.l_dmax = float(l_dmax_cd_m2)
+        self.method = method
+        self.top = min(self.lut[-1], self.l_dmax) if method == "Yoshida2008" else self.lut[-1]
+        self.black = float(self.lut[0])
+        self._offset = float(self.steps[0])  # log(L + offset): finite at a black of 0
+        self._u0 = math.log(self.black + self._offset)
+        span = math.log(self.lut[-1] + self._offset) - self._u0
+        self._scale = STEP_TABLE_SIZE / span
+        edges = np.exp(self._u0 + np.arange(STEP_TABLE_SIZE) / self._scale) - self._offset
+        self._table = self.step(np.maximum(edges, self.black))
+
+    def step(self, luminance_cd_m2: np.ndarray | float) -> np.ndarray:
+        """Smallest code step (cd/m²) at or above each luminance's code."""
+        code = np.searchsorted(self.lut, luminance_cd_m2, side="right") - 1
+        return self.steps[np.clip(code, 0, self.steps.size - 1)]
+
+    def _table_step(self, luminance_cd_m2: np.ndarray) -> np.ndarray:
+        """:meth:`step` from the log-luminance table: never larger, no search."""
+        u = np.log(luminance_cd_m2 + self._offset)
+        u -= self._u0
+        u *= self._scale
+        index = np.clip(u, 0, STEP_TABLE_SIZE - 1).astype(np.intp)
+        return self._table[index]
+
+    def _outputs(self, planes, spread_low, spread_high):
+        """Lowest and highest output (cd/m²) for spreads in ``[low, high]``, within the
+        display's range."""
+        low = compose(planes, spread_low, self.l_dmax, self.method)
+        high = compose(planes, spread_high, self.l_dmax, self.method)
+        return np.clip(low, self.black, self.top), np.clip(high, self.black, self.top)
+
+    def codes(
+        self,
+        planes: np.ndarray,
+        spread: np.ndarray,
+        *,
+        absolute: float,
+        relative: float,
+        tolerance_codes: float = 0.0,
+    ) -> float:
+        """Largest error in codes over the image (an upper bound).
+
+        Parameters
+        ----------
+        planes
+            The image, ``(H, W, C)``, cd/m².
+        spread
+            The computed spread, ``(H, W, C)`` or ``(H, W, 1)``, cd/m², >= 0.
+        absolute, relative
+            The spread's bound: ``absolute + relative · spread`` cd/m².
+        tolerance_codes
+            Blocks whose bound is within it are not looked at pixel by pixel.
+        """
+        if absolute == 0.0 and relative == 0.0:
+            return 0.0
+        p_lo, p_hi = _channel_extremes(planes)
+        s_lo, s_hi = _channel_extremes(spread)
+        p_min, p_max = block_reduce(p_lo, np.minimum), block_reduce(p_hi, np.maximum)
+        s_min, s_max = block_reduce(s_lo, np.minimum), block_reduce(s_hi, np.maximum)
+        low, _ = self._outputs(p_min, np.maximum((1.0 - relative) * s_min - absolute, 0.0), 0.0)
+        _, high = self._outputs(p_max, 0.0, (1.0 + relative) * s_max + absolute)
+        width = np.clip(high - low, 0.0, absolute + relative * s_max)
+        blocks = width / self.step(low)
+        worst = float(blocks.max())
+        if worst <= tolerance_codes:
+            return worst
+        failing = blocks > tolerance_codes
+        worst = float(blocks[~failing].max(initial=0.0))
+        for p, s in _failing_pixels(planes, spread, failing):
+            bound = absolute + relative * s
+            low, high = self._outputs(p, np.maximum(s - bound, 0.0), s + bound)
+            pixels = np.minimum(high - low, bound) / self._table_step(low)
+            worst = max(worst, float(pixels.max(initial=0.0)))
+        return worst
+
+
+def _channel_extremes(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Smallest and largest channel of each pixel of ``(H, W, C)`` (views for one channel)."""
+    if values.shape[2] == 1:
+        return values[..., 0], values[..., 0]
+    return values.min(axis=2), values.max(axis=2)
+
+
+def _failing_pixels(planes: np.ndarray, spread: np.ndarray, failing: np.ndarray):
+    """The pixels of the failing blocks, as ``(planes, spread)`` pairs of arrays: whole
+    blocks gathered through a strided view, then the partial blocks of the last row and
+    column of blocks."""
+    height, width, n = planes.shape
+    spread = np.broadcast_to(spread, planes.shape)
+    rows, cols = height // BLOCK_PX, width // BLOCK_PX
+    inner = np.nonzero(failing[:rows, :cols])
+    if inner[0].size:
+        views = []
+        for array in (planes, spread):
+            s0, s1, s2 = array.strides
+            views.append(
+                np.lib.stride_tricks.as_strided(
+                    array,
+                    (rows, cols, BLOCK_PX, BLOCK_PX, n),
+                    (BLOCK_PX * s0, BLOCK_PX * s1, s0, s1, s2),
+                    writeable=False,
+                )[inner]
+            )
+        yield views[0], views[1]
+    if height % BLOCK_PX and failing[rows:].any():
+        band = np.s_[rows * BLOCK_PX :]
+        yield planes[band], spread[band]
+    if width % BLOCK_PX and failing[:, cols:].any():
+        band = np.s_[:, cols * BLOCK_PX :]
+        yield planes[band], spread[band]
+
+
+def block_reduce(values: np.ndarray, ufunc, block: int = BLOCK_PX) -> np.ndarray:
+    """``ufunc`` over blocks of ``block × block`` pixels of a 2-D array (the last ones
+    smaller): rows of blocks first, over contiguous memory."""
+    height, width = values.shape
+    full_rows, full_cols = height // block, width // block
+    parts = []
+    if full_rows:
+        parts.append(ufunc.reduce(values[: full_rows * block].reshape(full_rows, block, width), 1))
+    if height % block:
+        parts.append(ufunc.reduce(values[full_rows * block :], axis=0, keepdims=True))
+    rows = np.concatenate(parts) if len(parts) > 1 else parts[0]
+    parts = []
+    if full_cols:
+        main = np.ascontiguousarray(rows[:, : full_cols * block])
+        parts.append(ufunc.reduce(main.reshape(rows.shape[0], full_cols, block), axis=2))
+    if width % block:
+        parts.append(ufunc.reduce(rows[:, full_cols * block :], axis=1, keepdims=True))
+    return np.concatenate(parts, axis=1) if len(parts) > 1 else parts[0]

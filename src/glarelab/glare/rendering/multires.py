@@ -1,0 +1,263 @@
+"""Multi-resolution numerics: the far tail of a smooth kernel on a grid ``f`` times coarser.
+
+Beyond a split radius ``R0`` a smooth PSF changes little over ``f`` pixels, so its part there
+is convolved on a coarse grid: the excess is splatted onto the coarse nodes with cubic weights
+(Keys 1981, ``a = -½``: the total, centroid and second moments are kept), convolved with the
+model digitised at ``f`` pixels (cell energies sharpened to point values), and interpolated
+back with the same cubic. The near part ``(1 - w) K`` stays at full resolution; ``w`` rises
+from 0 at ``R0`` to 1 at ``2 R0`` as Perlin's smootherstep.
+
+The far path's relative error against the full-resolution kernel is **measured**, for point
+sources at the corners and the centre of a coarse block, over the whole footprint of the
+approximate kernel (to the reach and a few coarse nodes beyond it, borders and corners
+included), not predicted.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from glarelab.glare.rendering._convolve import spread
+
+__all__ = ["FOOTPRINT_NODES", "PAD_NODES", "MultiresKernels", "far_spread", "multires_kernels"]
+
+PAD_NODES = 2  # nodes in front of the first cell, so that every cubic weight is on the grid
+# A source splats onto nodes up to 2 cells from it and a target interpolates from nodes up to
+# 2 cells from it: the coarse kernel must reach ceil(R / f) + 4 nodes for offsets up to R,
+# plus one for the rounding of R / f.
+FOOTPRINT_NODES = 5
+
+
+def channels(values: np.ndarray) -> list[np.ndarray]:
+    """The channels of a ``(H, W)`` or ``(H, W, C)`` array, as 2-D views."""
+    return [values] if values.ndim == 2 else [values[..., c] for c in range(values.shape[2])]
+
+
+def blend(radius_px: np.ndarray, split_px: int) -> np.ndarray:
+    """Weight of the far part: 0 within ``R0``, 1 beyond ``2 R0``, between them Perlin's
+    smootherstep ``6t⁵ - 15t⁴ + 10t³``, whose first and second derivatives vanish at both
+    ends (a kink in ``w''`` would cost cubic interpolation an order)."""
+    t = np.clip((radius_px - split_px) / split_px, 0.0, 1.0)
+    return t**3 * (t * (6.0 * t - 15.0) + 10.0)
+
+
+def radius(shape: tuple[int, int], scale: float = 1.0) -> np.ndarray:
+    """Distance of each element from the centre of an odd array, times ``scale``."""
+    y = (np.arange(shape[0]) - shape[0] // 2) * scale
+    x = (np.arange(shape[1]) - shape[1] // 2) * scale
+    return np.hypot(y[:, None], x[None, :])
+
+
+def grid_shape(shape: tuple[int, int], factor: int) -> tuple[int, int]:
+    """Nodes of the coarse grid of an image: its cells and :data:`PAD_NODES` on each side."""
+    return tuple(-(-n // factor) + 2 * PAD_NODES for n in shape[:2])
+
+
+def _cubic(n_fine: int, factor: int, start: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """Cubic-convolution weights (Keys 1981, a = -½) between fine pixels
+    ``start … start + n_fine - 1`` and the nodes of a grid ``f`` times coarser.
+
+    Node ``j`` sits at the centre of coarse cell ``j - PAD_NODES``, fine coordinate
+    ``(j - PAD_NODES) f + (f - 1) / 2``. Returns each pixel's first node (of four) and the
+    ``(n_fine, 4)`` weights. The weights reproduce quadratics, so interpolating with them, or
+    splatting with them (the adjoint), is exact to second order.
+    """
+    u = (np.arange(start, start + n_fine) + 0.5) / factor - 0.5
+    base = np.floor(u)
+    t = (u - base)[:, None]
+    weights = np.hstack(
+        [
+            -0.5 * t**3 + t**2 - 0.5 * t,
+            1.5 * t**3 - 2.5 * t**2 + 1.0,
+            -1.5 * t**3 + 2.0 * t**2 + 0.5 * t,
+            0.5 * t**3 - 0.5 * t**2,
+        ]
+    )
+    return base.astype(np.int64) + PAD_NODES - 1, weights
+
+
+def _phase_weights(factor: int) -> np.ndarray:
+    """``(f, 5)`` weights of a pixel at each phase ``s`` of cell ``m`` onto the nodes
+    ``m + PAD_NODES - 2 + j``: every cell has the same four cubic weights per phase."""
+    first, weights = _cubic(factor, factor)
+    table = np.zeros((factor, 5))
+    for phase in range(factor):
+        shift = first[phase] - (PAD_NODES - 2)  # 0 or 1
+        table[phase, shift : shift + 4] = weights[phase]
+    return table
+
+
+def _splat_last(values: np.ndarray, factor: int, start: int, n_nodes: int) -> np.ndarray:
+    """:func:`splat` along the last axis: pixels ``start …`` onto ``n_nodes`` nodes."""
+    offset, first_cell = start % factor, start // factor
+    cells = -(-(offset + values.shape[-1]) // factor)
+    padded = np.zeros((*values.shape[:-1], cells * factor))
+    padded[..., offset : offset + values.shape[-1]] = values
+    parts = padded.reshape(*values.shape[:-1], cells, factor) @ _phase_weights(factor)
+    out = np.zeros((*values.shape[:-1], n_nodes))
+    for shift in range(5):
+        node = first_cell + PAD_NODES - 2 + shift
+        out[..., node : node + cells] += parts[..., shift]
+    return out
+
+
+def _upsample_last(nodes: np.ndarray, factor: int, start: int, n_fine: int) -> np.ndarray:
+    """:func:`upsample` along the last axis: nodes onto pixels ``start … start + n_fine``."""
+    first_cell = start // factor
+    cells = -(-(start + n_fine) // factor) - first_cell
+    shifted = np.stack(
+        [
+            nodes[
+                ...,
+                first_cell + PAD_NODES - 2 + shift : first_cell + PAD_NODES - 2 + shift + cells,
+            ]
+            for shift in range(5)
+        ],
+        axis=-1,
+    )
+    fine = (shifted @ _phase_weights(factor).T).reshape(*nodes.shape[:-1], cells * factor)
+    offset = start - first_cell * factor
+    return fine[..., offset : offset + n_fine]
+
+
+def splat(excess: np.ndarray, factor: int, box, grid: tuple[int, int]) -> np.ndarray:
+    """Distribute each pixel of ``excess`` (the image's ``box = (r0, r1, c0, c1)``) over its
+    4 × 4 nearest coarse nodes with cubic weights: the total, centroid and second moments of
+    the excess are kept, so the coarse convolution is off only in third order of ``f / r``."""
+    columns = _splat_last(excess, factor, box[2], grid[1])
+    return _splat_last(columns.T, factor, box[0], grid[0]).T
+
+
+def upsample(coarse: np.ndarray, factor: int, shape: tuple[int, int], start=(0, 0)) -> np.ndarray:
+    """Cubic interpolation of the coarse nodes onto the fine pixels ``start … start + shape``
+    (the adjoint of :func:`splat`), one axis at a time, as a few dense products per cell."""
+    rows = _upsample_last(coarse.T, factor, start[0], shape[0]).T
+    return _upsample_last(rows, factor, start[1], shape[1])
+
+
+def sharpen_cells(cells: np.ndarray) -> np.ndarray:
+    """Point values from cell averages to second order: ``K - (1/24) Δ K`` (a cell average
+    is the point value blurred by a box of variance 1/12 per axis)."""
+    padded = np.pad(cells, [(1, 1), (1, 1)] + [(0, 0)] * (cells.ndim - 2), mode="edge")
+    laplacian = (
+        padded[:-2, 1:-1] + padded[2:, 1:-1] + padded[1:-1, :-2] + padded[1:-1, 2:] - 4.0 * cells
+    )
+    return cells - laplacian / 24.0
+
+
+def far_spread(
+    excess: np.ndarray,
+    box: tuple[int, int, int, int],
+    shape: tuple[int, int],
+    far: np.ndarray,
+    factor: int,
+    *,
+    nodes: bool = False,
+    splatted: np.ndarray | None = None,
+) -> np.ndarray:
+    """The far tail's spread of one channel of an image of ``shape`` whose excess is
+    ``excess`` within ``box`` (zero elsewhere): splat (or take ``splatted``), convolve on
+    the coarse grid, interpolate (or, with ``nodes``, the values at the coarse nodes)."""
+    coarse = (
+        splat(excess, factor, box, grid_shape(shape, factor)) if splatted is None else splatted
+    )
+    rows = np.flatnonzero(coarse.any(axis=1))
+    cols = np.flatnonzero(coarse.any(axis=0))
+    box_nodes = (slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1))
+    spread_coarse = spread(coarse, far, box_nodes)
+    return spread_coarse if nodes else upsample(spread_coarse, factor, shape)
+
+
+@dataclass(frozen=True)
+class MultiresKernels:
+    """Near and far kernels of one split, and the far path's measured relative error.
+
+    Attributes
+    ----------
+    factor, split_px
+        The coarse grid factor ``f`` and the split radius ``R0`` (pixels).
+    near
+        ``(1 - w) K`` within ``2 R0``, full resolution, ``(4 R0 + 1)²`` (``[, C]``).
+    far
+        ``w K / f²`` on the coarse grid, point values at the nodes.
+    relative_error
+        Largest ``|K̃ - K| / K`` of the approximate kernel ``K̃`` over its footprint.
+    """
+
+    factor: int
+    split_px: int
+    near: np.ndarray
+    far: np.ndarray
+    relative_error: float
+
+
+def multires_kernels(
+    full: np.ndarray, coarse: np.ndarray, factor: int, split_px: int, reach: tuple[int, int]
+) -> MultiresKernels:
+    """Near and far kernels from the full-resolution kernel ``full`` (centred, odd, ``[, C]``)
+    and the model digitised at ``factor`` pixels (``coarse``, at least
+    ``ceil(reach / f) + FOOTPRINT_NODES`` nodes each side), with the relative error measured.
+
+    The error is measured for a point source at each corner and the centre of a coarse cell,
+    at every offset from 0 to the footprint of the approximate kernel (the reach plus
+    ``FOOTPRINT_NODES`` cells, within the full kernel), in the quadrant of positive offsets;
+    the kernel is symmetric in both axes (checked), so the corners' mirror images cover the
+    other quadrants.
+    """
+    half = (full.shape[0] // 2, full.shape[1] // 2)
+    if 2 * split_px > min(half):
+        raise ValueError(
+            f"split_px must be at most a quarter of the kernel's size, got {split_px} for a "
+            f"{full.shape[0]} × {full.shape[1]} kernel"
+        )
+    w_fine = blend(radius((4 * split_px + 1,) * 2), split_px)
+    w_coarse = blend(radius(coarse.shape[:2], factor), split_px)
+    if full.ndim == 3:
+        w_fine, w_coarse = w_fine[..., None], w_coarse[..., None]
+    window = full[
+        half[0] - 2 * split_px : half[0] + 2 * split_px + 1,
+        half[1] - 2 * split_px : half[1] + 2 * split_px + 1,
+    ]
+    near = (1.0 - w_fine) * window
+    far = w_coarse * sharpen_cells(coarse) / factor**2
+    symmetric = np.array_equal(full, full[::-1]) and np.array_equal(full, full[:, ::-1])
+    extent = tuple(min(reach[a] + FOOTPRINT_NODES * factor, half[a]) for a in (0, 1))
+    corners = sorted({0, factor - 1})
+    phases = [(dy, dx) for dy in corners for dx in corners] + [(factor // 2,) * 2]
+    worst = 0.0
+    for dy, dx in phases:
+        for n_k, f_k, k in zip(channels(near), channels(far), channels(full), strict=True):
+            worst = max(worst, _worst_ratio(n_k, f_k, k, factor, split_px, (dy, dx), extent))
+            if not symmetric:  # every quadrant: the mirror images are not the same
+                for flip in (
+                    (slice(None, None, -1), slice(None)),
+                    (slice(None), slice(None, None, -1)),
+                    (slice(None, None, -1),) * 2,
+                ):
+                    worst = max(
+                        worst,
+                        _worst_ratio(
+                            n_k[flip], f_k[flip], k[flip], factor, split_px, (dy, dx), extent
+                        ),
+                    )
+    return MultiresKernels(factor, split_px, near, far, worst)
+
+
+def _worst_ratio(near, far, full, factor, split_px, phase, extent) -> float:
+    """Largest relative error of near + far against ``full`` for a point source at ``phase``
+    within a coarse cell, over offsets ``0 … extent`` in both axes."""
+    dy, dx = phase
+    shape = (dy + extent[0] + 1, dx + extent[1] + 1)
+    point = np.ones((1, 1))
+    approx = far_spread(point, (dy, dy + 1, dx, dx + 1), shape, far, factor)[dy:, dx:]
+    r = min(2 * split_px, extent[0]), min(2 * split_px, extent[1])
+    approx[: r[0] + 1, : r[1] + 1] += near[2 * split_px :, 2 * split_px :][: r[0] + 1, : r[1] + 1]
+    half = (full.shape[0] // 2, full.shape[1] // 2)
+    exact = full[half[0] : half[0] + extent[0] + 1, half[1] : half[1] + extent[1] + 1]
+    error = np.abs(approx - exact)
+    positive = exact > 0
+    if np.any(error[~positive] > 0):
+        return np.inf  # the approximation spreads light where the kernel has none
+    return float(np.max(error[positive] / exact[positive], initial=0.0))

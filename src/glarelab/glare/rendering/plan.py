@@ -1,0 +1,479 @@
+"""Plan the glare of one image from the scene and the display: the cheapest exact-enough path.
+
+The glare that matters is the glare a display can show: an error below half a display code
+cannot be seen. :func:`plan_glare` looks at the scene (which pixels exceed ``L_dmax``, how
+bright and where, which pixels can still change) and at the display (how many cd/m² one code
+step is at the darkest pixel that can change) and chooses the cheapest of three paths whose
+error stays under ``tolerance_codes``:
+
+- **direct**: each bright pixel adds a scaled copy of the kernel (exact; for a few glints);
+- **fft**: one forward and one inverse FFT of the bright pixels' box with the kernel's
+  spectrum, kept by the renderer across images (exact);
+- **multires**: the near kernel at full resolution, the far tail on a grid ``f`` times
+  coarser (:mod:`glarelab.glare.rendering.multires`), its relative error measured on the model.
+
+What is spread, and how far:
+
+- **Only pixels above L_dmax are spread**, and only the bounding box of them is transformed.
+- **Targets.** With Yoshida's clamp a pixel already at ``L_dmax`` cannot change; the kernel
+  only has to reach from the bright pixels to the pixels that can.
+- **Reach.** The kernel is cut where what its tail leaves out, times this scene's excess, is
+  below a share of the tolerance: at most ``min(ΣΔL · peak_beyond, max ΔL · energy_beyond)``
+  cd/m² anywhere (:meth:`~glare.GlareModel.tail_bound`; a rigorous bound, not an estimate).
+- **Colour**: a colour kernel is used only when the model's kernel differs between channels
+  (:attr:`~glare.GlareModel.achromatic`); an achromatic RGB scene with an achromatic kernel
+  is convolved once and copied to the three channels.
+
+The plan is an object (print it, or ``glarelab render --explain``); the rendered result
+carries the error bound reached, in display codes.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from typing import Literal
+
+import numpy as np
+
+from glarelab.glare.models.base import GlareModel
+from glarelab.glare.rendering._convolve import (
+    CORRELATE_WEIGHT_S,
+    DIRECT_PIXEL_S,
+    cluster_cost,
+    fft_length,
+)
+from glarelab.glare.rendering.display import block_reduce
+from glarelab.glare.rendering.multires import PAD_NODES, far_spread
+from glarelab.glare.rendering.scene import Scene
+
+__all__ = ["CUT_SHARE", "FAR_SHARE", "PATHS", "GlarePlan", "plan_glare"]
+
+PATHS = ("direct", "fft", "multires")
+
+CUT_SHARE = 0.25  # share of the tolerance the reach cut may spend (its bound is rigorous)
+FAR_SHARE = 0.5  # share the multi-resolution far tail may spend (checked per pixel afterwards)
+MULTIRES_FACTORS = (8, 4)  # coarse grid factors tried, coarsest first
+SPLIT_RATIOS = (16, 24, 32, 48, 64)  # R0 / f tried, shortest first: error falls as (f / R0)²
+MULTIRES_MIN_REACH = 4  # multi-resolution only when the reach is at least 4 R0
+# Which split to measure first: the far path's relative error is about 0.25 (f / R0)²
+# (measured on VosGlare, all regimes: 5e-4 at R0 = 16 f); the render measures it exactly.
+FAR_ERROR_SAFETY = 0.25
+# Costs, seconds, measured on a 2-core machine: a forward and an inverse real FFT of n
+# points cost about FFT_S · n log2 n (up to 4096²; FFT_LARGE_S beyond FFT_LARGE_POINTS, where
+# the arrays leave the caches); the direct spread as
+# glarelab.glare.rendering._convolve.cluster_cost says; the far tail (splat, coarse convolution,
+# cubic interpolation, preview and per-pixel check) MULTIRES_S per image pixel and convolution.
+# Only their ratios choose the path. A kernel spectrum is made once per renderer and FFT length, so
+# it is not counted.
+FFT_S = 4.5e-10
+FFT_LARGE_S = 5.5e-10
+FFT_LARGE_POINTS = 2**25
+MULTIRES_S = 3.5e-8
+
+
+@dataclass(frozen=True)
+class GlarePlan:
+    """What the renderer will compute for one image, and why.
+
+    Attributes
+    ----------
+    shape
+        Image shape.
+    model
+        The model's description.
+    tolerance_codes
+        Largest error allowed, display codes.
+    tolerance_cd_m2
+        The same at the darkest pixel that can change (one code step there × tolerance).
+    bright_pixels, source_box
+        Pixels above ``L_dmax`` and their bounding box ``(row0, row1, col0, col1)``.
+    max_excess_cd_m2, total_excess
+        Largest ``ΔL`` and ``ΣΔL`` (cd/m² × pixels) over the channels.
+    target_pixels, target_box
+        Pixels whose output can change, and their bounding box.
+    geometric_reach_px
+        Half-size ``(rows, cols)`` that lets every bright pixel reach every target.
+    reach_px
+        Half-size of the kernel after the tolerance cut.
+    cut_bound_cd_m2
+        Rigorous bound on what the cut leaves out, anywhere in the image.
+    path
+        ``'none'`` (nothing above ``L_dmax``), ``'clamp'`` (nothing can change), ``'direct'``,
+        ``'fft'`` or ``'multires'``.
+    multires_factor, split_px
+        Coarse grid factor ``f`` of the far tail and the split radius ``R0`` (1 and 0: off).
+    colour, colour_kernel, convolutions
+        Whether the scene is RGB, whether the kernel differs between channels, and the number
+        of convolutions planned.
+    halo
+        What happens to the lenticular halo (the model says, :meth:`GlareModel.halo`).
+    costs
+        Estimated seconds of each path considered.
+    notes
+        Reasons, one line each.
+    """
+
+    shape: tuple[int, ...]
+    model: dict
+    tolerance_codes: float
+    tolerance_cd_m2: float
+    bright_pixels: int
+    source_box: tuple[int, int, int, int] | None
+    max_excess_cd_m2: float
+    total_excess: float
+    target_pixels: int
+    target_box: tuple[int, int, int, int] | None
+    geometric_reach_px: tuple[int, int]
+    reach_px: tuple[int, int]
+    cut_bound_cd_m2: float
+    path: Literal["none", "clamp", "direct", "fft", "multires"]
+    multires_factor: int
+    split_px: int
+    colour: bool
+    colour_kernel: bool
+    convolutions: int
+    halo: str
+    costs: dict = field(default_factory=dict)
+    notes: tuple[str, ...] = field(default_factory=tuple)
+
+    @property
+    def exact(self) -> bool:
+        """True when nothing is approximated: no cut and no coarse far tail."""
+        return self.cut_bound_cd_m2 == 0.0 and self.multires_factor == 1
+
+    @property
+    def out_box(self) -> tuple[int, int, int, int] | None:
+        """The pixels that can receive glare: the targets within reach of the bright box."""
+        if self.source_box is None or self.target_box is None:
+            return None
+        (r0, r1, c0, c1), (t0, t1, u0, u1) = self.source_box, self.target_box
+        a, b = self.reach_px
+        box = (max(t0, r0 - a), min(t1, r1 + a), max(u0, c0 - b), min(u1, c1 + b))
+        return box if box[0] < box[1] and box[2] < box[3] else None
+
+    def __str__(self) -> str:
+        reach = self.reach_px
+        lines = [
+            f"glare plan for a {self.shape[1]} × {self.shape[0]} "
+            f"{'RGB' if self.colour else 'luminance'} image, model {self.model.get('model')}",
+            f"  tolerance: {self.tolerance_codes:g} display codes"
+            f" = {self.tolerance_cd_m2:.3g} cd/m² at the darkest pixel that can change",
+            f"  bright: {self.bright_pixels} px above L_dmax, max ΔL {self.max_excess_cd_m2:.4g}"
+            f" cd/m², ΣΔL {self.total_excess:.4g} cd/m²·px, box {self.source_box}",
+            f"  targets: {self.target_pixels} px can change, box {self.target_box}",
+            f"  reach: ±{reach[0]} × ±{reach[1]} px (geometric need ±{self.geometric_reach_px[0]}"
+            f" × ±{self.geometric_reach_px[1]}); the cut leaves out at most "
+            f"{self.cut_bound_cd_m2:.3g} cd/m²",
+        ]
+        if self.path == "multires":
+            near = 4 * self.split_px + 1
+            lines.append(
+                f"  path: multires — near part {near} × {near} px at full resolution, far "
+                f"tail beyond {self.split_px} px (blended to {2 * self.split_px} px) on a grid "
+                f"{self.multires_factor}× coarser"
+            )
+        elif self.path == "direct":
+            lines.append(
+                f"  path: direct — each cluster of the {self.bright_pixels} bright pixels "
+                f"correlated with a {2 * reach[0] + 1} × {2 * reach[1] + 1} px kernel (exact)"
+            )
+        elif self.path == "fft":
+            lines.append(
+                f"  path: fft — a {2 * reach[0] + 1} × {2 * reach[1] + 1} px kernel at full "
+                "resolution, its spectrum kept by the renderer"
+            )
+        else:
+            lines.append(f"  path: {self.path}")
+        if self.costs:
+            lines.append(
+                "  estimated: " + ", ".join(f"{k} {v:.3g} s" for k, v in self.costs.items())
+            )
+        lines.append(
+            f"  colour: {'RGB scene' if self.colour else 'luminance scene'}, "
+            f"{'colour' if self.colour_kernel else 'achromatic'} kernel, "
+            f"{self.convolutions} convolution(s)"
+        )
+        lines.append(f"  halo: {self.halo}")
+        lines += [f"  - {note}" for note in self.notes]
+        return "\n".join(lines)
+
+
+def _geometric_reach(source, target, half) -> tuple[int, int]:
+    if source is None or target is None:
+        return (0, 0)
+    rows = max(target[1] - 1 - source[0], source[1] - 1 - target[0], 0)
+    cols = max(target[3] - 1 - source[2], source[3] - 1 - target[2], 0)
+    return min(int(rows), half[0]), min(int(cols), half[1])
+
+
+def _direct_cost(scene: Scene, out, reach, limit: float) -> float:
+    """Estimated seconds of spreading the scene's bright clusters directly; a lower bound
+    when that is already above ``limit`` (the clusters are then not looked for)."""
+    area = min((out[1] - out[0]) * (out[3] - out[2]), (2 * reach[0] + 1) * (2 * reach[1] + 1))
+    lowest = area * scene.bright_pixels * min(DIRECT_PIXEL_S, CORRELATE_WEIGHT_S)
+    if lowest >= limit:
+        return lowest
+    return area * sum(cluster_cost(mask.size, int(mask.sum())) for _, mask in scene.clusters())
+
+
+def fft_cost(lengths: tuple[int, int]) -> float:
+    """Estimated seconds of one forward and one inverse real FFT of ``N0 × N1`` points."""
+    n = lengths[0] * lengths[1]
+    return (FFT_LARGE_S if n > FFT_LARGE_POINTS else FFT_S) * n * math.log2(max(n, 2))
+
+
+def plan_glare(
+    luminance_cd_m2: np.ndarray,
+    model: GlareModel | str,
+    *,
+    pixel_deg: float,
+    l_dmax_cd_m2: float,
+    method: Literal["Yoshida2008", "Spencer1995"] = "Yoshida2008",
+    tolerance_codes: float = 0.5,
+    display=None,
+) -> GlarePlan:
+    """Plan the glare of one image: what to spread, how far, by which path.
+
+    Parameters
+    ----------
+    luminance_cd_m2
+        Linear luminance, cd/m², ``(H, W)`` or ``(H, W, 3)``, finite and >= 0.
+    model
+        A glare model or its name.
+    pixel_deg
+        Visual angle of one pixel, degrees, > 0.
+    l_dmax_cd_m2
+        Maximum luminance the display shows, cd/m², > 0.
+    method
+        ``'Yoshida2008'`` (clamped to ``L_dmax``: saturated pixels cannot change) or
+        ``'Spencer1995'`` (every pixel can change).
+    tolerance_codes
+        Largest error allowed, in display codes, >= 0; default 0.5 (half a code step cannot
+        be seen). 0 plans the exact render.
+    display
+        The display the image is for: a :class:`~glarelab.glare.rendering.display.Display`, a
+        calibration (anything with a code → cd/m² ``lut``) or ``None`` for the reference display:
+        10-bit, gamma 2.2, 1000:1, white at ``l_dmax_cd_m2``.
+
+    Returns
+    -------
+    GlarePlan
+
+    Raises
+    ------
+    ValueError
+        For a bad image, a non-positive ``pixel_deg`` or ``l_dmax_cd_m2``, a negative or
+        non-finite tolerance, an unknown method, or a display table that is not increasing.
+
+    Notes
+    -----
+    The cut's error anywhere is at most :math:`\\min(\\Sigma\\Delta L \\cdot K_{max}(r),
+    \\max\\Delta L \\cdot E(r))` with :math:`K_{max}(r)` the largest kernel pixel and
+    :math:`E(r)` the energy beyond the cut. To plan many images of one shape, use
+    :meth:`glare.GlareRenderer.plan`, which keeps the kernel and what it measured.
+
+    Examples
+    --------
+    >>> from glarelab.glare import GaussianGlare
+    >>> image = np.full((101, 101), 100.0)
+    >>> image[50, 50] = 5000.0
+    >>> plan = plan_glare(image, GaussianGlare(sigma_deg=0.1), pixel_deg=0.02,
+    ...                   l_dmax_cd_m2=220.0)
+    >>> plan.reach_px < plan.geometric_reach_px, plan.path
+    (True, 'direct')
+    """
+    from glarelab.glare.rendering.renderer import _renderer_for  # it imports this module
+
+    image, renderer = _renderer_for(
+        luminance_cd_m2,
+        model,
+        pixel_deg=pixel_deg,
+        l_dmax_cd_m2=l_dmax_cd_m2,
+        method=method,
+        tolerance_codes=tolerance_codes,
+        display=display,
+    )
+    return renderer.plan(image)
+
+
+def make_plan(renderer, scene: Scene) -> GlarePlan:
+    """The plan of ``scene`` for ``renderer`` (a :class:`glare.GlareRenderer`)."""
+    model, tolerance = renderer.model, renderer.tolerance_codes
+    colour_kernel = scene.colour and not model.achromatic
+    if not scene.colour or (scene.achromatic and not colour_kernel):
+        convolutions = 1
+    else:
+        convolutions = 3
+    notes = []
+    if scene.colour and convolutions == 1:
+        notes.append("achromatic scene and kernel: one convolution, copied to R, G and B")
+    half = renderer.kernel_half
+    geometric = _geometric_reach(scene.source_box, scene.target_box, half)
+    # one code step at the darkest pixel that can change, in cd/m²
+    step = float(renderer.code_bound.step(scene.darkest))
+    common = {
+        "shape": tuple(scene.planes.shape[:2]) + ((3,) if scene.colour else ()),
+        "model": model.description(colour_kernel),
+        "tolerance_codes": tolerance,
+        "tolerance_cd_m2": tolerance * step,
+        "bright_pixels": scene.bright_pixels,
+        "source_box": scene.source_box,
+        "max_excess_cd_m2": scene.max_excess,
+        "total_excess": scene.total_excess,
+        "target_pixels": scene.target_pixels,
+        "target_box": scene.target_box,
+        "geometric_reach_px": geometric,
+        "colour": scene.colour,
+        "colour_kernel": colour_kernel,
+        "convolutions": convolutions,
+        "halo": model.halo() + (" (colour kernel)" if colour_kernel else ""),
+    }
+    if scene.source_box is None:
+        notes.append("nothing above L_dmax: the image is returned unchanged")
+        return GlarePlan(
+            **common, reach_px=(0, 0), cut_bound_cd_m2=0.0, path="none", multires_factor=1,
+            split_px=0, notes=tuple(notes),
+        )  # fmt: skip
+    if renderer.method == "Yoshida2008" and scene.target_box is None:
+        notes.append("every pixel is at L_dmax: Yoshida's clamp leaves nothing to spread into")
+        return GlarePlan(
+            **common, reach_px=(0, 0), cut_bound_cd_m2=0.0, path="clamp", multires_factor=1,
+            split_px=0, notes=tuple(notes),
+        )  # fmt: skip
+
+    reach, cut_bound = geometric, 0.0
+    bound = renderer.tail_bound(colour_kernel) if tolerance > 0 else None
+    if bound is not None and max(geometric) > 0:
+        left_out = np.minimum(scene.total_excess * bound.peak, scene.max_excess * bound.energy)
+        fits = np.flatnonzero(left_out[: max(geometric) + 1] <= CUT_SHARE * tolerance * step)
+        radius = int(fits[0]) if fits.size else max(geometric)
+        reach = (min(geometric[0], radius), min(geometric[1], radius))
+        if reach != geometric:
+            cut_bound = float(left_out[max(reach)])
+            notes.append(
+                f"kernel cut at {max(reach) * renderer.pixel_deg:.3g}°: beyond it the tail "
+                f"holds at most {cut_bound:.3g} cd/m² of this scene's glare"
+            )
+    elif tolerance == 0:
+        notes.append("tolerance 0: exact render")
+    elif bound is None:
+        notes.append(
+            "the model gives no tail bound (as with flare lines or wave optics): full reach, exact"
+        )
+
+    plan = GlarePlan(
+        **common, reach_px=reach, cut_bound_cd_m2=cut_bound, path="fft", multires_factor=1,
+        split_px=0, notes=(),
+    )  # fmt: skip
+    out = plan.out_box
+    source = scene.source_box
+    if out is None:  # the cut kernel reaches no pixel that can change
+        notes.append("path direct: the cut kernel reaches no pixel that can change")
+        return replace(plan, path="direct", costs={"direct": 0.0}, notes=tuple(notes))
+    lengths = (
+        fft_length(source[:2], out[:2], reach[0]),
+        fft_length(source[2:], out[2:], reach[1]),
+    )
+    costs = {"fft": fft_cost(lengths) * convolutions}
+    costs["direct"] = _direct_cost(scene, out, reach, costs["fft"] / convolutions) * convolutions
+    exact_paths = [p for p in ("direct", "fft") if p in renderer.paths] or ["direct", "fft"]
+    path, factor, split = min(exact_paths, key=costs.get), 1, 0
+    if bound is not None and tolerance > 0 and "multires" in renderer.paths:
+        limit = costs[path] if len(renderer.paths) > 1 else math.inf
+        choice = _choose_multires(renderer, scene, plan, lengths_cost=limit)
+        if choice is not None:
+            factor, split, predicted, cost = choice
+            costs["multires"] = cost
+            path = "multires"
+            notes.append(
+                f"far tail beyond {split} px at 1/{factor} resolution: measured relative error "
+                f"{renderer.multires(factor, split, colour_kernel).relative_error:.3g}, "
+                f"{predicted:.3g} codes predicted on the coarse grid"
+            )
+    if len(renderer.paths) < len(PATHS):
+        notes.append(f"path {path}: of the paths allowed, {', '.join(renderer.paths)}")
+    else:
+        notes.append(f"path {path}: the cheapest estimated that keeps the tolerance")
+    return GlarePlan(
+        **{k: v for k, v in plan.__dict__.items() if k not in ("path", "costs", "notes")}
+        | {"path": path, "multires_factor": factor, "split_px": split},
+        costs=costs,
+        notes=tuple(notes),
+    )
+
+
+def _choose_multires(renderer, scene: Scene, plan: GlarePlan, *, lengths_cost: float):
+    """The cheapest coarse factor and split whose far path fits ``FAR_SHARE`` of the
+    tolerance, predicted on the coarse grid with the measured relative error; ``None`` when
+    none fits or none is cheaper than ``lengths_cost``. Returns ``(f, R0, codes, cost)``."""
+    height, width = scene.planes.shape[:2]
+    reach = plan.geometric_reach_px  # the far tail covers the whole geometric reach
+    budget = FAR_SHARE * plan.tolerance_codes
+    source, out = plan.source_box, plan.out_box
+    for factor in MULTIRES_FACTORS:
+        ratios = [
+            k
+            for k in SPLIT_RATIOS
+            if max(reach) >= MULTIRES_MIN_REACH * k * factor and min(reach) >= 2 * k * factor
+        ]
+        if not ratios:
+            continue
+        far_cost = MULTIRES_S * height * width * plan.convolutions
+        preview = None
+        for k in ratios:
+            split = k * factor
+            near = (
+                max(out[0], source[0] - 2 * split),
+                min(out[1], source[1] + 2 * split),
+                max(out[2], source[2] - 2 * split),
+                min(out[3], source[3] + 2 * split),
+            )
+            near_lengths = (
+                fft_length(source[:2], near[:2], 2 * split),
+                fft_length(source[2:], near[2:], 2 * split),
+            )
+            cost = far_cost + fft_cost(near_lengths) * plan.convolutions
+            if cost >= lengths_cost:
+                break  # longer splits cost more
+            if preview is None:
+                preview = _preview(renderer, scene, factor, plan.colour_kernel)
+            if preview(FAR_ERROR_SAFETY / k**2) > budget:
+                continue
+            measured = renderer.multires(factor, split, plan.colour_kernel).relative_error
+            predicted = preview(measured) if measured < 1.0 else math.inf
+            if predicted <= budget:
+                return factor, split, predicted, cost
+    return None
+
+
+def _preview(renderer, scene: Scene, factor: int, colour_kernel: bool):
+    """A function from the far path's relative error to the predicted largest error in codes:
+    the scene's spread at the coarse nodes (the model digitised at ``f`` pixels) over the
+    darkest pixel of each cell."""
+    coarse = renderer.coarse_kernel(factor, colour_kernel)
+    brightest = coarse if coarse.ndim == 2 else coarse.max(axis=2)
+    height, width = scene.planes.shape[:2]
+    nodes = far_spread(
+        None,
+        scene.source_box,
+        (height, width),
+        brightest / factor**2,
+        factor,
+        nodes=True,
+        splatted=scene.splat(factor, None),
+    )
+    cells = -(-height // factor), -(-width // factor)
+    spread_cells = nodes[PAD_NODES : PAD_NODES + cells[0], PAD_NODES : PAD_NODES + cells[1]]
+    planes = scene.planes[..., 0] if scene.planes.shape[2] == 1 else scene.planes.min(axis=2)
+    darkest = block_reduce(planes, np.minimum, factor)
+
+    def codes(relative: float) -> float:
+        return renderer.code_bound.codes(
+            darkest[..., None],
+            np.maximum(spread_cells, 0.0)[..., None],
+            absolute=0.0,
+            relative=relative / max(1.0 - relative, 1e-12),
+        )
+
+    return codes

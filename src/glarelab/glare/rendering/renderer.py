@@ -1,0 +1,538 @@
+"""Render many images of one shape with one kernel: :class:`GlareRenderer`.
+
+A renderer owns, for one (model, pixel size, image shape, display), the digitised kernel,
+its spectra for the FFT lengths it has used, the model's tail bounds, and the multi-resolution
+kernels with their measured errors. Each is computed the first time a render needs it and kept
+for the next images. :func:`glare.add_glare` and :func:`glare.render_glare` are one-call forms
+that build a renderer for one image.
+
+Memory: the kernel (``(2H-1) × (2W-1)`` float64, ``[× 3]`` for a colour kernel) and the
+spectra, at most :data:`SPECTRA_BYTES` of them (the least recently used are dropped; the one
+in use is always kept).
+"""
+
+from __future__ import annotations
+
+import math
+from collections import OrderedDict
+from dataclasses import replace
+from typing import Literal
+
+import numpy as np
+
+from glarelab.glare._validation import check_choice, check_image, check_positive
+from glarelab.glare.models import _resolve
+from glarelab.glare.models.base import GlareModel, TailBound
+from glarelab.glare.models.cache import resolve_cache
+from glarelab.glare.models.digitise import Kernel, check_kernel_shape, kernel_shape_for
+from glarelab.glare.rendering._convolve import (
+    FLOAT32_NOISE_LIMIT_CD_M2,
+    convolution_dtype,
+    direct_spread,
+    fft_length,
+    kernel_spectrum,
+    spectral_spread,
+)
+from glarelab.glare.rendering.compose import METHODS, compose
+from glarelab.glare.rendering.display import CodeBound, display_lut
+from glarelab.glare.rendering.multires import (
+    FOOTPRINT_NODES,
+    MultiresKernels,
+    channels,
+    far_spread,
+    multires_kernels,
+    upsample,
+)
+from glarelab.glare.rendering.plan import PATHS, GlarePlan, make_plan
+from glarelab.glare.rendering.result import GlareResult, PlannedGlare
+from glarelab.glare.rendering.scene import Scene
+
+__all__ = ["SPECTRA_BYTES", "GlareRenderer", "GlareResult", "PlannedGlare"]
+
+SPECTRA_BYTES = 512 * 2**20  # kernel spectra a renderer keeps (the one in use always)
+# When the FFT's round-off bound exceeds the tolerance, the image is spread directly (no
+# round-off) if that is estimated to cost at most DIRECT_FALLBACK times the FFT.
+DIRECT_FALLBACK = 50.0
+PRECISIONS = ("float64", "float32")
+
+
+class GlareRenderer:
+    """Glare for many images of one shape: the kernel and its spectra are made once.
+
+    Parameters
+    ----------
+    model
+        A glare model or its name.
+    pixel_deg
+        Visual angle of one pixel in degrees, > 0.
+    shape
+        ``(H, W)`` of the images (RGB images ``(H, W, 3)`` are accepted too).
+    l_dmax_cd_m2
+        Maximum luminance of the display, cd/m², > 0; default 220 (Yoshida §3).
+    method
+        ``'Yoshida2008'`` (default) or ``'Spencer1995'`` (:mod:`glarelab.glare.rendering.compose`).
+    precision
+        ``'float64'`` (default) or ``'float32'`` (convolved in float64 where float32 FFT
+        round-off could show, next to a sun).
+    tolerance_codes
+        Largest error allowed against the exact render, display codes, >= 0; default 0.5.
+        0 (or ``None``): exact paths only.
+    display
+        The display the error is counted on (a calibration, a :class:`glare.Display`, or a
+        code → cd/m² table); ``None``: 10-bit, gamma 2.2, 1000:1, white at ``L_dmax``.
+    kernel_shape
+        Odd shape of the reference kernel; default ``(2H - 1, 2W - 1)`` (every pixel reaches
+        every other, Spencer §3.2).
+    kernel
+        The reference kernel, already digitised by ``model`` for ``pixel_deg``, or ``None``.
+    paths
+        The paths the plan may choose from (default all: ``'direct'``, ``'fft'``,
+        ``'multires'``), to measure one of them; an exact path is taken when none allowed
+        fits.
+    log
+        Called with one line per step, or ``None``.
+    cache
+        Where digitised kernels are kept between runs (:mod:`glarelab.glare.models.cache`):
+        ``None`` (default) or ``True``, the user's kernel cache (off when ``GLARELAB_NO_CACHE`` is
+        set); ``False``, none; a :class:`glarelab.glare.models.cache.KernelCache` or a folder.
+
+    Raises
+    ------
+    ValueError
+        For a bad model, pixel size, shape, ``l_dmax_cd_m2``, method, precision, tolerance,
+        display table or kernel.
+
+    Examples
+    --------
+    >>> from glarelab.glare import VosGlare
+    >>> renderer = GlareRenderer(VosGlare(), pixel_deg=0.05, shape=(64, 64))
+    >>> images = [np.full((64, 64), 50.0) for _ in range(3)]
+    >>> for image, level in zip(images, (1e4, 1e5, 1e6)):
+    ...     image[32, 32] = level
+    >>> results = [renderer.render(image) for image in images]
+    >>> [r.plan.path for r in results], max(r.error_bound_codes for r in results) <= 0.5
+    (['direct', 'direct', 'direct'], True)
+    """
+
+    def __init__(
+        self,
+        model: GlareModel | str,
+        *,
+        pixel_deg: float,
+        shape: tuple[int, ...],
+        l_dmax_cd_m2: float = 220.0,
+        method: Literal["Yoshida2008", "Spencer1995"] = "Yoshida2008",
+        precision: Literal["float64", "float32"] = "float64",
+        tolerance_codes: float | None = 0.5,
+        display=None,
+        kernel_shape: tuple[int, int] | None = None,
+        kernel: Kernel | None = None,
+        paths: tuple[str, ...] = PATHS,
+        log=None,
+        cache=None,
+    ) -> None:
+        self.model = _resolve(model)
+        self.cache = resolve_cache(cache)
+        self.pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
+        self.l_dmax = check_positive("l_dmax_cd_m2", l_dmax_cd_m2, unit="cd/m²")
+        check_choice("method", method, METHODS)
+        check_choice("precision", precision, PRECISIONS)
+        self.method, self.dtype = method, np.dtype(precision)
+        tolerance = 0.0 if tolerance_codes is None else float(tolerance_codes)
+        if not math.isfinite(tolerance) or tolerance < 0:
+            raise ValueError(
+                f"tolerance_codes must be a finite number >= 0 or None, got {tolerance_codes!r}"
+            )
+        self.tolerance_codes = tolerance
+        try:
+            height, width = (int(n) for n in tuple(shape)[:2])
+        except (TypeError, ValueError):
+            raise ValueError(f"shape must be (H, W) of positive integers, got {shape!r}") from None
+        if height < 1 or width < 1:
+            raise ValueError(f"shape must be (H, W) of positive integers, got {shape!r}")
+        self.shape = (height, width)
+        self.lut = display_lut(display, self.l_dmax)
+        self.code_bound = CodeBound(self.lut, self.l_dmax, method)
+        self._given = None
+        if kernel is not None:
+            if not np.isclose(kernel.pixel_deg, self.pixel_deg, rtol=1e-12, atol=0):
+                raise ValueError(
+                    f"kernel was digitised for pixel_deg = {kernel.pixel_deg!r}, not {pixel_deg!r}"
+                )
+            if len(kernel.shape) == 3 and kernel.shape[2] != 3:
+                raise ValueError(f"kernel must have 1 or 3 channels; got {kernel.shape}")
+            kernel_shape = check_kernel_shape(kernel.shape[:2])
+            self._given = kernel
+        elif kernel_shape is not None:
+            kernel_shape = check_kernel_shape(kernel_shape)
+        self.kernel_shape = kernel_shape or kernel_shape_for(self.shape)
+        self.kernel_half = (self.kernel_shape[0] // 2, self.kernel_shape[1] // 2)
+        self.paths = tuple(paths)
+        for path in self.paths:
+            check_choice("paths", path, PATHS)
+        if not self.paths:
+            raise ValueError(f"paths must name at least one of {PATHS}; got {paths!r}")
+        self.say = log or (lambda line: None)
+        self._kernels: dict[bool, Kernel] = {}
+        self._given_grey: Kernel | None = None  # a given colour kernel's first channel
+        self._peaks: dict[bool, float] = {}
+        self._bounds: dict[bool, TailBound | None] = {}
+        self._coarse: dict[tuple, np.ndarray] = {}
+        self._multires: dict[tuple, MultiresKernels] = {}
+        self._spectra: OrderedDict[tuple, np.ndarray] = OrderedDict()
+
+    # what is kept between images ----------------------------------------------------------
+    def kernel(self, colour: bool = False) -> Kernel:
+        """The reference kernel (digitised on first use)."""
+        if self._given is not None:
+            given = self._given
+            if len(given.shape) == 3 and not colour:  # the first channel, as before
+                if self._given_grey is None:  # made once: the result reports it
+                    outside = given.energy_outside
+                    first = {"energy_outside": float(np.asarray(outside).reshape(-1)[0])}
+                    if given.quadrant is not None:
+                        first["quadrant"] = given.quadrant[..., 0]
+                    else:
+                        first["values"] = given.values[..., 0]
+                    self._given_grey = given.replace(**first)
+                return self._given_grey
+            return given
+        if colour not in self._kernels:
+            self._kernels[colour] = self._digitised(self.pixel_deg, self.kernel_shape, colour)
+        return self._kernels[colour]
+
+    def _digitised(
+        self, pixel_deg: float, shape: tuple[int, int], colour: bool, *, say: bool = True
+    ) -> Kernel:
+        """The model's kernel, from the kernel cache when it holds it (``say``: one log line
+        saying which)."""
+        log = self.say if say else None
+
+        def build() -> Kernel:
+            if log is not None:
+                log(f"digitising a {shape[0]} × {shape[1]} kernel")
+            return self.model.kernel(pixel_deg, shape, colour=colour)
+
+        if self.cache is None:
+            return build()
+        return self.cache.kernel(self.model, pixel_deg, shape, colour=colour, build=build, log=log)
+
+    def kernel_peak(self, colour: bool = False) -> float:
+        """The reference kernel's largest value (found once)."""
+        if colour not in self._peaks:
+            self._peaks[colour] = float(self.kernel(colour).peak)
+        return self._peaks[colour]
+
+    def tail_bound(self, colour: bool) -> TailBound | None:
+        """The model's tail bounds for every radius up to the kernel's half-size."""
+        if colour not in self._bounds:
+            radii = np.arange(max(self.kernel_half) + 1)
+            bound = self.model.tail_bound(self.pixel_deg, radii, colour=colour)
+            if bound is not None and bound.renormalised:
+                # the reference kernel is normalised over its own support, which holds at
+                # least 1 - E(its smaller half-size) of the PSF: its values are at most
+                # 1 / that times the PSF's
+                kept = 1.0 - float(bound.energy[min(self.kernel_half)])
+                scale = 1.0 / kept if kept > 0 else np.inf
+                bound = TailBound(bound.peak * scale, np.minimum(bound.energy * scale, 1.0))
+            self._bounds[colour] = bound
+        return self._bounds[colour]
+
+    def coarse_kernel(self, factor: int, colour: bool) -> np.ndarray:
+        """The model digitised at ``factor`` pixels, reaching past the whole kernel."""
+        key = (factor, colour)
+        if key not in self._coarse:
+            shape = tuple(2 * (-(-h // factor) + FOOTPRINT_NODES) + 1 for h in self.kernel_half)
+            coarse = self._digitised(self.pixel_deg * factor, shape, colour, say=False)
+            self._coarse[key] = coarse.values
+        return self._coarse[key]
+
+    def multires(self, factor: int, split_px: int, colour: bool) -> MultiresKernels:
+        """Near and far kernels of one split, with the far path's error measured over the
+        whole kernel (kept for the next images)."""
+        key = (factor, split_px, colour)
+        if key not in self._multires:
+            self.say(f"measuring the far path's error: split {split_px} px, grid 1/{factor}")
+            full = self.kernel(colour).values
+            self._multires[key] = multires_kernels(
+                full,
+                self.coarse_kernel(factor, colour and full.ndim == 3),
+                factor,
+                split_px,
+                self.kernel_half,
+            )
+        return self._multires[key]
+
+    def _spectrum(self, lengths, reach, colour, split_px, channel, dtype, values=None):
+        key = (tuple(lengths), tuple(reach), colour, split_px, channel, np.dtype(dtype).name)
+        if key in self._spectra:
+            self._spectra.move_to_end(key)
+            return self._spectra[key]
+        if values is None:
+            full = channels(self.kernel(colour).values)
+            k = full[min(channel, len(full) - 1)]
+            a, b = self.kernel_half
+            values = k[a - reach[0] : a + reach[0] + 1, b - reach[1] : b + reach[1] + 1]
+        spectrum = kernel_spectrum(values.astype(dtype, copy=False), tuple(lengths))
+        self._spectra[key] = spectrum
+        while (
+            sum(s.nbytes for s in self._spectra.values()) > SPECTRA_BYTES
+            and len(self._spectra) > 1
+        ):
+            self._spectra.popitem(last=False)
+        return spectrum
+
+    # one image ----------------------------------------------------------------------------
+    def _scene(self, luminance_cd_m2) -> tuple[np.ndarray, Scene]:
+        image = check_image("luminance_cd_m2", luminance_cd_m2, channels=(3,))
+        if image.shape[:2] != self.shape:
+            raise ValueError(
+                f"luminance_cd_m2 must have the renderer's shape {self.shape}; "
+                f"got {image.shape[:2]}"
+            )
+        return image, Scene.of(image, self.l_dmax, self.method, self.dtype)
+
+    def plan(self, luminance_cd_m2: np.ndarray) -> GlarePlan:
+        """The plan for one image (what :meth:`render` will do)."""
+        return make_plan(self, self._scene(luminance_cd_m2)[1])
+
+    def render(self, luminance_cd_m2: np.ndarray) -> GlareResult:
+        """Add glare to one image as planned, and bound the error reached.
+
+        Parameters
+        ----------
+        luminance_cd_m2
+            Linear luminance, cd/m², finite and >= 0, the renderer's shape, ``(H, W)`` or
+            ``(H, W, 3)`` linear RGB in cd/m² of a white of equal R, G, B.
+
+        Returns
+        -------
+        GlareResult
+
+        Raises
+        ------
+        ValueError
+            For an image that is not finite and non-negative, or not of the renderer's shape.
+
+        Notes
+        -----
+        The error bound per pixel is ``cut + ε / (1 - ε) · S(p)`` cd/m², with ``ε`` the far
+        path's measured relative error, ``S`` the spread and ``cut`` the plan's rigorous
+        bound, passed through the display (:class:`glarelab.glare.rendering.display.CodeBound`).
+        When it exceeds the tolerance anywhere, the exact path is taken instead.
+        """
+        image, scene = self._scene(luminance_cd_m2)
+        plan = make_plan(self, scene)
+        self.say(f"plan: {plan.path}")
+        parameters = {
+            "pixel_deg": self.pixel_deg,
+            "l_dmax_cd_m2": self.l_dmax,
+            "method": self.method,
+            "precision": self.dtype.name,
+            "kernel_shape": self.kernel_shape,
+            "model": plan.model,
+            "convolution_precision": [self.dtype.name],
+        }
+        source = (scene.excess, scene.source_box)
+        empty = np.zeros(image.shape, dtype=self.dtype)  # calloc: pages only when touched
+        result = {"error_bound_codes": 0.0, "far_relative_error": 0.0, "fallback": ""}
+        if plan.path == "none":
+            return GlareResult(
+                image.copy(), plan, **result, kernel=None, parameters=parameters,
+                spread=empty, source=source,
+            )  # fmt: skip
+        if plan.path == "clamp":
+            out = compose(scene.planes, self.dtype.type(0), self.l_dmax, self.method)
+            return GlareResult(
+                out if scene.colour else out[..., 0], plan, **result, kernel=None,
+                parameters=parameters, spread=empty, source=source,
+            )  # fmt: skip
+        spread, used = self._spread(scene, plan)
+        out = compose(scene.planes, spread, self.l_dmax, self.method)
+        absolute = self._absolute(scene, plan, used)
+        relative = 0.0
+        if plan.path == "multires":
+            relative = self.multires(plan.multires_factor, plan.split_px, plan.colour_kernel)
+            relative = relative.relative_error
+        ratio = relative / max(1.0 - relative, 1e-12)
+        if relative:
+            error = self.code_bound.codes(
+                scene.planes,
+                spread,
+                absolute=absolute,
+                relative=ratio,
+                tolerance_codes=plan.tolerance_codes,
+            )
+        else:
+            error = self._exact_error(scene, spread, absolute, plan.tolerance_codes)
+        if plan.path == "multires" and error > plan.tolerance_codes:
+            result["fallback"] = (
+                f"far tail error bound {error:.3g} codes > {plan.tolerance_codes:g}: "
+                "rendered at full resolution"
+            )
+            self.say(result["fallback"])
+            exact = [p for p in ("direct", "fft") if p in self.paths] or ["direct", "fft"]
+            exact = min(exact, key=lambda p: plan.costs.get(p, math.inf))
+            plan = replace(plan, path=exact, multires_factor=1, split_px=0)
+            spread, used = self._spread(scene, plan)
+            out = compose(scene.planes, spread, self.l_dmax, self.method)
+            absolute = self._absolute(scene, plan, used)
+            relative = 0.0
+            error = self._exact_error(scene, spread, absolute, plan.tolerance_codes)
+        if (
+            plan.path == "fft"
+            and error > plan.tolerance_codes
+            and "direct" in self.paths
+            and plan.costs.get("direct", math.inf) <= DIRECT_FALLBACK * plan.costs["fft"]
+        ):
+            result["fallback"] = (
+                f"FFT round-off bound {error:.3g} codes > {plan.tolerance_codes:g}: "
+                "spread directly"
+            )
+            self.say(result["fallback"])
+            plan = replace(plan, path="direct")
+            spread, used = self._spread(scene, plan)
+            out = compose(scene.planes, spread, self.l_dmax, self.method)
+            absolute = self._absolute(scene, plan, used)
+            error = self._exact_error(scene, spread, absolute, plan.tolerance_codes)
+        self.say(f"error bound {error:.3g} display codes")
+        parameters["convolution_precision"] = sorted(used)
+        result.update(error_bound_codes=error, far_relative_error=relative)
+        if not scene.colour:
+            out, spread = out[..., 0], spread[..., 0]
+        elif spread.shape[2] == 1:
+            spread = np.broadcast_to(spread, out.shape)
+        return GlareResult(
+            out, plan, **result, kernel=self.kernel(plan.colour_kernel),
+            parameters=parameters, spread=spread, source=source,
+        )  # fmt: skip
+
+    def _exact_error(self, scene: Scene, spread, absolute: float, tolerance: float) -> float:
+        """Codes of a bound that does not grow with the spread: at the darkest pixel's step,
+        or, when that is over the tolerance, pixel by pixel through the display."""
+        error = absolute / float(self.code_bound.step(scene.darkest))
+        if error > tolerance:
+            error = min(
+                error,
+                self.code_bound.codes(
+                    scene.planes, spread, absolute=absolute, relative=0.0,
+                    tolerance_codes=tolerance,
+                ),
+            )  # fmt: skip
+        return error
+
+    def _absolute(self, scene: Scene, plan: GlarePlan, used: set[str]) -> float:
+        """The part of the error bound that does not grow with the spread, cd/m²: the cut's
+        bound and the FFT round-off (about ``ε log2 n`` times the largest spread,
+        ``ΣΔL · max K``, anywhere in the image; float32 limited by
+        :func:`~glarelab.glare.rendering._convolve.convolution_dtype`)."""
+        absolute = plan.cut_bound_cd_m2
+        if "float32" in used:
+            absolute += FLOAT32_NOISE_LIMIT_CD_M2
+        if plan.path in ("fft", "multires"):
+            peak = self.kernel_peak(plan.colour_kernel)
+            n = 4 * self.shape[0] * self.shape[1]
+            absolute += np.finfo(np.float64).eps * math.log2(n) * scene.total_excess * peak
+        return absolute
+
+    def _spread(self, scene: Scene, plan: GlarePlan) -> tuple[np.ndarray, set[str]]:
+        """The spread ``(H, W, 1 or C)`` of the plan's path, and the precisions used."""
+        height, width = self.shape
+        box, out_box = plan.source_box, plan.out_box
+        n = plan.convolutions
+        spread = np.zeros((height, width, n), dtype=self.dtype)
+        used: set[str] = set()
+        if out_box is None:
+            return spread, {self.dtype.name}
+        o = np.s_[out_box[0] : out_box[1], out_box[2] : out_box[3]]
+        reach = plan.reach_px
+        for c in range(n):
+            excess = scene.excess[..., c]
+            if plan.path == "direct":
+                kernel = self.kernel(plan.colour_kernel)
+                symmetric = kernel.quadrant is not None
+                k = channels(kernel.quadrant if symmetric else kernel.values)
+                k = k[min(c, len(k) - 1)]
+                if symmetric:  # spread from the quadrant: the full kernel is never made
+                    k = k[: reach[0] + 1, : reach[1] + 1]
+                else:
+                    a, b = self.kernel_half
+                    k = k[a - reach[0] : a + reach[0] + 1, b - reach[1] : b + reach[1] + 1]
+                used.add(self.dtype.name)
+                direct_spread(
+                    excess,
+                    box[::2],
+                    k.astype(self.dtype, copy=False),
+                    out_box,
+                    spread[..., c],
+                    quadrant=symmetric,
+                    # the scene's own groups, where its excess is this one plane
+                    groups=scene.clusters() if scene.excess.shape[2] == 1 else None,
+                )
+                continue
+            if plan.path == "fft":
+                values, half = None, reach
+            elif plan.path == "multires":
+                kernels = self.multires(plan.multires_factor, plan.split_px, plan.colour_kernel)
+                near = channels(kernels.near)
+                values, half = near[min(c, len(near) - 1)], (2 * plan.split_px,) * 2
+                far = channels(kernels.far)
+                coarse = far_spread(
+                    None,
+                    box,
+                    self.shape,
+                    far[min(c, len(far) - 1)],
+                    plan.multires_factor,
+                    nodes=True,
+                    splatted=scene.splat(plan.multires_factor, c),
+                )
+                spread[..., c][o] = upsample(
+                    coarse,
+                    plan.multires_factor,
+                    (out_box[1] - out_box[0], out_box[3] - out_box[2]),
+                    start=out_box[::2],
+                )
+            else:
+                raise ValueError(f"unknown path {plan.path!r}")
+            near_box = _within(out_box, box, half)
+            lengths = (
+                fft_length(box[:2], near_box[:2], half[0]),
+                fft_length(box[2:], near_box[2:], half[1]),
+            )
+            peak = np.array([self.kernel_peak(plan.colour_kernel)])
+            work = convolution_dtype(excess, peak, self.dtype)
+            used.add(work.name)
+            spectrum = self._spectrum(
+                lengths,
+                half,
+                plan.colour_kernel,
+                plan.split_px,
+                c if plan.colour_kernel else 0,
+                work,
+                values,
+            )
+            part = spectral_spread(
+                excess.astype(work, copy=False), box, near_box, spectrum, lengths
+            )
+            spread[..., c][near_box[0] : near_box[1], near_box[2] : near_box[3]] += part
+        np.maximum(spread, 0.0, out=spread)  # FFT round-off is not non-negative
+        return spread, used
+
+
+def _renderer_for(
+    luminance_cd_m2: np.ndarray, model: GlareModel | str, **options
+) -> tuple[np.ndarray, GlareRenderer]:
+    """The one-call functions' start: the image checked (``(H, W)`` or ``(H, W, 3)``, finite,
+    >= 0) and a :class:`GlareRenderer` of its shape with ``options``, which it checks."""
+    image = check_image("luminance_cd_m2", luminance_cd_m2, channels=(3,))
+    return image, GlareRenderer(model, shape=image.shape[:2], **options)
+
+
+def _within(out_box, box, half) -> tuple[int, int, int, int]:
+    """The part of ``out_box`` within ``half`` pixels of ``box``."""
+    return (
+        max(out_box[0], box[0] - half[0]),
+        min(out_box[1], box[1] + half[0]),
+        max(out_box[2], box[2] - half[1]),
+        min(out_box[3], box[3] + half[1]),
+    )

@@ -1,0 +1,109 @@
+"""What the plan reads from one image: :class:`Scene`.
+
+The pixels above ``L_dmax`` (their bounding box and their excess ``ΔL``, Yoshida 2008 eq. 1,
+kept only within that box), the pixels that can still change (under Yoshida's clamp, those
+below ``L_dmax``), the brightest and total excess, and the darkest pixel.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from glarelab.glare.rendering._convolve import clusters
+from glarelab.glare.rendering.compose import excess as excess_of
+from glarelab.glare.rendering.multires import grid_shape, splat
+
+__all__ = ["Scene"]
+
+
+@dataclass(frozen=True)
+class Scene:
+    """What the plan reads from one image (in the render's dtype).
+
+    ``planes`` is ``(H, W, C)``; ``excess`` is ``ΔL`` within ``source_box`` only,
+    ``(rows, cols, C)``; boxes are ``(row0, row1, col0, col1)``.
+    """
+
+    planes: np.ndarray
+    colour: bool
+    source_box: tuple[int, int, int, int] | None
+    target_box: tuple[int, int, int, int] | None
+    excess: np.ndarray | None
+    bright_pixels: int
+    target_pixels: int
+    max_excess: float
+    total_excess: float
+    darkest: float
+    achromatic: bool
+    _splats: dict = field(default_factory=dict, repr=False, compare=False)
+
+    def clusters(self) -> list[tuple[tuple[slice, slice], np.ndarray]]:
+        """The connected groups of bright pixels in the source box (made once)."""
+        if "clusters" not in self._splats:
+            self._splats["clusters"] = clusters((self.excess > 0).any(axis=2))
+        return self._splats["clusters"]
+
+    def splat(self, factor: int, channel: int | None) -> np.ndarray:
+        """The excess of one channel (``None``: the brightest channel of each pixel) splatted
+        onto the coarse grid of ``factor`` (:func:`glarelab.glare.rendering.multires.splat`), made
+        once."""
+        if self.excess.shape[2] == 1:
+            channel = 0
+        key = (factor, channel)
+        if key not in self._splats:
+            excess = self.excess.max(axis=2) if channel is None else self.excess[..., channel]
+            self._splats[key] = splat(
+                excess.astype(np.float64, copy=False),
+                factor,
+                self.source_box,
+                grid_shape(self.planes.shape[:2], factor),
+            )
+        return self._splats[key]
+
+    @classmethod
+    def of(cls, image: np.ndarray, l_dmax: float, method: str, dtype) -> Scene:
+        colour = image.ndim == 3
+        planes = (image if colour else image[..., None]).astype(dtype, copy=False)
+        bright = planes > l_dmax
+        bright = bright.any(axis=2) if colour else bright[..., 0]
+        source = _box(bright)
+        if method == "Yoshida2008":
+            targets = planes < l_dmax
+            targets = targets.any(axis=2) if colour else targets[..., 0]
+            target_box, n_targets = _box(targets), int(np.count_nonzero(targets))
+        else:
+            target_box, n_targets = (0, planes.shape[0], 0, planes.shape[1]), bright.size
+        excess = None
+        if source is not None:
+            r0, r1, c0, c1 = source
+            box = planes[r0:r1, c0:c1]
+            excess = excess_of(box, l_dmax)
+        achromatic = colour and bool(
+            np.array_equal(image[..., 0], image[..., 1])
+            and np.array_equal(image[..., 0], image[..., 2])
+        )
+        return cls(
+            planes=planes,
+            colour=colour,
+            source_box=source,
+            target_box=target_box,
+            excess=excess,
+            bright_pixels=int(np.count_nonzero(bright)) if source is not None else 0,
+            target_pixels=n_targets,
+            max_excess=float(excess.max()) if excess is not None else 0.0,
+            total_excess=float(excess.sum(axis=(0, 1), dtype=np.float64).max())
+            if excess is not None
+            else 0.0,
+            darkest=float(planes.min()),
+            achromatic=achromatic,
+        )
+
+
+def _box(mask: np.ndarray) -> tuple[int, int, int, int] | None:
+    rows = np.flatnonzero(mask.any(axis=1))
+    if rows.size == 0:
+        return None
+    cols = np.flatnonzero(mask.any(axis=0))
+    return int(rows[0]), int(rows[-1]) + 1, int(cols[0]), int(cols[-1]) + 1

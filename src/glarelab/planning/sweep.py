@@ -1,0 +1,257 @@
+"""The stimulus sets of a grid of protocol parameters, each built (and optionally simulated) as
+one task on Dask.
+
+For the grid of :func:`glarelab.planning.grid.grid`, point ``i`` is built into ``OUT/sets/iii/``: a
+stimulus set with its own ``manifest.json`` (the point's validated protocol, its hash, every
+file's sha256; :func:`glarelab.stimuli.stimulus_set.build_stimulus_set`). With ``simulate = N``,
+``N`` simulated observers run on it (``OUT/simulated/iii/data``), are analysed
+(``OUT/simulated/iii/report``, :func:`glarelab.analysis.report.write_report`) and the tests of the
+analysis are listed in ``OUT/effects.csv`` (:mod:`glarelab.planning.effects`). ``OUT/index.csv``
+(and ``index.json``) has one row per point: its number, the value of each key varied, its folder,
+the protocol's and the manifest's sha256, the number of images, and the build time.
+
+A point whose set is already in place, verified against its manifest and built from the same
+protocol, is not built again, and a point already in ``OUT/points.jsonl`` is not run again: an
+interrupted sweep resumes.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+import shutil
+import tempfile
+import time
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+import pandas as pd
+
+from glarelab.files.atomic import write_bytes, write_text
+from glarelab.planning.grid import Point, Setting, grid
+
+__all__ = ["MAX_POINTS", "SweepJob", "prepare", "sweep"]
+
+MAX_POINTS = 1000
+"""The most points a sweep builds (the sets are numbered with three digits, ``sets/iii``)."""
+
+
+def _manifest_sha(folder: Path) -> str:
+    return hashlib.sha256((folder / "manifest.json").read_bytes()).hexdigest()
+
+
+def _in_place(folder: Path, protocol) -> bool:
+    from glarelab.stimuli.stimulus_set import verify_stimulus_set
+
+    if not (folder / "manifest.json").is_file() or verify_stimulus_set(folder):
+        return False
+    manifest = json.loads((folder / "manifest.json").read_text())
+    return manifest.get("protocol_sha256") == protocol.sha256
+
+
+class SweepJob:
+    """The points of a grid as tasks of :func:`glarelab.planning.execute.run_tasks`."""
+
+    kind = "sweep"
+
+    def __init__(self, points: Sequence[Point], out: Path, *, simulate: int, seed: int):
+        self.points = {p.index: p for p in points}
+        self.out = Path(out)
+        self.simulate = simulate
+        self.seed = seed
+
+    def run(self, index: int) -> dict:
+        """Build point ``index``'s set (unless in place), simulate it if asked."""
+        from glarelab.experiments.session import shows_images
+        from glarelab.stimuli.stimulus_set import build_stimulus_set, default_calibration
+
+        point = self.points[index]
+        protocol = point.protocol
+        record = {
+            "point": index,
+            "values": point.values,
+            "protocol_sha256": protocol.sha256,
+            "folder": None,
+            "manifest_sha256": None,
+            "images": 0,
+            "build_s": 0.0,
+            "effects": [],
+        }
+        folder = None
+        if shows_images(protocol):
+            folder = self.out / "sets" / f"{index:03d}"
+            start = time.perf_counter()
+            if not _in_place(folder, protocol):
+                folder.parent.mkdir(parents=True, exist_ok=True)
+                staging = Path(tempfile.mkdtemp(prefix=".building-", dir=folder.parent))
+                try:
+                    build_stimulus_set(
+                        protocol, staging, calibration=default_calibration(protocol), progress=None
+                    )
+                    shutil.rmtree(folder, ignore_errors=True)
+                    os.replace(staging, folder)
+                finally:
+                    shutil.rmtree(staging, ignore_errors=True)
+            manifest = json.loads((folder / "manifest.json").read_text())
+            record |= {
+                "folder": str(folder.relative_to(self.out)),
+                "manifest_sha256": _manifest_sha(folder),
+                "images": sum(1 for i in manifest["images"].values() if i["kind"] != "component"),
+                "build_s": round(time.perf_counter() - start, 3),
+            }
+        if self.simulate:
+            record["effects"] = self._simulate(index, protocol, folder)
+        return record
+
+    def _simulate(self, index: int, protocol, folder: Path | None) -> list[dict]:
+        from glarelab.analysis.load import load_sessions
+        from glarelab.analysis.paradigms import PARADIGMS
+        from glarelab.analysis.report import write_report
+        from glarelab.planning.effects import effects
+        from glarelab.planning.simulate import _simulate_sessions
+
+        where = self.out / "simulated" / f"{index:03d}"
+        shutil.rmtree(where, ignore_errors=True)
+        data = where / "data"
+        ids = [f"sim{number:02d}" for number in range(1, self.simulate + 1)]
+        _simulate_sessions(
+            protocol, ids, seed=self.seed, out=data, stimuli=folder, looks_at=folder
+        )
+        csvs = sorted(data.glob("*.csv"))
+        write_report(protocol, csvs, where / "report", stimuli=folder)
+        tables = PARADIGMS[protocol.paradigm].tests(load_sessions(protocol, csvs), protocol)
+        return effects(protocol, tables, self.simulate)
+
+
+def prepare(
+    protocol: str | Path,
+    settings: Sequence[Setting],
+    out: str | Path,
+    *,
+    simulate: int = 0,
+    seed: int = 1,
+) -> tuple[list[Point], dict]:
+    """Check a sweep before it runs, writing nothing: the grid's points, each validated, and
+    the sweep's record (``sweep.json``).
+
+    Raises
+    ------
+    glarelab.planning.grid.GridError
+        For a bad key or value, or points that do not validate.
+    ValueError
+        For a protocol that shows no images without ``simulate``, ``simulate`` of 1, a point
+        whose observers cannot be simulated, or an ``out`` holding a sweep of other inputs.
+    """
+    from glarelab.experiments.paradigms import PARADIGMS
+    from glarelab.experiments.session import shows_images
+
+    if isinstance(simulate, bool) or not isinstance(simulate, int) or simulate < 0:
+        raise ValueError(f"simulate must be a whole number >= 0; got {simulate!r}")
+    if simulate == 1:
+        raise ValueError("simulate: the analysis needs at least 2 simulated observers; got 1")
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise ValueError(f"seed must be a whole number >= 0; got {seed!r}")
+    size = math.prod(len(s.values) for s in settings)
+    if size > MAX_POINTS:
+        raise ValueError(
+            f"the grid has {size} points ({' × '.join(str(len(s.values)) for s in settings)}); "
+            f"a sweep builds at most {MAX_POINTS}: split it into several"
+        )
+    points = grid(protocol, settings)
+    first = points[0].protocol
+    if not shows_images(first) and not simulate:
+        raise ValueError(
+            f"the {first.study} protocol's paradigm ({first.paradigm}) shows no images: there "
+            "are no stimulus sets to build; add --simulate N to simulate each point"
+        )
+    if simulate:
+        for point in points:
+            PARADIGMS[point.protocol.paradigm].observer.check(point.protocol)
+    config = {
+        "format": "glarelab sweep v1",
+        "points": [{"point": p.index, "protocol_sha256": p.protocol.sha256} for p in points],
+        "simulate": simulate,
+        "seed": seed,
+    }
+    path = Path(out) / "sweep.json"
+    if path.is_file():
+        try:
+            before = json.loads(path.read_text())
+        except (json.JSONDecodeError, UnicodeDecodeError):
+            before = None
+        if before != config:
+            raise ValueError(
+                f"{out} holds a sweep of another grid, protocol or simulation: give another "
+                "--out, or delete it to start again"
+            )
+    return points, config
+
+
+def sweep(
+    protocol: str | Path,
+    settings: Sequence[Setting],
+    out: str | Path,
+    *,
+    simulate: int = 0,
+    seed: int = 1,
+    client=None,
+    log: Callable[[str], None] = print,
+    progress: bool = True,
+) -> pd.DataFrame:
+    """Build (and with ``simulate`` > 0, simulate) every point of a grid; return the index.
+
+    Parameters
+    ----------
+    protocol
+        A shipped study's name or a protocol TOML file.
+    settings
+        The keys varied and their values (:func:`glarelab.planning.grid.parse_setting`).
+    out
+        Output folder (module docstring); a rerun resumes it.
+    simulate, seed
+        Simulated observers per point (0: build only; at least 2 to analyse) and their seed.
+    client
+        A :class:`distributed.Client`, or None to run here without Dask.
+    log, progress
+        Messages and the progress bar.
+
+    Raises
+    ------
+    glarelab.planning.grid.GridError, ValueError
+        As :func:`prepare`, before anything is built or written.
+    """
+    from glarelab.planning.execute import Progress, ResultLog, run_tasks
+
+    points, config = prepare(protocol, settings, out, simulate=simulate, seed=seed)
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    write_text(out / "sweep.json", json.dumps(config, indent=2, sort_keys=True) + "\n")
+    log(f"{len(points)} points on the grid of {', '.join(s.key for s in settings)}")
+    job = SweepJob(points, out, simulate=simulate, seed=seed)
+    with ResultLog(out / "points.jsonl") as results:
+        run_tasks(
+            job,
+            [p.index for p in points],
+            results,
+            client=client,
+            what="points",
+            progress=Progress if progress else None,
+        )
+        records = results.sorted(p.index for p in points)
+    rows, effect_rows = [], []
+    for record in records:
+        row = {"point": record["point"]}
+        row |= {key: json.dumps(value) for key, value in record["values"].items()}
+        row |= {k: record[k] for k in ("folder", "protocol_sha256", "manifest_sha256", "images")}
+        row["build_s"] = record["build_s"]
+        rows.append(row)
+        effect_rows += [{"point": record["point"], **e} for e in record["effects"]]
+    index = pd.DataFrame(rows)
+    write_bytes(out / "index.csv", index.to_csv(index=False).encode())
+    write_text(out / "index.json", json.dumps(records, indent=2, sort_keys=True) + "\n")
+    if effect_rows:
+        table = pd.DataFrame(effect_rows).to_csv(index=False, float_format="%.6g")
+        write_bytes(out / "effects.csv", table.encode())
+    return index

@@ -1,0 +1,300 @@
+"""A three-way forced-choice staircase (Spencer et al. 1995, §4): keys, rules and CSV columns.
+
+Two windows flash side by side: a light source with glare (one of several glare strengths,
+rendered with any registered glare model) and a comparison disc with an annulus, whose
+intensity one interleaved staircase per glare strength adjusts; the answer is "left
+brighter", "right brighter" or "neither". Blocks are contexts: the source on a background of
+its own (uniform black, a procedural lamp scene, or a linear EXR).
+"""
+
+from __future__ import annotations
+
+from fractions import Fraction
+from math import gcd, lcm
+from pathlib import Path
+
+from glarelab.protocols.columns import Column
+from glarelab.protocols.common import (
+    BREAK_EVERY,
+    DISPLAY,
+    INSTRUCTIONS,
+    VIEWING,
+    check_background,
+    check_display,
+    check_glare_model,
+)
+from glarelab.protocols.keys import Key, Schema, Tables
+
+__all__ = ["SCHEMA", "check", "columns", "comparison_terms", "glare_name", "intensity_grid"]
+
+CONTEXT: Schema = {
+    "name": Key(str, "the context's name in the data (a block)", token=True),
+    "background": Key(dict, "the scene around the source: kind and its keys"),
+}
+SCHEMA: Schema = {
+    "display": DISPLAY,
+    "viewing": VIEWING,
+    "stimulus": {
+        "window_px": Key(
+            int, "side of each square presentation window", unit="px", low=16, high=4096
+        ),
+        "window_gap_px": Key(int, "gap between the two windows", unit="px", low=0, high=4096),
+        "source_radius_px": Key(
+            float, "radius of the light source", unit="px", low=0.5, high=100.0
+        ),
+        "pixel_deg": Key(
+            float,
+            "visual angle of a pixel (overrides the display geometry)",
+            unit="deg",
+            low=0.0,
+            high=1.0,
+            default=0.0,
+        ),
+        "disc_radius_px": Key(
+            float, "radius of the comparison disc", unit="px", low=0.5, high=100.0
+        ),
+        "annulus_outer_px": Key(
+            float, "outer radius of the comparison annulus", unit="px", low=1.0, high=200.0
+        ),
+        "annulus_ratio": Key(float, "annulus intensity / disc intensity", low=0.0, high=1.0),
+    },
+    "contexts": Tables(CONTEXT, "the blocks: the source on each background", (1, 10)),
+    "glare": {
+        "model": Key(str, "a glare model registered in glare.GLARE_MODELS"),
+        "parameters": Key(dict, "the model's parameters", default={}),
+        "peak_fraction": Key(
+            float,
+            "peak of the glare image as a fraction of the display maximum",
+            low=0.01,
+            high=1.0,
+        ),
+        "strengths": Key(
+            list,
+            "source excess over the peak, one per glare level",
+            item=float,
+            length=(1, 50),
+            low=0.0,
+            high=1e9,
+        ),
+    },
+    "trials": {
+        "presentation_ms": Key(
+            list,
+            "presentation times",
+            unit="ms",
+            item=float,
+            length=(1, 4),
+            low=10.0,
+            high=10_000.0,
+        ),
+        "start_fraction": Key(
+            float, "disc intensity the staircases start at (fraction of max)", low=0.0, high=1.0
+        ),
+        "step_fractions": Key(
+            list,
+            "staircase step sizes, coarse to fine",
+            item=float,
+            length=(1, 10),
+            low=0.0001,
+            high=1.0,
+        ),
+        "reversals": Key(int, "reversals per staircase", low=1, high=100),
+        "neither": Key(
+            str,
+            "how a 'neither brighter' answer moves the staircase",
+            choices=("hold", "alternate"),
+        ),
+        "inter_trial_ms": Key(
+            float,
+            "blank screen before each flash",
+            unit="ms",
+            low=0.0,
+            high=60_000.0,
+            default=500.0,
+        ),
+        "timing_tolerance_ms": Key(
+            float,
+            "largest difference between the measured flash and its frames (Spencer §4: ±10 ms)",
+            unit="ms",
+            low=0.0,
+            high=1000.0,
+            default=10.0,
+        ),
+        "repeat_failed_presentations": Key(
+            bool,
+            "a flash that dropped frames or missed its timing does not move its staircase and "
+            "is shown again",
+            default=True,
+        ),
+        "repeat_limit": Key(
+            int,
+            "a failed flash is shown again at most this many times in a row; then its answer "
+            "counts (flagged presentation_ok = false), so a display that keeps failing cannot "
+            "stall the session",
+            low=0,
+            high=100,
+            default=3,
+        ),
+        "break_every": BREAK_EVERY,
+    },
+    "instructions": INSTRUCTIONS,
+    "observer": Key(
+        dict,
+        "simulated observers' parameters (glarelab.experiments.perception); empty: the fitted"
+        " defaults",
+        default={},
+    ),
+}
+
+
+GRID_DENOMINATOR_LIMIT = 1_000_000  # finer grids are not kept: intensities are plain floats
+
+
+def intensity_grid(trials: dict) -> int | None:
+    """The grid of the disc intensities a staircase can take, ``k / N`` for whole ``k`` from 0
+    to ``N``: ``1 / N`` is the greatest common divisor of the start, the steps and 1 (the
+    staircase is clamped to 0 and 1), so every intensity it reaches is on the grid. The
+    experiment computes them as ``k / N`` (no drift in the last bits from adding steps) and
+    the analysis compares them there. None where a value is not a fraction with a
+    denominator of at most a million (such a grid is not kept).
+
+    Examples
+    --------
+    >>> intensity_grid({"start_fraction": 1.0, "step_fractions": [0.16, 0.08, 0.04, 0.02]})
+    50
+    >>> intensity_grid({"start_fraction": 0.5, "step_fractions": [0.1, 0.03]})
+    100
+    >>> intensity_grid({"start_fraction": 1 / 3, "step_fractions": [0.1]})
+    30
+    >>> intensity_grid({"start_fraction": 0.123456789, "step_fractions": [0.1]}) is None
+    True
+    """
+    values = [1.0, float(trials["start_fraction"]), *map(float, trials["step_fractions"])]
+    fractions = []
+    for value in values:
+        fraction = Fraction(repr(value)).limit_denominator(GRID_DENOMINATOR_LIMIT)
+        if abs(float(fraction) - value) > 1e-12 * max(1.0, abs(value)):
+            return None
+        fractions.append(fraction)
+    denominator = lcm(*(f.denominator for f in fractions))
+    unit = Fraction(gcd(*(int(f * denominator) for f in fractions)), denominator)
+    grid = unit.denominator if unit.numerator == 1 else None
+    return grid if grid is not None and grid <= GRID_DENOMINATOR_LIMIT else None
+
+
+def glare_name(context: str, level: int) -> str:
+    """The stimulus-set image of a context's glare level (1-based)."""
+    return f"glare_{context}_{level:02d}"
+
+
+def comparison_terms(context: str, intensity_cd_m2: float, ratio: float) -> list:
+    """The comparison image as a sum of set images: the scene outside the disc and annulus,
+    the disc at ``intensity`` and the annulus at ``ratio × intensity``."""
+    return [
+        (f"scene_{context}_outside", 1.0),
+        ("comparison_disc", intensity_cd_m2),
+        ("comparison_annulus", ratio * intensity_cd_m2),
+    ]
+
+
+def check(p: dict, problems: list[str], folder: Path | None) -> None:
+    """Rules between keys: geometry, contexts, the glare model."""
+    check_display(p["display"], problems)
+    s = p["stimulus"]
+    if s["annulus_outer_px"] <= s["disc_radius_px"]:
+        problems.append("stimulus.annulus_outer_px: must exceed stimulus.disc_radius_px")
+    width, height = p["display"]["resolution_px"]
+    if 2 * s["window_px"] + s["window_gap_px"] > width or s["window_px"] > height:
+        problems.append("stimulus.window_px: two windows and their gap do not fit the display")
+    refresh_hz = p["display"]["refresh_hz"]
+    frame_ms = 1000.0 / refresh_hz
+    tolerance_ms = p["trials"]["timing_tolerance_ms"]
+    for i, shown_ms in enumerate(p["trials"]["presentation_ms"]):
+        frames = round(shown_ms / frame_ms)
+        where = f"trials.presentation_ms[{i}] = {shown_ms:g}"
+        if shown_ms < frame_ms:
+            problems.append(
+                f"{where}: shorter than one frame of the {refresh_hz:g} Hz display "
+                f"({frame_ms:.2f} ms); the flash would last a whole frame"
+            )
+        elif abs(frames * frame_ms - shown_ms) > tolerance_ms:
+            problems.append(
+                f"{where}: not a whole number of {frame_ms:.2f} ms frames at "
+                f"{refresh_hz:g} Hz within trials.timing_tolerance_ms = {tolerance_ms:g} "
+                f"(nearest: {frames} frames, {frames * frame_ms:.2f} ms)"
+            )
+    contexts = p["contexts"] or []
+    names = [c["name"] for c in contexts if c.get("name")]
+    if len(set(names)) != len(names):
+        problems.append(f"contexts: names repeat {sorted(set(names))}: each must be different")
+    for i, context in enumerate(contexts):
+        background = check_background(
+            context.get("background"), f"contexts[{i}].background", problems, folder
+        )
+        if background is not None:
+            context["background"] = background
+    g = p["glare"]
+    check_glare_model(g["model"], g["parameters"], "glare", problems)
+
+
+def columns(protocol) -> tuple[Column, ...]:
+    """The paradigm's CSV columns for this protocol (after the common ones)."""
+    p = protocol.data if hasattr(protocol, "data") else protocol
+    return (
+        Column(
+            "context",
+            str,
+            "context of the block",
+            choices=tuple(c["name"] for c in p["contexts"]),
+        ),
+        Column(
+            "glare_level",
+            int,
+            "glare level (the staircase), from 1",
+            low=1,
+            high=len(p["glare"]["strengths"]),
+        ),
+        Column("strength", float, "source excess over the displayed peak", low=0.0),
+        Column("duration_ms", float, "presentation time asked for", unit="ms", low=0.0),
+        Column("frames", int, "frames shown", low=1),
+        Column("glare_side", str, "side of the glare image", choices=("left", "right")),
+        Column(
+            "disc_fraction",
+            float,
+            "comparison disc intensity, fraction of the maximum",
+            low=0.0,
+            high=1.0,
+        ),
+        Column("response", str, "which looked brighter", choices=("glare", "disc", "neither")),
+        Column("reversal", bool, "this response reversed the staircase's direction"),
+        Column("step_fraction", float, "step size the staircase used after this trial", low=0.0),
+        Column(
+            "offset_s",
+            float,
+            "the flip that ended the flash, on the session clock",
+            unit="s",
+            low=0.0,
+            since="0.2",
+        ),
+        Column(
+            "shown_ms",
+            float,
+            "measured presentation: offset flip minus onset flip",
+            unit="ms",
+            low=0.0,
+            since="0.2",
+        ),
+        Column(
+            "presentation_ok",
+            bool,
+            "no frame dropped and shown_ms within trials.timing_tolerance_ms of the frames asked",
+            since="0.2",
+        ),
+        Column(
+            "counted",
+            bool,
+            "the answer moved its staircase (false: the presentation failed and the protocol "
+            "repeats such trials, trials.repeat_failed_presentations)",
+            since="0.2",
+        ),
+    )

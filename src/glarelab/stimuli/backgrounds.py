@@ -1,0 +1,196 @@
+"""Backgrounds a protocol can put behind its stimulus, by ``kind``:
+
+- ``sky``: the procedural cloudy sky of :mod:`glarelab.stimuli.sky` (Yoshida et al. 2008 used a
+  photograph of a cloudy sky that is not available);
+- ``uniform``: a field of one luminance (Spencer et al. 1995: "a black field");
+- ``lamp``: a desk lamp on a desk in a dark room, drawn procedurally (Spencer §4's context
+  photograph is not available), the bulb at the centre;
+- ``exr``: a linear luminance EXR of the lab's own (cd/m²), at its own pixel size: resampled
+  (bilinear, luminance kept) to the stimulus's pixels and cut from its centre.
+
+Every background is a luminance image in cd/m², drawn from the protocol's seed where it is
+random.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from scipy import ndimage
+
+from glarelab.stimuli.exr import read_exr
+from glarelab.stimuli.sky import cloudy_sky
+
+__all__ = ["ROOM_CD_M2", "background", "lamp_scene"]
+
+ROOM_CD_M2 = 0.05  # a darkened room (Spencer §4)
+
+
+# the RMS contrast a sky delivers may differ from the one asked by sampling (1-2 % at 0.15);
+# more means the ceiling cut its clouds, and the manifest would state a contrast not shown
+CONTRAST_TOLERANCE = 0.1
+
+
+def background(
+    spec: dict,
+    shape: tuple[int, int],
+    *,
+    pixel_deg: float,
+    rng: np.random.Generator,
+    ceiling_cd_m2: float,
+    folder: Path | None = None,
+) -> np.ndarray:
+    """The background ``spec`` (a validated protocol table) as an image of ``shape`` pixels.
+
+    Parameters
+    ----------
+    spec
+        ``kind`` and its keys (:data:`glarelab.protocols.common.BACKGROUNDS`).
+    shape
+        (height, width) in pixels.
+    pixel_deg
+        Visual angle of a pixel, degrees.
+    rng
+        Randomness of procedural backgrounds.
+    ceiling_cd_m2
+        Nothing in the background may exceed this (it would glare itself); the sky is kept
+        under it, other kinds are refused above it.
+    folder
+        Where a relative EXR path is found (the protocol's folder).
+
+    Raises
+    ------
+    ValueError
+        For an unknown kind, an EXR too small for the stimulus, or a background above the
+        ceiling.
+    """
+    kind = spec["kind"]
+    if kind == "sky":
+        image = cloudy_sky(
+            shape,
+            pixel_deg=pixel_deg,
+            rng=rng,
+            mean_cd_m2=spec["mean_cd_m2"],
+            contrast=spec["contrast"],
+            cloud_min_deg=spec["cloud_min_deg"],
+            cloud_max_deg=spec["cloud_max_deg"],
+            slope=spec["spectrum_slope"],
+            ceiling_cd_m2=0.98 * ceiling_cd_m2,
+        )
+        asked, given = spec["contrast"], float(image.std() / image.mean())
+        if asked > 0 and abs(given - asked) > CONTRAST_TOLERANCE * asked:
+            raise ValueError(
+                f"background.contrast = {asked:g}: the sky reaches only {given:.3g} under the "
+                f"ceiling of {0.98 * ceiling_cd_m2:.4g} cd/m² at a mean of "
+                f"{spec['mean_cd_m2']:g} cd/m² (its bright clouds are cut); ask a lower "
+                "contrast or a lower mean"
+            )
+    elif kind == "uniform":
+        image = np.full(shape, float(spec["cd_m2"]))
+    elif kind == "lamp":
+        if shape[0] != shape[1]:
+            raise ValueError(f"a lamp scene is square; shape {shape} is not")
+        image = lamp_scene(shape[0], rng=rng, peak_cd_m2=spec["peak_cd_m2"])["img"]
+    elif kind == "exr":
+        image = _from_exr(spec, shape, pixel_deg=pixel_deg, folder=folder)
+    else:
+        raise ValueError(f"background kind must be sky, uniform, lamp or exr; got {kind!r}")
+    if kind != "sky" and float(image.max(initial=0.0)) > ceiling_cd_m2:
+        raise ValueError(
+            f"the {kind} background reaches {float(image.max()):.4g} cd/m², above "
+            f"{ceiling_cd_m2:g} cd/m² where glare is added: it would glare itself"
+        )
+    return image
+
+
+def _from_exr(spec: dict, shape: tuple[int, int], *, pixel_deg: float, folder) -> np.ndarray:
+    path = Path(spec["path"])
+    if not path.is_absolute() and folder is not None:
+        path = Path(folder) / path
+    image = read_exr(path).astype(np.float64)
+    if image.ndim == 3:  # linear RGB: its luminance (ITU-R BT.709)
+        image = image @ np.array([0.2126, 0.7152, 0.0722])
+    if not np.isfinite(image).all() or image.min() < 0:
+        raise ValueError(f"{path}: a background needs finite luminances >= 0 cd/m²")
+    scale = spec["pixel_deg"] / pixel_deg
+    if not np.isclose(scale, 1.0, rtol=1e-6):
+        image = ndimage.zoom(image, scale, order=1, mode="nearest")  # bilinear
+    height, width = shape
+    if image.shape[0] < height or image.shape[1] < width:
+        field = (height * pixel_deg, width * pixel_deg)
+        have = (image.shape[0] * pixel_deg, image.shape[1] * pixel_deg)
+        raise ValueError(
+            f"{path} covers {have[1]:.3g}° × {have[0]:.3g}°, the stimulus needs "
+            f"{field[1]:.3g}° × {field[0]:.3g}°"
+        )
+    top, left = (image.shape[0] - height) // 2, (image.shape[1] - width) // 2
+    return image[top : top + height, left : left + width].copy()
+
+
+def _polygon_mask(shape: tuple[int, int], vertices: list[tuple[float, float]]) -> np.ndarray:
+    """Pixels whose centres are inside a convex polygon (vertices as (x, y) in px)."""
+    y, x = np.indices(shape) + 0.5
+    inside = np.ones(shape, dtype=bool)
+    n = len(vertices)
+    area = sum(
+        vertices[i][0] * vertices[(i + 1) % n][1] - vertices[(i + 1) % n][0] * vertices[i][1]
+        for i in range(n)
+    )
+    sign = 1.0 if area > 0 else -1.0
+    for i in range(n):
+        (x0, y0), (x1, y1) = vertices[i], vertices[(i + 1) % n]
+        inside &= sign * ((x1 - x0) * (y - y0) - (y1 - y0) * (x - x0)) >= 0
+    return inside
+
+
+def lamp_scene(size: int, *, rng: np.random.Generator, peak_cd_m2: float) -> dict:
+    """A desk lamp on a desk in a dark room, the bulb at the window centre.
+
+    Returns ``img`` (cd/m², the bulb region dark: the source is added separately), and masks
+    ``desk``, ``lamp``. Luminances stay below 15 % of ``peak_cd_m2``.
+    """
+    img = np.full((size, size), ROOM_CD_M2)
+    c = size / 2
+    y, x = np.indices((size, size)) + 0.5
+    # desk top: a trapezoid in perspective over the lower part of the window
+    desk = _polygon_mask(
+        (size, size),
+        [
+            (0.02 * size, size),
+            (0.98 * size, size),
+            (0.85 * size, 0.68 * size),
+            (0.15 * size, 0.68 * size),
+        ],
+    )
+    grain = 1.0 + 0.12 * np.sin(2 * np.pi * (y / (0.035 * size) + 0.6 * np.sin(x / (0.2 * size))))
+    grain *= 1.0 + 0.05 * rng.standard_normal((size, size))
+    light_pool = np.exp(-(((x - c) / (0.3 * size)) ** 2 + ((y - 0.8 * size) / (0.12 * size)) ** 2))
+    desk_l = 0.02 * peak_cd_m2 * grain * (0.2 + light_pool)
+    img = np.where(desk, desk_l, img)
+    # lamp: base on the desk, an arm up to the shade, the shade opening down at the centre
+    base = ((x - 0.7 * size) / (0.1 * size)) ** 2 + ((y - 0.8 * size) / (0.03 * size)) ** 2 <= 1
+    arm_a, arm_b = np.array([0.7 * size, 0.79 * size]), np.array([0.62 * size, 0.42 * size])
+    arm_c = np.array([c + 0.04 * size, c - 0.06 * size])
+    arm = np.zeros((size, size), dtype=bool)
+    for a, b in ((arm_a, arm_b), (arm_b, arm_c)):
+        ab = b - a
+        h = np.clip(((x - a[0]) * ab[0] + (y - a[1]) * ab[1]) / (ab @ ab), 0, 1)
+        arm |= np.hypot(x - a[0] - h * ab[0], y - a[1] - h * ab[1]) <= 0.012 * size
+    shade = _polygon_mask(
+        (size, size),
+        [
+            (c - 0.1 * size, c - 0.005 * size),
+            (c + 0.1 * size, c - 0.005 * size),
+            (c + 0.045 * size, c - 0.12 * size),
+            (c - 0.045 * size, c - 0.12 * size),
+        ],
+    )
+    lamp = base | arm | shade
+    metal = 0.004 * peak_cd_m2 * (1.0 + 0.6 * np.clip((c - y) / size + 0.5, 0, 1))
+    img = np.where(lamp, metal, img)
+    inside_shade = ((x - c) / (0.09 * size)) ** 2 + (
+        (y - c + 0.005 * size) / (0.03 * size)
+    ) ** 2 <= 1
+    img = np.where(inside_shade & (y > c - 0.01 * size), 0.12 * peak_cd_m2, img)  # lit rim
+    return {"img": img, "desk": desk, "lamp": lamp}

@@ -1,0 +1,165 @@
+"""OpenEXR input and output of linear luminance images, always float32.
+
+Half floats overflow at 65,504, far below the luminance of a lamp or the sun (Spencer Fig. 16:
+7.5e8 cd/m²), so images are written as 32-bit float and read back as such.
+"""
+
+from __future__ import annotations
+
+import errno
+from pathlib import Path
+
+import numpy as np
+import OpenEXR
+
+from glarelab.files.atomic import atomic_path
+
+__all__ = ["read_exr", "write_exr"]
+
+EXR_MAGIC = bytes((0x76, 0x2F, 0x31, 0x01))  # the first four bytes of every OpenEXR file
+
+
+def write_exr(path: str | Path, image: np.ndarray) -> Path:
+    """Write a linear image as a float32 OpenEXR file (ZIP compression, lossless), whole or
+    not at all (:func:`glarelab.files.atomic.atomic_path`).
+
+    Parameters
+    ----------
+    path
+        Output file.
+    image
+        ``(H, W)`` luminance, written as channel ``Y``, or ``(H, W, 3)`` linear RGB, written as
+        channels ``R``, ``G``, ``B``. Values must be finite.
+
+    Returns
+    -------
+    pathlib.Path
+        The path written.
+
+    Raises
+    ------
+    ValueError
+        For another shape or non-finite values.
+    """
+    array = np.asarray(image)
+    if not (array.ndim == 2 or (array.ndim == 3 and array.shape[2] == 3)):
+        raise ValueError(
+            f"image must be (H, W) luminance or (H, W, 3) RGB; got shape {array.shape}"
+        )
+    if not np.isfinite(array).all():
+        raise ValueError("image must be finite to be written as EXR; it holds NaN or Inf")
+    array = np.ascontiguousarray(array, dtype=np.float32)
+    channels = {"Y": array} if array.ndim == 2 else {"RGB": array}
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        with atomic_path(path) as temporary, OpenEXR.File(header, channels) as exr:
+            exr.write(str(temporary))  # whole or not at all: an earlier file stays as it was
+    except RuntimeError as error:  # OpenEXR reports a full disk or a closed folder this way
+        text = str(error)
+        code = errno.ENOSPC if "space" in text.lower() else errno.EIO
+        raise OSError(code, f"could not write the EXR file ({text})", str(path)) from None
+    return path
+
+
+# scan lines per chunk of each OpenEXR compression (OpenEXR file layout, "Line offset table")
+LINES_PER_CHUNK = {0: 1, 1: 1, 2: 1, 3: 16, 4: 32, 5: 16, 6: 32, 7: 32, 8: 32, 9: 256}
+
+
+def _truncated(path: Path) -> bool | None:
+    """Whether a single-part scan-line OpenEXR file ends before its last chunk does (the
+    library reads such a file with zeros for the missing lines and only a warning); None
+    when the layout is not one this checks (tiled, multi-part, deep)."""
+
+    length = path.stat().st_size
+    with path.open("rb") as stream:
+        data = stream.read(1 << 20)  # the header and the offset table
+        return _check_layout(data, length, stream)
+
+
+def _check_layout(data: bytes, length: int, stream) -> bool | None:
+    """:func:`_truncated` of a file of ``length`` bytes starting with ``data``."""
+    import struct
+
+    if len(data) < 8 or int.from_bytes(data[4:8], "little") & 0x1A00:  # tiled/deep/multi
+        return None
+    at, compression, window = 8, None, None
+    try:
+        while data[at] != 0:
+            name_end = data.index(b"\0", at)
+            type_end = data.index(b"\0", name_end + 1)
+            size = int.from_bytes(data[type_end + 1 : type_end + 5], "little")
+            name = data[at:name_end]
+            value = data[type_end + 5 : type_end + 5 + size]
+            if name == b"compression":
+                compression = value[0]
+            elif name == b"dataWindow":
+                window = struct.unpack("<4i", value)
+            at = type_end + 5 + size
+    except (ValueError, IndexError, struct.error):
+        return True  # the header itself is cut short
+    if compression not in LINES_PER_CHUNK or window is None:
+        return None
+    lines = window[3] - window[1] + 1
+    chunks = -(-lines // LINES_PER_CHUNK[compression])
+    table = at + 1
+    if table + 8 * chunks > length:
+        return True
+    if table + 8 * chunks > len(data):
+        stream.seek(table)
+        data = data[:table] + stream.read(8 * chunks)
+    offsets = struct.unpack(f"<{chunks}Q", data[table : table + 8 * chunks])
+    for offset in offsets:
+        if offset + 8 > length:
+            return True
+        stream.seek(offset + 4)
+        size = int.from_bytes(stream.read(4), "little")
+        if offset + 8 + size > length:
+            return True
+    return False
+
+
+def read_exr(path: str | Path) -> np.ndarray:
+    """Read an OpenEXR file as a float32 array: ``(H, W)`` for Y, ``(H, W, 3)`` for RGB.
+
+    Raises
+    ------
+    ValueError
+        If the file is not OpenEXR, is damaged, or holds neither a ``Y`` channel nor ``R``,
+        ``G`` and ``B``.
+    FileNotFoundError
+        If the file does not exist.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"no EXR file at {path}")
+    with path.open("rb") as stream:
+        magic = stream.read(4)
+    if magic != EXR_MAGIC:
+        what = "an empty file" if not magic else "not an OpenEXR file (its first bytes differ)"
+        raise ValueError(f"{path} is {what}; give a linear float OpenEXR image")
+    if _truncated(path):
+        raise ValueError(
+            f"{path} cannot be read: it is cut short, ending before its last scan lines (a "
+            "copy or a write that did not finish?); give the complete file"
+        )
+    try:
+        with OpenEXR.File(str(path), separate_channels=True) as exr:
+            channels = {name: np.asarray(c.pixels) for name, c in exr.channels().items()}
+    except (RuntimeError, ValueError, IndexError) as error:  # OpenEXR: the file is damaged
+        raise ValueError(
+            f"{path} cannot be read as OpenEXR (truncated or damaged?): {error}"
+        ) from None
+    if {"R", "G", "B"} <= channels.keys() and "Y" in channels:
+        raise ValueError(
+            f"{path} holds both a Y channel and R, G, B channels; glarelab reads one scene, "
+            "so write the file with either (not both)"
+        )
+    if {"R", "G", "B"} <= channels.keys():
+        return np.stack([channels[c] for c in "RGB"], axis=-1).astype(np.float32, copy=False)
+    if "Y" in channels:
+        return channels["Y"].astype(np.float32, copy=False)
+    raise ValueError(
+        f"{path} must hold a Y channel or R, G, B channels; it holds {sorted(channels)}"
+    )

@@ -1,0 +1,74 @@
+"""The stimuli of each paradigm: one registry for the layer (see docs/extending.md).
+
+A paradigm's stimulus module gives how its images are rendered (``build``), how a session draws
+its first trial's images side by side (``first_row``, which ``glarelab protocol check`` reports
+on the protocol's display), and how a set's profile plots group its images. Every entry names
+all three, so a new paradigm cannot leave one out and be passed over silently.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from glarelab.protocols import Protocol
+from glarelab.stimuli.matching import build_matching, matching_row
+from glarelab.stimuli.night import build_night, night_row, shows_scene
+from glarelab.stimuli.shapes import ImageRow
+from glarelab.stimuli.staircase import build_staircase, staircase_row
+
+__all__ = ["PARADIGMS", "ImageRow", "ParadigmStimuli", "paradigm_stimuli"]
+
+
+@dataclass(frozen=True)
+class ParadigmStimuli:
+    """How a paradigm's stimuli are made and drawn.
+
+    Attributes
+    ----------
+    build
+        ``build(protocol, *, progress)``: the images (cd/m²) with their parameters, the set's
+        geometry and parameters.
+    first_row
+        ``first_row(protocol, display_pixel_deg)``: the first trial's images
+        (:class:`ImageRow`); None when the protocol shows no images.
+    profile_groups
+        (image kind, the key that names a group) of the set's profile plots; None: the
+        paradigm's images have none (a sequence has its preview strips instead).
+    shows
+        ``shows(protocol)``: whether a protocol of the paradigm shows images (and so has a
+        stimulus set; a questionnaire without a scene shows none).
+    """
+
+    build: Callable[..., dict]
+    first_row: Callable[[Protocol, float], ImageRow | None]
+    profile_groups: tuple[str, str] | None
+    shows: Callable[[Protocol], bool]
+
+
+def _always(protocol: Protocol) -> bool:
+    return True
+
+
+PARADIGMS: dict[str, ParadigmStimuli] = {
+    "matching": ParadigmStimuli(build_matching, matching_row, ("reference", "method"), _always),
+    "staircase": ParadigmStimuli(build_staircase, staircase_row, ("glare", "context"), _always),
+    "rating": ParadigmStimuli(build_night, night_row, None, shows_scene),
+}
+
+
+def paradigm_stimuli(protocol: Protocol) -> ParadigmStimuli:
+    """The registry entry of ``protocol``'s paradigm.
+
+    Raises
+    ------
+    ValueError
+        When no stimuli are registered for the paradigm.
+    """
+    try:
+        return PARADIGMS[protocol.paradigm]
+    except KeyError:
+        raise ValueError(
+            f"paradigm {protocol.paradigm!r} has no stimuli registered in "
+            f"glarelab.stimuli.paradigms.PARADIGMS ({', '.join(sorted(PARADIGMS))})"
+        ) from None

@@ -1,0 +1,91 @@
+"""Simple stimulus geometry: a disk of given visual angle on a uniform field, and a row of images
+as a session draws them."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from glarelab.glare._validation import check_positive
+
+__all__ = ["ImageRow", "disk"]
+
+
+def disk(
+    *,
+    field_deg: float,
+    pixel_deg: float,
+    disk_diameter_deg: float,
+    disk_cd_m2: float,
+    background_cd_m2: float,
+) -> dict:
+    """A disk centred on a uniform square field (Yoshida 2008 §3 uses a 0.3° disk).
+
+    Parameters
+    ----------
+    field_deg
+        Side of the square field in degrees, > 0.
+    pixel_deg
+        Visual angle of a pixel in degrees, > 0. The field has an odd number of pixels so the
+        disk has a centre pixel.
+    disk_diameter_deg
+        Diameter of the disk in degrees, > 0.
+    disk_cd_m2, background_cd_m2
+        Luminances in cd/m², >= 0.
+
+    Returns
+    -------
+    dict
+        ``img`` (float64 luminance), ``mask`` (bool, the disk: pixel centres within the
+        radius) and the parameters, in the style of stimupy.
+
+    Examples
+    --------
+    >>> s = disk(field_deg=1.0, pixel_deg=0.1, disk_diameter_deg=0.3,
+    ...          disk_cd_m2=4000.0, background_cd_m2=150.0)
+    >>> s["img"].shape, int(s["mask"].sum())
+    ((11, 11), 9)
+    """
+    field_deg = check_positive("field_deg", field_deg, unit="deg")
+    pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
+    diameter = check_positive("disk_diameter_deg", disk_diameter_deg, unit="deg")
+    for name, value in (("disk_cd_m2", disk_cd_m2), ("background_cd_m2", background_cd_m2)):
+        if not (np.isfinite(value) and value >= 0):
+            raise ValueError(f"{name} must be a finite luminance >= 0 cd/m², got {value!r}")
+    n = round(field_deg / pixel_deg)
+    n += 1 - n % 2
+    y, x = (np.indices((n, n)) - n // 2) * pixel_deg
+    mask = np.hypot(x, y) <= diameter / 2
+    img = np.where(mask, float(disk_cd_m2), float(background_cd_m2))
+    return {
+        "img": img,
+        "mask": mask,
+        "field_deg": n * pixel_deg,
+        "pixel_deg": pixel_deg,
+        "disk_diameter_deg": diameter,
+        "disk_cd_m2": float(disk_cd_m2),
+        "background_cd_m2": float(background_cd_m2),
+    }
+
+
+@dataclass(frozen=True)
+class ImageRow:
+    """The images of a protocol's first trial as a session draws them, side by side.
+
+    Attributes
+    ----------
+    sizes_px
+        (width, height) of each image, pixels, left to right.
+    gap_px
+        Pixels between two images.
+    pixel_deg
+        The protocol's own pixel angle, degrees; None: the display's.
+    notes
+        Where whole pixels depart from the protocol's angles, one sentence each.
+    """
+
+    sizes_px: list[tuple[int, int]]
+    gap_px: int
+    pixel_deg: float | None = None
+    notes: list[str] = field(default_factory=list)

@@ -1,0 +1,576 @@
+"""A stimulus set on disk: what a study shows, exactly reproducible and self-describing.
+
+A set is a folder with, for every image, float32 linear luminance (``NAME.exr``, cd/m²) and
+the display codes that show it through the calibration (``NAME.png``, 16-bit greyscale:
+the codes scaled to the full 16-bit range, ``round(code × 65535 / (2^bits − 1))``, with an
+``sBIT`` chunk recording the display's bit depth, so any viewer shows the image as the display
+does and :func:`read_png_codes` gives back the exact codes); luminance-profile plots through the
+disk centre (``profiles_*.png``, like Yoshida et al.'s Figure 3); ``README.md``, an index of
+the files and images; and ``manifest.json``: the validated protocol and its hash, the
+calibration and its hash, the geometry, every image's parameters and encoding report, the
+package versions, and the sha256 of every file. Nothing in it depends on the time or the
+place of the build, so the same protocol and calibration give identical files.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import shutil
+import struct
+import sys
+import zlib
+from importlib import metadata
+from pathlib import Path
+
+import numpy as np
+from PIL import Image
+from PIL.PngImagePlugin import PngInfo
+
+from glarelab.display.calibration import Calibration, synthetic_calibration
+from glarelab.files.atomic import atomic_path, write_bytes, write_text
+from glarelab.files.folders import (
+    LISTING,
+    check_replaceable,
+    record_files,
+    replace_folder,
+    staging_folder,
+)
+from glarelab.protocols import Protocol
+from glarelab.stimuli.exr import read_exr, write_exr
+from glarelab.stimuli.paradigms import paradigm_stimuli
+
+__all__ = [
+    "StimulusSet",
+    "build_stimulus_set",
+    "cached_stimulus_set",
+    "compose",
+    "default_calibration",
+    "package_versions",
+    "progress_bar",
+    "read_png_codes",
+    "shows_images",
+    "verify_stimulus_set",
+    "write_codes",
+]
+
+MANIFEST = "manifest.json"
+INDEX = "README.md"
+FORMAT = "glarelab stimulus set v3"  # v3: PNGs scaled to 16 bits with sBIT, README.md
+PNG_MAX = 65535
+PACKAGES = ("numpy", "scipy", "colour-science", "OpenEXR", "matplotlib", "pillow", "glarelab")
+
+
+def shows_images(protocol: Protocol) -> bool:
+    """Whether the protocol shows images (and so has a stimulus set): its paradigm has a
+    builder, and the builder takes this protocol (a questionnaire without a scene shows none)."""
+    return bool(paradigm_stimuli(protocol).shows(protocol))
+
+
+def progress_bar(done: int, total: int, what: str, *, stream=None) -> None:
+    """A one-line text progress bar on stderr."""
+    stream = stream or sys.stderr
+    width = 30
+    filled = round(width * done / total) if total else width
+    print(
+        f"\r[{'#' * filled}{'-' * (width - filled)}] {done}/{total} {what:<28}",
+        end="\n" if done >= total else "",
+        file=stream,
+        flush=True,
+    )
+
+
+def _write_rgb16_png(path: str | Path, scaled: np.ndarray, bit_depth: int) -> None:
+    """``(H, W, 3)`` uint16 as a 16-bit RGB PNG with an ``sBIT`` chunk (Pillow writes 16-bit
+    greyscale but not 16-bit RGB): PNG specification (ISO/IEC 15948) IHDR with bit depth 16 and
+    colour type 2, sBIT of three channels, big-endian samples, filter type 0 on every row, one
+    zlib-compressed IDAT."""
+    height, width, _ = scaled.shape
+    rows = np.ascontiguousarray(scaled.astype(">u2")).reshape(height, width * 3).view(np.uint8)
+    raw = np.concatenate([np.zeros((height, 1), np.uint8), rows], axis=1).tobytes()
+
+    def chunk(kind: bytes, data: bytes) -> bytes:
+        body = kind + data
+        return struct.pack(">I", len(data)) + body + struct.pack(">I", zlib.crc32(body))
+
+    header = struct.pack(">IIBBBBB", width, height, 16, 2, 0, 0, 0)
+    write_bytes(
+        path,
+        b"\x89PNG\r\n\x1a\n"
+        + chunk(b"IHDR", header)
+        + chunk(b"sBIT", bytes([bit_depth] * 3))
+        + chunk(b"IDAT", zlib.compress(raw, 6))
+        + chunk(b"IEND", b""),
+    )
+
+
+def write_codes(path: str | Path, codes: np.ndarray, bit_depth: int) -> None:
+    """Write display codes as a 16-bit PNG that any viewer shows (greyscale; RGB for an
+    ``(H, W, 3)`` colour image): the codes scaled to
+    the full 16-bit range, ``round(code × 65535 / (2^bit_depth − 1))``, with an ``sBIT`` chunk
+    recording ``bit_depth`` (PNG specification §11.3.4.4: the scaling it recommends, which
+    keeps the code in the top ``bit_depth`` bits).
+
+    Raises
+    ------
+    ValueError
+        For a ``bit_depth`` outside 1-16, or codes outside 0 … 2^bit_depth − 1.
+    """
+    if not 1 <= bit_depth <= 16:
+        raise ValueError(f"bit_depth must be 1-16; got {bit_depth!r}")
+    top = 2**bit_depth - 1
+    codes = np.asarray(codes)
+    if codes.size and (codes.min() < 0 or codes.max() > top):
+        raise ValueError(
+            f"codes must be in [0, {top}] for bit_depth {bit_depth}; got "
+            f"{codes.min()}-{codes.max()}"
+        )
+    scaled = np.floor(codes.astype(np.float64) * PNG_MAX / top + 0.5).astype(np.uint16)
+    if scaled.ndim == 3:  # a colour image: 16-bit RGB
+        _write_rgb16_png(path, scaled, bit_depth)
+        return
+    info = PngInfo()
+    info.add(b"sBIT", bytes([bit_depth]))
+    with atomic_path(path) as temporary:
+        Image.fromarray(scaled).save(temporary, format="PNG", pnginfo=info)
+
+
+def _sbit(data: bytes) -> int | None:
+    """The significant bits of a PNG's sBIT chunk, its first channel's (None without one;
+    :func:`write_codes` gives every channel the same)."""
+    position = 8  # after the signature
+    while position + 8 <= len(data):
+        length = int.from_bytes(data[position : position + 4], "big")
+        kind = data[position + 4 : position + 8]
+        if kind == b"sBIT":
+            return data[position + 8]
+        if kind == b"IDAT":
+            return None  # sBIT precedes the image data
+        position += 12 + length
+    return None
+
+
+def read_png_codes(path: str | Path) -> tuple[np.ndarray, int]:
+    """The display codes of a set's PNG, greyscale ``(H, W)`` or colour ``(H, W, 3)``, and the
+    bit depth its ``sBIT`` chunk records (:func:`write_codes`); a PNG without one holds the
+    codes unscaled (16 bits).
+
+    The PNG is decoded by pypng, which reads every sample at the file's own bit depth: Pillow
+    opens a 16-bit RGB PNG as 8-bit RGB (it has no 16-bit colour mode), which would turn a
+    colour image's codes into their top byte.
+
+    Raises
+    ------
+    ValueError
+        For a PNG that is not 16-bit greyscale or RGB (not a set's codes), naming the file.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> path = Path(tempfile.mkdtemp()) / "codes.png"
+    >>> write_codes(path, np.array([[0, 1, 512, 1023]]), 10)
+    >>> codes, bits = read_png_codes(path)
+    >>> codes.tolist(), bits, np.asarray(Image.open(path)).tolist()
+    ([[0, 1, 512, 1023]], 10, [[0, 64, 32800, 65535]])
+    >>> write_codes(path, np.array([[[0, 734, 1023]]]), 10)  # a colour pixel
+    >>> read_png_codes(path)[0].tolist()
+    [[[0, 734, 1023]]]
+    """
+    import png  # pypng
+
+    data = Path(path).read_bytes()
+    try:
+        width, height, pixels, info = png.Reader(bytes=data).read_flat()
+    except png.Error as error:
+        raise ValueError(f"{path}: not a PNG of display codes ({error})") from None
+    planes = int(info["planes"])
+    if info["bitdepth"] != 16 or planes not in (1, 3) or info.get("palette"):
+        raise ValueError(
+            f"{path}: a set's codes are 16-bit greyscale or RGB; this PNG has "
+            f"{info['bitdepth']}-bit samples in {planes} channel(s)"
+        )
+    values = np.asarray(pixels, dtype=np.int64).reshape(height, width, planes)
+    if planes == 1:
+        values = values[..., 0]
+    bits = _sbit(data)
+    if bits is None or bits == 16:
+        return values.astype(np.uint16), 16
+    top = 2**bits - 1
+    return (values * top * 2 // PNG_MAX + 1) // 2, bits  # round(v × top / 65535), exactly
+
+
+def _sha256(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def default_calibration(protocol: Protocol) -> Calibration:
+    """The synthetic calibration of the protocol's display (gamma 2.2; marked synthetic)."""
+    d = protocol["display"]
+    return synthetic_calibration(
+        max_cd_m2=d["max_cd_m2"],
+        black_cd_m2=d["black_cd_m2"],
+        bit_depth=d["bit_depth"],
+        label=f"SYNTHETIC calibration of '{d['name']}' from its protocol (gamma 2.2)",
+    )
+
+
+def package_versions(names=PACKAGES) -> dict[str, str]:
+    """Installed versions of ``names`` (``'not installed'`` where absent), for provenance."""
+    versions = {}
+    for name in names:
+        try:
+            versions[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            versions[name] = "not installed"
+    return versions
+
+
+def _profile_plots(
+    out: Path, groups_by: tuple[str, str], images: dict, geometry: dict
+) -> list[str]:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    written = []
+    pixel = geometry["pixel_deg"]
+    kind, key = groups_by
+    groups: dict[str, list] = {}
+    for name, info in images.items():
+        if info["kind"] == kind:
+            groups.setdefault(info[key], []).append((name, info))
+    for group, members in groups.items():
+        figure, axes = plt.subplots(2, len(members), figsize=(2.0 * len(members), 4.2), dpi=110)
+        axes = np.atleast_2d(axes).reshape(2, len(members))
+        for column, (_name, info) in enumerate(members):
+            img = info["img"]
+            row = img.shape[0] // 2
+            axes[0, column].imshow(img, cmap="gray", vmin=0, vmax=img.max() or 1)
+            axes[0, column].set_axis_off()
+            label = info.get("label") or f"{info.get('level', '')}"
+            axes[0, column].set_title(label, fontsize=9)
+            offsets = (np.arange(img.shape[1]) - img.shape[1] // 2) * pixel
+            axes[1, column].plot(offsets, img[row], lw=0.8)
+            axes[1, column].set_xlabel("deg", fontsize=7)
+            axes[1, column].tick_params(labelsize=6)
+        axes[1, 0].set_ylabel("cd/m²", fontsize=8)
+        figure.suptitle(f"{key} {group}: images and profiles through the centre", fontsize=10)
+        figure.tight_layout()
+        name = f"profiles_{group}.png"
+        with atomic_path(out / name) as temporary:
+            figure.savefig(temporary, format="png", metadata={"Software": None})
+        plt.close(figure)
+        written.append(name)
+    return written
+
+
+def build_stimulus_set(
+    protocol: Protocol,
+    out: str | Path,
+    *,
+    calibration: Calibration | None = None,
+    progress=progress_bar,
+    accept_mismatch: bool = False,
+) -> dict:
+    """Build a study's stimulus set into folder ``out`` and return its manifest.
+
+    Parameters
+    ----------
+    protocol
+        A validated protocol of a paradigm that shows images (matching, staircase).
+    out
+        Output folder: new, empty, or an earlier stimulus set, which is replaced whole once
+        the new set is complete (a folder holding anything else is refused).
+    calibration
+        The display calibration; default: the protocol display's synthetic calibration, which
+        the manifest marks as synthetic.
+    progress
+        ``progress(done, total, what)``; default a text bar on stderr; None for silence.
+    accept_mismatch
+        Build although the calibration's white is not the protocol display's (a set for
+        another display, knowingly; sessions check again).
+
+    Raises
+    ------
+    ValueError
+        For a protocol without stimuli, a calibration whose bit depth is not the display's or
+        (unless ``accept_mismatch``) whose white is not its ``max_cd_m2`` within its
+        ``white_tolerance`` (:func:`glarelab.display.checks.check_calibration`: the images
+        would be encoded for another display, most of their pixels clipped), or an ``out``
+        that is a file or a folder holding something other than a stimulus set.
+    """
+    if not shows_images(protocol):
+        raise ValueError(
+            f"the {protocol.study} protocol's paradigm ({protocol.paradigm}) shows no images: "
+            "there is no stimulus set to build"
+        )
+    calibration = calibration or default_calibration(protocol)
+    if calibration.bit_depth != protocol["display"]["bit_depth"]:
+        raise ValueError(
+            f"the calibration is for a {calibration.bit_depth}-bit display, the protocol's "
+            f"display is {protocol['display']['bit_depth']}-bit"
+        )
+    from glarelab.display.checks import check_calibration
+
+    (fits,) = check_calibration(protocol, calibration)
+    if not fits.passed and not accept_mismatch:
+        raise ValueError(
+            f"the calibration is not of the {protocol.study} protocol's display: it is "
+            f"{fits.actual}, the protocol asks for {fits.expected}; the set would be encoded "
+            "for another display (luminances above its white clipped). Calibrate the "
+            "protocol's display, edit the protocol's [display] for yours, or build anyway with "
+            "--accept-mismatch calibration (sessions check again)"
+        )
+    if (
+        Path(out).is_dir()
+        and not (Path(out) / LISTING).exists()
+        and (Path(out) / MANIFEST).is_file()
+        and not verify_stimulus_set(out)
+    ):
+        record_files(Path(out), "stimulus set")  # a whole set of an earlier version: its own
+    final = check_replaceable(out, kind="stimulus set", what="stimulus set")
+    built = paradigm_stimuli(protocol).build(protocol, progress=progress)
+    out = staging_folder(final)
+    try:
+        manifest = _write_set(out, protocol, built, calibration)
+        replace_folder(out, final, kind="stimulus set")
+    finally:
+        shutil.rmtree(out, ignore_errors=True)
+    return manifest
+
+
+def _write_set(out: Path, protocol: Protocol, built: dict, calibration: Calibration) -> dict:
+    images = built["images"]
+    records = {}
+    for name, info in images.items():
+        # the luminances as the EXR keeps them (float32): its PNG codes are their encoding,
+        # the codes a session encodes from the EXR
+        img = np.asarray(info["img"], dtype=np.float32).astype(np.float64)
+        write_exr(out / f"{name}.exr", img.astype(np.float32))
+        files = [f"{name}.exr"]
+        record = {k: v for k, v in info.items() if k != "img"}
+        if info["kind"] != "component":  # display luminances: encode them for the display
+            codes, report = calibration.encode(img)
+            write_codes(out / f"{name}.png", codes, calibration.bit_depth)
+            files.append(f"{name}.png")
+            record["encoding"] = {
+                "above_max": report.above_max,
+                "below_black": report.below_black,
+                "max_error_cd_m2": report.max_error_cd_m2,
+            }
+        record["files"] = files
+        record["shape"] = list(img.shape)
+        records[name] = record
+    groups_by = paradigm_stimuli(protocol).profile_groups
+    plots = _profile_plots(out, groups_by, images, built["geometry"]) if groups_by else []
+    for name, pixels in sorted(built.get("previews", {}).items()):  # a sequence at a glance
+        with atomic_path(out / name) as temporary:
+            Image.fromarray(pixels).save(temporary, format="PNG")
+        plots.append(name)
+    write_text(out / INDEX, _index(protocol, calibration, records, plots, built["geometry"]))
+    files = sorted(f for r in records.values() for f in r["files"]) + plots + [INDEX]
+    manifest = {
+        "format": FORMAT,
+        "study": protocol.study,
+        "paradigm": protocol.paradigm,
+        "protocol": protocol.data,
+        "protocol_sha256": protocol.sha256,
+        "calibration": calibration.to_json(),
+        "calibration_sha256": hashlib.sha256(
+            json.dumps(calibration.to_json(), sort_keys=True).encode()
+        ).hexdigest(),
+        "seed": protocol.seed,
+        "geometry": built["geometry"],
+        "parameters": built["parameters"],
+        "images": records,
+        "plots": plots,
+        "packages": package_versions(),
+        "files": {f: _sha256(out / f) for f in files},
+    }
+    write_text(out / MANIFEST, json.dumps(manifest, indent=2, sort_keys=True) + "\n")
+    return manifest
+
+
+def _index(protocol: Protocol, calibration: Calibration, records: dict, plots, geometry) -> str:
+    """The set's README.md: what each file holds, how to read the PNGs, and every image."""
+    top = 2**calibration.bit_depth - 1
+    colour = any(len(record["shape"]) == 3 for record in records.values())
+    exr = (
+        "linear RGB in cd/m², channels `R`, `G`, `B`"
+        if colour
+        else ("linear luminance in cd/m², channel `Y`")
+    )
+    png = "16-bit RGB" if colour else "16-bit greyscale"
+    lines = [
+        f"# Stimulus set: {protocol.title}",
+        "",
+        f"Built by glarelab from the protocol `{protocol.study}` (sha256 "
+        f"`{protocol.sha256[:16]}…`) for a {calibration.bit_depth}-bit display, "
+        f"{calibration.black_cd_m2:.4g}-{calibration.max_cd_m2:.4g} cd/m² (calibration status "
+        f"`{calibration.status}`). `manifest.json` holds every parameter and the sha256 of "
+        "every file; `glarelab stimuli verify FOLDER` checks them.",
+        "",
+        "## Files",
+        "",
+        f"- `NAME.exr`: the image's {exr} (float32 OpenEXR), before the display.",
+        f"- `NAME.png`: the drive codes that show it on the display, 0-{top}, through the "
+        f"calibration. {png} scaled to the full 16-bit range, "
+        f"`value = round(code × 65535 / {top})`, with an `sBIT` chunk recording the true bit "
+        f"depth ({calibration.bit_depth}): an image viewer shows the image as the display "
+        f"does (for a display of gamma about 2.2); the codes are `round(value × {top} / "
+        f"65535)` (or `value >> {16 - calibration.bit_depth}`), as "
+        "`glarelab.stimuli.stimulus_set.read_png_codes` reads them. Images the sessions "
+        "compose from parts (kind `component`) have no PNG.",
+        "- `profiles_*.png`: the images with their luminance profile through the centre.",
+        "",
+        "## Images",
+        "",
+        "| file | kind | parameters | size (px) |",
+        "| --- | --- | --- | --- |",
+    ]
+    for record in records.values():
+        parameters = ", ".join(
+            f"{k} = {v:g}" if isinstance(v, float) else f"{k} = {v}"
+            for k, v in record.items()
+            if k not in ("kind", "files", "shape", "encoding")
+        )
+        files = ", ".join(f"`{f}`" for f in record["files"])
+        shape = " × ".join(str(x) for x in record["shape"][:2][::-1])
+        lines.append(f"| {files} | {record['kind']} | {parameters} | {shape} |")
+    lines += ["", f"Geometry: {', '.join(f'{k} = {v}' for k, v in geometry.items())}.", ""]
+    if plots:
+        lines += ["Profile plots: " + ", ".join(f"`{p}`" for p in plots) + ".", ""]
+    return "\n".join(lines)
+
+
+def _manifest_of(folder: Path) -> dict:
+    """The set's manifest, checked to be a JSON object that lists its files."""
+    path = folder / MANIFEST
+    if not path.is_file():
+        raise ValueError(f"{path}: missing (not a stimulus set?)")
+    try:
+        manifest = json.loads(path.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError) as error:
+        raise ValueError(f"{path}: not valid JSON ({error})") from None
+    if not isinstance(manifest, dict):
+        raise ValueError(f"{path}: must be a JSON object; it is a {type(manifest).__name__}")
+    files = manifest.get("files")
+    if not isinstance(files, dict) or not files:
+        raise ValueError(f"{path}: must list the set's files and their sha256 under 'files'")
+    for name, digest in files.items():
+        unsafe = Path(name).is_absolute() or len(Path(name).parts) != 1 or name in (".", "..")
+        if unsafe or not isinstance(digest, str):
+            raise ValueError(f"{path}: the file entry {name!r} is not a file name of the set")
+    return manifest
+
+
+def verify_stimulus_set(folder: str | Path) -> list[str]:
+    """Check a stimulus set: the manifest is a JSON object listing every file, and the folder
+    holds exactly those files, each with its recorded sha256.
+
+    Returns
+    -------
+    list of str
+        The problems, each naming the file: missing, changed, or not in the manifest (empty
+        when the set is intact).
+    """
+    folder = Path(folder)
+    if not folder.is_dir():
+        return [f"{folder}: not a folder"]
+    try:
+        manifest = _manifest_of(folder)
+    except ValueError as error:
+        return [str(error)]
+    problems = []
+    listed = manifest["files"]
+    for name, expected in sorted(listed.items()):
+        path = folder / name
+        if not path.is_file():
+            problems.append(f"{name}: missing")
+        elif _sha256(path) != expected:
+            problems.append(f"{name}: changed (sha256 differs from the manifest)")
+    for path in sorted(folder.iterdir()):
+        if path.name not in listed and path.name not in (MANIFEST, LISTING):
+            problems.append(f"{path.name}: not in the manifest (added after the build?)")
+    images = manifest.get("images")
+    if isinstance(images, dict):
+        for name, record in sorted(images.items()):
+            for file in record.get("files", []) if isinstance(record, dict) else []:
+                if file not in listed:
+                    problems.append(f"{file}: image {name}'s file is not hashed in the manifest")
+                if Path(file).stem != name:  # a build names each image's file after it
+                    problems.append(f"{MANIFEST}: image {name} points at {file} (edited?)")
+    else:
+        problems.append(f"{MANIFEST}: has no table of images")
+    # the protocol the set was built from is hashed as glarelab.protocols.core hashes it
+    canonical = json.dumps(manifest.get("protocol"), sort_keys=True, separators=(",", ":"))
+    if hashlib.sha256(canonical.encode()).hexdigest() != manifest.get("protocol_sha256"):
+        problems.append(
+            f"{MANIFEST}: its protocol table does not hash to its protocol_sha256 (edited?)"
+        )
+    return problems
+
+
+def compose(terms, image) -> np.ndarray:
+    """The image ``Σ weight × image(name)`` of ``terms``, ``[(name, weight), …]``: how sessions
+    show images that depend on a setting (a target's disk, a staircase's disc) from the set's
+    components."""
+    total = None
+    for name, weight in terms:
+        part = image(name) * float(weight)
+        total = part if total is None else total + part
+    if total is None:
+        raise ValueError("terms must name at least one image")
+    return total
+
+
+class StimulusSet:
+    """A built stimulus set, read back: its manifest and its images (float64 cd/m², read once).
+
+    Parameters
+    ----------
+    folder
+        The set's folder (verify it first: :func:`verify_stimulus_set`).
+    """
+
+    def __init__(self, folder: str | Path):
+        self.folder = Path(folder)
+        self.manifest = _manifest_of(self.folder)
+        self.geometry = self.manifest["geometry"]
+        self._images: dict[str, np.ndarray] = {}
+
+    def image(self, name: str) -> np.ndarray:
+        if name not in self._images:
+            self._images[name] = self.read(name)
+        return self._images[name]
+
+    def read(self, name: str) -> np.ndarray:
+        """An image read from its file, not kept (a sequence's frames are shown once)."""
+        return read_exr(self.folder / f"{name}.exr").astype(np.float64)
+
+    def compose(self, terms) -> np.ndarray:
+        return compose(terms, self.image)
+
+
+def cached_stimulus_set(
+    protocol: Protocol, *, root: Path | None = None, progress=progress_bar
+) -> Path:
+    """The protocol's stimulus set with its display's synthetic calibration, built once into a
+    cache folder and reused while it verifies (simulated sessions need the images, not a lab
+    calibration).
+
+    ``root`` defaults to ``$GLARELAB_CACHE`` or ``~/.cache/glarelab``; the set is
+    ``ROOT/sets/STUDY-SHA``, named by the protocol's hash.
+    """
+    if root is None:
+        root = Path(os.environ.get("GLARELAB_CACHE") or Path.home() / ".cache" / "glarelab")
+    folder = Path(root) / "sets" / f"{protocol.study}-{protocol.sha256[:16]}"
+    if (folder / MANIFEST).is_file() and not verify_stimulus_set(folder):
+        return folder
+    shutil.rmtree(folder, ignore_errors=True)  # the cache's own folder, damaged: rebuilt
+    build_stimulus_set(
+        protocol, folder, calibration=default_calibration(protocol), progress=progress
+    )
+    return folder

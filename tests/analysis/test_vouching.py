@@ -1,0 +1,288 @@
+"""The analysis vouches for each session it counts: pilots left out (and listed), sessions of
+another protocol, set, calibration or participant refused with the reason, row order
+irrelevant, trials missing or given twice named, impossible values refused with file and line,
+two sessions of one participant named; and a property test that shuffles, duplicates and
+truncates the rows of real session files: the analysis gives the untouched result or refuses
+naming the row."""
+
+import json
+import random
+import re
+import shutil
+import tempfile
+from pathlib import Path
+
+import pandas as pd
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from glarelab.analysis.dataset import DataError
+from glarelab.analysis.load import load_sessions
+from glarelab.analysis.paradigms import PARADIGMS
+from glarelab.analysis.report import write_report
+from glarelab.protocols import load_protocol
+
+
+def csvs(folder, study):
+    return sorted(folder.glob(f"*_{study}_s*.csv"))
+
+
+def copy_session(source: Path, folder: Path, *, name=None, rows=None, sidecar=None) -> Path:
+    """A copy of a session's CSV and sidecar in ``folder``: ``name`` its new file name,
+    ``rows`` changes its text lines, ``sidecar`` its sidecar's keys."""
+    target = folder / (name or source.name)
+    lines = source.read_text().splitlines(keepends=True)
+    target.write_text("".join(rows(lines) if rows else lines))
+    data = json.loads(source.with_suffix(".json").read_text())
+    if sidecar is not None:
+        data |= sidecar
+    target.with_suffix(".json").write_text(json.dumps(data))
+    return target
+
+
+def renamed(lines, old, new):
+    return [line.replace(f",{old},", f",{new},") for line in lines]
+
+
+def tables(protocol, files):
+    return PARADIGMS[protocol.paradigm].tests(load_sessions(protocol, files), protocol)
+
+
+@pytest.fixture
+def yoshida(simulated):
+    return load_protocol("yoshida2008"), csvs(simulated, "yoshida2008")
+
+
+def test_a_pilot_is_left_out_listed_and_analysed_only_when_asked(yoshida, tmp_path):
+    protocol, files = yoshida
+    source = files[0]
+    pilot = copy_session(
+        source,
+        tmp_path,
+        name=source.name.replace("sim01", "pil01").replace(".csv", "_pilot.csv"),
+        rows=lambda lines: renamed(lines, "sim01", "pil01"),
+        sidecar={"pilot": True, "participant": "pil01"},
+    )
+    dataset = load_sessions(protocol, [*files, pilot])
+    assert "pil01" not in set(dataset.trials["participant"])
+    assert [Path(s["file"]).name for s in dataset.pilots] == [pilot.name]
+    included = load_sessions(protocol, [*files, pilot], include_pilots=True)
+    assert "pil01" in set(included.trials["participant"]) and included.pilots_included
+    report = write_report(protocol, [*files, pilot], tmp_path / "report")
+    html = report.read_text()
+    assert "Pilot sessions, left out of the analysis (--include-pilots analyses them)" in html
+    assert pilot.name in html
+    assert "Analysis of 10 " in html  # the ten participants, not the pilot
+    with pytest.raises(DataError, match="every session given is a pilot"):
+        load_sessions(protocol, [pilot])
+    # a pilot's file renamed to look like a participant's is still a pilot (its sidecar)
+    hidden = copy_session(pilot, tmp_path, name=pilot.name.replace("_pilot", ""))
+    with pytest.raises(DataError, match="the file name says not a pilot, its sidecar says pilot"):
+        load_sessions(protocol, [*files, hidden])
+
+
+@pytest.mark.parametrize(
+    ("change", "named"),
+    [
+        ({"protocol_sha256": "0" * 64}, "ran with protocol sha256 000000000000…"),
+        ({"study": "spencer1995"}, "study 'spencer1995', but the data are analysed as"),
+        ({"participant": "sim07"}, "participant 'sim07', but its CSV's rows say sim01"),
+        (
+            {"images_encoded_with": {"readings_sha256": "a" * 64, "source": "session"},
+             "calibration": {"readings_sha256": "b" * 64}},
+            "the session's calibration (readings bbbbbbbbbbbb…) is not the one its images",
+        ),
+        ({"trials": 16}, "trial 16 of the 16 the completed session recorded missing"),
+    ],
+)  # fmt: skip
+def test_a_sidecar_that_disagrees_is_refused_with_the_reason(yoshida, tmp_path, change, named):
+    protocol, files = yoshida
+    bad = copy_session(files[0], tmp_path, sidecar=change)
+    with pytest.raises(DataError, match=re.escape(named)):
+        load_sessions(protocol, [bad, *files[1:]])
+
+
+def test_a_session_of_another_stimulus_set_is_refused(yoshida):
+    protocol, files = yoshida
+    other = {"manifest_sha256": "c" * 64, "readings_sha256": None}
+    with pytest.raises(DataError, match=r"ran on the stimulus set with manifest sha256 .* the "
+                       r"analysis is given cccccccccccc…"):  # fmt: skip
+        load_sessions(protocol, files, stimuli=other)
+
+
+def test_a_file_renamed_to_another_participant_is_refused(yoshida, tmp_path):
+    protocol, files = yoshida
+    moved = copy_session(files[0], tmp_path, name=files[0].name.replace("sim01", "sim11"))
+    with pytest.raises(
+        DataError, match="the file name says participant sim11, its rows say sim01"
+    ):
+        load_sessions(protocol, [moved, *files[1:]])
+
+
+def test_a_sidecar_that_is_a_folder_is_refused(yoshida, tmp_path):
+    protocol, files = yoshida
+    target = tmp_path / files[0].name
+    shutil.copy(files[0], target)
+    target.with_suffix(".json").mkdir()
+    with pytest.raises(DataError, match=r"\.json: not a file \(a folder\?\)"):
+        load_sessions(protocol, [target])
+
+
+def test_rows_in_any_order_give_the_same_analysis(yoshida, tmp_path):
+    protocol, files = yoshida
+    rng = random.Random(3)
+
+    def shuffled(lines):
+        body = lines[1:]
+        rng.shuffle(body)
+        return [lines[0], *body]
+
+    mixed = [copy_session(f, tmp_path, rows=shuffled) for f in files]
+    before, after = tables(protocol, files), tables(protocol, list(reversed(mixed)))
+    for name in before:
+        pd.testing.assert_frame_equal(before[name], after[name], check_exact=True)
+
+
+@pytest.mark.parametrize(
+    ("edit", "named"),
+    [
+        (lambda lines: [*lines, lines[5]], r"line 17: duplicated trial .*trial 5\), also on line 6"),
+        (lambda lines: lines[:6] + lines[7:], r"trial 6 of 15 missing"),
+        (lambda lines: lines[1:] + lines[:1], r"line 16: the header is on line 16, not the first"),
+        (lambda lines: [*lines[:8], lines[0], *lines[8:]], r"line 9: the header repeated"),
+        (lambda lines: [*lines[:-1], lines[-1].rstrip("\n")], r"line 16: the file ends inside"),
+    ],
+)  # fmt: skip
+def test_rows_deleted_repeated_or_moved_are_named(yoshida, tmp_path, edit, named):
+    protocol, files = yoshida
+    bad = copy_session(files[0], tmp_path, rows=edit)
+    with pytest.raises(DataError, match=named):
+        load_sessions(protocol, [bad, *files[1:]])
+
+
+def _set_cell(lines, line, column, value):
+    header = lines[0].rstrip("\n").split(",")
+    cells = lines[line - 1].rstrip("\n").split(",")
+    cells[header.index(column)] = value
+    lines[line - 1] = ",".join(cells) + "\n"
+    return lines
+
+
+@pytest.mark.parametrize(
+    ("column", "value", "named"),
+    [
+        ("time_s", "inf", "line 5, column time_s: 'inf' is not a finite number"),
+        ("onset_s", "inf", "line 5, column onset_s: 'inf' is not a finite number"),
+        ("block", "Training", "line 5, column block: 'Training' is not a block of this protocol"),
+    ],
+)
+def test_impossible_values_are_refused_with_file_and_line(yoshida, tmp_path, column, value, named):
+    protocol, files = yoshida
+    bad = copy_session(files[0], tmp_path, rows=lambda lines: _set_cell(lines, 5, column, value))
+    with pytest.raises(DataError, match=re.escape(named)):
+        load_sessions(protocol, [bad, *files[1:]])
+
+
+def test_a_last_row_cut_inside_its_comment_is_refused(simulated, tmp_path):
+    protocol = load_protocol("luidolt2020")
+    files = csvs(simulated, "luidolt2020")
+
+    def cut(lines):
+        lines[-1] = lines[-1].rstrip("\n") + '"a comment, cut in the'
+        return lines
+
+    bad = copy_session(files[0], tmp_path, rows=cut)
+    with pytest.raises(DataError, match=r"line 7: not readable as CSV .*a row cut short"):
+        load_sessions(protocol, [bad, *files[1:]])
+
+
+def test_a_file_of_a_format_that_has_counted_must_have_it(simulated, tmp_path):
+    protocol = load_protocol("spencer1995")
+    source = csvs(simulated, "spencer1995")[0]
+    frame = pd.read_csv(source, keep_default_na=False, dtype=str).drop(columns="counted")
+    frame.to_csv(tmp_path / source.name, index=False)
+    shutil.copy(source.with_suffix(".json"), (tmp_path / source.name).with_suffix(".json"))
+    with pytest.raises(
+        DataError, match=r"missing \['counted'\] \(its sidecar says data format 0\.4, whose files"
+    ):
+        load_sessions(protocol, [tmp_path / source.name])
+    sidecar = json.loads(source.with_suffix(".json").read_text()) | {"data_format": "0.1"}
+    (tmp_path / source.name).with_suffix(".json").write_text(json.dumps(sidecar))
+    assert load_sessions(protocol, [tmp_path / source.name]).trials["counted"].all()
+
+
+def test_two_sessions_of_one_participant_are_named(yoshida, tmp_path):
+    protocol, files = yoshida
+    second = copy_session(
+        files[0],
+        tmp_path,
+        name=files[0].name.replace("_s1_", "_s2_"),
+        rows=lambda lines: (
+            [lines[0]] + [line.replace(",sim01,1,", ",sim01,2,") for line in lines[1:]]
+        ),
+        sidecar={"session": 2},
+    )
+    with pytest.raises(DataError, match=r"participant sim01: 2 sessions in 2 files: .*\(session "
+                       r"1\), .*_s2_.*\(session 2\); the analysis takes one session per"):  # fmt: skip
+        load_sessions(protocol, [*files, second])
+
+
+# ------------------------------------------------------------------ the property test
+STUDIES = ("yoshida2008", "spencer1995", "luidolt2020")
+NAMED = re.compile(r"line \d+|trials? \d+")
+
+
+@pytest.fixture(scope="module")
+def baselines(simulated):
+    """Three participants of each study and the tests of their untouched files."""
+    chosen = {}
+    for study in STUDIES:
+        protocol = load_protocol(study)
+        files = csvs(simulated, study)[:3]
+        chosen[study] = (protocol, files, tables(protocol, files))
+    return chosen
+
+
+edits = st.lists(
+    st.tuples(st.sampled_from(["shuffle", "duplicate", "truncate"]), st.randoms()),
+    min_size=1,
+    max_size=3,
+)
+
+
+@settings(
+    max_examples=40,
+    deadline=None,
+    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
+)
+@given(study=st.sampled_from(STUDIES), which=st.integers(0, 2), operations=edits)
+def test_shuffled_duplicated_or_truncated_rows_give_the_result_or_a_named_refusal(
+    baselines, study, which, operations
+):
+    protocol, files, expected = baselines[study]
+    text = files[which].read_text()
+    for operation, rng in operations:
+        lines = text.splitlines(keepends=True)
+        header, body = lines[:1], lines[1:]
+        if operation == "shuffle":  # a spreadsheet's sort: the header stays first
+            rng.shuffle(body)
+            text = "".join(header + body)
+        elif operation == "duplicate" and body:
+            row = rng.choice(body)
+            body.insert(rng.randrange(len(body) + 1), row if row.endswith("\n") else row + "\n")
+            text = "".join(header + body)
+        elif text:  # a copy cut short: at any byte, the header's too
+            text = text[: rng.randrange(len(text))]
+    with tempfile.TemporaryDirectory() as folder:
+        edited = Path(folder) / files[which].name
+        edited.write_text(text)
+        shutil.copy(files[which].with_suffix(".json"), edited.with_suffix(".json"))
+        given_files = [edited if i == which else f for i, f in enumerate(files)]
+        try:
+            result = tables(protocol, given_files)
+        except DataError as error:
+            assert all(NAMED.search(p) or "empty file" in p for p in error.problems), error
+            return
+    for name, table in expected.items():  # untouched: the same analysis, to the last digit
+        pd.testing.assert_frame_equal(result[name], table, check_exact=True)
