@@ -223,3 +223,28 @@ def test_report_csvs_hold_every_digit_whatever_numpys_print_options(tmp_path):
     lines = (tmp_path / "t.csv").read_text().split()[1:]
     assert [float(v) for v in lines] == table["F"].tolist()
     assert lines[0] == "20.077025396150553"
+
+
+# R 4.2: wilcox.test(x, conf.int = TRUE, conf.level = 0.95): the interval, the level R reports
+# (lowered where the sample cannot reach 95 %) and the estimate
+R_SMALL_SAMPLE_LEVELS = [
+    ([0.4], 0.4, 0.4, 0.0, 0.4),
+    ([0.3, 1.2], 0.3, 1.2, 0.5, 0.75),
+    ([1.0, 2.0, 3.0], 1.0, 3.0, 0.75, 2.0),
+    ([0.2, 1.1, -0.4, 0.9], -0.4, 1.1, 0.88, 0.45),
+    ([1.3, 0.2, 2.1, 0.7, 1.9, -0.3], -0.3, 2.1, 0.95, 1.0),
+]
+
+
+@pytest.mark.parametrize("x, low, high, level, estimate", R_SMALL_SAMPLE_LEVELS)
+def test_hodges_lehmann_reports_the_level_r_reaches_in_small_samples(
+    x, low, high, level, estimate
+):
+    """Ratings 5, 6, 7 about a midpoint of 4 reach 75 %, not 95 %: an interval called 95 %
+    there excludes 0 beside a signed-rank test that is not significant."""
+    result = hodges_lehmann(x)
+    assert_allclose(
+        [result["hl_ci_low"], result["hl_ci_high"], result["hl_confidence"], result["hl_shift"]],
+        [low, high, level, estimate],
+        atol=1e-12,
+    )

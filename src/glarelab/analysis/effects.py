@@ -332,7 +332,8 @@ def hodges_lehmann(x: Sequence[float], *, mu: float = 0.0, confidence: float = C
         q = int(np.searchsorted(cumulative, alpha / 2 - 10 * np.finfo(float).eps))
         q = max(q, 1)
         upper = n * (n + 1) // 2 - q
-        achieved = 2 * (cumulative[q - 2] if q >= 2 else 0.0)  # 2 psignrank(q - 1, n)
+        # R's 2 psignrank(q - 1, n); cumulative[k] is P(V <= k)
+        achieved = 2 * float(cumulative[q - 1])
         if achieved - alpha > alpha / 2:  # R: "requested conf.level not achievable"
             confidence = 1 - float(f"{achieved:.2g}")
         return {
