@@ -630,3 +630,29 @@ def test_wilcoxon_refusals():
         wilcoxon_signed_rank([4, 5], mu=float("nan"))
     with pytest.raises(ValueError, match=r"x is empty"):
         wilcoxon_signed_rank([], mu=4)
+
+
+def test_an_effect_of_exactly_zero_is_f_zero_not_a_crash():
+    """Settings on a 50 cd/m² grid can give two methods equal means: the effect's sum of squares
+    is 0 and statsmodels' F comes out as -1e-14 from rounding, which the η²p interval refused."""
+    from glarelab.analysis.effects import with_eta2_ci
+
+    rng = np.random.default_rng(1)
+    values = (
+        250
+        + np.linspace(0, 60, 6)[None, None, :]
+        + rng.normal(0, 15, (10, 2, 6))
+        + rng.normal(0, 20, (10, 1, 1))
+    )
+    values = np.round(values / 50) * 50  # the two methods' means are equal on this grid
+    rows = [
+        {"participant": f"p{p:02d}", "method": m, "level": str(k), "match_cd_m2": values[p, i, k]}
+        for p in range(10)
+        for i, m in enumerate(("gaussian", "vos"))
+        for k in range(6)
+    ]
+    table = rm_anova(pd.DataFrame(rows), "match_cd_m2", ["level", "method"], "participant")
+    method = table.set_index("source").loc["method"]
+    assert method["F"] >= 0.0
+    assert_allclose(method["F"], 0.0, atol=1e-9)
+    assert with_eta2_ci(table).set_index("source").loc["method", "eta2_partial"] < 1e-9

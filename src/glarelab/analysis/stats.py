@@ -342,6 +342,10 @@ def rm_anova(
             df1, df2 = float(table_row["Num DF"]), float(table_row["Den DF"])
             f_value = float(table_row["F Value"])
             p_value = float(table_row["Pr > F"])
+            if f_value < 0:
+                # an effect's sum of squares is never negative: a negative F is the rounding of
+                # an effect that is exactly 0 (equal means, as settings on a coarse grid give)
+                f_value, p_value = 0.0, 1.0
             scores = _effect_scores(values, levels, effect)
             source = " × ".join(str(factors[i]) for i in effect)
             # no error variance beyond rounding: F is 0/0 or effect/rounding (statsmodels gave
