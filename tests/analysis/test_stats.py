@@ -656,3 +656,23 @@ def test_an_effect_of_exactly_zero_is_f_zero_not_a_crash():
     assert method["F"] >= 0.0
     assert_allclose(method["F"], 0.0, atol=1e-9)
     assert with_eta2_ci(table).set_index("source").loc["method", "eta2_partial"] < 1e-9
+
+
+def test_the_paired_test_and_the_anova_agree_on_a_difference_at_rounding():
+    """Method II = Method I + 1 ulp: the ANOVA finds no error variance, so the paired test of
+    the same matches must not report d_z = -0.77 and a significant difference."""
+    rng = np.random.default_rng(4)
+    first = rng.uniform(200, 400, (10, 3))
+    second = np.nextafter(first, np.inf)
+    result = ttest_paired(first[:, 0], second[:, 0])
+    assert result["note"].startswith("not testable"), result
+    rows = [
+        {"participant": f"p{p}", "method": m, "level": str(k), "match_cd_m2": v[p, k]}
+        for p in range(10)
+        for m, v in (("gaussian", first), ("vos", second))
+        for k in range(3)
+    ]
+    table = rm_anova(
+        pd.DataFrame(rows), "match_cd_m2", ["level", "method"], "participant", untestable="report"
+    )
+    assert table.set_index("source").loc["method", "note"].startswith("not testable")

@@ -621,7 +621,9 @@ def ttest_paired(a: Sequence[float], b: Sequence[float], *, confidence: float = 
         ``t``, ``df`` (n - 1), two-sided ``p``, ``mean_difference`` (``a - b``), ``ci_low``,
         ``ci_high`` (its t interval) and ``note``: empty, or why there is no test: every
         difference 0 (R gives NaN) or all equal (R stops: "data are essentially constant");
-        t, p and the interval are then NaN.
+        t, p and the interval are then NaN. Differences whose standard deviation is below
+        ``ROUNDING`` (1e-12) of the values' RMS count as equal, as in :func:`rm_anova`, so
+        that the two never disagree on whether a comparison has variance.
 
     Raises
     ------
@@ -645,7 +647,13 @@ def ttest_paired(a: Sequence[float], b: Sequence[float], *, confidence: float = 
         )
     d = a - b
     mean = float(d.mean())
-    se = float(d.std(ddof=1)) / math.sqrt(d.size)
+    sd = float(d.std(ddof=1))
+    values_rms = float(np.sqrt((np.mean(a**2) + np.mean(b**2)) / 2))
+    if 0 < sd <= ROUNDING * values_rms:
+        # the rule rm_anova applies to the same data: a spread of the differences at the
+        # values' rounding is no variance (R's t.test would test a 1-ulp difference)
+        sd = 0.0
+    se = sd / math.sqrt(d.size)
     result = _t_result(mean, se, d.size - 1, confidence, abs(mean), "the differences")
     result["mean_difference"] = result.pop("estimate")
     return result
