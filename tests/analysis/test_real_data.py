@@ -416,3 +416,38 @@ def test_a_darker_target_set_above_the_brighter_is_flagged():
     flags = matching.flags(trials, YOSHIDA)
     assert len(flags) == 1
     assert flags[0].startswith("p01.csv, line 5: participant p01, gaussian D: the darker target")
+
+
+def test_matches_at_the_display_maximum_are_said_to_bound_the_boost():
+    """Every participant at the display's maximum (433 cd/m²) at the highest level: the boost
+    is what the display allows, and the sentence says so instead of reporting it as a finding."""
+    protocol = load_protocol("yoshida2008")
+    labels = {m["name"]: m["labels"] for m in protocol["glare"]["methods"]}
+    disk = {m["name"]: m["levels_cd_m2"] for m in protocol["glare"]["methods"]}
+    rng = np.random.default_rng(1)
+    matches = 250 + np.linspace(0, 60, 6) + rng.normal(0, 15, (10, 2, 6))
+    matches[:, :, 5] = protocol["display"]["max_cd_m2"]
+    matches[0, :, 5] -= 1.0  # one participant just below: the rest are counted
+    rows = [
+        {
+            "participant": f"p{p + 1:02d}",
+            "block": "main",
+            "method": m,
+            "level_index": k + 1,
+            "level": labels[m][k],
+            "l_disk_cd_m2": float(disk[m][k]),
+            "darker_cd_m2": matches[p, i, k],
+            "brighter_cd_m2": matches[p, i, k],
+            "match_cd_m2": matches[p, i, k],
+            "q1_glow": True,
+            "q2_ring": False,
+            "q3_same_size": True,
+        }  # fmt: skip
+        for p in range(10)
+        for i, m in enumerate(("gaussian", "vos"))
+        for k in range(6)
+    ]
+    result = matching.analyse(Dataset("yoshida2008", pd.DataFrame(rows), []), protocol)
+    text = result["results"][2]
+    assert text.count("9 of 10 participants matched at the display's maximum, 433 cd/m²") == 2
+    assert (result["tables"]["boost_test"]["n_at_display_max"] == 9).all()

@@ -348,6 +348,7 @@ def _boost_tests(study: _Study, protocol) -> pd.DataFrame:
     boosts = (study.trials["match_cd_m2"] - shown) / shown * 100
     top = study.trials.assign(boost=boosts)
     top = top[top["L_disk"] == top["L_disk"].max()]
+    maximum = float(protocol["display"]["max_cd_m2"])
     rows = []
     for method in study.names:
         part = top[top["method"] == method].set_index("participant")
@@ -361,6 +362,11 @@ def _boost_tests(study: _Study, protocol) -> pd.DataFrame:
                 "level": study.labels[(method, int(top["L_disk"].max()))],
                 "l_disk_cd_m2": float(part["l_disk_cd_m2"].iloc[0]),
                 "n": len(part),
+                # matches at the display's maximum bound the boost: the report says how many
+                "n_at_display_max": int(
+                    np.sum(part["match_cd_m2"].to_numpy(float) >= maximum * (1 - 1e-9))
+                ),
+                "display_max_cd_m2": maximum,
                 "boost_percent_mean": result["mean"],
                 "t": result["t"],
                 "df": result["df"],
@@ -817,7 +823,14 @@ def _boost_sentence(boost: pd.DataFrame, study: _Study) -> str:
             verdict = f"fell short of it by {_mean(-mean)} %"
         else:
             verdict = f"did not differ from it (M = {_mean(mean)} %)"
-        parts.append(f"{where_} the matches {verdict}, {stats_}")
+        ceiling = ""
+        if row["n_at_display_max"] > 0:
+            ceiling = (
+                f" ({row['n_at_display_max']} of {row['n']} participants matched at the "
+                f"display's maximum, {row['display_max_cd_m2']:,.0f} cd/m², so the boost is "
+                "bounded by what the display can show)"
+            )
+        parts.append(f"{where_} the matches {verdict}{ceiling}, {stats_}")
     return (
         "At the highest level, compared with the luminance the display showed of the disk "
         "(one-sample t-tests of the participants' boosts against 0"
