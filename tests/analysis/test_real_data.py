@@ -442,7 +442,7 @@ def test_matches_at_the_display_maximum_are_said_to_bound_the_boost():
             "q1_glow": True,
             "q2_ring": False,
             "q3_same_size": True,
-        }  # fmt: skip
+        }
         for p in range(10)
         for i, m in enumerate(("gaussian", "vos"))
         for k in range(6)
@@ -451,3 +451,34 @@ def test_matches_at_the_display_maximum_are_said_to_bound_the_boost():
     text = result["results"][2]
     assert text.count("9 of 10 participants matched at the display's maximum, 433 cd/m²") == 2
     assert (result["tables"]["boost_test"]["n_at_display_max"] == 9).all()
+
+
+def luidolt_ratings(first_category: list[int]) -> Dataset:
+    """Ratings of Luidolt's categories: the first as given, every other at the midpoint."""
+    categories = load_protocol("luidolt2020")["questionnaire"]["categories"]
+    n = len(first_category)
+    rows = [
+        {
+            "participant": f"p{i + 1:02d}",
+            "category": c,
+            "rating": first_category[i] if c == categories[0] else 4,
+            "comment": None,
+            "block": "questionnaire",
+        }
+        for c in categories
+        for i in range(n)
+    ]
+    return Dataset("luidolt2020", pd.DataFrame(rows), [])
+
+
+def test_one_participants_ratings_are_described_not_tested():
+    """One participant: no SD, no signed-rank test, no interval (R: level 0)."""
+    text = rating.analyse(luidolt_ratings([6]), load_protocol("luidolt2020"))["results"][0]
+    assert text.startswith("One participant's ratings (no test")
+    assert "nan" not in text and "CI" not in text
+
+
+def test_ratings_all_at_the_midpoint_describe_no_holm_family():
+    text = rating.analyse(luidolt_ratings([4] * 10), load_protocol("luidolt2020"))["results"][0]
+    assert "were not compared with the scale's midpoint, 4: every rating" in text
+    assert "Holm" not in text and "0 categories" not in text

@@ -283,6 +283,15 @@ def _side(row) -> str:
 
 def _results(summary: pd.DataFrame, midpoint: float, n: int) -> list[str]:
     """The results section as one paragraph, generated from the summary table."""
+    if n < 2:
+        described = "; ".join(
+            f"{row['category']} {row['median']:g}" for _, row in summary.iterrows()
+        )
+        return [
+            "One participant's ratings (no test: a signed-rank test compares participants' "
+            f"ratings with the midpoint, {midpoint:g}, and one participant gives nothing to "
+            f"test against): {described}."
+        ]
     parts = []
     for _, row in summary.iterrows():
         if np.isnan(row["p"]):
@@ -297,6 +306,13 @@ def _results(summary: pd.DataFrame, midpoint: float, n: int) -> list[str]:
             + ("" if np.isnan(row["p"]) else f", {row['apa']}")
         )
     tested = int(summary["p"].notna().sum())
+    if tested == 0:
+        return [
+            f"The {n} participants' ratings of each category were not compared with the "
+            f"scale's midpoint, {midpoint:g}: every rating of every category was at it. "
+            + "; ".join(parts)
+            + "."
+        ]
     return [
         f"Luidolt (2020, §7.2.1) reports the mean rating of each category; as an addition to "
         f"his analysis, the {n} participants' ratings of each category were compared with "
