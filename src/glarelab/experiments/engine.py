@@ -5,9 +5,10 @@ An engine is a plain state machine. ``screen()`` says what to show now: a dict w
 the front-end needs to draw it; screens of a trial carry its number in ``trial``. ``press(key,
 t)`` takes a key press at ``t`` seconds after the onset of the current trial's stimulus (the
 flip that first showed it) and returns the finished trial's row (a dict of
-:mod:`experiments.schema` columns) when that key ended a trial, else None. ``presented(ok)``
-tells the engine whether the last timed presentation kept its frames. ``done`` says the session
-is over. ``replay(rows)`` rebuilds the state after the rows already on disk, to resume.
+:mod:`glarelab.protocols.columns` columns) when that key ended a trial, else None.
+``presented(ok)`` tells the engine whether the last timed presentation kept its frames.
+``done`` says the session is over. ``replay(rows)`` rebuilds the state after the rows already
+on disk, to resume.
 
 The session loop (:mod:`glarelab.experiments.loop`) is the only caller: it decides which key
 presses reach the engine (those made after the onset, on keys the screen takes) and adds the timing

@@ -241,8 +241,8 @@ def fitted_range_departures(protocol, geometry: dict) -> list[str]:
     Parameters
     ----------
     protocol
-        A matching or staircase protocol (:func:`protocols.load_protocol`, or its data as a
-        dict); other paradigms show no glare to judge and have no departures.
+        A matching or staircase protocol (:func:`glarelab.protocols.load_protocol`, or its
+        data as a dict); other paradigms show no glare to judge and have no departures.
     geometry
         Its stimulus set's geometry (``manifest.json``): the judged disk's diameter
         (``disk_diameter_deg`` or ``source_diameter_deg``, deg).

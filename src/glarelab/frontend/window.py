@@ -237,7 +237,7 @@ class TextCapture:
     """Every text event of a window, in order: ``("text", characters)`` and
     ``("motion", name)`` (Backspace, Delete, arrows, Home, End), as pyglet reports them, each
     after ``("key", symbol)`` of the key press that made it (pyglet's symbols are X keysyms).
-    Shift+Enter types a new line (``"\\n"``); :attr:`returns` says of each Enter pressed
+    Shift+Enter types a new line (``"\\n"``); ``returns`` says of each Enter pressed
     whether Shift was down.
 
     PsychoPy's own handlers keep running; this one only listens.

@@ -476,7 +476,7 @@ def power_analysis(
     Parameters
     ----------
     protocol
-        The study (:func:`protocols.load_protocol`).
+        The study (:func:`glarelab.protocols.load_protocol`).
     out
         Output folder (module docstring); a folder with replications of the same inputs is
         resumed.

@@ -109,7 +109,7 @@ def simulate_replication(
     Parameters
     ----------
     protocol
-        The study (:func:`protocols.load_protocol`).
+        The study (:func:`glarelab.protocols.load_protocol`).
     replication
         Which replication (>= 0): with ``seed`` it fixes every participant.
     participants

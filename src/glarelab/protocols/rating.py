@@ -5,8 +5,8 @@ exactly the same), optionally with a typed comment.
 
 A study that shows what it asks about adds a ``[scene]`` (a rendered night scene, still or a
 sequence, see :mod:`glarelab.stimuli.night`) and ``[[conditions]]``: the pipeline of
-:func:`glare.render_night` with a set of its effects each. Every condition's scene is shown,
-frame-exact, before its questions; the rows name the condition.
+:func:`glarelab.glare.render_night` with a set of its effects each. Every condition's scene is
+shown, frame-exact, before its questions; the rows name the condition.
 """
 
 from __future__ import annotations

@@ -18,7 +18,7 @@ fine stripes and print in the dark (what acuity loss blurs). Lamp bulbs are smal
   first lamp and back (the view-dependent window of §5.1).
 
 :func:`build_night` renders a rating protocol's scene once per condition with
-:func:`glare.render_night` (the effects the condition names) for a stimulus set.
+:func:`glarelab.glare.render_night` (the effects the condition names) for a stimulus set.
 
 References
 ----------
@@ -327,8 +327,8 @@ def night_plan(protocol: Protocol, refresh_hz: float) -> dict:
 def build_night(protocol: Protocol, *, progress=None) -> dict:
     """Render a rating protocol's night scene once per condition.
 
-    Each condition's frames are :func:`glare.render_night` of the scene's sequence with the
-    condition's effects (display RGB, cd/m²), named ``CONDITION_fNNN``; its preview strip is
+    Each condition's frames are :func:`glarelab.glare.render_night` of the scene's sequence with
+    the condition's effects (display RGB, cd/m²), named ``CONDITION_fNNN``; its preview strip is
     ``preview_CONDITION.png``.
 
     Returns

@@ -1,6 +1,6 @@
 """What the renderer and the planner need from a glare model: :class:`GlareModel`.
 
-Every model of :mod:`glare` subclasses :class:`GlareModel`. It must digitise its kernel
+Every model of :mod:`glarelab.glare` subclasses :class:`GlareModel`. It must digitise its kernel
 (:meth:`GlareModel.kernel`); the other capabilities have safe defaults, so that a model which
 says nothing about them is rendered exactly and described truthfully:
 

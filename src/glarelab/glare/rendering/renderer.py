@@ -3,8 +3,8 @@
 A renderer owns, for one (model, pixel size, image shape, display), the digitised kernel,
 its spectra for the FFT lengths it has used, the model's tail bounds, and the multi-resolution
 kernels with their measured errors. Each is computed the first time a render needs it and kept
-for the next images. :func:`glare.add_glare` and :func:`glare.render_glare` are one-call forms
-that build a renderer for one image.
+for the next images. :func:`glarelab.glare.add_glare` and :func:`glarelab.glare.render_glare`
+are one-call forms that build a renderer for one image.
 
 Memory: the kernel (``(2H-1) × (2W-1)`` float64, ``[× 3]`` for a colour kernel) and the
 spectra, at most :data:`SPECTRA_BYTES` of them (the least recently used are dropped; the one
@@ -78,7 +78,7 @@ class GlareRenderer:
         Largest error allowed against the exact render, display codes, >= 0; default 0.5.
         0 (or ``None``): exact paths only.
     display
-        The display the error is counted on (a calibration, a :class:`glare.Display`, or a
+        The display the error is counted on (a calibration, a :class:`glarelab.glare.Display`, or a
         code → cd/m² table); ``None``: 10-bit, gamma 2.2, 1000:1, white at ``L_dmax``.
     kernel_shape
         Odd shape of the reference kernel; default ``(2H - 1, 2W - 1)`` (every pixel reaches
