@@ -10,6 +10,7 @@ Build (nitpicky: a dead cross-reference fails the build)::
 from __future__ import annotations
 
 import ast
+import builtins
 import importlib
 import inspect
 import sys
@@ -125,6 +126,7 @@ _BUILTIN = (
 nitpick_ignore_regex = [
     (r"py:.*", rf"({_EXTERNAL})(\..*)?"),
     (r"py:.*", rf"({_BUILTIN})"),
+    (r"py:.*", "|".join(name for name in dir(builtins) if not name.startswith("_"))),
 ]
 
 
