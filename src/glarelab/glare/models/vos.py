@@ -282,6 +282,21 @@ def max_age_years(regime: Regime) -> float:
 
     Beyond it the "PSF" would have a negative central peak, so eq. 10 cannot be used there.
 
+    Parameters
+    ----------
+    regime
+        ``'photopic'``, ``'mesopic'`` or ``'scotopic'``.
+
+    Returns
+    -------
+    float
+        The age, years: ``(w0 / c)^(1/4)`` with eq. 10's coefficient ``c``.
+
+    Raises
+    ------
+    ValueError
+        For an unknown regime.
+
     Examples
     --------
     >>> round(max_age_years("photopic"), 1), round(max_age_years("scotopic"), 1)
