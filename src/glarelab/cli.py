@@ -118,6 +118,18 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     Ctrl-C (SIGINT) ends any command with status 3 and one line, whenever it comes; a closed
     pipe on stdout (SIGPIPE, ``| head``) ends it quietly with status 0.
+
+    Parameters
+    ----------
+    argv
+        The arguments after ``glarelab``; default None: :data:`sys.argv` without the
+        program's name.
+
+    Returns
+    -------
+    int
+        The exit status, as the module docstring lists them (0 done, 1 a check found
+        problems, 2 refused, 3 stopped, 4 files could not be written).
     """
     command = "glarelab"
     argv = sys.argv[1:] if argv is None else list(argv)

@@ -44,7 +44,33 @@ def run_demo(
     log: Callable[[str], None] = print,
 ) -> Path:
     """Run the demo of one protocol (a shipped name or a TOML file) into ``out``; return the
-    report's path."""
+    report's path.
+
+    Parameters
+    ----------
+    protocol_name
+        A shipped study's name or a protocol TOML file.
+    out
+        The demo folder: ``stimuli/``, ``data/`` and ``report/`` in it are rebuilt; a folder
+        holding other files is refused.
+    participants
+        Simulated observers, each one session; default 10.
+    seed
+        The simulated observers' seed; default 1.
+    log
+        Called with each step's progress line; default :func:`print`.
+
+    Returns
+    -------
+    pathlib.Path
+        The report's path, as :func:`glarelab.analysis.report.write_report` returns it.
+
+    Raises
+    ------
+    ValueError
+        For a folder holding files the demo did not write, or a stimulus set that does not
+        verify.
+    """
     out = Path(out)
     protocol = load_protocol(protocol_name)
     check_replaceable(out, kind=KIND, what="demo folder")

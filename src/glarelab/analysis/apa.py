@@ -125,6 +125,16 @@ WORDS = {  # abbreviations in headings
 def apa_p(p: float) -> str:
     """``p < .001``, ``p = .034`` or ``p > .999`` (APA: three decimals, no leading zero).
 
+    Parameters
+    ----------
+    p
+        The p-value, in [0, 1].
+
+    Returns
+    -------
+    str
+        The text.
+
     Raises
     ------
     ValueError
@@ -181,6 +191,20 @@ def degrees(value: float) -> str:
 
 def apa_F(df1: float, df2: float, f_value: float, p: float) -> str:
     """``F(5, 45) = 23.68, p < .001``; non-integer df (corrected) get two decimals.
+
+    Parameters
+    ----------
+    df1, df2
+        The numerator's and denominator's degrees of freedom (fractional when corrected).
+    f_value
+        The F statistic.
+    p
+        Its p-value, in [0, 1].
+
+    Returns
+    -------
+    str
+        The text.
 
     Examples
     --------
@@ -309,6 +333,20 @@ def apa_anova(table: pd.DataFrame, *, correction: Correction) -> list[str]:
 def apa_t(dof: float, t: float, p: float) -> str:
     """``t(14) = 1.71, p = .054``; Welch's fractional df with one decimal.
 
+    Parameters
+    ----------
+    dof
+        The degrees of freedom (fractional for Welch's test).
+    t
+        The t statistic.
+    p
+        Its p-value, in [0, 1].
+
+    Returns
+    -------
+    str
+        The text.
+
     Examples
     --------
     >>> apa_t(9, -0.004, 0.997), apa_t(16.83, 1.7749, 0.048)
@@ -320,6 +358,18 @@ def apa_t(dof: float, t: float, p: float) -> str:
 
 def unit_interval(value: float, decimals: int = 2) -> str:
     """A value that cannot exceed 1 in magnitude, without the leading zero.
+
+    Parameters
+    ----------
+    value
+        The value, at most 1 in magnitude (a correlation, an effect size, a proportion).
+    decimals
+        Decimals; default 2 (more where a value below 1 would round to 1, at most 3).
+
+    Returns
+    -------
+    str
+        The text; empty for NaN or infinity.
 
     Examples
     --------
@@ -360,6 +410,16 @@ def anova_effect(row) -> str:
     interval (from the same df, :func:`glarelab.analysis.effects.with_eta2_ci`), η²G, and
     which correction with its ε; where sphericity is not estimable, the lower-bound test, on
     which the conclusion rests, with the reason and the uncorrected test beside it.
+
+    Parameters
+    ----------
+    row
+        A row of :func:`glarelab.analysis.stats.rm_anova`'s table (a :class:`pandas.Series`).
+
+    Returns
+    -------
+    str
+        The text.
 
     Examples
     --------
@@ -403,6 +463,18 @@ def anova_effect(row) -> str:
 def series(items: Sequence[str], conjunction: str = "and") -> str:
     """``a``, ``a and b``, ``a, b, and c`` (APA's serial comma).
 
+    Parameters
+    ----------
+    items
+        The items, in order.
+    conjunction
+        The word before the last item; default ``'and'``.
+
+    Returns
+    -------
+    str
+        The list as text.
+
     Examples
     --------
     >>> series(["A"]), series(["A", "B"]), series(["A", "B", "C"], "or")
@@ -417,6 +489,16 @@ def series(items: Sequence[str], conjunction: str = "and") -> str:
 def p_cell(p: float) -> str:
     """A p-value in a table's p column: ``.034``, ``< .001``, ``> .999``; empty for NaN.
 
+    Parameters
+    ----------
+    p
+        The p-value, in [0, 1]; None or NaN for none.
+
+    Returns
+    -------
+    str
+        The cell.
+
     Examples
     --------
     >>> p_cell(0.0341), p_cell(0.00002), p_cell(float("nan"))
@@ -429,6 +511,18 @@ def p_cell(p: float) -> str:
 
 def number(value: float, decimals: int) -> str:
     """A number with fixed decimals and thousands separators (APA §6.38); NaN empty.
+
+    Parameters
+    ----------
+    value
+        The number; None or NaN for none.
+    decimals
+        Decimals.
+
+    Returns
+    -------
+    str
+        The text.
 
     Examples
     --------
@@ -468,6 +562,16 @@ def _is_p(name: str) -> bool:
 def header(name: str) -> str:
     """A column's heading: a statistic's symbol, or its name with the unit in parentheses.
 
+    Parameters
+    ----------
+    name
+        The column's name (``match_mean_cd_m2``, ``eta2_partial``).
+
+    Returns
+    -------
+    str
+        The heading.
+
     Examples
     --------
     >>> header("eta2_partial"), header("match_mean_cd_m2"), header("boost_percent_sem")
@@ -490,6 +594,16 @@ def format_table(table: pd.DataFrame) -> pd.DataFrame:
     every other column with fixed decimals for about three significant digits.
 
     Columns named ``apa…`` (the test strings, which the results text quotes) are left out.
+
+    Parameters
+    ----------
+    table
+        A results table, one statistic or measure per column.
+
+    Returns
+    -------
+    pandas.DataFrame
+        The same rows, every cell a string.
 
     Examples
     --------
@@ -550,6 +664,18 @@ def _decades(values: np.ndarray) -> float:
 def significant(value: float, digits: int) -> str:
     """A number to ``digits`` significant digits without trailing zeros, never in scientific
     notation, with thousands separators.
+
+    Parameters
+    ----------
+    value
+        The number.
+    digits
+        Significant digits, >= 1.
+
+    Returns
+    -------
+    str
+        The text.
 
     Examples
     --------

@@ -17,7 +17,13 @@ __all__ = ["DataError", "Dataset", "Design", "where"]
 
 
 class DataError(ValueError):
-    """Problems in the input data, each naming file, line and column."""
+    """Problems in the input data, each naming file, line and column.
+
+    Parameters
+    ----------
+    problems
+        Every problem found, one line each naming the file, line and column.
+    """
 
     def __init__(self, problems: list[str]):
         self.problems = problems
@@ -59,7 +65,29 @@ class Dataset:
     participants, sessions and trial numbers), the sidecars, the participants excluded as
     incomplete (with why), every session file read (``sessions``), the pilot sessions
     left out (``pilots``) or analysed (``pilots_included``), and the trials analysed as
-    recorded that the report lists (``flags``: a darker target set above the brighter)."""
+    recorded that the report lists (``flags``: a darker target set above the brighter).
+
+    Attributes
+    ----------
+    study
+        The study's name.
+    trials
+        The trials analysed, one row per trial, typed by the protocol's columns.
+    files
+        The session CSVs read.
+    sidecars
+        CSV → its JSON sidecar.
+    excluded
+        Participant → why they were excluded as incomplete.
+    sessions
+        One record per session file read: its participant, session, status and trials.
+    pilots
+        The pilot sessions left out.
+    pilots_included
+        Whether pilot sessions were analysed.
+    flags
+        The trials analysed as recorded that the report lists.
+    """
 
     study: str
     trials: pd.DataFrame
@@ -83,5 +111,16 @@ class Dataset:
 
 
 def where(row) -> str:
-    """The file and line of a trial, as problems name them."""
+    """The file and line of a trial, as problems name them.
+
+    Parameters
+    ----------
+    row
+        A trial (its ``_file`` and ``_line``).
+
+    Returns
+    -------
+    str
+        ``'FILE, line N'``.
+    """
     return f"{row['_file']}, line {row['_line']}"

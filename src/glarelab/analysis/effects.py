@@ -146,6 +146,15 @@ def paired_effect(
 ) -> dict:
     """The mean difference ``a - b`` with its t interval, and Cohen's d_z with its interval.
 
+    Parameters
+    ----------
+    a, b
+        The paired values, same length >= 2, in the measure's unit.
+    confidence
+        The interval's confidence level, in (0, 1); default :data:`CONFIDENCE` (0.95).
+    dz_interval
+        Whether to compute d_z's interval; default True.
+
     Returns
     -------
     dict
@@ -208,6 +217,15 @@ def paired_effect(
 def rank_biserial(x: Sequence[float], *, mu: float = 0.0, confidence: float = CONFIDENCE) -> dict:
     """The matched-pairs rank-biserial correlation of ``x - mu`` with its interval, as
     ``effectsize::rank_biserial(x, mu = mu)`` (0.8).
+
+    Parameters
+    ----------
+    x
+        The values (ratings), in the measure's unit.
+    mu
+        The value the differences are taken from (a scale's midpoint); default 0.
+    confidence
+        The interval's confidence level, in (0, 1); default :data:`CONFIDENCE` (0.95).
 
     Returns
     -------
@@ -390,6 +408,22 @@ def zeroin(f, low: float, high: float, f_low: float, f_high: float, *, tol: floa
     ``zeroin2``, at most 1000 iterations), so that a root of a step function, which any
     point within ``tol`` of the step satisfies, is the point R returns.
 
+    Parameters
+    ----------
+    f
+        The function, of one float.
+    low, high
+        The interval's ends.
+    f_low, f_high
+        ``f(low)`` and ``f(high)``, of opposite signs.
+    tol
+        The root's tolerance, as ``uniroot``'s ``tol``; default 1e-4.
+
+    Returns
+    -------
+    float
+        The root.
+
     References
     ----------
     Brent (1973), *Algorithms for Minimization without Derivatives*, Prentice-Hall, ch. 4;
@@ -460,6 +494,19 @@ def within_subject_ci(
     ``k`` cells (Morey 2008), divided by ``√n``, is the cell's within-subject SEM; the
     interval is ``mean ± t(n - 1) SEM``.
 
+    Parameters
+    ----------
+    data
+        The trials or cell means, long format: one row per subject and cell.
+    dv
+        The dependent variable's column.
+    within
+        The within factors' columns.
+    subject
+        The subject's column.
+    confidence
+        The interval's confidence level, in (0, 1); default :data:`CONFIDENCE` (0.95).
+
     Returns
     -------
     pandas.DataFrame
@@ -511,6 +558,19 @@ def marginal_means(
     standard error and t interval (``n - 1`` df), as ``emmeans(fit, ~ factor)`` gives them for
     an ``afex::aov_car`` fit (its multivariate model: the subjects' own marginal means).
 
+    Parameters
+    ----------
+    data
+        The trials or cell means, long format: one row per subject and cell.
+    dv
+        The dependent variable's column.
+    within
+        The within factors' columns.
+    subject
+        The subject's column.
+    confidence
+        The interval's confidence level, in (0, 1); default :data:`CONFIDENCE` (0.95).
+
     Returns
     -------
     pandas.DataFrame
@@ -557,6 +617,18 @@ def with_eta2_ci(anova: pd.DataFrame, *, confidence: float = ETA2_CONFIDENCE) ->
 
     η²p itself, ``F df1 / (F df1 + df2)``, is the same whatever ε; its interval is not: from
     the uncorrected df it can exclude 0 beside a corrected test that is not significant.
+
+    Parameters
+    ----------
+    anova
+        A table of :func:`glarelab.analysis.stats.rm_anova`.
+    confidence
+        The intervals' level; default :data:`ETA2_CONFIDENCE` (0.90, Steiger 2004).
+
+    Returns
+    -------
+    pandas.DataFrame
+        A copy with ``eta2p_ci_low`` and ``eta2p_ci_high``.
 
     Examples
     --------

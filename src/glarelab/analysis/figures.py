@@ -23,6 +23,15 @@ class Figure:
 
     A report numbers figures in the order it shows them and prints ``Figure N. Title.
     Caption``.
+
+    Attributes
+    ----------
+    png
+        The image, PNG bytes.
+    title
+        What it shows, one phrase.
+    caption
+        What is plotted; default empty.
     """
 
     png: bytes
@@ -33,6 +42,18 @@ class Figure:
 def as_figure(item, name: str = "") -> Figure:
     """A :class:`Figure` from a Figure, a mapping with ``png``, ``title`` and ``caption``, or
     bare PNG bytes (titled ``name``).
+
+    Parameters
+    ----------
+    item
+        A :class:`Figure`, a mapping, or PNG bytes.
+    name
+        The title of bare bytes, and the name in the message; default empty.
+
+    Returns
+    -------
+    Figure
+        The figure.
 
     Raises
     ------
@@ -52,7 +73,18 @@ def as_figure(item, name: str = "") -> Figure:
 
 
 def png(figure) -> bytes:
-    """The figure as PNG bytes (no timestamps), closed afterwards."""
+    """The figure as PNG bytes (no timestamps), closed afterwards.
+
+    Parameters
+    ----------
+    figure
+        A matplotlib figure.
+
+    Returns
+    -------
+    bytes
+        The PNG file's content, at 110 dpi.
+    """
     buffer = io.BytesIO()
     figure.tight_layout()
     # bbox "tight": a legend placed below the axes is kept whole
@@ -63,7 +95,24 @@ def png(figure) -> bytes:
 
 def small_multiples(panels: int, *, width_in: float = 2.3, height_in: float = 2.0, columns=5):
     """A figure with one small panel per participant (shared axes) and the axes as a flat list;
-    panels beyond ``panels`` are hidden."""
+    panels beyond ``panels`` are hidden.
+
+    Parameters
+    ----------
+    panels
+        The number of panels, >= 1.
+    width_in, height_in
+        A panel's size, inches; defaults 2.3 and 2.0.
+    columns
+        Panels per row, at most; default 5.
+
+    Returns
+    -------
+    figure : matplotlib.figure.Figure
+        The figure.
+    axes : list of matplotlib.axes.Axes
+        The ``panels`` visible axes, row by row.
+    """
     columns = max(1, min(columns, panels))
     rows = math.ceil(panels / columns)
     figure, axes = plt.subplots(

@@ -86,7 +86,18 @@ ONE_PARTICIPANT = (
 
 
 def design(protocol) -> Design:
-    """One match per method and level, the main block analysed after the training block."""
+    """One match per method and level, the main block analysed after the training block.
+
+    Parameters
+    ----------
+    protocol : glarelab.protocols.Protocol
+        The study's protocol, of this paradigm.
+
+    Returns
+    -------
+    glarelab.analysis.dataset.Design
+        The factors, the cells each participant needs and the blocks.
+    """
     cells = tuple(
         (m["name"], index)
         for m in protocol["glare"]["methods"]
@@ -104,7 +115,20 @@ def design(protocol) -> Design:
 def check(trials: pd.DataFrame, protocol) -> list[str]:
     """Values no session of this protocol can write: a level label or disk luminance that is
     not the protocol's at that level, a setting outside the display's range (a match above its
-    maximum cannot be shown), a match that is not the mean of its settings."""
+    maximum cannot be shown), a match that is not the mean of its settings.
+
+    Parameters
+    ----------
+    trials
+        The trials read, typed by the protocol's columns (``_file`` and ``_line`` name each).
+    protocol : glarelab.protocols.Protocol
+        The study's protocol, of this paradigm.
+
+    Returns
+    -------
+    list of str
+        One problem per line, naming the file, line and value.
+    """
     display = protocol["display"]
     low, high = display["black_cd_m2"], display["max_cd_m2"]
     methods = {m["name"]: m for m in protocol["glare"]["methods"]}
@@ -152,7 +176,20 @@ def flags(trials: pd.DataFrame, protocol) -> list[str]:
     """Trials a session can record but that contradict the task, analysed as recorded and
     listed in the report: a darker target set above the brighter one (the participant set
     the two the wrong way round, or confirmed before finishing; the experiment does not
-    stop them)."""
+    stop them).
+
+    Parameters
+    ----------
+    trials
+        The trials read, typed by the protocol's columns (``_file`` and ``_line`` name each).
+    protocol : glarelab.protocols.Protocol
+        The study's protocol, of this paradigm.
+
+    Returns
+    -------
+    list of str
+        One line per trial, naming its file and line.
+    """
     if protocol["trials"]["settings"] != "bounds":
         return []
     main = trials[trials["block"] == "main"]
@@ -166,7 +203,23 @@ def flags(trials: pd.DataFrame, protocol) -> list[str]:
 
 
 def methods(protocol, participants: int, who: str) -> str:
-    """Methods text naming the protocol's actual parameters."""
+    """Methods text naming the protocol's actual parameters.
+
+    Parameters
+    ----------
+    protocol : glarelab.protocols.Protocol
+        The study's protocol, of this paradigm.
+    participants
+        The number of participants analysed.
+    who
+        Who they were, as the sentence's subject (``'10 participants'``, ``'10 simulated
+        observers'``; :func:`glarelab.analysis.report.methods_paragraph`).
+
+    Returns
+    -------
+    str
+        The paragraph.
+    """
     s, g, t = protocol["stimulus"], protocol["glare"], protocol["trials"]
     background = protocol["background"]
     described = {
@@ -412,14 +465,41 @@ def tests(dataset: Dataset, protocol) -> dict[str, pd.DataFrame]:
     """The statistical tests alone (what a power analysis runs on thousands of simulated
     studies; :func:`analyse` reports the same tests): the ANOVAs (``anova``), the methods
     compared at the protocol's levels (``methods_at_levels``) and the boost at the highest
-    level (``boost_test``); none with one participant."""
+    level (``boost_test``); none with one participant.
+
+    Parameters
+    ----------
+    dataset
+        The study's validated trials (:func:`glarelab.analysis.load.load_sessions`).
+    protocol : glarelab.protocols.Protocol
+        The study's protocol, of this paradigm.
+
+    Returns
+    -------
+    dict of str to pandas.DataFrame
+        The tests' tables by name.
+    """
     return _public(_test_tables(_study(dataset, protocol), protocol))
 
 
 def analyse(dataset: Dataset, protocol) -> dict:
     """Every analysis of Yoshida §5 for the protocol's methods and levels: tables (DataFrames),
     figures (PNG bytes), statements (``text``) and the results section (``results``); its
-    tests are those of :func:`tests`."""
+    tests are those of :func:`tests`.
+
+    Parameters
+    ----------
+    dataset
+        The study's validated trials (:func:`glarelab.analysis.load.load_sessions`).
+    protocol : glarelab.protocols.Protocol
+        The study's protocol, of this paradigm.
+
+    Returns
+    -------
+    dict
+        ``tables``, ``figures``, ``text`` and ``results`` (and what the report shows
+        besides).
+    """
     study = _study(dataset, protocol)
     tables = _test_tables(study, protocol)
     text: dict[str, str] = {}
@@ -932,7 +1012,20 @@ def _results(tables: dict, summary: pd.DataFrame, study: _Study, protocol, n: in
 def stimulus_figures(protocol, shown) -> list[Figure]:
     """The stimuli as the display showed them: the references of each glare method, the
     targets at their start luminances, and the references' profiles through the disk centre
-    (Yoshida Fig. 3). ``shown`` is an :class:`glarelab.analysis.stimulus_figures.DisplayedSet`."""
+    (Yoshida Fig. 3). ``shown`` is an :class:`glarelab.analysis.stimulus_figures.DisplayedSet`.
+
+    Parameters
+    ----------
+    protocol : glarelab.protocols.Protocol
+        The study's protocol, of this paradigm.
+    shown : glarelab.analysis.stimulus_figures.DisplayedSet
+        The stimulus set as the display showed it.
+
+    Returns
+    -------
+    list of glarelab.analysis.figures.Figure
+        The figures.
+    """
     from glarelab.analysis.stimulus_figures import image_grid, profiles, radial_profile
 
     g, s = protocol["glare"], protocol["stimulus"]

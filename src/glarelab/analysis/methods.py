@@ -11,7 +11,19 @@ __all__ = ["display_text", "provenance", "session_rows"]
 
 
 def display_text(protocol) -> str:
-    """The display and viewing conditions, as the methods section names them."""
+    """The display and viewing conditions, as the methods section names them.
+
+    Parameters
+    ----------
+    protocol : glarelab.protocols.Protocol
+        The study's protocol: its ``[display]`` and ``[viewing]``.
+
+    Returns
+    -------
+    str
+        A phrase: the display's name, size, resolution, bits and maximum, the viewing
+        distance and the room's illumination.
+    """
     d, v = protocol["display"], protocol["viewing"]
     size = (
         f"{d['diagonal_in']:g}-inch"
@@ -33,7 +45,23 @@ def provenance(
 
     ``simulated`` is true when every session is simulated, false when none is, and
     ``"mixed"`` otherwise (``sessions`` says which); a session whose CSV came without its
-    sidecar is listed with status ``"no sidecar"`` and ``simulated`` null (unknown)."""
+    sidecar is listed with status ``"no sidecar"`` and ``simulated`` null (unknown).
+
+    Parameters
+    ----------
+    sidecars
+        CSV → its session's sidecar.
+    protocol_sha256
+        The analysed protocol's hash; None: not compared.
+    stimuli
+        The stimulus set's folder; None: none given.
+
+    Returns
+    -------
+    dict
+        ``sessions`` (one record per session) and what they share (``simulated``, the
+        hashes and versions).
+    """
     sessions = [
         {
             "file": Path(name).name,
@@ -96,7 +124,24 @@ def session_rows(
     """One row per session file, as the report's Sessions table shows it: who, when, how it
     ended (status "no sidecar" where the CSV came without one), and the hashes and versions it
     ran with, shortened (a ✓ after a hash that matches the analysis's protocol or stimulus
-    set). :func:`provenance` keeps them whole."""
+    set). :func:`provenance` keeps them whole.
+
+    Parameters
+    ----------
+    files
+        The session CSVs, in order; a CSV without a sidecar has no row here.
+    sidecars
+        CSV → its session's sidecar.
+    protocol_sha256
+        The analysed protocol's hash, to mark matching sessions; None: not marked.
+    stimuli_sha256
+        The stimulus set's manifest hash, likewise.
+
+    Returns
+    -------
+    list of dict
+        The table's rows.
+    """
     rows = []
     for file in files:
         sidecar = sidecars.get(file)

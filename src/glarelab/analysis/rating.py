@@ -49,7 +49,18 @@ def _conditions(protocol) -> list[dict]:
 
 
 def design(protocol) -> Design:
-    """One rating per category (and condition), in the questionnaire block."""
+    """One rating per category (and condition), in the questionnaire block.
+
+    Parameters
+    ----------
+    protocol : glarelab.protocols.Protocol
+        The study's protocol, of this paradigm.
+
+    Returns
+    -------
+    glarelab.analysis.dataset.Design
+        The factors, the cells each participant needs and the blocks.
+    """
     categories = protocol["questionnaire"]["categories"]
     conditions = _conditions(protocol)
     if conditions:
@@ -67,12 +78,41 @@ def design(protocol) -> Design:
 
 
 def flags(trials: pd.DataFrame, protocol) -> list[str]:
-    """Trials to list in the report though analysed as recorded: none."""
+    """Trials to list in the report though analysed as recorded: none.
+
+    Parameters
+    ----------
+    trials
+        The trials read, typed by the protocol's columns (``_file`` and ``_line`` name each).
+    protocol : glarelab.protocols.Protocol
+        The study's protocol, of this paradigm.
+
+    Returns
+    -------
+    list of str
+        Empty: this paradigm lists none.
+    """
     return []
 
 
 def methods(protocol, participants: int, who: str) -> str:
-    """Methods text naming the protocol's actual parameters."""
+    """Methods text naming the protocol's actual parameters.
+
+    Parameters
+    ----------
+    protocol : glarelab.protocols.Protocol
+        The study's protocol, of this paradigm.
+    participants
+        The number of participants analysed.
+    who
+        Who they were, as the sentence's subject (``'10 participants'``, ``'10 simulated
+        observers'``; :func:`glarelab.analysis.report.methods_paragraph`).
+
+    Returns
+    -------
+    str
+        The paragraph.
+    """
     q = protocol["questionnaire"]
     conditions = _conditions(protocol)
     shown = ""
@@ -108,7 +148,20 @@ def methods(protocol, participants: int, who: str) -> str:
 
 def check(trials: pd.DataFrame, protocol) -> list[str]:
     """Values no session of this protocol can write beyond the columns' own checks (category
-    and rating range): none."""
+    and rating range): none.
+
+    Parameters
+    ----------
+    trials
+        The trials read, typed by the protocol's columns (``_file`` and ``_line`` name each).
+    protocol : glarelab.protocols.Protocol
+        The study's protocol, of this paradigm.
+
+    Returns
+    -------
+    list of str
+        One problem per line, naming the file, line and value.
+    """
     return []
 
 
@@ -191,7 +244,20 @@ def tests(dataset: Dataset, protocol) -> dict[str, pd.DataFrame]:
     """The statistical tests alone (what a power analysis runs on thousands of simulated
     studies; :func:`analyse` reports the same): each category's Wilcoxon test against the
     midpoint (``summary``) and, with conditions, each condition against the first
-    (``comparisons``)."""
+    (``comparisons``).
+
+    Parameters
+    ----------
+    dataset
+        The study's validated trials (:func:`glarelab.analysis.load.load_sessions`).
+    protocol : glarelab.protocols.Protocol
+        The study's protocol, of this paradigm.
+
+    Returns
+    -------
+    dict of str to pandas.DataFrame
+        The tests' tables by name.
+    """
     conditions = [
         c for c in _conditions(protocol) if (dataset.trials["condition"] == c["name"]).any()
     ]
@@ -205,7 +271,21 @@ def analyse(dataset: Dataset, protocol) -> dict:
     """Per-category summaries with the Wilcoxon tests, the comments and the diverging bars:
     tables (DataFrames), figures (PNG bytes), statements (``text``) and the results section
     (``results``); with ``[[conditions]]``, each condition against the first. Its tests are
-    those of :func:`tests`."""
+    those of :func:`tests`.
+
+    Parameters
+    ----------
+    dataset
+        The study's validated trials (:func:`glarelab.analysis.load.load_sessions`).
+    protocol : glarelab.protocols.Protocol
+        The study's protocol, of this paradigm.
+
+    Returns
+    -------
+    dict
+        ``tables``, ``figures``, ``text`` and ``results`` (and what the report shows
+        besides).
+    """
     if _conditions(protocol):
         return _analyse_conditions(dataset, protocol)
     q = protocol["questionnaire"]
@@ -516,7 +596,20 @@ def _compared_text(compared: pd.DataFrame, reference: str) -> str:
 def stimulus_figures(protocol, shown) -> list[Figure]:
     """Each condition's scene as the display showed it: its first, middle and last frame.
     ``shown`` is an :class:`glarelab.analysis.stimulus_figures.DisplayedSet`; a questionnaire
-    without a scene shows none."""
+    without a scene shows none.
+
+    Parameters
+    ----------
+    protocol : glarelab.protocols.Protocol
+        The study's protocol, of this paradigm.
+    shown : glarelab.analysis.stimulus_figures.DisplayedSet
+        The stimulus set as the display showed it.
+
+    Returns
+    -------
+    list of glarelab.analysis.figures.Figure
+        The figures.
+    """
     from glarelab.analysis.stimulus_figures import image_grid
 
     conditions = _conditions(protocol)

@@ -101,7 +101,32 @@ def analyse(
     stimuli: Path | None = None,
 ) -> tuple[Dataset, dict]:
     """Load the sessions of the protocol's study (checked against the stimulus set, if
-    given) and run its paradigm's analysis."""
+    given) and run its paradigm's analysis.
+
+    Parameters
+    ----------
+    protocol : glarelab.protocols.Protocol
+        The study's protocol.
+    paths
+        The session CSVs.
+    exclude_incomplete, include_aborted, include_pilots
+        As for :func:`glarelab.analysis.load.load_sessions`; default False each.
+    stimuli
+        The stimulus set's folder, whose hashes the sessions must have recorded; default
+        None: not checked.
+
+    Returns
+    -------
+    dataset : glarelab.analysis.dataset.Dataset
+        The validated trials.
+    result : dict
+        The paradigm's analysis (``tables``, ``figures``, ``text``, ``results``).
+
+    Raises
+    ------
+    glarelab.analysis.dataset.DataError
+        For data the analysis cannot vouch for.
+    """
     dataset = load_sessions(
         protocol,
         paths,
@@ -133,7 +158,23 @@ def set_hashes(stimuli: Path) -> dict:
 
 def methods_paragraph(protocol, participants: int, simulated: bool | int) -> str:
     """Methods text naming the protocol's actual parameters; ``simulated`` is true when every
-    participant was a simulated observer, or the number of them among the participants."""
+    participant was a simulated observer, or the number of them among the participants.
+
+    Parameters
+    ----------
+    protocol : glarelab.protocols.Protocol
+        The study's protocol.
+    participants
+        The number of participants analysed.
+    simulated
+        True when every participant was simulated, else the number of simulated ones (0 or
+        False: none).
+
+    Returns
+    -------
+    str
+        The paragraph.
+    """
     if simulated is True:
         who = f"{participants} simulated observers"
     elif not simulated:
@@ -378,6 +419,25 @@ def write_report(
     paragraph naming its parameters; ``stimuli`` (the set's folder) adds its images as the
     display showed them and its manifest hash, and sessions that ran on another set are
     refused. Pilot sessions are left out and listed unless ``include_pilots``.
+
+    Parameters
+    ----------
+    protocol : glarelab.protocols.Protocol
+        The study's protocol.
+    paths
+        The session CSVs.
+    out
+        The report's folder, replaced whole; a folder holding other files is refused.
+    exclude_incomplete, include_aborted, include_pilots
+        As for :func:`glarelab.analysis.load.load_sessions`; default False each.
+    stimuli
+        The stimulus set's folder; default None: no stimulus figures, sessions not checked
+        against a set.
+
+    Returns
+    -------
+    pathlib.Path
+        ``OUT/report.html``.
 
     Raises
     ------

@@ -73,7 +73,18 @@ EFFECT_NAMES = {
 
 
 def design(protocol) -> Design:
-    """One staircase (many trials) per context and glare level; the blocks are the contexts."""
+    """One staircase (many trials) per context and glare level; the blocks are the contexts.
+
+    Parameters
+    ----------
+    protocol : glarelab.protocols.Protocol
+        The study's protocol, of this paradigm.
+
+    Returns
+    -------
+    glarelab.analysis.dataset.Design
+        The factors, the cells each participant needs and the blocks.
+    """
     levels = range(1, len(protocol["glare"]["strengths"]) + 1)
     cells = tuple((c["name"], level) for c in protocol["contexts"] for level in levels)
     return Design(
@@ -86,12 +97,41 @@ def design(protocol) -> Design:
 
 
 def flags(trials: pd.DataFrame, protocol) -> list[str]:
-    """Trials to list in the report though analysed as recorded: none."""
+    """Trials to list in the report though analysed as recorded: none.
+
+    Parameters
+    ----------
+    trials
+        The trials read, typed by the protocol's columns (``_file`` and ``_line`` name each).
+    protocol : glarelab.protocols.Protocol
+        The study's protocol, of this paradigm.
+
+    Returns
+    -------
+    list of str
+        Empty: this paradigm lists none.
+    """
     return []
 
 
 def methods(protocol, participants: int, who: str) -> str:
-    """Methods text naming the protocol's actual parameters."""
+    """Methods text naming the protocol's actual parameters.
+
+    Parameters
+    ----------
+    protocol : glarelab.protocols.Protocol
+        The study's protocol, of this paradigm.
+    participants
+        The number of participants analysed.
+    who
+        Who they were, as the sentence's subject (``'10 participants'``, ``'10 simulated
+        observers'``; :func:`glarelab.analysis.report.methods_paragraph`).
+
+    Returns
+    -------
+    str
+        The paragraph.
+    """
     s, g, t = protocol["stimulus"], protocol["glare"], protocol["trials"]
     parameters = ", ".join(f"{k} = {v}" for k, v in g["parameters"].items())
     return (
@@ -114,7 +154,20 @@ def check(trials: pd.DataFrame, protocol) -> list[str]:
     off the staircase's grid, a block that is not the trial's context; flags that contradict
     each other (a flash that did not count although it was shown right or the protocol counts
     every flash, a reversal on a flash that did not count, a failed flash counted before the
-    protocol's repeat limit); and a participant none of whose trials counted."""
+    protocol's repeat limit); and a participant none of whose trials counted.
+
+    Parameters
+    ----------
+    trials
+        The trials read, typed by the protocol's columns (``_file`` and ``_line`` name each).
+    protocol : glarelab.protocols.Protocol
+        The study's protocol, of this paradigm.
+
+    Returns
+    -------
+    list of str
+        One problem per line, naming the file, line and value.
+    """
     t = protocol["trials"]
     strengths = protocol["glare"]["strengths"]
     durations = t["presentation_ms"]
@@ -199,7 +252,20 @@ def on_grid(trials: pd.DataFrame, protocol) -> pd.DataFrame:
     """The trials with each disc intensity at its point of the staircase's grid
     (:func:`glarelab.protocols.staircase.intensity_grid`): files written before the grid hold
     sums of steps that drift in the last bits (0.84, 0.8399999999999999), which the fits must
-    see as one intensity."""
+    see as one intensity.
+
+    Parameters
+    ----------
+    trials
+        The trials, ``disc_fraction`` a fraction of the display maximum.
+    protocol : glarelab.protocols.Protocol
+        The study's protocol (its ``[trials]`` give the grid).
+
+    Returns
+    -------
+    pandas.DataFrame
+        The trials, ``disc_fraction`` rounded to the grid (unchanged without one).
+    """
     grid = intensity_grid(protocol["trials"])
     if grid is None:
         return trials
@@ -207,7 +273,19 @@ def on_grid(trials: pd.DataFrame, protocol) -> pd.DataFrame:
 
 
 def reversal_match(staircase: pd.DataFrame) -> float:
-    """Mean disc fraction at the reversals after the first two (or all, if fewer than 3)."""
+    """Mean disc fraction at the reversals after the first two (or all, if fewer than 3).
+
+    Parameters
+    ----------
+    staircase
+        One staircase's trials in order: ``disc_fraction`` (of the display maximum),
+        ``response`` and ``reversal``.
+
+    Returns
+    -------
+    float
+        The match, a fraction of the display maximum; the last intensity without reversals.
+    """
     reversals = staircase.loc[staircase["reversal"].astype(bool), "disc_fraction"].to_numpy(float)
     if reversals.size == 0:
         return float(staircase["disc_fraction"].iloc[-1])
@@ -235,6 +313,12 @@ def psychometric_fit(staircase: pd.DataFrame) -> dict:
     intensity (every "glare" below every "disc"), the likelihood grows without bound as the
     slope steepens, and a bounded optimiser stops on its bound. That is checked before the
     fit (Albert & Anderson 1984), and the fit's score is checked to vanish afterwards.
+
+    Parameters
+    ----------
+    staircase
+        One staircase's trials: ``disc_fraction`` (of the display maximum) and
+        ``response`` (``'glare'``, ``'disc'`` or ``'neither'``).
 
     Returns
     -------
@@ -343,7 +427,19 @@ def psychometric_fit(staircase: pd.DataFrame) -> dict:
 
 
 def psychometric_match(staircase: pd.DataFrame) -> float:
-    """The 50 % point of :func:`psychometric_fit`; NaN where it is not estimable."""
+    """The 50 % point of :func:`psychometric_fit`; NaN where it is not estimable.
+
+    Parameters
+    ----------
+    staircase
+        One staircase's trials in order: ``disc_fraction`` (of the display maximum),
+        ``response`` and ``reversal``.
+
+    Returns
+    -------
+    float
+        The match, a fraction of the display maximum, or NaN.
+    """
     return psychometric_fit(staircase)["match"]
 
 
@@ -353,7 +449,19 @@ def reversal_range(staircase: pd.DataFrame) -> tuple[float, float]:
     interval: a staircase of a dozen answers locates its match too poorly for one that covers
     at its nominal rate (docs/analysis.md: a bootstrap of the reversal points covered the
     true match in 59 % of 1,800 simulated staircases, this range in 75 %). NaN without
-    reversals."""
+    reversals.
+
+    Parameters
+    ----------
+    staircase
+        One staircase's trials in order: ``disc_fraction`` (of the display maximum),
+        ``response`` and ``reversal``.
+
+    Returns
+    -------
+    low, high : float
+        Fractions of the display maximum.
+    """
     reversals = staircase.loc[staircase["reversal"].astype(bool), "disc_fraction"].to_numpy(float)
     kept = reversals[DISCARDED_REVERSALS:] if reversals.size > DISCARDED_REVERSALS else reversals
     if kept.size == 0:
@@ -419,7 +527,20 @@ def _anova(matches: pd.DataFrame) -> pd.DataFrame | None:
 def tests(dataset: Dataset, protocol) -> dict[str, pd.DataFrame]:
     """The statistical tests alone (what a power analysis runs on thousands of simulated
     studies; :func:`analyse` reports the same): the ANOVA on the reversal matches, none with
-    one participant."""
+    one participant.
+
+    Parameters
+    ----------
+    dataset
+        The study's validated trials (:func:`glarelab.analysis.load.load_sessions`).
+    protocol : glarelab.protocols.Protocol
+        The study's protocol, of this paradigm.
+
+    Returns
+    -------
+    dict of str to pandas.DataFrame
+        The tests' tables by name.
+    """
     _, trials = _counted(dataset, protocol)
     anova = _anova(_matches(trials, protocol, fits=False))
     return {} if anova is None else {"anova": anova}
@@ -428,7 +549,21 @@ def tests(dataset: Dataset, protocol) -> dict[str, pd.DataFrame]:
 def analyse(dataset: Dataset, protocol) -> dict:
     """Matched intensities, their summary, the ANOVA and Figure 13: tables (DataFrames),
     figures (PNG bytes), statements (``text``) and the results section (``results``); its
-    tests are those of :func:`tests`."""
+    tests are those of :func:`tests`.
+
+    Parameters
+    ----------
+    dataset
+        The study's validated trials (:func:`glarelab.analysis.load.load_sessions`).
+    protocol : glarelab.protocols.Protocol
+        The study's protocol, of this paradigm.
+
+    Returns
+    -------
+    dict
+        ``tables``, ``figures``, ``text`` and ``results`` (and what the report shows
+        besides).
+    """
     every, trials = _counted(dataset, protocol)
     matches = _matches(trials, protocol, fits=True)
     needed = protocol["trials"]["reversals"]
@@ -664,7 +799,20 @@ def _results(
 def stimulus_figures(protocol, shown) -> list[Figure]:
     """The stimuli as the display showed them: the glare images of every strength in each
     context with the comparison at full intensity, and their glare profiles. ``shown`` is an
-    :class:`glarelab.analysis.stimulus_figures.DisplayedSet`."""
+    :class:`glarelab.analysis.stimulus_figures.DisplayedSet`.
+
+    Parameters
+    ----------
+    protocol : glarelab.protocols.Protocol
+        The study's protocol, of this paradigm.
+    shown : glarelab.analysis.stimulus_figures.DisplayedSet
+        The stimulus set as the display showed it.
+
+    Returns
+    -------
+    list of glarelab.analysis.figures.Figure
+        The figures.
+    """
     from glarelab.analysis.stimulus_figures import image_grid, profiles, radial_profile
 
     g = protocol["glare"]

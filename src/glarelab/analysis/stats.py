@@ -577,6 +577,15 @@ def ttest_one_sample(x: Sequence[float], *, mu: float = 0.0, confidence: float =
     """One-sample t-test of ``x`` against ``mu`` (two-sided), as R's ``t.test(x, mu = mu,
     conf.level = confidence)``.
 
+    Parameters
+    ----------
+    x
+        The values, at least 2, in the measure's unit.
+    mu
+        The value tested against, same unit; default 0.
+    confidence
+        The interval's confidence level, in (0, 1); default 0.95.
+
     Returns
     -------
     dict
@@ -614,6 +623,13 @@ def ttest_one_sample(x: Sequence[float], *, mu: float = 0.0, confidence: float =
 
 def ttest_paired(a: Sequence[float], b: Sequence[float], *, confidence: float = 0.95) -> dict:
     """Paired t-test, as R's ``t.test(a, b, paired = TRUE, conf.level = confidence)``.
+
+    Parameters
+    ----------
+    a, b
+        The paired values, same length >= 2, in the measure's unit.
+    confidence
+        The interval's confidence level, in (0, 1); default 0.95.
 
     Returns
     -------
@@ -661,6 +677,13 @@ def ttest_paired(a: Sequence[float], b: Sequence[float], *, confidence: float = 
 
 def ttest_welch(a: Sequence[float], b: Sequence[float], *, confidence: float = 0.95) -> dict:
     """Welch's unpaired t-test, as R's ``t.test(a, b, conf.level = confidence)``.
+
+    Parameters
+    ----------
+    a, b
+        The two samples, at least 2 values each, in the measure's unit.
+    confidence
+        The interval's confidence level, in (0, 1); default 0.95.
 
     Returns
     -------
@@ -788,7 +811,23 @@ def wilcoxon_signed_rank(x: Sequence[float], *, mu: float = 0.0) -> dict:
 
 
 def signed_rank_counts(n: int) -> np.ndarray:
-    """How many subsets of ``{1, …, n}`` have each sum ``0 … n(n+1)/2`` (exact for n < 63)."""
+    """How many subsets of ``{1, …, n}`` have each sum ``0 … n(n+1)/2`` (exact for n < 63).
+
+    Parameters
+    ----------
+    n
+        The number of non-zero differences, >= 0.
+
+    Returns
+    -------
+    numpy.ndarray
+        int64 counts, index = the signed-rank sum ``V``; they sum to ``2^n``.
+
+    Examples
+    --------
+    >>> signed_rank_counts(3).tolist()
+    [1, 1, 1, 2, 1, 1, 1]
+    """
     counts = np.zeros(n * (n + 1) // 2 + 1, dtype=np.int64)
     counts[0] = 1
     for k in range(1, n + 1):
@@ -806,6 +845,19 @@ def pairwise_tests(
     e.g. matches at the display's maximum) has no test, as R's ``pairwise.t.test`` gives NA
     there; it is left out of the Holm family (``p.adjust`` leaves out NA) and its ``note``
     says why.
+
+    Parameters
+    ----------
+    df
+        Long data, one row per subject and level.
+    dv
+        The dependent variable's column.
+    factor
+        The within factor's column.
+    subject
+        The subject's column.
+    alpha
+        The familywise level the intervals agree with; default 0.05.
 
     Returns
     -------
@@ -872,6 +924,16 @@ def pairwise_tests(
 def natural_order(values) -> list:
     """Levels in their natural order: numbers as numbers (1, 2, …, 10, 11), anything else as
     text.
+
+    Parameters
+    ----------
+    values
+        The levels.
+
+    Returns
+    -------
+    list
+        Sorted.
 
     Examples
     --------
@@ -947,6 +1009,23 @@ def group_letters(count: int, letters: Sequence[str] = LETTERS) -> list[str]:
     """The names of ``count`` letter groups, as R's ``multcompView::multcompLetters`` gives
     them: ``a … z, A … Z``, then the last letter as a prefix (``.a … .Z``, ``..a`` …).
 
+    Parameters
+    ----------
+    count
+        The number of groups, >= 0.
+    letters
+        The alphabet; default ``a … z, A … Z``.
+
+    Returns
+    -------
+    list of str
+        ``count`` names.
+
+    Raises
+    ------
+    ValueError
+        For a negative count.
+
     Examples
     --------
     >>> group_letters(3)
@@ -980,6 +1059,17 @@ def correction(row) -> Correction:
     check there, and the lower bound is the correction valid whatever the covariance
     (Greenhouse & Geisser 1959).
 
+    Parameters
+    ----------
+    row
+        A row of :func:`rm_anova`'s table (``df1``, ``df2``, ``p`` and each correction's
+        ``eps_*`` and ``p_*``).
+
+    Returns
+    -------
+    {'none', 'GG', 'HF', 'LB'}
+        The correction.
+
     Examples
     --------
     >>> correction(pd.Series({"df1": 5.0, "eps_gg": 0.42, "eps_hf": 0.47}))
@@ -999,13 +1089,37 @@ def correction(row) -> Correction:
 
 
 def corrected_p(row) -> float:
-    """The p-value of the correction :func:`correction` chooses: the one to decide on."""
+    """The p-value of the correction :func:`correction` chooses: the one to decide on.
+
+    Parameters
+    ----------
+    row
+        A row of :func:`rm_anova`'s table (``df1``, ``df2``, ``p`` and each correction's
+        ``eps_*`` and ``p_*``).
+
+    Returns
+    -------
+    float
+        The p-value.
+    """
     chosen = correction(row)
     return float(row["p"] if chosen == "none" else row[f"p_{chosen.lower()}"])
 
 
 def corrected_df(row) -> tuple[float, float]:
-    """The degrees of freedom of the test :func:`correction` chooses, ``(ε df1, ε df2)``."""
+    """The degrees of freedom of the test :func:`correction` chooses, ``(ε df1, ε df2)``.
+
+    Parameters
+    ----------
+    row
+        A row of :func:`rm_anova`'s table (``df1``, ``df2``, ``p`` and each correction's
+        ``eps_*`` and ``p_*``).
+
+    Returns
+    -------
+    tuple of float
+        ``(ε df1, ε df2)``.
+    """
     chosen = correction(row)
     eps = 1.0 if chosen == "none" else float(row[f"eps_{chosen.lower()}"])
     return float(row["df1"]) * eps, float(row["df2"]) * eps
@@ -1015,6 +1129,16 @@ def normality(values: Sequence[float]) -> dict:
     """Shapiro–Wilk test (``W``, ``p``; scipy's port of Royston's algorithm, as R's
     ``shapiro.test``) of residuals or differences; NaN for fewer than 3 values or values
     without variance, where it is undefined.
+
+    Parameters
+    ----------
+    values
+        The residuals or differences.
+
+    Returns
+    -------
+    dict
+        ``W``, ``p`` and ``n``.
 
     Examples
     --------
@@ -1031,7 +1155,24 @@ def normality(values: Sequence[float]) -> dict:
 
 def anova_residuals(data: pd.DataFrame, dv: str, within: Sequence[str], subject: str):
     """The residuals of the additive subject + cell model of a within-subject ANOVA:
-    ``y - subject mean - cell mean + grand mean`` (every effect's error term pooled)."""
+    ``y - subject mean - cell mean + grand mean`` (every effect's error term pooled).
+
+    Parameters
+    ----------
+    data
+        Long data, one row per subject and cell.
+    dv
+        The dependent variable's column.
+    within
+        The within factors' columns.
+    subject
+        The subject's column.
+
+    Returns
+    -------
+    numpy.ndarray
+        The residuals, one per subject and cell, in the dependent variable's unit.
+    """
     wide = data.pivot_table(index=subject, columns=list(within), values=dv, aggfunc="first")
     values = wide.to_numpy(float)
     residuals = (
@@ -1046,6 +1187,15 @@ def assumptions(
     """The assumption report of an analysis: for each ANOVA effect the sphericity correction it
     is reported with and why (:func:`correction`, with Mauchly's test), then
     Shapiro–Wilk of the ANOVA's residuals and of each ``(name, paired differences)``.
+
+    Parameters
+    ----------
+    anova
+        The table of :func:`rm_anova`.
+    residuals
+        The ANOVA's residuals (:func:`anova_residuals`).
+    differences
+        ``(name, paired differences)`` of the t-tests reported; default none.
 
     Returns
     -------

@@ -36,6 +36,18 @@ def to_srgb8(luminance_cd_m2: np.ndarray, max_cd_m2: float) -> np.ndarray:
     """Luminance relative to ``max_cd_m2``, encoded as 8-bit sRGB (what an sRGB screen shows
     at that relative luminance).
 
+    Parameters
+    ----------
+    luminance_cd_m2
+        Luminance, cd/m², any shape.
+    max_cd_m2
+        The luminance shown as white, cd/m².
+
+    Returns
+    -------
+    numpy.ndarray
+        uint8 codes, the shape of ``luminance_cd_m2``.
+
     Examples
     --------
     >>> to_srgb8(np.array([0.0, 21.6, 120.0]), 120.0).tolist()  # 18 % grey → sRGB 118
@@ -91,12 +103,34 @@ class DisplayedSet:
 
     def luminance(self, name: str) -> np.ndarray:
         """The luminance (cd/m²) the display showed for image ``name``:
-        ``decode(encode(image))``."""
+        ``decode(encode(image))``.
+
+        Parameters
+        ----------
+        name
+            An image of the set.
+
+        Returns
+        -------
+        numpy.ndarray
+            cd/m².
+        """
         codes, _report = self.calibration.encode(self.set.image(name))
         return self.calibration.decode(codes)
 
     def picture(self, name: str) -> np.ndarray:
-        """Image ``name`` as the display showed it, as 8-bit sRGB (:func:`to_srgb8`)."""
+        """Image ``name`` as the display showed it, as 8-bit sRGB (:func:`to_srgb8`).
+
+        Parameters
+        ----------
+        name
+            An image of the set.
+
+        Returns
+        -------
+        numpy.ndarray
+            uint8 sRGB codes.
+        """
         return to_srgb8(self.luminance(name), self.calibration.max_cd_m2)
 
     def describe_display(self) -> str:
@@ -111,7 +145,22 @@ class DisplayedSet:
 def image_grid(panels: list[tuple[np.ndarray, str]], *, columns: int | None = None) -> bytes:
     """8-bit images with a label above each, one screen pixel per image pixel, as PNG bytes.
 
-    ``columns`` defaults to as many as fit in 1000 px.
+    Parameters
+    ----------
+    panels
+        ``(picture, label)`` pairs: uint8 images (grey or RGB) and their labels, at least one.
+    columns
+        Panels per row; default None: as many as fit in 1000 px.
+
+    Returns
+    -------
+    bytes
+        The PNG file's content.
+
+    Raises
+    ------
+    ValueError
+        Without panels.
     """
     if not panels:
         raise ValueError("image_grid needs at least one image")
@@ -153,6 +202,20 @@ def radial_profile(
     rings out to the nearest image border: (distance in degrees, cd/m²). A colour image is
     averaged as Rec. 709 luminance.
 
+    Parameters
+    ----------
+    luminance_cd_m2
+        ``(H, W)`` luminance, or ``(H, W, 3)`` linear RGB, cd/m².
+    centre_px
+        ``(row, column)`` of the centre, pixel indices (fractions allowed).
+    pixel_deg
+        Visual angle of one pixel, degrees.
+
+    Returns
+    -------
+    distance_deg, mean_cd_m2 : numpy.ndarray
+        Each ring's distance from the centre, degrees, and its mean luminance, cd/m².
+
     Examples
     --------
     >>> r, mean = radial_profile(np.full((5, 5), 3.0), (2, 2), 0.1)
@@ -185,7 +248,24 @@ def profiles(
     ylabel: str = "displayed luminance (cd/m²)",
 ) -> bytes:
     """Luminance profiles: one panel per group (a method, a context), one curve per image
-    ``(label, x, values)``; ``lines`` adds labelled horizontal lines (as L_dmax)."""
+    ``(label, x, values)``; ``lines`` adds labelled horizontal lines (as L_dmax).
+
+    Parameters
+    ----------
+    groups
+        Panel title → its curves ``(label, x, values)``.
+    log
+        Whether the luminance axis is logarithmic; default False.
+    lines
+        Label → luminance of a horizontal line, cd/m²; default none.
+    xlabel, ylabel
+        The axes' labels; defaults: distance in degrees, displayed luminance in cd/m².
+
+    Returns
+    -------
+    bytes
+        The PNG file's content.
+    """
     figure, axes = plt.subplots(
         1, len(groups), figsize=(4.6 * len(groups), 3.6), sharey=True, squeeze=False
     )

@@ -62,6 +62,15 @@ def acuity_bench(
     """Time every way of the acuity blur against the exact one on each workload (``only``:
     these of :data:`ACUITY_WORKLOADS`).
 
+    Parameters
+    ----------
+    repeats
+        Timed runs of each variant, the fastest kept; default 3.
+    only
+        Workload names to run; default None: all.
+    log
+        Called with a line per workload; default :func:`print`.
+
     Returns
     -------
     list of dict
@@ -118,7 +127,18 @@ def acuity_bench(
 
 
 def acuity_table(rows: list[dict]) -> str:
-    """The rows as a Markdown table."""
+    """The rows as a Markdown table.
+
+    Parameters
+    ----------
+    rows
+        The rows of :func:`acuity_bench`.
+
+    Returns
+    -------
+    str
+        The table, one line per row, ending in a new line.
+    """
     lines = [
         "| workload | σ (px) | variant | time (s) | speed-up over exact | max error (codes) "
         "| 99.9 % (codes) | stated bound (of the range) |",
@@ -135,7 +155,15 @@ def acuity_table(rows: list[dict]) -> str:
 
 
 def write_acuity_bench(out: Path, rows: list[dict]) -> None:
-    """``acuity.csv`` and ``acuity.md`` in ``out``."""
+    """``acuity.csv`` and ``acuity.md`` in ``out``.
+
+    Parameters
+    ----------
+    out
+        The folder, existing; the two files are written whole or not at all.
+    rows
+        The rows of :func:`acuity_bench`, at least one.
+    """
     with atomic_open(out / "acuity.csv", "w", newline="") as handle:
         writer = csv.DictWriter(handle, fieldnames=list(rows[0]))
         writer.writeheader()

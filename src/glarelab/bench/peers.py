@@ -41,7 +41,22 @@ GAUSSIAN_PEER_TRUNCATE = (4.0, 5.0, 6.0)  # 4 σ is both libraries' default
 
 def spectrum_peer(image, kernel, dtype) -> Callable[[], np.ndarray]:
     """The peer a user could write: the kernel's spectrum computed once, then per image
-    ``irfft2(rfft2(ΔL padded to next_fast_len) · K̂)``, every channel at once."""
+    ``irfft2(rfft2(ΔL padded to next_fast_len) · K̂)``, every channel at once.
+
+    Parameters
+    ----------
+    image
+        The workload, luminance, cd/m², ``(H, W)`` or ``(H, W, 3)``.
+    kernel
+        The full kernel ``(2H - 1, 2W - 1[, C])``, centred.
+    dtype
+        The numpy float type computed in (``np.float32`` or ``np.float64``).
+
+    Returns
+    -------
+    callable
+        ``peer()``: the image with Yoshida's clamped glare (:data:`L_DMAX`), cd/m².
+    """
     height, width = image.shape[:2]
     lengths = tuple(scipy.fft.next_fast_len(2 * n - 1, real=True) for n in (height, width))
     placed = np.zeros(lengths + kernel.shape[2:], dtype=dtype)
@@ -64,7 +79,20 @@ def spectrum_peer(image, kernel, dtype) -> Callable[[], np.ndarray]:
 
 
 def fftconvolve_peer(image, kernel) -> Callable[[], np.ndarray]:
-    """``scipy.signal.fftconvolve`` of the whole excess image with the full kernel."""
+    """``scipy.signal.fftconvolve`` of the whole excess image with the full kernel.
+
+    Parameters
+    ----------
+    image
+        The workload, luminance, cd/m², ``(H, W)`` or ``(H, W, 3)``.
+    kernel
+        The full kernel, centred, ``(KH, KW[, C])``.
+
+    Returns
+    -------
+    callable
+        ``peer()``: the image with Yoshida's clamped glare (:data:`L_DMAX`), cd/m².
+    """
 
     from scipy.signal import fftconvolve
 
@@ -82,6 +110,24 @@ def fftconvolve_peer(image, kernel) -> Callable[[], np.ndarray]:
 
 
 def gaussian_peers(image, pixel, model) -> dict[str, Callable[[], np.ndarray]]:
+    """What a user could write for the Gaussian model: library Gaussian filters of the excess,
+    clamped at :data:`L_DMAX`.
+
+    Parameters
+    ----------
+    image
+        The workload, luminance, cd/m², ``(H, W)`` or ``(H, W, 3)``.
+    pixel
+        Visual angle of one pixel, degrees.
+    model
+        The Gaussian model whose ``sigma_deg`` the filters use.
+
+    Returns
+    -------
+    dict of str to callable
+        Name → ``peer()``: SciPy's ``gaussian_filter`` and, where OpenCV is installed, its
+        ``GaussianBlur``, at each truncation of :data:`GAUSSIAN_PEER_TRUNCATE`.
+    """
     from scipy.ndimage import gaussian_filter
 
     sigma_px = model.sigma_deg / pixel

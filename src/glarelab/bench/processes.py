@@ -80,7 +80,25 @@ def _fresh_call(
 def fresh_bench(name: str, model_name: str, repeats: int, log=print) -> dict:
     """The one-call workload: ``add_glare`` in a fresh process with an empty kernel cache
     (a new folder each time) and with a warm one (filled by an earlier process); the best
-    of ``repeats`` each, and the last image of each."""
+    of ``repeats`` each, and the last image of each.
+
+    Parameters
+    ----------
+    name
+        The workload (:func:`glarelab.bench.scenes.workload`).
+    model_name
+        The model (:func:`glarelab.bench.scenes.bench_model`).
+    repeats
+        Fresh processes per case, the fastest kept.
+    log
+        Called with a line per measurement; default :func:`print`.
+
+    Returns
+    -------
+    dict
+        Case (empty or warm cache) → ``(seconds, image)``: the best wall time of the call,
+        and the image, cd/m².
+    """
     import tempfile
 
     results = {}
@@ -160,7 +178,21 @@ def startup_bench(repeats: int = 5, log=print) -> list[dict]:
     """Start-up: the imports of ``import numpy, scipy.fft``, ``from glarelab import glare`` and
     ``glarelab --version`` (``python -X importtime``), and each process's wall time; the
     median of ``repeats`` runs, the cases in turn, with each case's ratio to numpy and
-    scipy.fft (the median of the per-round ratios)."""
+    scipy.fft (the median of the per-round ratios).
+
+    Parameters
+    ----------
+    repeats
+        Rounds of the three cases; default 5.
+    log
+        Called with a line per measurement; default :func:`print`.
+
+    Returns
+    -------
+    list of dict
+        One row per case: ``case``, ``import_s`` and ``process_s`` (medians, seconds),
+        ``import_ratio`` and ``process_ratio`` (to the numpy and scipy.fft baseline).
+    """
     rounds = []
     for _ in range(repeats):
         measured = {}
@@ -199,7 +231,20 @@ def memory_bench(name: str, log=print) -> list[dict]:
     """Peak memory (MiB) of one Vos render of a workload, allocated through Python and NumPy
     (``tracemalloc``; FFT scratch inside pocketfft is not counted) on top of the image and the
     digitised kernel: ours (renderer built with the kernel, then one render) and the two FFT
-    peers (their kernel spectrum included)."""
+    peers (their kernel spectrum included).
+
+    Parameters
+    ----------
+    name
+        The workload (:func:`glarelab.bench.scenes.workload`).
+    log
+        Called with a line per measurement; default :func:`print`.
+
+    Returns
+    -------
+    list of dict
+        One row per contender: ``workload``, ``variant`` and ``peak_mib``.
+    """
     import tracemalloc
 
     image, pixel = workload(name)

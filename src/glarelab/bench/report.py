@@ -29,7 +29,25 @@ def tables(
 ) -> str:
     """Markdown: a summary per workload and model (the default against the exact render and
     the peers, as ratios of times measured in the same run), then every variant, then peak
-    memory and the spectral section."""
+    memory and the spectral section.
+
+    Parameters
+    ----------
+    rows
+        The rows of :func:`glarelab.bench.run.run_bench`: one per workload, model and
+        variant.
+    spectral_rows
+        The rows of :func:`glarelab.bench.spectral.spectral_bench`; default none.
+    memory_rows
+        The rows of :func:`glarelab.bench.processes.memory_bench`; default none.
+    startup_rows
+        The rows of :func:`glarelab.bench.processes.startup_bench`; default none.
+
+    Returns
+    -------
+    str
+        The Markdown.
+    """
     lines = [
         "| workload | model | default (s) | path | error (codes) | fastest peer within "
         "0.5 codes | peer (s) | × faster than it | × faster than rfft2 with precomputed "
@@ -96,7 +114,15 @@ def tables(
 
 
 def write_plots(rows: list[dict], out: Path) -> None:
-    """One Pareto PNG per workload and model, ``pareto_<workload>_<model>.png``."""
+    """One Pareto PNG per workload and model, ``pareto_<workload>_<model>.png``.
+
+    Parameters
+    ----------
+    rows
+        The rows of :func:`glarelab.bench.run.run_bench`.
+    out
+        The folder the PNGs are written into.
+    """
     for key in dict.fromkeys((r["workload"], r["model"]) for r in rows):
         results = [r for r in rows if (r["workload"], r["model"]) == key]
         title = f"{key[0]} / {key[1]}: time against error"

@@ -59,6 +59,20 @@ def sun_scene(n: int, *, seed: int = 0) -> tuple[np.ndarray, float]:
     Sky 60-180 cd/m² brightening towards the sun, ground 10-40 cd/m² below a horizon at
     two thirds of the height; the sun at a third of the height. Every pixel but the sun is
     displayable, so the whole image is a target and the dark ground lies next to the sun.
+
+    Parameters
+    ----------
+    n
+        The image's side, pixels; the scene spans :data:`LARGE_FOV_DEG` degrees.
+    seed
+        The seed of its texture; default 0.
+
+    Returns
+    -------
+    image : numpy.ndarray
+        ``(H, W)`` luminance, cd/m².
+    pixel_deg : float
+        Visual angle of one pixel, degrees.
     """
     rng = np.random.default_rng(seed)
     pixel = LARGE_FOV_DEG / n
@@ -78,6 +92,20 @@ def leaves_scene(n: int, *, seed: int = 0) -> tuple[np.ndarray, float]:
     Leaves 5-200 cd/m² (log-normal), sky in the canopy's gaps (about 12 % of the pixels,
     all above L_dmax: many bright pixels all over the image), and the 7.5e8 cd/m² sun
     covered by leaves except for three small holes.
+
+    Parameters
+    ----------
+    n
+        The image's side, pixels; the scene spans :data:`LARGE_FOV_DEG` degrees.
+    seed
+        The seed of its texture; default 0.
+
+    Returns
+    -------
+    image : numpy.ndarray
+        ``(H, W)`` luminance, cd/m².
+    pixel_deg : float
+        Visual angle of one pixel, degrees.
     """
     rng = np.random.default_rng(seed)
     pixel = LARGE_FOV_DEG / n
@@ -97,7 +125,22 @@ def leaves_scene(n: int, *, seed: int = 0) -> tuple[np.ndarray, float]:
 
 
 def glints_scene(n: int, *, seed: int = 0) -> tuple[np.ndarray, float]:
-    """Sunlit water: 20 cd/m² waves with 0.1 % glints of 1e3-1e6 cd/m² all over the image."""
+    """Sunlit water: 20 cd/m² waves with 0.1 % glints of 1e3-1e6 cd/m² all over the image.
+
+    Parameters
+    ----------
+    n
+        The image's side, pixels; the scene spans :data:`LARGE_FOV_DEG` degrees.
+    seed
+        The seed of its texture; default 0.
+
+    Returns
+    -------
+    image : numpy.ndarray
+        ``(H, W)`` luminance, cd/m².
+    pixel_deg : float
+        Visual angle of one pixel, degrees.
+    """
     rng = np.random.default_rng(seed)
     image = np.exp(np.log(20.0) + 0.3 * rng.standard_normal((n, n)))
     glints = rng.random((n, n)) < 0.001
@@ -107,7 +150,20 @@ def glints_scene(n: int, *, seed: int = 0) -> tuple[np.ndarray, float]:
 
 def yoshida_scene(*, seed: int = 0) -> tuple[np.ndarray, float]:
     """The Yoshida 2008 stimulus: 271² at 0.011824°/px, a 0.3° disk at 7000 cd/m² (level
-    F) on a 150 ± 15 cd/m² sky."""
+    F) on a 150 ± 15 cd/m² sky.
+
+    Parameters
+    ----------
+    seed
+        The seed of its texture; default 0.
+
+    Returns
+    -------
+    image : numpy.ndarray
+        ``(H, W)`` luminance, cd/m².
+    pixel_deg : float
+        Visual angle of one pixel, degrees.
+    """
     rng = np.random.default_rng(seed)
     n, pixel = 271, 0.011824  # 3.2° at the paper's display geometry
     y, x = np.indices((n, n)) - n // 2
@@ -117,7 +173,20 @@ def yoshida_scene(*, seed: int = 0) -> tuple[np.ndarray, float]:
 
 
 def night_scene(*, seed: int = 0) -> tuple[np.ndarray, float]:
-    """Spencer Fig. 14 style: 1280 × 1024 at 0.03°/px, 0.05 cd/m² road, six headlights."""
+    """Spencer Fig. 14 style: 1280 × 1024 at 0.03°/px, 0.05 cd/m² road, six headlights.
+
+    Parameters
+    ----------
+    seed
+        The seed of its texture; default 0.
+
+    Returns
+    -------
+    image : numpy.ndarray
+        ``(H, W)`` luminance, cd/m².
+    pixel_deg : float
+        Visual angle of one pixel, degrees.
+    """
     rng = np.random.default_rng(seed)
     night = np.full((1024, 1280), 0.05) + 0.02 * rng.random((1024, 1280))
     for row, col, level in (
@@ -143,7 +212,30 @@ def lamps_scene(
 ) -> tuple[np.ndarray, float]:
     """A night street: 0.01-1 cd/m² (log-uniform texture), ``lamps`` lamps of 3 × 3 px at
     1e3-1e5 cd/m² anywhere, and optionally a 2 × 2 glint (a sun reflected in a window).
-    In RGB the background is bluish and each lamp sodium orange or white."""
+    In RGB the background is bluish and each lamp sodium orange or white.
+
+    Parameters
+    ----------
+    shape
+        ``(H, W)``, pixels.
+    lamps
+        The number of lamps.
+    pixel_deg
+        Visual angle of one pixel, degrees (returned as given).
+    colour
+        Whether the image is RGB ``(H, W, 3)``; default False.
+    glint_cd_m2
+        The glint's luminance, cd/m²; default None: no glint.
+    seed
+        The seed of its texture; default 0.
+
+    Returns
+    -------
+    image : numpy.ndarray
+        ``(H, W)`` or ``(H, W, 3)`` luminance, cd/m².
+    pixel_deg : float
+        ``pixel_deg``.
+    """
     rng = np.random.default_rng(seed)
     height, width = shape
     image = 10 ** rng.uniform(-2, 0, shape)
@@ -184,14 +276,43 @@ LARGE = ("sun_4096", "leaves_4096", "glints_4096")
 
 
 def workload(name: str) -> tuple[np.ndarray, float]:
-    """One workload: (luminance image, pixel_deg)."""
+    """One workload: (luminance image, pixel_deg).
+
+    Parameters
+    ----------
+    name
+        A key of :data:`WORKLOADS`.
+
+    Returns
+    -------
+    image : numpy.ndarray
+        ``(H, W)`` luminance, cd/m².
+    pixel_deg : float
+        Visual angle of one pixel, degrees.
+
+    Raises
+    ------
+    ValueError
+        For an unknown name.
+    """
     if name not in WORKLOADS:
         raise ValueError(f"unknown workload {name!r}; choose from {sorted(WORKLOADS)}")
     return WORKLOADS[name]()
 
 
 def workload_names(large: bool = False) -> list[str]:
-    """The workloads run by default, and with ``large`` the 4096² ones too."""
+    """The workloads run by default, and with ``large`` the 4096² ones too.
+
+    Parameters
+    ----------
+    large
+        Whether to include the 4096² scenes (:data:`LARGE`); default False.
+
+    Returns
+    -------
+    list of str
+        Names of :data:`WORKLOADS`, in its order.
+    """
     return [name for name in WORKLOADS if large or name not in LARGE]
 
 
@@ -214,6 +335,26 @@ MODELS = {
 
 
 def bench_model(name: str, pixel: float):
+    """The glare model a workload is benched with, by name.
+
+    Parameters
+    ----------
+    name
+        ``'vos'``, ``'vos_scotopic'`` or ``'gaussian'`` (:data:`MODELS`).
+    pixel
+        The workload's pixel, degrees: Yoshida's Gaussian is integrated over pixels when
+        its σ spans fewer than 3 of them.
+
+    Returns
+    -------
+    glarelab.glare.GlareModel
+        The model.
+
+    Raises
+    ------
+    ValueError
+        For an unknown name.
+    """
     if name == "vos":
         return glare.VosGlare()
     if name == "vos_scotopic":

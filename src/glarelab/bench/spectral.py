@@ -18,7 +18,24 @@ def spectral_bench(
     reference (:func:`glarelab.glare.models.wave.kernel_colour_error`). The kernels are FFT samples
     rebinned (``pixel_integration='rebin'``), the path whose cost these methods differ in: with
     exact pixel integration one autocorrelation serves every wavelength
-    (docs/speed-accuracy.md)."""
+    (docs/speed-accuracy.md).
+
+    Parameters
+    ----------
+    shape
+        The kernel's odd shape, pixels; default ``(1025, 1025)``.
+    pixel_deg
+        Visual angle of one pixel, degrees; default 0.004.
+    repeats
+        Rounds of the variants, the fastest time kept; default 1.
+
+    Returns
+    -------
+    list of dict
+        One row per variant: ``workload``, ``variant``, ``seconds``, the colour error of
+        :func:`glarelab.glare.models.wave.kernel_colour_error` and ``speed_vs_peer`` (the
+        reference's time over this one's).
+    """
 
     def kernel(**options):
         model = glare.WaveOpticsGlare(pupil_mm=6.0, pixel_integration="rebin", **options)

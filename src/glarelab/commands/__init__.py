@@ -48,7 +48,18 @@ COMMANDS = {  # command → (its module, its help), in the order of ``glarelab -
 
 
 def load(name: str) -> ModuleType:
-    """The command module ``name`` of :data:`MODULE_NAMES`, imported."""
+    """The command module ``name`` of :data:`MODULE_NAMES`, imported.
+
+    Parameters
+    ----------
+    name
+        A name of :data:`MODULE_NAMES` (``'render'``, ``'run'``, ...).
+
+    Returns
+    -------
+    types.ModuleType
+        The module ``glarelab.commands.NAME``.
+    """
     return importlib.import_module(f".{name}", __name__)
 
 

@@ -44,7 +44,14 @@ def _analyse(args: argparse.Namespace) -> int:
 
 
 def add(commands) -> None:
-    """Add the commands to the ``glarelab`` parser."""
+    """Add the commands to the ``glarelab`` parser.
+
+    Parameters
+    ----------
+    commands
+        The ``glarelab`` parser's subcommands (what ``add_subparsers()`` returned); this
+        module's commands are added to them.
+    """
     analyse = commands.add_parser("analyse", help="analyse session CSVs: tables, figures, report")
     analyse.add_argument("study", help=f"the protocol: {PROTOCOL_HELP}")
     analyse.add_argument("csv", nargs="+", type=Path, help="session CSV files")

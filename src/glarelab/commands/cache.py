@@ -28,6 +28,14 @@ def _clear(args: argparse.Namespace) -> int:
 
 
 def add(commands) -> None:
+    """Add the commands to the ``glarelab`` parser.
+
+    Parameters
+    ----------
+    commands
+        The ``glarelab`` parser's subcommands (what ``add_subparsers()`` returned); this
+        module's commands are added to them.
+    """
     cache = commands.add_parser(
         "cache",
         help="show or clear the cache of digitised kernels",

@@ -38,7 +38,28 @@ def _free_name(path: Path, tag: str) -> Path:
 def calibration_out(path: Path, *, replace: bool, inputs=()) -> Path:
     """Where a new calibration goes: ``path`` if it is free; beside it under a new name if a
     file is there (which is kept as it was); over it with ``replace``, when it is a glarelab
-    calibration, which is then kept as ``STEM.replaced-N.json``."""
+    calibration, which is then kept as ``STEM.replaced-N.json``.
+
+    Parameters
+    ----------
+    path
+        The ``--out`` file asked for, ``.json``.
+    replace
+        Whether to replace a calibration there (``--replace``).
+    inputs
+        The command's input files, none of which may be the output; default none.
+
+    Returns
+    -------
+    pathlib.Path
+        The file to write the calibration to.
+
+    Raises
+    ------
+    ValueError
+        For an output that may not be written, or ``replace`` of something that is not a
+        glarelab calibration.
+    """
     path = Path(path)
     if not (path.exists() or path.is_symlink()):
         return output_file(path, (".json",), "calibration", inputs=inputs)
@@ -291,7 +312,14 @@ def _measure_locked(args: argparse.Namespace) -> int:
 
 
 def add(commands) -> None:
-    """Add the commands to the ``glarelab`` parser."""
+    """Add the commands to the ``glarelab`` parser.
+
+    Parameters
+    ----------
+    commands
+        The ``glarelab`` parser's subcommands (what ``add_subparsers()`` returned); this
+        module's commands are added to them.
+    """
     calibrate = commands.add_parser("calibrate", help="display calibration")
     calibrate_commands = calibrate.add_subparsers(dest="calibrate_command", required=True)
     fit = calibrate_commands.add_parser("fit", help="fit a calibration to photometer readings")

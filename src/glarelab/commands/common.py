@@ -39,7 +39,13 @@ FORCE_HELP = "overwrite an existing file glarelab did not write, or replace a sy
 
 
 def log(message: str) -> None:
-    """A progress line on stderr (stdout keeps what a command prints as its result)."""
+    """A progress line on stderr (stdout keeps what a command prints as its result).
+
+    Parameters
+    ----------
+    message
+        The line, after ``[glarelab]``.
+    """
     print(f"[glarelab] {message}", file=sys.stderr, flush=True)
 
 
@@ -70,19 +76,49 @@ class HelpFormatter(argparse.HelpFormatter):
 
 
 class Parser(argparse.ArgumentParser):
-    """An argument parser whose errors are one line, naming the command and the problem."""
+    """An argument parser whose errors are one line, naming the command and the problem.
+
+    Parameters
+    ----------
+    args, kwargs
+        As for :class:`argparse.ArgumentParser`; the help formatter defaults to
+        :class:`HelpFormatter`.
+    """
 
     def __init__(self, *args, **kwargs):
         kwargs.setdefault("formatter_class", HelpFormatter)
         super().__init__(*args, **kwargs)
 
     def error(self, message: str):
+        """Print ``message`` on one line after the command's name, and exit with status 2.
+
+        Parameters
+        ----------
+        message
+            What is wrong, as argparse words it.
+        """
         print(f"{self.prog}: {message} (see {self.prog} --help)", file=sys.stderr)
         raise SystemExit(2)
 
 
 def number(low: float | None = None, high: float | None = None, *, above: bool = False):
-    """An argparse type: a finite number in ``[low, high]`` (``(low, high]`` if ``above``)."""
+    """An argparse type: a finite number in ``[low, high]`` (``(low, high]`` if ``above``).
+
+    Parameters
+    ----------
+    low
+        The smallest value allowed; default None: no bound.
+    high
+        The largest value allowed; default None: no bound.
+    above
+        Whether ``low`` itself is refused; default False.
+
+    Returns
+    -------
+    callable
+        ``parse(text) -> float``, raising :class:`argparse.ArgumentTypeError` for text out
+        of range or not a number.
+    """
 
     def parse(text: str) -> float:
         try:
@@ -104,7 +140,21 @@ def number(low: float | None = None, high: float | None = None, *, above: bool =
 
 
 def count(low: int = 1, high: int | None = None):
-    """An argparse type: a whole number in ``[low, high]``."""
+    """An argparse type: a whole number in ``[low, high]``.
+
+    Parameters
+    ----------
+    low
+        The smallest value allowed; default 1.
+    high
+        The largest; default None: no bound.
+
+    Returns
+    -------
+    callable
+        ``parse(text) -> int``, raising :class:`argparse.ArgumentTypeError` for text out
+        of range or not a whole number.
+    """
 
     def parse(text: str) -> int:
         try:
@@ -124,6 +174,18 @@ def output_folder(path: Path, command: str) -> Path:
     """The folder a command fills with files of its choosing: created if new, and reused only
     when the same command made it (a previous output, which it may replace). A file, or a
     folder holding anything else, is refused before anything is written.
+
+    Parameters
+    ----------
+    path
+        The folder (``--out``).
+    command
+        The command's name, recorded in the folder's ``.glarelab`` marker.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``, existing.
 
     Raises
     ------
@@ -152,7 +214,27 @@ def output_folder(path: Path, command: str) -> Path:
 def writes_into(path: Path, names: list[str], command: str) -> Path:
     """A folder a command writes a fixed set of named files into (``docs``, ``gallery``, …):
     created if new; a file of that name glarelab did not write there is refused
-    (``glarelab.files.folders.claim_files``); other files in it are left alone."""
+    (``glarelab.files.folders.claim_files``); other files in it are left alone.
+
+    Parameters
+    ----------
+    path
+        The folder.
+    names
+        The files the command writes, relative to ``path``.
+    command
+        The command's name, the kind the files are listed as.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``, existing.
+
+    Raises
+    ------
+    ValueError
+        If ``path`` is a file, or a file of ``names`` is there and glarelab did not write it.
+    """
     path = Path(path)
     if path.exists() and not path.is_dir():
         raise ValueError(f"{path} is a file; give a folder for {', '.join(names)}")
@@ -171,7 +253,18 @@ def _same_file(first: Path, second: Path) -> bool:
 
 
 def inside_whole_output(path: Path) -> str | None:
-    """What kind of whole output (a stimulus set, a report) holds ``path``, if one does."""
+    """What kind of whole output (a stimulus set, a report) holds ``path``, if one does.
+
+    Parameters
+    ----------
+    path
+        A file or folder.
+
+    Returns
+    -------
+    str or None
+        ``'KIND FOLDER'`` of the innermost such output, or None.
+    """
     for folder in Path(path).absolute().parents:
         kinds = set(listed_files(folder).values())
         whole = sorted(kinds & WHOLE_OUTPUTS)
@@ -223,6 +316,29 @@ def output_file(
     (as the folder's listing, :mod:`glarelab.files.folders`, says); ``shared`` says the caller
     has checked the folder's listing itself (a batch of outputs).
 
+    Parameters
+    ----------
+    path
+        The file to write.
+    suffixes
+        The suffixes allowed, lower case with the dot (``('.png',)``).
+    what
+        What the file holds, for the messages.
+    inputs
+        The command's input files, none of which may be ``path``; default none.
+    force
+        Whether to overwrite a file glarelab did not write, or replace a link; default False.
+    shared
+        Whether the caller has checked the folder's listing itself; default False.
+    verified_ok
+        Whether a verified calibration may be overwritten (``calibrate verify``); default
+        False.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
     Raises
     ------
     ValueError
@@ -266,7 +382,20 @@ def output_file(
 
 
 def claim_output(path: Path, kind: str) -> Path:
-    """Just before writing ``path``: list it as glarelab's (so a later run may replace it)."""
+    """Just before writing ``path``: list it as glarelab's (so a later run may replace it).
+
+    Parameters
+    ----------
+    path
+        The file about to be written.
+    kind
+        The kind of output it is listed as.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
     path = Path(path)
     list_files(path.parent, [path.name], kind)
     return path
@@ -284,7 +413,21 @@ def available_memory() -> int | None:
 
 
 def check_memory(needed: float, what: str) -> None:
-    """Refuse work that needs more memory than the system has, before allocating it."""
+    """Refuse work that needs more memory than the system has, before allocating it.
+
+    Parameters
+    ----------
+    needed
+        Bytes the work needs.
+    what
+        The work, for the message.
+
+    Raises
+    ------
+    ValueError
+        If Linux reports less memory available than ``needed`` (elsewhere nothing is
+        checked).
+    """
     free = available_memory()
     if free is not None and needed > free:
         raise ValueError(

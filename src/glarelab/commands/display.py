@@ -116,7 +116,14 @@ def _patch_protocol(args: argparse.Namespace):
 
 
 def add(commands) -> None:
-    """Add the commands to the ``glarelab`` parser."""
+    """Add the commands to the ``glarelab`` parser.
+
+    Parameters
+    ----------
+    commands
+        The ``glarelab`` parser's subcommands (what ``add_subparsers()`` returned); this
+        module's commands are added to them.
+    """
     check = commands.add_parser(
         "check-display",
         help="measure the display: resolution, refresh, frame jitter, bits, a flash's cost, and "

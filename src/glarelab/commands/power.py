@@ -218,7 +218,14 @@ def _cluster_arguments(parser: argparse.ArgumentParser, workers_need: str) -> No
 
 
 def add(commands) -> None:
-    """Add the commands to the ``glarelab`` parser."""
+    """Add the commands to the ``glarelab`` parser.
+
+    Parameters
+    ----------
+    commands
+        The ``glarelab`` parser's subcommands (what ``add_subparsers()`` returned); this
+        module's commands are added to them.
+    """
     from glarelab.planning.effects import CORRECTIONS
     from glarelab.planning.power import MAX_PARTICIPANTS
 

@@ -37,7 +37,14 @@ def _protocol_check(args: argparse.Namespace) -> int:
 
 
 def add(commands) -> None:
-    """Add the commands to the ``glarelab`` parser."""
+    """Add the commands to the ``glarelab`` parser.
+
+    Parameters
+    ----------
+    commands
+        The ``glarelab`` parser's subcommands (what ``add_subparsers()`` returned); this
+        module's commands are added to them.
+    """
     protocol = commands.add_parser("protocol", help="check a protocol or list its keys")
     protocol_commands = protocol.add_subparsers(dest="protocol_command", required=True)
     check = protocol_commands.add_parser("check", help="validate a protocol file")

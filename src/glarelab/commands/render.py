@@ -66,7 +66,24 @@ def _check_options(args: argparse.Namespace) -> None:
 
 
 def build_model(args: argparse.Namespace) -> glare.GlareModel:
-    """The glare model named by the command-line options."""
+    """The glare model named by the command-line options.
+
+    Parameters
+    ----------
+    args
+        The parsed options: ``model`` and the model's own (``sigma_deg``, ``regime``,
+        ``pupil_mm``, ...).
+
+    Returns
+    -------
+    glarelab.glare.GlareModel
+        The model.
+
+    Raises
+    ------
+    ValueError
+        For an unknown model, or an option that is not the model's.
+    """
     if args.model not in MODEL_OPTIONS:
         raise ValueError(f"--model must be one of {MODEL_CHOICES}; got {args.model!r}")
     _check_options(args)
@@ -161,7 +178,23 @@ def _short(model: glare.GlareModel) -> str:
 
 
 def odd_size(text: str) -> int:
-    """An argparse type: a kernel's odd size in pixels (its centre is a pixel)."""
+    """An argparse type: a kernel's odd size in pixels (its centre is a pixel).
+
+    Parameters
+    ----------
+    text
+        The option's text.
+
+    Returns
+    -------
+    int
+        An odd size, 3-16385 pixels.
+
+    Raises
+    ------
+    argparse.ArgumentTypeError
+        For anything else.
+    """
     size = count(3, 16385)(text)
     if size % 2 == 0:
         raise argparse.ArgumentTypeError(f"{size} must be odd, so the kernel has a centre pixel")
@@ -536,7 +569,14 @@ def _looks(args: argparse.Namespace) -> int:
 
 
 def add(commands) -> None:
-    """Add the commands to the ``glarelab`` parser."""
+    """Add the commands to the ``glarelab`` parser.
+
+    Parameters
+    ----------
+    commands
+        The ``glarelab`` parser's subcommands (what ``add_subparsers()`` returned); this
+        module's commands are added to them.
+    """
     render = commands.add_parser(
         "render", help="add glare to linear float EXR images (one kernel for many files)"
     )

@@ -210,7 +210,14 @@ def _run_session(args: argparse.Namespace) -> int:
 
 
 def add(commands) -> None:
-    """Add the commands to the ``glarelab`` parser."""
+    """Add the commands to the ``glarelab`` parser.
+
+    Parameters
+    ----------
+    commands
+        The ``glarelab`` parser's subcommands (what ``add_subparsers()`` returned); this
+        module's commands are added to them.
+    """
     run = commands.add_parser("run", help="run a study session (PsychoPy) or simulated sessions")
     run.add_argument(
         "study", nargs="?", default=None, help=f"the protocol: {PROTOCOL_HELP} (or --protocol)"

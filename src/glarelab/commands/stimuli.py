@@ -52,7 +52,14 @@ def _stimuli_verify(args: argparse.Namespace) -> int:
 
 
 def add(commands) -> None:
-    """Add the commands to the ``glarelab`` parser."""
+    """Add the commands to the ``glarelab`` parser.
+
+    Parameters
+    ----------
+    commands
+        The ``glarelab`` parser's subcommands (what ``add_subparsers()`` returned); this
+        module's commands are added to them.
+    """
     stimuli = commands.add_parser("stimuli", help="build or verify a study's stimulus set")
     stimuli_commands = stimuli.add_subparsers(dest="stimuli_command", required=True)
     build = stimuli_commands.add_parser("build", help="build a stimulus set from a protocol")

@@ -73,7 +73,14 @@ def _bench(args: argparse.Namespace) -> int:
 
 
 def add(commands) -> None:
-    """Add the commands to the ``glarelab`` parser."""
+    """Add the commands to the ``glarelab`` parser.
+
+    Parameters
+    ----------
+    commands
+        The ``glarelab`` parser's subcommands (what ``add_subparsers()`` returned); this
+        module's commands are added to them.
+    """
     bench = commands.add_parser(
         "bench", help="time each speed knob against its error in display codes"
     )

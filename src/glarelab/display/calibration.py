@@ -66,7 +66,20 @@ MAX_DISPLAY_CD_M2 = 1e5
 
 @dataclass(frozen=True)
 class EncodeReport:
-    """What encoding did to an image: pixels clipped above the maximum or below black."""
+    """What encoding did to an image: pixels clipped above the maximum or below black.
+
+    Attributes
+    ----------
+    above_max
+        Pixels brighter than the display's maximum, shown at the top code.
+    below_black
+        Pixels darker than its black, shown at code 0.
+    max_error_cd_m2
+        The largest difference between a pixel inside the display's range and the luminance
+        of its code, cd/m² (at most half the local code step).
+    pixels
+        Values encoded in all (pixels times channels).
+    """
 
     above_max: int
     below_black: int
@@ -198,7 +211,23 @@ class Calibration:
         return float(self.lut[-1])
 
     def decode(self, codes: np.ndarray) -> np.ndarray:
-        """Luminance (cd/m²) the display shows for drive codes."""
+        """Luminance (cd/m²) the display shows for drive codes.
+
+        Parameters
+        ----------
+        codes
+            Integer drive codes, any shape, in 0 … 2^bit_depth − 1.
+
+        Returns
+        -------
+        numpy.ndarray
+            The luminance of each code, cd/m², the shape of ``codes``.
+
+        Raises
+        ------
+        ValueError
+            For a code outside the display's range.
+        """
         codes = np.asarray(codes)
         if codes.size and (codes.min() < 0 or codes.max() >= self.n_codes):
             raise ValueError(
@@ -211,6 +240,24 @@ class Calibration:
 
         Each luminance gets the code whose luminance is nearest: within the display's range
         the error is at most half the step between neighbouring codes.
+
+        Parameters
+        ----------
+        luminance_cd_m2
+            Linear luminance, cd/m², any shape, finite; values beyond the display's black and
+            maximum are clipped to codes 0 and 2^bit_depth − 1 (and counted).
+
+        Returns
+        -------
+        codes : numpy.ndarray
+            uint16, the shape of ``luminance_cd_m2``.
+        report : EncodeReport
+            The pixels clipped and the largest error inside the range.
+
+        Raises
+        ------
+        ValueError
+            If a luminance is not finite.
         """
         values = np.asarray(luminance_cd_m2, dtype=float)
         if not np.isfinite(values).all():
@@ -233,7 +280,18 @@ class Calibration:
         return codes.astype(np.uint16), report
 
     def step_cd_m2(self, codes: np.ndarray) -> np.ndarray:
-        """Luminance step to the neighbouring codes (the larger of the two), cd/m²."""
+        """Luminance step to the neighbouring codes (the larger of the two), cd/m².
+
+        Parameters
+        ----------
+        codes
+            Integer drive codes, any shape, in 0 … 2^bit_depth − 1.
+
+        Returns
+        -------
+        numpy.ndarray
+            The step at each code, cd/m²: what one code more or less changes.
+        """
         lut = self.lut
         codes = np.asarray(codes, dtype=np.int64)
         up = lut[np.minimum(codes + 1, self.n_codes - 1)] - lut[codes]
@@ -292,6 +350,18 @@ class Calibration:
         }
 
     def save(self, path: str | Path) -> Path:
+        """Write the calibration as JSON (:meth:`to_json`), whole or not at all.
+
+        Parameters
+        ----------
+        path
+            The file; its folder is created.
+
+        Returns
+        -------
+        pathlib.Path
+            ``path``.
+        """
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         write_text(path, json.dumps(self.to_json(), indent=2) + "\n")  # whole or not at all
@@ -300,7 +370,27 @@ class Calibration:
     @classmethod
     def from_json(cls, data: dict, *, source: str = "calibration") -> Calibration:
         """A calibration from its JSON form (a file, or a stimulus-set manifest), checking its
-        format and the hash of its readings."""
+        format and the hash of its readings.
+
+        Parameters
+        ----------
+        data
+            The JSON object, as :meth:`to_json` writes it.
+        source
+            Where it came from, for the messages; default ``'calibration'``.
+
+        Returns
+        -------
+        Calibration
+            The calibration.
+
+        Raises
+        ------
+        ValueError
+            If ``data`` is not a glarelab calibration, lacks a field, has malformed values,
+            readings that do not match their hash, or a method, model, range or status that
+            its readings and its verification pass do not give (an edited file).
+        """
         if not isinstance(data, dict):
             raise ValueError(
                 f"{source}: not a glarelab calibration (a JSON {type(data).__name__}, "
@@ -332,7 +422,25 @@ class Calibration:
 
     @classmethod
     def load(cls, path: str | Path) -> Calibration:
-        """Read a calibration file, checking its format and the hash of its readings."""
+        """Read a calibration file, checking its format and the hash of its readings.
+
+        Parameters
+        ----------
+        path
+            A JSON file written by :meth:`save`.
+
+        Returns
+        -------
+        Calibration
+            The calibration (:meth:`from_json`).
+
+        Raises
+        ------
+        FileNotFoundError
+            If there is no such file.
+        ValueError
+            If the file is not JSON, or as for :meth:`from_json`.
+        """
         path = Path(path)
         if not path.is_file():
             raise FileNotFoundError(f"no calibration file at {path}")
@@ -477,7 +585,25 @@ def _check_readings(
 
 
 def read_readings(path: str | Path) -> list[tuple[int, float]]:
-    """Read photometer readings from a CSV with columns ``code`` and ``luminance_cd_m2``."""
+    """Read photometer readings from a CSV with columns ``code`` and ``luminance_cd_m2``.
+
+    Parameters
+    ----------
+    path
+        The CSV file (UTF-8, a byte-order mark allowed); other columns are ignored.
+
+    Returns
+    -------
+    list of tuple of (int, float)
+        ``(code, cd/m²)`` in file order, not yet checked (:func:`fit_calibration` checks).
+
+    Raises
+    ------
+    FileNotFoundError
+        If there is no such file.
+    ValueError
+        If a column is missing or a cell is not a number (naming the line).
+    """
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"no readings file at {path}")
@@ -508,6 +634,25 @@ def fit_calibration(
     source: str = "readings",
 ) -> Calibration:
     """Build a calibration from ``(code, cd/m²)`` readings.
+
+    Parameters
+    ----------
+    readings
+        ``(drive code, luminance cd/m²)`` pairs, in any order: at least 4, codes 0 and
+        2^bit_depth − 1 among them, luminance increasing with code.
+    bit_depth
+        Bits per channel of the display.
+    method
+        ``'pchip-log'`` (default), ``'pchip'`` or ``'gog'`` (see the module notes).
+    label
+        Free text recorded with it: display, photometer, who measured.
+    source
+        Where the readings came from, for the messages; default ``'readings'``.
+
+    Returns
+    -------
+    Calibration
+        Unverified, dated today.
 
     Raises
     ------
@@ -554,7 +699,25 @@ def synthetic_calibration(
     *, max_cd_m2: float, black_cd_m2: float, bit_depth: int, label: str = ""
 ) -> Calibration:
     """A made-up display following a 2.2 gamma, marked ``synthetic`` (for demos and tests,
-    never for a real study: experiments treat it as uncalibrated)."""
+    never for a real study: experiments treat it as uncalibrated).
+
+    Parameters
+    ----------
+    max_cd_m2
+        The white, cd/m².
+    black_cd_m2
+        The black, cd/m², below ``max_cd_m2``.
+    bit_depth
+        Bits per channel.
+    label
+        The label recorded; default: one that says it is synthetic and how it was made.
+
+    Returns
+    -------
+    Calibration
+        ``black + (max − black) (code / top)^2.2`` read at 33 codes and fitted (``'pchip'``),
+        status ``synthetic``.
+    """
     top = 2**bit_depth - 1
     codes = np.unique(np.round(np.linspace(0, top, 33)).astype(int))
     values = black_cd_m2 + (max_cd_m2 - black_cd_m2) * (codes / top) ** SYNTHETIC_GAMMA
@@ -579,6 +742,13 @@ def usable_calibration(
 
     A missing, failed or synthetic calibration is refused unless ``allow_uncalibrated`` (and
     the session data then say it ran uncalibrated); an unverified one runs with a warning.
+
+    Parameters
+    ----------
+    calibration
+        The session's calibration; ``None``: none given.
+    allow_uncalibrated
+        Whether to run anyway on a missing, failed or synthetic calibration; default False.
 
     Returns
     -------

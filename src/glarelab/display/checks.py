@@ -70,7 +70,22 @@ class ScreenFacts:
 
 @dataclass(frozen=True)
 class Check:
-    """One comparison of the display with the protocol."""
+    """One comparison of the display with the protocol.
+
+    Attributes
+    ----------
+    name
+        Which check, one of :data:`CHECKS`.
+    expected
+        What the protocol asks for, in words with units (``'1920 × 1080 px'``).
+    actual
+        What the display has, in the same words.
+    passed
+        Whether the display is what the protocol asks for.
+    accepted
+        Whether a failed check was accepted for this session (``--accept-mismatch``);
+        default False.
+    """
 
     name: str
     expected: str
@@ -85,7 +100,20 @@ class Check:
 def check_calibration(protocol, calibration) -> list[Check]:
     """The calibration belongs to the protocol's display: bit depth, and white luminance within
     ``display.white_tolerance`` (a fraction) of ``display.max_cd_m2``. No calibration, no check
-    (an uncalibrated session is refused or recorded elsewhere)."""
+    (an uncalibrated session is refused or recorded elsewhere).
+
+    Parameters
+    ----------
+    protocol : glarelab.protocols.Protocol
+        The session's protocol; without a ``[display]``, nothing is checked.
+    calibration : glarelab.display.calibration.Calibration or None
+        The session's calibration.
+
+    Returns
+    -------
+    list of Check
+        The ``calibration`` check, or none.
+    """
     if calibration is None or not protocol.data.get("display"):
         return []
     display = protocol["display"]
@@ -105,7 +133,21 @@ def check_calibration(protocol, calibration) -> list[Check]:
 
 
 def check_screen(protocol, facts: ScreenFacts) -> list[Check]:
-    """Resolution, refresh rate and bits per channel of the open window against the protocol."""
+    """Resolution, refresh rate and bits per channel of the open window against the protocol.
+
+    Parameters
+    ----------
+    protocol : glarelab.protocols.Protocol
+        The session's protocol; without a ``[display]``, nothing is checked.
+    facts
+        What the open window measured.
+
+    Returns
+    -------
+    list of Check
+        ``resolution``; ``refresh`` (within :data:`REFRESH_TOLERANCE_FRACTION`) or
+        ``refresh-unmeasured``; ``bit-depth`` (at least the protocol's).
+    """
     if not protocol.data.get("display"):
         return []
     display = protocol["display"]
@@ -151,6 +193,19 @@ def check_screen(protocol, facts: ScreenFacts) -> list[Check]:
 def enforce(checks: Iterable[Check], *, accept: Iterable[str] = ()) -> list[dict]:
     """Refuse on any failed check not accepted; return every check as a record.
 
+    Parameters
+    ----------
+    checks
+        The checks made (:func:`check_calibration`, :func:`check_screen`).
+    accept
+        Names of checks (:data:`CHECKS`) whose failure the session accepts; default none.
+
+    Returns
+    -------
+    list of dict
+        Every check as a dict of its fields, an accepted failure marked ``accepted``, for the
+        session's sidecar.
+
     Raises
     ------
     DisplayMismatch
@@ -187,7 +242,22 @@ def enforce(checks: Iterable[Check], *, accept: Iterable[str] = ()) -> list[dict
 
 def timing_rate_hz(protocol, facts: ScreenFacts | None, records: list[dict]) -> float:
     """The frame rate presentations are timed at: the measured one when the refresh check
-    passed, else the protocol's nominal rate (the window then paces frames by the clock)."""
+    passed, else the protocol's nominal rate (the window then paces frames by the clock).
+
+    Parameters
+    ----------
+    protocol : glarelab.protocols.Protocol
+        The session's protocol; its ``display.refresh_hz`` (default 60) is the nominal rate.
+    facts
+        What the open window measured; None when nothing was measured.
+    records
+        The checks' records (:func:`enforce`).
+
+    Returns
+    -------
+    float
+        Frames per second, Hz.
+    """
     nominal = (protocol.data.get("display") or {}).get("refresh_hz", 60.0)
     passed = any(r["name"] == "refresh" and r["passed"] for r in records)
     if passed and facts is not None and facts.refresh_hz is not None:

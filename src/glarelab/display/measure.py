@@ -53,6 +53,16 @@ def protocol_luminances(protocol) -> list[float]:
     night scene's adapted and starting luminance), but not its display's own range, its
     simulated observer's or an adjustment's step; sorted, each once.
 
+    Parameters
+    ----------
+    protocol : glarelab.protocols.Protocol
+        A study's protocol.
+
+    Returns
+    -------
+    list of float
+        The luminances, cd/m², ascending.
+
     Examples
     --------
     >>> from glarelab.protocols import load_protocol
@@ -94,6 +104,11 @@ class MeasurementLock(ProcessLock):
     on one session file would interleave their readings and overwrite each other's saves. The
     operating system releases the lock when the process ends, however it ends (a killed
     measurement can be resumed at once).
+
+    Parameters
+    ----------
+    out
+        The calibration file the session writes; the lock is ``NAME.session.lock`` beside it.
 
     Raises
     ------
@@ -145,6 +160,36 @@ class MeasurementSession:
     protocol_targets
         Luminances (cd/m²) the studies to be run use (:func:`protocol_luminances`), verified
         besides the log-spaced targets.
+
+    Attributes
+    ----------
+    readings
+        Drive code → luminance measured, cd/m².
+    log
+        Every entry in order (phase, code, purpose, cd/m², the photometer's readings, where
+        it came from), as saved and replayed by :meth:`resume`.
+    flags
+        What the session found, one sentence each (drift, non-monotone readings, unsteady
+        patches).
+    queue
+        The ``(code, purpose)`` patches still to measure: ``'measure'``, ``'refine'`` or the
+        closing ``'drift'`` re-reading of the first code.
+    phase
+        ``'measure'``, ``'verify'`` or ``'done'``.
+    calibration
+        The calibration fitted once the codes are measured; None before.
+    targets
+        The verification's target luminances, cd/m².
+    verification
+        ``(target cd/m², code shown, measured cd/m²)`` of each verification patch so far.
+    refused
+        Why the session gave no calibration; None while it may.
+    raw
+        Every photometer reading as taken (:meth:`keep_reading`).
+    interruptions
+        The faults that stopped a patch's reading (:meth:`interrupted`).
+    codes
+        The order of the codes measured (set from ``rng`` or ``order``).
     """
 
     bit_depth: int
@@ -225,8 +270,28 @@ class MeasurementSession:
     ) -> list[str]:
         """Enter the luminance of the code shown; returns new flags.
 
-        ``readings`` are the photometer's readings it was made of (recorded with it), and
-        ``flags`` what the reading of the patch found (unsteady readings).
+        Parameters
+        ----------
+        luminance_cd_m2
+            The patch's luminance, cd/m², >= 0 (typed, or the photometer's median).
+        readings
+            The photometer's readings it was made of, cd/m², recorded with it; default None.
+        source
+            Where it came from: ``'typed'`` (default), ``'photometer'`` or ``'simulated'``.
+        flags
+            What the reading of the patch found (``'unsteady ...'``: the patch is read
+            again, not used).
+
+        Returns
+        -------
+        list of str
+            The flags this entry raised (drift, non-monotone readings, a re-read).
+
+        Raises
+        ------
+        ValueError
+            For a luminance that is negative or not a number, or when the session is
+            finished.
         """
         value = float(luminance_cd_m2)
         if not (np.isfinite(value) and value >= 0):
@@ -330,7 +395,11 @@ class MeasurementSession:
     def keep_reading(self, row: dict) -> None:
         """Keep one photometer reading of the patch shown now, at once (saved before the next).
 
-        ``row`` holds ``cd_m2``, the instrument's raw ``reply`` and the reading's ``set``.
+        Parameters
+        ----------
+        row
+            The reading: ``cd_m2``, the instrument's raw ``reply`` and the reading's ``set``;
+            the time, phase, code and purpose are added.
         """
         step = self.current()
         purpose = step.get("purpose", "verify")
@@ -346,7 +415,15 @@ class MeasurementSession:
         self.save()
 
     def interrupted(self, message: str, *, save: bool = True) -> None:
-        """Keep a fault that stopped the reading of the patch shown now."""
+        """Keep a fault that stopped the reading of the patch shown now.
+
+        Parameters
+        ----------
+        message
+            The fault, as the photometer or the operator reported it.
+        save
+            Whether to save the session at once; default True.
+        """
         step = self.current()
         self.interruptions.append(
             {
@@ -367,6 +444,18 @@ class MeasurementSession:
         Its entries are played again through the same steps (so the re-measured codes, the
         fit and the verification targets come out as they did); the raw readings and the
         faults are kept as they were.
+
+        Parameters
+        ----------
+        session_path
+            The saved session, ``NAME.session.json``.
+        out
+            The calibration file to write at the end.
+
+        Returns
+        -------
+        MeasurementSession
+            The session, its next patch the one it stopped at.
 
         Raises
         ------

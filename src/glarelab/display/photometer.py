@@ -168,6 +168,21 @@ class Photometer:
     """An open photometer: a plugin's device object, its model and serial number.
 
     Use :func:`open_photometer` to make one.
+
+    Attributes
+    ----------
+    model
+        The model's name, a key of :data:`PHOTOMETERS` (``'LS-100'``, ``'PR-655'``, ...).
+    port
+        The serial port it answers on (``'/dev/ttyUSB0'``, ``'COM3'``).
+    device
+        The PsychoPy plugin's device object that talks to it.
+    serial_number
+        The serial number it reports; None where it reports none.
+    plugin_version
+        The version of the PsychoPy plugin that drives it.
+    replies
+        The instrument's raw replies to the last command, as they came.
     """
 
     model: str
@@ -462,12 +477,36 @@ class PatchProtocol:
             raise ValueError(f"repeats must be 0-20; got {self.repeats!r}")
 
     def allowed_spread(self, median_cd_m2: float) -> float:
+        """The largest spread (max − min) a patch's readings may have, cd/m².
+
+        Parameters
+        ----------
+        median_cd_m2
+            The median of the patch's readings, cd/m².
+
+        Returns
+        -------
+        float
+            ``max(spread_fraction × median, spread_floor_cd_m2)``, cd/m².
+        """
         return max(self.spread_fraction * median_cd_m2, self.spread_floor_cd_m2)
 
 
 @dataclass
 class PatchResult:
-    """A patch read: its luminance (median of the accepted readings), every reading taken."""
+    """A patch read: its luminance (median of the accepted readings), every reading taken.
+
+    Attributes
+    ----------
+    luminance_cd_m2
+        The median of the last set of readings, cd/m².
+    readings
+        Every reading taken, cd/m², in order, over all sets.
+    sets
+        The sets of readings taken (more than 1: the earlier ones disagreed).
+    flags
+        ``'unsteady: ...'`` when even the last set disagreed; empty otherwise.
+    """
 
     luminance_cd_m2: float
     readings: list[float]

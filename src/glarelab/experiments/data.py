@@ -69,7 +69,21 @@ class WriteFault(RuntimeError):
 
 
 def check_session_id(participant: str, session: int) -> None:
-    """Refuse a participant id that is not file-name safe, or a session number below 1."""
+    """Refuse a participant id that is not file-name safe, or a session number below 1.
+
+    Parameters
+    ----------
+    participant
+        The participant's id: 1-64 letters, digits, ``_`` or ``-``, starting with a letter or
+        digit (it names the session's files).
+    session
+        The session's number, an integer >= 1.
+
+    Raises
+    ------
+    SessionError
+        Naming the value and what is allowed.
+    """
     if not isinstance(participant, str) or not _ID.match(participant):
         raise SessionError(
             "participant must be 1-64 letters, digits, '_' or '-', starting with a letter "
@@ -84,7 +98,30 @@ def _prefix(participant: str, study: str, session: int) -> str:
 
 
 def session_files(out: Path, participant: str, study: str, session: int) -> list[Path]:
-    """Every file of one participant's session of a study in ``out`` (whatever its date)."""
+    """Every file of one participant's session of a study in ``out`` (whatever its date).
+
+    Parameters
+    ----------
+    out
+        The data folder.
+    participant
+        The participant's id.
+    study
+        The study's name.
+    session
+        The session's number.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The session's CSV, sidecar, log and frame times, sorted; empty for a missing
+        folder.
+
+    Raises
+    ------
+    SessionError
+        For a participant id or session number that is not allowed.
+    """
     check_session_id(participant, session)
     pattern = re.compile(
         re.escape(_prefix(participant, study, session))
@@ -97,7 +134,18 @@ def session_files(out: Path, participant: str, study: str, session: int) -> list
 
 
 def read_rows(path: Path) -> list[dict[str, str]]:
-    """The rows of a session CSV as strings (a partly written last line is ignored)."""
+    """The rows of a session CSV as strings (a partly written last line is ignored).
+
+    Parameters
+    ----------
+    path
+        The session CSV.
+
+    Returns
+    -------
+    list of dict of str to str
+        One dict per complete row, column → cell.
+    """
     text = Path(path).read_text(encoding="utf-8")
     if text and not text.endswith("\n"):
         text = text[: text.rfind("\n") + 1]  # a row cut by a crash is not a trial
@@ -209,6 +257,9 @@ class SessionFiles:
         Continue the existing session; otherwise start a new one.
     started
         When this run started (names a new session's files).
+    pilot
+        Whether the session is a pilot run (``--pilot``): its files' names end in
+        ``_pilot``, and it resumes only as a pilot; default False.
     lock
         The session's lock, held already (:class:`SessionLock`, taken before the stimulus set
         is verified); default: the lock of ``out``, taken now.
@@ -375,7 +426,19 @@ class SessionFiles:
             raise
 
     def write_row(self, row: dict) -> None:
-        """Append one trial and make it durable before returning."""
+        """Append one trial and make it durable before returning.
+
+        Parameters
+        ----------
+        row
+            Column → value of one trial (:func:`glarelab.protocols.columns.format_value` writes
+            each); columns left out are empty, which only optional columns may be.
+
+        Raises
+        ------
+        ValueError
+            For a column the study's CSV does not have, or a required value missing.
+        """
         unknown = set(row) - set(self.names)
         if unknown:
             raise ValueError(f"row has columns the {self.study} schema lacks: {sorted(unknown)}")
@@ -384,7 +447,13 @@ class SessionFiles:
         self.rows.append(dict(zip(self.names, cells, strict=True)))
 
     def write_sidecar(self, data: dict) -> None:
-        """Rewrite the sidecar atomically (a crash leaves the previous version)."""
+        """Rewrite the sidecar atomically (a crash leaves the previous version).
+
+        Parameters
+        ----------
+        data
+            The sidecar's content, JSON-serialisable (other values are written as text).
+        """
         temporary = self.sidecar_path.with_suffix(".json.tmp")
         try:
             with temporary.open("w", encoding="utf-8") as handle:

@@ -5,9 +5,10 @@ An engine is a plain state machine. ``screen()`` says what to show now: a dict w
 the front-end needs to draw it; screens of a trial carry its number in ``trial``. ``press(key,
 t)`` takes a key press at ``t`` seconds after the onset of the current trial's stimulus (the
 flip that first showed it) and returns the finished trial's row (a dict of
-:mod:`experiments.schema` columns) when that key ended a trial, else None. ``presented(ok)``
-tells the engine whether the last timed presentation kept its frames. ``done`` says the session
-is over. ``replay(rows)`` rebuilds the state after the rows already on disk, to resume.
+:mod:`glarelab.protocols.columns` columns) when that key ended a trial, else None.
+``presented(ok)`` tells the engine whether the last timed presentation kept its frames.
+``done`` says the session is over. ``replay(rows)`` rebuilds the state after the rows already
+on disk, to resume.
 
 The session loop (:mod:`glarelab.experiments.loop`) is the only caller: it decides which key
 presses reach the engine (those made after the onset, on keys the screen takes) and adds the timing
@@ -54,6 +55,18 @@ def normalise_key(name: str, taken=()) -> str:
     """A key name as a screen takes it: a keypad key becomes the main-block key the screen
     takes (a digit, or an arrow or page key), else its first meaning.
 
+    Parameters
+    ----------
+    name
+        The key's name as the keyboard reports it (``'num_8'``, ``'up'``).
+    taken
+        The keys the screen takes (its ``keys``); default none.
+
+    Returns
+    -------
+    str
+        The name the screen takes.
+
     Examples
     --------
     >>> normalise_key("num_8", {"up": "brighter"}), normalise_key("num_8", {"8": "rate 8"})
@@ -67,7 +80,15 @@ def normalise_key(name: str, taken=()) -> str:
 
 @dataclass(frozen=True)
 class Press:
-    """One key press: its name and the time it went down (s, on the session clock)."""
+    """One key press: its name and the time it went down (s, on the session clock).
+
+    Attributes
+    ----------
+    name
+        The key's name.
+    t_s
+        When it went down, s on the session clock.
+    """
 
     name: str
     t_s: float
@@ -89,14 +110,40 @@ class Engine(ABC):
 
     @abstractmethod
     def press(self, key: str, t: float = 0.0) -> dict | None:
-        """Take a key press ``t`` s after the trial's onset; the finished row, or None."""
+        """Take a key press ``t`` s after the trial's onset; the finished row, or None.
+
+        Parameters
+        ----------
+        key
+            The key's name as the screen takes it (:func:`normalise_key`).
+        t
+            When it went down, s after the onset of the current trial's stimulus; default 0.
+
+        Returns
+        -------
+        dict or None
+            The finished trial's row (column → value) when the press ended a trial, else None.
+        """
 
     @abstractmethod
     def replay(self, rows: list[dict]) -> None:
-        """Continue after the rows already recorded."""
+        """Continue after the rows already recorded.
+
+        Parameters
+        ----------
+        rows
+            The rows already on disk, in order, as :func:`glarelab.experiments.data.read_rows`
+            reads them.
+        """
 
     def presented(self, ok: bool) -> None:  # noqa: B027 - a hook most engines ignore
-        """The last timed presentation kept its frames (``ok``) or not; default: no effect."""
+        """The last timed presentation kept its frames (``ok``) or not; default: no effect.
+
+        Parameters
+        ----------
+        ok
+            Whether the last timed presentation kept its frames.
+        """
 
     @property
     def total_trials(self) -> int | None:
@@ -110,7 +157,23 @@ class Engine(ABC):
 
 def participant_rng(seed: int, participant: str, purpose: str) -> np.random.Generator:
     """A generator fixed by the protocol seed, the participant and what it is for, so that a
-    participant's trial order is the same in every run and resumed session."""
+    participant's trial order is the same in every run and resumed session.
+
+    Parameters
+    ----------
+    seed
+        The protocol's seed.
+    participant
+        The participant's id.
+    purpose
+        What the draws are for (``'conditions'``, ``'observer 1'``, ...): each purpose has
+        a stream of its own.
+
+    Returns
+    -------
+    numpy.random.Generator
+        The generator.
+    """
     digest = hashlib.sha256(f"{participant}/{purpose}".encode()).digest()
     return np.random.default_rng([seed, int.from_bytes(digest[:8], "little")])
 
@@ -119,11 +182,36 @@ class LookingObserver:
     """What the simulated observers that look at a stimulus set share: the brightness model
     and noise of the protocol's ``[observer]`` table, this participant's draw of the noise,
     and the set as its display shows it (:class:`glarelab.experiments.looking.DisplayedSet`, which
-    observers given the same one share percepts through)."""
+    observers given the same one share percepts through).
+
+    Parameters
+    ----------
+    protocol : glarelab.protocols.Protocol
+        The study's protocol, with an ``[observer]`` table.
+    participant
+        The simulated participant's id.
+    seed
+        The simulated observers' seed: with the protocol's seed and the participant, it fixes
+        this observer's draw of the noise.
+    stimuli
+        The stimulus set (:class:`glarelab.stimuli.stimulus_set.StimulusSet`), or the set
+        as displayed (:class:`glarelab.experiments.looking.DisplayedSet`) to share.
+    """
 
     @staticmethod
     def check(protocol) -> None:
-        """Refuse an ``[observer]`` table the model and the noise do not take (ValueError)."""
+        """Refuse an ``[observer]`` table the model and the noise do not take (ValueError).
+
+        Parameters
+        ----------
+        protocol : glarelab.protocols.Protocol
+            The study's protocol.
+
+        Raises
+        ------
+        ValueError
+            Naming the key of ``[observer]`` that is wrong.
+        """
         from glarelab.experiments.perception import observer_parameters
 
         observer_parameters(protocol["observer"])
@@ -147,7 +235,20 @@ class LookingObserver:
 def first_screen(engine, *, presses: int = 50) -> dict | None:
     """The first screen with images an engine shows, Space pressed through the screens before
     it (instructions, a block's start); None if it shows none (a questionnaire). The engine is
-    used up: give it one of its own."""
+    used up: give it one of its own.
+
+    Parameters
+    ----------
+    engine
+        A new engine of its own.
+    presses
+        The most Space presses to try; default 50.
+
+    Returns
+    -------
+    dict or None
+        The screen, or None.
+    """
     for _ in range(presses):
         screen = engine.screen()
         if screen.get("images"):

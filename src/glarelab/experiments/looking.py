@@ -43,7 +43,20 @@ class DisplayedSet:
         self._percepts: dict[tuple, object] = {}
 
     def shows(self, terms) -> np.ndarray:
-        """The luminance (cd/m²) the display shows for an image given as ``[(name, weight)]``."""
+        """The luminance (cd/m²) the display shows for an image given as ``[(name, weight)]``.
+
+        Parameters
+        ----------
+        terms
+            The image as ``[(name, weight)]`` of the set's images
+            (:func:`glarelab.stimuli.stimulus_set.compose`).
+
+        Returns
+        -------
+        numpy.ndarray
+            ``decode(encode(image))`` through the set's calibration, cd/m² (the last images
+            shown are kept).
+        """
         key = tuple((name, float(weight)) for name, weight in terms)
         if key in self._shown:
             self._shown.move_to_end(key)
@@ -58,7 +71,23 @@ class DisplayedSet:
     def percept(self, model, terms, **geometry):
         """What ``model`` (a :class:`glarelab.experiments.perception.BrightnessModel`) perceives of
         the image ``[(name, weight)]`` with ``geometry`` (its ``percept`` keywords); computed once
-        per model, image and geometry."""
+        per model, image and geometry.
+
+        Parameters
+        ----------
+        model
+            The brightness model.
+        terms
+            The image as ``[(name, weight)]`` of the set's images
+            (:func:`glarelab.stimuli.stimulus_set.compose`).
+        geometry
+            The region judged, as ``model.percept`` takes it (centre, diameter, ...).
+
+        Returns
+        -------
+        object
+            What ``model.percept`` returns.
+        """
         image = tuple((name, float(weight)) for name, weight in terms)
         key = (model, image, tuple(sorted(geometry.items())))
         if key not in self._percepts:

@@ -56,7 +56,19 @@ class SessionAborted(BaseException):
 @dataclass(frozen=True)
 class Shown:
     """When a device showed a screen: the onset flip, and for a timed presentation the flip
-    that ended it, the frames asked for and the frames dropped."""
+    that ended it, the frames asked for and the frames dropped.
+
+    Attributes
+    ----------
+    onset_s
+        The flip that first showed the screen, s on the session clock.
+    offset_s
+        The flip that ended a timed presentation, s; None for a static screen.
+    frames
+        The frames a timed presentation asked for; None for a static screen.
+    dropped_frames
+        Frames dropped while it was on (:func:`count_dropped_frames`); default 0.
+    """
 
     onset_s: float
     offset_s: float | None = None
@@ -72,15 +84,49 @@ class Device(TypingProtocol):
     """What the loop needs of a front-end."""
 
     def show(self, screen: dict) -> float:
-        """Draw a screen; return the time of the flip that showed it (s, session clock)."""
+        """Draw a screen; return the time of the flip that showed it (s, session clock).
+
+        Parameters
+        ----------
+        screen
+            The engine's screen (``kind``, ``keys``, images and what the front-end needs).
+
+        Returns
+        -------
+        float
+            The onset flip's time, s.
+        """
 
     def present(self, screen: dict) -> Shown:
         """Show a timed presentation (``screen['frames']`` frames after a blank of
-        ``screen['blank_before_ms']``), then its answer prompt; return its flip times."""
+        ``screen['blank_before_ms']``), then its answer prompt; return its flip times.
+
+        Parameters
+        ----------
+        screen
+            The engine's timed screen: ``frames`` and ``blank_before_ms`` besides its
+            ``kind``, ``keys`` and images.
+
+        Returns
+        -------
+        Shown
+            Its onset and offset flips and the frames dropped.
+        """
 
     def wait_keys(self, anchor_s: float) -> list[Press]:
         """Block until at least one key press is available; return every press not yet
-        returned, in the order pressed. ``anchor_s`` is the onset the loop times from."""
+        returned, in the order pressed. ``anchor_s`` is the onset the loop times from.
+
+        Parameters
+        ----------
+        anchor_s
+            The onset the loop times the presses from, s on the session clock.
+
+        Returns
+        -------
+        list of Press
+            The presses, at least one.
+        """
 
     def typed(self) -> str:
         """The text typed on the current text-entry screen, up to its Enter."""
@@ -89,6 +135,18 @@ class Device(TypingProtocol):
 def count_dropped_frames(flip_times_s, refresh_hz: float) -> int:
     """Frames lost between consecutive flips: an interval of ``k`` frame periods (over 1.5)
     lost ``k - 1`` frames.
+
+    Parameters
+    ----------
+    flip_times_s
+        The flips' times, s, in order.
+    refresh_hz
+        The display's refresh rate, Hz.
+
+    Returns
+    -------
+    int
+        Frames lost.
 
     Examples
     --------
@@ -101,7 +159,22 @@ def count_dropped_frames(flip_times_s, refresh_hz: float) -> int:
 
 
 def presentation_ok(shown: Shown, *, refresh_hz: float, tolerance_ms: float) -> bool:
-    """No frame dropped, and the measured duration within ``tolerance_ms`` of its frames."""
+    """No frame dropped, and the measured duration within ``tolerance_ms`` of its frames.
+
+    Parameters
+    ----------
+    shown
+        A timed presentation's flips (``frames`` and ``offset_s`` set).
+    refresh_hz
+        The display's refresh rate, Hz.
+    tolerance_ms
+        The largest difference allowed between its measured and planned durations, ms.
+
+    Returns
+    -------
+    bool
+        Whether the presentation kept its frames.
+    """
     planned_ms = 1000.0 * shown.frames / refresh_hz
     return shown.dropped_frames == 0 and abs(shown.shown_ms - planned_ms) <= tolerance_ms
 
@@ -169,7 +242,14 @@ class SessionLoop:
         self.log(f"key {name} at {t_s:.4f} not taken ({why})")
 
     def pause(self, screen: dict) -> None:
-        """Show a screen that waits for one of its keys (presses before it are not taken)."""
+        """Show a screen that waits for one of its keys (presses before it are not taken).
+
+        Parameters
+        ----------
+        screen
+            The engine's screen (``kind``, ``keys``, images and what the front-end needs).
+            Presses of other keys are recorded as ignored.
+        """
         anchor = self.device.show(screen)
         self.log(f"{screen['kind']} screen onset at {anchor:.4f}")
         while True:
@@ -182,7 +262,16 @@ class SessionLoop:
     # --- the session --------------------------------------------------------------------
 
     def run(self, engine: Engine, *, resumed_after: int = 0) -> None:
-        """Run ``engine`` to its end; ``resumed_after`` trials were recorded before."""
+        """Run ``engine`` to its end; ``resumed_after`` trials were recorded before.
+
+        Parameters
+        ----------
+        engine
+            The session's engine, replayed to where it stopped when resumed.
+        resumed_after
+            Trials recorded before this run; default 0 (a new session). A resumed session
+            starts with a welcome-back screen.
+        """
         if resumed_after:
             total = engine.total_trials
             of = f" of {total}" if total else ""

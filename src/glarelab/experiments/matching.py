@@ -34,7 +34,21 @@ LABELS = {"left": "slightly darker", "right": "slightly brighter"}
 
 
 class MatchingEngine(Engine):
-    """The engine of a matching protocol (no PsychoPy)."""
+    """The engine of a matching protocol (no PsychoPy).
+
+    Parameters
+    ----------
+    protocol : glarelab.protocols.Protocol
+        The study's protocol, of this paradigm.
+    participant
+        The participant's id (it seeds the participant's orders).
+    session
+        The session's number, from 1; default 1.
+    counterbalance
+        Not used: the trial order is randomised per participant. Default None.
+    refresh_hz
+        Not used: nothing is timed. Default 60, Hz.
+    """
 
     def __init__(
         self,
@@ -187,6 +201,21 @@ class MatchingEngine(Engine):
     # --- input ------------------------------------------------------------------------
 
     def press(self, key: str, t: float = 0.0) -> dict | None:
+        """Take a key press (:meth:`glarelab.experiments.engine.Engine.press`).
+
+        Parameters
+        ----------
+        key
+            The key's name as the screen takes it
+            (:func:`glarelab.experiments.engine.normalise_key`).
+        t
+            When it went down, s after the onset of the current trial's stimulus; default 0.
+
+        Returns
+        -------
+        dict or None
+            The finished trial's row (column → value) when the press ended a trial, else None.
+        """
         if self.phase == "instructions":
             if key == "space":
                 self.phase = "adjust" if self.trials else "done"
@@ -256,7 +285,14 @@ class MatchingEngine(Engine):
         return row
 
     def replay(self, rows: list[dict]) -> None:
-        """Continue after ``rows`` already recorded (trials are independent: skip them)."""
+        """Continue after ``rows`` already recorded (trials are independent: skip them).
+
+        Parameters
+        ----------
+        rows
+            The rows already on disk, in order, as :func:`glarelab.experiments.data.read_rows`
+            reads them.
+        """
         if rows:
             self.index = len(rows)
             self.phase = "adjust" if self.index < len(self.trials) else "done"
@@ -309,7 +345,23 @@ class MatchingObserver(LookingObserver):
         )
 
     def keys(self, screen: dict) -> list[tuple[str, float]]:
-        """The key presses (with times from the trial's onset) that answer ``screen``."""
+        """The key presses (with times from the trial's onset) that answer ``screen``.
+
+        Parameters
+        ----------
+        screen
+            The engine's screen to answer. (``adjust`` or ``question``).
+
+        Returns
+        -------
+        list of tuple of (str, float)
+            ``(key, seconds from the onset)`` of each press, in order.
+
+        Raises
+        ------
+        ValueError
+            For a screen of another kind.
+        """
         rng = self._rng(screen)
         if screen["kind"] == "adjust":
             return self._adjust(screen, rng)

@@ -18,7 +18,17 @@ __all__ = ["PARADIGMS", "Paradigm"]
 
 @dataclass(frozen=True)
 class Paradigm:
-    """How a paradigm is run: the engine's class and the simulated observer's."""
+    """How a paradigm is run: the engine's class and the simulated observer's.
+
+    Attributes
+    ----------
+    engine
+        The engine's class, made with ``(protocol, participant, *, session,
+        counterbalance, refresh_hz)``.
+    observer
+        The simulated observer's class, made with ``(protocol, participant, *, seed,
+        stimuli)``; None where the paradigm has none.
+    """
 
     engine: type[Engine]
     observer: type | None = None

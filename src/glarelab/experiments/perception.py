@@ -241,8 +241,8 @@ def fitted_range_departures(protocol, geometry: dict) -> list[str]:
     Parameters
     ----------
     protocol
-        A matching or staircase protocol (:func:`protocols.load_protocol`, or its data as a
-        dict); other paradigms show no glare to judge and have no departures.
+        A matching or staircase protocol (:func:`glarelab.protocols.load_protocol`, or its
+        data as a dict); other paradigms show no glare to judge and have no departures.
     geometry
         Its stimulus set's geometry (``manifest.json``): the judged disk's diameter
         (``disk_diameter_deg`` or ``source_diameter_deg``, deg).
@@ -298,6 +298,18 @@ def fitted_range_departures(protocol, geometry: dict) -> list[str]:
 def warn_outside_fitted_range(protocol, geometry: dict) -> list[str]:
     """Warn once, with every departure, when a protocol's stimuli lie outside what the
     observers were fitted on (:func:`fitted_range_departures`); return the departures.
+
+    Parameters
+    ----------
+    protocol
+        As for :func:`fitted_range_departures`.
+    geometry
+        As for :func:`fitted_range_departures`.
+
+    Returns
+    -------
+    list of str
+        The departures, one line each; empty inside the fitted range.
 
     Warns
     -----
@@ -499,6 +511,20 @@ class BrightnessModel:
 
     def brightness(self, disk_cd_m2: float, glow: float, diameter_ratio: float) -> float:
         """``B`` from the disk's luminance, its glow ``G`` and ``2 R_e / d`` (module docstring).
+
+        Parameters
+        ----------
+        disk_cd_m2
+            The disk's luminance ``L_d``, cd/m².
+        glow
+            The glow's strength ``G`` (:class:`Percept`).
+        diameter_ratio
+            ``2 R_e / d``: the apparent over the nominal diameter; below 1 counts as 1.
+
+        Returns
+        -------
+        float
+            ``B``, cd/m² of a glare-free disk that looks as bright.
 
         Examples
         --------
@@ -734,14 +760,46 @@ class ObserverNoise:
         check_in_range("size_tolerance", self.size_tolerance, -10.0, 10.0)
 
     def draw(self, rng: np.random.Generator) -> Observer:
-        """A new observer: the gain ``g ~ N(1, gain_sd)`` clipped at 0, drawn from ``rng``."""
+        """A new observer: the gain ``g ~ N(1, gain_sd)`` clipped at 0, drawn from ``rng``.
+
+        Parameters
+        ----------
+        rng
+            The generator to draw from (the caller seeds it for the trial).
+
+        Returns
+        -------
+        Observer
+            The observer with its gain and this noise.
+
+        Raises
+        ------
+        ValueError
+            If ``rng`` is not a :class:`numpy.random.Generator`.
+        """
         if not isinstance(rng, np.random.Generator):
             raise ValueError(f"rng must be a numpy.random.Generator; got {type(rng).__name__}")
         return Observer(gain=max(0.0, float(rng.normal(1.0, self.gain_sd))), noise=self)
 
     def block_shift(self, rng: np.random.Generator) -> float:
         """An observer's shift for one block of comparisons, ``N(0, block_sd)``; pass it to
-        :meth:`Observer.compare` as ``shift``."""
+        :meth:`Observer.compare` as ``shift``.
+
+        Parameters
+        ----------
+        rng
+            The generator to draw from (the caller seeds it for the trial).
+
+        Returns
+        -------
+        float
+            The shift, relative brightness difference; 0 when ``block_sd`` is 0.
+
+        Raises
+        ------
+        ValueError
+            If ``rng`` is not a :class:`numpy.random.Generator`.
+        """
         if not isinstance(rng, np.random.Generator):
             raise ValueError(f"rng must be a numpy.random.Generator; got {type(rng).__name__}")
         return float(rng.normal(0.0, self.block_sd)) if self.block_sd > 0 else 0.0
@@ -753,6 +811,13 @@ class Observer:
 
     Every method that draws noise takes the generator to draw from, so a trial's answer is
     fixed by the generator the caller seeds for it.
+
+    Parameters
+    ----------
+    gain
+        ``g``, the observer's gain on the illusion (0 sees none, 1 the model's), 0-100.
+    noise
+        The noise the observer answers with.
 
     Examples
     --------
@@ -772,12 +837,36 @@ class Observer:
         check_in_range("gain", self.gain, 0.0, 100.0)
 
     def brightness(self, percept: Percept) -> float:
-        """This observer's brightness, ``L_d + g (B - L_d)`` (cd/m²)."""
+        """This observer's brightness, ``L_d + g (B - L_d)`` (cd/m²).
+
+        Parameters
+        ----------
+        percept
+            What the observer perceives of the disk (:meth:`BrightnessModel.percept`).
+
+        Returns
+        -------
+        float
+            cd/m².
+        """
         return percept.disk_cd_m2 + self.gain * (percept.brightness_cd_m2 - percept.disk_cd_m2)
 
     def settings(self, percept: Percept, rng: np.random.Generator) -> tuple[float, float]:
         """The brightness (cd/m², as a glare-free disk) wanted for the "slightly darker" and
-        "slightly brighter" targets: ``B_obs (1 ∓ m)(1 + σ_s z)``."""
+        "slightly brighter" targets: ``B_obs (1 ∓ m)(1 + σ_s z)``.
+
+        Parameters
+        ----------
+        percept
+            What the observer perceives of the disk (:meth:`BrightnessModel.percept`).
+        rng
+            The generator to draw from (the caller seeds it for the trial).
+
+        Returns
+        -------
+        darker, brighter : float
+            The two targets' luminances, cd/m², >= 0.
+        """
         b, m, sd = self.brightness(percept), self.noise.margin, self.noise.setting_sd
         z = rng.standard_normal(2)
         return (
@@ -789,7 +878,22 @@ class Observer:
         self, reference: Percept, target: Percept, rng: np.random.Generator
     ) -> tuple[bool, bool, bool]:
         """Yes/no to Yoshida's Table 1 questions: does the reference glow (Q1), is there a
-        bright ring (Q2), are reference and target disks the same size (Q3)?"""
+        bright ring (Q2), are reference and target disks the same size (Q3)?
+
+        Parameters
+        ----------
+        reference
+            The percept of the reference (glare) disk.
+        target
+            The percept of the glare-free target disk.
+        rng
+            The generator to draw from (the caller seeds it for the trial).
+
+        Returns
+        -------
+        glow, ring, same_size : bool
+            The answers to Q1, Q2 and Q3.
+        """
         n = self.noise
         z = rng.standard_normal(3)
         glow = reference.glow + n.glow_criterion_sd * z[0] > n.glow_criterion
@@ -809,7 +913,23 @@ class Observer:
         """Which of two images looks brighter: their relative difference
         ``2 (B_1 - B_2) / (B_1 + B_2) + shift + N(0, σ_c)``, "neither" within ``±b``.
         ``shift`` is the observer's bias for the current block (:meth:`ObserverNoise.block_shift`)
-        in favour of ``first``."""
+        in favour of ``first``.
+
+        Parameters
+        ----------
+        first, second
+            The percepts of the two images.
+        rng
+            The generator to draw from (the caller seeds it for the trial).
+        shift
+            The observer's bias in this block towards ``first``, relative brightness difference;
+            default 0.
+
+        Returns
+        -------
+        {'first', 'second', 'neither'}
+            The image that looks brighter, or neither.
+        """
         a, b = self.brightness(first), self.brightness(second)
         difference = 2 * (a - b) / (a + b) if a + b > 0 else 0.0
         difference += shift + self.noise.comparison_sd * float(rng.standard_normal())
@@ -823,6 +943,18 @@ class Observer:
 def observer_parameters(table: dict) -> tuple[BrightnessModel, ObserverNoise]:
     """The model and the noise from a protocol's ``[observer]`` table: any field of
     :class:`BrightnessModel` or :class:`ObserverNoise`; the others keep their fitted defaults.
+
+    Parameters
+    ----------
+    table
+        The ``[observer]`` table: field → value, in each field's unit.
+
+    Returns
+    -------
+    model : BrightnessModel
+        The brightness model.
+    noise : ObserverNoise
+        The observers' noise.
 
     Raises
     ------

@@ -24,7 +24,22 @@ __all__ = ["RatingEngine", "RatingObserver", "shift_down"]
 
 
 class RatingEngine(Engine):
-    """The engine of a rating protocol (no PsychoPy)."""
+    """The engine of a rating protocol (no PsychoPy).
+
+    Parameters
+    ----------
+    protocol : glarelab.protocols.Protocol
+        The study's protocol, of this paradigm.
+    participant
+        The participant's id (it seeds the participant's orders).
+    session
+        The session's number, from 1; default 1.
+    counterbalance
+        Not used: the conditions' order is randomised per participant. Default None.
+    refresh_hz
+        The display's refresh rate, Hz, > 0: how many refreshes each frame of the scene
+        stays on (:func:`glarelab.stimuli.night.night_plan`). Default 60.
+    """
 
     def __init__(
         self,
@@ -149,6 +164,21 @@ class RatingEngine(Engine):
         return self._sequences
 
     def press(self, key: str, t: float = 0.0) -> dict | None:
+        """Take a key press (:meth:`glarelab.experiments.engine.Engine.press`).
+
+        Parameters
+        ----------
+        key
+            The key's name as the screen takes it
+            (:func:`glarelab.experiments.engine.normalise_key`).
+        t
+            When it went down, s after the onset of the current trial's stimulus; default 0.
+
+        Returns
+        -------
+        dict or None
+            The finished trial's row (column → value) when the press ended a trial, else None.
+        """
         if self.phase == "instructions":
             if key == "space":
                 self.phase = "rate"
@@ -169,7 +199,13 @@ class RatingEngine(Engine):
         return None
 
     def type_text(self, text: str) -> None:
-        """The comment as typed into the front-end's text box (kept verbatim)."""
+        """The comment as typed into the front-end's text box (kept verbatim).
+
+        Parameters
+        ----------
+        text
+            The comment so far; ignored outside the comment screen.
+        """
         if self.phase == "comment":
             self.typed = text
 
@@ -193,6 +229,14 @@ class RatingEngine(Engine):
         return row
 
     def replay(self, rows: list[dict]) -> None:
+        """Continue after the rows already recorded.
+
+        Parameters
+        ----------
+        rows
+            The rows already on disk, in order, as :func:`glarelab.experiments.data.read_rows`
+            reads them.
+        """
         if rows:
             self.index = len(rows)
             for number, row in enumerate(rows):
@@ -226,7 +270,13 @@ class RatingObserver:
 
     @staticmethod
     def check(protocol) -> None:
-        """Nothing to check here: the protocol checks ``observer`` when it loads."""
+        """Nothing to check here: the protocol checks ``observer`` when it loads.
+
+        Parameters
+        ----------
+        protocol : glarelab.protocols.Protocol
+            The study's protocol (not used).
+        """
 
     def __init__(self, protocol, participant: str, *, seed: int, stimuli=None):
         q = protocol["questionnaire"]
@@ -244,7 +294,22 @@ class RatingObserver:
         }
 
     def distribution(self, category: str, condition: str | None = None) -> np.ndarray:
-        """The probability of each rating of a category, for the condition shown."""
+        """The probability of each rating of a category, for the condition shown.
+
+        Parameters
+        ----------
+        category
+            A category of ``questionnaire.categories``.
+        condition
+            The condition shown; default None: none (the category's own distribution).
+
+        Returns
+        -------
+        numpy.ndarray
+            One probability per rating of the scale, summing to 1: the protocol's, moved down by
+            ``missing_effect_shift`` when the condition lacks the category's effect
+            (:func:`shift_down`).
+        """
         p = self.probabilities[category]
         effect = self.protocol["observer"]["category_effects"].get(category)
         if condition is None or effect is None or effect in self.effects[condition]:
@@ -252,11 +317,35 @@ class RatingObserver:
         return shift_down(p, self.protocol["observer"]["missing_effect_shift"])
 
     def expected(self, category: str, condition: str | None = None) -> float:
-        """The expected rating of a category (for the condition shown)."""
+        """The expected rating of a category (for the condition shown).
+
+        Parameters
+        ----------
+        category
+            A category of ``questionnaire.categories``.
+        condition
+            The condition shown; default None: none (the category's own distribution).
+
+        Returns
+        -------
+        float
+            The mean rating, in scale points.
+        """
         return float(self.scale @ self.distribution(category, condition))
 
     def keys(self, screen: dict) -> list[tuple[str, float]]:
-        """The rating key (with its time from the screen's onset), or Enter on a comment."""
+        """The rating key (with its time from the screen's onset), or Enter on a comment.
+
+        Parameters
+        ----------
+        screen
+            The engine's screen to answer.
+
+        Returns
+        -------
+        list of tuple of (str, float)
+            ``(key, seconds from the onset)`` of each press, in order.
+        """
         rng = participant_rng(
             self.protocol.seed,
             self.participant,
@@ -274,6 +363,18 @@ class RatingObserver:
 def shift_down(probabilities: np.ndarray, points: float) -> np.ndarray:
     """A rating distribution moved ``points`` (>= 0) down its scale; a fractional shift is
     split between the two ratings around it, and what falls below the first rating stays there.
+
+    Parameters
+    ----------
+    probabilities
+        One probability per rating, lowest first.
+    points
+        The shift, scale points, >= 0.
+
+    Returns
+    -------
+    numpy.ndarray
+        The shifted distribution, the same sum.
 
     Examples
     --------

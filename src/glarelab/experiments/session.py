@@ -67,14 +67,44 @@ END_TEXT = "The session is complete. Thank you!\n\nPlease tell the experimenter.
 
 
 def shows_images(protocol) -> bool:
-    """Whether the protocol shows images (and so needs a stimulus set)."""
+    """Whether the protocol shows images (and so needs a stimulus set).
+
+    Parameters
+    ----------
+    protocol : glarelab.protocols.Protocol
+        The study's protocol.
+
+    Returns
+    -------
+    bool
+        Whether it does (:func:`glarelab.stimuli.stimulus_set.shows_images`).
+    """
     return _shows_images(protocol)
 
 
 def make_engine(
     protocol, participant: str, *, session: int, counterbalance: int | None, refresh_hz: float
 ):
-    """The engine of the protocol's paradigm for one participant's session."""
+    """The engine of the protocol's paradigm for one participant's session.
+
+    Parameters
+    ----------
+    protocol : glarelab.protocols.Protocol
+        The study's protocol.
+    participant
+        The participant's id.
+    session
+        The session's number, from 1.
+    counterbalance
+        The block order, where the paradigm has one (0 or 1); None: from the participant.
+    refresh_hz
+        The display's refresh rate, Hz, which timed presentations are counted in.
+
+    Returns
+    -------
+    glarelab.experiments.engine.Engine
+        A new engine (:data:`glarelab.experiments.paradigms.PARADIGMS`).
+    """
     return PARADIGMS[protocol.paradigm].engine(
         protocol,
         participant,
@@ -87,7 +117,30 @@ def make_engine(
 def make_observer(protocol, participant: str, *, seed: int, stimuli):
     """A simulated observer of the protocol's paradigm; it looks at the set in ``stimuli`` (a
     folder, or an :class:`glarelab.experiments.looking.DisplayedSet` that observers share, and with
-    it their percepts)."""
+    it their percepts).
+
+    Parameters
+    ----------
+    protocol : glarelab.protocols.Protocol
+        The study's protocol.
+    participant
+        The simulated participant's id.
+    seed
+        The simulated observers' seed.
+    stimuli
+        The set's folder, a shared displayed set, or None for a protocol that shows no
+        images.
+
+    Returns
+    -------
+    object
+        The paradigm's observer (its ``keys(screen)`` answers the screens).
+
+    Raises
+    ------
+    ValueError
+        For a paradigm without a simulated observer, or no set where images are shown.
+    """
     from glarelab.experiments.looking import DisplayedSet
     from glarelab.stimuli.stimulus_set import StimulusSet
 
@@ -120,6 +173,14 @@ class SimulatedFrontend:
 
     Screens that wait for the space bar (instructions, breaks) are answered after a second;
     trial screens by the observer, with its times from the trial's onset.
+
+    Parameters
+    ----------
+    observer
+        The simulated observer (:func:`make_observer`).
+    trial_delay_s
+        Real seconds to wait before each trial's answer, default 0 (for tests that stop a
+        session part way).
     """
 
     keyboard = "simulated observer"
@@ -145,23 +206,69 @@ class SimulatedFrontend:
         frames_path,
         log_path,
     ) -> None:
+        """Begin a run: only the refresh rate is kept (nothing is shown or written).
+
+        Parameters
+        ----------
+        run
+            The run's number within the session; not used.
+        started
+            When the run started; not used.
+        refresh_hz
+            The refresh rate the virtual clock counts timed presentations in, Hz.
+        pace
+            Whether to pace frames by the clock; not used (the clock is virtual).
+        frames_path, log_path
+            Where a screen would write its frame times and log; not used.
+        """
         self.refresh_hz = refresh_hz
 
     def close(self) -> None:
         pass
 
     def log(self, message: str) -> None:
+        """Log a line (nothing: a simulated run has no log).
+
+        Parameters
+        ----------
+        message
+            Not used: a simulated run writes no PsychoPy log.
+        """
         pass
 
     def clock_epoch_s(self) -> float | None:
         return None
 
     def show(self, screen: dict) -> float:
+        """Show a screen on the virtual clock.
+
+        Parameters
+        ----------
+        screen
+            The screen, kept for :meth:`wait_keys`.
+
+        Returns
+        -------
+        float
+            The virtual onset, s: a millisecond after the last event.
+        """
         self.screen = screen
         self.clock += _tick(0.001)
         return self.clock
 
     def present(self, screen: dict) -> Shown:
+        """Show a timed presentation on the virtual clock.
+
+        Parameters
+        ----------
+        screen
+            The timed screen (``frames``, ``blank_before_ms``), kept for :meth:`wait_keys`.
+
+        Returns
+        -------
+        glarelab.experiments.loop.Shown
+            Its virtual onset and offset, no frame dropped.
+        """
         self.screen = screen
         onset = self.clock + _tick(screen.get("blank_before_ms", 0.0) / 1000.0)
         self.clock = onset + _tick(screen["frames"] / self.refresh_hz)
@@ -171,6 +278,24 @@ class SimulatedFrontend:
         return ""  # simulated observers comment on nothing
 
     def wait_keys(self, anchor_s: float) -> list[Press]:
+        """The presses that answer the screen shown last, on the virtual clock.
+
+        Parameters
+        ----------
+        anchor_s
+            The onset the presses are timed from, s on the virtual clock.
+
+        Returns
+        -------
+        list of glarelab.experiments.engine.Press
+            The observer's presses on a trial screen, or Space a second after the onset on
+            another.
+
+        Raises
+        ------
+        RuntimeError
+            When the observer has no answer to the screen.
+        """
         screen = self.screen
         if "trial" in screen:
             keys = self.observer.keys(screen)

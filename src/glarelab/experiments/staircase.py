@@ -54,7 +54,23 @@ RESPONSE_KEYS = ("left", "right", "down")
 
 def counterbalance_for(participant: str) -> int:
     """Block order of a participant from the number in their id: odd → 0 (the protocol's
-    order), even → 1 (reversed), so consecutive participants alternate."""
+    order), even → 1 (reversed), so consecutive participants alternate.
+
+    Parameters
+    ----------
+    participant
+        The participant's id, with a number in it (the last one counts).
+
+    Returns
+    -------
+    int
+        0 or 1.
+
+    Raises
+    ------
+    ValueError
+        For an id without a number.
+    """
     digits = re.findall(r"\d+", participant)
     if not digits:
         raise ValueError(
@@ -66,7 +82,35 @@ def counterbalance_for(participant: str) -> int:
 
 @dataclass
 class Staircase:
-    """One staircase on the disc intensity (fraction of the display maximum)."""
+    """One staircase on the disc intensity (fraction of the display maximum).
+
+    Attributes
+    ----------
+    level
+        The glare level it belongs to, from 1.
+    strength
+        That level's source excess over the displayed peak (``glare.strengths``).
+    fraction
+        The disc's intensity now, a fraction of the display maximum, 0-1.
+    steps
+        The step sizes, fractions of the maximum: the first until the first reversal, and so
+        on; the last is kept.
+    reversals_needed
+        The reversals after which it is done.
+    neither
+        How a "neither brighter" answer moves it: ``'hold'`` or ``'alternate'``.
+    grid
+        ``N`` of the intensities ``k / N`` it moves on
+        (:func:`glarelab.protocols.staircase.intensity_grid`); None: plain floats.
+    direction
+        Its last move: +1 up, -1 down, 0 not moved yet.
+    reversals
+        Reversals so far.
+    trials
+        Trials so far.
+    history
+        ``(response, reversal)`` of each trial.
+    """
 
     level: int
     strength: float
@@ -92,7 +136,24 @@ class Staircase:
         )
 
     def update(self, response: str) -> bool:
-        """Apply a response ('glare', 'disc', 'neither'); return whether it was a reversal."""
+        """Apply a response ('glare', 'disc', 'neither'); return whether it was a reversal.
+
+        Parameters
+        ----------
+        response
+            ``'glare'`` (the glare image looked brighter: up), ``'disc'`` (down) or
+            ``'neither'``.
+
+        Returns
+        -------
+        bool
+            Whether it was a reversal (a "neither" always is).
+
+        Raises
+        ------
+        ValueError
+            For another response.
+        """
         self.trials += 1
         if response == "glare":
             move = +1
@@ -117,7 +178,22 @@ class Staircase:
 
 
 class StaircaseEngine(Engine):
-    """The engine of a staircase protocol (no PsychoPy)."""
+    """The engine of a staircase protocol (no PsychoPy).
+
+    Parameters
+    ----------
+    protocol : glarelab.protocols.Protocol
+        The study's protocol, of this paradigm.
+    participant
+        The participant's id (it seeds the participant's orders).
+    session
+        The session's number, from 1; default 1.
+    counterbalance
+        0 (the protocol's order of the contexts) or 1 (reversed); default None: from
+        the participant's id (:func:`counterbalance_for`).
+    refresh_hz
+        The display's refresh rate, Hz, > 0: the flash's duration in frames. Default 60.
+    """
 
     def __init__(
         self,
@@ -251,9 +327,31 @@ class StaircaseEngine(Engine):
         }
 
     def presented(self, ok: bool) -> None:
+        """Whether the flash just shown kept its frames (recorded as ``presentation_ok``).
+
+        Parameters
+        ----------
+        ok
+            Whether the last timed presentation kept its frames.
+        """
         self.presentation_ok = bool(ok)
 
     def press(self, key: str, t: float = 0.0) -> dict | None:
+        """Take a key press (:meth:`glarelab.experiments.engine.Engine.press`).
+
+        Parameters
+        ----------
+        key
+            The key's name as the screen takes it
+            (:func:`glarelab.experiments.engine.normalise_key`).
+        t
+            When it went down, s after the onset of the current trial's stimulus; default 0.
+
+        Returns
+        -------
+        dict or None
+            The finished trial's row (column → value) when the press ended a trial, else None.
+        """
         if self.phase in ("instructions", "block"):
             if key == "space":
                 self.phase = "trial"
@@ -304,7 +402,14 @@ class StaircaseEngine(Engine):
         return row
 
     def replay(self, rows: list[dict]) -> None:
-        """Rebuild every staircase from the recorded responses, then continue."""
+        """Rebuild every staircase from the recorded responses, then continue.
+
+        Parameters
+        ----------
+        rows
+            The rows already on disk, in order, as :func:`glarelab.experiments.data.read_rows`
+            reads them.
+        """
         if rows and self.phase == "instructions":
             self.phase = "trial"
         for row in rows:
@@ -361,7 +466,23 @@ class StaircaseObserver(LookingObserver):
         )
 
     def keys(self, screen: dict) -> list[tuple[str, float]]:
-        """The answer (with its time from the flash's onset) to a flash."""
+        """The answer (with its time from the flash's onset) to a flash.
+
+        Parameters
+        ----------
+        screen
+            The engine's screen to answer. (a ``present`` flash).
+
+        Returns
+        -------
+        list of tuple of (str, float)
+            ``(key, seconds from the onset)`` of each press, in order.
+
+        Raises
+        ------
+        ValueError
+            For a screen of another kind.
+        """
         if screen["kind"] != "present":
             raise ValueError(f"a staircase observer cannot answer a {screen['kind']!r} screen")
         context = screen["context"]

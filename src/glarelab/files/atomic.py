@@ -63,7 +63,14 @@ def glob_escape(text: str) -> str:
 
 
 def fsync_folder(folder: str | Path) -> None:
-    """Flush a folder's entries (a rename into it) to the disk, where the system allows."""
+    """Flush a folder's entries (a rename into it) to the disk, where the system allows.
+
+    Parameters
+    ----------
+    folder
+        The folder whose entries are flushed. A folder that cannot be opened, or a system
+        that cannot flush folders, is passed over silently: the rename already happened.
+    """
     try:
         handle = os.open(folder, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0))
     except OSError:
@@ -143,6 +150,31 @@ def atomic_open(
 ) -> Iterator[IO]:
     """``open(path, mode)`` whose content replaces ``path`` only when the block completes.
 
+    Parameters
+    ----------
+    path
+        The file to write, through a temporary file beside it (:func:`atomic_path`). Its folder
+        must exist.
+    mode
+        ``'w'`` (text, default) or ``'wb'`` (bytes).
+    encoding
+        The text encoding in mode ``'w'``; default UTF-8. Not used in mode ``'wb'``.
+    newline
+        As for :func:`open` in mode ``'w'``: ``None`` (default) writes ``\\n`` as the
+        platform's line ending, ``''`` or ``'\\n'`` writes it as is.
+
+    Yields
+    ------
+    typing.IO
+        The open temporary file.
+
+    Raises
+    ------
+    ValueError
+        If ``mode`` is neither ``'w'`` nor ``'wb'``.
+
+    Examples
+    --------
     >>> import tempfile
     >>> path = Path(tempfile.mkdtemp()) / "notes.txt"
     >>> with atomic_open(path) as handle:
@@ -162,14 +194,44 @@ def atomic_open(
 
 
 def write_text(path: str | Path, text: str, *, encoding: str = "utf-8") -> Path:
-    """Write ``text`` to ``path`` whole or not at all (:func:`atomic_path`)."""
+    """Write ``text`` to ``path`` whole or not at all (:func:`atomic_path`).
+
+    Parameters
+    ----------
+    path
+        The file to write; an earlier file of that name is replaced only once ``text`` is on
+        the disk.
+    text
+        The whole content.
+    encoding
+        The text encoding; default UTF-8.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
     with atomic_open(path, "w", encoding=encoding) as handle:
         handle.write(text)
     return Path(path)
 
 
 def write_bytes(path: str | Path, data: bytes) -> Path:
-    """Write ``data`` to ``path`` whole or not at all (:func:`atomic_path`)."""
+    """Write ``data`` to ``path`` whole or not at all (:func:`atomic_path`).
+
+    Parameters
+    ----------
+    path
+        The file to write; an earlier file of that name is replaced only once ``data`` is on
+        the disk.
+    data
+        The whole content.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
     with atomic_open(path, "wb") as handle:
         handle.write(data)
     return Path(path)

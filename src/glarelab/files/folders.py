@@ -75,6 +75,24 @@ def check_replaceable(
     """``out`` as the folder of a ``what`` that replaces it whole: new, empty, or holding only
     files an earlier output of the same ``kind`` wrote (as its listing says).
 
+    Parameters
+    ----------
+    out
+        The folder the output will replace whole; it need not exist.
+    kind
+        The kind of output the listing records the files as (``'stimulus set'``, ``'report'``,
+        ``'power'``, ...): an output replaces or overwrites only files of its own kind.
+    what
+        The output's name in the error messages (``'stimulus set'``, ``'demo folder'``).
+    inputs
+        The files and folders the command reads: none may be inside ``out``, which the output
+        replaces whole.
+
+    Returns
+    -------
+    pathlib.Path
+        ``out``.
+
     Raises
     ------
     ValueError
@@ -107,7 +125,17 @@ def check_replaceable(
 
 
 def record_files(folder: Path, kind: str) -> None:
-    """List every file now in ``folder`` as written by glarelab, as output of ``kind``."""
+    """List every file now in ``folder`` as written by glarelab, as output of ``kind``.
+
+    Parameters
+    ----------
+    folder
+        The folder whose listing (``.glarelab-files.json``) is written anew: every file and
+        symbolic link under it, at any depth.
+    kind
+        The kind of output the listing records the files as (``'stimulus set'``, ``'report'``,
+        ``'power'``, ...): an output replaces or overwrites only files of its own kind.
+    """
     files = {entry: kind for entry in _entries(folder)}
     _write_listing(folder, files)
 
@@ -115,6 +143,16 @@ def record_files(folder: Path, kind: str) -> None:
 def claim_files(folder: Path, names: Iterable[str], kind: str) -> None:
     """Before writing ``names`` into a shared ``folder``: refuse if one exists and glarelab did
     not write it there; otherwise list them as glarelab's.
+
+    Parameters
+    ----------
+    folder
+        The shared folder; it must exist.
+    names
+        The files about to be written, relative to ``folder``.
+    kind
+        The kind of output the listing records the files as (``'stimulus set'``, ``'report'``,
+        ``'power'``, ...): an output replaces or overwrites only files of its own kind.
 
     Raises
     ------
@@ -134,12 +172,35 @@ def claim_files(folder: Path, names: Iterable[str], kind: str) -> None:
 
 
 def listed_files(folder: Path) -> dict[str, str]:
-    """``{relative path: kind}`` of the files glarelab wrote into ``folder`` (empty if none)."""
+    """``{relative path: kind}`` of the files glarelab wrote into ``folder`` (empty if none).
+
+    Parameters
+    ----------
+    folder
+        The folder whose listing is read; a missing or unreadable listing lists nothing.
+
+    Returns
+    -------
+    dict of str to str
+        Each listed file's path relative to ``folder`` (``/``-separated), and its kind.
+    """
     return _listing(Path(folder))
 
 
 def list_files(folder: Path, names: Iterable[str], kind: str) -> None:
-    """List ``names`` in ``folder`` as written by glarelab (checked by the caller)."""
+    """List ``names`` in ``folder`` as written by glarelab (checked by the caller).
+
+    Parameters
+    ----------
+    folder
+        The folder; it must exist. Files listed there before stay listed.
+    names
+        The files to add to the listing, relative to ``folder``; no check that glarelab
+        wrote them (:func:`claim_files` checks first).
+    kind
+        The kind of output the listing records the files as (``'stimulus set'``, ``'report'``,
+        ``'power'``, ...): an output replaces or overwrites only files of its own kind.
+    """
     folder = Path(folder)
     _write_listing(folder, _listing(folder) | dict.fromkeys(names, kind))
 
@@ -172,6 +233,11 @@ def restore_folder(final: str | Path) -> None:
     Call it before reading or writing into a folder that is replaced whole while files in it
     are kept (:func:`staging_folder` calls it too): on a file system that cannot swap two
     folders in one step, ``final`` is missing until then.
+
+    Parameters
+    ----------
+    final
+        The folder that is replaced whole; nothing happens if its parent does not exist.
     """
     final = Path(final).resolve()
     if final.parent.is_dir():
@@ -179,7 +245,20 @@ def restore_folder(final: str | Path) -> None:
 
 
 def staging_folder(final: Path) -> Path:
-    """A new, empty folder next to ``final`` to build its replacement in."""
+    """A new, empty folder next to ``final`` to build its replacement in.
+
+    Parameters
+    ----------
+    final
+        The folder the build will replace (:func:`replace_folder`); its parent folders are
+        created. Leftovers of killed builds beside it are cleared first
+        (:func:`restore_folder`).
+
+    Returns
+    -------
+    pathlib.Path
+        ``.NAME.building-PID`` beside ``final``, empty.
+    """
     final = Path(final).resolve()
     final.parent.mkdir(parents=True, exist_ok=True)
     _leftovers(final)
@@ -218,8 +297,25 @@ def replace_folder(
     is moved aside first and put back by the next build if the process dies in between). The
     earlier ``final`` is removed only once the new one is in place.
 
-    ``files`` are the files glarelab wrote, for the listing, where the folder holds others too
-    (default: every file in ``staging``)."""
+    Parameters
+    ----------
+    staging
+        The finished build (:func:`staging_folder`); it is gone afterwards.
+    final
+        The folder it replaces; it need not exist.
+    kind
+        The kind of output the listing records the files as (``'stimulus set'``, ``'report'``,
+        ``'power'``, ...): an output replaces or overwrites only files of its own kind.
+    files
+        The files glarelab wrote, relative to ``staging``, for the listing where the folder
+        holds others too; default ``None``: every file in ``staging``.
+
+    Raises
+    ------
+    OSError
+        If the folders cannot be swapped or renamed (the earlier ``final`` is then kept, or
+        put back by the next build).
+    """
     if files is None:
         record_files(staging, kind)
     else:

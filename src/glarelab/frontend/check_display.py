@@ -139,6 +139,13 @@ def check_display(
         An open :class:`~glarelab.display.photometer.Photometer`: also measure luminances.
     patch_protocol
         How the photometer reads each patch (:class:`~glarelab.display.photometer.PatchProtocol`).
+    log
+        Called with each finding's line as it is measured; default :func:`print`.
+
+    Returns
+    -------
+    dict
+        The findings, as :func:`write_check` records them.
     """
     if not protocol.data.get("display"):
         raise ValueError(f"the {protocol.study} protocol describes no display to check")
@@ -406,7 +413,20 @@ def _not_shown(name: str, kind: str, bits: int) -> dict:
 
 
 def write_check(result: dict, path: Path) -> Path:
-    """Write the findings as JSON (a new file; an existing one is kept as ``.previous``)."""
+    """Write the findings as JSON (a new file; an existing one is kept as ``.previous``).
+
+    Parameters
+    ----------
+    result
+        The findings (:func:`check_display`).
+    path
+        The JSON file, written whole or not at all.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
     path = Path(path)
     if path.exists():
         path.replace(path.with_suffix(".previous.json"))

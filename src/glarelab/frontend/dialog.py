@@ -23,7 +23,23 @@ def experiment_info(
 ) -> None:
     """Ask for the participant's details in a dialog, as PsychoPy's experiment info does, and
     set them on ``args`` (participant, session, age, sex, vision); ``check_age`` checks an age
-    as the command line does, ``vision`` are the vision corrections offered."""
+    as the command line does, ``vision`` are the vision corrections offered.
+
+    Parameters
+    ----------
+    args
+        The ``run`` command's options; the answers are set on it.
+    check_age
+        Takes the age as typed and returns it as a whole number of years, raising
+        :class:`argparse.ArgumentTypeError` for one the command line would refuse.
+    vision
+        The vision corrections offered (``'none'``, ``'glasses'``, ...).
+
+    Raises
+    ------
+    ValueError
+        Without a display for the dialog, or without Qt's libraries.
+    """
     if sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
         raise ValueError("--participant is required (no display for the participant dialog)")
     if not qt_dialog_available():

@@ -27,6 +27,20 @@ def codes_at_bits(codes: np.ndarray, bits: int, window_bits: int) -> np.ndarray:
     """``bits``-bit codes as the nearest codes of a ``window_bits``-bit window:
     ``round(code × (2^window_bits − 1) / (2^bits − 1))``; the same codes when the bits agree.
 
+    Parameters
+    ----------
+    codes
+        Integer codes at ``bits``.
+    bits
+        Their bit depth.
+    window_bits
+        The window's bits per channel.
+
+    Returns
+    -------
+    numpy.ndarray
+        The codes at ``window_bits``.
+
     Examples
     --------
     >>> codes_at_bits(np.array([0, 43, 255]), 8, 10).tolist()
@@ -78,7 +92,15 @@ class ImageBank:
         self._roles: dict[str, tuple[tuple, object]] = {}  # images that change: by role
 
     def attach(self, window, facts: ScreenFacts) -> None:
-        """Draw into ``window``, whose measured facts give its bits."""
+        """Draw into ``window``, whose measured facts give its bits.
+
+        Parameters
+        ----------
+        window
+            The open PsychoPy window.
+        facts : glarelab.display.checks.ScreenFacts
+            What the window measured (its bits per channel).
+        """
         self.window = window
         self.facts = facts
 
@@ -94,7 +116,18 @@ class ImageBank:
     def codes(self, luminance: np.ndarray) -> np.ndarray:
         """The codes the window shows for ``luminance`` (cd/m²): the calibration's, rounded to
         the window's bits here (:func:`codes_at_bits`), not by the graphics card, which
-        rounds a value near a tie either way."""
+        rounds a value near a tie either way.
+
+        Parameters
+        ----------
+        luminance
+            The image, cd/m², ``(H, W)`` or ``(H, W, 3)``, top row first.
+
+        Returns
+        -------
+        numpy.ndarray
+            Integer codes at the window's bits, the shape of ``luminance``.
+        """
         if self.calibration is None:
             self.calibration = synthetic_calibration(
                 max_cd_m2=self.display["max_cd_m2"],
@@ -112,13 +145,34 @@ class ImageBank:
         texture shown as it is, clamped to [0, 1]. Each gets the values that its path maps
         linearly onto the codes (a colour frame passed as [−1, 1] would show every code below
         mid-range as black).
+
+        Parameters
+        ----------
+        luminance
+            The image, cd/m², ``(H, W)`` or ``(H, W, 3)``, top row first.
+
+        Returns
+        -------
+        numpy.ndarray
+            Floats: in [−1, 1] for grey, [0, 1] for colour, rows bottom-up.
         """
         fraction = self.codes(luminance).astype(np.float64) / (2**self.window_bits - 1)
         level = fraction if fraction.ndim == 3 else fraction * 2.0 - 1.0
         return np.flipud(level)
 
     def image_stim(self, luminance: np.ndarray):
-        """An ``ImageStim`` showing ``luminance`` pixel for pixel."""
+        """An ``ImageStim`` showing ``luminance`` pixel for pixel.
+
+        Parameters
+        ----------
+        luminance
+            The image, cd/m², ``(H, W)`` or ``(H, W, 3)``, top row first.
+
+        Returns
+        -------
+        psychopy.visual.ImageStim
+            The stimulus, one image pixel per screen pixel.
+        """
         from psychopy import visual
 
         levels = self.levels(luminance)  # (H, W), or (H, W, 3) for a colour image
@@ -137,7 +191,19 @@ class ImageBank:
 
     def stim(self, image: dict):
         """The stimulus of a screen's image, encoded and uploaded once: a set image on first
-        use, an image that depends on a setting (a target, a comparison) when it changes."""
+        use, an image that depends on a setting (a target, a comparison) when it changes.
+
+        Parameters
+        ----------
+        image
+            A screen's image: its ``terms`` (``[(name, weight)]`` of the set's images) and
+            ``role``.
+
+        Returns
+        -------
+        psychopy.visual.ImageStim
+            The stimulus.
+        """
         terms = tuple((name, float(weight)) for name, weight in image["terms"])
         role = image["role"]
         if len(terms) == 1 and terms[0][1] == 1.0:  # a set image as it is
@@ -155,7 +221,18 @@ class ImageBank:
         return stim
 
     def frame_stims(self, step: dict) -> list:
-        """A sequence frame's images, centred, uploaded now and not cached."""
+        """A sequence frame's images, centred, uploaded now and not cached.
+
+        Parameters
+        ----------
+        step
+            One frame of a sequence: its ``images``, each a single set image and its weight.
+
+        Returns
+        -------
+        list of psychopy.visual.ImageStim
+            The frame's stimuli, laid out.
+        """
         stims = []
         for image in step["images"]:
             ((name, weight),) = image["terms"]
@@ -164,14 +241,36 @@ class ImageBank:
         return stims
 
     def place(self, screen: dict) -> list:
-        """The screen's images, uploaded and laid out in a row, centred, the set's gap apart."""
+        """The screen's images, uploaded and laid out in a row, centred, the set's gap apart.
+
+        Parameters
+        ----------
+        screen
+            The engine's screen; its ``images`` are placed.
+
+        Returns
+        -------
+        list of psychopy.visual.ImageStim
+            The stimuli, laid out.
+        """
         stims = [self.stim(image) for image in screen.get("images", [])]
         self.lay_out(stims)
         return stims
 
     def lay_out(self, stims: list) -> list[Placement]:
         """Put ``stims`` in a row on whole pixels (:func:`glarelab.experiments.layout.row_layout`):
-        each image pixel on one screen pixel."""
+        each image pixel on one screen pixel.
+
+        Parameters
+        ----------
+        stims
+            The stimuli, left to right; their positions are set.
+
+        Returns
+        -------
+        list of glarelab.experiments.layout.Placement
+            Where each is drawn.
+        """
         gap = self.set.geometry.get("gap_px", 40) if self.set else 0
         placements = row_layout(
             tuple(int(v) for v in self.window.size),
@@ -183,7 +282,19 @@ class ImageBank:
         return placements
 
     def image_size(self, image: dict) -> tuple[int, int]:
-        """(width, height) in pixels of a screen's image."""
+        """(width, height) in pixels of a screen's image.
+
+        Parameters
+        ----------
+        image
+            A screen's image: its ``terms`` (``[(name, weight)]`` of the set's images) and
+            ``role``.
+
+        Returns
+        -------
+        tuple of int
+            ``(width, height)``, pixels.
+        """
         stim = self.stim(image)
         return int(stim.size[0]), int(stim.size[1])
 
@@ -193,7 +304,20 @@ class ImageBank:
         """The codes the window must show for an image, (height, width, 3), top row first, at
         the window's bits, and where they come from: a set image as it is, encoded with the
         set's own calibration, has the codes of its PNG; any other image the calibration's
-        encoding of its luminance."""
+        encoding of its luminance.
+
+        Parameters
+        ----------
+        terms
+            The image as ``[(name, weight)]`` of the set's images.
+
+        Returns
+        -------
+        codes : numpy.ndarray
+            ``(height, width, 3)`` integer codes at the window's bits.
+        source : str
+            Where they come from (the set's PNG, or the calibration's encoding).
+        """
         terms = [tuple(t) for t in terms]
         set_image = len(terms) == 1 and float(terms[0][1]) == 1.0
         png = self.set.folder / f"{terms[0][0]}.png"
@@ -215,7 +339,20 @@ class ImageBank:
 
     def read_back(self, stim, placement: Placement) -> np.ndarray:
         """Draw ``stim`` alone at ``placement`` and read its pixels back from the frame buffer
-        (codes at the window's bits, top row first); the back buffer is cleared after."""
+        (codes at the window's bits, top row first); the back buffer is cleared after.
+
+        Parameters
+        ----------
+        stim
+            The stimulus.
+        placement : glarelab.experiments.layout.Placement
+            Where to draw it.
+
+        Returns
+        -------
+        numpy.ndarray
+            The codes read back, at the window's bits, top row first.
+        """
         self.window.clearBuffer()
         stim.pos = placement.pos
         stim.draw()
@@ -227,7 +364,18 @@ class ImageBank:
         """Draw ``screen``'s images as a session places them, read them back from the frame
         buffer and compare each with its codes (:meth:`expected_codes`); None without images.
         A sequence (a night scene) is checked frame by frame, each drawn as
-        :meth:`frame_stims` draws it for the presentation. The back buffer is cleared after."""
+        :meth:`frame_stims` draws it for the presentation. The back buffer is cleared after.
+
+        Parameters
+        ----------
+        screen
+            The screen to check; None: nothing.
+
+        Returns
+        -------
+        dict or None
+            Each image's comparison with its expected codes, or None.
+        """
         if screen is None or self.set is None or not screen.get("images"):
             return None
         images = []

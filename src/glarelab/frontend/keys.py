@@ -27,7 +27,13 @@ __all__ = ["ScriptedKeys", "SessionKeys"]
 
 class ScriptedKeys:
     """Key names read from a list instead of the keyboard (dry runs): one press per read, at
-    the time it is read; ``escape`` when the list is used up."""
+    the time it is read; ``escape`` when the list is used up.
+
+    Parameters
+    ----------
+    names
+        The key names, in the order they are pressed (``--scripted-keys``).
+    """
 
     def __init__(self, names: list[str]):
         self.names = list(names)
@@ -76,14 +82,31 @@ class SessionKeys:
 
     def showing(self, screen: dict) -> None:
         """A screen is shown: a comment's box starts its comment, any other screen its own
-        typing."""
+        typing.
+
+        Parameters
+        ----------
+        screen
+            The screen now shown; ``text_entry`` marks a comment's box.
+        """
         if screen.get("text_entry") and self._comment_start is None:
             self._start_comment(screen)
         elif not screen.get("text_entry"):
             self._typing_mark = max(self._typing_mark, len(self.typing.events))
 
     def read(self, *, text_entry: bool) -> list[tuple[str, float]]:
-        """New presses; on a text-entry screen without those of Shift+Enter."""
+        """New presses; on a text-entry screen without those of Shift+Enter.
+
+        Parameters
+        ----------
+        text_entry
+            Whether the screen shown takes typed text.
+
+        Returns
+        -------
+        list of tuple of (str, float)
+            ``(key name, time)`` of each new press, s on the session clock.
+        """
         presses = self.reader.read()
         if self.scripted is not None or not any(
             name in ("return", "num_enter") for name, _ in presses

@@ -80,6 +80,8 @@ def run_measurement(
 
     Parameters
     ----------
+    session
+        The measurement session (new or resumed), saved after every entry.
     photometer
         A simulated photometer: the luminance of a code (tests, dry runs).
     meter
@@ -90,6 +92,22 @@ def run_measurement(
         patch by hand, Escape stops (``--resume`` goes on from this patch).
     patch_protocol
         Readings per patch, settling time, spread allowed (default :class:`PatchProtocol`).
+    reopen
+        Opens the photometer anew after a fault (a pulled cable); default None: R retries the
+        open one.
+    fullscr
+        Whether the window is full-screen; default True.
+    size
+        The window's size in pixels when not full-screen; default ``(800, 600)``.
+    screen
+        The screen's number; default 0.
+    frames_per_patch
+        Frames each patch is drawn before it is read; default 2.
+    allow_fewer_bits
+        Whether to measure in a window of fewer bits per channel than the session's; default
+        False.
+    log
+        Called with each progress line; default: nothing.
 
     Returns
     -------
@@ -291,6 +309,23 @@ def read_code_luminances(
     log: Callable[[str], None] = lambda line: None,
 ) -> list[dict]:
     """Show each drive code full-field in an open window and read it with the photometer.
+
+    Parameters
+    ----------
+    window
+        The open PsychoPy window.
+    meter
+        The open photometer.
+    codes
+        The drive codes to show, in order.
+    bit_depth
+        The codes' bits per channel.
+    patch_protocol
+        How each patch is read; default None: :class:`PatchProtocol`'s defaults.
+    keep
+        Called with every reading as it is taken; default: nothing.
+    log
+        Called with each code's line; default: nothing.
 
     Returns
     -------

@@ -33,7 +33,21 @@ class SessionRecords:
         window_intervals: list[float],
     ) -> None:
         """Begin both records with ``marker`` (the run and when it started): the log, with
-        ``log_lines`` after it; the frame intervals, with those measured as the window opened."""
+        ``log_lines`` after it; the frame intervals, with those measured as the window opened.
+
+        Parameters
+        ----------
+        marker
+            The line that starts the run's records (its number and when it started).
+        frames_path
+            The frame-interval file (``_frames.tsv``), appended to; None: none written.
+        log_path
+            The PsychoPy log file, appended to; None: none written.
+        log_lines
+            Lines to log after the marker (what was checked before the window opened).
+        window_intervals
+            The frame intervals measured as the window opened, s.
+        """
         from psychopy import logging
 
         self.frames_path = frames_path
@@ -55,7 +69,15 @@ class SessionRecords:
                 self.frames_path = None
 
     def write_intervals(self, what: str, flips: list[float]) -> None:
-        """The intervals between ``flips``, each a line ``what``, frame, milliseconds."""
+        """The intervals between ``flips``, each a line ``what``, frame, milliseconds.
+
+        Parameters
+        ----------
+        what
+            What was shown (the line's first field).
+        flips
+            The flips' times, s, in order.
+        """
         if self.frames_path is None:
             return
         try:
@@ -97,7 +119,13 @@ class SessionRecords:
 
     @staticmethod
     def log(message: str) -> None:
-        """A line in the session's PsychoPy log (written when the loop waits for keys)."""
+        """A line in the session's PsychoPy log (written when the loop waits for keys).
+
+        Parameters
+        ----------
+        message
+            The line.
+        """
         from psychopy import logging
 
         logging.exp(message)

@@ -107,7 +107,17 @@ class ScreenText:
 
     def draw_text(self, text: str, *, pos=(0, 0), below: bool = False) -> None:
         """``text`` centred at ``pos`` (pixels from the centre); with ``below``, its first line
-        at ``pos`` and the rest under it (a prompt under the images)."""
+        at ``pos`` and the rest under it (a prompt under the images).
+
+        Parameters
+        ----------
+        text
+            The text.
+        pos
+            ``(x, y)`` of its anchor, pixels from the window's centre; default the centre.
+        below
+            Whether the text hangs below ``pos`` instead of centring on it; default False.
+        """
         self.text.text = text
         self.text.anchorVert = "top" if below else "center"
         self.text.pos = pos
@@ -123,7 +133,20 @@ class ScreenText:
     ) -> None:
         """The screen's text around its placed image ``stims`` (drawn before): labels and
         marker under them; the screen's text, or its answer prompt; the box of a typed answer
-        with ``comment`` (its text and the cursor's place)."""
+        with ``comment`` (its text and the cursor's place).
+
+        Parameters
+        ----------
+        screen
+            The engine's screen: its images' roles and ``labels``, ``marker``, ``text`` and
+            prompt.
+        stims
+            The screen's image stimuli, already placed and drawn.
+        prompt
+            Whether to draw the answer prompt (a flash's prompt comes after it); default True.
+        comment
+            ``(text, cursor)`` of a typed answer, to draw in its box; default None: no box.
+        """
         roles = [image["role"] for image in screen.get("images", [])]
         bottom = -max((s.size[1] for s in stims), default=0) / 2
         for role, stim in zip(roles, stims, strict=True):

@@ -176,7 +176,23 @@ class PsychoPyFrontend:
         """Time presentations at ``refresh_hz`` (pacing flips by the clock if ``pace``); log
         to ``log_path`` and frame intervals to ``frames_path``, each from a line that names the
         session's ``run`` (1, or the resume's number) and the wall-clock time it ``started``
-        (the log's times restart at zero in every run); from now on every key press counts."""
+        (the log's times restart at zero in every run); from now on every key press counts.
+
+        Parameters
+        ----------
+        run
+            The session's run: 1, or the resume's number; default 1.
+        started
+            The wall-clock time the run started, as the marker line gives it; default empty.
+        refresh_hz
+            The refresh rate presentations are timed at, Hz.
+        pace
+            Whether flips are paced by the clock instead of vertical sync.
+        frames_path
+            The frame-interval file; None: not written.
+        log_path
+            The PsychoPy log file; None: not written.
+        """
         self.refresh_hz = refresh_hz
         self.pace = pace
         marker = (
@@ -227,25 +243,84 @@ class PsychoPyFrontend:
         return self.images.calibration
 
     def image_stim(self, terms):
-        """The stimulus a session draws for an image ``[(name, weight), …]`` of the set."""
+        """The stimulus a session draws for an image ``[(name, weight), …]`` of the set.
+
+        Parameters
+        ----------
+        terms
+            The image as ``[(name, weight)]`` of the set's images.
+
+        Returns
+        -------
+        psychopy.visual.ImageStim
+            The stimulus.
+        """
         return self.images.stim({"role": "read back", "terms": [tuple(t) for t in terms]})
 
     def image_size(self, image: dict) -> tuple[int, int]:
-        """(width, height) in pixels of a screen's image."""
+        """(width, height) in pixels of a screen's image.
+
+        Parameters
+        ----------
+        image
+            A screen's image (its ``terms`` and ``role``).
+
+        Returns
+        -------
+        tuple of int
+            ``(width, height)``, pixels.
+        """
         return self.images.image_size(image)
 
     def expected_codes(self, terms) -> tuple[np.ndarray, str]:
-        """The codes the window must show for an image (:meth:`ImageBank.expected_codes`)."""
+        """The codes the window must show for an image (:meth:`ImageBank.expected_codes`).
+
+        Parameters
+        ----------
+        terms
+            The image as ``[(name, weight)]`` of the set's images.
+
+        Returns
+        -------
+        codes : numpy.ndarray
+            ``(height, width, 3)`` codes at the window's bits.
+        source : str
+            Where they come from.
+        """
         return self.images.expected_codes(terms)
 
     def read_back(self, stim, placement: Placement) -> np.ndarray:
         """Draw ``stim`` alone at ``placement`` and read its pixels back
-        (:meth:`ImageBank.read_back`)."""
+        (:meth:`ImageBank.read_back`).
+
+        Parameters
+        ----------
+        stim
+            The stimulus.
+        placement : glarelab.experiments.layout.Placement
+            Where to draw it.
+
+        Returns
+        -------
+        numpy.ndarray
+            The codes read back, top row first.
+        """
         return self.images.read_back(stim, placement)
 
     def check_presentation(self, screen: dict | None) -> dict | None:
         """``screen``'s images drawn as a session places them and read back
-        (:meth:`ImageBank.check_presentation`); None without images."""
+        (:meth:`ImageBank.check_presentation`); None without images.
+
+        Parameters
+        ----------
+        screen
+            The screen to check; None: nothing.
+
+        Returns
+        -------
+        dict or None
+            Each image's comparison with its expected codes, or None.
+        """
         return self.images.check_presentation(screen)
 
     # --- screens ----------------------------------------------------------------------------
@@ -282,6 +357,18 @@ class PsychoPyFrontend:
     # --- the device interface ---------------------------------------------------------------
 
     def show(self, screen: dict) -> float:
+        """Draw a screen and flip; a trial screen's frame is captured for the record.
+
+        Parameters
+        ----------
+        screen
+            The engine's screen.
+
+        Returns
+        -------
+        float
+            The onset flip's time, s on the session clock.
+        """
         self.keys.showing(screen)
         self._screen = screen
         self._draw(screen)
@@ -292,7 +379,18 @@ class PsychoPyFrontend:
 
     def present(self, screen: dict) -> Shown:
         """A still for ``frames`` flips, or a sequence (``screen['sequence']``: images, each for
-        its ``frames`` flips), after a blank of ``blank_before_ms``; then the answer prompt."""
+        its ``frames`` flips), after a blank of ``blank_before_ms``; then the answer prompt.
+
+        Parameters
+        ----------
+        screen
+            The engine's timed screen: ``frames`` (or ``sequence``) and ``blank_before_ms``.
+
+        Returns
+        -------
+        glarelab.experiments.loop.Shown
+            Its onset and offset flips, the frames asked for and the frames dropped.
+        """
         self._screen = screen
         sequence = screen.get("sequence")
         steps = sequence or [{"images": screen["images"], "frames": screen["frames"]}]
@@ -364,6 +462,18 @@ class PsychoPyFrontend:
         raise SessionAborted(f"escape during the presentation of trial {screen['trial']}")
 
     def wait_keys(self, anchor_s: float) -> list[Press]:
+        """Block until a key is pressed; every press not yet returned.
+
+        Parameters
+        ----------
+        anchor_s
+            The onset the presses are timed from, s on the session clock.
+
+        Returns
+        -------
+        list of glarelab.experiments.engine.Press
+            Every press not yet returned, in order, at least one.
+        """
         self.records.flush()
         text_entry = bool((self._screen or {}).get("text_entry"))
         while True:
@@ -403,5 +513,11 @@ class PsychoPyFrontend:
             time.sleep(min(left, 0.002) if left > 0.003 else 0)
 
     def log(self, message: str) -> None:
-        """A line in the session's PsychoPy log (written when the loop waits for keys)."""
+        """A line in the session's PsychoPy log (written when the loop waits for keys).
+
+        Parameters
+        ----------
+        message
+            The line.
+        """
         self.records.log(message)

@@ -55,6 +55,19 @@ def open_window(
 ):
     """A PsychoPy window asking for ``bits`` per channel (10 or more: a deep frame buffer).
 
+    Parameters
+    ----------
+    bits
+        Bits per channel asked for, from 8.
+    fullscreen
+        Whether the window fills the screen.
+    size
+        The window's size in pixels when not full-screen; default ``(1280, 800)``.
+    units
+        PsychoPy's units of the window; default ``'pix'``.
+    screen
+        The screen's number; default 0.
+
     Returns
     -------
     (window, bits_given)
@@ -95,6 +108,16 @@ def compose_typed_text(window) -> bool:
     types nothing and the letter after it comes without its accent (``^`` ``e`` gives ``e``).
     The input context's focus window is set to the view, where the key events arrive; the X
     input method then composes them as in any X program (Xlib's Compose tables of the locale).
+
+    Parameters
+    ----------
+    window
+        The open PsychoPy window.
+
+    Returns
+    -------
+    bool
+        Whether the input context was set up.
     """
     handle = getattr(window, "winHandle", None)
     context, view = getattr(handle, "_x_ic", None), getattr(handle, "_view", None)
@@ -118,20 +141,57 @@ def window_bits() -> int:
 
 
 def screen_resolution(window) -> tuple[int, int]:
-    """The (width, height) in pixels of the screen the window is on."""
+    """The (width, height) in pixels of the screen the window is on.
+
+    Parameters
+    ----------
+    window
+        The open PsychoPy window.
+
+    Returns
+    -------
+    tuple of int
+        ``(width, height)``, pixels.
+    """
     screen = window.winHandle.screen
     return int(screen.width), int(screen.height)
 
 
 def measure_refresh(window) -> float | None:
     """The refresh rate (Hz) from frame intervals on the open window, or None when the
-    intervals never settled (no vertical sync, a busy machine)."""
+    intervals never settled (no vertical sync, a busy machine).
+
+    Parameters
+    ----------
+    window
+        The open PsychoPy window.
+
+    Returns
+    -------
+    float or None
+        Hz, or None.
+    """
     rate = window.getActualFrameRate(nIdentical=20, nMaxFrames=240, nWarmUpFrames=20)
     return float(rate) if rate else None
 
 
 def measure_frame_intervals(window, frames: int = 300, draw=None) -> np.ndarray:
-    """Intervals (s) between ``frames`` consecutive flips, each after ``draw()`` if given."""
+    """Intervals (s) between ``frames`` consecutive flips, each after ``draw()`` if given.
+
+    Parameters
+    ----------
+    window
+        The open PsychoPy window.
+    frames
+        The intervals to measure; default 300.
+    draw
+        Called before each flip; default None: nothing drawn.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(frames,)`` intervals, s.
+    """
     times = []
     for _ in range(frames + 1):
         if draw is not None:
@@ -141,7 +201,20 @@ def measure_frame_intervals(window, frames: int = 300, draw=None) -> np.ndarray:
 
 
 def grab_screen(window, *, buffer: str = "back") -> np.ndarray:
-    """The window's pixels (height, width, 3) as uint8, from the back or front buffer."""
+    """The window's pixels (height, width, 3) as uint8, from the back or front buffer.
+
+    Parameters
+    ----------
+    window
+        The open PsychoPy window.
+    buffer
+        ``'back'`` (default) or ``'front'``.
+
+    Returns
+    -------
+    numpy.ndarray
+        uint8 ``(height, width, 3)``.
+    """
     return np.asarray(window.getMovieFrame(buffer=buffer))
 
 
@@ -157,6 +230,22 @@ def read_framebuffer_codes(
     loss, and turned back into codes: ``round(value × (2^bits − 1) / 65535)``; a ``bits``-bit
     code ``c`` reads as ``round(c × 65535 / (2^bits − 1))``, within half a 16-bit step, so it
     comes back exactly.
+
+    Parameters
+    ----------
+    window
+        The open PsychoPy window.
+    box
+        ``(left, bottom, width, height)``, frame-buffer pixels from the lower-left corner.
+    bits
+        The codes' bits per channel, 1-16.
+    buffer
+        ``'back'`` (default) or ``'front'``.
+
+    Returns
+    -------
+    numpy.ndarray
+        Integer codes ``(height, width, 3)``, top row first.
     """
     from pyglet import gl
 
@@ -237,10 +326,15 @@ class TextCapture:
     """Every text event of a window, in order: ``("text", characters)`` and
     ``("motion", name)`` (Backspace, Delete, arrows, Home, End), as pyglet reports them, each
     after ``("key", symbol)`` of the key press that made it (pyglet's symbols are X keysyms).
-    Shift+Enter types a new line (``"\\n"``); :attr:`returns` says of each Enter pressed
+    Shift+Enter types a new line (``"\\n"``); ``returns`` says of each Enter pressed
     whether Shift was down.
 
     PsychoPy's own handlers keep running; this one only listens.
+
+    Parameters
+    ----------
+    window
+        The open PsychoPy window (pyglet) whose events are captured from now on.
     """
 
     def __init__(self, window):
@@ -280,6 +374,14 @@ def typed_text(events: list[tuple[str, str]], start: int = 0) -> tuple[str, int,
     Returns the text, the cursor's position in it, and whether an Enter ended it. Backspace and
     Delete remove a character, the arrows, Home and End move the cursor; every other character
     (tabs included) is kept as typed.
+
+    Parameters
+    ----------
+    events
+        The window's text events (:class:`TextCapture`): ``("text", characters)`` and
+        ``("motion", name)``.
+    start
+        The first event of the text; default 0.
 
     Examples
     --------
@@ -322,6 +424,18 @@ def key_symbols(window, names) -> set[int]:
     ``psychopy.hardware.keyboard.keyNamesLinux``), whatever the layout; the window system's text
     events follow the layout. Elsewhere than on X11 only the symbols of the names' own
     characters are given (a digit's key and its keypad key).
+
+    Parameters
+    ----------
+    window
+        The open PsychoPy window.
+    names
+        Key names as PsychoPy's keyboard gives them.
+
+    Returns
+    -------
+    set of int
+        The symbols.
     """
     from pyglet.window import key
 
@@ -356,6 +470,18 @@ def key_labels(window, names) -> dict[str, str]:
     Psychtoolbox names keys by their position on a US keyboard on Linux
     (:data:`psychopy.hardware.keyboard.keyNamesLinux`), so a screen that takes the key named
     ``y`` must tell a German participant to press Z.
+
+    Parameters
+    ----------
+    window
+        The open PsychoPy window.
+    names
+        Key names as PsychoPy's keyboard gives them.
+
+    Returns
+    -------
+    dict of str to str
+        Name → label.
     """
     labels = {name: name.upper() for name in names}
     if not sys.platform.startswith("linux"):

@@ -1,4 +1,4 @@
-"""Checks at the public boundary of :mod:`glare`.
+"""Checks at the public boundary of :mod:`glarelab.glare`.
 
 Every check raises :class:`ValueError` whose message names the argument, the value it got and
 what is allowed, so that a wrong call is fixed from the message alone.

@@ -5,8 +5,7 @@ This package sits above the others: it runs the experiments' simulated sessions 
 analysis' tests on them (neither of which imports it).
 
 - :mod:`glarelab.planning.effects`: each test of a protocol's analysis as an effect with its
-p-values
-  and effect size; the correction an ANOVA effect is judged by.
+  p-values and effect size; the correction an ANOVA effect is judged by.
 - :mod:`glarelab.planning.simulate`: one simulated study at several sample sizes.
 - :mod:`glarelab.planning.power`: power with binomial intervals, effect sizes, recommended sample
   sizes, power curves.

@@ -48,6 +48,25 @@ def noncentrality(
 ) -> float:
     """``λ = n Σ (μ_j − μ̄)² / σ²`` (module docstring).
 
+    Parameters
+    ----------
+    means_per_condition
+        ``μ_j``, the condition means (at least two), in the unit of the measure.
+    error_sd
+        ``σ``, the SD of the error within subjects, same unit, > 0.
+    subjects
+        ``n``, >= 2.
+
+    Returns
+    -------
+    float
+        ``λ``, dimensionless.
+
+    Raises
+    ------
+    ValueError
+        For fewer than two finite means, ``error_sd <= 0`` or fewer than two subjects.
+
     Examples
     --------
     >>> noncentrality([0.0, 0.5, 1.0], error_sd=1.0, subjects=10)
@@ -105,6 +124,20 @@ class OneWayJob:
 
     Replication ``r`` draws from ``numpy.random.default_rng([seed, r])``; the sample sizes of
     one replication share their first subjects, as in :mod:`glarelab.planning.simulate`.
+
+    Parameters
+    ----------
+    means_per_condition
+        ``μ_j``, the condition means (at least two), in the unit of the measure.
+    error_sd
+        ``σ``, the SD of the error within subjects, same unit, > 0.
+    subject_sd
+        ``σ_s``, the SD of the subject effects, same unit, >= 0 (it does not change the
+        power under sphericity).
+    participants
+        The sample sizes ``n`` to analyse, each >= 2.
+    seed
+        The seed of every replication's draws.
     """
 
     kind = "one-way"
@@ -130,6 +163,20 @@ class OneWayJob:
         self.seed = seed
 
     def run(self, replication: int) -> dict:
+        """One simulated study at every sample size.
+
+        Parameters
+        ----------
+        replication
+            The replication's number, >= 0: with ``seed``, it seeds the draws.
+
+        Returns
+        -------
+        dict
+            ``replication``; ``results``: one effect record per sample size
+            (:func:`glarelab.planning.effects.anova_effects`, with ``n``); ``failures``:
+            none.
+        """
         from glarelab.analysis.stats import rm_anova
 
         rng = np.random.default_rng([self.seed, replication])

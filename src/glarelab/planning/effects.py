@@ -63,7 +63,24 @@ def _number(value) -> float | None:
 
 def anova_effects(table: pd.DataFrame, *, prefix: str | None = None) -> list[dict]:
     """The rows of an ANOVA table (:func:`glarelab.analysis.stats.rm_anova`, optionally with an
-    ``analysis`` column) as effects."""
+    ``analysis`` column) as effects.
+
+    Parameters
+    ----------
+    table
+        The ANOVA table: ``source``, ``F``, ``df1``, ``df2``, ``p``, ``p_gg``, ``p_hf``,
+        ``eps_gg``, ``eta2_partial``, and optionally ``analysis``.
+    prefix
+        The analysis's name for rows without an ``analysis`` column (``"ANALYSIS: SOURCE"``);
+        default None: the source alone.
+
+    Returns
+    -------
+    list of dict
+        One row per test: ``effect`` (its name), ``test`` (``'F'``, ``'t'``, ...),
+        ``statistic``, ``df1`` (and ``df2``), ``p`` (and for F ``p_gg``, ``p_hf``, ``eps_gg``,
+        None where sphericity cannot be estimated), ``size`` and ``size_name``.
+    """
     rows = []
     for row in table.itertuples(index=False):
         analysis = getattr(row, "analysis", None) or prefix
@@ -149,7 +166,24 @@ PARADIGMS: dict[str, Callable[[Mapping[str, pd.DataFrame], object, int], list[di
 
 def effects(protocol, tables: Mapping[str, pd.DataFrame], participants: int) -> list[dict]:
     """Every test of the protocol's analysis as an effect row (module docstring), from the
-    tables of the analysis's ``tests(dataset, protocol)`` on ``participants``."""
+    tables of the analysis's ``tests(dataset, protocol)`` on ``participants``.
+
+    Parameters
+    ----------
+    protocol : glarelab.protocols.Protocol
+        The study's protocol; its paradigm selects the reader (:data:`PARADIGMS`).
+    tables
+        The analysis's tables by name (``'anova'``, ``'ttests'``, ...).
+    participants
+        The number of participants the tables are of (for the t-tests' effect sizes).
+
+    Returns
+    -------
+    list of dict
+        One row per test: ``effect`` (its name), ``test`` (``'F'``, ``'t'``, ...),
+        ``statistic``, ``df1`` (and ``df2``), ``p`` (and for F ``p_gg``, ``p_hf``, ``eps_gg``,
+        None where sphericity cannot be estimated), ``size`` and ``size_name``.
+    """
     return PARADIGMS[protocol.paradigm](tables, protocol, participants)
 
 
@@ -161,6 +195,20 @@ def chosen_p(row: Mapping, correction: Correction) -> tuple[float, str]:
     estimated (fewer participants than the effect's df + 1) the conservative lower bound
     ``ε = 1 / df1`` is used (Greenhouse & Geisser 1959): ``F`` on ``1`` and ``df2 / df1``
     degrees of freedom. Other tests: their p as the analysis reports it.
+
+    Parameters
+    ----------
+    row
+        An effect row (:func:`effects`).
+    correction
+        ``'gg'``, ``'hf'``, ``'girden'`` or ``'none'`` (:data:`CORRECTIONS`).
+
+    Returns
+    -------
+    p : float
+        The p-value.
+    how : str
+        ``'GG'``, ``'HF'``, ``'lower bound'``, ``'uncorrected'`` or ``'as tested'``.
 
     Raises
     ------

@@ -116,7 +116,15 @@ class ResultLog:
         return task in self.results
 
     def add(self, task: int, result: dict) -> None:
-        """Write a finished task's result (flushed and fsync'ed before returning)."""
+        """Write a finished task's result (flushed and fsync'ed before returning).
+
+        Parameters
+        ----------
+        task
+            The task's number.
+        result
+            Its result, JSON-serialisable (NaN allowed).
+        """
         record = {"task": task, "result": result}
         if self.key is not None:
             record["run"] = self.key
@@ -131,7 +139,19 @@ class ResultLog:
         self.results[task] = json.loads(line)["result"]  # as a resumed run reads it
 
     def sorted(self, tasks: Iterable[int] | None = None) -> list[dict]:
-        """The results of ``tasks`` (default: all) in task order."""
+        """The results of ``tasks`` (default: all) in task order.
+
+        Parameters
+        ----------
+        tasks
+            The task numbers wanted; those not finished are left out. Default None: every
+            finished task.
+
+        Returns
+        -------
+        list of dict
+            Their results, as read back from the log.
+        """
         keys = sorted(self.results if tasks is None else set(tasks) & set(self.results))
         return [self.results[k] for k in keys]
 
@@ -170,6 +190,13 @@ class Progress:
         self.show()
 
     def update(self, count: int = 1) -> None:
+        """Count tasks finished and redraw the bar.
+
+        Parameters
+        ----------
+        count
+            Tasks finished since the last update; default 1.
+        """
         self.done += count
         if self.first is None:
             self.first = (time.perf_counter(), self.done)
@@ -237,6 +264,18 @@ def dask_client(*, workers: int | None = None, scheduler: str | None = None) -> 
     ``tcp://10.0.0.5:8786``), or of a new :class:`distributed.LocalCluster` of ``workers``
     single-threaded worker processes (default: one per core), closed on exit.
 
+    Parameters
+    ----------
+    workers
+        Worker processes of a local cluster, >= 1; default None: one per available core.
+    scheduler
+        The address of a running scheduler to connect to instead; default None.
+
+    Yields
+    ------
+    distributed.Client
+        The client; closed, with its local cluster, when the block ends.
+
     Raises
     ------
     ValueError
@@ -276,7 +315,15 @@ def dask_client(*, workers: int | None = None, scheduler: str | None = None) -> 
 
 
 class JobPlugin(WorkerPlugin):
-    """Holds a job on each worker for its tasks (Dask's place for per-worker state)."""
+    """Holds a job on each worker for its tasks (Dask's place for per-worker state).
+
+    Parameters
+    ----------
+    job
+        The job whose ``run(task)`` the worker's tasks call; it is pickled to each worker once.
+    name
+        The plugin's name on the workers, which the tasks look the job up by.
+    """
 
     def __init__(self, job, name: str):
         self.job = job

@@ -41,7 +41,20 @@ class GridError(ValueError):
 
 @dataclass(frozen=True)
 class Setting:
-    """One key of the grid and its values."""
+    """One key of the grid and its values.
+
+    Attributes
+    ----------
+    key
+        The protocol's dotted path (module docstring), such as ``stimulus.disk_deg``.
+    values
+        The values it takes, in the key's own unit, at least one.
+
+    Raises
+    ------
+    GridError
+        For a key that is not a dotted path, or no values.
+    """
 
     key: str
     values: tuple
@@ -54,7 +67,17 @@ class Setting:
 
 @dataclass(frozen=True)
 class Point:
-    """One protocol of the grid: its number, the value of each key varied, the protocol."""
+    """One protocol of the grid: its number, the value of each key varied, the protocol.
+
+    Attributes
+    ----------
+    index
+        The point's number in the grid, from 0.
+    values
+        Key → the value it has at this point.
+    protocol : glarelab.protocols.Protocol
+        The protocol with these values, validated.
+    """
 
     index: int
     values: dict
@@ -87,6 +110,16 @@ def _value(text: str):
 
 def parse_setting(text: str) -> Setting:
     """``KEY=V1,V2,…`` as a :class:`Setting` (module docstring).
+
+    Parameters
+    ----------
+    text
+        The ``--set`` argument.
+
+    Returns
+    -------
+    Setting
+        The key and its values.
 
     Raises
     ------
@@ -122,6 +155,15 @@ def parse_setting(text: str) -> Setting:
 
 def apply_setting(data: dict, key: str, value) -> None:
     """Set ``key`` (a path of the module docstring) to ``value`` in a protocol's parsed TOML.
+
+    Parameters
+    ----------
+    data
+        The protocol's tables as :mod:`tomllib` reads them; changed in place.
+    key
+        The dotted path to set.
+    value
+        Its new value, in the key's unit.
 
     Raises
     ------

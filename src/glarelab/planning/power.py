@@ -82,6 +82,25 @@ QUANTILES = (0.05, 0.25, 0.5, 0.75, 0.95)
 def binomial_interval(successes: int, trials: int, *, level: float = 0.95) -> tuple[float, float]:
     """The Clopper–Pearson interval of a proportion (statsmodels).
 
+    Parameters
+    ----------
+    successes
+        Replications that rejected the null hypothesis, ``0 <= successes <= trials``.
+    trials
+        Replications, >= 1.
+    level
+        Confidence level; default 0.95.
+
+    Returns
+    -------
+    low, high : float
+        The interval's bounds, proportions in [0, 1].
+
+    Raises
+    ------
+    ValueError
+        For counts outside those ranges.
+
     Examples
     --------
     >>> low, high = binomial_interval(80, 100)
@@ -197,6 +216,26 @@ def recommend(power: pd.DataFrame, *, target: float = 0.8) -> pd.DataFrame:
     the smallest whose confidence interval lies wholly above it (``n_confident``); empty where
     none of the sample sizes does.
 
+    Parameters
+    ----------
+    power
+        The power table (:func:`summarise`): ``effect``, ``participants``, ``power`` and
+        ``ci_low``.
+    target
+        The power wanted, in (0, 1); default 0.8.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per effect: ``effect``, ``target``, ``n_power``, ``n_confident`` (missing
+        where not reached), ``power_at_largest`` and ``largest`` (the largest sample size
+        simulated).
+
+    Raises
+    ------
+    ValueError
+        For a ``target`` outside (0, 1).
+
     Examples
     --------
     >>> table = pd.DataFrame({"effect": ["a"] * 3, "participants": [6, 8, 10],
@@ -235,7 +274,24 @@ def _groups(effects: list[str]) -> dict[str, list[str]]:
 
 
 def power_figure(power: pd.DataFrame, *, target: float, alpha: float, title: str) -> bytes:
-    """Power curves with their confidence intervals, one panel per analysis (PNG bytes)."""
+    """Power curves with their confidence intervals, one panel per analysis (PNG bytes).
+
+    Parameters
+    ----------
+    power
+        The power table (:func:`summarise`).
+    target
+        The power wanted, drawn as a dashed line.
+    alpha
+        The significance level, drawn as a dotted line (the power of no effect).
+    title
+        The figure's title (the study's).
+
+    Returns
+    -------
+    bytes
+        The PNG file's content.
+    """
     from glarelab.analysis.figures import plt, png
 
     groups = _groups(list(dict.fromkeys(power["effect"])))
@@ -279,7 +335,21 @@ def power_figure(power: pd.DataFrame, *, target: float, alpha: float, title: str
 
 def effect_size_figure(sizes: pd.DataFrame, *, title: str) -> bytes:
     """Median effect size with its 5-95 % and 25-75 % ranges against the sample size, one
-    panel per analysis (PNG bytes)."""
+    panel per analysis (PNG bytes).
+
+    Parameters
+    ----------
+    sizes
+        The effect-size table (:func:`summarise`): the quantiles ``q05`` … ``q95`` of each
+        effect's size at each sample size, and the size's name.
+    title
+        The figure's title (the study's).
+
+    Returns
+    -------
+    bytes
+        The PNG file's content.
+    """
     from glarelab.analysis.figures import plt, png
 
     groups = _groups(list(dict.fromkeys(sizes["effect"])))
@@ -324,6 +394,23 @@ def write_summary(
     (:func:`glarelab.files.folders.replace_folder`). A process killed at any moment leaves
     the earlier five or the new five, never some of each; a full disk leaves the earlier ones.
     Nothing else may write into ``out`` meanwhile (:func:`power_analysis` holds its lock).
+
+    Parameters
+    ----------
+    out
+        The run's folder.
+    records
+        The replications' records, in replication order (:func:`summarise`).
+    alpha, correction, target
+        Significance level, how ANOVA effects are judged
+        (:func:`glarelab.planning.effects.chosen_p`) and the power wanted.
+    title
+        The figures' title (the study's).
+
+    Returns
+    -------
+    pandas.DataFrame
+        The recommendations (:func:`recommend`).
     """
     power, sizes = summarise(records, alpha=alpha, correction=correction)
     recommended = recommend(power, target=target)
@@ -397,7 +484,22 @@ def _folder_lock(out: Path) -> ProcessLock:
 def run_inputs(protocol, *, seed: int, participants: Sequence[int]) -> dict:
     """What a folder's replications depend on (its ``run.json``): the protocol, the seed and
     the sample sizes. The number of replications is not among them: more can be added later,
-    and fewer summarised."""
+    and fewer summarised.
+
+    Parameters
+    ----------
+    protocol : glarelab.protocols.Protocol
+        The study; its name and hash are recorded.
+    seed
+        The simulated observers' seed.
+    participants
+        The sample sizes; recorded sorted, each once.
+
+    Returns
+    -------
+    dict
+        ``format``, ``study``, ``protocol_sha256``, ``seed`` and ``participants``.
+    """
     return {
         "format": RUN_FORMAT,
         "study": protocol.study,
@@ -409,6 +511,13 @@ def run_inputs(protocol, *, seed: int, participants: Sequence[int]) -> dict:
 
 def check_run_folder(out: str | Path, run: dict) -> None:
     """Refuse a folder whose replications were made with other inputs (writes nothing).
+
+    Parameters
+    ----------
+    out
+        The run's folder; without a ``run.json``, nothing is refused.
+    run
+        This run's inputs (:func:`run_inputs`).
 
     Raises
     ------
@@ -476,7 +585,7 @@ def power_analysis(
     Parameters
     ----------
     protocol
-        The study (:func:`protocols.load_protocol`).
+        The study (:func:`glarelab.protocols.load_protocol`).
     out
         Output folder (module docstring); a folder with replications of the same inputs is
         resumed.
@@ -502,6 +611,9 @@ def power_analysis(
         :func:`glarelab.planning.simulate.default_scratch`, on each worker).
     log, progress
         Progress messages, and whether to show the progress bar.
+    task_delay_s
+        Seconds each replication waits before it runs, default 0: for tests that stop a run
+        part way (the command's hidden ``--task-delay-ms``).
 
     Returns
     -------

@@ -45,6 +45,23 @@ __all__ = ["PowerJob", "default_scratch", "participant_id", "simulate_replicatio
 def participant_id(replication: int, number: int) -> str:
     """The id of participant ``number`` (from 1) of a replication (from 0).
 
+    Parameters
+    ----------
+    replication
+        The replication, >= 0.
+    number
+        The participant within it, >= 1.
+
+    Returns
+    -------
+    str
+        ``repRRRRRR-pNNN``.
+
+    Raises
+    ------
+    ValueError
+        For a negative replication or a number below 1.
+
     Examples
     --------
     >>> participant_id(12, 3)
@@ -109,7 +126,7 @@ def simulate_replication(
     Parameters
     ----------
     protocol
-        The study (:func:`protocols.load_protocol`).
+        The study (:func:`glarelab.protocols.load_protocol`).
     replication
         Which replication (>= 0): with ``seed`` it fixes every participant.
     participants
@@ -161,6 +178,28 @@ class PowerJob:
     stimulus set, made once (:meth:`setup`) and kept for every replication it runs. A worker
     that cannot read ``stimuli`` (a cluster without a shared file system) builds the protocol's
     set into its own cache (:func:`glarelab.stimuli.stimulus_set.cached_stimulus_set`).
+
+    Parameters
+    ----------
+    protocol : glarelab.protocols.Protocol
+        The study.
+    participants
+        The sample sizes, each >= 2.
+    seed
+        The simulated observers' seed.
+    stimuli
+        The protocol's stimulus set; None only for a protocol that shows no images.
+    scratch
+        Folder for the simulated sessions' files; default None:
+        :func:`default_scratch`.
+    task_delay_s
+        Seconds each replication waits before it runs, default 0 (for tests that stop a run
+        part way).
+
+    Raises
+    ------
+    ValueError
+        For a sample size below 2, or no stimulus set for a protocol that shows images.
     """
 
     kind = "power"
@@ -206,7 +245,18 @@ class PowerJob:
         return folder, DisplayedSet(StimulusSet(folder))
 
     def run(self, replication: int) -> dict:
-        """Simulate and analyse one replication."""
+        """Simulate and analyse one replication.
+
+        Parameters
+        ----------
+        replication
+            The replication's number, >= 0 (:func:`simulate_replication`).
+
+        Returns
+        -------
+        dict
+            As :func:`simulate_replication` returns it.
+        """
         if not hasattr(self._local, "state"):
             self._local.state = self.setup()
         folder, displayed = self._local.state

@@ -52,7 +52,19 @@ def _in_place(folder: Path, protocol) -> bool:
 
 
 class SweepJob:
-    """The points of a grid as tasks of :func:`glarelab.planning.execute.run_tasks`."""
+    """The points of a grid as tasks of :func:`glarelab.planning.execute.run_tasks`.
+
+    Parameters
+    ----------
+    points
+        The grid's points (:func:`prepare`); a task is a point's index.
+    out
+        The sweep's folder: sets in ``sets/NNN``, simulations in ``simulated/NNN``.
+    simulate
+        Simulated observers per point; 0: build only.
+    seed
+        The simulated observers' seed.
+    """
 
     kind = "sweep"
 
@@ -63,7 +75,21 @@ class SweepJob:
         self.seed = seed
 
     def run(self, index: int) -> dict:
-        """Build point ``index``'s set (unless in place), simulate it if asked."""
+        """Build point ``index``'s set (unless in place), simulate it if asked.
+
+        Parameters
+        ----------
+        index
+            The point's number in the grid.
+
+        Returns
+        -------
+        dict
+            The index's row: ``point``, ``values``, ``protocol_sha256``, the set's ``folder``
+            and ``manifest_sha256`` (None without images), ``images`` (not counting
+            components), ``build_s`` (seconds) and ``effects``
+            (:func:`glarelab.planning.effects.effects` of the simulation; empty without).
+        """
         from glarelab.experiments.session import shows_images
         from glarelab.stimuli.stimulus_set import build_stimulus_set, default_calibration
 
@@ -135,6 +161,26 @@ def prepare(
 ) -> tuple[list[Point], dict]:
     """Check a sweep before it runs, writing nothing: the grid's points, each validated, and
     the sweep's record (``sweep.json``).
+
+    Parameters
+    ----------
+    protocol
+        A shipped study's name or a protocol TOML file.
+    settings
+        The keys varied and their values (:func:`glarelab.planning.grid.parse_setting`).
+    out
+        The sweep's folder; one holding a sweep of the same inputs is resumed.
+    simulate
+        Simulated observers per point: 0 (default, build only) or at least 2.
+    seed
+        The simulated observers' seed; default 1.
+
+    Returns
+    -------
+    points : list of Point
+        The grid's points, each protocol validated.
+    record : dict
+        What the sweep depends on, as ``sweep.json`` holds it.
 
     Raises
     ------

@@ -4,7 +4,7 @@ A protocol is a TOML file that names its paradigm (matching, staircase, rating) 
 everything the study needs; the shipped studies' files live in this package. The session CSV
 format is derived from the protocol here too (:mod:`glarelab.protocols.columns`), so the
 experiments that write data and the analysis that reads it agree by construction. This package
-imports nothing of the suite but :mod:`glare` (to check glare models' parameters).
+imports nothing of the suite but :mod:`glarelab.glare` (to check glare models' parameters).
 """
 
 from glarelab.protocols.columns import COMMON, DATA_FORMAT, Column, columns, format_value

@@ -22,7 +22,29 @@ DATA_FORMAT = "0.4"  # the version of the session files written now (recorded in
 
 @dataclass(frozen=True)
 class Column:
-    """One CSV column: name, type, unit and meaning; ``choices`` limits a string column."""
+    """One CSV column: name, type, unit and meaning; ``choices`` limits a string column.
+
+    Parameters
+    ----------
+    name
+        The column's header in the CSV.
+    kind
+        The type of its values: ``str``, ``int``, ``float`` or ``bool`` (written
+        ``true``/``false``).
+    doc
+        What the column holds, for ``docs/data.md``.
+    unit
+        The unit of a number (``'s'``, ``'cd/m²'``); empty (default) for none.
+    optional
+        Whether a cell may be empty (a missing value); default ``False``.
+    choices
+        The values a string column may take; default ``None``: any.
+    low, high
+        Inclusive bounds of a number, in ``unit``; default ``None``: unbounded.
+    since
+        The data-format version (:data:`DATA_FORMAT`) that added the column; files written
+        before it lack it. Default ``'0.1'``, the first.
+    """
 
     name: str
     kind: type
@@ -80,14 +102,44 @@ COMMON = (
 
 def columns(protocol) -> tuple[Column, ...]:
     """Every column of a protocol's session CSV, in file order: :data:`COMMON`, then those its
-    paradigm derives from the protocol (methods, levels, questions, contexts, scale)."""
+    paradigm derives from the protocol (methods, levels, questions, contexts, scale).
+
+    Parameters
+    ----------
+    protocol : glarelab.protocols.Protocol
+        A loaded protocol (:func:`glarelab.protocols.load_protocol`).
+
+    Returns
+    -------
+    tuple of Column
+        The columns, in the order the CSV has them.
+    """
     from glarelab.protocols.core import PARADIGMS
 
     return COMMON + PARADIGMS[protocol.paradigm].columns(protocol)
 
 
 def format_value(value: object, column: Column) -> str:
-    """A value as written in the CSV (floats with full precision, booleans as true/false)."""
+    """A value as written in the CSV (floats with full precision, booleans as true/false).
+
+    Parameters
+    ----------
+    value
+        The value of the cell; ``None`` or ``''`` is a missing value (an empty cell).
+    column
+        The column it is written in, whose ``kind`` decides the format.
+
+    Returns
+    -------
+    str
+        The cell's text: ``repr`` of a float (it reads back to the same number), ``true`` or
+        ``false`` for a boolean, ``str`` otherwise, ``''`` for a missing value.
+
+    Raises
+    ------
+    ValueError
+        If the value is missing and the column is not ``optional``.
+    """
     if value is None or value == "":
         if not column.optional:
             raise ValueError(f"column {column.name} needs a value")

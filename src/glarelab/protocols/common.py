@@ -75,7 +75,17 @@ LEVELS_CD_M2 = Key(
 
 
 def check_display(display: dict | None, problems: list[str]) -> None:
-    """Rules between the display's keys."""
+    """Rules between the display's keys: one of ``diagonal_in`` and ``pixel_pitch_mm``, and
+    the black level below the white.
+
+    Parameters
+    ----------
+    display
+        The ``[display]`` table as :func:`~glarelab.protocols.keys.validate` returned it;
+        ``None`` or empty (a table with problems of its own) is not checked.
+    problems
+        The list each problem found is appended to, one line naming the key and its value.
+    """
     if not display:
         return
     if (display["diagonal_in"] is None) == (display["pixel_pitch_mm"] is None):
@@ -128,7 +138,27 @@ BACKGROUNDS: dict[str, Schema] = {
 def check_background(
     table: Any, where: str, problems: list[str], folder: Path | None
 ) -> dict | None:
-    """A background table validated for its ``kind`` (an EXR's path must exist)."""
+    """A background table validated for its ``kind`` (an EXR's path must exist).
+
+    Parameters
+    ----------
+    table
+        The ``[background]`` table as read from TOML; its ``kind`` selects its keys in
+        :data:`BACKGROUNDS`.
+    where
+        The table's dotted name in the messages (``'background'``).
+    problems
+        The list each problem found is appended to, one line naming the key and its value.
+    folder
+        The protocol file's folder, which an EXR's relative ``path`` is read from; ``None``:
+        relative to the working folder.
+
+    Returns
+    -------
+    dict or None
+        The validated table with its defaults, or ``None`` when it is not a table or its
+        ``kind`` is unknown.
+    """
     if not isinstance(table, Mapping):
         problems.append(f"{where} = {table!r}: must be a table with a kind")
         return None
@@ -172,7 +202,28 @@ METHOD: Schema = {
 
 def glare_model(model: str, parameters: Mapping[str, Any]):
     """The glare model ``model`` with ``parameters``; a table value builds the nested model
-    of a parameter whose default is one (``hybrid``'s ``wave``)."""
+    of a parameter whose default is one (``hybrid``'s ``wave``).
+
+    Parameters
+    ----------
+    model
+        A name in :data:`glarelab.glare.GLARE_MODELS` (``'gaussian'``, ``'vos'``, ``'wave'``,
+        ...).
+    parameters
+        The model's constructor keywords, in the units of its own parameters (a method's
+        ``parameters`` table).
+
+    Returns
+    -------
+    glarelab.glare.GlareModel
+        The model.
+
+    Raises
+    ------
+    ValueError, TypeError
+        As :func:`glarelab.glare.make_model` raises them: an unknown model, an unknown
+        parameter or a value out of range.
+    """
     import dataclasses
 
     from glarelab.glare import GLARE_MODELS, make_model
@@ -190,7 +241,19 @@ def glare_model(model: str, parameters: Mapping[str, Any]):
 
 
 def check_glare_model(model: Any, parameters: Any, where: str, problems: list[str]) -> None:
-    """The model exists and takes these parameters (its own checks name what is wrong)."""
+    """The model exists and takes these parameters (its own checks name what is wrong).
+
+    Parameters
+    ----------
+    model
+        The method's ``model`` as read from TOML.
+    parameters
+        Its ``parameters`` table; ``None`` for none.
+    where
+        The method's dotted name in the messages (``'methods[0]'``).
+    problems
+        The list each problem found is appended to, one line naming the key and its value.
+    """
     names = _glare_models()
     if model not in names:
         problems.append(f"{where}.model = {model!r}: must be one of {', '.join(map(repr, names))}")
@@ -204,7 +267,18 @@ def check_glare_model(model: Any, parameters: Any, where: str, problems: list[st
 
 
 def check_methods(methods: list[dict] | None, where: str, problems: list[str]) -> None:
-    """Glare methods: names unique, labels as many as levels, models and parameters valid."""
+    """Glare methods: names unique, labels as many as levels, models and parameters valid.
+
+    Parameters
+    ----------
+    methods
+        The ``[[methods]]`` tables as :func:`~glarelab.protocols.keys.validate` returned them
+        (:data:`METHOD`); ``None`` or empty is not checked.
+    where
+        Their name in the messages (``'methods'``).
+    problems
+        The list each problem found is appended to, one line naming the key and its value.
+    """
     if not methods:
         return
     names = [m["name"] for m in methods if m.get("name")]
@@ -222,7 +296,27 @@ def check_methods(methods: list[dict] | None, where: str, problems: list[str]) -
 
 def display_pixel_deg(display: dict, distance_m: float) -> float:
     """Visual angle of one pixel of ``display`` (a protocol's validated ``[display]``) seen
-    from ``distance_m``, degrees: from its pixel pitch, or its diagonal and resolution."""
+    from ``distance_m``, degrees: from its pixel pitch, or its diagonal and resolution.
+
+    Parameters
+    ----------
+    display
+        The validated ``[display]`` table: ``resolution_px`` and one of ``pixel_pitch_mm``
+        (mm) and ``diagonal_in`` (inches, square pixels assumed).
+    distance_m
+        Eye-screen distance, m, > 0.
+
+    Returns
+    -------
+    float
+        ``atan(pitch / distance)`` in degrees.
+
+    Examples
+    --------
+    >>> display = {"resolution_px": [1920, 1080], "pixel_pitch_mm": 0.5}
+    >>> round(display_pixel_deg(display, 1.0), 6)
+    0.028648
+    """
     width, height = display["resolution_px"]
     if display.get("pixel_pitch_mm") is not None:
         pitch_mm = display["pixel_pitch_mm"]

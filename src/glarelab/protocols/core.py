@@ -51,7 +51,29 @@ STUDY: Schema = {
 
 @dataclass(frozen=True)
 class Protocol:
-    """A validated protocol: ``data`` mirrors the file with defaults filled in."""
+    """A validated protocol: ``data`` mirrors the file with defaults filled in.
+
+    Made by :func:`load_protocol` and :func:`parse_protocol`; ``protocol["display"]`` reads a
+    table of ``data``.
+
+    Parameters
+    ----------
+    study
+        The study's name (``study.name``): it names the data files and the report.
+    paradigm
+        The paradigm that runs it, a key of :data:`PARADIGMS`.
+    data
+        Every table of the file, validated, with defaults filled in.
+    source
+        Where it came from: the file's path, or the name given to :func:`parse_protocol`.
+    sha256
+        The SHA-256 of ``data`` as canonical JSON (sorted keys): two protocols that say the
+        same have the same hash, whatever their layout or comments; stimulus sets and data
+        record it.
+    folder
+        The folder relative paths in the protocol are read from (the file's own); ``None``
+        for a protocol made in code.
+    """
 
     study: str
     paradigm: str
@@ -77,7 +99,22 @@ def parse_protocol(
 ) -> Protocol:
     """Validate a protocol given as a mapping (the parsed TOML).
 
-    ``folder`` is where relative paths in the protocol (a background EXR) are found.
+    Parameters
+    ----------
+    data
+        Every table of the protocol, as :mod:`tomllib` reads it; ``study.paradigm`` selects
+        the paradigm whose schema the rest follows.
+    source
+        The name of the protocol in messages and in :attr:`Protocol.source`; default
+        ``'<protocol>'``.
+    folder
+        Where relative paths in the protocol (a background EXR) are found; default ``None``:
+        the working folder.
+
+    Returns
+    -------
+    Protocol
+        The validated protocol.
 
     Raises
     ------
@@ -118,7 +155,24 @@ def shipped_protocols() -> list[str]:
 
 
 def protocol_path(name: str | Path) -> Path:
-    """A path to a TOML file, or the shipped protocol of that name."""
+    """A path to a TOML file, or the shipped protocol of that name.
+
+    Parameters
+    ----------
+    name
+        A path (ending in ``.toml``, existing, or with a folder in it), taken as it is; or the
+        name of a shipped protocol (:func:`shipped_protocols`), such as ``'yoshida2008'``.
+
+    Returns
+    -------
+    pathlib.Path
+        The path, not checked to exist when ``name`` is a path.
+
+    Raises
+    ------
+    FileNotFoundError
+        If ``name`` is neither a path nor a shipped protocol's name.
+    """
     path = Path(name)
     if path.suffix == ".toml" or path.exists() or len(path.parts) > 1:
         return path
@@ -133,6 +187,18 @@ def protocol_path(name: str | Path) -> Path:
 
 def load_protocol(path: str | Path) -> Protocol:
     """Read and validate a protocol TOML file (a path, or a shipped protocol's name).
+
+    Parameters
+    ----------
+    path
+        A TOML file, or the name of a shipped protocol (:func:`protocol_path`). The file is
+        read as UTF-8 (a byte-order mark is allowed); relative paths in it are read from its
+        folder.
+
+    Returns
+    -------
+    Protocol
+        The validated protocol.
 
     Raises
     ------
@@ -166,12 +232,47 @@ NESTED_TOO_DEEPLY = "arrays or tables nested too deeply (a protocol nests a few 
 
 
 def pixel_deg(protocol: Protocol) -> float:
-    """Visual angle of one display pixel at the viewing distance, degrees."""
+    """Visual angle of one display pixel at the viewing distance, degrees.
+
+    Parameters
+    ----------
+    protocol
+        A protocol whose ``[display]`` and ``viewing.distance_m`` give the geometry
+        (:func:`glarelab.protocols.common.display_pixel_deg`).
+
+    Returns
+    -------
+    float
+        Degrees per pixel.
+
+    Examples
+    --------
+    >>> round(pixel_deg(load_protocol("yoshida2008")), 5)
+    0.01182
+    """
     return display_pixel_deg(protocol["display"], protocol["viewing"]["distance_m"])
 
 
 def describe_schema(paradigm: str) -> list[tuple[str, str, str, str, str]]:
-    """Rows ``(key, unit, default, allowed, description)`` of a paradigm's schema, for docs."""
+    """Rows ``(key, unit, default, allowed, description)`` of a paradigm's schema, for docs.
+
+    Parameters
+    ----------
+    paradigm
+        A key of :data:`PARADIGMS`.
+
+    Returns
+    -------
+    list of tuple of str
+        One row per key, in schema order, ``[study]`` first: the dotted key (``[[name]]`` for
+        a list of tables, ``name[].key`` for its keys), its unit, its default (``required``
+        if none), what is allowed and what it means.
+
+    Raises
+    ------
+    ValueError
+        If ``paradigm`` is not a known paradigm.
+    """
     if paradigm not in PARADIGMS:
         raise ValueError(f"paradigm must be one of {', '.join(PARADIGMS)}; got {paradigm!r}")
     rows = []

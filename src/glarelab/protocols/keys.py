@@ -20,7 +20,16 @@ TOKEN = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,63}\Z")  # \Z: "$" admits a fin
 
 
 class ProtocolError(ValueError):
-    """A protocol file that does not validate; ``problems`` lists every finding."""
+    """A protocol file that does not validate; ``problems`` lists every finding.
+
+    Parameters
+    ----------
+    source
+        Where the protocol came from (its file, or a name for one built in code), the
+        message's first word.
+    problems
+        Every problem found, one line each, naming the key, its value and what is allowed.
+    """
 
     def __init__(self, source: str, problems: list[str]):
         self.source = source
@@ -38,6 +47,32 @@ class Key:
     optionally ``length``. Numbers may have ``low``/``high`` bounds (inclusive); strings and
     numbers may have ``choices``; ``token`` strings must be file-name-safe labels. A key with
     ``default`` is optional.
+
+    Parameters
+    ----------
+    kind
+        The type of the value: ``float``, ``int``, ``str``, ``bool``, ``list`` or ``dict``.
+    doc
+        What the key means, for the error messages and ``docs/protocols.md``.
+    unit
+        The unit of a number (``'deg'``, ``'cd/m²'``, ``'m'``); empty (default) for none.
+    low, high
+        Inclusive bounds of a number (or of a list's numbers), in ``unit``; default ``None``:
+        unbounded.
+    choices
+        The values allowed; default ``None``: any of ``kind``.
+    default
+        The value of a key the file leaves out; default ``...``: the key is required.
+    item
+        The type of a list's elements; default ``None``: not checked.
+    length
+        A list's length, or its ``(shortest, longest)`` range; default ``None``: any.
+    token
+        Whether a string (or a list's strings) must be a file-name-safe label (:data:`TOKEN`);
+        default ``False``.
+    unique
+        Whether a list's elements must all differ (strings ignoring case, as file names on
+        macOS and Windows do); default ``False``.
     """
 
     kind: type
@@ -84,7 +119,19 @@ class Key:
 
 @dataclass(frozen=True)
 class Tables:
-    """A list of tables (``[[name]]`` in TOML), each following ``schema``."""
+    """A list of tables (``[[name]]`` in TOML), each following ``schema``.
+
+    Parameters
+    ----------
+    schema
+        The keys of each table: :class:`Key`, :class:`Tables` or nested tables, by name.
+    doc
+        What the tables are, for the error messages and ``docs/protocols.md``.
+    length
+        The ``(fewest, most)`` tables allowed; default ``(1, 100)``.
+    default
+        The value when the file has none; default ``...``: required.
+    """
 
     schema: Mapping
     doc: str
@@ -100,7 +147,23 @@ Schema = Mapping[str, "Key | Tables | Schema"]
 
 
 def check_token(value: str, where: str, problems: list[str]) -> bool:
-    """Whether ``value`` is a file-name-safe label; if not, say so."""
+    """Whether ``value`` is a file-name-safe label; if not, say so.
+
+    Parameters
+    ----------
+    value
+        The label: 1-64 letters, digits, ``_``, ``-`` or ``.``, starting with a letter or
+        digit (:data:`TOKEN`).
+    where
+        The key it is the value of, for the message (``'study.name'``).
+    problems
+        The list the problem is appended to.
+
+    Returns
+    -------
+    bool
+        Whether ``value`` is a label.
+    """
     if isinstance(value, str) and TOKEN.match(value):
         return True
     problems.append(
@@ -184,7 +247,26 @@ def _check_key(value: Any, key: Key, path: str, problems: list[str]) -> Any:
 
 
 def validate(data: Mapping[str, Any], schema: Schema, path: str, problems: list[str]) -> dict:
-    """``data`` checked against ``schema`` with defaults filled in; problems appended."""
+    """``data`` checked against ``schema`` with defaults filled in; problems appended.
+
+    Parameters
+    ----------
+    data
+        One table of the protocol as read from TOML.
+    schema
+        Its keys: :class:`Key`, :class:`Tables` or nested tables, by name.
+    path
+        The table's dotted name, prefixed to each key in the messages; ``''`` at the top.
+    problems
+        The list every problem is appended to (unknown keys, missing keys, wrong types,
+        values out of range), so that one pass reports them all.
+
+    Returns
+    -------
+    dict
+        Every key of ``schema``: the checked value, its default where ``data`` leaves it out,
+        or ``None`` where the value is wrong.
+    """
     result: dict[str, Any] = {}
     for name in data:
         if name not in schema:

@@ -143,7 +143,25 @@ SCHEMA: Schema = {
 
 
 def reference_name(method: str, label: str) -> str:
-    """The stimulus-set image of a method's level (the contract between set and session)."""
+    """The stimulus-set image of a method's level (the contract between set and session).
+
+    Parameters
+    ----------
+    method
+        The glare method's ``name``.
+    label
+        The level's label (``labels`` of the method).
+
+    Returns
+    -------
+    str
+        The image's name in the set, ``reference_METHOD_LABEL``.
+
+    Examples
+    --------
+    >>> reference_name("yoshida", "A")
+    'reference_yoshida_A'
+    """
     return f"reference_{method}_{label}"
 
 
@@ -176,7 +194,19 @@ def _check_layout(p: dict, problems: list[str]) -> None:
 
 
 def check(p: dict, problems: list[str], folder: Path | None) -> None:
-    """Rules between keys: geometry, display limits, methods, questions, analyses."""
+    """Rules between keys: geometry, display limits, methods, questions, analyses.
+
+    Parameters
+    ----------
+    p
+        The protocol's tables, each validated against the paradigm's :data:`SCHEMA` (defaults
+        filled in); called only when that found no problem.
+    problems
+        The list each problem is appended to, one line naming the keys and their values.
+    folder
+        The protocol file's folder, which relative paths in it are read from; ``None``: the
+        working folder.
+    """
     display = p["display"]
     check_display(display, problems)
     s, g = p["stimulus"], p["glare"]
@@ -315,7 +345,18 @@ def _fixed_columns(p: dict) -> tuple[Column, ...]:
 
 
 def columns(protocol) -> tuple[Column, ...]:
-    """The paradigm's CSV columns for this protocol (after the common ones)."""
+    """The paradigm's CSV columns for this protocol (after the common ones).
+
+    Parameters
+    ----------
+    protocol : glarelab.protocols.Protocol
+        A loaded protocol of this paradigm.
+
+    Returns
+    -------
+    tuple of glarelab.protocols.columns.Column
+        The columns, in file order.
+    """
     p = protocol.data if hasattr(protocol, "data") else protocol
     asked = p["questionnaire"]["questions"] or []
     answers = tuple(Column(q["column"], bool, q["text"]) for q in asked)

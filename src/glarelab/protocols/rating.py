@@ -5,8 +5,8 @@ exactly the same), optionally with a typed comment.
 
 A study that shows what it asks about adds a ``[scene]`` (a rendered night scene, still or a
 sequence, see :mod:`glarelab.stimuli.night`) and ``[[conditions]]``: the pipeline of
-:func:`glare.render_night` with a set of its effects each. Every condition's scene is shown,
-frame-exact, before its questions; the rows name the condition.
+:func:`glarelab.glare.render_night` with a set of its effects each. Every condition's scene is
+shown, frame-exact, before its questions; the rows name the condition.
 """
 
 from __future__ import annotations
@@ -142,6 +142,20 @@ MAX_PIXEL_FRAMES = 1e8
 
 
 def check(p: dict, problems: list[str], folder: Path | None) -> None:
+    """Rules between keys: the scene and its conditions, the scale, one prompt per category,
+    and the simulated observer's categories, effects and rating probabilities.
+
+    Parameters
+    ----------
+    p
+        The protocol's tables, each validated against the paradigm's :data:`SCHEMA` (defaults
+        filled in); called only when that found no problem.
+    problems
+        The list each problem is appended to, one line naming the keys and their values.
+    folder
+        The protocol file's folder, which relative paths in it are read from; ``None``: the
+        working folder.
+    """
     q = p["questionnaire"]
     _check_scene(p, problems)
     if q["scale_min"] >= q["scale_max"]:
@@ -233,7 +247,18 @@ def _check_scene(p: dict, problems: list[str]) -> None:
 
 
 def columns(protocol) -> tuple[Column, ...]:
-    """The paradigm's CSV columns for this protocol (after the common ones)."""
+    """The paradigm's CSV columns for this protocol (after the common ones).
+
+    Parameters
+    ----------
+    protocol : glarelab.protocols.Protocol
+        A loaded protocol of this paradigm.
+
+    Returns
+    -------
+    tuple of glarelab.protocols.columns.Column
+        The columns, in file order.
+    """
     data = protocol.data if hasattr(protocol, "data") else protocol
     q = data["questionnaire"]
     low, high = q["anchors"]

@@ -158,6 +158,17 @@ def intensity_grid(trials: dict) -> int | None:
     the analysis compares them there. None where a value is not a fraction with a
     denominator of at most a million (such a grid is not kept).
 
+    Parameters
+    ----------
+    trials
+        The ``[trials]`` table: ``start_fraction`` and ``step_fractions``, fractions of the
+        display's maximum luminance.
+
+    Returns
+    -------
+    int or None
+        ``N``, or None where there is no grid of at most a million steps.
+
     Examples
     --------
     >>> intensity_grid({"start_fraction": 1.0, "step_fractions": [0.16, 0.08, 0.04, 0.02]})
@@ -183,13 +194,47 @@ def intensity_grid(trials: dict) -> int | None:
 
 
 def glare_name(context: str, level: int) -> str:
-    """The stimulus-set image of a context's glare level (1-based)."""
+    """The stimulus-set image of a context's glare level (1-based).
+
+    Parameters
+    ----------
+    context
+        The context's name.
+    level
+        The glare level, from 1.
+
+    Returns
+    -------
+    str
+        The image's name in the set, ``glare_CONTEXT_NN``.
+
+    Examples
+    --------
+    >>> glare_name("dark", 3)
+    'glare_dark_03'
+    """
     return f"glare_{context}_{level:02d}"
 
 
 def comparison_terms(context: str, intensity_cd_m2: float, ratio: float) -> list:
     """The comparison image as a sum of set images: the scene outside the disc and annulus,
-    the disc at ``intensity`` and the annulus at ``ratio × intensity``."""
+    the disc at ``intensity`` and the annulus at ``ratio × intensity``.
+
+    Parameters
+    ----------
+    context
+        The context's name: the scene around the disc and annulus.
+    intensity_cd_m2
+        The disc's luminance, cd/m² (the staircase's fraction times the display's maximum).
+    ratio
+        The annulus's luminance as a multiple of the disc's (``stimulus.annulus_ratio``).
+
+    Returns
+    -------
+    list of tuple of (str, float)
+        ``(image, weight)`` pairs: the set's images (the disc and annulus images are their
+        coverage, 0-1) and the factor each is summed with, cd/m² for the disc and annulus.
+    """
     return [
         (f"scene_{context}_outside", 1.0),
         ("comparison_disc", intensity_cd_m2),
@@ -198,7 +243,19 @@ def comparison_terms(context: str, intensity_cd_m2: float, ratio: float) -> list
 
 
 def check(p: dict, problems: list[str], folder: Path | None) -> None:
-    """Rules between keys: geometry, contexts, the glare model."""
+    """Rules between keys: geometry, contexts, the glare model.
+
+    Parameters
+    ----------
+    p
+        The protocol's tables, each validated against the paradigm's :data:`SCHEMA` (defaults
+        filled in); called only when that found no problem.
+    problems
+        The list each problem is appended to, one line naming the keys and their values.
+    folder
+        The protocol file's folder, which relative paths in it are read from; ``None``: the
+        working folder.
+    """
     check_display(p["display"], problems)
     s = p["stimulus"]
     if s["annulus_outer_px"] <= s["disc_radius_px"]:
@@ -238,7 +295,18 @@ def check(p: dict, problems: list[str], folder: Path | None) -> None:
 
 
 def columns(protocol) -> tuple[Column, ...]:
-    """The paradigm's CSV columns for this protocol (after the common ones)."""
+    """The paradigm's CSV columns for this protocol (after the common ones).
+
+    Parameters
+    ----------
+    protocol : glarelab.protocols.Protocol
+        A loaded protocol of this paradigm.
+
+    Returns
+    -------
+    tuple of glarelab.protocols.columns.Column
+        The columns, in file order.
+    """
     p = protocol.data if hasattr(protocol, "data") else protocol
     return (
         Column(

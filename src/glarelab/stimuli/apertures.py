@@ -43,6 +43,18 @@ def load_aperture_image(path: str | Path) -> np.ndarray:
     """Read an obstacle transmittance image: PNG (8 or 16 bit, scaled to [0, 1], colour
     averaged) or a float EXR already in [0, 1].
 
+    Parameters
+    ----------
+    path
+        The image file: PNG (or another format Pillow reads) or OpenEXR, at most
+        :data:`MAX_APERTURE_PIXELS` pixels. 1 is clear, 0 opaque.
+
+    Returns
+    -------
+    numpy.ndarray
+        The 2-D transmittance in [0, 1], checked by
+        :func:`glarelab.glare.models.apertures.aperture_from_image`.
+
     Raises
     ------
     ValueError

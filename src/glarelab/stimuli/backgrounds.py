@@ -149,6 +149,22 @@ def lamp_scene(size: int, *, rng: np.random.Generator, peak_cd_m2: float) -> dic
 
     Returns ``img`` (cd/m², the bulb region dark: the source is added separately), and masks
     ``desk``, ``lamp``. Luminances stay below 15 % of ``peak_cd_m2``.
+
+    Parameters
+    ----------
+    size
+        Side of the square window, pixels.
+    rng
+        The random generator of the desk's grain (the protocol's seed).
+    peak_cd_m2
+        The scene's scale, cd/m²: the desk is lit at about 2 % of it, and no surface reaches
+        15 %.
+
+    Returns
+    -------
+    dict
+        ``img``: ``(size, size)`` luminance, cd/m²; ``desk`` and ``lamp``: boolean masks of
+        the same shape.
     """
     img = np.full((size, size), ROOM_CD_M2)
     c = size / 2

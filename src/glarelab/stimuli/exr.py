@@ -123,6 +123,17 @@ def _check_layout(data: bytes, length: int, stream) -> bool | None:
 def read_exr(path: str | Path) -> np.ndarray:
     """Read an OpenEXR file as a float32 array: ``(H, W)`` for Y, ``(H, W, 3)`` for RGB.
 
+    Parameters
+    ----------
+    path
+        The file, with a ``Y`` channel or ``R``, ``G`` and ``B`` channels (linear, cd/m² in a
+        stimulus set).
+
+    Returns
+    -------
+    numpy.ndarray
+        float32, ``(H, W)`` or ``(H, W, 3)``.
+
     Raises
     ------
     ValueError

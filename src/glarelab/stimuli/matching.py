@@ -28,7 +28,26 @@ __all__ = ["box_filter", "build_matching", "compose_target", "matching_row", "ta
 
 
 def box_filter(image: np.ndarray, factor: int) -> np.ndarray:
-    """Average ``factor × factor`` blocks (the filter-and-subsample of Yoshida §3)."""
+    """Average ``factor × factor`` blocks (the filter-and-subsample of Yoshida §3).
+
+    Parameters
+    ----------
+    image
+        A supersampled image, ``(H, W)`` or ``(H, W, C)``; rows and columns beyond a whole
+        number of blocks are dropped.
+    factor
+        The supersampling factor, an integer >= 1; 1 returns a copy.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(H // factor, W // factor[, C])``, each pixel the mean of its block.
+
+    Examples
+    --------
+    >>> box_filter(np.arange(16.0).reshape(4, 4), 2).tolist()
+    [[2.5, 4.5], [10.5, 12.5]]
+    """
     if factor == 1:
         return image.copy()
     h, w = image.shape[0] // factor, image.shape[1] // factor
@@ -36,12 +55,39 @@ def box_filter(image: np.ndarray, factor: int) -> np.ndarray:
 
 
 def compose_target(background: np.ndarray, coverage: np.ndarray, disk_cd_m2: float) -> np.ndarray:
-    """A glare-free target: the background with the disk at ``disk_cd_m2``."""
+    """A glare-free target: the background with the disk at ``disk_cd_m2``.
+
+    Parameters
+    ----------
+    background
+        The target's background without the disk, cd/m² (``target_background``: zero
+        under the disk).
+    coverage
+        The disk's area fraction in each pixel, 0-1 (``target_coverage``).
+    disk_cd_m2
+        The disk's luminance, cd/m².
+
+    Returns
+    -------
+    numpy.ndarray
+        ``background + disk_cd_m2 × coverage``, cd/m².
+    """
     return background + disk_cd_m2 * coverage
 
 
 def target_terms(disk_cd_m2: float) -> list[tuple[str, float]]:
-    """A target as a sum of set images (:func:`glarelab.stimuli.stimulus_set.compose`)."""
+    """A target as a sum of set images (:func:`glarelab.stimuli.stimulus_set.compose`).
+
+    Parameters
+    ----------
+    disk_cd_m2
+        The disk's luminance the participant has set, cd/m².
+
+    Returns
+    -------
+    list of tuple of (str, float)
+        ``(image, weight)``: the background once, the disk's coverage times ``disk_cd_m2``.
+    """
     return [("target_background", 1.0), ("target_coverage", float(disk_cd_m2))]
 
 
@@ -151,7 +197,21 @@ def build_matching(protocol: Protocol, *, progress=None) -> dict:
 def matching_row(protocol: Protocol, display_pixel_deg: float) -> ImageRow:
     """The first trial's images on the protocol's display: the reference and the targets
     (two, or three when the darker and brighter bounds are set), each rendered at the
-    display's pixel and odd so that the disk has a centre pixel."""
+    display's pixel and odd so that the disk has a centre pixel.
+
+    Parameters
+    ----------
+    protocol
+        A validated protocol of the paradigm.
+    display_pixel_deg
+        Visual angle of one pixel of the display the session runs on, degrees.
+
+    Returns
+    -------
+    ImageRow
+        The images' sizes and gap in display pixels, with notes where whole pixels depart
+        from the protocol's ``size_deg`` and ``gap_deg``.
+    """
     s = protocol["stimulus"]
     size = _odd(s["size_deg"] / display_pixel_deg)
     gap = round(s["gap_deg"] / display_pixel_deg)

@@ -18,7 +18,7 @@ fine stripes and print in the dark (what acuity loss blurs). Lamp bulbs are smal
   first lamp and back (the view-dependent window of §5.1).
 
 :func:`build_night` renders a rating protocol's scene once per condition with
-:func:`glare.render_night` (the effects the condition names) for a stimulus set.
+:func:`glarelab.glare.render_night` (the effects the condition names) for a stimulus set.
 
 References
 ----------
@@ -284,7 +284,21 @@ def night_sequence(
 
 def preview_strip(frames: list[np.ndarray], *, l_dmax_cd_m2: float) -> np.ndarray:
     """8-bit sRGB previews of up to :data:`PREVIEW_FRAMES` frames (first, …, last), side by
-    side with a 4-pixel gap: what a report shows of a stimulus."""
+    side with a 4-pixel gap: what a report shows of a stimulus.
+
+    Parameters
+    ----------
+    frames
+        The frames, linear display RGB, cd/m², ``(H, W, 3)`` each; evenly spaced ones are
+        shown.
+    l_dmax_cd_m2
+        The luminance shown as white, cd/m² (the display's maximum).
+
+    Returns
+    -------
+    numpy.ndarray
+        uint8 ``(H, n × W + 4 (n - 1), 3)``.
+    """
     count = min(len(frames), PREVIEW_FRAMES)
     picks = np.unique(np.round(np.linspace(0, len(frames) - 1, count)).astype(int))
     tiles = [to_display(frames[i], l_dmax_cd_m2=l_dmax_cd_m2) for i in picks]
@@ -298,6 +312,25 @@ def preview_strip(frames: list[np.ndarray], *, l_dmax_cd_m2: float) -> np.ndarra
 def night_plan(protocol: Protocol, refresh_hz: float) -> dict:
     """What a session shows of each condition at ``refresh_hz``: its frame names (as
     :func:`build_night` names them) and the refreshes of each (a whole number, at least 1).
+
+    Parameters
+    ----------
+    protocol
+        A rating protocol with a ``[scene]``.
+    refresh_hz
+        The display's refresh rate, Hz, > 0.
+
+    Returns
+    -------
+    dict
+        Condition name → ``frames`` (names), ``refreshes_per_frame`` (the refreshes each frame
+        stays on: the scene's ``seconds`` for a still, the refresh over the scene's frame rate
+        for a sequence, rounded) and ``refreshes`` (in all).
+
+    Raises
+    ------
+    ValueError
+        If ``refresh_hz`` is not a positive number.
 
     Examples
     --------
@@ -327,9 +360,17 @@ def night_plan(protocol: Protocol, refresh_hz: float) -> dict:
 def build_night(protocol: Protocol, *, progress=None) -> dict:
     """Render a rating protocol's night scene once per condition.
 
-    Each condition's frames are :func:`glare.render_night` of the scene's sequence with the
-    condition's effects (display RGB, cd/m²), named ``CONDITION_fNNN``; its preview strip is
+    Each condition's frames are :func:`glarelab.glare.render_night` of the scene's sequence with
+    the condition's effects (display RGB, cd/m²), named ``CONDITION_fNNN``; its preview strip is
     ``preview_CONDITION.png``.
+
+    Parameters
+    ----------
+    protocol
+        A validated rating protocol with a ``[scene]``.
+    progress
+        Optional callable ``progress(done, total, what)``, called after each image or
+        condition (:func:`glarelab.stimuli.stimulus_set.progress_bar`); default ``None``: none.
 
     Returns
     -------
@@ -423,12 +464,37 @@ def build_night(protocol: Protocol, *, progress=None) -> dict:
 
 
 def shows_scene(protocol: Protocol) -> bool:
-    """Whether a rating protocol shows a scene (a questionnaire alone shows no images)."""
+    """Whether a rating protocol shows a scene (a questionnaire alone shows no images).
+
+    Parameters
+    ----------
+    protocol
+        A validated rating protocol.
+
+    Returns
+    -------
+    bool
+        Whether it has a ``[scene]``.
+    """
     return protocol.data.get("scene") is not None
 
 
 def night_row(protocol: Protocol, display_pixel_deg: float) -> ImageRow | None:
-    """The scene, alone, at the protocol's own pixel angle; None without a scene."""
+    """The scene, alone, at the protocol's own pixel angle; None without a scene.
+
+    Parameters
+    ----------
+    protocol
+        A validated protocol of the paradigm.
+    display_pixel_deg
+        Visual angle of one pixel of the display the session runs on, degrees. Not used:
+        the scene is drawn at its own ``pixel_deg``, one image pixel on one display pixel.
+
+    Returns
+    -------
+    ImageRow or None
+        The scene's ``size_px``, or None when the protocol shows no scene.
+    """
     scene = protocol.data.get("scene")
     if scene is None:
         return None

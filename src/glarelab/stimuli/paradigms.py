@@ -60,6 +60,16 @@ PARADIGMS: dict[str, ParadigmStimuli] = {
 def paradigm_stimuli(protocol: Protocol) -> ParadigmStimuli:
     """The registry entry of ``protocol``'s paradigm.
 
+    Parameters
+    ----------
+    protocol
+        A validated protocol; its ``paradigm`` is looked up in :data:`PARADIGMS`.
+
+    Returns
+    -------
+    ParadigmStimuli
+        How the paradigm's stimuli are built and drawn.
+
     Raises
     ------
     ValueError

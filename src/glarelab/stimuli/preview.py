@@ -60,7 +60,24 @@ def preview_png(
     l_dmax_cd_m2: float,
     scale: Literal["display", "log"] = "display",
 ) -> Path:
-    """Write :func:`to_display` of an image to a PNG file and return its path."""
+    """Write :func:`to_display` of an image to a PNG file and return its path.
+
+    Parameters
+    ----------
+    path
+        The PNG file, written whole or not at all; its folder is created.
+    luminance_cd_m2
+        ``(H, W)`` or ``(H, W, 3)`` linear image in cd/m².
+    l_dmax_cd_m2
+        Luminance shown as white, cd/m².
+    scale
+        ``'display'`` (default) or ``'log'``, as for :func:`to_display`.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     pixels = to_display(luminance_cd_m2, l_dmax_cd_m2=l_dmax_cd_m2, scale=scale)
@@ -79,6 +96,21 @@ def psf_to_display(
     sigmoid's output (1.6 to 640) is shown as codes 0-255, clipped. Each channel of a colour
     kernel is mapped with the same scale; give several kernels one ``peak`` to compare their
     intensities.
+
+    Parameters
+    ----------
+    values
+        The kernel (any unit: only ratios to ``peak`` count), ``(H, W)`` or ``(H, W, 3)``;
+        negative values are taken as 0.
+    dynamic_range
+        The ratio shown between ``peak`` and 1 on the sigmoid's input; default 1e6.
+    peak
+        The value mapped to ``dynamic_range``; default ``None``: the kernel's maximum.
+
+    Returns
+    -------
+    numpy.ndarray
+        uint8, the shape of ``values``.
     """
     array = np.asarray(values, dtype=float)
     if peak is None:
@@ -94,7 +126,20 @@ def psf_png(
     dynamic_range: float = 1e6,
     peak: float | None = None,
 ) -> Path:
-    """Write :func:`psf_to_display` of a kernel to a PNG file and return its path."""
+    """Write :func:`psf_to_display` of a kernel to a PNG file and return its path.
+
+    Parameters
+    ----------
+    path
+        The PNG file, written whole or not at all; its folder is created.
+    values, dynamic_range, peak
+        As for :func:`psf_to_display`.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     pixels = psf_to_display(values, dynamic_range=dynamic_range, peak=peak)

@@ -31,6 +31,35 @@ def cloudy_sky(
 ) -> np.ndarray:
     """A sky of luminances (cd/m²) with the given mean and spectrum of cloud sizes.
 
+    Gaussian noise is filtered to an amplitude spectrum ``f^-slope`` between the cloud sizes
+    (edges half an octave wide), made log-normal with the RMS contrast asked for, then scaled
+    to the mean and kept below the ceiling.
+
+    Parameters
+    ----------
+    shape
+        ``(height, width)``, pixels.
+    pixel_deg
+        Visual angle of one pixel, degrees, > 0.
+    rng
+        The random generator of the noise (the protocol's seed).
+    mean_cd_m2
+        The sky's mean luminance, cd/m² (Yoshida et al.'s photograph: 150).
+    contrast
+        RMS contrast, standard deviation over mean, >= 0.
+    cloud_min_deg, cloud_max_deg
+        The smallest and largest cloud structures, degrees: the band of spatial frequencies
+        ``1 / cloud_max_deg`` to ``1 / cloud_min_deg`` cycles per degree.
+    slope
+        The exponent of the amplitude spectrum, ``f^-slope``.
+    ceiling_cd_m2
+        The most any pixel may reach, cd/m² (the display's maximum), above ``mean_cd_m2``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``shape`` luminances, cd/m².
+
     Examples
     --------
     >>> sky = cloudy_sky((64, 64), pixel_deg=0.05, rng=np.random.default_rng(0),

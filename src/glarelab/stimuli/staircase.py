@@ -37,7 +37,24 @@ def compose_comparison(
     scene: np.ndarray, disc: np.ndarray, annulus: np.ndarray, intensity_cd_m2: float, ratio: float
 ) -> np.ndarray:
     """The comparison image: the scene with a disc at ``intensity`` and an annulus at
-    ``ratio × intensity`` where the source was (``disc``, ``annulus``: area fractions)."""
+    ``ratio × intensity`` where the source was (``disc``, ``annulus``: area fractions).
+
+    Parameters
+    ----------
+    scene
+        The context's scene without the source, cd/m².
+    disc, annulus
+        The area fraction of the disc and of the annulus in each pixel, 0-1.
+    intensity_cd_m2
+        The disc's luminance, cd/m².
+    ratio
+        The annulus's luminance as a multiple of the disc's.
+
+    Returns
+    -------
+    numpy.ndarray
+        The comparison image, cd/m².
+    """
     cover = np.clip(disc + annulus, 0.0, 1.0)
     return scene * (1.0 - cover) + intensity_cd_m2 * (disc + ratio * annulus)
 
@@ -51,6 +68,14 @@ def _circle_coverage(size: int, radius: float, factor: int = 8) -> np.ndarray:
 
 def build_staircase(protocol: Protocol, *, progress=None) -> dict:
     """Render the glare and comparison images of a staircase protocol.
+
+    Parameters
+    ----------
+    protocol
+        A validated protocol of the staircase paradigm.
+    progress
+        Optional callable ``progress(done, total, what)``, called after each image or
+        condition (:func:`glarelab.stimuli.stimulus_set.progress_bar`); default ``None``: none.
 
     Returns
     -------
@@ -141,6 +166,20 @@ def build_staircase(protocol: Protocol, *, progress=None) -> dict:
 
 def staircase_row(protocol: Protocol, display_pixel_deg: float) -> ImageRow:
     """The two windows of a flash, side by side, at the protocol's own pixel angle (0: the
-    display's)."""
+    display's).
+
+    Parameters
+    ----------
+    protocol
+        A validated protocol of the paradigm.
+    display_pixel_deg
+        Visual angle of one pixel of the display the session runs on, degrees. Not used:
+        the row carries the protocol's own ``pixel_deg`` (0: the display's).
+
+    Returns
+    -------
+    ImageRow
+        Two ``window_px`` squares, ``window_gap_px`` apart.
+    """
     s = protocol["stimulus"]
     return ImageRow([(s["window_px"], s["window_px"])] * 2, s["window_gap_px"], s["pixel_deg"])

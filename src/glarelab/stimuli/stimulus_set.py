@@ -64,12 +64,43 @@ PACKAGES = ("numpy", "scipy", "colour-science", "OpenEXR", "matplotlib", "pillow
 
 def shows_images(protocol: Protocol) -> bool:
     """Whether the protocol shows images (and so has a stimulus set): its paradigm has a
-    builder, and the builder takes this protocol (a questionnaire without a scene shows none)."""
+    builder, and the builder takes this protocol (a questionnaire without a scene shows none).
+
+    Parameters
+    ----------
+    protocol
+        A validated protocol.
+
+    Returns
+    -------
+    bool
+        Whether a stimulus set is built for it.
+
+    Raises
+    ------
+    ValueError
+        When no stimuli are registered for its paradigm.
+    """
     return bool(paradigm_stimuli(protocol).shows(protocol))
 
 
 def progress_bar(done: int, total: int, what: str, *, stream=None) -> None:
-    """A one-line text progress bar on stderr."""
+    """A one-line text progress bar on stderr.
+
+    The bar is redrawn in place (a carriage return) and the line ends when ``done`` reaches
+    ``total``.
+
+    Parameters
+    ----------
+    done
+        The steps done.
+    total
+        The steps in all; 0 shows a full bar.
+    what
+        What was done last, shown after the count.
+    stream
+        Where the bar is written; default ``None``: :data:`sys.stderr`.
+    """
     stream = stream or sys.stderr
     width = 30
     filled = round(width * done / total) if total else width
@@ -111,6 +142,16 @@ def write_codes(path: str | Path, codes: np.ndarray, bit_depth: int) -> None:
     the full 16-bit range, ``round(code × 65535 / (2^bit_depth − 1))``, with an ``sBIT`` chunk
     recording ``bit_depth`` (PNG specification §11.3.4.4: the scaling it recommends, which
     keeps the code in the top ``bit_depth`` bits).
+
+    Parameters
+    ----------
+    path
+        The PNG file, written whole or not at all.
+    codes
+        Integer display codes, ``(H, W)`` (greyscale) or ``(H, W, 3)`` (RGB), each in
+        0 … 2^bit_depth − 1.
+    bit_depth
+        The display's bits per channel, 1-16.
 
     Raises
     ------
@@ -160,6 +201,18 @@ def read_png_codes(path: str | Path) -> tuple[np.ndarray, int]:
     opens a 16-bit RGB PNG as 8-bit RGB (it has no 16-bit colour mode), which would turn a
     colour image's codes into their top byte.
 
+    Parameters
+    ----------
+    path
+        A PNG written by :func:`write_codes` (or any 16-bit greyscale or RGB PNG).
+
+    Returns
+    -------
+    codes : numpy.ndarray
+        The codes, ``(H, W)`` or ``(H, W, 3)``, integers in 0 … 2^bits − 1.
+    bits : int
+        The bit depth of the codes (16 without ``sBIT``).
+
     Raises
     ------
     ValueError
@@ -205,7 +258,20 @@ def _sha256(path: Path) -> str:
 
 
 def default_calibration(protocol: Protocol) -> Calibration:
-    """The synthetic calibration of the protocol's display (gamma 2.2; marked synthetic)."""
+    """The synthetic calibration of the protocol's display (gamma 2.2; marked synthetic).
+
+    Parameters
+    ----------
+    protocol
+        A validated protocol: its ``[display]`` gives the white and black (cd/m²), the bit
+        depth and the name.
+
+    Returns
+    -------
+    glarelab.display.calibration.Calibration
+        The calibration :func:`glarelab.display.calibration.synthetic_calibration` makes of
+        them.
+    """
     d = protocol["display"]
     return synthetic_calibration(
         max_cd_m2=d["max_cd_m2"],
@@ -216,7 +282,19 @@ def default_calibration(protocol: Protocol) -> Calibration:
 
 
 def package_versions(names=PACKAGES) -> dict[str, str]:
-    """Installed versions of ``names`` (``'not installed'`` where absent), for provenance."""
+    """Installed versions of ``names`` (``'not installed'`` where absent), for provenance.
+
+    Parameters
+    ----------
+    names
+        Distribution names as pip knows them; default :data:`PACKAGES`, what a set's images
+        depend on.
+
+    Returns
+    -------
+    dict of str to str
+        Each name's installed version.
+    """
     versions = {}
     for name in names:
         try:
@@ -470,6 +548,14 @@ def verify_stimulus_set(folder: str | Path) -> list[str]:
     """Check a stimulus set: the manifest is a JSON object listing every file, and the folder
     holds exactly those files, each with its recorded sha256.
 
+    Also checked: every image's files are hashed, each image points at its own file, and the
+    manifest's protocol hashes to its ``protocol_sha256``.
+
+    Parameters
+    ----------
+    folder
+        The set's folder.
+
     Returns
     -------
     list of str
@@ -516,7 +602,26 @@ def verify_stimulus_set(folder: str | Path) -> list[str]:
 def compose(terms, image) -> np.ndarray:
     """The image ``Σ weight × image(name)`` of ``terms``, ``[(name, weight), …]``: how sessions
     show images that depend on a setting (a target's disk, a staircase's disc) from the set's
-    components."""
+    components.
+
+    Parameters
+    ----------
+    terms
+        ``(name, weight)`` pairs, at least one: the images to add and the factor of each
+        (cd/m² for a coverage image, 1 for a luminance image).
+    image
+        ``image(name)``: the set's image of that name (cd/m² or coverage), as an array.
+
+    Returns
+    -------
+    numpy.ndarray
+        The sum, cd/m².
+
+    Raises
+    ------
+    ValueError
+        If ``terms`` is empty.
+    """
     total = None
     for name, weight in terms:
         part = image(name) * float(weight)
@@ -542,15 +647,50 @@ class StimulusSet:
         self._images: dict[str, np.ndarray] = {}
 
     def image(self, name: str) -> np.ndarray:
+        """An image of the set, read from its file the first time and kept.
+
+        Parameters
+        ----------
+        name
+            The image's name in the manifest (its EXR file without the suffix).
+
+        Returns
+        -------
+        numpy.ndarray
+            float64, cd/m² (a coverage image: 0-1).
+        """
         if name not in self._images:
             self._images[name] = self.read(name)
         return self._images[name]
 
     def read(self, name: str) -> np.ndarray:
-        """An image read from its file, not kept (a sequence's frames are shown once)."""
+        """An image read from its file, not kept (a sequence's frames are shown once).
+
+        Parameters
+        ----------
+        name
+            The image's name in the manifest (its EXR file without the suffix).
+
+        Returns
+        -------
+        numpy.ndarray
+            float64, cd/m².
+        """
         return read_exr(self.folder / f"{name}.exr").astype(np.float64)
 
     def compose(self, terms) -> np.ndarray:
+        """The image ``Σ weight × image(name)`` of ``terms`` (:func:`compose`).
+
+        Parameters
+        ----------
+        terms
+            ``(name, weight)`` pairs of the set's images, at least one.
+
+        Returns
+        -------
+        numpy.ndarray
+            The sum, cd/m².
+        """
         return compose(terms, self.image)
 
 
@@ -561,8 +701,20 @@ def cached_stimulus_set(
     cache folder and reused while it verifies (simulated sessions need the images, not a lab
     calibration).
 
-    ``root`` defaults to ``$GLARELAB_CACHE`` or ``~/.cache/glarelab``; the set is
-    ``ROOT/sets/STUDY-SHA``, named by the protocol's hash.
+    Parameters
+    ----------
+    protocol
+        A validated protocol that shows images.
+    root
+        The cache folder; default ``None``: ``$GLARELAB_CACHE``, else ``~/.cache/glarelab``.
+        The set is ``ROOT/sets/STUDY-SHA``, named by the protocol's hash.
+    progress
+        ``progress(done, total, what)`` while a set is built; default :func:`progress_bar`.
+
+    Returns
+    -------
+    pathlib.Path
+        The set's folder, verified.
     """
     if root is None:
         root = Path(os.environ.get("GLARELAB_CACHE") or Path.home() / ".cache" / "glarelab")

@@ -86,6 +86,24 @@ def __getattr__(name: str):
 def make_model(method: str, **parameters) -> GlareModel:
     """Build a glare model by name from :data:`GLARE_MODELS`.
 
+    Parameters
+    ----------
+    method
+        A model's name in :data:`GLARE_MODELS` (``'gaussian'``, ``'vos'``, ``'wave'``,
+        ``'hybrid'``).
+    parameters
+        The model's constructor keywords, in its own units.
+
+    Returns
+    -------
+    GlareModel
+        The model.
+
+    Raises
+    ------
+    ValueError
+        For an unknown name, or (from the model) a parameter out of range.
+
     Examples
     --------
     >>> make_model("vos", regime="mesopic").regime
@@ -117,10 +135,27 @@ def digitise_kernel(
     """Digitise a glare model into a :class:`~glarelab.glare.models.digitise.Kernel` with its
     energy account.
 
-    ``cache``: ``None`` (default) or ``True``, the kernel is read from (or kept in) the user's
-    kernel cache (:mod:`glarelab.glare.models.cache`, off when ``GLARELAB_NO_CACHE`` is set);
-    ``False``, always digitised; a :class:`glarelab.glare.models.cache.KernelCache` or a folder,
-    that cache.
+    Parameters
+    ----------
+    model
+        A glare model, or its name in :data:`GLARE_MODELS`.
+    pixel_deg
+        Visual angle of one pixel in degrees, > 0.
+    shape
+        Odd kernel shape ``(KH, KW)``, pixels.
+    colour
+        Whether a kernel per colour channel ``(KH, KW, C)`` is wanted instead of the
+        luminance kernel ``(KH, KW)``; default False.
+    cache
+        ``None`` (default) or ``True``: the kernel is read from (or kept in) the user's
+        kernel cache (:mod:`glarelab.glare.models.cache`, off when ``GLARELAB_NO_CACHE`` is
+        set); ``False``: always digitised; a :class:`glarelab.glare.models.cache.KernelCache`
+        or a folder: that cache.
+
+    Returns
+    -------
+    Kernel
+        The kernel and its energy account.
 
     Examples
     --------

@@ -68,17 +68,54 @@ class ApertureGrid:
 
     def coordinates(self, shift_x_mm: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
         """``(x, y)`` in mm of every sample, y up; ``shift_x_mm`` moves the obstacle, not the
-        grid (an obstacle at ``+shift`` appears at ``x - shift``)."""
+        grid (an obstacle at ``+shift`` appears at ``x - shift``).
+
+        Parameters
+        ----------
+        shift_x_mm
+            The obstacle's horizontal shift, mm; default 0.
+
+        Returns
+        -------
+        x, y : numpy.ndarray
+            ``(n, n)`` each, mm from the grid's centre.
+        """
         axis = (np.arange(self.n) - self.n // 2) * self.spacing_mm
         x, y = np.meshgrid(axis, -axis)
         return x - shift_x_mm, y
 
     def antialias(self, signed_distance_mm: np.ndarray) -> np.ndarray:
+        """Transmittance of samples at a signed distance from an edge.
+
+        Parameters
+        ----------
+        signed_distance_mm
+            Each sample's distance to the edge of an opening, mm: positive inside.
+
+        Returns
+        -------
+        numpy.ndarray
+            Transmittance ``clip(0.5 + d / spacing, 0, 1)``: 1 a sample inside, 0 outside, linear
+            across the one sample the edge crosses.
+        """
         return np.clip(0.5 + signed_distance_mm / self.spacing_mm, 0.0, 1.0)
 
 
 def aperture_pupil(grid: ApertureGrid, diameter_mm: float) -> np.ndarray:
     """A circular pupil of ``diameter_mm`` (Kakimoto eq. 4: 1 inside, 0 outside).
+
+    Parameters
+    ----------
+    grid
+        The pupil-plane sampling grid.
+    diameter_mm
+        The pupil's diameter, mm, > 0.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(n, n)`` amplitude transmittance, 0 (opaque) to 1 (clear), edges antialiased over
+        one sample.
 
     Examples
     --------
@@ -95,6 +132,23 @@ def aperture_diaphragm(
     grid: ApertureGrid, diameter_mm: float, sides: int, *, rotation_deg: float = 0.0
 ) -> np.ndarray:
     """A regular polygonal camera diaphragm with ``sides`` blades, circumscribed diameter given.
+
+    Parameters
+    ----------
+    grid
+        The pupil-plane sampling grid.
+    diameter_mm
+        Diameter of the circle through the polygon's corners, mm, > 0.
+    sides
+        Number of blades, >= 3.
+    rotation_deg
+        Rotation of the polygon, degrees anticlockwise; default 0.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(n, n)`` amplitude transmittance, 0 (opaque) to 1 (clear), edges antialiased over
+        one sample.
 
     Examples
     --------
@@ -126,6 +180,8 @@ def aperture_eyelid(
 
     Parameters
     ----------
+    grid
+        The pupil-plane sampling grid.
     upper_mm, lower_mm
         Height of the lid margin above (below) the pupil centre at the centre line, mm; None
         for no lid. Default: upper lid 2.2 mm above the centre, no lower lid.
@@ -305,6 +361,25 @@ def aperture_cross_screen(
     ``'4-point'`` has two sets at right angles (4 streaks), ``'trigonal'`` three sets at 60°
     (6 streaks); each set diffracts light perpendicular to its lines.
 
+    Parameters
+    ----------
+    grid
+        The pupil-plane sampling grid.
+    kind
+        ``'4-point'`` or ``'trigonal'``.
+    pitch_mm
+        Distance between neighbouring lines of a set, mm; default 0.25.
+    line_mm
+        Width of a line, mm; default 0.03.
+    rotation_deg
+        Rotation of the line sets, degrees anticlockwise; default 0.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(n, n)`` amplitude transmittance, 0 (opaque) to 1 (clear), edges antialiased over
+        one sample.
+
     References
     ----------
     Kakimoto et al. 2004, Fig. 5; Shinya et al. 1989.
@@ -325,6 +400,18 @@ def aperture_cross_screen(
 
 def aperture_from_image(image: np.ndarray, *, name: str = "aperture") -> np.ndarray:
     """Check a user-supplied transmittance image (hand-drawn or photographed obstacles).
+
+    Parameters
+    ----------
+    image
+        The transmittance, 2-D, 0 (opaque) to 1 (clear).
+    name
+        The image's name in the messages; default ``'aperture'``.
+
+    Returns
+    -------
+    numpy.ndarray
+        The image as float.
 
     Raises
     ------

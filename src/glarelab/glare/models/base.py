@@ -1,6 +1,6 @@
 """What the renderer and the planner need from a glare model: :class:`GlareModel`.
 
-Every model of :mod:`glare` subclasses :class:`GlareModel`. It must digitise its kernel
+Every model of :mod:`glarelab.glare` subclasses :class:`GlareModel`. It must digitise its kernel
 (:meth:`GlareModel.kernel`); the other capabilities have safe defaults, so that a model which
 says nothing about them is rendered exactly and described truthfully:
 
@@ -63,12 +63,47 @@ class GlareModel(abc.ABC):
 
     @abc.abstractmethod
     def kernel(self, pixel_deg: float, shape: tuple[int, int], *, colour: bool = False) -> Kernel:
-        """The kernel for pixels of ``pixel_deg`` degrees in an odd ``shape``."""
+        """The kernel for pixels of ``pixel_deg`` degrees in an odd ``shape``.
+
+        Parameters
+        ----------
+        pixel_deg
+            Visual angle of one pixel in degrees, > 0.
+        shape
+            Odd kernel shape ``(KH, KW)``, pixels.
+        colour
+            Whether a kernel per colour channel ``(KH, KW, C)`` is wanted instead of the
+            luminance kernel ``(KH, KW)``; default False.
+
+        Returns
+        -------
+        Kernel
+            The kernel, each channel summing to its PSF energy inside the support, with its
+            energy account.
+        """
 
     def tail_bound(
         self, pixel_deg: float, radius_px: np.ndarray, *, colour: bool = False
     ) -> TailBound | None:
-        """Bounds on what a cut at each radius leaves out, or ``None`` (none known)."""
+        """Bounds on what a cut at each radius leaves out, or ``None`` (none known).
+
+        Parameters
+        ----------
+        pixel_deg
+            Visual angle of one pixel in degrees, > 0.
+        radius_px
+            Half-sizes of the centred squares the kernel is cut to, whole pixels (a square spans
+            ``2 r + 1`` pixels a side).
+        colour
+            Whether a kernel per colour channel ``(KH, KW, C)`` is wanted instead of the
+            luminance kernel ``(KH, KW)``; default False.
+
+        Returns
+        -------
+        TailBound or None
+            For each radius, the largest kernel pixel outside the square and the energy outside
+            (fractions of the source's energy); ``None`` when the model knows no bound.
+        """
         return None
 
     @property
@@ -81,7 +116,18 @@ class GlareModel(abc.ABC):
         return "not declared by the model"
 
     def description(self, colour: bool) -> dict:
-        """The model's name and parameters, for logs."""
+        """The model's name and parameters, for logs.
+
+        Parameters
+        ----------
+        colour
+            Whether the kernel described is the colour one (recorded as ``colour``).
+
+        Returns
+        -------
+        dict
+            ``model`` (the class's name), the model's parameters and ``colour``.
+        """
         parameters = (
             {f.name: getattr(self, f.name) for f in fields(self)} if is_dataclass(self) else {}
         )
@@ -103,7 +149,24 @@ class _Declared(GlareModel):
 
 def as_model(model: object) -> GlareModel:
     """``model`` as a :class:`GlareModel`: itself, or an object with a ``kernel`` method
-    wrapped with the safe defaults (no tail bound, a colour kernel, halo not declared)."""
+    wrapped with the safe defaults (no tail bound, a colour kernel, halo not declared).
+
+    Parameters
+    ----------
+    model
+        A :class:`GlareModel`, or any object with a
+        ``kernel(pixel_deg, shape, *, colour)`` method.
+
+    Returns
+    -------
+    GlareModel
+        ``model`` itself, or wrapped.
+
+    Raises
+    ------
+    ValueError
+        If ``model`` has no ``kernel`` method.
+    """
     if isinstance(model, GlareModel):
         return model
     if callable(getattr(model, "kernel", None)):

@@ -172,7 +172,25 @@ class KernelCache:
         self, model: object, pixel_deg: float, shape: tuple[int, int], *, colour: bool
     ) -> str | None:
         """The entry's name for a model's kernel, or ``None`` when the model cannot be keyed
-        (its ``repr`` does not pin down its parameters)."""
+        (its ``repr`` does not pin down its parameters).
+
+        Parameters
+        ----------
+        model
+            The glare model; its class, its ``repr`` (its parameters) and the source of its
+            module are in the key, so an edited model never reads an old kernel.
+        pixel_deg
+            Visual angle of one pixel in degrees.
+        shape
+            Odd kernel shape ``(KH, KW)``, pixels.
+        colour
+            Whether the kernel is the colour one.
+
+        Returns
+        -------
+        str or None
+            A SHA-256 hex digest, or None.
+        """
         described = repr(model)
         if " at 0x" in described or "..." in described:
             return None
@@ -192,11 +210,34 @@ class KernelCache:
         return hashlib.sha256(json.dumps(parts).encode()).hexdigest()
 
     def path(self, key: str) -> Path:
+        """The file of the entry ``key``.
+
+        Parameters
+        ----------
+        key
+            An entry's name (:meth:`key`).
+
+        Returns
+        -------
+        pathlib.Path
+            The entry's file in the cache folder.
+        """
         return self.directory / f"{key}{SUFFIX}"
 
     # entries ------------------------------------------------------------------------------
     def get(self, key: str) -> Kernel | None:
-        """The kernel stored under ``key``, or ``None`` (missing, or corrupt and removed)."""
+        """The kernel stored under ``key``, or ``None`` (missing, or corrupt and removed).
+
+        Parameters
+        ----------
+        key
+            The entry's name (:meth:`key`). A hit marks the entry most recently used.
+
+        Returns
+        -------
+        Kernel or None
+            The kernel, or None.
+        """
         path = self.path(key)
         try:
             data = path.read_bytes()
@@ -216,7 +257,21 @@ class KernelCache:
         return kernel
 
     def put(self, key: str, kernel: Kernel) -> bool:
-        """Store a kernel under ``key``; False (and a warning) when it could not be written."""
+        """Store a kernel under ``key``; False (and a warning) when it could not be written.
+
+        Parameters
+        ----------
+        key
+            The entry's name (:meth:`key`).
+        kernel
+            The kernel; one larger than the cache's ``max_bytes`` is not stored. The least
+            recently used entries are evicted to make room.
+
+        Returns
+        -------
+        bool
+            Whether it was stored.
+        """
         encoded = _encode(kernel, key)
         if encoded is None or len(encoded) > self.max_bytes:
             return False
@@ -248,7 +303,30 @@ class KernelCache:
         log: Callable[[str], None] | None = None,
     ) -> Kernel:
         """The model's kernel from the cache, or digitised (``build()``, by default
-        ``model.kernel(pixel_deg, shape, colour=colour)``) and stored."""
+        ``model.kernel(pixel_deg, shape, colour=colour)``) and stored.
+
+        Parameters
+        ----------
+        model
+            The glare model; its class, its ``repr`` (its parameters) and the source of its
+            module are in the key, so an edited model never reads an old kernel.
+        pixel_deg
+            Visual angle of one pixel in degrees.
+        shape
+            Odd kernel shape ``(KH, KW)``, pixels.
+        colour
+            Whether the colour kernel is wanted; default False.
+        build
+            ``build()`` digitises the kernel on a miss; default None:
+            ``model.kernel(pixel_deg, shape, colour=colour)``.
+        log
+            Called with a message when the kernel is read from the cache; default None.
+
+        Returns
+        -------
+        Kernel
+            The kernel.
+        """
         key = self.key(model, pixel_deg, shape, colour=colour)
         if key is not None:
             cached = self.get(key)
@@ -414,6 +492,16 @@ def default_cache() -> KernelCache | None:
 def resolve_cache(cache) -> KernelCache | None:
     """``True`` or ``None``: :func:`default_cache`; ``False``: no cache; a
     :class:`KernelCache` or a folder: that cache.
+
+    Parameters
+    ----------
+    cache
+        ``True``, ``None``, ``False``, a :class:`KernelCache` or a folder (str or path).
+
+    Returns
+    -------
+    KernelCache or None
+        The cache, or None for no cache.
 
     Raises
     ------

@@ -181,7 +181,19 @@ class Kernel:
         return self._values.sum(axis=(0, 1), dtype=np.float64)
 
     def replace(self, **changes) -> Kernel:
-        """A copy with ``changes`` (``values`` replaces a quadrant, and the reverse)."""
+        """A copy with ``changes`` (``values`` replaces a quadrant, and the reverse).
+
+        Parameters
+        ----------
+        changes
+            The fields to change (``values``, ``quadrant``, ``pixel_deg``, ``energy_outside``,
+            ``quadrature_error``, ``description``).
+
+        Returns
+        -------
+        Kernel
+            The copy; the kernel itself is unchanged.
+        """
         fields = {
             "pixel_deg": self.pixel_deg,
             "energy_outside": self.energy_outside,
@@ -209,6 +221,16 @@ def kernel_shape_for(image_shape: Sequence[int]) -> tuple[int, int]:
     This is Spencer §3.2's "double the width and height of the target image" and covers
     Yoshida's kernel "from -s/2 to s/2" of the stimulus size.
 
+    Parameters
+    ----------
+    image_shape
+        The image's shape ``(H, W[, C])``, pixels.
+
+    Returns
+    -------
+    tuple of int
+        ``(2H - 1, 2W - 1)``.
+
     Examples
     --------
     >>> kernel_shape_for((300, 200))
@@ -219,6 +241,23 @@ def kernel_shape_for(image_shape: Sequence[int]) -> tuple[int, int]:
 
 
 def check_kernel_shape(shape: Sequence[int]) -> tuple[int, int]:
+    """A kernel shape checked: two odd positive integers.
+
+    Parameters
+    ----------
+    shape
+        The kernel shape asked for.
+
+    Returns
+    -------
+    tuple of int
+        ``(KH, KW)`` as ints.
+
+    Raises
+    ------
+    ValueError
+        Unless it is two odd positive integers (a kernel needs a centre pixel).
+    """
     try:
         height, width = (int(n) for n in shape)
     except (TypeError, ValueError):
@@ -237,6 +276,16 @@ def mirror_quadrant(quadrant: np.ndarray) -> np.ndarray:
     """Unfold the quadrant ``i, j >= 0`` of a kernel symmetric in both axes to the full kernel.
 
     The quadrant may carry trailing axes (channels); they are kept.
+
+    Parameters
+    ----------
+    quadrant
+        ``(h, w[, ...])``: the kernel at offsets ``i, j >= 0`` from its centre.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(2h - 1, 2w - 1[, ...])``, of the quadrant's dtype.
 
     Examples
     --------
@@ -257,6 +306,16 @@ def quadrant_sum(quadrant: np.ndarray) -> np.ndarray:
     """Sum over the full kernel that :func:`mirror_quadrant` would unfold, per trailing axis,
     in float64 whatever the quadrant's dtype (as the full kernel's total is taken).
 
+    Parameters
+    ----------
+    quadrant
+        ``(h, w[, ...])``: the kernel at offsets ``i, j >= 0`` from its centre.
+
+    Returns
+    -------
+    numpy.ndarray
+        float64, the shape of the trailing axes (a scalar array for none).
+
     Examples
     --------
     >>> q = np.array([[4.0, 2.0], [1.0, 0.5]])
@@ -276,6 +335,20 @@ def gaussian_pixel_energies(width_deg: float, pixel_deg: float, half_size: int) 
 
     Returns ``½[erf((i+½)Δ/w) - erf((i-½)Δ/w)]`` for ``i = 0 … half_size``; the 2-D kernel of
     a separable Gaussian is the outer product of two of these, mirrored.
+
+    Parameters
+    ----------
+    width_deg
+        The Gaussian's width ``w``, degrees (``σ √2``).
+    pixel_deg
+        Visual angle of one pixel ``Δ``, degrees.
+    half_size
+        The largest offset ``n``, pixels.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(half_size + 1,)`` fractions of the Gaussian's energy.
     """
     from scipy.special import erf  # imported here: 0.2 s at start-up
 
@@ -503,7 +576,22 @@ def digitise_radial_quadrant(
     symmetric: bool = True,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """:func:`digitise_radial` returning the quadrants ``(C, KH//2 + 1, KW//2 + 1)`` of
-    offsets ``i, j >= 0`` (unfold them with :func:`mirror_quadrant`)."""
+    offsets ``i, j >= 0`` (unfold them with :func:`mirror_quadrant`).
+
+    Parameters
+    ----------
+    profiles, pixel_deg, shape, samples_per_pixel, center_samples_per_pixel
+        As for :func:`digitise_radial`.
+    center_radius_px, max_spacing_deg, breakpoints, support_deg, symmetric
+        As for :func:`digitise_radial`.
+
+    Returns
+    -------
+    quadrant : numpy.ndarray
+        ``(C, KH//2 + 1, KW//2 + 1)`` pixel energies at offsets ``i, j >= 0``.
+    inside, total, quadrature_error : numpy.ndarray
+        As for :func:`digitise_radial`.
+    """
     pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
     height, width = check_kernel_shape(shape)
     samples_per_pixel = check_positive_int("samples_per_pixel", samples_per_pixel)

@@ -259,6 +259,22 @@ def rebin(
     (cumulative sums interpolated at the output pixel edges), so the sum is conserved
     wherever the output covers the input.
 
+    Parameters
+    ----------
+    values
+        The image, centred, each sample constant over its ``from_spacing_deg`` square.
+    from_spacing_deg
+        The image's sample spacing, degrees.
+    to_spacing_deg
+        The output's pixel size, degrees.
+    shape
+        Odd output shape ``(KH, KW)``, centred on the image's centre.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``shape``: the integral of ``values`` over each output pixel.
+
     Examples
     --------
     >>> a = np.zeros((5, 5)); a[2, 2] = 1.0
@@ -521,6 +537,29 @@ def psf_pixel_integrated(
 
     The aperture (and the Fresnel term, if given) are those of :func:`psf_fraunhofer`; the
     result is :func:`pixel_integrated_psf` of their autocorrelation.
+
+    Parameters
+    ----------
+    aperture
+        ``(N, N)`` amplitude transmittance in [0, 1], centred at ``N // 2``.
+    spacing_mm
+        Sample spacing of the aperture in mm, > 0.
+    wavelength_nm
+        Wavelength in nm, 380-780.
+    pixel_deg
+        Pixel size, degrees, > 0.
+    shape
+        Odd kernel shape ``(KH, KW)``.
+    fresnel_distance_mm
+        If given, Luidolt's Fresnel term with this distance, as for :func:`psf_fraunhofer`;
+        default None.
+    reach_deg
+        As for :func:`pixel_integrated_psf`; default None: the largest.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``shape``: the fraction of the light through the aperture that falls in each pixel.
 
     Raises
     ------

@@ -71,9 +71,40 @@ class HybridGlare(GlareModel):
         return self._vos().halo()
 
     def description(self, colour: bool) -> dict:
+        """The model's name and parameters, for logs.
+
+        Parameters
+        ----------
+        colour
+            Whether the kernel described is the colour one (recorded as ``colour``).
+
+        Returns
+        -------
+        dict
+            The Vos part's description (:meth:`VosGlare.description`), named ``HybridGlare``.
+        """
         return {**self._vos().description(colour), "model": "HybridGlare"}
 
     def kernel(self, pixel_deg: float, shape: tuple[int, int], *, colour: bool = False) -> Kernel:
+        """The kernel: the Vos PSF with its unscattered core replaced by the wave-optics
+        diffraction kernel (class docstring).
+
+        Parameters
+        ----------
+        pixel_deg
+            Visual angle of one pixel in degrees, > 0.
+        shape
+            Odd kernel shape ``(KH, KW)``, pixels.
+        colour
+            Whether a kernel per colour channel ``(KH, KW, C)`` is wanted instead of the
+            luminance kernel ``(KH, KW)``; default False.
+
+        Returns
+        -------
+        Kernel
+            The kernel, each channel summing to its PSF energy inside the support, with its
+            energy account.
+        """
         vos_model = VosGlare(
             regime=self.regime,
             age=self.age,

@@ -97,7 +97,25 @@ class Spectrum:
         return np.linspace(*self.wavelength_range_nm, self.n_wavelengths)
 
     def channel_weights(self, channels: Literal["Y", "XYZ", "RGB"]) -> np.ndarray:
-        """Weights ``(C, n_wavelengths)`` turning ``f3(θ, λ)`` into channel profiles."""
+        """Weights ``(C, n_wavelengths)`` turning ``f3(θ, λ)`` into channel profiles.
+
+        Parameters
+        ----------
+        channels
+            ``'Y'`` (luminance), ``'XYZ'`` (CIE 1931) or ``'RGB'`` (the spectrum's
+            colourspace, balanced so that a flat ring has R = G = B = Y).
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(C, n_wavelengths)``, normalised so that the illuminant's luminance weights sum
+            to 1.
+
+        Raises
+        ------
+        ValueError
+            For other ``channels``.
+        """
         from glarelab.glare._colour import colour
 
         wavelengths = self.wavelengths_nm

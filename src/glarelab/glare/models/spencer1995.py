@@ -134,6 +134,19 @@ class VosGlare(GlareModel):
     def from_field_luminance(cls, field_luminance_cd_m2: float, **options) -> VosGlare:
         """The model for an observer adapted to a field luminance (Spencer §3.1, §3.1.1).
 
+        Parameters
+        ----------
+        field_luminance_cd_m2
+            The luminance the observer is adapted to, cd/m² (Spencer §3.1: photopic above 3,
+            scotopic below 0.01, mesopic between).
+        options
+            The model's other parameters (``age``, ``pupil_mm``, ``flare_lines``, ...).
+
+        Returns
+        -------
+        VosGlare
+            The model with the regime of that luminance.
+
         Examples
         --------
         >>> VosGlare.from_field_luminance(0.5).regime
@@ -179,7 +192,18 @@ class VosGlare(GlareModel):
         return profile
 
     def psf(self, theta_deg: float | np.ndarray) -> float | np.ndarray:
-        """The continuous PSF (per steradian) at the halo wavelength (568 nm if white)."""
+        """The continuous PSF (per steradian) at the halo wavelength (568 nm if white).
+
+        Parameters
+        ----------
+        theta_deg
+            Angle from the source, degrees, a number or an array.
+
+        Returns
+        -------
+        float or numpy.ndarray
+            The PSF, per steradian, the shape of ``theta_deg``.
+        """
         wavelength = vos.HALO_REFERENCE_NM if self.wavelength_nm is None else self.wavelength_nm
         values = self._profile(lambda t: vos.f3(t, wavelength))(np.asarray(theta_deg, float))
         return float(values) if np.ndim(theta_deg) == 0 else values
@@ -195,6 +219,23 @@ class VosGlare(GlareModel):
         of radius ``θ``. Every channel's halo profile is bounded separately. ``None`` with
         flare lines, whose streaks are not bounded by the smooth PSF, and with Spencer's
         renormalisation, which scales the kernel by a factor that depends on its shape.
+
+        Parameters
+        ----------
+        pixel_deg
+            Visual angle of one pixel in degrees, > 0.
+        radius_px
+            Half-sizes of the centred squares the kernel is cut to, whole pixels (a square spans
+            ``2 r + 1`` pixels a side).
+        colour
+            Whether a kernel per colour channel ``(KH, KW, C)`` is wanted instead of the
+            luminance kernel ``(KH, KW)``; default False.
+
+        Returns
+        -------
+        TailBound or None
+            For each radius, the largest kernel pixel outside the square and the energy outside
+            (fractions of the source's energy); ``None`` where no bound is known.
         """
         if self.flare_lines or self.normalisation != "psf":
             return None
@@ -309,6 +350,16 @@ class VosGlare(GlareModel):
         ``(KH, KW)``) and ``core_outside``; ``scatter`` (``w1 f1 + w2 f2``, flare lines
         applied, ``(KH, KW)``) and ``scatter_outside``; ``halo`` (``w3 f3``, ``(C, KH, KW)``)
         and ``halo_outside`` ``(C,)``; and ``errors``, ``(energy, quadrature error)`` pairs.
+
+        Parameters
+        ----------
+        pixel_deg
+            Visual angle of one pixel in degrees, > 0.
+        shape
+            Odd kernel shape ``(KH, KW)``, pixels.
+        colour
+            Whether a kernel per colour channel ``(KH, KW, C)`` is wanted instead of the
+            luminance kernel ``(KH, KW)``; default False.
         """
         p = self._quadrant_parts(pixel_deg, shape, colour=colour)
         shape = check_kernel_shape(shape)
@@ -326,6 +377,19 @@ class VosGlare(GlareModel):
         return {**p, "core": mirror_quadrant(p["core"]), "scatter": scatter, "halo": halo}
 
     def description(self, colour: bool) -> dict:
+        """The model's name and parameters, for logs.
+
+        Parameters
+        ----------
+        colour
+            Whether the kernel described is the colour one (recorded as ``colour``).
+
+        Returns
+        -------
+        dict
+            ``model`` (the class's name), the model's parameters and ``colour``. The halo
+            spectrum is given as a dict.
+        """
         return {
             "model": type(self).__name__,
             **{k: v for k, v in asdict(self).items() if k != "halo_spectrum"},

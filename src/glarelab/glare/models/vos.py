@@ -20,7 +20,7 @@ Corrections to the printed equations (checked numerically in ``tests/glare/model
   ``exp(-19.75 (θ - θ0)²)`` the volume is 1.0000 at every wavelength 380–780 nm and the FWHM is
   0.375°, the "approximately 0.35°" of Mallero & Palmer's observation. We use eq. 6's 19.75.
 - The other printed constants (2.61e6, 20.91, 72.37, 436.9) give volumes within 0.1 % of 1.
-  :func:`glare.digitise_kernel` renormalises each component to exactly unit volume, as
+  :func:`glarelab.glare.digitise_kernel` renormalises each component to exactly unit volume, as
   Spencer §3.2 renormalises its filters.
 
 References
@@ -281,6 +281,21 @@ def max_age_years(regime: Regime) -> float:
     """Age at which eq. 10 drives the weight of ``f0`` to zero for a regime.
 
     Beyond it the "PSF" would have a negative central peak, so eq. 10 cannot be used there.
+
+    Parameters
+    ----------
+    regime
+        ``'photopic'``, ``'mesopic'`` or ``'scotopic'``.
+
+    Returns
+    -------
+    float
+        The age, years: ``(w0 / c)^(1/4)`` with eq. 10's coefficient ``c``.
+
+    Raises
+    ------
+    ValueError
+        For an unknown regime.
 
     Examples
     --------

@@ -342,6 +342,18 @@ class WaveOpticsGlare(GlareModel):
         pupil by 64 samples and particles and lashes by 2, and samples the Fresnel chirp (if
         on) below Nyquist; the grid spans twice the pupil.
 
+        Parameters
+        ----------
+        pixel_deg
+            Visual angle of one pixel in degrees, > 0.
+        shape
+            Odd kernel shape ``(KH, KW)``, pixels.
+
+        Returns
+        -------
+        glarelab.glare.models.apertures.ApertureGrid
+            The pupil-plane grid: its size in samples and its spacing, mm.
+
         Raises
         ------
         ValueError
@@ -379,6 +391,16 @@ class WaveOpticsGlare(GlareModel):
         """The composite amplitude transmittance on ``grid`` (Kakimoto eq. 5: ``t_o · P``).
 
         Obstacles are drawn only over the pupil's bounding box: outside it ``P = 0``.
+
+        Parameters
+        ----------
+        grid
+            The pupil-plane grid (:meth:`grid_for`).
+
+        Returns
+        -------
+        numpy.ndarray
+            The transmittance on the grid, 0 (opaque) to 1 (clear).
         """
         t = self._aperture_crop(grid)
         n_crop = t.shape[0]
@@ -435,7 +457,22 @@ class WaveOpticsGlare(GlareModel):
         (:func:`glarelab.glare.models.fraunhofer.pixel_integrated_psf`; one autocorrelation serves
         every wavelength unless the Fresnel term differs between them, 'reference' with
         ``fresnel``); ``'rebin'`` samples the PSF by FFT and rebins the samples, 'reference'
-        transforming once per wavelength and 'scaled' once in all."""
+        transforming once per wavelength and 'scaled' once in all.
+
+        Parameters
+        ----------
+        pixel_deg
+            Visual angle of one pixel in degrees, > 0.
+        shape
+            Odd kernel shape ``(KH, KW)``, pixels.
+
+        Returns
+        -------
+        kernels : numpy.ndarray
+            ``(n_wavelengths, KH, KW)``, fractions of each wavelength's light.
+        wavelengths : numpy.ndarray
+            The wavelengths, nm.
+        """
         pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
         shape = check_kernel_shape(shape)
         grid = self.grid_for(pixel_deg, shape)
@@ -491,6 +528,22 @@ class WaveOpticsGlare(GlareModel):
         1 for ``'unit-energy'``; for ``'Luidolt2020'`` the open area of the aperture over the
         area of the 8 mm disc the particles are spread over (Luidolt's largest pupil, §5.2.1
         ii): a 2 mm pupil 1/16, an 8 mm pupil 1 (less what lids, lashes and particles stop).
+
+        Parameters
+        ----------
+        open_area_mm2
+            The open area of the aperture, mm²; default None: the pupil's disc,
+            ``π d² / 4``.
+
+        Returns
+        -------
+        float
+            The factor, 1 for ``'unit-energy'``.
+
+        Raises
+        ------
+        ValueError
+            For an unknown ``pupil_convention``.
         """
         if self.pupil_convention == "unit-energy":
             return 1.0
@@ -507,7 +560,24 @@ class WaveOpticsGlare(GlareModel):
 
     def kernel(self, pixel_deg: float, shape: tuple[int, int], *, colour: bool = False) -> Kernel:
         """The glare kernel on ``pixel_deg`` pixels: luminance ``(KH, KW)`` or RGB
-        ``(KH, KW, 3)`` in the display primaries of ``spectrum``."""
+        ``(KH, KW, 3)`` in the display primaries of ``spectrum``.
+
+        Parameters
+        ----------
+        pixel_deg
+            Visual angle of one pixel in degrees, > 0.
+        shape
+            Odd kernel shape ``(KH, KW)``, pixels.
+        colour
+            Whether a kernel per colour channel ``(KH, KW, 3)`` is wanted instead of the
+            luminance kernel ``(KH, KW)``; default False.
+
+        Returns
+        -------
+        Kernel
+            The kernel, each channel summing to its PSF energy inside the support, with its
+            energy account.
+        """
         kernels, wavelengths = self.monochromatic_kernels(pixel_deg, shape)
         if self.spectral == "kakimoto":
             rgb = kernels  # Kakimoto §3.2: each wavelength is one display channel
@@ -542,7 +612,18 @@ class WaveOpticsGlare(GlareModel):
         )
 
     def at_source(self, source_x_deg: float) -> WaveOpticsGlare:
-        """The same eye with the light source at another horizontal angle."""
+        """The same eye with the light source at another horizontal angle.
+
+        Parameters
+        ----------
+        source_x_deg
+            The source's horizontal angle from the line of sight, degrees.
+
+        Returns
+        -------
+        WaveOpticsGlare
+            A copy with that source position.
+        """
         return replace(self, source_x_deg=source_x_deg)
 
     def kernel_set(
@@ -553,7 +634,25 @@ class WaveOpticsGlare(GlareModel):
         *,
         colour: bool = False,
     ) -> dict[float, Kernel]:
-        """Kernels keyed by source position, precomputed as Kakimoto §4.3 does."""
+        """Kernels keyed by source position, precomputed as Kakimoto §4.3 does.
+
+        Parameters
+        ----------
+        pixel_deg
+            Visual angle of one pixel in degrees, > 0.
+        shape
+            Odd kernel shape ``(KH, KW)``, pixels.
+        positions_deg
+            The sources' horizontal angles, degrees.
+        colour
+            Whether a kernel per colour channel ``(KH, KW, 3)`` is wanted instead of the
+            luminance kernel ``(KH, KW)``; default False.
+
+        Returns
+        -------
+        dict of float to Kernel
+            One kernel per position.
+        """
         return {
             float(x): self.at_source(x).kernel(pixel_deg, shape, colour=colour)
             for x in positions_deg
@@ -587,6 +686,15 @@ def compare_spectral_methods(
     the method's pixel keeps its luminance ratio to it), averaged with the reference energy as
     weight, and the maximum, over the pixels at 1e-4 of the reference's peak or above.
 
+    Parameters
+    ----------
+    model
+        The wave-optics model; its ``spectral`` method is replaced by each in turn.
+    pixel_deg
+        Visual angle of one pixel in degrees, > 0.
+    shape
+        Odd kernel shape ``(KH, KW)``, pixels.
+
     Returns
     -------
     list of dict
@@ -615,6 +723,15 @@ def kernel_colour_error(reference: np.ndarray, values: np.ndarray, colourspace: 
     Every pixel is shown at a luminance of 20 % of the display white (the reference pixel's
     luminance; the other keeps its luminance ratio to it); the mean is weighted by the
     reference energy, over the pixels at 1e-4 of the reference's peak or above.
+
+    Parameters
+    ----------
+    reference
+        The reference RGB kernel, ``(KH, KW, 3)``, linear.
+    values
+        The kernel compared, same shape.
+    colourspace
+        The name of the kernels' RGB colourspace in colour-science (``'sRGB'``, ...).
 
     Returns
     -------

@@ -82,6 +82,23 @@ class GaussianGlare(GlareModel):
         Exact for the separable kernel: the largest pixel outside is ``a[r+1] a[0]`` and the
         energy outside ``1 - (Σ_{|i|≤r} a_i)²`` for the normalised 1-D profile ``a``. The cut
         kernel is normalised over its support (eq. 2's ``k``), so it is marked renormalised.
+
+        Parameters
+        ----------
+        pixel_deg
+            Visual angle of one pixel in degrees, > 0.
+        radius_px
+            Half-sizes of the centred squares the kernel is cut to, whole pixels (a square spans
+            ``2 r + 1`` pixels a side).
+        colour
+            Whether a kernel per colour channel ``(KH, KW, C)`` is wanted instead of the
+            luminance kernel ``(KH, KW)``; default False. The Gaussian is achromatic: the
+            bound is the same.
+
+        Returns
+        -------
+        TailBound
+            Exact bounds, marked renormalised.
         """
         pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
         radius = np.asarray(radius_px, dtype=np.int64)
@@ -104,6 +121,22 @@ class GaussianGlare(GlareModel):
 
         ``colour`` is accepted for a uniform interface: the Gaussian is achromatic, so the same
         2-D kernel serves every channel.
+
+        Parameters
+        ----------
+        pixel_deg
+            Visual angle of one pixel in degrees, > 0.
+        shape
+            Odd kernel shape ``(KH, KW)``, pixels.
+        colour
+            Whether a kernel per colour channel ``(KH, KW, C)`` is wanted instead of the
+            luminance kernel ``(KH, KW)``; default False.
+
+        Returns
+        -------
+        Kernel
+            The kernel, each channel summing to its PSF energy inside the support, with its
+            energy account.
         """
         pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
         height, width = check_kernel_shape(shape)

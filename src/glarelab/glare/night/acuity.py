@@ -167,6 +167,19 @@ def luminance_for_acuity(cpd: float | np.ndarray) -> float | np.ndarray:
 def lightness(luminance_cd_m2, *, white_cd_m2: float = LAB_WHITE_CD_M2_LUIDOLT2020):
     """CIE 1976 lightness L* of a luminance for a white of ``white_cd_m2`` (colour-science).
 
+    Parameters
+    ----------
+    luminance_cd_m2
+        Luminance, cd/m², >= 0, a number or an array.
+    white_cd_m2
+        The luminance of the white (L* = 100), cd/m², > 0; default
+        :data:`LAB_WHITE_CD_M2_LUIDOLT2020`.
+
+    Returns
+    -------
+    float or numpy.ndarray
+        L*, 0-100 for luminances up to the white, the shape of ``luminance_cd_m2``.
+
     Examples
     --------
     >>> round(lightness(luminance_for_acuity(13.85)), 2)  # Luidolt §5.3.2: "approximately 1.31"

@@ -5,9 +5,8 @@ returns what a display shows of it, frame by frame, in the order of Luidolt 2020
 (Fig. 4.1, §6 and Fig. 6.1):
 
 1. **Temporal adaptation** (§5.1, eqs. 5.1-5.4; :mod:`glarelab.glare.night.adaptation`): the
-luminance of the
-   frame around the gaze, and the adapted luminance ``L_i`` following it over time. Without
-   this effect the eye is adapted at once (``L_i`` = the frame's luminance).
+   luminance of the frame around the gaze, and the adapted luminance ``L_i`` following it over
+   time. Without this effect the eye is adapted at once (``L_i`` = the frame's luminance).
 2. **Exposure**: the scene is scaled by ``adapted_display_cd_m2 / L_i``, so that an adapted
    eye sees the adapting luminance at ``adapted_display_cd_m2`` on the display. This departs
    from the words of §5.1, "This adaptation luminance L_i can then be applied to the image
@@ -17,17 +16,16 @@ luminance of the
    of the adapting luminance). A scale commutes with the glare's convolution and the blur's
    weights, so scaling first and stating the display's maximum in display units is Luidolt's
    order with tone mapping moved forward.
-3. **Glare** (§5.2; any model of :data:`glare.GLARE_MODELS`): its pupil from the adapted
+3. **Glare** (§5.2; any model of :data:`glarelab.glare.GLARE_MODELS`): its pupil from the adapted
    luminance (Moon & Spencer, :func:`glarelab.glare.models.eye.pupil_diameter_mm`, as Ritschel et
    al. 2009; Luidolt measures it with an eye tracker) and, for the Vos PSF, its regime (Spencer
    §3.1); the excess over the display's maximum spread and clamped (Yoshida eq. 1). Without glare
    the excess is clipped, as the display clips it.
-4. **Acuity** (§5.3, eqs. 5.14-5.16; :mod:`glarelab.glare.night.acuity`): each pixel blurred by the
-σ of its
-   scene luminance (display luminance / exposure), in CIE L* for the display's white.
+4. **Acuity** (§5.3, eqs. 5.14-5.16; :mod:`glarelab.glare.night.acuity`): each pixel blurred by
+   the σ of its scene luminance (display luminance / exposure), in CIE L* for the display's white.
 5. **Scotopic colour** (§5.4, eq. 5.18, "after tone mapping";
-:mod:`glarelab.glare.night.scotopic`): the blend
-   towards the tinted rod image by σ(``L_i``), or Spencer's 70 % desaturation.
+   :mod:`glarelab.glare.night.scotopic`): the blend towards the tinted rod image by σ(``L_i``),
+   or Spencer's 70 % desaturation.
 
 The output is linear display RGB in cd/m² (channels of a white of equal R, G, B), within
 ``[0, display_max_cd_m2]``: never negative, never NaN, from black frames to 1e9 cd/m² suns.
@@ -201,8 +199,8 @@ def render_night(
         Which of ``'adaptation'``, ``'glare'``, ``'acuity'``, ``'scotopic'`` to apply; default
         all. The exposure is always applied.
     glare_model
-        The glare model (an object or a name of :data:`glare.GLARE_MODELS`); default the Vos
-        PSF (Spencer 1995).
+        The glare model (an object or a name of :data:`glarelab.glare.GLARE_MODELS`); default
+        the Vos PSF (Spencer 1995).
     display_max_cd_m2
         The display's white, cd/m², > 0: the most it shows (``L_dmax``); default 100.
     adapted_display_cd_m2
@@ -223,7 +221,7 @@ def render_night(
         Adaptation (:func:`glarelab.glare.night.adaptation.frame_luminance`, eqs. 5.2-5.4).
     glare_method, tolerance_codes
         Glare composition (``'Yoshida2008'`` clamp or ``'Spencer1995'`` sum) and the
-        renderer's error tolerance in display codes (:class:`glare.GlareRenderer`).
+        renderer's error tolerance in display codes (:class:`glarelab.glare.GlareRenderer`).
     acuity_method, blur, levels_per_octave, acuity_space
         Acuity (:func:`glarelab.glare.night.acuity.acuity_blur`); the lightness is taken for the
         display's white.

@@ -242,6 +242,18 @@ def scotopic_luminance(rgb: np.ndarray, *, colourspace: str = "ITU-R BT.709") ->
     """Scotopic luminance (scotopic cd/m²) of linear RGB in cd/m²: the rod luminance times
     D65's S/P ratio.
 
+    Parameters
+    ----------
+    rgb
+        ``(..., 3)`` linear RGB, cd/m² (channels of a white of equal R, G, B).
+    colourspace
+        The RGB colourspace's name in colour-science; default ``'ITU-R BT.709'``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(...)`` scotopic luminance, scotopic cd/m².
+
     Examples
     --------
     >>> round(float(scotopic_luminance(np.array([1.0, 1.0, 1.0]))), 3)  # 1 cd/m² of D65

@@ -25,6 +25,18 @@ Method = Literal["Yoshida2008", "Spencer1995"]
 def excess(planes: np.ndarray, l_dmax_cd_m2: float) -> np.ndarray:
     """``ΔL = max(L - L_dmax, 0)`` (Yoshida 2008 eq. 1), in the dtype of ``planes``.
 
+    Parameters
+    ----------
+    planes
+        Linear luminance, cd/m², any shape.
+    l_dmax_cd_m2
+        The display's maximum luminance ``L_dmax``, cd/m².
+
+    Returns
+    -------
+    numpy.ndarray
+        ``ΔL``, cd/m², the shape and dtype of ``planes``.
+
     Examples
     --------
     >>> excess(np.array([100.0, 300.0]), 220.0).tolist()

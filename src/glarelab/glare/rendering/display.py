@@ -42,6 +42,11 @@ class Display:
     """A display as its code → luminance table (cd/m², increasing).
 
     A :class:`glarelab.display.calibration.Calibration` serves as well: the planner reads ``lut``.
+
+    Attributes
+    ----------
+    lut
+        The display's code → luminance table, cd/m², increasing, one entry per code.
     """
 
     lut: np.ndarray
@@ -56,6 +61,27 @@ class Display:
         gamma: float = DISPLAY_GAMMA,
     ) -> Display:
         """A gain-offset-gamma display: ``L = black + (white - black) (code / max)^γ``.
+
+        Parameters
+        ----------
+        white_cd_m2
+            The top code's luminance, cd/m², > 0.
+        black_cd_m2
+            Code 0's luminance, cd/m², in ``[0, white_cd_m2)``.
+        bits
+            Bits per channel: ``2^bits`` codes; default :data:`DISPLAY_BITS`.
+        gamma
+            The exponent ``γ``; default :data:`DISPLAY_GAMMA`.
+
+        Returns
+        -------
+        Display
+            The display.
+
+        Raises
+        ------
+        ValueError
+            For a white that is not positive, or a black outside ``[0, white)``.
 
         Examples
         --------
@@ -73,7 +99,25 @@ class Display:
 
 def display_lut(display, l_dmax_cd_m2: float) -> np.ndarray:
     """The display's code → cd/m² table; for ``None`` the reference display: 10-bit, gamma
-    2.2, 1000:1, white at ``l_dmax_cd_m2``."""
+    2.2, 1000:1, white at ``l_dmax_cd_m2``.
+
+    Parameters
+    ----------
+    display
+        A :class:`Display`, a calibration (anything with a ``lut``), a table itself, or None.
+    l_dmax_cd_m2
+        The reference display's white, cd/m², > 0 (used only for None).
+
+    Returns
+    -------
+    numpy.ndarray
+        The table, cd/m², float.
+
+    Raises
+    ------
+    ValueError
+        For a table that is not 1-D and increasing with at least two codes.
+    """
     if display is None:
         l_dmax = check_positive("l_dmax_cd_m2", l_dmax_cd_m2, unit="cd/m²")
         return Display.gamma(l_dmax, black_cd_m2=l_dmax / DISPLAY_CONTRAST).lut
@@ -88,6 +132,18 @@ def display_lut(display, l_dmax_cd_m2: float) -> np.ndarray:
 def display_codes(luminance_cd_m2: np.ndarray, lut: np.ndarray) -> np.ndarray:
     """Continuous display codes of luminances (clipped to the display's range).
 
+    Parameters
+    ----------
+    luminance_cd_m2
+        Luminances, cd/m², any shape.
+    lut
+        The display's code → luminance table, cd/m², increasing, one entry per code.
+
+    Returns
+    -------
+    numpy.ndarray
+        Fractional codes, interpolated linearly in the table, 0 … ``lut.size - 1``.
+
     Examples
     --------
     >>> display_codes(np.array([0.0, 1.5, 9.0]), np.array([1.0, 2.0, 4.0])).tolist()
@@ -98,7 +154,18 @@ def display_codes(luminance_cd_m2: np.ndarray, lut: np.ndarray) -> np.ndarray:
 
 
 def steps_above(lut: np.ndarray) -> np.ndarray:
-    """For each code, the smallest step (cd/m²) between it and white (non-decreasing)."""
+    """For each code, the smallest step (cd/m²) between it and white (non-decreasing).
+
+    Parameters
+    ----------
+    lut
+        The display's code → luminance table, cd/m², increasing, one entry per code.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(lut.size - 1,)`` steps, cd/m².
+    """
     steps = np.diff(lut)
     return np.minimum.accumulate(steps[::-1])[::-1]
 
@@ -118,6 +185,22 @@ class CodeBound:
     smallest and largest spread), and per pixel only in blocks whose bound exceeds the
     tolerance. Steps are looked up directly: a table of :data:`STEP_TABLE_SIZE` bins in
     log-luminance holds, for each bin, the smallest step at or above its lower edge.
+
+    Parameters
+    ----------
+    lut
+        The display's code → luminance table, cd/m², increasing.
+    l_dmax_cd_m2
+        The display maximum of the glare's composition ``L_dmax``, cd/m²: Yoshida's clamp
+        keeps the output below it.
+    method
+        The composition, ``'Yoshida2008'`` (clamped at ``L_dmax``) or ``'Spencer1995'``
+        (summed).
+
+    Raises
+    ------
+    ValueError
+        For an unknown ``method``.
     """
 
     def __init__(self, lut: np.ndarray, l_dmax_cd_m2: float, method: str) -> None:
@@ -137,7 +220,18 @@ class CodeBound:
         self._table = self.step(np.maximum(edges, self.black))
 
     def step(self, luminance_cd_m2: np.ndarray | float) -> np.ndarray:
-        """Smallest code step (cd/m²) at or above each luminance's code."""
+        """Smallest code step (cd/m²) at or above each luminance's code.
+
+        Parameters
+        ----------
+        luminance_cd_m2
+            Luminances, cd/m², a number or an array.
+
+        Returns
+        -------
+        numpy.ndarray
+            The step at each, cd/m².
+        """
         code = np.searchsorted(self.lut, luminance_cd_m2, side="right") - 1
         return self.steps[np.clip(code, 0, self.steps.size - 1)]
 

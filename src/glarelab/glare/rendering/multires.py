@@ -159,7 +159,32 @@ def far_spread(
 ) -> np.ndarray:
     """The far tail's spread of one channel of an image of ``shape`` whose excess is
     ``excess`` within ``box`` (zero elsewhere): splat (or take ``splatted``), convolve on
-    the coarse grid, interpolate (or, with ``nodes``, the values at the coarse nodes)."""
+    the coarse grid, interpolate (or, with ``nodes``, the values at the coarse nodes).
+
+    Parameters
+    ----------
+    excess
+        The excess luminance over ``L_dmax`` within ``box``, cd/m², one channel.
+    box
+        ``(r0, r1, c0, c1)``: where ``excess`` lies in the image, pixels.
+    shape
+        The image's shape ``(H, W)``, pixels.
+    far
+        The far kernel on the coarse grid (:class:`MultiresKernels`).
+    factor
+        The coarse grid's factor ``f``: one node every ``f`` pixels.
+    nodes
+        Whether to return the spread at the coarse nodes instead of on the pixels; default
+        False.
+    splatted
+        The excess already splatted onto the coarse grid (:func:`splat`), to reuse; default
+        None: splatted here.
+
+    Returns
+    -------
+    numpy.ndarray
+        The far tail's spread, cd/m²: ``shape``, or the coarse grid with ``nodes``.
+    """
     coarse = (
         splat(excess, factor, box, grid_shape(shape, factor)) if splatted is None else splatted
     )
@@ -205,6 +230,30 @@ def multires_kernels(
     ``FOOTPRINT_NODES`` cells, within the full kernel), in the quadrant of positive offsets;
     the kernel is symmetric in both axes (checked), so the corners' mirror images cover the
     other quadrants.
+
+    Parameters
+    ----------
+    full
+        The kernel at full resolution, centred, odd, ``(KH, KW[, C])``.
+    coarse
+        The model digitised at ``factor`` pixels per node.
+    factor
+        The coarse grid's factor ``f``.
+    split_px
+        The split radius ``R0`` between the near and far kernels, pixels, at most a quarter
+        of the kernel's size.
+    reach
+        ``(rows, columns)``: how far the kernel is applied from a source, pixels.
+
+    Returns
+    -------
+    MultiresKernels
+        The near and far kernels and the far path's measured relative error.
+
+    Raises
+    ------
+    ValueError
+        For a split radius larger than a quarter of the kernel.
     """
     half = (full.shape[0] // 2, full.shape[1] // 2)
     if 2 * split_px > min(half):

@@ -19,10 +19,11 @@ What is spread, and how far:
   only has to reach from the bright pixels to the pixels that can.
 - **Reach.** The kernel is cut where what its tail leaves out, times this scene's excess, is
   below a share of the tolerance: at most ``min(ΣΔL · peak_beyond, max ΔL · energy_beyond)``
-  cd/m² anywhere (:meth:`~glare.GlareModel.tail_bound`; a rigorous bound, not an estimate).
+  cd/m² anywhere (:meth:`~glarelab.glare.GlareModel.tail_bound`; a rigorous bound, not an
+  estimate).
 - **Colour**: a colour kernel is used only when the model's kernel differs between channels
-  (:attr:`~glare.GlareModel.achromatic`); an achromatic RGB scene with an achromatic kernel
-  is convolved once and copied to the three channels.
+  (:attr:`~glarelab.glare.GlareModel.achromatic`); an achromatic RGB scene with an achromatic
+  kernel is convolved once and copied to the three channels.
 
 The plan is an object (print it, or ``glarelab render --explain``); the rendered result
 carries the error bound reached, in display codes.
@@ -271,7 +272,7 @@ def plan_glare(
     The cut's error anywhere is at most :math:`\\min(\\Sigma\\Delta L \\cdot K_{max}(r),
     \\max\\Delta L \\cdot E(r))` with :math:`K_{max}(r)` the largest kernel pixel and
     :math:`E(r)` the energy beyond the cut. To plan many images of one shape, use
-    :meth:`glare.GlareRenderer.plan`, which keeps the kernel and what it measured.
+    :meth:`glarelab.glare.GlareRenderer.plan`, which keeps the kernel and what it measured.
 
     Examples
     --------
@@ -298,7 +299,7 @@ def plan_glare(
 
 
 def make_plan(renderer, scene: Scene) -> GlarePlan:
-    """The plan of ``scene`` for ``renderer`` (a :class:`glare.GlareRenderer`)."""
+    """The plan of ``scene`` for ``renderer`` (a :class:`glarelab.glare.GlareRenderer`)."""
     model, tolerance = renderer.model, renderer.tolerance_codes
     colour_kernel = scene.colour and not model.achromatic
     if not scene.colour or (scene.achromatic and not colour_kernel):

@@ -55,7 +55,8 @@ def render_glare(
         Linear luminance, cd/m², finite and >= 0: shape ``(H, W)``, or ``(H, W, 3)`` linear RGB
         whose channels are in cd/m² of a white of equal R, G, B.
     model
-        A glare model (:class:`~glare.GaussianGlare`, :class:`~glare.VosGlare`) or its name.
+        A glare model (:class:`~glarelab.glare.GaussianGlare`,
+        :class:`~glarelab.glare.VosGlare`) or its name.
     pixel_deg
         Visual angle of one pixel in degrees, > 0.
     l_dmax_cd_m2
@@ -150,12 +151,12 @@ def add_glare(
         as :func:`render_glare` does (no plan).
     tolerance_codes
         Largest error allowed against the exact render, in codes of ``display``; default 0.5
-        (half a code step cannot be seen). The work is planned by :func:`glare.plan_glare`
+        (half a code step cannot be seen). The work is planned by :func:`glarelab.glare.plan_glare`
         (kernel reach, multi-resolution far tail) and the bound checked on the result.
         ``None`` or 0: the exact render with the full ``(2H - 1) × (2W - 1)`` kernel.
     display
         The display the error is counted on: a calibration, a
-        :class:`glarelab.glare.rendering.plan.Display`, or ``None`` for a 10-bit, gamma-2.2, 1000:1
+        :class:`glarelab.glare.Display`, or ``None`` for a 10-bit, gamma-2.2, 1000:1
         display whose white is ``l_dmax_cd_m2``.
     cache
         As for :func:`render_glare`: the second call with the same model, pixel size and
@@ -171,11 +172,11 @@ def add_glare(
     Raises
     ------
     ValueError
-        As for :func:`render_glare` and :func:`glare.plan_glare`.
+        As for :func:`render_glare` and :func:`glarelab.glare.plan_glare`.
 
     See Also
     --------
-    glare.plan_glare, glare.render_planned : the plan, and the result with its error bound.
+    glarelab.glare.plan_glare, render_planned : the plan, and the result with its error bound.
 
     References
     ----------
@@ -227,19 +228,19 @@ def render_planned(
     log=None,
     cache=None,
 ) -> GlareResult:
-    """Add glare as :func:`glare.plan_glare` plans it, and bound the error reached: the
+    """Add glare as :func:`glarelab.glare.plan_glare` plans it, and bound the error reached: the
     one-call form of :meth:`GlareRenderer.render`.
 
     Parameters
     ----------
     luminance_cd_m2, model, pixel_deg, l_dmax_cd_m2, method, tolerance_codes, display
-        As for :func:`glare.plan_glare`.
+        As for :func:`glarelab.glare.plan_glare`.
     precision
-        ``'float64'`` or ``'float32'``, as for :func:`glare.render_glare`.
+        ``'float64'`` or ``'float32'``, as for :func:`glarelab.glare.render_glare`.
     log
         Called with one line per step, or ``None``.
     cache
-        As for :func:`glare.render_glare`.
+        As for :func:`glarelab.glare.render_glare`.
 
     Returns
     -------
@@ -248,7 +249,7 @@ def render_planned(
     Raises
     ------
     ValueError
-        As for :func:`glare.plan_glare`, and for an unknown precision.
+        As for :func:`glarelab.glare.plan_glare`, and for an unknown precision.
 
     Examples
     --------

@@ -3,8 +3,8 @@
 A renderer owns, for one (model, pixel size, image shape, display), the digitised kernel,
 its spectra for the FFT lengths it has used, the model's tail bounds, and the multi-resolution
 kernels with their measured errors. Each is computed the first time a render needs it and kept
-for the next images. :func:`glare.add_glare` and :func:`glare.render_glare` are one-call forms
-that build a renderer for one image.
+for the next images. :func:`glarelab.glare.add_glare` and :func:`glarelab.glare.render_glare`
+are one-call forms that build a renderer for one image.
 
 Memory: the kernel (``(2H-1) × (2W-1)`` float64, ``[× 3]`` for a colour kernel) and the
 spectra, at most :data:`SPECTRA_BYTES` of them (the least recently used are dropped; the one
@@ -78,7 +78,7 @@ class GlareRenderer:
         Largest error allowed against the exact render, display codes, >= 0; default 0.5.
         0 (or ``None``): exact paths only.
     display
-        The display the error is counted on (a calibration, a :class:`glare.Display`, or a
+        The display the error is counted on (a calibration, a :class:`glarelab.glare.Display`, or a
         code → cd/m² table); ``None``: 10-bit, gamma 2.2, 1000:1, white at ``L_dmax``.
     kernel_shape
         Odd shape of the reference kernel; default ``(2H - 1, 2W - 1)`` (every pixel reaches
@@ -183,7 +183,19 @@ class GlareRenderer:
 
     # what is kept between images ----------------------------------------------------------
     def kernel(self, colour: bool = False) -> Kernel:
-        """The reference kernel (digitised on first use)."""
+        """The reference kernel (digitised on first use).
+
+        Parameters
+        ----------
+        colour
+            Whether the colour kernel (one per channel) is meant; default False: the luminance
+            kernel.
+
+        Returns
+        -------
+        Kernel
+            The kernel of the renderer's shape (or the one given), kept for the next images.
+        """
         if self._given is not None:
             given = self._given
             if len(given.shape) == 3 and not colour:  # the first channel, as before
@@ -218,13 +230,37 @@ class GlareRenderer:
         return self.cache.kernel(self.model, pixel_deg, shape, colour=colour, build=build, log=log)
 
     def kernel_peak(self, colour: bool = False) -> float:
-        """The reference kernel's largest value (found once)."""
+        """The reference kernel's largest value (found once).
+
+        Parameters
+        ----------
+        colour
+            Whether the colour kernel (one per channel) is meant; default False: the luminance
+            kernel.
+
+        Returns
+        -------
+        float
+            The peak, a fraction of the source's energy per pixel.
+        """
         if colour not in self._peaks:
             self._peaks[colour] = float(self.kernel(colour).peak)
         return self._peaks[colour]
 
     def tail_bound(self, colour: bool) -> TailBound | None:
-        """The model's tail bounds for every radius up to the kernel's half-size."""
+        """The model's tail bounds for every radius up to the kernel's half-size.
+
+        Parameters
+        ----------
+        colour
+            Whether the colour kernel (one per channel) is meant, else the luminance kernel.
+
+        Returns
+        -------
+        TailBound or None
+            Bounds for radii 0 … the larger half-size, scaled to the reference kernel where it
+            is renormalised; None when the model has none.
+        """
         if colour not in self._bounds:
             radii = np.arange(max(self.kernel_half) + 1)
             bound = self.model.tail_bound(self.pixel_deg, radii, colour=colour)
@@ -239,7 +275,20 @@ class GlareRenderer:
         return self._bounds[colour]
 
     def coarse_kernel(self, factor: int, colour: bool) -> np.ndarray:
-        """The model digitised at ``factor`` pixels, reaching past the whole kernel."""
+        """The model digitised at ``factor`` pixels, reaching past the whole kernel.
+
+        Parameters
+        ----------
+        factor
+            Pixels per coarse node ``f``.
+        colour
+            Whether the colour kernel (one per channel) is meant, else the luminance kernel.
+
+        Returns
+        -------
+        numpy.ndarray
+            The coarse kernel, odd, centred, kept for the next images.
+        """
         key = (factor, colour)
         if key not in self._coarse:
             shape = tuple(2 * (-(-h // factor) + FOOTPRINT_NODES) + 1 for h in self.kernel_half)
@@ -249,7 +298,22 @@ class GlareRenderer:
 
     def multires(self, factor: int, split_px: int, colour: bool) -> MultiresKernels:
         """Near and far kernels of one split, with the far path's error measured over the
-        whole kernel (kept for the next images)."""
+        whole kernel (kept for the next images).
+
+        Parameters
+        ----------
+        factor
+            Pixels per coarse node ``f``.
+        split_px
+            The split radius between the near and far kernels, pixels.
+        colour
+            Whether the colour kernel (one per channel) is meant, else the luminance kernel.
+
+        Returns
+        -------
+        MultiresKernels
+            The kernels and the far path's measured relative error.
+        """
         key = (factor, split_px, colour)
         if key not in self._multires:
             self.say(f"measuring the far path's error: split {split_px} px, grid 1/{factor}")
@@ -293,7 +357,19 @@ class GlareRenderer:
         return image, Scene.of(image, self.l_dmax, self.method, self.dtype)
 
     def plan(self, luminance_cd_m2: np.ndarray) -> GlarePlan:
-        """The plan for one image (what :meth:`render` will do)."""
+        """The plan for one image (what :meth:`render` will do).
+
+        Parameters
+        ----------
+        luminance_cd_m2
+            Linear luminance, cd/m², finite and >= 0, the renderer's shape, ``(H, W)`` or
+            ``(H, W, 3)``.
+
+        Returns
+        -------
+        GlarePlan
+            The kernel's reach, the paths and the error bound the render will reach.
+        """
         return make_plan(self, self._scene(luminance_cd_m2)[1])
 
     def render(self, luminance_cd_m2: np.ndarray) -> GlareResult:

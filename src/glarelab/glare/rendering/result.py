@@ -36,6 +36,10 @@ class GlareResult:
         The arguments, for logs.
     spread
         ``ΔL`` convolved with the kernel, inside the image, cd/m².
+    source
+        ``(values, box)``: ``ΔL`` within ``box = (row0, row1, col0, col1)``, ``(rows, cols,
+        C)``, cd/m², or ``(None, None)`` for an image without excess; the energy account is
+        derived from it.
 
     The energy account (``excess``, ``excess_energy``, ``energy_outside_kernel``,
     ``energy_outside_image``) is derived on access; the last two are ``None`` unless the

@@ -24,6 +24,32 @@ class Scene:
 
     ``planes`` is ``(H, W, C)``; ``excess`` is ``ΔL`` within ``source_box`` only,
     ``(rows, cols, C)``; boxes are ``(row0, row1, col0, col1)``.
+
+    Attributes
+    ----------
+    planes
+        The image, cd/m², ``(H, W, C)`` (``C = 1`` for luminance).
+    colour
+        Whether the image is RGB.
+    source_box
+        The smallest box holding every pixel above ``L_dmax``; None when none is.
+    target_box
+        The box of the pixels glare may change: below ``L_dmax`` for Yoshida's clamp, the
+        whole image for Spencer's sum; None when none is below.
+    excess
+        ``ΔL`` within ``source_box``, cd/m²; None without a source.
+    bright_pixels
+        Pixels above ``L_dmax`` in any channel.
+    target_pixels
+        Pixels glare may change.
+    max_excess
+        The largest ``ΔL``, cd/m².
+    total_excess
+        ``Σ ΔL`` of the brightest channel, cd/m² × pixels.
+    darkest
+        The smallest value of the image, cd/m².
+    achromatic
+        Whether an RGB image has R = G = B everywhere.
     """
 
     planes: np.ndarray
@@ -48,7 +74,20 @@ class Scene:
     def splat(self, factor: int, channel: int | None) -> np.ndarray:
         """The excess of one channel (``None``: the brightest channel of each pixel) splatted
         onto the coarse grid of ``factor`` (:func:`glarelab.glare.rendering.multires.splat`), made
-        once."""
+        once.
+
+        Parameters
+        ----------
+        factor
+            Pixels per coarse node ``f``.
+        channel
+            The channel's index; None: the largest excess of each pixel over the channels.
+
+        Returns
+        -------
+        numpy.ndarray
+            The excess on the coarse grid, cd/m², float64.
+        """
         if self.excess.shape[2] == 1:
             channel = 0
         key = (factor, channel)
@@ -64,6 +103,24 @@ class Scene:
 
     @classmethod
     def of(cls, image: np.ndarray, l_dmax: float, method: str, dtype) -> Scene:
+        """The scene of ``image``: its planes, its excess over ``L_dmax`` and their boxes.
+
+        Parameters
+        ----------
+        image
+            Linear luminance, cd/m², ``(H, W)`` or ``(H, W, 3)``.
+        l_dmax
+            The display's maximum ``L_dmax``, cd/m².
+        method
+            The composition, ``'Yoshida2008'`` or ``'Spencer1995'`` (which pixels are targets).
+        dtype
+            The render's dtype (float64 or float32), which ``planes`` are converted to.
+
+        Returns
+        -------
+        Scene
+            The scene.
+        """
         colour = image.ndim == 3
         planes = (image if colour else image[..., None]).astype(dtype, copy=False)
         bright = planes > l_dmax
