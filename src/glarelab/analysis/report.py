@@ -4,7 +4,8 @@ file, with its tables (CSV, Markdown) and figures (PNG) beside it.
 A paradigm's ``analyse(dataset, protocol)`` (:mod:`glarelab.analysis.paradigms`) returns a dict:
 
 ``tables``
-    name → DataFrame. Written as ``NAME.csv`` (every digit) and ``NAME.md``; shown as numbered
+    name → DataFrame. Written as ``NAME.csv`` (as R and JASP read it:
+    :mod:`glarelab.analysis.export`) and ``NAME.md``; shown as numbered
     tables with fixed decimals and p-values as APA prints them
     (:func:`glarelab.analysis.apa.format_table`).
 ``figures``
@@ -18,10 +19,16 @@ A paradigm's ``analyse(dataset, protocol)`` (:mod:`glarelab.analysis.paradigms`)
     ``results.md``. Without it the statements of ``text`` are listed.
 ``captions`` (optional)
     table name → the table's title.
+``wide`` (optional)
+    one row per participant, one column per cell of the within design (the dependent variable
+    JASP's repeated-measures ANOVA takes): written as ``participants_wide.csv``.
 ``stimuli`` (optional)
     a list of what the participants were shown: :class:`glarelab.analysis.figures.Figure`, or
     mappings with ``png`` (bytes), ``title`` and ``caption``. Shown as numbered figures in the
     Method section, before the results, and written as ``stimulus_NN.png``.
+
+Beside the tables the report writes ``trials.csv``: every trial analysed, one row each, as R
+and JASP read it (the session file's name in ``file``).
 
 Given the stimulus set's folder (``stimuli=``), the report opens it
 (:class:`glarelab.analysis.stimulus_figures.DisplayedSet`: verified, built from this protocol) and,
@@ -50,6 +57,7 @@ from PIL import Image
 
 from glarelab.analysis.apa import format_table, header
 from glarelab.analysis.dataset import DataError, Dataset
+from glarelab.analysis.export import csv_text
 from glarelab.analysis.figures import Figure, as_figure
 from glarelab.analysis.load import load_sessions
 from glarelab.analysis.methods import provenance, session_rows
@@ -59,8 +67,7 @@ from glarelab.files.folders import check_replaceable, replace_folder, staging_fo
 __all__ = ["analyse", "methods_paragraph", "write_report"]
 
 REPORT = "report.html"
-CSV_FLOAT_FORMAT = "%.17g"  # every digit: reads back as the same double, whatever numpy's
-# print options (pandas writes floats with them otherwise)
+EXPORTS = ("trials", "participants_wide")  # the CSVs written beside the tables
 COLLAPSE_ROWS = 30  # longer tables are folded (<details>), their title stays visible
 FLAGS_SHOWN = 5  # longer lists of flagged trials are folded too
 STYLE = """
@@ -323,6 +330,18 @@ def _html(
         number += 1
         parts.append(_figure_html(number, as_figure(item, name)))
     parts.append("<h2 id='tables'>Tables</h2>")
+    wide = (
+        ", <code>participants_wide.csv</code> (one row per participant, one column per cell: "
+        "the layout of a repeated-measures ANOVA in JASP)"
+        if result.get("wide") is not None
+        else ""
+    )
+    parts.append(
+        "<p class='note'>Beside each table's CSV: <code>trials.csv</code> (every trial "
+        f"analysed){wide}. Every CSV reads into R (<code>read.csv</code>) and JASP as it is: "
+        "booleans TRUE/FALSE, numbers in the fewest digits that give back the same value, "
+        "missing values empty.</p>"
+    )
     captions = result.get("captions", {})
     for index, (name, table) in enumerate(result["tables"].items(), start=1):
         title = captions.get(name, name.replace("_", " "))
@@ -360,6 +379,15 @@ def _spreadsheet_safe(table: pd.DataFrame) -> pd.DataFrame:
 
     text = table.select_dtypes(include=["object", "string"]).columns
     return table.assign(**{column: table[column].map(safe) for column in text})
+
+
+def _trials(dataset: Dataset) -> pd.DataFrame:
+    """Every trial analysed, with its session file's name (``file``) instead of the loader's
+    path and line."""
+    trials = dataset.trials.drop(columns=["_line"])
+    return trials.assign(_file=trials["_file"].map(lambda f: Path(f).name)).rename(
+        columns={"_file": "file"}
+    )
 
 
 def write_report(
@@ -402,10 +430,15 @@ def write_report(
     staging = staging_folder(out)
     try:
         for name, table in result["tables"].items():
-            _spreadsheet_safe(table).to_csv(
-                staging / f"{name}.csv", index=False, float_format=CSV_FLOAT_FORMAT
-            )
+            if name in EXPORTS:
+                raise ValueError(f"a paradigm's table may not be named {name!r} ({EXPORTS})")
+            (staging / f"{name}.csv").write_text(csv_text(_spreadsheet_safe(table)))
             (staging / f"{name}.md").write_text(_markdown(table))
+        (staging / "trials.csv").write_text(csv_text(_spreadsheet_safe(_trials(dataset))))
+        if result.get("wide") is not None:
+            (staging / "participants_wide.csv").write_text(
+                csv_text(_spreadsheet_safe(result["wide"]))
+            )
         for name, item in result["figures"].items():
             (staging / name).write_bytes(as_figure(item, name).png)
         for index, figure in enumerate(shown, start=1):
