@@ -19,8 +19,6 @@ from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
 from glarelab.analysis.export import csv_text, participants_wide, r_cell
-from glarelab.analysis.report import write_report
-from glarelab.protocols import load_protocol
 
 R_SCRIPT = Path(__file__).parent / "R" / "exports.R"
 RSCRIPT = shutil.which("Rscript")
@@ -68,16 +66,6 @@ def test_the_wide_table_has_a_row_per_participant_and_a_column_per_cell():
     assert_allclose(wide.iloc[:, 1:].to_numpy(float), [[3, 4, 5], [1, 2, 6]], rtol=0)
     with pytest.raises(ValueError, match="no column rating"):
         participants_wide(long, "rating", ["method"])
-
-
-@pytest.fixture(scope="module")
-def reports(simulated, tmp_path_factory):
-    folder = tmp_path_factory.mktemp("exports")
-    written = {}
-    for study in ("yoshida2008", "spencer1995", "luidolt2020"):
-        files = sorted(simulated.glob(f"*_{study}_s1_*.csv"))
-        written[study] = write_report(load_protocol(study), files, folder / study).parent
-    return written
 
 
 def test_the_report_writes_trials_and_the_wide_table_r_reads(reports):
