@@ -43,6 +43,7 @@ COMMANDS = {  # command → (its module, its help), in the order of ``glarelab -
     ),
     "bench": ("tools", "time each speed knob against its error in display codes"),
     "docs": ("tools", "regenerate docs/protocols.md and docs/data.md"),
+    "examples": ("tools", "write out the example scenes and display readings glarelab ships"),
     "demo": (
         "tools",
         "the whole study on simulated observers: stimuli, sessions, analysis, report",
