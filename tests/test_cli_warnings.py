@@ -11,7 +11,7 @@ from glarelab.commands import tools
 
 def test_a_commands_warning_is_one_line(monkeypatch, capsys, tmp_path):
     def warns(args):
-        warnings.warn("the simulated observers extrapolate:\n  glare: mesopic", UserWarning)
+        warnings.warn("the simulated observers extrapolate:\n  glare: mesopic", stacklevel=2)
         return 0
 
     monkeypatch.setattr(tools, "_docs", warns)
