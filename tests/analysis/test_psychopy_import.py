@@ -15,6 +15,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pandas as pd
 import pytest
 
 from glarelab.analysis.dataset import DataError
@@ -118,12 +119,18 @@ def test_psychopy_csvs_analyse_to_the_same_numbers(study, simulated, tmp_path):
         ("psychopy", [session.csv for session in imported]),
     ):
         reports[name] = write_report(protocol, files, tmp_path / f"report_{name}").parent
-    tables = sorted(p.name for p in reports["own"].glob("*.csv"))
+    tables = sorted(p.name for p in reports["own"].glob("*.csv") if p.name != "trials.csv")
     assert tables
     for table in tables:
         assert (reports["psychopy"] / table).read_bytes() == (
             reports["own"] / table
         ).read_bytes(), table
+    # every trial the same, but for the name of the file it came from
+    trials = {
+        name: pd.read_csv(reports[name] / "trials.csv", keep_default_na=False).drop(columns="file")
+        for name in reports
+    }
+    pd.testing.assert_frame_equal(trials["psychopy"], trials["own"], check_exact=True)
     results = "results.md"
     if (reports["own"] / results).exists():
         assert (reports["psychopy"] / results).read_text() == (

@@ -94,3 +94,24 @@ def test_no_text_prints_below_8_pt_at_a_pages_width():
     rendered = png(figure)
     assert rendered.pdf.startswith(b"%PDF") and b"<svg" in rendered.svg[:2000]
     assert bytes(rendered).startswith(b"\x89PNG")
+
+
+@pytest.mark.parametrize("study", ["yoshida2008", "spencer1995", "luidolt2020"])
+def test_an_interval_is_headed_with_its_own_confidence(reports, study):
+    # Yoshida's effect sizes: η²p intervals are 90 %, never headed 95 %
+    from glarelab.analysis.apa import header
+
+    for path in reports[study].glob("*.csv"):
+        table = pd.read_csv(path)
+        heads = [header(str(c)) for c in table.columns]
+        # the intervals at the row's confidence (r_rb's is 95 % always, and headed so)
+        at_row = {"ci_low", "ci_high", "md_ci_low", "md_ci_high", "dz_ci_low", "dz_ci_high"}
+        if "confidence" in table.columns and (table["confidence"].dropna() != 0.95).any():
+            governed = [h for c, h in zip(table.columns, heads, strict=True) if c in at_row]
+            assert not any("95 %" in h for h in governed), (path.name, governed)
+        for column, head in zip(table.columns, heads, strict=True):
+            if str(column).startswith("eta2p_ci"):
+                assert "90 % CI" in head, (path.name, column, head)
+        if "effect_size" in table.columns:
+            eta = table[table["effect_size"] == "η²p"]
+            assert (eta["confidence"] == 0.90).all(), path.name
