@@ -17,6 +17,7 @@ import os
 import signal
 import sys
 import traceback
+import warnings
 from collections.abc import Sequence
 from importlib import metadata
 
@@ -105,6 +106,20 @@ def _refusal(error: BaseException) -> str | None:
     return None
 
 
+def _one_line_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """A warning as one line on stderr, as the commands' other messages: what it says and
+    its kind, without Python's source line (``warnings.showwarning``'s signature).
+
+    >>> import io, contextlib
+    >>> with contextlib.redirect_stderr(io.StringIO()) as err:
+    ...     _one_line_warning(UserWarning("two\\nlines"), UserWarning, "x.py", 3)
+    >>> err.getvalue()
+    '[glarelab] warning (UserWarning): two lines\\n'
+    """
+    text = " ".join(str(message).split())
+    print(f"[glarelab] warning ({category.__name__}): {text}", file=file or sys.stderr, flush=True)
+
+
 def _quiet_stdout() -> None:
     """The reader of stdout went away (``glarelab … | head``): send the rest nowhere, so
     that Python's own flush at exit does not fail again."""
@@ -144,7 +159,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.no_cache:  # for this command and the processes it starts (Dask workers)
             os.environ[NO_CACHE_ENV] = "1"
         try:
-            return args.run(args)
+            with warnings.catch_warnings():  # restores Python's own printing afterwards
+                warnings.showwarning = _one_line_warning
+                return args.run(args)
         except SessionAborted as stop:
             why = stop.args[0] if stop.args else "SIGINT"
             _log(f"{args.command}: stopped by {why}; nothing more was written")

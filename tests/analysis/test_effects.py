@@ -211,13 +211,13 @@ def test_importing_the_analysis_leaves_numpys_print_options_as_they_were():
 
 
 def test_report_csvs_hold_every_digit_whatever_numpys_print_options(tmp_path):
-    from glarelab.analysis.report import CSV_FLOAT_FORMAT
+    from glarelab.analysis.export import csv_text
 
     table = pd.DataFrame({"F": [20.077025396150553, 1 / 3, 1e-300, 12345678.901234567]})
     before = np.get_printoptions()
     np.set_printoptions(legacy="1.13")  # what colour-science sets
     try:
-        table.to_csv(tmp_path / "t.csv", index=False, float_format=CSV_FLOAT_FORMAT)
+        (tmp_path / "t.csv").write_text(csv_text(table))
     finally:
         np.set_printoptions(**before)
     lines = (tmp_path / "t.csv").read_text().split()[1:]

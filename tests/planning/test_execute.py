@@ -55,13 +55,41 @@ def test_tasks_in_the_log_are_not_run_again(tmp_path):
     assert job.calls == [0, 1, 2, 3, 4]
 
 
-def test_progress_shows_tasks_done_rate_and_time_left():
+def test_progress_shows_tasks_done_rate_and_time_left(monkeypatch):
+    import glarelab.planning.execute as execute
+
+    now = [0.0]
+    clock = type("Clock", (), {"perf_counter": staticmethod(lambda: now[0])})
+    monkeypatch.setattr(execute, "time", clock)  # this module's clock only
     stream = io.StringIO()
     bar = Progress(10, done=4, what="replications", stream=stream)
     assert bar.line().endswith("4/10 replications")
-    bar.update()
+    for t in (5.0, 7.0, 9.0):
+        now[0] = t
+        bar.update()
     line = bar.line()
-    assert "5/10 replications, " in line and "/s, " in line and line.endswith(" left")
+    assert "7/10 replications, " in line and line.endswith("0.5/s, 6s left"), line
+
+
+def test_the_first_time_left_waits_for_a_rate_without_the_start_up(monkeypatch):
+    """The issue's "24h42m left": 1 of 3,000 tasks done after 30 s of workers starting up."""
+    import glarelab.planning.execute as execute
+
+    now = [0.0]
+    clock = type("Clock", (), {"perf_counter": staticmethod(lambda: now[0])})
+    monkeypatch.setattr(execute, "time", clock)
+    bar = Progress(3000, what="replications", stream=io.StringIO())
+    now[0] = 30.0
+    bar.update()
+    assert bar.line().endswith("time left: estimating"), bar.line()
+    now[0] = 30.01  # a second worker's first task, at once: no rate yet either
+    bar.update()
+    assert bar.line().endswith("time left: estimating"), bar.line()
+    for t in (31.0, 32.0, 33.0):
+        now[0] = t
+        bar.update(4)
+    # 12 + 1 tasks in 3 s after the first: 4.33/s, 2,986 left
+    assert bar.line().endswith("4.33/s, 11m29s left"), bar.line()
 
 
 def test_the_same_results_on_dask_as_here(tmp_path):

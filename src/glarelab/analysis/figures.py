@@ -1,5 +1,9 @@
 """Figures of the analyses: PNG bytes (matplotlib, Agg) with the title and caption a report
-prints under them."""
+prints under them, and the same figure as PDF and SVG for print.
+
+Every text of a figure is at least :data:`MIN_PRINTED_PT` points when the figure is printed
+:data:`PRINT_WIDTH_IN` wide (a page's text width): a figure drawn wider is printed smaller, so
+its fonts are enlarged by the ratio before it is saved."""
 
 from __future__ import annotations
 
@@ -13,7 +17,56 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
-__all__ = ["Figure", "as_figure", "plt", "png", "small_multiples"]
+__all__ = [
+    "MIN_PRINTED_PT",
+    "PRINT_WIDTH_IN",
+    "Figure",
+    "Rendered",
+    "as_figure",
+    "plt",
+    "png",
+    "small_multiples",
+]
+
+PRINT_WIDTH_IN = 6.5  # a page's text width (US Letter and A4 with 1-inch margins)
+MIN_PRINTED_PT = 8.0  # the smallest text a journal accepts in a printed figure (APA 7: 8-14 pt)
+
+
+class Rendered(bytes):
+    """A figure's PNG bytes, with the same figure as ``pdf`` and ``svg`` bytes (vector, for
+    print)."""
+
+    pdf: bytes
+    svg: bytes
+
+
+def printed_scale(figure) -> float:
+    """How much smaller the figure is printed than drawn: 1 up to :data:`PRINT_WIDTH_IN`."""
+    return min(1.0, PRINT_WIDTH_IN / figure.get_figwidth())
+
+
+def legible(figure) -> None:
+    """Enlarge every text of ``figure`` that would print below :data:`MIN_PRINTED_PT` at
+    :data:`PRINT_WIDTH_IN` wide (tick labels, legends, annotations, titles).
+
+    >>> figure, axis = plt.subplots(figsize=(13, 3))
+    >>> _ = axis.set_xlabel("level", fontsize=6)
+    >>> legible(figure)
+    >>> float(axis.xaxis.label.get_fontsize() * printed_scale(figure))
+    8.0
+    >>> plt.close(figure)
+    """
+    from matplotlib.text import Text
+
+    smallest = MIN_PRINTED_PT / printed_scale(figure)
+    for text in figure.findobj(Text):
+        if text.get_text() and text.get_fontsize() < smallest:
+            text.set_fontsize(smallest)
+    for axis in figure.axes:  # tick labels get their text on drawing: size them by the axis
+        for which in (axis.xaxis, axis.yaxis):
+            ticks = which.get_major_ticks() + which.get_minor_ticks()
+            if any(tick.label1.get_fontsize() < smallest for tick in ticks):
+                which.set_tick_params(which="both", labelsize=smallest)
 
 
 @dataclass(frozen=True)
@@ -62,6 +115,8 @@ def as_figure(item, name: str = "") -> Figure:
     """
     if isinstance(item, Figure):
         return item
+    if isinstance(item, Rendered):
+        return Figure(item, name)
     if isinstance(item, bytes | bytearray):
         return Figure(bytes(item), name)
     if isinstance(item, Mapping) and isinstance(item.get("png"), bytes | bytearray):
@@ -72,8 +127,9 @@ def as_figure(item, name: str = "") -> Figure:
     )
 
 
-def png(figure) -> bytes:
-    """The figure as PNG bytes (no timestamps), closed afterwards.
+def png(figure) -> Rendered:
+    """The figure as PNG bytes (no timestamps) with its PDF and SVG, legible in print
+    (:func:`legible`), closed afterwards.
 
     Parameters
     ----------
@@ -82,15 +138,26 @@ def png(figure) -> bytes:
 
     Returns
     -------
-    bytes
-        The PNG file's content, at 110 dpi.
+    Rendered
+        The PNG file's content (at 110 dpi), with the same figure as PDF and SVG in its
+        ``pdf`` and ``svg`` attributes.
     """
-    buffer = io.BytesIO()
+    legible(figure)
     figure.tight_layout()
+    saved = {}
     # bbox "tight": a legend placed below the axes is kept whole
-    figure.savefig(buffer, format="png", dpi=110, metadata={"Software": None}, bbox_inches="tight")
+    for kind, metadata in (
+        ("png", {"Software": None}),
+        ("pdf", {"Creator": None, "Producer": None, "CreationDate": None}),
+        ("svg", {"Creator": None, "Date": None}),
+    ):
+        buffer = io.BytesIO()
+        figure.savefig(buffer, format=kind, dpi=110, metadata=metadata, bbox_inches="tight")
+        saved[kind] = buffer.getvalue()
     plt.close(figure)
-    return buffer.getvalue()
+    rendered = Rendered(saved["png"])
+    rendered.pdf, rendered.svg = saved["pdf"], saved["svg"]
+    return rendered
 
 
 def small_multiples(panels: int, *, width_in: float = 2.3, height_in: float = 2.0, columns=5):

@@ -53,6 +53,7 @@ from glarelab.analysis.effects import (
     with_eta2_ci,
     within_subject_ci,
 )
+from glarelab.analysis.export import participants_wide
 from glarelab.analysis.figures import Figure, plt, png, small_multiples
 from glarelab.analysis.methods import display_text
 from glarelab.analysis.stats import (
@@ -577,6 +578,9 @@ def analyse(dataset: Dataset, protocol) -> dict:
         "text": text,
         "results": results,
         "captions": {k: v for k, v in CAPTIONS.items() if k in tables},
+        # for JASP's repeated-measures ANOVA: a participant's match in each method × level
+        # (the level's position, as the ANOVA's L_disk)
+        "wide": participants_wide(study.trials, "match_cd_m2", ["method", "L_disk"]),
     }
 
 

@@ -34,6 +34,7 @@ from glarelab.analysis.apa import (
 )
 from glarelab.analysis.dataset import Dataset, Design
 from glarelab.analysis.effects import hodges_lehmann, rank_biserial
+from glarelab.analysis.export import participants_wide
 from glarelab.analysis.figures import Figure, plt, png
 from glarelab.analysis.methods import display_text
 from glarelab.analysis.stats import holm, holm_confidence, wilcoxon_signed_rank
@@ -300,6 +301,7 @@ def analyse(dataset: Dataset, protocol) -> dict:
     n = trials["participant"].nunique()
     neutral = f" (grey: the neutral {scale[len(scale) // 2]})" if len(scale) % 2 else ""
     return {
+        "wide": participants_wide(trials, "rating", ["category"]),
         "tables": {"summary": summary, "comments": comments},
         "figures": {
             "ratings.png": Figure(
@@ -533,6 +535,7 @@ def _analyse_conditions(dataset: Dataset, protocol) -> dict:
     )
     results = [_compared_text(compared, reference)]
     return {
+        "wide": participants_wide(trials, "rating", ["condition", "category"]),
         "tables": {"summary": summary, "comparisons": compared, "comments": comments},
         "figures": {"ratings_by_condition.png": figure},
         "text": text,

@@ -4,7 +4,8 @@ file, with its tables (CSV, Markdown) and figures (PNG) beside it.
 A paradigm's ``analyse(dataset, protocol)`` (:mod:`glarelab.analysis.paradigms`) returns a dict:
 
 ``tables``
-    name → DataFrame. Written as ``NAME.csv`` (every digit) and ``NAME.md``; shown as numbered
+    name → DataFrame. Written as ``NAME.csv`` (as R and JASP read it:
+    :mod:`glarelab.analysis.export`) and ``NAME.md``; shown as numbered
     tables with fixed decimals and p-values as APA prints them
     (:func:`glarelab.analysis.apa.format_table`).
 ``figures``
@@ -18,10 +19,16 @@ A paradigm's ``analyse(dataset, protocol)`` (:mod:`glarelab.analysis.paradigms`)
     ``results.md``. Without it the statements of ``text`` are listed.
 ``captions`` (optional)
     table name → the table's title.
+``wide`` (optional)
+    one row per participant, one column per cell of the within design (the dependent variable
+    JASP's repeated-measures ANOVA takes): written as ``participants_wide.csv``.
 ``stimuli`` (optional)
     a list of what the participants were shown: :class:`glarelab.analysis.figures.Figure`, or
     mappings with ``png`` (bytes), ``title`` and ``caption``. Shown as numbered figures in the
     Method section, before the results, and written as ``stimulus_NN.png``.
+
+Beside the tables the report writes ``trials.csv``: every trial analysed, one row each, as R
+and JASP read it (the session file's name in ``file``).
 
 Given the stimulus set's folder (``stimuli=``), the report opens it
 (:class:`glarelab.analysis.stimulus_figures.DisplayedSet`: verified, built from this protocol) and,
@@ -50,6 +57,7 @@ from PIL import Image
 
 from glarelab.analysis.apa import format_table, header
 from glarelab.analysis.dataset import DataError, Dataset
+from glarelab.analysis.export import csv_text
 from glarelab.analysis.figures import Figure, as_figure
 from glarelab.analysis.load import load_sessions
 from glarelab.analysis.methods import provenance, session_rows
@@ -59,9 +67,14 @@ from glarelab.files.folders import check_replaceable, replace_folder, staging_fo
 __all__ = ["analyse", "methods_paragraph", "write_report"]
 
 REPORT = "report.html"
-CSV_FLOAT_FORMAT = "%.17g"  # every digit: reads back as the same double, whatever numpy's
-# print options (pandas writes floats with them otherwise)
+EXPORTS = ("trials", "participants_wide")  # the CSVs written beside the tables
 COLLAPSE_ROWS = 30  # longer tables are folded (<details>), their title stays visible
+# a table with more columns is shown in parts, each repeating the columns that name its rows,
+# so that none is scrolled out of a page's width (about 1,100 px of text at 0.85 em)
+SPLIT_COLUMNS = 11
+KEY_COLUMNS = 3  # at most this many leading text columns name a row
+# a corrected p and the p it corrects: shown side by side, whatever order the analysis built
+CORRECTED = {"p_holm": ("p", "p_two_sided")}
 FLAGS_SHOWN = 5  # longer lists of flagged trials are folded too
 STYLE = """
 body{font-family:system-ui,-apple-system,"Segoe UI",Roboto,sans-serif;max-width:1100px;
@@ -212,6 +225,43 @@ def _grid(head: str, body: str) -> str:
     )
 
 
+def corrected_beside(table: pd.DataFrame) -> pd.DataFrame:
+    """The table with each corrected p (``p_holm``) right after the p it corrects.
+
+    >>> corrected_beside(pd.DataFrame(columns=["t", "p", "d", "p_holm"])).columns.tolist()
+    ['t', 'p', 'p_holm', 'd']
+    """
+    order = list(table.columns)
+    for corrected, bases in CORRECTED.items():
+        base = next((b for b in bases if b in order), None)
+        if corrected in order and base is not None:
+            order.remove(corrected)
+            order.insert(order.index(base) + 1, corrected)
+    return table[order]
+
+
+def column_parts(table: pd.DataFrame, *, width: int = SPLIT_COLUMNS) -> list[list]:
+    """The columns of each part a wide table is shown in: the leading text columns that name a
+    row (at most :data:`KEY_COLUMNS`) in every part, the others ``width`` minus those a part.
+
+    >>> columns = ["method", "level"] + [f"x{i}" for i in range(12)]
+    >>> table = pd.DataFrame([["a", "b"] + [1.0] * 12], columns=columns)
+    >>> [len(part) for part in column_parts(table, width=8)]
+    [8, 8]
+    """
+    columns = list(table.columns)
+    if len(columns) <= width:
+        return [columns]
+    keys = []
+    for column in columns[:KEY_COLUMNS]:
+        if pd.api.types.is_numeric_dtype(table[column]):
+            break
+        keys.append(column)
+    rest = [c for c in columns if c not in keys]
+    step = max(1, width - len(keys))
+    return [keys + rest[i : i + step] for i in range(0, len(rest), step)]
+
+
 def _figure_html(number: int, figure: Figure) -> str:
     width, height = Image.open(io.BytesIO(figure.png)).size
     encoded = base64.b64encode(figure.png).decode()
@@ -235,20 +285,23 @@ def _table_html(number: int, name: str, table: pd.DataFrame, title: str) -> str:
     def cls(column) -> str:
         return " class='num'" if column in numeric else ""
 
-    head = "".join(
-        f"<th{cls(c)} title='{html.escape(str(c))}'>{html.escape(header(str(c)))}</th>"
-        for c in formatted.columns
-    )
-    body = "".join(
-        "<tr>"
-        + "".join(
-            f"<td{cls(c)}>{html.escape(str(v))}</td>"
-            for c, v in zip(formatted.columns, row, strict=True)
+    grids = []
+    parts = column_parts(formatted)
+    for number_, part in enumerate(parts, start=1):
+        head = "".join(
+            f"<th{cls(c)} title='{html.escape(str(c))}'>{html.escape(header(str(c)))}</th>"
+            for c in part
         )
-        + "</tr>"
-        for row in formatted.itertuples(index=False)
-    )
-    grid = _grid(head, body) if len(formatted) else "<p class='note'>(none)</p>"
+        body = "".join(
+            "<tr>" + "".join(f"<td{cls(c)}>{html.escape(str(v))}</td>" for c, v in row.items())
+            + "</tr>"
+            for _, row in formatted[part].iterrows()
+        )  # fmt: skip
+        label = (
+            f"<p class='note part'>Part {number_} of {len(parts)}</p>" if len(parts) > 1 else ""
+        )
+        grids.append(label + _grid(head, body))
+    grid = "".join(grids) if len(formatted) else "<p class='note'>(none)</p>"
     if len(formatted) > COLLAPSE_ROWS:
         grid = f"<details><summary>show all {len(formatted)} rows</summary>{grid}</details>"
     files = f"<code>{html.escape(name)}.csv</code>"
@@ -262,13 +315,18 @@ def _table_html(number: int, name: str, table: pd.DataFrame, title: str) -> str:
 def _sessions_html(rows: list[dict]) -> str:
     if not rows:
         return "<p>No session sidecars (.json) were found next to the CSV files.</p>"
-    table = pd.DataFrame(rows)
-    head = "".join(f"<th>{html.escape(str(c))}</th>" for c in table.columns)
-    body = "".join(
-        "<tr>" + "".join(f"<td>{html.escape(str(v))}</td>" for v in row) + "</tr>"
-        for row in table.itertuples(index=False)
-    )
-    grid = _grid(head, body)
+    table = pd.DataFrame(rows).astype(str)
+    parts = column_parts(table, width=7)
+    grids = []
+    for number, part in enumerate(parts, start=1):
+        head = "".join(f"<th>{html.escape(str(c))}</th>" for c in part)
+        body = "".join(
+            "<tr>" + "".join(f"<td>{html.escape(str(v))}</td>" for v in row) + "</tr>"
+            for row in table[part].itertuples(index=False)
+        )
+        label = f"<p class='note part'>Part {number} of {len(parts)}</p>" if len(parts) > 1 else ""
+        grids.append(label + _grid(head, body))
+    grid = "".join(grids)
     if len(table) > COLLAPSE_ROWS:
         grid = f"<details><summary>show all {len(table)} sessions</summary>{grid}</details>"
     return grid
@@ -364,6 +422,18 @@ def _html(
         number += 1
         parts.append(_figure_html(number, as_figure(item, name)))
     parts.append("<h2 id='tables'>Tables</h2>")
+    wide = (
+        ", <code>participants_wide.csv</code> (one row per participant, one column per cell: "
+        "the layout of a repeated-measures ANOVA in JASP)"
+        if result.get("wide") is not None
+        else ""
+    )
+    parts.append(
+        "<p class='note'>Beside each table's CSV: <code>trials.csv</code> (every trial "
+        f"analysed){wide}. Every CSV reads into R (<code>read.csv</code>) and JASP as it is: "
+        "booleans TRUE/FALSE, numbers in the fewest digits that give back the same value, "
+        "missing values empty.</p>"
+    )
     captions = result.get("captions", {})
     for index, (name, table) in enumerate(result["tables"].items(), start=1):
         title = captions.get(name, name.replace("_", " "))
@@ -401,6 +471,24 @@ def _spreadsheet_safe(table: pd.DataFrame) -> pd.DataFrame:
 
     text = table.select_dtypes(include=["object", "string"]).columns
     return table.assign(**{column: table[column].map(safe) for column in text})
+
+
+def _write_figure(path: Path, figure: Figure) -> None:
+    """The figure's PNG, and its PDF and SVG beside it where it was drawn with them."""
+    path.write_bytes(figure.png)
+    for kind in ("pdf", "svg"):
+        vector = getattr(figure.png, kind, None)
+        if vector is not None:
+            path.with_suffix(f".{kind}").write_bytes(vector)
+
+
+def _trials(dataset: Dataset) -> pd.DataFrame:
+    """Every trial analysed, with its session file's name (``file``) instead of the loader's
+    path and line."""
+    trials = dataset.trials.drop(columns=["_line"])
+    return trials.assign(_file=trials["_file"].map(lambda f: Path(f).name)).rename(
+        columns={"_file": "file"}
+    )
 
 
 def write_report(
@@ -458,18 +546,24 @@ def write_report(
         include_pilots=include_pilots,
         stimuli=stimuli,
     )
+    result = result | {"tables": {k: corrected_beside(t) for k, t in result["tables"].items()}}
     shown = _stimuli(protocol, result, displayed)
     staging = staging_folder(out)
     try:
         for name, table in result["tables"].items():
-            _spreadsheet_safe(table).to_csv(
-                staging / f"{name}.csv", index=False, float_format=CSV_FLOAT_FORMAT
-            )
+            if name in EXPORTS:
+                raise ValueError(f"a paradigm's table may not be named {name!r} ({EXPORTS})")
+            (staging / f"{name}.csv").write_text(csv_text(_spreadsheet_safe(table)))
             (staging / f"{name}.md").write_text(_markdown(table))
+        (staging / "trials.csv").write_text(csv_text(_spreadsheet_safe(_trials(dataset))))
+        if result.get("wide") is not None:
+            (staging / "participants_wide.csv").write_text(
+                csv_text(_spreadsheet_safe(result["wide"]))
+            )
         for name, item in result["figures"].items():
-            (staging / name).write_bytes(as_figure(item, name).png)
+            _write_figure(staging / name, as_figure(item, name))
         for index, figure in enumerate(shown, start=1):
-            (staging / f"stimulus_{index:02d}.png").write_bytes(figure.png)
+            _write_figure(staging / f"stimulus_{index:02d}.png", figure)
         flags = dataset.trials.groupby("participant")["_file"].first()
         simulated_ids = sum(
             bool(dataset.sidecars.get(file, {}).get("simulated")) for file in flags

@@ -37,6 +37,7 @@ from glarelab.analysis.effects import (
     with_eta2_ci,
     within_subject_ci,
 )
+from glarelab.analysis.export import participants_wide
 from glarelab.analysis.figures import Figure, plt, png, small_multiples
 from glarelab.analysis.methods import display_text
 from glarelab.analysis.stats import (
@@ -648,6 +649,8 @@ def analyse(dataset: Dataset, protocol) -> dict:
     peak = protocol["glare"]["peak_fraction"]
     return {
         "tables": tables,
+        # for JASP's repeated-measures ANOVA: a participant's reversal match in each cell
+        "wide": participants_wide(matches, "match_reversals", ["context", "glare_level"]),
         "figures": {
             "matches_by_glare_level.png": Figure(
                 _figure13(summary, contexts, peak),

@@ -32,6 +32,10 @@ COMMANDS = {  # command → (its module, its help), in the order of ``glarelab -
         "every image of a stimulus set back from the screen",
     ),
     "analyse": ("analyse", "analyse session CSVs: tables, figures, report"),
+    "import-psychopy": (
+        "analyse",
+        "make session files of data a PsychoPy experiment collected (ExperimentHandler CSVs)",
+    ),
     "power": ("power", "power and sample size of a study's effects from simulated studies (Dask)"),
     "sweep": (
         "power",
@@ -39,6 +43,7 @@ COMMANDS = {  # command → (its module, its help), in the order of ``glarelab -
     ),
     "bench": ("tools", "time each speed knob against its error in display codes"),
     "docs": ("tools", "regenerate docs/protocols.md and docs/data.md"),
+    "examples": ("tools", "write out the example scenes and display readings glarelab ships"),
     "demo": (
         "tools",
         "the whole study on simulated observers: stimuli, sessions, analysis, report",

@@ -1,4 +1,4 @@
-"""The ``glarelab`` commands of analysis: analyse."""
+"""The ``glarelab`` commands of analysis: analyse, import-psychopy."""
 
 from __future__ import annotations
 
@@ -40,6 +40,41 @@ def _analyse(args: argparse.Namespace) -> int:
     )
     _log(f"wrote {report} with its tables and figures")
     print(report.resolve())
+    return 0
+
+
+def _pairs(option: str, items: list[str]) -> dict[str, str]:
+    """``["A=B", …]`` as ``{"A": "B"}``; one-line error naming the option otherwise."""
+    pairs = {}
+    for item in items:
+        name, equals, value = item.partition("=")
+        if not equals or not name:
+            raise ValueError(f"{option} {item!r}: give NAME=VALUE")
+        if name in pairs:
+            raise ValueError(f"{option} {name}: given twice")
+        pairs[name] = value
+    return pairs
+
+
+def _import_psychopy(args: argparse.Namespace) -> int:
+    from glarelab.analysis.psychopy_import import import_psychopy
+
+    protocol = load_protocol(args.protocol or args.study)
+    for csv in args.csv:
+        if Path(csv).suffix.lower() != ".csv":
+            raise ValueError(f"{csv}: PsychoPy's data are the CSV its ExperimentHandler wrote")
+    imported = import_psychopy(
+        protocol,
+        args.csv,
+        args.out,
+        mapping=_pairs("--column", args.column),
+        values=_pairs("--set", args.set),
+    )
+    for session in imported:
+        _log(session.summary())
+        print(session.csv.resolve())
+    if not imported:
+        _log("no trial rows in the files given: nothing written")
     return 0
 
 
@@ -88,3 +123,36 @@ def add(commands) -> None:
         "leaving them out (either way the report lists them)",
     )
     analyse.set_defaults(run=_analyse)
+    imports = commands.add_parser(
+        "import-psychopy",
+        help="make session files of data a PsychoPy experiment collected (ExperimentHandler CSVs)",
+        description="Map a PsychoPy ExperimentHandler CSV (Builder or Coder) to the study's "
+        "session format and write it as a session (CSV and sidecar) for glarelab analyse; "
+        "prints the columns and rows it dropped and the columns it filled.",
+    )
+    imports.add_argument("study", help=f"the protocol: {PROTOCOL_HELP}")
+    imports.add_argument("csv", nargs="+", type=Path, help="PsychoPy data CSVs")
+    imports.add_argument(
+        "--out", type=Path, required=True, help="folder for the session files (existing files "
+        "are never replaced)"
+    )  # fmt: skip
+    imports.add_argument(
+        "--protocol", type=Path, default=None, help="a protocol TOML file (instead of STUDY)"
+    )
+    imports.add_argument(
+        "--column",
+        action="append",
+        default=[],
+        metavar="PSYCHOPY=GLARELAB",
+        help="a PsychoPy column that holds a study column under another name "
+        "(e.g. key_resp.rt=time_s); repeatable",
+    )
+    imports.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="COLUMN=VALUE",
+        help="one value for every trial of a required column the experiment did not record "
+        "(e.g. dropped_frames=0); recorded in the sidecar; repeatable",
+    )
+    imports.set_defaults(run=_import_psychopy)

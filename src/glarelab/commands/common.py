@@ -402,14 +402,15 @@ def claim_output(path: Path, kind: str) -> Path:
 
 
 def available_memory() -> int | None:
-    """Bytes the system can still give (Linux's MemAvailable); None where unknown."""
+    """Bytes the system can still give without swapping (psutil's ``available``: Linux's
+    MemAvailable, and its counterpart on macOS and Windows, where there is no /proc/meminfo);
+    None where unknown."""
+    import psutil
+
     try:
-        for line in Path("/proc/meminfo").read_text().splitlines():
-            if line.startswith("MemAvailable:"):
-                return int(line.split()[1]) * 1024
-    except OSError:
+        return int(psutil.virtual_memory().available)
+    except (OSError, RuntimeError, NotImplementedError):
         return None
-    return None
 
 
 def check_memory(needed: float, what: str) -> None:

@@ -51,6 +51,61 @@ def _scheduler(text: str) -> str:
     return text
 
 
+HANDSHAKE_WAIT_S = 3.0  # a Dask scheduler sends its handshake as soon as a client connects
+
+
+def scheduler_problem(address: str, *, wait_s: float = HANDSHAKE_WAIT_S) -> str | None:
+    """What answers at a ``tcp://`` scheduler address, if it is not a Dask scheduler: nothing,
+    or a web server (Dask's dashboard, by default on port 8787, is one). None when the
+    address sends first, as a Dask scheduler does (its comm handshake; distributed's
+    ``comm.core.connect``), and for other protocols (TLS, UCX), which are not probed.
+
+    A web server waits for a request, so only an address that has sent nothing within
+    ``wait_s`` is asked one (``HEAD /``): a Dask scheduler is never sent bytes it cannot read.
+
+    >>> scheduler_problem("tcp://127.0.0.1:1")[:30]
+    'nothing answers at 127.0.0.1:1'
+    """
+    import socket
+
+    from distributed.comm.addressing import parse_address, parse_host_port
+
+    protocol, location = parse_address(address)
+    if protocol != "tcp":
+        return None
+    host, port = parse_host_port(location)
+    try:
+        connection = socket.create_connection((host, int(port)), timeout=wait_s)
+    except OSError as error:
+        return f"nothing answers at {host}:{port} ({error.strerror or error})"
+    with connection:
+        connection.settimeout(wait_s)
+        try:
+            if connection.recv(1):
+                return None  # it spoke first: a Dask scheduler's handshake
+            return f"{host}:{port} closed the connection without a word"
+        except TimeoutError:
+            pass
+        except OSError as error:
+            return f"{host}:{port} dropped the connection ({error.strerror or error})"
+        try:
+            connection.sendall(f"HEAD / HTTP/1.0\r\nHost: {host}\r\n\r\n".encode())
+            reply = connection.recv(64)
+        except OSError:
+            reply = b""
+    if reply.startswith(b"HTTP/"):
+        status = reply.split(b"\r\n", 1)[0].decode("latin-1")
+        return (
+            f"{host}:{port} is a web server ({status}), not a Dask scheduler: Dask's dashboard "
+            "answers HTTP (by default on port 8787); give the scheduler's own port (by "
+            "default 8786), as `dask scheduler` prints it"
+        )
+    return (
+        f"{host}:{port} answers, but not as a Dask scheduler (it sent nothing within "
+        f"{wait_s:g} s of connecting)"
+    )
+
+
 def _folder(text: str) -> Path:
     """An existing folder this process may write into."""
     path = Path(text)
@@ -104,6 +159,9 @@ def _cluster(stack: contextlib.ExitStack, args: argparse.Namespace):
         return None
     if args.scheduler:
         _log(f"connecting to the Dask scheduler at {args.scheduler}")
+        problem = scheduler_problem(args.scheduler)
+        if problem is not None:
+            raise ValueError(f"--scheduler {args.scheduler}: {problem}")
         try:
             client = stack.enter_context(dask_client(scheduler=args.scheduler))
         except OSError as error:

@@ -1,8 +1,9 @@
-"""The ``glarelab`` commands of protocols: protocol check, protocol keys."""
+"""The ``glarelab`` commands of protocols: protocol check, protocol keys, protocol copy."""
 
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 from glarelab.protocols import PARADIGMS, describe_schema, load_protocol
 
@@ -36,6 +37,29 @@ def _protocol_check(args: argparse.Namespace) -> int:
     return 0 if exact else 1
 
 
+def _protocol_copy(args: argparse.Namespace) -> int:
+    from glarelab.files.atomic import write_bytes
+    from glarelab.protocols.core import SHIPPED, shipped_protocols
+
+    if args.name not in shipped_protocols():
+        raise ValueError(
+            f"copy {args.name!r}: not a shipped protocol ({', '.join(shipped_protocols())})"
+        )
+    source = SHIPPED / f"{args.name}.toml"
+    destination = Path(args.destination)
+    if destination.is_dir():
+        destination = destination / source.name
+    if destination.suffix != ".toml":
+        raise ValueError(f"copy to {destination}: must end in .toml (or be a folder)")
+    if destination.exists():
+        raise ValueError(f"copy to {destination}: the file exists; it is never replaced")
+    if not destination.parent.is_dir():
+        raise ValueError(f"copy: no folder {destination.parent}")
+    write_bytes(destination, source.read_bytes())
+    print(destination.resolve())
+    return 0
+
+
 def add(commands) -> None:
     """Add the commands to the ``glarelab`` parser.
 
@@ -55,3 +79,10 @@ def add(commands) -> None:
         "paradigm", help=f"a paradigm ({', '.join(PARADIGMS)}) or a protocol ({PROTOCOL_HELP})"
     )
     keys.set_defaults(run=_protocol_keys)
+    copy = protocol_commands.add_parser(
+        "copy",
+        help="write out a shipped protocol's TOML to edit into a study of your own",
+    )
+    copy.add_argument("name", help="a shipped protocol (yoshida2008, spencer1995, …)")
+    copy.add_argument("destination", help="a new .toml file, or a folder to write NAME.toml in")
+    copy.set_defaults(run=_protocol_copy)

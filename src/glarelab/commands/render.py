@@ -14,7 +14,7 @@ from glarelab.display.calibration import Calibration
 from glarelab.files.atomic import atomic_path, write_text
 from glarelab.stimuli.apertures import load_aperture_image
 from glarelab.stimuli.exr import read_exr, write_exr
-from glarelab.stimuli.preview import preview_png, psf_png
+from glarelab.stimuli.preview import preview_png, psf_figure, psf_png
 from glarelab.stimuli.shapes import disk
 
 from .common import (
@@ -291,6 +291,10 @@ def _render(args: argparse.Namespace) -> int:
 def _psf(args: argparse.Namespace) -> int:
     sources = [args.aperture_image]
     output_file(args.out, (".png",), "kernel image", inputs=sources, force=args.force)
+    # the kernel as a figure: axes in degrees and the intensity scale, PNG and PDF
+    figure_png = Path(args.out).with_name(f"{Path(args.out).stem}_axes.png")
+    for path in (figure_png, figure_png.with_suffix(".pdf")):
+        output_file(path, (path.suffix,), "kernel figure", inputs=sources, force=args.force)
     if args.exr is not None:
         output_file(args.exr, (".exr",), "kernel", inputs=[*sources, args.out], force=args.force)
     model = build_model(args)  # reads the aperture image: after the outputs are checked
@@ -308,7 +312,15 @@ def _psf(args: argparse.Namespace) -> int:
     )
     claim_output(args.out, "psf")
     psf_png(args.out, kernel.values)
-    written = [args.out]
+    for path in (figure_png, figure_png.with_suffix(".pdf")):
+        claim_output(path, "psf")
+    psf_figure(
+        figure_png,
+        kernel.values,
+        pixel_deg=args.pixel_deg,
+        title=f"{type(model).__name__} kernel, {args.size}² px at {args.pixel_deg:g}°/px",
+    )
+    written = [args.out, figure_png, figure_png.with_suffix(".pdf")]
     if args.exr is not None:
         claim_output(args.exr, "psf --exr")
         write_exr(args.exr, kernel.values.astype(np.float32))
@@ -365,8 +377,9 @@ GALLERY_SERIES = "wave_particles_pupil_"  # kernels shown on one scale, that of 
 
 def _gallery(args: argparse.Namespace) -> int:
     models = gallery_models()
+    figures = [f"{n}_axes{end}" for n in models for end in (".png", ".pdf")]
     out = writes_into(
-        Path(args.out), [f"{n}.png" for n in models] + ["wave_gallery.json"], "gallery"
+        Path(args.out), [f"{n}.png" for n in models] + figures + ["wave_gallery.json"], "gallery"
     )
     check_memory(
         PSF_FIXED_BYTES + PSF_BYTES_PER_PIXEL * 3 * args.size**2, f"a {args.size}² kernel"
@@ -382,10 +395,14 @@ def _gallery(args: argparse.Namespace) -> int:
             series[name] = kernel.values
             continue
         psf_png(out / f"{name}.png", kernel.values)
-        _log(f"    {captions[name]['seconds']} s → {out / name}.png")
+        psf_figure(out / f"{name}_axes.png", kernel.values, pixel_deg=args.pixel_deg,
+                   title=caption)  # fmt: skip
+        _log(f"    {captions[name]['seconds']} s → {out / name}.png, {name}_axes.png")
     peak = max((float(v.max()) for v in series.values()), default=None)
     for name, values in series.items():
         psf_png(out / f"{name}.png", values, peak=peak)
+        psf_figure(out / f"{name}_axes.png", values, pixel_deg=args.pixel_deg, peak=peak,
+                   title=captions[name]["caption"])  # fmt: skip
         _log(f"    {captions[name]['seconds']} s → {out / name}.png (the series' scale)")
     write_text(out / "wave_gallery.json", json.dumps(captions, indent=2))
     print(out.resolve())

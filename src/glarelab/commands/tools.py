@@ -24,10 +24,30 @@ def _demo(args: argparse.Namespace) -> int:
 def _docs(args: argparse.Namespace) -> int:
     from glarelab.docs import data_reference, protocol_reference
 
-    out = writes_into(Path(args.out), ["protocols.md", "data.md"], "docs")
+    folder = args.out
+    if folder is None:  # only a source checkout's docs/, never a docs/ made wherever it runs
+        if not (Path("docs").is_dir() and Path("src", "glarelab").is_dir()):
+            raise ValueError(
+                "no --out, and this is not a glarelab source checkout (no docs/ "
+                "and src/glarelab here): give --out FOLDER"
+            )
+        folder = Path("docs")
+    out = writes_into(Path(folder), ["protocols.md", "data.md"], "docs")
     for name, text in (("protocols.md", protocol_reference()), ("data.md", data_reference())):
         write_text(out / name, text)
         print((out / name).resolve())
+    return 0
+
+
+def _examples(args: argparse.Namespace) -> int:
+    from glarelab.files.shipped import copy_shipped
+
+    try:
+        written = copy_shipped(args.destination)
+    except FileExistsError as error:
+        raise ValueError(str(error)) from None
+    for path in written:
+        print(path.resolve())
     return 0
 
 
@@ -106,9 +126,24 @@ def add(commands) -> None:
     bench.set_defaults(run=_bench)
 
     docs = commands.add_parser("docs", help="regenerate docs/protocols.md and docs/data.md")
-    docs.add_argument("--out", type=Path, default=Path("docs"))
+    docs.add_argument(
+        "--out",
+        type=Path,
+        default=None,
+        help="the folder to write protocols.md and data.md in (default: docs/ of the source "
+        "checkout it runs in; elsewhere --out is required)",
+    )
     docs.set_defaults(run=_docs)
 
+    examples = commands.add_parser(
+        "examples",
+        help="write out the example scenes and display readings glarelab ships",
+        description="Copy the shipped examples (examples/scene.exr, examples/night.exr) and "
+        "calibrations (the example readings and the synthetic calibrations) into DESTINATION, "
+        "as a clone of the repository has them; existing files are never replaced.",
+    )
+    examples.add_argument("destination", type=Path, help="the folder to write them in")
+    examples.set_defaults(run=_examples)
     demo = commands.add_parser(
         "demo", help="the whole study on simulated observers: stimuli, sessions, analysis, report"
     )

@@ -33,13 +33,11 @@ def _temporary(path: Path) -> Path:
 
 
 def _alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
+    """Whether process ``pid`` exists (psutil: on every system; ``os.kill(pid, 0)`` would
+    send CTRL_C_EVENT on Windows, where signal 0 is that event)."""
+    import psutil
+
+    return psutil.pid_exists(pid)
 
 
 def _remove_stale(path: Path) -> None:

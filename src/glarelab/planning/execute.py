@@ -165,6 +165,12 @@ class ResultLog:
         self.close()
 
 
+# the time left is estimated from the tasks finished after the first: at least this many, over
+# at least this long (workers that started together finish their first tasks together)
+ETA_AFTER_TASKS = 2
+ETA_AFTER_S = 1.0
+
+
 class Progress:
     """A one-line progress bar on stderr: tasks done, rate and the estimated time left (from
     the tasks finished in this run).
@@ -208,15 +214,20 @@ class Progress:
         elapsed = time.perf_counter() - self.start
         new = self.done - self.before
         parts = [f"[{'#' * filled}{'-' * (width - filled)}] {self.done}/{self.total} {self.what}"]
-        if new and elapsed > 0:
-            # from the first finished task on: the time before it is the workers' start-up
-            # and set-up (seconds to minutes), which the remaining tasks do not pay again
-            rate = new / elapsed
-            if self.first is not None and self.done > self.first[1]:
-                since = time.perf_counter() - self.first[0]
-                rate = (self.done - self.first[1]) / since if since > 0 else rate
-            left = (self.total - self.done) / rate
-            parts.append(f"{rate:.3g}/s, {_duration(left)} left")
+        if new and elapsed > 0 and self.done < self.total:
+            # only from the tasks finished after the first: the time before it is the
+            # workers' start-up and set-up (seconds to minutes), which the remaining tasks do
+            # not pay again, so a rate over it promises hours for a run of minutes
+            since = time.perf_counter() - self.first[0] if self.first is not None else 0.0
+            after = self.done - self.first[1] if self.first is not None else 0
+            if after >= ETA_AFTER_TASKS and since >= ETA_AFTER_S:
+                rate = after / since
+                left = (self.total - self.done) / rate
+                parts.append(f"{rate:.3g}/s, {_duration(left)} left")
+            else:
+                parts.append("time left: estimating")
+        elif new and elapsed > 0:
+            parts.append(f"{new / elapsed:.3g}/s")
         return ", ".join(parts)
 
     def show(self) -> None:

@@ -273,6 +273,11 @@ def _groups(effects: list[str]) -> dict[str, list[str]]:
     return groups
 
 
+def _legend_below(axis) -> None:
+    """The panel's legend under its axis label, outside the plot: never over a curve."""
+    axis.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.22), frameon=False)
+
+
 def power_figure(power: pd.DataFrame, *, target: float, alpha: float, title: str) -> bytes:
     """Power curves with their confidence intervals, one panel per analysis (PNG bytes).
 
@@ -295,10 +300,10 @@ def power_figure(power: pd.DataFrame, *, target: float, alpha: float, title: str
     from glarelab.analysis.figures import plt, png
 
     groups = _groups(list(dict.fromkeys(power["effect"])))
-    columns = min(len(groups), 3)
+    columns = min(len(groups), 2)  # a page's width (6.5 in) at 8 pt and more
     rows = math.ceil(len(groups) / columns)
     figure, axes = plt.subplots(
-        rows, columns, figsize=(4.6 * columns, 3.6 * rows), squeeze=False, sharey=True
+        rows, columns, figsize=(3.3 * columns, 3.4 * rows), squeeze=False, sharey=True
     )
     for axis, (group, members) in zip(axes.flat, groups.items(), strict=False):
         for effect in members:
@@ -319,7 +324,7 @@ def power_figure(power: pd.DataFrame, *, target: float, alpha: float, title: str
         axis.set_ylim(-0.02, 1.02)
         axis.set_title(group, fontsize=9)
         axis.set_xlabel("participants")
-        axis.legend(fontsize=6, loc="lower right")
+        _legend_below(axis)
     for axis in axes.flat[len(groups) :]:
         axis.set_axis_off()
     for axis in axes[:, 0]:
@@ -353,9 +358,9 @@ def effect_size_figure(sizes: pd.DataFrame, *, title: str) -> bytes:
     from glarelab.analysis.figures import plt, png
 
     groups = _groups(list(dict.fromkeys(sizes["effect"])))
-    columns = min(len(groups), 3)
+    columns = min(len(groups), 2)  # a page's width (6.5 in) at 8 pt and more
     rows = math.ceil(len(groups) / columns)
-    figure, axes = plt.subplots(rows, columns, figsize=(4.6 * columns, 3.6 * rows), squeeze=False)
+    figure, axes = plt.subplots(rows, columns, figsize=(3.3 * columns, 3.4 * rows), squeeze=False)
     for axis, (group, members) in zip(axes.flat, groups.items(), strict=False):
         width = 0.8 / len(members)
         for index, effect in enumerate(members):
@@ -369,7 +374,7 @@ def effect_size_figure(sizes: pd.DataFrame, *, title: str) -> bytes:
         axis.set_title(group, fontsize=9)
         axis.set_xlabel("participants")
         axis.set_ylabel(sizes.loc[sizes["effect"] == members[0], "size"].iloc[0], fontsize=8)
-        axis.legend(fontsize=6, loc="best")
+        _legend_below(axis)
     for axis in axes.flat[len(groups) :]:
         axis.set_axis_off()
     figure.suptitle(f"{title}: effect sizes\n(median, 25-75 %, 5-95 %)", fontsize=10)

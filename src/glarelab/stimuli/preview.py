@@ -146,3 +146,99 @@ def psf_png(
     with atomic_path(path) as temporary:
         Image.fromarray(pixels).save(temporary, format="PNG")
     return path
+
+
+def psf_figure(
+    path: str | Path,
+    values: np.ndarray,
+    *,
+    pixel_deg: float,
+    title: str = "",
+    dynamic_range: float = 1e6,
+    peak: float | None = None,
+) -> Path:
+    """Write a kernel's :func:`psf_to_display` image as a figure with its axes in degrees of
+    visual angle and a scale of its intensity relative to ``peak`` (ticks at each decade the
+    sigmoid maps), as PNG (and PDF beside it) for print.
+
+    Parameters
+    ----------
+    path
+        The PNG to write (``.png``); the PDF gets the same name with ``.pdf``.
+    values
+        The kernel, (n, n) or (n, n, 3).
+    pixel_deg
+        Visual angle of a kernel pixel, degrees.
+    title
+        The figure's title.
+    dynamic_range, peak
+        As :func:`psf_to_display`.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
+    Raises
+    ------
+    ValueError
+        For a ``pixel_deg`` that is not a positive number.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> y, x = np.mgrid[-8:9, -8:9]
+    >>> psf_figure(folder / "k.png", np.exp(-(x**2 + y**2) / 4.0), pixel_deg=0.01).name
+    'k.png'
+    >>> sorted(p.suffix for p in folder.iterdir())
+    ['.pdf', '.png']
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    if not (isinstance(pixel_deg, int | float) and np.isfinite(pixel_deg) and pixel_deg > 0):
+        raise ValueError(f"pixel_deg must be a positive number of degrees; got {pixel_deg!r}")
+    array = np.asarray(values, dtype=float)
+    pixels = psf_to_display(array, dynamic_range=dynamic_range, peak=peak)
+    size = array.shape[0]
+    half = size * pixel_deg / 2
+    figure, axis = plt.subplots(figsize=(4.8, 3.6))
+    axis.imshow(
+        pixels,
+        cmap="gray",
+        vmin=0,
+        vmax=255,
+        extent=(-half, half, -half, half),
+        interpolation="none",
+    )
+    axis.set_xlabel("horizontal angle (deg)", fontsize=9)
+    axis.set_ylabel("vertical angle (deg)", fontsize=9)
+    axis.tick_params(labelsize=8)
+    if title:
+        axis.set_title(title, fontsize=9)
+    # the scale: the code each decade below the peak is shown with (the sigmoid of
+    # 10^decade × dynamic_range), labelled by its intensity relative to the peak; from the
+    # intensity the sigmoid maps to 255 on, the bright centre is clipped (Kakimoto §3.3)
+    decades = np.arange(-round(np.log10(dynamic_range)), 1)
+    codes = sigmoid_Kakimoto2004(10.0**decades * dynamic_range)
+    fine = np.logspace(-np.log10(dynamic_range), 0, 2001)
+    white = fine[np.argmax(sigmoid_Kakimoto2004(fine * dynamic_range) >= 254.5)]
+    kept = codes < 254.5 - 8  # a decade tick clear of the clipping tick
+    ticks = [*codes[kept], 255.0]
+    labels = [f"$10^{{{d}}}$" for d in decades[kept]] + [f"≥{white:.1e}"]
+    scale = matplotlib.cm.ScalarMappable(norm=matplotlib.colors.Normalize(0, 255), cmap="gray")
+    bar = figure.colorbar(scale, ax=axis, ticks=ticks)
+    bar.ax.set_yticklabels(labels, fontsize=8)
+    bar.set_label("intensity / peak (per channel; white: clipped)", fontsize=9)
+    figure.tight_layout()
+    path = Path(path)
+    with atomic_path(path) as temporary:
+        figure.savefig(temporary, format="png", dpi=150, metadata={"Software": None})
+    with atomic_path(path.with_suffix(".pdf")) as temporary:
+        figure.savefig(temporary, format="pdf", metadata={"Creator": None, "Producer": None,
+                                                         "CreationDate": None})  # fmt: skip
+    plt.close(figure)
+    return path

@@ -1,0 +1,395 @@
+"""Data a PsychoPy experiment collected, made into glarelab session files for ``analyse``.
+
+A Builder or Coder experiment that records a study's trials with PsychoPy's
+``ExperimentHandler`` writes one wide CSV per run (``saveAsWideText``): a row per
+``nextEntry()``, the columns it was given (``addData``), and columns of its own that a glarelab
+session file does not have: ``thisRow.t``, ``notes``, each loop's ``LOOP.thisRepN``,
+``LOOP.thisTrialN``, ``LOOP.thisN``, ``LOOP.thisIndex``, the experiment's info (``date``,
+``expName``, ``psychopyVersion``, ``frameRate``, ``expStart``), each component's ``.started``
+and ``.stopped``, and a last column with no name (every row ends with the delimiter).
+Booleans are Python's ``True``/``False``; the file may begin with a byte-order mark.
+
+:func:`import_psychopy` maps such a file to the study's session format
+(:func:`glarelab.protocols.columns`) and writes it as a session of its own (CSV and sidecar,
+named ``PARTICIPANT_STUDY_sN_YYYY-MM-DD_HHMM`` from PsychoPy's ``date``) that
+:func:`glarelab.analysis.load.load_sessions` then checks like any other: every cell, every
+trial. The mapping is explicit and its result is said, never silent:
+
+- a column takes the study column of the same name, or the one ``columns`` maps it to
+  (``{"key_resp.rt": "time_s"}``);
+- every other column is dropped and listed (PsychoPy's own bookkeeping apart from the rest);
+- rows with no trial data (a routine outside the trial loop, such as instructions, ends with
+  ``nextEntry()`` too) are dropped and counted;
+- ``True``/``False`` become ``true``/``false``; an integer column written as ``35.0`` (a float
+  PsychoPy was given) becomes ``35``; PsychoPy's zero-padded session (``001``) becomes ``1``;
+- the ``study`` column, if the experiment did not record it, is the protocol's; ``trial``, if
+  not recorded, numbers the trial rows in file order (the order ``nextEntry`` wrote them);
+  optional columns not recorded are empty; a required column not recorded is refused, unless
+  ``values`` gives it one value for every trial (recorded in the sidecar).
+
+Why a separate step and not an option of ``analyse``: the analysis keeps one strict reader of
+one format, and the imported sessions are files a lab keeps, inspects and archives beside the
+PsychoPy originals, with a sidecar recording where each came from (file, sha256, mapping, what
+was dropped).
+"""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import io
+import json
+import re
+from dataclasses import dataclass, field
+from datetime import UTC, datetime
+from pathlib import Path
+
+from glarelab.analysis.dataset import DataError
+from glarelab.files.atomic import write_text
+from glarelab.protocols import columns
+from glarelab.protocols.columns import DATA_FORMAT
+from glarelab.protocols.keys import TOKEN
+
+__all__ = ["PSYCHOPY_BOOKKEEPING", "Imported", "import_psychopy", "psychopy_bookkeeping"]
+
+# columns PsychoPy's ExperimentHandler and Builder add of their own accord (PsychoPy
+# psychopy/data/experiment.py: thisRow.t, notes; psychopy/data/trial.py: a loop's thisRepN,
+# thisTrialN, thisN, thisIndex; Builder's expInfo: date, expName, psychopyVersion, frameRate,
+# expStart; each component's .started/.stopped and its ...StartTime columns)
+PSYCHOPY_BOOKKEEPING = re.compile(
+    r"thisRow\.t|notes|date|expName|psychopyVersion|frameRate|expStart|"
+    r"(?:.+\.)?(?:thisRepN|thisTrialN|thisN|thisIndex|ran|order)|"
+    r".+\.(?:started|stopped|startedRefresh|stoppedRefresh)"
+)
+_BOOLEANS = {"True": "true", "False": "false", "true": "true", "false": "false"}
+_INTEGRAL = re.compile(r"[+-]?\d+(\.0*)?")
+# PsychoPy's data.getDateStr(): 2026-12-03_07h29.22.123
+_DATE = re.compile(r"(\d{4}-\d{2}-\d{2})_(\d{2})h(\d{2})")
+_FILLED = ("study", "participant", "session")  # not trial data: the same on every row
+
+
+def psychopy_bookkeeping(name: str) -> bool:
+    """Whether a column is one PsychoPy writes of its own accord.
+
+    >>> [psychopy_bookkeeping(n) for n in ("thisRow.t", "trials.thisN", "time_s")]
+    [True, True, False]
+    """
+    return PSYCHOPY_BOOKKEEPING.fullmatch(name) is not None
+
+
+@dataclass
+class Imported:
+    """One session made from a PsychoPy CSV: what was written and what was left out."""
+
+    source: Path
+    csv: Path
+    participant: str
+    session: int
+    trials: int
+    dropped_bookkeeping: list[str] = field(default_factory=list)
+    dropped_other: list[str] = field(default_factory=list)
+    dropped_rows: list[int] = field(default_factory=list)  # their line numbers in the source
+    filled: dict[str, str] = field(default_factory=dict)  # column → what it was given
+
+    def summary(self) -> str:
+        """One line: source → session file, and what was dropped or filled."""
+        parts = [f"{self.source.name} → {self.csv.name}: {self.trials} trials"]
+        if self.dropped_bookkeeping:
+            parts.append(f"dropped PsychoPy's columns {', '.join(self.dropped_bookkeeping)}")
+        if self.dropped_other:
+            parts.append(
+                f"dropped columns not in the study's format {', '.join(self.dropped_other)}"
+            )
+        if self.dropped_rows:
+            lines = ", ".join(map(str, self.dropped_rows[:8]))
+            more = " …" if len(self.dropped_rows) > 8 else ""
+            parts.append(
+                f"dropped {len(self.dropped_rows)} rows without trial data (lines {lines}{more})"
+            )
+        if self.filled:
+            parts.append("filled " + ", ".join(f"{k} ({v})" for k, v in self.filled.items()))
+        return "; ".join(parts)
+
+
+def _cell(value: str, column) -> str:
+    """A PsychoPy cell written as the session format writes it (the loader checks it)."""
+    if column.kind is bool:
+        return _BOOLEANS.get(value, value)
+    if column.kind is int and _INTEGRAL.fullmatch(value):
+        return str(int(float(value))) if "." in value else str(int(value))
+    return value
+
+
+def _started(rows: list[dict[str, str]], source: Path) -> datetime:
+    """When the run started: PsychoPy's ``date`` column, else the file's modification time."""
+    for row in rows:
+        match = _DATE.match(row.get("date", ""))
+        if match:
+            return datetime.strptime(f"{match[1]} {match[2]}:{match[3]}", "%Y-%m-%d %H:%M")
+    return datetime.fromtimestamp(source.stat().st_mtime)
+
+
+def _read(source: Path, problems: list[str]) -> tuple[list[str], list[tuple[int, list[str]]]]:
+    try:
+        text = source.read_text(encoding="utf-8-sig")
+    except (OSError, UnicodeDecodeError) as error:
+        problems.append(f"{source}: not readable as UTF-8 text ({error})")
+        return [], []
+    reader = csv.reader(io.StringIO(text, newline=""), strict=True)
+    try:
+        records = [(reader.line_num, cells) for cells in reader]
+    except csv.Error as error:
+        problems.append(f"{source}, line {reader.line_num}: not readable as CSV ({error})")
+        return [], []
+    if not records:
+        problems.append(f"{source}: empty file, no header")
+        return [], []
+    return records[0][1], [(line, cells) for line, cells in records[1:] if cells]
+
+
+def import_psychopy(
+    protocol,
+    sources: list[str | Path],
+    out: str | Path,
+    *,
+    mapping: dict[str, str] | None = None,
+    values: dict[str, str] | None = None,
+) -> list[Imported]:
+    """Write glarelab session files (CSV and sidecar) from PsychoPy ExperimentHandler CSVs.
+
+    Parameters
+    ----------
+    protocol
+        The study's validated protocol: its columns are the session format.
+    sources
+        PsychoPy CSVs (``ExperimentHandler.saveAsWideText``), one run each; a file with the
+        trials of several participants or sessions gives one session file each.
+    out
+        The folder for the session files (made if missing); existing files are not replaced.
+    mapping
+        PsychoPy column → study column, for columns the experiment named otherwise.
+    values
+        Study column → one value for every trial, for a required column the experiment did not
+        record (e.g. ``{"dropped_frames": "0"}``); recorded in the sidecar.
+
+    Returns
+    -------
+    list of Imported
+        One per session written, with what was dropped and filled.
+
+    Raises
+    ------
+    glarelab.analysis.dataset.DataError
+        Naming every problem of every file (nothing is written then): a mapping from a column
+        the file lacks or to a column the study does not have, a required column neither
+        recorded nor given, two columns mapped to one, a participant id that cannot name a
+        file, a session file that exists already, a last column with no name that holds data.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from glarelab.protocols import load_protocol
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> names = [c.name for c in columns(load_protocol("yoshida2008"))]
+    >>> _ = (folder / "run.csv").write_text(",".join(names) + ",thisRow.t,notes,\\n")
+    >>> import_psychopy(load_protocol("yoshida2008"), [folder / "run.csv"], folder / "out")
+    []
+    """
+    mapping = dict(mapping or {})
+    values = dict(values or {})
+    schema = columns(protocol)
+    by_name = {c.name: c for c in schema}
+    problems: list[str] = []
+    for target in [*mapping.values(), *values]:
+        if target not in by_name:
+            problems.append(
+                f"{target!r} is not a column of the {protocol.study} session format "
+                f"({', '.join(by_name)})"
+            )
+    twice = sorted({t for t in mapping.values() if list(mapping.values()).count(t) > 1})
+    if twice:
+        problems.append(f"several PsychoPy columns mapped to {', '.join(twice)}")
+    if problems:
+        raise DataError(problems)
+    out = Path(out)
+    planned: list[tuple[Imported, str, dict]] = []
+    for raw in sources:
+        source = Path(raw)
+        found = len(problems)
+        header, records = _read(source, problems)
+        if len(problems) > found or not header:
+            continue
+        # the empty last column: every row of saveAsWideText ends with the delimiter
+        while header and header[-1] == "":
+            if any(len(cells) == len(header) and cells[-1] != "" for _, cells in records):
+                problems.append(
+                    f"{source}, line 1: the last column has no name but holds data; name it"
+                )
+                break
+            header.pop()
+            records = [(line, cells[: len(header)]) for line, cells in records]
+        if len(problems) > found:
+            continue
+        duplicated = sorted({n for n in header if header.count(n) > 1})
+        if duplicated:
+            problems.append(f"{source}, line 1: column(s) {', '.join(duplicated)} appear twice")
+            continue
+        absent = [name for name in mapping if name not in header]
+        if absent:
+            problems.append(f"{source}, line 1: no column {', '.join(absent)} to map")
+            continue
+        renamed = [mapping.get(name, name) for name in header]
+        taken = [n for n in renamed if n in by_name]
+        clash = sorted({n for n in taken if taken.count(n) > 1})
+        if clash:
+            problems.append(
+                f"{source}, line 1: two columns give {', '.join(clash)} (one by its name, one "
+                "mapped to it); map or drop one"
+            )
+            continue
+        filled: dict[str, str] = {}
+        for column in schema:
+            if column.name in taken:
+                continue
+            if column.name in values:
+                filled[column.name] = f"given: {values[column.name]!r}"
+            elif column.name == "study":
+                filled["study"] = f"the protocol's: {protocol.study}"
+            elif column.name == "trial":
+                filled["trial"] = "numbered in file order"
+            elif column.optional:
+                filled[column.name] = "empty (not recorded)"
+            else:
+                problems.append(
+                    f"{source}, line 1: no column {column.name!r} ({column.doc}); map the "
+                    f"experiment's column to it (--column PSYCHOPY={column.name}) or give it "
+                    f"one value for every trial (--set {column.name}=VALUE)"
+                )
+        if len(problems) > found:
+            continue
+        dropped = [h for h, n in zip(header, renamed, strict=True) if n not in by_name]
+        rows: list[tuple[int, dict[str, str]]] = []
+        empty_rows: list[int] = []
+        data_columns = [n for n in taken if n not in _FILLED]
+        for line, cells in records:
+            if len(cells) != len(header):
+                problems.append(
+                    f"{source}, line {line}: {len(cells)} cells, the header has {len(header)}"
+                )
+                continue
+            record = dict(zip(renamed, cells, strict=True))
+            if all(record[n] == "" for n in data_columns):
+                empty_rows.append(line)
+                continue
+            rows.append((line, record))
+        sessions: dict[tuple[str, str], list[dict[str, str]]] = {}
+        originals = [
+            dict(zip(header, cells, strict=True))
+            for _, cells in records
+            if len(cells) == len(header)
+        ]
+        for line, record in rows:
+            for name in ("participant", "session"):
+                if record.get(name, "") == "":
+                    problems.append(f"{source}, line {line}: no {name}")
+            participant = record.get("participant", "")
+            if participant and not TOKEN.match(participant):
+                problems.append(
+                    f"{source}, line {line}: participant {participant!r} cannot name a session "
+                    "file (letters, digits, '_', '-', '.')"
+                )
+            session = _cell(record.get("session", ""), by_name["session"])
+            sessions.setdefault((participant, session), []).append(record)
+        if len(problems) > found:
+            continue
+        started = _started(originals, source)
+        digest = hashlib.sha256(source.read_bytes()).hexdigest()
+        version = next((r["psychopyVersion"] for r in originals if r.get("psychopyVersion")), None)
+        for (participant, session), trial_rows in sessions.items():
+            cells_rows = []
+            for number, record in enumerate(trial_rows, start=1):
+                row = {}
+                for column in schema:
+                    if column.name in record:
+                        row[column.name] = _cell(record[column.name], column)
+                    elif column.name in values:
+                        row[column.name] = values[column.name]
+                    elif column.name == "study":
+                        row[column.name] = protocol.study
+                    elif column.name == "trial":
+                        row[column.name] = str(number)
+                    else:
+                        row[column.name] = ""
+                cells_rows.append(row)
+            try:
+                number = int(session)
+            except ValueError:
+                problems.append(f"{source}: session {session!r} is not a whole number")
+                continue
+            stem = f"{participant}_{protocol.study}_s{number}_{started:%Y-%m-%d_%H%M}"
+            target = out / f"{stem}.csv"
+            for existing in (target, target.with_suffix(".json")):
+                if existing.exists():
+                    problems.append(
+                        f"{existing} exists: an import never replaces a session file (give "
+                        "another --out)"
+                    )
+            trials = [int(r["trial"]) for r in cells_rows if _INTEGRAL.fullmatch(r["trial"])]
+            imported = Imported(
+                source=source,
+                csv=target,
+                participant=participant,
+                session=number,
+                trials=len(cells_rows),
+                dropped_bookkeeping=[d for d in dropped if psychopy_bookkeeping(d)],
+                dropped_other=[d for d in dropped if not psychopy_bookkeeping(d)],
+                dropped_rows=empty_rows,
+                filled=filled,
+            )
+            mapped = {
+                h: n for h, n in zip(header, renamed, strict=True) if n in by_name and h != n
+            }
+            sidecar = {
+                "study": protocol.study,
+                "participant": participant,
+                "session": number,
+                "status": "completed",
+                "trials": max(trials, default=0),
+                "simulated": False,
+                "pilot": False,
+                "data_format": DATA_FORMAT,
+                "started": started.isoformat(),
+                "packages": {"psychopy": version} if version else {},
+                "imported_from": {
+                    "format": "PsychoPy ExperimentHandler CSV (saveAsWideText)",
+                    "file": str(source.resolve()),
+                    "sha256": digest,
+                    "imported": datetime.now(UTC).isoformat(timespec="seconds"),
+                    "mapping": mapped,
+                    "filled": filled,
+                    "dropped_columns": dropped,
+                    "dropped_rows": empty_rows,
+                },
+            }
+            planned.append((imported, _csv_text(schema, cells_rows), sidecar))
+    names = [p[0].csv for p in planned]
+    for name in sorted({n for n in names if names.count(n) > 1}):
+        problems.append(f"{name}: two sessions of the sources would get this name")
+    if problems:
+        raise DataError(problems)
+    out.mkdir(parents=True, exist_ok=True)
+    for imported, text, sidecar in planned:
+        write_text(imported.csv, text)
+        write_text(
+            imported.csv.with_suffix(".json"), json.dumps(sidecar, indent=2, sort_keys=True) + "\n"
+        )
+    return [p[0] for p in planned]
+
+
+def _csv_text(schema, rows: list[dict[str, str]]) -> str:
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow([c.name for c in schema])
+    for row in rows:
+        writer.writerow([row[c.name] for c in schema])
+    return buffer.getvalue()

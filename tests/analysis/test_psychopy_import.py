@@ -1,0 +1,181 @@
+"""Data a PsychoPy experiment collected are analysed to the same numbers as glarelab's own
+session files of the same trials.
+
+The PsychoPy files are written by PsychoPy's own ``ExperimentHandler`` as a Builder experiment
+writes them: the experiment info (participant, a zero-padded session, date, expName,
+psychopyVersion, frameRate) on every row, an instructions routine's row before the trial loop,
+a ``TrialHandler`` loop named ``trials`` (its thisRepN/thisTrialN/thisN/thisIndex columns),
+``thisRow.t`` and ``notes``, the trailing empty column, and Python's True/False.
+"""
+
+from __future__ import annotations
+
+import csv
+import subprocess
+import sys
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from glarelab.analysis.dataset import DataError
+from glarelab.analysis.psychopy_import import import_psychopy
+from glarelab.analysis.report import write_report
+from glarelab.protocols import columns, load_protocol
+
+STUDIES = ("yoshida2008", "spencer1995", "luidolt2020")
+
+
+def _typed(value: str, column):
+    """A session cell as the experiment held it before PsychoPy wrote it."""
+    if value == "":
+        return ""
+    if column.kind is bool:
+        return value == "true"
+    if column.kind is int:
+        return int(value)
+    if column.kind is float:
+        return float(value)
+    return value
+
+
+def write_psychopy(session_csv: Path, protocol, folder: Path, *, rt_name: str) -> Path:
+    """The trials of a glarelab session file, recorded again by PsychoPy's ExperimentHandler
+    as a Builder experiment records them (``time_s`` under the name ``rt_name``)."""
+    from psychopy import data
+
+    rows = list(csv.DictReader(session_csv.open(encoding="utf-8")))
+    schema = columns(protocol)
+    first = rows[0]
+    name = f"{first['participant']}_{protocol.study}_2026-03-02_14h05.33.120"
+    info = {
+        "participant": first["participant"],
+        "session": f"{int(first['session']):03d}",
+        "date": "2026-03-02_14h05.33.120",
+        "expName": protocol.study,
+        "psychopyVersion": "2026.2.5",
+        "frameRate": 59.95,
+    }
+    experiment = data.ExperimentHandler(
+        name=protocol.study,
+        extraInfo=info,
+        dataFileName=str(folder / name),
+        savePickle=False,
+        saveWideText=False,
+    )
+    experiment.addData("instructions.started", 0.016)  # a routine outside the loop
+    experiment.addData("key_resp_instr.keys", "space")
+    experiment.nextEntry()
+    trials = data.TrialHandler(
+        trialList=[{"row": i} for i in range(len(rows))], nReps=1, method="sequential",
+        name="trials",
+    )  # fmt: skip
+    experiment.addLoop(trials)
+    for _, row in zip(trials, rows, strict=True):
+        for column in schema:
+            if column.name in ("participant", "session"):
+                continue  # the experiment info holds them
+            name_in_psychopy = rt_name if column.name == "time_s" else column.name
+            experiment.addData(name_in_psychopy, _typed(row[column.name], column))
+        experiment.addData("key_resp.keys", "return")
+        experiment.nextEntry()
+    path = folder / f"{name}.csv"
+    experiment.saveAsWideText(str(path), delim=",")
+    experiment.abort()  # no second save when the handler is collected
+    return path
+
+
+@pytest.mark.parametrize("study", STUDIES)
+def test_psychopy_csvs_analyse_to_the_same_numbers(study, simulated, tmp_path):
+    pytest.importorskip("psychopy.data")
+    protocol = load_protocol(study)
+    own = sorted(simulated.glob(f"*_{study}_s1_*.csv"))
+    assert len(own) == 10
+    psychopy_folder = tmp_path / "psychopy"
+    psychopy_folder.mkdir()
+    written = [
+        write_psychopy(path, protocol, psychopy_folder, rt_name="key_resp.rt") for path in own
+    ]
+    header = written[0].read_text(encoding="utf-8-sig").splitlines()[0].split(",")
+    # what PsychoPy writes of its own accord is in the files the import is given
+    assert {"thisRow.t", "notes", "trials.thisN", "trials.thisTrialN", "date"} <= set(header)
+    assert header[-1] == ""
+    assert ",True," in written[0].read_text() or study != "yoshida2008"
+    imported = import_psychopy(
+        protocol, written, tmp_path / "imported", mapping={"key_resp.rt": "time_s"}
+    )
+    assert len(imported) == 10
+    first = imported[0]
+    assert {"thisRow.t", "notes", "trials.thisN", "expName", "psychopyVersion"} <= set(
+        first.dropped_bookkeeping
+    )
+    # the loop's condition (row), the key components' keys
+    assert set(first.dropped_other) == {"row", "key_resp.keys", "key_resp_instr.keys"}
+    assert first.dropped_rows == [2]  # the instructions routine's row
+    assert "dropped 1 rows without trial data (lines 2)" in first.summary()
+    reports = {}
+    for name, files in (
+        ("own", own),
+        ("psychopy", [session.csv for session in imported]),
+    ):
+        reports[name] = write_report(protocol, files, tmp_path / f"report_{name}").parent
+    tables = sorted(p.name for p in reports["own"].glob("*.csv") if p.name != "trials.csv")
+    assert tables
+    for table in tables:
+        assert (reports["psychopy"] / table).read_bytes() == (
+            reports["own"] / table
+        ).read_bytes(), table
+    # every trial the same, but for the name of the file it came from
+    trials = {
+        name: pd.read_csv(reports[name] / "trials.csv", keep_default_na=False).drop(columns="file")
+        for name in reports
+    }
+    pd.testing.assert_frame_equal(trials["psychopy"], trials["own"], check_exact=True)
+    results = "results.md"
+    if (reports["own"] / results).exists():
+        assert (reports["psychopy"] / results).read_text() == (
+            reports["own"] / results
+        ).read_text()
+
+
+def test_the_command_prints_what_it_dropped(simulated, tmp_path):
+    pytest.importorskip("psychopy.data")
+    protocol = load_protocol("yoshida2008")
+    own = sorted(simulated.glob("*_yoshida2008_s1_*.csv"))[0]
+    source = write_psychopy(own, protocol, tmp_path, rt_name="time_s")
+    done = subprocess.run(
+        [sys.executable, "-m", "glarelab", "import-psychopy", "yoshida2008", str(source),
+         "--out", str(tmp_path / "sessions")],
+        capture_output=True, text=True, timeout=300, check=False,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    assert "dropped PsychoPy's columns" in done.stderr
+    assert "thisRow.t" in done.stderr and "notes" in done.stderr
+    assert "key_resp.keys" in done.stderr
+    written = Path(done.stdout.strip())
+    assert written.name.startswith("sim01_yoshida2008_s1_2026-03-02_1405")
+    assert written.read_text().splitlines()[1].split(",")[17] in ("true", "false")
+
+
+def test_a_required_column_not_recorded_is_refused_by_name(tmp_path):
+    protocol = load_protocol("yoshida2008")
+    names = [c.name for c in columns(protocol) if c.name != "dropped_frames"]
+    source = tmp_path / "run.csv"
+    source.write_text(",".join([*names, "thisRow.t", "notes", ""]) + "\n")
+    with pytest.raises(DataError, match=r"no column 'dropped_frames'.*--set dropped_frames"):
+        import_psychopy(protocol, [source], tmp_path / "out")
+    with pytest.raises(DataError, match="'reaction' is not a column of the yoshida2008"):
+        import_psychopy(protocol, [source], tmp_path / "out", mapping={"notes": "reaction"})
+    assert (
+        import_psychopy(protocol, [source], tmp_path / "out", values={"dropped_frames": "0"}) == []
+    )
+
+
+def test_a_named_last_column_with_data_is_not_dropped(tmp_path):
+    protocol = load_protocol("yoshida2008")
+    names = [c.name for c in columns(protocol)]
+    source = tmp_path / "run.csv"
+    cells = ["x"] * len(names)
+    source.write_text(",".join([*names, ""]) + "\n" + ",".join([*cells, "kept"]) + "\n")
+    with pytest.raises(DataError, match="last column has no name but holds data"):
+        import_psychopy(protocol, [source], tmp_path / "out")
