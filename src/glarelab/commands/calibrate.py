@@ -14,7 +14,7 @@ from glarelab.display.calibration import Calibration, fit_calibration, read_read
 from glarelab.display.photometer import PHOTOMETERS
 from glarelab.files.atomic import write_bytes
 
-from .common import count, number, output_file
+from .common import claim_output, count, number, output_file
 from .common import log as _log
 
 if TYPE_CHECKING:
@@ -75,6 +75,7 @@ def _calibrate_fit(args: argparse.Namespace) -> int:
     )
     args.out = calibration_out(args.out, replace=args.replace, inputs=[args.readings])
     calibration.save(args.out)
+    claim_output(args.out, "calibrate fit")  # glarelab's: a later measure or --replace takes it
     _log(
         f"{len(readings)} readings → {args.method} calibration, {calibration.black_cd_m2:.4g}-"
         f"{calibration.max_cd_m2:.4g} cd/m², status '{calibration.status}' → {args.out}"
@@ -138,10 +139,16 @@ def _open_meter(args: argparse.Namespace, instrument: dict | None):
 def _calibrate_measure(args: argparse.Namespace) -> int:
     from glarelab.display.measure import MeasurementLock
 
-    output_file(args.out, (".json",), "calibration")
+    if Path(args.out).suffix.lower() != ".json":
+        output_file(args.out, (".json",), "calibration")  # refuses, naming the suffix
+    # an existing calibration (one that calibrate fit wrote, too) is kept: the new one gets the
+    # next free name, as for fit
     args.out = calibration_out(args.out, replace=args.replace)
     with MeasurementLock(args.out):  # one process per session file, until it ends
-        return _measure_locked(args)
+        status = _measure_locked(args)
+    if Path(args.out).is_file():  # glarelab's: a later fit or measure keeps it, --replace takes it
+        claim_output(args.out, "calibrate measure")
+    return status
 
 
 def _protocol_targets(studies: list[str] | None) -> list[float]:

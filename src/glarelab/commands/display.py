@@ -9,7 +9,7 @@ from glarelab.display.calibration import Calibration
 from glarelab.display.photometer import PHOTOMETERS
 from glarelab.protocols import load_protocol
 
-from .common import count, number, output_file
+from .common import claim_output, count, number, output_file
 from .common import log as _log
 
 
@@ -104,6 +104,7 @@ def _check_display(args: argparse.Namespace) -> int:
                 f"photometer ({found['instrument']['model']}): black "
                 f"{found['black_cd_m2']:.4g} cd/m², white {found['white_cd_m2']:.4g} cd/m²"
             )
+    claim_output(out, "check-display")  # the next check (after a driver change) replaces it
     _log(f"wrote {write_check(result, out)}")
     passed = all(c["passed"] for c in result["checks"]) and result.get("images_exact", True)
     return 0 if passed else 1
