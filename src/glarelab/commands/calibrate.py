@@ -87,6 +87,28 @@ def _calibrate_fit(args: argparse.Namespace) -> int:
     return 0
 
 
+def _calibrate_export_monitor(args: argparse.Namespace) -> int:
+    from glarelab.frontend.monitors import export_calibration
+    from glarelab.protocols import load_protocol
+
+    calibration = Calibration.load(args.calibration)
+    protocol = load_protocol(args.protocol) if args.protocol else None
+    path, name = export_calibration(
+        calibration,
+        args.monitor,
+        display=protocol.data.get("display") if protocol else None,
+        viewing=protocol.data.get("viewing") if protocol else None,
+        folder=args.monitor_folder,
+    )
+    _log(
+        f"{args.calibration} → Monitor Center monitor {args.monitor!r}, calibration {name!r} "
+        f"({path}): gamma grid of its gain-offset-gamma fit, {len(calibration.readings)} "
+        "luminance measurements"
+        + (f", the {protocol.study} display's size, width and distance" if protocol else "")
+    )
+    return 0
+
+
 _PROTOCOL_OPTIONS = {
     "readings": "--readings",
     "settle_s": "--settle-s",
@@ -324,6 +346,29 @@ def add(commands) -> None:
     fit.add_argument("--label", default="", help="display, photometer, operator")
     fit.add_argument("--replace", action="store_true", help=REPLACE_HELP)
     fit.set_defaults(run=_calibrate_fit)
+
+    export = calibrate_commands.add_parser(
+        "export-monitor",
+        help="write a calibration into a PsychoPy Monitor Center monitor (a new calibration)",
+    )
+    export.add_argument("calibration", type=Path, help="a glarelab calibration JSON")
+    export.add_argument(
+        "--monitor", required=True, metavar="NAME", help="the monitor (made if new)"
+    )
+    export.add_argument(
+        "--protocol",
+        default=None,
+        help="a study (shipped name or TOML file): the monitor gets its display's size in "
+        "pixels and width and its viewing distance",
+    )
+    export.add_argument(
+        "--monitor-folder",
+        type=Path,
+        default=None,
+        metavar="DIR",
+        help="Monitor Center's folder of monitors (default PsychoPy's, ~/.psychopy3/monitors)",
+    )
+    export.set_defaults(run=_calibrate_export_monitor)
 
     measure = calibrate_commands.add_parser(
         "measure", help="measure a display with a photometer (PsychoPy, full-field patches)"

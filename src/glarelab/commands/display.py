@@ -9,14 +9,14 @@ from glarelab.display.calibration import Calibration
 from glarelab.display.photometer import PHOTOMETERS
 from glarelab.protocols import load_protocol
 
-from .common import claim_output, count, number, output_file
+from .common import add_monitor_options, apply_monitor, claim_output, count, number, output_file
 from .common import log as _log
 
 
 def _check_display(args: argparse.Namespace) -> int:
     from glarelab.frontend.check_display import check_display, write_check
 
-    protocol = load_protocol(args.protocol)
+    protocol, monitor = apply_monitor(args, load_protocol(args.protocol))
     calibration = Calibration.load(args.calibration) if args.calibration else None
     if args.out is not None:
         out = args.out
@@ -44,6 +44,7 @@ def _check_display(args: argparse.Namespace) -> int:
             photometer=meter,
             patch_protocol=_patch_protocol(args),
             log=_log,
+            monitor=monitor,
         )
     finally:
         if meter is not None:
@@ -132,6 +133,7 @@ def add(commands) -> None:
         "set's codes (and time a flash of it)",
     )
     check.add_argument("--calibration", type=Path, default=None, help="the display calibration")
+    add_monitor_options(check)
     check.add_argument(
         "--out", type=Path, default=None, help="JSON to write (default: next to --calibration)"
     )

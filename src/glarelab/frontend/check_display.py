@@ -120,6 +120,7 @@ def check_display(
     photometer=None,
     patch_protocol=None,
     log=print,
+    monitor=None,
 ) -> dict:
     """Measure the display a protocol's sessions will run on; return the findings.
 
@@ -139,6 +140,9 @@ def check_display(
         An open :class:`~glarelab.display.photometer.Photometer`: also measure luminances.
     patch_protocol
         How the photometer reads each patch (:class:`~glarelab.display.photometer.PatchProtocol`).
+    monitor
+        The PsychoPy Monitor Center monitor of the window (``--monitor``); default the
+        protocol's display.
     """
     if not protocol.data.get("display"):
         raise ValueError(f"the {protocol.study} protocol describes no display to check")
@@ -150,6 +154,7 @@ def check_display(
         calibration=calibration,
         fullscreen=fullscreen,
         scripted_keys=[],
+        monitor=monitor,
     )
     log("opening the window and measuring the refresh rate")
     facts = device.open()
