@@ -8,9 +8,10 @@ parameters are those of an Image component that can show an image 1:1: the image
 position in pixels, and the timing; units are pixels, the size is the image's own, there is no
 interpolation, colour or mask. PsychoPy lists it under Stimuli once the glarelab plugin is
 loaded at start-up (registered by the ``psychopy.experiment.components`` entry point in
-glarelab's ``pyproject.toml``). The experiment's window must have the set's bits: on a 10-bit
-display, set the window's ``bpc`` to 10 (Builder's Experiment settings → Screen, or a Code
-component before the first routine).
+glarelab's ``pyproject.toml``). The experiment's window must have the set's bits: Builder's
+Experiment settings have no bits per channel (PsychoPy 2026.2), so for a 10-bit set compile the
+experiment to a script and add ``bpc=(10, 10, 10)`` to its ``visual.Window(...)``; on Builder's
+8-bit window the component shows the nearest 8-bit codes.
 """
 
 from __future__ import annotations
