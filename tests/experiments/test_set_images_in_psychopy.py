@@ -3,7 +3,9 @@
 - An 8-bit set's ``NAME.png``, drawn as a Coder script or Builder's Image component draws a
   file (a plain ``visual.ImageStim(win, image=PATH)``, nothing else set), on an 8-bit screen.
 - A 10-bit set's image drawn through the documented route, glarelab's PsychoPy plugin
-  (``SetImageStim(win, image=PATH)`` on a window of ``bpc=(10, 10, 10)``), on a 10-bit screen.
+  (``SetImageStim(win, image=PATH)`` on a window of ``bpc=(10, 10, 10)``, every other image
+  through one stimulus's ``setImage(PATH)``, as the Builder component's "set every repeat"
+  does), on a 10-bit screen.
 
 Each image is read back from the X server by python-xlib (:meth:`tests.experiments.xscreen.
 XScreen.codes`, the root window at the screen's depth) and compared with the set's codes file
@@ -43,7 +45,14 @@ SCRIPT = textwrap.dedent(
         from glarelab.frontend.psychopy_plugin import SetImageStim
         win = visual.Window(fullscr=True, color=(-1, -1, -1), checkTiming=False,
                             bpc=(10, 10, 10), units="pix")
-        make = lambda path: SetImageStim(win, image=path)
+        shared = SetImageStim(win, image=None)  # Builder's "set every repeat": made empty
+        made = []
+        def make(path):  # a new stimulus (Coder), then the shared one's setImage (Builder)
+            made.append(path)
+            if len(made) % 2:
+                return SetImageStim(win, image=path)
+            shared.setImage(path)
+            return shared
     for name in names:
         stim = make(f"{folder}/{name}.png")
         stim.draw()
