@@ -805,6 +805,21 @@ CASES = [
         "foreign is a folder with files glarelab sweep did not write",
     ),
     ("cache-unknown-action", "cache purge", "invalid choice: 'purge'"),
+    (
+        "export-monitor-folder",
+        "calibrate export-monitor {box}/8bit.json --monitor lab --monitor-folder {box}/nowhere",
+        "--monitor-folder {box}/nowhere: no such folder",
+    ),
+    (
+        "stimuli-monitor-unknown",
+        "stimuli build spencer1995 --monitor nowhere --monitor-folder {box} --out {box}/set",
+        "--monitor 'nowhere': no such monitor in Monitor Center's folder",
+    ),
+    (
+        "run-monitor-folder-alone",
+        "run spencer1995 --participant P1 --monitor-folder {box} --out {box}/data",
+        "--monitor-folder needs --monitor NAME",
+    ),
 ]
 
 

@@ -127,6 +127,23 @@ def test_a_new_calibration_never_replaces_a_verified_one(box, capsys):
             "preview must be named .png")  # fmt: skip
 
 
+def test_measure_after_fit_keeps_fits_calibration_and_takes_the_next_name(box, monkeypatch):
+    # docs/workflow.md step 2: `calibrate fit` then `calibrate measure` on the same --out; the
+    # measurement goes to the next free name (it once refused the file fit had just written)
+    import glarelab.commands.calibrate as calibrate
+
+    out = box / "my-display.json"
+    assert main(["calibrate", "fit", str(READINGS), "--out", str(out), "--bit-depth", "10"]) == 0
+    written = out.read_bytes()
+    measured = []
+    monkeypatch.setattr(calibrate, "_measure_locked", lambda args: measured.append(args.out) or 0)
+    assert main(["calibrate", "measure", "--out", str(out), "--bit-depth", "10"]) == 0
+    assert measured == [box / "my-display-2.json"] and out.read_bytes() == written
+    # a second fit keeps both and goes on counting
+    assert main(["calibrate", "fit", str(READINGS), "--out", str(out), "--bit-depth", "10"]) == 0
+    assert out.read_bytes() == written and (box / "my-display-2.json").is_file()
+
+
 def _edited(box: Path, change, method: str = "gog") -> Path:
     calibration = fit_calibration(read_readings(READINGS), bit_depth=10, method=method)
     data = calibration.to_json()

@@ -76,7 +76,7 @@ def test_the_references_are_shown_pixel_for_pixel_as_the_display_showed_them(yos
     protocol = load_protocol("yoshida2008")
     shown = DisplayedSet(stimuli, protocol)
     # the luminance shown is the set's own codes decoded: the codes the sessions drew
-    codes, bits = read_png_codes(stimuli / "reference_vos_f.png")
+    codes, bits = read_png_codes(stimuli / "reference_vos_f_10bit.png")
     assert bits == 10
     decoded = shown.calibration.decode(codes)
     luminance = shown.luminance("reference_vos_f")

@@ -113,15 +113,23 @@ SCRIPT = textwrap.dedent(
 )
 
 
+def codes_file(folder: Path, name: str, set_bits: int) -> Path:
+    """The file of a set's image that holds its codes exactly (the set's README says which):
+    ``NAME.png`` for an 8-bit display, ``NAME_<bits>bit.png`` for a deeper one."""
+    return folder / (f"{name}.png" if set_bits == 8 else f"{name}_{set_bits}bit.png")
+
+
 def png_codes(path: Path, set_bits: int, window_bits: int) -> np.ndarray:
-    """The PNG's codes as OpenCV decodes the file, at the window's bits, (H, W, 3) RGB."""
+    """The PNG's codes as OpenCV decodes the file, at the window's bits, (H, W, 3) RGB: an 8-bit
+    PNG's samples are the codes; a 16-bit one's are scaled to the full 16-bit range."""
     values = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
-    assert values is not None and values.dtype == np.uint16, path
+    assert values is not None and values.dtype in (np.uint8, np.uint16), path
     if values.ndim == 3:
         values = values[..., ::-1]  # OpenCV gives BGR
     else:
         values = np.repeat(values[..., None], 3, axis=-1)
-    codes = np.rint(values.astype(np.float64) * (2**set_bits - 1) / 65535)
+    full = 255 if values.dtype == np.uint8 else 65535
+    codes = np.rint(values.astype(np.float64) * (2**set_bits - 1) / full)
     return np.rint(codes * (2**window_bits - 1) / (2**set_bits - 1)).astype(np.int64)
 
 
@@ -210,7 +218,7 @@ def compare(x: XScreen, shown: dict, sets: dict, cache: dict) -> list[dict]:
         cache[folder] = json.loads((folder / "manifest.json").read_text())
     manifest = cache[folder]
     set_bits, bits = manifest["calibration"]["bit_depth"], shown["bits"]
-    expected = [png_codes(folder / f"{n}.png", set_bits, bits) for n in shown["names"]]
+    expected = [png_codes(codes_file(folder, n, set_bits), set_bits, bits) for n in shown["names"]]
     width, height = shown["window"]
     left_edge, top_edge = shown["origin"]
     gap = manifest["geometry"]["gap_px"]

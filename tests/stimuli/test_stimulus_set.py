@@ -18,6 +18,7 @@ from glarelab.stimuli.stimulus_set import (
     read_png_codes,
     verify_stimulus_set,
     write_codes,
+    write_display_png,
 )
 
 PROTOCOLS = Path(__file__).parents[2] / "src" / "glarelab" / "protocols"
@@ -74,12 +75,21 @@ def test_codes_decode_to_the_luminance_within_half_a_step(tmp_path):
     assert manifest["calibration"]["readings_sha256"] == calibration.readings_sha256
     for name in ("reference_vos_f", "target_start_brighter"):
         luminance = read_exr(tmp_path / f"{name}.exr").astype(float)
-        codes, bits = read_png_codes(tmp_path / f"{name}.png")
+        codes, bits = read_png_codes(tmp_path / f"{name}_10bit.png")
         assert bits == 10 and codes.max() <= 1023
         # the file itself spans the 16-bit range, so a viewer shows the image, not black
-        shown = np.asarray(Image.open(tmp_path / f"{name}.png"))
+        shown = np.asarray(Image.open(tmp_path / f"{name}_10bit.png"))
         assert shown.dtype == np.uint16
         assert_array_equal(shown >> 6, codes)  # the codes are the top 10 bits
+        # NAME.png: the nearest 8-bit codes, which PsychoPy's ImageStim and viewers show
+        eight = Image.open(tmp_path / f"{name}.png")
+        assert eight.mode == "L"
+        assert_array_equal(np.asarray(eight), np.rint(codes * 255 / 1023))
+        assert manifest["images"][name]["files"] == [
+            f"{name}.exr",
+            f"{name}.png",
+            f"{name}_10bit.png",
+        ]
         decoded = calibration.decode(codes)
         step = calibration.step_cd_m2(codes)
         assert (np.abs(decoded - luminance) <= step / 2 + 1e-6).all()
@@ -87,6 +97,7 @@ def test_codes_decode_to_the_luminance_within_half_a_step(tmp_path):
     index = (tmp_path / "README.md").read_text()
     assert "README.md" in manifest["files"]  # hashed with the rest
     assert "value = round(code × 65535 / 1023)" in index and "sBIT" in index
+    assert "SetImageStim" in index and "`NAME_10bit.png`" in index
     for name in manifest["images"]:
         assert f"`{name}.exr`" in index, name
 
@@ -119,11 +130,52 @@ def test_every_code_of_every_channel_survives_a_colour_png(tmp_path, bits):
     assert_array_equal(np.rint(values * ((2**bits - 1) / 65535)), codes)
 
 
+def test_an_8_bit_sets_pngs_are_8_bit_pngs_of_its_codes(tmp_path):
+    # what PsychoPy's ImageStim draws as it is (Pillow's L, not I;16): the codes themselves
+    protocol = load_protocol(PROTOCOLS / "spencer1995.toml")
+    manifest = build_stimulus_set(protocol, tmp_path, progress=None)
+    calibration = default_calibration(protocol)
+    pngs = [f for f in manifest["files"] if f.endswith(".png") and f[0] in "cg"]
+    assert len(pngs) == 26 and not [f for f in manifest["files"] if "bit.png" in f]
+    for name in ("glare_lamp_05", "comparison_none_full"):
+        image = Image.open(tmp_path / f"{name}.png")
+        assert image.mode == "L"
+        codes, _ = calibration.encode(read_exr(tmp_path / f"{name}.exr").astype(float))
+        assert_array_equal(np.asarray(image), codes)
+        assert_array_equal(read_png_codes(tmp_path / f"{name}.png")[0], codes)
+        assert read_png_codes(tmp_path / f"{name}.png")[1] == 8
+    index = (tmp_path / "README.md").read_text()
+    assert "visual.ImageStim(win, image='NAME.png', units='pix')" in index
+    # an image's files are named after it: a manifest pointing elsewhere is found
+    data = json.loads((tmp_path / "manifest.json").read_text())
+    data["images"]["glare_lamp_05"]["files"][1] = "glare_lamp_06.png"
+    (tmp_path / "manifest.json").write_text(json.dumps(data))
+    assert "manifest.json: image glare_lamp_05 points at glare_lamp_06.png (edited?)" in (
+        verify_stimulus_set(tmp_path)
+    )
+
+
+@pytest.mark.parametrize("bits", [1, 8, 10, 12, 16])
+def test_display_pngs_hold_the_nearest_8_bit_codes(tmp_path, bits):
+    codes = np.arange(2**bits, dtype=np.int64).reshape(1, -1)
+    write_display_png(tmp_path / "eight.png", codes, bits)
+    shown = np.asarray(Image.open(tmp_path / "eight.png"))
+    assert shown.dtype == np.uint8
+    assert_array_equal(shown, np.floor(codes * 255 / (2**bits - 1) + 0.5))
+    colour = np.stack([codes, codes[:, ::-1], codes], axis=-1)
+    write_display_png(tmp_path / "colour.png", colour, bits)
+    assert Image.open(tmp_path / "colour.png").mode == "RGB"
+    with pytest.raises(
+        ValueError, match=r"codes must be in \[0, 255\] for bit_depth 8; got 0-256"
+    ):
+        write_display_png(tmp_path / "x.png", np.array([[0, 256]]), 8)
+
+
 def test_a_png_that_holds_no_codes_is_named(tmp_path):
-    Image.new("RGB", (4, 3)).save(tmp_path / "photo.png")  # 8-bit: not a set's codes
+    Image.new("RGBA", (4, 3)).save(tmp_path / "photo.png")  # with alpha: not a set's codes
     with pytest.raises(
         ValueError,
-        match=r"photo.png: a set's codes are 16-bit greyscale or RGB; this PNG has 8-bit samples in 3 channel",
+        match=r"photo.png: a set's codes are 8- or 16-bit greyscale or RGB; this PNG has 8-bit samples in 4 channel",
     ):
         read_png_codes(tmp_path / "photo.png")
     (tmp_path / "broken.png").write_bytes(b"\x89PNG\r\n\x1a\nnonsense")

@@ -14,7 +14,7 @@ from glarelab.display.calibration import Calibration, fit_calibration, read_read
 from glarelab.display.photometer import PHOTOMETERS
 from glarelab.files.atomic import write_bytes
 
-from .common import count, number, output_file
+from .common import claim_output, count, number, output_file
 from .common import log as _log
 
 if TYPE_CHECKING:
@@ -96,6 +96,7 @@ def _calibrate_fit(args: argparse.Namespace) -> int:
     )
     args.out = calibration_out(args.out, replace=args.replace, inputs=[args.readings])
     calibration.save(args.out)
+    claim_output(args.out, "calibrate fit")  # glarelab's: a later measure or --replace takes it
     _log(
         f"{len(readings)} readings → {args.method} calibration, {calibration.black_cd_m2:.4g}-"
         f"{calibration.max_cd_m2:.4g} cd/m², status '{calibration.status}' → {args.out}"
@@ -104,6 +105,28 @@ def _calibrate_fit(args: argparse.Namespace) -> int:
         _log(
             f"gain-offset-gamma residuals: RMS {calibration.model['rms_residual_cd_m2']:.3g} cd/m²"
         )
+    return 0
+
+
+def _calibrate_export_monitor(args: argparse.Namespace) -> int:
+    from glarelab.frontend.monitors import export_calibration
+    from glarelab.protocols import load_protocol
+
+    calibration = Calibration.load(args.calibration)
+    protocol = load_protocol(args.protocol) if args.protocol else None
+    path, name = export_calibration(
+        calibration,
+        args.monitor,
+        display=protocol.data.get("display") if protocol else None,
+        viewing=protocol.data.get("viewing") if protocol else None,
+        folder=args.monitor_folder,
+    )
+    _log(
+        f"{args.calibration} → Monitor Center monitor {args.monitor!r}, calibration {name!r} "
+        f"({path}): gamma grid of its gain-offset-gamma fit, {len(calibration.readings)} "
+        "luminance measurements"
+        + (f", the {protocol.study} display's size, width and distance" if protocol else "")
+    )
     return 0
 
 
@@ -159,10 +182,16 @@ def _open_meter(args: argparse.Namespace, instrument: dict | None):
 def _calibrate_measure(args: argparse.Namespace) -> int:
     from glarelab.display.measure import MeasurementLock
 
-    output_file(args.out, (".json",), "calibration")
+    if Path(args.out).suffix.lower() != ".json":
+        output_file(args.out, (".json",), "calibration")  # refuses, naming the suffix
+    # an existing calibration (one that calibrate fit wrote, too) is kept: the new one gets the
+    # next free name, as for fit
     args.out = calibration_out(args.out, replace=args.replace)
     with MeasurementLock(args.out):  # one process per session file, until it ends
-        return _measure_locked(args)
+        status = _measure_locked(args)
+    if Path(args.out).is_file():  # glarelab's: a later fit or measure keeps it, --replace takes it
+        claim_output(args.out, "calibrate measure")
+    return status
 
 
 def _protocol_targets(studies: list[str] | None) -> list[float]:
@@ -345,6 +374,29 @@ def add(commands) -> None:
     fit.add_argument("--label", default="", help="display, photometer, operator")
     fit.add_argument("--replace", action="store_true", help=REPLACE_HELP)
     fit.set_defaults(run=_calibrate_fit)
+
+    export = calibrate_commands.add_parser(
+        "export-monitor",
+        help="write a calibration into a PsychoPy Monitor Center monitor (a new calibration)",
+    )
+    export.add_argument("calibration", type=Path, help="a glarelab calibration JSON")
+    export.add_argument(
+        "--monitor", required=True, metavar="NAME", help="the monitor (made if new)"
+    )
+    export.add_argument(
+        "--protocol",
+        default=None,
+        help="a study (shipped name or TOML file): the monitor gets its display's size in "
+        "pixels and width and its viewing distance",
+    )
+    export.add_argument(
+        "--monitor-folder",
+        type=Path,
+        default=None,
+        metavar="DIR",
+        help="Monitor Center's folder of monitors (default PsychoPy's, ~/.psychopy3/monitors)",
+    )
+    export.set_defaults(run=_calibrate_export_monitor)
 
     measure = calibrate_commands.add_parser(
         "measure", help="measure a display with a photometer (PsychoPy, full-field patches)"

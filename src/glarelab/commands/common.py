@@ -435,3 +435,58 @@ def check_memory(needed: float, what: str) -> None:
             f"{what} needs about {needed / 2**30:.1f} GiB of memory, {free / 2**30:.1f} GiB "
             "are available; use a smaller size"
         )
+
+
+MONITOR_HELP = (
+    "a PsychoPy Monitor Center monitor: its size in pixels, width and distance replace the "
+    "protocol display's geometry, and the window is opened with it"
+)
+
+
+def add_monitor_options(parser: argparse.ArgumentParser, *, gamma: bool = False) -> None:
+    """``--monitor NAME`` and ``--monitor-folder DIR`` (Monitor Center's by default)."""
+    parser.add_argument(
+        "--monitor",
+        default=None,
+        metavar="NAME",
+        help=MONITOR_HELP
+        + (
+            "; without --calibration, its luminance calibration (its measurements, or its "
+            "gamma grid) encodes the images"
+            if gamma
+            else ""
+        ),
+    )
+    parser.add_argument(
+        "--monitor-folder",
+        type=Path,
+        default=None,
+        metavar="DIR",
+        help="Monitor Center's folder of monitors (default PsychoPy's, ~/.psychopy3/monitors)",
+    )
+
+
+def apply_monitor(args: argparse.Namespace, protocol):
+    """The protocol with ``--monitor``'s geometry, and the monitor (None without one)."""
+    if getattr(args, "monitor", None) is None:
+        if getattr(args, "monitor_folder", None) is not None:
+            raise ValueError("--monitor-folder needs --monitor NAME (the monitor to use)")
+        return protocol, None
+    from glarelab.frontend.monitors import load_monitor, monitor_display
+    from glarelab.protocols import with_monitor
+
+    monitor = load_monitor(args.monitor, folder=args.monitor_folder)
+    facts = monitor_display(monitor)
+    protocol = with_monitor(
+        protocol,
+        name=args.monitor,
+        resolution_px=facts["resolution_px"],
+        width_cm=facts["width_cm"],
+        distance_cm=facts["distance_cm"],
+    )
+    log(
+        f"monitor {args.monitor!r} of Monitor Center (calibration {facts['calibration']}): "
+        f"{facts['resolution_px']} px, {facts['width_cm']} cm wide, seen from "
+        f"{facts['distance_cm']} cm"
+    )
+    return protocol, monitor

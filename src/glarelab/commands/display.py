@@ -9,14 +9,14 @@ from glarelab.display.calibration import Calibration
 from glarelab.display.photometer import PHOTOMETERS
 from glarelab.protocols import load_protocol
 
-from .common import count, number, output_file
+from .common import add_monitor_options, apply_monitor, claim_output, count, number, output_file
 from .common import log as _log
 
 
 def _check_display(args: argparse.Namespace) -> int:
     from glarelab.frontend.check_display import check_display, write_check
 
-    protocol = load_protocol(args.protocol)
+    protocol, monitor = apply_monitor(args, load_protocol(args.protocol))
     calibration = Calibration.load(args.calibration) if args.calibration else None
     if args.out is not None:
         out = args.out
@@ -44,6 +44,7 @@ def _check_display(args: argparse.Namespace) -> int:
             photometer=meter,
             patch_protocol=_patch_protocol(args),
             log=_log,
+            monitor=monitor,
         )
     finally:
         if meter is not None:
@@ -104,6 +105,7 @@ def _check_display(args: argparse.Namespace) -> int:
                 f"photometer ({found['instrument']['model']}): black "
                 f"{found['black_cd_m2']:.4g} cd/m², white {found['white_cd_m2']:.4g} cd/m²"
             )
+    claim_output(out, "check-display")  # the next check (after a driver change) replaces it
     _log(f"wrote {write_check(result, out)}")
     passed = all(c["passed"] for c in result["checks"]) and result.get("images_exact", True)
     return 0 if passed else 1
@@ -138,6 +140,7 @@ def add(commands) -> None:
         "set's codes (and time a flash of it)",
     )
     check.add_argument("--calibration", type=Path, default=None, help="the display calibration")
+    add_monitor_options(check)
     check.add_argument(
         "--out", type=Path, default=None, help="JSON to write (default: next to --calibration)"
     )

@@ -11,6 +11,8 @@ from glarelab.protocols import load_protocol
 
 from .common import (
     PROTOCOL_HELP,
+    add_monitor_options,
+    apply_monitor,
     claim_output,
     count,
     inside_whole_output,
@@ -88,7 +90,7 @@ def _run(args: argparse.Namespace) -> int:
 def _run_session(args: argparse.Namespace) -> int:
     from glarelab.experiments.session import SimulatedFrontend, run_session
 
-    protocol = _protocol(args.study, args.protocol)
+    protocol, monitor = apply_monitor(args, _protocol(args.study, args.protocol))
     args.title = protocol.study
     out = Path(args.out)
     if out.exists() and not out.is_dir():
@@ -183,6 +185,7 @@ def _run_session(args: argparse.Namespace) -> int:
         scripted_keys=scripted,
         screenshot=args.screenshot,
         pilot=args.pilot,
+        monitor=monitor,
     )
     sidecar = run_session(
         protocol,
@@ -234,6 +237,7 @@ def add(commands) -> None:
     )
     run.add_argument("--stimuli", type=Path, default=None, help="the stimulus set folder")
     run.add_argument("--calibration", type=Path, default=None, help="display calibration JSON")
+    add_monitor_options(run)
     run.add_argument(
         "--allow-uncalibrated",
         action="store_true",

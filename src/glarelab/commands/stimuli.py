@@ -11,13 +11,18 @@ from glarelab.display.calibration import Calibration
 from glarelab.protocols import load_protocol
 from glarelab.stimuli.stimulus_set import build_stimulus_set, verify_stimulus_set
 
-from .common import PROTOCOL_HELP
+from .common import PROTOCOL_HELP, add_monitor_options, apply_monitor
 from .common import log as _log
 
 
 def _stimuli_build(args: argparse.Namespace) -> int:
-    protocol = load_protocol(args.protocol)
+    protocol, monitor = apply_monitor(args, load_protocol(args.protocol))
     calibration = Calibration.load(args.calibration) if args.calibration else None
+    if calibration is None and monitor is not None:
+        from glarelab.frontend.monitors import calibration_from_monitor
+
+        calibration = calibration_from_monitor(monitor, bit_depth=protocol["display"]["bit_depth"])
+        _log(f"calibration: {calibration.label} (status {calibration.status})")
     _log(f"building the {protocol.study} stimulus set into {args.out}")
     start = time.perf_counter()
     manifest = build_stimulus_set(
@@ -79,6 +84,7 @@ def add(commands) -> None:
         help="build although the calibration's white is not the protocol display's "
         "(calibration); sessions check again",
     )
+    add_monitor_options(build, gamma=True)
     build.set_defaults(run=_stimuli_build)
     verify = stimuli_commands.add_parser(
         "verify",

@@ -120,6 +120,7 @@ def check_display(
     photometer=None,
     patch_protocol=None,
     log=print,
+    monitor=None,
 ) -> dict:
     """Measure the display a protocol's sessions will run on; return the findings.
 
@@ -141,6 +142,9 @@ def check_display(
         How the photometer reads each patch (:class:`~glarelab.display.photometer.PatchProtocol`).
     log
         Called with each finding's line as it is measured; default :func:`print`.
+    monitor
+        The PsychoPy Monitor Center monitor of the window (``--monitor``); default the
+        protocol's display.
 
     Returns
     -------
@@ -157,6 +161,7 @@ def check_display(
         calibration=calibration,
         fullscreen=fullscreen,
         scripted_keys=[],
+        monitor=monitor,
     )
     log("opening the window and measuring the refresh rate")
     facts = device.open()

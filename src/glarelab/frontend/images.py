@@ -18,7 +18,7 @@ from glarelab.display.calibration import Calibration, synthetic_calibration
 from glarelab.display.checks import ScreenFacts
 from glarelab.experiments.layout import Placement, row_layout
 from glarelab.frontend.window import read_framebuffer_codes
-from glarelab.stimuli.stimulus_set import StimulusSet, read_png_codes
+from glarelab.stimuli.stimulus_set import StimulusSet, codes_png, read_png_codes
 
 __all__ = ["ImageBank", "codes_at_bits"]
 
@@ -303,7 +303,8 @@ class ImageBank:
     def expected_codes(self, terms) -> tuple[np.ndarray, str]:
         """The codes the window must show for an image, (height, width, 3), top row first, at
         the window's bits, and where they come from: a set image as it is, encoded with the
-        set's own calibration, has the codes of its PNG; any other image the calibration's
+        set's own calibration, has the codes of its codes PNG (``NAME.png`` for an 8-bit
+        display, ``NAME_<bits>bit.png`` for a deeper one); any other image the calibration's
         encoding of its luminance.
 
         Parameters
@@ -320,7 +321,8 @@ class ImageBank:
         """
         terms = [tuple(t) for t in terms]
         set_image = len(terms) == 1 and float(terms[0][1]) == 1.0
-        png = self.set.folder / f"{terms[0][0]}.png"
+        set_bits = int(self.set.manifest["calibration"]["bit_depth"])
+        png = self.set.folder / codes_png(str(terms[0][0]), set_bits)
         if set_image and self._set_calibration_used() and png.is_file():
             codes, bits = read_png_codes(png)
             source = f"{png.name} (the set's codes)"

@@ -74,6 +74,9 @@ class PsychoPyFrontend:
     pilot
         A pilot run (PsychoPy's piloting mode): a window, never full screen, with "PILOT" in
         its top-left corner on every frame, and the log's run line says so.
+    monitor
+        A PsychoPy Monitor Center monitor (``--monitor``): the window's monitor (its size,
+        width and distance; never its gamma); default the protocol's display.
     """
 
     def __init__(
@@ -87,8 +90,10 @@ class PsychoPyFrontend:
         screenshot=None,
         size: tuple[int, int] = (1280, 800),
         pilot: bool = False,
+        monitor=None,
     ):
         self.protocol = protocol
+        self.monitor = monitor
         self.pilot = pilot
         fullscreen = fullscreen and not pilot
         self.stimuli = Path(stimuli) if stimuli else None
@@ -139,8 +144,15 @@ class PsychoPyFrontend:
 
     def open(self) -> ScreenFacts:
         """Open the window, measure it and start reading the keyboard."""
+        from glarelab.frontend.monitors import window_monitor
+
+        monitor = window_monitor(
+            self.protocol.data.get("display"),
+            self.protocol.data.get("viewing"),
+            monitor=self.monitor,
+        )
         self.window, bits = open_window(
-            bits=self.display_bits, fullscreen=self.fullscreen, size=self.size
+            bits=self.display_bits, fullscreen=self.fullscreen, size=self.size, monitor=monitor
         )
         self._refresh_intervals = measure_frame_intervals(self.window, frames=60)
         self.facts = ScreenFacts(

@@ -52,8 +52,12 @@ def open_window(
     size: tuple[int, int] = (1280, 800),
     units: str = "pix",
     screen: int = 0,
+    monitor=None,
 ):
-    """A PsychoPy window asking for ``bits`` per channel (10 or more: a deep frame buffer).
+    """A PsychoPy window asking for ``bits`` per channel (10 or more: a deep frame buffer),
+    opened with ``monitor`` (a ``psychopy.monitors.Monitor``; default one that describes no
+    geometry, :func:`glarelab.frontend.monitors.window_monitor`): PsychoPy then has a monitor,
+    does not warn "Monitor specification not found", and keeps the graphics card's gamma table.
 
     Parameters
     ----------
@@ -74,7 +78,10 @@ def open_window(
     """
     from psychopy import visual
 
+    from glarelab.frontend.monitors import window_monitor
+
     common = dict(
+        monitor=monitor if monitor is not None else window_monitor(None, None),
         size=size,
         fullscr=fullscreen,
         screen=screen,

@@ -18,6 +18,7 @@ from glarelab.protocols.core import (
     pixel_deg,
     protocol_path,
     shipped_protocols,
+    with_monitor,
 )
 from glarelab.protocols.keys import Key, ProtocolError, Tables
 
@@ -39,4 +40,5 @@ __all__ = [
     "pixel_deg",
     "protocol_path",
     "shipped_protocols",
+    "with_monitor",
 ]

@@ -231,6 +231,55 @@ def load_protocol(path: str | Path) -> Protocol:
 NESTED_TOO_DEEPLY = "arrays or tables nested too deeply (a protocol nests a few levels)"
 
 
+def with_monitor(
+    protocol: Protocol,
+    *,
+    name: str,
+    resolution_px: tuple[int, int] | None = None,
+    width_cm: float | None = None,
+    distance_cm: float | None = None,
+) -> Protocol:
+    """The protocol with its display's geometry taken from a PsychoPy Monitor Center monitor
+    ``name``: its size in pixels (``display.resolution_px``), its width (the pixel pitch,
+    ``display.pixel_pitch_mm = 10 × width_cm / width_px``, square pixels) and the viewing
+    distance (``viewing.distance_m``); None keeps the protocol's. Validated as any protocol;
+    its source names the monitor.
+
+    Raises
+    ------
+    ValueError
+        For a protocol without a display, or values the protocol's keys do not allow.
+
+    Examples
+    --------
+    >>> p = with_monitor(load_protocol("yoshida2008"), name="lab", resolution_px=(1920, 1080),
+    ...                  width_cm=53.0, distance_cm=57.0)
+    >>> p["display"]["resolution_px"], p["display"]["pixel_pitch_mm"], p["viewing"]["distance_m"]
+    ([1920, 1080], 0.2760416666666667, 0.57)
+    """
+    if not protocol.data.get("display"):
+        raise ValueError(f"--monitor {name}: the {protocol.study} protocol has no display")
+    data = json.loads(json.dumps(protocol.data))  # a deep copy of the validated tables
+    display = data["display"]
+    if resolution_px is not None:
+        display["resolution_px"] = [int(v) for v in resolution_px]
+    if width_cm is not None:
+        display["pixel_pitch_mm"] = float(width_cm) * 10.0 / display["resolution_px"][0]
+        display["diagonal_in"] = None
+    if distance_cm is not None:
+        data["viewing"]["distance_m"] = float(distance_cm) / 100.0
+    for table in ("display", "viewing"):  # keys left at their defaults need not be given
+        data[table] = {k: v for k, v in data[table].items() if v is not None}
+    try:
+        return parse_protocol(
+            data,
+            source=f"{protocol.source} with PsychoPy Monitor Center monitor {name!r}",
+            folder=protocol.folder,
+        )
+    except ProtocolError as error:
+        raise ValueError(f"--monitor {name}: {error}") from None
+
+
 def pixel_deg(protocol: Protocol) -> float:
     """Visual angle of one display pixel at the viewing distance, degrees.
 

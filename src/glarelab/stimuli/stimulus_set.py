@@ -1,10 +1,15 @@
 """A stimulus set on disk: what a study shows, exactly reproducible and self-describing.
 
 A set is a folder with, for every image, float32 linear luminance (``NAME.exr``, cd/m²) and
-the display codes that show it through the calibration (``NAME.png``, 16-bit greyscale:
-the codes scaled to the full 16-bit range, ``round(code × 65535 / (2^bits − 1))``, with an
-``sBIT`` chunk recording the display's bit depth, so any viewer shows the image as the display
-does and :func:`read_png_codes` gives back the exact codes); luminance-profile plots through the
+the display codes that show it through the calibration: ``NAME.png``, an 8-bit PNG (greyscale,
+or RGB for a colour image) whose samples are the codes of an 8-bit display, so PsychoPy's
+``visual.ImageStim(win, image="NAME.png")`` (and Builder's Image component, which is one) and
+any image viewer show the image code for code; for a display of more than 8 bits, ``NAME.png``
+holds the nearest 8-bit codes (a viewer's and an 8-bit screen's copy) and ``NAME_10bit.png``
+(``_12bit``, …) the display's own codes, a 16-bit PNG of the codes scaled to the full 16-bit
+range, ``round(code × 65535 / (2^bits − 1))``, with an ``sBIT`` chunk recording the bit depth
+(:func:`read_png_codes` gives back the exact codes; :class:`glarelab.frontend.psychopy_plugin.
+SetImageStim` shows them on a deep window); luminance-profile plots through the
 disk centre (``profiles_*.png``, like Yoshida et al.'s Figure 3); ``README.md``, an index of
 the files and images; and ``manifest.json``: the validated protocol and its hash, the
 calibration and its hash, the geometry, every image's parameters and encoding report, the
@@ -45,6 +50,7 @@ __all__ = [
     "StimulusSet",
     "build_stimulus_set",
     "cached_stimulus_set",
+    "codes_png",
     "compose",
     "default_calibration",
     "package_versions",
@@ -53,11 +59,13 @@ __all__ = [
     "shows_images",
     "verify_stimulus_set",
     "write_codes",
+    "write_display_png",
 ]
 
 MANIFEST = "manifest.json"
 INDEX = "README.md"
-FORMAT = "glarelab stimulus set v3"  # v3: PNGs scaled to 16 bits with sBIT, README.md
+# v4: NAME.png 8-bit (an 8-bit display's codes as they are), NAME_<bits>bit.png for deeper ones
+FORMAT = "glarelab stimulus set v4"
 PNG_MAX = 65535
 PACKAGES = ("numpy", "scipy", "colour-science", "OpenEXR", "matplotlib", "pillow", "glarelab")
 
@@ -158,6 +166,68 @@ def write_codes(path: str | Path, codes: np.ndarray, bit_depth: int) -> None:
     ValueError
         For a ``bit_depth`` outside 1-16, or codes outside 0 … 2^bit_depth − 1.
     """
+    codes = _checked_codes(codes, bit_depth)
+    top = 2**bit_depth - 1
+    scaled = np.floor(codes.astype(np.float64) * PNG_MAX / top + 0.5).astype(np.uint16)
+    if scaled.ndim == 3:  # a colour image: 16-bit RGB
+        _write_rgb16_png(path, scaled, bit_depth)
+        return
+    info = PngInfo()
+    info.add(b"sBIT", bytes([bit_depth]))
+    with atomic_path(path) as temporary:
+        Image.fromarray(scaled).save(temporary, format="PNG", pnginfo=info)
+
+
+def write_display_png(path: str | Path, codes: np.ndarray, bit_depth: int) -> None:
+    """Write display codes as an 8-bit PNG (greyscale; RGB for an ``(H, W, 3)`` colour image)
+    whose samples are the codes an 8-bit display shows: the codes themselves for
+    ``bit_depth`` 8, the nearest 8-bit codes, ``round(code × 255 / (2^bit_depth − 1))``,
+    otherwise.
+
+    An 8-bit PNG is what PsychoPy's ``ImageStim`` draws as it is: Pillow opens it as ``L`` or
+    ``RGB``, PsychoPy uploads sample ``v`` as ``v / 255`` of full scale, and an 8-bit frame
+    buffer shows code ``v`` (a 16-bit PNG opens as Pillow's ``I;16``, which PsychoPy clips to
+    black and white).
+
+    Raises
+    ------
+    ValueError
+        For a ``bit_depth`` outside 1-16, or codes outside 0 … 2^bit_depth − 1.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> path = Path(tempfile.mkdtemp()) / "codes.png"
+    >>> write_display_png(path, np.array([[0, 1, 254, 255]]), 8)
+    >>> image = Image.open(path)
+    >>> image.mode, np.asarray(image).tolist()
+    ('L', [[0, 1, 254, 255]])
+    >>> write_display_png(path, np.array([[0, 2, 512, 1023]]), 10)  # nearest 8-bit codes
+    >>> np.asarray(Image.open(path)).tolist()
+    [[0, 0, 128, 255]]
+    """
+    codes = _checked_codes(codes, bit_depth)
+    top = 2**bit_depth - 1
+    eight = codes.astype(np.int64)
+    if bit_depth != 8:
+        eight = (eight * 255 * 2 // top + 1) // 2  # round(code × 255 / top), exactly
+    with atomic_path(path) as temporary:
+        Image.fromarray(eight.astype(np.uint8)).save(temporary, format="PNG")
+
+
+def codes_png(name: str, bit_depth: int) -> str:
+    """The file of a set's image ``name`` that holds its display codes exactly: ``NAME.png``
+    for an 8-bit display, ``NAME_<bits>bit.png`` for a deeper one.
+
+    Examples
+    --------
+    >>> codes_png("reference_vos_f", 8), codes_png("reference_vos_f", 10)
+    ('reference_vos_f.png', 'reference_vos_f_10bit.png')
+    """
+    return f"{name}.png" if bit_depth <= 8 else f"{name}_{bit_depth}bit.png"
+
+
+def _checked_codes(codes: np.ndarray, bit_depth: int) -> np.ndarray:
     if not 1 <= bit_depth <= 16:
         raise ValueError(f"bit_depth must be 1-16; got {bit_depth!r}")
     top = 2**bit_depth - 1
@@ -167,14 +237,7 @@ def write_codes(path: str | Path, codes: np.ndarray, bit_depth: int) -> None:
             f"codes must be in [0, {top}] for bit_depth {bit_depth}; got "
             f"{codes.min()}-{codes.max()}"
         )
-    scaled = np.floor(codes.astype(np.float64) * PNG_MAX / top + 0.5).astype(np.uint16)
-    if scaled.ndim == 3:  # a colour image: 16-bit RGB
-        _write_rgb16_png(path, scaled, bit_depth)
-        return
-    info = PngInfo()
-    info.add(b"sBIT", bytes([bit_depth]))
-    with atomic_path(path) as temporary:
-        Image.fromarray(scaled).save(temporary, format="PNG", pnginfo=info)
+    return codes
 
 
 def _sbit(data: bytes) -> int | None:
@@ -193,9 +256,10 @@ def _sbit(data: bytes) -> int | None:
 
 
 def read_png_codes(path: str | Path) -> tuple[np.ndarray, int]:
-    """The display codes of a set's PNG, greyscale ``(H, W)`` or colour ``(H, W, 3)``, and the
-    bit depth its ``sBIT`` chunk records (:func:`write_codes`); a PNG without one holds the
-    codes unscaled (16 bits).
+    """The display codes of a set's PNG, greyscale ``(H, W)`` or colour ``(H, W, 3)``, and
+    their bit depth: a 16-bit PNG's ``sBIT`` chunk records it (:func:`write_codes`; one
+    without holds the codes unscaled, 16 bits); an 8-bit PNG holds 8-bit codes as they are
+    (:func:`write_display_png`).
 
     The PNG is decoded by pypng, which reads every sample at the file's own bit depth: Pillow
     opens a 16-bit RGB PNG as 8-bit RGB (it has no 16-bit colour mode), which would turn a
@@ -216,7 +280,8 @@ def read_png_codes(path: str | Path) -> tuple[np.ndarray, int]:
     Raises
     ------
     ValueError
-        For a PNG that is not 16-bit greyscale or RGB (not a set's codes), naming the file.
+        For a PNG that is not 8- or 16-bit greyscale or RGB (not a set's codes), naming the
+        file.
 
     Examples
     --------
@@ -229,6 +294,10 @@ def read_png_codes(path: str | Path) -> tuple[np.ndarray, int]:
     >>> write_codes(path, np.array([[[0, 734, 1023]]]), 10)  # a colour pixel
     >>> read_png_codes(path)[0].tolist()
     [[[0, 734, 1023]]]
+    >>> write_display_png(path, np.array([[3, 250]]), 8)
+    >>> codes, bits = read_png_codes(path)
+    >>> codes.tolist(), bits
+    ([[3, 250]], 8)
     """
     import png  # pypng
 
@@ -238,19 +307,20 @@ def read_png_codes(path: str | Path) -> tuple[np.ndarray, int]:
     except png.Error as error:
         raise ValueError(f"{path}: not a PNG of display codes ({error})") from None
     planes = int(info["planes"])
-    if info["bitdepth"] != 16 or planes not in (1, 3) or info.get("palette"):
+    depth = info["bitdepth"]
+    if depth not in (8, 16) or planes not in (1, 3) or info.get("palette"):
         raise ValueError(
-            f"{path}: a set's codes are 16-bit greyscale or RGB; this PNG has "
-            f"{info['bitdepth']}-bit samples in {planes} channel(s)"
+            f"{path}: a set's codes are 8- or 16-bit greyscale or RGB; this PNG has "
+            f"{depth}-bit samples in {planes} channel(s)"
         )
     values = np.asarray(pixels, dtype=np.int64).reshape(height, width, planes)
     if planes == 1:
         values = values[..., 0]
     bits = _sbit(data)
-    if bits is None or bits == 16:
-        return values.astype(np.uint16), 16
-    top = 2**bits - 1
-    return (values * top * 2 // PNG_MAX + 1) // 2, bits  # round(v × top / 65535), exactly
+    if bits is None or bits == depth:
+        return values.astype(np.uint16), depth
+    top, full = 2**bits - 1, 2**depth - 1
+    return (values * top * 2 // full + 1) // 2, bits  # round(v × top / full), exactly
 
 
 def _sha256(path: Path) -> str:
@@ -431,8 +501,12 @@ def _write_set(out: Path, protocol: Protocol, built: dict, calibration: Calibrat
         record = {k: v for k, v in info.items() if k != "img"}
         if info["kind"] != "component":  # display luminances: encode them for the display
             codes, report = calibration.encode(img)
-            write_codes(out / f"{name}.png", codes, calibration.bit_depth)
+            write_display_png(out / f"{name}.png", codes, calibration.bit_depth)
             files.append(f"{name}.png")
+            if calibration.bit_depth > 8:  # the display's own codes, beside the 8-bit copy
+                deep = codes_png(name, calibration.bit_depth)
+                write_codes(out / deep, codes, calibration.bit_depth)
+                files.append(deep)
             record["encoding"] = {
                 "above_max": report.above_max,
                 "below_black": report.below_black,
@@ -480,7 +554,33 @@ def _index(protocol: Protocol, calibration: Calibration, records: dict, plots, g
         if colour
         else ("linear luminance in cd/m², channel `Y`")
     )
-    png = "16-bit RGB" if colour else "16-bit greyscale"
+    kind = "RGB" if colour else "greyscale"
+    bits = calibration.bit_depth
+    if bits == 8:
+        png = [
+            f"- `NAME.png`: the drive codes that show it on the display, 0-{top}, through the "
+            f"calibration: an 8-bit {kind} PNG whose samples are the codes. PsychoPy shows it "
+            "code for code, drawn by its file name (`visual.ImageStim(win, image='NAME.png', "
+            "units='pix')`, or Builder's Image component with units `pix`, an empty size and "
+            "interpolation off), and so does any image viewer. Images the sessions compose "
+            "from parts (kind `component`) have no PNG.",
+        ]
+    else:
+        png = [
+            f"- `NAME_{bits}bit.png`: the drive codes that show it on the display, 0-{top}, "
+            f"through the calibration: a 16-bit {kind} PNG of the codes scaled to the full "
+            f"16-bit range, `value = round(code × 65535 / {top})`, with an `sBIT` chunk "
+            f"recording the true bit depth ({bits}); the codes are `round(value × {top} / "
+            f"65535)` (or `value >> {16 - bits}`), as "
+            "`glarelab.stimuli.stimulus_set.read_png_codes` reads them. PsychoPy shows them "
+            f"code for code on a {bits}-bit window through "
+            "`glarelab.frontend.psychopy_plugin.SetImageStim(win, image='NAME.png')` "
+            "(README: Stimuli in your own PsychoPy experiment).",
+            f"- `NAME.png`: the same image at 8 bits, an 8-bit {kind} PNG of the nearest 8-bit "
+            f"codes, `round(code × 255 / {top})`: what an image viewer or an 8-bit screen "
+            "shows (drawn by a plain `ImageStim` it is not the display's codes). Images the "
+            "sessions compose from parts (kind `component`) have no PNG.",
+        ]
     lines = [
         f"# Stimulus set: {protocol.title}",
         "",
@@ -493,14 +593,7 @@ def _index(protocol: Protocol, calibration: Calibration, records: dict, plots, g
         "## Files",
         "",
         f"- `NAME.exr`: the image's {exr} (float32 OpenEXR), before the display.",
-        f"- `NAME.png`: the drive codes that show it on the display, 0-{top}, through the "
-        f"calibration. {png} scaled to the full 16-bit range, "
-        f"`value = round(code × 65535 / {top})`, with an `sBIT` chunk recording the true bit "
-        f"depth ({calibration.bit_depth}): an image viewer shows the image as the display "
-        f"does (for a display of gamma about 2.2); the codes are `round(value × {top} / "
-        f"65535)` (or `value >> {16 - calibration.bit_depth}`), as "
-        "`glarelab.stimuli.stimulus_set.read_png_codes` reads them. Images the sessions "
-        "compose from parts (kind `component`) have no PNG.",
+        *png,
         "- `profiles_*.png`: the images with their luminance profile through the centre.",
         "",
         "## Images",
@@ -586,7 +679,10 @@ def verify_stimulus_set(folder: str | Path) -> list[str]:
             for file in record.get("files", []) if isinstance(record, dict) else []:
                 if file not in listed:
                     problems.append(f"{file}: image {name}'s file is not hashed in the manifest")
-                if Path(file).stem != name:  # a build names each image's file after it
+                named = (f"{name}.exr", f"{name}.png")
+                deep = file.removeprefix(f"{name}_").removesuffix("bit.png")
+                if file not in named and not (deep.isdigit() and file.startswith(f"{name}_")):
+                    # a build names each image's files after it
                     problems.append(f"{MANIFEST}: image {name} points at {file} (edited?)")
     else:
         problems.append(f"{MANIFEST}: has no table of images")
