@@ -8,12 +8,15 @@ from collections.abc import Callable
 
 import numpy as np
 
-__all__ = ["timed"]
+__all__ = ["round_ratio", "timed"]
 
 
-def timed(variants: dict[str, Callable[[], np.ndarray]], repeats: int) -> dict:
+def timed(
+    variants: dict[str, Callable[[], np.ndarray]], repeats: int, *, rounds: dict | None = None
+) -> dict:
     """Best time and last result of each variant, the variants run in turn ``repeats``
-    times (so that a busy moment of a shared machine does not fall on one of them)."""
+    times (so that a busy moment of a shared machine does not fall on one of them); with
+    ``rounds``, each variant's time in every round is put there too."""
     times = {name: [] for name in variants}
     results = {}
     for _ in range(repeats):
@@ -21,4 +24,13 @@ def timed(variants: dict[str, Callable[[], np.ndarray]], repeats: int) -> dict:
             start = time.perf_counter()
             results[name] = function()
             times[name].append(time.perf_counter() - start)
+    if rounds is not None:
+        rounds.update(times)
     return {name: (min(times[name]), results[name]) for name in variants}
+
+
+def round_ratio(rounds: dict, numerator: str, denominator: str) -> float:
+    """The median over the rounds of ``numerator``'s time over ``denominator``'s, both
+    measured in the same round (``rounds`` as :func:`timed` fills it)."""
+    ratios = np.asarray(rounds[numerator], float) / np.asarray(rounds[denominator], float)
+    return float(np.median(ratios))
