@@ -15,12 +15,18 @@ def timed(
     variants: dict[str, Callable[[], np.ndarray]], repeats: int, *, rounds: dict | None = None
 ) -> dict:
     """Best time and last result of each variant, the variants run in turn ``repeats``
-    times (so that a busy moment of a shared machine does not fall on one of them); with
-    ``rounds``, each variant's time in every round is put there too."""
+    times (so that a busy moment of a shared machine does not fall on one of them), each
+    round starting one variant later; with ``rounds``, each variant's time in every round
+    is put there too."""
     times = {name: [] for name in variants}
     results = {}
-    for _ in range(repeats):
-        for name, function in variants.items():
+    names = list(variants)
+    for index in range(repeats):
+        # each round starts one variant later: the first of a round runs after the slowest
+        # of the last (its caches evicted), and that place goes round
+        shift = index % len(names)
+        for name in names[shift:] + names[:shift]:
+            function = variants[name]
             start = time.perf_counter()
             results[name] = function()
             times[name].append(time.perf_counter() - start)
