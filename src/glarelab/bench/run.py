@@ -35,6 +35,7 @@ wavelength, with CIEDE2000.
 from __future__ import annotations
 
 import csv
+import functools
 from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
@@ -74,9 +75,16 @@ from glarelab.bench.timing import round_ratio, timed
 from glarelab.display.calibration import Calibration
 from glarelab.files.atomic import atomic_open, write_text
 from glarelab.glare.models.digitise import kernel_shape_for
+from glarelab.glare.rendering.costs import measure_costs
 from glarelab.glare.rendering.display import display_codes
 
 __all__ = ["run_bench"]
+
+
+@functools.cache
+def _machine_costs():
+    """The path costs of this machine, measured once per run (the renderers have no cache)."""
+    return measure_costs()
 
 
 def _reach_shape(reach_deg: float, pixel: float, full: tuple[int, int]) -> tuple[int, int]:
@@ -95,6 +103,7 @@ class _Prepared:
             l_dmax_cd_m2=L_DMAX,
             display=lut,
             cache=False,
+            costs=_machine_costs(),
             **options,
         )
         self.image = image

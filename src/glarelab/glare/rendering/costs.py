@@ -22,7 +22,7 @@ import numpy as np
 
 __all__ = ["DEFAULT_COSTS", "PathCosts", "cores", "machine_costs", "measure_costs"]
 
-COSTS_VERSION = 2  # bump when what is measured changes
+COSTS_VERSION = 3  # bump when what is measured changes
 
 
 def cores() -> int:
@@ -65,13 +65,16 @@ class PathCosts:
 DEFAULT_COSTS = PathCosts()
 
 
-def _best(function, repeats: int = 3) -> float:
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        function()
-        times.append(time.perf_counter() - start)
-    return float(np.median(times))
+def _medians(functions: dict, rounds: int = 5) -> dict:
+    """Median seconds of each function, run in turn ``rounds`` times (alternating rounds: a
+    busy moment of a shared machine falls on all of them alike)."""
+    times = {name: [] for name in functions}
+    for _ in range(rounds):
+        for name, function in functions.items():
+            start = time.perf_counter()
+            function()
+            times[name].append(time.perf_counter() - start)
+    return {name: float(np.median(t)) for name, t in times.items()}
 
 
 def measure_costs() -> PathCosts:
@@ -88,7 +91,7 @@ def measure_costs() -> PathCosts:
         kernel_spectrum,
         spectral_spread,
     )
-    from glarelab.glare.rendering.display import CodeBound, display_lut
+    from glarelab.glare.rendering.display import CodeBound, block_reduce, display_lut
     from glarelab.glare.rendering.multires import far_spread, grid_shape, splat, upsample
 
     rng = np.random.default_rng(0)
@@ -98,52 +101,57 @@ def measure_costs() -> PathCosts:
     kernel = rng.random((2 * n - 1, 2 * n - 1))
     unit = lengths[0] * lengths[1] * np.log2(lengths[0] * lengths[1])
     box, out = (0, n, 0, n), (0, n, 0, n)
-    per = {}
     full = kernel_spectrum(kernel, lengths)
-    for dtype in (np.float64, np.float32):
-        spectrum = full.astype(np.complex64 if dtype == np.float32 else np.complex128)
-        work = excess.astype(dtype)
-        per[dtype] = (
-            _best(lambda w=work, k=spectrum: spectral_spread(w, box, out, k, lengths)) / unit
-        )
-    # direct: one bright pixel, then a 3 × 3 cluster, onto a 512² output
+    work = {np.float64: excess, np.float32: excess.astype(np.float32)}
+    spectra = {np.float64: full, np.float32: full.astype(np.complex64)}
     into = np.zeros((n, n))
     kernel_small = kernel[: n + 1, : n + 1]
-    one = np.zeros((1, 1)) + 1.0
-    pixel_s = _best(
-        lambda: direct_spread(one, (n // 2, n // 2), kernel_small, out, into, workers=cores())
-    ) / (n * n)
-    cluster = np.ones((3, 3))
-    groups = [((slice(0, 3), slice(0, 3)), np.ones((3, 3), bool))]
-    cluster_s = _best(
-        lambda: direct_spread(
-            cluster, (n // 2, n // 2), kernel_small, out, into, workers=cores(), groups=groups
-        )
-    ) / (n * n)
-    big = np.ones((12, 12))
-    groups = [((slice(0, 12), slice(0, 12)), np.ones((12, 12), bool))]
-    big_s = _best(
-        lambda: direct_spread(
-            big, (n // 2, n // 2), kernel_small, out, into, workers=cores(), groups=groups
-        )
-    ) / (n * n)
-    weight_s = max((big_s - cluster_s) / (144 - 9), 1e-12)
-    # far tail: splat, coarse convolution and interpolation of a 1024² image at 1/8
+    centre = (n // 2, n // 2)
+    one = np.ones((1, 1))
+    small, big = np.ones((3, 3)), np.ones((12, 12))
+    small_groups = [((slice(0, 3), slice(0, 3)), np.ones((3, 3), bool))]
+    big_groups = [((slice(0, 12), slice(0, 12)), np.ones((12, 12), bool))]
+    # far tail: splat, coarse convolution, interpolation, the plan's preview and the
+    # per-pixel bound, for a 1024² image at 1/8
     size, factor = 1024, 8
     image = rng.random((size, size))
     far = rng.random((2 * (size // factor + 5) + 1,) * 2)
     whole = (0, size, 0, size)
-
     bound = CodeBound(display_lut(None, 220.0), 220.0, "Yoshida2008")
     planes = image[..., None] * 100.0
 
     def far_tail():
         nodes = splat(image, factor, whole, grid_shape((size, size), factor))
+        far_spread(None, whole, (size, size), far, factor, nodes=True, splatted=nodes)
+        block_reduce(image, np.minimum, factor)
         spread = far_spread(None, whole, (size, size), far, factor, nodes=True, splatted=nodes)
         fine = upsample(spread, factor, (size, size))
         bound.codes(planes, fine[..., None], absolute=0.0, relative=1e-4, tolerance_codes=0.5)
 
-    multires_s = _best(far_tail) / (size * size)
+    workers = cores()
+    medians = _medians(
+        {
+            "fft64": lambda: spectral_spread(
+                work[np.float64], box, out, spectra[np.float64], lengths
+            ),
+            "fft32": lambda: spectral_spread(
+                work[np.float32], box, out, spectra[np.float32], lengths
+            ),
+            "pixel": lambda: direct_spread(one, centre, kernel_small, out, into, workers=workers),
+            "small": lambda: direct_spread(
+                small, centre, kernel_small, out, into, workers=workers, groups=small_groups
+            ),
+            "big": lambda: direct_spread(
+                big, centre, kernel_small, out, into, workers=workers, groups=big_groups
+            ),
+            "far": far_tail,
+        }
+    )
+    pixel_s = medians["pixel"] / (n * n)
+    cluster_s = medians["small"] / (n * n)
+    weight_s = max((medians["big"] / (n * n) - cluster_s) / (144 - 9), 1e-12)
+    multires_s = medians["far"] / (size * size)
+    per = {np.float64: medians["fft64"] / unit, np.float32: medians["fft32"] / unit}
     return PathCosts(
         fft_s=per[np.float64],
         fft32_s=per[np.float32],
