@@ -21,3 +21,9 @@ def test_workloads_are_the_scenes_the_issues_name():
     leaves, _ = workload("leaves_2048")
     assert (leaves == 4000.0).mean() > 0.05  # many bright pixels: the sky through the leaves
     assert workload("night_1280x1024")[0].shape == (1024, 1280)
+    # issue 35: a city at night with 2,000 lamps, an RGB street and a sky with the sun, 1024²
+    city, _ = workload("city_1024")
+    assert city.shape == (1024, 1024) and (city > 220).sum() >= 2000 * 9 * 0.9
+    street, _ = workload("street_rgb_1024")
+    assert street.shape == (1024, 1024, 3) and not np.array_equal(street[..., 0], street[..., 2])
+    assert workload("sun_1024")[0].max() == 7.5e8

@@ -253,9 +253,15 @@ def lamps_scene(
 
 
 NIGHT_PIXEL_DEG = 0.02  # the 2048² night scenes: 41° across
+CITY_PIXEL_DEG = 0.04  # the 1024² city and street: 41° across
 WORKLOADS = {  # name → builder: the scenes of the benchmark and of the tests
     "yoshida2008": yoshida_scene,
     "night_1280x1024": night_scene,
+    "city_1024": lambda: lamps_scene((1024, 1024), 2000, pixel_deg=CITY_PIXEL_DEG),
+    "street_rgb_1024": lambda: lamps_scene(
+        (1024, 1024), 200, pixel_deg=CITY_PIXEL_DEG, colour=True
+    ),
+    "sun_1024": lambda: sun_scene(1024),
     "street_256": lambda: lamps_scene((256, 256), 6, pixel_deg=0.05),
     "strip_4096x256": lambda: lamps_scene((256, 4096), 24, pixel_deg=NIGHT_PIXEL_DEG),
     "sun_2048": lambda: sun_scene(2048),
@@ -320,12 +326,15 @@ def workload_names(large: bool = False) -> list[str]:
 MODELS = {
     "yoshida2008": ("vos", "gaussian"),
     "night_1280x1024": ("vos_scotopic",),
+    "city_1024": ("vos",),
+    "street_rgb_1024": ("vos",),
+    "sun_1024": ("vos",),
     "street_256": ("vos",),
     "strip_4096x256": ("vos",),
     "sun_2048": ("vos",),
     "leaves_2048": ("vos",),
     "glints_2048": ("vos", "gaussian"),
-    "city_2048": ("vos",),
+    "city_2048": ("vos", "vos_mesopic"),
     "city_rgb_2048": ("vos",),
     "night_sun_2048": ("vos",),
     "sun_4096": ("vos",),
@@ -359,6 +368,8 @@ def bench_model(name: str, pixel: float):
         return glare.VosGlare()
     if name == "vos_scotopic":
         return glare.VosGlare(regime="scotopic")
+    if name == "vos_mesopic":
+        return glare.VosGlare(regime="mesopic")
     if name == "gaussian":
         # Yoshida's σ; integrated over pixels when it spans fewer than 3
         sampling = "pixel" if glare.models.SIGMA_DEG_YOSHIDA2008 / pixel < 3 else "point"

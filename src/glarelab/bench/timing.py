@@ -8,12 +8,15 @@ from collections.abc import Callable
 
 import numpy as np
 
-__all__ = ["timed"]
+__all__ = ["round_ratio", "timed"]
 
 
-def timed(variants: dict[str, Callable[[], np.ndarray]], repeats: int) -> dict:
+def timed(
+    variants: dict[str, Callable[[], np.ndarray]], repeats: int, *, rounds: dict | None = None
+) -> dict:
     """Best time and last result of each variant, the variants run in turn ``repeats``
-    times (so that a busy moment of a shared machine does not fall on one of them).
+    times (so that a busy moment of a shared machine does not fall on one of them), each
+    round starting one variant later.
 
     Parameters
     ----------
@@ -21,6 +24,8 @@ def timed(variants: dict[str, Callable[[], np.ndarray]], repeats: int) -> dict:
         Name → a function of no arguments that does the work and returns its result.
     repeats
         Rounds, >= 1.
+    rounds
+        If given, each variant's time in every round is put there too (name → seconds).
 
     Returns
     -------
@@ -29,9 +34,23 @@ def timed(variants: dict[str, Callable[[], np.ndarray]], repeats: int) -> dict:
     """
     times = {name: [] for name in variants}
     results = {}
-    for _ in range(repeats):
-        for name, function in variants.items():
+    names = list(variants)
+    for index in range(repeats):
+        # each round starts one variant later: the first of a round runs after the slowest
+        # of the last (its caches evicted), and that place goes round
+        shift = index % len(names)
+        for name in names[shift:] + names[:shift]:
+            function = variants[name]
             start = time.perf_counter()
             results[name] = function()
             times[name].append(time.perf_counter() - start)
+    if rounds is not None:
+        rounds.update(times)
     return {name: (min(times[name]), results[name]) for name in variants}
+
+
+def round_ratio(rounds: dict, numerator: str, denominator: str) -> float:
+    """The median over the rounds of ``numerator``'s time over ``denominator``'s, both
+    measured in the same round (``rounds`` as :func:`timed` fills it)."""
+    ratios = np.asarray(rounds[numerator], float) / np.asarray(rounds[denominator], float)
+    return float(np.median(ratios))

@@ -10,7 +10,14 @@ from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 from glarelab import glare
+from glarelab.bench.scenes import lamps_scene, yoshida_scene
 from glarelab.glare import GaussianGlare, GlareRenderer, HybridGlare, VosGlare, WaveOpticsGlare
+from glarelab.glare.rendering._convolve import (
+    fft_length,
+    fft_roundoff,
+    kernel_spectrum,
+    spectral_spread,
+)
 from glarelab.glare.rendering.display import display_codes, display_lut
 
 L_DMAX = 220.0
@@ -62,13 +69,17 @@ def scene(shape, *, seed, background_cd_m2, sources, colour):
     return image
 
 
-def _check(image, model, pixel_deg, tolerance, *, paths=None, kernel=None, display=None):
+def _check(
+    image, model, pixel_deg, tolerance, *, paths=None, kernel=None, display=None, precision=None
+):
     """Render as planned and exactly with the same digitised kernel; return the error and
     the result."""
     colour = image.ndim == 3
     if kernel is None:
         kernel = model.kernel(pixel_deg, glare.kernel_shape_for(image.shape), colour=colour)
     options = {} if paths is None else {"paths": paths}
+    if precision is not None:
+        options["precision"] = precision
     renderer = GlareRenderer(
         model,
         pixel_deg=pixel_deg,
@@ -90,7 +101,7 @@ def _check(image, model, pixel_deg, tolerance, *, paths=None, kernel=None, displ
 
 
 @st.composite
-def scenes(draw, *, large, kinds=None):
+def scenes(draw, *, large, kinds=None, background=(-3.0, 2.0)):
     kinds = kinds or (("strip", "small", "medium") if large else ("strip", "small"))
     kind = draw(st.sampled_from(kinds))
     if kind == "strip":
@@ -114,7 +125,7 @@ def scenes(draw, *, large, kinds=None):
     return scene(
         shape,
         seed=draw(st.integers(0, 2**16)),
-        background_cd_m2=10.0 ** draw(st.floats(-3.0, 2.0)),
+        background_cd_m2=10.0 ** draw(st.floats(*background)),
         sources=sources,
         colour=draw(st.booleans()),
     )
@@ -196,3 +207,96 @@ def test_bright_sources_on_a_2048_night_scene(vos_2048, where, paths, tolerance)
         result.error_bound_codes,
         str(result.plan),
     )
+
+
+@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    image=scenes(large=True, kinds=("small", "medium"), background=(-1.0, 2.2)),
+    model=st.sampled_from(list(BOUNDED.values())),
+    pixel_deg=st.sampled_from([0.005, 0.02, 0.05]),
+    tolerance=st.sampled_from([0.5, 2.0]),
+    paths=st.sampled_from([None, ("fft",), ("multires",)]),
+    precision=st.sampled_from(["float64", "float32"]),
+)
+def test_float32_transforms_keep_the_reported_bound(
+    image, model, pixel_deg, tolerance, paths, precision
+):
+    # backgrounds bright enough (0.1-160 cd/m²) for the plan to take float32 transforms often;
+    # glints up to 1e9 cd/m² at corners and edges make it refuse them; images kept in float64
+    # or in float32
+    error, result = _check(image, model, pixel_deg, tolerance, paths=paths, precision=precision)
+    event(f"transforms {result.plan.fft_precision}, path {result.plan.path}")
+    assert error <= tolerance, (error, str(result.plan))
+    assert error <= result.error_bound_codes, (error, str(result.plan))
+
+
+@settings(max_examples=10, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    image=scenes(large=False, kinds=("small",), background=(-1.0, 2.2)),
+    model=st.sampled_from(list(UNBOUNDED.values())),
+    pixel_deg=st.sampled_from([0.01, 0.05]),
+    precision=st.sampled_from(["float64", "float32"]),
+)
+def test_float32_transforms_keep_the_bound_for_models_without_a_tail_bound(
+    image, model, pixel_deg, precision
+):
+    error, result = _check(image, model, pixel_deg, 0.5, paths=("fft",), precision=precision)
+    event(f"transforms {result.plan.fft_precision}")
+    assert error <= 0.5 and error <= result.error_bound_codes, (error, str(result.plan))
+
+
+@pytest.mark.parametrize("model", [GaussianGlare(sampling="pixel"), VosGlare()])
+def test_precision_is_planned_float32_for_a_disk_and_float64_next_to_a_sun(model):
+    # Yoshida 2008's stimulus (a 7000 cd/m² disk on a 150 cd/m² sky): float32 keeps half a
+    # code; a 7.5e8 cd/m² glint (Spencer Fig. 16's sun) over a dark street does not
+    disk, pixel = yoshida_scene()
+    error, result = _check(disk, model, pixel, 0.5, paths=("fft",))
+    assert result.plan.fft_precision == "float32" and not result.fallback
+    assert result.parameters["convolution_precision"] == ["float32"]
+    assert error <= result.error_bound_codes <= 0.5
+    night, pixel = lamps_scene((256, 256), 3, pixel_deg=0.05, glint_cd_m2=7.5e8)
+    error, result = _check(night, model, pixel, 0.5, paths=("fft",))
+    assert result.plan.fft_precision == "float64"
+    assert error <= result.error_bound_codes <= 0.5
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    image=scenes(large=False, kinds=("small",)),
+    model=st.sampled_from(
+        [*BOUNDED.values(), UNBOUNDED["wave optics"], UNBOUNDED["vos scotopic, flare lines"]]
+    ),
+    pixel_deg=st.sampled_from([0.005, 0.02, 0.1]),
+)
+def test_float32_fft_round_off_is_within_its_bound_at_every_pixel(image, model, pixel_deg):
+    # the bound the plan spends the tolerance on: the float32 spread against the float64 one,
+    # pixel by pixel, |ΔS| <= a + r S, forced on every scene (the plan takes float32 only
+    # where the bound fits the tolerance)
+    plane = image if image.ndim == 2 else image[..., 0]
+    excess = np.maximum(plane - L_DMAX, 0.0)
+    if not excess.any():
+        return
+    rows, cols = np.flatnonzero(excess.any(axis=1)), np.flatnonzero(excess.any(axis=0))
+    box = (int(rows[0]), int(rows[-1]) + 1, int(cols[0]), int(cols[-1]) + 1)
+    height, width = plane.shape
+    kernel = model.kernel(pixel_deg, glare.kernel_shape_for(plane.shape)).values
+    half = (kernel.shape[0] // 2, kernel.shape[1] // 2)
+    out = (0, height, 0, width)
+    lengths = (fft_length(box[:2], out[:2], half[0]), fft_length(box[2:], out[2:], half[1]))
+    spectrum = kernel_spectrum(kernel, lengths)
+    part = excess[box[0] : box[1], box[2] : box[3]]
+    exact = spectral_spread(part, box, out, spectrum, lengths)
+    single = spectral_spread(
+        part.astype(np.float32), box, out, spectrum.astype(np.complex64), lengths
+    )
+    a, r = fft_roundoff(
+        lengths,
+        float(part.sum()),
+        float(np.sqrt((part**2).sum())),
+        float(np.abs(kernel).sum()),
+        float(np.sqrt((kernel**2).sum())),
+        np.float32,
+    )
+    worst = float(np.max(np.abs(single - exact) / (a + r * np.abs(exact))))
+    event(f"round-off / bound {10 ** np.ceil(np.log10(max(worst, 1e-6))):g}")
+    assert worst <= 1.0, worst

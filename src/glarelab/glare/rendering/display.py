@@ -218,6 +218,10 @@ class CodeBound:
         self._scale = STEP_TABLE_SIZE / span
         edges = np.exp(self._u0 + np.arange(STEP_TABLE_SIZE) / self._scale) - self._offset
         self._table = self.step(np.maximum(edges, self.black))
+        shown = self.lut[:-1] <= self.top
+        # codes per relative change of the output, at most: L / step over the display's range
+        self.relative_codes = float(np.max(self.lut[:-1][shown] / self.steps[shown], initial=0))
+        self.largest_step = float(self.steps.max())
 
     def step(self, luminance_cd_m2: np.ndarray | float) -> np.ndarray:
         """Smallest code step (cd/m²) at or above each luminance's code.

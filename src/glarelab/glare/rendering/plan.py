@@ -38,12 +38,8 @@ from typing import Literal
 import numpy as np
 
 from glarelab.glare.models.base import GlareModel
-from glarelab.glare.rendering._convolve import (
-    CORRELATE_WEIGHT_S,
-    DIRECT_PIXEL_S,
-    cluster_cost,
-    fft_length,
-)
+from glarelab.glare.rendering._convolve import fft_length, fft_roundoff
+from glarelab.glare.rendering.costs import DEFAULT_COSTS, PathCosts
 from glarelab.glare.rendering.display import block_reduce
 from glarelab.glare.rendering.multires import PAD_NODES, far_spread
 from glarelab.glare.rendering.scene import Scene
@@ -54,23 +50,21 @@ PATHS = ("direct", "fft", "multires")
 
 CUT_SHARE = 0.25  # share of the tolerance the reach cut may spend (its bound is rigorous)
 FAR_SHARE = 0.5  # share the multi-resolution far tail may spend (checked per pixel afterwards)
+ROUNDOFF_SHARE = 0.25  # share float32 FFT round-off may spend (checked per pixel afterwards)
+PREVIEW_MARGIN = 0.5  # the predicted spread at a coarse cell, times this, for the darkest output
 MULTIRES_FACTORS = (8, 4)  # coarse grid factors tried, coarsest first
 SPLIT_RATIOS = (16, 24, 32, 48, 64)  # R0 / f tried, shortest first: error falls as (f / R0)²
 MULTIRES_MIN_REACH = 4  # multi-resolution only when the reach is at least 4 R0
 # Which split to measure first: the far path's relative error is about 0.25 (f / R0)²
 # (measured on VosGlare, all regimes: 5e-4 at R0 = 16 f); the render measures it exactly.
 FAR_ERROR_SAFETY = 0.25
-# Costs, seconds, measured on a 2-core machine: a forward and an inverse real FFT of n
-# points cost about FFT_S · n log2 n (up to 4096²; FFT_LARGE_S beyond FFT_LARGE_POINTS, where
-# the arrays leave the caches); the direct spread as
-# glarelab.glare.rendering._convolve.cluster_cost says; the far tail (splat, coarse convolution,
-# cubic interpolation, preview and per-pixel check) MULTIRES_S per image pixel and convolution.
-# Only their ratios choose the path. A kernel spectrum is made once per renderer and FFT length, so
-# it is not counted.
-FFT_S = 4.5e-10
-FFT_LARGE_S = 5.5e-10
+# Costs: glarelab.glare.rendering.costs.PathCosts, measured on the machine at the threads the
+# render uses (a forward and an inverse real FFT of n points per n log2 n, FFT_LARGE times
+# that beyond FFT_LARGE_POINTS, where the arrays leave the caches; the direct spread per
+# output pixel; the far tail per image pixel). Only their ratios choose the path. A kernel
+# spectrum is made once per renderer and FFT length, so it is not counted.
+FFT_LARGE = 5.5 / 4.5
 FFT_LARGE_POINTS = 2**25
-MULTIRES_S = 3.5e-8
 
 
 @dataclass(frozen=True)
@@ -109,6 +103,12 @@ class GlarePlan:
         of convolutions planned.
     halo
         What happens to the lenticular halo (the model says, :meth:`GlareModel.halo`).
+    fft_precision, roundoff_cd_m2
+        The precision of the FFTs (``'float32'`` where their round-off bound,
+        :func:`~glarelab.glare.rendering._convolve.fft_roundoff`, keeps
+        :data:`ROUNDOFF_SHARE` of the tolerance, else ``'float64'``) and that bound's part
+        that does not grow with the spread, cd/m² (0 for float64: its round-off is counted
+        by the render).
     costs
         Estimated seconds of each path considered.
     notes
@@ -135,6 +135,8 @@ class GlarePlan:
     colour_kernel: bool
     convolutions: int
     halo: str
+    fft_precision: str = "float64"
+    roundoff_cd_m2: float = 0.0
     costs: dict = field(default_factory=dict)
     notes: tuple[str, ...] = field(default_factory=tuple)
 
@@ -186,6 +188,16 @@ class GlarePlan:
             )
         else:
             lines.append(f"  path: {self.path}")
+        if self.path in ("fft", "multires"):
+            lines.append(
+                f"  transforms: {self.fft_precision}"
+                + (
+                    f", round-off at most {self.roundoff_cd_m2:.3g} cd/m² plus a share of "
+                    "the spread"
+                    if self.fft_precision == "float32"
+                    else ""
+                )
+            )
         if self.costs:
             lines.append(
                 "  estimated: " + ", ".join(f"{k} {v:.3g} s" for k, v in self.costs.items())
@@ -208,20 +220,29 @@ def _geometric_reach(source, target, half) -> tuple[int, int]:
     return min(int(rows), half[0]), min(int(cols), half[1])
 
 
-def _direct_cost(scene: Scene, out, reach, limit: float) -> float:
+def _direct_cost(scene: Scene, out, reach, limit: float, costs: PathCosts) -> float:
     """Estimated seconds of spreading the scene's bright clusters directly; a lower bound
     when that is already above ``limit`` (the clusters are then not looked for)."""
     area = min((out[1] - out[0]) * (out[3] - out[2]), (2 * reach[0] + 1) * (2 * reach[1] + 1))
-    lowest = area * scene.bright_pixels * min(DIRECT_PIXEL_S, CORRELATE_WEIGHT_S)
+    lowest = area * scene.bright_pixels * min(costs.direct_pixel_s, costs.correlate_weight_s)
     if lowest >= limit:
         return lowest
-    return area * sum(cluster_cost(mask.size, int(mask.sum())) for _, mask in scene.clusters())
+    return area * sum(
+        min(
+            costs.direct_pixel_s * int(mask.sum()),
+            costs.correlate_s + costs.correlate_weight_s * mask.size,
+        )
+        for _, mask in scene.clusters()
+    )
 
 
-def fft_cost(lengths: tuple[int, int]) -> float:
+def fft_cost(
+    lengths: tuple[int, int], costs: PathCosts = DEFAULT_COSTS, precision: str = "float64"
+) -> float:
     """Estimated seconds of one forward and one inverse real FFT of ``N0 × N1`` points."""
     n = lengths[0] * lengths[1]
-    return (FFT_LARGE_S if n > FFT_LARGE_POINTS else FFT_S) * n * math.log2(max(n, 2))
+    unit = costs.fft32_s if precision == "float32" else costs.fft_s
+    return (FFT_LARGE if n > FFT_LARGE_POINTS else 1.0) * unit * n * math.log2(max(n, 2))
 
 
 def plan_glare(
@@ -376,13 +397,27 @@ def make_plan(renderer, scene: Scene) -> GlarePlan:
         fft_length(source[:2], out[:2], reach[0]),
         fft_length(source[2:], out[2:], reach[1]),
     )
-    costs = {"fft": fft_cost(lengths) * convolutions}
-    costs["direct"] = _direct_cost(scene, out, reach, costs["fft"] / convolutions) * convolutions
+    machine = renderer.costs
+    precision, roundoff, precision_note = renderer.dtype.name, 0.0, None
+    optimistic = fft_cost(lengths, machine, "float32")
+    direct = _direct_cost(scene, out, reach, optimistic, machine)
+    if tolerance > 0:
+        precision = "float64"
+        if direct >= optimistic:  # the FFT may win: plan its precision
+            precision, roundoff, precision_note = _choose_precision(
+                renderer, scene, plan, lengths, step, 1
+            )
+    costs = {"fft": fft_cost(lengths, machine, precision) * convolutions}
+    costs["direct"] = (
+        direct
+        if direct >= costs["fft"] / convolutions or direct < optimistic
+        else _direct_cost(scene, out, reach, costs["fft"] / convolutions, machine)
+    ) * convolutions
     exact_paths = [p for p in ("direct", "fft") if p in renderer.paths] or ["direct", "fft"]
     path, factor, split = min(exact_paths, key=costs.get), 1, 0
     if bound is not None and tolerance > 0 and "multires" in renderer.paths:
         limit = costs[path] if len(renderer.paths) > 1 else math.inf
-        choice = _choose_multires(renderer, scene, plan, lengths_cost=limit)
+        choice = _choose_multires(renderer, scene, plan, lengths_cost=limit, precision=precision)
         if choice is not None:
             factor, split, predicted, cost = choice
             costs["multires"] = cost
@@ -392,19 +427,87 @@ def make_plan(renderer, scene: Scene) -> GlarePlan:
                 f"{renderer.multires(factor, split, colour_kernel).relative_error:.3g}, "
                 f"{predicted:.3g} codes predicted on the coarse grid"
             )
+    if path == "multires":  # the near part's transforms
+        precision, roundoff, precision_note = _choose_precision(
+            renderer, scene, plan, _lengths(source, out, (2 * split,) * 2), step, factor
+        )
+    if path in ("fft", "multires") and precision_note is not None:
+        notes.append(precision_note)
+    if path not in ("fft", "multires"):
+        precision, roundoff = "float64", 0.0
     if len(renderer.paths) < len(PATHS):
         notes.append(f"path {path}: of the paths allowed, {', '.join(renderer.paths)}")
     else:
         notes.append(f"path {path}: the cheapest estimated that keeps the tolerance")
     return GlarePlan(
-        **{k: v for k, v in plan.__dict__.items() if k not in ("path", "costs", "notes")}
+        **{
+            k: v
+            for k, v in plan.__dict__.items()
+            if k not in ("path", "costs", "notes", "fft_precision", "roundoff_cd_m2")
+        }
         | {"path": path, "multires_factor": factor, "split_px": split},
+        fft_precision=precision,
+        roundoff_cd_m2=roundoff,
         costs=costs,
         notes=tuple(notes),
     )
 
 
-def _choose_multires(renderer, scene: Scene, plan: GlarePlan, *, lengths_cost: float):
+def _lengths(source, out, half) -> tuple[int, int]:
+    """FFT lengths of the spread from ``source`` to the part of ``out`` within ``half``."""
+    near = (
+        max(out[0], source[0] - half[0]),
+        min(out[1], source[1] + half[0]),
+        max(out[2], source[2] - half[1]),
+        min(out[3], source[3] + half[1]),
+    )
+    return (
+        fft_length(source[:2], near[:2], half[0]),
+        fft_length(source[2:], near[2:], half[1]),
+    )
+
+
+def _choose_precision(renderer, scene: Scene, plan: GlarePlan, lengths, step: float, factor):
+    """``'float32'`` transforms when their round-off bound (:func:`fft_roundoff`) keeps
+    :data:`ROUNDOFF_SHARE` of the tolerance: at the darkest pixel's code step, or else, when
+    it could, at each coarse cell's darkest output predicted from the scene's spread on the
+    coarse grid (the render checks it pixel by pixel and falls back to float64). Returns
+    ``(precision, a, note)``."""
+    budget = ROUNDOFF_SHARE * plan.tolerance_codes
+    l1, l2 = scene.excess_norms()
+    k1, k2 = renderer.kernel_norms(plan.colour_kernel)
+    absolute, relative = fft_roundoff(lengths, l1, l2, k1, k2, np.float32)
+    relative_codes = relative * renderer.code_bound.relative_codes
+    at_darkest = absolute / step + relative_codes
+    if at_darkest <= budget:
+        return "float32", absolute, f"float32 transforms: {at_darkest:.2g} codes of round-off"
+    if absolute / renderer.code_bound.largest_step > budget:  # nowhere within the budget
+        return (
+            "float64",
+            0.0,
+            (f"float64 transforms: float32 round-off up to {absolute:.3g} cd/m² would show"),
+        )
+    if renderer.tail_bound(plan.colour_kernel) is not None:
+        preview = _preview(renderer, scene, max(factor, MULTIRES_FACTORS[0]), plan.colour_kernel)
+        predicted = preview(
+            0.0, absolute=absolute, spread_scale=PREVIEW_MARGIN, relative_extra=relative
+        )
+        if predicted <= budget:
+            return (
+                "float32",
+                absolute,
+                (
+                    f"float32 transforms: {predicted:.2g} codes of round-off predicted where the "
+                    "glare lifts the darkest pixels"
+                ),
+            )
+    note = f"float64 transforms: float32 round-off would reach {at_darkest:.2g} codes"
+    return "float64", 0.0, note
+
+
+def _choose_multires(
+    renderer, scene: Scene, plan: GlarePlan, *, lengths_cost: float, precision: str
+):
     """The cheapest coarse factor and split whose far path fits ``FAR_SHARE`` of the
     tolerance, predicted on the coarse grid with the measured relative error; ``None`` when
     none fits or none is cheaper than ``lengths_cost``. Returns ``(f, R0, codes, cost)``."""
@@ -420,7 +523,7 @@ def _choose_multires(renderer, scene: Scene, plan: GlarePlan, *, lengths_cost: f
         ]
         if not ratios:
             continue
-        far_cost = MULTIRES_S * height * width * plan.convolutions
+        far_cost = renderer.costs.multires_s * height * width * plan.convolutions
         preview = None
         for k in ratios:
             split = k * factor
@@ -434,7 +537,7 @@ def _choose_multires(renderer, scene: Scene, plan: GlarePlan, *, lengths_cost: f
                 fft_length(source[:2], near[:2], 2 * split),
                 fft_length(source[2:], near[2:], 2 * split),
             )
-            cost = far_cost + fft_cost(near_lengths) * plan.convolutions
+            cost = far_cost + fft_cost(near_lengths, renderer.costs, precision) * plan.convolutions
             if cost >= lengths_cost:
                 break  # longer splits cost more
             if preview is None:
@@ -469,12 +572,18 @@ def _preview(renderer, scene: Scene, factor: int, colour_kernel: bool):
     planes = scene.planes[..., 0] if scene.planes.shape[2] == 1 else scene.planes.min(axis=2)
     darkest = block_reduce(planes, np.minimum, factor)
 
-    def codes(relative: float) -> float:
+    def codes(
+        relative: float,
+        *,
+        absolute: float = 0.0,
+        spread_scale: float = 1.0,
+        relative_extra: float = 0.0,
+    ) -> float:
         return renderer.code_bound.codes(
             darkest[..., None],
-            np.maximum(spread_cells, 0.0)[..., None],
-            absolute=0.0,
-            relative=relative / max(1.0 - relative, 1e-12),
+            spread_scale * np.maximum(spread_cells, 0.0)[..., None],
+            absolute=absolute,
+            relative=relative / max(1.0 - relative, 1e-12) + relative_extra,
         )
 
     return codes

@@ -30,10 +30,12 @@ from glarelab.glare.rendering._convolve import (
     convolution_dtype,
     direct_spread,
     fft_length,
+    fft_roundoff,
     kernel_spectrum,
     spectral_spread,
 )
 from glarelab.glare.rendering.compose import METHODS, compose
+from glarelab.glare.rendering.costs import DEFAULT_COSTS, PathCosts, machine_costs
 from glarelab.glare.rendering.display import CodeBound, display_lut
 from glarelab.glare.rendering.multires import (
     FOOTPRINT_NODES,
@@ -95,6 +97,12 @@ class GlareRenderer:
         Where digitised kernels are kept between runs (:mod:`glarelab.glare.models.cache`):
         ``None`` (default) or ``True``, the user's kernel cache (off when ``GLARELAB_NO_CACHE`` is
         set); ``False``, none; a :class:`glarelab.glare.models.cache.KernelCache` or a folder.
+    costs
+        What each path costs (:class:`~glarelab.glare.rendering.costs.PathCosts`), or
+        ``'machine'``: measured once on this machine at its thread count and kept in the
+        kernel cache's folder (:func:`~glarelab.glare.rendering.costs.machine_costs`; the
+        constants below without a cache). Default ``None``: the constants measured on a
+        quiet 2-core machine, :data:`~glarelab.glare.rendering.costs.DEFAULT_COSTS`.
 
     Raises
     ------
@@ -130,6 +138,7 @@ class GlareRenderer:
         paths: tuple[str, ...] = PATHS,
         log=None,
         cache=None,
+        costs: PathCosts | Literal["machine"] | None = None,
     ) -> None:
         self.model = _resolve(model)
         self.cache = resolve_cache(cache)
@@ -176,6 +185,10 @@ class GlareRenderer:
         self._kernels: dict[bool, Kernel] = {}
         self._given_grey: Kernel | None = None  # a given colour kernel's first channel
         self._peaks: dict[bool, float] = {}
+        self._norms: dict[bool, tuple[float, float]] = {}
+        if costs is not None and costs != "machine" and not isinstance(costs, PathCosts):
+            raise ValueError(f"costs must be None, 'machine' or a PathCosts; got {costs!r}")
+        self._costs = DEFAULT_COSTS if costs is None else costs
         self._bounds: dict[bool, TailBound | None] = {}
         self._coarse: dict[tuple, np.ndarray] = {}
         self._multires: dict[tuple, MultiresKernels] = {}
@@ -246,6 +259,36 @@ class GlareRenderer:
         if colour not in self._peaks:
             self._peaks[colour] = float(self.kernel(colour).peak)
         return self._peaks[colour]
+
+    @property
+    def costs(self) -> PathCosts:
+        """What each path costs here (:func:`~glarelab.glare.rendering.costs.machine_costs`)."""
+        if self._costs == "machine":
+            folder = None if self.cache is None else self.cache.directory
+            self._costs = machine_costs(folder)
+        return self._costs
+
+    def kernel_norms(self, colour: bool = False) -> tuple[float, float]:
+        """``Σ|K|`` and ``(ΣK²)^½`` of the reference kernel, the largest over its channels
+        (found once; from the quadrant of a symmetric kernel, which is not unfolded)."""
+        if colour not in self._norms:
+            kernel = self.kernel(colour)
+            if kernel.quadrant is not None:
+                q = np.asarray(kernel.quadrant, dtype=np.float64)
+                weights = np.full(q.shape[:2], 4.0)
+                weights[0, :] = 2.0
+                weights[:, 0] = 2.0
+                weights[0, 0] = 1.0
+                if q.ndim == 3:
+                    weights = weights[..., None]
+                l1 = np.sum(weights * np.abs(q), axis=(0, 1))
+                l2 = np.sqrt(np.sum(weights * q * q, axis=(0, 1)))
+            else:
+                v = np.asarray(kernel.values, dtype=np.float64)
+                l1 = np.abs(v).sum(axis=(0, 1))
+                l2 = np.sqrt(np.einsum("ij...,ij...->...", v, v))
+            self._norms[colour] = (float(np.max(l1)), float(np.max(l2)))
+        return self._norms[colour]
 
     def tail_bound(self, colour: bool) -> TailBound | None:
         """The model's tail bounds for every radius up to the kernel's half-size.
@@ -337,7 +380,10 @@ class GlareRenderer:
             k = full[min(channel, len(full) - 1)]
             a, b = self.kernel_half
             values = k[a - reach[0] : a + reach[0] + 1, b - reach[1] : b + reach[1] + 1]
-        spectrum = kernel_spectrum(values.astype(dtype, copy=False), tuple(lengths))
+        # made in float64 and rounded once: a float32 spectrum is off by u, not u log2 n
+        spectrum = kernel_spectrum(values.astype(np.float64, copy=False), tuple(lengths))
+        if np.dtype(dtype) == np.float32:
+            spectrum = spectrum.astype(np.complex64)
         self._spectra[key] = spectrum
         while (
             sum(s.nbytes for s in self._spectra.values()) > SPECTRA_BYTES
@@ -423,24 +469,23 @@ class GlareRenderer:
                 out if scene.colour else out[..., 0], plan, **result, kernel=None,
                 parameters=parameters, spread=empty, source=source,
             )  # fmt: skip
-        spread, used = self._spread(scene, plan)
+        spread, used, roundoff = self._spread(scene, plan)
         out = compose(scene.planes, spread, self.l_dmax, self.method)
-        absolute = self._absolute(scene, plan, used)
         relative = 0.0
         if plan.path == "multires":
             relative = self.multires(plan.multires_factor, plan.split_px, plan.colour_kernel)
             relative = relative.relative_error
-        ratio = relative / max(1.0 - relative, 1e-12)
-        if relative:
-            error = self.code_bound.codes(
-                scene.planes,
-                spread,
-                absolute=absolute,
-                relative=ratio,
-                tolerance_codes=plan.tolerance_codes,
+        error = self._error(scene, plan, spread, used, roundoff, relative)
+        if error > plan.tolerance_codes and roundoff[0] > 0:
+            result["fallback"] = (
+                f"float32 round-off bound {error:.3g} codes > {plan.tolerance_codes:g}: "
+                "float64 transforms"
             )
-        else:
-            error = self._exact_error(scene, spread, absolute, plan.tolerance_codes)
+            self.say(result["fallback"])
+            plan = replace(plan, fft_precision="float64", roundoff_cd_m2=0.0)
+            spread, used, roundoff = self._spread(scene, plan)
+            out = compose(scene.planes, spread, self.l_dmax, self.method)
+            error = self._error(scene, plan, spread, used, roundoff, relative)
         if plan.path == "multires" and error > plan.tolerance_codes:
             result["fallback"] = (
                 f"far tail error bound {error:.3g} codes > {plan.tolerance_codes:g}: "
@@ -450,11 +495,10 @@ class GlareRenderer:
             exact = [p for p in ("direct", "fft") if p in self.paths] or ["direct", "fft"]
             exact = min(exact, key=lambda p: plan.costs.get(p, math.inf))
             plan = replace(plan, path=exact, multires_factor=1, split_px=0)
-            spread, used = self._spread(scene, plan)
+            spread, used, roundoff = self._spread(scene, plan)
             out = compose(scene.planes, spread, self.l_dmax, self.method)
-            absolute = self._absolute(scene, plan, used)
             relative = 0.0
-            error = self._exact_error(scene, spread, absolute, plan.tolerance_codes)
+            error = self._error(scene, plan, spread, used, roundoff, relative)
         if (
             plan.path == "fft"
             and error > plan.tolerance_codes
@@ -467,10 +511,9 @@ class GlareRenderer:
             )
             self.say(result["fallback"])
             plan = replace(plan, path="direct")
-            spread, used = self._spread(scene, plan)
+            spread, used, roundoff = self._spread(scene, plan)
             out = compose(scene.planes, spread, self.l_dmax, self.method)
-            absolute = self._absolute(scene, plan, used)
-            error = self._exact_error(scene, spread, absolute, plan.tolerance_codes)
+            error = self._error(scene, plan, spread, used, roundoff, 0.0)
         self.say(f"error bound {error:.3g} display codes")
         parameters["convolution_precision"] = sorted(used)
         result.update(error_bound_codes=error, far_relative_error=relative)
@@ -497,13 +540,29 @@ class GlareRenderer:
             )  # fmt: skip
         return error
 
+    def _error(self, scene, plan, spread, used, roundoff, relative) -> float:
+        """The error bound in codes: the cut, the FFT round-off (``roundoff``: the planned
+        float32 transforms' ``(a, r)``) and the far tail's relative error."""
+        absolute = self._absolute(scene, plan, used) + roundoff[0]
+        ratio = relative / max(1.0 - relative, 1e-12) + roundoff[1]
+        if ratio:
+            return self.code_bound.codes(
+                scene.planes,
+                spread,
+                absolute=absolute,
+                relative=ratio,
+                tolerance_codes=plan.tolerance_codes,
+            )
+        return self._exact_error(scene, spread, absolute, plan.tolerance_codes)
+
     def _absolute(self, scene: Scene, plan: GlarePlan, used: set[str]) -> float:
-        """The part of the error bound that does not grow with the spread, cd/m²: the cut's
-        bound and the FFT round-off (about ``ε log2 n`` times the largest spread,
-        ``ΣΔL · max K``, anywhere in the image; float32 limited by
-        :func:`~glarelab.glare.rendering._convolve.convolution_dtype`)."""
+        """The part of the error bound that does not grow with the spread, cd/m², but for
+        planned float32 transforms: the cut's bound and the float64 FFT round-off (about
+        ``ε log2 n`` times the largest spread, ``ΣΔL · max K``, anywhere in the image); an
+        image in float32 adds what :func:`~glarelab.glare.rendering._convolve.convolution_dtype`
+        allows."""
         absolute = plan.cut_bound_cd_m2
-        if "float32" in used:
+        if self.dtype == np.float32:
             absolute += FLOAT32_NOISE_LIMIT_CD_M2
         if plan.path in ("fft", "multires"):
             peak = self.kernel_peak(plan.colour_kernel)
@@ -511,15 +570,17 @@ class GlareRenderer:
             absolute += np.finfo(np.float64).eps * math.log2(n) * scene.total_excess * peak
         return absolute
 
-    def _spread(self, scene: Scene, plan: GlarePlan) -> tuple[np.ndarray, set[str]]:
-        """The spread ``(H, W, 1 or C)`` of the plan's path, and the precisions used."""
+    def _spread(self, scene: Scene, plan: GlarePlan):
+        """The spread ``(H, W, 1 or C)`` of the plan's path, the precisions used, and the
+        round-off bound ``(a, r)`` of planned float32 transforms (zeros otherwise)."""
         height, width = self.shape
         box, out_box = plan.source_box, plan.out_box
         n = plan.convolutions
         spread = np.zeros((height, width, n), dtype=self.dtype)
         used: set[str] = set()
+        roundoff = (0.0, 0.0)
         if out_box is None:
-            return spread, {self.dtype.name}
+            return spread, {self.dtype.name}, roundoff
         o = np.s_[out_box[0] : out_box[1], out_box[2] : out_box[3]]
         reach = plan.reach_px
         for c in range(n):
@@ -575,8 +636,19 @@ class GlareRenderer:
                 fft_length(box[:2], near_box[:2], half[0]),
                 fft_length(box[2:], near_box[2:], half[1]),
             )
-            peak = np.array([self.kernel_peak(plan.colour_kernel)])
-            work = convolution_dtype(excess, peak, self.dtype)
+            if plan.tolerance_codes > 0:
+                work = np.dtype(plan.fft_precision)
+                if work == np.float32:
+                    bound = fft_roundoff(
+                        lengths,
+                        *scene.excess_norms(),
+                        *self.kernel_norms(plan.colour_kernel),
+                        np.float32,
+                    )
+                    roundoff = tuple(max(a, b) for a, b in zip(roundoff, bound, strict=True))
+            else:
+                peak = np.array([self.kernel_peak(plan.colour_kernel)])
+                work = convolution_dtype(excess, peak, self.dtype)
             used.add(work.name)
             spectrum = self._spectrum(
                 lengths,
@@ -592,7 +664,7 @@ class GlareRenderer:
             )
             spread[..., c][near_box[0] : near_box[1], near_box[2] : near_box[3]] += part
         np.maximum(spread, 0.0, out=spread)  # FFT round-off is not non-negative
-        return spread, used
+        return spread, used, roundoff
 
 
 def _renderer_for(

@@ -71,6 +71,15 @@ class Scene:
             self._splats["clusters"] = clusters((self.excess > 0).any(axis=2))
         return self._splats["clusters"]
 
+    def excess_norms(self) -> tuple[float, float]:
+        """``ΣΔL`` and ``(ΣΔL²)^½``, cd/m², the largest over the channels (found once)."""
+        if "norms" not in self._splats:
+            excess = self.excess.astype(np.float64, copy=False)
+            l1 = float(excess.sum(axis=(0, 1)).max())
+            l2 = float(np.sqrt(np.einsum("ijc,ijc->c", excess, excess).max()))
+            self._splats["norms"] = (l1, l2)
+        return self._splats["norms"]
+
     def splat(self, factor: int, channel: int | None) -> np.ndarray:
         """The excess of one channel (``None``: the brightest channel of each pixel) splatted
         onto the coarse grid of ``factor`` (:func:`glarelab.glare.rendering.multires.splat`), made

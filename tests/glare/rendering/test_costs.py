@@ -1,0 +1,94 @@
+"""The planner chooses the fastest of its paths with the costs measured on this machine: forced
+on each path in turn, the renders are timed in alternating rounds, and the planner's choice is
+within 1.2× of the fastest path that keeps the tolerance (medians of the rounds, so that a busy
+moment of a shared machine falls on every path alike)."""
+
+import json
+import os
+import time
+
+import numpy as np
+import pytest
+
+from glarelab.bench.scenes import lamps_scene
+from glarelab.glare import VosGlare
+from glarelab.glare.models.cache import KernelCache
+from glarelab.glare.rendering.costs import PathCosts, cores, machine_costs
+from glarelab.glare.rendering.renderer import GlareRenderer
+
+ROUNDS = 5
+SLOWEST_RATIO = 1.2  # issue 35: the planner's choice within 1.2× of the fastest path
+
+
+def test_costs_are_measured_once_and_kept(tmp_path):
+    first = machine_costs(tmp_path)
+    stored = tmp_path / f"costs-{cores()}-threads.json"
+    assert stored.is_file() and json.loads(stored.read_text())["threads"] == cores()
+    assert machine_costs(tmp_path) == first  # read back, not measured again
+    assert all(value > 0 for value in vars(first).values())
+    stored.write_text("{not json")  # a damaged file is measured again and replaced
+    assert isinstance(machine_costs(tmp_path), PathCosts)
+    assert json.loads(stored.read_text())["version"] >= 1
+    with pytest.raises(ValueError, match="costs must be"):
+        GlareRenderer(VosGlare(), pixel_deg=0.05, shape=(8, 8), costs="quiet")
+
+
+def _scenes():
+    glints, pixel = lamps_scene((512, 512), 2, pixel_deg=0.04, glint_cd_m2=1e7)
+    city, _ = lamps_scene((512, 512), 400, pixel_deg=0.04)
+    bright, _ = lamps_scene((512, 512), 60, pixel_deg=0.04)
+    bright += 5.0  # a lit street: the dark end is far from black
+    return {"two lamps and a glint": glints, "400 lamps": city, "a lit street": bright}, pixel
+
+
+@pytest.mark.skipif(
+    not os.environ.get("GLARELAB_TIME_PATHS"),
+    reason="times every path (minutes on a loaded machine): set GLARELAB_TIME_PATHS=1",
+)
+@pytest.mark.xfail(
+    reason="issue 35 item 2 is open: the planner took the far tail for two lamps and a "
+    "glint at 512², 1.5-2.5x slower than the FFT, in two of three runs",
+    strict=False,
+)
+def test_the_planner_chooses_within_1_2x_of_the_fastest_path(tmp_path):
+    scenes, pixel = _scenes()
+    model = VosGlare()
+    cache = KernelCache(tmp_path)
+    costs = machine_costs(tmp_path)
+    kernel = model.kernel(pixel, (1023, 1023))
+    failures = []
+    for name, image in scenes.items():
+        renderers = {
+            label: GlareRenderer(
+                model,
+                pixel_deg=pixel,
+                shape=image.shape,
+                kernel=kernel,
+                cache=cache,
+                costs=costs,
+                **({} if paths is None else {"paths": paths}),
+            )
+            for label, paths in (
+                ("planner", None),
+                ("direct", ("direct",)),
+                ("fft", ("fft",)),
+                ("multires", ("multires",)),
+            )
+        }
+        kept = {}
+        for label, renderer in renderers.items():  # made once: kernels, spectra, errors
+            result = renderer.render(image)
+            path = result.plan.path
+            if label == "planner" or (path == label and not result.fallback):
+                kept[label] = renderer  # a forced path that fell back is not that path
+        times = {label: [] for label in kept}
+        for _ in range(ROUNDS):
+            for label, renderer in kept.items():
+                start = time.perf_counter()
+                renderer.render(image)
+                times[label].append(time.perf_counter() - start)
+        medians = {label: float(np.median(t)) for label, t in times.items()}
+        fastest = min(v for k, v in medians.items() if k != "planner")
+        if medians["planner"] > SLOWEST_RATIO * fastest:
+            failures.append((name, renderers["planner"].plan(image).path, medians))
+    assert not failures, failures
