@@ -108,7 +108,7 @@ def _rings(shape, pixel_deg):
     ("pupil_mm", "low_nm", "high_nm", "pixel_deg", "size"),
     [
         (2.0, 380.0, 780.0, 0.025, 101),  # to 1.26°, corners 1.78°
-        (8.0, 380.0, 780.0, 0.025, 101),
+        (8.0, 380.0, 780.0, 0.025, 81),  # to 1°, corners 1.41°
         (5.0, 450.0, 650.0, 0.02, 251),  # to 2.5°
         (3.0, 380.0, 700.0, 0.0118, 21),  # Yoshida's pixels, a small kernel
     ],
@@ -169,23 +169,61 @@ def test_polygon_rings_and_border_are_the_polygons_transform(
     sides, diameter_mm, rotation_deg, wavelength_index
 ):
     # the polygon's Fourier transform as a sum over its edges, integrated over each pixel
-    # (test_wave_exact.polygon_pixels): ring 0.3-0.4° and the border of a 41² kernel at
+    # (test_wave_exact.polygon_pixels): ring 0.2-0.3° and the border of a 31² kernel at
     # 0.02°/px. Not yet within 1 %: an octagon of 2 mm at 530 nm, border 1.7 % low, the ring
     # 0.9 % (docs/optics-departures.md); it changes sign with the grid and falls to 0.2 % on
     # a grid four times finer
     from tests.glare.models.test_wave_exact import polygon_pixels
 
-    pixel_deg, shape = 0.02, (41, 41)
+    pixel_deg, shape = 0.02, (31, 31)
     model = WaveOpticsGlare(
         pupil_mm=diameter_mm, **CAMERA, diaphragm_sides=sides,
         diaphragm_rotation_deg=rotation_deg, spectral="kakimoto",
     )  # fmt: skip
     kernels, nm = model.monochromatic_kernels(pixel_deg, shape)
     kernel, wavelength = kernels[wavelength_index], nm[wavelength_index]
-    reference = polygon_pixels(sides, diameter_mm, rotation_deg, wavelength, pixel_deg, 20)
-    y, x = np.indices(shape) - 20
+    reference = polygon_pixels(sides, diameter_mm, rotation_deg, wavelength, pixel_deg, 15)
+    y, x = np.indices(shape) - 15
     radius = np.hypot(x, y) * pixel_deg
     border = np.zeros(shape, bool)
     border[[0, -1], :] = border[:, [0, -1]] = True
-    for name, mask in (("0.3-0.4°", (radius >= 0.3) & (radius < 0.4)), ("border", border)):
+    for name, mask in (("0.2-0.3°", (radius >= 0.2) & (radius < 0.3)), ("border", border)):
         assert_allclose(kernel[mask].sum(), reference[mask].sum(), rtol=RING_RTOL, err_msg=name)
+
+
+def test_eye_with_lid_lashes_and_particles_matches_a_finely_sampled_zero_padded_aperture():
+    # the same obstacles drawn on a grid twice as fine, zero-padded to 3072² and transformed
+    # by one FFT, normalised by the open area, the finer edges' transfer sinc²(k/N) divided
+    # out and the samples (0.004-0.008°) rebinned onto the pixels: an independent path from
+    # the aperture to the pixels (measured: within 0.06 %; before issue 33, −19 % at the
+    # border)
+    from glarelab.glare.models import apertures as ap
+    from glarelab.glare.models.fraunhofer import psf_fraunhofer, rebin
+
+    pixel_deg, shape, n = 0.02, (41, 41), 3072
+    spectrum = Spectrum(n_wavelengths=2, wavelength_range_nm=(380.0, 780.0))
+    model = WaveOpticsGlare(pupil_mm=2.0, spectral="reference", spectrum=spectrum)
+    kernels, nm = model.monochromatic_kernels(pixel_deg, shape)
+    fine = model.grid_for(pixel_deg, shape).spacing_mm / 2
+    crop = model._aperture_crop(ap.ApertureGrid(n, fine))
+    field = np.zeros((n, n))
+    start = n // 2 - crop.shape[0] // 2
+    field[start : start + crop.shape[0], start : start + crop.shape[1]] = crop
+    lags = np.hypot(*np.meshgrid(np.arange(n) - n // 2, np.arange(n) - n // 2)) / n
+    y, x = np.indices(shape) - shape[0] // 2
+    radius = np.hypot(x, y) * pixel_deg
+    border = np.zeros(shape, bool)
+    border[[0, -1], :] = border[:, [0, -1]] = True
+    masks = {
+        "0.1-0.3°": (radius >= 0.1) & (radius < 0.3),
+        "0.3°-": radius >= 0.3,
+        "border": border,
+    }
+    for kernel, wavelength in zip(kernels, nm, strict=True):
+        psf = psf_fraunhofer(field, fine, wavelength)
+        values = psf.values * psf.raw_energy / (n * n * crop.sum()) / np.sinc(lags) ** 2
+        reference = rebin(values, psf.spacing_deg, pixel_deg, shape)
+        for name, mask in masks.items():
+            assert_allclose(
+                kernel[mask].sum(), reference[mask].sum(), rtol=RING_RTOL, err_msg=name
+            )
