@@ -91,7 +91,9 @@ def test_components_and_halo_with_a_support(pixel_deg):
 
 def test_the_gaussian_kernel_is_its_normalised_outer_product():
     for sampling in ("point", "pixel"):
-        model = glare.GaussianGlare(sigma_deg=0.1, sampling=sampling)
+        model = glare.GaussianGlare(
+            sigma_deg=0.1, sampling=sampling, normalisation="Yoshida2008"
+        )  # normalised over the kernel: the outer product over its own sum
         values = model.kernel(0.02, (61, 81)).values
         offsets = [np.arange(-(n // 2), n // 2 + 1) * 0.02 for n in (61, 81)]
         if sampling == "point":

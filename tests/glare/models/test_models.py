@@ -33,7 +33,8 @@ def test_gaussian_sigma_in_pixels_is_sigma_deg_over_pixel_deg(sigma_deg, pixel_d
 
 
 def test_gaussian_is_normalised_to_one_and_shaped_as_eq_2():
-    k = GaussianGlare().kernel(0.034, (41, 41))  # σ = 10 px
+    # Yoshida eq. 2 as printed: k is the sum of the kernel's own elements
+    k = GaussianGlare(normalisation="Yoshida2008").kernel(0.034, (41, 41))  # σ = 10 px
     assert_allclose(k.values.sum(), 1.0, rtol=1e-14)
     assert k.energy_outside == 0.0
     # eq. 2: F(x, 0) / F(0, 0) = exp(-x² / 2σ²)

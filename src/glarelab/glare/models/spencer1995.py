@@ -163,7 +163,7 @@ class VosGlare(GlareModel):
     def weights(self) -> tuple[float, float, float, float]:
         """``(w0, w1, w2, w3)`` of eqs. 5, 8-10, with the halo's weight moved to ``f0`` when
         :attr:`halo_skipped`."""
-        w0, w1, w2, w3 = vos.weights(self.regime, self.age)
+        w0, w1, w2, w3 = vos.weights(self.regime, self.age, warn=False)  # warned when made
         if self.halo_skipped:
             return (w0 + w3, w1, w2, 0.0)
         return (w0, w1, w2, w3)

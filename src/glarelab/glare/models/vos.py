@@ -20,8 +20,10 @@ Corrections to the printed equations (checked numerically in ``tests/glare/model
   ``exp(-19.75 (θ - θ0)²)`` the volume is 1.0000 at every wavelength 380–780 nm and the FWHM is
   0.375°, the "approximately 0.35°" of Mallero & Palmer's observation. We use eq. 6's 19.75.
 - The other printed constants (2.61e6, 20.91, 72.37, 436.9) give volumes within 0.1 % of 1.
-  :func:`glarelab.glare.digitise_kernel` renormalises each component to exactly unit volume, as
-  Spencer §3.2 renormalises its filters.
+  :func:`glarelab.glare.digitise_kernel` renormalises each component to exactly unit volume
+  over the plane (the PSF's, not the kernel's). Spencer §3.2 renormalises the filter instead,
+  "so that all pixels sum to one", which puts the light beyond the kernel back inside it; that
+  is ``VosGlare(normalisation="Spencer1995")``.
 
 References
 ----------
@@ -306,8 +308,13 @@ def max_age_years(regime: Regime) -> float:
     return (WEIGHTS[regime][0] / AGE_COEFFICIENT_PER_YEAR4) ** 0.25
 
 
-def weights(regime: Regime = "photopic", age: float | None = None) -> tuple[float, ...]:
+def weights(
+    regime: Regime = "photopic", age: float | None = None, *, warn: bool = True
+) -> tuple[float, ...]:
     """Weights of ``(f0, f1, f2, f3)`` for an adaptation regime and, optionally, an age.
+
+    ``warn=False`` leaves out the warning for an age outside 20-70 years, for a caller that
+    has given it once already (a model warns when it is made, not at every kernel).
 
     Parameters
     ----------
@@ -359,7 +366,7 @@ def weights(regime: Regime = "photopic", age: float | None = None) -> tuple[floa
         "age", age, 0.0, limit, unit=f"years (eq. 10, {regime})", high_inclusive=False
     )
     low, high = AGE_VALIDATED_YEARS
-    if not low <= age_years <= high:
+    if warn and not low <= age_years <= high:
         warnings.warn(
             f"age={age_years:g} years is outside {low:g}-{high:g} years, the span for which "
             "Spencer 1995 §3.1.2 states the age relation eq. 10; the PSF is extrapolated",

@@ -17,10 +17,30 @@ from glarelab.glare.models.digitise import (
     gaussian_pixel_energies,
 )
 
-__all__ = ["SIGMA_DEG_YOSHIDA2008", "GaussianGlare"]
+__all__ = ["GAUSSIAN_NORMALISATIONS", "SIGMA_DEG_YOSHIDA2008", "GaussianGlare"]
 
 SIGMA_DEG_YOSHIDA2008 = 0.34  # Yoshida 2008 §3: σ = 0.34 visual degrees (Method I)
 MAX_SIGMA_DEG = 90.0  # as the command line: a halo wider than the visual field is a typo
+GAUSSIAN_NORMALISATIONS = ("infinite", "Yoshida2008")
+_POISSON_FROM_SIGMA_PX = 2.0  # above this σ the Poisson form of the lattice sum is used
+
+
+def _lattice_sum(sigma_px: float) -> float:
+    """``Σ_{i ∈ ℤ} exp(-i² / 2σ²)``, the sum of the point-sampled profile over every integer.
+
+    By Poisson summation it is ``σ √(2π) (1 + 2 Σ_{k≥1} exp(-2π² σ² k²))``; for ``σ >= 2`` px
+    the first correction is below 1e-34, so three terms are exact to the last bit. Narrower
+    profiles are summed directly over ``|i| <= 40 σ + 2`` (the terms beyond are below e⁻⁸⁰⁰).
+    """
+    if sigma_px >= _POISSON_FROM_SIGMA_PX:
+        k = np.arange(1, 4, dtype=float)
+        return (
+            sigma_px
+            * math.sqrt(2.0 * math.pi)
+            * (1.0 + 2.0 * float(np.exp(-2.0 * math.pi**2 * sigma_px**2 * k**2).sum()))
+        )
+    i = np.arange(1, math.ceil(40.0 * sigma_px) + 3, dtype=float)
+    return 1.0 + 2.0 * float(np.exp(-(i**2) / (2.0 * sigma_px**2)).sum())
 
 
 @dataclass(frozen=True)
@@ -34,14 +54,26 @@ class GaussianGlare(GlareModel):
     sampling
         ``'point'`` samples eq. 2 at pixel centres, as the paper does; ``'pixel'`` integrates
         the Gaussian over each pixel (exact; use it when σ is only a few pixels).
+    normalisation
+        ``'infinite'`` (default): ``k`` is the sum of eq. 2 over every pixel of the infinite
+        plane, so the kernel is the same crop of one Gaussian whatever its size, and the
+        light beyond the kernel is booked as ``energy_outside`` (not spread).
+        ``'Yoshida2008'``: ``k`` is the sum over the kernel's own elements (eq. 2 as
+        printed), so a kernel cut short puts its lost tail back inside: on a ``(2H-1)²``
+        kernel the same 0.3° disk then glows 1.82 times as much at its edge in a 33² image
+        at 0.0118°/px as in a 271² one.
 
     Notes
     -----
     .. math:: F(x, y) = \\frac{1}{k} \\exp\\Bigl(-\\frac{x^2 + y^2}{2\\sigma^2}\\Bigr)
 
-    with ``x, y`` pixel offsets, ``σ`` in pixels ``= sigma_deg / pixel_deg``, and ``k`` the sum
-    of all kernel elements, so the kernel sums to 1 and the truncated tail (reported in
-    ``Kernel.description['truncated_tail']``) is redistributed over the support, not lost.
+    with ``x, y`` pixel offsets and ``σ`` in pixels ``= sigma_deg / pixel_deg``. Yoshida §3:
+    "k is a normalization factor computed as the sum of all kernel elements", with ``x, y``
+    "from −s/2 to s/2, where s is the stimulus size". Under ``'infinite'``, ``k`` is that sum
+    over all integer ``x, y``, ``(Σ_i exp(-i²/2σ²))²`` (:func:`_lattice_sum`; ``2πσ²`` to
+    1e-34 for ``σ >= 2`` px); with ``sampling='pixel'`` the pixel energies of the continuous
+    Gaussian already sum to 1 over the plane. The truncated tail of the continuous Gaussian
+    is reported in ``Kernel.description['truncated_tail']`` under both normalisations.
 
     References
     ----------
@@ -50,12 +82,18 @@ class GaussianGlare(GlareModel):
     Examples
     --------
     >>> k = GaussianGlare(sigma_deg=0.34).kernel(0.034, (41, 41))
-    >>> round(float(k.values.sum()), 12), k.description["sigma_px"]
+    >>> round(float(k.values.sum() + k.energy_outside), 12), k.description["sigma_px"]
     (1.0, 10.0)
+    >>> round(k.energy_outside, 4)  # the samples beyond ±20 px (±2 σ); continuous: 0.0791
+    0.0789
+    >>> literal = GaussianGlare(sigma_deg=0.34, normalisation="Yoshida2008")
+    >>> round(float(literal.kernel(0.034, (41, 41)).values.sum()), 12)
+    1.0
     """
 
     sigma_deg: float = SIGMA_DEG_YOSHIDA2008
     sampling: Literal["point", "pixel"] = "point"
+    normalisation: Literal["infinite", "Yoshida2008"] = "infinite"
 
     def __post_init__(self) -> None:
         check_positive("sigma_deg", self.sigma_deg, unit="deg")
@@ -65,6 +103,7 @@ class GaussianGlare(GlareModel):
                 f"field); got {self.sigma_deg!r}"
             )
         check_choice("sampling", self.sampling, ("point", "pixel"))
+        check_choice("normalisation", self.normalisation, GAUSSIAN_NORMALISATIONS)
 
     @property
     def achromatic(self) -> bool:
@@ -80,8 +119,9 @@ class GaussianGlare(GlareModel):
         """What a kernel cut to a centred square of half-size ``radius_px`` leaves out.
 
         Exact for the separable kernel: the largest pixel outside is ``a[r+1] a[0]`` and the
-        energy outside ``1 - (Σ_{|i|≤r} a_i)²`` for the normalised 1-D profile ``a``. The cut
-        kernel is normalised over its support (eq. 2's ``k``), so it is marked renormalised.
+        energy outside ``1 - (Σ_{|i|≤r} a_i)²`` for the normalised 1-D profile ``a``. Under
+        ``normalisation='Yoshida2008'`` the cut kernel is normalised over its support (eq. 2's
+        ``k``), so it is marked renormalised; under ``'infinite'`` a cut loses that energy.
 
         Parameters
         ----------
@@ -98,7 +138,7 @@ class GaussianGlare(GlareModel):
         Returns
         -------
         TailBound
-            Exact bounds, marked renormalised.
+            Exact bounds, marked renormalised under ``'Yoshida2008'``.
         """
         pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
         radius = np.asarray(radius_px, dtype=np.int64)
@@ -108,12 +148,23 @@ class GaussianGlare(GlareModel):
             profile = np.exp(-(np.arange(n + 1, dtype=float) ** 2) / (2.0 * sigma_px**2))
         else:
             profile = gaussian_pixel_energies(self.sigma_deg * math.sqrt(2.0), pixel_deg, n)
-        profile = profile / (2.0 * profile.sum() - profile[0])
+        profile = profile / self._profile_total(sigma_px, profile)
         inside = 2.0 * np.cumsum(profile) - profile[0]  # Σ_{|i|≤r} a_i
         return TailBound(
             peak=profile[radius + 1] * profile[0],
             energy=np.clip(1.0 - inside[radius] ** 2, 0.0, 1.0),
-            renormalised=True,
+            renormalised=self.normalisation == "Yoshida2008",
+        )
+
+    def _profile_total(self, sigma_px: float, profile: np.ndarray) -> float:
+        """The 1-D normaliser: over the mirrored ``profile`` (``'Yoshida2008'``) or over every
+        integer offset (``'infinite'``: the lattice sum, or 1 for pixel energies)."""
+        if self.normalisation == "Yoshida2008":
+            return float(2.0 * profile.sum() - profile[0])
+        if self.normalisation == "infinite":
+            return _lattice_sum(sigma_px) if self.sampling == "point" else 1.0
+        raise ValueError(
+            f"normalisation must be one of {GAUSSIAN_NORMALISATIONS}; got {self.normalisation!r}"
         )
 
     def kernel(self, pixel_deg: float, shape: tuple[int, int], *, colour: bool = False) -> Kernel:
@@ -161,13 +212,18 @@ class GaussianGlare(GlareModel):
                 raise ValueError(f"sampling must be 'point' or 'pixel'; got {self.sampling!r}")
         # the kernel's sum is the product of the mirrored profiles' sums: normalise those
         # (eq. 2's k); the kernel is their outer product's quadrant, unfolded when used
-        rows, cols = (p / (2.0 * p.sum() - p[0]) for p in profiles)
+        rows, cols = (p / self._profile_total(sigma_px, p) for p in profiles)
         reach = [(n // 2 + 0.5) * pixel_deg / (self.sigma_deg * math.sqrt(2.0)) for n in shape]
         tail = 1.0 - math.erf(reach[0]) * math.erf(reach[1])
+        if self.normalisation == "infinite":
+            inside = (2.0 * rows.sum() - rows[0]) * (2.0 * cols.sum() - cols[0])
+            outside = float(min(max(1.0 - inside, 0.0), 1.0))
+        else:
+            outside = 0.0
         return Kernel(
             quadrant=np.outer(rows, cols),
             pixel_deg=pixel_deg,
-            energy_outside=0.0,
+            energy_outside=outside,
             quadrature_error=0.0,
             description={
                 "model": "GaussianGlare",

@@ -220,7 +220,7 @@ def render_planned(
     model: GlareModel | str,
     *,
     pixel_deg: float,
-    l_dmax_cd_m2: float,
+    l_dmax_cd_m2: float = L_DMAX_YOSHIDA2008_CD_M2,
     method: Literal["Yoshida2008", "Spencer1995"] = "Yoshida2008",
     precision: Literal["float64", "float32"] = "float64",
     tolerance_codes: float = 0.5,

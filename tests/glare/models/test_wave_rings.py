@@ -1,0 +1,229 @@
+"""Wave-optics kernels hold the described aperture's diffraction pattern out to their border.
+
+Issue 33: the kernel was exact for the sampled, edge-smoothed aperture, whose pattern is the
+described one's times ``sinc²(θ δ / λ)``, and the grid made the PSF repeat at twice the
+kernel's width: a round pupil's light at 1-2.5° was 22 % low at 380 nm, a 21² kernel 6-19 %
+dim where the same eye's 101² kernel was right. The reference here is independent of the
+model's DFT: the Airy pattern ``(2 J1(x)/x)²`` integrated over each pixel by radial
+Gauss-Legendre quadrature, each radius weighted by the length of its circle inside the pixel
+(a closed form). Errors are counted as a display shows them: ring by ring, and in codes.
+"""
+
+import math
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+from scipy.special import j1
+
+from glarelab.glare import WaveOpticsGlare, render_glare
+from glarelab.glare.models.digitise import Kernel
+from glarelab.glare.models.spectral import Spectrum
+from glarelab.glare.rendering.display import display_codes, display_lut
+
+CAMERA = {"eyelashes": False, "eyelid": False, "particles": 0}
+RING_RTOL = 0.01  # issue 33: ring energies 0.3-2.5° and the kernel border within 1 %
+RINGS_DEG = ((0.3, 0.6), (0.6, 1.0), (1.0, 2.5))
+
+
+def _arc_in_box(t, x0, x1, y0, y1):
+    """Length of the arc of the circle of radius ``t`` inside ``[x0, x1] × [y0, y1]`` (first
+    quadrant, ``x0, y0 >= 0``)."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        c_lo, c_hi = np.arccos(np.clip(x1 / t, -1, 1)), np.arccos(np.clip(x0 / t, -1, 1))
+        s_lo, s_hi = np.arcsin(np.clip(y0 / t, -1, 1)), np.arcsin(np.clip(y1 / t, -1, 1))
+    return t * np.clip(np.minimum(c_hi, s_hi) - np.maximum(c_lo, s_lo), 0.0, None)
+
+
+def airy_kernel(diameter_mm: float, wavelength_nm: float, pixel_deg: float, half: int):
+    """The unit-energy Airy pattern integrated over each pixel of a ``(2 half + 1)²`` kernel:
+    ``∫ I(θ) ℓ(θ) dθ`` with ``ℓ`` the arc of radius ``θ`` inside the pixel, on panels of
+    ``λ / 2D`` (at least 8 between kinks) with 8 Gauss-Legendre nodes each."""
+    lam = wavelength_nm * 1e-6
+    p = math.radians(pixel_deg)
+    i, j = np.nonzero(np.tril(np.ones((half + 1, half + 1), bool)))  # one octant, i >= j
+
+    def extent(k):  # a pixel on an axis is twice its half on the positive side
+        return np.where(k == 0, 0.0, (k - 0.5) * p), (k + 0.5) * p, np.where(k == 0, 2.0, 1.0)
+
+    y0, y1, my = extent(i)
+    x0, x1, mx = extent(j)
+    # the arc length has kinks where the circle passes the pixel's other two corners: the
+    # panels split [t0, t1] there, so each holds a smooth integrand
+    t0, t1 = np.hypot(x0, y0), np.hypot(x1, y1)
+    k1 = np.minimum(np.hypot(x1, y0), np.hypot(x0, y1))
+    k2 = np.maximum(np.hypot(x1, y0), np.hypot(x0, y1))
+    panels = max(8, math.ceil(float((t1 - t0).max()) / (lam / diameter_mm / 2)))
+    xg, wg = np.polynomial.legendre.leggauss(8)
+    share = np.linspace(0.0, 1.0, panels + 1)[1:]
+    edges = np.concatenate(
+        [t0[:, None]]
+        + [a[:, None] + (b - a)[:, None] * share for a, b in ((t0, k1), (k1, k2), (k2, t1))],
+        axis=1,
+    )
+    middle, width = (edges[:, 1:] + edges[:, :-1]) / 2, (edges[:, 1:] - edges[:, :-1]) / 2
+    t = (middle[:, :, None] + width[:, :, None] * xg).reshape(i.size, -1)
+    w = (width[:, :, None] * wg).reshape(i.size, -1)
+    a = math.pi * diameter_mm * t / lam
+    safe = np.where(a > 1e-12, a, 1.0)
+    airy = np.where(a > 1e-12, (2 * j1(safe) / safe) ** 2, 1.0)
+    density = math.pi * (diameter_mm / 2) ** 2 / lam**2 * airy
+    arc = _arc_in_box(t, x0[:, None], x1[:, None], y0[:, None], y1[:, None])
+    quadrant = np.zeros((half + 1, half + 1))
+    quadrant[i, j] = quadrant[j, i] = (w * density * arc).sum(axis=1) * mx * my
+    rows = np.concatenate([quadrant[:0:-1], quadrant])
+    return np.concatenate([rows[:, :0:-1], rows], axis=1)
+
+
+def test_reference_is_the_airy_pattern():
+    # the encircled energy 1 - J0² - J1² (Born & Wolf §8.5.2) bounds a square's energy
+    from scipy.special import j0
+
+    half, pixel = 40, 0.004
+    k = airy_kernel(3.0, 550.0, pixel, half)
+    v = np.pi * 3.0 * np.radians((half + 0.5) * pixel * np.array([1.0, math.sqrt(2)])) / 550e-6
+    inscribed, circumscribed = 1 - j0(v) ** 2 - j1(v) ** 2
+    assert inscribed < k.sum() < circumscribed
+    # the centre pixel of a 3 mm pupil at 530 nm and 0.0118°/px: 0.6292 (test_wave_exact)
+    assert_allclose(airy_kernel(3.0, 530.0, 0.0118, 2)[2, 2], 0.6292, atol=5e-5)
+
+
+def _monochromatic(pupil_mm, low_nm, high_nm, pixel_deg, shape):
+    spectrum = Spectrum(n_wavelengths=2, wavelength_range_nm=(low_nm, high_nm))
+    model = WaveOpticsGlare(pupil_mm=pupil_mm, **CAMERA, spectral="reference", spectrum=spectrum)
+    return model.monochromatic_kernels(pixel_deg, shape)
+
+
+def _rings(shape, pixel_deg):
+    half = shape[0] // 2
+    y, x = np.indices(shape) - half
+    radius = np.hypot(x, y) * pixel_deg
+    border = np.zeros(shape, bool)
+    border[[0, -1], :] = border[:, [0, -1]] = True
+    masks = {f"{a}-{b}°": (radius >= a) & (radius < b) for a, b in RINGS_DEG}
+    return {name: mask for name, mask in masks.items() if mask.any()} | {"border": border}
+
+
+@pytest.mark.parametrize(
+    ("pupil_mm", "low_nm", "high_nm", "pixel_deg", "size"),
+    [
+        (2.0, 380.0, 780.0, 0.025, 101),  # to 1.26°, corners 1.78°
+        (8.0, 380.0, 780.0, 0.025, 81),  # to 1°, corners 1.41°
+        (5.0, 450.0, 650.0, 0.02, 251),  # to 2.5°
+        (3.0, 380.0, 700.0, 0.0118, 21),  # Yoshida's pixels, a small kernel
+    ],
+)
+def test_ring_energies_and_border_are_the_airy_patterns(
+    pupil_mm, low_nm, high_nm, pixel_deg, size
+):
+    shape = (size, size)
+    kernels, nm = _monochromatic(pupil_mm, low_nm, high_nm, pixel_deg, shape)
+    for kernel, wavelength in zip(kernels, nm, strict=True):
+        reference = airy_kernel(pupil_mm, wavelength, pixel_deg, size // 2)
+        for name, mask in _rings(shape, pixel_deg).items():
+            assert_allclose(
+                kernel[mask].sum(), reference[mask].sum(), rtol=RING_RTOL, err_msg=name
+            )
+
+
+def test_small_kernel_is_the_large_kernels_centre():
+    # issue 33: a 21² kernel at 0.0118°/px was 6-19 % dim at 0.08-0.125° where the same
+    # eye's 101² kernel was within 0.14 %
+    model = WaveOpticsGlare(pupil_mm=3.0, particles=0, spectral="kakimoto")
+    small = model.monochromatic_kernels(0.0118, (21, 21))[0]
+    large = model.monochromatic_kernels(0.0118, (101, 101))[0][:, 40:61, 40:61]
+    significant = large > 1e-6 * large.max()
+    assert_allclose(small[significant], large[significant], rtol=0.01)
+
+
+def test_bright_lamp_renders_within_half_a_code_of_the_airy_reference():
+    # issue 33: a 1e5 cd/m² lamp's glow was 0.3-0.6 codes low from 0.3° to 2.8°; here the
+    # kernels before it were 1.21 codes low at 1-2° (3 mm pupil), now within 0.10
+    pixel_deg, size = 0.05, 81  # ±2°; the (2H-1)² kernel reaches 4°, the model's extent
+    spectrum = Spectrum(n_wavelengths=5, wavelength_range_nm=(380.0, 780.0))
+    model = WaveOpticsGlare(pupil_mm=3.0, **CAMERA, spectrum=spectrum)
+    weights = spectrum.channel_weights("Y")[0]
+    half = size - 1
+    reference = sum(
+        w * airy_kernel(3.0, nm, pixel_deg, half)
+        for w, nm in zip(weights, spectrum.wavelengths_nm, strict=True)
+    )
+    y, x = np.indices((size, size)) - size // 2
+    image = np.where(np.hypot(x, y) <= 2, 1e5, 0.5)  # a lamp 0.2° wide on a dark field
+    lut = display_lut(None, 220.0)
+    codes = {}
+    for name, kernel in (
+        ("model", None),
+        ("reference", Kernel(values=reference, pixel_deg=pixel_deg, energy_outside=0.0)),
+    ):
+        result = render_glare(image, model, pixel_deg=pixel_deg, kernel=kernel, cache=False)
+        codes[name] = display_codes(result.image, lut)
+    assert np.abs(codes["model"] - codes["reference"]).max() <= 0.5
+
+
+@pytest.mark.parametrize(
+    ("sides", "diameter_mm", "rotation_deg", "wavelength_index"),
+    [(3, 3.0, 10.0, 2), (6, 4.0, 0.0, 0)],  # 460, 680 nm
+)
+def test_polygon_rings_and_border_are_the_polygons_transform(
+    sides, diameter_mm, rotation_deg, wavelength_index
+):
+    # the polygon's Fourier transform as a sum over its edges, integrated over each pixel
+    # (test_wave_exact.polygon_pixels): ring 0.2-0.3° and the border of a 31² kernel at
+    # 0.02°/px. Not yet within 1 %: an octagon of 2 mm at 530 nm, border 1.7 % low, the ring
+    # 0.9 % (docs/optics-departures.md); it changes sign with the grid and falls to 0.2 % on
+    # a grid four times finer
+    from tests.glare.models.test_wave_exact import polygon_pixels
+
+    pixel_deg, shape = 0.02, (31, 31)
+    model = WaveOpticsGlare(
+        pupil_mm=diameter_mm, **CAMERA, diaphragm_sides=sides,
+        diaphragm_rotation_deg=rotation_deg, spectral="kakimoto",
+    )  # fmt: skip
+    kernels, nm = model.monochromatic_kernels(pixel_deg, shape)
+    kernel, wavelength = kernels[wavelength_index], nm[wavelength_index]
+    reference = polygon_pixels(sides, diameter_mm, rotation_deg, wavelength, pixel_deg, 15)
+    y, x = np.indices(shape) - 15
+    radius = np.hypot(x, y) * pixel_deg
+    border = np.zeros(shape, bool)
+    border[[0, -1], :] = border[:, [0, -1]] = True
+    for name, mask in (("0.2-0.3°", (radius >= 0.2) & (radius < 0.3)), ("border", border)):
+        assert_allclose(kernel[mask].sum(), reference[mask].sum(), rtol=RING_RTOL, err_msg=name)
+
+
+def test_eye_with_lid_lashes_and_particles_matches_a_finely_sampled_zero_padded_aperture():
+    # the same obstacles drawn on a grid twice as fine, zero-padded to 3072² and transformed
+    # by one FFT, normalised by the open area, the finer edges' transfer sinc²(k/N) divided
+    # out and the samples (0.004-0.008°) rebinned onto the pixels: an independent path from
+    # the aperture to the pixels (measured: within 0.06 %; before issue 33, −23 % at the
+    # border at 380 nm, −15 % at 0.3-0.41°)
+    from glarelab.glare.models import apertures as ap
+    from glarelab.glare.models.fraunhofer import psf_fraunhofer, rebin
+
+    pixel_deg, shape, n = 0.02, (41, 41), 3072
+    spectrum = Spectrum(n_wavelengths=2, wavelength_range_nm=(380.0, 780.0))
+    model = WaveOpticsGlare(pupil_mm=2.0, spectral="reference", spectrum=spectrum)
+    kernels, nm = model.monochromatic_kernels(pixel_deg, shape)
+    fine = model.grid_for(pixel_deg, shape).spacing_mm / 2
+    crop = model._aperture_crop(ap.ApertureGrid(n, fine))
+    field = np.zeros((n, n))
+    start = n // 2 - crop.shape[0] // 2
+    field[start : start + crop.shape[0], start : start + crop.shape[1]] = crop
+    lags = np.hypot(*np.meshgrid(np.arange(n) - n // 2, np.arange(n) - n // 2)) / n
+    y, x = np.indices(shape) - shape[0] // 2
+    radius = np.hypot(x, y) * pixel_deg
+    border = np.zeros(shape, bool)
+    border[[0, -1], :] = border[:, [0, -1]] = True
+    masks = {
+        "0.1-0.3°": (radius >= 0.1) & (radius < 0.3),
+        "0.3°-": radius >= 0.3,
+        "border": border,
+    }
+    for kernel, wavelength in zip(kernels, nm, strict=True):
+        psf = psf_fraunhofer(field, fine, wavelength)
+        values = psf.values * psf.raw_energy / (n * n * crop.sum()) / np.sinc(lags) ** 2
+        reference = rebin(values, psf.spacing_deg, pixel_deg, shape)
+        for name, mask in masks.items():
+            assert_allclose(
+                kernel[mask].sum(), reference[mask].sum(), rtol=RING_RTOL, err_msg=name
+            )
