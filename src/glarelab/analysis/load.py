@@ -39,7 +39,7 @@ from pathlib import Path
 import pandas as pd
 
 from glarelab.analysis.dataset import DataError, Dataset, Design, where
-from glarelab.analysis.paradigms import PARADIGMS
+from glarelab.analysis.paradigms import paradigm_analysis
 from glarelab.protocols import columns
 from glarelab.protocols.keys import TOKEN
 
@@ -472,7 +472,7 @@ def load_sessions(
     files = []
     if not paths:
         raise DataError(["no CSV files given"])
-    paradigm = PARADIGMS[protocol.paradigm]
+    paradigm = paradigm_analysis(protocol)
     design: Design = paradigm.design(protocol)
     for raw in paths:
         path = Path(raw)

@@ -53,7 +53,7 @@ from glarelab.analysis.dataset import DataError, Dataset
 from glarelab.analysis.figures import Figure, as_figure
 from glarelab.analysis.load import load_sessions
 from glarelab.analysis.methods import provenance, session_rows
-from glarelab.analysis.paradigms import PARADIGMS
+from glarelab.analysis.paradigms import paradigm_analysis
 from glarelab.files.folders import check_replaceable, replace_folder, staging_folder
 
 __all__ = ["analyse", "methods_paragraph", "write_report"]
@@ -110,7 +110,7 @@ def analyse(
         include_pilots=include_pilots,
         stimuli=None if stimuli is None else set_hashes(stimuli),
     )
-    return dataset, PARADIGMS[protocol.paradigm].analyse(dataset, protocol)
+    return dataset, paradigm_analysis(protocol).analyse(dataset, protocol)
 
 
 def set_hashes(stimuli: Path) -> dict:
@@ -140,7 +140,7 @@ def methods_paragraph(protocol, participants: int, simulated: bool | int) -> str
         who = f"{participants} participants"
     else:
         who = f"{participants} participants ({simulated} of them simulated observers)"
-    return PARADIGMS[protocol.paradigm].methods(protocol, participants, who)
+    return paradigm_analysis(protocol).methods(protocol, participants, who)
 
 
 def _displayed(protocol, stimuli: Path | None):
@@ -157,7 +157,7 @@ def _stimuli(protocol, result: dict, shown) -> list[Figure]:
     """The analysis's own stimuli, then the set's images as the display showed them."""
     figures = [as_figure(item, "stimulus") for item in result.get("stimuli", [])]
     if shown is not None:
-        draw = getattr(PARADIGMS[protocol.paradigm], "stimulus_figures", None)
+        draw = paradigm_analysis(protocol).stimulus_figures
         if draw is not None:
             figures += draw(protocol, shown)
     return figures
@@ -275,7 +275,7 @@ def _html(
         for figure in stimuli:
             number += 1
             parts.append(_figure_html(number, figure))
-    elif not had_set and getattr(PARADIGMS[protocol.paradigm], "stimulus_figures", None):
+    elif not had_set and paradigm_analysis(protocol).stimulus_figures is not None:
         parts.append(
             "<p class='note'>The stimuli are shown when the report is given the stimulus set "
             "(<code>glarelab analyse … --stimuli SET</code>).</p>"

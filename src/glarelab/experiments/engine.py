@@ -115,11 +115,23 @@ def participant_rng(seed: int, participant: str, purpose: str) -> np.random.Gene
     return np.random.default_rng([seed, int.from_bytes(digest[:8], "little")])
 
 
-class LookingObserver:
+class LookingObserver(ABC):
     """What the simulated observers that look at a stimulus set share: the brightness model
     and noise of the protocol's ``[observer]`` table, this participant's draw of the noise,
     and the set as its display shows it (:class:`glarelab.experiments.looking.DisplayedSet`, which
-    observers given the same one share percepts through)."""
+    observers given the same one share percepts through).
+
+    A paradigm's observer says what it judges (:meth:`judged`), against which the stimuli are
+    checked for the range the observers were fitted on: an observer that does not say cannot be
+    made.
+    """
+
+    @staticmethod
+    @abstractmethod
+    def judged(protocol, geometry: dict):
+        """The glare methods, the disk's luminance and its diameter the observers judge
+        (:class:`glarelab.experiments.perception.JudgedStimuli`), from the protocol and its
+        stimulus set's ``geometry``."""
 
     @staticmethod
     def check(protocol) -> None:
@@ -141,7 +153,9 @@ class LookingObserver:
         )
         self.display = stimuli if isinstance(stimuli, DisplayedSet) else DisplayedSet(stimuli)
         # once per observer: the stimuli it will be asked about, against what it was fitted on
-        self.departures = warn_outside_fitted_range(protocol, self.display.geometry)
+        self.departures = warn_outside_fitted_range(
+            protocol.study, self.judged(protocol, self.display.geometry)
+        )
 
 
 def first_screen(engine, *, presses: int = 50) -> dict | None:

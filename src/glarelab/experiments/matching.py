@@ -282,6 +282,28 @@ class MatchingObserver(LookingObserver):
         percepts).
     """
 
+    @staticmethod
+    def judged(protocol, geometry: dict):
+        """Each method's references, their levels over the clamp ``L_dmax``, and the disk of
+        ``geometry["disk_diameter_deg"]`` (:class:`LookingObserver.judged`)."""
+        from glarelab.experiments.perception import JudgedGlare, JudgedStimuli
+
+        glare = protocol["glare"]
+        clamp = glare["l_dmax_cd_m2"]
+        return JudgedStimuli(
+            tuple(
+                JudgedGlare(
+                    f"method {method['name']!r}",
+                    method["model"],
+                    method.get("parameters"),
+                    tuple(level / clamp for level in method["levels_cd_m2"]),
+                )
+                for method in glare["methods"]
+            ),
+            disk_cd_m2=clamp,
+            disk_diameter_deg=geometry["disk_diameter_deg"],
+        )
+
     def __init__(self, protocol, participant: str, *, seed: int, stimuli):
         super().__init__(protocol, participant, seed=seed, stimuli=stimuli)
         g = self.display.geometry

@@ -77,8 +77,9 @@ from __future__ import annotations
 import functools
 import math
 import warnings
+from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 
@@ -96,6 +97,8 @@ __all__ = [
     "FITTED_LEVEL_RATIO",
     "FITTED_VOS_REGIMES",
     "BrightnessModel",
+    "JudgedGlare",
+    "JudgedStimuli",
     "Observer",
     "ObserverNoise",
     "OutsideFittedRangeWarning",
@@ -235,17 +238,48 @@ def _kernel_departures(where: str, model: str, parameters, ratios: list[float]) 
     return out
 
 
-def fitted_range_departures(protocol, geometry: dict) -> list[str]:
-    """How a protocol's stimuli depart from those the observers were fitted on.
+@dataclass(frozen=True)
+class JudgedGlare:
+    """One glare method whose images an observer judges, as the fitted range needs it.
+
+    Attributes
+    ----------
+    where
+        How a departure names it (``"method 'gaussian'"``).
+    model
+        Its glare model's name (a key of :data:`glarelab.glare.GLARE_MODELS`).
+    parameters
+        The model's keywords (None: its defaults).
+    level_ratios
+        Each level's glare-source luminance over the clamp it is rendered against.
+    """
+
+    where: str
+    model: str
+    parameters: Mapping[str, Any] | None
+    level_ratios: tuple[float, ...]
+
+
+@dataclass(frozen=True)
+class JudgedStimuli:
+    """What a paradigm's simulated observers judge, in the terms of the fitted range: the glare
+    methods, the judged disk's luminance (the clamp, cd/m²) and its diameter (deg). Each
+    paradigm's observer says it (``judged(protocol, geometry)``), so this module never asks
+    which paradigm a protocol is."""
+
+    glare: tuple[JudgedGlare, ...]
+    disk_cd_m2: float
+    disk_diameter_deg: float
+
+
+def fitted_range_departures(judged: JudgedStimuli) -> list[str]:
+    """How the stimuli judged depart from those the observers were fitted on.
 
     Parameters
     ----------
-    protocol
-        A matching or staircase protocol (:func:`protocols.load_protocol`, or its data as a
-        dict); other paradigms show no glare to judge and have no departures.
-    geometry
-        Its stimulus set's geometry (``manifest.json``): the judged disk's diameter
-        (``disk_diameter_deg`` or ``source_diameter_deg``, deg).
+    judged
+        The glare methods, the disk's luminance and its diameter, as a paradigm's observer
+        gives them (``judged(protocol, geometry)``).
 
     Returns
     -------
@@ -255,34 +289,18 @@ def fitted_range_departures(protocol, geometry: dict) -> list[str]:
 
     Examples
     --------
-    >>> from glarelab.protocols import load_protocol
-    >>> yoshida = load_protocol("yoshida2008")
-    >>> fitted_range_departures(yoshida, {"disk_diameter_deg": 0.3})
+    >>> gaussian = JudgedGlare("method 'gaussian'", "gaussian", {"sigma_deg": 0.34}, (1.0, 20.0))
+    >>> fitted_range_departures(JudgedStimuli((gaussian,), 220.0, 0.3))
     []
-    >>> fitted_range_departures(yoshida, {"disk_diameter_deg": 1.0})
+    >>> fitted_range_departures(JudgedStimuli((gaussian,), 220.0, 1.0))
     ['disk diameter 1° (fitted on 0.1065-0.3°)']
     """
-    paradigm = getattr(protocol, "paradigm", None) or protocol["study"]["paradigm"]
-    if paradigm not in ("matching", "staircase"):
-        return []
-    glare_table = protocol["glare"]
     out: list[str] = []
-    if paradigm == "matching":
-        clamp = glare_table["l_dmax_cd_m2"]
-        diameter = geometry["disk_diameter_deg"]
-        for method in glare_table["methods"]:
-            ratios = [level / clamp for level in method["levels_cd_m2"]]
-            where = f"method {method['name']!r}"
-            out += _kernel_departures(where, method["model"], method.get("parameters"), ratios)
-    elif paradigm == "staircase":
-        clamp = glare_table["peak_fraction"] * protocol["display"]["max_cd_m2"]
-        diameter = geometry["source_diameter_deg"]
-        ratios = [1.0 + strength for strength in glare_table["strengths"]]
+    for method in judged.glare:
         out += _kernel_departures(
-            "glare", glare_table["model"], glare_table.get("parameters"), ratios
+            method.where, method.model, method.parameters, list(method.level_ratios)
         )
-    else:
-        raise ValueError(f"paradigm {paradigm!r}: expected matching or staircase")
+    diameter, clamp = judged.disk_diameter_deg, judged.disk_cd_m2
     if not _inside(diameter, FITTED_DISK_DIAMETER_DEG):
         out.append(
             f"disk diameter {diameter:.4g}° (fitted on {_bounds(FITTED_DISK_DIAMETER_DEG, '°')})"
@@ -295,18 +313,18 @@ def fitted_range_departures(protocol, geometry: dict) -> list[str]:
     return out
 
 
-def warn_outside_fitted_range(protocol, geometry: dict) -> list[str]:
-    """Warn once, with every departure, when a protocol's stimuli lie outside what the
-    observers were fitted on (:func:`fitted_range_departures`); return the departures.
+def warn_outside_fitted_range(study: str, judged: JudgedStimuli) -> list[str]:
+    """Warn once, with every departure, when the stimuli a study's observers judge lie outside
+    what the observers were fitted on (:func:`fitted_range_departures`); return the
+    departures.
 
     Warns
     -----
     OutsideFittedRangeWarning
         Naming each value and its fitted range.
     """
-    departures = fitted_range_departures(protocol, geometry)
+    departures = fitted_range_departures(judged)
     if departures:
-        study = getattr(protocol, "study", None) or protocol["study"]["name"]
         warnings.warn(
             f"the simulated observers of {study} are asked about stimuli outside those they "
             f"were fitted on (docs/observers.md), so their answers are an extrapolation: "

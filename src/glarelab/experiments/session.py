@@ -47,7 +47,7 @@ from glarelab.experiments.data import (
 )
 from glarelab.experiments.engine import Press, first_screen
 from glarelab.experiments.loop import SessionAborted, SessionLoop, Shown
-from glarelab.experiments.paradigms import PARADIGMS
+from glarelab.experiments.paradigms import paradigm_run
 from glarelab.protocols import DATA_FORMAT
 from glarelab.stimuli.stimulus_set import package_versions, verify_stimulus_set
 from glarelab.stimuli.stimulus_set import shows_images as _shows_images
@@ -75,7 +75,7 @@ def make_engine(
     protocol, participant: str, *, session: int, counterbalance: int | None, refresh_hz: float
 ):
     """The engine of the protocol's paradigm for one participant's session."""
-    return PARADIGMS[protocol.paradigm].engine(
+    return paradigm_run(protocol).engine(
         protocol,
         participant,
         session=session,
@@ -91,7 +91,7 @@ def make_observer(protocol, participant: str, *, seed: int, stimuli):
     from glarelab.experiments.looking import DisplayedSet
     from glarelab.stimuli.stimulus_set import StimulusSet
 
-    observer = PARADIGMS[protocol.paradigm].observer
+    observer = paradigm_run(protocol).observer
     if observer is None:
         raise ValueError(f"the {protocol.paradigm} paradigm has no simulated observer")
     if shows_images(protocol) and stimuli is None:

@@ -343,6 +343,26 @@ class StaircaseObserver(LookingObserver):
         percepts).
     """
 
+    @staticmethod
+    def judged(protocol, geometry: dict):
+        """The glare at each strength over the clamp (the display's peak), and the source of
+        ``geometry["source_diameter_deg"]`` (:class:`LookingObserver.judged`)."""
+        from glarelab.experiments.perception import JudgedGlare, JudgedStimuli
+
+        glare = protocol["glare"]
+        return JudgedStimuli(
+            (
+                JudgedGlare(
+                    "glare",
+                    glare["model"],
+                    glare.get("parameters"),
+                    tuple(1.0 + strength for strength in glare["strengths"]),
+                ),
+            ),
+            disk_cd_m2=glare["peak_fraction"] * protocol["display"]["max_cd_m2"],
+            disk_diameter_deg=geometry["source_diameter_deg"],
+        )
+
     def __init__(self, protocol, participant: str, *, seed: int, stimuli):
         super().__init__(protocol, participant, seed=seed, stimuli=stimuli)
         g = self.display.geometry

@@ -281,9 +281,9 @@ def _flash_cost(device, screen: dict, frames: int, period: float, log) -> dict:
 
 
 def _engine(protocol, refresh_hz: float):
-    from glarelab.experiments.paradigms import PARADIGMS
+    from glarelab.experiments.paradigms import paradigm_run
 
-    return PARADIGMS[protocol.paradigm].engine(
+    return paradigm_run(protocol).engine(
         protocol, "check1", counterbalance=0, refresh_hz=refresh_hz
     )
 

@@ -150,7 +150,14 @@ PARADIGMS: dict[str, Callable[[Mapping[str, pd.DataFrame], object, int], list[di
 def effects(protocol, tables: Mapping[str, pd.DataFrame], participants: int) -> list[dict]:
     """Every test of the protocol's analysis as an effect row (module docstring), from the
     tables of the analysis's ``tests(dataset, protocol)`` on ``participants``."""
-    return PARADIGMS[protocol.paradigm](tables, protocol, participants)
+    reader = PARADIGMS.get(protocol.paradigm)
+    if reader is None:
+        raise ValueError(
+            f"paradigm {protocol.paradigm!r} has no effects reader registered in "
+            f"glarelab.planning.effects.PARADIGMS ({', '.join(sorted(PARADIGMS))}): a power "
+            "analysis cannot name its tests"
+        )
+    return reader(tables, protocol, participants)
 
 
 def chosen_p(row: Mapping, correction: Correction) -> tuple[float, str]:

@@ -27,7 +27,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from glarelab.analysis.load import load_sessions
-from glarelab.analysis.paradigms import PARADIGMS
+from glarelab.analysis.paradigms import paradigm_analysis
 from glarelab.experiments.data import session_files
 from glarelab.experiments.looking import DisplayedSet
 from glarelab.experiments.session import (
@@ -140,7 +140,7 @@ def simulate_replication(
             protocol, ids, seed=seed, out=folder, stimuli=stimuli, looks_at=displayed
         )
         results, failures = [], []
-        tests = PARADIGMS[protocol.paradigm].tests
+        tests = paradigm_analysis(protocol).tests
         for n in sorted(participants):
             try:
                 dataset = load_sessions(protocol, csvs[:n])

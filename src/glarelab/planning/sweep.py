@@ -107,7 +107,7 @@ class SweepJob:
 
     def _simulate(self, index: int, protocol, folder: Path | None) -> list[dict]:
         from glarelab.analysis.load import load_sessions
-        from glarelab.analysis.paradigms import PARADIGMS
+        from glarelab.analysis.paradigms import paradigm_analysis
         from glarelab.analysis.report import write_report
         from glarelab.planning.effects import effects
         from glarelab.planning.simulate import _simulate_sessions
@@ -121,7 +121,7 @@ class SweepJob:
         )
         csvs = sorted(data.glob("*.csv"))
         write_report(protocol, csvs, where / "report", stimuli=folder)
-        tables = PARADIGMS[protocol.paradigm].tests(load_sessions(protocol, csvs), protocol)
+        tables = paradigm_analysis(protocol).tests(load_sessions(protocol, csvs), protocol)
         return effects(protocol, tables, self.simulate)
 
 
@@ -144,7 +144,7 @@ def prepare(
         For a protocol that shows no images without ``simulate``, ``simulate`` of 1, a point
         whose observers cannot be simulated, or an ``out`` holding a sweep of other inputs.
     """
-    from glarelab.experiments.paradigms import PARADIGMS
+    from glarelab.experiments.paradigms import paradigm_run
     from glarelab.experiments.session import shows_images
 
     if isinstance(simulate, bool) or not isinstance(simulate, int) or simulate < 0:
@@ -168,7 +168,12 @@ def prepare(
         )
     if simulate:
         for point in points:
-            PARADIGMS[point.protocol.paradigm].observer.check(point.protocol)
+            observer = paradigm_run(point.protocol).observer
+            if observer is None:
+                raise ValueError(
+                    f"the {point.protocol.paradigm} paradigm has no simulated observer"
+                )
+            observer.check(point.protocol)
     config = {
         "format": "glarelab sweep v1",
         "points": [{"point": p.index, "protocol_sha256": p.protocol.sha256} for p in points],

@@ -17,6 +17,7 @@ from glarelab.protocols.core import (
     parse_protocol,
     pixel_deg,
     protocol_path,
+    register_paradigm,
     shipped_protocols,
 )
 from glarelab.protocols.keys import Key, ProtocolError, Tables
@@ -38,5 +39,6 @@ __all__ = [
     "parse_protocol",
     "pixel_deg",
     "protocol_path",
+    "register_paradigm",
     "shipped_protocols",
 ]
