@@ -25,11 +25,7 @@ from glarelab.analysis.dataset import Design
 from glarelab.experiments import paradigms as experiments_paradigms
 from glarelab.experiments.engine import Engine, LookingObserver, participant_rng
 from glarelab.experiments.layout import protocol_drawing
-from glarelab.experiments.perception import (
-    JudgedGlare,
-    JudgedStimuli,
-    OutsideFittedRangeWarning,
-)
+from glarelab.observers.fitted_range import JudgedGlare, JudgedStimuli, OutsideFittedRangeWarning
 from glarelab.protocols import Key, load_protocol, pixel_deg
 from glarelab.protocols import core as protocols_core
 from glarelab.protocols.columns import Column

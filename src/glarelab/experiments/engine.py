@@ -118,7 +118,7 @@ def participant_rng(seed: int, participant: str, purpose: str) -> np.random.Gene
 class LookingObserver(ABC):
     """What the simulated observers that look at a stimulus set share: the brightness model
     and noise of the protocol's ``[observer]`` table, this participant's draw of the noise,
-    and the set as its display shows it (:class:`glarelab.experiments.looking.DisplayedSet`, which
+    and the set as its display shows it (:class:`glarelab.observers.looking.ObservedSet`, which
     observers given the same one share percepts through).
 
     A paradigm's observer says what it judges (:meth:`judged`), against which the stimuli are
@@ -130,19 +130,21 @@ class LookingObserver(ABC):
     @abstractmethod
     def judged(protocol, geometry: dict):
         """The glare methods, the disk's luminance and its diameter the observers judge
-        (:class:`glarelab.experiments.perception.JudgedStimuli`), from the protocol and its
+        (:class:`glarelab.observers.fitted_range.JudgedStimuli`), from the protocol and its
         stimulus set's ``geometry``."""
 
     @staticmethod
     def check(protocol) -> None:
         """Refuse an ``[observer]`` table the model and the noise do not take (ValueError)."""
-        from glarelab.experiments.perception import observer_parameters
+        from glarelab.observers.noise import observer_parameters
 
         observer_parameters(protocol["observer"])
 
     def __init__(self, protocol, participant: str, *, seed: int, stimuli):
-        from glarelab.experiments.looking import DisplayedSet
-        from glarelab.experiments.perception import observer_parameters, warn_outside_fitted_range
+        # imported here: the model and the set's images are needed only by a simulation
+        from glarelab.observers.fitted_range import warn_outside_fitted_range
+        from glarelab.observers.looking import ObservedSet
+        from glarelab.observers.noise import observer_parameters
 
         self.protocol = protocol
         self.participant = participant
@@ -151,7 +153,7 @@ class LookingObserver(ABC):
         self.observer = self.noise.draw(
             participant_rng(protocol.seed, participant, f"observer {seed}")
         )
-        self.display = stimuli if isinstance(stimuli, DisplayedSet) else DisplayedSet(stimuli)
+        self.display = stimuli if isinstance(stimuli, ObservedSet) else ObservedSet(stimuli)
         # once per observer: the stimuli it will be asked about, against what it was fitted on
         self.departures = warn_outside_fitted_range(
             protocol.study, self.judged(protocol, self.display.geometry)

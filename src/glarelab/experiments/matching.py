@@ -264,21 +264,21 @@ class MatchingEngine(Engine):
 
 class MatchingObserver(LookingObserver):
     """A simulated observer of a matching study: looks at each reference as the display shows
-    it (:mod:`glarelab.experiments.perception`), sets the targets around the brightness it
+    it (:mod:`glarelab.observers`), sets the targets around the brightness it
     perceives and answers the questions from the glow, the ring or the sizes it sees.
 
     Parameters
     ----------
     protocol
         A matching protocol; its ``[observer]`` table may change the model's and the noise's
-        parameters (:func:`glarelab.experiments.perception.observer_parameters`).
+        parameters (:func:`glarelab.observers.noise.observer_parameters`).
     participant
         Its id (with ``seed``, it fixes the observer's gain and every trial's noise).
     seed
         The simulation's seed.
     stimuli
         The stimulus set it looks at, or the set as displayed
-        (:class:`glarelab.experiments.looking.DisplayedSet`, shared by observers to share
+        (:class:`glarelab.observers.looking.ObservedSet`, shared by observers to share
         percepts).
     """
 
@@ -286,7 +286,7 @@ class MatchingObserver(LookingObserver):
     def judged(protocol, geometry: dict):
         """Each method's references, their levels over the clamp ``L_dmax``, and the disk of
         ``geometry["disk_diameter_deg"]`` (:class:`LookingObserver.judged`)."""
-        from glarelab.experiments.perception import JudgedGlare, JudgedStimuli
+        from glarelab.observers.fitted_range import JudgedGlare, JudgedStimuli
 
         glare = protocol["glare"]
         clamp = glare["l_dmax_cd_m2"]

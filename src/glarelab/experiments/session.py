@@ -86,9 +86,9 @@ def make_engine(
 
 def make_observer(protocol, participant: str, *, seed: int, stimuli):
     """A simulated observer of the protocol's paradigm; it looks at the set in ``stimuli`` (a
-    folder, or an :class:`glarelab.experiments.looking.DisplayedSet` that observers share, and with
+    folder, or an :class:`glarelab.observers.looking.ObservedSet` that observers share, and with
     it their percepts)."""
-    from glarelab.experiments.looking import DisplayedSet
+    from glarelab.observers.looking import ObservedSet
     from glarelab.stimuli.stimulus_set import StimulusSet
 
     observer = paradigm_run(protocol).observer
@@ -103,7 +103,7 @@ def make_observer(protocol, participant: str, *, seed: int, stimuli):
         participant,
         seed=seed,
         stimuli=stimuli
-        if stimuli is None or isinstance(stimuli, DisplayedSet)
+        if stimuli is None or isinstance(stimuli, ObservedSet)
         else StimulusSet(stimuli),
     )
 

@@ -327,7 +327,7 @@ class StaircaseEngine(Engine):
 
 class StaircaseObserver(LookingObserver):
     """A simulated observer of a staircase study: looks at the glare image and the comparison
-    as the display shows them (:mod:`glarelab.experiments.perception`) and says which looked
+    as the display shows them (:mod:`glarelab.observers`) and says which looked
     brighter, or neither, with the noise of one brief comparison and a shift of its own per block.
 
     Parameters
@@ -339,7 +339,7 @@ class StaircaseObserver(LookingObserver):
         Who, and the simulation's seed (they fix the observer and every trial's noise).
     stimuli
         The stimulus set it looks at, or the set as displayed
-        (:class:`glarelab.experiments.looking.DisplayedSet`, shared by observers to share
+        (:class:`glarelab.observers.looking.ObservedSet`, shared by observers to share
         percepts).
     """
 
@@ -347,7 +347,7 @@ class StaircaseObserver(LookingObserver):
     def judged(protocol, geometry: dict):
         """The glare at each strength over the clamp (the display's peak), and the source of
         ``geometry["source_diameter_deg"]`` (:class:`LookingObserver.judged`)."""
-        from glarelab.experiments.perception import JudgedGlare, JudgedStimuli
+        from glarelab.observers.fitted_range import JudgedGlare, JudgedStimuli
 
         glare = protocol["glare"]
         return JudgedStimuli(

@@ -29,13 +29,13 @@ from pathlib import Path
 from glarelab.analysis.load import load_sessions
 from glarelab.analysis.paradigms import paradigm_analysis
 from glarelab.experiments.data import session_files
-from glarelab.experiments.looking import DisplayedSet
 from glarelab.experiments.session import (
     SimulatedFrontend,
     make_observer,
     run_session,
     shows_images,
 )
+from glarelab.observers.looking import ObservedSet
 from glarelab.planning.effects import effects
 from glarelab.stimuli.stimulus_set import StimulusSet, cached_stimulus_set, verify_stimulus_set
 
@@ -75,7 +75,7 @@ def _simulate_sessions(
 
     ``stimuli`` is the set's folder the sessions show (None for a paradigm that shows no
     images); ``looks_at`` what the observers look at: the folder, or a
-    :class:`glarelab.experiments.looking.DisplayedSet` they share.
+    :class:`glarelab.observers.looking.ObservedSet` they share.
     """
     csvs = []
     for participant in participants:
@@ -101,7 +101,7 @@ def simulate_replication(
     participants: tuple[int, ...],
     seed: int,
     stimuli: Path | None,
-    displayed: DisplayedSet | None = None,
+    displayed: ObservedSet | None = None,
     scratch: Path | None = None,
 ) -> dict:
     """Simulate one study at every sample size; return its effects.
@@ -132,7 +132,7 @@ def simulate_replication(
     """
     largest = max(participants)
     if displayed is None and stimuli is not None:
-        displayed = DisplayedSet(StimulusSet(stimuli))
+        displayed = ObservedSet(StimulusSet(stimuli))
     folder = Path(tempfile.mkdtemp(prefix="glarelab-power-", dir=scratch or default_scratch()))
     try:
         ids = [participant_id(replication, number) for number in range(1, largest + 1)]
@@ -157,7 +157,7 @@ def simulate_replication(
 class PowerJob:
     """The replications of a power analysis as tasks (see :mod:`glarelab.planning.execute`).
 
-    Each worker thread looks at its own :class:`glarelab.experiments.looking.DisplayedSet` of the
+    Each worker thread looks at its own :class:`glarelab.observers.looking.ObservedSet` of the
     stimulus set, made once (:meth:`setup`) and kept for every replication it runs. A worker
     that cannot read ``stimuli`` (a cluster without a shared file system) builds the protocol's
     set into its own cache (:func:`glarelab.stimuli.stimulus_set.cached_stimulus_set`).
@@ -196,14 +196,14 @@ class PowerJob:
         self.__dict__.update(state)
         self._local = threading.local()
 
-    def setup(self) -> tuple[Path | None, DisplayedSet | None]:
+    def setup(self) -> tuple[Path | None, ObservedSet | None]:
         """The stimulus set this worker reads, and the set as displayed."""
         if self.stimuli is None:
             return None, None
         folder = self.stimuli
         if verify_stimulus_set(folder):  # not readable here, or changed: this worker's own
             folder = cached_stimulus_set(self.protocol, progress=None)
-        return folder, DisplayedSet(StimulusSet(folder))
+        return folder, ObservedSet(StimulusSet(folder))
 
     def run(self, replication: int) -> dict:
         """Simulate and analyse one replication."""

@@ -135,8 +135,7 @@ SCHEMA: Schema = {
     },
     "observer": Key(
         dict,
-        "simulated observers' parameters (glarelab.experiments.perception); empty: the fitted"
-        " defaults",
+        "simulated observers' parameters (glarelab.observers); empty: the fitted defaults",
         default={},
     ),
 }

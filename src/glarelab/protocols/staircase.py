@@ -140,8 +140,7 @@ SCHEMA: Schema = {
     "instructions": INSTRUCTIONS,
     "observer": Key(
         dict,
-        "simulated observers' parameters (glarelab.experiments.perception); empty: the fitted"
-        " defaults",
+        "simulated observers' parameters (glarelab.observers); empty: the fitted defaults",
         default={},
     ),
 }

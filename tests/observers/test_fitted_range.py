@@ -12,9 +12,9 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from glarelab.experiments.engine import LookingObserver
-from glarelab.experiments.looking import DisplayedSet
 from glarelab.experiments.paradigms import PARADIGMS
-from glarelab.experiments.perception import (
+from glarelab.experiments.session import make_observer
+from glarelab.observers.fitted_range import (
     FITTED_DISK_CD_M2,
     FITTED_DISK_DIAMETER_DEG,
     FITTED_GAUSSIAN_SIGMA_DEG,
@@ -23,7 +23,7 @@ from glarelab.experiments.perception import (
     fitted_range_departures,
     warn_outside_fitted_range,
 )
-from glarelab.experiments.session import make_observer
+from glarelab.observers.looking import ObservedSet
 from glarelab.protocols import load_protocol
 from glarelab.stimuli.stimulus_set import StimulusSet, cached_stimulus_set
 
@@ -152,7 +152,7 @@ def test_the_warning_names_the_ranges_and_points_at_its_caller():
 @pytest.fixture(scope="module")
 def yoshida_set():
     folder = cached_stimulus_set(load_protocol("yoshida2008"), progress=None)
-    return DisplayedSet(StimulusSet(folder))
+    return ObservedSet(StimulusSet(folder))
 
 
 def test_an_observer_outside_the_range_warns_once(tmp_path, yoshida_set):
