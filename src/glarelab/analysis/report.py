@@ -24,7 +24,7 @@ A paradigm's ``analyse(dataset, protocol)`` (:mod:`glarelab.analysis.paradigms`)
     Method section, before the results, and written as ``stimulus_NN.png``.
 
 Given the stimulus set's folder (``stimuli=``), the report opens it
-(:class:`glarelab.analysis.stimulus_figures.DisplayedSet`: verified, built from this protocol) and,
+(:class:`glarelab.analysis.stimulus_figures.VerifiedSet`: verified, built from this protocol) and,
 if the paradigm's module has ``stimulus_figures(protocol, shown)``, adds the figures it returns
 (the set's images as the display showed them) after the analysis's own ``stimuli``.
 
@@ -44,6 +44,7 @@ import io
 import json
 import shutil
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pandas as pd
 from PIL import Image
@@ -55,6 +56,9 @@ from glarelab.analysis.load import load_sessions
 from glarelab.analysis.methods import provenance, session_rows
 from glarelab.analysis.paradigms import paradigm_analysis
 from glarelab.files.folders import check_replaceable, replace_folder, staging_folder
+
+if TYPE_CHECKING:
+    from glarelab.protocols import Protocol
 
 __all__ = ["analyse", "methods_paragraph", "write_report"]
 
@@ -92,7 +96,7 @@ def _markdown(table: pd.DataFrame) -> str:
 
 
 def analyse(
-    protocol,
+    protocol: Protocol,
     paths: list[str | Path],
     *,
     exclude_incomplete: bool = False,
@@ -131,7 +135,7 @@ def set_hashes(stimuli: Path) -> dict:
     return {"manifest_sha256": hashlib.sha256(data).hexdigest(), "readings_sha256": readings}
 
 
-def methods_paragraph(protocol, participants: int, simulated: bool | int) -> str:
+def methods_paragraph(protocol: Protocol, participants: int, simulated: bool | int) -> str:
     """Methods text naming the protocol's actual parameters; ``simulated`` is true when every
     participant was a simulated observer, or the number of them among the participants."""
     if simulated is True:
@@ -143,17 +147,17 @@ def methods_paragraph(protocol, participants: int, simulated: bool | int) -> str
     return paradigm_analysis(protocol).methods(protocol, participants, who)
 
 
-def _displayed(protocol, stimuli: Path | None):
+def _displayed(protocol: Protocol, stimuli: Path | None):
     """The stimulus set as the display showed it: verified, and built from this protocol
     (before the sessions are checked against it)."""
     if stimuli is None:
         return None
-    from glarelab.analysis.stimulus_figures import DisplayedSet  # colour-science: only here
+    from glarelab.analysis.stimulus_figures import VerifiedSet  # colour-science: only here
 
-    return DisplayedSet(stimuli, protocol)
+    return VerifiedSet(stimuli, protocol)
 
 
-def _stimuli(protocol, result: dict, shown) -> list[Figure]:
+def _stimuli(protocol: Protocol, result: dict, shown) -> list[Figure]:
     """The analysis's own stimuli, then the set's images as the display showed them."""
     figures = [as_figure(item, "stimulus") for item in result.get("stimuli", [])]
     if shown is not None:
@@ -234,7 +238,7 @@ def _sessions_html(rows: list[dict]) -> str:
 
 
 def _html(
-    protocol,
+    protocol: Protocol,
     dataset: Dataset,
     result: dict,
     methods: str | None,
@@ -363,7 +367,7 @@ def _spreadsheet_safe(table: pd.DataFrame) -> pd.DataFrame:
 
 
 def write_report(
-    protocol,
+    protocol: Protocol,
     paths: list[str | Path],
     out: str | Path,
     *,

@@ -23,6 +23,7 @@ context, a one-way ANOVA over the levels).
 from __future__ import annotations
 
 import warnings
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
@@ -48,6 +49,9 @@ from glarelab.analysis.stats import (
 )
 from glarelab.protocols.staircase import intensity_grid
 
+if TYPE_CHECKING:
+    from glarelab.protocols import Protocol
+
 __all__ = [
     "analyse",
     "check",
@@ -72,7 +76,7 @@ EFFECT_NAMES = {
 }
 
 
-def design(protocol) -> Design:
+def design(protocol: Protocol) -> Design:
     """One staircase (many trials) per context and glare level; the blocks are the contexts."""
     levels = range(1, len(protocol["glare"]["strengths"]) + 1)
     cells = tuple((c["name"], level) for c in protocol["contexts"] for level in levels)
@@ -85,12 +89,12 @@ def design(protocol) -> Design:
     )
 
 
-def flags(trials: pd.DataFrame, protocol) -> list[str]:
+def flags(trials: pd.DataFrame, protocol: Protocol) -> list[str]:
     """Trials to list in the report though analysed as recorded: none."""
     return []
 
 
-def methods(protocol, participants: int, who: str) -> str:
+def methods(protocol: Protocol, participants: int, who: str) -> str:
     """Methods text naming the protocol's actual parameters."""
     s, g, t = protocol["stimulus"], protocol["glare"], protocol["trials"]
     parameters = ", ".join(f"{k} = {v}" for k, v in g["parameters"].items())
@@ -108,7 +112,7 @@ def methods(protocol, participants: int, who: str) -> str:
     )
 
 
-def check(trials: pd.DataFrame, protocol) -> list[str]:
+def check(trials: pd.DataFrame, protocol: Protocol) -> list[str]:
     """Values no session of this protocol can write: a strength that is not the protocol's at
     the trial's glare level, a presentation time or a step it does not have, a disc intensity
     off the staircase's grid, a block that is not the trial's context; flags that contradict
@@ -195,7 +199,7 @@ def check(trials: pd.DataFrame, protocol) -> list[str]:
     return problems
 
 
-def on_grid(trials: pd.DataFrame, protocol) -> pd.DataFrame:
+def on_grid(trials: pd.DataFrame, protocol: Protocol) -> pd.DataFrame:
     """The trials with each disc intensity at its point of the staircase's grid
     (:func:`glarelab.protocols.staircase.intensity_grid`): files written before the grid hold
     sums of steps that drift in the last bits (0.84, 0.8399999999999999), which the fits must
@@ -361,14 +365,14 @@ def reversal_range(staircase: pd.DataFrame) -> tuple[float, float]:
     return float(kept.min()), float(kept.max())
 
 
-def _counted(dataset: Dataset, protocol) -> tuple[pd.DataFrame, pd.DataFrame]:
+def _counted(dataset: Dataset, protocol: Protocol) -> tuple[pd.DataFrame, pd.DataFrame]:
     """Every trial, and the counted ones (repeated flashes did not move a staircase), with
     their intensities on the staircase's grid."""
     every = on_grid(dataset.trials, protocol)
     return every, every[every["counted"].astype(bool)]
 
 
-def _matches(trials: pd.DataFrame, protocol, *, fits: bool) -> pd.DataFrame:
+def _matches(trials: pd.DataFrame, protocol: Protocol, *, fits: bool) -> pd.DataFrame:
     """One row per staircase: its reversal match, and with ``fits`` the range of its kept
     reversals and the psychometric fit."""
     rows = []
@@ -416,7 +420,7 @@ def _anova(matches: pd.DataFrame) -> pd.DataFrame | None:
     return anova
 
 
-def tests(dataset: Dataset, protocol) -> dict[str, pd.DataFrame]:
+def tests(dataset: Dataset, protocol: Protocol) -> dict[str, pd.DataFrame]:
     """The statistical tests alone (what a power analysis runs on thousands of simulated
     studies; :func:`analyse` reports the same): the ANOVA on the reversal matches, none with
     one participant."""
@@ -425,7 +429,7 @@ def tests(dataset: Dataset, protocol) -> dict[str, pd.DataFrame]:
     return {} if anova is None else {"anova": anova}
 
 
-def analyse(dataset: Dataset, protocol) -> dict:
+def analyse(dataset: Dataset, protocol: Protocol) -> dict:
     """Matched intensities, their summary, the ANOVA and Figure 13: tables (DataFrames),
     figures (PNG bytes), statements (``text``) and the results section (``results``); its
     tests are those of :func:`tests`."""
@@ -570,7 +574,7 @@ def _results(
     tables: dict,
     summary: pd.DataFrame,
     matches: pd.DataFrame,
-    protocol,
+    protocol: Protocol,
     repeated: int,
     flashes: int,
 ) -> list[str]:
@@ -661,10 +665,10 @@ def _results(
     return paragraphs
 
 
-def stimulus_figures(protocol, shown) -> list[Figure]:
+def stimulus_figures(protocol: Protocol, shown) -> list[Figure]:
     """The stimuli as the display showed them: the glare images of every strength in each
     context with the comparison at full intensity, and their glare profiles. ``shown`` is an
-    :class:`glarelab.analysis.stimulus_figures.DisplayedSet`."""
+    :class:`glarelab.analysis.stimulus_figures.VerifiedSet`."""
     from glarelab.analysis.stimulus_figures import image_grid, profiles, radial_profile
 
     g = protocol["glare"]

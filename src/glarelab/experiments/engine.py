@@ -18,9 +18,14 @@ from __future__ import annotations
 
 import hashlib
 from abc import ABC, abstractmethod
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from glarelab.protocols import Protocol
 
 __all__ = [
     "Engine",
@@ -128,19 +133,19 @@ class LookingObserver(ABC):
 
     @staticmethod
     @abstractmethod
-    def judged(protocol, geometry: dict):
+    def judged(protocol: Protocol | Mapping[str, Any], geometry: dict):
         """The glare methods, the disk's luminance and its diameter the observers judge
         (:class:`glarelab.observers.fitted_range.JudgedStimuli`), from the protocol and its
         stimulus set's ``geometry``."""
 
     @staticmethod
-    def check(protocol) -> None:
+    def check(protocol: Protocol) -> None:
         """Refuse an ``[observer]`` table the model and the noise do not take (ValueError)."""
         from glarelab.observers.noise import observer_parameters
 
         observer_parameters(protocol["observer"])
 
-    def __init__(self, protocol, participant: str, *, seed: int, stimuli):
+    def __init__(self, protocol: Protocol, participant: str, *, seed: int, stimuli):
         # imported here: the model and the set's images are needed only by a simulation
         from glarelab.observers.fitted_range import warn_outside_fitted_range
         from glarelab.observers.looking import ObservedSet

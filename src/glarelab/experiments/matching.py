@@ -20,11 +20,17 @@ adjustments and the time from the reference's onset to the confirming Enter.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any
+
 import numpy as np
 
 from glarelab.experiments.engine import Engine, LookingObserver, participant_rng
 from glarelab.protocols.matching import reference_name
 from glarelab.stimuli.matching import target_terms
+
+if TYPE_CHECKING:
+    from glarelab.protocols import Protocol
 
 __all__ = ["MatchingEngine", "MatchingObserver"]
 
@@ -38,7 +44,7 @@ class MatchingEngine(Engine):
 
     def __init__(
         self,
-        protocol,
+        protocol: Protocol,
         participant: str,
         *,
         session: int = 1,
@@ -283,7 +289,7 @@ class MatchingObserver(LookingObserver):
     """
 
     @staticmethod
-    def judged(protocol, geometry: dict):
+    def judged(protocol: Protocol | Mapping[str, Any], geometry: dict):
         """Each method's references, their levels over the clamp ``L_dmax``, and the disk of
         ``geometry["disk_diameter_deg"]`` (:class:`LookingObserver.judged`)."""
         from glarelab.observers.fitted_range import JudgedGlare, JudgedStimuli
@@ -304,7 +310,7 @@ class MatchingObserver(LookingObserver):
             disk_diameter_deg=geometry["disk_diameter_deg"],
         )
 
-    def __init__(self, protocol, participant: str, *, seed: int, stimuli):
+    def __init__(self, protocol: Protocol, participant: str, *, seed: int, stimuli):
         super().__init__(protocol, participant, seed=seed, stimuli=stimuli)
         g = self.display.geometry
         self.geometry = {

@@ -35,10 +35,15 @@ has no third answer, and importing it would put PsychoPy into this screen-free e
 from __future__ import annotations
 
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
 
 from glarelab.experiments.engine import Engine, LookingObserver, participant_rng
 from glarelab.protocols.staircase import comparison_terms, glare_name, intensity_grid
+
+if TYPE_CHECKING:
+    from glarelab.protocols import Protocol
 
 __all__ = ["Staircase", "StaircaseEngine", "StaircaseObserver", "counterbalance_for"]
 
@@ -121,7 +126,7 @@ class StaircaseEngine(Engine):
 
     def __init__(
         self,
-        protocol,
+        protocol: Protocol,
         participant: str,
         *,
         session: int = 1,
@@ -344,7 +349,7 @@ class StaircaseObserver(LookingObserver):
     """
 
     @staticmethod
-    def judged(protocol, geometry: dict):
+    def judged(protocol: Protocol | Mapping[str, Any], geometry: dict):
         """The glare at each strength over the clamp (the display's peak), and the source of
         ``geometry["source_diameter_deg"]`` (:class:`LookingObserver.judged`)."""
         from glarelab.observers.fitted_range import JudgedGlare, JudgedStimuli
@@ -363,7 +368,7 @@ class StaircaseObserver(LookingObserver):
             disk_diameter_deg=geometry["source_diameter_deg"],
         )
 
-    def __init__(self, protocol, participant: str, *, seed: int, stimuli):
+    def __init__(self, protocol: Protocol, participant: str, *, seed: int, stimuli):
         super().__init__(protocol, participant, seed=seed, stimuli=stimuli)
         g = self.display.geometry
         self.centre = tuple(g["centre_px"])

@@ -16,7 +16,7 @@ from collections import OrderedDict
 
 import numpy as np
 
-from glarelab.display.calibration import Calibration
+from glarelab.stimuli.shown import ShownSet
 from glarelab.stimuli.stimulus_set import StimulusSet
 
 __all__ = ["ObservedSet"]
@@ -24,8 +24,10 @@ __all__ = ["ObservedSet"]
 CACHE_SIZE = 64  # images kept: a study's references and staircases' comparisons repeat
 
 
-class ObservedSet:
-    """A stimulus set as its display shows it to the simulated observers.
+class ObservedSet(ShownSet):
+    """A stimulus set as its display shows it to the simulated observers
+    (:class:`glarelab.stimuli.shown.ShownSet`), with the images they are shown and the percepts
+    they share remembered.
 
     Parameters
     ----------
@@ -34,11 +36,7 @@ class ObservedSet:
     """
 
     def __init__(self, stimuli: StimulusSet):
-        self.set = stimuli
-        self.geometry = stimuli.geometry
-        self.calibration = Calibration.from_json(
-            stimuli.manifest["calibration"], source=f"{stimuli.folder} calibration"
-        )
+        super().__init__(stimuli)
         self._shown: OrderedDict[tuple, np.ndarray] = OrderedDict()
         self._percepts: dict[tuple, object] = {}
 

@@ -25,6 +25,7 @@ import tempfile
 import threading
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from glarelab.analysis.load import load_sessions
 from glarelab.analysis.paradigms import paradigm_analysis
@@ -38,6 +39,9 @@ from glarelab.experiments.session import (
 from glarelab.observers.looking import ObservedSet
 from glarelab.planning.effects import effects
 from glarelab.stimuli.stimulus_set import StimulusSet, cached_stimulus_set, verify_stimulus_set
+
+if TYPE_CHECKING:
+    from glarelab.protocols import Protocol
 
 __all__ = ["PowerJob", "default_scratch", "participant_id", "simulate_replication"]
 
@@ -68,7 +72,13 @@ def default_scratch() -> Path:
 
 
 def _simulate_sessions(
-    protocol, participants: Sequence[str], *, seed: int, out: Path, stimuli: Path | None, looks_at
+    protocol: Protocol,
+    participants: Sequence[str],
+    *,
+    seed: int,
+    out: Path,
+    stimuli: Path | None,
+    looks_at,
 ) -> list[Path]:
     """Run each participant's first session with a simulated observer into ``out``, as
     ``glarelab run --simulate`` does; return their CSVs, in the participants' order.
@@ -95,7 +105,7 @@ def _simulate_sessions(
 
 
 def simulate_replication(
-    protocol,
+    protocol: Protocol,
     replication: int,
     *,
     participants: tuple[int, ...],
@@ -167,7 +177,7 @@ class PowerJob:
 
     def __init__(
         self,
-        protocol,
+        protocol: Protocol,
         *,
         participants: tuple[int, ...],
         seed: int,

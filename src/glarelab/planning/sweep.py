@@ -26,11 +26,15 @@ import tempfile
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pandas as pd
 
 from glarelab.files.atomic import write_bytes, write_text
 from glarelab.planning.grid import Point, Setting, grid
+
+if TYPE_CHECKING:
+    from glarelab.protocols import Protocol
 
 __all__ = ["MAX_POINTS", "SweepJob", "prepare", "sweep"]
 
@@ -42,7 +46,7 @@ def _manifest_sha(folder: Path) -> str:
     return hashlib.sha256((folder / "manifest.json").read_bytes()).hexdigest()
 
 
-def _in_place(folder: Path, protocol) -> bool:
+def _in_place(folder: Path, protocol: Protocol) -> bool:
     from glarelab.stimuli.stimulus_set import verify_stimulus_set
 
     if not (folder / "manifest.json").is_file() or verify_stimulus_set(folder):
@@ -105,7 +109,7 @@ class SweepJob:
             record["effects"] = self._simulate(index, protocol, folder)
         return record
 
-    def _simulate(self, index: int, protocol, folder: Path | None) -> list[dict]:
+    def _simulate(self, index: int, protocol: Protocol, folder: Path | None) -> list[dict]:
         from glarelab.analysis.load import load_sessions
         from glarelab.analysis.paradigms import paradigm_analysis
         from glarelab.analysis.report import write_report
