@@ -19,7 +19,14 @@ from glarelab.stimuli.night import build_night, night_row, shows_scene
 from glarelab.stimuli.shapes import ImageRow
 from glarelab.stimuli.staircase import build_staircase, staircase_row
 
-__all__ = ["PARADIGMS", "ImageRow", "ParadigmStimuli", "paradigm_stimuli", "register_paradigm"]
+__all__ = [
+    "PARADIGMS",
+    "ImageRow",
+    "ParadigmStimuli",
+    "always_shows",
+    "paradigm_stimuli",
+    "register_paradigm",
+]
 
 
 @dataclass(frozen=True)
