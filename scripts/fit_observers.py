@@ -13,15 +13,17 @@ and is what ``tests/test_fit_observers.py`` runs.
 
 What it does, deterministically (fixed seeds, common random numbers), in about two minutes:
 
-1. **Perceives every image once** with :class:`glarelab.experiments.perception.BrightnessModel`:
+1. **Perceives every image once** with :class:`glarelab.observers.brightness.BrightnessModel`:
 the 12
    Yoshida references, glare-free targets on a grid of disk luminances (composed from the set's
    background and coverage images, as the experiment shows them), Spencer's 24 glare images and
    the comparison images on a grid of disc intensities. The glow, ring, apparent size and disk
    luminance of an image do not depend on the fitted parameters, so each image is looked at once
    per glow band and only the brightness equation is re-evaluated during the fit.
-2. **Simulates 10-observer Yoshida studies** with the equations of
-   :class:`glarelab.experiments.perception.Observer` (vectorised): each observer draws a gain, sets
+2. **Simulates 10-observer Yoshida studies** with the decisions of
+   :class:`glarelab.observers.noise.Observer`, the same functions on arrays
+   (:func:`glarelab.observers.noise.target_settings` and its neighbours; the staircase's
+   comparisons likewise): each observer draws a gain, sets
    the darker and brighter targets, inverted through the targets' own percepts, rounded to the
    1 cd/m² fine step and bounded by the display; the match is their mean. The 6 × 2
    repeated-measures ANOVA, the {A, B, C} and {D, E, F} ANOVAs and Welch's t at D, E, F are
@@ -60,7 +62,15 @@ ROOT = Path(__file__).resolve().parents[1]
 
 from glarelab.analysis.figures import plt, png  # noqa: E402
 from glarelab.analysis.stats import pairwise_tests, rm_anova, similarity_groups  # noqa: E402
-from glarelab.experiments.perception import BrightnessModel, ObserverNoise  # noqa: E402
+from glarelab.observers.brightness import BrightnessModel  # noqa: E402
+from glarelab.observers.noise import (  # noqa: E402
+    ObserverNoise,
+    comparison_answers,
+    observer_gains,
+    perceived_brightness,
+    relative_difference,
+    target_settings,
+)
 from glarelab.stimuli.exr import read_exr  # noqa: E402
 
 # --- the papers' numbers ----------------------------------------------------------------------
@@ -330,11 +340,12 @@ class YoshidaSimulation:
         # the targets as the observer sees them: brightness against disk luminance, made
         # monotone (turning a key further never makes the target look darker)
         target = np.maximum.accumulate([_brightness(model, f) for f in seen["targets"]])
-        gain = np.clip(1 + theta["gain_sd"] * self.z_gain, 0, None)
-        perceived = disk + gain * (brightness - disk)
-        margin = ObserverNoise().margin
-        factor = np.clip(1 + theta["setting_sd"] * self.z_set, 0, None)
-        wanted = perceived[..., None] * np.array([1 - margin, 1 + margin]) * factor
+        # the observers' decisions, the functions glarelab.observers.Observer applies per trial
+        gain = observer_gains(self.z_gain, theta["gain_sd"])
+        perceived = perceived_brightness(disk, brightness, gain)
+        wanted = target_settings(
+            perceived, self.z_set, margin=ObserverNoise().margin, setting_sd=theta["setting_sd"]
+        )
         setting = np.interp(wanted, target, seen["target_levels"])
         setting = np.clip(np.round(setting / self.fine) * self.fine, self.low, self.high)
         return {
@@ -342,6 +353,8 @@ class YoshidaSimulation:
             "brighter": setting[..., 1],
             "match": setting.mean(-1),
             "boost_model": brightness / disk - 1,
+            "wanted": wanted,
+            "gain": gain,
         }
 
 
@@ -469,11 +482,10 @@ def simulate_spencer(seen: dict, theta: dict, noise: ObserverNoise, studies: int
     rng = np.random.default_rng(seed)
     contexts, levels = glare.shape[:2]
     shape = (studies, SPENCER_OBSERVERS, contexts, levels)
-    gain = np.clip(1 + theta["gain_sd"] * rng.standard_normal(shape[:2]), 0, None)
-    gain = gain[:, :, None, None]
+    gain = observer_gains(rng.standard_normal(shape[:2]), theta["gain_sd"])[:, :, None, None]
     shift = noise.block_sd * rng.standard_normal((*shape[:3], 1))  # per observer and block
     g_b, g_d = glare[..., 0], glare[..., 1]
-    seen_glare = g_d + gain * (g_b - g_d)
+    seen_glare = perceived_brightness(g_d, g_b, gain)
     fractions = np.r_[0.0, seen["fractions"]]
     comp_b = np.concatenate([np.zeros((contexts, 1)), comparison[..., 0]], axis=1)
     comp_d = np.concatenate([np.zeros((contexts, 1)), comparison[..., 1]], axis=1)
@@ -492,12 +504,16 @@ def simulate_spencer(seen: dict, theta: dict, noise: ObserverNoise, studies: int
         for c in range(contexts):
             b[:, :, c] = np.interp(fraction[:, :, c], fractions, comp_b[c])
             d[:, :, c] = np.interp(fraction[:, :, c], fractions, comp_d[c])
-        seen_disc = d + gain * (b - d)
-        total = seen_glare + seen_disc
-        diff = np.where(total > 0, 2 * (seen_glare - seen_disc) / np.where(total > 0, total, 1), 0)
-        diff = diff + shift + noise.comparison_sd * rng.standard_normal(shape)
-        neither = np.abs(diff) < noise.neither_band
-        move = np.where(neither, 0, np.where(diff > 0, 1, -1))
+        seen_disc = perceived_brightness(d, b, gain)
+        diff = relative_difference(
+            seen_glare,
+            seen_disc,
+            rng.standard_normal(shape),
+            comparison_sd=noise.comparison_sd,
+            shift=shift,
+        )
+        move = comparison_answers(diff, noise.neither_band)
+        neither = move == 0
         reversal = active & (neither | ((direction != 0) & (move == -direction)))
         where = np.nonzero(reversal)
         points[(*where, reversals[where])] = fraction[where]  # the disc shown at the reversal

@@ -5,7 +5,7 @@ Each simulated staircase runs the experiment's own rules
 "neither" rule and intensity grid) against an observer whose point of subjective equality
 ``T`` is known: at disc intensity ``x`` it sees the relative difference ``2 (T - x) / (T + x)``
 plus normal noise of SD ``σ``, and answers "neither" within ``±b`` (the form of the suite's
-simulated observers, :meth:`glarelab.experiments.perception.Observer.compare`, whose defaults
+simulated observers, :meth:`glarelab.observers.noise.Observer.compare`, whose defaults
 are ``σ = 0.04``, ``b = 0.02``). ``T`` is drawn uniformly from 0.3-0.9 of the display maximum.
 
 For each staircase the candidates for a 95 % interval of its match are computed, and the table

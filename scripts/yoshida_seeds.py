@@ -37,7 +37,7 @@ ROOT = Path(__file__).resolve().parents[1]
 from glarelab.analysis.figures import plt, png  # noqa: E402
 from glarelab.analysis.load import load_sessions  # noqa: E402
 from glarelab.analysis.paradigms import PARADIGMS  # noqa: E402
-from glarelab.experiments.looking import DisplayedSet  # noqa: E402
+from glarelab.observers.looking import ObservedSet  # noqa: E402
 from glarelab.planning.effects import effects  # noqa: E402
 from glarelab.planning.simulate import _simulate_sessions, default_scratch  # noqa: E402
 from glarelab.protocols import load_protocol  # noqa: E402
@@ -269,7 +269,7 @@ def main(argv=None) -> int:
         parser.error(f"--participants must be >= 2; got {args.participants}")
     protocol = load_protocol("yoshida2008")
     stimuli = args.stimuli or cached_stimulus_set(protocol)
-    displayed = DisplayedSet(StimulusSet(stimuli))
+    displayed = ObservedSet(StimulusSet(stimuli))
     started = time.time()
     rows = []
     seeds = range(args.first_seed, args.first_seed + args.seeds)

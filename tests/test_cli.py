@@ -86,7 +86,7 @@ def test_render_accepts_rgb_and_mesopic_options(tmp_path):
                 "3",
                 "--pixel-deg",
                 "0.02",
-                "--method",
+                "--composition",
                 "Spencer1995",
                 "--precision",
                 "float32",

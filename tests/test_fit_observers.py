@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from glarelab.experiments import perception
+from glarelab.observers import brightness, noise
 
 SCRIPT = Path(__file__).parents[1] / "scripts" / "fit_observers.py"
 QUICK = ["--studies", "100", "--similarity-studies", "5"]
@@ -37,20 +37,20 @@ def test_no_fit_reports_the_module_defaults(script, tmp_path, capsys):
     summary = _read(tmp_path)
     theta = summary["theta"]
     assert theta == {
-        "glow_gain": perception.GLOW_GAIN,
-        "glow_half": perception.GLOW_HALF,
-        "size_exponent": perception.SIZE_EXPONENT,
-        "gain_sd": perception.GAIN_SD,
-        "setting_sd": perception.SETTING_SD,
-        "glow_band_deg": perception.GLOW_BAND_DEG,
+        "glow_gain": brightness.GLOW_GAIN,
+        "glow_half": brightness.GLOW_HALF,
+        "size_exponent": brightness.SIZE_EXPONENT,
+        "gain_sd": noise.GAIN_SD,
+        "setting_sd": noise.SETTING_SD,
+        "glow_band_deg": brightness.GLOW_BAND_DEG,
     }
     # the Table 1 criteria are a deterministic fit on the images: the module's constants are
     # this script's output, rounded to three digits
     criteria = summary["criteria"]
     expected = {
-        "q1_glow": (perception.GLOW_CRITERION, perception.GLOW_CRITERION_SD),
-        "q2_ring": (perception.RING_CRITERION, perception.RING_CRITERION_SD),
-        "q3_same_size": (perception.SIZE_TOLERANCE, perception.SIZE_TOLERANCE_SD),
+        "q1_glow": (noise.GLOW_CRITERION, noise.GLOW_CRITERION_SD),
+        "q2_ring": (noise.RING_CRITERION, noise.RING_CRITERION_SD),
+        "q3_same_size": (noise.SIZE_TOLERANCE, noise.SIZE_TOLERANCE_SD),
     }
     for question, values in expected.items():
         assert_allclose(criteria[question], values, rtol=2e-3, err_msg=question)
@@ -91,3 +91,46 @@ def test_bad_options_are_refused_naming_them(script, argv, message, capsys):
 def test_a_missing_set_is_named(script, tmp_path):
     with pytest.raises(SystemExit, match=r"manifest\.json not found: build the set first"):
         script.main(["--no-fit", "--yoshida", str(tmp_path / "nothing"), "--out", str(tmp_path)])
+
+
+class _Draws(np.random.Generator):
+    """A generator whose standard normal draws are given: the fit's common random numbers."""
+
+    def __init__(self, z):
+        super().__init__(np.random.PCG64(0))
+        self.z = np.asarray(z, dtype=float)
+
+    def standard_normal(self, size=None, dtype=np.float64, out=None):
+        return self.z if size is not None else float(self.z)
+
+
+def test_the_fit_simulates_the_observer_that_runs(script):
+    # the studies the fit simulates decide as glarelab.observers.Observer does in a session:
+    # for the same standard normal draws, each simulated observer has the Observer's gain and
+    # wants the Observer's settings, to the last bit
+    theta = {
+        "glow_gain": brightness.GLOW_GAIN,
+        "glow_half": brightness.GLOW_HALF,
+        "size_exponent": brightness.SIZE_EXPONENT,
+        "gain_sd": 0.3,  # not the defaults: the fit's own values must reach the decisions
+        "setting_sd": 0.2,
+        "glow_band_deg": brightness.GLOW_BAND_DEG,
+    }
+    model = script._model(theta)
+    seen = script.look_at_yoshida(script._stimuli(None, "yoshida2008"), model)
+    simulation = script.YoshidaSimulation(seen, studies=2, seed=3)
+    result = simulation.run(theta)
+    drawn = noise.ObserverNoise(gain_sd=theta["gain_sd"], setting_sd=theta["setting_sd"])
+    for study, who, level, method in [(0, 0, 0, 0), (1, 9, 5, 1), (0, 4, 3, 1), (1, 2, 1, 0)]:
+        observer = drawn.draw(_Draws(simulation.z_gain[study, who, 0, 0]))
+        assert observer.gain == result["gain"][study, who, 0, 0]
+        reference = simulation.references[level][method]
+        percept = brightness.Percept(
+            brightness_cd_m2=script._brightness(model, reference),
+            glow=reference["glow"],
+            ring=reference["ring"],
+            apparent_diameter_deg=reference["diameter_deg"],
+            disk_cd_m2=reference["disk"],
+        )
+        settings = observer.settings(percept, _Draws(simulation.z_set[study, who, level, method]))
+        assert settings == tuple(result["wanted"][study, who, level, method])

@@ -1,5 +1,6 @@
 """Every paradigm is in every layer's registry, and nothing in the code branches on a study."""
 
+import ast
 import re
 from pathlib import Path
 
@@ -51,3 +52,44 @@ def _without_examples(text: str):
             example = False
         if not example:
             yield line
+
+
+PARADIGM_NAMES = {"matching", "staircase", "rating"}
+# a paradigm's own modules, one per layer, and the registries that list them
+OWN = {"matching.py", "staircase.py", "rating.py", "night.py", "paradigms.py"}
+
+
+def _names_a_paradigm(node: ast.AST) -> bool:
+    if isinstance(node, ast.Constant):
+        return node.value in PARADIGM_NAMES
+    if isinstance(node, ast.Tuple | ast.List | ast.Set):
+        return any(_names_a_paradigm(e) for e in node.elts)
+    return False
+
+
+def branches_on_a_paradigm(source: str) -> list[int]:
+    """Lines comparing a value with a paradigm's name (``x == "matching"``, ``x in
+    ("matching", "staircase")``)."""
+    return [
+        node.lineno
+        for node in ast.walk(ast.parse(source))
+        if isinstance(node, ast.Compare)
+        and any(_names_a_paradigm(part) for part in [node.left, *node.comparators])
+    ]
+
+
+def test_nothing_outside_a_paradigms_modules_branches_on_its_name():
+    paths = [p for p in sorted(PACKAGE.rglob("*.py")) if p.name not in OWN]
+    assert len(paths) > 100, f"too few modules under {PACKAGE}"
+    found = [
+        f"{path.relative_to(ROOT)}:{line}"
+        for path in paths
+        for line in branches_on_a_paradigm(path.read_text(encoding="utf-8"))
+    ]
+    assert found == []
+
+
+def test_the_branch_scan_sees_a_branch():
+    assert branches_on_a_paradigm('if paradigm == "matching":\n    pass\n') == [1]
+    assert branches_on_a_paradigm('ok = p not in ("matching", "staircase")\n') == [1]
+    assert branches_on_a_paradigm('x = {"rating": 1}\n') == []

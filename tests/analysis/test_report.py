@@ -16,7 +16,7 @@ from PIL import Image
 from glarelab.analysis import paradigms as analysis_paradigms
 from glarelab.analysis.load import DataError
 from glarelab.analysis.report import write_report
-from glarelab.analysis.stimulus_figures import DisplayedSet, to_srgb8
+from glarelab.analysis.stimulus_figures import VerifiedSet, to_srgb8
 from glarelab.protocols import load_protocol
 from glarelab.stimuli.stimulus_set import cached_stimulus_set, read_png_codes
 
@@ -74,7 +74,7 @@ def test_the_yoshida_report_shows_the_stimuli_and_numbers_its_figures(yoshida):
 def test_the_references_are_shown_pixel_for_pixel_as_the_display_showed_them(yoshida):
     report, stimuli = yoshida
     protocol = load_protocol("yoshida2008")
-    shown = DisplayedSet(stimuli, protocol)
+    shown = VerifiedSet(stimuli, protocol)
     # the luminance shown is the set's own codes decoded: the codes the sessions drew
     codes, bits = read_png_codes(stimuli / "reference_vos_f_10bit.png")
     assert bits == 10

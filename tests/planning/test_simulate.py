@@ -4,8 +4,8 @@ import pytest
 from glarelab.analysis.load import load_sessions
 from glarelab.analysis.paradigms import PARADIGMS
 from glarelab.experiments.data import session_files
-from glarelab.experiments.looking import DisplayedSet
 from glarelab.experiments.session import SimulatedFrontend, make_observer, run_session
+from glarelab.observers.looking import ObservedSet
 from glarelab.planning.simulate import participant_id, simulate_replication
 from glarelab.protocols import load_protocol
 from glarelab.stimuli.stimulus_set import StimulusSet, cached_stimulus_set
@@ -33,7 +33,7 @@ def _session(protocol, participant, stimuli, looked, out):
 
 def test_observers_sharing_a_displayed_set_answer_as_observers_alone(yoshida, tmp_path):
     protocol, stimuli = yoshida
-    shared = DisplayedSet(StimulusSet(stimuli))
+    shared = ObservedSet(StimulusSet(stimuli))
     for participant in ("a1", "a2"):
         alone = _session(protocol, participant, stimuli, stimuli, tmp_path / "alone")
         together = _session(protocol, participant, stimuli, shared, tmp_path / "shared")

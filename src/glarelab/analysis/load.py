@@ -35,13 +35,17 @@ import json
 import math
 import re
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pandas as pd
 
 from glarelab.analysis.dataset import DataError, Dataset, Design, where
-from glarelab.analysis.paradigms import PARADIGMS
+from glarelab.analysis.paradigms import paradigm_analysis
 from glarelab.protocols import columns
 from glarelab.protocols.keys import TOKEN
+
+if TYPE_CHECKING:
+    from glarelab.protocols import Protocol
 
 # the numbers a session CSV holds, as format_value writes them (int() and float() also read
 # "2_50" as 250 and surrounding spaces)
@@ -116,7 +120,9 @@ def _parse(cell: str, column, where: str, problems: list[str]):
     return value
 
 
-def _read_file(path: Path, protocol, sidecar: dict | None, problems: list[str]) -> list[dict]:
+def _read_file(
+    path: Path, protocol: Protocol, sidecar: dict | None, problems: list[str]
+) -> list[dict]:
     study = protocol.study
     expected = columns(protocol)
     names = [c.name for c in expected]
@@ -254,7 +260,7 @@ def _short(value) -> str:
 
 
 def _sidecar_contradictions(
-    path: Path, sidecar: dict, rows: list[dict], protocol, stimuli: dict | None
+    path: Path, sidecar: dict, rows: list[dict], protocol: Protocol, stimuli: dict | None
 ) -> list[str]:
     """Where a session's sidecar disagrees with its CSV, the protocol or the stimulus set the
     analysis is given (a file of another session, study or protocol version put beside it, or
@@ -414,7 +420,7 @@ def _session(path: Path, rows: list[dict], sidecar: dict | None) -> dict:
 
 
 def load_sessions(
-    protocol,
+    protocol: Protocol,
     paths: list[str | Path],
     *,
     exclude_incomplete: bool = False,
@@ -472,7 +478,7 @@ def load_sessions(
     files = []
     if not paths:
         raise DataError(["no CSV files given"])
-    paradigm = PARADIGMS[protocol.paradigm]
+    paradigm = paradigm_analysis(protocol)
     design: Design = paradigm.design(protocol)
     for raw in paths:
         path = Path(raw)

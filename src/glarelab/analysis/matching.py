@@ -31,7 +31,7 @@
 from __future__ import annotations
 
 import itertools
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 import pandas as pd
@@ -71,9 +71,17 @@ from glarelab.analysis.stats import (
     ttest_welch,
 )
 
+if TYPE_CHECKING:
+    from glarelab.protocols import Protocol
+
 __all__ = ["analyse", "check", "design", "flags", "methods", "stimulus_figures", "tests"]
 
 MARKERS = "osD^v<>p*"
+LEVEL_POSITION = "level_position"
+"""The trials' column of a level's position among its method's levels (1 = first): an index,
+beside ``l_disk_cd_m2``, the level's luminance."""
+L_DISK = "L_disk"
+"""The level factor's name in the ANOVA tables, as Yoshida et al. 2008 §5 name it."""
 ALPHA = 0.05  # the significance level the results text uses
 ERROR_BARS = (
     "95 % within-subject confidence intervals (Cousineau 2005 with Morey's 2008 correction, "
@@ -86,7 +94,7 @@ ONE_PARTICIPANT = (
 )
 
 
-def design(protocol) -> Design:
+def design(protocol: Protocol) -> Design:
     """One match per method and level, the main block analysed after the training block.
 
     Parameters
@@ -113,7 +121,7 @@ def design(protocol) -> Design:
     )
 
 
-def check(trials: pd.DataFrame, protocol) -> list[str]:
+def check(trials: pd.DataFrame, protocol: Protocol) -> list[str]:
     """Values no session of this protocol can write: a level label or disk luminance that is
     not the protocol's at that level, a setting outside the display's range (a match above its
     maximum cannot be shown), a match that is not the mean of its settings.
@@ -173,7 +181,7 @@ def check(trials: pd.DataFrame, protocol) -> list[str]:
     return problems
 
 
-def flags(trials: pd.DataFrame, protocol) -> list[str]:
+def flags(trials: pd.DataFrame, protocol: Protocol) -> list[str]:
     """Trials a session can record but that contradict the task, analysed as recorded and
     listed in the report: a darker target set above the brighter one (the participant set
     the two the wrong way round, or confirmed before finishing; the experiment does not
@@ -203,7 +211,7 @@ def flags(trials: pd.DataFrame, protocol) -> list[str]:
     ]
 
 
-def methods(protocol, participants: int, who: str) -> str:
+def methods(protocol: Protocol, participants: int, who: str) -> str:
     """Methods text naming the protocol's actual parameters.
 
     Parameters
@@ -265,17 +273,17 @@ class _Study(NamedTuple):
     """The protocol's names and the main block's trials, as every part of the analysis uses
     them."""
 
-    trials: pd.DataFrame  # the main block, with L_disk (the level's position)
+    trials: pd.DataFrame  # the main block, with LEVEL_POSITION (the level's position, 1 = first)
     names: list[str]  # the methods, in the protocol's order
     titles: dict  # method → its title
     labels: dict  # (method, position) → the level's label
     several: bool  # more than one participant: tests between them are possible
 
 
-def _study(dataset: Dataset, protocol) -> _Study:
+def _study(dataset: Dataset, protocol: Protocol) -> _Study:
     g = protocol["glare"]
     trials = dataset.trials[dataset.trials["block"] == "main"].copy()
-    trials["L_disk"] = trials["level_index"].astype(int)
+    trials[LEVEL_POSITION] = trials["level_index"].astype(int)
     return _Study(
         trials=trials,
         names=[m["name"] for m in g["methods"]],
@@ -288,7 +296,10 @@ def _study(dataset: Dataset, protocol) -> _Study:
 
 
 def _anova(data: pd.DataFrame, label: str) -> pd.DataFrame:
-    factors = ["L_disk", "method"] if data["method"].nunique() > 1 else ["L_disk"]
+    # the level factor is Yoshida's L_disk (§5: "F(5, 45) for L_disk"), its values the levels'
+    # positions
+    data = data.rename(columns={LEVEL_POSITION: L_DISK})
+    factors = [L_DISK, "method"] if data["method"].nunique() > 1 else [L_DISK]
     # an effect without error variance (every participant at the display's maximum in the
     # cells it compares) is reported as not testable; the others are still tested
     table = rm_anova(data, "match_cd_m2", factors, "participant", untestable="report")
@@ -299,13 +310,13 @@ def _anova(data: pd.DataFrame, label: str) -> pd.DataFrame:
     return table
 
 
-def _anovas(study: _Study, protocol) -> pd.DataFrame:
+def _anovas(study: _Study, protocol: Protocol) -> pd.DataFrame:
     """The levels × methods ANOVA and the follow-ups on the protocol's subsets of levels."""
     n_levels = len(protocol["glare"]["methods"][0]["labels"])
     methods_ = len(study.names)
     anovas = [_anova(study.trials, f"{n_levels} × {methods_} (all levels)")]
     for followup in protocol["analysis"]["followups"]:
-        subset = study.trials[study.trials["L_disk"].isin(followup["levels"])]
+        subset = study.trials[study.trials[LEVEL_POSITION].isin(followup["levels"])]
         label = f"{len(followup['levels'])} × {methods_} ({followup['name']})"
         anovas.append(_anova(subset, label))
     return pd.concat(anovas, ignore_index=True)
@@ -313,7 +324,7 @@ def _anovas(study: _Study, protocol) -> pd.DataFrame:
 
 def _wide(study: _Study, column: str = "match_cd_m2") -> pd.DataFrame:
     return study.trials.pivot_table(
-        index="participant", columns=["method", "L_disk"], values=column
+        index="participant", columns=["method", LEVEL_POSITION], values=column
     )
 
 
@@ -332,7 +343,7 @@ def _values(a: pd.Series, b: pd.Series | None, unit: str) -> str:
     )
 
 
-def _methods_at_levels(study: _Study, protocol) -> pd.DataFrame | None:
+def _methods_at_levels(study: _Study, protocol: Protocol) -> pd.DataFrame | None:
     """The methods compared at the levels the protocol names: paired and Welch t-tests, the
     paired ones Holm-corrected (those that can be tested), with the mean difference's interval
     at the level that agrees with the corrected test (Welch's: 95 %, its own)."""
@@ -393,7 +404,7 @@ def _methods_at_levels(study: _Study, protocol) -> pd.DataFrame | None:
     return compared
 
 
-def _boost_tests(study: _Study, protocol) -> pd.DataFrame:
+def _boost_tests(study: _Study, protocol: Protocol) -> pd.DataFrame:
     """The boost at each method's highest level against 0: one-sample t-tests of the
     participants' boosts (a between-participant test: one mean against a fixed value, where
     a within-subject interval does not apply), Holm-corrected over the methods, each with the
@@ -401,7 +412,7 @@ def _boost_tests(study: _Study, protocol) -> pd.DataFrame:
     shown = np.minimum(study.trials["l_disk_cd_m2"], protocol["glare"]["l_dmax_cd_m2"])
     boosts = (study.trials["match_cd_m2"] - shown) / shown * 100
     top = study.trials.assign(boost=boosts)
-    top = top[top["L_disk"] == top["L_disk"].max()]
+    top = top[top[LEVEL_POSITION] == top[LEVEL_POSITION].max()]
     maximum = float(protocol["display"]["max_cd_m2"])
     rows = []
     for method in study.names:
@@ -413,7 +424,7 @@ def _boost_tests(study: _Study, protocol) -> pd.DataFrame:
         rows.append(
             {
                 "method": method,
-                "level": study.labels[(method, int(top["L_disk"].max()))],
+                "level": study.labels[(method, int(top[LEVEL_POSITION].max()))],
                 "l_disk_cd_m2": float(part["l_disk_cd_m2"].iloc[0]),
                 "n": len(part),
                 # matches at the display's maximum bound the boost: the report says how many
@@ -443,7 +454,7 @@ def _boost_tests(study: _Study, protocol) -> pd.DataFrame:
     return table
 
 
-def _test_tables(study: _Study, protocol) -> dict[str, pd.DataFrame]:
+def _test_tables(study: _Study, protocol: Protocol) -> dict[str, pd.DataFrame]:
     """The tests, with the data of each comparison in private columns (``_a``, ``_b``)."""
     if not study.several:
         return {}
@@ -462,7 +473,7 @@ def _public(tables: dict[str, pd.DataFrame]) -> dict[str, pd.DataFrame]:
     }
 
 
-def tests(dataset: Dataset, protocol) -> dict[str, pd.DataFrame]:
+def tests(dataset: Dataset, protocol: Protocol) -> dict[str, pd.DataFrame]:
     """The statistical tests alone (what a power analysis runs on thousands of simulated
     studies; :func:`analyse` reports the same tests): the ANOVAs (``anova``), the methods
     compared at the protocol's levels (``methods_at_levels``) and the boost at the highest
@@ -483,7 +494,7 @@ def tests(dataset: Dataset, protocol) -> dict[str, pd.DataFrame]:
     return _public(_test_tables(_study(dataset, protocol), protocol))
 
 
-def analyse(dataset: Dataset, protocol) -> dict:
+def analyse(dataset: Dataset, protocol: Protocol) -> dict:
     """Every analysis of Yoshida §5 for the protocol's methods and levels: tables (DataFrames),
     figures (PNG bytes), statements (``text``) and the results section (``results``); its
     tests are those of :func:`tests`.
@@ -535,15 +546,15 @@ def analyse(dataset: Dataset, protocol) -> dict:
         ["method", "level", "boost_percent_mean", "boost_percent_sem", "boost_percent_ci_within"]
     ]
     if study.several:
-        factors = ["L_disk", "method"] if len(study.names) > 1 else ["L_disk"]
+        factors = [LEVEL_POSITION, "method"] if len(study.names) > 1 else [LEVEL_POSITION]
         means = marginal_means(study.trials, "match_cd_m2", factors, "participant")
         means["level"] = [
             "/".join(study.labels[(m, int(v))] for m in study.names)
-            if f == "L_disk"
+            if f == LEVEL_POSITION
             else study.titles[v]
             for f, v in zip(means["factor"], means["level"], strict=True)
         ]
-        means["factor"] = means["factor"].map({"L_disk": "level", "method": "glare method"})
+        means["factor"] = means["factor"].map({LEVEL_POSITION: "level", "method": "glare method"})
         tables["marginal_means"] = means.rename(
             columns={"emmean": "match_mean", "se": "match_se", "ci_low": "match_ci_low",
                      "ci_high": "match_ci_high"}
@@ -610,8 +621,8 @@ def _contrasts(study: _Study) -> tuple[pd.DataFrame, pd.DataFrame]:
     contrasts, groups = [], []
     for method in study.names:
         part = study.trials[study.trials["method"] == method]
-        table = pairwise_tests(part, "match_cd_m2", "L_disk", "participant", alpha=ALPHA)
-        wide = part.pivot(index="participant", columns="L_disk", values="match_cd_m2")
+        table = pairwise_tests(part, "match_cd_m2", LEVEL_POSITION, "participant", alpha=ALPHA)
+        wide = part.pivot(index="participant", columns=LEVEL_POSITION, values="match_cd_m2")
         d_z, low, high = [], [], []
         for row in table.itertuples():
             if row.note:
@@ -638,7 +649,7 @@ def _contrasts(study: _Study) -> tuple[pd.DataFrame, pd.DataFrame]:
                    "md_ci_low", "md_ci_high", "d_z", "dz_ci_low", "dz_ci_high", "confidence",
                    "note"]  # fmt: skip
         contrasts.append(table[columns])
-        means = part.groupby("L_disk")["match_cd_m2"].mean()
+        means = part.groupby(LEVEL_POSITION)["match_cd_m2"].mean()
         letters = similarity_groups(
             {study.labels[(method, k)]: v for k, v in means.items()},
             {(r.a, r.b): r.p_holm for r in table.itertuples()},
@@ -653,7 +664,7 @@ def _contrasts(study: _Study) -> tuple[pd.DataFrame, pd.DataFrame]:
     return pd.concat(contrasts, ignore_index=True), pd.DataFrame(groups)
 
 
-def _summary(study: _Study, protocol) -> pd.DataFrame:
+def _summary(study: _Study, protocol: Protocol) -> pd.DataFrame:
     """Settings, match and boost per method and level: mean, SEM and half the 95 %
     within-subject interval; the questions' per cent "yes"."""
     g = protocol["glare"]
@@ -663,7 +674,7 @@ def _summary(study: _Study, protocol) -> pd.DataFrame:
     shown = np.minimum(trials["l_disk_cd_m2"], g["l_dmax_cd_m2"])
     trials["boost_percent"] = (trials["match_cd_m2"] - shown) / shown * 100
     summary = []
-    for (method, level), part in trials.groupby(["method", "L_disk"], sort=False):
+    for (method, level), part in trials.groupby(["method", LEVEL_POSITION], sort=False):
         row = {
             "method": method,
             "level": study.labels[(method, level)],
@@ -699,8 +710,8 @@ def _summary(study: _Study, protocol) -> pd.DataFrame:
         if not study.several:
             summary[f"{prefix}_ci_within"] = float("nan")
             continue
-        within = within_subject_ci(trials, column, ["method", "L_disk"], "participant")
-        half = within.set_index(["method", "L_disk"])["ci_half"]
+        within = within_subject_ci(trials, column, ["method", LEVEL_POSITION], "participant")
+        half = within.set_index(["method", LEVEL_POSITION])["ci_half"]
         summary[f"{prefix}_ci_within"] = [
             half[(m, k)] for m, k in zip(summary["method"], summary["level_index"], strict=True)
         ]
@@ -709,7 +720,7 @@ def _summary(study: _Study, protocol) -> pd.DataFrame:
     return summary.reset_index(drop=True)
 
 
-def _figures(study: _Study, summary: pd.DataFrame, protocol, n: int) -> dict:
+def _figures(study: _Study, summary: pd.DataFrame, protocol: Protocol, n: int) -> dict:
     g = protocol["glare"]
     bounds = protocol["trials"]["settings"] == "bounds"
     return {
@@ -939,7 +950,9 @@ def _normality_note(table: pd.DataFrame) -> str:
     )
 
 
-def _results(tables: dict, summary: pd.DataFrame, study: _Study, protocol, n: int) -> list[str]:
+def _results(
+    tables: dict, summary: pd.DataFrame, study: _Study, protocol: Protocol, n: int
+) -> list[str]:
     """The results section as paragraphs: the ANOVAs, the methods compared at chosen levels,
     the boost at the highest level, and a word on any assumption that failed; every
     sentence from a test in the tables."""
@@ -1013,16 +1026,16 @@ def _results(tables: dict, summary: pd.DataFrame, study: _Study, protocol, n: in
     return paragraphs
 
 
-def stimulus_figures(protocol, shown) -> list[Figure]:
+def stimulus_figures(protocol: Protocol, shown) -> list[Figure]:
     """The stimuli as the display showed them: the references of each glare method, the
     targets at their start luminances, and the references' profiles through the disk centre
-    (Yoshida Fig. 3). ``shown`` is an :class:`glarelab.analysis.stimulus_figures.DisplayedSet`.
+    (Yoshida Fig. 3). ``shown`` is an :class:`glarelab.analysis.stimulus_figures.VerifiedSet`.
 
     Parameters
     ----------
     protocol : glarelab.protocols.Protocol
         The study's protocol, of this paradigm.
-    shown : glarelab.analysis.stimulus_figures.DisplayedSet
+    shown : glarelab.analysis.stimulus_figures.VerifiedSet
         The stimulus set as the display showed it.
 
     Returns
@@ -1102,7 +1115,7 @@ def stimulus_figures(protocol, shown) -> list[Figure]:
 def _participants(trials: pd.DataFrame, names: list[str], titles: dict, labels: dict) -> bytes:
     participants = sorted(trials["participant"].unique())
     figure, axes = small_multiples(len(participants))
-    means = trials.groupby(["method", "L_disk"])["match_cd_m2"].mean()
+    means = trials.groupby(["method", LEVEL_POSITION])["match_cd_m2"].mean()
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     for axis, participant in zip(axes, participants, strict=True):
         part = trials[trials["participant"] == participant]
@@ -1112,9 +1125,9 @@ def _participants(trials: pd.DataFrame, names: list[str], titles: dict, labels: 
             axis.plot(
                 levels, means.loc[method].to_numpy(), color=colour, alpha=0.3, lw=3, zorder=1
             )
-            own = part[part["method"] == method].sort_values("L_disk")
+            own = part[part["method"] == method].sort_values(LEVEL_POSITION)
             axis.plot(
-                own["L_disk"],
+                own[LEVEL_POSITION],
                 own["match_cd_m2"],
                 marker=marker,
                 ms=3.5,
@@ -1125,7 +1138,7 @@ def _participants(trials: pd.DataFrame, names: list[str], titles: dict, labels: 
             )
         axis.set_title(participant, fontsize=9)
         axis.tick_params(labelsize=7)
-    positions = sorted(trials["L_disk"].unique())
+    positions = sorted(trials[LEVEL_POSITION].unique())
     ticks = ["/".join(labels[(m, k)] for m in names) for k in positions]
     axes[0].set_xticks(positions, ticks)
     for axis in axes:

@@ -6,11 +6,15 @@ from __future__ import annotations
 import hashlib
 import json
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from glarelab.protocols import Protocol
 
 __all__ = ["display_text", "provenance", "session_rows"]
 
 
-def display_text(protocol) -> str:
+def display_text(protocol: Protocol) -> str:
     """The display and viewing conditions, as the methods section names them.
 
     Parameters

@@ -20,6 +20,8 @@ condition's frames as the display showed them (:func:`stimulus_figures`)."""
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import matplotlib.colors
 import numpy as np
 import pandas as pd
@@ -39,17 +41,20 @@ from glarelab.analysis.figures import Figure, plt, png
 from glarelab.analysis.methods import display_text
 from glarelab.analysis.stats import holm, holm_confidence, wilcoxon_signed_rank
 
+if TYPE_CHECKING:
+    from glarelab.protocols import Protocol
+
 __all__ = ["analyse", "check", "design", "flags", "methods", "stimulus_figures", "tests"]
 
 ALPHA = 0.05  # the significance level the results text uses
 NEUTRAL = "#9e9e9e"  # the scale's middle category: a grey that shows on white
 
 
-def _conditions(protocol) -> list[dict]:
+def _conditions(protocol: Protocol) -> list[dict]:
     return protocol.data.get("conditions") or []
 
 
-def design(protocol) -> Design:
+def design(protocol: Protocol) -> Design:
     """One rating per category (and condition), in the questionnaire block.
 
     Parameters
@@ -78,7 +83,7 @@ def design(protocol) -> Design:
     )
 
 
-def flags(trials: pd.DataFrame, protocol) -> list[str]:
+def flags(trials: pd.DataFrame, protocol: Protocol) -> list[str]:
     """Trials to list in the report though analysed as recorded: none.
 
     Parameters
@@ -96,7 +101,7 @@ def flags(trials: pd.DataFrame, protocol) -> list[str]:
     return []
 
 
-def methods(protocol, participants: int, who: str) -> str:
+def methods(protocol: Protocol, participants: int, who: str) -> str:
     """Methods text naming the protocol's actual parameters.
 
     Parameters
@@ -147,7 +152,7 @@ def methods(protocol, participants: int, who: str) -> str:
     )
 
 
-def check(trials: pd.DataFrame, protocol) -> list[str]:
+def check(trials: pd.DataFrame, protocol: Protocol) -> list[str]:
     """Values no session of this protocol can write beyond the columns' own checks (category
     and rating range): none.
 
@@ -166,7 +171,7 @@ def check(trials: pd.DataFrame, protocol) -> list[str]:
     return []
 
 
-def _summary(trials: pd.DataFrame, protocol, conditions: list[dict]) -> pd.DataFrame:
+def _summary(trials: pd.DataFrame, protocol: Protocol, conditions: list[dict]) -> pd.DataFrame:
     """Per (condition and) category: mean, SD, median, IQR, the Wilcoxon test against the
     midpoint, Holm-corrected over the tests that can be computed, the effect sizes and the
     count of each rating; the ratings in a private column (``_values``)."""
@@ -241,7 +246,7 @@ def _public(table: pd.DataFrame) -> pd.DataFrame:
     return table.drop(columns=[c for c in table.columns if str(c).startswith("_")])
 
 
-def tests(dataset: Dataset, protocol) -> dict[str, pd.DataFrame]:
+def tests(dataset: Dataset, protocol: Protocol) -> dict[str, pd.DataFrame]:
     """The statistical tests alone (what a power analysis runs on thousands of simulated
     studies; :func:`analyse` reports the same): each category's Wilcoxon test against the
     midpoint (``summary``) and, with conditions, each condition against the first
@@ -268,7 +273,7 @@ def tests(dataset: Dataset, protocol) -> dict[str, pd.DataFrame]:
     return tables
 
 
-def analyse(dataset: Dataset, protocol) -> dict:
+def analyse(dataset: Dataset, protocol: Protocol) -> dict:
     """Per-category summaries with the Wilcoxon tests, the comments and the diverging bars:
     tables (DataFrames), figures (PNG bytes), statements (``text``) and the results section
     (``results``); with ``[[conditions]]``, each condition against the first. Its tests are
@@ -503,7 +508,7 @@ def _summary_row(ratings: pd.Series, scale: range, midpoint: float) -> dict:
     return row
 
 
-def _analyse_conditions(dataset: Dataset, protocol) -> dict:
+def _analyse_conditions(dataset: Dataset, protocol: Protocol) -> dict:
     q = protocol["questionnaire"]
     scale = range(q["scale_min"], q["scale_max"] + 1)
     midpoint = (q["scale_min"] + q["scale_max"]) / 2
@@ -596,16 +601,16 @@ def _compared_text(compared: pd.DataFrame, reference: str) -> str:
     )
 
 
-def stimulus_figures(protocol, shown) -> list[Figure]:
+def stimulus_figures(protocol: Protocol, shown) -> list[Figure]:
     """Each condition's scene as the display showed it: its first, middle and last frame.
-    ``shown`` is an :class:`glarelab.analysis.stimulus_figures.DisplayedSet`; a questionnaire
+    ``shown`` is an :class:`glarelab.analysis.stimulus_figures.VerifiedSet`; a questionnaire
     without a scene shows none.
 
     Parameters
     ----------
     protocol : glarelab.protocols.Protocol
         The study's protocol, of this paradigm.
-    shown : glarelab.analysis.stimulus_figures.DisplayedSet
+    shown : glarelab.analysis.stimulus_figures.VerifiedSet
         The stimulus set as the display showed it.
 
     Returns

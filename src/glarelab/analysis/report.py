@@ -31,7 +31,7 @@ Beside the tables the report writes ``trials.csv``: every trial analysed, one ro
 and JASP read it (the session file's name in ``file``).
 
 Given the stimulus set's folder (``stimuli=``), the report opens it
-(:class:`glarelab.analysis.stimulus_figures.DisplayedSet`: verified, built from this protocol) and,
+(:class:`glarelab.analysis.stimulus_figures.VerifiedSet`: verified, built from this protocol) and,
 if the paradigm's module has ``stimulus_figures(protocol, shown)``, adds the figures it returns
 (the set's images as the display showed them) after the analysis's own ``stimuli``.
 
@@ -51,6 +51,7 @@ import io
 import json
 import shutil
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pandas as pd
 from PIL import Image
@@ -61,8 +62,11 @@ from glarelab.analysis.export import csv_text
 from glarelab.analysis.figures import Figure, as_figure
 from glarelab.analysis.load import load_sessions
 from glarelab.analysis.methods import provenance, session_rows
-from glarelab.analysis.paradigms import PARADIGMS
+from glarelab.analysis.paradigms import paradigm_analysis
 from glarelab.files.folders import check_replaceable, replace_folder, staging_folder
+
+if TYPE_CHECKING:
+    from glarelab.protocols import Protocol
 
 __all__ = ["analyse", "methods_paragraph", "write_report"]
 
@@ -105,7 +109,7 @@ def _markdown(table: pd.DataFrame) -> str:
 
 
 def analyse(
-    protocol,
+    protocol: Protocol,
     paths: list[str | Path],
     *,
     exclude_incomplete: bool = False,
@@ -148,7 +152,7 @@ def analyse(
         include_pilots=include_pilots,
         stimuli=None if stimuli is None else set_hashes(stimuli),
     )
-    return dataset, PARADIGMS[protocol.paradigm].analyse(dataset, protocol)
+    return dataset, paradigm_analysis(protocol).analyse(dataset, protocol)
 
 
 def set_hashes(stimuli: Path) -> dict:
@@ -169,7 +173,7 @@ def set_hashes(stimuli: Path) -> dict:
     return {"manifest_sha256": hashlib.sha256(data).hexdigest(), "readings_sha256": readings}
 
 
-def methods_paragraph(protocol, participants: int, simulated: bool | int) -> str:
+def methods_paragraph(protocol: Protocol, participants: int, simulated: bool | int) -> str:
     """Methods text naming the protocol's actual parameters; ``simulated`` is true when every
     participant was a simulated observer, or the number of them among the participants.
 
@@ -194,24 +198,24 @@ def methods_paragraph(protocol, participants: int, simulated: bool | int) -> str
         who = f"{participants} participants"
     else:
         who = f"{participants} participants ({simulated} of them simulated observers)"
-    return PARADIGMS[protocol.paradigm].methods(protocol, participants, who)
+    return paradigm_analysis(protocol).methods(protocol, participants, who)
 
 
-def _displayed(protocol, stimuli: Path | None):
+def _displayed(protocol: Protocol, stimuli: Path | None):
     """The stimulus set as the display showed it: verified, and built from this protocol
     (before the sessions are checked against it)."""
     if stimuli is None:
         return None
-    from glarelab.analysis.stimulus_figures import DisplayedSet  # colour-science: only here
+    from glarelab.analysis.stimulus_figures import VerifiedSet  # colour-science: only here
 
-    return DisplayedSet(stimuli, protocol)
+    return VerifiedSet(stimuli, protocol)
 
 
-def _stimuli(protocol, result: dict, shown) -> list[Figure]:
+def _stimuli(protocol: Protocol, result: dict, shown) -> list[Figure]:
     """The analysis's own stimuli, then the set's images as the display showed them."""
     figures = [as_figure(item, "stimulus") for item in result.get("stimuli", [])]
     if shown is not None:
-        draw = getattr(PARADIGMS[protocol.paradigm], "stimulus_figures", None)
+        draw = paradigm_analysis(protocol).stimulus_figures
         if draw is not None:
             figures += draw(protocol, shown)
     return figures
@@ -333,7 +337,7 @@ def _sessions_html(rows: list[dict]) -> str:
 
 
 def _html(
-    protocol,
+    protocol: Protocol,
     dataset: Dataset,
     result: dict,
     methods: str | None,
@@ -374,7 +378,7 @@ def _html(
         for figure in stimuli:
             number += 1
             parts.append(_figure_html(number, figure))
-    elif not had_set and getattr(PARADIGMS[protocol.paradigm], "stimulus_figures", None):
+    elif not had_set and paradigm_analysis(protocol).stimulus_figures is not None:
         parts.append(
             "<p class='note'>The stimuli are shown when the report is given the stimulus set "
             "(<code>glarelab analyse … --stimuli SET</code>).</p>"
@@ -492,7 +496,7 @@ def _trials(dataset: Dataset) -> pd.DataFrame:
 
 
 def write_report(
-    protocol,
+    protocol: Protocol,
     paths: list[str | Path],
     out: str | Path,
     *,

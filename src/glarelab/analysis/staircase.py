@@ -23,6 +23,7 @@ context, a one-way ANOVA over the levels).
 from __future__ import annotations
 
 import warnings
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
@@ -49,6 +50,9 @@ from glarelab.analysis.stats import (
 )
 from glarelab.protocols.staircase import intensity_grid
 
+if TYPE_CHECKING:
+    from glarelab.protocols import Protocol
+
 __all__ = [
     "analyse",
     "check",
@@ -73,7 +77,7 @@ EFFECT_NAMES = {
 }
 
 
-def design(protocol) -> Design:
+def design(protocol: Protocol) -> Design:
     """One staircase (many trials) per context and glare level; the blocks are the contexts.
 
     Parameters
@@ -97,7 +101,7 @@ def design(protocol) -> Design:
     )
 
 
-def flags(trials: pd.DataFrame, protocol) -> list[str]:
+def flags(trials: pd.DataFrame, protocol: Protocol) -> list[str]:
     """Trials to list in the report though analysed as recorded: none.
 
     Parameters
@@ -115,7 +119,7 @@ def flags(trials: pd.DataFrame, protocol) -> list[str]:
     return []
 
 
-def methods(protocol, participants: int, who: str) -> str:
+def methods(protocol: Protocol, participants: int, who: str) -> str:
     """Methods text naming the protocol's actual parameters.
 
     Parameters
@@ -149,7 +153,7 @@ def methods(protocol, participants: int, who: str) -> str:
     )
 
 
-def check(trials: pd.DataFrame, protocol) -> list[str]:
+def check(trials: pd.DataFrame, protocol: Protocol) -> list[str]:
     """Values no session of this protocol can write: a strength that is not the protocol's at
     the trial's glare level, a presentation time or a step it does not have, a disc intensity
     off the staircase's grid, a block that is not the trial's context; flags that contradict
@@ -249,7 +253,7 @@ def check(trials: pd.DataFrame, protocol) -> list[str]:
     return problems
 
 
-def on_grid(trials: pd.DataFrame, protocol) -> pd.DataFrame:
+def on_grid(trials: pd.DataFrame, protocol: Protocol) -> pd.DataFrame:
     """The trials with each disc intensity at its point of the staircase's grid
     (:func:`glarelab.protocols.staircase.intensity_grid`): files written before the grid hold
     sums of steps that drift in the last bits (0.84, 0.8399999999999999), which the fits must
@@ -470,14 +474,14 @@ def reversal_range(staircase: pd.DataFrame) -> tuple[float, float]:
     return float(kept.min()), float(kept.max())
 
 
-def _counted(dataset: Dataset, protocol) -> tuple[pd.DataFrame, pd.DataFrame]:
+def _counted(dataset: Dataset, protocol: Protocol) -> tuple[pd.DataFrame, pd.DataFrame]:
     """Every trial, and the counted ones (repeated flashes did not move a staircase), with
     their intensities on the staircase's grid."""
     every = on_grid(dataset.trials, protocol)
     return every, every[every["counted"].astype(bool)]
 
 
-def _matches(trials: pd.DataFrame, protocol, *, fits: bool) -> pd.DataFrame:
+def _matches(trials: pd.DataFrame, protocol: Protocol, *, fits: bool) -> pd.DataFrame:
     """One row per staircase: its reversal match, and with ``fits`` the range of its kept
     reversals and the psychometric fit."""
     rows = []
@@ -525,7 +529,7 @@ def _anova(matches: pd.DataFrame) -> pd.DataFrame | None:
     return anova
 
 
-def tests(dataset: Dataset, protocol) -> dict[str, pd.DataFrame]:
+def tests(dataset: Dataset, protocol: Protocol) -> dict[str, pd.DataFrame]:
     """The statistical tests alone (what a power analysis runs on thousands of simulated
     studies; :func:`analyse` reports the same): the ANOVA on the reversal matches, none with
     one participant.
@@ -547,7 +551,7 @@ def tests(dataset: Dataset, protocol) -> dict[str, pd.DataFrame]:
     return {} if anova is None else {"anova": anova}
 
 
-def analyse(dataset: Dataset, protocol) -> dict:
+def analyse(dataset: Dataset, protocol: Protocol) -> dict:
     """Matched intensities, their summary, the ANOVA and Figure 13: tables (DataFrames),
     figures (PNG bytes), statements (``text``) and the results section (``results``); its
     tests are those of :func:`tests`.
@@ -708,7 +712,7 @@ def _results(
     tables: dict,
     summary: pd.DataFrame,
     matches: pd.DataFrame,
-    protocol,
+    protocol: Protocol,
     repeated: int,
     flashes: int,
 ) -> list[str]:
@@ -799,16 +803,16 @@ def _results(
     return paragraphs
 
 
-def stimulus_figures(protocol, shown) -> list[Figure]:
+def stimulus_figures(protocol: Protocol, shown) -> list[Figure]:
     """The stimuli as the display showed them: the glare images of every strength in each
     context with the comparison at full intensity, and their glare profiles. ``shown`` is an
-    :class:`glarelab.analysis.stimulus_figures.DisplayedSet`.
+    :class:`glarelab.analysis.stimulus_figures.VerifiedSet`.
 
     Parameters
     ----------
     protocol : glarelab.protocols.Protocol
         The study's protocol, of this paradigm.
-    shown : glarelab.analysis.stimulus_figures.DisplayedSet
+    shown : glarelab.analysis.stimulus_figures.VerifiedSet
         The stimulus set as the display showed it.
 
     Returns

@@ -8,7 +8,7 @@ through colour-science), so a reader's screen shows the same relative luminance 
 did, and every image at one screen pixel per display pixel.
 
 A paradigm draws its stimuli with the helpers here (:func:`image_grid`, :func:`profiles`) in
-its ``stimulus_figures(protocol, shown)``; the report opens the set (:class:`DisplayedSet`) and
+its ``stimulus_figures(protocol, shown)``; the report opens the set (:class:`VerifiedSet`) and
 calls it when it is given the set's folder.
 """
 
@@ -22,9 +22,10 @@ import numpy as np
 
 from glarelab.analysis.dataset import DataError
 from glarelab.analysis.figures import plt, png
-from glarelab.display.calibration import Calibration
+from glarelab.protocols import Protocol
+from glarelab.stimuli.shown import ShownSet
 
-__all__ = ["DisplayedSet", "image_grid", "profiles", "radial_profile", "to_srgb8"]
+__all__ = ["VerifiedSet", "image_grid", "profiles", "radial_profile", "to_srgb8"]
 
 DPI = 100  # the grid is laid out in pixels at this resolution
 TITLE_PX = 20  # room above each image for its label
@@ -59,9 +60,9 @@ def to_srgb8(luminance_cd_m2: np.ndarray, max_cd_m2: float) -> np.ndarray:
     return np.round(255 * colour.cctf_encoding(relative, function="sRGB")).astype(np.uint8)
 
 
-class DisplayedSet:
-    """A verified stimulus set with its calibration: the luminance of its images as the
-    display showed them.
+class VerifiedSet(ShownSet):
+    """A stimulus set as the display showed it (:class:`glarelab.stimuli.shown.ShownSet`),
+    verified first: its files are those of its manifest and it was built from the protocol.
 
     Parameters
     ----------
@@ -77,7 +78,7 @@ class DisplayedSet:
         or missing), or a set built from another protocol.
     """
 
-    def __init__(self, folder: str | Path, protocol):
+    def __init__(self, folder: str | Path, protocol: Protocol):
         from glarelab.stimuli.stimulus_set import StimulusSet, verify_stimulus_set
 
         self.folder = Path(folder)
@@ -93,30 +94,8 @@ class DisplayedSet:
                     f"{protocol.study} protocol {protocol.sha256[:12]}…"
                 ]
             )
-        self.set = StimulusSet(self.folder)
-        self.manifest = manifest
-        self.images: dict[str, dict] = manifest["images"]
-        self.geometry: dict = manifest["geometry"]
-        self.calibration = Calibration.from_json(
-            manifest["calibration"], source=f"{self.folder}/manifest.json"
-        )
-
-    def luminance(self, name: str) -> np.ndarray:
-        """The luminance (cd/m²) the display showed for image ``name``:
-        ``decode(encode(image))``.
-
-        Parameters
-        ----------
-        name
-            An image of the set.
-
-        Returns
-        -------
-        numpy.ndarray
-            cd/m².
-        """
-        codes, _report = self.calibration.encode(self.set.image(name))
-        return self.calibration.decode(codes)
+        super().__init__(StimulusSet(self.folder))
+        self.images: dict[str, dict] = self.manifest["images"]
 
     def picture(self, name: str) -> np.ndarray:
         """Image ``name`` as the display showed it, as 8-bit sRGB (:func:`to_srgb8`).

@@ -21,10 +21,12 @@ def _protocol_keys(args: argparse.Namespace) -> int:
 
 
 def _protocol_check(args: argparse.Namespace) -> int:
-    from glarelab.experiments.paradigms import PARADIGMS as RUNS
+    from glarelab.experiments.paradigms import paradigm_run
 
     protocol = load_protocol(args.protocol)
-    RUNS[protocol.paradigm].observer.check(protocol)  # the simulated observers' parameters
+    observer = paradigm_run(protocol).observer
+    if observer is not None:
+        observer.check(protocol)  # the simulated observers' parameters
     print(
         f"{args.protocol}: valid protocol of the {protocol.paradigm} paradigm (study "
         f"{protocol.study}), sha256 {protocol.sha256}"

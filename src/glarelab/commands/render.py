@@ -252,7 +252,7 @@ def _render(args: argparse.Namespace) -> int:
                 pixel_deg=args.pixel_deg,
                 shape=key,
                 l_dmax_cd_m2=args.l_dmax,
-                method=args.method,
+                composition=args.composition,
                 precision=args.precision,
                 tolerance_codes=args.tolerance_codes,
                 display=display,
@@ -613,7 +613,14 @@ def add(commands) -> None:
     render.add_argument(
         "--l-dmax", type=number(0, 1e9, above=True), default=220.0, help="display maximum, cd/m²"
     )
-    render.add_argument("--method", choices=("Yoshida2008", "Spencer1995"), default="Yoshida2008")
+    render.add_argument(
+        "--composition",
+        "--method",  # its former name
+        dest="composition",
+        choices=("Yoshida2008", "Spencer1995"),
+        default="Yoshida2008",
+        help="how the spread glare is put back: Yoshida2008 (clamped) or Spencer1995 (added)",
+    )
     render.add_argument("--precision", choices=("float64", "float32"), default="float64")
     render.add_argument(
         "--tolerance-codes",

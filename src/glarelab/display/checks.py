@@ -26,6 +26,10 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 from dataclasses import asdict, dataclass
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from glarelab.protocols import Protocol
 
 __all__ = [
     "CHECKS",
@@ -97,7 +101,7 @@ class Check:
         return f"{self.name}: the protocol asks for {self.expected}, the display has {self.actual}"
 
 
-def check_calibration(protocol, calibration) -> list[Check]:
+def check_calibration(protocol: Protocol, calibration) -> list[Check]:
     """The calibration belongs to the protocol's display: bit depth, and white luminance within
     ``display.white_tolerance`` (a fraction) of ``display.max_cd_m2``. No calibration, no check
     (an uncalibrated session is refused or recorded elsewhere).
@@ -132,7 +136,7 @@ def check_calibration(protocol, calibration) -> list[Check]:
     ]
 
 
-def check_screen(protocol, facts: ScreenFacts) -> list[Check]:
+def check_screen(protocol: Protocol, facts: ScreenFacts) -> list[Check]:
     """Resolution, refresh rate and bits per channel of the open window against the protocol.
 
     Parameters
@@ -240,7 +244,7 @@ def enforce(checks: Iterable[Check], *, accept: Iterable[str] = ()) -> list[dict
     return records
 
 
-def timing_rate_hz(protocol, facts: ScreenFacts | None, records: list[dict]) -> float:
+def timing_rate_hz(protocol: Protocol, facts: ScreenFacts | None, records: list[dict]) -> float:
     """The frame rate presentations are timed at: the measured one when the refresh check
     passed, else the protocol's nominal rate (the window then paces frames by the clock).
 

@@ -31,13 +31,16 @@ import itertools
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
 from glarelab.display.calibration import Calibration, fit_calibration
 from glarelab.files.atomic import write_text
 from glarelab.files.locks import ProcessLock
+
+if TYPE_CHECKING:
+    from glarelab.protocols import Protocol
 
 __all__ = ["MeasurementLock", "MeasurementSession", "SessionInUse", "protocol_luminances"]
 
@@ -47,7 +50,7 @@ REFINE_ROUNDS = 6  # rounds of codes added where the readings bend
 UNSTEADY_RETRIES = 2  # an unsteady patch is read again this many times before refusing
 
 
-def protocol_luminances(protocol) -> list[float]:
+def protocol_luminances(protocol: Protocol) -> list[float]:
     """The luminances (cd/m²) a study names for what it shows: every ``*_cd_m2`` value of its
     protocol's tables (a matching study's target starts and background mean, a glare level, a
     night scene's adapted and starting luminance), but not its display's own range, its

@@ -10,9 +10,9 @@ Everything here runs without a screen; :mod:`glarelab.frontend` puts a session o
   :mod:`~glarelab.experiments.staircase` (Spencer et al. 1995) and
   :mod:`~glarelab.experiments.rating` (Luidolt 2020), registered in
   :mod:`glarelab.experiments.paradigms`.
-- :mod:`glarelab.experiments.perception` and :mod:`glarelab.experiments.looking`: what a
-  simulated observer perceives (a brightness model and its noise) of a set's images as the
-  display shows them.
+- Each paradigm's simulated participant sits beside its engine and answers its screens; what
+  it perceives (the brightness model, its noise, the range it was fitted on, a set's images as
+  the display shows them) is :mod:`glarelab.observers`.
 - :mod:`glarelab.experiments.layout`: where a screen's images go, one image pixel on one
   screen pixel.
 - :mod:`glarelab.experiments.data`: the session's files, written so that nothing collected is

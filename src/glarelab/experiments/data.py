@@ -37,9 +37,13 @@ import re
 import sys
 from datetime import datetime
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from glarelab.files.locks import ProcessLock
 from glarelab.protocols import columns, format_value
+
+if TYPE_CHECKING:
+    from glarelab.protocols import Protocol
 
 __all__ = [
     "RESERVE_BYTES",
@@ -273,7 +277,7 @@ class SessionFiles:
 
     def __init__(
         self,
-        protocol,
+        protocol: Protocol,
         participant: str,
         session: int,
         out: Path,

@@ -19,9 +19,14 @@ from __future__ import annotations
 
 import hashlib
 from abc import ABC, abstractmethod
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from glarelab.protocols import Protocol
 
 __all__ = [
     "Engine",
@@ -178,11 +183,15 @@ def participant_rng(seed: int, participant: str, purpose: str) -> np.random.Gene
     return np.random.default_rng([seed, int.from_bytes(digest[:8], "little")])
 
 
-class LookingObserver:
+class LookingObserver(ABC):
     """What the simulated observers that look at a stimulus set share: the brightness model
     and noise of the protocol's ``[observer]`` table, this participant's draw of the noise,
-    and the set as its display shows it (:class:`glarelab.experiments.looking.DisplayedSet`, which
+    and the set as its display shows it (:class:`glarelab.observers.looking.ObservedSet`, which
     observers given the same one share percepts through).
+
+    A paradigm's observer says what it judges (:meth:`judged`), against which the stimuli are
+    checked for the range the observers were fitted on: an observer that does not say cannot be
+    made.
 
     Parameters
     ----------
@@ -195,11 +204,31 @@ class LookingObserver:
         this observer's draw of the noise.
     stimuli
         The stimulus set (:class:`glarelab.stimuli.stimulus_set.StimulusSet`), or the set
-        as displayed (:class:`glarelab.experiments.looking.DisplayedSet`) to share.
+        as displayed (:class:`glarelab.observers.looking.ObservedSet`) to share.
     """
 
     @staticmethod
-    def check(protocol) -> None:
+    @abstractmethod
+    def judged(protocol: Protocol | Mapping[str, Any], geometry: dict):
+        """The glare methods, the disk's luminance and its diameter the observers judge
+        (:class:`glarelab.observers.fitted_range.JudgedStimuli`), from the protocol and its
+        stimulus set's ``geometry``.
+
+        Parameters
+        ----------
+        protocol : glarelab.protocols.Protocol
+            The study's protocol (or its data as a mapping).
+        geometry
+            The stimulus set's geometry (its manifest's ``geometry``).
+
+        Returns
+        -------
+        glarelab.observers.fitted_range.JudgedStimuli
+            What the observers judge.
+        """
+
+    @staticmethod
+    def check(protocol: Protocol) -> None:
         """Refuse an ``[observer]`` table the model and the noise do not take (ValueError).
 
         Parameters
@@ -212,13 +241,15 @@ class LookingObserver:
         ValueError
             Naming the key of ``[observer]`` that is wrong.
         """
-        from glarelab.experiments.perception import observer_parameters
+        from glarelab.observers.noise import observer_parameters
 
         observer_parameters(protocol["observer"])
 
-    def __init__(self, protocol, participant: str, *, seed: int, stimuli):
-        from glarelab.experiments.looking import DisplayedSet
-        from glarelab.experiments.perception import observer_parameters, warn_outside_fitted_range
+    def __init__(self, protocol: Protocol, participant: str, *, seed: int, stimuli):
+        # imported here: the model and the set's images are needed only by a simulation
+        from glarelab.observers.fitted_range import warn_outside_fitted_range
+        from glarelab.observers.looking import ObservedSet
+        from glarelab.observers.noise import observer_parameters
 
         self.protocol = protocol
         self.participant = participant
@@ -227,9 +258,11 @@ class LookingObserver:
         self.observer = self.noise.draw(
             participant_rng(protocol.seed, participant, f"observer {seed}")
         )
-        self.display = stimuli if isinstance(stimuli, DisplayedSet) else DisplayedSet(stimuli)
+        self.display = stimuli if isinstance(stimuli, ObservedSet) else ObservedSet(stimuli)
         # once per observer: the stimuli it will be asked about, against what it was fitted on
-        self.departures = warn_outside_fitted_range(protocol, self.display.geometry)
+        self.departures = warn_outside_fitted_range(
+            protocol.study, self.judged(protocol, self.display.geometry)
+        )
 
 
 def first_screen(engine, *, presses: int = 50) -> dict | None:

@@ -20,9 +20,13 @@ No PsychoPy here: the front-end, the display check and ``protocol check`` share 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from glarelab.protocols import pixel_deg
 from glarelab.stimuli.paradigms import paradigm_stimuli
+
+if TYPE_CHECKING:
+    from glarelab.protocols import Protocol
 
 __all__ = ["Placement", "row_layout"]
 
@@ -125,7 +129,7 @@ def row_layout(
     return placements
 
 
-def protocol_drawing(protocol) -> tuple[list[str], bool]:
+def protocol_drawing(protocol: Protocol) -> tuple[list[str], bool]:
     """How a protocol's first trial is drawn on the protocol's own display: lines to print and
     whether every image is drawn 1:1 (each image pixel on one screen pixel, the whole row on
     the screen). A protocol that shows no images: no lines, True.

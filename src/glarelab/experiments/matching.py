@@ -20,11 +20,17 @@ adjustments and the time from the reference's onset to the confirming Enter.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any
+
 import numpy as np
 
 from glarelab.experiments.engine import Engine, LookingObserver, participant_rng
 from glarelab.protocols.matching import reference_name
 from glarelab.stimuli.matching import target_terms
+
+if TYPE_CHECKING:
+    from glarelab.protocols import Protocol
 
 __all__ = ["MatchingEngine", "MatchingObserver"]
 
@@ -52,7 +58,7 @@ class MatchingEngine(Engine):
 
     def __init__(
         self,
-        protocol,
+        protocol: Protocol,
         participant: str,
         *,
         session: int = 1,
@@ -300,25 +306,47 @@ class MatchingEngine(Engine):
 
 class MatchingObserver(LookingObserver):
     """A simulated observer of a matching study: looks at each reference as the display shows
-    it (:mod:`glarelab.experiments.perception`), sets the targets around the brightness it
+    it (:mod:`glarelab.observers`), sets the targets around the brightness it
     perceives and answers the questions from the glow, the ring or the sizes it sees.
 
     Parameters
     ----------
     protocol
         A matching protocol; its ``[observer]`` table may change the model's and the noise's
-        parameters (:func:`glarelab.experiments.perception.observer_parameters`).
+        parameters (:func:`glarelab.observers.noise.observer_parameters`).
     participant
         Its id (with ``seed``, it fixes the observer's gain and every trial's noise).
     seed
         The simulation's seed.
     stimuli
         The stimulus set it looks at, or the set as displayed
-        (:class:`glarelab.experiments.looking.DisplayedSet`, shared by observers to share
+        (:class:`glarelab.observers.looking.ObservedSet`, shared by observers to share
         percepts).
     """
 
-    def __init__(self, protocol, participant: str, *, seed: int, stimuli):
+    @staticmethod
+    def judged(protocol: Protocol | Mapping[str, Any], geometry: dict):
+        """Each method's references, their levels over the clamp ``L_dmax``, and the disk of
+        ``geometry["disk_diameter_deg"]`` (:class:`LookingObserver.judged`)."""
+        from glarelab.observers.fitted_range import JudgedGlare, JudgedStimuli
+
+        glare = protocol["glare"]
+        clamp = glare["l_dmax_cd_m2"]
+        return JudgedStimuli(
+            tuple(
+                JudgedGlare(
+                    f"method {method['name']!r}",
+                    method["model"],
+                    method.get("parameters"),
+                    tuple(level / clamp for level in method["levels_cd_m2"]),
+                )
+                for method in glare["methods"]
+            ),
+            disk_cd_m2=clamp,
+            disk_diameter_deg=geometry["disk_diameter_deg"],
+        )
+
+    def __init__(self, protocol: Protocol, participant: str, *, seed: int, stimuli):
         super().__init__(protocol, participant, seed=seed, stimuli=stimuli)
         g = self.display.geometry
         self.geometry = {

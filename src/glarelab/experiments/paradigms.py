@@ -1,7 +1,9 @@
 """The paradigms the experiments run: for each, its engine and its simulated observer.
 
-One registry for the layer; a new paradigm adds its module (engine and observer) and a line
-here (see docs/extending.md).
+One registry for the layer; a new paradigm adds its module (engine and observer) and an entry
+here, through :func:`register_paradigm` (see docs/extending.md). Code outside the paradigms'
+modules finds a paradigm's entry through :func:`paradigm_run`, which names the registry when
+the entry is missing.
 """
 
 from __future__ import annotations
@@ -12,8 +14,9 @@ from glarelab.experiments.engine import Engine
 from glarelab.experiments.matching import MatchingEngine, MatchingObserver
 from glarelab.experiments.rating import RatingEngine, RatingObserver
 from glarelab.experiments.staircase import StaircaseEngine, StaircaseObserver
+from glarelab.protocols import Protocol
 
-__all__ = ["PARADIGMS", "Paradigm"]
+__all__ = ["PARADIGMS", "Paradigm", "paradigm_run", "register_paradigm"]
 
 
 @dataclass(frozen=True)
@@ -34,8 +37,52 @@ class Paradigm:
     observer: type | None = None
 
 
-PARADIGMS: dict[str, Paradigm] = {
-    "matching": Paradigm(MatchingEngine, MatchingObserver),
-    "staircase": Paradigm(StaircaseEngine, StaircaseObserver),
-    "rating": Paradigm(RatingEngine, RatingObserver),
-}
+PARADIGMS: dict[str, Paradigm] = {}
+
+
+def register_paradigm(name: str, paradigm: Paradigm) -> None:
+    """Register how the paradigm ``name`` is run.
+
+    Raises
+    ------
+    ValueError
+        For a name already registered, an engine that is not an :class:`Engine` subclass, or an
+        observer class without ``check(protocol)``.
+    """
+    if name in PARADIGMS:
+        raise ValueError(f"paradigm {name!r}: already registered in experiments")
+    if not isinstance(paradigm, Paradigm):
+        raise ValueError(f"paradigm {name!r}: expected a Paradigm entry; got {paradigm!r}")
+    if not (isinstance(paradigm.engine, type) and issubclass(paradigm.engine, Engine)):
+        raise ValueError(
+            f"paradigm {name!r}: engine must be a subclass of glarelab.experiments.engine."
+            f"Engine; got {paradigm.engine!r}"
+        )
+    if paradigm.observer is not None and not callable(getattr(paradigm.observer, "check", None)):
+        raise ValueError(
+            f"paradigm {name!r}: observer {paradigm.observer!r} has no check(protocol) (the "
+            "check of the protocol's [observer] table before a simulation)"
+        )
+    PARADIGMS[name] = paradigm
+
+
+def paradigm_run(protocol: Protocol) -> Paradigm:
+    """The entry of ``protocol``'s paradigm.
+
+    Raises
+    ------
+    ValueError
+        When the paradigm is not registered here.
+    """
+    try:
+        return PARADIGMS[protocol.paradigm]
+    except KeyError:
+        raise ValueError(
+            f"paradigm {protocol.paradigm!r} has no engine registered in "
+            f"glarelab.experiments.paradigms.PARADIGMS ({', '.join(sorted(PARADIGMS))})"
+        ) from None
+
+
+register_paradigm("matching", Paradigm(MatchingEngine, MatchingObserver))
+register_paradigm("staircase", Paradigm(StaircaseEngine, StaircaseObserver))
+register_paradigm("rating", Paradigm(RatingEngine, RatingObserver))

@@ -16,9 +16,14 @@ ignored). That row's timing columns are the presentation's (onset, offset, frame
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from glarelab.experiments.engine import Engine, normalise_key, participant_rng
+
+if TYPE_CHECKING:
+    from glarelab.protocols import Protocol
 
 __all__ = ["RatingEngine", "RatingObserver", "shift_down"]
 
@@ -43,7 +48,7 @@ class RatingEngine(Engine):
 
     def __init__(
         self,
-        protocol,
+        protocol: Protocol,
         participant: str,
         *,
         session: int = 1,
@@ -269,7 +274,7 @@ class RatingObserver:
     """
 
     @staticmethod
-    def check(protocol) -> None:
+    def check(protocol: Protocol) -> None:
         """Nothing to check here: the protocol checks ``observer`` when it loads.
 
         Parameters
@@ -278,7 +283,7 @@ class RatingObserver:
             The study's protocol (not used).
         """
 
-    def __init__(self, protocol, participant: str, *, seed: int, stimuli=None):
+    def __init__(self, protocol: Protocol, participant: str, *, seed: int, stimuli=None):
         q = protocol["questionnaire"]
         self.protocol = protocol
         self.participant = participant

@@ -35,6 +35,7 @@ import threading
 import time
 from datetime import UTC, datetime
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from glarelab.display.calibration import Calibration, usable_calibration
 from glarelab.display.checks import check_calibration, check_screen, enforce, timing_rate_hz
@@ -47,10 +48,13 @@ from glarelab.experiments.data import (
 )
 from glarelab.experiments.engine import Press, first_screen
 from glarelab.experiments.loop import SessionAborted, SessionLoop, Shown
-from glarelab.experiments.paradigms import PARADIGMS
+from glarelab.experiments.paradigms import paradigm_run
 from glarelab.protocols import DATA_FORMAT
 from glarelab.stimuli.stimulus_set import package_versions, verify_stimulus_set
 from glarelab.stimuli.stimulus_set import shows_images as _shows_images
+
+if TYPE_CHECKING:
+    from glarelab.protocols import Protocol
 
 __all__ = [
     "SessionAborted",
@@ -66,7 +70,7 @@ INFO_KEYS = ("age", "sex", "vision_correction")
 END_TEXT = "The session is complete. Thank you!\n\nPlease tell the experimenter."
 
 
-def shows_images(protocol) -> bool:
+def shows_images(protocol: Protocol) -> bool:
     """Whether the protocol shows images (and so needs a stimulus set).
 
     Parameters
@@ -83,7 +87,12 @@ def shows_images(protocol) -> bool:
 
 
 def make_engine(
-    protocol, participant: str, *, session: int, counterbalance: int | None, refresh_hz: float
+    protocol: Protocol,
+    participant: str,
+    *,
+    session: int,
+    counterbalance: int | None,
+    refresh_hz: float,
 ):
     """The engine of the protocol's paradigm for one participant's session.
 
@@ -103,9 +112,9 @@ def make_engine(
     Returns
     -------
     glarelab.experiments.engine.Engine
-        A new engine (:data:`glarelab.experiments.paradigms.PARADIGMS`).
+        A new engine (:func:`glarelab.experiments.paradigms.paradigm_run`).
     """
-    return PARADIGMS[protocol.paradigm].engine(
+    return paradigm_run(protocol).engine(
         protocol,
         participant,
         session=session,
@@ -114,9 +123,9 @@ def make_engine(
     )
 
 
-def make_observer(protocol, participant: str, *, seed: int, stimuli):
+def make_observer(protocol: Protocol, participant: str, *, seed: int, stimuli):
     """A simulated observer of the protocol's paradigm; it looks at the set in ``stimuli`` (a
-    folder, or an :class:`glarelab.experiments.looking.DisplayedSet` that observers share, and with
+    folder, or an :class:`glarelab.observers.looking.ObservedSet` that observers share, and with
     it their percepts).
 
     Parameters
@@ -141,10 +150,10 @@ def make_observer(protocol, participant: str, *, seed: int, stimuli):
     ValueError
         For a paradigm without a simulated observer, or no set where images are shown.
     """
-    from glarelab.experiments.looking import DisplayedSet
+    from glarelab.observers.looking import ObservedSet
     from glarelab.stimuli.stimulus_set import StimulusSet
 
-    observer = PARADIGMS[protocol.paradigm].observer
+    observer = paradigm_run(protocol).observer
     if observer is None:
         raise ValueError(f"the {protocol.paradigm} paradigm has no simulated observer")
     if shows_images(protocol) and stimuli is None:
@@ -156,7 +165,7 @@ def make_observer(protocol, participant: str, *, seed: int, stimuli):
         participant,
         seed=seed,
         stimuli=stimuli
-        if stimuli is None or isinstance(stimuli, DisplayedSet)
+        if stimuli is None or isinstance(stimuli, ObservedSet)
         else StimulusSet(stimuli),
     )
 
@@ -312,7 +321,7 @@ class SimulatedFrontend:
         return presses
 
 
-def _check_stimuli(protocol, stimuli: Path | None) -> str | None:
+def _check_stimuli(protocol: Protocol, stimuli: Path | None) -> str | None:
     if not shows_images(protocol):
         return None
     if stimuli is None:
@@ -343,7 +352,7 @@ def _iso(moment: datetime) -> str:
 def _check_resume(
     sidecar: dict,
     files: SessionFiles,
-    protocol,
+    protocol: Protocol,
     manifest_sha,
     calibration_record,
     info: dict,
@@ -437,7 +446,7 @@ class _StopRequest:
 
 
 def run_session(
-    protocol,
+    protocol: Protocol,
     participant: str,
     *,
     out: Path,
@@ -525,7 +534,7 @@ def run_session(
 
 
 def _run_session_locked(
-    protocol,
+    protocol: Protocol,
     participant: str,
     *,
     lock,
@@ -664,7 +673,7 @@ def _run_session_locked(
     return sidecar
 
 
-def _check_presentation(frontend, protocol, participant, session, counterbalance, rate):
+def _check_presentation(frontend, protocol: Protocol, participant, session, counterbalance, rate):
     """The first trial's images drawn in the session's window and read back (a front-end that
     can, with a stimulus set): what the sidecar records; a warning if the screen does not show
     their codes."""
@@ -697,7 +706,7 @@ def _start_run(
     sidecar: dict,
     files: SessionFiles,
     engine,
-    protocol,
+    protocol: Protocol,
     *,
     info: dict,
     started: datetime,
@@ -787,7 +796,7 @@ def _interrupted(run: dict, files: SessionFiles) -> dict:
     }
 
 
-def _run_trials(engine, frontend, files, sidecar, protocol, rate, resume, stop) -> None:
+def _run_trials(engine, frontend, files, sidecar, protocol: Protocol, rate, resume, stop) -> None:
     trials = protocol.data.get("trials", {})
     loop = SessionLoop(
         frontend,

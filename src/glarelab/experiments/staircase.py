@@ -35,10 +35,15 @@ has no third answer, and importing it would put PsychoPy into this screen-free e
 from __future__ import annotations
 
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
 
 from glarelab.experiments.engine import Engine, LookingObserver, participant_rng
 from glarelab.protocols.staircase import comparison_terms, glare_name, intensity_grid
+
+if TYPE_CHECKING:
+    from glarelab.protocols import Protocol
 
 __all__ = ["Staircase", "StaircaseEngine", "StaircaseObserver", "counterbalance_for"]
 
@@ -197,7 +202,7 @@ class StaircaseEngine(Engine):
 
     def __init__(
         self,
-        protocol,
+        protocol: Protocol,
         participant: str,
         *,
         session: int = 1,
@@ -432,7 +437,7 @@ class StaircaseEngine(Engine):
 
 class StaircaseObserver(LookingObserver):
     """A simulated observer of a staircase study: looks at the glare image and the comparison
-    as the display shows them (:mod:`glarelab.experiments.perception`) and says which looked
+    as the display shows them (:mod:`glarelab.observers`) and says which looked
     brighter, or neither, with the noise of one brief comparison and a shift of its own per block.
 
     Parameters
@@ -444,11 +449,31 @@ class StaircaseObserver(LookingObserver):
         Who, and the simulation's seed (they fix the observer and every trial's noise).
     stimuli
         The stimulus set it looks at, or the set as displayed
-        (:class:`glarelab.experiments.looking.DisplayedSet`, shared by observers to share
+        (:class:`glarelab.observers.looking.ObservedSet`, shared by observers to share
         percepts).
     """
 
-    def __init__(self, protocol, participant: str, *, seed: int, stimuli):
+    @staticmethod
+    def judged(protocol: Protocol | Mapping[str, Any], geometry: dict):
+        """The glare at each strength over the clamp (the display's peak), and the source of
+        ``geometry["source_diameter_deg"]`` (:class:`LookingObserver.judged`)."""
+        from glarelab.observers.fitted_range import JudgedGlare, JudgedStimuli
+
+        glare = protocol["glare"]
+        return JudgedStimuli(
+            (
+                JudgedGlare(
+                    "glare",
+                    glare["model"],
+                    glare.get("parameters"),
+                    tuple(1.0 + strength for strength in glare["strengths"]),
+                ),
+            ),
+            disk_cd_m2=glare["peak_fraction"] * protocol["display"]["max_cd_m2"],
+            disk_diameter_deg=geometry["source_diameter_deg"],
+        )
+
+    def __init__(self, protocol: Protocol, participant: str, *, seed: int, stimuli):
         super().__init__(protocol, participant, seed=seed, stimuli=stimuli)
         g = self.display.geometry
         self.centre = tuple(g["centre_px"])

@@ -45,6 +45,7 @@ import platform
 import time
 from datetime import datetime
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -55,6 +56,9 @@ from glarelab.experiments.loop import DROPPED_INTERVAL
 from glarelab.files.atomic import write_text
 from glarelab.frontend.session import PsychoPyFrontend
 from glarelab.frontend.window import measure_frame_intervals
+
+if TYPE_CHECKING:
+    from glarelab.protocols import Protocol
 
 __all__ = ["check_display", "read_back_images", "write_check"]
 
@@ -111,7 +115,7 @@ def _framebuffer_levels(window, bits: int) -> int:
 
 
 def check_display(
-    protocol,
+    protocol: Protocol,
     *,
     stimuli: Path | None = None,
     calibration=None,
@@ -214,7 +218,9 @@ def check_display(
 PHOTOMETER_TOLERANCE = 0.03  # as the calibration's verification pass (glarelab.display.measure)
 
 
-def _photometer_check(protocol, window, meter, calibration, patch_protocol, records, log) -> dict:
+def _photometer_check(
+    protocol: Protocol, window, meter, calibration, patch_protocol, records, log
+) -> dict:
     """Black, white and (with a calibration) five codes across its range, read by the
     photometer; adds its checks to ``records``."""
     from glarelab.display.checks import Check
@@ -292,15 +298,15 @@ def _flash_cost(device, screen: dict, frames: int, period: float, log) -> dict:
     }
 
 
-def _engine(protocol, refresh_hz: float):
-    from glarelab.experiments.paradigms import PARADIGMS
+def _engine(protocol: Protocol, refresh_hz: float):
+    from glarelab.experiments.paradigms import paradigm_run
 
-    return PARADIGMS[protocol.paradigm].engine(
+    return paradigm_run(protocol).engine(
         protocol, "check1", counterbalance=0, refresh_hz=refresh_hz
     )
 
 
-def _first_flash(protocol, refresh_hz: float) -> dict | None:
+def _first_flash(protocol: Protocol, refresh_hz: float) -> dict | None:
     """The first timed presentation a session of this protocol shows, if any."""
     engine = _engine(protocol, refresh_hz)
     engine.press("space", 0.0)

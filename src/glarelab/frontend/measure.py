@@ -22,10 +22,14 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 from glarelab.display.measure import MeasurementSession
 from glarelab.display.photometer import PatchProtocol, Photometer, PhotometerError, measure_patch
 from glarelab.frontend.window import KeyReader, dispatch_events, grab_screen, open_window
+
+if TYPE_CHECKING:
+    from glarelab.protocols import Protocol
 
 __all__ = ["read_code_luminances", "run_measurement"]
 
@@ -271,7 +275,7 @@ def run_measurement(
     return result(session.calibration.status if session.calibration else "failed")
 
 
-def _read_patch(session, meter, protocol, window, draw, keys):
+def _read_patch(session, meter, protocol: Protocol, window, draw, keys):
     """Read the patch shown through the photometer; Escape stops (raises :class:`_Stopped`)."""
     taken = [0]
 

@@ -27,6 +27,7 @@ from __future__ import annotations
 import json
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -48,6 +49,9 @@ from glarelab.frontend.window import (
     screen_resolution,
 )
 from glarelab.stimuli.stimulus_set import StimulusSet
+
+if TYPE_CHECKING:
+    from glarelab.protocols import Protocol
 
 __all__ = ["PsychoPyFrontend"]
 
@@ -81,7 +85,7 @@ class PsychoPyFrontend:
 
     def __init__(
         self,
-        protocol,
+        protocol: Protocol,
         *,
         stimuli=None,
         calibration: Calibration | None = None,

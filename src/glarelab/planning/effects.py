@@ -34,10 +34,13 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import pandas as pd
 from scipy import stats as sps
+
+if TYPE_CHECKING:
+    from glarelab.protocols import Protocol
 
 __all__ = [
     "CORRECTIONS",
@@ -125,18 +128,24 @@ def _t_effects(table: pd.DataFrame, participants: int) -> list[dict]:
     return rows
 
 
-def _matching(tables: Mapping[str, pd.DataFrame], protocol, participants: int) -> list[dict]:
+def _matching(
+    tables: Mapping[str, pd.DataFrame], protocol: Protocol, participants: int
+) -> list[dict]:
     rows = anova_effects(tables["anova"]) if "anova" in tables else []
     if "methods_at_levels" in tables:
         rows += _t_effects(tables["methods_at_levels"], participants)
     return rows
 
 
-def _staircase(tables: Mapping[str, pd.DataFrame], protocol, participants: int) -> list[dict]:
+def _staircase(
+    tables: Mapping[str, pd.DataFrame], protocol: Protocol, participants: int
+) -> list[dict]:
     return anova_effects(tables["anova"], prefix="ANOVA") if "anova" in tables else []
 
 
-def _rating(tables: Mapping[str, pd.DataFrame], protocol, participants: int) -> list[dict]:
+def _rating(
+    tables: Mapping[str, pd.DataFrame], protocol: Protocol, participants: int
+) -> list[dict]:
     q = protocol["questionnaire"]
     midpoint = (q["scale_min"] + q["scale_max"]) / 2
     rows = []
@@ -164,7 +173,9 @@ PARADIGMS: dict[str, Callable[[Mapping[str, pd.DataFrame], object, int], list[di
 }
 
 
-def effects(protocol, tables: Mapping[str, pd.DataFrame], participants: int) -> list[dict]:
+def effects(
+    protocol: Protocol, tables: Mapping[str, pd.DataFrame], participants: int
+) -> list[dict]:
     """Every test of the protocol's analysis as an effect row (module docstring), from the
     tables of the analysis's ``tests(dataset, protocol)`` on ``participants``.
 
@@ -184,7 +195,14 @@ def effects(protocol, tables: Mapping[str, pd.DataFrame], participants: int) -> 
         ``statistic``, ``df1`` (and ``df2``), ``p`` (and for F ``p_gg``, ``p_hf``, ``eps_gg``,
         None where sphericity cannot be estimated), ``size`` and ``size_name``.
     """
-    return PARADIGMS[protocol.paradigm](tables, protocol, participants)
+    reader = PARADIGMS.get(protocol.paradigm)
+    if reader is None:
+        raise ValueError(
+            f"paradigm {protocol.paradigm!r} has no effects reader registered in "
+            f"glarelab.planning.effects.PARADIGMS ({', '.join(sorted(PARADIGMS))}): a power "
+            "analysis cannot name its tests"
+        )
+    return reader(tables, protocol, participants)
 
 
 def chosen_p(row: Mapping, correction: Correction) -> tuple[float, str]:

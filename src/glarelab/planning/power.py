@@ -45,6 +45,7 @@ import os
 import shutil
 from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
@@ -59,6 +60,9 @@ from glarelab.files.folders import (
 )
 from glarelab.files.locks import ProcessLock
 from glarelab.planning.effects import CORRECTIONS, Correction, chosen_p
+
+if TYPE_CHECKING:
+    from glarelab.protocols import Protocol
 
 __all__ = [
     "binomial_interval",
@@ -486,7 +490,7 @@ def _folder_lock(out: Path) -> ProcessLock:
     return ProcessLock(final.parent / f".{final.name}.power.lock", refusal=refusal)
 
 
-def run_inputs(protocol, *, seed: int, participants: Sequence[int]) -> dict:
+def run_inputs(protocol: Protocol, *, seed: int, participants: Sequence[int]) -> dict:
     """What a folder's replications depend on (its ``run.json``): the protocol, the seed and
     the sample sizes. The number of replications is not among them: more can be added later,
     and fewer summarised.
@@ -552,7 +556,7 @@ def check_run_folder(out: str | Path, run: dict) -> None:
         )
 
 
-def _check_stimuli(stimuli: Path, protocol) -> None:
+def _check_stimuli(stimuli: Path, protocol: Protocol) -> None:
     """Refuse a stimulus set that is damaged or of another protocol."""
     from glarelab.stimuli.stimulus_set import verify_stimulus_set
 
@@ -569,7 +573,7 @@ def _check_stimuli(stimuli: Path, protocol) -> None:
 
 
 def power_analysis(
-    protocol,
+    protocol: Protocol,
     out: str | Path,
     *,
     participants: Sequence[int],

@@ -25,19 +25,23 @@ import tempfile
 import threading
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from glarelab.analysis.load import load_sessions
-from glarelab.analysis.paradigms import PARADIGMS
+from glarelab.analysis.paradigms import paradigm_analysis
 from glarelab.experiments.data import session_files
-from glarelab.experiments.looking import DisplayedSet
 from glarelab.experiments.session import (
     SimulatedFrontend,
     make_observer,
     run_session,
     shows_images,
 )
+from glarelab.observers.looking import ObservedSet
 from glarelab.planning.effects import effects
 from glarelab.stimuli.stimulus_set import StimulusSet, cached_stimulus_set, verify_stimulus_set
+
+if TYPE_CHECKING:
+    from glarelab.protocols import Protocol
 
 __all__ = ["PowerJob", "default_scratch", "participant_id", "simulate_replication"]
 
@@ -85,14 +89,20 @@ def default_scratch() -> Path:
 
 
 def _simulate_sessions(
-    protocol, participants: Sequence[str], *, seed: int, out: Path, stimuli: Path | None, looks_at
+    protocol: Protocol,
+    participants: Sequence[str],
+    *,
+    seed: int,
+    out: Path,
+    stimuli: Path | None,
+    looks_at,
 ) -> list[Path]:
     """Run each participant's first session with a simulated observer into ``out``, as
     ``glarelab run --simulate`` does; return their CSVs, in the participants' order.
 
     ``stimuli`` is the set's folder the sessions show (None for a paradigm that shows no
     images); ``looks_at`` what the observers look at: the folder, or a
-    :class:`glarelab.experiments.looking.DisplayedSet` they share.
+    :class:`glarelab.observers.looking.ObservedSet` they share.
     """
     csvs = []
     for participant in participants:
@@ -112,13 +122,13 @@ def _simulate_sessions(
 
 
 def simulate_replication(
-    protocol,
+    protocol: Protocol,
     replication: int,
     *,
     participants: tuple[int, ...],
     seed: int,
     stimuli: Path | None,
-    displayed: DisplayedSet | None = None,
+    displayed: ObservedSet | None = None,
     scratch: Path | None = None,
 ) -> dict:
     """Simulate one study at every sample size; return its effects.
@@ -149,7 +159,7 @@ def simulate_replication(
     """
     largest = max(participants)
     if displayed is None and stimuli is not None:
-        displayed = DisplayedSet(StimulusSet(stimuli))
+        displayed = ObservedSet(StimulusSet(stimuli))
     folder = Path(tempfile.mkdtemp(prefix="glarelab-power-", dir=scratch or default_scratch()))
     try:
         ids = [participant_id(replication, number) for number in range(1, largest + 1)]
@@ -157,7 +167,7 @@ def simulate_replication(
             protocol, ids, seed=seed, out=folder, stimuli=stimuli, looks_at=displayed
         )
         results, failures = [], []
-        tests = PARADIGMS[protocol.paradigm].tests
+        tests = paradigm_analysis(protocol).tests
         for n in sorted(participants):
             try:
                 dataset = load_sessions(protocol, csvs[:n])
@@ -174,7 +184,7 @@ def simulate_replication(
 class PowerJob:
     """The replications of a power analysis as tasks (see :mod:`glarelab.planning.execute`).
 
-    Each worker thread looks at its own :class:`glarelab.experiments.looking.DisplayedSet` of the
+    Each worker thread looks at its own :class:`glarelab.observers.looking.ObservedSet` of the
     stimulus set, made once (:meth:`setup`) and kept for every replication it runs. A worker
     that cannot read ``stimuli`` (a cluster without a shared file system) builds the protocol's
     set into its own cache (:func:`glarelab.stimuli.stimulus_set.cached_stimulus_set`).
@@ -206,7 +216,7 @@ class PowerJob:
 
     def __init__(
         self,
-        protocol,
+        protocol: Protocol,
         *,
         participants: tuple[int, ...],
         seed: int,
@@ -235,14 +245,14 @@ class PowerJob:
         self.__dict__.update(state)
         self._local = threading.local()
 
-    def setup(self) -> tuple[Path | None, DisplayedSet | None]:
+    def setup(self) -> tuple[Path | None, ObservedSet | None]:
         """The stimulus set this worker reads, and the set as displayed."""
         if self.stimuli is None:
             return None, None
         folder = self.stimuli
         if verify_stimulus_set(folder):  # not readable here, or changed: this worker's own
             folder = cached_stimulus_set(self.protocol, progress=None)
-        return folder, DisplayedSet(StimulusSet(folder))
+        return folder, ObservedSet(StimulusSet(folder))
 
     def run(self, replication: int) -> dict:
         """Simulate and analyse one replication.

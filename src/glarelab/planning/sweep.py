@@ -26,11 +26,15 @@ import tempfile
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pandas as pd
 
 from glarelab.files.atomic import write_bytes, write_text
 from glarelab.planning.grid import Point, Setting, grid
+
+if TYPE_CHECKING:
+    from glarelab.protocols import Protocol
 
 __all__ = ["MAX_POINTS", "SweepJob", "prepare", "sweep"]
 
@@ -42,7 +46,7 @@ def _manifest_sha(folder: Path) -> str:
     return hashlib.sha256((folder / "manifest.json").read_bytes()).hexdigest()
 
 
-def _in_place(folder: Path, protocol) -> bool:
+def _in_place(folder: Path, protocol: Protocol) -> bool:
     from glarelab.stimuli.stimulus_set import verify_stimulus_set
 
     if not (folder / "manifest.json").is_file() or verify_stimulus_set(folder):
@@ -131,9 +135,9 @@ class SweepJob:
             record["effects"] = self._simulate(index, protocol, folder)
         return record
 
-    def _simulate(self, index: int, protocol, folder: Path | None) -> list[dict]:
+    def _simulate(self, index: int, protocol: Protocol, folder: Path | None) -> list[dict]:
         from glarelab.analysis.load import load_sessions
-        from glarelab.analysis.paradigms import PARADIGMS
+        from glarelab.analysis.paradigms import paradigm_analysis
         from glarelab.analysis.report import write_report
         from glarelab.planning.effects import effects
         from glarelab.planning.simulate import _simulate_sessions
@@ -147,7 +151,7 @@ class SweepJob:
         )
         csvs = sorted(data.glob("*.csv"))
         write_report(protocol, csvs, where / "report", stimuli=folder)
-        tables = PARADIGMS[protocol.paradigm].tests(load_sessions(protocol, csvs), protocol)
+        tables = paradigm_analysis(protocol).tests(load_sessions(protocol, csvs), protocol)
         return effects(protocol, tables, self.simulate)
 
 
@@ -190,7 +194,7 @@ def prepare(
         For a protocol that shows no images without ``simulate``, ``simulate`` of 1, a point
         whose observers cannot be simulated, or an ``out`` holding a sweep of other inputs.
     """
-    from glarelab.experiments.paradigms import PARADIGMS
+    from glarelab.experiments.paradigms import paradigm_run
     from glarelab.experiments.session import shows_images
 
     if isinstance(simulate, bool) or not isinstance(simulate, int) or simulate < 0:
@@ -214,7 +218,12 @@ def prepare(
         )
     if simulate:
         for point in points:
-            PARADIGMS[point.protocol.paradigm].observer.check(point.protocol)
+            observer = paradigm_run(point.protocol).observer
+            if observer is None:
+                raise ValueError(
+                    f"the {point.protocol.paradigm} paradigm has no simulated observer"
+                )
+            observer.check(point.protocol)
     config = {
         "format": "glarelab sweep v1",
         "points": [{"point": p.index, "protocol_sha256": p.protocol.sha256} for p in points],

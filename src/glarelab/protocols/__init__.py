@@ -17,6 +17,7 @@ from glarelab.protocols.core import (
     parse_protocol,
     pixel_deg,
     protocol_path,
+    register_paradigm,
     shipped_protocols,
     with_monitor,
 )
@@ -39,6 +40,7 @@ __all__ = [
     "parse_protocol",
     "pixel_deg",
     "protocol_path",
+    "register_paradigm",
     "shipped_protocols",
     "with_monitor",
 ]

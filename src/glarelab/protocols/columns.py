@@ -14,6 +14,10 @@ analysis reads them with the column missing (``counted`` as true).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from glarelab.protocols.core import Protocol
 
 __all__ = ["COMMON", "DATA_FORMAT", "Column", "columns", "format_value"]
 
@@ -100,7 +104,7 @@ COMMON = (
 )
 
 
-def columns(protocol) -> tuple[Column, ...]:
+def columns(protocol: Protocol) -> tuple[Column, ...]:
     """Every column of a protocol's session CSV, in file order: :data:`COMMON`, then those its
     paradigm derives from the protocol (methods, levels, questions, contexts, scale).
 

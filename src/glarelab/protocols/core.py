@@ -32,6 +32,7 @@ __all__ = [
     "parse_protocol",
     "pixel_deg",
     "protocol_path",
+    "register_paradigm",
     "shipped_protocols",
 ]
 
@@ -47,6 +48,47 @@ STUDY: Schema = {
     "title": Key(str, "title for reports"),
     "seed": Key(int, "seed of every random choice in stimuli and trial orders", low=0),
 }
+
+
+def _study_schema() -> Schema:
+    """The ``[study]`` table's keys, its paradigm one of those registered now."""
+    return {**STUDY, "paradigm": Key(str, "how the study is run", choices=tuple(PARADIGMS))}
+
+
+def register_paradigm(name: str, contract: ModuleType | Any) -> None:
+    """Register a paradigm's contract: a module (or any object) with ``SCHEMA`` (the protocol's
+    keys besides ``[study]``), ``check(validated, problems, folder)`` (the rules between keys)
+    and ``columns(protocol)`` (the session CSV's columns of the paradigm).
+
+    The other layers register the paradigm in their own registries
+    (:mod:`glarelab.stimuli.paradigms`, :mod:`glarelab.experiments.paradigms`,
+    :mod:`glarelab.analysis.paradigms`; docs/extending.md).
+
+    Raises
+    ------
+    ValueError
+        For a name already registered or not a lower-case token, or a contract that lacks one
+        of the three.
+    """
+    if not isinstance(name, str) or not name.isidentifier() or name != name.lower():
+        raise ValueError(f"paradigm name must be a lower-case identifier; got {name!r}")
+    if name in PARADIGMS:
+        raise ValueError(f"paradigm {name!r}: already registered in protocols")
+    missing = [
+        key
+        for key, ok in (
+            ("SCHEMA", isinstance(getattr(contract, "SCHEMA", None), Mapping)),
+            ("check", callable(getattr(contract, "check", None))),
+            ("columns", callable(getattr(contract, "columns", None))),
+        )
+        if not ok
+    ]
+    if missing:
+        raise ValueError(
+            f"paradigm {name!r}: its contract {contract!r} lacks {', '.join(missing)} (a "
+            "paradigm's contract names SCHEMA, check and columns)"
+        )
+    PARADIGMS[name] = contract
 
 
 @dataclass(frozen=True)
@@ -133,7 +175,7 @@ def parse_protocol(
         )
     module = PARADIGMS[paradigm]
     problems: list[str] = []
-    validated = validate(data, {"study": STUDY, **module.SCHEMA}, "", problems)
+    validated = validate(data, {"study": _study_schema(), **module.SCHEMA}, "", problems)
     if not problems:
         module.check(validated, problems, folder)
     if problems:
@@ -340,5 +382,5 @@ def describe_schema(paradigm: str) -> list[tuple[str, str, str, str, str]]:
                 default = "required" if spec.required else repr(spec.default)
                 rows.append((path, spec.unit, default, spec.allowed(), spec.doc))
 
-    walk({"study": STUDY, **PARADIGMS[paradigm].SCHEMA}, "")
+    walk({"study": _study_schema(), **PARADIGMS[paradigm].SCHEMA}, "")
     return rows

@@ -12,6 +12,7 @@ follow-up analyses named by level positions.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from glarelab.protocols.columns import COMMON, Column
 from glarelab.protocols.common import (
@@ -26,6 +27,9 @@ from glarelab.protocols.common import (
     display_pixel_deg,
 )
 from glarelab.protocols.keys import Key, Schema, Tables
+
+if TYPE_CHECKING:
+    from glarelab.protocols.core import Protocol
 
 __all__ = ["SCHEMA", "check", "columns", "reference_name"]
 
@@ -135,8 +139,7 @@ SCHEMA: Schema = {
     },
     "observer": Key(
         dict,
-        "simulated observers' parameters (glarelab.experiments.perception); empty: the fitted"
-        " defaults",
+        "simulated observers' parameters (glarelab.observers); empty: the fitted defaults",
         default={},
     ),
 }
@@ -344,7 +347,7 @@ def _fixed_columns(p: dict) -> tuple[Column, ...]:
     )
 
 
-def columns(protocol) -> tuple[Column, ...]:
+def columns(protocol: Protocol) -> tuple[Column, ...]:
     """The paradigm's CSV columns for this protocol (after the common ones).
 
     Parameters

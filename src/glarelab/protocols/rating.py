@@ -12,10 +12,14 @@ shown, frame-exact, before its questions; the rows name the condition.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from glarelab.protocols.columns import Column
 from glarelab.protocols.common import DISPLAY, INSTRUCTIONS, VIEWING, check_display
 from glarelab.protocols.keys import Key, Schema, Tables, validate
+
+if TYPE_CHECKING:
+    from glarelab.protocols.core import Protocol
 
 __all__ = ["CONDITION", "EFFECTS", "SCENE", "SCHEMA", "check", "columns"]
 
@@ -246,7 +250,7 @@ def _check_scene(p: dict, problems: list[str]) -> None:
         )
 
 
-def columns(protocol) -> tuple[Column, ...]:
+def columns(protocol: Protocol) -> tuple[Column, ...]:
     """The paradigm's CSV columns for this protocol (after the common ones).
 
     Parameters

@@ -12,6 +12,7 @@ from __future__ import annotations
 from fractions import Fraction
 from math import gcd, lcm
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from glarelab.protocols.columns import Column
 from glarelab.protocols.common import (
@@ -24,6 +25,9 @@ from glarelab.protocols.common import (
     check_glare_model,
 )
 from glarelab.protocols.keys import Key, Schema, Tables
+
+if TYPE_CHECKING:
+    from glarelab.protocols.core import Protocol
 
 __all__ = ["SCHEMA", "check", "columns", "comparison_terms", "glare_name", "intensity_grid"]
 
@@ -140,8 +144,7 @@ SCHEMA: Schema = {
     "instructions": INSTRUCTIONS,
     "observer": Key(
         dict,
-        "simulated observers' parameters (glarelab.experiments.perception); empty: the fitted"
-        " defaults",
+        "simulated observers' parameters (glarelab.observers); empty: the fitted defaults",
         default={},
     ),
 }
@@ -294,7 +297,7 @@ def check(p: dict, problems: list[str], folder: Path | None) -> None:
     check_glare_model(g["model"], g["parameters"], "glare", problems)
 
 
-def columns(protocol) -> tuple[Column, ...]:
+def columns(protocol: Protocol) -> tuple[Column, ...]:
     """The paradigm's CSV columns for this protocol (after the common ones).
 
     Parameters

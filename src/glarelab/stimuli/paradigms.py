@@ -2,8 +2,10 @@
 
 A paradigm's stimulus module gives how its images are rendered (``build``), how a session draws
 its first trial's images side by side (``first_row``, which ``glarelab protocol check`` reports
-on the protocol's display), and how a set's profile plots group its images. Every entry names
-all three, so a new paradigm cannot leave one out and be passed over silently.
+on the protocol's display), how a set's profile plots group its images, and whether a protocol
+shows images at all. Every entry names all four, so a new paradigm cannot leave one out and be
+passed over silently; code outside the paradigms' modules finds an entry through
+:func:`paradigm_stimuli`, which names the registry when the entry is missing.
 """
 
 from __future__ import annotations
@@ -17,7 +19,14 @@ from glarelab.stimuli.night import build_night, night_row, shows_scene
 from glarelab.stimuli.shapes import ImageRow
 from glarelab.stimuli.staircase import build_staircase, staircase_row
 
-__all__ = ["PARADIGMS", "ImageRow", "ParadigmStimuli", "paradigm_stimuli"]
+__all__ = [
+    "PARADIGMS",
+    "ImageRow",
+    "ParadigmStimuli",
+    "always_shows",
+    "paradigm_stimuli",
+    "register_paradigm",
+]
 
 
 @dataclass(frozen=True)
@@ -46,15 +55,49 @@ class ParadigmStimuli:
     shows: Callable[[Protocol], bool]
 
 
-def _always(protocol: Protocol) -> bool:
+def always_shows(protocol: Protocol) -> bool:
+    """``shows`` of a paradigm every protocol of which shows images."""
     return True
 
 
-PARADIGMS: dict[str, ParadigmStimuli] = {
-    "matching": ParadigmStimuli(build_matching, matching_row, ("reference", "method"), _always),
-    "staircase": ParadigmStimuli(build_staircase, staircase_row, ("glare", "context"), _always),
-    "rating": ParadigmStimuli(build_night, night_row, None, shows_scene),
-}
+PARADIGMS: dict[str, ParadigmStimuli] = {}
+
+
+def register_paradigm(name: str, stimuli: ParadigmStimuli) -> None:
+    """Register how the paradigm ``name``'s stimuli are made and drawn.
+
+    Raises
+    ------
+    ValueError
+        For a name already registered, or an entry whose functions are not callable or whose
+        profile groups are neither None nor two names.
+    """
+    if name in PARADIGMS:
+        raise ValueError(f"paradigm {name!r}: already registered in stimuli")
+    if not isinstance(stimuli, ParadigmStimuli):
+        raise ValueError(f"paradigm {name!r}: expected a ParadigmStimuli entry; got {stimuli!r}")
+    for key in ("build", "first_row", "shows"):
+        if not callable(getattr(stimuli, key)):
+            raise ValueError(f"paradigm {name!r}: stimuli.{key} must be callable")
+    groups = stimuli.profile_groups
+    if groups is not None and not (
+        isinstance(groups, tuple) and len(groups) == 2 and all(isinstance(g, str) for g in groups)
+    ):
+        raise ValueError(
+            f"paradigm {name!r}: profile_groups must be None or (image kind, key); got {groups!r}"
+        )
+    PARADIGMS[name] = stimuli
+
+
+register_paradigm(
+    "matching",
+    ParadigmStimuli(build_matching, matching_row, ("reference", "method"), always_shows),
+)
+register_paradigm(
+    "staircase",
+    ParadigmStimuli(build_staircase, staircase_row, ("glare", "context"), always_shows),
+)
+register_paradigm("rating", ParadigmStimuli(build_night, night_row, None, shows_scene))
 
 
 def paradigm_stimuli(protocol: Protocol) -> ParadigmStimuli:

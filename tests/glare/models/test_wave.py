@@ -265,7 +265,7 @@ def test_wave_models_render_like_the_others():
     image = np.full((61, 61), 100.0)
     image[30, 30] = 1e6
     model = WaveOpticsGlare(pupil_mm=3.0, particles=100)
-    result = render_glare(image, model, pixel_deg=0.03, method="Spencer1995")
+    result = render_glare(image, model, pixel_deg=0.03, composition="Spencer1995")
     total = result.spread.sum() + result.energy_outside_image + result.energy_outside_kernel
     assert_allclose(total, result.excess_energy, rtol=1e-9)
     assert add_glare(image, "hybrid", pixel_deg=0.05).max() == 220.0

@@ -57,7 +57,7 @@ def test_single_bright_pixel_conserves_energy_in_degenerate_shapes(shape, pixel_
     image = np.zeros(shape)
     image[shape[0] // 2, shape[1] // 2] = 1e9
     result = glare.render_glare(
-        image, VosGlare(), pixel_deg=pixel_deg, l_dmax_cd_m2=L_DMAX, method="Spencer1995"
+        image, VosGlare(), pixel_deg=pixel_deg, l_dmax_cd_m2=L_DMAX, composition="Spencer1995"
     )
     kept = result.spread.sum() + result.energy_outside_kernel + result.energy_outside_image
     assert_allclose(kept, result.excess_energy, rtol=1e-9)  # energy conservation
@@ -67,7 +67,7 @@ def test_every_pixel_bright():
     image = np.full((33, 47), 1e6)
     # Yoshida's clamp: every pixel at L_dmax, and nothing is convolved
     assert (glare.add_glare(image, VosGlare(), pixel_deg=0.05) == L_DMAX).all()
-    spencer = glare.render_glare(image, VosGlare(), pixel_deg=0.05, method="Spencer1995")
+    spencer = glare.render_glare(image, VosGlare(), pixel_deg=0.05, composition="Spencer1995")
     kept = spencer.spread.sum() + spencer.energy_outside_kernel + spencer.energy_outside_image
     assert_allclose(kept, spencer.excess_energy, rtol=1e-9)
     # the middle pixel receives more than a corner, and everything stays finite
@@ -152,11 +152,11 @@ def test_float32_planned_render_next_to_the_sun_has_no_noise_in_the_dark():
             VosGlare(),
             pixel_deg=0.5,
             l_dmax_cd_m2=L_DMAX,
-            method=method,
+            composition=method,
             precision="float32",
         )
         exact = glare.render_glare(
-            image, VosGlare(), pixel_deg=0.5, l_dmax_cd_m2=L_DMAX, method=method
+            image, VosGlare(), pixel_deg=0.5, l_dmax_cd_m2=L_DMAX, composition=method
         ).image
         assert (planned.image >= 0).all()
         error = np.abs(display_codes(planned.image, LUT) - display_codes(exact, LUT))

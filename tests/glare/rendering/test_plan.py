@@ -17,7 +17,7 @@ LUT = Calibration.load(CALIBRATION).lut  # the shipped 10-bit, 433 cd/m² synthe
 
 def _exact(image, model, pixel, method="Yoshida2008", kernel=None):
     return glare.render_glare(
-        image, model, pixel_deg=pixel, l_dmax_cd_m2=220.0, method=method, kernel=kernel
+        image, model, pixel_deg=pixel, l_dmax_cd_m2=220.0, composition=method, kernel=kernel
     )
 
 
@@ -183,7 +183,7 @@ def test_spencer_method_and_float32_stay_within_the_tolerance():
             VosGlare(),
             pixel_deg=pixel,
             l_dmax_cd_m2=220.0,
-            method=method,
+            composition=method,
             precision="float32",
             display=LUT,
         )
@@ -205,7 +205,7 @@ def test_the_printed_plan_says_what_is_done_and_why():
         ({"tolerance_codes": -1.0}, "tolerance_codes must be a finite number >= 0"),
         ({"tolerance_codes": float("nan")}, "tolerance_codes"),
         ({"display": np.array([1.0, 0.5, 2.0])}, "increasing"),
-        ({"method": "Kakimoto"}, "method"),
+        ({"composition": "Kakimoto"}, "composition"),
     ],
 )
 def test_bad_plan_arguments_raise_clear_errors(kwargs, match):

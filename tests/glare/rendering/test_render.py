@@ -82,8 +82,8 @@ def test_convolution_is_linear_not_circular():
 
 def test_yoshida_adds_back_and_clamps_spencer_does_not():
     image = disk(radius_px=3, inside=10_000.0, outside=10.0)
-    yoshida = render_glare(image, VosGlare(), pixel_deg=0.02, method="Yoshida2008")
-    spencer = render_glare(image, VosGlare(), pixel_deg=0.02, method="Spencer1995")
+    yoshida = render_glare(image, VosGlare(), pixel_deg=0.02, composition="Yoshida2008")
+    spencer = render_glare(image, VosGlare(), pixel_deg=0.02, composition="Spencer1995")
     assert yoshida.image.max() == 220.0
     assert_allclose(yoshida.image, np.minimum(image + yoshida.spread, 220.0), rtol=0)
     assert spencer.image.max() > 220.0  # "burn-out" (Spencer §5)
@@ -117,7 +117,9 @@ def test_extreme_luminances_stay_finite(peak):
     image = np.zeros((64, 64))
     image[32, 32] = peak
     for method in ("Yoshida2008", "Spencer1995"):
-        result = render_glare(image, VosGlare(regime="scotopic"), pixel_deg=0.01, method=method)
+        result = render_glare(
+            image, VosGlare(regime="scotopic"), pixel_deg=0.01, composition=method
+        )
         assert np.isfinite(result.image).all() and (result.image >= 0).all()
         assert_allclose(
             result.spread.sum() + result.energy_outside_image + result.energy_outside_kernel,
@@ -149,7 +151,7 @@ def test_colour_images_get_a_coloured_halo_and_keep_each_channels_energy():
         image,
         VosGlare(regime="mesopic"),
         pixel_deg=0.02,
-        method="Spencer1995",
+        composition="Spencer1995",
         kernel_shape=(301, 301),
     )
     assert result.image.shape == (301, 301, 3)
@@ -181,7 +183,7 @@ def test_colour_images_get_a_coloured_halo_and_keep_each_channels_energy():
         ),
         (np.ones((4, 4)), {"pixel_deg": -1.0}, "pixel_deg"),
         (np.ones((4, 4)), {"l_dmax_cd_m2": 0.0}, "l_dmax_cd_m2 must be a finite number > 0"),
-        (np.ones((4, 4)), {"method": "Kakimoto"}, "method must be one of 'Yoshida2008'"),
+        (np.ones((4, 4)), {"composition": "Kakimoto"}, "composition must be one of 'Yoshida2008'"),
         (np.ones((4, 4)), {"precision": "float16"}, "precision must be one of"),
         (np.ones((4, 4)), {"kernel_shape": (4, 5)}, "shape must be two odd positive integers"),
     ],
@@ -257,7 +259,35 @@ def test_spread_is_linear_in_the_excess_and_shift_equivariant():
 def test_glare_grows_with_source_luminance(luminance, factor):
     image = np.full((41, 41), 1.0)
     image[20, 20] = luminance
-    dim = render_glare(image, VosGlare(), pixel_deg=0.05, method="Spencer1995").image
+    dim = render_glare(image, VosGlare(), pixel_deg=0.05, composition="Spencer1995").image
     image[20, 20] = 220.0 + (luminance - 220.0) * factor
-    bright = render_glare(image, VosGlare(), pixel_deg=0.05, method="Spencer1995").image
+    bright = render_glare(image, VosGlare(), pixel_deg=0.05, composition="Spencer1995").image
     assert (bright >= dim - 1e-9 * dim).all()
+
+
+def test_method_is_refused_naming_composition():
+    # every composition rule is also a model's name: render_glare(image, "Spencer1995",
+    # method="Yoshida2008") read as a choice of model and ran with another meaning
+    from glarelab.glare import GlareRenderer, add_glare, plan_glare, render_planned
+
+    image = np.full((9, 9), 100.0)
+    image[4, 4] = 1e4
+    calls = [
+        lambda: render_glare(image, "Spencer1995", pixel_deg=0.05, method="Yoshida2008"),
+        lambda: add_glare(image, "vos", pixel_deg=0.05, method="Spencer1995"),
+        lambda: add_glare(np.ones((9, 9)), "vos", pixel_deg=0.05, method="Spencer1995"),
+        lambda: render_planned(image, "vos", pixel_deg=0.05, l_dmax_cd_m2=220.0, method="x"),
+        lambda: plan_glare(image, "vos", pixel_deg=0.05, l_dmax_cd_m2=220.0, method="vos"),
+        lambda: GlareRenderer("vos", pixel_deg=0.05, shape=(9, 9), method="Spencer1995"),
+    ]
+    for call in calls:
+        with pytest.raises(
+            TypeError, match=r"the glare model is the second argument.*composition="
+        ):
+            call()
+    with pytest.raises(
+        ValueError, match="composition must be one of 'Yoshida2008', 'Spencer1995'"
+    ):
+        render_glare(image, "vos", pixel_deg=0.05, composition="vos")
+    spencer = render_glare(image, "vos", pixel_deg=0.05, composition="Spencer1995").image
+    assert spencer.max() > 220.0  # Spencer's sum has no clamp

@@ -30,7 +30,7 @@ def test_the_exact_paths_equal_a_plain_convolution_with_the_full_kernel(path, me
     model = VosGlare(regime="mesopic")
     kernel = model.kernel(0.05, glare.kernel_shape_for(image.shape))
     result = GlareRenderer(
-        model, pixel_deg=0.05, shape=image.shape, method=method, tolerance_codes=0,
+        model, pixel_deg=0.05, shape=image.shape, composition=method, tolerance_codes=0,
         kernel=kernel, paths=(path,),
     ).render(image)  # fmt: skip
     assert result.plan.path == path and result.plan.exact
@@ -81,7 +81,7 @@ def test_an_achromatic_rgb_scene_is_convolved_once_and_a_coloured_one_three_time
         ({"paths": ()}, "paths"),
         ({"tolerance_codes": -1}, "tolerance_codes"),
         ({"precision": "float16"}, "precision"),
-        ({"method": "Kakimoto"}, "method"),
+        ({"composition": "Kakimoto"}, "composition"),
     ],
 )
 def test_bad_renderer_arguments_are_named(options, match):

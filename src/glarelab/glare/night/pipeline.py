@@ -304,7 +304,7 @@ def render_night(
             if renderer is None:
                 renderer = GlareRenderer(
                     model, pixel_deg=pixel_deg, shape=display.shape[:2], l_dmax_cd_m2=l_dmax,
-                    method=glare_method, tolerance_codes=tolerance_codes,
+                    composition=glare_method, tolerance_codes=tolerance_codes,
                 )  # fmt: skip
                 renderers[model] = renderer
             result = renderer.render(display)

@@ -16,10 +16,55 @@ from typing import Literal
 
 import numpy as np
 
-__all__ = ["METHODS", "Method", "compose", "excess"]
+__all__ = [
+    "COMPOSITIONS",
+    "METHODS",
+    "Composition",
+    "Method",
+    "check_composition",
+    "compose",
+    "excess",
+]
 
-METHODS = ("Yoshida2008", "Spencer1995")
-Method = Literal["Yoshida2008", "Spencer1995"]
+COMPOSITIONS = ("Yoshida2008", "Spencer1995")
+"""How the spread excess is put back: the ``composition=`` of the render functions."""
+Composition = Literal["Yoshida2008", "Spencer1995"]
+METHODS = COMPOSITIONS  # the name :func:`compose` gives its argument
+Method = Composition
+
+
+def check_composition(composition: object, method: object = None, *, where: str) -> str:
+    """The composition rule ``composition`` checked, and the render functions' removed
+    ``method=`` keyword refused.
+
+    ``method=`` named the composition rule, but every rule is also the name of a glare model
+    (``GLARE_MODELS["Spencer1995"]`` is the Vos PSF), so ``render_glare(image, "Spencer1995",
+    method="Yoshida2008")`` read as a model choice and ran with another meaning; the keyword
+    is refused whatever it holds.
+
+    Raises
+    ------
+    TypeError
+        When ``method`` is given.
+    ValueError
+        For a composition that is not one of :data:`COMPOSITIONS`.
+
+    Examples
+    --------
+    >>> check_composition("Spencer1995", where="render_glare")
+    'Spencer1995'
+    """
+    if method is not None:
+        raise TypeError(
+            f"{where}: method={method!r} is not taken: the glare model is the second argument, "
+            f"and how the spread glare is composed is composition= "
+            f"({' or '.join(map(repr, COMPOSITIONS))})"
+        )
+    if composition not in COMPOSITIONS:
+        raise ValueError(
+            f"composition must be one of {', '.join(map(repr, COMPOSITIONS))}; got {composition!r}"
+        )
+    return str(composition)
 
 
 def excess(planes: np.ndarray, l_dmax_cd_m2: float) -> np.ndarray:

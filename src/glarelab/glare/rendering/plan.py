@@ -251,9 +251,10 @@ def plan_glare(
     *,
     pixel_deg: float,
     l_dmax_cd_m2: float,
-    method: Literal["Yoshida2008", "Spencer1995"] = "Yoshida2008",
+    composition: Literal["Yoshida2008", "Spencer1995"] = "Yoshida2008",
     tolerance_codes: float = 0.5,
     display=None,
+    method: None = None,
 ) -> GlarePlan:
     """Plan the glare of one image: what to spread, how far, by which path.
 
@@ -267,7 +268,7 @@ def plan_glare(
         Visual angle of one pixel, degrees, > 0.
     l_dmax_cd_m2
         Maximum luminance the display shows, cd/m², > 0.
-    method
+    composition
         ``'Yoshida2008'`` (clamped to ``L_dmax``: saturated pixels cannot change) or
         ``'Spencer1995'`` (every pixel can change).
     tolerance_codes
@@ -277,6 +278,9 @@ def plan_glare(
         The display the image is for: a :class:`~glarelab.glare.rendering.display.Display`, a
         calibration (anything with a code → cd/m² ``lut``) or ``None`` for the reference display:
         10-bit, gamma 2.2, 1000:1, white at ``l_dmax_cd_m2``.
+    method
+        Removed (it was the composition rule, and read as a model's name): refused with a
+        TypeError.
 
     Returns
     -------
@@ -312,9 +316,10 @@ def plan_glare(
         model,
         pixel_deg=pixel_deg,
         l_dmax_cd_m2=l_dmax_cd_m2,
-        method=method,
         tolerance_codes=tolerance_codes,
         display=display,
+        composition=composition,
+        method=method,
     )
     return renderer.plan(image)
 

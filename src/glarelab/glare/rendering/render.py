@@ -16,7 +16,7 @@ import numpy as np
 from glarelab.glare._validation import check_choice, check_image, check_positive
 from glarelab.glare.models import GlareModel, _resolve
 from glarelab.glare.models.digitise import Kernel, check_kernel_shape
-from glarelab.glare.rendering.compose import METHODS
+from glarelab.glare.rendering.compose import check_composition
 from glarelab.glare.rendering.renderer import (
     PRECISIONS,
     GlareRenderer,
@@ -41,11 +41,12 @@ def render_glare(
     *,
     pixel_deg: float,
     l_dmax_cd_m2: float = L_DMAX_YOSHIDA2008_CD_M2,
-    method: Literal["Yoshida2008", "Spencer1995"] = "Yoshida2008",
+    composition: Literal["Yoshida2008", "Spencer1995"] = "Yoshida2008",
     precision: Literal["float64", "float32"] = "float64",
     kernel_shape: tuple[int, int] | None = None,
     kernel: Kernel | None = None,
     cache=None,
+    method: None = None,
 ) -> GlareResult:
     """Add glare to a linear luminance image and account for every bit of energy.
 
@@ -61,9 +62,10 @@ def render_glare(
         Visual angle of one pixel in degrees, > 0.
     l_dmax_cd_m2
         Maximum luminance the display shows, cd/m², > 0; default 220 (Yoshida §3).
-    method
-        ``'Yoshida2008'`` (default): ``min(L + ΔL ⊛ K, L_dmax)``. ``'Spencer1995'``:
-        ``min(L, L_dmax) + ΔL ⊛ K`` with no clamp.
+    composition
+        How the spread glare is put back: ``'Yoshida2008'`` (default):
+        ``min(L + ΔL ⊛ K, L_dmax)``. ``'Spencer1995'``: ``min(L, L_dmax) + ΔL ⊛ K`` with no
+        clamp.
     precision
         ``'float64'`` (reference) or ``'float32'`` (fast; about 1e-6 relative). The float32
         path convolves in float64 when its FFT round-off could add more than 1e-3 cd/m² to the
@@ -78,6 +80,10 @@ def render_glare(
         Where digitised kernels are kept between runs: ``None`` (default), the user's kernel
         cache (:mod:`glarelab.glare.models.cache`); ``False``, none; a
         :class:`glarelab.glare.models.cache.KernelCache`.
+    method
+        Removed: it was the composition rule, and every rule is also a glare model's name, so
+        ``render_glare(image, "Spencer1995", method="Yoshida2008")`` read as a choice of model;
+        any value is refused.
 
     Returns
     -------
@@ -87,8 +93,10 @@ def render_glare(
     ------
     ValueError
         For a non-2-D (or non-RGB) image, NaN/Inf or negative luminance, a non-positive
-        ``pixel_deg`` or ``l_dmax_cd_m2``, an unknown method or precision, or an even kernel
-        shape.
+        ``pixel_deg`` or ``l_dmax_cd_m2``, an unknown composition or precision, or an even
+        kernel shape.
+    TypeError
+        For ``method=`` (its message names ``composition=``).
 
     Notes
     -----
@@ -117,6 +125,7 @@ def render_glare(
         model,
         pixel_deg=pixel_deg,
         l_dmax_cd_m2=l_dmax_cd_m2,
+        composition=composition,
         method=method,
         precision=precision,
         tolerance_codes=0,
@@ -133,18 +142,19 @@ def add_glare(
     *,
     pixel_deg: float,
     l_dmax_cd_m2: float = L_DMAX_YOSHIDA2008_CD_M2,
-    method: Literal["Yoshida2008", "Spencer1995"] = "Yoshida2008",
+    composition: Literal["Yoshida2008", "Spencer1995"] = "Yoshida2008",
     precision: Literal["float64", "float32"] = "float64",
     kernel_shape: tuple[int, int] | None = None,
     tolerance_codes: float | None = 0.5,
     display=None,
     cache=None,
+    method: None = None,
 ) -> np.ndarray:
     """Add glare to a linear luminance image, doing only the work the scene and display need.
 
     Parameters
     ----------
-    luminance_cd_m2, model, pixel_deg, l_dmax_cd_m2, method, precision
+    luminance_cd_m2, model, pixel_deg, l_dmax_cd_m2, composition, precision, method
         As for :func:`render_glare`.
     kernel_shape
         ``None`` (default): planned from the scene. A shape renders exactly with that kernel,
@@ -194,7 +204,7 @@ def add_glare(
     if not (image > l_dmax).any():
         # nothing to spread: skip digitising a kernel, after checking the other arguments
         check_positive("pixel_deg", pixel_deg, unit="deg")
-        check_choice("method", method, METHODS)
+        check_composition(composition, method, where="add_glare")
         check_choice("precision", precision, PRECISIONS)
         if kernel_shape is not None:
             check_kernel_shape(kernel_shape)
@@ -205,6 +215,7 @@ def add_glare(
         pixel_deg=pixel_deg,
         shape=image.shape[:2],
         l_dmax_cd_m2=l_dmax_cd_m2,
+        composition=composition,
         method=method,
         precision=precision,
         tolerance_codes=tolerance_codes if kernel_shape is None else 0,
@@ -221,19 +232,20 @@ def render_planned(
     *,
     pixel_deg: float,
     l_dmax_cd_m2: float = L_DMAX_YOSHIDA2008_CD_M2,
-    method: Literal["Yoshida2008", "Spencer1995"] = "Yoshida2008",
+    composition: Literal["Yoshida2008", "Spencer1995"] = "Yoshida2008",
     precision: Literal["float64", "float32"] = "float64",
     tolerance_codes: float = 0.5,
     display=None,
     log=None,
     cache=None,
+    method: None = None,
 ) -> GlareResult:
     """Add glare as :func:`glarelab.glare.plan_glare` plans it, and bound the error reached: the
     one-call form of :meth:`GlareRenderer.render`.
 
     Parameters
     ----------
-    luminance_cd_m2, model, pixel_deg, l_dmax_cd_m2, method, tolerance_codes, display
+    luminance_cd_m2, model, pixel_deg, l_dmax_cd_m2, composition, tolerance_codes, display, method
         As for :func:`glarelab.glare.plan_glare`.
     precision
         ``'float64'`` or ``'float32'``, as for :func:`glarelab.glare.render_glare`.
@@ -265,6 +277,7 @@ def render_planned(
         model,
         pixel_deg=pixel_deg,
         l_dmax_cd_m2=l_dmax_cd_m2,
+        composition=composition,
         method=method,
         precision=precision,
         tolerance_codes=tolerance_codes,

@@ -34,7 +34,7 @@ from glarelab.glare.rendering._convolve import (
     kernel_spectrum,
     spectral_spread,
 )
-from glarelab.glare.rendering.compose import METHODS, compose
+from glarelab.glare.rendering.compose import check_composition, compose
 from glarelab.glare.rendering.costs import DEFAULT_COSTS, PathCosts, machine_costs
 from glarelab.glare.rendering.display import CodeBound, display_lut
 from glarelab.glare.rendering.multires import (
@@ -71,8 +71,12 @@ class GlareRenderer:
         ``(H, W)`` of the images (RGB images ``(H, W, 3)`` are accepted too).
     l_dmax_cd_m2
         Maximum luminance of the display, cd/m², > 0; default 220 (Yoshida §3).
+    composition
+        How the spread glare is put back: ``'Yoshida2008'`` (default, clamped to ``L_dmax``) or
+        ``'Spencer1995'`` (added without a clamp); :mod:`glarelab.glare.rendering.compose`.
     method
-        ``'Yoshida2008'`` (default) or ``'Spencer1995'`` (:mod:`glarelab.glare.rendering.compose`).
+        Removed (it was the composition rule, and read as a model's name): refused with a
+        TypeError.
     precision
         ``'float64'`` (default) or ``'float32'`` (convolved in float64 where float32 FFT
         round-off could show, next to a sun).
@@ -107,7 +111,7 @@ class GlareRenderer:
     Raises
     ------
     ValueError
-        For a bad model, pixel size, shape, ``l_dmax_cd_m2``, method, precision, tolerance,
+        For a bad model, pixel size, shape, ``l_dmax_cd_m2``, composition, precision, tolerance,
         display table or kernel.
 
     Examples
@@ -129,7 +133,7 @@ class GlareRenderer:
         pixel_deg: float,
         shape: tuple[int, ...],
         l_dmax_cd_m2: float = 220.0,
-        method: Literal["Yoshida2008", "Spencer1995"] = "Yoshida2008",
+        composition: Literal["Yoshida2008", "Spencer1995"] = "Yoshida2008",
         precision: Literal["float64", "float32"] = "float64",
         tolerance_codes: float | None = 0.5,
         display=None,
@@ -139,14 +143,15 @@ class GlareRenderer:
         log=None,
         cache=None,
         costs: PathCosts | Literal["machine"] | None = None,
+        method: None = None,
     ) -> None:
         self.model = _resolve(model)
         self.cache = resolve_cache(cache)
         self.pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
         self.l_dmax = check_positive("l_dmax_cd_m2", l_dmax_cd_m2, unit="cd/m²")
-        check_choice("method", method, METHODS)
+        self.composition = check_composition(composition, method, where="GlareRenderer")
         check_choice("precision", precision, PRECISIONS)
-        self.method, self.dtype = method, np.dtype(precision)
+        self.method, self.dtype = self.composition, np.dtype(precision)
         tolerance = 0.0 if tolerance_codes is None else float(tolerance_codes)
         if not math.isfinite(tolerance) or tolerance < 0:
             raise ValueError(
@@ -161,7 +166,7 @@ class GlareRenderer:
             raise ValueError(f"shape must be (H, W) of positive integers, got {shape!r}")
         self.shape = (height, width)
         self.lut = display_lut(display, self.l_dmax)
-        self.code_bound = CodeBound(self.lut, self.l_dmax, method)
+        self.code_bound = CodeBound(self.lut, self.l_dmax, self.composition)
         self._given = None
         if kernel is not None:
             if not np.isclose(kernel.pixel_deg, self.pixel_deg, rtol=1e-12, atol=0):

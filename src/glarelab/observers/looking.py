@@ -6,7 +6,7 @@ clipped to its range, as a participant would see them. Images are composed from 
 components exactly as the session composes them (:func:`glarelab.stimuli.stimulus_set.compose`).
 
 A percept depends only on the image, the brightness model and the geometry judged, so it is
-remembered here: observers given the same :class:`DisplayedSet` (the simulated participants of
+remembered here: observers given the same :class:`ObservedSet` (the simulated participants of
 a power analysis) compute each percept once.
 """
 
@@ -16,16 +16,18 @@ from collections import OrderedDict
 
 import numpy as np
 
-from glarelab.display.calibration import Calibration
+from glarelab.stimuli.shown import ShownSet
 from glarelab.stimuli.stimulus_set import StimulusSet
 
-__all__ = ["DisplayedSet"]
+__all__ = ["ObservedSet"]
 
 CACHE_SIZE = 64  # images kept: a study's references and staircases' comparisons repeat
 
 
-class DisplayedSet:
-    """A stimulus set as its display shows it.
+class ObservedSet(ShownSet):
+    """A stimulus set as its display shows it to the simulated observers
+    (:class:`glarelab.stimuli.shown.ShownSet`), with the images they are shown and the percepts
+    they share remembered.
 
     Parameters
     ----------
@@ -34,11 +36,7 @@ class DisplayedSet:
     """
 
     def __init__(self, stimuli: StimulusSet):
-        self.set = stimuli
-        self.geometry = stimuli.geometry
-        self.calibration = Calibration.from_json(
-            stimuli.manifest["calibration"], source=f"{stimuli.folder} calibration"
-        )
+        super().__init__(stimuli)
         self._shown: OrderedDict[tuple, np.ndarray] = OrderedDict()
         self._percepts: dict[tuple, object] = {}
 
@@ -69,7 +67,7 @@ class DisplayedSet:
         return shown
 
     def percept(self, model, terms, **geometry):
-        """What ``model`` (a :class:`glarelab.experiments.perception.BrightnessModel`) perceives of
+        """What ``model`` (a :class:`glarelab.observers.brightness.BrightnessModel`) perceives of
         the image ``[(name, weight)]`` with ``geometry`` (its ``percept`` keywords); computed once
         per model, image and geometry.
 

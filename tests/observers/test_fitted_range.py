@@ -11,8 +11,10 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from glarelab.experiments.looking import DisplayedSet
-from glarelab.experiments.perception import (
+from glarelab.experiments.engine import LookingObserver
+from glarelab.experiments.paradigms import PARADIGMS
+from glarelab.experiments.session import make_observer
+from glarelab.observers.fitted_range import (
     FITTED_DISK_CD_M2,
     FITTED_DISK_DIAMETER_DEG,
     FITTED_GAUSSIAN_SIGMA_DEG,
@@ -21,7 +23,7 @@ from glarelab.experiments.perception import (
     fitted_range_departures,
     warn_outside_fitted_range,
 )
-from glarelab.experiments.session import make_observer
+from glarelab.observers.looking import ObservedSet
 from glarelab.protocols import load_protocol
 from glarelab.stimuli.stimulus_set import StimulusSet, cached_stimulus_set
 
@@ -42,16 +44,27 @@ def matching(sigma_deg: float = 0.34, *, levels=None, clamp: float = 220.0, mode
     return {**data, "glare": {**data["glare"], "l_dmax_cd_m2": clamp, "methods": [method]}}
 
 
+def judged(protocol, geometry: dict):
+    """What the protocol's paradigm's observers judge (a protocol or its data)."""
+    paradigm = getattr(protocol, "paradigm", None) or protocol["study"]["paradigm"]
+    return PARADIGMS[paradigm].observer.judged(protocol, geometry)
+
+
+def departures(protocol, geometry: dict) -> list[str]:
+    return fitted_range_departures(judged(protocol, geometry))
+
+
 def _outside_warnings(record) -> list:
     return [w for w in record if issubclass(w.category, OutsideFittedRangeWarning)]
 
 
 def test_the_papers_studies_are_inside_the_fitted_range_but_spencers_own_conditions():
-    assert fitted_range_departures(load_protocol("yoshida2008"), YOSHIDA_GEOMETRY) == []
-    assert fitted_range_departures(load_protocol("luidolt2020"), {}) == []  # rating: no glare
+    assert departures(load_protocol("yoshida2008"), YOSHIDA_GEOMETRY) == []
+    # a rating study's observers look at no glare: they are no LookingObserver
+    assert not issubclass(PARADIGMS["rating"].observer, LookingObserver)
     # the observers were fitted on Spencer's Figure 13 through a photopic PSF on a 100 cd/m²
     # display; the protocol now follows the paper (mesopic by §3.1's rule, 50 cd/m² as §1)
-    assert fitted_range_departures(load_protocol("spencer1995"), SPENCER_GEOMETRY) == [
+    assert departures(load_protocol("spencer1995"), SPENCER_GEOMETRY) == [
         "glare: Vos regime 'mesopic' (fitted on photopic only)",
         "disk luminance 37.5 cd/m² (the clamp; fitted on 75-220 cd/m²)",
     ]
@@ -62,14 +75,14 @@ def test_the_issue_study_of_two_gaussian_widths_is_named():
     data = matching(0.2)
     wide = {**data["glare"]["methods"][0], "name": "wide", "parameters": {"sigma_deg": 0.5}}
     data["glare"]["methods"] = [{**data["glare"]["methods"][0], "name": "narrow"}, wide]
-    assert fitted_range_departures(data, YOSHIDA_GEOMETRY) == [
+    assert departures(data, YOSHIDA_GEOMETRY) == [
         "method 'narrow': Gaussian sigma_deg = 0.2° (fitted on 0.34° only)",
         "method 'wide': Gaussian sigma_deg = 0.5° (fitted on 0.34° only)",
     ]
 
 
 def test_glare_methods2026_names_its_wave_models_and_high_levels():
-    found = fitted_range_departures(load_protocol("glare_methods2026"), YOSHIDA_GEOMETRY)
+    found = departures(load_protocol("glare_methods2026"), YOSHIDA_GEOMETRY)
     assert found == [
         "method 'gaussian': levels of 45.45 × the clamp luminance "
         "(fitted on 1-31.82 × for gaussian)",
@@ -80,7 +93,7 @@ def test_glare_methods2026_names_its_wave_models_and_high_levels():
 
 def test_vos_regime_age_disk_size_and_luminance_are_checked():
     data = matching(model=("vos", {"regime": "scotopic", "age": 70.0}), clamp=300.0)
-    found = fitted_range_departures(data, {"disk_diameter_deg": 1.0})
+    found = departures(data, {"disk_diameter_deg": 1.0})
     assert found == [
         "method 'gaussian': Vos regime 'scotopic' (fitted on photopic only)",
         "method 'gaussian': Vos age = 70 years (fitted at the default age)",
@@ -94,7 +107,7 @@ def test_a_staircase_study_is_checked_on_its_glare_and_source():
     data = load_protocol("spencer1995").data
     strengths = [*data["glare"]["strengths"], 1000.0]
     data = {**data, "glare": {**data["glare"], "strengths": strengths, "peak_fraction": 0.5}}
-    found = fitted_range_departures(data, {"source_diameter_deg": 0.05})
+    found = departures(data, {"source_diameter_deg": 0.05})
     assert found == [
         "glare: Vos regime 'mesopic' (fitted on photopic only)",
         "glare: levels of 1001 × the clamp luminance (fitted on 1-285 × for vos)",
@@ -107,28 +120,27 @@ def test_a_staircase_study_is_checked_on_its_glare_and_source():
 def test_a_gaussian_width_departs_exactly_when_outside_the_fitted_one(sigma_deg):
     low, high = FITTED_GAUSSIAN_SIGMA_DEG
     inside = low * (1 - 1e-3) <= sigma_deg <= high * (1 + 1e-3)
-    assert (fitted_range_departures(matching(sigma_deg), YOSHIDA_GEOMETRY) == []) == inside
+    assert (departures(matching(sigma_deg), YOSHIDA_GEOMETRY) == []) == inside
 
 
 @pytest.mark.parametrize("factor, departs", [(1.0, False), (1.002, True), (0.998, True)])
 def test_the_borders_of_the_level_range(factor, departs):
     low, high = FITTED_LEVEL_RATIO["gaussian"]
     levels = [220.0 * low, 220.0 * high * factor] if factor > 1 else [220.0 * low * factor]
-    assert bool(fitted_range_departures(matching(levels=levels), YOSHIDA_GEOMETRY)) == departs
+    assert bool(departures(matching(levels=levels), YOSHIDA_GEOMETRY)) == departs
     for diameter in FITTED_DISK_DIAMETER_DEG:  # both ends of the sizes are inside
-        assert fitted_range_departures(matching(), {"disk_diameter_deg": diameter}) == []
+        assert departures(matching(), {"disk_diameter_deg": diameter}) == []
     for clamp in FITTED_DISK_CD_M2:
         levels = [clamp * r for r in FITTED_LEVEL_RATIO["gaussian"]]
-        assert (
-            fitted_range_departures(matching(levels=levels, clamp=clamp), YOSHIDA_GEOMETRY) == []
-        )
+        assert departures(matching(levels=levels, clamp=clamp), YOSHIDA_GEOMETRY) == []
 
 
 def test_the_warning_names_the_ranges_and_points_at_its_caller():
     with warnings.catch_warnings(record=True) as record:
         warnings.simplefilter("always")
-        found = warn_outside_fitted_range(matching(0.5), YOSHIDA_GEOMETRY)
-        assert warn_outside_fitted_range(load_protocol("yoshida2008"), YOSHIDA_GEOMETRY) == []
+        found = warn_outside_fitted_range("yoshida2008", judged(matching(0.5), YOSHIDA_GEOMETRY))
+        yoshida = judged(load_protocol("yoshida2008"), YOSHIDA_GEOMETRY)
+        assert warn_outside_fitted_range("yoshida2008", yoshida) == []
     (warning,) = _outside_warnings(record)
     assert found == ["method 'gaussian': Gaussian sigma_deg = 0.5° (fitted on 0.34° only)"]
     assert "yoshida2008" in str(warning.message)
@@ -140,7 +152,7 @@ def test_the_warning_names_the_ranges_and_points_at_its_caller():
 @pytest.fixture(scope="module")
 def yoshida_set():
     folder = cached_stimulus_set(load_protocol("yoshida2008"), progress=None)
-    return DisplayedSet(StimulusSet(folder))
+    return ObservedSet(StimulusSet(folder))
 
 
 def test_an_observer_outside_the_range_warns_once(tmp_path, yoshida_set):

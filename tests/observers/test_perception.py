@@ -1,4 +1,4 @@
-"""The image-computable brightness model and the observers' noise (glarelab.experiments.perception),
+"""The image-computable brightness model and the observers' noise (glarelab.observers),
 and the Luidolt rating defaults: the acceptance properties of issue 14 item 5 as tests."""
 
 import math
@@ -13,13 +13,8 @@ from scipy import stats as sps
 
 from glarelab import glare
 from glarelab.analysis.stats import rm_anova
-from glarelab.experiments.perception import (
-    GLOW_GAIN,
-    BrightnessModel,
-    Observer,
-    ObserverNoise,
-    Percept,
-)
+from glarelab.observers.brightness import GLOW_GAIN, BrightnessModel, Percept
+from glarelab.observers.noise import Observer, ObserverNoise
 from glarelab.stimuli.sky import cloudy_sky
 
 MODEL = BrightnessModel()

@@ -1,0 +1,198 @@
+"""Where the simulated observers were fitted, and a warning when they are asked beyond it.
+
+The observers' parameters (:mod:`glarelab.observers.brightness`, :mod:`glarelab.observers.noise`)
+were fitted on the stimuli of Yoshida et al. 2008 §3 and Spencer et al. 1995 §4 as this suite
+renders them (``scripts/fit_observers.py``, ``docs/observers.md``). A study whose stimuli lie
+outside them (another kernel, wider levels, another disk size or luminance) is simulated by
+extrapolation: :func:`warn_outside_fitted_range` says so, once per observer, naming each value.
+
+What a paradigm's observers judge is given to these functions by the paradigm
+(:class:`JudgedStimuli`, from its observer's ``judged(protocol, geometry)``), so this module
+never asks which paradigm a protocol is.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+__all__ = [
+    "FITTED_DISK_CD_M2",
+    "FITTED_DISK_DIAMETER_DEG",
+    "FITTED_GAUSSIAN_SIGMA_DEG",
+    "FITTED_LEVEL_RATIO",
+    "FITTED_VOS_REGIMES",
+    "JudgedGlare",
+    "JudgedStimuli",
+    "OutsideFittedRangeWarning",
+    "fitted_range_departures",
+    "warn_outside_fitted_range",
+]
+
+# --- the stimuli the fit saw (Yoshida 2008 §3 and Spencer 1995 §4 as this suite renders them) -
+FITTED_GAUSSIAN_SIGMA_DEG = (0.34, 0.34)
+"""Gaussian kernel widths ``σ`` (deg) the fit saw: Yoshida 2008 §3 Method I, 0.34° only. The
+glow band ``w`` was fitted on it, so a wider kernel's ramp is judged over a part of it."""
+FITTED_VOS_REGIMES = ("photopic",)
+"""Vos PSF regimes the fit saw: photopic, at the default age (Yoshida Method II, eqs. 3-6;
+Spencer §4, with and without flare lines)."""
+FITTED_LEVEL_RATIO = {"gaussian": (1.0, 7000.0 / 220.0), "vos": (1.0, 285.0)}
+"""Glare source luminance over the clamp it is rendered against, per kernel: Yoshida's levels
+over ``L_dmax`` = 220 cd/m² (A-F: 1-31.8; a-f: 1-45.5) and Spencer's ``1 + strength`` (1.01-285,
+Vos only)."""
+FITTED_DISK_DIAMETER_DEG = (0.1065, 0.3)
+"""Diameters (deg) of the disks judged: Spencer's 4-pixel source at 0.0266°/px and Yoshida's
+0.3° disk."""
+FITTED_DISK_CD_M2 = (75.0, 220.0)
+"""Luminance (cd/m²) of the judged disk as displayed, the clamp: Spencer's peak (75 % of
+100 cd/m²) and Yoshida's ``L_dmax``."""
+_RELATIVE = 1e-3  # a value within 0.1 % of a fitted bound is inside it (rounded geometry)
+
+
+class OutsideFittedRangeWarning(UserWarning):
+    """Simulated observers are asked about stimuli unlike those their parameters were fitted on
+    (the ``FITTED_*`` constants, ``docs/observers.md``): their answers are an extrapolation."""
+
+
+def _inside(value: float, bounds: tuple[float, float]) -> bool:
+    low, high = bounds
+    return low * (1 - _RELATIVE) <= value <= high * (1 + _RELATIVE)
+
+
+def _bounds(bounds: tuple[float, float], unit: str = "") -> str:
+    low, high = bounds
+    if math.isclose(low, high):
+        return f"{low:.4g}{unit} only"
+    return f"{low:.4g}-{high:.4g}{unit}"
+
+
+def _kernel_departures(where: str, model: str, parameters, ratios: list[float]) -> list[str]:
+    """Departures of one glare method (``model`` with ``parameters``, its levels as ratios of
+    source luminance to the clamp) from what the fit saw."""
+    from glarelab.protocols.common import glare_model
+
+    if model not in FITTED_LEVEL_RATIO:
+        return [f"{where}: glare model {model!r} (fitted on {', '.join(FITTED_LEVEL_RATIO)} only)"]
+    out = []
+    kernel = glare_model(model, parameters or {})
+    if model == "gaussian" and not _inside(kernel.sigma_deg, FITTED_GAUSSIAN_SIGMA_DEG):
+        out.append(
+            f"{where}: Gaussian sigma_deg = {kernel.sigma_deg:.4g}° (fitted on "
+            f"{_bounds(FITTED_GAUSSIAN_SIGMA_DEG, '°')})"
+        )
+    if model == "vos":
+        if kernel.regime not in FITTED_VOS_REGIMES:
+            out.append(
+                f"{where}: Vos regime {kernel.regime!r} (fitted on "
+                f"{', '.join(FITTED_VOS_REGIMES)} only)"
+            )
+        if kernel.age is not None:
+            out.append(f"{where}: Vos age = {kernel.age:g} years (fitted at the default age)")
+    outside = [r for r in ratios if not _inside(r, FITTED_LEVEL_RATIO[model])]
+    if outside:
+        shown = ", ".join(f"{r:.4g}" for r in outside)
+        out.append(
+            f"{where}: levels of {shown} × the clamp luminance "
+            f"(fitted on {_bounds(FITTED_LEVEL_RATIO[model], ' ×')} for {model})"
+        )
+    return out
+
+
+@dataclass(frozen=True)
+class JudgedGlare:
+    """One glare method whose images an observer judges, as the fitted range needs it.
+
+    Attributes
+    ----------
+    where
+        How a departure names it (``"method 'gaussian'"``).
+    model
+        Its glare model's name (a key of :data:`glarelab.glare.GLARE_MODELS`).
+    parameters
+        The model's keywords (None: its defaults).
+    level_ratios
+        Each level's glare-source luminance over the clamp it is rendered against.
+    """
+
+    where: str
+    model: str
+    parameters: Mapping[str, Any] | None
+    level_ratios: tuple[float, ...]
+
+
+@dataclass(frozen=True)
+class JudgedStimuli:
+    """What a paradigm's simulated observers judge, in the terms of the fitted range: the glare
+    methods, the judged disk's luminance (the clamp, cd/m²) and its diameter (deg). Each
+    paradigm's observer says it (``judged(protocol, geometry)``), so this module never asks
+    which paradigm a protocol is."""
+
+    glare: tuple[JudgedGlare, ...]
+    disk_cd_m2: float
+    disk_diameter_deg: float
+
+
+def fitted_range_departures(judged: JudgedStimuli) -> list[str]:
+    """How the stimuli judged depart from those the observers were fitted on.
+
+    Parameters
+    ----------
+    judged
+        The glare methods, the disk's luminance and its diameter, as a paradigm's observer
+        gives them (``judged(protocol, geometry)``).
+
+    Returns
+    -------
+    list of str
+        One line per departure (kernel width or model, levels, disk size, disk luminance),
+        naming the value and the fitted range; empty inside it.
+
+    Examples
+    --------
+    >>> gaussian = JudgedGlare("method 'gaussian'", "gaussian", {"sigma_deg": 0.34}, (1.0, 20.0))
+    >>> fitted_range_departures(JudgedStimuli((gaussian,), 220.0, 0.3))
+    []
+    >>> fitted_range_departures(JudgedStimuli((gaussian,), 220.0, 1.0))
+    ['disk diameter 1° (fitted on 0.1065-0.3°)']
+    """
+    out: list[str] = []
+    for method in judged.glare:
+        out += _kernel_departures(
+            method.where, method.model, method.parameters, list(method.level_ratios)
+        )
+    diameter, clamp = judged.disk_diameter_deg, judged.disk_cd_m2
+    if not _inside(diameter, FITTED_DISK_DIAMETER_DEG):
+        out.append(
+            f"disk diameter {diameter:.4g}° (fitted on {_bounds(FITTED_DISK_DIAMETER_DEG, '°')})"
+        )
+    if not _inside(clamp, FITTED_DISK_CD_M2):
+        out.append(
+            f"disk luminance {clamp:.4g} cd/m² (the clamp; fitted on "
+            f"{_bounds(FITTED_DISK_CD_M2, ' cd/m²')})"
+        )
+    return out
+
+
+def warn_outside_fitted_range(study: str, judged: JudgedStimuli) -> list[str]:
+    """Warn once, with every departure, when the stimuli a study's observers judge lie outside
+    what the observers were fitted on (:func:`fitted_range_departures`); return the
+    departures.
+
+    Warns
+    -----
+    OutsideFittedRangeWarning
+        Naming each value and its fitted range.
+    """
+    departures = fitted_range_departures(judged)
+    if departures:
+        warnings.warn(
+            f"the simulated observers of {study} are asked about stimuli outside those they "
+            f"were fitted on (docs/observers.md), so their answers are an extrapolation: "
+            + "; ".join(departures),
+            OutsideFittedRangeWarning,
+            stacklevel=2,
+        )
+    return departures
