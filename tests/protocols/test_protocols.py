@@ -138,6 +138,19 @@ def method(data, index):
             lambda d: method(d, 1).update(labels=["a", "b", "c"], levels_cd_m2=[220.0, 1.0, 2.0]),
             "every method needs the same number of levels",
         ),
+        (
+            # answers and times would share one header name (q1_glow_time_s twice)
+            lambda d: d["questionnaire"]["questions"][1].update(column="q1_glow_time_s"),
+            r"questions\[1\]\.column = 'q1_glow_time_s': already a column of the session CSV",
+        ),
+        (
+            lambda d: d["questionnaire"]["questions"][0].update(column="q2_ring_time_s"),
+            r"questions\[1\]\.column = 'q2_ring': already a column of the session CSV",
+        ),
+        (
+            lambda d: d["questionnaire"]["questions"][1].update(column="Q1_Glow"),
+            r"questions\[1\]\.column = 'Q1_Glow': already a column of the session CSV",
+        ),
     ],
 )
 def test_bad_protocols_are_refused_with_the_key_named(edit, match):
