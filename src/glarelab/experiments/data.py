@@ -129,6 +129,34 @@ def _check_trial_sequence(path: Path, rows: list[dict[str, str]]) -> None:
         previous = trial
 
 
+def _check_unended_row(path: Path, data: bytes, n_columns: int, n_rows: int) -> None:
+    """A last line without its newline is a row cut by a crash (fewer cells: dropped on
+    resume) or a whole row an editor saved without one; the two cannot be told apart when the
+    cut fell inside the last cell (a time, a comment), so a last line with every cell is
+    left to the person rather than deleted or guessed.
+
+    Raises
+    ------
+    SessionError
+        If the last line lacks its newline but has the header's number of cells.
+    """
+    if not data or data.endswith(b"\n"):
+        return
+    tail = data[data.rfind(b"\n") + 1 :].decode("utf-8", "replace")
+    try:
+        cells = next(csv.reader([tail]), [])
+    except csv.Error:
+        return  # a quote left open: cut inside a quoted cell
+    if len(cells) < n_columns:
+        return
+    raise SessionError(
+        f"{path}, line {n_rows + 2}: the last row has no final newline: it is whole (saved by "
+        "an editor) or cut by a crash inside its last cell, which the file cannot tell; check "
+        "it, then end it with a newline to keep it or delete the line to run that trial again; "
+        "nothing was changed"
+    )
+
+
 def _fsync_folder(folder: Path) -> None:
     if sys.platform == "win32":  # pragma: no cover - folders cannot be opened there
         return
@@ -297,6 +325,7 @@ class SessionFiles:
             )
         self.rows = read_rows(path)
         _check_trial_sequence(path, self.rows)
+        _check_unended_row(path, data, len(self.names), len(self.rows))
         return path
 
     def open(self) -> None:
