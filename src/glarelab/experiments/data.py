@@ -341,7 +341,7 @@ class SessionFiles:
             if not data.endswith(b"\n"):  # a row cut by a crash is not a trial
                 with self.csv_path.open("r+b") as handle:
                     handle.truncate(data.rfind(b"\n") + 1)
-            self._fd = os.open(self.csv_path, os.O_WRONLY | os.O_APPEND)
+            self._fd = os.open(self.csv_path, os.O_RDWR | os.O_APPEND)
             try:
                 self._reserve()
             except OSError as error:
@@ -354,9 +354,7 @@ class SessionFiles:
                 ) from None
             return
         self.out.mkdir(parents=True, exist_ok=True)
-        self._fd = os.open(
-            self.csv_path, os.O_WRONLY | os.O_APPEND | os.O_CREAT | os.O_EXCL, 0o644
-        )
+        self._fd = os.open(self.csv_path, os.O_RDWR | os.O_APPEND | os.O_CREAT | os.O_EXCL, 0o644)
         self.created = True
         try:
             self._write_line(self.names)
@@ -404,13 +402,70 @@ class SessionFiles:
             raise
 
     def write_row(self, row: dict) -> None:
-        """Append one trial and make it durable before returning."""
+        """Append one trial and make it durable before returning.
+
+        Raises
+        ------
+        OSError
+            If the CSV is no longer at its path (removed or replaced with its folder during
+            the session): the trials it held are written back first (:meth:`check_in_place`).
+        """
         unknown = set(row) - set(self.names)
         if unknown:
             raise ValueError(f"row has columns the {self.study} schema lacks: {sorted(unknown)}")
         cells = [format_value(row.get(c.name), c) for c in self.columns]
+        self.check_in_place()
         self._write_line(cells)
         self.rows.append(dict(zip(self.names, cells, strict=True)))
+        self.check_in_place()
+
+    def check_in_place(self) -> None:
+        """The CSV this session appends to is still the file at its path.
+
+        A CSV removed during the session (its folder deleted, a cleaning script) takes the
+        trials with it while the open file still accepts rows; the trials held are written
+        back (to the path, its folder made again, or beside it when another file took the
+        name) before the session is stopped.
+
+        Raises
+        ------
+        OSError
+            Naming where the trials now are.
+        """
+        if self._fd is None:
+            return
+        try:
+            same = os.path.samestat(os.fstat(self._fd), os.stat(self.csv_path))
+        except FileNotFoundError:
+            same = False
+        if same:
+            return
+        size = os.fstat(self._fd).st_size
+        data = os.pread(self._fd, size, 0)
+        try:
+            self.csv_path.parent.mkdir(parents=True, exist_ok=True)
+            target = self.csv_path
+            if target.exists() or target.is_symlink():
+                target = target.with_name(f"{self.csv_path.stem}.rescued-{os.getpid()}.csv")
+            descriptor = os.open(target, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
+            try:
+                os.write(descriptor, data)
+                os.fsync(descriptor)
+            finally:
+                os.close(descriptor)
+        except OSError as error:
+            raise OSError(
+                error.errno,
+                "the session's CSV was removed during the session and its trials could not be "
+                f"written back ({error.strerror or error})",
+                str(self.csv_path),
+            ) from None
+        raise OSError(
+            2,
+            "the session's CSV was removed or replaced during the session; its "
+            f"{len(self.rows)} trials are written back to {target}",
+            str(self.csv_path),
+        )
 
     def write_sidecar(self, data: dict) -> None:
         """Rewrite the sidecar atomically (a crash leaves the previous version)."""

@@ -207,6 +207,22 @@ def _check_stimuli(protocol, stimuli: Path | None) -> str | None:
     return hashlib.sha256((Path(stimuli) / "manifest.json").read_bytes()).hexdigest()
 
 
+def _check_set_in_use(frontend, stimuli: Path | None, manifest_sha: str | None) -> None:
+    """The set the front-end shows is the one verified: a set rebuilt between the check and
+    the window's opening is refused (a change during the session is refused by its reads,
+    :class:`glarelab.stimuli.stimulus_set.StimulusSet`)."""
+    held = getattr(getattr(frontend, "images", None), "set", None)
+    if held is None:
+        display = getattr(getattr(frontend, "observer", None), "display", None)
+        held = getattr(display, "set", None)
+    shown = getattr(held, "manifest_sha256", None)
+    if manifest_sha is not None and shown is not None and shown != manifest_sha:
+        raise SessionError(
+            f"the stimulus set {stimuli} changed while the session started (its manifest is "
+            "not the one verified): it was rebuilt or edited; start the session again"
+        )
+
+
 def _now() -> datetime:
     return datetime.now().astimezone()
 
@@ -472,6 +488,7 @@ def _run_session_locked(
                 )
             facts = frontend.open()
             frontend.should_stop = stop.check
+            _check_set_in_use(frontend, stimuli, manifest_sha)
             try:
                 stop.check()
                 if facts is not None:
@@ -678,6 +695,7 @@ def _run_trials(engine, frontend, files, sidecar, protocol, rate, resume, stop) 
             try:
                 stop.check()
                 loop.run(engine, resumed_after=len(files.rows) if resume else 0)
+                files.check_in_place()  # a CSV removed after its last trial is not completed
                 status = "completed"
             except SessionAborted as abort:
                 reason = abort.args[0] if abort.args else "escape"

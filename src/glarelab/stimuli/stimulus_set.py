@@ -42,6 +42,7 @@ from glarelab.stimuli.exr import read_exr, write_exr
 from glarelab.stimuli.paradigms import paradigm_stimuli
 
 __all__ = [
+    "SetChanged",
     "StimulusSet",
     "build_stimulus_set",
     "cached_stimulus_set",
@@ -445,13 +446,14 @@ def _index(protocol: Protocol, calibration: Calibration, records: dict, plots, g
     return "\n".join(lines)
 
 
-def _manifest_of(folder: Path) -> dict:
-    """The set's manifest, checked to be a JSON object that lists its files."""
+def _manifest_of(folder: Path, data: bytes | None = None) -> dict:
+    """The set's manifest (from ``data``, its bytes, when given), checked to be a JSON object
+    that lists its files."""
     path = folder / MANIFEST
-    if not path.is_file():
+    if data is None and not path.is_file():
         raise ValueError(f"{path}: missing (not a stimulus set?)")
     try:
-        manifest = json.loads(path.read_text())
+        manifest = json.loads(path.read_bytes() if data is None else data)
     except (json.JSONDecodeError, UnicodeDecodeError) as error:
         raise ValueError(f"{path}: not valid JSON ({error})") from None
     if not isinstance(manifest, dict):
@@ -526,18 +528,38 @@ def compose(terms, image) -> np.ndarray:
     return total
 
 
+class SetChanged(ValueError):
+    """A file of a stimulus set differs from the manifest the set was read with: the set was
+    rebuilt or edited while in use."""
+
+
 class StimulusSet:
     """A built stimulus set, read back: its manifest and its images (float64 cd/m², read once).
+
+    The manifest is read once; every image read afterwards is checked against the sha256 that
+    manifest lists, so a set rebuilt or edited while in use (a session running on it) is
+    refused at its first changed image rather than shown half old, half new.
 
     Parameters
     ----------
     folder
         The set's folder (verify it first: :func:`verify_stimulus_set`).
+
+    Attributes
+    ----------
+    manifest_sha256
+        The sha256 of the manifest's bytes as read: what a session records and compares with
+        the manifest it verified.
     """
 
     def __init__(self, folder: str | Path):
         self.folder = Path(folder)
-        self.manifest = _manifest_of(self.folder)
+        path = self.folder / MANIFEST
+        if not path.is_file():
+            raise ValueError(f"{path}: missing (not a stimulus set?)")
+        data = path.read_bytes()
+        self.manifest_sha256 = hashlib.sha256(data).hexdigest()
+        self.manifest = _manifest_of(self.folder, data)
         self.geometry = self.manifest["geometry"]
         self._images: dict[str, np.ndarray] = {}
 
@@ -547,8 +569,37 @@ class StimulusSet:
         return self._images[name]
 
     def read(self, name: str) -> np.ndarray:
-        """An image read from its file, not kept (a sequence's frames are shown once)."""
-        return read_exr(self.folder / f"{name}.exr").astype(np.float64)
+        """An image read from its file, not kept (a sequence's frames are shown once).
+
+        Raises
+        ------
+        SetChanged
+            If the file is not the one the manifest lists (its sha256 differs, or it was
+            replaced while being read).
+        """
+        file = f"{name}.exr"
+        path = self.folder / file
+        expected = self.manifest["files"].get(file)
+        if expected is None:
+            raise SetChanged(f"stimulus set {self.folder}: {file} is not in its manifest")
+        before = os.stat(path)
+        if _sha256(path) != expected:
+            raise SetChanged(
+                f"stimulus set {self.folder}: {file} changed since the set was verified "
+                "(rebuilt or edited while in use); nothing of it was shown"
+            )
+        image = read_exr(path).astype(np.float64)
+        after = os.stat(path)
+        if (before.st_ino, before.st_size, before.st_mtime_ns) != (
+            after.st_ino,
+            after.st_size,
+            after.st_mtime_ns,
+        ):
+            raise SetChanged(
+                f"stimulus set {self.folder}: {file} was replaced while it was read (rebuilt "
+                "while in use); nothing of it was shown"
+            )
+        return image
 
     def compose(self, terms) -> np.ndarray:
         return compose(terms, self.image)
