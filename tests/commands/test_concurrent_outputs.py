@@ -65,3 +65,33 @@ def test_replacing_one_calibration_at_once_keeps_every_calibration(tmp_path):
     for d in done:
         if d.returncode == 2:
             assert "another glarelab" in d.stderr and "Traceback" not in d.stderr
+
+
+def test_sets_built_at_once_into_one_folder_end_as_one_whole_set(tmp_path):
+    out = tmp_path / "set"
+    build = ["stimuli", "build", "spencer1995", "--out", str(out)]
+    for _rounds in range(2):  # a new folder, then an earlier set replaced
+        done = at_once([build, build])
+        assert all(d.returncode == 0 for d in done), [d.stderr for d in done]
+        verify = subprocess.run(
+            [*PYTHON, "stimuli", "verify", str(out)], capture_output=True, text=True, check=False
+        )
+        assert verify.returncode == 0, verify.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["set"]  # nothing left beside it
+
+
+def test_sessions_and_reports_at_once_lose_nothing(tmp_path):
+    data = tmp_path / "data"
+    run = ["run", "luidolt2020", "--simulate", "--out", str(data)]
+    done = at_once([[*run, "--participant", p] for p in ("P01", "P02", "P01")])
+    codes = sorted(d.returncode for d in done)
+    assert codes == [0, 0, 2], [d.stderr for d in done]  # one P01 is held by the other
+    assert any("P01" in d.stderr and d.returncode == 2 for d in done)
+    csvs = sorted(data.glob("*.csv"))
+    assert [p.name.split("_")[0] for p in csvs] == ["P01", "P02"]
+    report = tmp_path / "report"
+    analyse = ["analyse", "luidolt2020", *map(str, csvs), "--out", str(report)]
+    done = at_once([analyse, analyse])
+    assert all(d.returncode == 0 for d in done), [d.stderr for d in done]
+    assert (report / "results.md").is_file()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["data", "report"]
