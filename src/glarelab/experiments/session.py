@@ -49,7 +49,7 @@ from glarelab.experiments.engine import Press, first_screen
 from glarelab.experiments.loop import SessionAborted, SessionLoop, Shown
 from glarelab.experiments.paradigms import PARADIGMS
 from glarelab.protocols import DATA_FORMAT
-from glarelab.stimuli.stimulus_set import package_versions, verify_stimulus_set
+from glarelab.stimuli.stimulus_set import package_versions, prove_stimulus_set
 from glarelab.stimuli.stimulus_set import shows_images as _shows_images
 
 __all__ = [
@@ -192,7 +192,7 @@ def _check_stimuli(protocol, stimuli: Path | None) -> str | None:
         return None
     if stimuli is None:
         raise ValueError(f"a {protocol.study} session needs its stimulus set (--stimuli DIR)")
-    problems = verify_stimulus_set(stimuli)
+    problems = prove_stimulus_set(stimuli)
     if problems:
         raise ValueError(
             f"the stimulus set {stimuli} fails its manifest: " + "; ".join(problems[:5])

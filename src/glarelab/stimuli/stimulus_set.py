@@ -14,6 +14,7 @@ place of the build, so the same protocol and calibration give identical files.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
@@ -50,6 +51,7 @@ __all__ = [
     "default_calibration",
     "package_versions",
     "progress_bar",
+    "prove_stimulus_set",
     "read_png_codes",
     "shows_images",
     "verify_stimulus_set",
@@ -337,6 +339,7 @@ def build_stimulus_set(
     try:
         manifest = _write_set(out, protocol, built, calibration)
         replace_folder(out, final, kind="stimulus set")
+        _remember_proof(hashlib.sha256((final / MANIFEST).read_bytes()).hexdigest())
     finally:
         shutil.rmtree(out, ignore_errors=True)
     return manifest
@@ -513,6 +516,121 @@ def verify_stimulus_set(folder: str | Path) -> list[str]:
             f"{MANIFEST}: its protocol table does not hash to its protocol_sha256 (edited?)"
         )
     return problems
+
+
+PROVEN_ENV = "GLARELAB_CACHE"
+
+
+def _proven_folder() -> Path:
+    """Where the digests of manifests proven by a rebuild (or written by a build) on this
+    machine are kept: ``$GLARELAB_CACHE/proven-sets`` or ``~/.cache/glarelab/proven-sets``."""
+    root = os.environ.get(PROVEN_ENV) or Path.home() / ".cache" / "glarelab"
+    return Path(root) / "proven-sets"
+
+
+def _proof_key(manifest_sha256: str) -> Path:
+    # a proof holds for this version of the builder only (its packages make the bytes)
+    versions = hashlib.sha256(json.dumps(package_versions(), sort_keys=True).encode())
+    return _proven_folder() / f"{manifest_sha256}-{versions.hexdigest()[:16]}"
+
+
+def _remember_proof(manifest_sha256: str) -> None:
+    with contextlib.suppress(OSError):  # a cache: a read-only home only costs a rebuild
+        key = _proof_key(manifest_sha256)
+        key.parent.mkdir(parents=True, exist_ok=True)
+        write_text(key, "built or rebuilt identically by glarelab\n")
+
+
+def _differences(found, rebuilt, where: str, out: list[str], limit: int = 8) -> None:
+    """The keys at which two JSON values differ, as ``where.key: found X, rebuilt Y``."""
+    if len(out) >= limit:
+        return
+    if isinstance(found, dict) and isinstance(rebuilt, dict):
+        for key in sorted(set(found) | set(rebuilt), key=str):
+            _differences(found.get(key), rebuilt.get(key), f"{where}.{key}", out, limit)
+    elif found != rebuilt or type(found) is not type(rebuilt):
+        shown = json.dumps(found)[:60], json.dumps(rebuilt)[:60]
+        out.append(f"{where}: {shown[0]} in the manifest, {shown[1]} when rebuilt")
+
+
+def _without_none(value):
+    if isinstance(value, dict):
+        return {k: _without_none(v) for k, v in value.items() if v is not None}
+    if isinstance(value, list):
+        return [_without_none(v) for v in value]
+    return value
+
+
+def prove_stimulus_set(folder: str | Path, *, progress=None) -> list[str]:
+    """Check a stimulus set against its protocol: its files against its manifest
+    (:func:`verify_stimulus_set`), then the manifest itself, by rebuilding the set from the
+    protocol and the calibration the manifest records and comparing every file byte for byte
+    (builds are byte-reproducible). A manifest whose sha256s, geometry, image records or
+    calibration were edited to match edited files does not rebuild to itself.
+
+    A manifest proven once (or written by a build) on this machine, with these package
+    versions, is remembered by its sha256 and not rebuilt again.
+
+    Parameters
+    ----------
+    folder
+        The set's folder.
+    progress
+        As for :func:`build_stimulus_set` (default: silent).
+
+    Returns
+    -------
+    list of str
+        The problems, each naming the file or the manifest key (empty when proven).
+    """
+    from glarelab.protocols import ProtocolError, parse_protocol
+
+    folder = Path(folder)
+    problems = verify_stimulus_set(folder)
+    if problems:
+        return problems
+    data = (folder / MANIFEST).read_bytes()
+    digest = hashlib.sha256(data).hexdigest()
+    if _proof_key(digest).is_file():
+        return []
+    manifest = json.loads(data)
+    try:
+        # the manifest holds the protocol as validated (defaults filled in, unset keys None):
+        # validated again without its unset keys, it must hash as it did
+        protocol = parse_protocol(
+            _without_none(manifest["protocol"]), source=f"{folder / MANIFEST} protocol"
+        )
+        calibration = Calibration.from_json(
+            manifest["calibration"], source=f"{folder / MANIFEST} calibration"
+        )
+    except (KeyError, TypeError, ValueError, ProtocolError) as error:
+        return [f"{MANIFEST}: cannot be rebuilt to prove it ({error})"]
+    if protocol.sha256 != manifest.get("protocol_sha256"):
+        return [f"{MANIFEST}: its protocol table does not hash to its protocol_sha256 (edited?)"]
+    if not shows_images(protocol):
+        return [f"{MANIFEST}: its protocol ({protocol.paradigm}) shows no images"]
+    import tempfile
+
+    with tempfile.TemporaryDirectory(prefix="glarelab-proof-") as scratch:
+        built = paradigm_stimuli(protocol).build(protocol, progress=progress)
+        rebuilt = _write_set(Path(scratch), protocol, built, calibration)
+    found = {k: v for k, v in manifest.items() if k != "packages"}
+    expected = {k: v for k, v in rebuilt.items() if k != "packages"}
+    out: list[str] = []
+    _differences(found, expected, "manifest", out)
+    if out:
+        packages = manifest.get("packages")
+        if packages != rebuilt["packages"]:
+            out.append(
+                f"{MANIFEST}: built with other package versions ({packages}); this rebuild "
+                f"used {rebuilt['packages']}, which may explain the differences"
+            )
+        return [
+            f"{MANIFEST} does not match a rebuild from its own protocol and calibration: {d}"
+            for d in out
+        ]
+    _remember_proof(digest)
+    return []
 
 
 def compose(terms, image) -> np.ndarray:
