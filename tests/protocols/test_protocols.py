@@ -246,3 +246,23 @@ def test_any_registered_glare_model_with_its_parameters():
     data["glare"]["methods"][2]["parameters"]["wave"]["pupil_mm"] = -1.0
     with pytest.raises(ProtocolError, match=r"glare\.methods\[2\]\.parameters: pupil_mm"):
         parse_protocol(data)
+
+
+@pytest.mark.parametrize(
+    ("study", "edit", "match"),
+    [
+        ("yoshida2008", lambda d: d["glare"]["methods"][1].update(name="Gaussian"),
+         r"glare\.methods: method names repeat \['Gaussian', 'gaussian'\]: each must be "
+         r"different \(ignoring case"),
+        ("spencer1995", lambda d: d["contexts"][1].update(name=d["contexts"][0]["name"].upper()),
+         r"contexts: names repeat \['NONE', 'none'\]"),
+        ("night2026", lambda d: d["conditions"][1].update(name=d["conditions"][0]["name"].title()),
+         r"conditions: names repeat \[.*\]: each must be different \(ignoring case\)"),
+    ],
+    ids=["methods", "contexts", "conditions"],
+)  # fmt: skip
+def test_names_that_differ_only_by_case_are_refused(study, edit, match):
+    data = copy.deepcopy(raw(study))
+    edit(data)
+    with pytest.raises(ProtocolError, match=match):
+        parse_protocol(data, source="test.toml", folder=PROTOCOLS)

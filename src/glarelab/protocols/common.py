@@ -26,6 +26,7 @@ __all__ = [
     "check_methods",
     "display_pixel_deg",
     "glare_model",
+    "repeated_names",
 ]
 
 DISPLAY: Schema = {
@@ -203,14 +204,23 @@ def check_glare_model(model: Any, parameters: Any, where: str, problems: list[st
         problems.append(f"{where}.parameters: {error}")
 
 
+def repeated_names(names: list) -> list:
+    """The names that repeat, compared ignoring case (they become file names)."""
+    folded = [n.casefold() if isinstance(n, str) else n for n in names]
+    return sorted({n for n, f in zip(names, folded, strict=True) if folded.count(f) > 1}, key=str)
+
+
 def check_methods(methods: list[dict] | None, where: str, problems: list[str]) -> None:
     """Glare methods: names unique, labels as many as levels, models and parameters valid."""
     if not methods:
         return
     names = [m["name"] for m in methods if m.get("name")]
-    if len(set(names)) != len(names):
-        repeated = sorted({n for n in names if names.count(n) > 1})
-        problems.append(f"{where}: method names repeat {repeated}: each must be different")
+    repeated = repeated_names(names)
+    if repeated:
+        problems.append(
+            f"{where}: method names repeat {repeated}: each must be different (ignoring case: "
+            "they name files, and macOS's and Windows's file names ignore case)"
+        )
     for i, method in enumerate(methods):
         at = f"{where}[{i}]"
         labels, levels = method.get("labels"), method.get("levels_cd_m2")

@@ -14,7 +14,13 @@ from __future__ import annotations
 from pathlib import Path
 
 from glarelab.protocols.columns import Column
-from glarelab.protocols.common import DISPLAY, INSTRUCTIONS, VIEWING, check_display
+from glarelab.protocols.common import (
+    DISPLAY,
+    INSTRUCTIONS,
+    VIEWING,
+    check_display,
+    repeated_names,
+)
 from glarelab.protocols.keys import Key, Schema, Tables, validate
 
 __all__ = ["CONDITION", "EFFECTS", "SCENE", "SCHEMA", "check", "columns"]
@@ -195,9 +201,11 @@ def _check_scene(p: dict, problems: list[str]) -> None:
         problems.append("[[conditions]]: missing (a [scene] is shown once per condition)")
         return
     names = [c["name"] for c in conditions]
-    if len(set(names)) != len(names):
-        repeated = sorted({n for n in names if names.count(n) > 1})
-        problems.append(f"conditions: names repeat {repeated}: each must be different")
+    repeated = repeated_names(names)
+    if repeated:
+        problems.append(
+            f"conditions: names repeat {repeated}: each must be different (ignoring case)"
+        )
     model = p["scene"]["glare_model"]
     if any("glare" in c["effects"] for c in conditions):
         from glarelab.protocols.common import check_glare_model

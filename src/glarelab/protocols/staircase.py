@@ -22,6 +22,7 @@ from glarelab.protocols.common import (
     check_background,
     check_display,
     check_glare_model,
+    repeated_names,
 )
 from glarelab.protocols.keys import Key, Schema, Tables
 
@@ -225,8 +226,11 @@ def check(p: dict, problems: list[str], folder: Path | None) -> None:
             )
     contexts = p["contexts"] or []
     names = [c["name"] for c in contexts if c.get("name")]
-    if len(set(names)) != len(names):
-        problems.append(f"contexts: names repeat {sorted(set(names))}: each must be different")
+    repeated = repeated_names(names)
+    if repeated:
+        problems.append(
+            f"contexts: names repeat {repeated}: each must be different (ignoring case)"
+        )
     for i, context in enumerate(contexts):
         background = check_background(
             context.get("background"), f"contexts[{i}].background", problems, folder
