@@ -266,3 +266,22 @@ def test_names_that_differ_only_by_case_are_refused(study, edit, match):
     edit(data)
     with pytest.raises(ProtocolError, match=match):
         parse_protocol(data, source="test.toml", folder=PROTOCOLS)
+
+
+@pytest.mark.parametrize(
+    ("study", "edit", "match"),
+    [
+        ("spencer1995", lambda d: d["trials"].update(step_fractions=[0.02, 0.04, 0.08, 0.16]),
+         r"trials\.step_fractions = \[0\.02, 0\.04, 0\.08, 0\.16\]: must run from coarse to fine"),
+        ("spencer1995", lambda d: d["glare"].update(strengths=[0.01, 0.1, 0.1, 1.0]),
+         r"glare\.strengths repeats 0\.1: must be all different"),
+        ("yoshida2008", lambda d: d["background"].update(mean_cd_m2=0.0),
+         r"background\.mean_cd_m2 = 0\.0: must be above 0 cd/m²"),
+    ],
+    ids=["steps fine to coarse", "duplicate strengths", "sky of mean 0"],
+)  # fmt: skip
+def test_values_that_cannot_mean_what_they_say_are_refused(study, edit, match):
+    data = copy.deepcopy(raw(study))
+    edit(data)
+    with pytest.raises(ProtocolError, match=match):
+        parse_protocol(data, source="test.toml", folder=PROTOCOLS)

@@ -140,6 +140,11 @@ def check_background(
         )
         return None
     result = validate(table, BACKGROUNDS[kind], where, problems)
+    if kind == "sky" and result.get("mean_cd_m2") is not None and result["mean_cd_m2"] <= 0:
+        problems.append(
+            f"{where}.mean_cd_m2 = {result['mean_cd_m2']!r}: must be above 0 cd/m² (the "
+            "contrast is SD / mean)"
+        )
     if kind == "sky" and result.get("cloud_min_deg") and result.get("cloud_max_deg"):
         if result["cloud_min_deg"] >= result["cloud_max_deg"]:
             problems.append(f"{where}.cloud_min_deg: must be below {where}.cloud_max_deg")

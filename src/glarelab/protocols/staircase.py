@@ -10,6 +10,7 @@ its own (uniform black, a procedural lamp scene, or a linear EXR).
 from __future__ import annotations
 
 from fractions import Fraction
+from itertools import pairwise
 from math import gcd, lcm
 from pathlib import Path
 
@@ -76,6 +77,7 @@ SCHEMA: Schema = {
             length=(1, 50),
             low=0.0,
             high=1e9,
+            unique=True,
         ),
     },
     "trials": {
@@ -201,6 +203,12 @@ def comparison_terms(context: str, intensity_cd_m2: float, ratio: float) -> list
 def check(p: dict, problems: list[str], folder: Path | None) -> None:
     """Rules between keys: geometry, contexts, the glare model."""
     check_display(p["display"], problems)
+    steps = p["trials"]["step_fractions"] or []
+    if any(b >= a for a, b in pairwise(steps)):
+        problems.append(
+            f"trials.step_fractions = {steps!r}: must run from coarse to fine (each smaller "
+            "than the one before)"
+        )
     s = p["stimulus"]
     if s["annulus_outer_px"] <= s["disc_radius_px"]:
         problems.append("stimulus.annulus_outer_px: must exceed stimulus.disc_radius_px")
