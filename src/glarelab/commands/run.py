@@ -143,10 +143,9 @@ def _parser_actions():
 
 def _scripted_key_names(path: Path, names: list[str]) -> None:
     """Refuse a name that is no key (a typo would be an ignored press)."""
-    from psychopy.hardware.keyboard import keyNamesLinux, keyNamesMac, keyNamesWin
+    from glarelab.frontend.keys import unknown_key_names
 
-    known = set(keyNamesLinux.values()) | set(keyNamesMac.values()) | set(keyNamesWin.values())
-    unknown = sorted({name for name in names if name not in known})
+    unknown = unknown_key_names(names)
     if unknown:
         raise ValueError(
             f"--scripted-keys {path}: {', '.join(map(repr, unknown[:5]))} not a key name "
