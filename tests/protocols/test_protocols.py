@@ -285,3 +285,9 @@ def test_values_that_cannot_mean_what_they_say_are_refused(study, edit, match):
     edit(data)
     with pytest.raises(ProtocolError, match=match):
         parse_protocol(data, source="test.toml", folder=PROTOCOLS)
+
+
+@pytest.mark.parametrize("data", [None, [], "yoshida2008", 3])
+def test_a_protocol_that_is_not_a_table_is_named(data):
+    with pytest.raises(ProtocolError, match=r"must be a table \(a mapping of keys\)"):
+        parse_protocol(data, source="api")
