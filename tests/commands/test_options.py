@@ -149,3 +149,9 @@ def test_no_output_inside_a_stimulus_set(argv, stimulus_set, capsys, tmp_path, m
     before = sorted(stimulus_set.rglob("*"))
     refused(argv, capsys, tmp_path, "inside the stimulus set")
     assert sorted(stimulus_set.rglob("*")) == before
+
+
+def test_a_measurement_without_verification_points_is_refused_before_it_starts(capsys, tmp_path):
+    argv = ["calibrate", "measure", "--out", tmp_path / "c.json", "--simulate", "300", "0.1",
+            "2.2", "--verify-points", "0"]  # fmt: skip
+    refused(argv, capsys, tmp_path, "--verify-points", "0")

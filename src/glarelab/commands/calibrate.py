@@ -394,9 +394,10 @@ def add(commands) -> None:
     )
     measure.add_argument(
         "--verify-points",
-        type=count(0, 1024),
+        type=count(1, 1024),
         default=None,
-        help="codes measured again to verify (default 5)",
+        help="codes measured again to verify (1-1024, default 5): the status of a calibration "
+        "comes only from its verification pass",
     )
     measure.add_argument(
         "--tolerance",
