@@ -613,7 +613,8 @@ def prove_stimulus_set(folder: str | Path, *, progress=None) -> list[str]:
 
     with tempfile.TemporaryDirectory(prefix="glarelab-proof-") as scratch:
         built = paradigm_stimuli(protocol).build(protocol, progress=progress)
-        rebuilt = _write_set(Path(scratch), protocol, built, calibration)
+        _write_set(Path(scratch), protocol, built, calibration)
+        rebuilt = json.loads((Path(scratch) / MANIFEST).read_bytes())  # as written, in JSON
     found = {k: v for k, v in manifest.items() if k != "packages"}
     expected = {k: v for k, v in rebuilt.items() if k != "packages"}
     out: list[str] = []
