@@ -32,3 +32,34 @@ def test_a_csv_with_rows_deleted_or_moved_is_not_resumed(tmp_path, edit, found):
     assert len(message) == 1 and found in message[0] and "line " in message[0]
     assert "Traceback" not in done.stderr
     assert data_files(tmp_path) == before
+
+
+def _stopped_part_way(tmp_path, keep: int):
+    assert simulated(tmp_path).returncode == 0
+    (csv,) = tmp_path.glob("P01_luidolt2020_s1_*.csv")
+    sidecar = json.loads(csv.with_suffix(".json").read_text())
+    sidecar["status"] = "aborted"  # as a session stopped part-way
+    csv.with_suffix(".json").write_text(json.dumps(sidecar))
+    lines = csv.read_text().splitlines(keepends=True)[: keep + 1]
+    return csv, lines
+
+
+def test_a_whole_last_row_without_its_newline_is_neither_deleted_nor_run_again(tmp_path):
+    csv, lines = _stopped_part_way(tmp_path, keep=4)
+    csv.write_text("".join(lines).removesuffix("\n"))  # an editor's save
+    before = data_files(tmp_path)
+    done = simulated(tmp_path, "luidolt2020", "P01", "--resume")
+    assert done.returncode == 2, done.stderr
+    message = done.stderr.strip().splitlines()
+    assert len(message) == 1 and "line 5" in message[0] and "no final newline" in message[0]
+    assert data_files(tmp_path) == before
+
+
+def test_a_row_cut_by_a_crash_is_dropped_and_its_trial_run_again(tmp_path):
+    csv, lines = _stopped_part_way(tmp_path, keep=4)
+    csv.write_text("".join(lines[:4]) + lines[4][:12])  # cut in its first cells
+    done = simulated(tmp_path, "luidolt2020", "P01", "--resume")
+    assert done.returncode == 0, done.stderr
+    rows = csv.read_text().splitlines()
+    assert [row.split(",")[3] for row in rows[1:5]] == ["1", "2", "3", "4"]
+    assert rows[1:4] == [line.rstrip("\n") for line in lines[1:4]]

@@ -242,7 +242,7 @@ def test_a_participants_session_is_held_across_output_folders_before_the_set_is_
 
     verified = []
     monkeypatch.setattr(
-        sessions, "verify_stimulus_set", lambda folder: verified.append(folder) or []
+        sessions, "prove_stimulus_set", lambda folder: verified.append(folder) or []
     )
     holder = SessionLock(tmp_path / "first", "P01", "yoshida2008", 1, across_folders=True)
     holder.acquire()  # the first run, into another folder

@@ -138,6 +138,19 @@ def method(data, index):
             lambda d: method(d, 1).update(labels=["a", "b", "c"], levels_cd_m2=[220.0, 1.0, 2.0]),
             "every method needs the same number of levels",
         ),
+        (
+            # answers and times would share one header name (q1_glow_time_s twice)
+            lambda d: d["questionnaire"]["questions"][1].update(column="q1_glow_time_s"),
+            r"questions\[1\]\.column = 'q1_glow_time_s': already a column of the session CSV",
+        ),
+        (
+            lambda d: d["questionnaire"]["questions"][0].update(column="q2_ring_time_s"),
+            r"questions\[1\]\.column = 'q2_ring': already a column of the session CSV",
+        ),
+        (
+            lambda d: d["questionnaire"]["questions"][1].update(column="Q1_Glow"),
+            r"questions\[1\]\.column = 'Q1_Glow': already a column of the session CSV",
+        ),
     ],
 )
 def test_bad_protocols_are_refused_with_the_key_named(edit, match):
@@ -233,3 +246,48 @@ def test_any_registered_glare_model_with_its_parameters():
     data["glare"]["methods"][2]["parameters"]["wave"]["pupil_mm"] = -1.0
     with pytest.raises(ProtocolError, match=r"glare\.methods\[2\]\.parameters: pupil_mm"):
         parse_protocol(data)
+
+
+@pytest.mark.parametrize(
+    ("study", "edit", "match"),
+    [
+        ("yoshida2008", lambda d: d["glare"]["methods"][1].update(name="Gaussian"),
+         r"glare\.methods: method names repeat \['Gaussian', 'gaussian'\]: each must be "
+         r"different \(ignoring case"),
+        ("spencer1995", lambda d: d["contexts"][1].update(name=d["contexts"][0]["name"].upper()),
+         r"contexts: names repeat \['NONE', 'none'\]"),
+        ("night2026", lambda d: d["conditions"][1].update(name=d["conditions"][0]["name"].title()),
+         r"conditions: names repeat \[.*\]: each must be different \(ignoring case\)"),
+    ],
+    ids=["methods", "contexts", "conditions"],
+)  # fmt: skip
+def test_names_that_differ_only_by_case_are_refused(study, edit, match):
+    data = copy.deepcopy(raw(study))
+    edit(data)
+    with pytest.raises(ProtocolError, match=match):
+        parse_protocol(data, source="test.toml", folder=PROTOCOLS)
+
+
+@pytest.mark.parametrize(
+    ("study", "edit", "match"),
+    [
+        ("spencer1995", lambda d: d["trials"].update(step_fractions=[0.02, 0.04, 0.08, 0.16]),
+         r"trials\.step_fractions = \[0\.02, 0\.04, 0\.08, 0\.16\]: must run from coarse to fine"),
+        ("spencer1995", lambda d: d["glare"].update(strengths=[0.01, 0.1, 0.1, 1.0]),
+         r"glare\.strengths repeats 0\.1: must be all different"),
+        ("yoshida2008", lambda d: d["background"].update(mean_cd_m2=0.0),
+         r"background\.mean_cd_m2 = 0\.0: must be above 0 cd/m²"),
+    ],
+    ids=["steps fine to coarse", "duplicate strengths", "sky of mean 0"],
+)  # fmt: skip
+def test_values_that_cannot_mean_what_they_say_are_refused(study, edit, match):
+    data = copy.deepcopy(raw(study))
+    edit(data)
+    with pytest.raises(ProtocolError, match=match):
+        parse_protocol(data, source="test.toml", folder=PROTOCOLS)
+
+
+@pytest.mark.parametrize("data", [None, [], "yoshida2008", 3])
+def test_a_protocol_that_is_not_a_table_is_named(data):
+    with pytest.raises(ProtocolError, match=r"must be a table \(a mapping of keys\)"):
+        parse_protocol(data, source="api")

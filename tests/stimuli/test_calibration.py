@@ -1,4 +1,5 @@
 import json
+import re
 
 import numpy as np
 import pytest
@@ -159,3 +160,76 @@ def test_sessions_refuse_missing_failed_or_synthetic_calibrations():
     assert usable_calibration(passed)["calibrated"] is True
     with pytest.warns(UserWarning, match="not been verified"):
         assert usable_calibration(fitted)["calibrated"] is True
+
+
+def _saved(tmp_path, calibration) -> dict:
+    return json.loads(calibration.save(tmp_path / "display.json").read_text())
+
+
+def _forge(tmp_path, data):
+    path = tmp_path / "forged.json"
+    path.write_text(json.dumps(data))
+    return path
+
+
+def _one_invented_measurement(data):
+    data["status"] = "passed"
+    data["verification"] = {
+        "tolerance_fraction": 0.03,
+        "max_relative_error": 0.0,
+        "measurements": [
+            {"target_cd_m2": 100.0, "code": 500, "measured_cd_m2": 100.0, "relative_error": 0.0}
+        ],
+        "date": "2026-01-01",
+    }
+
+
+def _tolerance_widened(data):  # a failed pass made to pass
+    data["verification"]["tolerance_fraction"] = 0.5
+    data["status"] = "passed"
+
+
+def _nan_reading(data):
+    data["verification"]["measurements"].append(
+        {"target_cd_m2": 50.0, "code": 300, "measured_cd_m2": float("nan"), "relative_error": 0}
+    )
+
+
+@pytest.mark.parametrize(
+    ("verified", "forge", "named"),
+    [
+        (False, _one_invented_measurement, "does not match its recorded hash"),
+        (True, _tolerance_widened, "does not match its recorded hash"),
+        (True, _nan_reading, "measured_cd_m2 is nan; must be a finite luminance"),
+        (True, lambda d: d["verification"].update(tolerance_fraction=True),
+         "tolerance_fraction is True; must be a number in (0, 1]"),
+        (True, lambda d: d["verification"]["measurements"][0].update(code=100.7),
+         "a verification code is 100.7; must be a whole number"),
+        (False, lambda d: d["readings"][2].__setitem__(0, 256.5),
+         "a reading's code is 256.5; must be a whole number"),
+        (False, lambda d: d.update(bit_depth=10.9), "bit_depth is 10.9; must be a whole number"),
+    ],
+    ids=["invented pass", "tolerance 0.5", "NaN", "tolerance true", "fractional verify code",
+         "fractional reading code", "bit depth 10.9"],
+)  # fmt: skip
+def test_a_forged_calibration_is_refused_naming_the_key(tmp_path, verified, forge, named):
+    calibration = fit_calibration(measured_looking(), bit_depth=10)
+    if verified:  # a pass that failed: 10 % off at code 500
+        calibration = calibration.verified(
+            [(10.0, 100, 10.1), (100.0, 500, 90.0)], tolerance_fraction=0.03
+        )
+    data = _saved(tmp_path, calibration)
+    Calibration.from_json(json.loads(json.dumps(data)))  # the genuine one loads
+    forge(data)
+    with pytest.raises(ValueError, match=re.escape(named)):
+        Calibration.load(_forge(tmp_path, data))
+
+
+def test_a_readings_row_with_a_decimal_comma_is_refused(tmp_path):
+    path = tmp_path / "readings.csv"
+    path.write_text("code,luminance_cd_m2\n0,0.5\n512,94,830825\n1023,300\n")
+    with pytest.raises(ValueError, match=r"line 3: 3 cells for 2 columns .*decimal comma"):
+        read_readings(path)
+    path.write_text("code,luminance_cd_m2\n0,0.5\n512,\n1023,300\n")
+    with pytest.raises(ValueError, match=r"line 3: code and luminance_cd_m2 both need a value"):
+        read_readings(path)

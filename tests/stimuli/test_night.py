@@ -220,3 +220,11 @@ def test_the_adaptation_follows_the_gaze_and_a_still_is_one_frame(tmp_path):
     still = parse_protocol(tomllib.loads(small_night_protocol(sequence="still")))
     plan = night_plan(still, 60.0)["full"]
     assert plan == {"frames": ["full_f000"], "refreshes_per_frame": 18, "refreshes": 18}
+
+
+def test_the_set_rebuilds_to_its_own_manifest(built, tmp_path, monkeypatch):
+    from glarelab.stimuli.stimulus_set import prove_stimulus_set
+
+    _, folder, _ = built
+    monkeypatch.setenv("GLARELAB_CACHE", str(tmp_path))  # nothing remembered: rebuilt
+    assert prove_stimulus_set(folder) == []

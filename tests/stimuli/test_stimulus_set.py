@@ -239,3 +239,19 @@ def test_a_calibration_of_another_display_is_refused_at_build(tmp_path):
             "--calibration", str(tmp_path / "dim.json")]  # fmt: skip
     assert main(argv) == 2 and not (tmp_path / "set").exists()
     assert main([*argv, "--accept-mismatch", "calibration"]) == 0  # knowingly
+
+
+def test_an_image_changed_while_the_set_is_in_use_is_refused(tmp_path):
+    from glarelab.stimuli.stimulus_set import SetChanged, StimulusSet
+
+    build_stimulus_set(load_protocol("spencer1995"), tmp_path, progress=None)
+    held = StimulusSet(tmp_path)
+    names = sorted(Path(n).stem for n in held.manifest["files"] if n.endswith(".exr"))
+    first, later = names[0], names[-1]
+    shown = held.image(first)
+    # a rebuild with another calibration or geometry: a file replaced by other bytes
+    (tmp_path / f"{later}.exr").write_bytes((tmp_path / f"{first}.exr").read_bytes())
+    with pytest.raises(SetChanged, match=rf"{later}\.exr changed since the set was verified"):
+        held.image(later)
+    assert held.image(first) is shown  # what was read before the change is what was verified
+    assert StimulusSet(tmp_path).manifest_sha256 == held.manifest_sha256

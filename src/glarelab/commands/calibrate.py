@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import dataclasses
 import json
+import os
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -13,6 +15,7 @@ import numpy as np
 from glarelab.display.calibration import Calibration, fit_calibration, read_readings
 from glarelab.display.photometer import PHOTOMETERS
 from glarelab.files.atomic import write_bytes
+from glarelab.files.locks import ProcessLock
 
 from .common import claim_output, count, number, output_file
 from .common import log as _log
@@ -26,19 +29,34 @@ REPLACE_HELP = (
 )
 
 
-def _free_name(path: Path, tag: str) -> Path:
-    """``STEM-TAG2.json``, ``STEM-TAG3.json``, … : the first that does not exist."""
+def _claim(path: Path) -> bool:
+    """Create ``path`` empty if no file is there, in one step (``O_EXCL``): of two processes
+    choosing one name at once, one gets it and the other goes on to the next name."""
+    try:
+        os.close(os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644))
+    except FileExistsError:
+        return False
+    return True
+
+
+def _free_name(path: Path, tag: str, *, claim: bool = False) -> Path:
+    """``STEM-TAG2.json``, ``STEM-TAG3.json``, … : the first that does not exist; with
+    ``claim``, created empty by this process (so that no other process takes it too)."""
     for index in range(2, 10_000):
         candidate = path.with_name(f"{path.stem}{tag}{index}{path.suffix}")
-        if not candidate.exists() and not candidate.is_symlink():
+        if candidate.is_symlink():
+            continue
+        if _claim(candidate) if claim else not candidate.exists():
             return candidate
     raise ValueError(f"{path}: 10,000 calibrations of this name; give another --out")
 
 
-def calibration_out(path: Path, *, replace: bool, inputs=()) -> Path:
+def calibration_out(path: Path, *, replace: bool, inputs=(), claim: bool = False) -> Path:
     """Where a new calibration goes: ``path`` if it is free; beside it under a new name if a
     file is there (which is kept as it was); over it with ``replace``, when it is a glarelab
-    calibration, which is then kept as ``STEM.replaced-N.json``.
+    calibration, which is then kept as ``STEM.replaced-N.json``. With ``claim`` a new name is
+    created empty at once (``O_EXCL``), so that runs at once never choose the same one; the
+    caller writes it, or removes it on failure (:func:`_release`).
 
     Parameters
     ----------
@@ -48,6 +66,8 @@ def calibration_out(path: Path, *, replace: bool, inputs=()) -> Path:
         Whether to replace a calibration there (``--replace``).
     inputs
         The command's input files, none of which may be the output; default none.
+    claim
+        Whether to create a new name empty at once (``O_EXCL``); default False.
 
     Returns
     -------
@@ -62,10 +82,17 @@ def calibration_out(path: Path, *, replace: bool, inputs=()) -> Path:
     """
     path = Path(path)
     if not (path.exists() or path.is_symlink()):
-        return output_file(path, (".json",), "calibration", inputs=inputs)
+        output_file(path, (".json",), "calibration", inputs=inputs)
+        if not claim or _claim(path):
+            return path
     if not replace:
-        new = _free_name(path, "-")
-        output_file(new, (".json",), "calibration", inputs=inputs)
+        new = _free_name(path, "-", claim=claim)
+        try:
+            output_file(new, (".json",), "calibration", inputs=inputs, shared=claim)
+        except BaseException:
+            if claim:
+                _release(new)
+            raise
         _log(f"{path} exists and is kept; the new calibration is {new} (--replace replaces it)")
         return new
     if path.is_symlink() or not path.is_file():
@@ -77,10 +104,30 @@ def calibration_out(path: Path, *, replace: bool, inputs=()) -> Path:
             f"--replace {path}: it is not a glarelab calibration ({error}); give another --out"
         ) from None
     output_file(path, (".json",), "calibration", inputs=inputs, force=True, verified_ok=True)
-    kept = _free_name(path, ".replaced-")
+    kept = _free_name(path, ".replaced-", claim=True)
     write_bytes(kept, path.read_bytes())
     _log(f"the calibration {path} is replaced; it is kept as {kept}")
     return path
+
+
+def _release(path: Path) -> None:
+    """Remove a name claimed by :func:`_claim` that was never written (still empty)."""
+    with contextlib.suppress(OSError):
+        if path.is_file() and not path.is_symlink() and path.stat().st_size == 0:
+            path.unlink()
+
+
+def _replace_lock(path: Path) -> ProcessLock:
+    """One ``--replace`` of a calibration at a time: two would each keep the old file and the
+    later would write over the other's new calibration."""
+
+    def refusal(holder: str) -> Exception:
+        return ValueError(
+            f"--replace {path}: another glarelab ({holder}) is replacing this calibration; "
+            "run again when it has ended (nothing was changed)"
+        )
+
+    return ProcessLock(path.with_name(f".{path.name}.replace.lock"), refusal=refusal)
 
 
 def _calibrate_fit(args: argparse.Namespace) -> int:
@@ -94,9 +141,18 @@ def _calibrate_fit(args: argparse.Namespace) -> int:
         label=args.label,
         source=str(args.readings),
     )
-    args.out = calibration_out(args.out, replace=args.replace, inputs=[args.readings])
-    calibration.save(args.out)
-    claim_output(args.out, "calibrate fit")  # glarelab's: a later measure or --replace takes it
+    with contextlib.ExitStack() as stack:
+        if args.replace:
+            stack.enter_context(_replace_lock(Path(args.out)))
+        args.out = calibration_out(
+            args.out, replace=args.replace, inputs=[args.readings], claim=True
+        )
+        try:
+            calibration.save(args.out)
+        except BaseException:
+            _release(args.out)
+            raise
+        claim_output(args.out, "calibrate fit")  # glarelab's: a later measure or --replace takes it
     _log(
         f"{len(readings)} readings → {args.method} calibration, {calibration.black_cd_m2:.4g}-"
         f"{calibration.max_cd_m2:.4g} cd/m², status '{calibration.status}' → {args.out}"
@@ -420,9 +476,10 @@ def add(commands) -> None:
     )
     measure.add_argument(
         "--verify-points",
-        type=count(0, 1024),
+        type=count(1, 1024),
         default=None,
-        help="codes measured again to verify (default 5)",
+        help="codes measured again to verify (1-1024, default 5): the status of a calibration "
+        "comes only from its verification pass",
     )
     measure.add_argument(
         "--tolerance",

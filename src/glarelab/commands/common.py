@@ -100,6 +100,48 @@ class Parser(argparse.ArgumentParser):
         print(f"{self.prog}: {message} (see {self.prog} --help)", file=sys.stderr)
         raise SystemExit(2)
 
+    # options that may be given more than once (each adds to a list, or counts)
+    _REPEATABLE = (
+        argparse._AppendAction,
+        argparse._AppendConstAction,
+        argparse._CountAction,
+        argparse._ExtendAction,
+        argparse._HelpAction,
+        argparse._VersionAction,
+        argparse._SubParsersAction,
+    )
+
+    def parse_known_args(self, args=None, namespace=None):
+        self._given: set[int] = set()  # the options met in this parse
+        return super().parse_known_args(args, namespace)
+
+    def _get_values(self, action, arg_strings):
+        # called once for each option on the command line: a second one would silently win
+        if action.option_strings and not isinstance(action, self._REPEATABLE):
+            given = getattr(self, "_given", None)
+            if given is not None and id(action) in given:
+                self.error(
+                    f"{'/'.join(action.option_strings)} is given twice; give it once (the "
+                    "second would silently replace the first)"
+                )
+            if given is not None:
+                given.add(id(action))
+        name = "/".join(action.option_strings) or action.metavar or action.dest
+        if action.type is Path and any(not text.strip() for text in arg_strings):
+            self.error(
+                f"{name} is empty (an unset shell variable?): give a path; an empty one would "
+                "mean the working folder"
+            )
+        values = super()._get_values(action, arg_strings)
+        if action.dest == "out" and isinstance(values, str | Path):
+            whole = inside_whole_output(Path(values))
+            if whole is not None:
+                self.error(
+                    f"{name} {values} is inside the {whole}, which glarelab writes and checks "
+                    "as a whole: write elsewhere (nothing was changed)"
+                )
+        return values
+
 
 def number(low: float | None = None, high: float | None = None, *, above: bool = False):
     """An argparse type: a finite number in ``[low, high]`` (``(low, high]`` if ``above``).

@@ -63,6 +63,17 @@ def _check_options(args: argparse.Namespace) -> None:
     if ignored:
         shown = ", ".join("--" + name.replace("_", "-") for name in ignored)
         raise ValueError(f"{shown}: not an option of --model {args.model}, which would ignore it")
+    given = {n for n in default if getattr(args, n, default[n]) != default[n]}
+    if args.model == "vos" and "seed" in given and "flare_lines" not in given:
+        raise ValueError(
+            "--seed without --flare-lines: the seed places Spencer's flare lines, and the vos "
+            "model without them would ignore it"
+        )
+    if "aperture_spacing_mm" in given and "aperture_image" not in given:
+        raise ValueError(
+            "--aperture-spacing-mm without --aperture-image: the spacing scales the obstacle "
+            "image, so without one it would be ignored"
+        )
 
 
 def build_model(args: argparse.Namespace) -> glare.GlareModel:

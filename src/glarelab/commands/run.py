@@ -87,6 +87,75 @@ def _run(args: argparse.Namespace) -> int:
         return WRITE_FAULT
 
 
+# the options of a session on a screen, which a simulated one would ignore, and the reverse
+SCREEN_ONLY = (
+    "screenshot",
+    "scripted_keys",
+    "age",
+    "sex",
+    "vision",
+    "calibration",
+    "fullscreen",
+    "accept_mismatch",
+    "allow_uncalibrated",
+    "allow_unmeasured_refresh",
+)
+SIMULATED_ONLY = ("participants", "seed")
+
+
+def _flag(name: str) -> str:
+    return "--" + name.replace("_", "-")
+
+
+def _check_run_options(args: argparse.Namespace, protocol) -> None:
+    """Refuse every option the session would ignore, in one line."""
+    from glarelab.experiments.session import shows_images
+
+    defaults = {a.dest: a.default for a in _parser_actions()}
+    given = [n for n in (*SCREEN_ONLY, *SIMULATED_ONLY) if getattr(args, n) != defaults[n]]
+    if args.simulate:
+        ignored = [n for n in given if n in SCREEN_ONLY]
+        if ignored:
+            raise ValueError(
+                f"{', '.join(map(_flag, ignored))} with --simulate: a simulated session has no "
+                "screen, keyboard or participant details, so it would ignore them"
+            )
+    else:
+        ignored = [n for n in given if n in SIMULATED_ONLY]
+        if ignored:
+            raise ValueError(
+                f"{', '.join(map(_flag, ignored))}: options of simulated sessions "
+                "(--simulate), which a session on the screen would ignore"
+            )
+    if args.stimuli is not None and not shows_images(protocol):
+        raise ValueError(
+            f"--stimuli {args.stimuli}: the {protocol.study} protocol ({protocol.paradigm}) "
+            "shows no images, so it would ignore a stimulus set"
+        )
+
+
+def _parser_actions():
+    import argparse as _argparse
+
+    parser = _argparse.ArgumentParser(add_help=False)
+    commands = parser.add_subparsers()
+    add(commands)
+    return commands.choices["run"]._actions
+
+
+def _scripted_key_names(path: Path, names: list[str]) -> None:
+    """Refuse a name that is no key (a typo would be an ignored press)."""
+    from glarelab.frontend.keys import unknown_key_names
+
+    unknown = unknown_key_names(names)
+    if unknown:
+        raise ValueError(
+            f"--scripted-keys {path}: {', '.join(map(repr, unknown[:5]))} not a key name "
+            "(PsychoPy's names: a-z, 0-9, space, return, escape, up, down, left, right, "
+            "num_0-num_9, …)"
+        )
+
+
 def _run_session(args: argparse.Namespace) -> int:
     from glarelab.experiments.session import SimulatedFrontend, run_session
 
@@ -101,6 +170,7 @@ def _run_session(args: argparse.Namespace) -> int:
             f"--out {out} is inside the {whole}, which glarelab replaces and checks as a "
             "whole: give a folder of its own for the session files (nothing was written)"
         )
+    _check_run_options(args, protocol)
     if args.simulate:
         from glarelab.experiments.session import make_observer, shows_images
         from glarelab.stimuli.stimulus_set import cached_stimulus_set
@@ -169,6 +239,7 @@ def _run_session(args: argparse.Namespace) -> int:
             ) from None
         if not scripted:
             raise ValueError(f"--scripted-keys {args.scripted_keys}: the file names no keys")
+        _scripted_key_names(args.scripted_keys, scripted)
     if args.screenshot is not None:
         output_file(
             args.screenshot,

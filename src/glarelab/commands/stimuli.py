@@ -9,7 +9,7 @@ from pathlib import Path
 
 from glarelab.display.calibration import Calibration
 from glarelab.protocols import load_protocol
-from glarelab.stimuli.stimulus_set import build_stimulus_set, verify_stimulus_set
+from glarelab.stimuli.stimulus_set import build_stimulus_set, prove_stimulus_set
 
 from .common import PROTOCOL_HELP, add_monitor_options, apply_monitor
 from .common import log as _log
@@ -47,12 +47,15 @@ def _stimuli_verify(args: argparse.Namespace) -> int:
     if not Path(args.folder).is_dir():  # one line, exit 2: there is nothing to verify
         what = "not a folder" if Path(args.folder).exists() else "no such folder"
         raise FileNotFoundError(f"{args.folder}: {what} (give a stimulus set's folder)")
-    problems = verify_stimulus_set(args.folder)
+    problems = prove_stimulus_set(args.folder)
     if problems:
         for problem in problems:
             print(f"{args.folder}: {problem}", file=sys.stderr)
         return 1
-    print(f"{args.folder}: the folder holds exactly the manifest's files, each unchanged")
+    print(
+        f"{args.folder}: the folder holds exactly the manifest's files, each unchanged, and "
+        "the manifest is what its protocol and calibration build"
+    )
     return 0
 
 

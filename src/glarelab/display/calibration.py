@@ -331,6 +331,7 @@ class Calibration:
             "measurements": rows,
             "date": dt.date.today().isoformat(),
         }
+        verification["sha256"] = _verification_sha256(self.readings_sha256, verification)
         return replace(self, status=status, verification=verification)
 
     def to_json(self) -> dict:
@@ -401,6 +402,11 @@ class Calibration:
                 f"{source}: not a glarelab calibration (format {data.get('format')!r})"
             )
         try:
+            _whole("bit_depth", data["bit_depth"], source)
+            for pair in data["readings"]:
+                if not isinstance(pair, list | tuple) or len(pair) != 2:
+                    raise ValueError(f"a reading must be [code, cd/m²]; got {pair!r}")
+                _whole("a reading's code", pair[0], source)
             calibration = cls(
                 bit_depth=int(data["bit_depth"]),
                 readings=tuple((int(c), float(v)) for c, v in data["readings"]),
@@ -449,6 +455,20 @@ class Calibration:
         except (json.JSONDecodeError, UnicodeDecodeError) as error:
             raise ValueError(f"{path}: a calibration must be a JSON file; {error}") from None
         return cls.from_json(data, source=str(path))
+
+
+def _whole(name: str, value, source: str) -> None:
+    """A JSON whole number (not a bool, not 10.9 that ``int`` would truncate)."""
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise ValueError(f"{source}: {name} is {value!r}; must be a whole number")
+
+
+def _verification_sha256(readings_sha256: str, verification: dict) -> str:
+    """The hash binding a verification pass to the readings it verified (as the readings'
+    own hash: an edited tolerance, status or measurement no longer matches)."""
+    body = {k: v for k, v in verification.items() if k != "sha256"}
+    text = json.dumps([readings_sha256, body], sort_keys=True)
+    return hashlib.sha256(text.encode()).hexdigest()
 
 
 STATUSES = ("unverified", "passed", "failed", "synthetic")
@@ -527,19 +547,47 @@ def _check_status(calibration: Calibration, source: str) -> None:
         return
     rows = verification.get("measurements")
     tolerance = verification.get("tolerance_fraction")
-    if not isinstance(rows, list) or not rows or not isinstance(tolerance, int | float):
+    if not isinstance(rows, list) or not rows:
         raise ValueError(
             f"{source}: status {status!r} without verification measurements; the status of a "
             "calibration comes only from its verification pass (glarelab calibrate measure)"
         )
+    if (
+        isinstance(tolerance, bool)
+        or not isinstance(tolerance, int | float)
+        or not 0 < tolerance <= 1
+    ):
+        raise ValueError(
+            f"{source}: verification tolerance_fraction is {tolerance!r}; must be a number in "
+            "(0, 1]"
+        )
     try:
+        for r in rows:
+            _whole("a verification code", r["code"], source)
+            for key in ("measured_cd_m2", "target_cd_m2"):
+                value = r[key]
+                if isinstance(value, bool) or not isinstance(value, int | float):
+                    raise TypeError
+                if not (np.isfinite(value) and value > 0):
+                    raise ValueError(
+                        f"{source}: a verification measurement's {key} is {value!r}; must be "
+                        "a finite luminance above 0 cd/m²"
+                    )
         worst = max(
             abs(float(r["measured_cd_m2"]) - float(r["target_cd_m2"])) / float(r["target_cd_m2"])
             for r in rows
         )
         codes = [int(r["code"]) for r in rows]
-    except (KeyError, TypeError, ValueError, ZeroDivisionError):
+    except (KeyError, TypeError, ZeroDivisionError):
         raise ValueError(f"{source}: a malformed verification measurement") from None
+    if verification.get("sha256") != _verification_sha256(
+        calibration.readings_sha256, verification
+    ):
+        raise ValueError(
+            f"{source}: its verification pass does not match its recorded hash (sha256): the "
+            "status, tolerance_fraction or measurements were edited, or written by hand; "
+            "measure the display again (glarelab calibrate measure)"
+        )
     if any(not 0 <= code < calibration.n_codes for code in codes):
         raise ValueError(f"{source}: a verification code is outside the display's codes")
     given = "passed" if worst <= tolerance else "failed"
@@ -616,6 +664,19 @@ def read_readings(path: str | Path) -> list[tuple[int, float]]:
                 f"{path}: missing column(s) {sorted(missing)}; need code, luminance_cd_m2"
             )
         for line, row in enumerate(reader, start=2):
+            if None in row:  # more cells than columns: a decimal comma splits a number
+                raise ValueError(
+                    f"{path}, line {line}: {len(reader.fieldnames) + len(row[None])} cells for "
+                    f"{len(reader.fieldnames)} columns ({', '.join(reader.fieldnames)}); a "
+                    "decimal comma (94,83) splits a number: write 94.83"
+                )
+            if (
+                not (row.get("code") or "").strip()
+                or not (row.get("luminance_cd_m2") or "").strip()
+            ):
+                raise ValueError(
+                    f"{path}, line {line}: code and luminance_cd_m2 both need a value; got {row}"
+                )
             try:
                 rows.append((int(row["code"]), float(row["luminance_cd_m2"])))
             except ValueError:

@@ -181,6 +181,34 @@ def _check_trial_sequence(path: Path, rows: list[dict[str, str]]) -> None:
         previous = trial
 
 
+def _check_unended_row(path: Path, data: bytes, n_columns: int, n_rows: int) -> None:
+    """A last line without its newline is a row cut by a crash (fewer cells: dropped on
+    resume) or a whole row an editor saved without one; the two cannot be told apart when the
+    cut fell inside the last cell (a time, a comment), so a last line with every cell is
+    left to the person rather than deleted or guessed.
+
+    Raises
+    ------
+    SessionError
+        If the last line lacks its newline but has the header's number of cells.
+    """
+    if not data or data.endswith(b"\n"):
+        return
+    tail = data[data.rfind(b"\n") + 1 :].decode("utf-8", "replace")
+    try:
+        cells = next(csv.reader([tail]), [])
+    except csv.Error:
+        return  # a quote left open: cut inside a quoted cell
+    if len(cells) < n_columns:
+        return
+    raise SessionError(
+        f"{path}, line {n_rows + 2}: the last row has no final newline: it is whole (saved by "
+        "an editor) or cut by a crash inside its last cell, which the file cannot tell; check "
+        "it, then end it with a newline to keep it or delete the line to run that trial again; "
+        "nothing was changed"
+    )
+
+
 def _fsync_folder(folder: Path) -> None:
     if sys.platform == "win32":  # pragma: no cover - folders cannot be opened there
         return
@@ -352,6 +380,7 @@ class SessionFiles:
             )
         self.rows = read_rows(path)
         _check_trial_sequence(path, self.rows)
+        _check_unended_row(path, data, len(self.names), len(self.rows))
         return path
 
     def open(self) -> None:
@@ -367,7 +396,7 @@ class SessionFiles:
             if not data.endswith(b"\n"):  # a row cut by a crash is not a trial
                 with self.csv_path.open("r+b") as handle:
                     handle.truncate(data.rfind(b"\n") + 1)
-            self._fd = os.open(self.csv_path, os.O_WRONLY | os.O_APPEND)
+            self._fd = os.open(self.csv_path, os.O_RDWR | os.O_APPEND)
             try:
                 self._reserve()
             except OSError as error:
@@ -380,9 +409,7 @@ class SessionFiles:
                 ) from None
             return
         self.out.mkdir(parents=True, exist_ok=True)
-        self._fd = os.open(
-            self.csv_path, os.O_WRONLY | os.O_APPEND | os.O_CREAT | os.O_EXCL, 0o644
-        )
+        self._fd = os.open(self.csv_path, os.O_RDWR | os.O_APPEND | os.O_CREAT | os.O_EXCL, 0o644)
         self.created = True
         try:
             self._write_line(self.names)
@@ -442,13 +469,66 @@ class SessionFiles:
         ------
         ValueError
             For a column the study's CSV does not have, or a required value missing.
+        OSError
+            If the CSV is no longer at its path (removed or replaced with its folder during
+            the session): the trials it held are written back first (:meth:`check_in_place`).
         """
         unknown = set(row) - set(self.names)
         if unknown:
             raise ValueError(f"row has columns the {self.study} schema lacks: {sorted(unknown)}")
         cells = [format_value(row.get(c.name), c) for c in self.columns]
+        self.check_in_place()
         self._write_line(cells)
         self.rows.append(dict(zip(self.names, cells, strict=True)))
+        self.check_in_place()
+
+    def check_in_place(self) -> None:
+        """The CSV this session appends to is still the file at its path.
+
+        A CSV removed during the session (its folder deleted, a cleaning script) takes the
+        trials with it while the open file still accepts rows; the trials held are written
+        back (to the path, its folder made again, or beside it when another file took the
+        name) before the session is stopped.
+
+        Raises
+        ------
+        OSError
+            Naming where the trials now are.
+        """
+        if self._fd is None:
+            return
+        try:
+            same = os.path.samestat(os.fstat(self._fd), os.stat(self.csv_path))
+        except FileNotFoundError:
+            same = False
+        if same:
+            return
+        size = os.fstat(self._fd).st_size
+        data = os.pread(self._fd, size, 0)
+        try:
+            self.csv_path.parent.mkdir(parents=True, exist_ok=True)
+            target = self.csv_path
+            if target.exists() or target.is_symlink():
+                target = target.with_name(f"{self.csv_path.stem}.rescued-{os.getpid()}.csv")
+            descriptor = os.open(target, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
+            try:
+                os.write(descriptor, data)
+                os.fsync(descriptor)
+            finally:
+                os.close(descriptor)
+        except OSError as error:
+            raise OSError(
+                error.errno,
+                "the session's CSV was removed during the session and its trials could not be "
+                f"written back ({error.strerror or error})",
+                str(self.csv_path),
+            ) from None
+        raise OSError(
+            2,
+            "the session's CSV was removed or replaced during the session; its "
+            f"{len(self.rows)} trials are written back to {target}",
+            str(self.csv_path),
+        )
 
     def write_sidecar(self, data: dict) -> None:
         """Rewrite the sidecar atomically (a crash leaves the previous version).

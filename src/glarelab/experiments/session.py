@@ -50,7 +50,7 @@ from glarelab.experiments.engine import Press, first_screen
 from glarelab.experiments.loop import SessionAborted, SessionLoop, Shown
 from glarelab.experiments.paradigms import paradigm_run
 from glarelab.protocols import DATA_FORMAT
-from glarelab.stimuli.stimulus_set import package_versions, verify_stimulus_set
+from glarelab.stimuli.stimulus_set import package_versions, prove_stimulus_set
 from glarelab.stimuli.stimulus_set import shows_images as _shows_images
 
 if TYPE_CHECKING:
@@ -326,7 +326,7 @@ def _check_stimuli(protocol: Protocol, stimuli: Path | None) -> str | None:
         return None
     if stimuli is None:
         raise ValueError(f"a {protocol.study} session needs its stimulus set (--stimuli DIR)")
-    problems = verify_stimulus_set(stimuli)
+    problems = prove_stimulus_set(stimuli)
     if problems:
         raise ValueError(
             f"the stimulus set {stimuli} fails its manifest: " + "; ".join(problems[:5])
@@ -339,6 +339,22 @@ def _check_stimuli(protocol: Protocol, stimuli: Path | None) -> str | None:
             "rebuild it with glarelab stimuli build"
         )
     return hashlib.sha256((Path(stimuli) / "manifest.json").read_bytes()).hexdigest()
+
+
+def _check_set_in_use(frontend, stimuli: Path | None, manifest_sha: str | None) -> None:
+    """The set the front-end shows is the one verified: a set rebuilt between the check and
+    the window's opening is refused (a change during the session is refused by its reads,
+    :class:`glarelab.stimuli.stimulus_set.StimulusSet`)."""
+    held = getattr(getattr(frontend, "images", None), "set", None)
+    if held is None:
+        display = getattr(getattr(frontend, "observer", None), "display", None)
+        held = getattr(display, "set", None)
+    shown = getattr(held, "manifest_sha256", None)
+    if manifest_sha is not None and shown is not None and shown != manifest_sha:
+        raise SessionError(
+            f"the stimulus set {stimuli} changed while the session started (its manifest is "
+            "not the one verified): it was rebuilt or edited; start the session again"
+        )
 
 
 def _now() -> datetime:
@@ -606,6 +622,7 @@ def _run_session_locked(
                 )
             facts = frontend.open()
             frontend.should_stop = stop.check
+            _check_set_in_use(frontend, stimuli, manifest_sha)
             try:
                 stop.check()
                 if facts is not None:
@@ -812,6 +829,7 @@ def _run_trials(engine, frontend, files, sidecar, protocol: Protocol, rate, resu
             try:
                 stop.check()
                 loop.run(engine, resumed_after=len(files.rows) if resume else 0)
+                files.check_in_place()  # a CSV removed after its last trial is not completed
                 status = "completed"
             except SessionAborted as abort:
                 reason = abort.args[0] if abort.args else "escape"

@@ -330,16 +330,32 @@ def replace_folder(
                     os.close(handle)
         fsync_folder(root)
     final = Path(final).resolve()
-    if final.is_dir() and not final.is_symlink() and _exchange(staging, final):
+    for _attempt in range(5):  # another process may put its own output there meanwhile
+        if final.is_dir() and not final.is_symlink() and _exchange(staging, final):
+            fsync_folder(final.parent)
+            shutil.rmtree(staging, ignore_errors=True)  # now the earlier output
+            return
+        old = None
+        if final.exists():
+            old = final.with_name(f".{final.name}.old-{os.getpid()}")
+            shutil.rmtree(old, ignore_errors=True)
+            try:
+                final.rename(old)
+            except FileNotFoundError:  # moved by another process: look again
+                continue
+        try:
+            staging.rename(final)
+        except OSError as error:  # another process's output arrived first: replace it
+            if old is not None and not final.exists():
+                with contextlib.suppress(OSError):
+                    old.rename(final)  # put the earlier output back
+            elif old is not None:
+                shutil.rmtree(old, ignore_errors=True)
+            if error.errno in (errno.EEXIST, errno.ENOTEMPTY) and final.is_dir():
+                continue
+            raise
         fsync_folder(final.parent)
-        shutil.rmtree(staging, ignore_errors=True)  # now the earlier output
+        if old is not None:
+            shutil.rmtree(old, ignore_errors=True)
         return
-    old = None
-    if final.exists():
-        old = final.with_name(f".{final.name}.old-{os.getpid()}")
-        shutil.rmtree(old, ignore_errors=True)
-        final.rename(old)
-    staging.rename(final)
-    fsync_folder(final.parent)
-    if old is not None:
-        shutil.rmtree(old, ignore_errors=True)
+    raise OSError(errno.EBUSY, "other processes kept replacing the folder", str(final))

@@ -22,7 +22,16 @@ from glarelab.frontend.window import (
     typed_text,
 )
 
-__all__ = ["ScriptedKeys", "SessionKeys"]
+__all__ = ["ScriptedKeys", "SessionKeys", "unknown_key_names"]
+
+
+def unknown_key_names(names: list[str]) -> list[str]:
+    """The names in ``names`` that PsychoPy gives no key on any system (sorted, once each):
+    a typo in a dry run's scripted keys would be an ignored press."""
+    from psychopy.hardware.keyboard import keyNamesLinux, keyNamesMac, keyNamesWin
+
+    known = set(keyNamesLinux.values()) | set(keyNamesMac.values()) | set(keyNamesWin.values())
+    return sorted({name for name in names if name not in known})
 
 
 class ScriptedKeys:

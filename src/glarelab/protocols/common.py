@@ -26,6 +26,7 @@ __all__ = [
     "check_methods",
     "display_pixel_deg",
     "glare_model",
+    "repeated_names",
 ]
 
 DISPLAY: Schema = {
@@ -169,6 +170,11 @@ def check_background(
         )
         return None
     result = validate(table, BACKGROUNDS[kind], where, problems)
+    if kind == "sky" and result.get("mean_cd_m2") is not None and result["mean_cd_m2"] <= 0:
+        problems.append(
+            f"{where}.mean_cd_m2 = {result['mean_cd_m2']!r}: must be above 0 cd/m² (the "
+            "contrast is SD / mean)"
+        )
     if kind == "sky" and result.get("cloud_min_deg") and result.get("cloud_max_deg"):
         if result["cloud_min_deg"] >= result["cloud_max_deg"]:
             problems.append(f"{where}.cloud_min_deg: must be below {where}.cloud_max_deg")
@@ -266,6 +272,12 @@ def check_glare_model(model: Any, parameters: Any, where: str, problems: list[st
         problems.append(f"{where}.parameters: {error}")
 
 
+def repeated_names(names: list) -> list:
+    """The names that repeat, compared ignoring case (they become file names)."""
+    folded = [n.casefold() if isinstance(n, str) else n for n in names]
+    return sorted({n for n, f in zip(names, folded, strict=True) if folded.count(f) > 1}, key=str)
+
+
 def check_methods(methods: list[dict] | None, where: str, problems: list[str]) -> None:
     """Glare methods: names unique, labels as many as levels, models and parameters valid.
 
@@ -282,9 +294,12 @@ def check_methods(methods: list[dict] | None, where: str, problems: list[str]) -
     if not methods:
         return
     names = [m["name"] for m in methods if m.get("name")]
-    if len(set(names)) != len(names):
-        repeated = sorted({n for n in names if names.count(n) > 1})
-        problems.append(f"{where}: method names repeat {repeated}: each must be different")
+    repeated = repeated_names(names)
+    if repeated:
+        problems.append(
+            f"{where}: method names repeat {repeated}: each must be different (ignoring case: "
+            "they name files, and macOS's and Windows's file names ignore case)"
+        )
     for i, method in enumerate(methods):
         at = f"{where}[{i}]"
         labels, levels = method.get("labels"), method.get("levels_cd_m2")

@@ -163,6 +163,11 @@ def parse_protocol(
     ProtocolError
         Listing every problem: unknown and missing keys, wrong types, values out of range.
     """
+    if not isinstance(data, Mapping):
+        raise ProtocolError(
+            source,
+            [f"the protocol is a {type(data).__name__}; must be a table (a mapping of keys)"],
+        )
     study_table = data.get("study")
     paradigm = study_table.get("paradigm") if isinstance(study_table, Mapping) else None
     if not isinstance(paradigm, str) or paradigm not in PARADIGMS:

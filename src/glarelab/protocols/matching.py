@@ -260,16 +260,23 @@ def check(p: dict, problems: list[str], folder: Path | None) -> None:
     if t["fine_step_cd_m2"] > t["coarse_step_cd_m2"]:
         problems.append("trials.fine_step_cd_m2: must not exceed trials.coarse_step_cd_m2")
     questions = p["questionnaire"]["questions"] or []
-    taken = {c.name for c in COMMON + _fixed_columns(p)}  # the CSV's own columns
-    seen: set[str] = set()
+    # every question writes two columns (its answer and its response time), so a question
+    # named like another's time column would repeat a header name: compared ignoring case, as
+    # a spreadsheet or a case-insensitive reader would
+    taken = {c.name.casefold() for c in COMMON + _fixed_columns(p)}  # the CSV's own columns
     for i, question in enumerate(questions):
         column = question.get("column")
-        if column in taken or column in seen:
+        if not isinstance(column, str):
+            continue  # the question's own check names it
+        own = (column.casefold(), f"{column}_time_s".casefold())
+        clash = [name for name in own if name in taken]
+        if clash:
             problems.append(
                 f"questionnaire.questions[{i}].column = {column!r}: already a column of the "
-                "session CSV; each question needs a column of its own"
+                f"session CSV ({clash[0]!r}, counting each question's '<column>_time_s'); "
+                "each question needs columns of its own"
             )
-        seen.add(column)
+        taken.update(own)
     n_levels = max(counts) if counts else 0
     a = p["analysis"]
     names = [followup.get("name") for followup in a["followups"] or []]

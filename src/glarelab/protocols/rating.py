@@ -15,7 +15,13 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from glarelab.protocols.columns import Column
-from glarelab.protocols.common import DISPLAY, INSTRUCTIONS, VIEWING, check_display
+from glarelab.protocols.common import (
+    DISPLAY,
+    INSTRUCTIONS,
+    VIEWING,
+    check_display,
+    repeated_names,
+)
 from glarelab.protocols.keys import Key, Schema, Tables, validate
 
 if TYPE_CHECKING:
@@ -213,9 +219,11 @@ def _check_scene(p: dict, problems: list[str]) -> None:
         problems.append("[[conditions]]: missing (a [scene] is shown once per condition)")
         return
     names = [c["name"] for c in conditions]
-    if len(set(names)) != len(names):
-        repeated = sorted({n for n in names if names.count(n) > 1})
-        problems.append(f"conditions: names repeat {repeated}: each must be different")
+    repeated = repeated_names(names)
+    if repeated:
+        problems.append(
+            f"conditions: names repeat {repeated}: each must be different (ignoring case)"
+        )
     model = p["scene"]["glare_model"]
     if any("glare" in c["effects"] for c in conditions):
         from glarelab.protocols.common import check_glare_model

@@ -10,6 +10,7 @@ its own (uniform black, a procedural lamp scene, or a linear EXR).
 from __future__ import annotations
 
 from fractions import Fraction
+from itertools import pairwise
 from math import gcd, lcm
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -23,6 +24,7 @@ from glarelab.protocols.common import (
     check_background,
     check_display,
     check_glare_model,
+    repeated_names,
 )
 from glarelab.protocols.keys import Key, Schema, Tables
 
@@ -79,6 +81,7 @@ SCHEMA: Schema = {
             length=(1, 50),
             low=0.0,
             high=1e9,
+            unique=True,
         ),
     },
     "trials": {
@@ -260,6 +263,12 @@ def check(p: dict, problems: list[str], folder: Path | None) -> None:
         working folder.
     """
     check_display(p["display"], problems)
+    steps = p["trials"]["step_fractions"] or []
+    if any(b >= a for a, b in pairwise(steps)):
+        problems.append(
+            f"trials.step_fractions = {steps!r}: must run from coarse to fine (each smaller "
+            "than the one before)"
+        )
     s = p["stimulus"]
     if s["annulus_outer_px"] <= s["disc_radius_px"]:
         problems.append("stimulus.annulus_outer_px: must exceed stimulus.disc_radius_px")
@@ -285,8 +294,11 @@ def check(p: dict, problems: list[str], folder: Path | None) -> None:
             )
     contexts = p["contexts"] or []
     names = [c["name"] for c in contexts if c.get("name")]
-    if len(set(names)) != len(names):
-        problems.append(f"contexts: names repeat {sorted(set(names))}: each must be different")
+    repeated = repeated_names(names)
+    if repeated:
+        problems.append(
+            f"contexts: names repeat {repeated}: each must be different (ignoring case)"
+        )
     for i, context in enumerate(contexts):
         background = check_background(
             context.get("background"), f"contexts[{i}].background", problems, folder

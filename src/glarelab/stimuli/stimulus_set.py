@@ -19,6 +19,7 @@ place of the build, so the same protocol and calibration give identical files.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
@@ -47,6 +48,7 @@ from glarelab.stimuli.exr import read_exr, write_exr
 from glarelab.stimuli.paradigms import paradigm_stimuli
 
 __all__ = [
+    "SetChanged",
     "StimulusSet",
     "build_stimulus_set",
     "cached_stimulus_set",
@@ -55,6 +57,7 @@ __all__ = [
     "default_calibration",
     "package_versions",
     "progress_bar",
+    "prove_stimulus_set",
     "read_png_codes",
     "shows_images",
     "verify_stimulus_set",
@@ -484,6 +487,7 @@ def build_stimulus_set(
     try:
         manifest = _write_set(out, protocol, built, calibration)
         replace_folder(out, final, kind="stimulus set")
+        _remember_proof(hashlib.sha256((final / MANIFEST).read_bytes()).hexdigest())
     finally:
         shutil.rmtree(out, ignore_errors=True)
     return manifest
@@ -616,13 +620,14 @@ def _index(protocol: Protocol, calibration: Calibration, records: dict, plots, g
     return "\n".join(lines)
 
 
-def _manifest_of(folder: Path) -> dict:
-    """The set's manifest, checked to be a JSON object that lists its files."""
+def _manifest_of(folder: Path, data: bytes | None = None) -> dict:
+    """The set's manifest (from ``data``, its bytes, when given), checked to be a JSON object
+    that lists its files."""
     path = folder / MANIFEST
-    if not path.is_file():
+    if data is None and not path.is_file():
         raise ValueError(f"{path}: missing (not a stimulus set?)")
     try:
-        manifest = json.loads(path.read_text())
+        manifest = json.loads(path.read_bytes() if data is None else data)
     except (json.JSONDecodeError, UnicodeDecodeError) as error:
         raise ValueError(f"{path}: not valid JSON ({error})") from None
     if not isinstance(manifest, dict):
@@ -695,6 +700,122 @@ def verify_stimulus_set(folder: str | Path) -> list[str]:
     return problems
 
 
+PROVEN_ENV = "GLARELAB_CACHE"
+
+
+def _proven_folder() -> Path:
+    """Where the digests of manifests proven by a rebuild (or written by a build) on this
+    machine are kept: ``$GLARELAB_CACHE/proven-sets`` or ``~/.cache/glarelab/proven-sets``."""
+    root = os.environ.get(PROVEN_ENV) or Path.home() / ".cache" / "glarelab"
+    return Path(root) / "proven-sets"
+
+
+def _proof_key(manifest_sha256: str) -> Path:
+    # a proof holds for this version of the builder only (its packages make the bytes)
+    versions = hashlib.sha256(json.dumps(package_versions(), sort_keys=True).encode())
+    return _proven_folder() / f"{manifest_sha256}-{versions.hexdigest()[:16]}"
+
+
+def _remember_proof(manifest_sha256: str) -> None:
+    with contextlib.suppress(OSError):  # a cache: a read-only home only costs a rebuild
+        key = _proof_key(manifest_sha256)
+        key.parent.mkdir(parents=True, exist_ok=True)
+        write_text(key, "built or rebuilt identically by glarelab\n")
+
+
+def _differences(found, rebuilt, where: str, out: list[str], limit: int = 8) -> None:
+    """The keys at which two JSON values differ, as ``where.key: found X, rebuilt Y``."""
+    if len(out) >= limit:
+        return
+    if isinstance(found, dict) and isinstance(rebuilt, dict):
+        for key in sorted(set(found) | set(rebuilt), key=str):
+            _differences(found.get(key), rebuilt.get(key), f"{where}.{key}", out, limit)
+    elif found != rebuilt or type(found) is not type(rebuilt):
+        shown = json.dumps(found)[:60], json.dumps(rebuilt)[:60]
+        out.append(f"{where}: {shown[0]} in the manifest, {shown[1]} when rebuilt")
+
+
+def _without_none(value):
+    if isinstance(value, dict):
+        return {k: _without_none(v) for k, v in value.items() if v is not None}
+    if isinstance(value, list):
+        return [_without_none(v) for v in value]
+    return value
+
+
+def prove_stimulus_set(folder: str | Path, *, progress=None) -> list[str]:
+    """Check a stimulus set against its protocol: its files against its manifest
+    (:func:`verify_stimulus_set`), then the manifest itself, by rebuilding the set from the
+    protocol and the calibration the manifest records and comparing every file byte for byte
+    (builds are byte-reproducible). A manifest whose sha256s, geometry, image records or
+    calibration were edited to match edited files does not rebuild to itself.
+
+    A manifest proven once (or written by a build) on this machine, with these package
+    versions, is remembered by its sha256 and not rebuilt again.
+
+    Parameters
+    ----------
+    folder
+        The set's folder.
+    progress
+        As for :func:`build_stimulus_set` (default: silent).
+
+    Returns
+    -------
+    list of str
+        The problems, each naming the file or the manifest key (empty when proven).
+    """
+    from glarelab.protocols import ProtocolError, parse_protocol
+
+    folder = Path(folder)
+    problems = verify_stimulus_set(folder)
+    if problems:
+        return problems
+    data = (folder / MANIFEST).read_bytes()
+    digest = hashlib.sha256(data).hexdigest()
+    if _proof_key(digest).is_file():
+        return []
+    manifest = json.loads(data)
+    try:
+        # the manifest holds the protocol as validated (defaults filled in, unset keys None):
+        # validated again without its unset keys, it must hash as it did
+        protocol = parse_protocol(
+            _without_none(manifest["protocol"]), source=f"{folder / MANIFEST} protocol"
+        )
+        calibration = Calibration.from_json(
+            manifest["calibration"], source=f"{folder / MANIFEST} calibration"
+        )
+    except (KeyError, TypeError, ValueError, ProtocolError) as error:
+        return [f"{MANIFEST}: cannot be rebuilt to prove it ({error})"]
+    if protocol.sha256 != manifest.get("protocol_sha256"):
+        return [f"{MANIFEST}: its protocol table does not hash to its protocol_sha256 (edited?)"]
+    if not shows_images(protocol):
+        return [f"{MANIFEST}: its protocol ({protocol.paradigm}) shows no images"]
+    import tempfile
+
+    with tempfile.TemporaryDirectory(prefix="glarelab-proof-") as scratch:
+        built = paradigm_stimuli(protocol).build(protocol, progress=progress)
+        _write_set(Path(scratch), protocol, built, calibration)
+        rebuilt = json.loads((Path(scratch) / MANIFEST).read_bytes())  # as written, in JSON
+    found = {k: v for k, v in manifest.items() if k != "packages"}
+    expected = {k: v for k, v in rebuilt.items() if k != "packages"}
+    out: list[str] = []
+    _differences(found, expected, "manifest", out)
+    if out:
+        packages = manifest.get("packages")
+        if packages != rebuilt["packages"]:
+            out.append(
+                f"{MANIFEST}: built with other package versions ({packages}); this rebuild "
+                f"used {rebuilt['packages']}, which may explain the differences"
+            )
+        return [
+            f"{MANIFEST} does not match a rebuild from its own protocol and calibration: {d}"
+            for d in out
+        ]
+    _remember_proof(digest)
+    return []
+
+
 def compose(terms, image) -> np.ndarray:
     """The image ``Σ weight × image(name)`` of ``terms``, ``[(name, weight), …]``: how sessions
     show images that depend on a setting (a target's disk, a staircase's disc) from the set's
@@ -727,18 +848,38 @@ def compose(terms, image) -> np.ndarray:
     return total
 
 
+class SetChanged(ValueError):
+    """A file of a stimulus set differs from the manifest the set was read with: the set was
+    rebuilt or edited while in use."""
+
+
 class StimulusSet:
     """A built stimulus set, read back: its manifest and its images (float64 cd/m², read once).
+
+    The manifest is read once; every image read afterwards is checked against the sha256 that
+    manifest lists, so a set rebuilt or edited while in use (a session running on it) is
+    refused at its first changed image rather than shown half old, half new.
 
     Parameters
     ----------
     folder
         The set's folder (verify it first: :func:`verify_stimulus_set`).
+
+    Attributes
+    ----------
+    manifest_sha256
+        The sha256 of the manifest's bytes as read: what a session records and compares with
+        the manifest it verified.
     """
 
     def __init__(self, folder: str | Path):
         self.folder = Path(folder)
-        self.manifest = _manifest_of(self.folder)
+        path = self.folder / MANIFEST
+        if not path.is_file():
+            raise ValueError(f"{path}: missing (not a stimulus set?)")
+        data = path.read_bytes()
+        self.manifest_sha256 = hashlib.sha256(data).hexdigest()
+        self.manifest = _manifest_of(self.folder, data)
         self.geometry = self.manifest["geometry"]
         self._images: dict[str, np.ndarray] = {}
 
@@ -771,8 +912,36 @@ class StimulusSet:
         -------
         numpy.ndarray
             float64, cd/m².
+
+        Raises
+        ------
+        SetChanged
+            If the file is not the one the manifest lists (its sha256 differs, or it was
+            replaced while being read).
         """
-        return read_exr(self.folder / f"{name}.exr").astype(np.float64)
+        file = f"{name}.exr"
+        path = self.folder / file
+        expected = self.manifest["files"].get(file)
+        if expected is None:
+            raise SetChanged(f"stimulus set {self.folder}: {file} is not in its manifest")
+        before = os.stat(path)
+        if _sha256(path) != expected:
+            raise SetChanged(
+                f"stimulus set {self.folder}: {file} changed since the set was verified "
+                "(rebuilt or edited while in use); nothing of it was shown"
+            )
+        image = read_exr(path).astype(np.float64)
+        after = os.stat(path)
+        if (before.st_ino, before.st_size, before.st_mtime_ns) != (
+            after.st_ino,
+            after.st_size,
+            after.st_mtime_ns,
+        ):
+            raise SetChanged(
+                f"stimulus set {self.folder}: {file} was replaced while it was read (rebuilt "
+                "while in use); nothing of it was shown"
+            )
+        return image
 
     def compose(self, terms) -> np.ndarray:
         """The image ``Σ weight × image(name)`` of ``terms`` (:func:`compose`).

@@ -1,0 +1,157 @@
+"""Every option acts or is refused: an option given twice, an option the command would ignore,
+an empty path and an output inside a stimulus set end in one line naming the option (exit 2),
+with nothing written."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from glarelab.cli import main
+from glarelab.stimuli.exr import write_exr
+from glarelab.stimuli.stimulus_set import build_stimulus_set
+
+ROOT = Path(__file__).parents[2]
+READINGS = ROOT / "calibrations" / "example-readings.csv"
+
+
+def refused(argv, capsys, tmp_path, *named) -> str:
+    before = sorted(tmp_path.rglob("*"))
+    capsys.readouterr()
+    try:
+        status = main([str(a) for a in argv])
+    except SystemExit as stop:
+        status = stop.code
+    err = capsys.readouterr().err
+    assert status == 2, err
+    lines = [line for line in err.strip().splitlines() if not line.startswith("[glarelab]")]
+    assert len(lines) == 1, err
+    assert "Traceback" not in err
+    for text in named:
+        assert text in lines[0], err
+    assert sorted(tmp_path.rglob("*")) == before
+    return lines[0]
+
+
+@pytest.mark.parametrize(
+    ("argv", "named"),
+    [
+        (["run", "luidolt2020", "--simulate", "--participant", "P1", "--participant", "P2"],
+         "--participant is given twice"),
+        (["--no-cache", "--no-cache", "protocol", "check", "luidolt2020"],
+         "--no-cache is given twice"),
+        (["calibrate", "fit", READINGS, "--out", "a.json", "--out", "b.json"],
+         "--out is given twice"),
+        (["run", "luidolt2020", "--simulate", "--seed", "1", "--seed", "2"],
+         "--seed is given twice"),
+    ],
+)  # fmt: skip
+def test_an_option_given_twice_is_refused(argv, named, capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    refused(argv, capsys, tmp_path, named)
+
+
+@pytest.mark.parametrize(
+    ("extra", "named"),
+    [
+        (["--age", "30"], "--age with --simulate"),
+        (["--screenshot", "shot.png"], "--screenshot with --simulate"),
+        (["--scripted-keys", "keys.txt"], "--scripted-keys with --simulate"),
+        (["--fullscreen"], "--fullscreen with --simulate"),
+    ],
+)
+def test_screen_options_with_simulate_are_refused(extra, named, capsys, tmp_path):
+    (tmp_path / "keys.txt").write_text("space 1 return\n")
+    argv = ["run", "luidolt2020", "--simulate", "--participant", "P1", "--out", tmp_path / "d"]
+    refused([*argv, *[tmp_path / e if e.endswith((".png", ".txt")) else e for e in extra]],
+            capsys, tmp_path, named)  # fmt: skip
+
+
+def test_simulation_options_without_simulate_are_refused(capsys, tmp_path):
+    argv = ["run", "luidolt2020", "--participant", "P1", "--out", tmp_path / "d", "--seed", "3"]
+    refused(argv, capsys, tmp_path, "--seed", "--simulate")
+
+
+def test_a_stimulus_set_for_a_questionnaire_is_refused(capsys, tmp_path):
+    (tmp_path / "set").mkdir()
+    argv = ["run", "luidolt2020", "--simulate", "--participant", "P1", "--out", tmp_path / "d"]
+    refused([*argv, "--stimuli", tmp_path / "set"], capsys, tmp_path, "--stimuli", "no images")
+
+
+def test_unknown_scripted_key_names_are_refused(capsys, tmp_path):
+    pytest.importorskip("psychopy")
+    (tmp_path / "keys.txt").write_text("space retrun 1 spcae\n")
+    argv = ["run", "luidolt2020", "--participant", "P1", "--out", tmp_path / "d"]
+    line = refused([*argv, "--scripted-keys", tmp_path / "keys.txt"], capsys, tmp_path,
+                   "'retrun', 'spcae'", "not a key name")  # fmt: skip
+    assert "'space'" not in line
+
+
+@pytest.fixture
+def scene(tmp_path):
+    image = np.full((32, 32), 1.0, dtype=np.float32)
+    image[14:18, 14:18] = 1000.0
+    write_exr(tmp_path / "in.exr", image)
+    return tmp_path / "in.exr"
+
+
+@pytest.mark.parametrize(
+    ("extra", "named"),
+    [
+        (["--seed", "3"], "--seed without --flare-lines"),
+        (["--model", "wave", "--aperture-spacing-mm", "2"],
+         "--aperture-spacing-mm without --aperture-image"),
+    ],
+)  # fmt: skip
+def test_render_options_that_would_be_ignored_are_refused(extra, named, scene, capsys, tmp_path):
+    argv = ["render", scene, tmp_path / "out.exr", "--pixel-deg", "0.02", *extra]
+    refused(argv, capsys, tmp_path, named)
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["run", "luidolt2020", "--simulate", "--participant", "P1", "--out", ""],
+        ["looks", "--out", " "],
+        ["docs", "--out", ""],
+    ],
+)
+def test_an_empty_out_is_refused(argv, capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    refused(argv, capsys, tmp_path, "--out is empty")
+
+
+@pytest.fixture(scope="module")
+def stimulus_set(tmp_path_factory):
+    from glarelab.protocols import load_protocol
+
+    folder = tmp_path_factory.mktemp("sets") / "spencer1995"
+    build_stimulus_set(load_protocol("spencer1995"), folder, progress=None)
+    return folder
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["analyse", "spencer1995", "x.csv", "--out", "{set}/report"],
+        ["stimuli", "build", "yoshida2008", "--out", "{set}/inner"],
+        ["looks", "--out", "{set}/looks"],
+        ["docs", "--out", "{set}/docs"],
+        ["bench", "--out", "{set}/bench"],
+        ["demo", "--out", "{set}/demo"],
+    ],
+)
+def test_no_output_inside_a_stimulus_set(argv, stimulus_set, capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    argv = [a.replace("{set}", str(stimulus_set)) for a in argv]
+    before = sorted(stimulus_set.rglob("*"))
+    refused(argv, capsys, tmp_path, "inside the stimulus set")
+    assert sorted(stimulus_set.rglob("*")) == before
+
+
+def test_a_measurement_without_verification_points_is_refused_before_it_starts(capsys, tmp_path):
+    argv = ["calibrate", "measure", "--out", tmp_path / "c.json", "--simulate", "300", "0.1",
+            "2.2", "--verify-points", "0"]  # fmt: skip
+    refused(argv, capsys, tmp_path, "--verify-points", "0")

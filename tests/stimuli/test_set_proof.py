@@ -1,0 +1,124 @@
+"""A stimulus set is checked against its protocol, not only file by file: a manifest edited to
+match edited files does not rebuild to itself, and neither ``stimuli verify`` nor a session
+accepts it."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from glarelab.display.calibration import fit_calibration, read_readings
+from glarelab.protocols import load_protocol
+from glarelab.stimuli.exr import read_exr, write_exr
+from glarelab.stimuli.stimulus_set import build_stimulus_set, prove_stimulus_set
+
+ROOT = Path(__file__).parents[2]
+READINGS = ROOT / "calibrations" / "example-readings.csv"
+PYTHON = [sys.executable, "-m", "glarelab"]
+
+
+@pytest.fixture(scope="module")
+def genuine(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("set") / "yoshida2008"
+    build_stimulus_set(load_protocol("yoshida2008"), folder, progress=None)
+    return folder
+
+
+@pytest.fixture
+def copy(genuine, tmp_path, monkeypatch):
+    monkeypatch.setenv("GLARELAB_CACHE", str(tmp_path / "cache"))  # nothing proven yet
+    folder = tmp_path / "set"
+    shutil.copytree(genuine, folder)
+    return folder
+
+
+def edit_manifest(folder: Path, change) -> None:
+    path = folder / "manifest.json"
+    manifest = json.loads(path.read_text())
+    change(manifest)
+    path.write_text(json.dumps(manifest, indent=2, sort_keys=True) + "\n")
+
+
+def rehash(manifest: dict, folder: Path, name: str) -> None:
+    manifest["files"][name] = hashlib.sha256((folder / name).read_bytes()).hexdigest()
+
+
+def test_a_genuine_set_is_proven_and_remembered(copy):
+    assert prove_stimulus_set(copy) == []
+    assert list((copy.parent / "cache" / "proven-sets").iterdir())  # not rebuilt next time
+
+
+def image_changed_and_rehashed(folder):
+    name = "reference_gaussian_A.exr"
+    image = read_exr(folder / name)
+    write_exr(folder / name, (image * np.float32(1.5)).astype(np.float32))
+    edit_manifest(folder, lambda m: rehash(m, folder, name))
+
+
+def geometry_edited(folder):
+    edit_manifest(folder, lambda m: m["geometry"].update(disk_diameter_deg=0.6))
+
+
+def calibration_replaced(folder):
+    lab = fit_calibration(read_readings(READINGS), bit_depth=10)
+    edit_manifest(folder, lambda m: m.update(calibration=lab.to_json()))
+
+
+def disk_luminance_times_ten(folder):
+    def change(manifest):
+        record = manifest["images"]["reference_gaussian_A"]
+        record["disk_cd_m2"] = record["disk_cd_m2"] * 10
+
+    edit_manifest(folder, change)
+
+
+@pytest.mark.parametrize(
+    ("tamper", "named"),
+    [
+        (image_changed_and_rehashed, "manifest.files.reference_gaussian_A.exr"),
+        (geometry_edited, "manifest.geometry.disk_diameter_deg"),
+        (calibration_replaced, "manifest.calibration"),
+        (disk_luminance_times_ten, "manifest.images.reference_gaussian_A.disk_cd_m2"),
+    ],
+    ids=["image changed, sha256 updated", "geometry", "calibration block", "disk x10"],
+)
+def test_a_manifest_edited_to_match_is_refused_by_verify(copy, tamper, named):
+    tamper(copy)
+    problems = prove_stimulus_set(copy)
+    assert problems and any(named in p for p in problems), problems
+    done = subprocess.run(
+        [*PYTHON, "stimuli", "verify", str(copy)], capture_output=True, text=True, check=False
+    )
+    assert done.returncode == 1 and named in done.stderr, done.stderr
+    assert "Traceback" not in done.stderr
+
+
+def test_a_session_refuses_a_set_whose_manifest_does_not_rebuild(copy, tmp_path):
+    disk_luminance_times_ten(copy)
+    done = subprocess.run(
+        [
+            *PYTHON,
+            "run",
+            "yoshida2008",
+            "--simulate",
+            "--participant",
+            "P01",
+            "--stimuli",
+            str(copy),
+            "--out",
+            str(tmp_path / "data"),
+        ],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert done.returncode == 2, done.stderr
+    assert "fails its manifest" in done.stderr and "disk_cd_m2" in done.stderr
+    assert not (tmp_path / "data").exists()
