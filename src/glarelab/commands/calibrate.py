@@ -152,7 +152,8 @@ def _calibrate_fit(args: argparse.Namespace) -> int:
         except BaseException:
             _release(args.out)
             raise
-        claim_output(args.out, "calibrate fit")  # glarelab's: a later measure or --replace takes it
+        # glarelab's: a later measure or --replace takes it
+        claim_output(args.out, "calibrate fit")
     _log(
         f"{len(readings)} readings → {args.method} calibration, {calibration.black_cd_m2:.4g}-"
         f"{calibration.max_cd_m2:.4g} cd/m², status '{calibration.status}' → {args.out}"
