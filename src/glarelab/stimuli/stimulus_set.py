@@ -189,6 +189,18 @@ def write_display_png(path: str | Path, codes: np.ndarray, bit_depth: int) -> No
     buffer shows code ``v`` (a 16-bit PNG opens as Pillow's ``I;16``, which PsychoPy clips to
     black and white).
 
+    Parameters
+    ----------
+    path
+        The PNG to write (written to a temporary name and renamed; an existing file is
+        replaced).
+    codes
+        Integer display codes, ``(H, W)`` (greyscale) or ``(H, W, 3)`` (RGB), in
+        0 … 2^bit_depth − 1.
+    bit_depth
+        The bits per channel of the display the codes are for, 1-16 (8, 10, 12 or 16 for a
+        glarelab calibration).
+
     Raises
     ------
     ValueError
@@ -218,6 +230,19 @@ def write_display_png(path: str | Path, codes: np.ndarray, bit_depth: int) -> No
 def codes_png(name: str, bit_depth: int) -> str:
     """The file of a set's image ``name`` that holds its display codes exactly: ``NAME.png``
     for an 8-bit display, ``NAME_<bits>bit.png`` for a deeper one.
+
+    Parameters
+    ----------
+    name
+        The image's name in the set (its manifest's key), without ``.png``.
+    bit_depth
+        The bits per channel of the set's display (8, 10, 12 or 16); 8 or fewer give
+        ``NAME.png``.
+
+    Returns
+    -------
+    str
+        The file name (no folder).
 
     Examples
     --------
