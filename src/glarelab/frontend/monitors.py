@@ -18,8 +18,9 @@ the lab's monitor.
 
 Monitor Center keeps a monitor's gamma per gun as ``L = a + (b + k·x)^γ`` (PsychoPy's
 ``gammaFun``, ``eq=4``) in a 4 × 6 grid (rows luminance, R, G, B; columns min, max, γ, a, b,
-k); the glarelab calibration's gain-offset-gamma fit (:func:`glarelab.display.calibration.
-fit_calibration`, ``method="gog"``), ``L = black + (max − black)·(gain·x + offset)^γ``, is the
+k); the glarelab calibration's gain-offset-gamma fit
+(:func:`glarelab.display.calibration.fit_calibration`, ``method="gog"``),
+``L = black + (max − black)·(gain·x + offset)^γ``, is the
 same curve with ``a = black``, ``b = offset·(max − black)^(1/γ)`` and
 ``k = gain·(max − black)^(1/γ)``.
 """

@@ -8,8 +8,9 @@ any image viewer show the image code for code; for a display of more than 8 bits
 holds the nearest 8-bit codes (a viewer's and an 8-bit screen's copy) and ``NAME_10bit.png``
 (``_12bit``, …) the display's own codes, a 16-bit PNG of the codes scaled to the full 16-bit
 range, ``round(code × 65535 / (2^bits − 1))``, with an ``sBIT`` chunk recording the bit depth
-(:func:`read_png_codes` gives back the exact codes; :class:`glarelab.frontend.psychopy_plugin.
-SetImageStim` shows them on a deep window); luminance-profile plots through the
+(:func:`read_png_codes` gives back the exact codes;
+:class:`glarelab.frontend.psychopy_plugin.SetImageStim` shows them on a deep window);
+luminance-profile plots through the
 disk centre (``profiles_*.png``, like Yoshida et al.'s Figure 3); ``README.md``, an index of
 the files and images; and ``manifest.json``: the validated protocol and its hash, the
 calibration and its hash, the geometry, every image's parameters and encoding report, the
