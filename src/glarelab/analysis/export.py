@@ -74,6 +74,17 @@ def r_cell(value) -> str:
 def csv_text(table: pd.DataFrame) -> str:
     """A table as CSV text R and JASP read with the right types (:func:`r_cell`).
 
+    Parameters
+    ----------
+    table
+        Any table; its column names become the header row (as text) and every cell is
+        written by :func:`r_cell`. The index is not written.
+
+    Returns
+    -------
+    str
+        The CSV text, one line per row after the header, each ending in a newline.
+
     Examples
     --------
     >>> print(csv_text(pd.DataFrame({"p": [0.05, float("nan")], "holds": [True, False]})), end="")

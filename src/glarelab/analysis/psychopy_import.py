@@ -71,6 +71,20 @@ _FILLED = ("study", "participant", "session")  # not trial data: the same on eve
 def psychopy_bookkeeping(name: str) -> bool:
     """Whether a column is one PsychoPy writes of its own accord.
 
+    Parameters
+    ----------
+    name
+        A column name of a PsychoPy CSV, as written in its header; it must match
+        ``PSYCHOPY_BOOKKEEPING`` whole (case-sensitive).
+
+    Returns
+    -------
+    bool
+        True for PsychoPy's own bookkeeping columns (``thisRow.t``, ``notes``, ``date``,
+        a loop's ``thisN`` …, a component's ``.started``/``.stopped`` …).
+
+    Examples
+    --------
     >>> [psychopy_bookkeeping(n) for n in ("thisRow.t", "trials.thisN", "time_s")]
     [True, True, False]
     """
@@ -79,7 +93,33 @@ def psychopy_bookkeeping(name: str) -> bool:
 
 @dataclass
 class Imported:
-    """One session made from a PsychoPy CSV: what was written and what was left out."""
+    """One session made from a PsychoPy CSV: what was written and what was left out.
+
+    Parameters
+    ----------
+    source
+        The PsychoPy CSV the session was read from.
+    csv
+        The session file written (its sidecar is the same name with ``.json``).
+    participant
+        The participant code of the session's rows.
+    session
+        The session number (a whole number).
+    trials
+        How many trials (rows) the session file holds.
+    dropped_bookkeeping
+        The source's columns left out because PsychoPy writes them of its own accord
+        (:func:`psychopy_bookkeeping`).
+    dropped_other
+        The source's other columns left out: not in the study's data format.
+    dropped_rows
+        The line numbers in the source (1 is the header) of rows left out because they hold
+        no trial data.
+    filled
+        Columns of the data format the source lacks, each mapped to what it was given
+        (a value given for every trial, the protocol's study, trial numbers in file order,
+        or empty).
+    """
 
     source: Path
     csv: Path

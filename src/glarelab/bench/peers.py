@@ -86,7 +86,20 @@ def spectrum_peer(image, kernel, dtype) -> Callable[[], np.ndarray]:
 
 def floor_peer(image) -> Callable[[], np.ndarray]:
     """One padded ``rfft2`` and ``irfft2`` of the excess in float32, every channel at once:
-    the floor of a whole-image FFT render. Returns the clamped image (no glare)."""
+    the floor of a whole-image FFT render. Returns the clamped image (no glare).
+
+    Parameters
+    ----------
+    image
+        The workload, luminance, cd/m², ``(H, W)`` or ``(H, W, 3)``; each axis is padded to
+        a fast FFT length >= ``2 n - 1``.
+
+    Returns
+    -------
+    callable
+        ``peer()``: the image clamped at :data:`L_DMAX`, cd/m², float32, after the
+        transforms a glare render cannot do without (their result is thrown away).
+    """
     height, width = image.shape[:2]
     lengths = tuple(scipy.fft.next_fast_len(2 * n - 1, real=True) for n in (height, width))
     work = image.astype(np.float32)

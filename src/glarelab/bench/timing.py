@@ -51,6 +51,22 @@ def timed(
 
 def round_ratio(rounds: dict, numerator: str, denominator: str) -> float:
     """The median over the rounds of ``numerator``'s time over ``denominator``'s, both
-    measured in the same round (``rounds`` as :func:`timed` fills it)."""
+    measured in the same round (``rounds`` as :func:`timed` fills it).
+
+    Parameters
+    ----------
+    rounds
+        Variant name → its time in each round, seconds, as :func:`timed` fills it; the two
+        lists must be equally long (one entry per round).
+    numerator
+        The name of the variant whose times are divided (a key of ``rounds``).
+    denominator
+        The name of the variant whose times divide (a key of ``rounds``).
+
+    Returns
+    -------
+    float
+        The median of the per-round ratios (dimensionless; > 1: ``numerator`` is slower).
+    """
     ratios = np.asarray(rounds[numerator], float) / np.asarray(rounds[denominator], float)
     return float(np.median(ratios))

@@ -63,6 +63,23 @@ def scheduler_problem(address: str, *, wait_s: float = HANDSHAKE_WAIT_S) -> str 
     A web server waits for a request, so only an address that has sent nothing within
     ``wait_s`` is asked one (``HEAD /``): a Dask scheduler is never sent bytes it cannot read.
 
+    Parameters
+    ----------
+    address
+        A Dask scheduler address as distributed parses it, ``PROTOCOL://HOST:PORT``
+        (e.g. ``tcp://10.0.0.5:8786``); only ``tcp`` is probed.
+    wait_s
+        How long to wait to connect, for the scheduler's handshake and for a web server's
+        reply, seconds, > 0 (default ``HANDSHAKE_WAIT_S`` = 3 s).
+
+    Returns
+    -------
+    str or None
+        One line on what answers instead of a Dask scheduler, or None when the address
+        looks like one (or is not probed).
+
+    Examples
+    --------
     >>> scheduler_problem("tcp://127.0.0.1:1")[:30]
     'nothing answers at 127.0.0.1:1'
     """

@@ -20,6 +20,18 @@ SHIPPED: dict[str, tuple[str, ...]] = {
 def shipped_folder(kind: Literal["examples", "calibrations"]) -> Path:
     """The folder of the shipped ``examples`` or ``calibrations``.
 
+    Parameters
+    ----------
+    kind : {"examples", "calibrations"}
+        Which folder: the example scenes (OpenEXR) or the calibration readings and
+        synthetic calibrations (a key of ``SHIPPED``).
+
+    Returns
+    -------
+    pathlib.Path
+        The folder inside the installed package (``glarelab/shipped/KIND``), else the source
+        checkout's ``KIND/``.
+
     Raises
     ------
     ValueError
@@ -46,6 +58,12 @@ def shipped_folder(kind: Literal["examples", "calibrations"]) -> Path:
 def copy_shipped(destination: str | Path) -> list[Path]:
     """Copy the shipped examples and calibrations into ``destination/examples`` and
     ``destination/calibrations`` (made if missing); an existing file is never replaced.
+
+    Parameters
+    ----------
+    destination
+        The folder to copy into (made if missing); the files go to its ``examples/`` and
+        ``calibrations/`` subfolders.
 
     Returns
     -------

@@ -18,8 +18,9 @@ the lab's monitor.
 
 Monitor Center keeps a monitor's gamma per gun as ``L = a + (b + k·x)^γ`` (PsychoPy's
 ``gammaFun``, ``eq=4``) in a 4 × 6 grid (rows luminance, R, G, B; columns min, max, γ, a, b,
-k); the glarelab calibration's gain-offset-gamma fit (:func:`glarelab.display.calibration.
-fit_calibration`, ``method="gog"``), ``L = black + (max − black)·(gain·x + offset)^γ``, is the
+k); the glarelab calibration's gain-offset-gamma fit
+(:func:`glarelab.display.calibration.fit_calibration`, ``method="gog"``),
+``L = black + (max − black)·(gain·x + offset)^γ``, is the
 same curve with ``a = black``, ``b = offset·(max − black)^(1/γ)`` and
 ``k = gain·(max − black)^(1/γ)``.
 """
@@ -90,6 +91,19 @@ def load_monitor(name: str, *, folder: str | Path | None = None):
     """The Monitor Center monitor ``name`` (its latest calibration current), from ``folder``
     (default :func:`default_monitor_folder`).
 
+    Parameters
+    ----------
+    name
+        The monitor's name in Monitor Center: the file ``NAME.json`` of ``folder``.
+    folder
+        The folder of Monitor Center's monitor files; None (default): Monitor Center's own,
+        :func:`default_monitor_folder`.
+
+    Returns
+    -------
+    psychopy.monitors.Monitor
+        The monitor, read from that file only (not from PsychoPy's own folder).
+
     Raises
     ------
     ValueError
@@ -110,7 +124,21 @@ def monitor_display(monitor) -> dict:
     """What glarelab takes from a Monitor Center monitor: ``resolution_px`` (width, height),
     ``width_cm``, ``distance_cm`` (None where the monitor does not say), and its luminance:
     ``gamma_grid`` (the 4 × 6 grid) and ``readings`` (``(level, cd/m²)`` of its luminance
-    measurements, level 0-255 as Monitor Center measures them; empty without)."""
+    measurements, level 0-255 as Monitor Center measures them; empty without).
+
+    Parameters
+    ----------
+    monitor : psychopy.monitors.Monitor
+        A Monitor Center monitor, as :func:`load_monitor` gives it (its current calibration
+        is read).
+
+    Returns
+    -------
+    dict
+        ``name``, ``calibration`` (the current calibration's name), ``resolution_px``
+        (``[width, height]``, px), ``width_cm``, ``distance_cm``, ``gamma_grid`` (4 × 6 list
+        or None) and ``readings`` (list of ``(level, cd/m²)``).
+    """
     size = monitor.getSizePix()
     levels, lums = monitor.getLevelsPre(), monitor.getLumsPre()
     readings = []
@@ -137,6 +165,20 @@ def calibration_from_monitor(monitor, *, bit_depth: int) -> Calibration:
     measurements when it has four or more (levels 0-255 taken to the display's codes), else
     sampled from its gamma grid's luminance row (33 codes of ``L = a + (b + k·x)^γ``, or
     ``min + (max − min)·x^γ`` where ``a``, ``b``, ``k`` are not set). Marked ``unverified``.
+
+    Parameters
+    ----------
+    monitor : psychopy.monitors.Monitor
+        A Monitor Center monitor, as :func:`load_monitor` gives it (its current calibration
+        is read).
+    bit_depth
+        The display's bits per channel, one of 8, 10, 12, 16: Monitor Center's levels
+        0-255 are scaled to its codes 0 … 2^bit_depth − 1.
+
+    Returns
+    -------
+    Calibration
+        The calibration fitted by :func:`~glarelab.display.calibration.fit_calibration`.
 
     Raises
     ------
@@ -228,6 +270,36 @@ def export_calibration(
     readings as Monitor Center's luminance measurements (levels 0-255, as Monitor Center
     measures), the size in pixels, width and distance of the protocol's ``display`` and
     ``viewing`` when given, and notes naming the glarelab calibration and its readings' hash.
+
+    Parameters
+    ----------
+    calibration
+        The glarelab calibration to write; its gain-offset-gamma fit is made from its
+        readings when it has none.
+    name
+        The monitor's name in Monitor Center (the file ``NAME.json`` of ``folder``).
+    display
+        The protocol's display: ``resolution_px`` (width, height, px) and either
+        ``pixel_pitch_mm`` (mm) or ``diagonal_in`` (inches, square pixels taken); None:
+        no size or width.
+    viewing
+        The protocol's viewing conditions: ``distance_m`` (viewing distance, m); None: no
+        distance (used only with ``display``).
+        Where not given, the monitor's current width, distance and size are kept.
+    folder
+        The folder of Monitor Center's monitor files, which must exist; None (default):
+        Monitor Center's own, :func:`default_monitor_folder`.
+
+    Returns
+    -------
+    tuple of (pathlib.Path, str)
+        The monitor file written and the new calibration's name
+        (``glarelab DATE HASH``).
+
+    Raises
+    ------
+    ValueError
+        For a ``folder`` that does not exist or a monitor file that is not one.
     """
     folder = Path(folder) if folder is not None else default_monitor_folder()
     if not folder.is_dir():
@@ -279,7 +351,28 @@ def window_monitor(
     """The monitor a glarelab window is opened with: the Monitor Center ``monitor``'s size,
     width and distance when given, else the protocol's display's, and Monitor Center's default
     gamma grid, so PsychoPy leaves the graphics card's gamma table as it is (glarelab encodes
-    through its own calibration). Saved nowhere."""
+    through its own calibration). Saved nowhere.
+
+    Parameters
+    ----------
+    display
+        The protocol's display: ``resolution_px`` (width, height, px) and either
+        ``pixel_pitch_mm`` (mm) or ``diagonal_in`` (inches, square pixels taken); None:
+        no size or width.
+    viewing
+        The protocol's viewing conditions: ``distance_m`` (viewing distance, m); None: no
+        distance (used only with ``display``).
+    monitor : psychopy.monitors.Monitor, optional
+        A Monitor Center monitor (:func:`load_monitor`); when given, its size, width,
+        distance and name are used instead of ``display``, ``viewing`` and ``name``.
+    name
+        The monitor's name when no ``monitor`` is given (default ``"glarelab"``).
+
+    Returns
+    -------
+    psychopy.monitors.Monitor
+        A monitor with a single calibration, ``glarelab``, and the default gamma grid.
+    """
     if monitor is not None:
         facts = monitor_display(monitor)
         geometry = {

@@ -28,7 +28,45 @@ _FIXED = ("color", "colorSpace", "fillColor", "borderColor", "contrast", "size",
 
 
 class SetImageComponent(BaseVisualComponent):
-    """Builder component: one image of a glarelab stimulus set, code for code."""
+    """Builder component: one image of a glarelab stimulus set, code for code.
+
+    Builder makes it with each parameter's value as text (a value, or ``$`` and Python code);
+    the units are always pixels and the size is the image's own.
+
+    Parameters
+    ----------
+    exp : psychopy.experiment.Experiment
+        The experiment the component belongs to (its imports get ``SetImageStim``).
+    parentName
+        The name of the routine that holds the component.
+    name
+        The component's name, a Python identifier: the stimulus's variable in the compiled
+        script (default ``"set_image"``).
+    image
+        The stimulus set's ``NAME.png`` (a path, relative to the experiment, or code); its
+        ``NAME_10bit.png`` beside it is shown on a 10-bit set's display.
+    pos
+        Centre of the image, px from the window's centre, ``(x, y)`` (x rightwards, y
+        upwards; default ``(0, 0)``).
+    ori
+        Orientation, degrees, clockwise (default 0).
+    startType : {"time (s)", "frame N", "condition"}
+        How ``startVal`` is read, as in every Builder component.
+    startVal
+        When the image appears: seconds, a frame number or a Python condition, by
+        ``startType`` (default 0.0 s).
+    stopType : {"duration (s)", "duration (frames)", "time (s)", "frame N", "condition"}
+        How ``stopVal`` is read, as in every Builder component.
+    stopVal
+        When the image goes: seconds, frames or a Python condition, by ``stopType``
+        (default 1.0 s); empty: never within the routine.
+    startEstim
+        The expected start, s, for Builder's timeline when ``startVal`` is not a number
+        (default ``""``: none).
+    durationEstim
+        The expected duration, s, for Builder's timeline when ``stopVal`` is not a number
+        (default ``""``: none).
+    """
 
     categories: ClassVar[list[str]] = ["Stimuli"]
     targets: ClassVar[list[str]] = ["PsychoPy"]
@@ -88,6 +126,17 @@ class SetImageComponent(BaseVisualComponent):
         self.params["pos"].hint = "Centre of the image, in pixels from the window's centre"
 
     def writeInitCode(self, buff):
+        """Write the code that makes the stimulus, a
+        :class:`~glarelab.frontend.psychopy_plugin.SetImageStim` of the window ``win``,
+        before the experiment's routines run. An image set every repeat is given as the
+        routine starts (``image=None`` here).
+
+        Parameters
+        ----------
+        buff : psychopy.experiment.IndentingBuffer
+            The compiled script's buffer, at the indentation of the experiment's
+            initialisation code.
+        """
         inits = getInitVals(self.params, "PsychoPy")
         if self.params["image"].updates != "constant":
             inits["image"].val, inits["image"].valType = None, "code"  # set as its routine starts

@@ -39,6 +39,19 @@ def set_image_codes(image: str | Path) -> tuple[np.ndarray, int]:
     exactly: ``image`` is a set's ``NAME.png`` (for a deeper display its ``NAME_<bits>bit.png``
     beside it is read, as the set's manifest names it) or a codes PNG itself.
 
+    Parameters
+    ----------
+    image
+        A set's ``NAME.png`` (its manifest beside it gives the set's bit depth, 8, 10, 12 or
+        16) or a codes PNG, ``NAME_<bits>bit.png``.
+
+    Returns
+    -------
+    codes : numpy.ndarray
+        The integer display codes, ``(H, W)`` or ``(H, W, 3)``, in 0 … 2^bits − 1.
+    bits : int
+        Their bit depth.
+
     Raises
     ------
     FileNotFoundError
@@ -83,10 +96,16 @@ class SetImageStim(visual.ImageStim):
         Put the edges on whole pixels (default): an odd-sized image at a whole-pixel centre of
         an even-sized window has its edges on half pixels, and the nearest-texel lookup
         doubles some rows and columns and drops others.
+    units : {"pix"}
+        The only units a set's image can be shown in, one image pixel on one screen pixel
+        (default); anything else raises.
+    size
+        None (default): the image's own size; else ``(width, height)``, px, which must be the
+        image's own.
     **kwargs
         Anything else PsychoPy's ``ImageStim`` takes (``name``, ``ori``, ``opacity``,
-        ``depth``, ``autoLog``); ``units`` must be ``'pix'`` and ``size`` None (the image's
-        own size: a set's pixel is a screen pixel).
+        ``depth``, ``autoLog``); not ``interpolate``, ``colorSpace``, ``color``, ``mask``,
+        ``flipHoriz`` or ``flipVert``, which are fixed (the codes are drawn as they are).
 
     Raises
     ------
@@ -176,7 +195,17 @@ class SetImageStim(visual.ImageStim):
 
     def setImage(self, value, log=None):
         """Show another image of a set (Builder's "set every repeat"); an array is taken as
-        PsychoPy's texture values, as ``ImageStim`` takes it."""
+        PsychoPy's texture values, as ``ImageStim`` takes it.
+
+        Parameters
+        ----------
+        value : str, pathlib.Path or numpy.ndarray
+            A set's ``NAME.png`` or a codes PNG (as ``image`` of the constructor): the size
+            becomes the new image's and the position is snapped again; or an array of
+            texture values, -1 … 1 (grey) or 0 … 1 (colour), set as it is.
+        log : bool, optional
+            Whether PsychoPy logs the change (None: the stimulus's ``autoLog``).
+        """
         if isinstance(value, np.ndarray):  # ImageStim's own call, from __init__
             super().setImage(value, log=log)
             return

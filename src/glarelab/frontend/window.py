@@ -71,6 +71,11 @@ def open_window(
         PsychoPy's units of the window; default ``'pix'``.
     screen
         The screen's number; default 0.
+    monitor : psychopy.monitors.Monitor, optional
+        The monitor the window is opened with, as
+        :func:`~glarelab.frontend.monitors.window_monitor` makes it (its size, width and
+        viewing distance; its gamma grid the default, so the card's gamma table is kept);
+        None (default): ``window_monitor(None, None)``, no geometry.
 
     Returns
     -------

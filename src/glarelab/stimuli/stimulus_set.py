@@ -8,8 +8,9 @@ any image viewer show the image code for code; for a display of more than 8 bits
 holds the nearest 8-bit codes (a viewer's and an 8-bit screen's copy) and ``NAME_10bit.png``
 (``_12bit``, …) the display's own codes, a 16-bit PNG of the codes scaled to the full 16-bit
 range, ``round(code × 65535 / (2^bits − 1))``, with an ``sBIT`` chunk recording the bit depth
-(:func:`read_png_codes` gives back the exact codes; :class:`glarelab.frontend.psychopy_plugin.
-SetImageStim` shows them on a deep window); luminance-profile plots through the
+(:func:`read_png_codes` gives back the exact codes;
+:class:`glarelab.frontend.psychopy_plugin.SetImageStim` shows them on a deep window);
+luminance-profile plots through the
 disk centre (``profiles_*.png``, like Yoshida et al.'s Figure 3); ``README.md``, an index of
 the files and images; and ``manifest.json``: the validated protocol and its hash, the
 calibration and its hash, the geometry, every image's parameters and encoding report, the
@@ -192,6 +193,18 @@ def write_display_png(path: str | Path, codes: np.ndarray, bit_depth: int) -> No
     buffer shows code ``v`` (a 16-bit PNG opens as Pillow's ``I;16``, which PsychoPy clips to
     black and white).
 
+    Parameters
+    ----------
+    path
+        The PNG to write (written to a temporary name and renamed; an existing file is
+        replaced).
+    codes
+        Integer display codes, ``(H, W)`` (greyscale) or ``(H, W, 3)`` (RGB), in
+        0 … 2^bit_depth − 1.
+    bit_depth
+        The bits per channel of the display the codes are for, 1-16 (8, 10, 12 or 16 for a
+        glarelab calibration).
+
     Raises
     ------
     ValueError
@@ -221,6 +234,19 @@ def write_display_png(path: str | Path, codes: np.ndarray, bit_depth: int) -> No
 def codes_png(name: str, bit_depth: int) -> str:
     """The file of a set's image ``name`` that holds its display codes exactly: ``NAME.png``
     for an 8-bit display, ``NAME_<bits>bit.png`` for a deeper one.
+
+    Parameters
+    ----------
+    name
+        The image's name in the set (its manifest's key), without ``.png``.
+    bit_depth
+        The bits per channel of the set's display (8, 10, 12 or 16); 8 or fewer give
+        ``NAME.png``.
+
+    Returns
+    -------
+    str
+        The file name (no folder).
 
     Examples
     --------

@@ -165,7 +165,21 @@ def measure_costs() -> PathCosts:
 
 def machine_costs(folder: str | os.PathLike | None) -> PathCosts:
     """The costs of this machine at its thread count: read from ``folder`` (the kernel
-    cache's), else measured and written there; :data:`DEFAULT_COSTS` without a folder."""
+    cache's), else measured and written there; :data:`DEFAULT_COSTS` without a folder.
+
+    Parameters
+    ----------
+    folder
+        The folder of the stored costs, ``costs-<threads>-threads.json`` in it (made if
+        missing; a file of another costs version is measured again); None: nothing is
+        measured or stored, :data:`DEFAULT_COSTS`. A folder that cannot be written is not an
+        error: the costs are measured again next time.
+
+    Returns
+    -------
+    PathCosts
+        The costs of each rendering path at :func:`cores` threads.
+    """
     if folder is None:
         return DEFAULT_COSTS
     from glarelab.files.atomic import write_text

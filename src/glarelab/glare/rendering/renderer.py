@@ -275,7 +275,19 @@ class GlareRenderer:
 
     def kernel_norms(self, colour: bool = False) -> tuple[float, float]:
         """``Σ|K|`` and ``(ΣK²)^½`` of the reference kernel, the largest over its channels
-        (found once; from the quadrant of a symmetric kernel, which is not unfolded)."""
+        (found once; from the quadrant of a symmetric kernel, which is not unfolded).
+
+        Parameters
+        ----------
+        colour
+            Whether the colour kernel (one per channel) is meant, else the luminance kernel
+            (default).
+
+        Returns
+        -------
+        tuple of float
+            ``(Σ|K|, (ΣK²)^½)``, dimensionless (the kernel's weights per pixel).
+        """
         if colour not in self._norms:
             kernel = self.kernel(colour)
             if kernel.quadrant is not None:
