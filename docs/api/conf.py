@@ -16,6 +16,8 @@ import inspect
 import sys
 from pathlib import Path
 
+from sphinx.ext.autodoc.mock import mock
+
 # The docs describe the tree they are in, whatever glarelab is installed.
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "src"))
 
@@ -41,6 +43,14 @@ autodoc_default_options = {
     "no-value": True,
     "member-order": "bysource",
 }
+# PsychoPy is imported by the front-end only, and opens a window system when it is: the
+# reference is built without a screen (and PsychoPy's visual module crashes when imported after
+# autodoc), so autodoc reads the front-end against stand-ins for it
+autodoc_mock_imports = ["psychopy", "pyglet"]
+# for the whole build, not only while autodoc imports a module: Sphinx's source analyser
+# imports the module an inherited member comes from (psychopy.visual) on its own
+_mocked = mock(autodoc_mock_imports)
+_mocked.__enter__()
 autodoc_typehints = "signature"
 autodoc_preserve_defaults = True
 autodoc_inherit_docstrings = False  # a method overriding the standard library's has its own

@@ -61,7 +61,9 @@ def test_the_correction_follows_the_rule_and_the_df_are_corrected(df1, eps):
 
 
 def dof(x):
-    return f"{x:.0f}" if float(x).is_integer() else f"{x:.2f}"
+    """Degrees of freedom as APA prints them: a float a hair from a whole number is that number
+    (20 × 0.05000000000000001 is 1)."""
+    return f"{round(x):.0f}" if abs(x - round(x)) < 1e-9 * max(1.0, abs(x)) else f"{x:.2f}"
 
 
 def test_an_effect_whose_sphericity_is_not_estimable_is_decided_on_the_lower_bound():

@@ -16,12 +16,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import Literal, get_args
+from typing import get_args
 
 import numpy as np
 import pandas as pd
 
-from glarelab.analysis.stats import GG_BELOW, correction
+from glarelab.analysis.stats import GG_BELOW, Correction, correction
 
 __all__ = [
     "anova_effect",
@@ -269,9 +269,6 @@ def confidence_interval(low: float, high: float, decimals: int, level: float, **
     ('95 % CI [-6.9, 51.4]', '97.5 % CI [1.20, 3.40]')
     """
     return f"{percent(level)} % CI {interval(low, high, decimals, **unit)}"
-
-
-Correction = Literal["none", "GG", "HF", "LB"]
 
 
 def apa_anova(table: pd.DataFrame, *, correction: Correction) -> list[str]:

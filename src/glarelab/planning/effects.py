@@ -46,13 +46,13 @@ __all__ = [
     "CORRECTIONS",
     "GIRDEN_EPSILON",
     "PARADIGMS",
-    "Correction",
+    "SphericityChoice",
     "anova_effects",
     "chosen_p",
     "effects",
 ]
 
-Correction = Literal["gg", "hf", "girden", "none"]
+SphericityChoice = Literal["gg", "hf", "girden", "none"]
 CORRECTIONS: tuple[str, ...] = ("gg", "hf", "girden", "none")
 GIRDEN_EPSILON = 0.75
 """Girden (1992): Greenhouse–Geisser when ``ε_GG < 0.75``, Huynh–Feldt otherwise."""
@@ -205,7 +205,7 @@ def effects(
     return reader(tables, protocol, participants)
 
 
-def chosen_p(row: Mapping, correction: Correction) -> tuple[float, str]:
+def chosen_p(row: Mapping, correction: SphericityChoice) -> tuple[float, str]:
     """The p-value an effect is judged by, and which it is.
 
     For an F test: ``"gg"`` Greenhouse–Geisser, ``"hf"`` Huynh–Feldt, ``"girden"`` GG when

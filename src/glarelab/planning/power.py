@@ -59,7 +59,7 @@ from glarelab.files.folders import (
     staging_folder,
 )
 from glarelab.files.locks import ProcessLock
-from glarelab.planning.effects import CORRECTIONS, Correction, chosen_p
+from glarelab.planning.effects import CORRECTIONS, SphericityChoice, chosen_p
 
 if TYPE_CHECKING:
     from glarelab.protocols import Protocol
@@ -129,7 +129,7 @@ def summarise(
     records: Sequence[dict],
     *,
     alpha: float = 0.05,
-    correction: Correction = "gg",
+    correction: SphericityChoice = "gg",
     level: float = 0.95,
 ) -> tuple[pd.DataFrame, pd.DataFrame]:
     """Power and effect-size tables from replications' records.
@@ -390,7 +390,7 @@ def write_summary(
     records: Sequence[dict],
     *,
     alpha: float,
-    correction: Correction,
+    correction: SphericityChoice,
     target: float,
     title: str,
 ) -> pd.DataFrame:
@@ -580,7 +580,7 @@ def power_analysis(
     replications: int,
     seed: int,
     alpha: float = 0.05,
-    correction: Correction = "gg",
+    correction: SphericityChoice = "gg",
     target: float = 0.8,
     stimuli: Path | None = None,
     client=None,
