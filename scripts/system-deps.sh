@@ -3,7 +3,8 @@
 # JACK library Psychtoolbox's keyboard loads (PsychoPy's Keyboard times key presses with it),
 # Qt's X11 libraries for the participant dialog, xdotool to send real key events in tests
 # (setxkbmap to give them another keyboard layout), and
-# Chromium with its WebDriver for the test that opens the reports in a real browser.
+# Chromium with its WebDriver for the test that opens the reports in a real browser, and R for
+# the test that reads a report's exported CSVs the way a lab's R script does.
 # Installs them with apt-get where it is available and we may use it; otherwise says what is
 # missing and leaves the decision to the caller (the window tests then fail with that message).
 set -euo pipefail
@@ -18,6 +19,7 @@ command -v xdotool >/dev/null 2>&1 || needed+=(xdotool)
 command -v setxkbmap >/dev/null 2>&1 || needed+=(x11-xkb-utils xkb-data)
 command -v chromium >/dev/null 2>&1 || needed+=(chromium)
 command -v chromedriver >/dev/null 2>&1 || needed+=(chromium-driver)
+command -v Rscript >/dev/null 2>&1 || needed+=(r-base-core)
 have_lib 'libGL.so.1' || needed+=(libgl1)
 have_lib 'libGLU.so.1' || needed+=(libglu1-mesa)
 have_lib 'libjack.so.0' || needed+=(libjack-jackd2-0)
