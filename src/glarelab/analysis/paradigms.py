@@ -43,6 +43,14 @@ def register_paradigm(name: str, analysis: ModuleType | Any) -> None:
     """Register the analysis of the paradigm ``name``: a module (or any object) with every
     name of :data:`REQUIRED`.
 
+    Parameters
+    ----------
+    name
+        The paradigm's name, as a protocol's ``paradigm`` gives it (not yet registered).
+    analysis
+        Its analysis: an object with every name of :data:`REQUIRED` callable
+        (``stimulus_figures`` may be None).
+
     Raises
     ------
     ValueError
@@ -66,6 +74,17 @@ def register_paradigm(name: str, analysis: ModuleType | Any) -> None:
 
 def paradigm_analysis(protocol: Protocol) -> Any:
     """The analysis registered for ``protocol``'s paradigm.
+
+    Parameters
+    ----------
+    protocol : glarelab.protocols.Protocol
+        The study's protocol; its ``paradigm`` names the analysis.
+
+    Returns
+    -------
+    object
+        The analysis registered by :func:`register_paradigm` (a module with every name of
+        :data:`REQUIRED`).
 
     Raises
     ------

@@ -112,6 +112,22 @@ class Parser(argparse.ArgumentParser):
     )
 
     def parse_known_args(self, args=None, namespace=None):
+        """Parse as :meth:`argparse.ArgumentParser.parse_known_args`, refusing an option given
+        twice (unless it adds to a list or counts) and an empty path.
+
+        Parameters
+        ----------
+        args
+            The command-line arguments (list of str); default None: ``sys.argv[1:]``.
+        namespace
+            The object to set the options on; default None: a new
+            :class:`argparse.Namespace`.
+
+        Returns
+        -------
+        tuple
+            The namespace and the list of arguments not parsed.
+        """
         self._given: set[int] = set()  # the options met in this parse
         return super().parse_known_args(args, namespace)
 

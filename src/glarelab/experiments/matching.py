@@ -327,7 +327,23 @@ class MatchingObserver(LookingObserver):
     @staticmethod
     def judged(protocol: Protocol | Mapping[str, Any], geometry: dict):
         """Each method's references, their levels over the clamp ``L_dmax``, and the disk of
-        ``geometry["disk_diameter_deg"]`` (:class:`LookingObserver.judged`)."""
+        ``geometry["disk_diameter_deg"]``
+        (:meth:`glarelab.experiments.engine.LookingObserver.judged`).
+
+        Parameters
+        ----------
+        protocol : glarelab.protocols.Protocol
+            The study's protocol (or its data as a mapping): its ``[glare]`` table's
+            ``l_dmax_cd_m2`` (cd/m²) and ``methods``.
+        geometry
+            The stimulus set's geometry (its manifest's ``geometry``): ``disk_diameter_deg``
+            (deg).
+
+        Returns
+        -------
+        glarelab.observers.fitted_range.JudgedStimuli
+            What the observers judge.
+        """
         from glarelab.observers.fitted_range import JudgedGlare, JudgedStimuli
 
         glare = protocol["glare"]

@@ -43,6 +43,14 @@ PARADIGMS: dict[str, Paradigm] = {}
 def register_paradigm(name: str, paradigm: Paradigm) -> None:
     """Register how the paradigm ``name`` is run.
 
+    Parameters
+    ----------
+    name
+        The paradigm's name, as a protocol's ``paradigm`` gives it (not yet registered).
+    paradigm
+        Its engine (a subclass of :class:`glarelab.experiments.engine.Engine`) and its
+        simulated observer's class (with ``check(protocol)``), or None for no observer.
+
     Raises
     ------
     ValueError
@@ -68,6 +76,16 @@ def register_paradigm(name: str, paradigm: Paradigm) -> None:
 
 def paradigm_run(protocol: Protocol) -> Paradigm:
     """The entry of ``protocol``'s paradigm.
+
+    Parameters
+    ----------
+    protocol : glarelab.protocols.Protocol
+        The study's protocol; its ``paradigm`` names the entry.
+
+    Returns
+    -------
+    Paradigm
+        The engine and the observer registered by :func:`register_paradigm`.
 
     Raises
     ------

@@ -456,7 +456,24 @@ class StaircaseObserver(LookingObserver):
     @staticmethod
     def judged(protocol: Protocol | Mapping[str, Any], geometry: dict):
         """The glare at each strength over the clamp (the display's peak), and the source of
-        ``geometry["source_diameter_deg"]`` (:class:`LookingObserver.judged`)."""
+        ``geometry["source_diameter_deg"]``
+        (:meth:`glarelab.experiments.engine.LookingObserver.judged`).
+
+        Parameters
+        ----------
+        protocol : glarelab.protocols.Protocol
+            The study's protocol (or its data as a mapping): its ``[glare]`` table's
+            ``model``, ``parameters``, ``strengths`` and ``peak_fraction``, and its
+            ``[display]`` table's ``max_cd_m2`` (cd/m²).
+        geometry
+            The stimulus set's geometry (its manifest's ``geometry``): ``source_diameter_deg``
+            (deg).
+
+        Returns
+        -------
+        glarelab.observers.fitted_range.JudgedStimuli
+            What the observers judge.
+        """
         from glarelab.observers.fitted_range import JudgedGlare, JudgedStimuli
 
         glare = protocol["glare"]

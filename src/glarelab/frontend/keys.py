@@ -27,7 +27,18 @@ __all__ = ["ScriptedKeys", "SessionKeys", "unknown_key_names"]
 
 def unknown_key_names(names: list[str]) -> list[str]:
     """The names in ``names`` that PsychoPy gives no key on any system (sorted, once each):
-    a typo in a dry run's scripted keys would be an ignored press."""
+    a typo in a dry run's scripted keys would be an ignored press.
+
+    Parameters
+    ----------
+    names
+        Key names as PsychoPy's keyboard reports them (``"space"``, ``"left"``, ...).
+
+    Returns
+    -------
+    list of str
+        The unknown names, sorted, once each; empty when all are known.
+    """
     from psychopy.hardware.keyboard import keyNamesLinux, keyNamesMac, keyNamesWin
 
     known = set(keyNamesLinux.values()) | set(keyNamesMac.values()) | set(keyNamesWin.values())

@@ -128,7 +128,18 @@ class JudgedStimuli:
     """What a paradigm's simulated observers judge, in the terms of the fitted range: the glare
     methods, the judged disk's luminance (the clamp, cd/m²) and its diameter (deg). Each
     paradigm's observer says it (``judged(protocol, geometry)``), so this module never asks
-    which paradigm a protocol is."""
+    which paradigm a protocol is.
+
+    Parameters
+    ----------
+    glare
+        The glare methods whose images the observers judge, one :class:`JudgedGlare` each.
+    disk_cd_m2
+        The judged disk's luminance as displayed, the clamp (cd/m², > 0; fitted on
+        :data:`FITTED_DISK_CD_M2`).
+    disk_diameter_deg
+        The judged disk's diameter (deg, > 0; fitted on :data:`FITTED_DISK_DIAMETER_DEG`).
+    """
 
     glare: tuple[JudgedGlare, ...]
     disk_cd_m2: float
@@ -180,6 +191,20 @@ def warn_outside_fitted_range(study: str, judged: JudgedStimuli) -> list[str]:
     """Warn once, with every departure, when the stimuli a study's observers judge lie outside
     what the observers were fitted on (:func:`fitted_range_departures`); return the
     departures.
+
+    Parameters
+    ----------
+    study
+        How the warning names the study (its protocol's study name).
+    judged
+        The glare methods, the disk's luminance and its diameter, as a paradigm's observer
+        gives them (``judged(protocol, geometry)``).
+
+    Returns
+    -------
+    list of str
+        The departures, as :func:`fitted_range_departures` returns them; empty inside the
+        fitted range (and no warning).
 
     Warns
     -----

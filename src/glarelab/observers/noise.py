@@ -96,6 +96,19 @@ def observer_gains(z: ArrayLike, gain_sd: float) -> np.ndarray:
     """Observers' gains on the illusion, ``g = max(1 + σ_g z, 0)``, from standard normal draws
     ``z`` (``g ~ N(1, σ_g)`` clipped at 0).
 
+    Parameters
+    ----------
+    z
+        Standard normal draws, one per observer (dimensionless; any shape).
+    gain_sd
+        ``σ_g``, the between-observer SD of the gain (dimensionless, ≥ 0; the fitted value
+        is :data:`GAIN_SD`).
+
+    Returns
+    -------
+    numpy.ndarray
+        The gains ``g`` (dimensionless, ≥ 0), of the shape of ``z``.
+
     Examples
     --------
     >>> observer_gains([-10.0, 0.0, 1.0], 0.2).tolist()
@@ -109,6 +122,22 @@ def perceived_brightness(
 ) -> np.ndarray:
     """An observer's brightness ``B_obs = L_d + g (B - L_d)`` (cd/m²) of a disk of luminance
     ``L_d`` that the model sees as bright as ``B``, for a gain ``g`` (broadcast).
+
+    Parameters
+    ----------
+    disk_cd_m2
+        ``L_d``, the disk's own luminance as displayed (cd/m², ≥ 0).
+    brightness_cd_m2
+        ``B``, the model's brightness of the disk: the luminance of a glare-free disk that
+        looks as bright (cd/m²).
+    gain
+        ``g``, the observer's gain on the illusion (dimensionless, ≥ 0; 1 is the model's
+        observer, 0 sees no illusion).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``B_obs`` (cd/m²), the three arguments broadcast together.
 
     Examples
     --------
@@ -127,6 +156,25 @@ def target_settings(
     """The brightness wanted for the "slightly darker" and "slightly brighter" targets,
     ``B_obs (1 ∓ m) max(1 + σ_s z, 0)``: shape ``(..., 2)`` for ``perceived_cd_m2`` of shape
     ``(...)`` and standard normal draws ``z`` of shape ``(..., 2)``.
+
+    Parameters
+    ----------
+    perceived_cd_m2
+        ``B_obs``, the observer's brightness of the reference disk (cd/m², shape ``(...)``).
+    z
+        Standard normal draws, the darker target's and the brighter target's (shape
+        ``(..., 2)``).
+    margin
+        ``m``, the "slightly but visibly" fraction (dimensionless, in [0, 0.5); the assumed
+        value is :data:`MARGIN`).
+    setting_sd
+        ``σ_s``, the multiplicative SD of each setting (dimensionless, ≥ 0; the fitted value
+        is :data:`SETTING_SD`).
+
+    Returns
+    -------
+    numpy.ndarray
+        The darker and the brighter target's brightness (cd/m², shape ``(..., 2)``).
 
     Examples
     --------
@@ -150,6 +198,25 @@ def relative_difference(
     ``B_1`` and ``B_2``: ``2 (B_1 - B_2) / (B_1 + B_2) + (shift + σ_c z)`` (0 before the noise
     when both are black), ``shift`` the observer's bias for the block in favour of the first.
 
+    Parameters
+    ----------
+    first_cd_m2, second_cd_m2
+        ``B_1``, ``B_2``: the observer's brightness of the first and the second image's disk
+        (cd/m², ≥ 0; broadcast).
+    z
+        Standard normal draws of the comparison noise (dimensionless; broadcast).
+    comparison_sd
+        ``σ_c``, the SD of the relative difference seen (dimensionless, ≥ 0; the assumed
+        value is :data:`COMPARISON_SD`).
+    shift
+        The observer's bias for the current block in favour of the first image (relative
+        difference, dimensionless; 0: none; broadcast).
+
+    Returns
+    -------
+    numpy.ndarray
+        The relative difference seen (dimensionless; positive: the first looks brighter).
+
     Examples
     --------
     >>> float(relative_difference(110.0, 90.0, 0.0, comparison_sd=0.04))
@@ -165,6 +232,20 @@ def relative_difference(
 def comparison_answers(difference: ArrayLike, neither_band: float) -> np.ndarray:
     """The answer to a comparison from the relative difference seen: 1 (the first looks
     brighter), -1 (the second), 0 (neither: within ``±b``).
+
+    Parameters
+    ----------
+    difference
+        The relative difference seen, as :func:`relative_difference` returns it
+        (dimensionless; any shape).
+    neither_band
+        ``b``, the half-width of the band answered "neither" (relative difference,
+        dimensionless, in [0, 1]; the assumed value is :data:`NEITHER_BAND`).
+
+    Returns
+    -------
+    numpy.ndarray
+        Integers 1, -1 or 0, of the shape of ``difference``.
 
     Examples
     --------
@@ -246,7 +327,23 @@ class ObserverNoise:
         check_in_range("size_tolerance", self.size_tolerance, -10.0, 10.0)
 
     def draw(self, rng: np.random.Generator) -> Observer:
-        """A new observer: the gain ``g ~ N(1, gain_sd)`` clipped at 0, drawn from ``rng``."""
+        """A new observer: the gain ``g ~ N(1, gain_sd)`` clipped at 0, drawn from ``rng``.
+
+        Parameters
+        ----------
+        rng
+            The generator to draw the gain from (:class:`numpy.random.Generator`).
+
+        Returns
+        -------
+        Observer
+            The observer, with this noise.
+
+        Raises
+        ------
+        ValueError
+            When ``rng`` is not a :class:`numpy.random.Generator`.
+        """
         if not isinstance(rng, np.random.Generator):
             raise ValueError(f"rng must be a numpy.random.Generator; got {type(rng).__name__}")
         return Observer(
@@ -255,7 +352,23 @@ class ObserverNoise:
 
     def block_shift(self, rng: np.random.Generator) -> float:
         """An observer's shift for one block of comparisons, ``N(0, block_sd)``; pass it to
-        :meth:`Observer.compare` as ``shift``."""
+        :meth:`Observer.compare` as ``shift``.
+
+        Parameters
+        ----------
+        rng
+            The generator to draw the shift from (:class:`numpy.random.Generator`).
+
+        Returns
+        -------
+        float
+            The shift (relative difference, dimensionless; 0 when ``block_sd`` is 0).
+
+        Raises
+        ------
+        ValueError
+            When ``rng`` is not a :class:`numpy.random.Generator`.
+        """
         if not isinstance(rng, np.random.Generator):
             raise ValueError(f"rng must be a numpy.random.Generator; got {type(rng).__name__}")
         return float(rng.normal(0.0, self.block_sd)) if self.block_sd > 0 else 0.0
@@ -267,6 +380,19 @@ class Observer:
 
     Every method that draws noise takes the generator to draw from, so a trial's answer is
     fixed by the generator the caller seeds for it.
+
+    Parameters
+    ----------
+    gain
+        ``g``, the observer's gain on the illusion (dimensionless, in [0, 100]; 1 is the
+        model's observer), as :meth:`ObserverNoise.draw` draws it.
+    noise
+        The noise of its settings, answers and comparisons.
+
+    Raises
+    ------
+    ValueError
+        For a gain outside [0, 100].
 
     Examples
     --------
@@ -286,12 +412,38 @@ class Observer:
         check_in_range("gain", self.gain, 0.0, 100.0)
 
     def brightness(self, percept: Percept) -> float:
-        """This observer's brightness, ``L_d + g (B - L_d)`` (cd/m²)."""
+        """This observer's brightness, ``L_d + g (B - L_d)`` (cd/m²).
+
+        Parameters
+        ----------
+        percept
+            What the model perceives of the disk in one image (its ``disk_cd_m2`` is ``L_d``,
+            its ``brightness_cd_m2`` is ``B``).
+
+        Returns
+        -------
+        float
+            The observer's brightness of the disk (cd/m²).
+        """
         return float(perceived_brightness(percept.disk_cd_m2, percept.brightness_cd_m2, self.gain))
 
     def settings(self, percept: Percept, rng: np.random.Generator) -> tuple[float, float]:
         """The brightness (cd/m², as a glare-free disk) wanted for the "slightly darker" and
-        "slightly brighter" targets: ``B_obs (1 ∓ m)(1 + σ_s z)``."""
+        "slightly brighter" targets: ``B_obs (1 ∓ m)(1 + σ_s z)``.
+
+        Parameters
+        ----------
+        percept
+            What the model perceives of the reference disk.
+        rng
+            The generator to draw the two settings' noise from
+            (:class:`numpy.random.Generator`).
+
+        Returns
+        -------
+        tuple of float
+            The darker and the brighter target's brightness (cd/m²).
+        """
         darker, brighter = target_settings(
             self.brightness(percept),
             rng.standard_normal(2),
@@ -304,7 +456,25 @@ class Observer:
         self, reference: Percept, target: Percept, rng: np.random.Generator
     ) -> tuple[bool, bool, bool]:
         """Yes/no to Yoshida's Table 1 questions: does the reference glow (Q1), is there a
-        bright ring (Q2), are reference and target disks the same size (Q3)?"""
+        bright ring (Q2), are reference and target disks the same size (Q3)?
+
+        Parameters
+        ----------
+        reference
+            What the model perceives of the reference image's disk (its ``glow`` for Q1, its
+            ``ring`` for Q2, its ``apparent_diameter_deg`` for Q3).
+        target
+            What it perceives of the target image's disk (its ``apparent_diameter_deg``, deg,
+            > 0, for Q3).
+        rng
+            The generator to draw the three criteria's noise from
+            (:class:`numpy.random.Generator`).
+
+        Returns
+        -------
+        tuple of bool
+            The answers to Q1, Q2 and Q3 (True: yes).
+        """
         n = self.noise
         z = rng.standard_normal(3)
         glow = reference.glow + n.glow_criterion_sd * z[0] > n.glow_criterion
@@ -324,7 +494,23 @@ class Observer:
         """Which of two images looks brighter: their relative difference
         ``2 (B_1 - B_2) / (B_1 + B_2) + shift + N(0, σ_c)``, "neither" within ``±b``.
         ``shift`` is the observer's bias for the current block (:meth:`ObserverNoise.block_shift`)
-        in favour of ``first``."""
+        in favour of ``first``.
+
+        Parameters
+        ----------
+        first, second
+            What the model perceives of the first and the second image's disk.
+        rng
+            The generator to draw the comparison noise from (:class:`numpy.random.Generator`).
+        shift
+            The observer's bias for the current block in favour of ``first`` (relative
+            difference, dimensionless; 0: none).
+
+        Returns
+        -------
+        {"first", "second", "neither"}
+            The image that looks brighter, or "neither".
+        """
         difference = relative_difference(
             self.brightness(first),
             self.brightness(second),
@@ -339,6 +525,17 @@ class Observer:
 def observer_parameters(table: dict) -> tuple[BrightnessModel, ObserverNoise]:
     """The model and the noise from a protocol's ``[observer]`` table: any field of
     :class:`BrightnessModel` or :class:`ObserverNoise`; the others keep their fitted defaults.
+
+    Parameters
+    ----------
+    table
+        The protocol's ``[observer]`` table: field names of either class to their values
+        (each within that field's range; empty: every default).
+
+    Returns
+    -------
+    tuple of BrightnessModel and ObserverNoise
+        The brightness model and the observers' noise.
 
     Raises
     ------

@@ -273,7 +273,18 @@ def check_glare_model(model: Any, parameters: Any, where: str, problems: list[st
 
 
 def repeated_names(names: list) -> list:
-    """The names that repeat, compared ignoring case (they become file names)."""
+    """The names that repeat, compared ignoring case (they become file names).
+
+    Parameters
+    ----------
+    names
+        The names to check (strings are compared case-folded, other values as they are).
+
+    Returns
+    -------
+    list
+        Each name that repeats, as written, sorted by its text; empty when none does.
+    """
     folded = [n.casefold() if isinstance(n, str) else n for n in names]
     return sorted({n for n, f in zip(names, folded, strict=True) if folded.count(f) > 1}, key=str)
 

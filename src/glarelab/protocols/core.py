@@ -64,6 +64,14 @@ def register_paradigm(name: str, contract: ModuleType | Any) -> None:
     (:mod:`glarelab.stimuli.paradigms`, :mod:`glarelab.experiments.paradigms`,
     :mod:`glarelab.analysis.paradigms`; docs/extending.md).
 
+    Parameters
+    ----------
+    name
+        The paradigm's name: a lower-case identifier, not yet registered.
+    contract
+        Its contract: an object (usually a module) with ``SCHEMA`` (a mapping), ``check`` and
+        ``columns`` (callables).
+
     Raises
     ------
     ValueError

@@ -56,7 +56,18 @@ class ParadigmStimuli:
 
 
 def always_shows(protocol: Protocol) -> bool:
-    """``shows`` of a paradigm every protocol of which shows images."""
+    """``shows`` of a paradigm every protocol of which shows images.
+
+    Parameters
+    ----------
+    protocol : glarelab.protocols.Protocol
+        The study's protocol (not read).
+
+    Returns
+    -------
+    bool
+        Always True.
+    """
     return True
 
 
@@ -65,6 +76,14 @@ PARADIGMS: dict[str, ParadigmStimuli] = {}
 
 def register_paradigm(name: str, stimuli: ParadigmStimuli) -> None:
     """Register how the paradigm ``name``'s stimuli are made and drawn.
+
+    Parameters
+    ----------
+    name
+        The paradigm's name, as a protocol's ``paradigm`` gives it (not yet registered).
+    stimuli
+        Its entry: callable ``build``, ``first_row`` and ``shows``, and ``profile_groups``
+        None or two names (image kind, key).
 
     Raises
     ------

@@ -45,6 +45,17 @@ class ShownSet:
 
     def luminance(self, name: str) -> np.ndarray:
         """The luminance (cd/m²) the display shows for image ``name``:
-        ``decode(encode(image))``."""
+        ``decode(encode(image))``.
+
+        Parameters
+        ----------
+        name
+            The image's name in the stimulus set's manifest.
+
+        Returns
+        -------
+        numpy.ndarray
+            The displayed luminance (cd/m²), of the image's shape.
+        """
         codes, _report = self.calibration.encode(self.set.image(name))
         return self.calibration.decode(codes)

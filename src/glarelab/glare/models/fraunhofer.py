@@ -574,6 +574,9 @@ def psf_pixel_integrated(
         default None.
     reach_deg
         As for :func:`pixel_integrated_psf`; default None: the largest.
+    edge_transfer
+        Divide out the transfer of the aperture's antialiased edges, as for
+        :func:`pixel_integrated_psf`. Default False.
 
     Returns
     -------

@@ -323,6 +323,9 @@ def weights(
     age
         Observer's age in years, or ``None`` for the standard observer of eqs. 5, 8, 9.
         Eq. 10 moves ``6.9e-9 A⁴`` of the weight from ``f0`` to ``f2``.
+    warn
+        Warn for an age outside 20-70 years (default True); False for a caller that has
+        warned once already.
 
     Returns
     -------

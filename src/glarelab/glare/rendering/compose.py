@@ -42,6 +42,20 @@ def check_composition(composition: object, method: object = None, *, where: str)
     method="Yoshida2008")`` read as a model choice and ran with another meaning; the keyword
     is refused whatever it holds.
 
+    Parameters
+    ----------
+    composition
+        The composition rule, one of :data:`COMPOSITIONS`.
+    method
+        The removed keyword's value, as the caller received it; only None is taken.
+    where
+        The caller's name, which the error names (``"render_glare"``).
+
+    Returns
+    -------
+    str
+        ``composition``.
+
     Raises
     ------
     TypeError
