@@ -591,7 +591,7 @@ def analyse(dataset: Dataset, protocol: Protocol) -> dict:
         "captions": {k: v for k, v in CAPTIONS.items() if k in tables},
         # for JASP's repeated-measures ANOVA: a participant's match in each method × level
         # (the level's position, as the ANOVA's L_disk)
-        "wide": participants_wide(study.trials, "match_cd_m2", ["method", "L_disk"]),
+        "wide": participants_wide(study.trials, "match_cd_m2", ["method", LEVEL_POSITION]),
     }
 
 
