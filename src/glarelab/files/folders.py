@@ -20,10 +20,12 @@ import errno
 import json
 import os
 import shutil
+import time
 from collections.abc import Iterable
 from pathlib import Path
 
 from glarelab.files.atomic import _alive, fsync_folder, glob_escape, write_text
+from glarelab.files.locks import ProcessLock
 
 __all__ = [
     "LISTING",
@@ -38,6 +40,7 @@ __all__ = [
 ]
 
 LISTING = ".glarelab-files.json"  # the files glarelab wrote into a folder, by kind of output
+LISTING_LOCK = ".glarelab-files.lock"  # held while the listing is read, changed and written
 
 
 def _listing(folder: Path) -> dict[str, str]:
@@ -160,15 +163,16 @@ def claim_files(folder: Path, names: Iterable[str], kind: str) -> None:
         Naming the first existing file the listing does not hold.
     """
     names = list(names)
-    listed = _listing(folder)
-    for name in names:
-        path = folder / name
-        if (path.exists() or path.is_symlink()) and name not in listed:
-            raise ValueError(
-                f"{path} exists and glarelab did not write it there; {kind} would overwrite "
-                "it, so give another folder or move the file (nothing was changed)"
-            )
-    _write_listing(folder, listed | dict.fromkeys(names, kind))
+    with _listing_held(Path(folder)):
+        listed = _listing(folder)
+        for name in names:
+            path = folder / name
+            if (path.exists() or path.is_symlink()) and name not in listed:
+                raise ValueError(
+                    f"{path} exists and glarelab did not write it there; {kind} would "
+                    "overwrite it, so give another folder or move the file (nothing was changed)"
+                )
+        _write_listing(folder, listed | dict.fromkeys(names, kind))
 
 
 def listed_files(folder: Path) -> dict[str, str]:
@@ -202,7 +206,35 @@ def list_files(folder: Path, names: Iterable[str], kind: str) -> None:
         ``'power'``, ...): an output replaces or overwrites only files of its own kind.
     """
     folder = Path(folder)
-    _write_listing(folder, _listing(folder) | dict.fromkeys(names, kind))
+    with _listing_held(folder):
+        _write_listing(folder, _listing(folder) | dict.fromkeys(names, kind))
+
+
+LISTING_WAIT_S = 60.0  # how long a process waits for another's update of a folder's listing
+
+
+@contextlib.contextmanager
+def _listing_held(folder: Path):
+    """Hold a folder's listing while it is read, changed and written: processes writing into
+    one folder at once (four ``calibrate fit`` to one ``--out``) each add their files, where
+    the last write would otherwise keep only its own."""
+    lock = ProcessLock(folder / LISTING_LOCK, refusal=lambda holder: BlockingIOError(holder))
+    deadline = time.monotonic() + LISTING_WAIT_S
+    while True:
+        try:
+            lock.acquire()
+            break
+        except BlockingIOError as held:
+            if time.monotonic() > deadline:
+                raise TimeoutError(
+                    f"{folder / LISTING}: another glarelab process ({held}) has held it for "
+                    f"{LISTING_WAIT_S:.0f} s; nothing was written"
+                ) from None
+            time.sleep(0.01)
+    try:
+        yield
+    finally:
+        lock.release()
 
 
 def _write_listing(folder: Path, files: dict[str, str]) -> None:
