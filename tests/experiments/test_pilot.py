@@ -68,13 +68,14 @@ def test_a_real_session_refuses_an_unverified_calibration(spencer, tmp_path, cap
 
     protocol, stimuli, calibration = spencer
     out = tmp_path / "data"
-    with pytest.warns(UserWarning, match="not been verified"):
-        code = main(
-            ["run", str(protocol), "--participant", "P01", "--stimuli", str(stimuli),
-             "--calibration", str(calibration), "--out", str(out)]
-        )  # fmt: skip
+    code = main(
+        ["run", str(protocol), "--participant", "P01", "--stimuli", str(stimuli),
+         "--calibration", str(calibration), "--out", str(out)]
+    )  # fmt: skip
     refused = capsys.readouterr().err
     assert code == 2
+    # the command prints a warning as one line
+    assert "warning (UserWarning): the display calibration has not been verified" in refused
     assert "the display calibration is unverified" in refused
     assert "--pilot" in refused and "--allow-uncalibrated" in refused
     assert not out.exists() or not [p for p in out.iterdir() if not p.name.startswith(".")]
