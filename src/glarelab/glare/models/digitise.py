@@ -52,6 +52,9 @@ _PIXEL_AREA_SR_PER_DEG2 = (math.pi / 180.0) ** 2
 _SAMPLE_CHUNK = 4_000_000  # samples evaluated at once, bounding memory to ~100 MB
 
 
+ROUNDING_OUTSIDE = 1e-12  # a kernel's energy outside above -this is rounding of 0
+
+
 class Kernel:
     """A digitised glare kernel and its energy account.
 
@@ -119,6 +122,16 @@ class Kernel:
             raise ValueError("Kernel needs pixel_deg")
         if quadrant is not None:
             quadrant = _read_only(quadrant)
+        # light outside a kernel is never negative: -1e-16 is the rounding of a kernel that
+        # holds all of it (a total summed to one plus a few ulp)
+        if np.ndim(energy_outside) == 0:
+            if -ROUNDING_OUTSIDE < float(energy_outside) < 0:
+                energy_outside = 0.0
+        else:
+            energy_outside = np.asarray(energy_outside, dtype=float)
+            rounded = (energy_outside < 0) & (energy_outside > -ROUNDING_OUTSIDE)
+            if rounded.any():
+                energy_outside = np.where(rounded, 0.0, energy_outside)
         fields = {
             "_values": values,
             "quadrant": quadrant,
