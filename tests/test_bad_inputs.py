@@ -820,6 +820,12 @@ CASES = [
         "run spencer1995 --participant P1 --monitor-folder {box} --out {box}/data",
         "--monitor-folder needs --monitor NAME",
     ),
+    ("examples-into-a-file", "examples {box}/afile.txt", "afile.txt"),
+    (
+        "import-psychopy-missing",
+        "import-psychopy yoshida2008 {box}/missing.csv --out {box}/imported",
+        "missing.csv",
+    ),
 ]
 
 
