@@ -216,7 +216,8 @@ def protocol_path(name: str | Path) -> Path:
     ----------
     name
         A path (ending in ``.toml``, existing, or with a folder in it), taken as it is; or the
-        name of a shipped protocol (:func:`shipped_protocols`), such as ``'yoshida2008'``.
+        name of a shipped protocol (:func:`shipped_protocols`: the TOML files of
+        ``src/glarelab/protocols/``, without the suffix).
 
     Returns
     -------
