@@ -173,15 +173,17 @@ def memoised(module, name: str, monkeypatch) -> None:
 
 
 def test_a_killed_stimulus_build_leaves_the_earlier_set_or_the_new_one(tmp_path, monkeypatch):
-    import glarelab.stimuli.stimulus_set as stimulus_set
+    import dataclasses
 
-    builders = dict(stimulus_set.BUILDERS)
-    for paradigm in builders:
+    from glarelab.stimuli import paradigms
+
+    for paradigm, entry in list(paradigms.PARADIGMS.items()):
         memo = type("Memo", (), {})()
-        memo.build = builders[paradigm]
+        memo.build = entry.build
         memoised(memo, "build", monkeypatch)
-        builders[paradigm] = memo.build
-    monkeypatch.setattr(stimulus_set, "BUILDERS", builders)
+        monkeypatch.setitem(
+            paradigms.PARADIGMS, paradigm, dataclasses.replace(entry, build=memo.build)
+        )
     old, new = tmp_path / "old.toml", tmp_path / "new.toml"
     text = tiny_matching_protocol()
     old.write_text(text)
