@@ -232,7 +232,12 @@ def test_documented_commands_run_in_a_fresh_clone(document, tmp_path):
         if words[1] == "power":
             # a documented run is a thousand replications on every core: the same command on
             # two, without a cluster (tests/planning check the estimates themselves)
-            words += ["--replications", "2", "--workers", "0"]
+            # (given once: a flag given twice is refused)
+            for flag, value in (("--replications", "2"), ("--workers", "0")):
+                if flag in words:
+                    words[words.index(flag) + 1] = value
+                else:
+                    words += [flag, value]
         argv = [sys.executable, "-m", "glarelab", *words[1:]]
         if "--scripted-keys" in words:
             argv += [] if "--pilot" in words else ON_XVFB  # a pilot accepts the screen itself
