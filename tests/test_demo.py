@@ -32,7 +32,11 @@ def test_demo_report_matches_a_fresh_analysis_and_names_the_protocol(tmp_path):
     protocol = load_protocol("yoshida2008")
     again = write_report(protocol, csvs, tmp_path / "again", stimuli=out / "stimuli").parent
     for table in sorted((out / "report").glob("*.csv")):
-        assert_frame_equal(pd.read_csv(table), pd.read_csv(again / table.name), check_exact=True)
+        # to the last bits: statsmodels' ANOVA solves by BLAS, whose sums may differ between a
+        # process and another by an ulp (the F column did, in a full run)
+        assert_frame_equal(
+            pd.read_csv(table), pd.read_csv(again / table.name), check_exact=False, rtol=1e-12
+        )
     methods = (out / "report" / "methods.md").read_text()
     for fact in (
         "10 simulated observers",
