@@ -42,6 +42,7 @@ __all__ = [
     "aperture_from_image",
     "aperture_particles",
     "aperture_pupil",
+    "half_plane_coverage",
     "ramp_radius_mm",
 ]
 
@@ -190,8 +191,9 @@ def aperture_diaphragm(
     Returns
     -------
     numpy.ndarray
-        ``(n, n)`` amplitude transmittance, 0 (opaque) to 1 (clear), edges antialiased over
-        one sample.
+        ``(n, n)`` amplitude transmittance, 0 (opaque) to 1 (clear): each sample the part of
+        its cell inside the polygon's edges (:func:`half_plane_coverage`), which holds the
+        polygon's area at every rotation.
 
     Examples
     --------
@@ -205,10 +207,58 @@ def aperture_diaphragm(
     x, y = grid.coordinates()
     apothem = diameter_mm / 2 * math.cos(math.pi / sides)
     angles = math.radians(rotation_deg) + (np.arange(sides) + 0.5) * 2 * math.pi / sides
-    distance = np.full(x.shape, np.inf)
+    t = np.ones(x.shape)
     for angle in angles:
-        distance = np.minimum(distance, apothem - (x * math.cos(angle) + y * math.sin(angle)))
-    return grid.antialias(distance)
+        inside = apothem - (x * math.cos(angle) + y * math.sin(angle))
+        t = np.minimum(t, half_plane_coverage(inside, angle, grid.spacing_mm))
+    return t
+
+
+def half_plane_coverage(
+    signed_distance_mm: np.ndarray, normal_rad: float, spacing_mm: float
+) -> np.ndarray:
+    """The fraction of each sample's square cell inside a straight edge (an exact box filter).
+
+    Parameters
+    ----------
+    signed_distance_mm
+        Each sample's distance to the edge, mm: positive inside.
+    normal_rad
+        Direction of the edge's normal, radians from the x axis.
+    spacing_mm
+        The grid spacing ``δ``, mm: the cell's side.
+
+    Returns
+    -------
+    numpy.ndarray
+        Coverage in [0, 1]. Along an axis it is the ramp ``clip(1/2 + s/δ, 0, 1)``; at other
+        angles the cells of a row overlap the edge at every phase, and a ramp one sample wide
+        misses a straight edge's area by up to 0.3 % at 100 samples across (a square at 45°).
+
+    Notes
+    -----
+    A cell's points project on the normal as the sum of two uniform variables of widths
+    ``a = δ|cos φ|`` and ``b = δ|sin φ|``; the coverage is their trapezoidal distribution
+    function at ``s``. The cells tile the plane, so the coverages of any straight edge sum to
+    its area exactly.
+
+    Examples
+    --------
+    >>> float(half_plane_coverage(np.array(0.0), 0.3, 0.1))  # a sample on the edge: half
+    0.5
+    """
+    a = spacing_mm * abs(math.cos(normal_rad))
+    b = spacing_mm * abs(math.sin(normal_rad))
+    short, long = min(a, b), max(a, b)
+    u = np.clip(
+        np.asarray(signed_distance_mm, dtype=float) + (short + long) / 2, 0.0, short + long
+    )
+    if short <= 1e-12 * spacing_mm:
+        return np.clip(u / long, 0.0, 1.0)
+    rise = u * u / (2.0 * short * long)
+    middle = (u - short / 2.0) / long
+    fall = 1.0 - (short + long - u) ** 2 / (2.0 * short * long)
+    return np.where(u < short, rise, np.where(u < long, middle, fall))
 
 
 def aperture_eyelid(
