@@ -1,6 +1,6 @@
 """What the analysis layer passes around: the validated trials of a study (:class:`Dataset`), a
-paradigm's design (:class:`Design`), and the error that names every problem of the data
-(:class:`DataError`).
+paradigm's design (:class:`Design`), the error that names every problem of the data
+(:class:`DataError`), and the ``flags`` of a paradigm that lists none (:func:`no_flags`).
 
 Reading and checking session files is :mod:`glarelab.analysis.load`'s job; each paradigm's
 module (:mod:`glarelab.analysis.paradigms`) analyses a :class:`Dataset` and describes its design
@@ -10,10 +10,14 @@ with a :class:`Design`. This module imports nothing of the suite, so that both c
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import pandas as pd
 
-__all__ = ["DataError", "Dataset", "Design", "where"]
+if TYPE_CHECKING:
+    from glarelab.protocols import Protocol
+
+__all__ = ["DataError", "Dataset", "Design", "no_flags", "where"]
 
 
 class DataError(ValueError):
@@ -124,3 +128,27 @@ def where(row) -> str:
         ``'FILE, line N'``.
     """
     return f"{row['_file']}, line {row['_line']}"
+
+
+def no_flags(trials: pd.DataFrame, protocol: Protocol) -> list[str]:
+    """The ``flags`` of a paradigm whose sessions record no trial that contradicts the task:
+    trials to list in the report though analysed as recorded, none.
+
+    Parameters
+    ----------
+    trials
+        The trials read, typed by the protocol's columns (``_file`` and ``_line`` name each).
+    protocol : glarelab.protocols.Protocol
+        The study's protocol, of this paradigm.
+
+    Returns
+    -------
+    list of str
+        Empty: this paradigm lists none.
+
+    Examples
+    --------
+    >>> no_flags(pd.DataFrame(), None)
+    []
+    """
+    return []

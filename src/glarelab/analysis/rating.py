@@ -34,7 +34,7 @@ from glarelab.analysis.apa import (
     series,
     unit_interval,
 )
-from glarelab.analysis.dataset import Dataset, Design
+from glarelab.analysis.dataset import Dataset, Design, no_flags
 from glarelab.analysis.effects import hodges_lehmann, rank_biserial
 from glarelab.analysis.export import participants_wide
 from glarelab.analysis.figures import Figure, plt, png
@@ -83,22 +83,7 @@ def design(protocol: Protocol) -> Design:
     )
 
 
-def flags(trials: pd.DataFrame, protocol: Protocol) -> list[str]:
-    """Trials to list in the report though analysed as recorded: none.
-
-    Parameters
-    ----------
-    trials
-        The trials read, typed by the protocol's columns (``_file`` and ``_line`` name each).
-    protocol : glarelab.protocols.Protocol
-        The study's protocol, of this paradigm.
-
-    Returns
-    -------
-    list of str
-        Empty: this paradigm lists none.
-    """
-    return []
+flags = no_flags  # trials to list in the report though analysed as recorded: none
 
 
 def methods(protocol: Protocol, participants: int, who: str) -> str:

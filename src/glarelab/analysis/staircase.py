@@ -32,7 +32,7 @@ from scipy import stats as sps
 from threadpoolctl import threadpool_limits
 
 from glarelab.analysis.apa import anova_effect, apa_anova, apa_p, fixed, series, unit_interval
-from glarelab.analysis.dataset import Dataset, Design, where
+from glarelab.analysis.dataset import Dataset, Design, no_flags, where
 from glarelab.analysis.effects import (
     marginal_means,
     with_eta2_ci,
@@ -101,22 +101,7 @@ def design(protocol: Protocol) -> Design:
     )
 
 
-def flags(trials: pd.DataFrame, protocol: Protocol) -> list[str]:
-    """Trials to list in the report though analysed as recorded: none.
-
-    Parameters
-    ----------
-    trials
-        The trials read, typed by the protocol's columns (``_file`` and ``_line`` name each).
-    protocol : glarelab.protocols.Protocol
-        The study's protocol, of this paradigm.
-
-    Returns
-    -------
-    list of str
-        Empty: this paradigm lists none.
-    """
-    return []
+flags = no_flags  # trials to list in the report though analysed as recorded: none
 
 
 def methods(protocol: Protocol, participants: int, who: str) -> str:
