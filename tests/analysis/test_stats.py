@@ -18,6 +18,8 @@ from scipy import stats as sps
 
 from glarelab.analysis.apa import apa_anova, apa_F, apa_p, apa_t
 from glarelab.analysis.stats import (
+    ROUNDING,
+    _no_variance,
     holm,
     pairwise_tests,
     rm_anova,
@@ -676,3 +678,20 @@ def test_the_paired_test_and_the_anova_agree_on_a_difference_at_rounding():
         pd.DataFrame(rows), "match_cd_m2", ["level", "method"], "participant", untestable="report"
     )
     assert table.set_index("source").loc["method", "note"].startswith("not testable")
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    rms=st.floats(min_value=1e-100, max_value=1e100),
+    steps=st.integers(min_value=-3, max_value=3),
+)
+def test_the_paired_test_decides_no_variance_as_it_did_by_its_sd(rms, steps):
+    """ttest_paired asks the ANOVA's rule of the differences' variance (sd²) where it compared
+    their sd with ``ROUNDING`` of the values' RMS: squaring is strictly increasing on normal
+    numbers, so the two agree at every sd, the threshold's neighbours included."""
+    threshold = ROUNDING * rms
+    sd = threshold
+    for _ in range(abs(steps)):
+        sd = math.nextafter(sd, math.inf if steps > 0 else 0.0)
+    assert _no_variance(sd**2, rms) == (sd <= threshold)
+    assert _no_variance(float("nan"), rms)  # the ANOVA's NaN variance: no test

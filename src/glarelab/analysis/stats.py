@@ -92,6 +92,14 @@ ROUNDING = 1e-12  # error SD below this fraction of the data's RMS is taken as n
 WILCOXON_EXACT_BELOW_N = 50  # R's wilcox.test: exact p for fewer non-zero differences, no ties
 
 
+def _no_variance(variance: float, rms: float) -> bool:
+    """Whether a spread is no variance but rounding: ``variance`` (in the data's unit squared)
+    at most ``(ROUNDING * rms)²``, ``rms`` the data's root mean square, or NaN. The one rule
+    of :func:`rm_anova` (an effect's error variance) and :func:`ttest_paired` (the
+    differences'), so that the two never disagree on whether a comparison has variance."""
+    return not variance > (ROUNDING * rms) ** 2
+
+
 def _helmert(levels: int) -> np.ndarray:
     """Orthonormal contrasts ``(levels, levels - 1)``: columns orthogonal to 1 and each other."""
     matrix = np.zeros((levels, levels - 1))
@@ -350,7 +358,7 @@ def rm_anova(
             source = " × ".join(str(factors[i]) for i in effect)
             # no error variance beyond rounding: F is 0/0 or effect/rounding (statsmodels gave
             # F = -2.8 for constant data, R's car NaN)
-            if not np.var(scores, axis=0, ddof=1).mean() > (ROUNDING * scale) ** 2:
+            if _no_variance(np.var(scores, axis=0, ddof=1).mean(), scale):
                 why = (
                     f"{dv!r} has no error variance for {source}: every subject's scores on "
                     "its contrasts are equal (to rounding), so F is undefined"
@@ -665,7 +673,7 @@ def ttest_paired(a: Sequence[float], b: Sequence[float], *, confidence: float = 
     mean = float(d.mean())
     sd = float(d.std(ddof=1))
     values_rms = float(np.sqrt((np.mean(a**2) + np.mean(b**2)) / 2))
-    if 0 < sd <= ROUNDING * values_rms:
+    if 0 < sd and _no_variance(sd**2, values_rms):
         # the rule rm_anova applies to the same data: a spread of the differences at the
         # values' rounding is no variance (R's t.test would test a 1-ulp difference)
         sd = 0.0
