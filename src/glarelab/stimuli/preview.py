@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 from typing import Literal
 
@@ -13,6 +14,17 @@ from glarelab.glare._colour import colour
 from glarelab.glare.models.wave import sigmoid_Kakimoto2004
 
 __all__ = ["preview_png", "psf_png", "psf_to_display", "to_display"]
+
+
+def _write_png(path: str | Path, encode: Callable[[], np.ndarray]) -> Path:
+    """Create ``path``'s folder, then write the 8-bit image ``encode()`` returns to ``path``
+    whole or not at all; return ``path``."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    pixels = encode()
+    with atomic_path(path) as temporary:
+        Image.fromarray(pixels).save(temporary, format="PNG")
+    return path
 
 
 def to_display(
@@ -78,12 +90,9 @@ def preview_png(
     pathlib.Path
         ``path``.
     """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    pixels = to_display(luminance_cd_m2, l_dmax_cd_m2=l_dmax_cd_m2, scale=scale)
-    with atomic_path(path) as temporary:
-        Image.fromarray(pixels).save(temporary, format="PNG")
-    return path
+    return _write_png(
+        path, lambda: to_display(luminance_cd_m2, l_dmax_cd_m2=l_dmax_cd_m2, scale=scale)
+    )
 
 
 def psf_to_display(
@@ -140,12 +149,7 @@ def psf_png(
     pathlib.Path
         ``path``.
     """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    pixels = psf_to_display(values, dynamic_range=dynamic_range, peak=peak)
-    with atomic_path(path) as temporary:
-        Image.fromarray(pixels).save(temporary, format="PNG")
-    return path
+    return _write_png(path, lambda: psf_to_display(values, dynamic_range=dynamic_range, peak=peak))
 
 
 def psf_figure(
