@@ -277,6 +277,20 @@ def _groups(effects: list[str]) -> dict[str, list[str]]:
     return groups
 
 
+def _panels(effects: pd.Series, **options):
+    """The effects grouped by :func:`_groups` (in order of appearance) and a figure with a
+    panel for each group, two columns at most; ``options`` go to ``plt.subplots``."""
+    from glarelab.analysis.figures import plt
+
+    groups = _groups(list(dict.fromkeys(effects)))
+    columns = min(len(groups), 2)  # a page's width (6.5 in) at 8 pt and more
+    rows = math.ceil(len(groups) / columns)
+    figure, axes = plt.subplots(
+        rows, columns, figsize=(3.3 * columns, 3.4 * rows), squeeze=False, **options
+    )
+    return groups, figure, axes
+
+
 def _legend_below(axis) -> None:
     """The panel's legend under its axis label, outside the plot: never over a curve."""
     axis.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.22), frameon=False)
@@ -301,14 +315,9 @@ def power_figure(power: pd.DataFrame, *, target: float, alpha: float, title: str
     bytes
         The PNG file's content.
     """
-    from glarelab.analysis.figures import plt, png
+    from glarelab.analysis.figures import png
 
-    groups = _groups(list(dict.fromkeys(power["effect"])))
-    columns = min(len(groups), 2)  # a page's width (6.5 in) at 8 pt and more
-    rows = math.ceil(len(groups) / columns)
-    figure, axes = plt.subplots(
-        rows, columns, figsize=(3.3 * columns, 3.4 * rows), squeeze=False, sharey=True
-    )
+    groups, figure, axes = _panels(power["effect"], sharey=True)
     for axis, (group, members) in zip(axes.flat, groups.items(), strict=False):
         for effect in members:
             part = power[power["effect"] == effect]
@@ -359,12 +368,9 @@ def effect_size_figure(sizes: pd.DataFrame, *, title: str) -> bytes:
     bytes
         The PNG file's content.
     """
-    from glarelab.analysis.figures import plt, png
+    from glarelab.analysis.figures import png
 
-    groups = _groups(list(dict.fromkeys(sizes["effect"])))
-    columns = min(len(groups), 2)  # a page's width (6.5 in) at 8 pt and more
-    rows = math.ceil(len(groups) / columns)
-    figure, axes = plt.subplots(rows, columns, figsize=(3.3 * columns, 3.4 * rows), squeeze=False)
+    groups, figure, axes = _panels(sizes["effect"])
     for axis, (group, members) in zip(axes.flat, groups.items(), strict=False):
         width = 0.8 / len(members)
         for index, effect in enumerate(members):
