@@ -113,6 +113,8 @@ PSF_PERIOD_KERNELS = 3.0  # the PSF's period at the shortest wavelength, in kern
 PSF_PERIOD_KERNELS_FAST = 2.0  # the same for aperture_grid="fast" (the grid before issue 33)
 APERTURE_GRIDS = ("exact", "fast")
 OBSTACLE_SAMPLES = 12  # samples across a particle or an eyelash
+# (subsamples, smoothing) of a diaphragm alone: its streaks' aliases 0.65 % of them, not 9.7 %
+DIAPHRAGM_PREFILTER = (5, 3)
 OBSTACLE_SAMPLES_FAST = 4  # the same for aperture_grid="fast"
 SPECTRAL_METHODS = ("reference", "scaled", "kakimoto")
 PIXEL_INTEGRATION_METHODS = ("exact", "rebin")
@@ -447,8 +449,26 @@ class WaveOpticsGlare(GlareModel):
         full[offset : offset + n_crop, offset : offset + n_crop] = t
         return full
 
-    def _aperture_crop(self, grid: ap.ApertureGrid) -> np.ndarray:
-        """The aperture over the pupil's bounding box (odd size, centred on ``grid``'s centre)."""
+    def _prefilter(self) -> tuple[int, int]:
+        """The diaphragm's prefilter for the exact pixel integration: :data:`DIAPHRAGM_PREFILTER`
+        for a diaphragm alone, whose transfer is then divided out; the one-sample box with any
+        other obstacle, whose edges are drawn with the one-sample ramp."""
+        alone = not (
+            self.eyelid
+            or self.eyelashes
+            or self.particles
+            or self.cross_screen is not None
+            or self.obstacle_image is not None
+        )
+        if self.diaphragm_sides is not None and alone:
+            return DIAPHRAGM_PREFILTER
+        return ap.PREFILTER_BOX
+
+    def _aperture_crop(
+        self, grid: ap.ApertureGrid, prefilter: tuple[int, int] = ap.PREFILTER_BOX
+    ) -> np.ndarray:
+        """The aperture over the pupil's bounding box (odd size, centred on ``grid``'s centre),
+        the diaphragm drawn with ``prefilter``."""
         rng_lashes, rng_particles = np.random.default_rng(self.seed).spawn(2)
         diameter = self.pupil_diameter
         n_crop = min(grid.n, 2 * (math.ceil(diameter / 2 / grid.spacing_mm) + 2) + 1)
@@ -457,7 +477,11 @@ class WaveOpticsGlare(GlareModel):
             t = ap.aperture_pupil(crop, diameter)
         else:
             t = ap.aperture_diaphragm(
-                crop, diameter, self.diaphragm_sides, rotation_deg=self.diaphragm_rotation_deg
+                crop,
+                diameter,
+                self.diaphragm_sides,
+                rotation_deg=self.diaphragm_rotation_deg,
+                prefilter=prefilter,
             )
         shift = self.obstacle_distance_mm * math.tan(math.radians(self.source_x_deg))
         if self.eyelid:
@@ -520,7 +544,8 @@ class WaveOpticsGlare(GlareModel):
         kernels = np.empty((wavelengths.size, *shape))
         if self.pixel_integration == "exact":
             reach_deg = self._extent_deg(pixel_deg, shape)
-            t = self._aperture_crop(grid)
+            prefilter = self._prefilter()
+            t = self._aperture_crop(grid, prefilter)
             per_wavelength = self.fresnel and self.spectral != "scaled"
             acf = None
             if not per_wavelength:
@@ -537,6 +562,7 @@ class WaveOpticsGlare(GlareModel):
                     shape,
                     reach_deg=reach_deg,
                     edge_transfer=True,
+                    prefilter=prefilter,
                 )
             open_area_mm2 = float(np.abs(t).sum()) * grid.spacing_mm**2
         elif self.pixel_integration == "rebin":
