@@ -21,7 +21,11 @@ through a matrix DFT), with the transfer of the antialiased edges, ``sinc²(θ �
 out, so that the kernel is the pattern of the aperture described, not of its samples; the
 PSF's period is three kernel widths (:meth:`WaveOpticsGlare.grid_for`). Against the
 pixel-integrated Airy pattern, ring energies from 0.3° to 2.5° and the kernel's border are
-within 0.6 % for 380-780 nm and 2-8 mm (``tests/glare/models/test_wave_rings.py``).
+within 0.6 % for 380-780 nm and 2-8 mm (``tests/glare/models/test_wave_rings.py``). A
+diaphragm alone is drawn with a smoother prefilter (:data:`DIAPHRAGM_PREFILTER`), whose
+transfer is divided out instead: a streak along an axis otherwise meets its own copies in the
+periodic spectrum, and a 2 mm square at 45° had its border 9.5 % off at 380 nm; now polygons
+of 3-8 sides are within 0.51 % of their transform.
 ``pixel_integration='rebin'`` spreads the DFT's samples over the pixels instead (:func:`rebin`:
 exact for the energy, not for the pattern when a pixel spans few samples).
 
@@ -83,6 +87,7 @@ from glarelab.glare.models.spectral import Spectrum
 
 __all__ = [
     "APERTURE_GRIDS",
+    "DIAPHRAGM_PREFILTER",
     "FRESNEL_DISTANCE_MM_LUIDOLT2020",
     "KAKIMOTO2004_WAVELENGTHS_NM",
     "LUIDOLT2020_PUPIL_RANGE_MM",
