@@ -103,14 +103,17 @@ def test_the_particles_of_an_8_mm_pupil_do_not_depend_on_the_kernel_size():
     samples=st.floats(64.0, 400.0),  # a triangle's corners miss 0.26 % at 33 samples across
     sides=st.sampled_from([None, 3, 4, 5, 6, 8]),
     rotation_deg=st.floats(0.0, 120.0),
+    prefilter=st.sampled_from([(1, 1), (5, 3), (3, 2)]),
 )
-def test_pupils_and_polygons_hold_their_area(diameter_mm, samples, sides, rotation_deg):
+def test_pupils_and_polygons_hold_their_area(diameter_mm, samples, sides, rotation_deg, prefilter):
     grid = _grid(diameter_mm / samples, 1.1 * diameter_mm)
     radius = diameter_mm / 2
     if sides is None:
         t, area = ap.aperture_pupil(grid, diameter_mm), math.pi * radius**2
     else:
-        t = ap.aperture_diaphragm(grid, diameter_mm, sides, rotation_deg=rotation_deg)
+        t = ap.aperture_diaphragm(
+            grid, diameter_mm, sides, rotation_deg=rotation_deg, prefilter=prefilter
+        )
         area = 0.5 * sides * radius**2 * math.sin(2 * math.pi / sides)
     assert_allclose(_area(t, grid), area, rtol=AREA_RTOL)
 

@@ -76,6 +76,12 @@ def test_bad_aperture_images_are_refused(image, match):
         (lambda: ap.aperture_pupil(GRID, 0.0), "diameter_mm must be a finite number > 0"),
         (lambda: ap.aperture_pupil(GRID, -2.0), "diameter_mm"),
         (lambda: ap.aperture_diaphragm(GRID, 4.0, 2), "sides must be an integer >= 3"),
+        (
+            lambda: ap.aperture_diaphragm(GRID, 4.0, 6, prefilter=(4, 3)),
+            r"prefilter must be \(subsamples, smoothing\).*got \(4, 3\)",
+        ),
+        (lambda: ap.prefilter_weights((3, 0)), "prefilter must be"),
+        (lambda: ap.prefilter_weights((1.5, 1)), "prefilter must be"),
         (lambda: ap.ApertureGrid(64, 0.0), "spacing_mm must be a finite number > 0"),
         (lambda: ap.aperture_cross_screen(GRID, "star"), "kind must be one of"),
     ],
@@ -83,3 +89,51 @@ def test_bad_aperture_images_are_refused(image, match):
 def test_bad_parameters_are_named(call, match):
     with pytest.raises(ValueError, match=match):
         call()
+
+
+@pytest.mark.parametrize("sides", [3, 4, 7])
+@pytest.mark.parametrize("rotation_deg", [0.0, 45.0, 13.0])
+def test_prefiltered_diaphragm_is_the_weighted_cover_of_its_sub_cells(sides, rotation_deg):
+    # every sample the prefilter's weights over the cover of all its 13² sub-cells, the way
+    # aperture_diaphragm draws samples away from the edges (0 or 1) and along one edge
+    # (that edge alone) included
+    grid, prefilter = ap.ApertureGrid(61, 0.05), (5, 3)
+    t = ap.aperture_diaphragm(grid, 2.5, sides, rotation_deg=rotation_deg, prefilter=prefilter)
+    weights, cell = ap.prefilter_weights(prefilter), grid.spacing_mm / 5
+    offsets = (np.arange(weights.size) - weights.size // 2) * cell
+    x, y = grid.coordinates()
+    px = x[..., None, None] + offsets[None, None, None, :]
+    py = y[..., None, None] + offsets[None, None, :, None]
+    cover = np.ones(px.shape)
+    apothem = 1.25 * math.cos(math.pi / sides)
+    for k in range(sides):
+        angle = math.radians(rotation_deg) + (k + 0.5) * 2 * math.pi / sides
+        inside = apothem - (px * math.cos(angle) + py * math.sin(angle))
+        cover = np.minimum(cover, ap.half_plane_coverage(inside, angle, cell))
+    assert_allclose(t, np.einsum("abij,i,j->ab", cover, weights, weights), atol=1e-12)
+
+
+def test_prefilter_transfer_is_the_weights_spectrum_and_shrinks_the_streaks_copies():
+    # Φ(ε) = sinc(ε/r) (sin(π ε) / (r sin(π ε/r)))^q = sinc(ε/r) (sinc(ε) / sinc(ε/r))^q: the
+    # sub-cell box times q boxes of r sub-cells
+    epsilon = np.linspace(-2.0, 2.0, 41)
+    weights = ap.prefilter_weights((5, 3))
+    assert_allclose(weights.sum(), 1.0)
+    assert_allclose([weights[k::5].sum() for k in range(5)], 0.2)  # each sub-cell: 1/r
+    closed = np.sinc(epsilon / 5) * (np.sinc(epsilon) / np.sinc(epsilon / 5)) ** 3
+    assert_allclose(ap.prefilter_transfer(epsilon, (5, 3)), closed, atol=1e-14)
+    assert_allclose(ap.prefilter_transfer(epsilon), np.sinc(epsilon), atol=1e-15)
+    # a streak falls off as 1/f: its copies 1/δ apart carry Σ_j |Φ(ε+j) ε / (Φ(ε) (ε+j))| of
+    # its amplitude; at the border of a kernel a third of the period wide, ε = 1/6. For the
+    # box, |Φ(ε+j)/Φ(ε)| = ε/|ε+j| and the sum is ε² Σ 1/(ε+j)² = (πε / sin πε)² - 1
+    epsilon, j = 1 / 6, np.concatenate([np.arange(-4000, 0), np.arange(1, 4001)])
+
+    def copies(prefilter):
+        ratio = ap.prefilter_transfer(epsilon + j, prefilter) / ap.prefilter_transfer(
+            np.array(epsilon), prefilter
+        )
+        return float(np.sum(np.abs(ratio) * epsilon / np.abs(epsilon + j)))
+
+    box = (np.pi * epsilon / np.sin(np.pi * epsilon)) ** 2 - 1  # 0.0966
+    assert_allclose(copies((1, 1)), box, rtol=1e-3)
+    assert_allclose(copies((5, 3)), 0.0065, atol=1e-4)

@@ -36,15 +36,20 @@ def _nodes(pixel_rad: float, scale_rad: float) -> tuple[np.ndarray, np.ndarray]:
     return x / 2, w / 2
 
 
-def _pixel_integrals(density, pixel_deg: float, scale_rad: float, half: int) -> np.ndarray:
-    """``∫∫ density(θx, θy)`` over each pixel (rad²) of a ``(2 half + 1)²`` kernel; rows run
-    down the image, so row ``i`` is at ``θy = -i p``."""
+def _pixel_integrals(
+    density, pixel_deg: float, scale_rad: float, half: int, mask: np.ndarray | None = None
+) -> np.ndarray:
+    """``∫∫ density(θx, θy)`` over each pixel (rad²) of a ``(2 half + 1)²`` kernel (only where
+    ``mask`` is true, if given; 0 elsewhere); rows run down the image, so row ``i`` is at
+    ``θy = -i p``."""
     p = math.radians(pixel_deg)
     x, w = _nodes(p, scale_rad)
-    out = np.empty((2 * half + 1, 2 * half + 1))
+    out = np.zeros((2 * half + 1, 2 * half + 1))
     for i in range(-half, half + 1):
         ty = (-i + x[:, None]) * p
         for j in range(-half, half + 1):
+            if mask is not None and not mask[i + half, j + half]:
+                continue
             tx = (j + x[None, :]) * p
             out[i + half, j + half] = np.sum(w[:, None] * w[None, :] * density(tx, ty)) * p * p
     return out
@@ -80,7 +85,13 @@ def square_pixels(side_mm: float, wavelength_nm: float, pixel_deg: float, half: 
 
 
 def polygon_pixels(
-    sides: int, diameter_mm: float, rotation_deg: float, wavelength_nm: float, pixel_deg, half
+    sides: int,
+    diameter_mm: float,
+    rotation_deg: float,
+    wavelength_nm: float,
+    pixel_deg,
+    half,
+    mask: np.ndarray | None = None,
 ):
     """The Fourier transform of a regular polygon (vertices on a circle of ``diameter_mm`` at
     ``rotation + k 360°/sides``, the diaphragm of :func:`glarelab.glare.models.apertures.aperture_diaphragm`),
@@ -109,7 +120,7 @@ def polygon_pixels(
         f = 1j * total / k2
         return np.abs(f) ** 2 / (lam**2 * area)
 
-    return _pixel_integrals(density, pixel_deg, lam / diameter_mm, half)
+    return _pixel_integrals(density, pixel_deg, lam / diameter_mm, half, mask)
 
 
 def assert_matches(kernel: np.ndarray, reference: np.ndarray) -> None:

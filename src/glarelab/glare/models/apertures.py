@@ -43,11 +43,14 @@ __all__ = [
     "aperture_particles",
     "aperture_pupil",
     "half_plane_coverage",
+    "prefilter_transfer",
+    "prefilter_weights",
     "ramp_radius_mm",
 ]
 
 PARTICLE_COUNT_LUIDOLT2020 = 1000  # Luidolt 2020 §5.2.4, after van den Berg et al. 2005
 PARTICLE_SIZE_MM_LUIDOLT2020 = 0.042  # Luidolt 2020 §5.2.4: "0.042 mm to be a feasible value"
+PREFILTER_BOX = (1, 1)  # (subsamples, smoothing): each sample its own cell's cover
 
 
 @dataclass(frozen=True)
@@ -173,7 +176,12 @@ def aperture_pupil(grid: ApertureGrid, diameter_mm: float) -> np.ndarray:
 
 
 def aperture_diaphragm(
-    grid: ApertureGrid, diameter_mm: float, sides: int, *, rotation_deg: float = 0.0
+    grid: ApertureGrid,
+    diameter_mm: float,
+    sides: int,
+    *,
+    rotation_deg: float = 0.0,
+    prefilter: tuple[int, int] = PREFILTER_BOX,
 ) -> np.ndarray:
     """A regular polygonal camera diaphragm with ``sides`` blades, circumscribed diameter given.
 
@@ -187,13 +195,35 @@ def aperture_diaphragm(
         Number of blades, >= 3.
     rotation_deg
         Rotation of the polygon, degrees anticlockwise; default 0.
+    prefilter
+        ``(subsamples, smoothing)``: each sample is the polygon's cover of ``subsamples²``
+        sub-cells around it, weighted by a box of ``subsamples`` sub-cells convolved with
+        itself ``smoothing`` times along each axis (:func:`prefilter_weights`); odd
+        ``subsamples``. Default ``(1, 1)``: the cover of the sample's own cell.
 
     Returns
     -------
     numpy.ndarray
-        ``(n, n)`` amplitude transmittance, 0 (opaque) to 1 (clear): each sample the part of
-        its cell inside the polygon's edges (:func:`half_plane_coverage`), which holds the
-        polygon's area at every rotation.
+        ``(n, n)`` amplitude transmittance, 0 (opaque) to 1 (clear): each sample the polygon
+        filtered by the prefilter at the sample, which holds the polygon's area at every
+        rotation.
+
+    Raises
+    ------
+    ValueError
+        For a non-positive diameter, fewer than 3 sides, or a prefilter that is not two
+        positive integers with an odd first.
+
+    Notes
+    -----
+    The samples are ``(P * φ)(x_m)``, so their spectrum is the polygon's times the
+    prefilter's transfer ``Φ`` (:func:`prefilter_transfer`), plus its copies shifted by
+    multiples of ``1/δ``. A straight edge's streak falls off only as ``1/f``: along an axis
+    the copies of the one-sample box (``(1, 1)``) fall on the streak itself, with amplitudes
+    ``ε²/(j + ε)²`` of it (``ε = f δ``), together ``(π ε / sin π ε)² - 1``, 9.7 % at ``ε = 1/6``;
+    ``(5, 3)`` brings them to 0.65 %. Each sub-cell's cover is exact along an edge
+    (:func:`half_plane_coverage`) and the edges are combined by the minimum, which misses
+    only at the corners, by a fraction of a sub-cell.
 
     Examples
     --------
@@ -201,17 +231,130 @@ def aperture_diaphragm(
     >>> area = float(t.sum()) * 0.05**2  # hexagon of circumradius 2: (3√3/2) 2² = 10.39
     >>> round(area, 1)
     10.4
+    >>> smooth = aperture_diaphragm(ApertureGrid(128, 0.05), 4.0, 6, prefilter=(5, 3))
+    >>> round(float(smooth.sum()) * 0.05**2, 3)  # the same area
+    10.392
     """
     diameter_mm = check_positive("diameter_mm", diameter_mm, unit="mm")
     sides = check_positive_int("sides", sides, minimum=3)
+    weights = prefilter_weights(prefilter)
     x, y = grid.coordinates()
     apothem = diameter_mm / 2 * math.cos(math.pi / sides)
     angles = math.radians(rotation_deg) + (np.arange(sides) + 0.5) * 2 * math.pi / sides
-    t = np.ones(x.shape)
-    for angle in angles:
+
+    def cover(px: np.ndarray, py: np.ndarray, cell_mm: float) -> np.ndarray:
+        t = np.ones(px.shape)
+        for angle in angles:
+            inside = apothem - (px * math.cos(angle) + py * math.sin(angle))
+            t = np.minimum(t, half_plane_coverage(inside, angle, cell_mm))
+        return t
+
+    if weights.size == 1:
+        return cover(x, y, grid.spacing_mm)
+    cell = grid.spacing_mm / prefilter[0]
+    offsets = (np.arange(weights.size) - weights.size // 2) * cell
+    # a sample farther than the filter's reach from an edge's line is wholly on one side
+    reach = (offsets[-1] + cell) * math.sqrt(2.0)
+    outside = np.zeros(x.shape, bool)
+    near = np.zeros(x.shape, np.int64)  # edges whose line is within reach
+    which = np.zeros(x.shape, np.int64)  # the last of them
+    for e, angle in enumerate(angles):
         inside = apothem - (x * math.cos(angle) + y * math.sin(angle))
-        t = np.minimum(t, half_plane_coverage(inside, angle, grid.spacing_mm))
+        outside |= inside <= -reach
+        close = np.abs(inside) < reach
+        near += close
+        which[close] = e
+    t = ((near == 0) & ~outside).astype(float)
+    pair = np.multiply.outer(weights, weights).ravel()
+    for e, angle in enumerate(angles):  # one edge in reach: the filter across that edge
+        index = np.flatnonzero((near == 1) & ~outside & (which == e))
+        normal_x, normal_y = math.cos(angle), math.sin(angle)
+        shift = np.add.outer(offsets * normal_y, offsets * normal_x).ravel()  # (row, col)
+        for chunk in np.array_split(index, max(1, index.size // 20_000)):
+            inside = apothem - (x.flat[chunk] * normal_x + y.flat[chunk] * normal_y)
+            t.flat[chunk] = half_plane_coverage(inside[:, None] - shift, angle, cell) @ pair
+    corners = np.flatnonzero((near > 1) & ~outside)  # the filter over the corner's cover
+    px = x.flat[corners][:, None, None] + offsets[None, None, :]
+    py = y.flat[corners][:, None, None] + offsets[None, :, None]
+    t.flat[corners] = np.einsum("kij,i,j->k", cover(px, py, cell), weights, weights)
     return t
+
+
+def prefilter_weights(prefilter: tuple[int, int]) -> np.ndarray:
+    """The sub-cell weights along one axis of the prefilter ``(subsamples, smoothing)``.
+
+    Parameters
+    ----------
+    prefilter
+        ``(r, q)``: ``r`` sub-cells per sample (odd, >= 1) and the number ``q`` (>= 1) of
+        boxes of ``r`` sub-cells convolved.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``q (r - 1) + 1`` weights summing to 1, centred; every sub-cell's weights over the
+        samples of one axis sum to ``1/r``, so the samples hold the area.
+
+    Raises
+    ------
+    ValueError
+        If ``r`` is not an odd positive integer or ``q`` not a positive integer.
+
+    Examples
+    --------
+    >>> prefilter_weights((3, 2)).round(4).tolist()
+    [0.1111, 0.2222, 0.3333, 0.2222, 0.1111]
+    """
+    try:
+        subsamples, smoothing = (int(v) for v in prefilter)
+        valid = (subsamples, smoothing) == tuple(prefilter)
+    except (TypeError, ValueError):
+        valid = False
+    if not valid or subsamples < 1 or subsamples % 2 == 0 or smoothing < 1:
+        raise ValueError(
+            f"prefilter must be (subsamples, smoothing), an odd positive integer and a "
+            f"positive integer; got {prefilter!r}"
+        )
+    box = np.full(subsamples, 1.0 / subsamples)
+    weights = np.ones(1)
+    for _ in range(smoothing):
+        weights = np.convolve(weights, box)
+    return weights
+
+
+def prefilter_transfer(
+    frequency_per_sample: np.ndarray, prefilter: tuple[int, int] = PREFILTER_BOX
+) -> np.ndarray:
+    """The transfer along one axis of the prefilter of :func:`aperture_diaphragm`.
+
+    Parameters
+    ----------
+    frequency_per_sample
+        Frequency ``ε = f δ``, cycles per sample.
+    prefilter
+        ``(r, q)`` as for :func:`prefilter_weights`; default ``(1, 1)``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``Φ(ε) = sinc(ε/r) · (sin(π ε) / (r sin(π ε/r)))^q``: a sub-cell's box times the
+        ``q`` boxes of ``r`` sub-cells; ``(1, 1)`` is ``sinc(ε)``.
+
+    Raises
+    ------
+    ValueError
+        For a bad ``prefilter``.
+
+    Examples
+    --------
+    >>> float(prefilter_transfer(np.array(1.0), (5, 3)))  # zero at every copy's centre
+    0.0
+    """
+    weights = prefilter_weights(prefilter)
+    nu = np.asarray(frequency_per_sample, dtype=float) / prefilter[0]
+    lags = np.arange(weights.size) - weights.size // 2
+    comb = np.cos(2.0 * np.pi * nu[..., None] * lags) @ weights  # symmetric weights: real
+    return np.sinc(nu) * comb
 
 
 def half_plane_coverage(

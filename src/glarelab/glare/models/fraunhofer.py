@@ -414,6 +414,7 @@ def pixel_integrated_psf(
     *,
     reach_deg: float | None = None,
     edge_transfer: bool = False,
+    prefilter: tuple[int, int] = ap.PREFILTER_BOX,
 ) -> np.ndarray:
     """The PSF of an aperture integrated exactly over each pixel of a centred kernel.
 
@@ -435,6 +436,12 @@ def pixel_integrated_psf(
         Divide out the transfer of the antialiased edges, ``sinc²(ρ δ / λ)`` at each pixel's
         distance ``ρ`` from the centre (see Notes): the result is then the pattern of the
         aperture the edges describe, not of its samples. Default False.
+    prefilter
+        With ``edge_transfer``: the prefilter the edges were drawn with
+        (:func:`glarelab.glare.models.apertures.aperture_diaphragm`). Default ``(1, 1)``: the
+        one-sample ramp or box, divided out as ``sinc²(ρ δ / λ)``; any other is divided out
+        as its separable transfer ``Φ²(θ_x δ / λ) Φ²(θ_y δ / λ)``
+        (:func:`glarelab.glare.models.apertures.prefilter_transfer`).
 
     Returns
     -------
@@ -445,8 +452,8 @@ def pixel_integrated_psf(
     Raises
     ------
     ValueError
-        For a wavelength outside 380-780 nm, a bad pixel size or shape, or a pixel wider than
-        half the PSF's period (the aperture is sampled too coarsely for it).
+        For a wavelength outside 380-780 nm, a bad pixel size or shape, a bad prefilter, or a
+        pixel wider than half the PSF's period (the aperture is sampled too coarsely for it).
 
     Notes
     -----
@@ -490,6 +497,7 @@ def pixel_integrated_psf(
     wavelength = check_in_range("wavelength_nm", wavelength_nm, *WAVELENGTH_RANGE_NM, unit="nm")
     pixel = check_positive("pixel_deg", pixel_deg, unit="deg")
     height, width = check_kernel_shape(shape)
+    ap.prefilter_weights(prefilter)
     beta_p = acf.spacing_mm / (wavelength * _MM_PER_NM) * math.radians(pixel)  # periods/pixel
     period_px = 1.0 / beta_p
     if period_px < 2.0:
@@ -528,9 +536,14 @@ def pixel_integrated_psf(
             value = cos_y @ (cr @ cos_x.T - ci @ sin_x.T) - sin_y @ (cr @ sin_x.T + ci @ cos_x.T)
         part[:, start : start + block] = value
     part *= beta_p**2 / acf.open_samples
-    if edge_transfer:  # sinc²(f δ) of the antialiased edges, f δ = ρ β p at ρ pixels
+    if edge_transfer and tuple(prefilter) == ap.PREFILTER_BOX:
+        # sinc²(f δ) of the antialiased edges, f δ = ρ β p at ρ pixels
         radius_px = np.hypot(rows_px[:, None], cols_px[None, :])
         part /= np.sinc(radius_px * beta_p) ** 2
+    elif edge_transfer:
+        along_rows = ap.prefilter_transfer(rows_px * beta_p, prefilter) ** 2
+        along_cols = ap.prefilter_transfer(cols_px * beta_p, prefilter) ** 2
+        part /= along_rows[:, None] * along_cols[None, :]
     if real:
         part = np.concatenate([part[::-1, :0:-1], part], axis=1)
     out = np.zeros((height, width))

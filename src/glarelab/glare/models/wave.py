@@ -21,7 +21,11 @@ through a matrix DFT), with the transfer of the antialiased edges, ``sinc²(θ �
 out, so that the kernel is the pattern of the aperture described, not of its samples; the
 PSF's period is three kernel widths (:meth:`WaveOpticsGlare.grid_for`). Against the
 pixel-integrated Airy pattern, ring energies from 0.3° to 2.5° and the kernel's border are
-within 0.6 % for 380-780 nm and 2-8 mm (``tests/glare/models/test_wave_rings.py``).
+within 0.6 % for 380-780 nm and 2-8 mm (``tests/glare/models/test_wave_rings.py``). A
+diaphragm alone is drawn with a smoother prefilter (:data:`DIAPHRAGM_PREFILTER`), whose
+transfer is divided out instead: a streak along an axis otherwise meets its own copies in the
+periodic spectrum, and a 2 mm square at 45° had its border 9.5 % off at 380 nm; now polygons
+of 3-8 sides are within 0.51 % of their transform.
 ``pixel_integration='rebin'`` spreads the DFT's samples over the pixels instead (:func:`rebin`:
 exact for the energy, not for the pattern when a pixel spans few samples).
 
@@ -83,6 +87,7 @@ from glarelab.glare.models.spectral import Spectrum
 
 __all__ = [
     "APERTURE_GRIDS",
+    "DIAPHRAGM_PREFILTER",
     "FRESNEL_DISTANCE_MM_LUIDOLT2020",
     "KAKIMOTO2004_WAVELENGTHS_NM",
     "LUIDOLT2020_PUPIL_RANGE_MM",
@@ -113,6 +118,8 @@ PSF_PERIOD_KERNELS = 3.0  # the PSF's period at the shortest wavelength, in kern
 PSF_PERIOD_KERNELS_FAST = 2.0  # the same for aperture_grid="fast" (the grid before issue 33)
 APERTURE_GRIDS = ("exact", "fast")
 OBSTACLE_SAMPLES = 12  # samples across a particle or an eyelash
+# (subsamples, smoothing) of a diaphragm alone: its streaks' aliases 0.65 % of them, not 9.7 %
+DIAPHRAGM_PREFILTER = (5, 3)
 OBSTACLE_SAMPLES_FAST = 4  # the same for aperture_grid="fast"
 SPECTRAL_METHODS = ("reference", "scaled", "kakimoto")
 PIXEL_INTEGRATION_METHODS = ("exact", "rebin")
@@ -447,8 +454,26 @@ class WaveOpticsGlare(GlareModel):
         full[offset : offset + n_crop, offset : offset + n_crop] = t
         return full
 
-    def _aperture_crop(self, grid: ap.ApertureGrid) -> np.ndarray:
-        """The aperture over the pupil's bounding box (odd size, centred on ``grid``'s centre)."""
+    def _prefilter(self) -> tuple[int, int]:
+        """The diaphragm's prefilter for the exact pixel integration: :data:`DIAPHRAGM_PREFILTER`
+        for a diaphragm alone, whose transfer is then divided out; the one-sample box with any
+        other obstacle, whose edges are drawn with the one-sample ramp."""
+        alone = not (
+            self.eyelid
+            or self.eyelashes
+            or self.particles
+            or self.cross_screen is not None
+            or self.obstacle_image is not None
+        )
+        if self.diaphragm_sides is not None and alone:
+            return DIAPHRAGM_PREFILTER
+        return ap.PREFILTER_BOX
+
+    def _aperture_crop(
+        self, grid: ap.ApertureGrid, prefilter: tuple[int, int] = ap.PREFILTER_BOX
+    ) -> np.ndarray:
+        """The aperture over the pupil's bounding box (odd size, centred on ``grid``'s centre),
+        the diaphragm drawn with ``prefilter``."""
         rng_lashes, rng_particles = np.random.default_rng(self.seed).spawn(2)
         diameter = self.pupil_diameter
         n_crop = min(grid.n, 2 * (math.ceil(diameter / 2 / grid.spacing_mm) + 2) + 1)
@@ -457,7 +482,11 @@ class WaveOpticsGlare(GlareModel):
             t = ap.aperture_pupil(crop, diameter)
         else:
             t = ap.aperture_diaphragm(
-                crop, diameter, self.diaphragm_sides, rotation_deg=self.diaphragm_rotation_deg
+                crop,
+                diameter,
+                self.diaphragm_sides,
+                rotation_deg=self.diaphragm_rotation_deg,
+                prefilter=prefilter,
             )
         shift = self.obstacle_distance_mm * math.tan(math.radians(self.source_x_deg))
         if self.eyelid:
@@ -520,7 +549,8 @@ class WaveOpticsGlare(GlareModel):
         kernels = np.empty((wavelengths.size, *shape))
         if self.pixel_integration == "exact":
             reach_deg = self._extent_deg(pixel_deg, shape)
-            t = self._aperture_crop(grid)
+            prefilter = self._prefilter()
+            t = self._aperture_crop(grid, prefilter)
             per_wavelength = self.fresnel and self.spectral != "scaled"
             acf = None
             if not per_wavelength:
@@ -537,6 +567,7 @@ class WaveOpticsGlare(GlareModel):
                     shape,
                     reach_deg=reach_deg,
                     edge_transfer=True,
+                    prefilter=prefilter,
                 )
             open_area_mm2 = float(np.abs(t).sum()) * grid.spacing_mm**2
         elif self.pixel_integration == "rebin":
