@@ -14,6 +14,7 @@ import numpy as np
 from glarelab.glare._validation import (
     check_choice,
     check_in_range,
+    check_pixel_deg,
     check_positive,
     check_positive_int,
 )
@@ -239,7 +240,7 @@ class VosGlare(GlareModel):
         """
         if self.flare_lines or self.normalisation != "psf":
             return None
-        pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
+        pixel_deg = check_pixel_deg(pixel_deg)
         radius = np.asarray(radius_px, dtype=float)
         theta = (radius + 0.5) * pixel_deg
         halos = [None]
@@ -282,7 +283,7 @@ class VosGlare(GlareModel):
     ) -> dict:
         """The smooth parts of the PSF (no flare lines) as quadrants ``i, j >= 0``: each is
         symmetric in both axes, so the kernel is unfolded once, after they are added."""
-        pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
+        pixel_deg = check_pixel_deg(pixel_deg)
         shape = check_kernel_shape(shape)
         w0, w1, w2, w3 = self.weights
         settings = self._digitise_settings(pixel_deg, shape)

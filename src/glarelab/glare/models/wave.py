@@ -60,6 +60,7 @@ from glarelab.glare._colour import colour
 from glarelab.glare._validation import (
     check_choice,
     check_in_range,
+    check_pixel_deg,
     check_positive,
     check_positive_int,
 )
@@ -511,7 +512,7 @@ class WaveOpticsGlare(GlareModel):
         wavelengths : numpy.ndarray
             The wavelengths, nm.
         """
-        pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
+        pixel_deg = check_pixel_deg(pixel_deg)
         shape = check_kernel_shape(shape)
         grid = self.grid_for(pixel_deg, shape)
         d = self.fresnel_distance_mm if self.fresnel else None

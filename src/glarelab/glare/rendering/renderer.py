@@ -20,7 +20,12 @@ from typing import Literal
 
 import numpy as np
 
-from glarelab.glare._validation import check_choice, check_image, check_positive
+from glarelab.glare._validation import (
+    check_choice,
+    check_image,
+    check_pixel_deg,
+    check_positive,
+)
 from glarelab.glare.models import _resolve
 from glarelab.glare.models.base import GlareModel, TailBound
 from glarelab.glare.models.cache import resolve_cache
@@ -56,6 +61,9 @@ SPECTRA_BYTES = 512 * 2**20  # kernel spectra a renderer keeps (the one in use a
 # round-off) if that is estimated to cost at most DIRECT_FALLBACK times the FFT.
 DIRECT_FALLBACK = 50.0
 PRECISIONS = ("float64", "float32")
+# as the command line's --pixel-deg: a coarse grid of the far tail (up to 8 pixels a node)
+# then stays within the 180° a kernel's pixel can subtend
+MAX_RENDER_PIXEL_DEG = 10.0
 
 
 class GlareRenderer:
@@ -66,7 +74,7 @@ class GlareRenderer:
     model
         A glare model or its name.
     pixel_deg
-        Visual angle of one pixel in degrees, > 0.
+        Visual angle of one pixel in degrees, in (0, 10].
     shape
         ``(H, W)`` of the images (RGB images ``(H, W, 3)`` are accepted too).
     l_dmax_cd_m2
@@ -147,7 +155,7 @@ class GlareRenderer:
     ) -> None:
         self.model = _resolve(model)
         self.cache = resolve_cache(cache)
-        self.pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
+        self.pixel_deg = check_pixel_deg(pixel_deg, high=MAX_RENDER_PIXEL_DEG)
         self.l_dmax = check_positive("l_dmax_cd_m2", l_dmax_cd_m2, unit="cd/m²")
         self.composition = check_composition(composition, method, where="GlareRenderer")
         check_choice("precision", precision, PRECISIONS)
