@@ -14,12 +14,12 @@ import numpy as np
 
 __all__ = [
     "check_choice",
+    "check_flag",
     "check_image",
     "check_in_range",
     "check_pixel_deg",
     "check_positive",
     "check_positive_int",
-    "check_seed",
     "real_number",
 ]
 
@@ -105,12 +105,12 @@ def check_positive_int(name: str, value: int, *, minimum: int = 1) -> int:
     return int(value)
 
 
-def check_seed(name: str, value: int) -> int:
-    """Return ``value`` if it is an integer >= 0 (a seed of :func:`numpy.random.default_rng`),
-    else raise ``ValueError``."""
-    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 0:
-        raise ValueError(f"{name} must be an integer >= 0 (a random seed), got {value!r}")
-    return int(value)
+def check_flag(name: str, value: object) -> bool:
+    """Return ``value`` if it is a bool, else raise ``ValueError`` (the string ``'no'`` is
+    true to ``if``)."""
+    if not isinstance(value, bool | np.bool_):
+        raise ValueError(f"{name} must be True or False, got {value!r}")
+    return bool(value)
 
 
 def check_choice(name: str, value: object, allowed: Iterable[object]) -> object:

@@ -163,9 +163,13 @@ def digitise_kernel(
     >>> k.values.shape, round(float(k.energy_outside), 3)
     ((21, 21), 0.094)
     """
+    from glarelab.glare._validation import check_pixel_deg
     from glarelab.glare.models.cache import resolve_cache
+    from glarelab.glare.models.digitise import check_kernel_shape
 
     resolved = _resolve(model)
+    check_pixel_deg(pixel_deg)  # before the cache builds a key of them
+    shape = check_kernel_shape(shape)
     chosen = resolve_cache(cache)
     if chosen is None:
         return resolved.kernel(pixel_deg, shape, colour=colour)

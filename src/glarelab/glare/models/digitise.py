@@ -253,13 +253,15 @@ def kernel_shape_for(image_shape: Sequence[int]) -> tuple[int, int]:
     return 2 * height - 1, 2 * width - 1
 
 
-def check_kernel_shape(shape: Sequence[int]) -> tuple[int, int]:
+def check_kernel_shape(shape: Sequence[int], *, name: str = "shape") -> tuple[int, int]:
     """A kernel shape checked: two odd positive integers.
 
     Parameters
     ----------
     shape
         The kernel shape asked for.
+    name
+        The argument's name in the messages; default ``'shape'``.
 
     Returns
     -------
@@ -275,18 +277,18 @@ def check_kernel_shape(shape: Sequence[int]) -> tuple[int, int]:
         height, width = shape
     except (TypeError, ValueError):
         raise ValueError(
-            f"shape must be two odd positive integers (KH, KW), got {shape!r}"
+            f"{name} must be two odd positive integers (KH, KW), got {shape!r}"
         ) from None
     for n in (height, width):
         if isinstance(n, bool | np.bool_) or not isinstance(n, int | np.integer):
             raise ValueError(
-                f"shape must be two odd positive integers (KH, KW), got {shape!r} (a "
+                f"{name} must be two odd positive integers (KH, KW), got {shape!r} (a "
                 f"{type(n).__name__} is not a pixel count)"
             )
     height, width = int(height), int(width)
     if height < 1 or width < 1 or height % 2 == 0 or width % 2 == 0:
         raise ValueError(
-            f"shape must be two odd positive integers (KH, KW) so the kernel has a centre "
+            f"{name} must be two odd positive integers (KH, KW) so the kernel has a centre "
             f"pixel, got {tuple(shape)!r}"
         )
     return height, width

@@ -59,6 +59,7 @@ import scipy.sparse
 from glarelab.glare._colour import colour
 from glarelab.glare._validation import (
     check_choice,
+    check_flag,
     check_in_range,
     check_pixel_deg,
     check_positive,
@@ -305,6 +306,8 @@ class WaveOpticsGlare(GlareModel):
     aperture_grid: Literal["exact", "fast"] = "exact"
 
     def __post_init__(self) -> None:
+        for flag in ("eyelashes", "eyelid", "fresnel"):
+            check_flag(flag, getattr(self, flag))
         if self.obstacle_image is not None:
             ap.aperture_from_image(self.obstacle_image, name="obstacle_image")
             check_positive("obstacle_spacing_mm", self.obstacle_spacing_mm, unit="mm")

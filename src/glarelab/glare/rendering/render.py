@@ -214,7 +214,7 @@ def add_glare(
         check_composition(composition, method, where="add_glare")
         check_choice("precision", precision, PRECISIONS)
         if kernel_shape is not None:
-            check_kernel_shape(kernel_shape)
+            check_kernel_shape(kernel_shape, name="kernel_shape")
         _resolve(model)
         return image.copy()
     renderer = GlareRenderer(

@@ -186,7 +186,7 @@ class GlareRenderer:
             kernel_shape = check_kernel_shape(kernel.shape[:2])
             self._given = kernel
         elif kernel_shape is not None:
-            kernel_shape = check_kernel_shape(kernel_shape)
+            kernel_shape = check_kernel_shape(kernel_shape, name="kernel_shape")
         self.kernel_shape = kernel_shape or kernel_shape_for(self.shape)
         self.kernel_half = (self.kernel_shape[0] // 2, self.kernel_shape[1] // 2)
         self.paths = tuple(paths)
