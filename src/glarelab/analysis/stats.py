@@ -472,7 +472,7 @@ def holm(pvalues: Sequence[float], *, missing: Literal["raise", "omit"] = "raise
     bad = np.flatnonzero(computed & ~((p >= 0) & (p <= 1)))
     if bad.size:
         raise ValueError(
-            f"holm: p-values must be numbers in [0, 1]; got {p[bad[0]]} at position {bad[0]}"
+            f"holm: pvalues must be numbers in [0, 1]; got {p[bad[0]]} at position {bad[0]}"
         )
     adjusted = np.full(p.shape, np.nan)
     if computed.any():

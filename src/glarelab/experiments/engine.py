@@ -270,14 +270,14 @@ class LookingObserver(ABC):
         observer_parameters(protocol["observer"])
 
     def __init__(self, protocol: Protocol, participant: str, *, seed: int, stimuli):
+        self.participant = _check_text("participant", participant)
+        self.seed = _check_seed("seed", seed)
         # imported here: the model and the set's images are needed only by a simulation
         from glarelab.observers.fitted_range import warn_outside_fitted_range
         from glarelab.observers.looking import ObservedSet
         from glarelab.observers.noise import observer_parameters
 
         self.protocol = protocol
-        self.participant = _check_text("participant", participant)
-        self.seed = _check_seed("seed", seed)
         self.model, self.noise = observer_parameters(protocol["observer"])
         self.observer = self.noise.draw(
             participant_rng(protocol.seed, participant, f"observer {seed}")

@@ -80,6 +80,13 @@ def test_a_bad_constructor_argument_is_refused_naming_it(data):
     assert "\n" not in str(raised.value)
 
 
+@pytest.mark.parametrize("sigma_deg", [True, "0.3", np.array([0.3, 0.4])])
+def test_a_sigma_that_is_not_a_number_is_refused(sigma_deg):
+    # True was read as 1°, "0.3" as 0.3°
+    with pytest.raises(ValueError, match=r"^sigma_deg must be a finite number > 0 deg, got"):
+        GaussianGlare(sigma_deg=sigma_deg)
+
+
 @pytest.mark.parametrize("flag", [VosGlare, HybridGlare])
 def test_a_flag_given_as_a_word_is_refused(flag):
     with pytest.raises(ValueError, match=r"flare_lines must be True or False, got 'no'"):
