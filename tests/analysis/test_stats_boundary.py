@@ -29,7 +29,9 @@ NOT_A_P = st.one_of(
 def test_holm_refuses_a_p_value_that_is_not_one_naming_pvalues(ps, bad, at):
     ps.insert(min(at, len(ps)), bad)
     for function in (holm, holm_confidence):
-        with pytest.raises((ValueError, TypeError), match=r"^holm(_confidence)?: pvalues must be") as raised:
+        with pytest.raises(
+            (ValueError, TypeError), match=r"^holm(_confidence)?: pvalues must be"
+        ) as raised:
             function(ps)
         assert "\n" not in str(raised.value)
 
