@@ -140,7 +140,7 @@ def digitise_kernel(
     model
         A glare model, or its name in :data:`GLARE_MODELS`.
     pixel_deg
-        Visual angle of one pixel in degrees, > 0.
+        Visual angle of one pixel in degrees, in [1e-5, 180].
     shape
         Odd kernel shape ``(KH, KW)``, pixels.
     colour
@@ -184,7 +184,7 @@ def kernel(model: GlareModel | str, pixel_deg: float, shape: tuple[int, int]) ->
     model
         A model object or a name from :data:`GLARE_MODELS`.
     pixel_deg
-        Visual angle of one pixel in degrees, > 0.
+        Visual angle of one pixel in degrees, in [1e-5, 180].
     shape
         Odd kernel shape ``(KH, KW)``.
 

@@ -92,7 +92,7 @@ class HybridGlare(GlareModel):
         Parameters
         ----------
         pixel_deg
-            Visual angle of one pixel in degrees, > 0.
+            Visual angle of one pixel in degrees, in [1e-5, 180].
         shape
             Odd kernel shape ``(KH, KW)``, pixels.
         colour

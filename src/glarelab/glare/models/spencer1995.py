@@ -229,7 +229,7 @@ class VosGlare(GlareModel):
         Parameters
         ----------
         pixel_deg
-            Visual angle of one pixel in degrees, > 0.
+            Visual angle of one pixel in degrees, in [1e-5, 180].
         radius_px
             Half-sizes of the centred squares the kernel is cut to, whole pixels (a square spans
             ``2 r + 1`` pixels a side).
@@ -368,7 +368,7 @@ class VosGlare(GlareModel):
         Parameters
         ----------
         pixel_deg
-            Visual angle of one pixel in degrees, > 0.
+            Visual angle of one pixel in degrees, in [1e-5, 180].
         shape
             Odd kernel shape ``(KH, KW)``, pixels.
         colour
@@ -418,7 +418,7 @@ class VosGlare(GlareModel):
         Parameters
         ----------
         pixel_deg
-            Visual angle of one pixel in degrees, > 0.
+            Visual angle of one pixel in degrees, in [1e-5, 180].
         shape
             Odd kernel shape ``(KH, KW)``.
         colour

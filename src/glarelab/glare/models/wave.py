@@ -378,7 +378,7 @@ class WaveOpticsGlare(GlareModel):
         Parameters
         ----------
         pixel_deg
-            Visual angle of one pixel in degrees, > 0.
+            Visual angle of one pixel in degrees, in [1e-5, 180].
         shape
             Odd kernel shape ``(KH, KW)``, pixels.
 
@@ -504,7 +504,7 @@ class WaveOpticsGlare(GlareModel):
         Parameters
         ----------
         pixel_deg
-            Visual angle of one pixel in degrees, > 0.
+            Visual angle of one pixel in degrees, in [1e-5, 180].
         shape
             Odd kernel shape ``(KH, KW)``, pixels.
 
@@ -612,7 +612,7 @@ class WaveOpticsGlare(GlareModel):
         Parameters
         ----------
         pixel_deg
-            Visual angle of one pixel in degrees, > 0.
+            Visual angle of one pixel in degrees, in [1e-5, 180].
         shape
             Odd kernel shape ``(KH, KW)``, pixels.
         colour
@@ -686,7 +686,7 @@ class WaveOpticsGlare(GlareModel):
         Parameters
         ----------
         pixel_deg
-            Visual angle of one pixel in degrees, > 0.
+            Visual angle of one pixel in degrees, in [1e-5, 180].
         shape
             Odd kernel shape ``(KH, KW)``, pixels.
         positions_deg
@@ -738,7 +738,7 @@ def compare_spectral_methods(
     model
         The wave-optics model; its ``spectral`` method is replaced by each in turn.
     pixel_deg
-        Visual angle of one pixel in degrees, > 0.
+        Visual angle of one pixel in degrees, in [1e-5, 180].
     shape
         Odd kernel shape ``(KH, KW)``, pixels.
 

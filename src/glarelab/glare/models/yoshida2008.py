@@ -51,7 +51,8 @@ class GaussianGlare(GlareModel):
     Parameters
     ----------
     sigma_deg
-        Standard deviation in visual degrees, > 0; default 0.34 (Yoshida §3).
+        Standard deviation in visual degrees, in [1e-5, 90] (as the command line); default
+        0.34 (Yoshida §3).
     sampling
         ``'point'`` samples eq. 2 at pixel centres, as the paper does; ``'pixel'`` integrates
         the Gaussian over each pixel (exact; use it when σ is only a few pixels).
@@ -132,7 +133,7 @@ class GaussianGlare(GlareModel):
         Parameters
         ----------
         pixel_deg
-            Visual angle of one pixel in degrees, > 0.
+            Visual angle of one pixel in degrees, in [1e-5, 180].
         radius_px
             Half-sizes of the centred squares the kernel is cut to, whole pixels (a square spans
             ``2 r + 1`` pixels a side).
@@ -182,7 +183,7 @@ class GaussianGlare(GlareModel):
         Parameters
         ----------
         pixel_deg
-            Visual angle of one pixel in degrees, > 0.
+            Visual angle of one pixel in degrees, in [1e-5, 180].
         shape
             Odd kernel shape ``(KH, KW)``, pixels.
         colour
