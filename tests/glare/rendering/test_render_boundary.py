@@ -113,6 +113,26 @@ def test_the_issue_cases_of_the_pixel_size(value, match):
         render_glare(IMAGE, MODEL, pixel_deg=value, cache=False)
 
 
+@SETTINGS
+@given(
+    tolerance=st.one_of(
+        st.booleans(),
+        st.text(max_size=4),
+        st.floats(max_value=-1e-300),
+        st.sampled_from([math.nan, math.inf, -math.inf]),
+    ),
+    kernel_shape=st.sampled_from([None, (31, 31)]),
+    dim=st.booleans(),
+)
+def test_add_glare_refuses_a_bad_tolerance_whatever_path_it_takes(tolerance, kernel_shape, dim):
+    image = np.full((16, 16), 50.0) if dim else IMAGE  # dim: nothing to spread
+    with pytest.raises(ValueError, match=r"^tolerance_codes must be a finite number >= 0"):
+        add_glare(
+            image, MODEL, pixel_deg=0.05, tolerance_codes=tolerance, kernel_shape=kernel_shape,
+            cache=False,
+        )  # fmt: skip
+
+
 def test_a_masked_image_is_refused_not_read_without_its_mask():
     image = np.ma.masked_array(IMAGE.copy(), mask=np.zeros(IMAGE.shape, bool))
     image.mask[8, 8] = True  # the sun is masked out: reading .data would spread it

@@ -28,6 +28,7 @@ from glarelab.glare.rendering.renderer import (
     GlareRenderer,
     GlareResult,
     _renderer_for,
+    check_tolerance,
 )
 
 __all__ = [
@@ -208,6 +209,7 @@ def add_glare(
     """
     image = check_image("luminance_cd_m2", luminance_cd_m2, channels=(3,))
     l_dmax = check_positive("l_dmax_cd_m2", l_dmax_cd_m2, unit="cd/m²")
+    check_tolerance(tolerance_codes)  # also when a kernel shape or a dim image makes it moot
     if not (image > l_dmax).any():
         # nothing to spread: skip digitising a kernel, after checking the other arguments
         check_pixel_deg(pixel_deg, high=MAX_RENDER_PIXEL_DEG)

@@ -25,6 +25,7 @@ from glarelab.glare._validation import (
     check_image,
     check_pixel_deg,
     check_positive,
+    real_number,
 )
 from glarelab.glare.models import _resolve
 from glarelab.glare.models.base import GlareModel, TailBound
@@ -160,12 +161,7 @@ class GlareRenderer:
         self.composition = check_composition(composition, method, where="GlareRenderer")
         check_choice("precision", precision, PRECISIONS)
         self.method, self.dtype = self.composition, np.dtype(precision)
-        tolerance = 0.0 if tolerance_codes is None else float(tolerance_codes)
-        if not math.isfinite(tolerance) or tolerance < 0:
-            raise ValueError(
-                f"tolerance_codes must be a finite number >= 0 or None, got {tolerance_codes!r}"
-            )
-        self.tolerance_codes = tolerance
+        self.tolerance_codes = check_tolerance(tolerance_codes)
         try:
             height, width = (int(n) for n in tuple(shape)[:2])
         except (TypeError, ValueError):
@@ -690,6 +686,38 @@ class GlareRenderer:
             spread[..., c][near_box[0] : near_box[1], near_box[2] : near_box[3]] += part
         np.maximum(spread, 0.0, out=spread)  # FFT round-off is not non-negative
         return spread, used, roundoff
+
+
+def check_tolerance(tolerance_codes: float | None) -> float:
+    """``tolerance_codes`` as a float (None: 0), after checking it is a finite number >= 0
+    (not a bool or a string, which ``float`` would read).
+
+    Parameters
+    ----------
+    tolerance_codes
+        The largest error allowed against the exact render, display codes, or None.
+
+    Returns
+    -------
+    float
+        The tolerance, 0 for None.
+
+    Raises
+    ------
+    ValueError
+        For anything else.
+    """
+    if tolerance_codes is None:
+        return 0.0
+    try:
+        tolerance = real_number(tolerance_codes)
+    except TypeError:
+        tolerance = math.nan
+    if not math.isfinite(tolerance) or tolerance < 0:
+        raise ValueError(
+            f"tolerance_codes must be a finite number >= 0 or None, got {tolerance_codes!r}"
+        )
+    return tolerance
 
 
 def _renderer_for(
