@@ -159,7 +159,7 @@ def test_the_holm_family_holds_only_the_tests_r_could_compute():
         )
     assert_allclose(p, theirs["p"], rtol=R_TOLERANCE)  # NaN where R has NA
     assert_allclose(holm(p, missing="omit"), theirs["p_holm"], rtol=R_TOLERANCE)
-    with pytest.raises(ValueError, match="p-values must be numbers"):
+    with pytest.raises(ValueError, match="pvalues must be numbers"):
         holm(p)
 
 

@@ -58,6 +58,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import numbers
 from collections.abc import Sequence
 from typing import Literal
 
@@ -417,6 +418,30 @@ def _corrected_p(f_value: float, df1: float, df2: float, eps: float, p: float) -
     return float(sps.f.sf(f_value, df1 * eps, df2 * eps))
 
 
+def _alpha(where: str, alpha: float) -> float:
+    """``alpha`` as a float, after checking it is a number strictly between 0 and 1."""
+    if isinstance(alpha, bool | np.bool_) or not isinstance(alpha, numbers.Real):
+        raise TypeError(f"{where}: alpha must be a number in (0, 1); got {alpha!r}")
+    if not 0 < alpha < 1:
+        raise ValueError(f"{where}: alpha must lie strictly between 0 and 1; got {alpha!r}")
+    return float(alpha)
+
+
+def _pvalues(where: str, pvalues: Sequence[float]) -> np.ndarray:
+    """``pvalues`` as a 1-D float array, after checking each is a real number (not a string
+    or a bool, which NumPy would read as a number)."""
+    if isinstance(pvalues, str | bytes) or np.ndim(pvalues) != 1:
+        raise TypeError(
+            f"{where}: pvalues must be a sequence of numbers (one per test); got {pvalues!r}"
+        )
+    for position, value in enumerate(pvalues):
+        if isinstance(value, bool | np.bool_) or not isinstance(value, numbers.Real):
+            raise TypeError(
+                f"{where}: pvalues must be numbers in [0, 1]; got {value!r} at position {position}"
+            )
+    return np.asarray(pvalues, dtype=float)
+
+
 def holm(pvalues: Sequence[float], *, missing: Literal["raise", "omit"] = "raise") -> np.ndarray:
     """Holm-adjusted p-values (as R's ``p.adjust(p, "holm")``), in the input order.
 
@@ -435,6 +460,9 @@ def holm(pvalues: Sequence[float], *, missing: Literal["raise", "omit"] = "raise
     ValueError
         For a p-value outside [0, 1], a NaN unless ``missing="omit"``, or another
         ``missing``.
+    TypeError
+        For ``pvalues`` that are not a flat sequence of numbers (a string or a bool among
+        them, a scalar, a table).
 
     Examples
     --------
@@ -445,14 +473,14 @@ def holm(pvalues: Sequence[float], *, missing: Literal["raise", "omit"] = "raise
     """
     if missing not in ("raise", "omit"):
         raise ValueError(f"holm: missing must be 'raise' or 'omit'; got {missing!r}")
-    p = np.asarray(pvalues, dtype=float)
+    p = _pvalues("holm", pvalues)
     if p.size == 0:
         return p
     computed = ~np.isnan(p) if missing == "omit" else np.ones(p.shape, bool)
     bad = np.flatnonzero(computed & ~((p >= 0) & (p <= 1)))
     if bad.size:
         raise ValueError(
-            f"holm: p-values must be numbers in [0, 1]; got {p[bad[0]]} at position {bad[0]}"
+            f"holm: pvalues must be numbers in [0, 1]; got {p[bad[0]]} at position {bad[0]}"
         )
     adjusted = np.full(p.shape, np.nan)
     if computed.any():
@@ -506,11 +534,8 @@ def holm_confidence(pvalues: Sequence[float], *, alpha: float = 0.05) -> np.ndar
     >>> holm_confidence([0.001, float("nan")]).tolist()  # a family of one
     [0.95, nan]
     """
-    if not 0 < alpha < 1:
-        raise ValueError(
-            f"holm_confidence: alpha must lie strictly between 0 and 1; got {alpha!r}"
-        )
-    p = np.asarray(pvalues, dtype=float)
+    alpha = _alpha("holm_confidence", alpha)
+    p = _pvalues("holm_confidence", pvalues)
     holm(p, missing="omit")  # the same checks
     levels = np.full(p.shape, np.nan)
     computed = np.flatnonzero(~np.isnan(p))
@@ -966,12 +991,20 @@ def similarity_groups(means: dict, p_adjusted: dict, alpha: float = 0.05) -> dic
         ``(level_a, level_b)`` → adjusted p-value for every pair; NaN for a pair that could
         not be tested (it does not separate the two levels: no test says they differ).
     alpha
-        Significance level; default .05.
+        Significance level, in (0, 1); default .05.
 
     Returns
     -------
     dict
         Level → letters (e.g. ``'ab'``).
+
+    Raises
+    ------
+    TypeError
+        For a mean, a p-value or ``alpha`` that is not a number (a string, a bool).
+    ValueError
+        For ``alpha`` outside (0, 1), a non-finite mean, a p-value outside [0, 1] (NaN is
+        allowed), or a key of ``p_adjusted`` that is not a pair of levels of ``means``.
 
     Notes
     -----
@@ -985,6 +1018,33 @@ def similarity_groups(means: dict, p_adjusted: dict, alpha: float = 0.05) -> dic
     ...                   {("A", "B"): .5, ("A", "C"): .01, ("B", "C"): .5})
     {'C': 'a', 'B': 'ab', 'A': 'b'}
     """
+    alpha = _alpha("similarity_groups", alpha)
+    for level, mean in means.items():
+        if isinstance(mean, bool | np.bool_) or not isinstance(mean, numbers.Real):
+            raise TypeError(
+                f"similarity_groups: means must map each level to a number; got {mean!r} for "
+                f"{level!r}"
+            )
+        if not math.isfinite(mean):
+            raise ValueError(
+                f"similarity_groups: means must be finite; got {mean!r} for {level!r}"
+            )
+    for pair, p in p_adjusted.items():
+        if not (isinstance(pair, tuple) and len(pair) == 2 and set(pair) <= means.keys()):
+            raise ValueError(
+                f"similarity_groups: p_adjusted must be keyed by pairs (level_a, level_b) of "
+                f"levels in means; got {pair!r} (levels: {', '.join(map(repr, means))})"
+            )
+        if isinstance(p, bool | np.bool_) or not isinstance(p, numbers.Real):
+            raise TypeError(
+                f"similarity_groups: p_adjusted values must be numbers in [0, 1] or NaN; got "
+                f"{p!r} for {pair!r}"
+            )
+        if not (math.isnan(p) or 0.0 <= p <= 1.0):
+            raise ValueError(
+                f"similarity_groups: p_adjusted values must be in [0, 1] or NaN; got {p!r} for "
+                f"{pair!r}"
+            )
     levels = sorted(means, key=lambda k: -means[k])
     groups = [set(levels)]
     for (a, b), p in p_adjusted.items():

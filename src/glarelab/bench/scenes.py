@@ -53,6 +53,13 @@ def _one_over_f(shape: tuple[int, int], rng: np.random.Generator, scale_px: floa
     return (field - field.mean()) / field.std()
 
 
+def _rng(seed: int) -> np.random.Generator:
+    """The texture's generator; a seed that is not an integer >= 0 is refused (ValueError)."""
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+        raise ValueError(f"seed must be an integer >= 0 (a random seed), got {seed!r}")
+    return np.random.default_rng(seed)
+
+
 def sun_scene(n: int, *, seed: int = 0) -> tuple[np.ndarray, float]:
     """A 7.5e8 cd/m² sun disk (Spencer Fig. 16) over a landscape the display can show.
 
@@ -74,7 +81,7 @@ def sun_scene(n: int, *, seed: int = 0) -> tuple[np.ndarray, float]:
     pixel_deg : float
         Visual angle of one pixel, degrees.
     """
-    rng = np.random.default_rng(seed)
+    rng = _rng(seed)
     pixel = LARGE_FOV_DEG / n
     yy, xx = np.indices((n, n))
     cy, cx = n // 3, int(0.55 * n)
@@ -107,7 +114,7 @@ def leaves_scene(n: int, *, seed: int = 0) -> tuple[np.ndarray, float]:
     pixel_deg : float
         Visual angle of one pixel, degrees.
     """
-    rng = np.random.default_rng(seed)
+    rng = _rng(seed)
     pixel = LARGE_FOV_DEG / n
     gaps = _one_over_f((n, n), rng, n / 64) > 1.2
     leaves = np.clip(np.exp(np.log(60.0) + 0.5 * _one_over_f((n, n), rng, n / 256)), 5, 200)
@@ -141,7 +148,7 @@ def glints_scene(n: int, *, seed: int = 0) -> tuple[np.ndarray, float]:
     pixel_deg : float
         Visual angle of one pixel, degrees.
     """
-    rng = np.random.default_rng(seed)
+    rng = _rng(seed)
     image = np.exp(np.log(20.0) + 0.3 * rng.standard_normal((n, n)))
     glints = rng.random((n, n)) < 0.001
     image[glints] = 10 ** rng.uniform(3, 6, int(glints.sum()))
@@ -164,7 +171,7 @@ def yoshida_scene(*, seed: int = 0) -> tuple[np.ndarray, float]:
     pixel_deg : float
         Visual angle of one pixel, degrees.
     """
-    rng = np.random.default_rng(seed)
+    rng = _rng(seed)
     n, pixel = 271, 0.011824  # 3.2° at the paper's display geometry
     y, x = np.indices((n, n)) - n // 2
     disk = np.hypot(x, y) * pixel <= 0.15
@@ -187,7 +194,7 @@ def night_scene(*, seed: int = 0) -> tuple[np.ndarray, float]:
     pixel_deg : float
         Visual angle of one pixel, degrees.
     """
-    rng = np.random.default_rng(seed)
+    rng = _rng(seed)
     night = np.full((1024, 1280), 0.05) + 0.02 * rng.random((1024, 1280))
     for row, col, level in (
         (400, 300, 2e4),
@@ -236,7 +243,7 @@ def lamps_scene(
     pixel_deg : float
         ``pixel_deg``.
     """
-    rng = np.random.default_rng(seed)
+    rng = _rng(seed)
     height, width = shape
     image = 10 ** rng.uniform(-2, 0, shape)
     if colour:

@@ -32,6 +32,7 @@ import datetime as dt
 import hashlib
 import itertools
 import json
+import numbers
 import warnings
 from dataclasses import dataclass, field, replace
 from functools import cached_property
@@ -601,10 +602,31 @@ def _check_status(calibration: Calibration, source: str) -> None:
 def _check_readings(
     readings: list[tuple[int, float]], bit_depth: int, source: str
 ) -> list[tuple[int, float]]:
-    if bit_depth not in (8, 10, 12, 16):
+    if (
+        isinstance(bit_depth, bool)
+        or not isinstance(bit_depth, int | np.integer)
+        or bit_depth not in (8, 10, 12, 16)
+    ):
         raise ValueError(f"bit_depth must be one of 8, 10, 12, 16; got {bit_depth!r}")
     if len(readings) < 4:
         raise ValueError(f"{source}: at least 4 readings are needed, got {len(readings)}")
+    for reading in readings:
+        if not isinstance(reading, tuple | list) or len(reading) != 2:
+            raise ValueError(
+                f"{source}: each reading must be a pair (code, cd/m²); got {reading!r}"
+            )
+        code, value = reading
+        if isinstance(code, bool | np.bool_) or not isinstance(code, int | np.integer):
+            raise ValueError(
+                f"{source}: a reading's code must be a whole number (a drive level); got "
+                f"{code!r} in {reading!r}"
+            )
+        if isinstance(value, bool | np.bool_) or not isinstance(value, numbers.Real):
+            raise ValueError(
+                f"{source}: a reading's luminance must be a number of cd/m²; got {value!r} for "
+                f"code {code}"
+            )
+    readings = [(int(code), float(value)) for code, value in readings]
     ordered = sorted(readings)
     top = 2**bit_depth - 1
     for code, value in ordered:
@@ -718,9 +740,13 @@ def fit_calibration(
     Raises
     ------
     ValueError
-        For fewer than 4 readings, codes outside the bit depth, a repeated code, readings that
-        do not increase with code (named), or readings without code 0 and the top code.
+        For a ``bit_depth`` other than the integers 8, 10, 12, 16, fewer than 4 readings, a
+        reading that is not a pair of a whole-number code and a luminance number, codes
+        outside the bit depth, a repeated code, readings that do not increase with code
+        (named), readings without code 0 and the top code, or another ``method``.
     """
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {', '.join(METHODS)}; got {method!r}")
     ordered = _check_readings(list(readings), bit_depth, source)
     model: dict = {}
     if method == "gog":

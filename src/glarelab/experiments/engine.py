@@ -160,6 +160,21 @@ class Engine(ABC):
         return []
 
 
+def _check_seed(name: str, value: int) -> int:
+    """``value`` if it is an integer >= 0 (a seed of :func:`numpy.random.default_rng`), else
+    ``ValueError`` naming ``name`` (a float seed 1.5 would name another stream silently)."""
+    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 0:
+        raise ValueError(f"{name} must be an integer >= 0 (a random seed), got {value!r}")
+    return int(value)
+
+
+def _check_text(name: str, value: object) -> str:
+    """``value`` if it is a non-empty string, else ``ValueError`` naming ``name``."""
+    if not isinstance(value, str) or not value:
+        raise ValueError(f"{name} must be a non-empty string (an id), got {value!r}")
+    return value
+
+
 def participant_rng(seed: int, participant: str, purpose: str) -> np.random.Generator:
     """A generator fixed by the protocol seed, the participant and what it is for, so that a
     participant's trial order is the same in every run and resumed session.
@@ -178,7 +193,16 @@ def participant_rng(seed: int, participant: str, purpose: str) -> np.random.Gene
     -------
     numpy.random.Generator
         The generator.
+
+    Raises
+    ------
+    ValueError
+        For a seed that is not an integer >= 0 (a float, a bool), or a participant or purpose
+        that is not a non-empty string (participant 7 and "7" would share a stream).
     """
+    seed = _check_seed("seed", seed)
+    _check_text("participant", participant)
+    _check_text("purpose", purpose)
     digest = hashlib.sha256(f"{participant}/{purpose}".encode()).digest()
     return np.random.default_rng([seed, int.from_bytes(digest[:8], "little")])
 
@@ -246,14 +270,14 @@ class LookingObserver(ABC):
         observer_parameters(protocol["observer"])
 
     def __init__(self, protocol: Protocol, participant: str, *, seed: int, stimuli):
+        self.participant = _check_text("participant", participant)
+        self.seed = _check_seed("seed", seed)
         # imported here: the model and the set's images are needed only by a simulation
         from glarelab.observers.fitted_range import warn_outside_fitted_range
         from glarelab.observers.looking import ObservedSet
         from glarelab.observers.noise import observer_parameters
 
         self.protocol = protocol
-        self.participant = participant
-        self.seed = seed
         self.model, self.noise = observer_parameters(protocol["observer"])
         self.observer = self.noise.draw(
             participant_rng(protocol.seed, participant, f"observer {seed}")

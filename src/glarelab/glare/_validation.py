@@ -7,17 +7,24 @@ what is allowed, so that a wrong call is fixed from the message alone.
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Iterable
 
 import numpy as np
 
 __all__ = [
     "check_choice",
+    "check_flag",
     "check_image",
     "check_in_range",
+    "check_pixel_deg",
     "check_positive",
     "check_positive_int",
+    "real_number",
 ]
+
+
+TINY = float(np.finfo(float).tiny)  # the smallest normal float64, 2.2e-308
 
 
 def _describe(value: object) -> str:
@@ -26,20 +33,44 @@ def _describe(value: object) -> str:
     return repr(value)
 
 
+def real_number(value: object) -> float:
+    """``value`` as a float if it is a real number (not a bool, a string or an array of more
+    than one value), else raise ``TypeError``."""
+    if isinstance(value, np.ndarray) and value.ndim == 0:
+        value = value[()]
+    if isinstance(value, bool | np.bool_) or not isinstance(value, numbers.Real):
+        raise TypeError(f"not a real number: {value!r}")
+    return float(value)
+
+
 def check_positive(name: str, value: float, *, unit: str = "") -> float:
-    """Return ``value`` as a float if it is finite and > 0, else raise ``ValueError``."""
+    """Return ``value`` as a float if it is finite and > 0, else raise ``ValueError``.
+
+    Subnormal numbers (below 2.2e-308) are refused too: a quantity that small cannot be
+    squared or divided by without becoming 0 or infinite.
+    """
     try:
-        number = float(value)
+        number = real_number(value)
     except (TypeError, ValueError):
         raise ValueError(
             f"{name} must be a finite number > 0{' ' + unit if unit else ''}, got {value!r}"
         ) from None
-    if not math.isfinite(number) or number <= 0.0:
+    if not math.isfinite(number) or number < TINY:
         raise ValueError(
             f"{name} must be a finite number > 0{' ' + unit if unit else ''}, "
             f"got {_describe(value)}"
         )
     return number
+
+
+MIN_PIXEL_DEG = 1e-5  # as the command line: 0.04 arcsec, far below the eye's resolution
+MAX_PIXEL_DEG = 180.0  # a pixel cannot subtend more than half the visual field
+
+
+def check_pixel_deg(value: float, *, high: float = MAX_PIXEL_DEG) -> float:
+    """Return ``pixel_deg`` as a float if it is a number in ``[1e-5, high]`` degrees (the
+    command line's lower bound), else raise ``ValueError``."""
+    return check_in_range("pixel_deg", value, MIN_PIXEL_DEG, high, unit="deg")
 
 
 def check_in_range(
@@ -57,7 +88,7 @@ def check_in_range(
     hb = "]" if high_inclusive else ")"
     allowed = f"{lb}{low:g}, {high:g}{hb}{' ' + unit if unit else ''}"
     try:
-        number = float(value)
+        number = real_number(value)
     except (TypeError, ValueError):
         raise ValueError(f"{name} must be a number in {allowed}, got {value!r}") from None
     above = number >= low if low_inclusive else number > low
@@ -72,6 +103,14 @@ def check_positive_int(name: str, value: int, *, minimum: int = 1) -> int:
     if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < minimum:
         raise ValueError(f"{name} must be an integer >= {minimum}, got {value!r}")
     return int(value)
+
+
+def check_flag(name: str, value: object) -> bool:
+    """Return ``value`` if it is a bool, else raise ``ValueError`` (the string ``'no'`` is
+    true to ``if``)."""
+    if not isinstance(value, bool | np.bool_):
+        raise ValueError(f"{name} must be True or False, got {value!r}")
+    return bool(value)
 
 
 def check_choice(name: str, value: object, allowed: Iterable[object]) -> object:
@@ -97,6 +136,11 @@ def check_image(name: str, image: object, *, channels: tuple[int, ...] = ()) -> 
     channels
         Allowed channel counts for a 3-D image; empty means 2-D only.
     """
+    if isinstance(image, np.ma.MaskedArray):
+        raise ValueError(
+            f"{name} must be a plain array, not a masked array (its mask would be ignored); "
+            "give image.filled(value) with the value the masked pixels should have"
+        )
     array = np.asarray(image)
     allowed = "a 2-D (H, W) array"
     if channels:

@@ -17,6 +17,13 @@ from glarelab.files.atomic import atomic_path
 __all__ = ["read_exr", "write_exr"]
 
 EXR_MAGIC = bytes((0x76, 0x2F, 0x31, 0x01))  # the first four bytes of every OpenEXR file
+FLOAT32_MAX = float(np.finfo(np.float32).max)  # 3.4028235e38; above it float32 is inf
+
+
+def _first(array: np.ndarray, bad: np.ndarray) -> str:
+    """The first offending value and its index."""
+    where = tuple(int(i) for i in np.argwhere(bad)[0])
+    return f"{float(array[where])!r} at index {where}"
 
 
 def write_exr(path: str | Path, image: np.ndarray) -> Path:
@@ -39,15 +46,40 @@ def write_exr(path: str | Path, image: np.ndarray) -> Path:
     Raises
     ------
     ValueError
-        For another shape or non-finite values.
+        For another shape, a masked array, values that are not real numbers, non-finite or
+        negative values, or values above float32's largest (3.4e38, they would be written as
+        inf).
     """
+    if isinstance(image, np.ma.MaskedArray):
+        raise ValueError(
+            "image must be a plain array, not a masked array (its mask would not be written); "
+            "give image.filled(value)"
+        )
     array = np.asarray(image)
     if not (array.ndim == 2 or (array.ndim == 3 and array.shape[2] == 3)):
         raise ValueError(
             f"image must be (H, W) luminance or (H, W, 3) RGB; got shape {array.shape}"
         )
+    if array.dtype.kind not in "iuf":
+        raise ValueError(
+            f"image must hold real numbers (integer or float) to be written as EXR; got dtype "
+            f"{array.dtype}"
+        )
     if not np.isfinite(array).all():
-        raise ValueError("image must be finite to be written as EXR; it holds NaN or Inf")
+        raise ValueError(
+            "image must be finite to be written as EXR; it holds NaN or Inf: "
+            + _first(array, ~np.isfinite(array))
+        )
+    if array.size and array.min() < 0:
+        raise ValueError(
+            f"image must be >= 0 (linear luminance, cd/m²) to be written as EXR; it holds "
+            f"{_first(array, array < 0)}"
+        )
+    if array.size and array.max() > FLOAT32_MAX:
+        raise ValueError(
+            f"image must be at most {FLOAT32_MAX:.8g}, float32's largest, to be written as EXR "
+            f"(it would become inf); it holds {_first(array, array > FLOAT32_MAX)}"
+        )
     array = np.ascontiguousarray(array, dtype=np.float32)
     channels = {"Y": array} if array.ndim == 2 else {"RGB": array}
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
@@ -120,6 +152,35 @@ def _check_layout(data: bytes, length: int, stream) -> bool | None:
     return False
 
 
+def _check_header(path: Path, exr) -> None:
+    """Refuse what reading the first part's pixels would silently drop: other parts, a pixel
+    aspect ratio other than 1 (the kernel is round in pixels), a data window that is not the
+    whole display window (pixels placed in, or cut from, a larger frame)."""
+    if len(exr.parts) > 1:
+        names = ", ".join(repr(part.name()) for part in exr.parts)
+        raise ValueError(
+            f"{path}: multi-part OpenEXR ({len(exr.parts)} parts: {names}); glarelab reads one "
+            "image, so write each part to a file of its own"
+        )
+    header = exr.header()
+    ratio = float(header.get("pixelAspectRatio", 1.0))
+    if ratio != 1.0:
+        raise ValueError(
+            f"{path}: pixelAspectRatio is {ratio:g}; glarelab needs square pixels (1), since "
+            "the glare kernel is digitised in square pixels: resample the image first"
+        )
+    data, display = header.get("dataWindow"), header.get("displayWindow")
+    if data is not None and display is not None:
+        data_box = tuple(int(v) for corner in data for v in corner)
+        display_box = tuple(int(v) for corner in display for v in corner)
+        if data_box != display_box:
+            raise ValueError(
+                f"{path}: dataWindow {data_box} is not the displayWindow {display_box} "
+                "(xmin, ymin, xmax, ymax); glarelab reads whole images: crop or pad the image "
+                "to its display window"
+            )
+
+
 def read_exr(path: str | Path) -> np.ndarray:
     """Read an OpenEXR file as a float32 array: ``(H, W)`` for Y, ``(H, W, 3)`` for RGB.
 
@@ -137,8 +198,10 @@ def read_exr(path: str | Path) -> np.ndarray:
     Raises
     ------
     ValueError
-        If the file is not OpenEXR, is damaged, or holds neither a ``Y`` channel nor ``R``,
-        ``G`` and ``B``.
+        If the file is not OpenEXR, is damaged, holds neither a ``Y`` channel nor ``R``,
+        ``G`` and ``B``, has more than one part, a ``pixelAspectRatio`` other than 1, or a
+        ``dataWindow`` other than its ``displayWindow`` (a data window that equals the display
+        window is read whole, wherever its origin).
     FileNotFoundError
         If the file does not exist.
     """
@@ -157,8 +220,9 @@ def read_exr(path: str | Path) -> np.ndarray:
         )
     try:
         with OpenEXR.File(str(path), separate_channels=True) as exr:
+            _check_header(path, exr)
             channels = {name: np.asarray(c.pixels) for name, c in exr.channels().items()}
-    except (RuntimeError, ValueError, IndexError) as error:  # OpenEXR: the file is damaged
+    except (RuntimeError, IndexError) as error:  # OpenEXR: the file is damaged
         raise ValueError(
             f"{path} cannot be read as OpenEXR (truncated or damaged?): {error}"
         ) from None

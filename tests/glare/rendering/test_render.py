@@ -179,7 +179,7 @@ def test_colour_images_get_a_coloured_halo_and_keep_each_channels_energy():
         (
             np.ones((4, 4)),
             {"pixel_deg": 0.0},
-            r"pixel_deg must be a finite number > 0 deg, got 0.0",
+            r"pixel_deg must be in \[1e-05, 10\] deg, got 0.0",
         ),
         (np.ones((4, 4)), {"pixel_deg": -1.0}, "pixel_deg"),
         (np.ones((4, 4)), {"l_dmax_cd_m2": 0.0}, "l_dmax_cd_m2 must be a finite number > 0"),

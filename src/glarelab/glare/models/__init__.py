@@ -140,7 +140,7 @@ def digitise_kernel(
     model
         A glare model, or its name in :data:`GLARE_MODELS`.
     pixel_deg
-        Visual angle of one pixel in degrees, > 0.
+        Visual angle of one pixel in degrees, in [1e-5, 180].
     shape
         Odd kernel shape ``(KH, KW)``, pixels.
     colour
@@ -163,9 +163,13 @@ def digitise_kernel(
     >>> k.values.shape, round(float(k.energy_outside), 3)
     ((21, 21), 0.094)
     """
+    from glarelab.glare._validation import check_pixel_deg
     from glarelab.glare.models.cache import resolve_cache
+    from glarelab.glare.models.digitise import check_kernel_shape
 
     resolved = _resolve(model)
+    check_pixel_deg(pixel_deg)  # before the cache builds a key of them
+    shape = check_kernel_shape(shape)
     chosen = resolve_cache(cache)
     if chosen is None:
         return resolved.kernel(pixel_deg, shape, colour=colour)
@@ -180,7 +184,7 @@ def kernel(model: GlareModel | str, pixel_deg: float, shape: tuple[int, int]) ->
     model
         A model object or a name from :data:`GLARE_MODELS`.
     pixel_deg
-        Visual angle of one pixel in degrees, > 0.
+        Visual angle of one pixel in degrees, in [1e-5, 180].
     shape
         Odd kernel shape ``(KH, KW)``.
 

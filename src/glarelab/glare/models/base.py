@@ -68,7 +68,7 @@ class GlareModel(abc.ABC):
         Parameters
         ----------
         pixel_deg
-            Visual angle of one pixel in degrees, > 0.
+            Visual angle of one pixel in degrees, in [1e-5, 180].
         shape
             Odd kernel shape ``(KH, KW)``, pixels.
         colour
@@ -90,7 +90,7 @@ class GlareModel(abc.ABC):
         Parameters
         ----------
         pixel_deg
-            Visual angle of one pixel in degrees, > 0.
+            Visual angle of one pixel in degrees, in [1e-5, 180].
         radius_px
             Half-sizes of the centred squares the kernel is cut to, whole pixels (a square spans
             ``2 r + 1`` pixels a side).

@@ -33,7 +33,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from glarelab.glare._validation import check_positive, check_positive_int
+from glarelab.glare._validation import check_pixel_deg, check_positive, check_positive_int
 from glarelab.glare.models._radial import radial_mass, rectangle_mass
 
 __all__ = [
@@ -253,13 +253,15 @@ def kernel_shape_for(image_shape: Sequence[int]) -> tuple[int, int]:
     return 2 * height - 1, 2 * width - 1
 
 
-def check_kernel_shape(shape: Sequence[int]) -> tuple[int, int]:
+def check_kernel_shape(shape: Sequence[int], *, name: str = "shape") -> tuple[int, int]:
     """A kernel shape checked: two odd positive integers.
 
     Parameters
     ----------
     shape
         The kernel shape asked for.
+    name
+        The argument's name in the messages; default ``'shape'``.
 
     Returns
     -------
@@ -272,14 +274,21 @@ def check_kernel_shape(shape: Sequence[int]) -> tuple[int, int]:
         Unless it is two odd positive integers (a kernel needs a centre pixel).
     """
     try:
-        height, width = (int(n) for n in shape)
+        height, width = shape
     except (TypeError, ValueError):
         raise ValueError(
-            f"shape must be two odd positive integers (KH, KW), got {shape!r}"
+            f"{name} must be two odd positive integers (KH, KW), got {shape!r}"
         ) from None
+    for n in (height, width):
+        if isinstance(n, bool | np.bool_) or not isinstance(n, int | np.integer):
+            raise ValueError(
+                f"{name} must be two odd positive integers (KH, KW), got {shape!r} (a "
+                f"{type(n).__name__} is not a pixel count)"
+            )
+    height, width = int(height), int(width)
     if height < 1 or width < 1 or height % 2 == 0 or width % 2 == 0:
         raise ValueError(
-            f"shape must be two odd positive integers (KH, KW) so the kernel has a centre "
+            f"{name} must be two odd positive integers (KH, KW) so the kernel has a centre "
             f"pixel, got {tuple(shape)!r}"
         )
     return height, width
@@ -605,7 +614,7 @@ def digitise_radial_quadrant(
     inside, total, quadrature_error : numpy.ndarray
         As for :func:`digitise_radial`.
     """
-    pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
+    pixel_deg = check_pixel_deg(pixel_deg)
     height, width = check_kernel_shape(shape)
     samples_per_pixel = check_positive_int("samples_per_pixel", samples_per_pixel)
     center_samples_per_pixel = check_positive_int(

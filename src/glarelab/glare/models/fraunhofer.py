@@ -44,7 +44,7 @@ import numpy as np
 import scipy.fft
 import scipy.sparse
 
-from glarelab.glare._validation import check_in_range, check_positive
+from glarelab.glare._validation import check_in_range, check_pixel_deg, check_positive
 from glarelab.glare.models import apertures as ap
 from glarelab.glare.models.vos import WAVELENGTH_RANGE_NM
 
@@ -495,7 +495,7 @@ def pixel_integrated_psf(
     from glarelab.glare.models.digitise import check_kernel_shape
 
     wavelength = check_in_range("wavelength_nm", wavelength_nm, *WAVELENGTH_RANGE_NM, unit="nm")
-    pixel = check_positive("pixel_deg", pixel_deg, unit="deg")
+    pixel = check_pixel_deg(pixel_deg)
     height, width = check_kernel_shape(shape)
     ap.prefilter_weights(prefilter)
     beta_p = acf.spacing_mm / (wavelength * _MM_PER_NM) * math.radians(pixel)  # periods/pixel

@@ -56,7 +56,7 @@ class HybridGlare(GlareModel):
     def __post_init__(self) -> None:
         if not isinstance(self.wave, WaveOpticsGlare):
             raise ValueError(f"wave must be a WaveOpticsGlare, got {self.wave!r}")
-        VosGlare(regime=self.regime, age=self.age, seed=self.seed)  # validates
+        VosGlare(regime=self.regime, age=self.age, flare_lines=self.flare_lines, seed=self.seed)
 
     def _vos(self) -> VosGlare:
         return VosGlare(
@@ -92,7 +92,7 @@ class HybridGlare(GlareModel):
         Parameters
         ----------
         pixel_deg
-            Visual angle of one pixel in degrees, > 0.
+            Visual angle of one pixel in degrees, in [1e-5, 180].
         shape
             Odd kernel shape ``(KH, KW)``, pixels.
         colour

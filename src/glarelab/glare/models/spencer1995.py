@@ -13,7 +13,9 @@ import numpy as np
 
 from glarelab.glare._validation import (
     check_choice,
+    check_flag,
     check_in_range,
+    check_pixel_deg,
     check_positive,
     check_positive_int,
 )
@@ -39,6 +41,9 @@ NORMALISATIONS = ("psf", "Spencer1995")  # Spencer 1995 §3.2: "renormalize the 
 PUPIL_RANGE_MM = (0.5, 10.0)  # accepted pupil diameters; the eye spans about 2-8 mm
 # Sample spacing in the halo ring (σ = 0.159°): σ/16. At σ/4 the 0.03°/px night scene was
 # 0.99 display codes (2e-4 relative) off near the black of a 10-bit display; at σ/16, 0.16.
+# samples a pixel side of the halo's midpoint rule at most: 2000² is the 4e6 samples the
+# digitiser evaluates at once (about 100 MB); more, and a coarse pixel would take gigabytes
+MAX_HALO_SAMPLES = 2000
 HALO_MAX_SPACING_DEG = 0.01
 TAIL_MARGIN = 1.02  # the peak beyond a radius is found on a grid; 2 % covers the ring's crest
 
@@ -117,6 +122,7 @@ class VosGlare(GlareModel):
 
     def __post_init__(self) -> None:
         vos.weights(self.regime, self.age)  # validates regime and age
+        check_flag("flare_lines", self.flare_lines)
         check_choice("normalisation", self.normalisation, NORMALISATIONS)
         if self.pupil_mm is not None:
             check_in_range("pupil_mm", self.pupil_mm, *PUPIL_RANGE_MM, unit="mm")
@@ -223,7 +229,7 @@ class VosGlare(GlareModel):
         Parameters
         ----------
         pixel_deg
-            Visual angle of one pixel in degrees, > 0.
+            Visual angle of one pixel in degrees, in [1e-5, 180].
         radius_px
             Half-sizes of the centred squares the kernel is cut to, whole pixels (a square spans
             ``2 r + 1`` pixels a side).
@@ -239,7 +245,7 @@ class VosGlare(GlareModel):
         """
         if self.flare_lines or self.normalisation != "psf":
             return None
-        pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
+        pixel_deg = check_pixel_deg(pixel_deg)
         radius = np.asarray(radius_px, dtype=float)
         theta = (radius + 0.5) * pixel_deg
         halos = [None]
@@ -282,7 +288,7 @@ class VosGlare(GlareModel):
     ) -> dict:
         """The smooth parts of the PSF (no flare lines) as quadrants ``i, j >= 0``: each is
         symmetric in both axes, so the kernel is unfolded once, after they are added."""
-        pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
+        pixel_deg = check_pixel_deg(pixel_deg)
         shape = check_kernel_shape(shape)
         w0, w1, w2, w3 = self.weights
         settings = self._digitise_settings(pixel_deg, shape)
@@ -313,6 +319,14 @@ class VosGlare(GlareModel):
         halo = None
         halo_outside = np.zeros(n_channels)
         if w3 > 0:
+            samples = math.ceil(pixel_deg / self.halo_spacing_deg)
+            if samples > MAX_HALO_SAMPLES:
+                raise ValueError(
+                    f"pixel_deg must be at most {MAX_HALO_SAMPLES * self.halo_spacing_deg:g} deg "
+                    f"for the {self.regime} halo sampled every halo_spacing_deg = "
+                    f"{self.halo_spacing_deg:g} deg ({MAX_HALO_SAMPLES}² samples a pixel); got "
+                    f"{pixel_deg:g} (give a larger halo_spacing_deg)"
+                )
             channels = "RGB" if colour else "Y"
             profiles = halo_profiles(
                 channels, self.halo_spectrum, wavelength_nm=self.wavelength_nm
@@ -354,7 +368,7 @@ class VosGlare(GlareModel):
         Parameters
         ----------
         pixel_deg
-            Visual angle of one pixel in degrees, > 0.
+            Visual angle of one pixel in degrees, in [1e-5, 180].
         shape
             Odd kernel shape ``(KH, KW)``, pixels.
         colour
@@ -404,7 +418,7 @@ class VosGlare(GlareModel):
         Parameters
         ----------
         pixel_deg
-            Visual angle of one pixel in degrees, > 0.
+            Visual angle of one pixel in degrees, in [1e-5, 180].
         shape
             Odd kernel shape ``(KH, KW)``.
         colour

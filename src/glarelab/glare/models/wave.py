@@ -63,7 +63,9 @@ import scipy.sparse
 from glarelab.glare._colour import colour
 from glarelab.glare._validation import (
     check_choice,
+    check_flag,
     check_in_range,
+    check_pixel_deg,
     check_positive,
     check_positive_int,
 )
@@ -311,6 +313,8 @@ class WaveOpticsGlare(GlareModel):
     aperture_grid: Literal["exact", "fast"] = "exact"
 
     def __post_init__(self) -> None:
+        for flag in ("eyelashes", "eyelid", "fresnel"):
+            check_flag(flag, getattr(self, flag))
         if self.obstacle_image is not None:
             ap.aperture_from_image(self.obstacle_image, name="obstacle_image")
             check_positive("obstacle_spacing_mm", self.obstacle_spacing_mm, unit="mm")
@@ -381,7 +385,7 @@ class WaveOpticsGlare(GlareModel):
         Parameters
         ----------
         pixel_deg
-            Visual angle of one pixel in degrees, > 0.
+            Visual angle of one pixel in degrees, in [1e-5, 180].
         shape
             Odd kernel shape ``(KH, KW)``, pixels.
 
@@ -529,7 +533,7 @@ class WaveOpticsGlare(GlareModel):
         Parameters
         ----------
         pixel_deg
-            Visual angle of one pixel in degrees, > 0.
+            Visual angle of one pixel in degrees, in [1e-5, 180].
         shape
             Odd kernel shape ``(KH, KW)``, pixels.
 
@@ -540,7 +544,7 @@ class WaveOpticsGlare(GlareModel):
         wavelengths : numpy.ndarray
             The wavelengths, nm.
         """
-        pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
+        pixel_deg = check_pixel_deg(pixel_deg)
         shape = check_kernel_shape(shape)
         grid = self.grid_for(pixel_deg, shape)
         d = self.fresnel_distance_mm if self.fresnel else None
@@ -639,7 +643,7 @@ class WaveOpticsGlare(GlareModel):
         Parameters
         ----------
         pixel_deg
-            Visual angle of one pixel in degrees, > 0.
+            Visual angle of one pixel in degrees, in [1e-5, 180].
         shape
             Odd kernel shape ``(KH, KW)``, pixels.
         colour
@@ -713,7 +717,7 @@ class WaveOpticsGlare(GlareModel):
         Parameters
         ----------
         pixel_deg
-            Visual angle of one pixel in degrees, > 0.
+            Visual angle of one pixel in degrees, in [1e-5, 180].
         shape
             Odd kernel shape ``(KH, KW)``, pixels.
         positions_deg
@@ -765,7 +769,7 @@ def compare_spectral_methods(
     model
         The wave-optics model; its ``spectral`` method is replaced by each in turn.
     pixel_deg
-        Visual angle of one pixel in degrees, > 0.
+        Visual angle of one pixel in degrees, in [1e-5, 180].
     shape
         Odd kernel shape ``(KH, KW)``, pixels.
 

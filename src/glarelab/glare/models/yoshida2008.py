@@ -9,7 +9,7 @@ from typing import Literal
 
 import numpy as np
 
-from glarelab.glare._validation import check_choice, check_positive
+from glarelab.glare._validation import check_choice, check_pixel_deg, check_positive
 from glarelab.glare.models.base import GlareModel, TailBound
 from glarelab.glare.models.digitise import (
     Kernel,
@@ -21,6 +21,7 @@ __all__ = ["GAUSSIAN_NORMALISATIONS", "SIGMA_DEG_YOSHIDA2008", "GaussianGlare"]
 
 SIGMA_DEG_YOSHIDA2008 = 0.34  # Yoshida 2008 §3: σ = 0.34 visual degrees (Method I)
 MAX_SIGMA_DEG = 90.0  # as the command line: a halo wider than the visual field is a typo
+MIN_SIGMA_DEG = 1e-5  # as the command line: 0.04 arcsec, far below the eye's resolution
 GAUSSIAN_NORMALISATIONS = ("infinite", "Yoshida2008")
 _POISSON_FROM_SIGMA_PX = 2.0  # above this σ the Poisson form of the lattice sum is used
 
@@ -50,7 +51,8 @@ class GaussianGlare(GlareModel):
     Parameters
     ----------
     sigma_deg
-        Standard deviation in visual degrees, > 0; default 0.34 (Yoshida §3).
+        Standard deviation in visual degrees, in [1e-5, 90] (as the command line); default
+        0.34 (Yoshida §3).
     sampling
         ``'point'`` samples eq. 2 at pixel centres, as the paper does; ``'pixel'`` integrates
         the Gaussian over each pixel (exact; use it when σ is only a few pixels).
@@ -102,6 +104,11 @@ class GaussianGlare(GlareModel):
                 f"sigma_deg must be at most {MAX_SIGMA_DEG:g} deg (a halo wider than the visual "
                 f"field); got {self.sigma_deg!r}"
             )
+        if self.sigma_deg < MIN_SIGMA_DEG:
+            raise ValueError(
+                f"sigma_deg must be at least {MIN_SIGMA_DEG:g} deg (0.04 arcsec, far below the "
+                f"eye's resolution); got {self.sigma_deg!r}"
+            )
         check_choice("sampling", self.sampling, ("point", "pixel"))
         check_choice("normalisation", self.normalisation, GAUSSIAN_NORMALISATIONS)
 
@@ -126,7 +133,7 @@ class GaussianGlare(GlareModel):
         Parameters
         ----------
         pixel_deg
-            Visual angle of one pixel in degrees, > 0.
+            Visual angle of one pixel in degrees, in [1e-5, 180].
         radius_px
             Half-sizes of the centred squares the kernel is cut to, whole pixels (a square spans
             ``2 r + 1`` pixels a side).
@@ -140,7 +147,7 @@ class GaussianGlare(GlareModel):
         TailBound
             Exact bounds, marked renormalised under ``'Yoshida2008'``.
         """
-        pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
+        pixel_deg = check_pixel_deg(pixel_deg)
         radius = np.asarray(radius_px, dtype=np.int64)
         sigma_px = self.sigma_deg / pixel_deg
         n = int(radius.max()) + 2 + math.ceil(12 * sigma_px)
@@ -176,7 +183,7 @@ class GaussianGlare(GlareModel):
         Parameters
         ----------
         pixel_deg
-            Visual angle of one pixel in degrees, > 0.
+            Visual angle of one pixel in degrees, in [1e-5, 180].
         shape
             Odd kernel shape ``(KH, KW)``, pixels.
         colour
@@ -189,7 +196,7 @@ class GaussianGlare(GlareModel):
             The kernel, each channel summing to its PSF energy inside the support, with its
             energy account.
         """
-        pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
+        pixel_deg = check_pixel_deg(pixel_deg)
         height, width = check_kernel_shape(shape)
         sigma_px = self.sigma_deg / pixel_deg
         if self.sampling == "point" and sigma_px < 1.0:

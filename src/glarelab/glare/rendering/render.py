@@ -13,15 +13,22 @@ from typing import Literal
 
 import numpy as np
 
-from glarelab.glare._validation import check_choice, check_image, check_positive
+from glarelab.glare._validation import (
+    check_choice,
+    check_image,
+    check_pixel_deg,
+    check_positive,
+)
 from glarelab.glare.models import GlareModel, _resolve
 from glarelab.glare.models.digitise import Kernel, check_kernel_shape
 from glarelab.glare.rendering.compose import check_composition
 from glarelab.glare.rendering.renderer import (
+    MAX_RENDER_PIXEL_DEG,
     PRECISIONS,
     GlareRenderer,
     GlareResult,
     _renderer_for,
+    check_tolerance,
 )
 
 __all__ = [
@@ -59,7 +66,8 @@ def render_glare(
         A glare model (:class:`~glarelab.glare.GaussianGlare`,
         :class:`~glarelab.glare.VosGlare`) or its name.
     pixel_deg
-        Visual angle of one pixel in degrees, > 0.
+        Visual angle of one pixel in degrees, in (0, 10] (as the command line's
+        ``--pixel-deg``).
     l_dmax_cd_m2
         Maximum luminance the display shows, cd/m², > 0; default 220 (Yoshida §3).
     composition
@@ -201,13 +209,14 @@ def add_glare(
     """
     image = check_image("luminance_cd_m2", luminance_cd_m2, channels=(3,))
     l_dmax = check_positive("l_dmax_cd_m2", l_dmax_cd_m2, unit="cd/m²")
+    check_tolerance(tolerance_codes)  # also when a kernel shape or a dim image makes it moot
     if not (image > l_dmax).any():
         # nothing to spread: skip digitising a kernel, after checking the other arguments
-        check_positive("pixel_deg", pixel_deg, unit="deg")
+        check_pixel_deg(pixel_deg, high=MAX_RENDER_PIXEL_DEG)
         check_composition(composition, method, where="add_glare")
         check_choice("precision", precision, PRECISIONS)
         if kernel_shape is not None:
-            check_kernel_shape(kernel_shape)
+            check_kernel_shape(kernel_shape, name="kernel_shape")
         _resolve(model)
         return image.copy()
     renderer = GlareRenderer(

@@ -20,7 +20,13 @@ from typing import Literal
 
 import numpy as np
 
-from glarelab.glare._validation import check_choice, check_image, check_positive
+from glarelab.glare._validation import (
+    check_choice,
+    check_image,
+    check_pixel_deg,
+    check_positive,
+    real_number,
+)
 from glarelab.glare.models import _resolve
 from glarelab.glare.models.base import GlareModel, TailBound
 from glarelab.glare.models.cache import resolve_cache
@@ -56,6 +62,9 @@ SPECTRA_BYTES = 512 * 2**20  # kernel spectra a renderer keeps (the one in use a
 # round-off) if that is estimated to cost at most DIRECT_FALLBACK times the FFT.
 DIRECT_FALLBACK = 50.0
 PRECISIONS = ("float64", "float32")
+# as the command line's --pixel-deg: a coarse grid of the far tail (up to 8 pixels a node)
+# then stays within the 180° a kernel's pixel can subtend
+MAX_RENDER_PIXEL_DEG = 10.0
 
 
 class GlareRenderer:
@@ -66,7 +75,7 @@ class GlareRenderer:
     model
         A glare model or its name.
     pixel_deg
-        Visual angle of one pixel in degrees, > 0.
+        Visual angle of one pixel in degrees, in (0, 10].
     shape
         ``(H, W)`` of the images (RGB images ``(H, W, 3)`` are accepted too).
     l_dmax_cd_m2
@@ -147,17 +156,12 @@ class GlareRenderer:
     ) -> None:
         self.model = _resolve(model)
         self.cache = resolve_cache(cache)
-        self.pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
+        self.pixel_deg = check_pixel_deg(pixel_deg, high=MAX_RENDER_PIXEL_DEG)
         self.l_dmax = check_positive("l_dmax_cd_m2", l_dmax_cd_m2, unit="cd/m²")
         self.composition = check_composition(composition, method, where="GlareRenderer")
         check_choice("precision", precision, PRECISIONS)
         self.method, self.dtype = self.composition, np.dtype(precision)
-        tolerance = 0.0 if tolerance_codes is None else float(tolerance_codes)
-        if not math.isfinite(tolerance) or tolerance < 0:
-            raise ValueError(
-                f"tolerance_codes must be a finite number >= 0 or None, got {tolerance_codes!r}"
-            )
-        self.tolerance_codes = tolerance
+        self.tolerance_codes = check_tolerance(tolerance_codes)
         try:
             height, width = (int(n) for n in tuple(shape)[:2])
         except (TypeError, ValueError):
@@ -178,7 +182,7 @@ class GlareRenderer:
             kernel_shape = check_kernel_shape(kernel.shape[:2])
             self._given = kernel
         elif kernel_shape is not None:
-            kernel_shape = check_kernel_shape(kernel_shape)
+            kernel_shape = check_kernel_shape(kernel_shape, name="kernel_shape")
         self.kernel_shape = kernel_shape or kernel_shape_for(self.shape)
         self.kernel_half = (self.kernel_shape[0] // 2, self.kernel_shape[1] // 2)
         self.paths = tuple(paths)
@@ -682,6 +686,38 @@ class GlareRenderer:
             spread[..., c][near_box[0] : near_box[1], near_box[2] : near_box[3]] += part
         np.maximum(spread, 0.0, out=spread)  # FFT round-off is not non-negative
         return spread, used, roundoff
+
+
+def check_tolerance(tolerance_codes: float | None) -> float:
+    """``tolerance_codes`` as a float (None: 0), after checking it is a finite number >= 0
+    (not a bool or a string, which ``float`` would read).
+
+    Parameters
+    ----------
+    tolerance_codes
+        The largest error allowed against the exact render, display codes, or None.
+
+    Returns
+    -------
+    float
+        The tolerance, 0 for None.
+
+    Raises
+    ------
+    ValueError
+        For anything else.
+    """
+    if tolerance_codes is None:
+        return 0.0
+    try:
+        tolerance = real_number(tolerance_codes)
+    except TypeError:
+        tolerance = math.nan
+    if not math.isfinite(tolerance) or tolerance < 0:
+        raise ValueError(
+            f"tolerance_codes must be a finite number >= 0 or None, got {tolerance_codes!r}"
+        )
+    return tolerance
 
 
 def _renderer_for(

@@ -1,0 +1,101 @@
+"""holm, holm_confidence and similarity_groups at their boundary: p-values and levels that are
+not numbers (strings, bools) or out of range are refused naming the argument, never read as
+numbers; valid families give finite adjusted values in [0, 1]."""
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from glarelab.analysis.stats import holm, holm_confidence, similarity_groups
+
+SETTINGS = settings(max_examples=30, deadline=None)
+P = st.floats(0.0, 1.0)
+NOT_A_P = st.one_of(
+    st.text(max_size=4),
+    st.booleans(),
+    st.none(),
+    st.floats(1.0, 1e300, exclude_min=True),
+    st.floats(max_value=0.0, exclude_max=True),
+    st.sampled_from([math.inf, -math.inf]),
+    st.complex_numbers(allow_nan=False, allow_infinity=False, min_magnitude=1e-3),
+)
+
+
+@SETTINGS
+@given(ps=st.lists(P, min_size=1, max_size=6), bad=NOT_A_P, at=st.integers(0, 6))
+def test_holm_refuses_a_p_value_that_is_not_one_naming_pvalues(ps, bad, at):
+    ps.insert(min(at, len(ps)), bad)
+    for function in (holm, holm_confidence):
+        with pytest.raises(
+            (ValueError, TypeError), match=r"^holm(_confidence)?: pvalues must be"
+        ) as raised:
+            function(ps)
+        assert "\n" not in str(raised.value)
+
+
+@pytest.mark.parametrize("pvalues", [["0.01", "0.5"], [True, False], 0.1, [[0.1, 0.2]], "0.1"])
+def test_holm_refuses_strings_bools_scalars_and_tables(pvalues):
+    with pytest.raises(TypeError, match=r"^holm: pvalues must be"):
+        holm(pvalues)
+
+
+@SETTINGS
+@given(ps=st.lists(P, min_size=0, max_size=8))
+def test_holm_of_valid_p_values_is_finite_in_the_unit_interval(ps):
+    adjusted = holm(ps)
+    assert adjusted.shape == (len(ps),)
+    assert np.isfinite(adjusted).all() and ((adjusted >= np.array(ps)) & (adjusted <= 1)).all()
+
+
+NOT_AN_ALPHA = st.one_of(
+    st.floats(1.0, 1e300),
+    st.floats(max_value=0.0),
+    st.sampled_from([math.nan, math.inf, True, False, "0.05", None]),
+)
+
+
+@SETTINGS
+@given(data=st.data())
+def test_similarity_groups_refuses_bad_arguments_naming_them(data):
+    means = {"A": 1.0, "B": 2.0, "C": 3.0}
+    p_adjusted = {("A", "B"): 0.5, ("A", "C"): 0.01, ("B", "C"): 0.5}
+    name = data.draw(st.sampled_from(["alpha", "means", "p_adjusted", "pair"]), label="argument")
+    alpha = 0.05
+    if name == "alpha":
+        alpha = data.draw(NOT_AN_ALPHA, label="alpha")
+    elif name == "means":
+        means["B"] = data.draw(
+            st.one_of(st.text(max_size=3), st.booleans(), st.none(),
+                      st.sampled_from([math.nan, math.inf])),
+            label="mean",
+        )  # fmt: skip
+    elif name == "p_adjusted":
+        p_adjusted[("A", "C")] = data.draw(NOT_A_P, label="p")
+    else:
+        p_adjusted[data.draw(st.sampled_from([("A", "D"), "AB", ("A",), ("A", "B", "C")]))] = 0.01
+        name = "p_adjusted"
+    with pytest.raises((ValueError, TypeError), match=rf"^similarity_groups: {name}"):
+        similarity_groups(means, p_adjusted, alpha=alpha)
+
+
+@pytest.mark.parametrize("alpha", [2, 0, 1.0, math.nan])
+def test_similarity_groups_refuses_an_alpha_outside_the_unit_interval(alpha):
+    # α = 2 made every pair significant: each level got a letter of its own
+    with pytest.raises(ValueError, match=r"alpha must lie strictly between 0 and 1; got"):
+        similarity_groups({"A": 1, "B": 2}, {("A", "B"): 0.5}, alpha=alpha)
+
+
+@SETTINGS
+@given(
+    means=st.lists(st.floats(-1e9, 1e9), min_size=2, max_size=5),
+    ps=st.lists(st.one_of(P, st.just(math.nan)), min_size=10, max_size=10),
+    alpha=st.floats(1e-6, 1.0, exclude_max=True),
+)
+def test_similarity_groups_gives_every_level_a_letter(means, ps, alpha):
+    levels = {f"L{i}": m for i, m in enumerate(means)}
+    pairs = [(a, b) for i, a in enumerate(levels) for b in list(levels)[i + 1 :]]
+    letters = similarity_groups(levels, dict(zip(pairs, ps, strict=False)), alpha=alpha)
+    assert set(letters) == set(levels) and all(letters.values())

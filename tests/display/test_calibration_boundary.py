@@ -1,0 +1,88 @@
+"""fit_calibration at its boundary: a bit depth that is not one of the integers 8, 10, 12, 16,
+fractional or bool codes, and luminances that are not numbers are refused naming what is wrong
+(they were truncated and accepted); valid readings give a finite, increasing table."""
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from glarelab.display.calibration import fit_calibration
+
+SETTINGS = settings(max_examples=30, deadline=None)
+READINGS = [(0, 0.1), (85, 5.0), (170, 40.0), (255, 100.0)]
+
+
+@SETTINGS
+@given(bit_depth=st.one_of(
+    st.floats(allow_nan=True),
+    st.booleans(),
+    st.integers().filter(lambda n: n not in (8, 10, 12, 16)),
+    st.text(max_size=3),
+    st.none(),
+))  # fmt: skip
+def test_a_bit_depth_that_is_not_a_known_integer_is_refused(bit_depth):
+    with pytest.raises(ValueError, match=r"^bit_depth must be one of 8, 10, 12, 16; got"):
+        fit_calibration(READINGS, bit_depth=bit_depth)
+
+
+BAD_CODE = st.one_of(
+    st.floats(0.0, 255.0).filter(lambda x: x != int(x)),
+    st.sampled_from([85.0, True, "85", None, math.nan]),
+)
+BAD_LUMINANCE = st.one_of(
+    st.text(max_size=4), st.booleans(), st.none(),
+    st.complex_numbers(allow_nan=False, allow_infinity=False),
+)  # fmt: skip
+
+
+@SETTINGS
+@given(data=st.data(), which=st.integers(0, 3))
+def test_a_reading_that_is_not_a_code_and_a_number_is_refused(data, which):
+    readings = list(READINGS)
+    part = data.draw(st.sampled_from(["code", "luminance", "pair"]), label="part")
+    code, value = readings[which]
+    if part == "code":
+        readings[which] = (data.draw(BAD_CODE, label="code"), value)
+        match = r"^readings: a reading's code must be a whole number"
+    elif part == "luminance":
+        readings[which] = (code, data.draw(BAD_LUMINANCE, label="luminance"))
+        match = r"^readings: a reading's luminance must be a number"
+    else:
+        readings[which] = data.draw(st.sampled_from([(code,), (code, value, 1), code, "ab"]))
+        match = r"^readings: each reading must be a pair"
+    with pytest.raises(ValueError, match=match) as raised:
+        fit_calibration(readings, bit_depth=8, method=data.draw(st.sampled_from(["pchip", "gog"])))
+    assert "\n" not in str(raised.value)
+
+
+@pytest.mark.parametrize(
+    ("readings", "bit_depth", "match"),
+    [
+        (READINGS, 8.0, r"bit_depth must be one of 8, 10, 12, 16; got 8.0"),
+        ([(0, 0.1), (300, 5.0), (600, 40.0), (1023, 100.0)], 10.9, "got 10.9"),
+        ([(0, 0.1), (85.5, 5.0), (170, 40.0), (255, 100.0)], 8, r"whole number .* got 85.5"),
+    ],
+)
+def test_the_issue_cases_are_refused(readings, bit_depth, match):
+    with pytest.raises(ValueError, match=match):
+        fit_calibration(readings, bit_depth=bit_depth)
+
+
+@SETTINGS
+@given(
+    steps=st.lists(st.floats(1e-3, 1e3), min_size=3, max_size=8),
+    black=st.floats(0.0, 1.0),
+    method=st.sampled_from(["pchip-log", "pchip"]),
+    numpy_types=st.booleans(),
+)
+def test_valid_readings_give_a_finite_increasing_table(steps, black, method, numpy_types):
+    codes = np.unique(np.linspace(0, 255, len(steps) + 1).round().astype(int))
+    values = black + np.concatenate([[0.0], np.cumsum(steps[: codes.size - 1])])
+    readings = list(zip(codes.tolist(), values.tolist(), strict=True))
+    if numpy_types:
+        readings = list(zip(codes, values, strict=True))  # np.int64 and np.float64 are numbers
+    lut = fit_calibration(readings, bit_depth=8, method=method).lut
+    assert np.isfinite(lut).all() and (np.diff(lut) >= 0).all()

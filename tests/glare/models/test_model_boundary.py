@@ -1,0 +1,173 @@
+"""The glare models' constructors and kernels at their boundary: a bad argument is refused with
+a ValueError or TypeError naming it (never another exception, never a NaN kernel), and pixel
+sizes across the allowed range (1e-5° to 180°) give finite kernels."""
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from glarelab.glare import GaussianGlare, VosGlare, kernel
+from glarelab.glare.models.hybrid import HybridGlare
+from glarelab.glare.models.wave import WaveOpticsGlare
+
+SETTINGS = settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+NOT_A_NUMBER = st.one_of(
+    st.booleans(),
+    st.text(max_size=4),
+    st.none(),
+    st.complex_numbers(allow_nan=False, allow_infinity=False),
+    st.lists(st.floats(0.1, 1.0), min_size=2, max_size=3),
+)
+NOT_FINITE_POSITIVE = st.one_of(
+    st.floats(max_value=0.0),
+    st.sampled_from([math.nan, math.inf, -math.inf, 5e-324, 1e-310]),
+)
+NOT_A_FLAG = st.one_of(st.text(max_size=4), st.integers(), st.none(), st.floats())
+NOT_A_SEED = st.one_of(
+    st.integers(max_value=-1),
+    st.floats(allow_nan=True),
+    st.booleans(),
+    st.text(max_size=3),
+    st.none(),
+)
+
+# argument -> (constructor, strategy of bad values)
+BAD_CONSTRUCTIONS = {
+    "sigma_deg": (
+        GaussianGlare,
+        st.one_of(
+            NOT_A_NUMBER,
+            NOT_FINITE_POSITIVE,
+            st.floats(0.0, 9.9e-6, exclude_min=True),  # below 1e-5°, as the command line
+            st.floats(90.0, 1e300, exclude_min=True),
+        ),
+    ),
+    "sampling": (GaussianGlare, st.one_of(st.text(max_size=6), st.none(), st.integers())),
+    "normalisation": (GaussianGlare, st.one_of(st.text(max_size=6), st.none())),
+    "regime": (VosGlare, st.one_of(st.text(max_size=6), st.none(), st.integers())),
+    "age": (
+        VosGlare,
+        st.one_of(
+            NOT_A_NUMBER.filter(lambda v: v is not None),
+            st.floats(-1e9, -1e-9),
+            st.floats(100, 1e300),
+        ),
+    ),
+    "pupil_mm": (VosGlare, st.one_of(st.booleans(), st.text(max_size=3), NOT_FINITE_POSITIVE)),
+    "flare_lines": (VosGlare, NOT_A_FLAG),
+    "seed": (VosGlare, NOT_A_SEED),
+    "eyelashes": (WaveOpticsGlare, NOT_A_FLAG),
+    "fresnel": (WaveOpticsGlare, NOT_A_FLAG),
+    "particles": (
+        WaveOpticsGlare,
+        st.one_of(st.booleans(), st.floats(), st.integers(max_value=-1)),
+    ),
+}
+
+
+@SETTINGS
+@given(data=st.data())
+def test_a_bad_constructor_argument_is_refused_naming_it(data):
+    name = data.draw(st.sampled_from(sorted(BAD_CONSTRUCTIONS)), label="argument")
+    constructor, bad = BAD_CONSTRUCTIONS[name]
+    value = data.draw(bad, label=name)
+    with pytest.raises((ValueError, TypeError)) as raised:
+        constructor(**{name: value})
+    assert name in str(raised.value)
+    assert "\n" not in str(raised.value)
+
+
+@pytest.mark.parametrize("sigma_deg", [True, "0.3", np.array([0.3, 0.4])])
+def test_a_sigma_that_is_not_a_number_is_refused(sigma_deg):
+    # True was read as 1°, "0.3" as 0.3°
+    with pytest.raises(ValueError, match=r"^sigma_deg must be a finite number > 0 deg, got"):
+        GaussianGlare(sigma_deg=sigma_deg)
+
+
+@pytest.mark.parametrize("flag", [VosGlare, HybridGlare])
+def test_a_flag_given_as_a_word_is_refused(flag):
+    with pytest.raises(ValueError, match=r"flare_lines must be True or False, got 'no'"):
+        flag(flare_lines="no")  # 'no' is true to `if`: the streaks would be drawn
+
+
+@pytest.mark.parametrize(
+    ("sigma_deg", "match"),
+    [
+        (5e-324, r"sigma_deg must be a finite number > 0 deg, got 5e-324"),  # subnormal
+        (1e-300, r"sigma_deg must be at least 1e-05 deg .*; got 1e-300"),
+    ],
+)
+def test_a_tiny_sigma_is_refused_not_a_nan_kernel(sigma_deg, match):
+    with pytest.raises(ValueError, match=match):
+        GaussianGlare(sigma_deg=sigma_deg)
+
+
+MODELS = [GaussianGlare(sigma_deg=0.1), VosGlare()]
+BAD_PIXEL_DEG = st.one_of(
+    NOT_A_NUMBER,
+    NOT_FINITE_POSITIVE,
+    st.floats(180.0, 1e300, exclude_min=True),
+    st.floats(0.0, 9.9e-6),
+)
+BAD_SHAPE = st.one_of(
+    st.tuples(st.integers(-3, 12), st.integers(-3, 12)).filter(
+        lambda s: min(s) < 1 or s[0] % 2 == 0 or s[1] % 2 == 0
+    ),
+    st.tuples(st.floats(1.5, 9.5).filter(lambda x: x != int(x)), st.just(5)),
+    st.tuples(st.booleans(), st.booleans()),
+    st.tuples(st.just(5), st.just(5), st.just(5)),
+    st.text(max_size=3),
+    st.none(),
+)
+
+
+@pytest.mark.parametrize("model", MODELS, ids=["gaussian", "vos"])
+@SETTINGS
+@given(data=st.data())
+def test_a_bad_kernel_argument_is_refused_naming_it(model, data):
+    name = data.draw(st.sampled_from(["pixel_deg", "shape"]), label="argument")
+    arguments = {"pixel_deg": 0.05, "shape": (9, 9)}
+    arguments[name] = data.draw(BAD_PIXEL_DEG if name == "pixel_deg" else BAD_SHAPE, label=name)
+    with pytest.raises((ValueError, TypeError)) as raised:
+        model.kernel(arguments["pixel_deg"], arguments["shape"])
+    assert name in str(raised.value)
+    with pytest.raises((ValueError, TypeError)) as raised:
+        kernel(model, arguments["pixel_deg"], arguments["shape"])
+    assert name in str(raised.value)
+
+
+@pytest.mark.filterwarnings("ignore:sigma_deg / pixel_deg")
+@SETTINGS
+@given(
+    log_pixel_deg=st.floats(math.log10(1e-5), math.log10(180.0)),
+    model=st.sampled_from(
+        [
+            GaussianGlare(sigma_deg=1e-5),
+            GaussianGlare(sigma_deg=90.0, sampling="pixel"),
+            GaussianGlare(normalisation="Yoshida2008"),
+            VosGlare(),
+            VosGlare(age=60.0, pupil_mm=8.0),
+        ]
+    ),
+    half=st.integers(0, 7),
+)
+def test_kernels_are_finite_across_the_allowed_pixel_sizes(log_pixel_deg, model, half):
+    pixel_deg = min(10.0**log_pixel_deg, 180.0)
+    made = model.kernel(pixel_deg, (2 * half + 1, 2 * half + 1))
+    assert np.isfinite(made.values).all() and (made.values >= 0).all()
+    assert math.isfinite(made.energy_outside)
+
+
+@pytest.mark.parametrize("pixel_deg", [1e-5, 20.0])
+def test_the_halo_is_finite_at_the_ends_of_its_pixel_sizes(pixel_deg):
+    made = VosGlare(regime="scotopic").kernel(pixel_deg, (3, 3))
+    assert np.isfinite(made.values).all() and (made.values >= 0).all()
+
+
+def test_a_pixel_too_coarse_for_the_halo_samples_is_refused_not_gigabytes():
+    # 180° at 0.01° a sample: 18000² samples a pixel, 2.4 GB an array (it was killed)
+    with pytest.raises(ValueError, match=r"pixel_deg must be at most 20 deg for the scotopic"):
+        VosGlare(regime="scotopic").kernel(180.0, (5, 5))

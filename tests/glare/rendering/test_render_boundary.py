@@ -1,0 +1,163 @@
+"""render_glare and add_glare at their boundary: every bad argument is refused with a
+ValueError or TypeError naming it (never another exception, never a NaN image), and the valid
+extremes (0 and 1e9 cd/m², pixels from 1e-5° to 10°) give finite images."""
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from glarelab.glare import GaussianGlare, VosGlare, add_glare, render_glare
+
+SETTINGS = settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+IMAGE = np.full((16, 16), 50.0)
+IMAGE[8, 8] = 1e6
+MODEL = GaussianGlare(sigma_deg=0.1)
+
+# what a caller may pass by mistake for a number: bools (True is 1), strings, None, arrays,
+# complex numbers, NaN and infinities, zero, negatives and subnormal numbers
+NOT_A_NUMBER = st.one_of(
+    st.booleans(),
+    st.text(max_size=4),
+    st.none(),
+    st.complex_numbers(allow_nan=False, allow_infinity=False),
+    st.lists(st.floats(0.1, 1.0), min_size=2, max_size=3),
+)
+NOT_POSITIVE = st.one_of(
+    st.floats(max_value=0.0),
+    st.sampled_from([math.nan, math.inf, -math.inf, 5e-324, 1e-310]),
+)
+BAD_PIXEL_DEG = st.one_of(
+    NOT_A_NUMBER, NOT_POSITIVE, st.floats(10.0, 1e300, exclude_min=True), st.floats(0, 9.9e-6)
+)
+BAD_KERNEL_SHAPE = st.one_of(
+    st.tuples(st.integers(-5, 41), st.integers(-5, 41)).filter(
+        lambda s: min(s) < 1 or s[0] % 2 == 0 or s[1] % 2 == 0
+    ),
+    st.tuples(st.floats(1.5, 30.5).filter(lambda x: x != int(x)), st.just(5)),
+    st.tuples(st.booleans(), st.booleans()),
+    st.tuples(st.integers(1, 5)),
+    st.tuples(st.just(5), st.just(5), st.just(5)),
+    st.text(max_size=3),
+    st.integers(1, 9),
+)
+BAD = {
+    "pixel_deg": BAD_PIXEL_DEG,
+    "l_dmax_cd_m2": st.one_of(NOT_A_NUMBER, NOT_POSITIVE),
+    "composition": st.one_of(st.text(max_size=12), st.none(), st.integers()),
+    "precision": st.one_of(st.sampled_from(["float16", "int", "Float64"]), st.none()),
+    "kernel_shape": BAD_KERNEL_SHAPE,
+}
+
+
+def bad_images():
+    """Images that are no luminance image: masked, bool, complex, strings, NaN/Inf, negative,
+    of another shape."""
+    masked = np.ma.masked_array(IMAGE.copy(), mask=IMAGE > 100)
+    return st.one_of(
+        st.just(masked),
+        st.just(IMAGE > 100),
+        st.just(IMAGE.astype(complex)),
+        st.just(np.full((4, 4), "1")),
+        st.just(np.ones(5)),
+        st.just(np.ones((4, 4, 2))),
+        st.just(np.ones((0, 4))),
+        st.tuples(
+            st.sampled_from([math.nan, math.inf, -math.inf, -1.0, -1e-300]),
+            st.integers(0, 15),
+            st.integers(0, 15),
+        ).map(_with_pixel),
+    )
+
+
+def _with_pixel(spec) -> np.ndarray:
+    value, row, col = spec
+    image = IMAGE.copy()
+    image[row, col] = value
+    return image
+
+
+@pytest.mark.parametrize("function", [render_glare, add_glare])
+@SETTINGS
+@given(data=st.data())
+def test_a_bad_argument_is_refused_naming_it(function, data):
+    name = data.draw(st.sampled_from(sorted(BAD)), label="argument")
+    value = data.draw(BAD[name], label=name)
+    arguments = {"pixel_deg": 0.05, "cache": False, name: value}
+    with pytest.raises((ValueError, TypeError)) as raised:
+        function(IMAGE, MODEL, **arguments)
+    assert name in str(raised.value)
+    assert "\n" not in str(raised.value)
+
+
+@pytest.mark.parametrize("function", [render_glare, add_glare])
+@SETTINGS
+@given(image=bad_images())
+def test_a_bad_image_is_refused_naming_it(function, image):
+    with pytest.raises((ValueError, TypeError), match="luminance_cd_m2"):
+        function(image, MODEL, pixel_deg=0.05, cache=False)
+
+
+@pytest.mark.parametrize(
+    ("value", "match"),
+    [
+        (True, r"pixel_deg must be a number in \[1e-05, 10\] deg, got True"),
+        (1e-300, r"pixel_deg must be in \[1e-05, 10\] deg, got 1e-300"),
+        (11.0, r"pixel_deg must be in \[1e-05, 10\] deg, got 11.0"),
+    ],
+)
+def test_the_issue_cases_of_the_pixel_size(value, match):
+    with pytest.raises(ValueError, match=match):
+        render_glare(IMAGE, MODEL, pixel_deg=value, cache=False)
+
+
+@SETTINGS
+@given(
+    tolerance=st.one_of(
+        st.booleans(),
+        st.text(max_size=4),
+        st.floats(max_value=-1e-300),
+        st.sampled_from([math.nan, math.inf, -math.inf]),
+    ),
+    kernel_shape=st.sampled_from([None, (31, 31)]),
+    dim=st.booleans(),
+)
+def test_add_glare_refuses_a_bad_tolerance_whatever_path_it_takes(tolerance, kernel_shape, dim):
+    image = np.full((16, 16), 50.0) if dim else IMAGE  # dim: nothing to spread
+    with pytest.raises(ValueError, match=r"^tolerance_codes must be a finite number >= 0"):
+        add_glare(
+            image, MODEL, pixel_deg=0.05, tolerance_codes=tolerance, kernel_shape=kernel_shape,
+            cache=False,
+        )  # fmt: skip
+
+
+def test_a_masked_image_is_refused_not_read_without_its_mask():
+    image = np.ma.masked_array(IMAGE.copy(), mask=np.zeros(IMAGE.shape, bool))
+    image.mask[8, 8] = True  # the sun is masked out: reading .data would spread it
+    with pytest.raises(ValueError, match=r"luminance_cd_m2 must be a plain array, not a masked"):
+        add_glare(image, MODEL, pixel_deg=0.05, cache=False)
+
+
+@pytest.mark.parametrize("shape", [(5.5, 5.5), (True, True), (15.0, 15)])
+def test_a_kernel_shape_that_is_not_integers_is_refused(shape):
+    with pytest.raises(ValueError, match=r"shape must be two odd positive integers"):
+        render_glare(IMAGE, MODEL, pixel_deg=0.05, kernel_shape=shape, cache=False)
+
+
+@SETTINGS
+@given(
+    pixels=st.lists(st.sampled_from([0.0, 1e9]), min_size=256, max_size=256),
+    log_pixel_deg=st.floats(math.log10(1e-5), 1.0),
+    model=st.sampled_from([GaussianGlare(sigma_deg=0.1, sampling="pixel"), VosGlare()]),
+    composition=st.sampled_from(["Yoshida2008", "Spencer1995"]),
+)
+def test_valid_extremes_give_finite_images(pixels, log_pixel_deg, model, composition):
+    image = np.array(pixels).reshape(16, 16)
+    pixel_deg = min(10.0**log_pixel_deg, 10.0)
+    result = render_glare(image, model, pixel_deg=pixel_deg, composition=composition, cache=False)
+    assert np.isfinite(result.image).all()
+    assert np.isfinite(result.excess_energy)
+    quick = add_glare(image, model, pixel_deg=pixel_deg, composition=composition, cache=False)
+    assert np.isfinite(quick).all()

@@ -1,0 +1,145 @@
+"""write_exr and read_exr at their boundary: an image that cannot be written as it is (complex,
+bool, masked, negative, non-finite, above float32's largest) is refused naming ``image``, and
+what reading one part's pixels would drop (other parts, a pixel aspect ratio, a data window
+inside a larger frame) is refused naming the file and the attribute."""
+
+import math
+
+import numpy as np
+import OpenEXR
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from numpy.testing import assert_array_equal
+
+from glarelab.stimuli.exr import read_exr, write_exr
+
+SETTINGS = settings(
+    max_examples=30, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+FLOAT32_MAX = float(np.finfo(np.float32).max)
+
+
+def _one_bad_pixel(spec) -> np.ndarray:
+    value, row, col, rgb = spec
+    image = np.full((4, 5, 3) if rgb else (4, 5), 100.0)
+    image[row, col] = value
+    return image
+
+
+BAD_IMAGES = st.one_of(
+    st.tuples(
+        st.one_of(
+            st.sampled_from([math.nan, math.inf, -math.inf, -1e-300]),
+            st.floats(max_value=-1e-300),
+            st.floats(min_value=FLOAT32_MAX * (1 + 1e-7), allow_infinity=False),
+        ),
+        st.integers(0, 3),
+        st.integers(0, 4),
+        st.booleans(),
+    ).map(_one_bad_pixel),
+    st.sampled_from(
+        [
+            np.ones((4, 4), complex),
+            np.ones((4, 4), bool),
+            np.full((4, 4), "1"),
+            np.ma.masked_array(np.ones((4, 4)), mask=np.eye(4, dtype=bool)),
+            np.ones(4),
+            np.ones((4, 4, 2)),
+        ]
+    ),
+)
+
+
+@SETTINGS
+@given(image=BAD_IMAGES)
+def test_a_bad_image_is_refused_naming_it_and_nothing_is_written(tmp_path, image):
+    path = tmp_path / "bad.exr"
+    with pytest.raises((ValueError, TypeError), match=r"^image must") as raised:
+        write_exr(path, image)
+    assert "\n" not in str(raised.value)
+    assert not path.exists()
+
+
+@pytest.mark.parametrize(
+    ("image", "match"),
+    [
+        (
+            np.full((2, 2), 1e40),
+            r"image must be at most 3.4028235e\+38, float32's largest, .* 1e\+40 at index \(0, 0\)",
+        ),
+        (np.full((2, 2), -5.0), r"image must be >= 0 .*-5.0 at index \(0, 0\)"),
+        (np.ones((2, 2), complex), r"image must hold real numbers .* got dtype complex128"),
+    ],
+)
+def test_the_issue_cases_are_refused(tmp_path, image, match):
+    with pytest.raises(ValueError, match=match):
+        write_exr(tmp_path / "a.exr", image)
+
+
+@SETTINGS
+@given(
+    values=st.lists(
+        st.one_of(st.just(0.0), st.floats(0.0, FLOAT32_MAX)), min_size=12, max_size=12
+    ),
+    rgb=st.booleans(),
+)
+def test_every_writable_image_reads_back_as_written(tmp_path, values, rgb):
+    image = np.array(values, dtype=np.float32).reshape((2, 2, 3) if rgb else (3, 4))
+    path = write_exr(tmp_path / "good.exr", image)
+    back = read_exr(path)
+    assert_array_equal(back, image)
+    assert np.isfinite(back).all()
+
+
+HEADER = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+PIXELS = np.arange(24, dtype=np.float32).reshape(4, 6)
+
+
+def _box(x0, y0, x1, y1):
+    return (np.array([x0, y0], np.int32), np.array([x1, y1], np.int32))
+
+
+def _write(path, header, channels=None):
+    with OpenEXR.File(HEADER | header, channels or {"Y": PIXELS}) as exr:
+        exr.write(str(path))
+    return path
+
+
+def test_a_data_window_inside_a_larger_frame_is_refused(tmp_path):
+    path = _write(
+        tmp_path / "window.exr",
+        {"dataWindow": _box(10, 20, 15, 23), "displayWindow": _box(0, 0, 30, 30)},
+    )
+    with pytest.raises(
+        ValueError, match=r"window.exr: dataWindow \(10, 20, 15, 23\) is not the displayWindow"
+    ):
+        read_exr(path)
+
+
+def test_a_data_window_equal_to_its_display_window_is_read_whole_wherever_it_starts(tmp_path):
+    box = _box(10, 20, 15, 23)
+    path = _write(tmp_path / "offset.exr", {"dataWindow": box, "displayWindow": box})
+    assert_array_equal(read_exr(path), PIXELS)
+
+
+def test_a_pixel_aspect_ratio_other_than_one_is_refused(tmp_path):
+    path = _write(tmp_path / "wide.exr", {"pixelAspectRatio": 2.0})
+    with pytest.raises(
+        ValueError, match=r"wide.exr: pixelAspectRatio is 2; glarelab needs square"
+    ):
+        read_exr(path)
+
+
+def test_a_multi_part_file_is_refused_not_read_as_its_first_part(tmp_path):
+    parts = [
+        OpenEXR.Part(HEADER | {"name": name}, {"Y": PIXELS * k}, name)
+        for k, name in ((1, "left"), (2, "right"))
+    ]
+    path = tmp_path / "stereo.exr"
+    with OpenEXR.File(parts) as exr:
+        exr.write(str(path))
+    with pytest.raises(
+        ValueError, match=r"stereo.exr: multi-part OpenEXR \(2 parts: 'left', 'right'\)"
+    ):
+        read_exr(path)
