@@ -102,6 +102,10 @@ def _refusal(error: BaseException) -> str | None:
             f"no display to open a window on (DISPLAY={os.environ.get('DISPLAY', '')!r}): run "
             "it on the lab's screen, or under xvfb-run for a dry run"
         )
+    if isinstance(error, RuntimeError) and str(error).startswith("Symlink loop from "):
+        # pathlib's resolve() up to Python 3.12; 3.13 raises OSError(ELOOP), named above
+        where = str(error).removeprefix("Symlink loop from ")
+        return f"{where}: a loop of symbolic links on the way; give a path without one"
     if isinstance(error, MemoryError):
         return "not enough memory for this size; try a smaller image or kernel"
     return None

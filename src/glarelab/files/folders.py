@@ -37,6 +37,7 @@ __all__ = [
     "replace_folder",
     "restore_folder",
     "staging_folder",
+    "without_link_loop",
 ]
 
 LISTING = ".glarelab-files.json"  # the files glarelab wrote into a folder, by kind of output
@@ -72,6 +73,44 @@ def _inside(path: Path, folder: Path) -> bool:
     return path == folder or folder in path.parents
 
 
+def without_link_loop(path: str | Path, *, what: str) -> Path:
+    """``path``, when no loop of symbolic links lies on its way (checked before any work, as
+    ``Path.resolve`` would raise RuntimeError at the end of it).
+
+    Parameters
+    ----------
+    path
+        A file or folder to be written; it need not exist.
+    what
+        What will be written there, for the message.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
+    Raises
+    ------
+    ValueError
+        If resolving ``path`` meets a loop of symbolic links (naming it).
+
+    Examples
+    --------
+    >>> without_link_loop("results/report", what="report")
+    PosixPath('results/report')
+    """
+    path = Path(path)
+    try:
+        path.resolve()
+    except (RuntimeError, OSError) as error:  # RuntimeError up to Python 3.12, then ELOOP
+        if isinstance(error, OSError) and error.errno != errno.ELOOP:
+            raise
+        raise ValueError(
+            f"{path}: a loop of symbolic links on the way; the {what} needs a path without one"
+        ) from None
+    return path
+
+
 def check_replaceable(
     out: str | Path, *, kind: str, what: str, inputs: Iterable[str | Path] = ()
 ) -> Path:
@@ -102,7 +141,7 @@ def check_replaceable(
         If ``out`` is a file, holds a file glarelab did not write there (named), or holds one of
         the command's ``inputs``.
     """
-    out = Path(out)
+    out = without_link_loop(out, what=what)
     if out.exists() and not out.is_dir():
         raise ValueError(f"{out} is a file; a {what} needs a folder")
     for source in inputs:

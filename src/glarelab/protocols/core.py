@@ -19,6 +19,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
+from glarelab.files.inputs import read_input_text
 from glarelab.protocols import matching, rating, staircase
 from glarelab.protocols.common import display_pixel_deg
 from glarelab.protocols.keys import Key, ProtocolError, Schema, Tables, validate
@@ -270,11 +271,10 @@ def load_protocol(path: str | Path) -> Protocol:
     ('yoshida2008', 'matching', 'A')
     """
     path = protocol_path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"no protocol file at {path}")
+    text = read_input_text(path, what="protocol file")
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8-sig"))
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as error:
         raise ProtocolError(str(path), [f"not valid TOML: {error}"]) from None
     except RecursionError:
         raise ProtocolError(str(path), [NESTED_TOO_DEEPLY]) from None
