@@ -505,7 +505,12 @@ CASES = [
     (
         "run-scripted-none",
         "run luidolt2020 --participant P1 --scripted-keys {box}/none.txt --out {box}/runs",
-        "none.txt: no such file",
+        "no --scripted-keys file at {box}/none.txt",
+    ),
+    (
+        "run-scripted-fifo",
+        "run luidolt2020 --participant P1 --scripted-keys {box}/special/fifo --out {box}/runs",
+        "--scripted-keys file {box}/special/fifo: a named pipe (FIFO), not a regular file",
     ),
     (
         "run-scripted-empty",

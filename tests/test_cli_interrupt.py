@@ -23,6 +23,12 @@ ENV = {**os.environ, "PYTHONPATH": str(ROOT / "src")}
 DELAYS_S = (0.05, 0.15, 0.25, 0.35, 0.5, 0.7)
 
 
+def _terminal_sigint() -> None:
+    """Ctrl-C as a terminal delivers it: a test runner started in the background of a shell
+    has SIGINT ignored, and its children would inherit that (and keep it, as glarelab does)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 @pytest.mark.parametrize(
     "command",
     [
@@ -41,6 +47,7 @@ def test_ctrl_c_while_starting_ends_with_3_and_one_line(command, tmp_path):
             text=True,
             env=ENV,
             cwd=tmp_path,
+            preexec_fn=_terminal_sigint,
         )
         started.append((time.monotonic() + delay, process))
     for when, process in started:

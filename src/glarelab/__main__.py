@@ -22,7 +22,8 @@ def _stopped_while_starting(number: int, frame: object) -> None:
 
 def main() -> int:
     """Run the ``glarelab`` program with :data:`sys.argv`; returns its exit status."""
-    _signal.signal(_signal.SIGINT, _stopped_while_starting)
+    if _signal.getsignal(_signal.SIGINT) is not _signal.SIG_IGN:  # ignored: a background job
+        _signal.signal(_signal.SIGINT, _stopped_while_starting)
     from glarelab.cli import main as run
 
     return run()

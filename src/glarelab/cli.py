@@ -177,7 +177,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         problems, 2 refused, 3 stopped, 4 files could not be written).
     """
     command = "glarelab"
-    program = argv is None  # the glarelab program, not a call from Python (a test, a script)
+    # the glarelab program, not a call from Python (a test, a script), and not started with
+    # SIGINT ignored (a background job of a shell script, nohup), which it keeps
+    program = argv is None and signal.getsignal(signal.SIGINT) is not signal.SIG_IGN
     if program:
         signal.signal(signal.SIGINT, _stopped_while_starting)
     argv = sys.argv[1:] if argv is None else list(argv)
