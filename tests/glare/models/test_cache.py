@@ -18,7 +18,7 @@ from glarelab import glare
 from glarelab.glare.models.cache import KernelCache, default_cache, resolve_cache
 from glarelab.glare.models.digitise import Kernel
 
-ROOT = Path(__file__).resolve().parents[2]
+SRC = Path(__file__).resolve().parents[3] / "src"  # this tree's glarelab, in subprocesses
 SHAPE = (41, 41)
 
 
@@ -163,7 +163,7 @@ WRITER = textwrap.dedent(
 def test_two_processes_filling_the_cache_at_once(tmp_path):
     """Two writers of the same entries, each reading back and removing them in a loop: every
     kernel read is the digitised one, and no partial file is left behind."""
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    env = {**os.environ, "PYTHONPATH": str(SRC)}
     writers = [
         subprocess.Popen([sys.executable, "-c", WRITER, str(tmp_path), "photopic", "6"], env=env)
         for _ in range(2)
@@ -198,7 +198,7 @@ FULL_DISK = textwrap.dedent(
 
 
 def test_a_full_disk_skips_the_entry_and_returns_the_right_kernel(tmp_path):
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    env = {**os.environ, "PYTHONPATH": str(SRC)}
     done = subprocess.run(
         [sys.executable, "-c", FULL_DISK, str(tmp_path)],
         env=env,
@@ -286,7 +286,7 @@ def test_the_environment_chooses_the_folder_and_turns_it_off(tmp_path, monkeypat
 
 def test_the_user_cache_folder_honours_xdg_cache_home(tmp_path):
     env = {k: v for k, v in os.environ.items() if k != "GLARELAB_CACHE"}
-    env |= {"PYTHONPATH": str(ROOT), "XDG_CACHE_HOME": str(tmp_path)}
+    env |= {"PYTHONPATH": str(SRC), "XDG_CACHE_HOME": str(tmp_path)}
     code = "from glarelab.glare.models.cache import KernelCache; print(KernelCache().directory)"
     done = subprocess.run(
         [sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=60
@@ -353,7 +353,7 @@ def test_a_fifo_under_an_entrys_name_is_a_miss_not_a_hang(tmp_path):
             print(KernelCache({str(tmp_path)!r}).get({key!r}))
         """)],
         capture_output=True, text=True, timeout=20,
-        env={**os.environ, "PYTHONPATH": str(Path(glare.__file__).parents[2])},
+        env={**os.environ, "PYTHONPATH": str(SRC)},
     )  # fmt: skip
     assert done.returncode == 0 and done.stdout == "None\n", done.stderr
     made = cache.kernel(model, 0.05, SHAPE)  # digitised and stored over the FIFO
