@@ -115,6 +115,10 @@ def sandbox(tmp_path_factory) -> Path:
     assert "scale_max = 7" in luidolt
     (box / "scale10.toml").write_text(luidolt.replace("scale_max = 7", "scale_max = 10"))
     (box / "syntax.toml").write_text("[study\nname = 'x'\n")
+    assert yoshida.count('name = "gaussian"') == 1
+    (box / "newline-name.toml").write_text(
+        yoshida.replace('name = "gaussian"', 'name = "gaus\nsian"')
+    )
     from tests.conftest import small_night_protocol
 
     night = small_night_protocol()
@@ -382,6 +386,11 @@ CASES = [
     ("protocol-missing-file", "protocol check {box}/none.toml", "none.toml"),
     ("protocol-scale-10", "protocol check {box}/scale10.toml", "questionnaire.scale_max"),
     ("protocol-syntax", "protocol check {box}/syntax.toml", "syntax.toml"),
+    (
+        "protocol-newline-in-name",
+        "protocol check {box}/newline-name.toml",
+        "glare.methods.name (line 42): not valid TOML: Illegal character '\\n'",
+    ),
     ("protocol-keys-unknown", "protocol keys nonsense", "nonsense"),
     # calibrate
     ("fit-missing", "calibrate fit {box}/none.csv --out {box}/c.json", "none.csv"),
