@@ -116,6 +116,8 @@ def sandbox(tmp_path_factory) -> Path:
     (box / "scale10.toml").write_text(luidolt.replace("scale_max = 7", "scale_max = 10"))
     (box / "syntax.toml").write_text("[study\nname = 'x'\n")
     assert yoshida.count('name = "gaussian"') == 1
+    (box / "observer-range.toml").write_text(yoshida + "\n[observer]\nglow_gain = -1\n")
+    (box / "observer-unknown.toml").write_text(yoshida + "\n[observer]\nglo_gain = 1\n")
     (box / "newline-name.toml").write_text(
         yoshida.replace('name = "gaussian"', 'name = "gaus\nsian"')
     )
@@ -386,6 +388,16 @@ CASES = [
     ("protocol-missing-file", "protocol check {box}/none.toml", "none.toml"),
     ("protocol-scale-10", "protocol check {box}/scale10.toml", "questionnaire.scale_max"),
     ("protocol-syntax", "protocol check {box}/syntax.toml", "syntax.toml"),
+    (
+        "protocol-observer-range",
+        "protocol check {box}/observer-range.toml",
+        "{box}/observer-range.toml: observer.glow_gain must be in [0, 10], got -1",
+    ),
+    (
+        "protocol-observer-unknown",
+        "protocol check {box}/observer-unknown.toml",
+        "{box}/observer-unknown.toml: observer: unknown key(s) glo_gain (known: block_sd,",
+    ),
     (
         "protocol-newline-in-name",
         "protocol check {box}/newline-name.toml",

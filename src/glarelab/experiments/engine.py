@@ -243,7 +243,7 @@ class LookingObserver(ABC):
         """
         from glarelab.observers.noise import observer_parameters
 
-        observer_parameters(protocol["observer"])
+        observer_parameters(protocol["observer"], source=protocol.source)
 
     def __init__(self, protocol: Protocol, participant: str, *, seed: int, stimuli):
         # imported here: the model and the set's images are needed only by a simulation
@@ -254,7 +254,7 @@ class LookingObserver(ABC):
         self.protocol = protocol
         self.participant = participant
         self.seed = seed
-        self.model, self.noise = observer_parameters(protocol["observer"])
+        self.model, self.noise = observer_parameters(protocol["observer"], source=protocol.source)
         self.observer = self.noise.draw(
             participant_rng(protocol.seed, participant, f"observer {seed}")
         )
