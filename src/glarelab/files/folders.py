@@ -24,7 +24,7 @@ import time
 from collections.abc import Iterable
 from pathlib import Path
 
-from glarelab.files.atomic import _alive, fsync_folder, glob_escape, write_text
+from glarelab.files.atomic import _alive, fsync_folder, glob_escape, short_name, write_text
 from glarelab.files.locks import ProcessLock
 
 __all__ = [
@@ -281,11 +281,17 @@ def _write_listing(folder: Path, files: dict[str, str]) -> None:
     write_text(folder / LISTING, text + "\n")
 
 
+def _aside_stem(final: Path) -> str:
+    """The part of ``final``'s name in the names of its staging and replaced folders,
+    ``.STEM.building-PID`` and ``.STEM.old-PID``: short enough for them to be legal."""
+    return short_name(final.name, room=len("..building-") + 10)
+
+
 def _leftovers(final: Path) -> None:
     """Remove the staging and replaced folders of ``final`` that killed processes left, and
     put back an earlier ``final`` that a process killed between two renames left aside."""
     for kind in ("old", "building"):
-        pattern = f".{glob_escape(final.name)}.{kind}-*"
+        pattern = f".{glob_escape(_aside_stem(final))}.{kind}-*"
         for leftover in sorted(final.parent.glob(pattern)):
             pid = leftover.name.rsplit("-", 1)[-1]
             if not pid.isdigit() or int(pid) == os.getpid() or _alive(int(pid)):
@@ -333,7 +339,7 @@ def staging_folder(final: Path) -> Path:
     final = Path(final).resolve()
     final.parent.mkdir(parents=True, exist_ok=True)
     _leftovers(final)
-    staging = final.with_name(f".{final.name}.building-{os.getpid()}")
+    staging = final.with_name(f".{_aside_stem(final)}.building-{os.getpid()}")
     shutil.rmtree(staging, ignore_errors=True)  # a build of this process that was cut short
     staging.mkdir()
     return staging
@@ -408,7 +414,7 @@ def replace_folder(
             return
         old = None
         if final.exists():
-            old = final.with_name(f".{final.name}.old-{os.getpid()}")
+            old = final.with_name(f".{_aside_stem(final)}.old-{os.getpid()}")
             shutil.rmtree(old, ignore_errors=True)
             try:
                 final.rename(old)
