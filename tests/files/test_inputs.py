@@ -66,3 +66,26 @@ def test_another_encoding_is_refused_by_its_byte(tmp_path):
     path.write_bytes(READINGS.encode("utf-16-le"))
     with pytest.raises(ValueError, match="byte 1 is a NUL: UTF-16 text without its"):
         read_readings(path)
+
+
+@pytest.mark.parametrize("value", [None, 3, b"yoshida2008", ["yoshida2008"]])
+def test_a_path_of_the_wrong_type_is_a_type_error_naming_the_argument(value):
+    from glarelab.display.calibration import Calibration
+    from glarelab.stimuli.stimulus_set import verify_stimulus_set
+
+    for call, what in [
+        (load_protocol, "protocol"),
+        (read_readings, "readings file"),
+        (Calibration.load, "calibration file"),
+        (verify_stimulus_set, "stimulus set folder"),
+    ]:
+        with pytest.raises(TypeError, match=rf"^{what}: a path \(str or os.PathLike\) is needed"):
+            call(value)
+
+
+@pytest.mark.parametrize("value", [None, 3, "0,0.4", {0: 0.4}])
+def test_readings_of_the_wrong_type_are_a_type_error(value):
+    from glarelab.display.calibration import fit_calibration
+
+    with pytest.raises(TypeError, match=r"^readings: readings must be a sequence of \(code"):
+        fit_calibration(value, bit_depth=10)

@@ -44,7 +44,7 @@ from scipy.interpolate import PchipInterpolator
 from scipy.optimize import curve_fit
 
 from glarelab.files.atomic import write_text
-from glarelab.files.inputs import read_input_text
+from glarelab.files.inputs import as_path, read_input_text
 
 __all__ = [
     "Calibration",
@@ -449,7 +449,7 @@ class Calibration:
         ValueError
             If the file is not JSON, or as for :meth:`from_json`.
         """
-        path = Path(path)
+        path = as_path(path, what="calibration file")
         text = read_input_text(path, what="calibration file")
         try:
             data = json.loads(text)
@@ -657,7 +657,7 @@ def read_readings(path: str | Path) -> list[tuple[int, float]]:
         If ``path`` is not a regular file (a FIFO, a device), is in another encoding (naming
         the byte), a column is missing or a cell is not a number (naming the line).
     """
-    path = Path(path)
+    path = as_path(path, what="readings file")
     text = read_input_text(path, what="readings file")
     rows = []
     reader = csv.DictReader(io.StringIO(text, newline=""))  # quoted newlines kept
@@ -721,6 +721,10 @@ def fit_calibration(
         For fewer than 4 readings, codes outside the bit depth, a repeated code, readings that
         do not increase with code (named), or readings without code 0 and the top code.
     """
+    if isinstance(readings, str | bytes | dict) or not hasattr(readings, "__iter__"):
+        raise TypeError(
+            f"{source}: readings must be a sequence of (code, cd/m²) pairs; got {readings!r:.80}"
+        )
     ordered = _check_readings(list(readings), bit_depth, source)
     model: dict = {}
     if method == "gog":

@@ -16,7 +16,7 @@ import os
 import stat
 from pathlib import Path
 
-__all__ = ["input_file", "read_input_text"]
+__all__ = ["as_path", "input_file", "read_input_text"]
 
 _BOMS = (  # longest first: UTF-32-LE's mark starts with UTF-16-LE's
     (codecs.BOM_UTF32_LE, "utf-32"),
@@ -25,6 +25,42 @@ _BOMS = (  # longest first: UTF-32-LE's mark starts with UTF-16-LE's
     (codecs.BOM_UTF16_LE, "utf-16"),
     (codecs.BOM_UTF16_BE, "utf-16"),
 )
+
+
+def as_path(path: object, *, what: str) -> Path:
+    """``path`` as a :class:`~pathlib.Path`, or a TypeError naming ``what`` and the value.
+
+    Parameters
+    ----------
+    path
+        A ``str`` or :class:`os.PathLike` (bytes are refused: glarelab's paths are text).
+    what
+        What the path is for (``'protocol'``, ``'readings file'``).
+
+    Returns
+    -------
+    pathlib.Path
+        ``Path(path)``.
+
+    Raises
+    ------
+    TypeError
+        For anything else, naming ``what`` and the value.
+
+    Examples
+    --------
+    >>> as_path(None, what="readings file")
+    Traceback (most recent call last):
+    ...
+    TypeError: readings file: a path (str or os.PathLike) is needed; got None
+    """
+    if isinstance(path, Path):
+        return path
+    if isinstance(path, str) or (
+        isinstance(path, os.PathLike) and isinstance(os.fspath(path), str)
+    ):
+        return Path(path)
+    raise TypeError(f"{what}: a path (str or os.PathLike) is needed; got {path!r:.80}")
 
 
 def _kind(mode: int) -> str:
@@ -72,7 +108,7 @@ def input_file(path: str | os.PathLike, *, what: str) -> Path:
     ...
     ValueError: readings file /dev/null: a device (as /dev/null is), not a regular file
     """
-    path = Path(path)
+    path = as_path(path, what=what)
     try:
         mode = path.stat().st_mode
     except FileNotFoundError:

@@ -20,7 +20,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-from glarelab.files.inputs import read_input_text
+from glarelab.files.inputs import as_path, read_input_text
 from glarelab.protocols import matching, rating, staircase
 from glarelab.protocols.common import display_pixel_deg
 from glarelab.protocols.keys import Key, ProtocolError, Schema, Tables, validate
@@ -231,7 +231,7 @@ def protocol_path(name: str | Path) -> Path:
     FileNotFoundError
         If ``name`` is neither a path nor a shipped protocol's name.
     """
-    path = Path(name)
+    path = as_path(name, what="protocol")
     if path.suffix == ".toml" or path.exists() or len(path.parts) > 1:
         return path
     shipped = SHIPPED / f"{name}.toml"
