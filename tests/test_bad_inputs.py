@@ -222,6 +222,16 @@ CASES = [
         "none.exr: no such file",
     ),
     (
+        "render-folder",
+        "render {box}/afolder {box}/out.exr --pixel-deg 0.02",
+        "input {box}/afolder: a folder, not a file",
+    ),
+    (
+        "render-fifo",
+        "render {box}/special/fifo {box}/out.exr --pixel-deg 0.02",
+        "input {box}/special/fifo: a named pipe (FIFO), not a regular file",
+    ),
+    (
         "render-one-path",
         "render {box}/good.exr --pixel-deg 0.02",
         "needs an input EXR and an output",
