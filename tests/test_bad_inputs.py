@@ -91,6 +91,12 @@ def sandbox(tmp_path_factory) -> Path:
     (box / "readings-down.csv").write_text(
         "code,luminance_cd_m2\n0,0.5\n300,50\n600,40\n1023,400\n"
     )
+    (box / "readings-latin1.csv").write_bytes(b"code,luminance_cd_m2,note\n0,0.5,\xe4\n")
+    (box / "special").mkdir()  # what is not a regular file, given as one
+    os.mkfifo(box / "special" / "fifo")
+    (box / "special" / "loop").symlink_to(box / "special" / "loop-back")  # a loop of links
+    (box / "special" / "loop-back").symlink_to(box / "special" / "loop")
+    shutil.copy(ROOT / "calibrations" / "example-readings.csv", box / "readings-good.csv")
     # protocols
     yoshida = (PROTOCOLS / "yoshida2008.toml").read_text()
     assert 'labels = ["A", "B", "C", "D", "E", "F"]' in yoshida
@@ -109,6 +115,12 @@ def sandbox(tmp_path_factory) -> Path:
     assert "scale_max = 7" in luidolt
     (box / "scale10.toml").write_text(luidolt.replace("scale_max = 7", "scale_max = 10"))
     (box / "syntax.toml").write_text("[study\nname = 'x'\n")
+    assert yoshida.count('name = "gaussian"') == 1
+    (box / "observer-range.toml").write_text(yoshida + "\n[observer]\nglow_gain = -1\n")
+    (box / "observer-unknown.toml").write_text(yoshida + "\n[observer]\nglo_gain = 1\n")
+    (box / "newline-name.toml").write_text(
+        yoshida.replace('name = "gaussian"', 'name = "gaus\nsian"')
+    )
     from tests.conftest import small_night_protocol
 
     night = small_night_protocol()
@@ -208,6 +220,16 @@ CASES = [
         "render-missing",
         "render {box}/none.exr {box}/out.exr --pixel-deg 0.02",
         "none.exr: no such file",
+    ),
+    (
+        "render-folder",
+        "render {box}/afolder {box}/out.exr --pixel-deg 0.02",
+        "input {box}/afolder: a folder, not a file",
+    ),
+    (
+        "render-fifo",
+        "render {box}/special/fifo {box}/out.exr --pixel-deg 0.02",
+        "input {box}/special/fifo: a named pipe (FIFO), not a regular file",
     ),
     (
         "render-one-path",
@@ -376,9 +398,70 @@ CASES = [
     ("protocol-missing-file", "protocol check {box}/none.toml", "none.toml"),
     ("protocol-scale-10", "protocol check {box}/scale10.toml", "questionnaire.scale_max"),
     ("protocol-syntax", "protocol check {box}/syntax.toml", "syntax.toml"),
+    (
+        "protocol-observer-range",
+        "protocol check {box}/observer-range.toml",
+        "{box}/observer-range.toml: observer.glow_gain must be in [0, 10], got -1",
+    ),
+    (
+        "protocol-observer-unknown",
+        "protocol check {box}/observer-unknown.toml",
+        "{box}/observer-unknown.toml: observer: unknown key(s) glo_gain (known: block_sd,",
+    ),
+    (
+        "protocol-newline-in-name",
+        "protocol check {box}/newline-name.toml",
+        "glare.methods.name (line 42): not valid TOML: Illegal character '\\n'",
+    ),
     ("protocol-keys-unknown", "protocol keys nonsense", "nonsense"),
     # calibrate
     ("fit-missing", "calibrate fit {box}/none.csv --out {box}/c.json", "none.csv"),
+    (
+        "fit-devnull",
+        "calibrate fit /dev/null --out {box}/c.json",
+        "readings file /dev/null: a device (as /dev/null is), not a regular file",
+    ),
+    (
+        "fit-folder",
+        "calibrate fit {box}/afolder --out {box}/c.json",
+        "readings file {box}/afolder: a folder, not a file",
+    ),
+    (
+        "fit-fifo",
+        "calibrate fit {box}/special/fifo --out {box}/c.json",
+        "readings file {box}/special/fifo: a named pipe (FIFO), not a regular file",
+    ),
+    (
+        "fit-latin1",
+        "calibrate fit {box}/readings-latin1.csv --out {box}/c.json",
+        "readings-latin1.csv: byte 32 is not UTF-8 text; save it as UTF-8",
+    ),
+    (
+        "fit-out-loop",
+        "calibrate fit {box}/readings-good.csv --out {box}/special/loop/c.json",
+        "{box}/special/loop/c.json: a loop of symbolic links on the way; the calibration needs",
+    ),
+    (
+        "build-out-loop",  # refused before the images are made
+        "stimuli build yoshida2008 --out {box}/special/loop/set",
+        "{box}/special/loop/set: a loop of symbolic links on the way; the stimulus set needs",
+    ),
+    (
+        "analyse-out-loop",
+        "analyse yoshida2008 {box}/data/sim01_*.csv --out {box}/special/loop/report",
+        "special/loop/report: a loop of symbolic links on the way; the report needs a path",
+    ),
+    (
+        "protocol-fifo",
+        "protocol check {box}/special/fifo",
+        "protocol file {box}/special/fifo: a named pipe (FIFO)",
+    ),
+    ("protocol-folder", "protocol check {box}/afolder", "protocol file {box}/afolder: a folder"),
+    (
+        "build-calibration-devnull",
+        "stimuli build yoshida2008 --calibration /dev/null --out {box}/s",
+        "calibration file /dev/null: a device",
+    ),
     (
         "fit-txt",
         "calibrate fit {box}/readings-down.csv --out {box}/c.txt",
@@ -453,7 +536,12 @@ CASES = [
     (
         "run-scripted-none",
         "run luidolt2020 --participant P1 --scripted-keys {box}/none.txt --out {box}/runs",
-        "none.txt: no such file",
+        "no --scripted-keys file at {box}/none.txt",
+    ),
+    (
+        "run-scripted-fifo",
+        "run luidolt2020 --participant P1 --scripted-keys {box}/special/fifo --out {box}/runs",
+        "--scripted-keys file {box}/special/fifo: a named pipe (FIFO), not a regular file",
     ),
     (
         "run-scripted-empty",
@@ -1265,3 +1353,14 @@ def test_one_session_in_two_files_is_one_line(sandbox, tmp_path, capsys):
     )
     assert status == 2 and "participant sim01: the same session in 2 files" in err, err
     assert "duplicated trial" not in err, err
+
+
+def test_a_link_loop_met_anywhere_else_is_named_not_a_bug():
+    from glarelab.cli import _refusal
+
+    # pathlib's resolve() up to Python 3.12, for a path no command checked first
+    message = _refusal(RuntimeError("Symlink loop from '/data/loop/c.json'"))
+    assert (
+        message
+        == "'/data/loop/c.json': a loop of symbolic links on the way; give a path without one"
+    )

@@ -1,8 +1,33 @@
+"""``python -m glarelab`` and the ``glarelab`` script: :func:`glarelab.cli.main`, with Ctrl-C
+ending the program with status 3 and one line from its first instant.
+
+While the program starts (its imports, the parser: up to a second or two) nothing has been
+done, so a Ctrl-C then ends it at once, without raising KeyboardInterrupt into library code
+that might swallow it or print its traceback; :func:`glarelab.cli.main` then lets the command
+see KeyboardInterrupt, to end its work as the module docstring of :mod:`glarelab.cli` says.
+"""
+
+import _signal  # the signal module's C part: ``signal`` itself imports enum, 10-50 ms
+import os
 import sys
 
-try:
-    from .cli import main
-except KeyboardInterrupt:  # Ctrl-C while starting: nothing was done
-    sys.exit(3)
+__all__ = ["main"]
 
-raise SystemExit(main())
+
+def _stopped_while_starting(number: int, frame: object) -> None:
+    """SIGINT before the command runs: nothing was done, end at once (a signal handler)."""
+    os.write(2, b"[glarelab] stopped by SIGINT while starting; nothing was done\n")
+    os._exit(3)
+
+
+def main() -> int:
+    """Run the ``glarelab`` program with :data:`sys.argv`; returns its exit status."""
+    if _signal.getsignal(_signal.SIGINT) is not _signal.SIG_IGN:  # ignored: a background job
+        _signal.signal(_signal.SIGINT, _stopped_while_starting)
+    from glarelab.cli import main as run
+
+    return run()
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -12,6 +12,7 @@ and asks for a bug report.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import errno
 import os
 import signal
@@ -101,6 +102,10 @@ def _refusal(error: BaseException) -> str | None:
             f"no display to open a window on (DISPLAY={os.environ.get('DISPLAY', '')!r}): run "
             "it on the lab's screen, or under xvfb-run for a dry run"
         )
+    if isinstance(error, RuntimeError) and str(error).startswith("Symlink loop from "):
+        # pathlib's resolve() up to Python 3.12; 3.13 raises OSError(ELOOP), named above
+        where = str(error).removeprefix("Symlink loop from ")
+        return f"{where}: a loop of symbolic links on the way; give a path without one"
     if isinstance(error, MemoryError):
         return "not enough memory for this size; try a smaller image or kernel"
     return None
@@ -128,11 +133,36 @@ def _quiet_stdout() -> None:
     os.close(devnull)
 
 
+def _stopped_while_starting(number: int, frame: object) -> None:
+    """SIGINT while the program starts (imports, the parser): nothing was done, so it ends at
+    once, rather than raising KeyboardInterrupt into a library's import that might swallow it
+    (a signal handler)."""
+    os.write(2, b"[glarelab] stopped by SIGINT while starting; nothing was done\n")
+    os._exit(3)
+
+
+def _stopped_while_ending(number: int, frame: object) -> None:
+    """SIGINT after the command returned, while Python shuts down (threads, atexit): its work
+    is done and its output flushed; end at once (a signal handler)."""
+    os.write(2, b"[glarelab] stopped by SIGINT while exiting; the command had finished\n")
+    os._exit(3)
+
+
+def _forget_interrupt() -> None:
+    """Make CPython forget a KeyboardInterrupt that passed through an ``eval`` or ``exec`` of a
+    string (``collections.namedtuple``, ``dataclasses``, at import): it remembers one, and at
+    exit kills itself by SIGINT (status -2 to the shell) instead of returning the status the
+    command chose. Each ``exec`` of a string starts by resetting that memory."""
+    exec("")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``glarelab`` command; returns the exit status.
 
     Ctrl-C (SIGINT) ends any command with status 3 and one line, whenever it comes; a closed
-    pipe on stdout (SIGPIPE, ``| head``) ends it quietly with status 0.
+    pipe on stdout (SIGPIPE, ``| head``) ends it quietly with status 0. Run as the program
+    (``argv`` None), a Ctrl-C before the command starts, or after it returned, ends the
+    process at once: nothing is being written then.
 
     Parameters
     ----------
@@ -147,6 +177,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         problems, 2 refused, 3 stopped, 4 files could not be written).
     """
     command = "glarelab"
+    # the glarelab program, not a call from Python (a test, a script), and not started with
+    # SIGINT ignored (a background job of a shell script, nohup), which it keeps
+    program = argv is None and signal.getsignal(signal.SIGINT) is not signal.SIG_IGN
+    if program:
+        signal.signal(signal.SIGINT, _stopped_while_starting)
     argv = sys.argv[1:] if argv is None else list(argv)
     previous = os.environ.get(NO_CACHE_ENV)
     args = None
@@ -161,6 +196,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         try:
             with warnings.catch_warnings():  # restores Python's own printing afterwards
                 warnings.showwarning = _one_line_warning
+                if program:  # the command ends its own work on Ctrl-C (KeyboardInterrupt)
+                    signal.signal(signal.SIGINT, signal.default_int_handler)
                 return args.run(args)
         except SessionAborted as stop:
             why = stop.args[0] if stop.args else "SIGINT"
@@ -178,6 +215,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             return 2
     except KeyboardInterrupt:
         signal.signal(signal.SIGINT, signal.SIG_IGN)  # a second Ctrl-C while cleaning up
+        _forget_interrupt()
         # a session's own trials are on disk and its sidecar says how it ended; every other
         # file is written whole or not at all, so an interruption leaves the output as it was
         _log(f"{command}: stopped by SIGINT; nothing more was written")
@@ -191,6 +229,13 @@ def main(argv: Sequence[str] | None = None) -> int:
                 os.environ.pop(NO_CACHE_ENV, None)
             else:
                 os.environ[NO_CACHE_ENV] = previous
+        if program:  # Python shuts down next: a Ctrl-C then ends it at once, status 3
+            stopping = signal.signal(signal.SIGINT, signal.SIG_IGN) is signal.SIG_IGN
+            for stream in (sys.stdout, sys.stderr):  # os._exit would lose what is buffered
+                with contextlib.suppress(OSError, ValueError):
+                    stream.flush()
+            if not stopping:
+                signal.signal(signal.SIGINT, _stopped_while_ending)
 
 
 if __name__ == "__main__":

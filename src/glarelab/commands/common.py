@@ -12,7 +12,7 @@ import sys
 from pathlib import Path
 
 from glarelab.files.atomic import write_text
-from glarelab.files.folders import claim_files, list_files, listed_files
+from glarelab.files.folders import claim_files, list_files, listed_files, without_link_loop
 
 __all__ = [
     "FORCE_HELP",
@@ -250,7 +250,7 @@ def output_folder(path: Path, command: str) -> Path:
     ValueError
         Naming the folder and why.
     """
-    path = Path(path)
+    path = without_link_loop(path, what=f"{command} output")
     if path.exists() and not path.is_dir():
         raise ValueError(f"--out {path} is a file; give a folder for the {command} output")
     if path.is_dir() and any(path.iterdir()):
@@ -293,7 +293,7 @@ def writes_into(path: Path, names: list[str], command: str) -> Path:
     ValueError
         If ``path`` is a file, or a file of ``names`` is there and glarelab did not write it.
     """
-    path = Path(path)
+    path = without_link_loop(path, what=", ".join(names))
     if path.exists() and not path.is_dir():
         raise ValueError(f"{path} is a file; give a folder for {', '.join(names)}")
     path.mkdir(parents=True, exist_ok=True)
@@ -402,7 +402,7 @@ def output_file(
     ValueError
         Naming the file and why (nothing is written).
     """
-    path = Path(path)
+    path = without_link_loop(path, what=what)
     if path.suffix.lower() not in suffixes:
         raise ValueError(
             f"{path}: {what} must be named {' or '.join(suffixes)} (got {path.suffix or 'none'})"

@@ -25,7 +25,11 @@ def _check_display(args: argparse.Namespace) -> int:
     else:
         raise ValueError("give --out FILE, or --calibration (the check is written next to it)")
     output_file(
-        out, (".json",), "display check", inputs=[args.calibration] if args.calibration else ()
+        out,
+        (".json",),
+        "display check",
+        inputs=[args.calibration] if args.calibration else (),
+        force=args.force,
     )
     meter = None
     if args.photometer is not None or args.port is not None:
@@ -143,6 +147,12 @@ def add(commands) -> None:
     add_monitor_options(check)
     check.add_argument(
         "--out", type=Path, default=None, help="JSON to write (default: next to --calibration)"
+    )
+    check.add_argument(
+        "--force",
+        action="store_true",
+        help="write the check over a file of that name glarelab did not write (its own earlier "
+        "check is replaced without it)",
     )
     check.add_argument(
         "--frames", type=count(30, 100_000), default=600, help="flips per measurement"

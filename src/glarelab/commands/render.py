@@ -12,6 +12,7 @@ import numpy as np
 from glarelab import glare
 from glarelab.display.calibration import Calibration
 from glarelab.files.atomic import atomic_path, write_text
+from glarelab.files.inputs import input_file
 from glarelab.stimuli.apertures import load_aperture_image
 from glarelab.stimuli.exr import read_exr, write_exr
 from glarelab.stimuli.preview import preview_png, psf_figure, psf_png
@@ -216,9 +217,10 @@ def _render(args: argparse.Namespace) -> int:
     *inputs, output = args.paths
     if not inputs:
         raise ValueError("render needs an input EXR and an output EXR (or folder)")
-    for source in inputs:
-        if not Path(source).is_file():
+    for source in inputs:  # a folder, a FIFO, /dev/null: named as what they are
+        if not Path(source).exists() and not Path(source).is_symlink():
             raise FileNotFoundError(f"input {source}: no such file")
+        input_file(source, what="input")
     folder = len(inputs) > 1 or output.endswith(("/", "\\")) or Path(output).is_dir()
     if folder:  # many files: one renderer per image shape, its kernel made once
         if args.preview:

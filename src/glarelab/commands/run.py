@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 from glarelab.display.calibration import Calibration
+from glarelab.files.inputs import read_input_text
 from glarelab.protocols import load_protocol
 
 from .common import (
@@ -229,14 +230,7 @@ def _run_session(args: argparse.Namespace) -> int:
     calibration = Calibration.load(args.calibration) if args.calibration else None
     scripted = None
     if args.scripted_keys is not None:
-        if not Path(args.scripted_keys).is_file():
-            raise FileNotFoundError(f"--scripted-keys {args.scripted_keys}: no such file")
-        try:
-            scripted = Path(args.scripted_keys).read_text(encoding="utf-8").split()
-        except UnicodeDecodeError:
-            raise ValueError(
-                f"--scripted-keys {args.scripted_keys}: not a text file of key names"
-            ) from None
+        scripted = read_input_text(args.scripted_keys, what="--scripted-keys file").split()
         if not scripted:
             raise ValueError(f"--scripted-keys {args.scripted_keys}: the file names no keys")
         _scripted_key_names(args.scripted_keys, scripted)

@@ -30,6 +30,7 @@ from __future__ import annotations
 import csv
 import datetime as dt
 import hashlib
+import io
 import itertools
 import json
 import numbers
@@ -44,6 +45,7 @@ from scipy.interpolate import PchipInterpolator
 from scipy.optimize import curve_fit
 
 from glarelab.files.atomic import write_text
+from glarelab.files.inputs import as_path, read_input_text
 
 __all__ = [
     "Calibration",
@@ -448,12 +450,11 @@ class Calibration:
         ValueError
             If the file is not JSON, or as for :meth:`from_json`.
         """
-        path = Path(path)
-        if not path.is_file():
-            raise FileNotFoundError(f"no calibration file at {path}")
+        path = as_path(path, what="calibration file")
+        text = read_input_text(path, what="calibration file")
         try:
-            data = json.loads(path.read_text())
-        except (json.JSONDecodeError, UnicodeDecodeError) as error:
+            data = json.loads(text)
+        except json.JSONDecodeError as error:
             raise ValueError(f"{path}: a calibration must be a JSON file; {error}") from None
         return cls.from_json(data, source=str(path))
 
@@ -660,7 +661,8 @@ def read_readings(path: str | Path) -> list[tuple[int, float]]:
     Parameters
     ----------
     path
-        The CSV file (UTF-8, a byte-order mark allowed); other columns are ignored.
+        The CSV file (UTF-8, a byte-order mark allowed, or UTF-16/32 with one: "Unicode
+        text"); other columns are ignored.
 
     Returns
     -------
@@ -671,40 +673,38 @@ def read_readings(path: str | Path) -> list[tuple[int, float]]:
     ------
     FileNotFoundError
         If there is no such file.
+    IsADirectoryError
+        If ``path`` is a folder.
     ValueError
-        If a column is missing or a cell is not a number (naming the line).
+        If ``path`` is not a regular file (a FIFO, a device), is in another encoding (naming
+        the byte), a column is missing or a cell is not a number (naming the line).
     """
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"no readings file at {path}")
+    path = as_path(path, what="readings file")
+    text = read_input_text(path, what="readings file")
     rows = []
-    with path.open(newline="", encoding="utf-8-sig") as handle:
-        reader = csv.DictReader(handle)
-        missing = {"code", "luminance_cd_m2"} - set(reader.fieldnames or [])
-        if missing:
+    reader = csv.DictReader(io.StringIO(text, newline=""))  # quoted newlines kept
+    missing = {"code", "luminance_cd_m2"} - set(reader.fieldnames or [])
+    if missing:
+        raise ValueError(
+            f"{path}: missing column(s) {sorted(missing)}; need code, luminance_cd_m2"
+        )
+    for line, row in enumerate(reader, start=2):
+        if None in row:  # more cells than columns: a decimal comma splits a number
             raise ValueError(
-                f"{path}: missing column(s) {sorted(missing)}; need code, luminance_cd_m2"
+                f"{path}, line {line}: {len(reader.fieldnames) + len(row[None])} cells for "
+                f"{len(reader.fieldnames)} columns ({', '.join(reader.fieldnames)}); a "
+                "decimal comma (94,83) splits a number: write 94.83"
             )
-        for line, row in enumerate(reader, start=2):
-            if None in row:  # more cells than columns: a decimal comma splits a number
-                raise ValueError(
-                    f"{path}, line {line}: {len(reader.fieldnames) + len(row[None])} cells for "
-                    f"{len(reader.fieldnames)} columns ({', '.join(reader.fieldnames)}); a "
-                    "decimal comma (94,83) splits a number: write 94.83"
-                )
-            if (
-                not (row.get("code") or "").strip()
-                or not (row.get("luminance_cd_m2") or "").strip()
-            ):
-                raise ValueError(
-                    f"{path}, line {line}: code and luminance_cd_m2 both need a value; got {row}"
-                )
-            try:
-                rows.append((int(row["code"]), float(row["luminance_cd_m2"])))
-            except ValueError:
-                raise ValueError(
-                    f"{path}, line {line}: code and luminance_cd_m2 must be numbers; got {row}"
-                ) from None
+        if not (row.get("code") or "").strip() or not (row.get("luminance_cd_m2") or "").strip():
+            raise ValueError(
+                f"{path}, line {line}: code and luminance_cd_m2 both need a value; got {row}"
+            )
+        try:
+            rows.append((int(row["code"]), float(row["luminance_cd_m2"])))
+        except ValueError:
+            raise ValueError(
+                f"{path}, line {line}: code and luminance_cd_m2 must be numbers; got {row}"
+            ) from None
     return rows
 
 
@@ -745,6 +745,10 @@ def fit_calibration(
         outside the bit depth, a repeated code, readings that do not increase with code
         (named), readings without code 0 and the top code, or another ``method``.
     """
+    if isinstance(readings, str | bytes | dict) or not hasattr(readings, "__iter__"):
+        raise TypeError(
+            f"{source}: readings must be a sequence of (code, cd/m²) pairs; got {readings!r:.80}"
+        )
     if method not in METHODS:
         raise ValueError(f"method must be one of {', '.join(METHODS)}; got {method!r}")
     ordered = _check_readings(list(readings), bit_depth, source)

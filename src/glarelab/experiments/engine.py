@@ -267,7 +267,7 @@ class LookingObserver(ABC):
         """
         from glarelab.observers.noise import observer_parameters
 
-        observer_parameters(protocol["observer"])
+        observer_parameters(protocol["observer"], source=protocol.source)
 
     def __init__(self, protocol: Protocol, participant: str, *, seed: int, stimuli):
         self.participant = _check_text("participant", participant)
@@ -278,7 +278,7 @@ class LookingObserver(ABC):
         from glarelab.observers.noise import observer_parameters
 
         self.protocol = protocol
-        self.model, self.noise = observer_parameters(protocol["observer"])
+        self.model, self.noise = observer_parameters(protocol["observer"], source=protocol.source)
         self.observer = self.noise.draw(
             participant_rng(protocol.seed, participant, f"observer {seed}")
         )

@@ -21,15 +21,63 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import IO
 
-__all__ = ["atomic_open", "atomic_path", "fsync_folder", "write_bytes", "write_text"]
+__all__ = [
+    "atomic_open",
+    "atomic_path",
+    "fsync_folder",
+    "short_name",
+    "write_bytes",
+    "write_text",
+]
 
 PARTIAL = ".partial-"  # in the name of a file being written
+NAME_MAX_BYTES = 255  # a file name's limit on ext4, XFS, Btrfs, APFS, tmpfs (NTFS: 255 UTF-16)
+_OWNER_BYTES = 28  # PID-THREAD: 7 digits, a dash, 20 digits
+
+
+def short_name(name: str, *, room: int) -> str:
+    """``name``, or a shorter one that stands for it, so that ``room`` more bytes still fit in a
+    file name (:data:`NAME_MAX_BYTES`): the temporary and staging names built from a legal
+    long name are legal too, and refused, if ever, before any work rather than after it.
+
+    Parameters
+    ----------
+    name
+        A file or folder name.
+    room
+        The bytes (UTF-8) that will be added to it.
+
+    Returns
+    -------
+    str
+        ``name`` when it fits; else its start, ``~`` and 12 hexadecimal digits of its SHA-256
+        (distinct names stay distinct).
+
+    Examples
+    --------
+    >>> short_name("table", room=40)
+    'table'
+    >>> long = "x" * 250
+    >>> len(short_name(long, room=40).encode()) + 40 <= NAME_MAX_BYTES
+    True
+    """
+    if len(name.encode()) + room <= NAME_MAX_BYTES:
+        return name
+    import hashlib
+
+    tag = "~" + hashlib.sha256(name.encode()).hexdigest()[:12]
+    keep = max(NAME_MAX_BYTES - room - len(tag), 1)
+    return name.encode()[:keep].decode(errors="ignore") + tag
+
+
+def _temporary_stem(path: Path) -> str:
+    return short_name(path.stem, room=1 + len(PARTIAL) + _OWNER_BYTES + len(path.suffix.encode()))
 
 
 def _temporary(path: Path) -> Path:
     # the suffix stays last: Pillow, matplotlib and pandas choose the format by it
     owner = f"{os.getpid()}-{threading.get_ident()}"
-    return path.with_name(f".{path.stem}{PARTIAL}{owner}{path.suffix}")
+    return path.with_name(f".{_temporary_stem(path)}{PARTIAL}{owner}{path.suffix}")
 
 
 def _alive(pid: int) -> bool:
@@ -42,7 +90,7 @@ def _alive(pid: int) -> bool:
 
 def _remove_stale(path: Path) -> None:
     """Remove the temporary files of ``path`` left by processes that were killed."""
-    prefix = f".{path.stem}{PARTIAL}"
+    prefix = f".{_temporary_stem(path)}{PARTIAL}"
     try:
         candidates = list(path.parent.glob(f"{glob_escape(prefix)}*{glob_escape(path.suffix)}"))
     except OSError:

@@ -24,7 +24,7 @@ import time
 from collections.abc import Iterable
 from pathlib import Path
 
-from glarelab.files.atomic import _alive, fsync_folder, glob_escape, write_text
+from glarelab.files.atomic import _alive, fsync_folder, glob_escape, short_name, write_text
 from glarelab.files.locks import ProcessLock
 
 __all__ = [
@@ -37,6 +37,7 @@ __all__ = [
     "replace_folder",
     "restore_folder",
     "staging_folder",
+    "without_link_loop",
 ]
 
 LISTING = ".glarelab-files.json"  # the files glarelab wrote into a folder, by kind of output
@@ -72,6 +73,44 @@ def _inside(path: Path, folder: Path) -> bool:
     return path == folder or folder in path.parents
 
 
+def without_link_loop(path: str | Path, *, what: str) -> Path:
+    """``path``, when no loop of symbolic links lies on its way (checked before any work, as
+    ``Path.resolve`` would raise RuntimeError at the end of it).
+
+    Parameters
+    ----------
+    path
+        A file or folder to be written; it need not exist.
+    what
+        What will be written there, for the message.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
+    Raises
+    ------
+    ValueError
+        If resolving ``path`` meets a loop of symbolic links (naming it).
+
+    Examples
+    --------
+    >>> without_link_loop("results/report", what="report")
+    PosixPath('results/report')
+    """
+    path = Path(path)
+    try:
+        path.resolve()
+    except (RuntimeError, OSError) as error:  # RuntimeError up to Python 3.12, then ELOOP
+        if isinstance(error, OSError) and error.errno != errno.ELOOP:
+            raise
+        raise ValueError(
+            f"{path}: a loop of symbolic links on the way; the {what} needs a path without one"
+        ) from None
+    return path
+
+
 def check_replaceable(
     out: str | Path, *, kind: str, what: str, inputs: Iterable[str | Path] = ()
 ) -> Path:
@@ -102,7 +141,7 @@ def check_replaceable(
         If ``out`` is a file, holds a file glarelab did not write there (named), or holds one of
         the command's ``inputs``.
     """
-    out = Path(out)
+    out = without_link_loop(out, what=what)
     if out.exists() and not out.is_dir():
         raise ValueError(f"{out} is a file; a {what} needs a folder")
     for source in inputs:
@@ -242,11 +281,17 @@ def _write_listing(folder: Path, files: dict[str, str]) -> None:
     write_text(folder / LISTING, text + "\n")
 
 
+def _aside_stem(final: Path) -> str:
+    """The part of ``final``'s name in the names of its staging and replaced folders,
+    ``.STEM.building-PID`` and ``.STEM.old-PID``: short enough for them to be legal."""
+    return short_name(final.name, room=len("..building-") + 10)
+
+
 def _leftovers(final: Path) -> None:
     """Remove the staging and replaced folders of ``final`` that killed processes left, and
     put back an earlier ``final`` that a process killed between two renames left aside."""
     for kind in ("old", "building"):
-        pattern = f".{glob_escape(final.name)}.{kind}-*"
+        pattern = f".{glob_escape(_aside_stem(final))}.{kind}-*"
         for leftover in sorted(final.parent.glob(pattern)):
             pid = leftover.name.rsplit("-", 1)[-1]
             if not pid.isdigit() or int(pid) == os.getpid() or _alive(int(pid)):
@@ -294,7 +339,7 @@ def staging_folder(final: Path) -> Path:
     final = Path(final).resolve()
     final.parent.mkdir(parents=True, exist_ok=True)
     _leftovers(final)
-    staging = final.with_name(f".{final.name}.building-{os.getpid()}")
+    staging = final.with_name(f".{_aside_stem(final)}.building-{os.getpid()}")
     shutil.rmtree(staging, ignore_errors=True)  # a build of this process that was cut short
     staging.mkdir()
     return staging
@@ -369,7 +414,7 @@ def replace_folder(
             return
         old = None
         if final.exists():
-            old = final.with_name(f".{final.name}.old-{os.getpid()}")
+            old = final.with_name(f".{_aside_stem(final)}.old-{os.getpid()}")
             shutil.rmtree(old, ignore_errors=True)
             try:
                 final.rename(old)

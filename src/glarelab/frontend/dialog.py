@@ -10,7 +10,7 @@ import os
 import sys
 from collections.abc import Callable
 
-from glarelab.frontend.window import qt_dialog_available
+from glarelab.frontend.window import qt_dialog_available, x_display_answers
 
 __all__ = ["experiment_info"]
 
@@ -42,6 +42,12 @@ def experiment_info(
     """
     if sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
         raise ValueError("--participant is required (no display for the participant dialog)")
+    if sys.platform.startswith("linux") and not x_display_answers():  # Qt would abort
+        raise ValueError(
+            f"--participant is required: no display answers at DISPLAY="
+            f"{os.environ.get('DISPLAY', '')!r} to open the participant dialog on; run it on "
+            "the lab's screen, or give --participant ID (nothing was run or written)"
+        )
     if not qt_dialog_available():
         raise ValueError(
             "--participant is required: the participant dialog needs Qt's X11 libraries "

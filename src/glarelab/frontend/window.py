@@ -525,7 +525,29 @@ if sys.platform.startswith("linux"):  # pragma: no branch
 
         return ctypes.util.find_library("xcb-cursor") is not None
 
+    def x_display_answers() -> bool:
+        """Whether the X server of ``$DISPLAY`` accepts a connection (Qt aborts the process
+        when it does not; pyglet raises). True when libX11 is not there to ask."""
+        import ctypes
+        import ctypes.util
+
+        name = ctypes.util.find_library("X11")
+        if name is None:  # pragma: no cover - PsychoPy's windows need it
+            return True
+        xlib = ctypes.CDLL(name)
+        xlib.XOpenDisplay.restype = ctypes.c_void_p
+        xlib.XOpenDisplay.argtypes = [ctypes.c_char_p]
+        xlib.XCloseDisplay.argtypes = [ctypes.c_void_p]
+        display = xlib.XOpenDisplay(None)
+        if not display:
+            return False
+        xlib.XCloseDisplay(display)
+        return True
+
 else:  # pragma: no cover
 
     def qt_dialog_available() -> bool:
+        return True
+
+    def x_display_answers() -> bool:
         return True

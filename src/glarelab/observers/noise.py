@@ -522,7 +522,9 @@ class Observer:
         return {1: "first", -1: "second", 0: "neither"}[answer]
 
 
-def observer_parameters(table: dict) -> tuple[BrightnessModel, ObserverNoise]:
+def observer_parameters(
+    table: dict, *, source: str = "<protocol>"
+) -> tuple[BrightnessModel, ObserverNoise]:
     """The model and the noise from a protocol's ``[observer]`` table: any field of
     :class:`BrightnessModel` or :class:`ObserverNoise`; the others keep their fitted defaults.
 
@@ -531,6 +533,9 @@ def observer_parameters(table: dict) -> tuple[BrightnessModel, ObserverNoise]:
     table
         The protocol's ``[observer]`` table: field names of either class to their values
         (each within that field's range; empty: every default).
+    source
+        Where the table comes from (the protocol's file), the start of every message; default
+        ``'<protocol>'``.
 
     Returns
     -------
@@ -540,20 +545,27 @@ def observer_parameters(table: dict) -> tuple[BrightnessModel, ObserverNoise]:
     Raises
     ------
     ValueError
-        For a key that is neither's field, or a value out of its range.
+        For a key that is neither's field, or a value out of its range: ``SOURCE:
+        observer.KEY ...``, with the value and what is allowed.
 
     Examples
     --------
     >>> model, noise = observer_parameters({"glow_gain": 0.3, "margin": 0.05})
     >>> model.glow_gain, noise.margin, noise.gain_sd == GAIN_SD
     (0.3, 0.05, True)
+    >>> observer_parameters({"glow_gain": -1}, source="lab.toml")
+    Traceback (most recent call last):
+    ...
+    ValueError: lab.toml: observer.glow_gain must be in [0, 10], got -1
     """
+    if not isinstance(table, dict):
+        raise TypeError(f"{source}: observer must be a table of keys; got {table!r}")
     model_keys = {f.name for f in dataclasses.fields(BrightnessModel)}
     noise_keys = {f.name for f in dataclasses.fields(ObserverNoise)}
     unknown = sorted(set(table) - model_keys - noise_keys)
     if unknown:
         raise ValueError(
-            f"observer: unknown key(s) {', '.join(unknown)} (known: "
+            f"{source}: observer: unknown key(s) {', '.join(unknown)} (known: "
             f"{', '.join(sorted(model_keys | noise_keys))})"
         )
     try:
@@ -561,5 +573,16 @@ def observer_parameters(table: dict) -> tuple[BrightnessModel, ObserverNoise]:
             BrightnessModel(**{k: v for k, v in table.items() if k in model_keys}),
             ObserverNoise(**{k: v for k, v in table.items() if k in noise_keys}),
         )
-    except TypeError as error:
-        raise ValueError(f"observer: {error}") from None
+    except (TypeError, ValueError) as error:
+        problem = f"{source}: observer: {error}"  # keys that do not go together
+    for key, value in table.items():  # the key that is wrong by itself, named
+        try:
+            (BrightnessModel if key in model_keys else ObserverNoise)(**{key: value})
+        except (TypeError, ValueError) as error:
+            text = str(error)
+            if text.startswith(f"{key} "):
+                problem = f"{source}: observer.{text}"
+            else:
+                problem = f"{source}: observer.{key} = {value!r}: {text}"
+            break
+    raise ValueError(problem)

@@ -28,6 +28,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from glarelab.files.inputs import read_input_text
 from glarelab.protocols import ProtocolError, parse_protocol, protocol_path
 
 __all__ = ["GridError", "Point", "Setting", "apply_setting", "grid", "parse_setting"]
@@ -245,9 +246,7 @@ def grid(protocol: str | Path, settings: Sequence[Setting]) -> list[Point]:
         repeated = sorted({k for k in keys if keys.count(k) > 1})
         raise GridError(f"--set: each key once; repeated {', '.join(repeated)}")
     path = protocol_path(protocol)
-    if not path.is_file():
-        raise FileNotFoundError(f"no protocol file at {path}")
-    raw = tomllib.loads(path.read_text(encoding="utf-8"))
+    raw = tomllib.loads(read_input_text(path, what="protocol file"))
     points, problems = [], []
     for index, values in enumerate(itertools.product(*(s.values for s in settings))):
         data = copy.deepcopy(raw)

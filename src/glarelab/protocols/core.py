@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import re
 import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -19,6 +20,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
+from glarelab.files.inputs import as_path, read_input_text
 from glarelab.protocols import matching, rating, staircase
 from glarelab.protocols.common import display_pixel_deg
 from glarelab.protocols.keys import Key, ProtocolError, Schema, Tables, validate
@@ -229,7 +231,7 @@ def protocol_path(name: str | Path) -> Path:
     FileNotFoundError
         If ``name`` is neither a path nor a shipped protocol's name.
     """
-    path = Path(name)
+    path = as_path(name, what="protocol")
     if path.suffix == ".toml" or path.exists() or len(path.parts) > 1:
         return path
     shipped = SHIPPED / f"{name}.toml"
@@ -270,18 +272,76 @@ def load_protocol(path: str | Path) -> Protocol:
     ('yoshida2008', 'matching', 'A')
     """
     path = protocol_path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"no protocol file at {path}")
+    text = read_input_text(path, what="protocol file")
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8-sig"))
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
-        raise ProtocolError(str(path), [f"not valid TOML: {error}"]) from None
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as error:
+        raise ProtocolError(str(path), [toml_problem(text, error)]) from None
     except RecursionError:
         raise ProtocolError(str(path), [NESTED_TOO_DEEPLY]) from None
     try:
         return parse_protocol(data, source=str(path), folder=path.resolve().parent)
     except RecursionError:
         raise ProtocolError(str(path), [NESTED_TOO_DEEPLY]) from None
+
+
+_TOML_PLACE = re.compile(r"\(at line (\d+), column (\d+)\)")
+_TOML_BARE_OR_QUOTED = r"""(?:[A-Za-z0-9_-]+|"[^"]*"|'[^']*')"""
+_TOML_KEY = re.compile(rf"^\s*({_TOML_BARE_OR_QUOTED}(?:\s*\.\s*{_TOML_BARE_OR_QUOTED})*)\s*=")
+_TOML_TABLE = re.compile(r"^\s*\[\[?\s*([^\]]+?)\s*\]\]?\s*(?:#.*)?$")
+
+
+def toml_problem(text: str, error: tomllib.TOMLDecodeError) -> str:
+    """The TOML parser's complaint about ``text``, with the key it was reading when the line
+    holds one (``glare.methods.name``), and what to do about a string cut by a newline.
+
+    Parameters
+    ----------
+    text
+        The protocol's text.
+    error
+        What :func:`tomllib.loads` raised for it.
+
+    Returns
+    -------
+    str
+        One problem, for :class:`ProtocolError`.
+
+    Examples
+    --------
+    >>> text = '[study]\\nname = "yoshida\\n2008"\\n'
+    >>> try:
+    ...     tomllib.loads(text)
+    ... except tomllib.TOMLDecodeError as error:
+    ...     problem = toml_problem(text, error)
+    >>> problem.split(": ")[0], "use triple quotes" in problem
+    ('study.name (line 2)', True)
+    """
+    message = f"not valid TOML: {error}"
+    place = _TOML_PLACE.search(str(error))
+    if place is None:
+        return message
+    number = int(place.group(1))
+    lines = text.splitlines()
+    line = lines[number - 1] if 0 < number <= len(lines) else ""
+    if "Illegal character '\\n'" in str(error):
+        message += (
+            "; a quoted string ends on the line it starts on: close its quote there, or use "
+            "triple quotes for text of several lines"
+        )
+    key = _TOML_KEY.match(line)
+    if key is None:
+        return message
+    table = next(
+        (
+            found.group(1)
+            for earlier in reversed(lines[: number - 1])
+            if (found := _TOML_TABLE.match(earlier))
+        ),
+        None,
+    )
+    name = re.sub(r"\s*\.\s*", ".", key.group(1))
+    return f"{table + '.' if table else ''}{name} (line {number}): {message}"
 
 
 NESTED_TOO_DEEPLY = "arrays or tables nested too deeply (a protocol nests a few levels)"

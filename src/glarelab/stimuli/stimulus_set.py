@@ -44,6 +44,7 @@ from glarelab.files.folders import (
     replace_folder,
     staging_folder,
 )
+from glarelab.files.inputs import as_path
 from glarelab.protocols import Protocol
 from glarelab.stimuli.exr import read_exr, write_exr
 from glarelab.stimuli.paradigms import paradigm_stimuli
@@ -686,7 +687,7 @@ def verify_stimulus_set(folder: str | Path) -> list[str]:
         The problems, each naming the file: missing, changed, or not in the manifest (empty
         when the set is intact).
     """
-    folder = Path(folder)
+    folder = as_path(folder, what="stimulus set folder")
     if not folder.is_dir():
         return [f"{folder}: not a folder"]
     try:

@@ -339,3 +339,23 @@ def test_a_symmetric_kernel_is_read_and_spread_as_its_quadrant(tmp_path):
         kernel=model.kernel(0.05, (191, 191)).replace(values=kernel.values),
     )
     np.testing.assert_array_equal(full.render(image).image, result.image)
+
+
+def test_a_fifo_under_an_entrys_name_is_a_miss_not_a_hang(tmp_path):
+    # reading a FIFO waits for a writer for ever; the cache checks what it opened first
+    cache = KernelCache(tmp_path)
+    model = glare.GaussianGlare(sigma_deg=0.2, sampling="pixel")
+    key = cache.key(model, 0.05, SHAPE, colour=False)
+    os.mkfifo(cache.path(key))
+    done = subprocess.run(  # in a process of its own: a hang fails the test, not the suite
+        [sys.executable, "-c", textwrap.dedent(f"""
+            from glarelab.glare.models.cache import KernelCache
+            print(KernelCache({str(tmp_path)!r}).get({key!r}))
+        """)],
+        capture_output=True, text=True, timeout=20,
+        env={**os.environ, "PYTHONPATH": str(SRC)},
+    )  # fmt: skip
+    assert done.returncode == 0 and done.stdout == "None\n", done.stderr
+    made = cache.kernel(model, 0.05, SHAPE)  # digitised and stored over the FIFO
+    assert cache.path(key).is_file() and not cache.path(key).is_fifo()
+    _same(cache.get(key), made)

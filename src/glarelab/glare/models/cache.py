@@ -41,6 +41,7 @@ import hashlib
 import json
 import math
 import os
+import stat
 import struct
 import time
 import warnings
@@ -240,9 +241,11 @@ class KernelCache:
         """
         path = self.path(key)
         try:
-            data = path.read_bytes()
+            data = _read_regular(path)
         except OSError:
             return None
+        if data is None:  # a FIFO or device under an entry's name: read, it would block
+            return None  # for ever; a miss, replaced by the next put (a rename over it)
         kernel = _decode(data, key)
         if kernel is None:  # corrupt: never served, removed so that it is written again
             try:
@@ -349,12 +352,12 @@ class KernelCache:
         now = time.time()
         for item in listing:
             try:
-                stat = item.stat()
+                info = item.stat()
             except OSError:
                 continue
             if item.name.endswith(SUFFIX):
-                entries.append((stat.st_mtime, stat.st_size, Path(item.path)))
-            elif _temporary(item.name) and now - stat.st_mtime > _STALE_PART_S:
+                entries.append((info.st_mtime, info.st_size, Path(item.path)))
+            elif _temporary(item.name) and now - info.st_mtime > _STALE_PART_S:
                 _remove(Path(item.path))
         return entries
 
@@ -392,6 +395,19 @@ class KernelCache:
             elif _temporary(item.name):
                 _remove(Path(item.path))
         return removed
+
+
+def _read_regular(path: Path) -> bytes | None:
+    """The bytes of ``path`` when it is a regular file, else None, without blocking: opened
+    non-blocking (a FIFO opens at once) and checked before it is read."""
+    descriptor = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+    try:
+        if not stat.S_ISREG(os.fstat(descriptor).st_mode):
+            return None
+        with os.fdopen(os.dup(descriptor), "rb") as handle:
+            return handle.read()
+    finally:
+        os.close(descriptor)
 
 
 def _temporary(name: str) -> bool:

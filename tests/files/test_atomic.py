@@ -1,0 +1,37 @@
+"""Files written whole (glarelab.files.atomic): a legal long name gets a legal temporary
+name, so that it is written, not refused after the work with ENAMETOOLONG."""
+
+from __future__ import annotations
+
+import os
+
+import pytest
+
+from glarelab.files.atomic import NAME_MAX_BYTES, _temporary, short_name, write_text
+from glarelab.files.folders import replace_folder, staging_folder
+
+
+@pytest.mark.parametrize("length", [200, 240, NAME_MAX_BYTES])
+def test_a_legal_long_file_name_is_written(tmp_path, length):
+    path = tmp_path / ("é" * ((length - 5) // 2) + "x" * ((length - 5) % 2) + ".json")
+    assert len(path.name.encode()) == length
+    write_text(path, "{}\n")
+    assert path.read_text() == "{}\n" and os.listdir(tmp_path) == [path.name]
+    assert len(_temporary(path).name.encode()) <= NAME_MAX_BYTES
+    assert _temporary(path).suffix == ".json"
+
+
+def test_a_legal_long_folder_name_is_built_and_replaced(tmp_path):
+    final = tmp_path / ("s" * NAME_MAX_BYTES)
+    for text in ("first\n", "second\n"):  # new, then replaced whole
+        staging = staging_folder(final)
+        (staging / "a.txt").write_text(text)
+        replace_folder(staging, final, kind="test")
+        assert (final / "a.txt").read_text() == text
+    assert sorted(os.listdir(tmp_path)) == [final.name]
+
+
+def test_short_names_stay_distinct():
+    first, second = ("x" * 250 + "1"), ("x" * 250 + "2")
+    assert short_name(first, room=40) != short_name(second, room=40)
+    assert short_name("table", room=40) == "table"

@@ -1,0 +1,97 @@
+"""Ctrl-C ends the ``glarelab`` program with status 3, one line and no traceback, whenever it
+comes: while Python imports the command (the first second of ``stimuli build`` and
+``analyse``), while the command runs, and through an ``eval`` of a string (as
+``collections.namedtuple`` does at import), after which CPython would otherwise kill itself by
+SIGINT (status -2) instead of returning 3."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).parents[1]
+ENV = {**os.environ, "PYTHONPATH": str(ROOT / "src")}
+# after the interpreter's own start (its site-packages' .pth files: 20-30 ms here), before
+# any glarelab code, Python's default handler prints a traceback from ``site``: not ours
+DELAYS_S = (0.05, 0.15, 0.25, 0.35, 0.5, 0.7)
+
+
+def _terminal_sigint() -> None:
+    """Ctrl-C as a terminal delivers it: a test runner started in the background of a shell
+    has SIGINT ignored, and its children would inherit that (and keep it, as glarelab does)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["stimuli", "build", "yoshida2008", "--out"],
+        ["analyse", "yoshida2008", "no-such-session.csv", "--out"],
+    ],
+    ids=["stimuli-build", "analyse"],
+)
+def test_ctrl_c_while_starting_ends_with_3_and_one_line(command, tmp_path):
+    started = []
+    for number, delay in enumerate(DELAYS_S):  # all at once: the test takes under 2 s
+        process = subprocess.Popen(
+            [sys.executable, "-m", "glarelab", *command, str(tmp_path / f"out{number}")],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            env=ENV,
+            cwd=tmp_path,
+            preexec_fn=_terminal_sigint,
+        )
+        started.append((time.monotonic() + delay, process))
+    for when, process in started:
+        time.sleep(max(0.0, when - time.monotonic()))
+        process.send_signal(signal.SIGINT)
+    landed = 0
+    for delay, (_, process) in zip(DELAYS_S, started, strict=True):
+        _, err = process.communicate(timeout=60)
+        lines = err.splitlines()
+        if process.returncode != 3 and "glarelab" not in err:
+            continue  # in the interpreter's own start, before any glarelab code, on a loaded
+            # machine (killed in silence, or a traceback from site, runpy): not ours
+        landed += 1
+        assert process.returncode == 3, (delay, process.returncode, err)
+        assert "Traceback" not in err and len(lines) == 1, (delay, err)
+        assert "stopped by SIGINT" in lines[0], (delay, err)
+    assert landed >= 3, "the machine is too slow to reach glarelab's start-up in time"
+    assert not list(tmp_path.glob("out*"))  # nothing written
+
+
+def test_an_interrupt_through_eval_still_ends_with_3(tmp_path):
+    # the command is interrupted inside an eval of a string, as an import is in namedtuple;
+    # run as ``python -m`` runs glarelab, the one way CPython then checks what it remembered
+    (tmp_path / "interrupted_glarelab.py").write_text(
+        textwrap.dedent(
+            """
+            import sys
+            from glarelab import cli
+            from glarelab.commands import load
+
+            def interrupted(args):
+                eval("(_ for _ in ()).throw(KeyboardInterrupt)")
+
+            load("protocol")._protocol_check = interrupted
+            sys.exit(cli.main(["protocol", "check", "yoshida2008"]))
+            """
+        )
+    )
+    done = subprocess.run(
+        [sys.executable, "-m", "interrupted_glarelab"],
+        capture_output=True,
+        text=True,
+        env=ENV,
+        cwd=tmp_path,
+    )
+    assert done.returncode == 3, (done.returncode, done.stderr)
+    assert "Traceback" not in done.stderr and "stopped by SIGINT" in done.stderr, done.stderr
