@@ -11,7 +11,8 @@ The two stimulus sets are built on first use into the cache (``$GLARELAB_CACHE``
 (``--glow-bands 0.16 --fit-studies 40 --max-evaluations 20 --studies 100``) runs in seconds
 and is what ``tests/test_fit_observers.py`` runs.
 
-What it does, deterministically (fixed seeds, common random numbers), in about two minutes:
+What it does, deterministically (fixed seeds, common random numbers), in 2-3 minutes on 2
+shared cores (``--no-fit`` under half a minute):
 
 1. **Perceives every image once** with :class:`glarelab.observers.brightness.BrightnessModel`:
 the 12
@@ -40,7 +41,8 @@ the 12
    method: every image goes through the same equations with the same parameters.
 4. **Reports** with fresh seeds: F values over many studies (median and 10-90 % range), boost
    per level, Table 1 per cell, Figure 6 similarity groups, Spencer's matches (7 observers, the
-   staircases as the protocol runs them) and the rate of significant context effects; writes
+   staircases as the protocol runs them) and the rate of significant context effects (200
+   studies per block shift, ``--spencer-studies``); writes
    ``fit.json``, ``report.md`` and PNG figures to ``--out``.
 """
 
@@ -54,14 +56,11 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
-from scipy import stats as sps
-from scipy.optimize import minimize
 
 ROOT = Path(__file__).resolve().parents[1]
+# scipy.stats, pandas, the figures and the EXR reader are imported where they are used, so that
+# the report's formatting (markdown) loads fast for tests/observers/test_shipped_fit.py
 
-from glarelab.analysis.figures import plt, png  # noqa: E402
-from glarelab.analysis.stats import pairwise_tests, rm_anova, similarity_groups  # noqa: E402
 from glarelab.observers.brightness import BrightnessModel  # noqa: E402
 from glarelab.observers.noise import (  # noqa: E402
     ObserverNoise,
@@ -71,7 +70,6 @@ from glarelab.observers.noise import (  # noqa: E402
     relative_difference,
     target_settings,
 )
-from glarelab.stimuli.exr import read_exr  # noqa: E402
 
 # --- the papers' numbers ----------------------------------------------------------------------
 YOSHIDA_F = {  # Yoshida 2008 §5
@@ -151,6 +149,8 @@ def _features(model: BrightnessModel, image: np.ndarray, geometry: dict) -> dict
 
 
 def look_at_yoshida(folder: Path, model: BrightnessModel) -> dict:
+    from glarelab.stimuli.exr import read_exr
+
     manifest = _manifest(folder)
     protocol = manifest["protocol"]
     coverage = read_exr(folder / "target_coverage.exr").astype(np.float64)
@@ -182,6 +182,8 @@ def look_at_yoshida(folder: Path, model: BrightnessModel) -> dict:
 
 
 def look_at_spencer(folder: Path, model: BrightnessModel) -> dict:
+    from glarelab.stimuli.exr import read_exr
+
     manifest = _manifest(folder)
     protocol = manifest["protocol"]
     disc = read_exr(folder / "comparison_disc.exr").astype(np.float64)
@@ -293,6 +295,10 @@ def yoshida_statistics(match: np.ndarray) -> dict:
 
 def check_against_rm_anova(match: np.ndarray, studies: int = 3) -> None:
     """The vectorised F values equal :func:`glarelab.analysis.stats.rm_anova` on the same data."""
+    import pandas as pd
+
+    from glarelab.analysis.stats import rm_anova
+
     mine = yoshida_statistics(match[:studies])
     for k in range(studies):
         rows = [
@@ -411,6 +417,9 @@ def _q_measure(seen: dict, model: BrightnessModel, question: str, method: str) -
 
 def fit_table1(seen: dict, model: BrightnessModel) -> dict:
     """``(criterion, sd)`` per question maximising the binomial likelihood of Table 1."""
+    from scipy import stats as sps
+    from scipy.optimize import minimize
+
     fitted = {}
     for question, sign in (("q1_glow", 1), ("q2_ring", 1), ("q3_same_size", -1)):
         x = np.concatenate([_q_measure(seen, model, question, m) for m in METHODS])
@@ -429,6 +438,8 @@ def fit_table1(seen: dict, model: BrightnessModel) -> dict:
 
 
 def table1_expected(seen: dict, model: BrightnessModel, criteria: dict) -> dict:
+    from scipy import stats as sps
+
     out = {}
     for question, sign in (("q1_glow", 1), ("q2_ring", 1), ("q3_same_size", -1)):
         criterion, sd = criteria[question]
@@ -567,6 +578,8 @@ def fit_band(
 ):
     """Nelder–Mead over :data:`FITTED` for one glow band (images already looked at with it),
     from :data:`START` and from it with half its ``G_50``; the better of the two."""
+    from scipy.optimize import minimize
+
     simulation = YoshidaSimulation(yoshida, studies, seed)
 
     def loss(x):
@@ -642,6 +655,10 @@ def _quantiles(x: np.ndarray) -> dict:
 
 def similarity_letters(result: dict, seen: dict, studies: int) -> dict:
     """The modal Figure 6 similarity groups over the first ``studies`` simulated studies."""
+    import pandas as pd
+
+    from glarelab.analysis.stats import pairwise_tests, similarity_groups
+
     found: dict = {m: {} for m in METHODS}
     for k in range(studies):
         for j, method in enumerate(METHODS):
@@ -669,7 +686,13 @@ def report(
     seed: int,
     *,
     similarity_studies: int = 200,
+    spencer_studies: int = 200,
 ) -> dict:
+    import pandas as pd
+    from scipy import stats as sps
+
+    from glarelab.analysis.stats import rm_anova
+
     noise = ObserverNoise(
         gain_sd=theta["gain_sd"],
         setting_sd=theta["setting_sd"],
@@ -693,7 +716,6 @@ def report(
         result["match"].std(1, ddof=1) / math.sqrt(YOSHIDA_OBSERVERS) / yoshida["l_dmax"]
     ).mean(0)
     table1 = table1_expected(yoshida, model, criteria)
-    spencer_studies = max(studies // 4, 50)
     # Spencer §4.1: "no significant influence" of the context: the smallest shift between
     # blocks on the grid under which a non-significant context effect is at least as likely
     # as a significant one
@@ -759,6 +781,8 @@ def report(
 
 
 def figures(out: Path, summary: dict, yoshida: dict) -> None:
+    from glarelab.analysis.figures import plt, png
+
     labels = {m: yoshida["labels"][m] for m in METHODS}
     figure, axis = plt.subplots(figsize=(5.5, 3.8))
     for method, marker in zip(METHODS, "os", strict=True):
@@ -870,6 +894,22 @@ def markdown(summary: dict, yoshida: dict) -> str:
             + " | ".join(f"{s['match_mean'][c][k]:.3f}" for c in range(len(s["contexts"])))
             + " |"
         )
+    q = s["context_F"]
+    lines += [
+        "",
+        f"| Spencer 1995 §4.1, {s['studies']} studies of {SPENCER_OBSERVERS} | paper | "
+        "simulated median [10 %, 90 %] | p < .05 |",
+        "|---|---|---|---|",
+        f"| context, F(1, {SPENCER_OBSERVERS - 1}), σ_b = {summary['block_sd']:g} | "
+        f"no significant influence | {q['median']:.2f} [{q['p10']:.2f}, {q['p90']:.2f}] | "
+        f"{s['context_significant_rate']:.2f} |",
+        "",
+        "| block shift σ_b | " + " | ".join(s["context_significant_rate_by_block_sd"]) + " |",
+        "|---|" + "---|" * len(s["context_significant_rate_by_block_sd"]),
+        "| context p < .05 | "
+        + " | ".join(f"{r:.2f}" for r in s["context_significant_rate_by_block_sd"].values())
+        + " |",
+    ]
     return "\n".join(lines) + "\n"
 
 
@@ -929,6 +969,12 @@ def main(argv=None) -> int:
         help="studies whose Figure 6 similarity groups are counted",
     )
     parser.add_argument(
+        "--spencer-studies",
+        type=_positive,
+        default=200,
+        help="simulated Spencer studies per block shift in the report",
+    )
+    parser.add_argument(
         "--glow-bands",
         type=_band,
         nargs="+",
@@ -984,6 +1030,7 @@ def main(argv=None) -> int:
         args.studies,
         args.seed + 1000,
         similarity_studies=args.similarity_studies,
+        spencer_studies=args.spencer_studies,
     )
     summary["fit"] = info
     summary["seconds"] = time.time() - started

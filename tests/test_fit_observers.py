@@ -14,7 +14,7 @@ from numpy.testing import assert_allclose
 from glarelab.observers import brightness, noise
 
 SCRIPT = Path(__file__).parents[1] / "scripts" / "fit_observers.py"
-QUICK = ["--studies", "100", "--similarity-studies", "5"]
+QUICK = ["--studies", "100", "--similarity-studies", "5", "--spencer-studies", "50"]
 
 
 @pytest.fixture(scope="module")

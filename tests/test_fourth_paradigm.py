@@ -25,7 +25,12 @@ from glarelab.analysis.dataset import Design
 from glarelab.experiments import paradigms as experiments_paradigms
 from glarelab.experiments.engine import Engine, LookingObserver, participant_rng
 from glarelab.experiments.layout import protocol_drawing
-from glarelab.observers.fitted_range import JudgedGlare, JudgedStimuli, OutsideFittedRangeWarning
+from glarelab.observers.fitted_range import (
+    JudgedGlare,
+    JudgedStimuli,
+    OutsideFittedRangeWarning,
+    judged_background,
+)
 from glarelab.protocols import Key, load_protocol, pixel_deg
 from glarelab.protocols import core as protocols_core
 from glarelab.protocols.columns import Column
@@ -59,7 +64,7 @@ text = "Press y when the disk glows, n when it does not."
 
 [stimulus]
 disk_deg = 0.3
-background_cd_m2 = 100.0
+background_cd_m2 = 0.0  # a black field, as the observers were fitted on (Spencer 1995 §4)
 
 [glare]
 model = "gaussian"
@@ -216,7 +221,20 @@ class DetectionObserver(LookingObserver):
         g = protocol["glare"]
         ratios = tuple(level / g["clamp_cd_m2"] for level in g["levels_cd_m2"])
         method = JudgedGlare("glare", g["model"], g["parameters"], ratios)
-        return JudgedStimuli((method,), g["clamp_cd_m2"], geometry["disk_diameter_deg"])
+        field = {"kind": "uniform", "cd_m2": protocol["stimulus"]["background_cd_m2"]}
+        background = judged_background(
+            "background",
+            field,
+            disk_cd_m2=g["clamp_cd_m2"],
+            black_cd_m2=protocol["display"]["black_cd_m2"],
+        )
+        return JudgedStimuli(
+            (method,),
+            g["clamp_cd_m2"],
+            geometry["disk_diameter_deg"],
+            backgrounds=(background,),
+            pixel_deg=geometry["pixel_deg"],
+        )
 
     def keys(self, screen: dict) -> list[tuple[str, float]]:
         g = self.display.geometry

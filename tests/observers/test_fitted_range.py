@@ -1,5 +1,6 @@
 """Simulated observers say where they stop: a study whose stimuli lie outside those the
-observers were fitted on (kernel widths, levels, disk sizes, luminances) warns once per observer,
+observers were fitted on (kernel widths and PSF normalisations, levels, disk sizes, luminances,
+backgrounds, pixel sizes) warns once per observer,
 naming each value and its fitted range; the papers' own studies do not warn; docs/observers.md
 lists the ranges."""
 
@@ -15,10 +16,12 @@ from glarelab.experiments.engine import LookingObserver
 from glarelab.experiments.paradigms import PARADIGMS
 from glarelab.experiments.session import make_observer
 from glarelab.observers.fitted_range import (
+    FITTED_BACKGROUND_RATIO,
     FITTED_DISK_CD_M2,
     FITTED_DISK_DIAMETER_DEG,
     FITTED_GAUSSIAN_SIGMA_DEG,
     FITTED_LEVEL_RATIO,
+    FITTED_PIXEL_DEG,
     OutsideFittedRangeWarning,
     fitted_range_departures,
     warn_outside_fitted_range,
@@ -28,8 +31,12 @@ from glarelab.protocols import load_protocol
 from glarelab.stimuli.stimulus_set import StimulusSet, cached_stimulus_set
 
 ROOT = Path(__file__).parents[2]
-YOSHIDA_GEOMETRY = {"disk_diameter_deg": 0.3}
-SPENCER_GEOMETRY = {"source_diameter_deg": 0.10653827731485196}  # 4 px of 0.0266° (§4)
+YOSHIDA_PIXEL_DEG = 0.011824416329142544  # 20.8-inch 2048 × 1536 at 1 m (§3-4)
+YOSHIDA_GEOMETRY = {"disk_diameter_deg": 0.3, "pixel_deg": YOSHIDA_PIXEL_DEG}
+SPENCER_GEOMETRY = {  # 4 px of 0.0266° (§4)
+    "source_diameter_deg": 0.10653827731485196,
+    "pixel_deg": 0.02663456932871299,
+}
 
 
 def matching(sigma_deg: float = 0.34, *, levels=None, clamp: float = 220.0, model=None) -> dict:
@@ -58,16 +65,13 @@ def _outside_warnings(record) -> list:
     return [w for w in record if issubclass(w.category, OutsideFittedRangeWarning)]
 
 
-def test_the_papers_studies_are_inside_the_fitted_range_but_spencers_own_conditions():
+def test_the_papers_studies_are_inside_the_fitted_range():
     assert departures(load_protocol("yoshida2008"), YOSHIDA_GEOMETRY) == []
     # a rating study's observers look at no glare: they are no LookingObserver
     assert not issubclass(PARADIGMS["rating"].observer, LookingObserver)
-    # the observers were fitted on Spencer's Figure 13 through a photopic PSF on a 100 cd/m²
-    # display; the protocol now follows the paper (mesopic by §3.1's rule, 50 cd/m² as §1)
-    assert departures(load_protocol("spencer1995"), SPENCER_GEOMETRY) == [
-        "glare: Vos regime 'mesopic' (fitted on photopic only)",
-        "disk luminance 37.5 cd/m² (the clamp; fitted on 75-220 cd/m²)",
-    ]
+    # fitted on the protocol as shipped: mesopic by §3.1's rule, each filter renormalised
+    # (§3.2), 50 cd/m² as §1
+    assert departures(load_protocol("spencer1995"), SPENCER_GEOMETRY) == []
 
 
 def test_the_issue_study_of_two_gaussian_widths_is_named():
@@ -93,13 +97,15 @@ def test_glare_methods2026_names_its_wave_models_and_high_levels():
 
 def test_vos_regime_age_disk_size_and_luminance_are_checked():
     data = matching(model=("vos", {"regime": "scotopic", "age": 70.0}), clamp=300.0)
-    found = departures(data, {"disk_diameter_deg": 1.0})
+    data["background"] = {**data["background"], "mean_cd_m2": 300.0 * 150.0 / 220.0}
+    found = departures(data, {"disk_diameter_deg": 1.0, "pixel_deg": YOSHIDA_PIXEL_DEG})
     assert found == [
-        "method 'gaussian': Vos regime 'scotopic' (fitted on photopic only)",
+        "method 'gaussian': Vos regime 'scotopic' with normalisation 'psf' (fitted on "
+        "photopic with 'psf', mesopic with 'Spencer1995' only)",
         "method 'gaussian': Vos age = 70 years (fitted at the default age)",
         "method 'gaussian': levels of 0.7333 × the clamp luminance (fitted on 1-285 × for vos)",
         "disk diameter 1° (fitted on 0.1065-0.3°)",
-        "disk luminance 300 cd/m² (the clamp; fitted on 75-220 cd/m²)",
+        "disk luminance 300 cd/m² (the clamp; fitted on 37.5-220 cd/m²)",
     ]
 
 
@@ -107,12 +113,79 @@ def test_a_staircase_study_is_checked_on_its_glare_and_source():
     data = load_protocol("spencer1995").data
     strengths = [*data["glare"]["strengths"], 1000.0]
     data = {**data, "glare": {**data["glare"], "strengths": strengths, "peak_fraction": 0.5}}
-    found = departures(data, {"source_diameter_deg": 0.05})
+    found = departures(data, {**SPENCER_GEOMETRY, "source_diameter_deg": 0.05})
     assert found == [
-        "glare: Vos regime 'mesopic' (fitted on photopic only)",
         "glare: levels of 1001 × the clamp luminance (fitted on 1-285 × for vos)",
         "disk diameter 0.05° (fitted on 0.1065-0.3°)",
-        "disk luminance 25 cd/m² (the clamp; fitted on 75-220 cd/m²)",
+        "disk luminance 25 cd/m² (the clamp; fitted on 37.5-220 cd/m²)",
+        # the black field at the display's black and the lamp scene, now over a dimmer peak
+        "context 'none': uniform background at 0.004 × the disk's luminance "
+        "(fitted on 0-0.002667 × for uniform)",
+        "context 'lamp': lamp background at 3 × the disk's luminance (fitted on 2 × only for lamp)",
+    ]
+
+
+def with_background(**background) -> dict:
+    """Yoshida's protocol data on another background."""
+    data = load_protocol("yoshida2008").data
+    return {**data, "background": background}
+
+
+def test_a_1_cd_m2_sky_is_named():
+    data = with_background(**{**load_protocol("yoshida2008")["background"], "mean_cd_m2": 1.0})
+    assert departures(data, YOSHIDA_GEOMETRY) == [
+        "background: sky background at 0.004545 × the disk's luminance "
+        "(fitted on 0.6818 × only for sky)"
+    ]
+
+
+@pytest.mark.parametrize("cd_m2", [0.0, 1.0, 150.0])
+def test_a_uniform_background_behind_yoshidas_disk_is_named_unless_black(cd_m2):
+    found = departures(with_background(kind="uniform", cd_m2=cd_m2), YOSHIDA_GEOMETRY)
+    if cd_m2 == 0.0:  # the display's black, 0.5 cd/m², as dark as Spencer's black field
+        assert found == []
+    else:
+        assert found == [
+            f"background: uniform background at {cd_m2 / 220.0:.4g} × the disk's luminance "
+            "(fitted on 0-0.002667 × for uniform)"
+        ]
+
+
+def test_a_sky_of_another_contrast_and_an_exr_are_named():
+    sky = {**load_protocol("yoshida2008")["background"], "contrast": 0.3}
+    assert departures(with_background(**sky), YOSHIDA_GEOMETRY) == [
+        "background: sky contrast 0.3 (fitted on 0.15 only)"
+    ]
+    exr = with_background(kind="exr", path="lab.exr", pixel_deg=0.01)
+    assert departures(exr, YOSHIDA_GEOMETRY) == [
+        "background: exr background (fitted on sky, uniform, lamp only)"
+    ]
+
+
+def test_three_times_finer_pixels_are_named():
+    finer = {**YOSHIDA_GEOMETRY, "pixel_deg": YOSHIDA_PIXEL_DEG / 3}
+    assert departures(load_protocol("yoshida2008"), finer) == [
+        "pixel size 0.003941° (fitted on 0.01182-0.02663°)"
+    ]
+
+
+def test_yoshidas_vos_with_spencers_normalisation_is_named():
+    data = load_protocol("yoshida2008").data
+    vos = data["glare"]["methods"][1]
+    parameters = {**vos["parameters"], "normalisation": "Spencer1995"}
+    methods = [data["glare"]["methods"][0], {**vos, "parameters": parameters}]
+    data = {**data, "glare": {**data["glare"], "methods": methods}}
+    assert departures(data, YOSHIDA_GEOMETRY) == [
+        "method 'vos': Vos regime 'photopic' with normalisation 'Spencer1995' (fitted on "
+        "photopic with 'psf', mesopic with 'Spencer1995' only)"
+    ]
+    # and Spencer's mesopic PSF normalised as a PSF was never fitted either
+    spencer = load_protocol("spencer1995").data
+    glare = {**spencer["glare"], "parameters": {**spencer["glare"]["parameters"]}}
+    glare["parameters"]["normalisation"] = "psf"
+    assert departures({**spencer, "glare": glare}, SPENCER_GEOMETRY) == [
+        "glare: Vos regime 'mesopic' with normalisation 'psf' (fitted on "
+        "photopic with 'psf', mesopic with 'Spencer1995' only)"
     ]
 
 
@@ -129,10 +202,16 @@ def test_the_borders_of_the_level_range(factor, departs):
     levels = [220.0 * low, 220.0 * high * factor] if factor > 1 else [220.0 * low * factor]
     assert bool(departures(matching(levels=levels), YOSHIDA_GEOMETRY)) == departs
     for diameter in FITTED_DISK_DIAMETER_DEG:  # both ends of the sizes are inside
-        assert departures(matching(), {"disk_diameter_deg": diameter}) == []
+        geometry = {**YOSHIDA_GEOMETRY, "disk_diameter_deg": diameter}
+        assert departures(matching(), geometry) == []
+    for pixel_deg in FITTED_PIXEL_DEG:  # and of the pixel sizes
+        assert departures(matching(), {**YOSHIDA_GEOMETRY, "pixel_deg": pixel_deg}) == []
     for clamp in FITTED_DISK_CD_M2:
         levels = [clamp * r for r in FITTED_LEVEL_RATIO["gaussian"]]
-        assert departures(matching(levels=levels, clamp=clamp), YOSHIDA_GEOMETRY) == []
+        data = matching(levels=levels, clamp=clamp)
+        ratio = FITTED_BACKGROUND_RATIO["sky"][0]
+        data["background"] = {**data["background"], "mean_cd_m2": clamp * ratio}
+        assert departures(data, YOSHIDA_GEOMETRY) == []
 
 
 def test_the_warning_names_the_ranges_and_points_at_its_caller():
@@ -183,6 +262,12 @@ def test_docs_list_the_fitted_range():
         f"{FITTED_LEVEL_RATIO['vos'][1]:g}",
         f"{FITTED_DISK_DIAMETER_DEG[0]:g}-{FITTED_DISK_DIAMETER_DEG[1]:g}°",
         f"{FITTED_DISK_CD_M2[0]:g}-{FITTED_DISK_CD_M2[1]:g} cd/m²",
+        f"{FITTED_PIXEL_DEG[0]:.4g}-{FITTED_PIXEL_DEG[1]:.4g}°",
+        f"sky {FITTED_BACKGROUND_RATIO['sky'][0]:.4g} only",
+        f"uniform 0-{FITTED_BACKGROUND_RATIO['uniform'][1]:.4g}",
+        f"lamp scene {FITTED_BACKGROUND_RATIO['lamp'][0]:g} only",
+        "FITTED_VOS_PSFS",
+        '"Spencer1995"',
         "photopic",
         "OutsideFittedRangeWarning",
     ):

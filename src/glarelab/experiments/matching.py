@@ -326,28 +326,39 @@ class MatchingObserver(LookingObserver):
 
     @staticmethod
     def judged(protocol: Protocol | Mapping[str, Any], geometry: dict):
-        """Each method's references, their levels over the clamp ``L_dmax``, and the disk of
-        ``geometry["disk_diameter_deg"]``
+        """Each method's references, their levels over the clamp ``L_dmax``, the disk of
+        ``geometry["disk_diameter_deg"]``, the background and the pixel size
         (:meth:`glarelab.experiments.engine.LookingObserver.judged`).
 
         Parameters
         ----------
         protocol : glarelab.protocols.Protocol
             The study's protocol (or its data as a mapping): its ``[glare]`` table's
-            ``l_dmax_cd_m2`` (cd/m²) and ``methods``.
+            ``l_dmax_cd_m2`` (cd/m²) and ``methods``, its ``[background]`` table and its
+            ``[display]`` table's ``black_cd_m2``.
         geometry
             The stimulus set's geometry (its manifest's ``geometry``): ``disk_diameter_deg``
-            (deg).
+            and ``pixel_deg`` (deg).
 
         Returns
         -------
         glarelab.observers.fitted_range.JudgedStimuli
             What the observers judge.
         """
-        from glarelab.observers.fitted_range import JudgedGlare, JudgedStimuli
+        from glarelab.observers.fitted_range import (
+            JudgedGlare,
+            JudgedStimuli,
+            judged_background,
+        )
 
         glare = protocol["glare"]
         clamp = glare["l_dmax_cd_m2"]
+        background = judged_background(
+            "background",
+            protocol["background"],
+            disk_cd_m2=clamp,
+            black_cd_m2=protocol["display"]["black_cd_m2"],
+        )
         return JudgedStimuli(
             tuple(
                 JudgedGlare(
@@ -360,6 +371,8 @@ class MatchingObserver(LookingObserver):
             ),
             disk_cd_m2=clamp,
             disk_diameter_deg=geometry["disk_diameter_deg"],
+            backgrounds=(background,),
+            pixel_deg=geometry["pixel_deg"],
         )
 
     def __init__(self, protocol: Protocol, participant: str, *, seed: int, stimuli):

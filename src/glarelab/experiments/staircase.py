@@ -455,8 +455,8 @@ class StaircaseObserver(LookingObserver):
 
     @staticmethod
     def judged(protocol: Protocol | Mapping[str, Any], geometry: dict):
-        """The glare at each strength over the clamp (the display's peak), and the source of
-        ``geometry["source_diameter_deg"]``
+        """The glare at each strength over the clamp (the display's peak), the source of
+        ``geometry["source_diameter_deg"]``, each context's background and the pixel size
         (:meth:`glarelab.experiments.engine.LookingObserver.judged`).
 
         Parameters
@@ -464,19 +464,34 @@ class StaircaseObserver(LookingObserver):
         protocol : glarelab.protocols.Protocol
             The study's protocol (or its data as a mapping): its ``[glare]`` table's
             ``model``, ``parameters``, ``strengths`` and ``peak_fraction``, and its
-            ``[display]`` table's ``max_cd_m2`` (cd/m²).
+            ``[display]`` table's ``max_cd_m2`` and ``black_cd_m2`` (cd/m²), and its
+            ``contexts``' backgrounds.
         geometry
             The stimulus set's geometry (its manifest's ``geometry``): ``source_diameter_deg``
-            (deg).
+            and ``pixel_deg`` (deg).
 
         Returns
         -------
         glarelab.observers.fitted_range.JudgedStimuli
             What the observers judge.
         """
-        from glarelab.observers.fitted_range import JudgedGlare, JudgedStimuli
+        from glarelab.observers.fitted_range import (
+            JudgedGlare,
+            JudgedStimuli,
+            judged_background,
+        )
 
         glare = protocol["glare"]
+        peak = glare["peak_fraction"] * protocol["display"]["max_cd_m2"]
+        backgrounds = tuple(
+            judged_background(
+                f"context {context['name']!r}",
+                context["background"],
+                disk_cd_m2=peak,
+                black_cd_m2=protocol["display"]["black_cd_m2"],
+            )
+            for context in protocol["contexts"]
+        )
         return JudgedStimuli(
             (
                 JudgedGlare(
@@ -486,8 +501,10 @@ class StaircaseObserver(LookingObserver):
                     tuple(1.0 + strength for strength in glare["strengths"]),
                 ),
             ),
-            disk_cd_m2=glare["peak_fraction"] * protocol["display"]["max_cd_m2"],
+            disk_cd_m2=peak,
             disk_diameter_deg=geometry["source_diameter_deg"],
+            backgrounds=backgrounds,
+            pixel_deg=geometry["pixel_deg"],
         )
 
     def __init__(self, protocol: Protocol, participant: str, *, seed: int, stimuli):
