@@ -1,0 +1,82 @@
+"""Under Xvfb with real X events: the mouse (ioHub's MouseGaze) moves, the frame log's gaze follows.
+
+The live loop runs in its own process on a private X screen; ``xdotool`` moves the pointer
+through the X server, and the test reads what the loop recorded per frame (``_frames.tsv``),
+never how fast it ran.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import subprocess
+import sys
+import time
+
+import pytest
+
+from tests.experiments.xscreen import XScreen, _need
+
+SCRIPT = """
+import sys, numpy as np
+from pathlib import Path
+from glarelab.frontend.live import run_live
+from glarelab.stimuli.night import night_street
+scene = night_street((160, 100), pixel_deg=0.1, rng=np.random.default_rng(3))["img"]
+run_live(scene, pixel_deg=0.1, frames_path=Path(sys.argv[1]), duration_s=60.0)
+"""
+
+
+def rows(path):
+    with path.open(newline="") as handle:
+        return list(csv.DictReader(handle, delimiter="\t"))
+
+
+def wait_for_gaze(screen, path, x, y, timeout=30.0):
+    """The first recorded row whose gaze is (x, y), waiting for it."""
+    deadline = time.time() + timeout
+    while time.time() < deadline:
+        for row in rows(path)[:-1]:  # the last line may be half written
+            if (float(row["gaze_x_px"]), float(row["gaze_y_px"])) == (x, y):
+                return row
+        assert screen.process.poll() is None, screen.stderr[-3000:]
+        time.sleep(0.05)
+    raise AssertionError(f"the gaze never reached {(x, y)}: last {rows(path)[-2:]}")
+
+
+@pytest.fixture
+def screen(tmp_path):
+    screen = XScreen(tmp_path)
+    yield screen
+    screen.close()
+
+
+def test_the_frame_log_gaze_follows_the_mouse_and_escape_ends_as_aborted(screen, tmp_path):
+    frames = tmp_path / "p01_frames.tsv"
+    screen.stderr_file = screen.stderr_path.open("w")
+    screen.process = subprocess.Popen(
+        [sys.executable, "-c", SCRIPT, str(frames)], env=screen.env,
+        stdout=subprocess.DEVNULL, stderr=screen.stderr_file,
+    )  # fmt: skip
+    sidecar = screen.wait_for_file("p01_live.json", tmp_path)
+    left, top = json.loads(sidecar.read_text())["window_pos_px"]
+    targets = [(20.0, 30.0), (159.0, 99.0), (0.0, 0.0)]  # inside, the two far corners
+    seen = []
+    for x, y in targets:
+        before = len(rows(frames)) if frames.exists() else 0
+        subprocess.run(
+            [_need("xdotool"), "mousemove", str(int(left + x)), str(int(top + y))],
+            env=screen.env, check=True,
+        )  # fmt: skip
+        row = wait_for_gaze(screen, frames, x, y)
+        assert int(row["frame"]) >= before - 1  # a frame after the move, not an old one
+        assert row["valid_gaze"] == "1" and float(row["pupil_mm"]) == 5.0  # MouseGaze: 5 mm
+        seen.append(float(row["target_cd_m2"]))
+    assert len(set(seen)) == 3  # each gaze adapted to its own window of the street
+    screen.focus_window()
+    screen.key("Escape")
+    assert screen.wait(timeout=60) == 0, screen.stderr[-3000:]
+    summary = json.loads(sidecar.read_text())["summary"]
+    recorded = rows(frames)
+    assert summary["aborted"] is True and summary["frames"] == len(recorded)
+    assert [int(r["frame"]) for r in recorded] == list(range(len(recorded)))
