@@ -57,6 +57,7 @@ def live_bench(
     frames: int = 60,
     compared: int = 3,
     only: tuple[str, ...] | None = None,
+    workloads: dict[str, tuple[int, int]] | None = None,
     log: Callable[[str], None] = print,
 ) -> list[dict]:
     """Time the per-frame renderer on each workload and measure it against ``render_night``.
@@ -69,6 +70,9 @@ def live_bench(
         Frames of the path rendered offline too (spread over it), >= 1; default 3.
     only
         Workload names of :data:`LIVE_WORKLOADS` to run; default None: all.
+    workloads
+        Other workloads, ``name → (width, height)`` of the street; default None:
+        :data:`LIVE_WORKLOADS`.
     log
         Called with a line per workload; default :func:`print`.
 
@@ -84,7 +88,7 @@ def live_bench(
         raise ValueError(f"frames must be >= 2 and compared >= 1; got {frames}, {compared}")
     lut = synthetic_calibration(max_cd_m2=DISPLAY_MAX_CD_M2, black_cd_m2=0.05, bit_depth=10).lut
     rows = []
-    for name, size in LIVE_WORKLOADS.items():
+    for name, size in (LIVE_WORKLOADS if workloads is None else workloads).items():
         if only is not None and name not in only:
             continue
         scene = night_street(
