@@ -136,7 +136,7 @@ def run_live(
         rows = dropped = 0
         times: list[float] = []
         aborted = False
-        last_flip = None
+        last_flip = last_now = None
         with frames_path.open("w", encoding="utf-8") as handle:
             handle.write("\t".join(FRAME_COLUMNS) + "\n")
             handle.flush()
@@ -146,17 +146,24 @@ def run_live(
                     break
                 now = clock.getTime()
                 state = gaze_filter.update(now, *source.sample())
-                elapsed = 0.0 if last_flip is None else now - last_flip
+                elapsed = 0.0 if last_now is None else now - last_now  # one frame's time
+                last_now = now
                 frame = live.frame(
                     gaze_px=(state.gaze_y_px, state.gaze_x_px),
                     pupil_mm=state.pupil_mm,
                     frame_time_s=elapsed,
                 )
                 codes = np.rint(display_codes(frame.image, lut))
-                stim.image = np.flipud(codes / top * 2.0 - 1.0)  # PsychoPy's rows: bottom-up
+                # a colour array is shown as it is in [0, 1] (ImageBank.levels), rows bottom-up
+                stim.image = np.flipud(codes / top)
                 stim.draw()
                 window.flip()
                 flipped = clock.getTime()
+                if last_flip is not None and flipped - last_flip < period:
+                    # a screen without vertical sync (Xvfb) flips at once: never run faster
+                    # than the refresh, which would starve the ioHub process of the CPU
+                    core.wait(period - (flipped - last_flip), hogCPUperiod=0)
+                    flipped = clock.getTime()
                 lost = last_flip is not None and flipped - last_flip > DROPPED_FACTOR * period
                 dropped += lost
                 last_flip = flipped
