@@ -3,11 +3,17 @@
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 import pytest
 
-from glarelab.frontend.eyetracker import PUPIL_FILTER_S, GazeFilter, PupilCalibration
+from glarelab.frontend.eyetracker import (
+    PUPIL_FILTER_S,
+    GazeFilter,
+    PupilCalibration,
+    calibrate_pupil,
+)
 
 
 def test_pupil_calibration_maps_white_to_2_and_black_to_8_mm():
@@ -49,3 +55,34 @@ def test_the_pupil_follows_a_step_with_its_time_constant():
     f.update(0.0, 1.0, 1.0, 4.0)
     state = f.update(PUPIL_FILTER_S, 1.0, 1.0, 6.0)  # one time constant: 1 - 1/e of the step
     np.testing.assert_allclose(state.pupil_mm, 4.0 + 2.0 * (1 - math.exp(-1)), rtol=1e-12)
+
+
+class Screen:
+    """A window stand-in: its colour is what a simulated eye's pupil answers to."""
+
+    def __init__(self):
+        self.color = (0.0, 0.0, 0.0)
+        self.flips = 0
+
+    def flip(self):
+        self.flips += 1
+        time.sleep(0.002)
+
+
+class Eye:
+    """A pupil of 3 mm on white and 7 mm on black, blinking (0) every fifth sample."""
+
+    def __init__(self, screen):
+        self.screen, self.n = screen, 0
+
+    def sample(self):
+        self.n += 1
+        pupil = 0.0 if self.n % 5 == 0 else 5.0 - 2.0 * self.screen.color[0]
+        return 10.0, 10.0, pupil
+
+
+def test_calibrate_pupil_shows_white_then_black_and_maps_their_means():
+    screen = Screen()
+    c = calibrate_pupil(screen, Eye(screen), screen_s=0.05)
+    assert (c.white_raw, c.black_raw) == (3.0, 7.0)  # blinks left out of both means
+    assert screen.color == (0.0, 0.0, 0.0) and screen.flips > 4  # the colour put back

@@ -40,6 +40,7 @@ __all__ = [
     "GazeState",
     "IoHubEyeTracker",
     "PupilCalibration",
+    "calibrate_pupil",
 ]
 
 LUIDOLT2020_PUPIL_RANGE_MM = (2.0, 8.0)  # Luidolt §5.2.1 ii: "our predefined range of 2-8 mm"
@@ -331,6 +332,66 @@ class GazeFilter:
             "blinks": self.blinks,
             "off_screen": self.off_screen,
         }
+
+
+def calibrate_pupil(
+    window, source, *, screen_s: float = CALIBRATION_SCREEN_S, unit: str = "mm"
+) -> PupilCalibration:
+    """Luidolt's pupil range calibration: a white screen, then a black one, ``screen_s`` each.
+
+    Parameters
+    ----------
+    window
+        The window (anything with a settable ``color`` in PsychoPy's ``rgb`` [-1, 1] and a
+        ``flip()``); its colour is put back afterwards.
+    source
+        The tracker (:class:`IoHubEyeTracker`, recording): ``sample()`` gives
+        ``(gaze_x_px, gaze_y_px, pupil_raw)``.
+    screen_s
+        How long each screen is shown, s, > 0; default 5 (Luidolt §5.2.1 ii).
+    unit
+        The tracker's pupil unit, recorded.
+
+    Returns
+    -------
+    PupilCalibration
+        From the mean pupil of each screen (blinks and lost samples left out).
+
+    Raises
+    ------
+    ValueError
+        For a bad duration, or a screen without a valid pupil or with no range between them
+        (MouseGaze reports 5 mm on both: run a simulated session without a calibration).
+
+    Notes
+    -----
+    "We calibrate our eye tracker to a user's pupil size, by showing a black or white screen
+    for 5 seconds each. We take the average of the pupil size during the white frame as
+    minimum pupil size and the average over the black frame as maximum." (Luidolt 2020,
+    §5.2.1 ii). White is shown first: the pupil then dilates on the black screen, as it
+    does faster than it constricts after the dark.
+    """
+    import time
+
+    if not (math.isfinite(screen_s) and screen_s > 0):
+        raise ValueError(f"screen_s must be a duration > 0 s; got {screen_s!r}")
+    before = getattr(window, "color", None)
+    samples: dict[str, list[float]] = {}
+    try:
+        for name, colour in (("white", (1.0, 1.0, 1.0)), ("black", (-1.0, -1.0, -1.0))):
+            window.color = colour
+            window.flip()
+            pupils = samples[name] = []
+            end = time.monotonic() + screen_s
+            while time.monotonic() < end:
+                window.flip()
+                pupil = source.sample()[2]
+                pupils.append(math.nan if pupil is None else float(pupil))
+    finally:
+        if before is not None:
+            window.color = before
+        window.flip()
+    return PupilCalibration.from_samples(samples["white"], samples["black"], unit=unit)
 
 
 class IoHubEyeTracker:

@@ -18,7 +18,12 @@ import numpy as np
 
 from glarelab.display.calibration import synthetic_calibration
 from glarelab.files.atomic import write_text
-from glarelab.frontend.eyetracker import GazeFilter, IoHubEyeTracker, PupilCalibration
+from glarelab.frontend.eyetracker import (
+    GazeFilter,
+    IoHubEyeTracker,
+    PupilCalibration,
+    calibrate_pupil,
+)
 from glarelab.glare.night.live import LiveNight
 from glarelab.glare.rendering.display import display_codes
 
@@ -49,6 +54,7 @@ def run_live(
     frames_path: Path,
     tracker: str = "mouse",
     calibration: PupilCalibration | None = None,
+    calibrate: bool = False,
     display_max_cd_m2: float = 100.0,
     adapted_display_cd_m2: float = 10.0,
     bits: int = 8,
@@ -73,6 +79,9 @@ def run_live(
         path; default ``'mouse'``.
     calibration
         Luidolt's pupil range, or None: the tracker's pupil in mm, clamped to 2-8 mm.
+    calibrate
+        Measure the pupil range first (:func:`~glarelab.frontend.eyetracker.calibrate_pupil`,
+        a white and a black screen of 5 s), in place of ``calibration``; default False.
     display_max_cd_m2, adapted_display_cd_m2
         The display's white and the adapting luminance's display luminance, cd/m².
     bits
@@ -118,6 +127,9 @@ def run_live(
     source = None
     try:
         source = IoHubEyeTracker(window, tracker=tracker)
+        if calibrate:
+            source.start()
+            calibration = calibrate_pupil(window, source)
         window_pos = [int(v) for v in getattr(window, "pos", (0, 0))]
         facts = {
             "tracker": tracker,
