@@ -80,3 +80,21 @@ def test_the_threshold_is_interpolated_between_the_bank_levels(scene):
     live = LiveNight(scene, pixel_deg=PIXEL_DEG, threshold_ratio=2.0)
     frame = live.frame(gaze_px=(0, 0), pupil_mm=5.0, frame_time_s=0.0)
     assert np.abs(codes(frame.image) - codes(offline(scene, frame, None, None).frames)).max() < 0.2
+
+
+def test_the_gaze_falloff_equals_render_nights_and_keeps_the_glare_near_the_gaze(scene):
+    # Luidolt §5.2.3: the glared frame blended with the unglared one by a Gaussian falloff
+    live = LiveNight(scene, pixel_deg=PIXEL_DEG, glare_falloff_deg=1.0)
+    frame = live.frame(gaze_px=(0, 0), pupil_mm=4.0, frame_time_s=0.0)
+    options = dict(
+        pixel_deg=PIXEL_DEG, effects=("adaptation", "glare"), glare_model=VosGlare(pupil_mm=4.0),
+        pupil_from_adaptation=False, gaze_px=(0.0, 0.0), tolerance_codes=0.0,
+    )  # fmt: skip
+    reference = render_night(scene, glare_falloff_deg=1.0, **options).frames
+    assert np.abs(codes(frame.image) - codes(reference)).max() < 0.5
+    full = render_night(scene, **options).frames
+    bare = np.minimum(scene * frame.exposure, L_DMAX)
+    near, far = np.s_[:1, :1], np.s_[-5:, -5:]  # the gaze (weight 1) and the far corner
+    np.testing.assert_allclose(frame.image[near], full[near], atol=1e-3)  # all the glare
+    np.testing.assert_allclose(frame.image[far], bare[far], atol=1e-3)  # and ≈ 0 here
+    assert np.abs(full[far] - bare[far]).max() > 1.0  # where the full frame has glare

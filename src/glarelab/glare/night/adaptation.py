@@ -44,6 +44,7 @@ __all__ = [
     "adaptation_step",
     "adaptation_time_s",
     "frame_luminance",
+    "gaze_falloff",
     "luminance",
     "rod_sensitivity",
     "window_mean",
@@ -447,6 +448,66 @@ def window_mean(
             f"{window_sigma_deg:g}°: no pixel has any weight"
         )
     return float(rows @ y @ cols / total)
+
+
+def gaze_falloff(
+    shape: tuple[int, int], *, pixel_deg: float, gaze_px: tuple[float, float], sigma_deg: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """The Gaussian falloff around the gaze with which Luidolt blends the glare (§5.2.3, §6.3.3),
+    as its row and column factors.
+
+    Parameters
+    ----------
+    shape
+        ``(H, W)`` of the image, pixels.
+    pixel_deg
+        Visual angle of a pixel, degrees, > 0.
+    gaze_px
+        ``(row, column)`` of the gaze, pixels (may lie off the image).
+    sigma_deg
+        The falloff's standard deviation, degrees, > 0.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(rows (H,), cols (W,))``: the weight of pixel ``(r, c)`` is ``rows[r] · cols[c]``,
+        1 at the gaze.
+
+    Raises
+    ------
+    ValueError
+        For a bad pixel size, width or gaze.
+
+    Notes
+    -----
+    .. math:: w(x) = \\exp\\Bigl(-\\frac{|x - g|^2 \\Delta^2}{2 s^2}\\Bigr)
+
+    "a custom post-processing stage was added, that blends the original (unconvolved) image
+    with the bloomed window using a Gaussian falloff" (Luidolt 2020, §6.3.3); he gives no
+    width.
+
+    References
+    ----------
+    Luidolt 2020, §5.2.3 and §6.3.3.
+
+    Examples
+    --------
+    >>> rows, cols = gaze_falloff((3, 3), pixel_deg=1.0, gaze_px=(1, 1), sigma_deg=1.0)
+    >>> float(rows[1] * cols[1]), round(float(rows[0] * cols[1]), 4)
+    (1.0, 0.6065)
+    """
+    pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
+    sigma_deg = check_positive("sigma_deg", sigma_deg, unit="deg")
+    try:
+        row, col = (float(v) for v in gaze_px)
+    except (TypeError, ValueError):
+        raise ValueError(f"gaze_px must be (row, column) in pixels; got {gaze_px!r}") from None
+    if not (math.isfinite(row) and math.isfinite(col)):
+        raise ValueError(f"gaze_px must be finite; got {gaze_px!r}")
+    sigma_px = sigma_deg / pixel_deg
+    rows = np.exp(-0.5 * ((np.arange(int(shape[0])) - row) / sigma_px) ** 2)
+    cols = np.exp(-0.5 * ((np.arange(int(shape[1])) - col) / sigma_px) ** 2)
+    return rows, cols
 
 
 def _luminances(name: str, value) -> np.ndarray:

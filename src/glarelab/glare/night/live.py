@@ -53,6 +53,7 @@ from glarelab.glare.night.adaptation import (
     TAU_ROD_S,
     WINDOW_SIGMA_DEG,
     adaptation_step,
+    gaze_falloff,
     luminance,
     window_mean,
 )
@@ -194,6 +195,9 @@ class LiveNight:
         night street; 0.12 codes at ``r`` = 2).
     bank_size
         Bank entries kept, >= 4 (the least recently used are dropped); default 64.
+    glare_falloff_deg
+        σ of Luidolt's Gaussian falloff of the glare around the gaze, degrees (§5.2.3; as
+        :func:`~glarelab.glare.render_night`'s); default None: the whole frame alike.
 
     Raises
     ------
@@ -238,6 +242,7 @@ class LiveNight:
         precision: Literal["float32", "float64"] = "float32",
         threshold_ratio: float = THRESHOLD_RATIO,
         bank_size: int = BANK_SIZE,
+        glare_falloff_deg: float | None = None,
     ) -> None:
         image = check_image("scene_cd_m2", scene_cd_m2, channels=(3,))
         rgb = image if image.ndim == 3 else np.repeat(image[..., None], 3, axis=2)
@@ -297,6 +302,11 @@ class LiveNight:
             raise ValueError(f"bank_size must be an integer >= 4; got {bank_size!r}")
         self._bank: OrderedDict[tuple, np.ndarray | None] = OrderedDict()
         self.bank_entries = 0
+        self.falloff_deg = (
+            None
+            if glare_falloff_deg is None
+            else check_positive("glare_falloff_deg", glare_falloff_deg, unit="deg")
+        )
         self.build_s = 0.0
         self.frames = 0
 
@@ -410,7 +420,7 @@ class LiveNight:
         )
         exposure = self.key / max(self._state, MIN_LUMINANCE_CD_M2)
         made = self.bank_entries
-        self._compose(exposure, pupil)
+        self._compose(exposure, pupil, gaze)
         self.frames += 1
         return LiveFrame(
             image=self._out,
@@ -423,7 +433,7 @@ class LiveNight:
             new_entries=self.bank_entries - made,
         )
 
-    def _compose(self, exposure: float, pupil: float) -> None:
+    def _compose(self, exposure: float, pupil: float, gaze: tuple[float, float]) -> None:
         dtype = self.dtype.type
         out, spread, work = self._out, self._spread, self._work
         np.multiply(self._display, dtype(exposure), out=out)
@@ -450,5 +460,15 @@ class LiveNight:
                 if entry is not None:
                     np.multiply(entry, dtype(weight_t * weight_p * exposure), out=work)
                     spread += work
-        compose(out, spread, self.l_dmax, self.method, out=out)
+        if self.falloff_deg is None:
+            compose(out, spread, self.l_dmax, self.method, out=out)
+        else:  # Luidolt §6.3.3: the unglared frame blended with the glared one by the falloff
+            rows, cols = gaze_falloff(
+                self.shape, pixel_deg=self.pixel_deg, gaze_px=gaze, sigma_deg=self.falloff_deg
+            )
+            base = np.minimum(out, dtype(self.l_dmax), out=work)
+            compose(out, spread, self.l_dmax, self.method, out=out)
+            out -= base
+            out *= (rows[:, None] * cols[None, :]).astype(self.dtype)[..., None]
+            out += base
         np.clip(out, 0.0, self.l_dmax, out=out)
