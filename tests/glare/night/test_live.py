@@ -98,3 +98,14 @@ def test_the_gaze_falloff_equals_render_nights_and_keeps_the_glare_near_the_gaze
     np.testing.assert_allclose(frame.image[near], full[near], atol=1e-3)  # all the glare
     np.testing.assert_allclose(frame.image[far], bare[far], atol=1e-3)  # and ≈ 0 here
     assert np.abs(full[far] - bare[far]).max() > 1.0  # where the full frame has glare
+
+
+def test_spencers_sum_equals_render_nights(scene):
+    live = LiveNight(scene, pixel_deg=PIXEL_DEG, glare_method="Spencer1995")
+    frame = live.frame(gaze_px=(20, 30), pupil_mm=2.5, frame_time_s=0.0)
+    reference = render_night(
+        scene, pixel_deg=PIXEL_DEG, effects=("adaptation", "glare"), glare_method="Spencer1995",
+        glare_model=VosGlare(pupil_mm=2.5), pupil_from_adaptation=False, gaze_px=(20.0, 30.0),
+        tolerance_codes=0.0,
+    )  # fmt: skip
+    assert np.abs(codes(frame.image) - codes(reference.frames)).max() < 0.5
