@@ -50,6 +50,18 @@ def wait_for_gaze(screen, path, x, y, timeout=30.0):
     raise AssertionError(f"the gaze never reached {(x, y)}: last {rows(path)[-2:]}")
 
 
+def wait_for_row(screen, path, test, timeout=30.0):
+    """The first recorded row for which ``test`` holds, waiting for it."""
+    deadline = time.time() + timeout
+    while time.time() < deadline:
+        for row in rows(path)[:-1]:
+            if test(row):
+                return row
+        assert screen.process.poll() is None, screen.stderr[-3000:]
+        time.sleep(0.05)
+    raise AssertionError(f"no such row: last {rows(path)[-2:]}")
+
+
 def wait_for_adapted(screen, path, timeout=30.0):
     """The last row once the adaptation is within 0.01 % of its target."""
     deadline = time.time() + timeout
@@ -98,6 +110,22 @@ def test_the_frame_log_gaze_follows_the_mouse_and_escape_ends_as_aborted(screen,
         assert row["valid_gaze"] == "1" and float(row["pupil_mm"]) == 5.0  # MouseGaze: 5 mm
         seen.append(float(row["target_cd_m2"]))
     assert len(set(seen)) == 3  # each gaze adapted to its own window of the street
+    # a blink (MouseGaze: both buttons held) is recorded as a lost gaze, the last one held
+    xdotool = [_need("xdotool")]
+    start = len(rows(frames))
+    subprocess.run([*xdotool, "mousedown", "1", "mousedown", "3"], env=screen.env, check=True)
+    blink = wait_for_row(
+        screen, frames, lambda r: int(r["frame"]) >= start and r["valid_gaze"] == "0"
+    )
+    subprocess.run([*xdotool, "mouseup", "1", "mouseup", "3"], env=screen.env, check=True)
+    assert (blink["gaze_x_px"], blink["gaze_y_px"], blink["pupil_mm"]) == (
+        "0.00",
+        "0.00",
+        "5.0000",
+    )
+    wait_for_row(
+        screen, frames, lambda r: int(r["frame"]) > int(blink["frame"]) and r["valid_gaze"] == "1"
+    )
     # the screen, read back from the X server once the eye has adapted to the last gaze,
     # shows render_night of that gaze, pupil and adaptation (8-bit codes, ±1 for the little
     # adaptation left between the row read and the screen read)
@@ -124,4 +152,5 @@ def test_the_frame_log_gaze_follows_the_mouse_and_escape_ends_as_aborted(screen,
     summary = json.loads(sidecar.read_text())["summary"]
     recorded = rows(frames)
     assert summary["aborted"] is True and summary["frames"] == len(recorded)
+    assert summary["lost"] == sum(r["valid_gaze"] == "0" for r in recorded) > 1  # the blink
     assert [int(r["frame"]) for r in recorded] == list(range(len(recorded)))
