@@ -55,6 +55,7 @@ def run_live(
     tracker: str = "mouse",
     calibration: PupilCalibration | None = None,
     calibrate: bool = False,
+    scotopic: bool = False,
     display_max_cd_m2: float = 100.0,
     adapted_display_cd_m2: float = 10.0,
     bits: int = 8,
@@ -82,6 +83,8 @@ def run_live(
     calibrate
         Measure the pupil range first (:func:`~glarelab.frontend.eyetracker.calibrate_pupil`,
         a white and a black screen of 5 s), in place of ``calibration``; default False.
+    scotopic
+        Also Luidolt's scotopic colour of the adapted luminance (§5.4); default False.
     display_max_cd_m2, adapted_display_cd_m2
         The display's white and the adapting luminance's display luminance, cd/m².
     bits
@@ -115,7 +118,7 @@ def run_live(
         raise ValueError(f"frames_path must end in _frames.tsv; got {frames_path.name!r}")
     live = LiveNight(
         scene_cd_m2, pixel_deg=pixel_deg, display_max_cd_m2=display_max_cd_m2,
-        adapted_display_cd_m2=adapted_display_cd_m2,
+        adapted_display_cd_m2=adapted_display_cd_m2, scotopic=scotopic,
     )  # fmt: skip
     height, width = live.shape
     lut = synthetic_calibration(

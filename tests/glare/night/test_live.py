@@ -109,3 +109,17 @@ def test_spencers_sum_equals_render_nights(scene):
         tolerance_codes=0.0,
     )  # fmt: skip
     assert np.abs(codes(frame.image) - codes(reference.frames)).max() < 0.5
+
+
+def test_scotopic_colour_of_the_adapted_luminance_equals_render_nights(scene):
+    live = LiveNight(scene, pixel_deg=PIXEL_DEG, scotopic=True, initial_adaptation_cd_m2=0.5)
+    frame = live.frame(gaze_px=(47, 0), pupil_mm=6.0, frame_time_s=0.05)
+    reference = render_night(
+        scene, pixel_deg=PIXEL_DEG, effects=("adaptation", "glare", "scotopic"),
+        glare_model=VosGlare(pupil_mm=6.0), pupil_from_adaptation=False, gaze_px=(47.0, 0.0),
+        frame_time_s=0.05, initial_adaptation_cd_m2=0.5, tolerance_codes=0.0,
+    )  # fmt: skip
+    assert np.abs(codes(frame.image) - codes(reference.frames)).max() < 0.5
+    unshifted = LiveNight(scene, pixel_deg=PIXEL_DEG, initial_adaptation_cd_m2=0.5)
+    plain = unshifted.frame(gaze_px=(47, 0), pupil_mm=6.0, frame_time_s=0.05).image
+    assert np.abs(codes(plain) - codes(reference.frames)).max() > 5  # the shift is visible

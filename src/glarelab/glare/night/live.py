@@ -58,6 +58,7 @@ from glarelab.glare.night.adaptation import (
     luminance,
     window_mean,
 )
+from glarelab.glare.night.scotopic import scotopic_colour
 from glarelab.glare.rendering.compose import check_composition, compose
 from glarelab.glare.rendering.renderer import GlareRenderer
 
@@ -196,6 +197,10 @@ class LiveNight:
         night street; 0.12 codes at ``r`` = 2).
     bank_size
         Bank entries kept, >= 4 (the least recently used are dropped); default 64.
+    scotopic
+        Also Luidolt's scotopic colour (§5.4, eq. 5.18, :func:`~glarelab.glare.scotopic_colour`)
+        of each frame's adapted luminance, after the glare, as ``render_night`` with the
+        effect ``'scotopic'``; default False.
     glare_falloff_deg
         σ of Luidolt's Gaussian falloff of the glare around the gaze, degrees (§5.2.3; as
         :func:`~glarelab.glare.render_night`'s); default None: the whole frame alike.
@@ -244,6 +249,7 @@ class LiveNight:
         threshold_ratio: float = THRESHOLD_RATIO,
         bank_size: int = BANK_SIZE,
         glare_falloff_deg: float | None = None,
+        scotopic: bool = False,
     ) -> None:
         image = check_image("scene_cd_m2", scene_cd_m2, channels=(3,))
         rgb = image if image.ndim == 3 else np.repeat(image[..., None], 3, axis=2)
@@ -304,6 +310,8 @@ class LiveNight:
         self._bank: OrderedDict[tuple, np.ndarray | None] = OrderedDict()
         self.bank_entries = 0
         self._threads = ThreadpoolController()
+        self.scotopic = bool(scotopic)
+        self.colourspace = colourspace
         self.falloff_deg = (
             None
             if glare_falloff_deg is None
@@ -429,6 +437,11 @@ class LiveNight:
         exposure = self.key / max(self._state, MIN_LUMINANCE_CD_M2)
         made = self.bank_entries
         self._compose(exposure, pupil, gaze)
+        if self.scotopic:  # §5.4: "after tone mapping", of the adapted luminance
+            shifted = scotopic_colour(
+                self._out, adaptation_luminance_cd_m2=self._state, colourspace=self.colourspace
+            )
+            np.clip(shifted, 0.0, self.l_dmax, out=self._out, casting="same_kind")
         self.frames += 1
         return LiveFrame(
             image=self._out,
