@@ -694,6 +694,8 @@ CASES = [
     ("bench-only", "bench --only nothing --out {box}/bench", "nothing"),
     ("bench-acuity-only", "bench --acuity --only yoshida2008 --out {box}/bench", "yoshida2008"),
     ("bench-acuity-large", "bench --acuity --large --out {box}/bench", "--large"),
+    ("bench-live-only", "bench --live --only yoshida2008 --out {box}/bench", "yoshida2008"),
+    ("bench-live-acuity", "bench --live --acuity --out {box}/bench", "--acuity"),
     ("bench-acuity-foreign", "bench --acuity --out {box}/foreign", "foreign is a folder"),
     (
         "bench-foreign",

@@ -155,6 +155,8 @@ def test_no_module_imports_above_its_layer():
         ("glarelab.glare.models.cache", "from glarelab.protocols import load_protocol"),
         ("glarelab.experiments.session", "from psychopy import visual"),
         ("glarelab.stimuli.night", "import pyglet"),
+        ("glarelab.glare.night.live", "from psychopy import core"),
+        ("glarelab.glare.night.live", "from glarelab.stimuli.night import night_street"),
         ("glarelab.files.atomic", "from glarelab.glare import render_glare"),
         ("glarelab.planning.power", "from glarelab.frontend.session import PsychoPyFrontend"),
         ("glarelab.experiments.loop", "from glarelab.analysis import load"),

@@ -55,6 +55,23 @@ def _bench(args: argparse.Namespace) -> int:
     from glarelab.bench.run import run_bench
     from glarelab.bench.scenes import WORKLOADS
 
+    if args.live:
+        from glarelab.bench.live import LIVE_WORKLOADS, live_bench, write_live_bench
+
+        unknown = sorted(set(args.only or ()) - set(LIVE_WORKLOADS))
+        if unknown or args.large or args.acuity:
+            raise ValueError(
+                f"--live runs its own workloads: --only "
+                f"{' '.join(unknown or ['--large' if args.large else '--acuity'])} is not one; "
+                f"choose from {', '.join(LIVE_WORKLOADS)}"
+            )
+        out = output_folder(args.out, "bench")
+        only = tuple(args.only) if args.only else None
+        write_live_bench(out, live_bench(only=only, log=_log))
+        _log(f"wrote {out / 'live.csv'} and live.md")
+        print(out.resolve())
+        return 0
+
     if args.acuity:
         from glarelab.bench.acuity import ACUITY_WORKLOADS, acuity_bench, write_acuity_bench
 
@@ -122,6 +139,12 @@ def add(commands) -> None:
         action="store_true",
         help="instead: the acuity blur's fast ways against the exact per-pixel blur "
         "(acuity.csv, acuity.md)",
+    )
+    bench.add_argument(
+        "--live",
+        action="store_true",
+        help="instead: night vision per frame (gaze and pupil) against the offline "
+        "render_night, ms per frame, fps and the error in codes (live.csv, live.md)",
     )
     bench.set_defaults(run=_bench)
 

@@ -44,8 +44,10 @@ __all__ = [
     "adaptation_step",
     "adaptation_time_s",
     "frame_luminance",
+    "gaze_falloff",
     "luminance",
     "rod_sensitivity",
+    "window_mean",
 ]
 
 TAU_ROD_S = 0.4  # Luidolt 2020 §5.1: adaptation time of the rods
@@ -370,7 +372,66 @@ def frame_luminance(
 
     if gaze_px is None:
         return back(np.mean(y))
+    return back(
+        window_mean(y, pixel_deg=pixel_deg, gaze_px=gaze_px, window_sigma_deg=window_sigma_deg)
+    )
+
+
+def window_mean(
+    values: np.ndarray,
+    *,
+    pixel_deg: float,
+    gaze_px: tuple[float, float],
+    window_sigma_deg: float = WINDOW_SIGMA_DEG,
+) -> float:
+    """The mean of ``values`` weighted by the Gaussian window around the gaze (Luidolt §5.1).
+
+    :func:`frame_luminance` is this of the frame's (log) luminance; a live renderer takes the
+    log luminance once and calls this per frame, with the same numbers.
+
+    Parameters
+    ----------
+    values
+        ``(H, W)`` values per pixel (luminance in cd/m², or its natural log).
+    pixel_deg
+        Visual angle of a pixel, degrees, > 0.
+    gaze_px
+        ``(row, column)`` where the eye looks, pixels (may lie outside the image).
+    window_sigma_deg
+        Standard deviation of the window, degrees, > 0; default 5 (an assumption: Luidolt
+        gives no width).
+
+    Returns
+    -------
+    float
+        ``Σ w(x) v(x) / Σ w(x)``, in the unit of ``values``.
+
+    Raises
+    ------
+    ValueError
+        For a bad pixel size, window or gaze, or a gaze so far off the image that no pixel
+        has any weight.
+
+    Notes
+    -----
+    .. math:: w(x) = \\exp\\Bigl(-\\frac{|x - g|^2 \\Delta^2}{2 s^2}\\Bigr)
+
+    separable in rows and columns, so the mean is ``rows @ values @ cols / (Σrows Σcols)``.
+
+    References
+    ----------
+    Luidolt 2020, §5.1.
+
+    Examples
+    --------
+    >>> window_mean(np.array([[0.0, 1.0]]), pixel_deg=1.0, gaze_px=(0, 1), window_sigma_deg=1.0)
+    0.6224593312018546
+    """
+    pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
     window_sigma_deg = check_positive("window_sigma_deg", window_sigma_deg, unit="deg")
+    y = np.asarray(values)
+    if y.ndim != 2:
+        raise ValueError(f"values must be an (H, W) array; got shape {y.shape}")
     try:
         row, col = (float(v) for v in gaze_px)
     except (TypeError, ValueError):
@@ -386,7 +447,67 @@ def frame_luminance(
             f"gaze_px = {gaze_px!r} is too far from the {y.shape} frame for a window of "
             f"{window_sigma_deg:g}°: no pixel has any weight"
         )
-    return back(rows @ y @ cols / total)
+    return float(rows @ y @ cols / total)
+
+
+def gaze_falloff(
+    shape: tuple[int, int], *, pixel_deg: float, gaze_px: tuple[float, float], sigma_deg: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """The Gaussian falloff around the gaze with which Luidolt blends the glare (§5.2.3, §6.3.3),
+    as its row and column factors.
+
+    Parameters
+    ----------
+    shape
+        ``(H, W)`` of the image, pixels.
+    pixel_deg
+        Visual angle of a pixel, degrees, > 0.
+    gaze_px
+        ``(row, column)`` of the gaze, pixels (may lie off the image).
+    sigma_deg
+        The falloff's standard deviation, degrees, > 0.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(rows (H,), cols (W,))``: the weight of pixel ``(r, c)`` is ``rows[r] · cols[c]``,
+        1 at the gaze.
+
+    Raises
+    ------
+    ValueError
+        For a bad pixel size, width or gaze.
+
+    Notes
+    -----
+    .. math:: w(x) = \\exp\\Bigl(-\\frac{|x - g|^2 \\Delta^2}{2 s^2}\\Bigr)
+
+    "a custom post-processing stage was added, that blends the original (unconvolved) image
+    with the bloomed window using a Gaussian falloff" (Luidolt 2020, §6.3.3); he gives no
+    width.
+
+    References
+    ----------
+    Luidolt 2020, §5.2.3 and §6.3.3.
+
+    Examples
+    --------
+    >>> rows, cols = gaze_falloff((3, 3), pixel_deg=1.0, gaze_px=(1, 1), sigma_deg=1.0)
+    >>> float(rows[1] * cols[1]), round(float(rows[0] * cols[1]), 4)
+    (1.0, 0.6065)
+    """
+    pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
+    sigma_deg = check_positive("sigma_deg", sigma_deg, unit="deg")
+    try:
+        row, col = (float(v) for v in gaze_px)
+    except (TypeError, ValueError):
+        raise ValueError(f"gaze_px must be (row, column) in pixels; got {gaze_px!r}") from None
+    if not (math.isfinite(row) and math.isfinite(col)):
+        raise ValueError(f"gaze_px must be finite; got {gaze_px!r}")
+    sigma_px = sigma_deg / pixel_deg
+    rows = np.exp(-0.5 * ((np.arange(int(shape[0])) - row) / sigma_px) ** 2)
+    cols = np.exp(-0.5 * ((np.arange(int(shape[1])) - col) / sigma_px) ** 2)
+    return rows, cols
 
 
 def _luminances(name: str, value) -> np.ndarray:

@@ -63,6 +63,7 @@ from glarelab.glare.night.adaptation import (
     WINDOW_SIGMA_DEG,
     adaptation_luminance,
     frame_luminance,
+    gaze_falloff,
 )
 from glarelab.glare.night.scotopic import METHODS as SCOTOPIC_METHODS
 from glarelab.glare.night.scotopic import SPENCER1995_DESATURATION, scotopic_colour
@@ -172,6 +173,7 @@ def render_night(
     initial_adaptation_cd_m2: float | None = None,
     pupil_from_adaptation: bool = True,
     window_sigma_deg: float = WINDOW_SIGMA_DEG,
+    glare_falloff_deg: float | None = None,
     adaptation_mean: Literal["log", "arithmetic"] = "log",
     tau_rod_s: float = TAU_ROD_S,
     tau_cone_s: float = TAU_CONE_S,
@@ -219,6 +221,11 @@ def render_night(
         default True.
     window_sigma_deg, adaptation_mean, tau_rod_s, tau_cone_s
         Adaptation (:func:`glarelab.glare.night.adaptation.frame_luminance`, eqs. 5.2-5.4).
+    glare_falloff_deg
+        σ of Luidolt's Gaussian falloff around the gaze, degrees (§5.2.3): the glared frame
+        is blended with the unglared one by the falloff's weight
+        (:func:`glarelab.glare.night.adaptation.gaze_falloff`); needs a gaze. Default None:
+        the glare over the whole frame alike.
     glare_method, tolerance_codes
         Glare composition (``'Yoshida2008'`` clamp or ``'Spencer1995'`` sum) and the
         renderer's error tolerance in display codes (:class:`glarelab.glare.GlareRenderer`).
@@ -308,7 +315,17 @@ def render_night(
                 )  # fmt: skip
                 renderers[model] = renderer
             result = renderer.render(display)
-            display, bound = np.asarray(result.image, dtype=np.float64), result.error_bound_codes
+            glared = np.asarray(result.image, dtype=np.float64)
+            if glare_falloff_deg is not None:
+                if gazes[index] is None:
+                    raise ValueError("glare_falloff_deg needs a gaze: give gaze_px")
+                rows, cols = gaze_falloff(
+                    display.shape[:2], pixel_deg=pixel_deg, gaze_px=gazes[index],
+                    sigma_deg=glare_falloff_deg,
+                )  # fmt: skip
+                base = np.minimum(display, l_dmax)
+                glared = base + (rows[:, None, None] * cols[None, :, None]) * (glared - base)
+            display, bound = glared, result.error_bound_codes
         display = np.minimum(display, l_dmax)  # what the display can show (Spencer's sum too)
         if "acuity" in chosen:
             display = acuity_blur(

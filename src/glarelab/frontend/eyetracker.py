@@ -1,0 +1,511 @@
+"""Gaze and pupil from an eye tracker through PsychoPy's ioHub, with the faults of real trackers.
+
+- :class:`PupilCalibration`: Luidolt's pupil range calibration (2020, §5.2.1 ii and §5.2.4): "We
+  calibrate our eye tracker to a user's pupil size, by showing a black or white screen for 5
+  seconds each. We take the average of the pupil size during the white frame as minimum pupil
+  size and the average over the black frame as maximum. During runtime, we then generate the
+  pupil aperture by mapping the eye tracker output to our predefined range of 2-8 mm
+  diameter." The mapping is linear (Luidolt does not say which; linear is the one that keeps
+  both ends) and clamped to 2-8 mm; it is recorded with the session (:meth:`as_dict`).
+- :class:`GazeFilter`: what a frame uses of the tracker's last sample. A lost sample (none, or
+  no gaze) and a blink (pupil 0 or missing, which made Luidolt's glare flicker) hold the last
+  valid state; a gaze off the window is clamped to its edge; the pupil is smoothed by a
+  first-order low-pass of time constant :data:`PUPIL_FILTER_S`; each fault is counted.
+- :class:`IoHubEyeTracker`: the samples of an ioHub eye tracker (``launchHubServer`` with the
+  tracker's device class, :data:`TRACKERS`), in window pixels from the top-left. The simulated
+  ``MouseGaze`` tracker (``'mouse'``) moves the gaze with the mouse, reports a constant 5 mm
+  pupil and blinks while both buttons are held; a lab's tracker is named the same way and
+  calibrated by its own procedure (``runSetupProcedure``).
+
+PsychoPy is imported inside the functions that open a window or the ioHub server.
+
+References
+----------
+Luidolt, L. (2020). Perception of light in virtual reality. TU Wien, §5.2.1 ii, §5.2.4, §6.1.2.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+__all__ = [
+    "CALIBRATION_SCREEN_S",
+    "PUPIL_FILTER_S",
+    "TRACKERS",
+    "GazeFilter",
+    "GazeState",
+    "IoHubEyeTracker",
+    "PupilCalibration",
+    "calibrate_pupil",
+]
+
+LUIDOLT2020_PUPIL_RANGE_MM = (2.0, 8.0)  # Luidolt §5.2.1 ii: "our predefined range of 2-8 mm"
+CALIBRATION_SCREEN_S = 5.0  # Luidolt §5.2.1 ii: "a black or white screen for 5 seconds each"
+# The pupil is smoothed with this time constant: an assumption (Luidolt does not filter), a
+# tenth of a second, well under the pupil's own light response of several tenths (so the
+# glare still follows the pupil), long enough to bridge a tracker's single-sample dropouts
+PUPIL_FILTER_S = 0.1
+# ioHub's device classes of the trackers PsychoPy drives (the lab ones need their plugin)
+TRACKERS = {
+    "mouse": "eyetracker.hw.mouse.EyeTracker",
+    "eyelink": "eyetracker.hw.sr_research.eyelink.EyeTracker",
+    "tobii": "eyetracker.hw.tobii.EyeTracker",
+    "gazepoint": "eyetracker.hw.gazepoint.gp3.EyeTracker",
+    "pupil_labs": "eyetracker.hw.pupil_labs.pupil_core.EyeTracker",
+}
+
+
+@dataclass(frozen=True)
+class PupilCalibration:
+    """Luidolt's pupil range: the tracker's pupil on a white and a black screen → 2-8 mm.
+
+    Attributes
+    ----------
+    white_raw
+        Mean pupil the tracker reported on the white screen (its unit), the 2 mm end.
+    black_raw
+        Mean pupil on the black screen, the 8 mm end; > ``white_raw``.
+    unit
+        The tracker's pupil unit (``'mm'``, ``'px'``, ``'area'``...), recorded.
+    range_mm
+        The range mapped to, mm; default Luidolt's 2-8.
+
+    Raises
+    ------
+    ValueError
+        For a black-screen pupil not larger than the white-screen one (a tracker that does
+        not measure the pupil, or a calibration that failed), or a bad range.
+
+    Examples
+    --------
+    >>> c = PupilCalibration(white_raw=20.0, black_raw=50.0, unit="px")
+    >>> c.to_mm(35.0), c.to_mm(100.0)
+    (5.0, 8.0)
+    """
+
+    white_raw: float
+    black_raw: float
+    unit: str = "mm"
+    range_mm: tuple[float, float] = LUIDOLT2020_PUPIL_RANGE_MM
+
+    def __post_init__(self) -> None:
+        low, high = (float(v) for v in self.range_mm)
+        if not (0 < low < high and math.isfinite(high)):
+            raise ValueError(
+                f"range_mm must be (low, high) mm with 0 < low < high; got {self.range_mm!r}"
+            )
+        if not (
+            math.isfinite(self.white_raw)
+            and math.isfinite(self.black_raw)
+            and self.black_raw > self.white_raw > 0
+        ):
+            raise ValueError(
+                "black_raw must exceed white_raw > 0 (the pupil on the black screen larger "
+                f"than on the white); got white_raw = {self.white_raw!r}, "
+                f"black_raw = {self.black_raw!r}"
+            )
+
+    @classmethod
+    def from_samples(
+        cls, white_raw: np.ndarray, black_raw: np.ndarray, *, unit: str = "mm"
+    ) -> PupilCalibration:
+        """The calibration from the pupil samples of the two screens (blinks, 0, dropped).
+
+        Parameters
+        ----------
+        white_raw, black_raw
+            The tracker's pupil samples during the white and the black screen.
+        unit
+            Their unit, recorded.
+
+        Returns
+        -------
+        PupilCalibration
+
+        Raises
+        ------
+        ValueError
+            When a screen has no valid sample, or the black mean is not above the white.
+
+        Examples
+        --------
+        >>> PupilCalibration.from_samples([3.0, 0.0, 3.2], [6.0, 6.4]).white_raw
+        3.1
+        """
+        means = []
+        for name, values in (("white_raw", white_raw), ("black_raw", black_raw)):
+            array = np.asarray(values, dtype=float).reshape(-1)
+            valid = array[np.isfinite(array) & (array > 0)]
+            if valid.size == 0:
+                raise ValueError(f"{name} holds no valid pupil sample (all missing or 0)")
+            means.append(round(float(valid.mean()), 12))
+        return cls(white_raw=means[0], black_raw=means[1], unit=unit)
+
+    def to_mm(self, raw: float) -> float:
+        """The pupil in mm of a tracker value (linear between the two screens, clamped).
+
+        Parameters
+        ----------
+        raw
+            The tracker's pupil, its unit.
+
+        Returns
+        -------
+        float
+            ``low + (raw - white) / (black - white) · (high - low)``, within ``range_mm``.
+        """
+        low, high = self.range_mm
+        fraction = (float(raw) - self.white_raw) / (self.black_raw - self.white_raw)
+        return float(min(max(low + fraction * (high - low), low), high))
+
+    def as_dict(self) -> dict[str, Any]:
+        """What a session records of the calibration.
+
+        Returns
+        -------
+        dict
+            The two means, the unit, the range and the rule.
+        """
+        return {
+            "white_raw": self.white_raw,
+            "black_raw": self.black_raw,
+            "unit": self.unit,
+            "range_mm": list(self.range_mm),
+            "rule": "linear from white (min) to black (max), clamped (Luidolt 2020 §5.2.1 ii)",
+        }
+
+
+@dataclass(frozen=True)
+class GazeState:
+    """What a frame uses: the filtered gaze and pupil and whether this sample was valid.
+
+    Attributes
+    ----------
+    gaze_x_px, gaze_y_px
+        Gaze in window pixels from the top-left (held or clamped).
+    pupil_mm
+        The smoothed pupil, mm (held through blinks).
+    valid_gaze, valid_pupil
+        Whether this frame's sample gave them.
+    clamped
+        Whether this frame's gaze lay off the window and was clamped.
+    """
+
+    gaze_x_px: float
+    gaze_y_px: float
+    pupil_mm: float
+    valid_gaze: bool
+    valid_pupil: bool
+    clamped: bool
+
+
+@dataclass
+class GazeFilter:
+    """The faults of a tracker handled: hold, clamp, smooth and count.
+
+    Parameters
+    ----------
+    window_px
+        ``(width, height)`` of the window, pixels.
+    calibration
+        The pupil calibration, or None: the tracker's pupil taken in mm (``MouseGaze``
+        reports 5 mm), clamped to 2-8 mm.
+    pupil_filter_s
+        Time constant of the pupil's low-pass, s, >= 0 (0: none); default
+        :data:`PUPIL_FILTER_S`.
+
+    Examples
+    --------
+    >>> f = GazeFilter((100, 50))
+    >>> f.update(0.0, 10.0, 20.0, 4.0).pupil_mm
+    4.0
+    >>> s = f.update(0.1, None, None, 0.0)  # a blink: gaze and pupil held
+    >>> (s.gaze_x_px, s.pupil_mm, f.blinks)
+    (10.0, 4.0, 1)
+    >>> f.update(0.2, 500.0, -3.0, 4.0).gaze_x_px, f.off_screen  # clamped to the window
+    (99.0, 1)
+    """
+
+    window_px: tuple[int, int]
+    calibration: PupilCalibration | None = None
+    pupil_filter_s: float = PUPIL_FILTER_S
+    lost: int = field(default=0, init=False)
+    blinks: int = field(default=0, init=False)
+    off_screen: int = field(default=0, init=False)
+    samples: int = field(default=0, init=False)
+    _state: GazeState | None = field(default=None, init=False, repr=False)
+    _time_s: float | None = field(default=None, init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        try:
+            width, height = (int(v) for v in self.window_px)
+        except (TypeError, ValueError):
+            raise ValueError(
+                f"window_px must be (width, height); got {self.window_px!r}"
+            ) from None
+        if width < 1 or height < 1:
+            raise ValueError(f"window_px must be positive; got {self.window_px!r}")
+        self.window_px = (width, height)
+        if not (math.isfinite(self.pupil_filter_s) and self.pupil_filter_s >= 0):
+            raise ValueError(f"pupil_filter_s must be >= 0 s; got {self.pupil_filter_s!r}")
+
+    def update(
+        self,
+        time_s: float,
+        gaze_x_px: float | None,
+        gaze_y_px: float | None,
+        pupil_raw: float | None,
+    ) -> GazeState:
+        """The state after one sample (None for a field the tracker did not give).
+
+        Parameters
+        ----------
+        time_s
+            The sample's time, s.
+        gaze_x_px, gaze_y_px
+            Gaze in window pixels from the top-left, or None (lost, blink).
+        pupil_raw
+            The tracker's pupil (its unit), or None / 0 / NaN (blink, lost).
+
+        Returns
+        -------
+        GazeState
+        """
+        self.samples += 1
+        width, height = self.window_px
+        previous = self._state
+        valid_gaze = (
+            gaze_x_px is not None
+            and gaze_y_px is not None
+            and math.isfinite(gaze_x_px)
+            and math.isfinite(gaze_y_px)
+        )
+        clamped = False
+        if valid_gaze:
+            x = min(max(float(gaze_x_px), 0.0), width - 1.0)
+            y = min(max(float(gaze_y_px), 0.0), height - 1.0)
+            clamped = (x, y) != (float(gaze_x_px), float(gaze_y_px))
+            self.off_screen += clamped
+        else:
+            self.lost += 1
+            x, y = (
+                (previous.gaze_x_px, previous.gaze_y_px)
+                if previous
+                else ((width - 1) / 2, (height - 1) / 2)
+            )
+        valid_pupil = pupil_raw is not None and math.isfinite(pupil_raw) and pupil_raw > 0
+        if valid_pupil:
+            measured = (
+                self.calibration.to_mm(pupil_raw)
+                if self.calibration is not None
+                else min(max(float(pupil_raw), 2.0), 8.0)
+            )
+            if previous is None or self.pupil_filter_s == 0:
+                pupil = measured
+            else:
+                since = float(time_s) - self._time_s if self._time_s is not None else 0.0
+                elapsed = max(since, 0.0)
+                keep = math.exp(-elapsed / self.pupil_filter_s)
+                pupil = previous.pupil_mm * keep + measured * (1.0 - keep)
+        else:
+            self.blinks += 1
+            pupil = previous.pupil_mm if previous else 5.0
+        self._time_s = float(time_s)
+        self._state = GazeState(x, y, pupil, valid_gaze, valid_pupil, clamped)
+        return self._state
+
+    def counts(self) -> dict[str, int]:
+        """The faults so far.
+
+        Returns
+        -------
+        dict
+            ``samples``, ``lost`` (no gaze), ``blinks`` (no pupil), ``off_screen``.
+        """
+        return {
+            "samples": self.samples,
+            "lost": self.lost,
+            "blinks": self.blinks,
+            "off_screen": self.off_screen,
+        }
+
+
+def calibrate_pupil(
+    window, source, *, screen_s: float = CALIBRATION_SCREEN_S, unit: str = "mm"
+) -> PupilCalibration:
+    """Luidolt's pupil range calibration: a white screen, then a black one, ``screen_s`` each.
+
+    Parameters
+    ----------
+    window
+        The window (anything with a settable ``color`` in PsychoPy's ``rgb`` [-1, 1] and a
+        ``flip()``); its colour is put back afterwards.
+    source
+        The tracker (:class:`IoHubEyeTracker`, recording): ``sample()`` gives
+        ``(gaze_x_px, gaze_y_px, pupil_raw)``.
+    screen_s
+        How long each screen is shown, s, > 0; default 5 (Luidolt §5.2.1 ii).
+    unit
+        The tracker's pupil unit, recorded.
+
+    Returns
+    -------
+    PupilCalibration
+        From the mean pupil of each screen (blinks and lost samples left out).
+
+    Raises
+    ------
+    ValueError
+        For a bad duration, or a screen without a valid pupil or with no range between them
+        (MouseGaze reports 5 mm on both: run a simulated session without a calibration).
+
+    Notes
+    -----
+    "We calibrate our eye tracker to a user's pupil size, by showing a black or white screen
+    for 5 seconds each. We take the average of the pupil size during the white frame as
+    minimum pupil size and the average over the black frame as maximum." (Luidolt 2020,
+    §5.2.1 ii). White is shown first: the pupil then dilates on the black screen, as it
+    does faster than it constricts after the dark.
+    """
+    import time
+
+    if not (math.isfinite(screen_s) and screen_s > 0):
+        raise ValueError(f"screen_s must be a duration > 0 s; got {screen_s!r}")
+    before = getattr(window, "color", None)
+    samples: dict[str, list[float]] = {}
+    try:
+        for name, colour in (("white", (1.0, 1.0, 1.0)), ("black", (-1.0, -1.0, -1.0))):
+            window.color = colour
+            window.flip()
+            pupils = samples[name] = []
+            end = time.monotonic() + screen_s
+            while time.monotonic() < end:
+                window.flip()
+                pupil = source.sample()[2]
+                pupils.append(math.nan if pupil is None else float(pupil))
+    finally:
+        if before is not None:
+            window.color = before
+        window.flip()
+    return PupilCalibration.from_samples(samples["white"], samples["black"], unit=unit)
+
+
+class IoHubEyeTracker:
+    """The samples of an ioHub eye tracker, in window pixels from the top-left.
+
+    Parameters
+    ----------
+    window
+        The PsychoPy window (units ``'pix'``), which ioHub's display takes its size from.
+    tracker
+        A name of :data:`TRACKERS` (``'mouse'`` for pilots and tests) or an ioHub device class
+        path (``'eyetracker.hw....EyeTracker'``).
+    settings
+        More of the device's ioHub configuration (``runtime_settings``, ``calibration``...).
+
+    Raises
+    ------
+    ValueError
+        For an unknown tracker name or a window not in pixels.
+    RuntimeError
+        When ioHub cannot start the tracker (its plugin missing, the device unreachable).
+
+    Notes
+    -----
+    ioHub reports gaze in the window's units with the origin at its centre and y up; this
+    turns it into pixels from the top-left, y down (``x + W/2``, ``H/2 - y``).
+    """
+
+    def __init__(self, window, *, tracker: str = "mouse", settings: dict | None = None) -> None:
+        from psychopy.iohub import launchHubServer
+        from psychopy.iohub.devices.eyetracker.eye_events import (
+            BinocularEyeSampleEvent,
+            MonocularEyeSampleEvent,
+        )
+
+        if tracker in TRACKERS:
+            device = TRACKERS[tracker]
+        elif tracker.startswith("eyetracker.hw.") and tracker.endswith("EyeTracker"):
+            device = tracker
+        else:
+            raise ValueError(
+                f"tracker must be one of {sorted(TRACKERS)} or an ioHub eye tracker class "
+                f"path; got {tracker!r}"
+            )
+        if window.units != "pix":
+            raise ValueError(f"window must have units 'pix' for the gaze; got {window.units!r}")
+        self.window = window
+        self.tracker = tracker
+        self.device = device
+        self._names = {
+            "mono": list(MonocularEyeSampleEvent.CLASS_ATTRIBUTE_NAMES),
+            "bino": list(BinocularEyeSampleEvent.CLASS_ATTRIBUTE_NAMES),
+        }
+        config = {"name": "tracker", **(settings or {})}
+        try:
+            self.io = launchHubServer(window=window, **{device: config})
+            self.device_handle = self.io.getDevice("tracker")
+        except Exception as error:  # ioHub raises many kinds; the session needs one message
+            raise RuntimeError(
+                f"ioHub could not start the eye tracker {tracker!r}: {error}"
+            ) from error
+        if self.device_handle is None:
+            self.io.quit()
+            raise RuntimeError(f"ioHub started without the eye tracker {tracker!r}")
+        self.disconnects = 0
+
+    def start(self) -> None:
+        """Start recording (ioHub keeps the raw samples as it stores them)."""
+        self.device_handle.setRecordingState(True)
+
+    def sample(self) -> tuple[float | None, float | None, float | None]:
+        """The tracker's last sample: gaze x, y in window pixels from the top-left and the pupil
+        in the tracker's unit, each None where the tracker gave none (lost, blink, no tracker).
+
+        Returns
+        -------
+        tuple
+            ``(gaze_x_px, gaze_y_px, pupil_raw)``.
+        """
+        try:
+            raw = self.device_handle.getLastSample()
+        except Exception:  # a tracker that disconnects: no sample, counted, never a crash
+            self.disconnects += 1
+            return None, None, None
+        if not raw:
+            return None, None, None
+        names = (
+            self._names["mono"] if len(raw) == len(self._names["mono"]) else self._names["bino"]
+        )
+        event = dict(zip(names, raw, strict=False))
+        if "gaze_x" in event:
+            x, y, pupil = event["gaze_x"], event["gaze_y"], event["pupil_measure1"]
+        else:  # binocular: the mean of the eyes
+            x = 0.5 * (event["left_gaze_x"] + event["right_gaze_x"])
+            y = 0.5 * (event["left_gaze_y"] + event["right_gaze_y"])
+            pupil = 0.5 * (event["left_pupil_measure1"] + event["right_pupil_measure1"])
+        width, height = self.window.size
+        # ioHub's status is 0 for a sample with its eye(s) found (MouseGaze: 2 in a blink);
+        # its UNDEFINED is 0, the centre's coordinate too, so the status decides
+        if event.get("status", 0) != 0 or not (_finite(x) and _finite(y)):
+            return None, None, float(pupil) if _finite(pupil) and pupil > 0 else None
+        pupil_raw = float(pupil) if _finite(pupil) and pupil > 0 else None
+        return float(x) + width / 2, height / 2 - float(y), pupil_raw
+
+    def close(self) -> None:
+        """Stop recording and the ioHub server."""
+        try:
+            self.device_handle.setRecordingState(False)
+        finally:
+            self.io.quit()
+
+
+def _finite(value) -> bool:
+    try:
+        return math.isfinite(float(value))
+    except (TypeError, ValueError):
+        return False

@@ -1,0 +1,125 @@
+"""The per-frame night renderer equals the offline render_night of the same gaze and pupil."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from glarelab.glare import VosGlare, render_night
+from glarelab.glare.night.live import LiveNight, pupil_bank_mm
+from glarelab.glare.rendering.display import display_codes, display_lut
+from glarelab.stimuli.night import night_street
+
+PIXEL_DEG = 0.1
+L_DMAX = 100.0
+
+
+@pytest.fixture(scope="module")
+def scene():
+    return night_street((72, 48), pixel_deg=PIXEL_DEG, rng=np.random.default_rng(3))["img"]
+
+
+def codes(image):
+    return display_codes(image, display_lut(None, L_DMAX))
+
+
+def offline(scene, frame, previous, frame_time_s):
+    """render_night of one frame from the live frame's gaze, pupil and previous state."""
+    return render_night(
+        scene, pixel_deg=PIXEL_DEG, effects=("adaptation", "glare"),
+        glare_model=VosGlare(pupil_mm=frame.pupil_mm), pupil_from_adaptation=False,
+        gaze_px=frame.gaze_px, frame_time_s=frame_time_s, initial_adaptation_cd_m2=previous,
+        display_max_cd_m2=L_DMAX, tolerance_codes=0.0,
+    )  # fmt: skip
+
+
+def test_frames_equal_render_night_within_half_a_code(scene):
+    # corners, a pupil between the bank's entries on either side of the halo's 3 mm step, a
+    # blink (pupil 0, no gaze: both held) and a dark start that moves the adaptation far
+    live = LiveNight(scene, pixel_deg=PIXEL_DEG, initial_adaptation_cd_m2=0.3)
+    h, w = scene.shape[:2]
+    steps = [((0, 0), 2.7), ((h - 1, w - 1), 3.3), (None, 0.0), ((0, w - 1), 5.25),
+             ((h - 1, 0), 7.9)]  # fmt: skip
+    previous, seen = 0.3, []
+    for gaze, pupil in steps:
+        frame = live.frame(gaze_px=gaze, pupil_mm=pupil, frame_time_s=0.05)
+        reference = offline(scene, frame, previous, 0.05)
+        np.testing.assert_allclose(
+            frame.adaptation_cd_m2, reference.adaptation_cd_m2[0], rtol=1e-12
+        )
+        error = np.abs(codes(frame.image) - codes(reference.frames)).max()
+        assert error < 0.5, (gaze, pupil, error)
+        previous = frame.adaptation_cd_m2
+        seen.append((frame.gaze_px, frame.pupil_mm))
+    assert seen[2] == seen[1]  # the blink held the last gaze and pupil
+    # the frames differ from one another by far more than the tolerance: the test can see
+    assert np.abs(codes(frame.image) - codes(offline(scene, frame, 0.3, 0.05).frames)).max() > 5
+
+
+def test_a_pupil_on_a_bank_entry(scene):
+    live = LiveNight(scene, pixel_deg=PIXEL_DEG)
+    frame = live.frame(gaze_px=(10, 10), pupil_mm=5.5, frame_time_s=0.0)
+    assert (
+        np.abs(codes(frame.image) - codes(offline(scene, frame, None, None).frames)).max() < 0.01
+    )
+
+
+def test_pupil_bank_holds_both_sides_of_the_halo_step():
+    bank = pupil_bank_mm(VosGlare(), (2.0, 2.5, 3.5))
+    assert bank[2] < 3.0 <= bank[3] and bank[3] - bank[2] < 1e-12
+
+
+def test_bad_pupil_is_refused(scene):
+    live = LiveNight(scene, pixel_deg=PIXEL_DEG)
+    with pytest.raises(ValueError, match="pupil_mm must lie within the bank, 2-8 mm"):
+        live.frame(gaze_px=(0, 0), pupil_mm=9.0, frame_time_s=0.0)
+
+
+def test_the_threshold_is_interpolated_between_the_bank_levels(scene):
+    # thresholds an octave apart: the frame still follows render_night (measured 0.12 codes)
+    live = LiveNight(scene, pixel_deg=PIXEL_DEG, threshold_ratio=2.0)
+    frame = live.frame(gaze_px=(0, 0), pupil_mm=5.0, frame_time_s=0.0)
+    assert np.abs(codes(frame.image) - codes(offline(scene, frame, None, None).frames)).max() < 0.2
+
+
+def test_the_gaze_falloff_equals_render_nights_and_keeps_the_glare_near_the_gaze(scene):
+    # Luidolt §5.2.3: the glared frame blended with the unglared one by a Gaussian falloff
+    live = LiveNight(scene, pixel_deg=PIXEL_DEG, glare_falloff_deg=1.0)
+    frame = live.frame(gaze_px=(0, 0), pupil_mm=4.0, frame_time_s=0.0)
+    options = dict(
+        pixel_deg=PIXEL_DEG, effects=("adaptation", "glare"), glare_model=VosGlare(pupil_mm=4.0),
+        pupil_from_adaptation=False, gaze_px=(0.0, 0.0), tolerance_codes=0.0,
+    )  # fmt: skip
+    reference = render_night(scene, glare_falloff_deg=1.0, **options).frames
+    assert np.abs(codes(frame.image) - codes(reference)).max() < 0.5
+    full = render_night(scene, **options).frames
+    bare = np.minimum(scene * frame.exposure, L_DMAX)
+    near, far = np.s_[:1, :1], np.s_[-5:, -5:]  # the gaze (weight 1) and the far corner
+    np.testing.assert_allclose(frame.image[near], full[near], atol=1e-3)  # all the glare
+    np.testing.assert_allclose(frame.image[far], bare[far], atol=1e-3)  # and ≈ 0 here
+    assert np.abs(full[far] - bare[far]).max() > 1.0  # where the full frame has glare
+
+
+def test_spencers_sum_equals_render_nights(scene):
+    live = LiveNight(scene, pixel_deg=PIXEL_DEG, glare_method="Spencer1995")
+    frame = live.frame(gaze_px=(20, 30), pupil_mm=2.5, frame_time_s=0.0)
+    reference = render_night(
+        scene, pixel_deg=PIXEL_DEG, effects=("adaptation", "glare"), glare_method="Spencer1995",
+        glare_model=VosGlare(pupil_mm=2.5), pupil_from_adaptation=False, gaze_px=(20.0, 30.0),
+        tolerance_codes=0.0,
+    )  # fmt: skip
+    assert np.abs(codes(frame.image) - codes(reference.frames)).max() < 0.5
+
+
+def test_scotopic_colour_of_the_adapted_luminance_equals_render_nights(scene):
+    live = LiveNight(scene, pixel_deg=PIXEL_DEG, scotopic=True, initial_adaptation_cd_m2=0.5)
+    frame = live.frame(gaze_px=(47, 0), pupil_mm=6.0, frame_time_s=0.05)
+    reference = render_night(
+        scene, pixel_deg=PIXEL_DEG, effects=("adaptation", "glare", "scotopic"),
+        glare_model=VosGlare(pupil_mm=6.0), pupil_from_adaptation=False, gaze_px=(47.0, 0.0),
+        frame_time_s=0.05, initial_adaptation_cd_m2=0.5, tolerance_codes=0.0,
+    )  # fmt: skip
+    assert np.abs(codes(frame.image) - codes(reference.frames)).max() < 0.5
+    unshifted = LiveNight(scene, pixel_deg=PIXEL_DEG, initial_adaptation_cd_m2=0.5)
+    plain = unshifted.frame(gaze_px=(47, 0), pupil_mm=6.0, frame_time_s=0.05).image
+    assert np.abs(codes(plain) - codes(reference.frames)).max() > 5  # the shift is visible
