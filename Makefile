@@ -34,12 +34,21 @@ docs-api: $(VENV)/.installed-test
 	rm -rf docs/api/generated out/api
 	$(BIN)/python -m sphinx -b html -n -W --keep-going -j auto -q docs/api out/api
 
+# Two streams of tests at once, one per core, each on its own X screen (screen tests read back
+# their own windows): the documented commands and the session screens in the second, the rest in
+# the first. Each stream writes its log; both are printed, and either failing fails the target.
+SECOND_STREAM := tests/test_docs.py tests/experiments/test_pixel_exact.py \
+	tests/experiments/test_real_keys.py tests/experiments/test_sessions.py
+
 test: $(VENV)/.installed-test system-deps lint docs-api
-	@if command -v xvfb-run >/dev/null 2>&1; then \
-		$(XVFB) $(BIN)/python -m pytest; \
-	else \
-		$(BIN)/python -m pytest; \
-	fi
+	@mkdir -p out
+	@if command -v xvfb-run >/dev/null 2>&1; then set -- $(XVFB); else set --; fi; \
+	"$$@" $(BIN)/python -m pytest -p no:cacheprovider $(SECOND_STREAM) > out/test-second.log 2>&1 & \
+	second=$$!; sleep 3; \
+	"$$@" $(BIN)/python -m pytest -p no:cacheprovider $(addprefix --ignore=,$(SECOND_STREAM)); \
+	first=$$?; wait $$second; status=$$?; \
+	echo "=== the second stream: $(SECOND_STREAM)"; cat out/test-second.log; \
+	test $$first -eq 0 && test $$status -eq 0
 
 clean:
 	rm -rf $(VENV) out .pytest_cache .ruff_cache .hypothesis docs/api/generated

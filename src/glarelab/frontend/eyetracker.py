@@ -6,7 +6,8 @@
   size and the average over the black frame as maximum. During runtime, we then generate the
   pupil aperture by mapping the eye tracker output to our predefined range of 2-8 mm
   diameter." The mapping is linear (Luidolt does not say which; linear is the one that keeps
-  both ends) and clamped to 2-8 mm; it is recorded with the session (:meth:`as_dict`).
+  both ends) and clamped to 2-8 mm; it is recorded with the session
+  (:meth:`PupilCalibration.as_dict`).
 - :class:`GazeFilter`: what a frame uses of the tracker's last sample. A lost sample (none, or
   no gaze) and a blink (pupil 0 or missing, which made Luidolt's glare flicker) hold the last
   valid state; a gaze off the window is clamped to its edge; the pupil is smoothed by a
