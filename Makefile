@@ -35,17 +35,20 @@ docs-api: $(VENV)/.installed-test
 	$(BIN)/python -m sphinx -b html -n -W --keep-going -j auto -q docs/api out/api
 
 # Two streams of tests at once, one per core, each on its own X screen (screen tests read back
-# their own windows): the documented commands and the session screens in the second, the rest in
-# the first. Each stream writes its log; both are printed, and either failing fails the target.
+# their own windows): the documented commands in fresh clones, the session screens and other
+# runs of whole commands in the second, the rest in the first, about 22 minutes each. The second
+# stream's log is printed after the first's; either failing fails the target.
 SECOND_STREAM := tests/test_docs.py tests/experiments/test_pixel_exact.py \
-	tests/experiments/test_real_keys.py tests/experiments/test_sessions.py
+	tests/experiments/test_real_keys.py tests/experiments/test_sessions.py \
+	tests/experiments/test_session_safety.py tests/stimuli/test_photometer.py \
+	tests/test_faults.py tests/test_install.py tests/test_demo.py tests/test_cli.py
 
 test: $(VENV)/.installed-test system-deps lint docs-api
 	@mkdir -p out
 	@if command -v xvfb-run >/dev/null 2>&1; then set -- $(XVFB); else set --; fi; \
-	"$$@" $(BIN)/python -m pytest -p no:cacheprovider $(SECOND_STREAM) > out/test-second.log 2>&1 & \
+	"$$@" $(BIN)/python -m pytest -p no:cacheprovider --durations=20 $(SECOND_STREAM) > out/test-second.log 2>&1 & \
 	second=$$!; sleep 3; \
-	"$$@" $(BIN)/python -m pytest -p no:cacheprovider $(addprefix --ignore=,$(SECOND_STREAM)); \
+	"$$@" $(BIN)/python -m pytest -p no:cacheprovider --durations=20 $(addprefix --ignore=,$(SECOND_STREAM)); \
 	first=$$?; wait $$second; status=$$?; \
 	echo "=== the second stream: $(SECOND_STREAM)"; cat out/test-second.log; \
 	test $$first -eq 0 && test $$status -eq 0

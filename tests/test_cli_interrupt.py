@@ -60,6 +60,8 @@ def test_ctrl_c_while_starting_ends_with_3_and_one_line(command, tmp_path):
         if process.returncode != 3 and "glarelab" not in err:
             continue  # in the interpreter's own start, before any glarelab code, on a loaded
             # machine (killed in silence, or a traceback from site, runpy): not ours
+        if process.returncode == 2 and lines[-1:] == ["  - no-such-session.csv: no such file"]:
+            continue  # the command had refused its missing input and ended before the signal
         landed += 1
         assert process.returncode == 3, (delay, process.returncode, err)
         assert "Traceback" not in err and len(lines) == 1, (delay, err)
