@@ -8,6 +8,7 @@ refusals themselves are tested in test_session_safety.py.
 
 import csv
 import json
+import re
 import shutil
 import signal
 import subprocess
@@ -27,6 +28,11 @@ XVFB_MISMATCH = (
     "--accept-mismatch", "resolution", "refresh", "bit-depth", "--allow-unmeasured-refresh"
 )  # fmt: skip
 CENTRE = (SCREEN[0] // 2, SCREEN[1] // 2)  # the window is centred on the screen
+KEY_SLACK_S = 0.02  # an X key event reaching PsychoPy, and a flip reaching the X server
+# how late a key sent by xdotool may reach PsychoPy's key thread on a loaded machine (one CI
+# run saw 57 ms); below 0.1 s the Spencer check still catches a time taken from another event
+# than the flip (off by 400 ms or more, the window the test sees being under 300 ms wide)
+LATE_DELIVERY_S = 0.1
 
 
 @pytest.fixture
@@ -111,25 +117,36 @@ def test_yoshida_every_quick_press_counts_the_marker_shows_and_rt_runs_from_onse
     assert float(row["brighter_cd_m2"]) == 400.0 + 3 * 10.0  # and of the three
     assert int(row["adjustments"]) == 13
     assert (row["q1_glow"], row["q2_ring"], row["q3_same_size"]) == ("true", "false", "true")
-    # each answer timed from the press before it: the Enter, then the keys 150 ms apart
-    assert 0 < float(row["q1_glow_time_s"]) < 1.0
-    for later in ("q2_ring_time_s", "q3_same_size_time_s"):
-        assert abs(float(row[later]) - 0.15) < 0.05, row[later]
-    # time_s: from the onset flip to the Enter, however many redraws came between
+    # each answer timed from the press before it (the Enter, then y and n), as the log's key
+    # times say; timed from the Enter, the third would be the sum of the two gaps
+    stamps = [
+        (m.group(1), float(m.group(2)))
+        for m in re.finditer(r"key (\w+) down at ([0-9.]+)", path.with_suffix(".log").read_text())
+    ]
+    (enter, first_y, n, second_y, escape) = stamps[-5:]
+    assert [k for k, _ in stamps[-5:]] == ["return", "y", "n", "y", "escape"], stamps[-5:]
+    for column, (earlier, later) in {
+        "q1_glow_time_s": (enter, first_y),
+        "q2_ring_time_s": (first_y, n),
+        "q3_same_size_time_s": (n, second_y),
+    }.items():
+        assert abs(float(row[column]) - (later[1] - earlier[1])) < 0.001, (column, row[column])
+        assert 0 < float(row[column]) < 1.0
+    # time_s: from the onset flip to the Enter, however many redraws came between: not before
+    # the key was sent, and not later than its delivery can lag on a loaded machine
     sidecar = sidecar_of(path)
     onset = sidecar["runs"][0]["clock_epoch_s"] + float(row["onset_s"])
-    measured = (before + after) / 2 - onset
-    assert abs(float(row["time_s"]) - measured) < 0.05, (row["time_s"], measured)
-    assert float(row["time_s"]) > 2.0  # not the time since the last redraw
+    time_s = float(row["time_s"])
+    assert before - onset - KEY_SLACK_S < time_s < after - onset + LATE_DELIVERY_S, (
+        time_s, before - onset, after - onset,
+    )  # fmt: skip
+    assert time_s > 2.0  # not the time since the last redraw
     assert row["ignored_keys"] == ""
     assert sidecar["status"] == "aborted" and sidecar["runs"][0]["ended_by"] == "escape"
     assert sidecar["runs"][0]["keyboard"] == "psychtoolbox"
 
 
 # --- Spencer 1995: flashes ------------------------------------------------------------------
-
-
-KEY_SLACK_S = 0.02  # an X key event reaching PsychoPy, and a flip reaching the X server
 
 
 def _flash_visible(screen: XScreen) -> bool:
@@ -190,7 +207,7 @@ def test_spencer_answers_during_the_flash_give_their_rows_timed_from_onset(scree
         low, high = measured
         assert high - low < 0.3, measured  # the check means something: narrower than a flash
         time_s = float(row["time_s"])
-        assert low - KEY_SLACK_S < time_s < high + KEY_SLACK_S, (time_s, measured)
+        assert low - KEY_SLACK_S < time_s < high + LATE_DELIVERY_S, (time_s, measured)
         assert float(row["offset_s"]) > float(row["onset_s"]) > 0
         assert epoch > 0
         if row["presentation_ok"] == "true":  # its frames at 76 Hz, within Spencer's 10 ms
@@ -514,7 +531,8 @@ def test_night_study_shows_the_scene_frame_exact_before_its_questions(screen, tm
     assert first["condition"] == rows[1]["condition"] != ""
     # Xvfb has no vertical sync: dropped frames are counted (the column), not ruled out
     assert int(first["dropped_frames"]) >= 0
-    assert abs(float(first["shown_ms"]) - 1500.0) < 60.0, first["shown_ms"]
+    if int(first["dropped_frames"]) == 0:  # else the late frames are flagged, as they should be
+        assert abs(float(first["shown_ms"]) - 1500.0) < 60.0, first["shown_ms"]
     assert first["time_s"] and float(first["time_s"]) > 1.5  # rated after the scene ended
     assert rows[1]["shown_ms"] == ""
     intervals = (path.parent / (path.stem + "_frames.tsv")).read_text().splitlines()
