@@ -6,25 +6,15 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import given
 from hypothesis import strategies as st
 
 from glarelab.glare import GaussianGlare, VosGlare, kernel
 from glarelab.glare.models.hybrid import HybridGlare
 from glarelab.glare.models.wave import WaveOpticsGlare
 
-SETTINGS = settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-NOT_A_NUMBER = st.one_of(
-    st.booleans(),
-    st.text(max_size=4),
-    st.none(),
-    st.complex_numbers(allow_nan=False, allow_infinity=False),
-    st.lists(st.floats(0.1, 1.0), min_size=2, max_size=3),
-)
-NOT_FINITE_POSITIVE = st.one_of(
-    st.floats(max_value=0.0),
-    st.sampled_from([math.nan, math.inf, -math.inf, 5e-324, 1e-310]),
-)
+from ..strategies import NOT_A_NUMBER, NOT_FINITE_POSITIVE, SETTINGS
+
 NOT_A_FLAG = st.one_of(st.text(max_size=4), st.integers(), st.none(), st.floats())
 NOT_A_SEED = st.one_of(
     st.integers(max_value=-1),

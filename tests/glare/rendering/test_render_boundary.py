@@ -6,31 +6,22 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import given
 from hypothesis import strategies as st
 
 from glarelab.glare import GaussianGlare, VosGlare, add_glare, render_glare
 
-SETTINGS = settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+from ..strategies import NOT_A_NUMBER, NOT_FINITE_POSITIVE, SETTINGS
+
 IMAGE = np.full((16, 16), 50.0)
 IMAGE[8, 8] = 1e6
 MODEL = GaussianGlare(sigma_deg=0.1)
 
-# what a caller may pass by mistake for a number: bools (True is 1), strings, None, arrays,
-# complex numbers, NaN and infinities, zero, negatives and subnormal numbers
-NOT_A_NUMBER = st.one_of(
-    st.booleans(),
-    st.text(max_size=4),
-    st.none(),
-    st.complex_numbers(allow_nan=False, allow_infinity=False),
-    st.lists(st.floats(0.1, 1.0), min_size=2, max_size=3),
-)
-NOT_POSITIVE = st.one_of(
-    st.floats(max_value=0.0),
-    st.sampled_from([math.nan, math.inf, -math.inf, 5e-324, 1e-310]),
-)
 BAD_PIXEL_DEG = st.one_of(
-    NOT_A_NUMBER, NOT_POSITIVE, st.floats(10.0, 1e300, exclude_min=True), st.floats(0, 9.9e-6)
+    NOT_A_NUMBER,
+    NOT_FINITE_POSITIVE,
+    st.floats(10.0, 1e300, exclude_min=True),
+    st.floats(0, 9.9e-6),
 )
 BAD_KERNEL_SHAPE = st.one_of(
     st.tuples(st.integers(-5, 41), st.integers(-5, 41)).filter(
@@ -45,7 +36,7 @@ BAD_KERNEL_SHAPE = st.one_of(
 )
 BAD = {
     "pixel_deg": BAD_PIXEL_DEG,
-    "l_dmax_cd_m2": st.one_of(NOT_A_NUMBER, NOT_POSITIVE),
+    "l_dmax_cd_m2": st.one_of(NOT_A_NUMBER, NOT_FINITE_POSITIVE),
     "composition": st.one_of(st.text(max_size=12), st.none(), st.integers()),
     "precision": st.one_of(st.sampled_from(["float16", "int", "Float64"]), st.none()),
     "kernel_shape": BAD_KERNEL_SHAPE,
