@@ -234,6 +234,8 @@ class DetectionObserver(LookingObserver):
             geometry["disk_diameter_deg"],
             backgrounds=(background,),
             pixel_deg=geometry["pixel_deg"],
+            bit_depth=protocol["display"]["bit_depth"],
+            room_lux=protocol["viewing"]["room_lux"],
         )
 
     def keys(self, screen: dict) -> list[tuple[str, float]]:

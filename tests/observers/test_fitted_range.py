@@ -1,6 +1,7 @@
 """Simulated observers say where they stop: a study whose stimuli lie outside those the
-observers were fitted on (kernel widths and PSF normalisations, levels, disk sizes, luminances,
-backgrounds, pixel sizes) warns once per observer,
+observers were fitted on (kernel widths and PSF normalisations, a Vos halo's pupil, wavelength
+and spectrum, flare lines, levels, disk sizes, luminances, backgrounds, a sky's contrast,
+cloud sizes and spectrum, pixel sizes, bit depths, room light) warns once per observer,
 naming each value and its fitted range; the papers' own studies do not warn; docs/observers.md
 lists the ranges."""
 
@@ -17,11 +18,16 @@ from glarelab.experiments.paradigms import PARADIGMS
 from glarelab.experiments.session import make_observer
 from glarelab.observers.fitted_range import (
     FITTED_BACKGROUND_RATIO,
+    FITTED_BIT_DEPTH,
     FITTED_DISK_CD_M2,
     FITTED_DISK_DIAMETER_DEG,
     FITTED_GAUSSIAN_SIGMA_DEG,
     FITTED_LEVEL_RATIO,
     FITTED_PIXEL_DEG,
+    FITTED_ROOM_LUX,
+    FITTED_SKY_CLOUD_DEG,
+    FITTED_SKY_SPECTRUM_SLOPE,
+    FITTED_VOS_FLARE_LINES,
     OutsideFittedRangeWarning,
     fitted_range_departures,
     warn_outside_fitted_range,
@@ -65,6 +71,17 @@ def _outside_warnings(record) -> list:
     return [w for w in record if issubclass(w.category, OutsideFittedRangeWarning)]
 
 
+def warned(protocol, geometry: dict) -> list[str]:
+    """The departures, checked to come as one warning from the caller's line (stacklevel=2)."""
+    with warnings.catch_warnings(record=True) as record:
+        warnings.simplefilter("always")
+        found = warn_outside_fitted_range("a study", judged(protocol, geometry))
+    (warning,) = _outside_warnings(record)
+    assert all(line in str(warning.message) for line in found)
+    assert warning.filename == __file__
+    return found
+
+
 def test_the_papers_studies_are_inside_the_fitted_range():
     assert departures(load_protocol("yoshida2008"), YOSHIDA_GEOMETRY) == []
     # a rating study's observers look at no glare: they are no LookingObserver
@@ -92,6 +109,8 @@ def test_glare_methods2026_names_its_wave_models_and_high_levels():
         "(fitted on 1-31.82 × for gaussian)",
         "method 'kakimoto': glare model 'wave' (fitted on gaussian, vos only)",
         "method 'luidolt': glare model 'wave' (fitted on gaussian, vos only)",
+        # its sky's clouds stop at its 2.4° image, Yoshida's at 3.2°
+        "background: sky cloud_max_deg = 2.4° (fitted on 3.2° only)",
     ]
 
 
@@ -189,6 +208,102 @@ def test_yoshidas_vos_with_spencers_normalisation_is_named():
     ]
 
 
+@pytest.mark.parametrize(
+    "key, value, line",
+    [
+        ("cloud_min_deg", 0.2, "background: sky cloud_min_deg = 0.2° (fitted on 0.05° only)"),
+        ("cloud_max_deg", 1.0, "background: sky cloud_max_deg = 1° (fitted on 3.2° only)"),
+        ("spectrum_slope", 2.0, "background: sky spectrum_slope = 2 (fitted on 1 only)"),
+    ],
+)
+def test_a_sky_of_other_cloud_sizes_or_spectrum_is_named(key, value, line):
+    sky = {**load_protocol("yoshida2008")["background"], key: value}
+    assert warned(with_background(**sky), YOSHIDA_GEOMETRY) == [line]
+
+
+@pytest.mark.parametrize(
+    "table, key, value, line",
+    [
+        ("display", "bit_depth", 12, "display bit depth 12 (fitted on 8-10)"),
+        ("display", "bit_depth", 16, "display bit depth 16 (fitted on 8-10)"),
+        ("viewing", "room_lux", 500.0, "room light 500 lx (fitted on 0-60 lx)"),
+    ],
+)
+def test_another_bit_depth_or_room_light_is_named(table, key, value, line):
+    for study, geometry in (("yoshida2008", YOSHIDA_GEOMETRY), ("spencer1995", SPENCER_GEOMETRY)):
+        data = load_protocol(study).data
+        data = {**data, table: {**data[table], key: value}}
+        assert warned(data, geometry) == [line]
+
+
+def with_spencer_glare(**parameters) -> dict:
+    """Spencer's protocol data with these Vos parameters added to its own."""
+    data = load_protocol("spencer1995").data
+    glare = {**data["glare"], "parameters": {**data["glare"]["parameters"], **parameters}}
+    return {**data, "glare": glare}
+
+
+@pytest.mark.parametrize(
+    "parameters, line",
+    [
+        (
+            {"pupil_mm": 2.5},
+            "glare: Vos pupil_mm = 2.5 mm drops the lenticular halo (Spencer §2.1; fitted "
+            "with the regime's halo, no pupil given)",
+        ),
+        (
+            {"wavelength_nm": 550.0},
+            "glare: Vos wavelength_nm = 550 nm, a monochromatic halo (fitted on the white "
+            "halo only)",
+        ),
+        (
+            {"halo_spectrum": {"n_wavelengths": 31, "wavelength_range_nm": [380.0, 780.0]}},
+            "glare: Vos halo spectrum of 31 over 380-780 nm under D65 (fitted on 61 over "
+            "400-700 nm under D65 only)",
+        ),
+        (
+            {"corona_lines": 50},
+            "glare: Vos flare lines corona_lines = 50, halo_lines = 300 (fitted on 150, 300 only)",
+        ),
+    ],
+)
+def test_a_vos_halo_of_another_pupil_wavelength_spectrum_or_streaks_is_named(parameters, line):
+    assert warned(with_spencer_glare(**parameters), SPENCER_GEOMETRY) == [line]
+
+
+def test_vos_parameters_that_leave_the_kernel_as_fitted_are_not_named():
+    # a pupil of 3 mm or more keeps the halo (Spencer §2.1), the halo's colourspace does not
+    # enter the luminance kernel, and the photopic PSF has no halo (eq. 5) to colour
+    same = {
+        "pupil_mm": 6.0,
+        "halo_spectrum": {"colourspace": "Display P3", "wavelength_range_nm": [400, 700]},
+    }
+    assert departures(with_spencer_glare(**same), SPENCER_GEOMETRY) == []
+    data = load_protocol("yoshida2008").data
+    vos = data["glare"]["methods"][1]
+    parameters = {**vos["parameters"], "pupil_mm": 2.0, "wavelength_nm": 550.0}
+    methods = [data["glare"]["methods"][0], {**vos, "parameters": parameters}]
+    data = {**data, "glare": {**data["glare"], "methods": methods}}
+    assert departures(data, YOSHIDA_GEOMETRY) == []
+
+
+def test_the_shipped_sets_are_at_the_fitted_sky_bits_room_and_streaks():
+    yoshida = load_protocol("yoshida2008")
+    sky = yoshida["background"]
+    assert (sky["cloud_min_deg"], sky["cloud_max_deg"]) == tuple(
+        bounds[0] for bounds in FITTED_SKY_CLOUD_DEG.values()
+    )
+    assert sky["spectrum_slope"] == FITTED_SKY_SPECTRUM_SLOPE[0]
+    spencer = load_protocol("spencer1995")
+    depths = {yoshida["display"]["bit_depth"], spencer["display"]["bit_depth"]}
+    assert depths == set(FITTED_BIT_DEPTH)
+    rooms = {yoshida["viewing"]["room_lux"], spencer["viewing"]["room_lux"]}
+    assert rooms == set(FITTED_ROOM_LUX)
+    from glarelab.glare.models.flare import CORONA_LINES, HALO_LINES
+
+    assert FITTED_VOS_FLARE_LINES == (CORONA_LINES, HALO_LINES)
+
+
 @given(st.floats(0.01, 3.0))
 def test_a_gaussian_width_departs_exactly_when_outside_the_fitted_one(sigma_deg):
     low, high = FITTED_GAUSSIAN_SIGMA_DEG
@@ -267,6 +382,13 @@ def test_docs_list_the_fitted_range():
         f"uniform 0-{FITTED_BACKGROUND_RATIO['uniform'][1]:.4g}",
         f"lamp scene {FITTED_BACKGROUND_RATIO['lamp'][0]:g} only",
         "FITTED_VOS_PSFS",
+        "FITTED_VOS_FLARE_LINES",
+        f"`cloud_min_deg` {FITTED_SKY_CLOUD_DEG['cloud_min_deg'][0]:g}° only",
+        f"`cloud_max_deg` {FITTED_SKY_CLOUD_DEG['cloud_max_deg'][0]:g}° only",
+        f"`spectrum_slope` {FITTED_SKY_SPECTRUM_SLOPE[0]:g} only",
+        f"{FITTED_BIT_DEPTH[0]}-{FITTED_BIT_DEPTH[1]} bits",
+        f"{FITTED_ROOM_LUX[0]:g}-{FITTED_ROOM_LUX[1]:g} lx",
+        f"{FITTED_VOS_FLARE_LINES[0]} in the corona, {FITTED_VOS_FLARE_LINES[1]} in the halo",
         '"Spencer1995"',
         "photopic",
         "OutsideFittedRangeWarning",

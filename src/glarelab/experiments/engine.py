@@ -234,7 +234,8 @@ class LookingObserver(ABC):
     @staticmethod
     @abstractmethod
     def judged(protocol: Protocol | Mapping[str, Any], geometry: dict):
-        """The glare methods, the disk's luminance and its diameter the observers judge
+        """The glare methods, the disk's luminance and its diameter, the backgrounds, the pixel
+        size, the display's bit depth and the room's light the observers judge
         (:class:`glarelab.observers.fitted_range.JudgedStimuli`), from the protocol and its
         stimulus set's ``geometry``.
 

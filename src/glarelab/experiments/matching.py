@@ -327,15 +327,17 @@ class MatchingObserver(LookingObserver):
     @staticmethod
     def judged(protocol: Protocol | Mapping[str, Any], geometry: dict):
         """Each method's references, their levels over the clamp ``L_dmax``, the disk of
-        ``geometry["disk_diameter_deg"]``, the background and the pixel size
+        ``geometry["disk_diameter_deg"]``, the background, the pixel size, the display's bit
+        depth and the room's light
         (:meth:`glarelab.experiments.engine.LookingObserver.judged`).
 
         Parameters
         ----------
         protocol : glarelab.protocols.Protocol
             The study's protocol (or its data as a mapping): its ``[glare]`` table's
-            ``l_dmax_cd_m2`` (cd/m²) and ``methods``, its ``[background]`` table and its
-            ``[display]`` table's ``black_cd_m2``.
+            ``l_dmax_cd_m2`` (cd/m²) and ``methods``, its ``[background]`` table, its
+            ``[display]`` table's ``black_cd_m2`` and ``bit_depth`` and its ``[viewing]``
+            table's ``room_lux``.
         geometry
             The stimulus set's geometry (its manifest's ``geometry``): ``disk_diameter_deg``
             and ``pixel_deg`` (deg).
@@ -373,6 +375,8 @@ class MatchingObserver(LookingObserver):
             disk_diameter_deg=geometry["disk_diameter_deg"],
             backgrounds=(background,),
             pixel_deg=geometry["pixel_deg"],
+            bit_depth=protocol["display"]["bit_depth"],
+            room_lux=protocol["viewing"]["room_lux"],
         )
 
     def __init__(self, protocol: Protocol, participant: str, *, seed: int, stimuli):

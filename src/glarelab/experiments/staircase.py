@@ -456,15 +456,17 @@ class StaircaseObserver(LookingObserver):
     @staticmethod
     def judged(protocol: Protocol | Mapping[str, Any], geometry: dict):
         """The glare at each strength over the clamp (the display's peak), the source of
-        ``geometry["source_diameter_deg"]``, each context's background and the pixel size
+        ``geometry["source_diameter_deg"]``, each context's background, the pixel size, the
+        display's bit depth and the room's light
         (:meth:`glarelab.experiments.engine.LookingObserver.judged`).
 
         Parameters
         ----------
         protocol : glarelab.protocols.Protocol
             The study's protocol (or its data as a mapping): its ``[glare]`` table's
-            ``model``, ``parameters``, ``strengths`` and ``peak_fraction``, and its
-            ``[display]`` table's ``max_cd_m2`` and ``black_cd_m2`` (cd/m²), and its
+            ``model``, ``parameters``, ``strengths`` and ``peak_fraction``, its
+            ``[display]`` table's ``max_cd_m2`` and ``black_cd_m2`` (cd/m²) and
+            ``bit_depth``, its ``[viewing]`` table's ``room_lux`` (lx) and its
             ``contexts``' backgrounds.
         geometry
             The stimulus set's geometry (its manifest's ``geometry``): ``source_diameter_deg``
@@ -505,6 +507,8 @@ class StaircaseObserver(LookingObserver):
             disk_diameter_deg=geometry["source_diameter_deg"],
             backgrounds=backgrounds,
             pixel_deg=geometry["pixel_deg"],
+            bit_depth=protocol["display"]["bit_depth"],
+            room_lux=protocol["viewing"]["room_lux"],
         )
 
     def __init__(self, protocol: Protocol, participant: str, *, seed: int, stimuli):

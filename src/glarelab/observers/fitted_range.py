@@ -4,7 +4,8 @@ The observers' parameters (:mod:`glarelab.observers.brightness`, :mod:`glarelab.
 were fitted on the stimuli of Yoshida et al. 2008 §3 and Spencer et al. 1995 §4 as this suite
 renders them (``scripts/fit_observers.py``, ``docs/observers.md``). A study whose stimuli lie
 outside them (another kernel or PSF normalisation, wider levels, another disk size or
-luminance, another background or pixel size) is simulated by extrapolation:
+luminance, another background, sky, pixel size, bit depth or room light, a Vos halo of
+another pupil, wavelength or spectrum) is simulated by extrapolation:
 :func:`warn_outside_fitted_range` says so, once per observer, naming each value.
 
 What a paradigm's observers judge is given to these functions by the paradigm
@@ -22,12 +23,17 @@ from typing import Any
 
 __all__ = [
     "FITTED_BACKGROUND_RATIO",
+    "FITTED_BIT_DEPTH",
     "FITTED_DISK_CD_M2",
     "FITTED_DISK_DIAMETER_DEG",
     "FITTED_GAUSSIAN_SIGMA_DEG",
     "FITTED_LEVEL_RATIO",
     "FITTED_PIXEL_DEG",
+    "FITTED_ROOM_LUX",
+    "FITTED_SKY_CLOUD_DEG",
     "FITTED_SKY_CONTRAST",
+    "FITTED_SKY_SPECTRUM_SLOPE",
+    "FITTED_VOS_FLARE_LINES",
     "FITTED_VOS_PSFS",
     "JudgedBackground",
     "JudgedGlare",
@@ -78,6 +84,25 @@ fitted."""
 FITTED_SKY_CONTRAST = (0.15, 0.15)
 """RMS contrast of the sky the fit saw (Yoshida's, as ``yoshida2008.toml`` draws it): a
 cloud's edge can look like a glow to the model (``docs/observers.md``)."""
+FITTED_SKY_CLOUD_DEG = {"cloud_min_deg": (0.05, 0.05), "cloud_max_deg": (3.2, 3.2)}
+"""Cloud sizes (deg) of the sky the fit saw (``yoshida2008.toml``: structure from 0.05° to the
+3.2° of the whole image): the clouds' size sets how much of the surround the model's lower
+quartile over 8 sectors sees as one cloud, and so whether a cloud's edge looks like a glow."""
+FITTED_SKY_SPECTRUM_SLOPE = (1.0, 1.0)
+"""Amplitude-spectrum slope of the sky the fit saw (``yoshida2008.toml``: 1/f, natural
+scenes'): a steeper slope puts the contrast into larger clouds, a shallower one into fine
+texture next to the disk's border."""
+FITTED_ROOM_LUX = (0.0, 60.0)
+"""Room light at the eye (lx) of the studies fitted: Spencer §4's "darkened room" (0 lx) and
+Yoshida §4's "dim lighting condition (60 lx)". The model has no ambient term (no reflection
+on the screen, no adaptation), so the rooms' effect is held only in the fitted values."""
+FITTED_BIT_DEPTH = (8, 10)
+"""Display bits per channel of the fitted sets (the observer looks at the images quantised to
+the display's codes, :class:`glarelab.observers.looking.ObservedSet`): Spencer's 8-bit frame
+buffer and Yoshida's 10-bit display (§3)."""
+FITTED_VOS_FLARE_LINES = (150, 300)
+"""``(corona_lines, halo_lines)`` of the Vos flare lines the fit saw (Spencer protocol, the
+model's defaults): the number of streaks sets how much of the corona's light they gather."""
 _RELATIVE = 1e-3  # a value within 0.1 % of a fitted bound is inside it (rounded geometry)
 
 
@@ -121,12 +146,55 @@ def _kernel_departures(where: str, model: str, parameters, ratios: list[float]) 
             )
         if kernel.age is not None:
             out.append(f"{where}: Vos age = {kernel.age:g} years (fitted at the default age)")
+        out += _vos_halo_departures(where, kernel)
     outside = [r for r in ratios if not _inside(r, FITTED_LEVEL_RATIO[model])]
     if outside:
         shown = ", ".join(f"{r:.4g}" for r in outside)
         out.append(
             f"{where}: levels of {shown} × the clamp luminance "
             f"(fitted on {_bounds(FITTED_LEVEL_RATIO[model], ' ×')} for {model})"
+        )
+    return out
+
+
+def _vos_halo_departures(where: str, kernel) -> list[str]:
+    """Departures of a Vos model's pupil, halo wavelength and spectrum and flare lines from
+    those the fit saw, each only where it changes the luminance kernel (a photopic PSF has no
+    halo, Spencer eq. 5, so its pupil and wavelength do not matter)."""
+    from glarelab.glare.models import vos
+    from glarelab.glare.models.spectral import HaloSpectrum
+
+    def _seen(spectrum) -> tuple:  # what the luminance halo H_Y depends on
+        low, high = spectrum.wavelength_range_nm  # a TOML table gives a list
+        return (spectrum.n_wavelengths, (float(low), float(high)), spectrum.illuminant)
+
+    def _shown(spectrum) -> str:
+        low, high = spectrum.wavelength_range_nm
+        return f"{spectrum.n_wavelengths} over {low:g}-{high:g} nm under {spectrum.illuminant}"
+
+    out = []
+    has_halo = vos.WEIGHTS[kernel.regime][3] > 0.0
+    if has_halo and kernel.halo_skipped:
+        out.append(
+            f"{where}: Vos pupil_mm = {kernel.pupil_mm:g} mm drops the lenticular halo "
+            "(Spencer §2.1; fitted with the regime's halo, no pupil given)"
+        )
+    elif has_halo and kernel.wavelength_nm is not None:
+        out.append(
+            f"{where}: Vos wavelength_nm = {kernel.wavelength_nm:g} nm, a monochromatic halo "
+            "(fitted on the white halo only)"
+        )
+    elif has_halo and _seen(kernel.halo_spectrum) != _seen(HaloSpectrum()):
+        out.append(
+            f"{where}: Vos halo spectrum of {_shown(kernel.halo_spectrum)} (fitted on "
+            f"{_shown(HaloSpectrum())} only)"
+        )
+    # the halo's streaks count only where there is a halo
+    lines = (kernel.corona_lines, kernel.halo_lines if has_halo else FITTED_VOS_FLARE_LINES[1])
+    if kernel.flare_lines and lines != FITTED_VOS_FLARE_LINES:
+        out.append(
+            f"{where}: Vos flare lines corona_lines = {lines[0]}, halo_lines = {lines[1]} "
+            f"(fitted on {FITTED_VOS_FLARE_LINES[0]}, {FITTED_VOS_FLARE_LINES[1]} only)"
         )
     return out
 
@@ -169,12 +237,19 @@ class JudgedBackground:
         over the judged disk's; None where the protocol does not say it (an EXR).
     contrast
         A sky's RMS contrast; None for other kinds.
+    cloud_deg
+        A sky's smallest and largest cloud structure ``(cloud_min_deg, cloud_max_deg)``, deg;
+        None for other kinds.
+    spectrum_slope
+        A sky's amplitude-spectrum slope; None for other kinds.
     """
 
     where: str
     kind: str
     ratio: float | None
     contrast: float | None = None
+    cloud_deg: tuple[float, float] | None = None
+    spectrum_slope: float | None = None
 
 
 def judged_background(
@@ -197,7 +272,8 @@ def judged_background(
     Returns
     -------
     JudgedBackground
-        Its kind, its luminance over the disk's and, for a sky, its contrast.
+        Its kind, its luminance over the disk's and, for a sky, its contrast, cloud sizes and
+        spectrum slope.
 
     Raises
     ------
@@ -212,7 +288,14 @@ def judged_background(
     """
     kind = spec["kind"]
     if kind == "sky":
-        return JudgedBackground(where, kind, spec["mean_cd_m2"] / disk_cd_m2, spec["contrast"])
+        return JudgedBackground(
+            where,
+            kind,
+            spec["mean_cd_m2"] / disk_cd_m2,
+            spec["contrast"],
+            cloud_deg=(spec["cloud_min_deg"], spec["cloud_max_deg"]),
+            spectrum_slope=spec["spectrum_slope"],
+        )
     elif kind == "uniform":
         return JudgedBackground(where, kind, max(spec["cd_m2"], black_cd_m2) / disk_cd_m2)
     elif kind == "lamp":
@@ -238,10 +321,23 @@ def _background_departures(background: JudgedBackground) -> list[str]:
             f"{where}: {kind} background at {shown} × the disk's luminance "
             f"(fitted on {_bounds(bounds, ' ×')} for {kind})"
         )
-    if kind == "sky" and not _inside(background.contrast, FITTED_SKY_CONTRAST):
+    if kind != "sky":
+        return out
+    if not _inside(background.contrast, FITTED_SKY_CONTRAST):
         out.append(
             f"{where}: sky contrast {background.contrast:.4g} "
             f"(fitted on {_bounds(FITTED_SKY_CONTRAST)})"
+        )
+    for name, value in zip(FITTED_SKY_CLOUD_DEG, background.cloud_deg, strict=True):
+        if not _inside(value, FITTED_SKY_CLOUD_DEG[name]):
+            out.append(
+                f"{where}: sky {name} = {value:.4g}° "
+                f"(fitted on {_bounds(FITTED_SKY_CLOUD_DEG[name], '°')})"
+            )
+    if not _inside(background.spectrum_slope, FITTED_SKY_SPECTRUM_SLOPE):
+        out.append(
+            f"{where}: sky spectrum_slope = {background.spectrum_slope:.4g} "
+            f"(fitted on {_bounds(FITTED_SKY_SPECTRUM_SLOPE)})"
         )
     return out
 
@@ -250,7 +346,8 @@ def _background_departures(background: JudgedBackground) -> list[str]:
 class JudgedStimuli:
     """What a paradigm's simulated observers judge, in the terms of the fitted range: the glare
     methods, the judged disk's luminance (the clamp, cd/m²) and its diameter (deg), the
-    backgrounds it is shown on and the pixel size (deg). Each
+    backgrounds it is shown on, the pixel size (deg), the display's bit depth and the room's
+    light (lx). Each
     paradigm's observer says it (``judged(protocol, geometry)``), so this module never asks
     which paradigm a protocol is.
 
@@ -268,6 +365,12 @@ class JudgedStimuli:
         :data:`FITTED_BACKGROUND_RATIO`, :data:`FITTED_SKY_CONTRAST`).
     pixel_deg
         The pixel size (deg, > 0; fitted on :data:`FITTED_PIXEL_DEG`).
+    bit_depth
+        The display's bits per channel (the protocol's ``display.bit_depth``; fitted on
+        :data:`FITTED_BIT_DEPTH`).
+    room_lux
+        The room's light at the eye (lx, the protocol's ``viewing.room_lux``; fitted on
+        :data:`FITTED_ROOM_LUX`).
     """
 
     glare: tuple[JudgedGlare, ...]
@@ -276,6 +379,8 @@ class JudgedStimuli:
     _: KW_ONLY
     backgrounds: tuple[JudgedBackground, ...]
     pixel_deg: float
+    bit_depth: int
+    room_lux: float
 
 
 def fitted_range_departures(judged: JudgedStimuli) -> list[str]:
@@ -290,19 +395,25 @@ def fitted_range_departures(judged: JudgedStimuli) -> list[str]:
     Returns
     -------
     list of str
-        One line per departure (kernel width, model or PSF normalisation, levels, disk size,
-        disk luminance, background, pixel size), naming the value and the fitted range; empty
-        inside it.
+        One line per departure (kernel width, model or PSF normalisation, a Vos halo's
+        pupil, wavelength and spectrum and its flare lines, levels, disk size, disk
+        luminance, background and a sky's contrast, cloud sizes and spectrum, pixel size, bit
+        depth, room light), naming the value and the fitted range; empty inside it.
 
     Examples
     --------
     >>> gaussian = JudgedGlare("method 'gaussian'", "gaussian", {"sigma_deg": 0.34}, (1.0, 20.0))
-    >>> sky = JudgedBackground("background", "sky", 150.0 / 220.0, 0.15)
-    >>> seen = dict(backgrounds=(sky,), pixel_deg=0.011824416329142544)
+    >>> sky = JudgedBackground("background", "sky", 150.0 / 220.0, 0.15, cloud_deg=(0.05, 3.2),
+    ...                        spectrum_slope=1.0)
+    >>> seen = dict(backgrounds=(sky,), pixel_deg=0.011824416329142544, bit_depth=10,
+    ...             room_lux=60.0)
     >>> fitted_range_departures(JudgedStimuli((gaussian,), 220.0, 0.3, **seen))
     []
     >>> fitted_range_departures(JudgedStimuli((gaussian,), 220.0, 1.0, **seen))
     ['disk diameter 1° (fitted on 0.1065-0.3°)']
+    >>> fitted_range_departures(JudgedStimuli((gaussian,), 220.0, 0.3, **{**seen,
+    ...                         "bit_depth": 12, "room_lux": 500.0}))
+    ['display bit depth 12 (fitted on 8-10)', 'room light 500 lx (fitted on 0-60 lx)']
     """
     out: list[str] = []
     for method in judged.glare:
@@ -324,6 +435,12 @@ def fitted_range_departures(judged: JudgedStimuli) -> list[str]:
     if not _inside(judged.pixel_deg, FITTED_PIXEL_DEG):
         out.append(
             f"pixel size {judged.pixel_deg:.4g}° (fitted on {_bounds(FITTED_PIXEL_DEG, '°')})"
+        )
+    if not _inside(judged.bit_depth, FITTED_BIT_DEPTH):
+        out.append(f"display bit depth {judged.bit_depth} (fitted on {_bounds(FITTED_BIT_DEPTH)})")
+    if not _inside(judged.room_lux, FITTED_ROOM_LUX):
+        out.append(
+            f"room light {judged.room_lux:.4g} lx (fitted on {_bounds(FITTED_ROOM_LUX, ' lx')})"
         )
     return out
 

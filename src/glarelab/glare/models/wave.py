@@ -22,10 +22,13 @@ out, so that the kernel is the pattern of the aperture described, not of its sam
 PSF's period is three kernel widths (:meth:`WaveOpticsGlare.grid_for`). Against the
 pixel-integrated Airy pattern, ring energies from 0.3° to 2.5° and the kernel's border are
 within 0.6 % for 380-780 nm and 2-8 mm (``tests/glare/models/test_wave_rings.py``). A
-diaphragm alone is drawn with a smoother prefilter (:data:`DIAPHRAGM_PREFILTER`), whose
-transfer is divided out instead: a streak along an axis otherwise meets its own copies in the
-periodic spectrum, and a 2 mm square at 45° had its border 9.5 % off at 380 nm; now polygons
-of 3-8 sides are within 0.51 % of their transform.
+diaphragm, alone or behind the lid or a 4-point cross screen, is drawn with a smoother
+prefilter (:data:`DIAPHRAGM_PREFILTER`; with the lid and the screen under it,
+:func:`glarelab.glare.models.apertures.aperture_diaphragm_prefiltered`), whose transfer is
+divided out instead: a streak along an axis otherwise meets its own copies in the periodic
+spectrum, and a 2 mm square at 45° had its border 9.5 % off at 380 nm (+17.6 % for an 8 mm
+square behind lid and screen); now polygons of 3-8 sides are within 0.51 % of their
+transform, and within 0.44 % behind the lid or the screen.
 ``pixel_integration='rebin'`` spreads the DFT's samples over the pixels instead (:func:`rebin`:
 exact for the energy, not for the pattern when a pixel spans few samples).
 
@@ -120,7 +123,8 @@ PSF_PERIOD_KERNELS = 3.0  # the PSF's period at the shortest wavelength, in kern
 PSF_PERIOD_KERNELS_FAST = 2.0  # the same for aperture_grid="fast" (the grid before issue 33)
 APERTURE_GRIDS = ("exact", "fast")
 OBSTACLE_SAMPLES = 12  # samples across a particle or an eyelash
-# (subsamples, smoothing) of a diaphragm alone: its streaks' aliases 0.65 % of them, not 9.7 %
+# (subsamples, smoothing) of a diaphragm, alone or behind the lid or a 4-point screen: its
+# streaks' aliases 0.65 % of them, not 9.7 %
 DIAPHRAGM_PREFILTER = (5, 3)
 OBSTACLE_SAMPLES_FAST = 4  # the same for aperture_grid="fast"
 SPECTRAL_METHODS = ("reference", "scaled", "kakimoto")
@@ -460,16 +464,18 @@ class WaveOpticsGlare(GlareModel):
 
     def _prefilter(self) -> tuple[int, int]:
         """The diaphragm's prefilter for the exact pixel integration: :data:`DIAPHRAGM_PREFILTER`
-        for a diaphragm alone, whose transfer is then divided out; the one-sample box with any
-        other obstacle, whose edges are drawn with the one-sample ramp."""
-        alone = not (
-            self.eyelid
-            or self.eyelashes
+        for a diaphragm alone or behind the lid or a 4-point cross screen (the whole aperture
+        filtered, :func:`glarelab.glare.models.apertures.aperture_diaphragm_prefiltered`),
+        whose transfer is then divided out; the one-sample box with lashes, particles, a
+        trigonal cross screen or an obstacle image, whose edges are drawn with the one-sample
+        ramp (lashes and particles make the grid fine: 12 samples across them)."""
+        one_sample = (
+            self.eyelashes
             or self.particles
-            or self.cross_screen is not None
+            or self.cross_screen == "trigonal"
             or self.obstacle_image is not None
         )
-        if self.diaphragm_sides is not None and alone:
+        if self.diaphragm_sides is not None and not one_sample:
             return DIAPHRAGM_PREFILTER
         return ap.PREFILTER_BOX
 
@@ -482,8 +488,25 @@ class WaveOpticsGlare(GlareModel):
         diameter = self.pupil_diameter
         n_crop = min(grid.n, 2 * (math.ceil(diameter / 2 / grid.spacing_mm) + 2) + 1)
         crop = ap.ApertureGrid(n_crop, grid.spacing_mm)
+        shift = self.obstacle_distance_mm * math.tan(math.radians(self.source_x_deg))
+        together = (
+            prefilter != ap.PREFILTER_BOX
+            and (self.eyelid or self.cross_screen is not None)
+            and not (self.eyelashes or self.particles or self.obstacle_image is not None)
+        )
         if self.diaphragm_sides is None:
             t = ap.aperture_pupil(crop, diameter)
+        elif together:  # the lid and the cross screen under the diaphragm's prefilter
+            return ap.aperture_diaphragm_prefiltered(
+                crop,
+                diameter,
+                self.diaphragm_sides,
+                rotation_deg=self.diaphragm_rotation_deg,
+                eyelid=self.eyelid,
+                eyelid_shift_x_mm=shift,
+                cross_screen=self.cross_screen,
+                prefilter=prefilter,
+            )
         else:
             t = ap.aperture_diaphragm(
                 crop,
@@ -492,7 +515,6 @@ class WaveOpticsGlare(GlareModel):
                 rotation_deg=self.diaphragm_rotation_deg,
                 prefilter=prefilter,
             )
-        shift = self.obstacle_distance_mm * math.tan(math.radians(self.source_x_deg))
         if self.eyelid:
             t = t * ap.aperture_eyelid(crop, shift_x_mm=shift)
         if self.eyelashes:
