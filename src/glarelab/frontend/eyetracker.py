@@ -463,6 +463,15 @@ class IoHubEyeTracker:
         """Start recording (ioHub keeps the raw samples as it stores them)."""
         self.device_handle.setRecordingState(True)
 
+    def time_s(self) -> float:
+        """The ioHub clock now, s (the clock of its samples' times and of its hdf5 store).
+
+        Returns
+        -------
+        float
+        """
+        return float(self.io.getTime())
+
     def sample(self) -> tuple[float | None, float | None, float | None]:
         """The tracker's last sample: gaze x, y in window pixels from the top-left and the pupil
         in the tracker's unit, each None where the tracker gave none (lost, blink, no tracker).
