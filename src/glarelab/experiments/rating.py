@@ -376,7 +376,8 @@ class RatingObserver:
         if screen["kind"] in ("rate", "present"):
             p = self.distribution(screen["category"], screen.get("condition"))
             rating = int(rng.choice(self.scale, p=p))
-            return [(str(rating), 5.0 + float(rng.exponential(5.0)))]
+            viewing = float(screen.get("live", {}).get("seconds", 0.0))  # answered after it
+            return [(str(rating), viewing + 5.0 + float(rng.exponential(5.0)))]
         if screen["kind"] == "comment":
             return [("return", 1.0)]
         raise ValueError(f"a rating observer cannot answer a {screen['kind']!r} screen")
