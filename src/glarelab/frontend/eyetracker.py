@@ -42,6 +42,7 @@ __all__ = [
     "GazeState",
     "IoHubEyeTracker",
     "PupilCalibration",
+    "TrackerError",
     "calibrate_pupil",
     "tracker_config",
 ]
@@ -69,6 +70,25 @@ MOUSE_GAZE_SETTINGS = {
     "device_timer": {"interval": 0.005},
     "controls": {"move": [], "blink": ["LEFT_BUTTON", "RIGHT_BUTTON"], "saccade_threshold": 1e6},
 }
+
+
+# how long a request to ioHub's server may wait for its answer before the sample is counted
+# lost (an assumption: ioHub answers in about a millisecond; a loaded machine, far slower)
+REQUEST_TIMEOUT_S = 2.0
+
+
+class TrackerError(RuntimeError):
+    """ioHub could not start the eye tracker (its plugin missing, the device unreachable)."""
+
+
+def _free_udp_port() -> int:
+    """A UDP port free now, for this ioHub server alone: ioHub's fixed default (9036) lets a
+    second session on the machine (or a server left behind) stop it from starting."""
+    import socket
+
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
+        probe.bind(("127.0.0.1", 0))
+        return int(probe.getsockname()[1])
 
 
 def tracker_config(spec: str) -> tuple[str, dict]:
@@ -492,7 +512,7 @@ class IoHubEyeTracker:
     ------
     ValueError
         For an unknown tracker name or a window not in pixels.
-    RuntimeError
+    TrackerError
         When ioHub cannot start the tracker (its plugin missing, the device unreachable).
 
     Notes
@@ -544,19 +564,25 @@ class IoHubEyeTracker:
                 "datastore_name": name[: -len(".hdf5")] if name.endswith(".hdf5") else name,
             }
         try:
-            self.io = launchHubServer(window=window, **store, **{device: config})
+            self.io = launchHubServer(
+                window=window, udp_port=_free_udp_port(), **store, **{device: config}
+            )
             self.device_handle = self.io.getDevice("tracker")
+            # ioHub's client waits for each answer without a limit: a server that ends between
+            # a request and its answer would freeze the frame for ever
+            self.io.udp_client.sock.settimeout(REQUEST_TIMEOUT_S)
         except Exception as error:  # ioHub raises many kinds; the session needs one message
-            raise RuntimeError(
+            raise TrackerError(
                 f"ioHub could not start the eye tracker {tracker!r}: {error}"
             ) from error
         if self.device_handle is None:
             self.io.quit()
-            raise RuntimeError(f"ioHub started without the eye tracker {tracker!r}")
+            raise TrackerError(f"ioHub started without the eye tracker {tracker!r}")
         self.disconnects = 0
 
     def start(self) -> None:
-        """Start recording (ioHub keeps the raw samples as it stores them)."""
+        """Start recording (ioHub keeps the raw samples as it stores them); ``disconnects``
+        counts the samples asked for while the tracker or ioHub's server was gone."""
         self.device_handle.setRecordingState(True)
 
     def time_s(self) -> float:
@@ -566,7 +592,9 @@ class IoHubEyeTracker:
         -------
         float
         """
-        return float(self.io.getTime())
+        from psychopy.iohub.devices import Computer
+
+        return float(Computer.getTime())  # the shared time base, without asking the server
 
     def sample(self) -> tuple[float | None, float | None, float | None]:
         """The tracker's last sample: gaze x, y in window pixels from the top-left and the pupil
@@ -577,6 +605,11 @@ class IoHubEyeTracker:
         tuple
             ``(gaze_x_px, gaze_y_px, pupil_raw)``.
         """
+        server = getattr(self.io, "_server_process", None)
+        if server is not None and server.poll() is not None:
+            # ioHub's server has ended: a request would wait for its answer for ever
+            self.disconnects += 1
+            return None, None, None
         try:
             raw = self.device_handle.getLastSample()
         except Exception:  # a tracker that disconnects: no sample, counted, never a crash
@@ -604,8 +637,10 @@ class IoHubEyeTracker:
 
     def close(self) -> None:
         """Stop recording and the ioHub server (a tracker or server already gone: nothing)."""
+        server = getattr(self.io, "_server_process", None)
         try:
-            self.device_handle.setRecordingState(False)
+            if server is None or server.poll() is None:  # a request to an ended one would hang
+                self.device_handle.setRecordingState(False)
         except Exception:  # a disconnected tracker, a server that ended: nothing to stop
             pass
         finally:

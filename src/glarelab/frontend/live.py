@@ -93,7 +93,7 @@ class LiveView:
         self.top = 2**bits - 1
         self.stim = visual.ImageStim(
             window, size=(width, height), units="pix", interpolate=False, colorSpace="rgb",
-            pos=pos_px,
+            pos=pos_px, autoLog=False,
         )  # fmt: skip
         self.filter = GazeFilter((width, height), calibration=calibration)
         win_w, win_h = (int(v) for v in window.size)

@@ -543,6 +543,7 @@ class PsychoPyFrontend:
             f"{view.origin_px[0]:g}, {view.origin_px[1]:g} (top-left), codes through the "
             f"{'session' if calibration is self.calibration else 'synthetic'} calibration"
         )
+        self.records.flush()  # the scene's place is known before its first frame
         clock = logging.defaultClock
         period = 1.0 / self.refresh_hz
         self.window.clearBuffer()
