@@ -2,13 +2,11 @@
 
 from __future__ import annotations
 
-import subprocess
-import sys
-
 import pandas as pd
 
 from glarelab.analysis.live import live_frames
 from glarelab.analysis.report import write_report
+from glarelab.cli import main
 from glarelab.frontend.live import FRAME_COLUMNS
 from glarelab.protocols import load_protocol
 
@@ -25,11 +23,10 @@ def frame_row(frame: int, *, dropped: int = 0, gaze: int = 1, pupil: int = 1) ->
 
 def test_the_report_counts_dropped_frames_and_tracker_loss_per_session(tmp_path):
     data = tmp_path / "data"
-    subprocess.run(
-        [sys.executable, "-m", "glarelab", "run", "luidolt2020-live", "--simulate",
-         "--participants", "2", "--out", str(data)],
-        check=True, capture_output=True,
-    )  # fmt: skip
+    assert (
+        main(["run", "luidolt2020-live", "--simulate", "--participants", "2", "--out", str(data)])
+        == 0
+    )
     first, second = sorted(data.glob("*.csv"))
     # the first session: 200 frames, 3 dropped, 10 without gaze (a blink: no pupil either)
     rows = [

@@ -147,7 +147,7 @@ def test_a_live_session_follows_the_mouse_survives_blinks_and_a_lost_tracker(scr
     )
     last = int(live_rows(frames)[-1]["frame"])
     server.kill()
-    lost = wait_for(screen, frames, lambda r: int(r["frame"]) > last + 30)
+    lost = wait_for(screen, frames, lambda r: int(r["frame"]) > last + 8)
     assert lost["valid_gaze"] == "0" and gaze(lost) == (float(left), float(top))
     screen.focus_window()
     screen.key("Escape")
