@@ -62,7 +62,7 @@ TRACKERS = {
     "pupil_labs": "eyetracker.hw.pupil_labs.pupil_core.EyeTracker",
 }
 # MouseGaze as a live session's simulated tracker: sampled at 200 Hz, the rate of Luidolt's
-# Pupil Labs tracker (§5.2.4: "Our eye tracker can capture images at 200Hz"), polled every
+# Pupil Labs tracker (§5.2.3: "Our eye tracker can capture images at 200Hz"), polled every
 # 5 ms, and without its simulated saccades (a move beyond saccade_threshold degrees is held at
 # the start for the saccade's duration): the gaze is where the mouse is at the next sample
 MOUSE_GAZE_SETTINGS = {
