@@ -75,6 +75,17 @@ LAB_SESSIONS = [  # README.md and docs/workflow.md: a participant's sessions
 NOT_RUN |= dict.fromkeys(LAB_SESSIONS, LAB_SESSION)
 NOT_RUN |= dict.fromkeys(
     [
+        "glarelab run luidolt2020-live --pilot --eyetracker mouse --participant P01 --out "
+        "data/live",
+        "glarelab run luidolt2020-live --eyetracker pupil_core.yaml --participant P01 "
+        "--fullscreen --out data/live",
+    ],
+    "a participant looking around a live scene for a minute (the second with a Pupil Labs "
+    "tracker); tests/frontend/test_live_session.py runs the first under Xvfb with real X "
+    "events",
+)
+NOT_RUN |= dict.fromkeys(
+    [
         "glarelab power spencer1995 --participants 4 6 8 --replications 1000 --scheduler "
         "tcp://10.0.0.5:8786 --out power/spencer1995",
         "glarelab power spencer1995 --participants 4 6 8 --replications 1000 --scheduler "

@@ -89,6 +89,10 @@ def _refusal(error: BaseException) -> str | None:
         return str(error)
     if isinstance(error, ValueError | FileNotFoundError | IsADirectoryError):
         return str(error)
+    from glarelab.frontend.eyetracker import TrackerError
+
+    if isinstance(error, TrackerError):
+        return str(error)
     if isinstance(error, NotADirectoryError | PermissionError | FileExistsError):
         where = f" ({error.filename})" if error.filename else ""
         return f"{error.strerror or error}{where}"

@@ -102,7 +102,13 @@ def data_reference() -> str:
         "onset and offset (session clock; each run begins with a line `run N started TIME; log "
         "time 0 = Unix time T s`) |",
         "| `STEM_frames.tsv` | frame intervals: at window opening and of every timed flash "
-        "(each run begins with its `run N started ...` line) |",
+        "(each run begins with its `run N started ...` line); a live scene's frames "
+        "(`scene.live`) add, per frame, the session clock's and the tracker's time, the gaze "
+        "`gaze_x_px`, `gaze_y_px` (window pixels from the top-left), `pupil_mm`, the "
+        "adaptation's target and state (cd/m²), `render_ms`, `dropped` and whether the sample "
+        "gave a gaze and a pupil ([night vision](night-vision.md)) |",
+        "| `STEM_iohub.hdf5` | a live scene's eye tracker: ioHub's own store of every event "
+        "(raw samples, blinks, fixations), one ioHub session per run (`run1`, ...) |",
         "| `.STEM.reserve` | 256 KiB a running session sets aside, given back when a write "
         "fails (a full disk) so that the sidecar can still say why the session ended; removed "
         "when it ends |",

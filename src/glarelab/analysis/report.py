@@ -60,6 +60,7 @@ from glarelab.analysis.apa import format_table, header
 from glarelab.analysis.dataset import DataError, Dataset
 from glarelab.analysis.export import csv_text
 from glarelab.analysis.figures import Figure, as_figure
+from glarelab.analysis.live import live_frames, live_sentence
 from glarelab.analysis.load import load_sessions
 from glarelab.analysis.methods import provenance, session_rows
 from glarelab.analysis.paradigms import paradigm_analysis
@@ -551,6 +552,13 @@ def write_report(
         stimuli=stimuli,
     )
     result = result | {"tables": {k: corrected_beside(t) for k, t in result["tables"].items()}}
+    live = live_frames(dataset.files)
+    if live is not None:  # a live scene: its dropped frames and tracker loss per session
+        paragraphs = result.get("results") or [f"{k}: {v}." for k, v in result["text"].items()]
+        result = result | {
+            "tables": {**result["tables"], "live_frames": live},
+            "results": [*paragraphs, live_sentence(live)],
+        }
     shown = _stimuli(protocol, result, displayed)
     staging = staging_folder(out)
     try:

@@ -90,6 +90,7 @@ def _run(args: argparse.Namespace) -> int:
 
 # the options of a session on a screen, which a simulated one would ignore, and the reverse
 SCREEN_ONLY = (
+    "eyetracker",
     "screenshot",
     "scripted_keys",
     "age",
@@ -128,6 +129,17 @@ def _check_run_options(args: argparse.Namespace, protocol) -> None:
                 f"{', '.join(map(_flag, ignored))}: options of simulated sessions "
                 "(--simulate), which a session on the screen would ignore"
             )
+    live = bool((protocol.data.get("scene") or {}).get("live"))
+    if args.eyetracker is not None and not live:
+        raise ValueError(
+            f"--eyetracker {args.eyetracker}: the {protocol.study} protocol shows no live scene "
+            "(a rating protocol's [scene] with live = true), so it would ignore the tracker"
+        )
+    if live and not args.simulate and args.eyetracker is None:
+        raise ValueError(
+            f"the {protocol.study} protocol shows its scene live for the gaze: give --eyetracker "
+            "mouse (the mouse as the gaze) or the ioHub configuration (.yaml) of a tracker"
+        )
     if args.stimuli is not None and not shows_images(protocol):
         raise ValueError(
             f"--stimuli {args.stimuli}: the {protocol.study} protocol ({protocol.paradigm}) "
@@ -221,6 +233,11 @@ def _run_session(args: argparse.Namespace) -> int:
         raise ValueError(
             "--pilot runs in a window (PsychoPy's piloting mode); --fullscreen is for sessions"
         )
+    eyetracker = None
+    if args.eyetracker is not None:
+        from glarelab.frontend.eyetracker import tracker_config
+
+        eyetracker = tracker_config(args.eyetracker)
     if args.participant is None:
         from glarelab.frontend.dialog import experiment_info
 
@@ -244,6 +261,7 @@ def _run_session(args: argparse.Namespace) -> int:
         claim_output(args.screenshot, "run --screenshot")
     frontend = PsychoPyFrontend(
         protocol,
+        eyetracker=eyetracker,
         stimuli=args.stimuli,
         calibration=calibration,
         fullscreen=args.fullscreen,
@@ -358,6 +376,14 @@ def add(commands) -> None:
         default=None,
         help="dry run: a text file of PsychoPy key names separated by spaces or lines, one per "
         "press (e.g. 'space up up return y n y'); Escape when they run out",
+    )
+    run.add_argument(
+        "--eyetracker",
+        default=None,
+        metavar="TRACKER",
+        help="the eye tracker of a live scene (scene.live): 'mouse' (ioHub's MouseGaze, the "
+        "mouse as the gaze; both buttons held: a blink), or an ioHub eye tracker's "
+        "configuration file (.yaml; docs/night-vision.md)",
     )
     run.add_argument("--screenshot", type=Path, default=None, help="save the first trial's screen")
     run.add_argument("--simulate", action="store_true", help="simulated observers, no screen")

@@ -129,7 +129,7 @@ def session_files(out: Path, participant: str, study: str, session: int) -> list
     check_session_id(participant, session)
     pattern = re.compile(
         re.escape(_prefix(participant, study, session))
-        + r"_\d{4}-\d{2}-\d{2}_\d{4}(_pilot)?(\.csv|\.json|\.log|_frames\.tsv)\Z"
+        + r"_\d{4}-\d{2}-\d{2}_\d{4}(_pilot)?(\.csv|\.json|\.log|_frames\.tsv|_iohub\.hdf5)\Z"
     )
     folder = Path(out)
     if not folder.is_dir():

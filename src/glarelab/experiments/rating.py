@@ -11,7 +11,9 @@ of its own per participant) begins with a timed presentation of its frames (the 
 or a sequence, each frame for a whole number of refreshes), after which the first category's
 question appears; keys pressed while the scene shows are not taken (they are recorded as
 ignored). That row's timing columns are the presentation's (onset, offset, frames dropped;
-``time_s`` from the scene's onset). The rows name the condition.
+``time_s`` from the scene's onset). The rows name the condition. A live scene
+(``scene.live``) is a free-viewing period of ``scene.seconds`` instead, which the front-end
+renders per refresh for the eye tracker's gaze (:mod:`glarelab.frontend.live`).
 """
 
 from __future__ import annotations
@@ -139,7 +141,22 @@ class RatingEngine(Engine):
         }
 
     def _presentation(self) -> dict:
-        """The condition's frames, each for its refreshes (a still: all of them)."""
+        """The condition's frames, each for its refreshes (a still: all of them); a live scene:
+        the free-viewing period, every refresh rendered for the gaze by the front-end."""
+        scene = self.protocol["scene"]
+        if scene["live"]:
+            effects = next(
+                c["effects"] for c in self.protocol["conditions"] if c["name"] == self.condition
+            )
+            return {
+                "kind": "present",
+                "condition": self.condition,
+                "live": {"effects": list(effects), "seconds": scene["seconds"]},
+                "images": [],
+                "frames": max(1, round(scene["seconds"] * self.refresh_hz)),
+                "blank_before_ms": scene["blank_before_ms"],
+                "answer_after_presentation": True,
+            }
         sequence = self.sequences[self.condition]
         frames = [
             {
@@ -359,7 +376,8 @@ class RatingObserver:
         if screen["kind"] in ("rate", "present"):
             p = self.distribution(screen["category"], screen.get("condition"))
             rating = int(rng.choice(self.scale, p=p))
-            return [(str(rating), 5.0 + float(rng.exponential(5.0)))]
+            viewing = float(screen.get("live", {}).get("seconds", 0.0))  # answered after it
+            return [(str(rating), viewing + 5.0 + float(rng.exponential(5.0)))]
         if screen["kind"] == "comment":
             return [("return", 1.0)]
         raise ValueError(f"a rating observer cannot answer a {screen['kind']!r} screen")

@@ -35,13 +35,16 @@ import numpy as np
 
 __all__ = [
     "CALIBRATION_SCREEN_S",
+    "MOUSE_GAZE_SETTINGS",
     "PUPIL_FILTER_S",
     "TRACKERS",
     "GazeFilter",
     "GazeState",
     "IoHubEyeTracker",
     "PupilCalibration",
+    "TrackerError",
     "calibrate_pupil",
+    "tracker_config",
 ]
 
 LUIDOLT2020_PUPIL_RANGE_MM = (2.0, 8.0)  # Luidolt §5.2.1 ii: "our predefined range of 2-8 mm"
@@ -58,6 +61,97 @@ TRACKERS = {
     "gazepoint": "eyetracker.hw.gazepoint.gp3.EyeTracker",
     "pupil_labs": "eyetracker.hw.pupil_labs.pupil_core.EyeTracker",
 }
+# MouseGaze as a live session's simulated tracker: sampled at 200 Hz, the rate of Luidolt's
+# Pupil Labs tracker (§5.2.3: "Our eye tracker can capture images at 200Hz"), polled every
+# 5 ms, and without its simulated saccades (a move beyond saccade_threshold degrees is held at
+# the start for the saccade's duration): the gaze is where the mouse is at the next sample
+MOUSE_GAZE_SETTINGS = {
+    "runtime_settings": {"sampling_rate": 200, "track_eyes": "RIGHT_EYE"},
+    "device_timer": {"interval": 0.005},
+    "controls": {"move": [], "blink": ["LEFT_BUTTON", "RIGHT_BUTTON"], "saccade_threshold": 1e6},
+}
+
+
+# how long a request to ioHub's server may wait for its answer before the sample is counted
+# lost (an assumption: ioHub answers in about a millisecond; a loaded machine, far slower)
+REQUEST_TIMEOUT_S = 2.0
+
+
+class TrackerError(RuntimeError):
+    """ioHub could not start the eye tracker (its plugin missing, the device unreachable)."""
+
+
+def _free_udp_port() -> int:
+    """A UDP port free now, for this ioHub server alone: ioHub's fixed default (9036) lets a
+    second session on the machine (or a server left behind) stop it from starting."""
+    import socket
+
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
+        probe.bind(("127.0.0.1", 0))
+        return int(probe.getsockname()[1])
+
+
+def tracker_config(spec: str) -> tuple[str, dict]:
+    """The tracker a session names: a name of :data:`TRACKERS`, or an ioHub configuration file.
+
+    Parameters
+    ----------
+    spec
+        ``'mouse'`` (ioHub's simulated MouseGaze, :data:`MOUSE_GAZE_SETTINGS`), another name
+        of :data:`TRACKERS` (ioHub's defaults for it), or the path of a YAML file holding one
+        ioHub eye tracker's configuration, as PsychoPy's eye tracker documentation writes it:
+        ``eyetracker.hw.<maker>.<model>.EyeTracker:`` with its settings below (or that entry
+        inside a ``monitor_devices:`` list).
+
+    Returns
+    -------
+    tuple of (str, dict)
+        The device class path (or name) and its settings.
+
+    Raises
+    ------
+    ValueError
+        For an unknown name, a missing or unreadable file, or a file that names no eye tracker
+        or more than one.
+
+    Examples
+    --------
+    >>> tracker_config("mouse")[1]["runtime_settings"]["sampling_rate"]
+    200
+    """
+    from pathlib import Path
+
+    if spec in TRACKERS:
+        return spec, (dict(MOUSE_GAZE_SETTINGS) if spec == "mouse" else {})
+    path = Path(spec)
+    if path.suffix.lower() not in (".yaml", ".yml"):
+        raise ValueError(
+            f"--eyetracker {spec!r}: must be one of {', '.join(sorted(TRACKERS))} or an ioHub "
+            "configuration file (.yaml)"
+        )
+    import yaml
+
+    try:
+        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, yaml.YAMLError) as error:
+        raise ValueError(f"--eyetracker {spec}: cannot read it as YAML ({error})") from None
+    entries = []
+    if isinstance(data, dict):
+        devices = data.get("monitor_devices")
+        for item in devices if isinstance(devices, list) else [data]:
+            if isinstance(item, dict):
+                entries += [
+                    (k, v)
+                    for k, v in item.items()
+                    if isinstance(k, str) and k.startswith("eyetracker.hw.")
+                ]
+    if len(entries) != 1 or not isinstance(entries[0][1], dict | None):
+        raise ValueError(
+            f"--eyetracker {spec}: must configure exactly one ioHub eye tracker "
+            f"(eyetracker.hw.<maker>.<model>.EyeTracker: ...); found {len(entries)}"
+        )
+    device, settings = entries[0]
+    return device, dict(settings or {})
 
 
 @dataclass(frozen=True)
@@ -407,12 +501,18 @@ class IoHubEyeTracker:
         path (``'eyetracker.hw....EyeTracker'``).
     settings
         More of the device's ioHub configuration (``runtime_settings``, ``calibration``...).
+    datastore
+        Keep ioHub's own record of every event (its hdf5 store: the raw samples, blinks,
+        fixations and saccades as the tracker reported them) in this file (``.hdf5``); None
+        (default): none. Needs PyTables (the ``eyetracker`` extra).
+    session_code
+        ioHub's name of this recording in the store (unique within the file).
 
     Raises
     ------
     ValueError
         For an unknown tracker name or a window not in pixels.
-    RuntimeError
+    TrackerError
         When ioHub cannot start the tracker (its plugin missing, the device unreachable).
 
     Notes
@@ -421,7 +521,15 @@ class IoHubEyeTracker:
     turns it into pixels from the top-left, y down (``x + W/2``, ``H/2 - y``).
     """
 
-    def __init__(self, window, *, tracker: str = "mouse", settings: dict | None = None) -> None:
+    def __init__(
+        self,
+        window,
+        *,
+        tracker: str = "mouse",
+        settings: dict | None = None,
+        datastore=None,
+        session_code: str = "live",
+    ) -> None:
         from psychopy.iohub import launchHubServer
         from psychopy.iohub.devices.eyetracker.eye_events import (
             BinocularEyeSampleEvent,
@@ -446,22 +554,47 @@ class IoHubEyeTracker:
             "mono": list(MonocularEyeSampleEvent.CLASS_ATTRIBUTE_NAMES),
             "bino": list(BinocularEyeSampleEvent.CLASS_ATTRIBUTE_NAMES),
         }
-        config = {"name": "tracker", **(settings or {})}
+        config = {**(settings or {}), "name": "tracker"}
+        store = {}
+        if datastore is not None:
+            name = str(datastore)
+            store = {
+                "experiment_code": "glarelab",
+                "session_code": session_code,
+                "datastore_name": name[: -len(".hdf5")] if name.endswith(".hdf5") else name,
+            }
         try:
-            self.io = launchHubServer(window=window, **{device: config})
+            self.io = launchHubServer(
+                window=window, udp_port=_free_udp_port(), **store, **{device: config}
+            )
             self.device_handle = self.io.getDevice("tracker")
+            # ioHub's client waits for each answer without a limit: a server that ends between
+            # a request and its answer would freeze the frame for ever
+            self.io.udp_client.sock.settimeout(REQUEST_TIMEOUT_S)
         except Exception as error:  # ioHub raises many kinds; the session needs one message
-            raise RuntimeError(
+            raise TrackerError(
                 f"ioHub could not start the eye tracker {tracker!r}: {error}"
             ) from error
         if self.device_handle is None:
             self.io.quit()
-            raise RuntimeError(f"ioHub started without the eye tracker {tracker!r}")
+            raise TrackerError(f"ioHub started without the eye tracker {tracker!r}")
         self.disconnects = 0
 
     def start(self) -> None:
-        """Start recording (ioHub keeps the raw samples as it stores them)."""
+        """Start recording (ioHub keeps the raw samples as it stores them); ``disconnects``
+        counts the samples asked for while the tracker or ioHub's server was gone."""
         self.device_handle.setRecordingState(True)
+
+    def time_s(self) -> float:
+        """The ioHub clock now, s (the clock of its samples' times and of its hdf5 store).
+
+        Returns
+        -------
+        float
+        """
+        from psychopy.iohub.devices import Computer
+
+        return float(Computer.getTime())  # the shared time base, without asking the server
 
     def sample(self) -> tuple[float | None, float | None, float | None]:
         """The tracker's last sample: gaze x, y in window pixels from the top-left and the pupil
@@ -472,6 +605,11 @@ class IoHubEyeTracker:
         tuple
             ``(gaze_x_px, gaze_y_px, pupil_raw)``.
         """
+        server = getattr(self.io, "_server_process", None)
+        if server is not None and server.poll() is not None:
+            # ioHub's server has ended: a request would wait for its answer for ever
+            self.disconnects += 1
+            return None, None, None
         try:
             raw = self.device_handle.getLastSample()
         except Exception:  # a tracker that disconnects: no sample, counted, never a crash
@@ -498,11 +636,18 @@ class IoHubEyeTracker:
         return float(x) + width / 2, height / 2 - float(y), pupil_raw
 
     def close(self) -> None:
-        """Stop recording and the ioHub server."""
+        """Stop recording and the ioHub server (a tracker or server already gone: nothing)."""
+        server = getattr(self.io, "_server_process", None)
         try:
-            self.device_handle.setRecordingState(False)
+            if server is None or server.poll() is None:  # a request to an ended one would hang
+                self.device_handle.setRecordingState(False)
+        except Exception:  # a disconnected tracker, a server that ended: nothing to stop
+            pass
         finally:
-            self.io.quit()
+            try:
+                self.io.quit()
+            except Exception:  # the server already gone: nothing to quit
+                pass
 
 
 def _finite(value) -> bool:

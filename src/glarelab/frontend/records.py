@@ -31,6 +31,7 @@ class SessionRecords:
         log_path: Path | None,
         log_lines: list[str],
         window_intervals: list[float],
+        live_columns: tuple[str, ...] = (),
     ) -> None:
         """Begin both records with ``marker`` (the run and when it started): the log, with
         ``log_lines`` after it; the frame intervals, with those measured as the window opened.
@@ -47,6 +48,9 @@ class SessionRecords:
             Lines to log after the marker (what was checked before the window opened).
         window_intervals
             The frame intervals measured as the window opened, s.
+        live_columns
+            The columns after ``interval_ms`` of a live scene's frames (a new file's header
+            names them; :meth:`write_live_row`); default none.
         """
         from psychopy import logging
 
@@ -60,7 +64,8 @@ class SessionRecords:
             try:
                 with frames_path.open("a", encoding="utf-8") as handle:
                     if handle.tell() == 0:
-                        handle.write("what\tframe\tinterval_ms\n")
+                        handle.write("\t".join(("what", "frame", "interval_ms", *live_columns)))
+                        handle.write("\n")
                     handle.write(f"{marker}\t\t\n")
                     for index, interval in enumerate(window_intervals, start=1):
                         handle.write(f"window opened\t{index}\t{1000 * interval:.3f}\n")
@@ -87,6 +92,50 @@ class SessionRecords:
         except OSError as error:  # the trials matter more than the frame intervals
             self._warn(f"frame intervals no longer written to {self.frames_path}", error)
             self.frames_path = None
+
+    def open_live(self):
+        """The frame file opened for a live scene's rows (:meth:`write_live_row`), or None."""
+        if self.frames_path is None:
+            return None
+        try:
+            return self.frames_path.open("a", encoding="utf-8")
+        except OSError as error:
+            self._warn(f"frame records not written to {self.frames_path}", error)
+            self.frames_path = None
+            return None
+
+    def write_live_row(self, handle, what: str, values: tuple, interval_s: float | None) -> bool:
+        """One frame of a live scene: ``what``, its frame number, flip interval and values,
+        flushed at once.
+
+        Parameters
+        ----------
+        handle
+            The file :meth:`open_live` gave.
+        what
+            What was shown (the line's first field).
+        values
+            The frame's values, its number first (``glarelab.frontend.live.FRAME_COLUMNS``).
+        interval_s
+            The flip interval, s; None for the first frame.
+
+        Returns
+        -------
+        bool
+            Whether it was written (False once the file can no longer be written).
+        """
+        if handle is None or self.frames_path is None:
+            return False
+        interval = "" if interval_s is None else f"{1000 * interval_s:.3f}"
+        try:
+            handle.write("\t".join((what, str(values[0]), interval, *map(str, values[1:]))))
+            handle.write("\n")
+            handle.flush()
+        except OSError as error:  # the trials matter more than the frame records
+            self._warn(f"frame records no longer written to {self.frames_path}", error)
+            self.frames_path = None
+            return False
+        return True
 
     def flush(self) -> None:
         """Write the log's lines so far to its file."""

@@ -81,6 +81,9 @@ class PsychoPyFrontend:
     monitor
         A PsychoPy Monitor Center monitor (``--monitor``): the window's monitor (its size,
         width and distance; never its gamma); default the protocol's display.
+    eyetracker
+        The eye tracker of a live scene (``scene.live``): ``(device, settings)`` as
+        :func:`glarelab.frontend.eyetracker.tracker_config` gives them; default None.
     """
 
     def __init__(
@@ -95,8 +98,11 @@ class PsychoPyFrontend:
         size: tuple[int, int] = (1280, 800),
         pilot: bool = False,
         monitor=None,
+        eyetracker: tuple[str, dict] | None = None,
     ):
         self.protocol = protocol
+        self.eyetracker = eyetracker
+        self.tracker = None  # the ioHub eye tracker, started with the session
         self.monitor = monitor
         self.pilot = pilot
         fullscreen = fullscreen and not pilot
@@ -215,6 +221,8 @@ class PsychoPyFrontend:
             f"run {run} started {started}; log time 0 = Unix time {self.clock_epoch_s():.3f} s"
             + ("; PILOT run, not a session's data" if self.pilot else "")
         )
+        from glarelab.frontend.live import FRAME_COLUMNS
+
         self.records.start(
             marker,
             frames_path=frames_path,
@@ -224,8 +232,43 @@ class PsychoPyFrontend:
                 f"{'the clock' if pace else 'vertical sync'}; screen {self.facts}"
             ],
             window_intervals=self._refresh_intervals,
+            live_columns=FRAME_COLUMNS[1:] if self.eyetracker is not None else (),
         )
+        if self.eyetracker is not None:
+            self._start_tracker(run, frames_path)
         self.keys.start()
+
+    def _start_tracker(self, run: int, frames_path: Path | None) -> None:
+        """Launch ioHub with the eye tracker, its hdf5 store beside the session's files, the
+        tracker's own calibration (not MouseGaze's), and start recording."""
+        from glarelab.frontend.eyetracker import IoHubEyeTracker
+
+        device, settings = self.eyetracker
+        store = None
+        if frames_path is None:
+            self.log("eye tracker: ioHub's hdf5 store not kept (the session writes no files)")
+        else:
+            try:
+                import tables  # noqa: F401  (ioHub's hdf5 store is written with PyTables)
+            except ImportError:
+                self.log(
+                    "eye tracker: ioHub's hdf5 store of the raw samples not kept: PyTables is "
+                    "not installed (pip install 'glarelab[eyetracker]')"
+                )
+            else:
+                stem = frames_path.name[: -len("_frames.tsv")]
+                store = frames_path.with_name(f"{stem}_iohub.hdf5")
+        self.tracker = IoHubEyeTracker(
+            self.window, tracker=device, settings=settings, datastore=store,
+            session_code=f"run{run}",
+        )  # fmt: skip
+        if device != "mouse":  # the tracker's own calibration (MouseGaze needs none)
+            self.tracker.device_handle.runSetupProcedure()
+        self.tracker.start()
+        self.log(
+            f"eye tracker {device} recording"
+            + (f"; ioHub's raw events kept in {store.name} (session run{run})" if store else "")
+        )
 
     @property
     def frames_path(self) -> Path | None:
@@ -233,6 +276,9 @@ class PsychoPyFrontend:
         return self.records.frames_path
 
     def close(self) -> None:
+        if self.tracker is not None:
+            tracker, self.tracker = self.tracker, None
+            tracker.close()
         if self.window is not None:
             self.window.close()
             self.window = None
@@ -408,6 +454,8 @@ class PsychoPyFrontend:
             Its onset and offset flips, the frames asked for and the frames dropped.
         """
         self._screen = screen
+        if screen.get("live"):
+            return self._present_live(screen)
         sequence = screen.get("sequence")
         steps = sequence or [{"images": screen["images"], "frames": screen["frames"]}]
         placed = []
@@ -454,6 +502,101 @@ class PsychoPyFrontend:
             f"{shown.dropped_frames} dropped"
         )
         return shown
+
+    def _present_live(self, screen: dict) -> Shown:
+        """A live scene's free-viewing period: every refresh rendered for the tracker's gaze
+        and pupil (:class:`glarelab.frontend.live.LiveView`), each frame a row of the
+        session's ``_frames.tsv``; Escape ends it, and the session, at once."""
+        from psychopy import logging
+
+        from glarelab.display.calibration import synthetic_calibration
+        from glarelab.experiments.loop import SessionAborted
+        from glarelab.frontend.live import LiveView
+        from glarelab.glare.night.live import LiveNight
+        from glarelab.protocols.common import glare_model
+        from glarelab.stimuli.night import night_scene
+
+        if self.tracker is None:
+            raise ValueError(
+                f"the {self.protocol.study} scene is live: run it with --eyetracker (mouse, or "
+                "the ioHub configuration of a tracker)"
+            )
+        scene, display = self.protocol["scene"], self.protocol["display"]
+        street = night_scene(self.protocol)
+        live = LiveNight(
+            street["img"], pixel_deg=street["pixel_deg"],
+            glare_model=glare_model(scene["glare_model"], scene["glare_parameters"]),
+            display_max_cd_m2=display["max_cd_m2"],
+            adapted_display_cd_m2=min(scene["adapted_display_cd_m2"], display["max_cd_m2"]),
+            scotopic="scotopic" in screen["live"]["effects"],
+        )  # fmt: skip
+        bits = self.window_bits
+        calibration = self.calibration
+        if calibration is None or len(calibration.lut) != 2**bits:
+            calibration = synthetic_calibration(
+                max_cd_m2=display["max_cd_m2"], black_cd_m2=display["black_cd_m2"], bit_depth=bits
+            )
+        view = LiveView(self.window, live, lut=calibration.lut, bits=bits)
+        what = f"trial {screen['trial']} live"
+        self.log(
+            f"{what}: scene {live.shape[1]} x {live.shape[0]} px at window pixels "
+            f"{view.origin_px[0]:g}, {view.origin_px[1]:g} (top-left), codes through the "
+            f"{'session' if calibration is self.calibration else 'synthetic'} calibration"
+        )
+        self.records.flush()  # the scene's place is known before its first frame
+        clock = logging.defaultClock
+        period = 1.0 / self.refresh_hz
+        self.window.clearBuffer()
+        blank = self.window.flip()
+        self._wait_until(
+            blank + screen["blank_before_ms"] / 1000.0 - period,
+            during=lambda: self._escape_during(screen, []),
+        )
+        escape: list[float] = []
+
+        def stop() -> bool:
+            if self.scripted is None:
+                self.keys.held += self.keys.read(text_entry=False)
+                escape.extend(t for name, t in self.keys.held if name == "escape")
+            return bool(escape)
+
+        handle = self.records.open_live()
+        try:
+            flips = view.run(
+                self.tracker, clock=clock, refresh_hz=self.refresh_hz,
+                write_row=lambda values, interval: self.records.write_live_row(
+                    handle, what, values, interval
+                ),
+                stop=stop, duration_s=screen["live"]["seconds"],
+            )  # fmt: skip
+        finally:
+            if handle is not None:
+                handle.close()
+        summary = view.summary(self.tracker)
+        self.log(
+            f"{what}: {summary['frames']} frames, {summary['dropped']} dropped, median render "
+            f"{summary['render_ms_median']:.2f} ms; tracker faults: {summary['lost']} lost "
+            f"samples, {summary['blinks']} blinks, {summary['off_screen']} off the scene, "
+            f"{summary['disconnects']} disconnects"
+        )
+        if escape:
+            self.window.clearBuffer()
+            end = self.window.flip()
+            self.log(
+                f"trial {screen['trial']} aborted: escape at {escape[0]:.4f} during its live "
+                f"scene, ended at {end:.4f} after {len(flips)} frames"
+            )
+            self.records.flush()
+            raise SessionAborted(f"escape during the live scene of trial {screen['trial']}")
+        height = live.shape[0]
+        self.screen_text.draw_text(screen.get("prompt", ""), pos=(0, -height / 2 - 60))
+        flips.append(self.window.flip())
+        return Shown(
+            onset_s=flips[0],
+            offset_s=flips[-1],
+            frames=screen["frames"],
+            dropped_frames=summary["dropped"],
+        )
 
     def _escape_during(self, screen: dict, flips: list[float]) -> None:
         """After each frame of a presentation: Escape ends it now (the trial is logged as

@@ -27,7 +27,7 @@ from glarelab.protocols.keys import Key, Schema, Tables, validate
 if TYPE_CHECKING:
     from glarelab.protocols.core import Protocol
 
-__all__ = ["CONDITION", "EFFECTS", "SCENE", "SCHEMA", "check", "columns"]
+__all__ = ["CONDITION", "EFFECTS", "LIVE_EFFECTS", "SCENE", "SCHEMA", "check", "columns"]
 
 EFFECTS = (
     "adaptation",
@@ -35,6 +35,10 @@ EFFECTS = (
     "acuity",
     "scotopic",
 )  # glarelab.glare.night.EFFECTS, Luidolt's order
+# what a live scene renders per frame (glarelab.glare.night.live.LiveNight): adaptation and
+# glare always, scotopic colour as an option; the acuity loss is not rendered live
+LIVE_EFFECTS = ("adaptation", "glare", "scotopic")
+LIVE_REQUIRED = ("adaptation", "glare")
 SCENE: Schema = {
     "kind": Key(str, "the procedural scene (glarelab.stimuli.night)", choices=("street",)),
     "size_px": Key(list, "scene size (width, height)", item=int, length=2, low=16, high=4096),
@@ -85,6 +89,12 @@ SCENE: Schema = {
     "glare_model": Key(str, "a glare model of glare.GLARE_MODELS", default="vos"),
     "glare_parameters": Key(dict, "the glare model's parameters", default={}),
     "seed": Key(int, "seed of the scene's random details", low=0, default=0),
+    "live": Key(
+        bool,
+        "shown live for an eye tracker's gaze and pupil (glarelab run --eyetracker): each "
+        "refresh rendered for the current gaze for `seconds` of free viewing, no stimulus set",
+        default=False,
+    ),
     "blank_before_ms": Key(
         float,
         "blank screen before each showing",
@@ -229,6 +239,9 @@ def _check_scene(p: dict, problems: list[str]) -> None:
         from glarelab.protocols.common import check_glare_model
 
         check_glare_model(model, p["scene"]["glare_parameters"], "scene", problems)
+    if p["scene"]["live"]:
+        _check_live(p, problems)
+        return
     rate_hz, refresh_hz = p["scene"]["frame_rate_hz"], p["display"]["refresh_hz"]
     if rate_hz > refresh_hz:
         problems.append(
@@ -250,6 +263,33 @@ def _check_scene(p: dict, problems: list[str]) -> None:
             f"{width * height * frames * 12 / 2**30:.0f} GiB per condition; at most "
             f"{MAX_PIXEL_FRAMES:.0e} (a smaller scene, a shorter or slower sequence)"
         )
+    screen_w, screen_h = p["display"]["resolution_px"]
+    if width > screen_w or height > screen_h:
+        problems.append(
+            f"scene.size_px = {[width, height]}: must fit the display's "
+            f"{[screen_w, screen_h]} pixels"
+        )
+
+
+def _check_live(p: dict, problems: list[str]) -> None:
+    """A live scene: a still street rendered per refresh, with the effects a frame renders."""
+    scene = p["scene"]
+    if scene["sequence"] != "still":
+        problems.append(
+            f"scene.sequence = {scene['sequence']!r}: a live scene (scene.live = true) follows "
+            "the eye, so its sequence must be 'still'"
+        )
+    for condition in p["conditions"]:
+        effects = condition["effects"]
+        missing = [e for e in LIVE_REQUIRED if e not in effects]
+        extra = [e for e in effects if e not in LIVE_EFFECTS]
+        if missing or extra:
+            problems.append(
+                f"conditions {condition['name']!r}: effects = {effects!r}: a live scene renders "
+                f"{', '.join(LIVE_REQUIRED)} always and scotopic as an option "
+                f"({'missing ' + ', '.join(missing) if missing else 'not ' + ', '.join(extra)})"
+            )
+    width, height = scene["size_px"]
     screen_w, screen_h = p["display"]["resolution_px"]
     if width > screen_w or height > screen_h:
         problems.append(

@@ -46,6 +46,7 @@ __all__ = [
     "build_night",
     "night_plan",
     "night_row",
+    "night_scene",
     "night_sequence",
     "night_street",
     "preview_strip",
@@ -381,16 +382,8 @@ def build_night(protocol: Protocol, *, progress=None) -> dict:
     """
     scene = protocol["scene"]
     display = protocol["display"]
-    pixel = scene["pixel_deg"] or display_pixel_deg(protocol)
-    rng = np.random.default_rng([protocol.seed, scene["seed"]])
-    street = night_street(
-        tuple(scene["size_px"]),
-        pixel_deg=pixel,
-        lamps=scene["lamps"],
-        lamp_cd_m2=scene["lamp_cd_m2"],
-        ambient_cd_m2=scene["ambient_cd_m2"],
-        rng=rng,
-    )
+    street = night_scene(protocol)
+    pixel = street["pixel_deg"]
     shown = night_sequence(
         street,
         scene["sequence"],
@@ -464,7 +457,8 @@ def build_night(protocol: Protocol, *, progress=None) -> dict:
 
 
 def shows_scene(protocol: Protocol) -> bool:
-    """Whether a rating protocol shows a scene (a questionnaire alone shows no images).
+    """Whether a rating protocol shows a scene from a stimulus set (a questionnaire alone shows
+    no images; a live scene is rendered in the session, per refresh, and has no set).
 
     Parameters
     ----------
@@ -474,9 +468,36 @@ def shows_scene(protocol: Protocol) -> bool:
     Returns
     -------
     bool
-        Whether it has a ``[scene]``.
+        Whether it has a ``[scene]`` that is not ``live``.
     """
-    return protocol.data.get("scene") is not None
+    scene = protocol.data.get("scene")
+    return scene is not None and not scene.get("live", False)
+
+
+def night_scene(protocol: Protocol) -> dict:
+    """The protocol's night street (:func:`night_street` of its ``[scene]``, seeded by the
+    protocol's and the scene's seeds), as a stimulus set and a live session both render it.
+
+    Parameters
+    ----------
+    protocol
+        A validated rating protocol with a ``[scene]``.
+
+    Returns
+    -------
+    dict
+        :func:`night_street`'s dict (``img`` in cd/m², ``pixel_deg``...).
+    """
+    scene = protocol["scene"]
+    pixel = scene["pixel_deg"] or display_pixel_deg(protocol)
+    return night_street(
+        tuple(scene["size_px"]),
+        pixel_deg=pixel,
+        lamps=scene["lamps"],
+        lamp_cd_m2=scene["lamp_cd_m2"],
+        ambient_cd_m2=scene["ambient_cd_m2"],
+        rng=np.random.default_rng([protocol.seed, scene["seed"]]),
+    )
 
 
 def night_row(protocol: Protocol, display_pixel_deg: float) -> ImageRow | None:

@@ -1,0 +1,186 @@
+"""``glarelab run luidolt2020-live --pilot --eyetracker mouse`` under Xvfb with real X events.
+
+The session runs in its own process on a private X screen; ``xdotool`` presses its keys and
+moves the pointer, which ioHub's MouseGaze takes as the gaze. The test reads what the session
+recorded: its ``_frames.tsv`` (one row per frame, with the tracker's clock at the frame's start)
+and ioHub's own hdf5 store of the tracker's samples (each with its time on that clock), never
+how fast the machine ran.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import re
+import subprocess
+import time
+
+import numpy as np
+import pytest
+
+from glarelab.display.calibration import synthetic_calibration
+from glarelab.glare import VosGlare, render_night
+from glarelab.glare.rendering.display import display_codes
+from glarelab.protocols import load_protocol
+from glarelab.protocols.common import glare_model
+from glarelab.stimuli.night import night_scene
+from tests.experiments.xscreen import XScreen, _need
+
+
+def live_rows(path):
+    with path.open(newline="") as handle:
+        rows = list(csv.DictReader(handle, delimiter="\t"))
+    return [r for r in rows[:-1] if r["what"].endswith(" live")]  # the last may be half written
+
+
+def wait_for(screen, path, test, timeout=40.0):
+    """The first live row for which ``test`` holds, waiting for it."""
+    deadline = time.time() + timeout
+    while time.time() < deadline:
+        for row in live_rows(path):
+            if test(row):
+                return row
+        screen._alive()
+        time.sleep(0.05)
+    raise AssertionError(f"no such row: last {live_rows(path)[-2:]}")
+
+
+def gaze(row):
+    return float(row["gaze_x_px"]), float(row["gaze_y_px"])
+
+
+@pytest.fixture
+def screen(tmp_path):
+    screen = XScreen(tmp_path)
+    yield screen
+    if screen.process is not None and screen.process.poll() is None:
+        screen.process.terminate()
+        try:
+            screen.process.wait(timeout=30)
+        except subprocess.TimeoutExpired:
+            screen.process.kill()
+    screen.close()
+
+
+def test_a_live_session_follows_the_mouse_survives_blinks_and_a_lost_tracker(screen, tmp_path):
+    data = tmp_path / "data"
+    screen.run(
+        "run", "luidolt2020-live", "--pilot", "--eyetracker", "mouse", "--participant", "P1",
+        "--out", data,
+    )  # fmt: skip
+    screen.wait_for_log(data, r"instructions screen onset")
+    screen.focus_window()
+    screen.key("space")
+    found = screen.wait_for_log(
+        data, r"trial 1 live: scene (\d+) x (\d+) px at window pixels (\d+), (\d+)"
+    )
+    width, height, left, top = (int(v) for v in found.groups())
+    what = "trial 1 live"
+    window = screen.wait_for_window("PsychoPy")
+    shell = subprocess.run(
+        [_need("xdotool"), "getwindowgeometry", "--shell", window],
+        env=screen.env, capture_output=True, text=True, check=True,
+    ).stdout  # fmt: skip
+    geometry = dict(line.split("=") for line in shell.split())
+    win_x, win_y = int(geometry["X"]), int(geometry["Y"])
+    win_w, win_h = int(geometry["WIDTH"]), int(geometry["HEIGHT"])
+    frames = screen.wait_for_file("*_frames.tsv", data)
+    wait_for(screen, frames, lambda r: True)
+    # three moves: inside the scene and to its two far corners (window pixels)
+    targets = [(left + 20.0, top + 30.0), (left + width - 1.0, top + height - 1.0)]
+    targets.append((float(left), float(top)))
+    moves = []
+    for x, y in targets:
+        subprocess.run(
+            [_need("xdotool"), "mousemove", "--sync", str(int(win_x + x)), str(int(win_y + y))],
+            env=screen.env, check=True,
+        )  # fmt: skip
+        row = wait_for(screen, frames, lambda r, x=x, y=y: gaze(r) == (x, y))
+        assert row["valid_gaze"] == "1" and row["pupil_mm"] == "5.0000"  # MouseGaze: 5 mm
+        moves.append((x, y, row))
+    # a blink (MouseGaze: both buttons held): the gaze lost, the last gaze and pupil held
+    xdotool = [_need("xdotool")]
+    held = int(moves[-1][2]["frame"])
+    subprocess.run([*xdotool, "mousedown", "1", "mousedown", "3"], env=screen.env, check=True)
+    blink = wait_for(screen, frames, lambda r: int(r["frame"]) > held and r["valid_gaze"] == "0")
+    subprocess.run([*xdotool, "mouseup", "1", "mouseup", "3"], env=screen.env, check=True)
+    assert gaze(blink) == (float(left), float(top)) and blink["pupil_mm"] == "5.0000"
+    back = wait_for(
+        screen, frames, lambda r: int(r["frame"]) > int(blink["frame"]) and r["valid_gaze"] == "1"
+    )
+    # the screen, read back from the X server once the eye has adapted to the corner, shows
+    # render_night of that gaze, pupil and adaptation (8-bit codes, ±1 for the little
+    # adaptation left between the row read and the screen read)
+    row = wait_for(
+        screen, frames,
+        lambda r: int(r["frame"]) > int(back["frame"])
+        and abs(float(r["adaptation_cd_m2"]) / float(r["target_cd_m2"]) - 1) < 1e-4,
+    )  # fmt: skip
+    shown = screen.codes((win_x + left, win_y + top, width, height))
+    protocol = load_protocol("luidolt2020-live")
+    scene, display = protocol["scene"], protocol["display"]
+    street = night_scene(protocol)
+    assert glare_model(scene["glare_model"], scene["glare_parameters"]) == VosGlare()
+    settings = dict(
+        pixel_deg=street["pixel_deg"], effects=("adaptation", "glare", "scotopic"),
+        glare_model=VosGlare(pupil_mm=5.0), pupil_from_adaptation=False, frame_time_s=0.0,
+        display_max_cd_m2=display["max_cd_m2"],
+        adapted_display_cd_m2=scene["adapted_display_cd_m2"], tolerance_codes=0.0,
+    )  # fmt: skip
+    offline = render_night(
+        street["img"], gaze_px=(0.0, 0.0),
+        initial_adaptation_cd_m2=float(row["adaptation_cd_m2"]), **settings,
+    )  # fmt: skip
+    lut = synthetic_calibration(
+        max_cd_m2=display["max_cd_m2"], black_cd_m2=display["black_cd_m2"], bit_depth=8
+    ).lut
+    assert np.abs(shown - np.rint(display_codes(offline.frames, lut))).max() <= 1
+    # and not the adaptation of a gaze at a lamp: the screen tells the two apart
+    other = render_night(street["img"], gaze_px=street["lamps_px"][1], **settings)
+    assert np.abs(shown - np.rint(display_codes(other.frames, lut))).max() > 5
+    # a lost tracker: ioHub's server ends; the scene goes on, the last gaze held, counted
+    import psutil
+
+    session = psutil.Process(screen.process.pid)
+    server = next(
+        p for p in session.children(recursive=True) if "iohub" in " ".join(p.cmdline()).lower()
+    )
+    last = int(live_rows(frames)[-1]["frame"])
+    server.kill()
+    lost = wait_for(screen, frames, lambda r: int(r["frame"]) > last + 8)
+    assert lost["valid_gaze"] == "0" and gaze(lost) == (float(left), float(top))
+    screen.focus_window()
+    screen.key("Escape")
+    assert screen.wait(timeout=60) == 3, screen.stderr[-3000:]  # aborted, as any Escape
+    sidecar = json.loads(next(data.glob("*.json")).read_text())
+    assert sidecar["status"] == "aborted"
+    log = next(data.glob("*.log")).read_text()
+    counts = re.search(
+        r"trial 1 live: (\d+) frames, (\d+) dropped.*?(\d+) lost samples, (\d+) blinks, "
+        r"(\d+) off the scene, (\d+) disconnects",
+        log,
+    )
+    with frames.open(newline="") as handle:  # complete now: its last row too
+        recorded = [r for r in csv.DictReader(handle, delimiter="\t") if r["what"] == what]
+    assert counts is not None, log[-2000:]
+    n, dropped, lost_n, blinks, _, disconnects = (int(v) for v in counts.groups())
+    assert n == len(recorded) and dropped == sum(r["dropped"] == "1" for r in recorded)
+    assert lost_n == sum(r["valid_gaze"] == "0" for r in recorded) and blinks >= 1
+    assert disconnects > 0
+    # the gaze followed each move within one frame of the tracker's sample: the first frame
+    # whose recorded gaze is the new place is at most one frame after the first frame that
+    # began after the tracker's first sample there (ioHub's clock, in its hdf5 store)
+    import tables
+
+    with tables.open_file(next(data.glob("*_iohub.hdf5"))) as store:
+        samples = store.get_node(
+            "/data_collection/events/eyetracker/MonocularEyeSampleEvent"
+        ).read()
+    starts = np.array([float(r["tracker_time_s"]) for r in recorded])
+    for x, y, _ in moves:
+        # ioHub's gaze: pixels from the window's centre, y up
+        at = (samples["gaze_x"] == x - win_w / 2) & (samples["gaze_y"] == win_h / 2 - y)
+        first_sample = samples["time"][at & (samples["status"] == 0)].min()
+        began_after = int(np.argmax(starts > first_sample))
+        first_new = next(int(r["frame"]) for r in recorded if gaze(r) == (x, y))
+        assert first_new <= began_after + 1, (x, y, first_new, began_after)
