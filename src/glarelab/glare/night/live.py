@@ -40,14 +40,25 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
+from scipy import ndimage
 from threadpoolctl import ThreadpoolController
 
+from glarelab.glare._colour import colour
 from glarelab.glare._validation import check_choice, check_image, check_in_range, check_positive
 from glarelab.glare.models import _resolve
 from glarelab.glare.models.base import GlareModel
 from glarelab.glare.models.eye import HALO_PUPIL_MM
 from glarelab.glare.models.spencer1995 import VosGlare
-from glarelab.glare.night.acuity import MIN_LUMINANCE_CD_M2
+from glarelab.glare.night.acuity import (
+    LEVELS_PER_OCTAVE,
+    MIN_LUMINANCE_CD_M2,
+    SIGMA_METHODS,
+    _layers_at,
+    _levels,
+    _radius,
+    acuity_blur,
+    blur_sigma_deg,
+)
 from glarelab.glare.night.adaptation import (
     ABSOLUTE_THRESHOLD_CD_M2,
     TAU_CONE_S,
@@ -58,7 +69,7 @@ from glarelab.glare.night.adaptation import (
     luminance,
     window_mean,
 )
-from glarelab.glare.night.scotopic import scotopic_colour
+from glarelab.glare.night.scotopic import rod_weights, scotopic_colour
 from glarelab.glare.rendering.compose import check_composition, compose
 from glarelab.glare.rendering.renderer import GlareRenderer
 
@@ -140,7 +151,12 @@ class LiveFrame:
         Wall time of the frame, ms.
     new_entries
         Entries of the bank this frame had to make (0 once the gaze has visited the
-        adaptation levels and pupils before; each costs about one offline glare render).
+        adaptation levels and pupils before; each costs about one offline glare render, or
+        with the acuity loss one offline render of glare and acuity).
+    exact_px
+        With the acuity loss: pixels whose blur this frame computed directly (those within
+        the blur's reach of a pixel that meets the display's white between the two bank
+        levels); 0 without.
     """
 
     image: np.ndarray
@@ -151,6 +167,7 @@ class LiveFrame:
     exposure: float
     render_ms: float
     new_entries: int
+    exact_px: int = 0
 
 
 class LiveNight:
@@ -204,6 +221,12 @@ class LiveNight:
     glare_falloff_deg
         σ of Luidolt's Gaussian falloff of the glare around the gaze, degrees (§5.2.3; as
         :func:`~glarelab.glare.render_night`'s); default None: the whole frame alike.
+    acuity
+        Also the loss of acuity (Luidolt §5.3, :func:`~glarelab.glare.night.acuity.acuity_blur`
+        with ``blur='layers'``) of each frame, after the glare and before the scotopic colour,
+        as ``render_night`` with the effect ``'acuity'``; default False. See Notes.
+    acuity_method, acuity_space, levels_per_octave
+        As ``render_night``'s (defaults ``'Krawczyk2005'``, ``'lightness'``, 16).
 
     Raises
     ------
@@ -214,6 +237,22 @@ class LiveNight:
     -----
     The bank holds ``2 × len(bank)`` images of the scene's size (fewer where neighbouring
     pupils give the same spread, as the Vos PSF's do above and below 3 mm).
+
+    **Acuity.** The blur's input is the CIE L* of the clamped, glared display image and each
+    pixel's σ follows from its scene luminance with the glare (eqs. 5.14-5.15): neither is
+    linear in the exposure, so a stack of blurs of one image cannot give the frame. The bank
+    keeps, with each threshold ``T_j`` and pupil, the frame with acuity loss at the exposure
+    ``s_j = L_dmax / T_j``, divided by ``s_j`` (``A_j``); a frame at ``s`` is
+    ``s((1 - u) A_j + u A_{j+1})``, bilinear in ``T`` and the pupil as the spread. Where no
+    channel meets ``L_dmax`` between ``T_j`` and ``T_{j+1}`` the frame divided by ``s`` is
+    smooth in ``T`` (in the cube-root part of L* exactly proportional to ``s``), and the
+    interpolation errs by less than 0.01 codes (measured); a pixel that meets the white in
+    between has a kink, so every pixel within the blur's reach of one is blurred directly
+    from this frame's display (:attr:`LiveFrame.exact_px`), with the numbers of
+    ``render_night``. The acuity loss does not combine with the gaze falloff: the falloff
+    blends the glared and the unglared frame by a weight that changes across the frame
+    before the blur, and blending the two banked blurs instead errs by up to 250 codes next
+    to a lamp (measured), where the unglared frame is dark and its blur large.
 
     References
     ----------
@@ -250,6 +289,10 @@ class LiveNight:
         bank_size: int = BANK_SIZE,
         glare_falloff_deg: float | None = None,
         scotopic: bool = False,
+        acuity: bool = False,
+        acuity_method: Literal["Krawczyk2005", "Luidolt2020"] = "Krawczyk2005",
+        acuity_space: Literal["lightness", "linear"] = "lightness",
+        levels_per_octave: int = LEVELS_PER_OCTAVE,
     ) -> None:
         image = check_image("scene_cd_m2", scene_cd_m2, channels=(3,))
         rgb = image if image.ndim == 3 else np.repeat(image[..., None], 3, axis=2)
@@ -317,6 +360,21 @@ class LiveNight:
             if glare_falloff_deg is None
             else check_positive("glare_falloff_deg", glare_falloff_deg, unit="deg")
         )
+        self.acuity = bool(acuity)
+        if self.acuity and self.falloff_deg is not None:
+            raise ValueError(
+                "acuity=True does not combine with glare_falloff_deg (the falloff's blend "
+                "precedes the blur, which the bank cannot interpolate): give one of them"
+            )
+        self.acuity_method = check_choice("acuity_method", acuity_method, SIGMA_METHODS)
+        self.acuity_space = check_choice("acuity_space", acuity_space, ("lightness", "linear"))
+        self.levels_per_octave = int(
+            check_in_range("levels_per_octave", levels_per_octave, 1, 64, unit="")
+        )
+        if self.levels_per_octave != levels_per_octave:
+            raise ValueError(f"levels_per_octave must be an integer; got {levels_per_octave!r}")
+        # the scotopic blend of eq. 5.18 is linear in RGB for a frame's L_i: one 3 × 3 matrix
+        self._rod_positive = bool((rod_weights(colourspace) >= 0).all())
         self.build_s = 0.0
         self.frames = 0
 
@@ -436,12 +494,15 @@ class LiveNight:
         )
         exposure = self.key / max(self._state, MIN_LUMINANCE_CD_M2)
         made = self.bank_entries
-        self._compose(exposure, pupil, gaze)
+        exact = 0
+        if self.acuity:  # §5.3, of the glared display, before the colour (Luidolt ch. 4)
+            with self._threads.limit(limits=1, user_api="blas"):
+                exact = self._acuity(exposure, pupil)
+        else:
+            self._compose(exposure, pupil, gaze)
         if self.scotopic:  # §5.4: "after tone mapping", of the adapted luminance
-            shifted = scotopic_colour(
-                self._out, adaptation_luminance_cd_m2=self._state, colourspace=self.colourspace
-            )
-            np.clip(shifted, 0.0, self.l_dmax, out=self._out, casting="same_kind")
+            with self._threads.limit(limits=1, user_api="blas"):
+                self._scotopic(self._state)
         self.frames += 1
         return LiveFrame(
             image=self._out,
@@ -452,14 +513,13 @@ class LiveNight:
             exposure=exposure,
             render_ms=1e3 * (time.perf_counter() - start),
             new_entries=self.bank_entries - made,
+            exact_px=exact,
         )
 
-    def _compose(self, exposure: float, pupil: float, gaze: tuple[float, float]) -> None:
-        dtype = self.dtype.type
-        out, spread, work = self._out, self._spread, self._work
-        np.multiply(self._display, dtype(exposure), out=out)
-        # the threshold T = L_dmax / s between T_j = r^j and T_{j+1}, and the pupil between
-        # the bank's p_i and p_{i+1}: bilinear weights
+    def _terms(self, exposure: float, pupil: float) -> list[tuple[int, float, float]]:
+        """``(level, pupil, weight)`` of the bank entries around the frame's threshold
+        ``T = L_dmax / s`` (between ``T_j = r^j`` and ``T_{j+1}``) and pupil (between the
+        bank's ``p_i`` and ``p_{i+1}``): bilinear weights, those of 0 left out."""
         threshold = self.l_dmax / exposure
         level = math.floor(math.log(threshold) / math.log(self.threshold_ratio))
         t_low, t_high = self.threshold_ratio**level, self.threshold_ratio ** (level + 1)
@@ -472,12 +532,22 @@ class LiveNight:
             t = (pupil - p0) / (p1 - p0)
             if t > 0 and self._model_for(p0) != self._model_for(p1):
                 pupils = [(p0, 1.0 - t), (p1, t)]
+        return [
+            (step, p, weight_t * weight_p)
+            for step, weight_t in ((level, 1.0 - u), (level + 1, u))
+            if weight_t > 0
+            for p, weight_p in pupils
+        ]
+
+    def _compose(self, exposure: float, pupil: float, gaze: tuple[float, float]) -> None:
+        dtype = self.dtype.type
+        out, spread, work = self._out, self._spread, self._work
+        np.multiply(self._display, dtype(exposure), out=out)
         terms = []
-        for step, weight_t in ((level, 1.0 - u), (level + 1, u)):
-            for p, weight_p in pupils if weight_t > 0 else ():
-                entry = self._entry(step, p)
-                if entry is not None:
-                    terms.append((entry, dtype(weight_t * weight_p * exposure)))
+        for step, p, weight in self._terms(exposure, pupil):
+            entry = self._entry(step, p)
+            if entry is not None:
+                terms.append((entry, dtype(weight * exposure)))
         l_dmax = dtype(self.l_dmax)
         if self.falloff_deg is None:
             # min(L + S, L_dmax), the spread added term by term: Yoshida's rule, and Spencer's
@@ -490,12 +560,162 @@ class LiveNight:
         spread.fill(0)
         for entry, weight in terms:
             spread += np.multiply(entry, weight, out=work)
-        rows, cols = gaze_falloff(
-            self.shape, pixel_deg=self.pixel_deg, gaze_px=gaze, sigma_deg=self.falloff_deg
-        )
         base = np.minimum(out, l_dmax, out=work)
         compose(out, spread, self.l_dmax, self.method, out=out)
         out -= base
-        out *= (rows[:, None] * cols[None, :]).astype(self.dtype)[..., None]
+        out *= self._falloff(gaze)[..., None]
         out += base
         np.clip(out, 0.0, self.l_dmax, out=out)
+
+    def _falloff(self, gaze: tuple[float, float]) -> np.ndarray:
+        """The falloff's weight around the gaze (§5.2.3), ``(H, W)``."""
+        rows, cols = gaze_falloff(
+            self.shape, pixel_deg=self.pixel_deg, gaze_px=gaze, sigma_deg=self.falloff_deg
+        )
+        return (rows[:, None] * cols[None, :]).astype(self.dtype)
+
+    # the acuity loss -------------------------------------------------------------------
+    def _acuity_entry(self, level: int, pupil: float) -> tuple[np.ndarray, np.ndarray, int]:
+        """The frame with acuity loss at the exposure ``s_j = L_dmax / T_j`` divided by
+        ``s_j``, which channels meet ``L_dmax`` there, and the largest blur radius (pixels)
+        of the frame's ladder levels."""
+        key = ("acuity", level, self._model_for(pupil))
+        if key in self._bank:
+            self._bank.move_to_end(key)
+            return self._bank[key]
+        exposure = self.l_dmax / self.threshold_ratio**level
+        display = self.scene * exposure
+        spread = self._entry(level, pupil)  # counted and timed there
+        start = time.perf_counter()
+        if spread is not None:
+            display = compose(display, spread.astype(float) * exposure, self.l_dmax, self.method)
+        display = np.minimum(display, self.l_dmax)
+        blurred = acuity_blur(
+            display, pixel_deg=self.pixel_deg, method=self.acuity_method, blur="layers",
+            space=self.acuity_space, white_cd_m2=self.l_dmax, luminance_scale=1.0 / exposure,
+            levels_per_octave=self.levels_per_octave, colourspace=self.colourspace,
+        )  # fmt: skip
+        # each pixel's reach: the radius of the ladder's level above its σ
+        y = np.maximum(luminance(display, colourspace=self.colourspace), 0.0) / exposure
+        sigma = np.asarray(blur_sigma_deg(y, method=self.acuity_method)) / self.pixel_deg
+        ladder = _levels(float(sigma.max()), self.levels_per_octave)
+        upper = ladder[np.minimum(np.searchsorted(ladder, sigma), ladder.size - 1)]
+        clamped = display >= self.l_dmax  # one bit per channel
+        entry = (
+            (blurred / exposure).astype(self.dtype),
+            clamped[..., 0] | (clamped[..., 1] << 1) | (clamped[..., 2] << 2),
+            _radius(upper).astype(np.int16),
+        )
+        self._bank[key] = entry
+        self.bank_entries += 1
+        while len(self._bank) > self.bank_size:
+            self._bank.popitem(last=False)
+        self.build_s += time.perf_counter() - start
+        return entry
+
+    def _acuity(self, exposure: float, pupil: float) -> int:
+        """Replace the display in ``_out`` by its acuity loss: the bank's interpolation, and
+        the pixels near a kink blurred directly. Returns how many were."""
+        dtype = self.dtype.type
+        out, work = self._out, self._work
+        kinks, reach, by_model = None, None, {}
+        terms = self._terms(exposure, pupil)
+        for index, (step, p, weight) in enumerate(terms):
+            blurred, clamped, radius = self._acuity_entry(step, p)
+            if index == 0:
+                np.multiply(blurred, dtype(weight * exposure), out=out)
+            else:
+                out += np.multiply(blurred, dtype(weight * exposure), out=work)
+            by_model.setdefault(self._model_for(p), []).append(clamped)
+            reach = radius if reach is None else np.maximum(reach, radius)
+        for masks in by_model.values():
+            if len(masks) == 2:  # two levels: where a channel meets the white between them
+                kink = masks[0] != masks[1]
+                kinks = kink if kinks is None else kinks | kink
+        exact = 0
+        if kinks is not None and kinks.any():
+            # a frame's σ lies near its two levels': one pixel more of reach for the rest
+            exact = self._blur_near(kinks, reach + 1, exposure, pupil)
+        return exact
+
+    def _display_in(self, exposure: float, pupil: float, rows: slice, cols: slice) -> np.ndarray:
+        """The glared display ``min(s X + S, L_dmax)`` of a part of the frame (as
+        :meth:`_compose` without the falloff), float64."""
+        display = self.scene[rows, cols] * exposure
+        for step, p, weight in self._terms(exposure, pupil):
+            entry = self._entry(step, p)
+            if entry is not None:
+                display += entry[rows, cols].astype(float) * (weight * exposure)
+        return np.minimum(display, self.l_dmax, out=display)
+
+    def _blur_near(
+        self, kinks: np.ndarray, reach: np.ndarray, exposure: float, pupil: float
+    ) -> int:
+        """Blur the pixels whose kernel reaches a kink (``reach``: each pixel's radius)
+        directly from the frame's display, as :func:`~glarelab.glare.night.acuity.acuity_blur`
+        does, into ``_out``."""
+        rows, cols = np.nonzero(kinks)
+        height, width = self.shape
+        most = int(reach.max())
+        top, bottom = max(rows.min() - most, 0), min(rows.max() + most + 1, height)
+        left, right = max(cols.min() - most, 0), min(cols.max() + most + 1, width)
+        distance = ndimage.distance_transform_cdt(
+            ~kinks[top:bottom, left:right], metric="chessboard"
+        )
+        near_rows, near_cols = np.nonzero(distance <= reach[top:bottom, left:right])
+        near_rows, near_cols = near_rows + top, near_cols + left
+        space_rgb = colour.RGB_COLOURSPACES[self.colourspace]
+        y_row = np.asarray(space_rgb.matrix_RGB_to_XYZ[1], float)
+        y_row = y_row / y_row.sum()
+        margin = most
+        while True:  # the crop holds every pixel the kernels reach (or the image's border)
+            c_top, c_bottom = max(top - margin, 0), min(bottom + margin, height)
+            c_left, c_right = max(left - margin, 0), min(right + margin, width)
+            crop = self._display_in(
+                exposure, pupil, slice(c_top, c_bottom), slice(c_left, c_right)
+            )
+            r, c = near_rows - c_top, near_cols - c_left
+            if self.acuity_space == "lightness":  # CIE L* of the display's white (§5.3.1)
+                planes = colour.colorimetry.lightness_CIE1976(
+                    (crop @ y_row) / self.l_dmax * 100.0, 100.0
+                )[..., None]
+                y = colour.colorimetry.luminance_CIE1976(planes[r, c, 0], 100.0)
+                y = y / 100.0 * self.l_dmax
+            else:
+                planes = crop
+                y = planes[r, c] @ y_row
+            sigma = (
+                np.asarray(
+                    blur_sigma_deg(np.maximum(y, 0.0) / exposure, method=self.acuity_method)
+                ).reshape(-1)
+                / self.pixel_deg
+            )
+            needed = int(_radius(_levels(float(sigma.max()), self.levels_per_octave)[-1]))
+            if needed <= margin:
+                break
+            margin = needed
+        blurred = _layers_at(planes, sigma, r, c, self.levels_per_octave)
+        if self.acuity_space == "lightness":  # the blurred L* with the pixel's a*, b*
+            xyz = (crop[r, c] / self.l_dmax) @ space_rgb.matrix_RGB_to_XYZ.T
+            lab = colour.XYZ_to_Lab(xyz, space_rgb.whitepoint)
+            lab[:, 0] = blurred[:, 0]
+            xyz = colour.Lab_to_XYZ(lab, space_rgb.whitepoint)
+            blurred = (xyz @ space_rgb.matrix_XYZ_to_RGB.T) * self.l_dmax
+        self._out[near_rows, near_cols] = np.maximum(blurred, 0.0)
+        return int(near_rows.size)
+
+    def _scotopic(self, adaptation: float) -> None:
+        """Luidolt's eq. 5.18 of ``_out``: for Rec. 709 (rod weights >= 0) one 3 × 3 matrix,
+        the shift of each primary."""
+        if not self._rod_positive:
+            shifted = scotopic_colour(
+                self._out, adaptation_luminance_cd_m2=adaptation, colourspace=self.colourspace
+            )
+            np.clip(shifted, 0.0, self.l_dmax, out=self._out, casting="same_kind")
+            return
+        matrix = scotopic_colour(
+            np.eye(3), adaptation_luminance_cd_m2=adaptation, colourspace=self.colourspace
+        ).astype(self.dtype)
+        flat = self._out.reshape(-1, 3)
+        np.matmul(flat, matrix, out=self._work.reshape(-1, 3))
+        np.clip(self._work, 0.0, self.l_dmax, out=self._out)
