@@ -641,7 +641,7 @@ class LiveNight:
         sigma = np.asarray(blur_sigma_deg(y, method=self.acuity_method)) / self.pixel_deg
         ladder = _levels(float(sigma.max()), self.levels_per_octave)
         upper = ladder[np.minimum(np.searchsorted(ladder, sigma), ladder.size - 1)]
-        clamped = display >= self.l_dmax  # one bit per channel
+        clamped = (display >= self.l_dmax).astype(np.uint8)  # one bit per channel
         entry = (
             (blurred / exposure).astype(self.dtype),
             clamped[..., 0] | (clamped[..., 1] << 1) | (clamped[..., 2] << 2),
@@ -659,7 +659,7 @@ class LiveNight:
         the pixels near a kink blurred directly. Returns how many were."""
         dtype = self.dtype.type
         out, work = self._out, self._work
-        kinks, reach, by_model = None, None, {}
+        kinks, radii, by_model = None, [], {}
         terms = self._terms(exposure, pupil)
         for index, (step, p, weight) in enumerate(terms):
             blurred, clamped, radius = self._acuity_entry(step, p)
@@ -668,17 +668,19 @@ class LiveNight:
             else:
                 out += np.multiply(blurred, dtype(weight * exposure), out=work)
             by_model.setdefault(self._model_for(p), []).append(clamped)
-            reach = radius if reach is None else np.maximum(reach, radius)
+            radii.append(radius)
         for masks in by_model.values():
             if len(masks) == 2:  # two levels: where a channel meets the white between them
                 kink = masks[0] != masks[1]
                 kinks = kink if kinks is None else kinks | kink
         exact = 0
         if kinks is not None and kinks.any():
-            exact = sum(
-                self._blur_near(kinks, reach, exposure, pupil, box)
-                for box in _clusters(kinks, int(reach.max()))
-            )
+            most = int(max(radius.max() for radius in radii))  # kept with each entry
+            for box in _clusters(kinks, most):
+                reach = radii[0][box]
+                for radius in radii[1:]:
+                    reach = np.maximum(reach, radius[box])
+                exact += self._blur_near(kinks, reach, exposure, pupil, box)
         return exact
 
     def _display_in(self, exposure: float, pupil: float, rows: slice, cols: slice) -> np.ndarray:
@@ -699,16 +701,14 @@ class LiveNight:
         pupil: float,
         box: tuple[slice, slice],
     ) -> int:
-        """Blur the pixels of ``box`` within ``reach`` (each pixel's, pixels) of a kink
-        directly from the frame's display, as :func:`~glarelab.glare.night.acuity.acuity_blur`
-        does, into ``_out``."""
+        """Blur the pixels of ``box`` within ``reach`` (each pixel's in the box, pixels) of a
+        kink directly from the frame's display, as
+        :func:`~glarelab.glare.night.acuity.acuity_blur` does, into ``_out``."""
         height, width = self.shape
         top, bottom, left, right = box[0].start, box[0].stop, box[1].start, box[1].stop
-        most = int(reach[box].max())
-        distance = ndimage.distance_transform_cdt(
-            ~kinks[top:bottom, left:right], metric="chessboard"
-        )
-        near_rows, near_cols = np.nonzero(distance <= reach[top:bottom, left:right])
+        most = int(reach.max())
+        distance = ndimage.distance_transform_cdt(~kinks[box], metric="chessboard")
+        near_rows, near_cols = np.nonzero(distance <= reach)
         near_rows, near_cols = near_rows + top, near_cols + left
         space_rgb = colour.RGB_COLOURSPACES[self.colourspace]
         y_row = np.asarray(space_rgb.matrix_RGB_to_XYZ[1], float)
