@@ -307,6 +307,13 @@ class LiveNight:
     >>> frame = live.frame(gaze_px=(12.0, 16.0), pupil_mm=5.0, frame_time_s=1 / 60)
     >>> frame.image.shape, bool(frame.image.max() <= 100.0), frame.pupil_mm
     ((24, 32, 3), True, 5.0)
+
+    All four of Luidolt's effects, the acuity loss from the bank:
+
+    >>> night = LiveNight(scene, pixel_deg=0.1, pupils_mm=(4.0, 6.0), acuity=True, scotopic=True)
+    >>> frame = night.frame(gaze_px=(12.0, 16.0), pupil_mm=5.0, frame_time_s=1 / 60)
+    >>> frame.image.shape, frame.new_entries > 0
+    ((24, 32, 3), True)
     """
 
     def __init__(
