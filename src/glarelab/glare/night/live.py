@@ -36,6 +36,7 @@ import dataclasses
 import math
 import time
 from collections import OrderedDict
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Literal
 
@@ -401,6 +402,7 @@ class LiveNight:
         self._bank: OrderedDict[tuple, np.ndarray | None] = OrderedDict()
         self.bank_entries = 0
         self._threads = ThreadpoolController()
+        self._pool: ThreadPoolExecutor | None = None  # the direct blur's thread, when needed
         self.scotopic = bool(scotopic)
         self.colourspace = colourspace
         self.falloff_deg = (
@@ -666,38 +668,58 @@ class LiveNight:
         the pixels near a kink blurred directly. Returns how many were."""
         dtype = self.dtype.type
         out, work = self._out, self._work
-        kinks, radii, by_model = None, [], {}
-        terms = self._terms(exposure, pupil)
-        for index, (step, p, weight) in enumerate(terms):
-            blurred, clamped, radius = self._acuity_entry(step, p)
-            if index == 0:
-                np.multiply(blurred, dtype(weight * exposure), out=out)
-            else:
-                out += np.multiply(blurred, dtype(weight * exposure), out=work)
+        kinks, radii, by_model, spreads, blurred = None, [], {}, [], []
+        for step, p, weight in self._terms(exposure, pupil):
+            entry, clamped, radius = self._acuity_entry(step, p)
+            blurred.append((entry, dtype(weight * exposure)))
+            spread = self._entry(step, p)
+            if spread is not None:
+                spreads.append((spread, weight))
             by_model.setdefault(self._model_for(p), []).append(clamped)
             radii.append(radius)
         for masks in by_model.values():
             if len(masks) == 2:  # two levels: where a channel meets the white between them
                 kink = masks[0] != masks[1]
                 kinks = kink if kinks is None else kinks | kink
-        exact = 0
+        direct = None
         if kinks is not None and kinks.any():
-            most = int(max(radius.max() for radius in radii))  # kept with each entry
-            for box in _clusters(kinks, most):
-                reach = radii[0][box]
-                for radius in radii[1:]:
-                    reach = np.maximum(reach, radius[box])
-                exact += self._blur_near(kinks, reach, exposure, pupil, box)
+            # the direct blur on the second core while this one interpolates (numpy lets go
+            # of the GIL in both)
+            if self._pool is None:
+                self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="LiveNight")
+            direct = self._pool.submit(self._blur_kinks, kinks, radii, exposure, spreads)
+        for index, (entry, weight) in enumerate(blurred):
+            if index == 0:
+                np.multiply(entry, weight, out=out)
+            else:
+                out += np.multiply(entry, weight, out=work)
+        exact = 0
+        if direct is not None:
+            for rows, cols, values in direct.result():
+                out[rows, cols] = values
+                exact += rows.size
         return exact
 
-    def _display_in(self, exposure: float, pupil: float, rows: slice, cols: slice) -> np.ndarray:
+    def _blur_kinks(
+        self, kinks: np.ndarray, radii: list, exposure: float, spreads: list
+    ) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+        """:meth:`_blur_near` of each box around a group of kinks."""
+        most = int(max(radius.max() for radius in radii))
+        found = []
+        for box in _clusters(kinks, most):
+            reach = radii[0][box]
+            for radius in radii[1:]:
+                reach = np.maximum(reach, radius[box])
+            found.append(self._blur_near(kinks, reach, exposure, spreads, box))
+        return found
+
+    def _display_in(self, exposure: float, spreads: list, rows: slice, cols: slice) -> np.ndarray:
         """The glared display ``min(s X + S, L_dmax)`` of a part of the frame (as
-        :meth:`_compose` without the falloff), float64."""
+        :meth:`_compose` without the falloff; ``spreads``: the bank's ``(entry, weight)``),
+        float64."""
         display = self.scene[rows, cols] * exposure
-        for step, p, weight in self._terms(exposure, pupil):
-            entry = self._entry(step, p)
-            if entry is not None:
-                display += entry[rows, cols].astype(float) * (weight * exposure)
+        for entry, weight in spreads:
+            display += entry[rows, cols].astype(float) * (weight * exposure)
         return np.minimum(display, self.l_dmax, out=display)
 
     def _blur_near(
@@ -705,12 +727,12 @@ class LiveNight:
         kinks: np.ndarray,
         reach: np.ndarray,
         exposure: float,
-        pupil: float,
+        spreads: list,
         box: tuple[slice, slice],
-    ) -> int:
-        """Blur the pixels of ``box`` within ``reach`` (each pixel's in the box, pixels) of a
-        kink directly from the frame's display, as
-        :func:`~glarelab.glare.night.acuity.acuity_blur` does, into ``_out``."""
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The pixels of ``box`` within ``reach`` (each pixel's in the box, pixels) of a kink,
+        blurred directly from the frame's display as
+        :func:`~glarelab.glare.night.acuity.acuity_blur` does: rows, columns, display RGB."""
         height, width = self.shape
         top, bottom, left, right = box[0].start, box[0].stop, box[1].start, box[1].stop
         most = int(reach.max())
@@ -725,7 +747,7 @@ class LiveNight:
             c_top, c_bottom = max(top - margin, 0), min(bottom + margin, height)
             c_left, c_right = max(left - margin, 0), min(right + margin, width)
             crop = self._display_in(
-                exposure, pupil, slice(c_top, c_bottom), slice(c_left, c_right)
+                exposure, spreads, slice(c_top, c_bottom), slice(c_left, c_right)
             )
             r, c = near_rows - c_top, near_cols - c_left
             y = crop[r, c] @ y_row
@@ -751,8 +773,7 @@ class LiveNight:
             f += ((blurred[:, 0] + 16.0) / 116.0 - f[:, 1])[:, None]
             xyz = _cie_f_inverse(f) * white
             blurred = (xyz @ space_rgb.matrix_XYZ_to_RGB.T) * self.l_dmax
-        self._out[near_rows, near_cols] = np.maximum(blurred, 0.0)
-        return int(near_rows.size)
+        return near_rows, near_cols, np.maximum(blurred, 0.0)
 
     def _scotopic(self, adaptation: float) -> None:
         """Luidolt's eq. 5.18 of ``_out``: for Rec. 709 (rod weights >= 0) one 3 × 3 matrix,
