@@ -49,7 +49,7 @@ NOT_RUN = {
     "glarelab bench --acuity --out docs/bench-acuity": "takes a minute or more; the "
     "documented quick run (--only street_0.0297deg) runs, and tests/bench/test_acuity.py checks its "
     "rows",
-    "glarelab bench --live --out out/bench-live": "takes a minute or more; "
+    "glarelab bench --live --out out/bench-live": "takes several minutes; "
     "tests/bench/test_live.py runs it on a smaller street and checks the rows",
 }
 LAB_SESSIONS = [  # README.md and docs/workflow.md: a participant's sessions

@@ -236,3 +236,14 @@ def test_the_scale_from_display_to_scene_sets_the_blur():
 def test_bad_input_is_refused_by_name(call, pattern):
     with pytest.raises(ValueError, match=pattern):
         call()
+
+
+def test_the_layers_blur_at_chosen_pixels_equals_the_whole_images():
+    # the live renderer blurs a few pixels directly: the same numbers as varying_blur
+    rng = np.random.default_rng(5)
+    image, sigma = rng.random((30, 40, 2)), rng.random((30, 40)) * 3.0
+    sigma[0, 0], sigma[5, 5] = 0.0, 0.1  # kept, and between level 0 and the first level
+    rows, cols = np.nonzero(rng.random((30, 40)) < 0.3)
+    whole = acuity.varying_blur(image, sigma, levels_per_octave=16)
+    chosen = acuity._layers_at(image, sigma[rows, cols], rows, cols, 16)
+    np.testing.assert_allclose(chosen, whole[rows, cols], atol=1e-12)

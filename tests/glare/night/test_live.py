@@ -123,3 +123,62 @@ def test_scotopic_colour_of_the_adapted_luminance_equals_render_nights(scene):
     unshifted = LiveNight(scene, pixel_deg=PIXEL_DEG, initial_adaptation_cd_m2=0.5)
     plain = unshifted.frame(gaze_px=(47, 0), pupil_mm=6.0, frame_time_s=0.05).image
     assert np.abs(codes(plain) - codes(reference.frames)).max() > 5  # the shift is visible
+
+
+def border_lamp_scene():
+    """A dim street with a lamp cut by the left border and an orange window."""
+    scene = np.full((40, 56, 3), 0.05)
+    scene[18:21, 0:2] = 3e4
+    scene[5:9, 30:40] *= [4.0, 1.0, 0.3]
+    return scene
+
+
+@pytest.mark.parametrize("adaptation_cd_m2", [30.0, 0.3, 0.003])  # photopic, mesopic, scotopic
+@pytest.mark.parametrize("which", ["street", "border"])
+def test_acuity_and_scotopic_colour_equal_render_nights(scene, which, adaptation_cd_m2):
+    # Luidolt §5.3-5.4 per frame from the bank: measured within 2e-4 codes of render_night
+    image = scene if which == "street" else border_lamp_scene()
+    live = LiveNight(
+        image, pixel_deg=PIXEL_DEG, initial_adaptation_cd_m2=adaptation_cd_m2, acuity=True,
+        scotopic=True,
+    )  # fmt: skip
+    for gaze, pupil in (((0.0, 0.0), 2.7), ((20.0, 30.0), 5.25)):
+        before = live._state
+        frame = live.frame(gaze_px=gaze, pupil_mm=pupil, frame_time_s=0.02)
+        reference = render_night(
+            image, pixel_deg=PIXEL_DEG, glare_model=VosGlare(pupil_mm=pupil),
+            pupil_from_adaptation=False, gaze_px=gaze, frame_time_s=0.02,
+            initial_adaptation_cd_m2=before, tolerance_codes=0.0, display_max_cd_m2=L_DMAX,
+        )  # fmt: skip
+        error = np.abs(codes(frame.image) - codes(reference.frames)).max()
+        assert error < 0.5, (gaze, pupil, error)
+    plain = render_night(
+        image, pixel_deg=PIXEL_DEG, effects=("adaptation", "glare"), glare_model=VosGlare(
+            pupil_mm=5.25), pupil_from_adaptation=False, gaze_px=(20.0, 30.0),
+        frame_time_s=0.02, initial_adaptation_cd_m2=before, tolerance_codes=0.0,
+    ).frames  # fmt: skip
+    if adaptation_cd_m2 < 1.0:  # the two effects are visible at night (little by day)
+        assert np.abs(codes(frame.image) - codes(plain)).max() > 2
+
+
+def test_pixels_that_meet_the_white_between_two_levels_are_blurred_directly(scene):
+    # thresholds 5 % apart: the bank's interpolation alone errs by 5.7 codes where a channel
+    # meets L_dmax between the two levels; those pixels and their neighbours are blurred
+    # from the frame itself (measured 0.28 codes, the rest from the glare's interpolation)
+    live = LiveNight(
+        scene, pixel_deg=PIXEL_DEG, initial_adaptation_cd_m2=0.3, acuity=True,
+        threshold_ratio=1.05,
+    )  # fmt: skip
+    frame = live.frame(gaze_px=(0, 0), pupil_mm=5.0, frame_time_s=0.0)
+    reference = render_night(
+        scene, pixel_deg=PIXEL_DEG, effects=("adaptation", "glare", "acuity"),
+        glare_model=VosGlare(pupil_mm=5.0), pupil_from_adaptation=False, gaze_px=(0.0, 0.0),
+        initial_adaptation_cd_m2=0.3, frame_time_s=0.0, tolerance_codes=0.0,
+    )  # fmt: skip
+    assert frame.exact_px > 0
+    assert np.abs(codes(frame.image) - codes(reference.frames)).max() < 0.5
+
+
+def test_acuity_with_the_gaze_falloff_is_refused(scene):
+    with pytest.raises(ValueError, match="acuity=True does not combine with glare_falloff_deg"):
+        LiveNight(scene, pixel_deg=PIXEL_DEG, acuity=True, glare_falloff_deg=2.0)

@@ -594,6 +594,59 @@ def _layers(planes: np.ndarray, sigma: np.ndarray, per_octave: int) -> np.ndarra
     return out.reshape(planes.shape)
 
 
+def _layers_at(
+    planes: np.ndarray, sigma: np.ndarray, rows: np.ndarray, cols: np.ndarray, per_octave: int
+) -> np.ndarray:
+    """The ``'layers'`` blur of :func:`varying_blur` at the pixels ``(rows, cols)`` only.
+
+    ``planes`` is ``(H, W, C)``; ``sigma`` the ``(n,)`` σ of the chosen pixels. Each pixel
+    is the interpolation of :func:`_layers` between its two levels, each level's normalised,
+    truncated Gaussian summed over the pixel's neighbourhood directly (``(2r + 1)²``
+    products per pixel and level): for a few pixels of a large image, far less work than
+    blurring the whole image at every level, with the same numbers.
+    """
+    height, width = planes.shape[:2]
+    levels = _levels(float(sigma.max()) if sigma.size else 0.0, per_octave)
+    bins = np.searchsorted(levels, sigma, side="left")
+    out = planes[rows, cols].astype(float)  # σ = 0: kept
+    blurred = bins > 0
+    if not blurred.any():
+        return out
+    low, high = levels[bins - 1], levels[bins]
+    t = ((sigma**2 - low**2) / (high**2 - low**2))[:, None]
+    reaches = _radius(high)
+    for reach in np.unique(reaches[blurred]):  # pixels of one reach together: small patches
+        group = np.flatnonzero(blurred & (reaches == reach))
+        d = np.arange(-reach, reach + 1)
+        y, x = rows[group], cols[group]
+        patch = _patches(planes, y, x, int(reach))  # (n, 2r + 1, 2r + 1, C), 0 outside
+        inside_rows = ((y[:, None] + d) >= 0) & ((y[:, None] + d) < height)
+        inside_cols = ((x[:, None] + d) >= 0) & ((x[:, None] + d) < width)
+        blurred_levels = []
+        for level_sigma in (low[group], high[group]):
+            s = level_sigma[:, None]
+            with np.errstate(divide="ignore", invalid="ignore"):
+                k = np.exp(-(d * d) / (2.0 * s * s)) * (np.abs(d) <= _radius(s))
+            k = np.where(s > 0, k, (d == 0).astype(float))  # level 0: the image itself
+            k_rows, k_cols = k * inside_rows, k * inside_cols
+            total = np.einsum("nd,ndec,ne->nc", k_rows, patch, k_cols)
+            blurred_levels.append(total / (k_rows.sum(1) * k_cols.sum(1))[:, None])
+        out[group] = (1.0 - t[group]) * blurred_levels[0] + t[group] * blurred_levels[1]
+    return out
+
+
+def _patches(planes: np.ndarray, rows: np.ndarray, cols: np.ndarray, reach: int) -> np.ndarray:
+    """The ``(2 reach + 1)²`` neighbourhoods of the pixels, zero outside the image."""
+    height, width = planes.shape[:2]
+    d = np.arange(-reach, reach + 1)
+    r = rows[:, None, None] + d[None, :, None]
+    c = cols[:, None, None] + d[None, None, :]
+    inside = (r >= 0) & (r < height) & (c >= 0) & (c < width)
+    patch = planes[np.clip(r, 0, height - 1), np.clip(c, 0, width - 1)]
+    patch[~inside] = 0.0
+    return patch
+
+
 def _luminances(name: str, value) -> np.ndarray:
     array = np.asarray(value, dtype=float)
     check_image(name, array.reshape(1, -1) if array.size else np.zeros((1, 1)))
