@@ -61,7 +61,7 @@ def test_a_tracker_yaml_names_one_ioHub_eye_tracker(tmp_path):
 def test_a_live_scene_renders_what_a_live_frame_can(tmp_path):
     text = Path(load_protocol("luidolt2020-live").source).read_text()
     bad = text.replace(
-        'effects = ["adaptation", "glare", "scotopic"]', 'effects = ["glare", "acuity"]'
+        'effects = ["adaptation", "glare", "acuity", "scotopic"]', 'effects = ["glare", "acuity"]'
     )
     bad = bad.replace('sequence = "still"', 'sequence = "gaze"')
     path = tmp_path / "bad.toml"

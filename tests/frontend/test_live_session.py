@@ -122,7 +122,7 @@ def test_a_live_session_follows_the_mouse_survives_blinks_and_a_lost_tracker(scr
     street = night_scene(protocol)
     assert glare_model(scene["glare_model"], scene["glare_parameters"]) == VosGlare()
     settings = dict(
-        pixel_deg=street["pixel_deg"], effects=("adaptation", "glare", "scotopic"),
+        pixel_deg=street["pixel_deg"], effects=("adaptation", "glare", "acuity", "scotopic"),
         glare_model=VosGlare(pupil_mm=5.0), pupil_from_adaptation=False, frame_time_s=0.0,
         display_max_cd_m2=display["max_cd_m2"],
         adapted_display_cd_m2=scene["adapted_display_cd_m2"], tolerance_codes=0.0,

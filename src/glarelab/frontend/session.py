@@ -528,6 +528,7 @@ class PsychoPyFrontend:
             glare_model=glare_model(scene["glare_model"], scene["glare_parameters"]),
             display_max_cd_m2=display["max_cd_m2"],
             adapted_display_cd_m2=min(scene["adapted_display_cd_m2"], display["max_cd_m2"]),
+            acuity="acuity" in screen["live"]["effects"],
             scotopic="scotopic" in screen["live"]["effects"],
         )  # fmt: skip
         bits = self.window_bits

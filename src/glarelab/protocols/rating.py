@@ -36,8 +36,8 @@ EFFECTS = (
     "scotopic",
 )  # glarelab.glare.night.EFFECTS, Luidolt's order
 # what a live scene renders per frame (glarelab.glare.night.live.LiveNight): adaptation and
-# glare always, scotopic colour as an option; the acuity loss is not rendered live
-LIVE_EFFECTS = ("adaptation", "glare", "scotopic")
+# glare always, the acuity loss and scotopic colour as options
+LIVE_EFFECTS = ("adaptation", "glare", "acuity", "scotopic")
 LIVE_REQUIRED = ("adaptation", "glare")
 SCENE: Schema = {
     "kind": Key(str, "the procedural scene (glarelab.stimuli.night)", choices=("street",)),
@@ -286,7 +286,7 @@ def _check_live(p: dict, problems: list[str]) -> None:
         if missing or extra:
             problems.append(
                 f"conditions {condition['name']!r}: effects = {effects!r}: a live scene renders "
-                f"{', '.join(LIVE_REQUIRED)} always and scotopic as an option "
+                f"{', '.join(LIVE_REQUIRED)} always, acuity and scotopic as options "
                 f"({'missing ' + ', '.join(missing) if missing else 'not ' + ', '.join(extra)})"
             )
     width, height = scene["size_px"]
