@@ -34,6 +34,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from glarelab.files.memory import check_memory
+from glarelab.files.values import is_whole
 from glarelab.glare._validation import check_pixel_deg, check_positive, check_positive_int
 from glarelab.glare.models._radial import radial_mass, rectangle_mass
 
@@ -303,7 +304,7 @@ def check_kernel_shape(
             f"{name} must be two odd positive integers (KH, KW), got {shape!r}"
         ) from None
     for n in (height, width):
-        if isinstance(n, bool | np.bool_) or not isinstance(n, int | np.integer):
+        if not is_whole(n):
             raise ValueError(
                 f"{name} must be two odd positive integers (KH, KW), got {shape!r} (a "
                 f"{type(n).__name__} is not a pixel count)"
