@@ -6,11 +6,13 @@ in range."""
 import math
 
 import numpy as np
+import pandas as pd
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from glarelab.analysis.stats import (
+    anova_residuals,
     group_letters,
     normality,
     signed_rank_counts,
@@ -123,3 +125,31 @@ def test_signed_rank_counts_sum_to_two_to_the_n(n):
 def test_group_letters_refuses_a_count_that_is_not_one(count):
     with pytest.raises(ValueError, match=r"^group_letters: count must be a whole number >= 0"):
         group_letters(count)
+
+
+def _long(values):
+    subjects, cells = np.meshgrid(range(3), range(2), indexing="ij")
+    return pd.DataFrame({"s": subjects.ravel(), "c": cells.ravel(), "y": values})
+
+
+@pytest.mark.parametrize(
+    ("values", "match"),
+    [
+        ([1.0, 2.0, math.nan, 4.0, 5.0, 7.0], r"^anova_residuals: dv 'y' is nan in row 2; every"),
+        ([1.0, 2.0, math.inf, 4.0, 5.0, 7.0], r"^anova_residuals: dv 'y' is inf in row 2"),
+        (["1", "2", "3", "4", "5", "7"], r"^anova_residuals: column dv='y' must be numeric"),
+        ([True, False] * 3, r"^anova_residuals: column dv='y' must be numeric"),
+    ],
+)
+def test_anova_residuals_refuses_what_is_not_a_finite_number(values, match):
+    # a NaN dropped out of the pivot and gave NaN residuals for its subject and cell
+    with pytest.raises(ValueError, match=match):
+        anova_residuals(_long(values), "y", ["c"], "s")
+
+
+def test_anova_residuals_refuses_a_missing_cell():
+    with pytest.raises(
+        ValueError,
+        match=r"^anova_residuals needs a balanced design: subject 2 has no 'y' at \{'c': 1\}$",
+    ):
+        anova_residuals(_long(np.arange(6.0)).iloc[:-1], "y", ["c"], "s")

@@ -1287,9 +1287,25 @@ def anova_residuals(data: pd.DataFrame, dv: str, within: Sequence[str], subject:
     -------
     numpy.ndarray
         The residuals, one per subject and cell, in the dependent variable's unit.
+
+    Raises
+    ------
+    ValueError
+        For a ``dv`` column that is not numeric (strings, bools), a value that is NaN or
+        infinite (naming its row), or a subject without a value in some cell.
     """
+    column = _numeric(data, dv, "anova_residuals")
+    _finite(column, f"anova_residuals: dv {dv!r}", lambda i: f"in row {data.index[i]!r}")
     wide = data.pivot_table(index=subject, columns=list(within), values=dv, aggfunc="first")
     values = wide.to_numpy(float)
+    if np.isnan(values).any():
+        s, c = np.argwhere(np.isnan(values))[0]
+        cell = wide.columns[c] if isinstance(wide.columns[c], tuple) else (wide.columns[c],)
+        cell = tuple(v.item() if isinstance(v, np.generic) else v for v in cell)
+        raise ValueError(
+            f"anova_residuals needs a balanced design: subject {wide.index[s]} has no "
+            f"{dv!r} at {dict(zip(within, cell, strict=True))}"
+        )
     residuals = (
         values - values.mean(axis=1, keepdims=True) - values.mean(axis=0, keepdims=True)
     ) + values.mean()
