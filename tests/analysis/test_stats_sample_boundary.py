@@ -15,6 +15,7 @@ from glarelab.analysis.stats import (
     anova_residuals,
     group_letters,
     normality,
+    pairwise_tests,
     signed_rank_counts,
     ttest_one_sample,
     ttest_paired,
@@ -153,3 +154,11 @@ def test_anova_residuals_refuses_a_missing_cell():
         match=r"^anova_residuals needs a balanced design: subject 2 has no 'y' at \{'c': 1\}$",
     ):
         anova_residuals(_long(np.arange(6.0)).iloc[:-1], "y", ["c"], "s")
+
+
+@pytest.mark.parametrize("alpha", [True, "0.05", None, math.nan, 0.0, 1.5])
+def test_pairwise_tests_refuses_a_bad_alpha_in_its_own_name(alpha):
+    # the alpha was judged by holm_confidence after every test had run, in that function's name
+    data = _long([1.0, 2.5, 3.0, 4.5, 5.0, 7.5])
+    with pytest.raises((TypeError, ValueError), match=r"^pairwise_tests: alpha must"):
+        pairwise_tests(data, "y", "c", "s", alpha=alpha)

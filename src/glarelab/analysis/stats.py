@@ -923,9 +923,12 @@ def pairwise_tests(
     Raises
     ------
     ValueError
-        For missing columns, a non-numeric, NaN or infinite ``dv``, or a subject without
-        exactly one value at every level.
+        For missing columns, a non-numeric, NaN or infinite ``dv``, a subject without
+        exactly one value at every level, or ``alpha`` outside (0, 1).
+    TypeError
+        For an ``alpha`` that is not a number (a string, a bool).
     """
+    alpha = _alpha("pairwise_tests", alpha)  # before the tests, named as this function's
     missing = [c for c in (dv, factor, subject) if c not in df.columns]
     if missing:
         raise ValueError(f"pairwise_tests: column(s) {missing} not in the data")
