@@ -11,12 +11,15 @@ from hypothesis import strategies as st
 from glarelab.files.values import is_real, is_whole, real_array
 
 SETTINGS = settings(max_examples=25, deadline=None)
-NOT_REAL = st.one_of(
+NOT_REAL_SCALAR = st.one_of(
     st.booleans(),
-    st.sampled_from([np.True_, np.False_, None, b"1", np.array([1.0, 2.0])]),
+    st.sampled_from([np.True_, np.False_, None, b"1"]),
     st.text(max_size=3),
     st.complex_numbers(allow_nan=False, allow_infinity=False, min_magnitude=1e-3),
 )
+# an array of two values is not one number (in a list of one it is a row: real_array's callers
+# judge the shape)
+NOT_REAL = st.one_of(NOT_REAL_SCALAR, st.just(np.array([1.0, 2.0])))
 
 
 @SETTINGS
@@ -33,7 +36,11 @@ def test_ints_and_floats_are_real_and_only_ints_whole(value):
 
 
 @SETTINGS
-@given(values=st.lists(st.floats(allow_nan=True), max_size=6), bad=NOT_REAL, at=st.integers(0, 6))
+@given(
+    values=st.lists(st.floats(allow_nan=True), max_size=6),
+    bad=NOT_REAL_SCALAR,
+    at=st.integers(0, 6),
+)
 def test_real_array_names_the_first_value_that_is_not_a_number(values, bad, at):
     at = min(at, len(values))
     values.insert(at, bad)

@@ -22,6 +22,20 @@ def available_memory() -> int | None:
 def refuse_beyond(needed: float, free: int | None, what: str) -> None:
     """Raise ``ValueError`` if ``needed`` bytes exceed ``free`` (nothing when ``free`` is None).
 
+    Parameters
+    ----------
+    needed
+        Bytes the work needs.
+    free
+        Bytes available (:func:`available_memory`), or None where unknown.
+    what
+        The work, for the message.
+
+    Raises
+    ------
+    ValueError
+        Naming ``what``, both sizes in GiB, when ``needed > free``.
+
     Examples
     --------
     >>> refuse_beyond(3 * 2**30, 2**30, "shape (9, 9)")  # doctest: +ELLIPSIS

@@ -19,6 +19,16 @@ def is_real(value: object) -> bool:
     """Whether ``value`` is a real number: not a bool, a string, a complex number or an array
     of more than one value (a 0-d array holding a real number counts).
 
+    Parameters
+    ----------
+    value
+        Anything given where a number is expected.
+
+    Returns
+    -------
+    bool
+        True for a real number (NaN and the infinities included: finiteness is the caller's).
+
     Examples
     --------
     >>> is_real(2), is_real(np.float32(0.5)), is_real(True), is_real("2")
@@ -32,6 +42,16 @@ def is_real(value: object) -> bool:
 def is_whole(value: object) -> bool:
     """Whether ``value`` is a whole number (a Python or NumPy integer, not a bool and not a
     float such as 2.0 that ``int`` would read).
+
+    Parameters
+    ----------
+    value
+        Anything given where a count is expected.
+
+    Returns
+    -------
+    bool
+        True for a Python or NumPy integer that is not a bool.
 
     Examples
     --------
