@@ -3,6 +3,7 @@ not numbers (strings, bools) or out of range are refused naming the argument, ne
 numbers; valid families give finite adjusted values in [0, 1]."""
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -97,5 +98,31 @@ def test_similarity_groups_refuses_an_alpha_outside_the_unit_interval(alpha):
 def test_similarity_groups_gives_every_level_a_letter(means, ps, alpha):
     levels = {f"L{i}": m for i, m in enumerate(means)}
     pairs = [(a, b) for i, a in enumerate(levels) for b in list(levels)[i + 1 :]]
-    letters = similarity_groups(levels, dict(zip(pairs, ps, strict=False)), alpha=alpha)
+    letters = similarity_groups(
+        levels, dict(zip(pairs, ps, strict=False)), alpha=alpha, missing="omit"
+    )
     assert set(letters) == set(levels) and all(letters.values())
+
+
+@SETTINGS
+@given(means=st.lists(st.floats(-1e9, 1e9), min_size=2, max_size=5), data=st.data())
+def test_similarity_groups_refuses_a_nan_p_value_naming_its_pair(means, data):
+    # a NaN p-value read as "not different" put two levels in one group without a word
+    levels = {f"L{i}": m for i, m in enumerate(means)}
+    pairs = [(a, b) for i, a in enumerate(levels) for b in list(levels)[i + 1 :]]
+    p_adjusted = dict.fromkeys(pairs, 0.5)
+    at = data.draw(st.integers(0, len(pairs) - 1), label="at")
+    p_adjusted[pairs[at]] = math.nan
+    with pytest.raises(
+        ValueError,
+        match=rf"^similarity_groups: p_adjusted is NaN for {re.escape(repr(pairs[at]))} "
+        rf"\(position {at}\);.*missing='omit'",
+    ):
+        similarity_groups(levels, p_adjusted)
+    assert set(similarity_groups(levels, p_adjusted, missing="omit")) == set(levels)
+
+
+@pytest.mark.parametrize("missing", ["drop", None, True])
+def test_similarity_groups_refuses_an_unknown_missing(missing):
+    with pytest.raises(ValueError, match=r"^similarity_groups: missing must be 'raise' or"):
+        similarity_groups({"A": 1, "B": 2}, {("A", "B"): 0.5}, missing=missing)

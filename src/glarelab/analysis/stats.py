@@ -58,7 +58,6 @@ from __future__ import annotations
 
 import itertools
 import math
-import numbers
 from collections.abc import Sequence
 from typing import Literal
 
@@ -66,6 +65,8 @@ import numpy as np
 import pandas as pd
 from scipy import stats as sps
 from statsmodels.stats.anova import AnovaRM
+
+from glarelab.files.values import is_real, is_whole, real_array
 
 __all__ = [
     "GG_BELOW",
@@ -420,7 +421,7 @@ def _corrected_p(f_value: float, df1: float, df2: float, eps: float, p: float) -
 
 def _alpha(where: str, alpha: float) -> float:
     """``alpha`` as a float, after checking it is a number strictly between 0 and 1."""
-    if isinstance(alpha, bool | np.bool_) or not isinstance(alpha, numbers.Real):
+    if not is_real(alpha):
         raise TypeError(f"{where}: alpha must be a number in (0, 1); got {alpha!r}")
     if not 0 < alpha < 1:
         raise ValueError(f"{where}: alpha must lie strictly between 0 and 1; got {alpha!r}")
@@ -435,7 +436,7 @@ def _pvalues(where: str, pvalues: Sequence[float]) -> np.ndarray:
             f"{where}: pvalues must be a sequence of numbers (one per test); got {pvalues!r}"
         )
     for position, value in enumerate(pvalues):
-        if isinstance(value, bool | np.bool_) or not isinstance(value, numbers.Real):
+        if not is_real(value):
             raise TypeError(
                 f"{where}: pvalues must be numbers in [0, 1]; got {value!r} at position {position}"
             )
@@ -561,7 +562,9 @@ def holm_confidence(pvalues: Sequence[float], *, alpha: float = 0.05) -> np.ndar
 
 
 def _sample(values: Sequence[float], name: str, caller: str) -> np.ndarray:
-    array = np.asarray(values, dtype=float)
+    """``values`` as a 1-D float array of finite numbers (a masked array, a string, a bool or
+    a NaN refused, naming ``caller``, ``name`` and the position)."""
+    array = real_array(values, f"{caller}: {name}")
     if array.ndim != 1:
         raise ValueError(f"{caller}: {name} must be one-dimensional; got shape {array.shape}")
     _finite(array, f"{caller}: {name}", lambda i: f"at position {i}")
@@ -572,6 +575,8 @@ CONSTANT = 10 * np.finfo(float).eps  # R's t.test: SE below this fraction of |me
 
 
 def _confidence_level(confidence: float, caller: str) -> float:
+    if not is_real(confidence):
+        raise TypeError(f"{caller}: confidence must be a number in (0, 1); got {confidence!r}")
     if not 0 < confidence < 1:
         raise ValueError(
             f"{caller}: confidence must lie strictly between 0 and 1; got {confidence!r}"
@@ -640,7 +645,7 @@ def ttest_one_sample(x: Sequence[float], *, mu: float = 0.0, confidence: float =
     """
     x = _sample(x, "x", "ttest_one_sample")
     confidence = _confidence_level(confidence, "ttest_one_sample")
-    if not math.isfinite(mu):
+    if not (is_real(mu) and math.isfinite(mu)):
         raise ValueError(f"ttest_one_sample: mu must be a finite number; got {mu!r}")
     if x.size < 2:
         raise ValueError(f"ttest_one_sample needs at least 2 values; got {x.size}")
@@ -811,7 +816,7 @@ def wilcoxon_signed_rank(x: Sequence[float], *, mu: float = 0.0) -> dict:
     (33.0, 0.0371, 8, 2)
     """
     values = _sample(x, "x", "wilcoxon_signed_rank")
-    if not math.isfinite(mu):
+    if not (is_real(mu) and math.isfinite(mu)):
         raise ValueError(f"wilcoxon_signed_rank: mu must be a finite number; got {mu!r}")
     if values.size == 0:
         raise ValueError("wilcoxon_signed_rank: x is empty; it needs at least one value")
@@ -843,6 +848,9 @@ def wilcoxon_signed_rank(x: Sequence[float], *, mu: float = 0.0) -> dict:
     return {"V": statistic, "p": p, "n": int(n), "zeros": zeros, "method": method}
 
 
+SIGNED_RANK_MAX_N = 62  # 2^63 overflows int64: the counts are exact up to n = 62
+
+
 def signed_rank_counts(n: int) -> np.ndarray:
     """How many subsets of ``{1, …, n}`` have each sum ``0 … n(n+1)/2`` (exact for n < 63).
 
@@ -856,11 +864,22 @@ def signed_rank_counts(n: int) -> np.ndarray:
     numpy.ndarray
         int64 counts, index = the signed-rank sum ``V``; they sum to ``2^n``.
 
+    Raises
+    ------
+    ValueError
+        For an ``n`` that is not a whole number (a bool, a float) in ``[0, 62]`` (above 62 the
+        counts overflow int64).
+
     Examples
     --------
     >>> signed_rank_counts(3).tolist()
     [1, 1, 1, 2, 1, 1, 1]
     """
+    if not (is_whole(n) and 0 <= n <= SIGNED_RANK_MAX_N):
+        raise ValueError(
+            f"signed_rank_counts: n must be a whole number in [0, {SIGNED_RANK_MAX_N}] (the "
+            f"number of non-zero differences); got {n!r}"
+        )
     counts = np.zeros(n * (n + 1) // 2 + 1, dtype=np.int64)
     counts[0] = 1
     for k in range(1, n + 1):
@@ -904,9 +923,12 @@ def pairwise_tests(
     Raises
     ------
     ValueError
-        For missing columns, a non-numeric, NaN or infinite ``dv``, or a subject without
-        exactly one value at every level.
+        For missing columns, a non-numeric, NaN or infinite ``dv``, a subject without
+        exactly one value at every level, or ``alpha`` outside (0, 1).
+    TypeError
+        For an ``alpha`` that is not a number (a string, a bool).
     """
+    alpha = _alpha("pairwise_tests", alpha)  # before the tests, named as this function's
     missing = [c for c in (dv, factor, subject) if c not in df.columns]
     if missing:
         raise ValueError(f"pairwise_tests: column(s) {missing} not in the data")
@@ -980,7 +1002,13 @@ def natural_order(values) -> list:
         return sorted(values, key=str)
 
 
-def similarity_groups(means: dict, p_adjusted: dict, alpha: float = 0.05) -> dict:
+def similarity_groups(
+    means: dict,
+    p_adjusted: dict,
+    alpha: float = 0.05,
+    *,
+    missing: Literal["raise", "omit"] = "raise",
+) -> dict:
     """Compact letter display: levels sharing a letter are not significantly different.
 
     Parameters
@@ -989,9 +1017,14 @@ def similarity_groups(means: dict, p_adjusted: dict, alpha: float = 0.05) -> dic
         Level → mean (letters are given in order of decreasing mean).
     p_adjusted
         ``(level_a, level_b)`` → adjusted p-value for every pair; NaN for a pair that could
-        not be tested (it does not separate the two levels: no test says they differ).
+        not be tested, with ``missing="omit"`` only.
     alpha
         Significance level, in (0, 1); default .05.
+    missing
+        What a NaN p-value means: ``"raise"`` (default) refuses it, naming the pair, so that a
+        p-value lost upstream never joins two levels unnoticed; ``"omit"`` leaves the pair out
+        (it does not separate the two levels: no test says they differ), as :func:`holm`'s
+        ``missing="omit"`` leaves an untested p-value out of the family.
 
     Returns
     -------
@@ -1003,8 +1036,9 @@ def similarity_groups(means: dict, p_adjusted: dict, alpha: float = 0.05) -> dic
     TypeError
         For a mean, a p-value or ``alpha`` that is not a number (a string, a bool).
     ValueError
-        For ``alpha`` outside (0, 1), a non-finite mean, a p-value outside [0, 1] (NaN is
-        allowed), or a key of ``p_adjusted`` that is not a pair of levels of ``means``.
+        For ``alpha`` outside (0, 1), a non-finite mean, a p-value outside [0, 1], a NaN
+        p-value unless ``missing="omit"``, an unknown ``missing``, or a key of ``p_adjusted``
+        that is not a pair of levels of ``means``.
 
     Notes
     -----
@@ -1019,8 +1053,10 @@ def similarity_groups(means: dict, p_adjusted: dict, alpha: float = 0.05) -> dic
     {'C': 'a', 'B': 'ab', 'A': 'b'}
     """
     alpha = _alpha("similarity_groups", alpha)
+    if missing not in ("raise", "omit"):
+        raise ValueError(f"similarity_groups: missing must be 'raise' or 'omit'; got {missing!r}")
     for level, mean in means.items():
-        if isinstance(mean, bool | np.bool_) or not isinstance(mean, numbers.Real):
+        if not is_real(mean):
             raise TypeError(
                 f"similarity_groups: means must map each level to a number; got {mean!r} for "
                 f"{level!r}"
@@ -1035,10 +1071,16 @@ def similarity_groups(means: dict, p_adjusted: dict, alpha: float = 0.05) -> dic
                 f"similarity_groups: p_adjusted must be keyed by pairs (level_a, level_b) of "
                 f"levels in means; got {pair!r} (levels: {', '.join(map(repr, means))})"
             )
-        if isinstance(p, bool | np.bool_) or not isinstance(p, numbers.Real):
+        if not is_real(p):
             raise TypeError(
                 f"similarity_groups: p_adjusted values must be numbers in [0, 1] or NaN; got "
                 f"{p!r} for {pair!r}"
+            )
+        if math.isnan(p) and missing == "raise":
+            raise ValueError(
+                f"similarity_groups: p_adjusted is NaN for {pair!r} (position "
+                f"{list(p_adjusted).index(pair)}); every p-value must be a number in [0, 1] "
+                "(give missing='omit' to leave untested pairs out)"
             )
         if not (math.isnan(p) or 0.0 <= p <= 1.0):
             raise ValueError(
@@ -1048,7 +1090,7 @@ def similarity_groups(means: dict, p_adjusted: dict, alpha: float = 0.05) -> dic
     levels = sorted(means, key=lambda k: -means[k])
     groups = [set(levels)]
     for (a, b), p in p_adjusted.items():
-        if not p < alpha:  # not significant, or not tested (NaN): no evidence they differ
+        if not p < alpha:  # not significant, or omitted as untested (NaN): no evidence they differ
             continue
         new = []
         for group in groups:
@@ -1092,7 +1134,7 @@ def group_letters(count: int, letters: Sequence[str] = LETTERS) -> list[str]:
     Raises
     ------
     ValueError
-        For a negative count.
+        For a count that is not a whole number >= 0 (a bool, a float, a negative number).
 
     Examples
     --------
@@ -1101,8 +1143,8 @@ def group_letters(count: int, letters: Sequence[str] = LETTERS) -> list[str]:
     >>> group_letters(54)[50:]
     ['Y', 'Z', '.a', '.b']
     """
-    if count < 0:
-        raise ValueError(f"group_letters: count must be 0 or more; got {count}")
+    if not (is_whole(count) and count >= 0):
+        raise ValueError(f"group_letters: count must be a whole number >= 0; got {count!r}")
     letters = list(letters)
     names: list[str] = []
     while count >= len(letters):  # multcompView's makeLtrs, unrolled
@@ -1208,13 +1250,21 @@ def normality(values: Sequence[float]) -> dict:
     dict
         ``W``, ``p`` and ``n``.
 
+    Raises
+    ------
+    TypeError
+        For a masked array, or a string, bool or ``None`` among the values.
+    ValueError
+        For values that are not one-dimensional or hold NaN or an infinity (the test would
+        be NaN).
+
     Examples
     --------
     >>> result = normality([2.1, 3.4, 1.9, 5.6, 4.4, 3.0, 2.8, 3.9])
     >>> round(result["W"], 3)
     0.96
     """
-    x = np.asarray(values, dtype=float)
+    x = _sample(values, "values", "normality")
     if x.size < 3 or not np.ptp(x) > 1e-12 * max(1.0, float(np.abs(x).max())):
         return {"W": float("nan"), "p": float("nan"), "n": int(x.size)}
     result = sps.shapiro(x)
@@ -1240,9 +1290,25 @@ def anova_residuals(data: pd.DataFrame, dv: str, within: Sequence[str], subject:
     -------
     numpy.ndarray
         The residuals, one per subject and cell, in the dependent variable's unit.
+
+    Raises
+    ------
+    ValueError
+        For a ``dv`` column that is not numeric (strings, bools), a value that is NaN or
+        infinite (naming its row), or a subject without a value in some cell.
     """
+    column = _numeric(data, dv, "anova_residuals")
+    _finite(column, f"anova_residuals: dv {dv!r}", lambda i: f"in row {data.index[i]!r}")
     wide = data.pivot_table(index=subject, columns=list(within), values=dv, aggfunc="first")
     values = wide.to_numpy(float)
+    if np.isnan(values).any():
+        s, c = np.argwhere(np.isnan(values))[0]
+        cell = wide.columns[c] if isinstance(wide.columns[c], tuple) else (wide.columns[c],)
+        cell = tuple(v.item() if isinstance(v, np.generic) else v for v in cell)
+        raise ValueError(
+            f"anova_residuals needs a balanced design: subject {wide.index[s]} has no "
+            f"{dv!r} at {dict(zip(within, cell, strict=True))}"
+        )
     residuals = (
         values - values.mean(axis=1, keepdims=True) - values.mean(axis=0, keepdims=True)
     ) + values.mean()

@@ -13,6 +13,7 @@ from pathlib import Path
 
 from glarelab.files.atomic import write_text
 from glarelab.files.folders import claim_files, list_files, listed_files, without_link_loop
+from glarelab.files.memory import available_memory, refuse_beyond
 
 __all__ = [
     "FORCE_HELP",
@@ -459,18 +460,6 @@ def claim_output(path: Path, kind: str) -> Path:
     return path
 
 
-def available_memory() -> int | None:
-    """Bytes the system can still give without swapping (psutil's ``available``: Linux's
-    MemAvailable, and its counterpart on macOS and Windows, where there is no /proc/meminfo);
-    None where unknown."""
-    import psutil
-
-    try:
-        return int(psutil.virtual_memory().available)
-    except (OSError, RuntimeError, NotImplementedError):
-        return None
-
-
 def check_memory(needed: float, what: str) -> None:
     """Refuse work that needs more memory than the system has, before allocating it.
 
@@ -487,12 +476,7 @@ def check_memory(needed: float, what: str) -> None:
         If Linux reports less memory available than ``needed`` (elsewhere nothing is
         checked).
     """
-    free = available_memory()
-    if free is not None and needed > free:
-        raise ValueError(
-            f"{what} needs about {needed / 2**30:.1f} GiB of memory, {free / 2**30:.1f} GiB "
-            "are available; use a smaller size"
-        )
+    refuse_beyond(needed, available_memory(), what)  # available_memory: patched in tests
 
 
 MONITOR_HELP = (

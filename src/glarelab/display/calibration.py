@@ -33,7 +33,6 @@ import hashlib
 import io
 import itertools
 import json
-import numbers
 import warnings
 from dataclasses import dataclass, field, replace
 from functools import cached_property
@@ -46,6 +45,7 @@ from scipy.optimize import curve_fit
 
 from glarelab.files.atomic import write_text
 from glarelab.files.inputs import as_path, read_input_text
+from glarelab.files.values import is_real, is_whole
 
 __all__ = [
     "Calibration",
@@ -461,7 +461,7 @@ class Calibration:
 
 def _whole(name: str, value, source: str) -> None:
     """A JSON whole number (not a bool, not 10.9 that ``int`` would truncate)."""
-    if isinstance(value, bool) or not isinstance(value, int):
+    if not is_whole(value):
         raise ValueError(f"{source}: {name} is {value!r}; must be a whole number")
 
 
@@ -508,7 +508,7 @@ def _check_consistent(calibration: Calibration, data: dict, source: str) -> None
         refit = fit_calibration(ordered, bit_depth=calibration.bit_depth, method="gog").model
         for name in ("gain", "offset", "gamma", "black_cd_m2", "max_cd_m2"):
             value = calibration.model.get(name)
-            if isinstance(value, bool) or not isinstance(value, int | float):
+            if not is_real(value):
                 raise ValueError(
                     f"{source}: the model's {name} is {value!r}; its readings give "
                     f"{refit[name]:.6g} (a gain-offset-gamma model needs numbers)"
@@ -525,7 +525,7 @@ def _check_consistent(calibration: Calibration, data: dict, source: str) -> None
     lut = calibration.lut
     for name, value in (("black_cd_m2", float(lut[0])), ("max_cd_m2", float(lut[-1]))):
         recorded = data.get(name, value)
-        if isinstance(recorded, bool) or not isinstance(recorded, int | float):
+        if not is_real(recorded):
             raise ValueError(f"{source}: {name} is {recorded!r}; its readings give {value:.6g}")
         if not _close(float(recorded), value):
             raise ValueError(
@@ -554,11 +554,7 @@ def _check_status(calibration: Calibration, source: str) -> None:
             f"{source}: status {status!r} without verification measurements; the status of a "
             "calibration comes only from its verification pass (glarelab calibrate measure)"
         )
-    if (
-        isinstance(tolerance, bool)
-        or not isinstance(tolerance, int | float)
-        or not 0 < tolerance <= 1
-    ):
+    if not is_real(tolerance) or not 0 < tolerance <= 1:
         raise ValueError(
             f"{source}: verification tolerance_fraction is {tolerance!r}; must be a number in "
             "(0, 1]"
@@ -568,7 +564,7 @@ def _check_status(calibration: Calibration, source: str) -> None:
             _whole("a verification code", r["code"], source)
             for key in ("measured_cd_m2", "target_cd_m2"):
                 value = r[key]
-                if isinstance(value, bool) or not isinstance(value, int | float):
+                if not is_real(value):
                     raise TypeError
                 if not (np.isfinite(value) and value > 0):
                     raise ValueError(
@@ -603,11 +599,7 @@ def _check_status(calibration: Calibration, source: str) -> None:
 def _check_readings(
     readings: list[tuple[int, float]], bit_depth: int, source: str
 ) -> list[tuple[int, float]]:
-    if (
-        isinstance(bit_depth, bool)
-        or not isinstance(bit_depth, int | np.integer)
-        or bit_depth not in (8, 10, 12, 16)
-    ):
+    if not is_whole(bit_depth) or bit_depth not in (8, 10, 12, 16):
         raise ValueError(f"bit_depth must be one of 8, 10, 12, 16; got {bit_depth!r}")
     if len(readings) < 4:
         raise ValueError(f"{source}: at least 4 readings are needed, got {len(readings)}")
@@ -617,12 +609,12 @@ def _check_readings(
                 f"{source}: each reading must be a pair (code, cd/m²); got {reading!r}"
             )
         code, value = reading
-        if isinstance(code, bool | np.bool_) or not isinstance(code, int | np.integer):
+        if not is_whole(code):
             raise ValueError(
                 f"{source}: a reading's code must be a whole number (a drive level); got "
                 f"{code!r} in {reading!r}"
             )
-        if isinstance(value, bool | np.bool_) or not isinstance(value, numbers.Real):
+        if not is_real(value):
             raise ValueError(
                 f"{source}: a reading's luminance must be a number of cd/m²; got {value!r} for "
                 f"code {code}"

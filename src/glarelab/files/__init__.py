@@ -7,6 +7,10 @@
   listing ``.glarelab-files.json`` of the files glarelab wrote there).
 - :mod:`glarelab.files.locks`: one process at a time on a file (a session, a measurement, a
   power run).
+- :mod:`glarelab.files.memory`: work that needs more memory than the system has refused
+  before anything is allocated.
+- :mod:`glarelab.files.values`: which values are real and whole numbers (not bools, strings
+  or masked arrays), for every layer's boundary checks.
 
 Every other package may import this one; it imports nothing of glarelab, so that even
 :mod:`glarelab.glare`'s kernel cache writes its files the same safe way.

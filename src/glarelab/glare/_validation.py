@@ -7,10 +7,11 @@ what is allowed, so that a wrong call is fixed from the message alone.
 from __future__ import annotations
 
 import math
-import numbers
 from collections.abc import Iterable
 
 import numpy as np
+
+from glarelab.files.values import is_real, is_whole
 
 __all__ = [
     "check_choice",
@@ -38,7 +39,7 @@ def real_number(value: object) -> float:
     than one value), else raise ``TypeError``."""
     if isinstance(value, np.ndarray) and value.ndim == 0:
         value = value[()]
-    if isinstance(value, bool | np.bool_) or not isinstance(value, numbers.Real):
+    if not is_real(value):
         raise TypeError(f"not a real number: {value!r}")
     return float(value)
 
@@ -100,7 +101,7 @@ def check_in_range(
 
 def check_positive_int(name: str, value: int, *, minimum: int = 1) -> int:
     """Return ``value`` if it is an integer >= ``minimum``, else raise ``ValueError``."""
-    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < minimum:
+    if not is_whole(value) or value < minimum:
         raise ValueError(f"{name} must be an integer >= {minimum}, got {value!r}")
     return int(value)
 

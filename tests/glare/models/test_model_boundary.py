@@ -161,3 +161,28 @@ def test_a_pixel_too_coarse_for_the_halo_samples_is_refused_not_gigabytes():
     # 180° at 0.01° a sample: 18000² samples a pixel, 2.4 GB an array (it was killed)
     with pytest.raises(ValueError, match=r"pixel_deg must be at most 20 deg for the scotopic"):
         VosGlare(regime="scotopic").kernel(180.0, (5, 5))
+
+
+@SETTINGS
+@given(seed=st.integers(1, 2**32), model=st.sampled_from([VosGlare, HybridGlare]))
+def test_a_seed_without_flare_lines_is_refused_not_ignored(seed, model):
+    # VosGlare(seed=3) was accepted and the seed placed nothing (the command line refuses
+    # --seed without --flare-lines)
+    with pytest.raises(ValueError, match=rf"^seed={seed} without flare_lines=True: .* ignored"):
+        model(seed=seed)
+    assert model(seed=seed, flare_lines=True).seed == seed
+    assert model(seed=0).seed == 0
+
+
+@pytest.mark.parametrize("model", [*MODELS, "vos"], ids=["gaussian", "vos", "by-name"])
+def test_a_kernel_too_large_for_the_memory_is_refused_before_allocating(model):
+    # kernel('vos', 0.01, (100001, 100001)) raised MemoryError after asking for 37 GiB
+    with pytest.raises(
+        ValueError,
+        match=r"^shape \(100001, 100001\) \(a kernel takes about 128 bytes a pixel while it "
+        r"is digitised\) needs about 1192\.1 GiB of memory, [\d.]+ GiB are available",
+    ):
+        kernel(model, 0.01, (100001, 100001))
+    if not isinstance(model, str):  # the model's own kernel method too
+        with pytest.raises(ValueError, match=r"^shape \(100001, 100001\) .* GiB are available"):
+            model.kernel(0.01, (100001, 100001))

@@ -33,6 +33,8 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
+from glarelab.files.memory import check_memory
+from glarelab.files.values import is_whole
 from glarelab.glare._validation import check_pixel_deg, check_positive, check_positive_int
 from glarelab.glare.models._radial import radial_mass, rectangle_mass
 
@@ -253,7 +255,15 @@ def kernel_shape_for(image_shape: Sequence[int]) -> tuple[int, int]:
     return 2 * height - 1, 2 * width - 1
 
 
-def check_kernel_shape(shape: Sequence[int], *, name: str = "shape") -> tuple[int, int]:
+# bytes a pixel of a luminance kernel takes while it is digitised (about 110 measured, as the
+# command line's psf reckons it); a shape needing more than the system has is refused
+KERNEL_BYTES_PER_PIXEL = 128
+ASK_MEMORY_ABOVE_BYTES = 2**28  # smaller kernels are not worth asking the system about
+
+
+def check_kernel_shape(
+    shape: Sequence[int], *, name: str = "shape", allocating: bool = True
+) -> tuple[int, int]:
     """A kernel shape checked: two odd positive integers.
 
     Parameters
@@ -262,6 +272,10 @@ def check_kernel_shape(shape: Sequence[int], *, name: str = "shape") -> tuple[in
         The kernel shape asked for.
     name
         The argument's name in the messages; default ``'shape'``.
+    allocating
+        Whether a kernel of this shape is about to be digitised (default): then a shape whose
+        digitising needs more memory than the system has (about 128 bytes a pixel) is refused
+        before anything is allocated. False for a kernel that exists already.
 
     Returns
     -------
@@ -271,7 +285,17 @@ def check_kernel_shape(shape: Sequence[int], *, name: str = "shape") -> tuple[in
     Raises
     ------
     ValueError
-        Unless it is two odd positive integers (a kernel needs a centre pixel).
+        Unless it is two odd positive integers (a kernel needs a centre pixel), or when the
+        kernel would need more memory than is available (naming the shape and both sizes).
+
+    Examples
+    --------
+    >>> check_kernel_shape((5, 7))
+    (5, 7)
+    >>> check_kernel_shape((100001, 100001))  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    ValueError: shape (100001, 100001) (a kernel ...) needs about 1192.1 GiB of memory, ...
     """
     try:
         height, width = shape
@@ -280,7 +304,7 @@ def check_kernel_shape(shape: Sequence[int], *, name: str = "shape") -> tuple[in
             f"{name} must be two odd positive integers (KH, KW), got {shape!r}"
         ) from None
     for n in (height, width):
-        if isinstance(n, bool | np.bool_) or not isinstance(n, int | np.integer):
+        if not is_whole(n):
             raise ValueError(
                 f"{name} must be two odd positive integers (KH, KW), got {shape!r} (a "
                 f"{type(n).__name__} is not a pixel count)"
@@ -290,6 +314,13 @@ def check_kernel_shape(shape: Sequence[int], *, name: str = "shape") -> tuple[in
         raise ValueError(
             f"{name} must be two odd positive integers (KH, KW) so the kernel has a centre "
             f"pixel, got {tuple(shape)!r}"
+        )
+    needed = KERNEL_BYTES_PER_PIXEL * height * width
+    if allocating and needed > ASK_MEMORY_ABOVE_BYTES:
+        check_memory(
+            needed,
+            f"{name} {(height, width)!r} (a kernel takes about {KERNEL_BYTES_PER_PIXEL} bytes a "
+            "pixel while it is digitised)",
         )
     return height, width
 

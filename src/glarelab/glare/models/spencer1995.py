@@ -62,7 +62,8 @@ class VosGlare(GlareModel):
         Multiply seeded random radial streaks into the corona and the halo (§3.2).
     seed
         Seed of the flare lines (``numpy.random.default_rng``); the corona and the halo get
-        independent child streams.
+        independent child streams. A seed other than 0 without ``flare_lines`` is refused (it
+        would act on nothing).
     wavelength_nm
         ``None`` (default): the halo of a white source, integrated over 400-700 nm.
         A number: a monochromatic halo at that wavelength (380-780 nm).
@@ -129,6 +130,12 @@ class VosGlare(GlareModel):
         if self.wavelength_nm is not None:
             vos.f3(0.0, self.wavelength_nm)  # validates the wavelength
         check_positive_int("seed", self.seed, minimum=0)
+        if self.seed != 0 and not self.flare_lines:  # as the command line's --seed alone
+            raise ValueError(
+                f"seed={self.seed!r} without flare_lines=True: the seed places Spencer's flare "
+                "lines, and without them it would be ignored; give flare_lines=True or leave "
+                "seed at 0"
+            )
         check_positive_int("samples_per_pixel", self.samples_per_pixel)
         check_positive_int("center_samples_per_pixel", self.center_samples_per_pixel)
         check_positive("center_radius_px", self.center_radius_px, unit="px")

@@ -260,6 +260,10 @@ def render_night(
     frames, single = _frames(scene_cd_m2)
     n = len(frames)
     pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
+    # the time constants judged here, before frame_time_s: a bad one is named even where
+    # another argument is missing too
+    tau_rod_s = check_positive("tau_rod_s", tau_rod_s, unit="s")
+    tau_cone_s = check_positive("tau_cone_s", tau_cone_s, unit="s")
     chosen = tuple(effects)
     for effect in chosen:
         check_choice("effects", effect, EFFECTS)

@@ -179,7 +179,7 @@ class GlareRenderer:
                 )
             if len(kernel.shape) == 3 and kernel.shape[2] != 3:
                 raise ValueError(f"kernel must have 1 or 3 channels; got {kernel.shape}")
-            kernel_shape = check_kernel_shape(kernel.shape[:2])
+            kernel_shape = check_kernel_shape(kernel.shape[:2], allocating=False)
             self._given = kernel
         elif kernel_shape is not None:
             kernel_shape = check_kernel_shape(kernel_shape, name="kernel_shape")

@@ -1,0 +1,27 @@
+"""render_night at its boundary: its adaptation time constants are judged by themselves and
+named, whatever else is missing."""
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from glarelab.glare.night.pipeline import render_night
+
+from ..strategies import NOT_A_NUMBER, NOT_FINITE_POSITIVE, SETTINGS
+
+SCENE = np.full((8, 8), 0.05)
+
+
+@SETTINGS
+@given(
+    name=st.sampled_from(["tau_rod_s", "tau_cone_s"]),
+    value=st.one_of(NOT_A_NUMBER, NOT_FINITE_POSITIVE),
+    frame_time_s=st.sampled_from([None, 0.1]),
+)
+def test_a_time_constant_that_is_not_positive_is_refused_naming_it(name, value, frame_time_s):
+    # render_night([img] * 2, tau_rod_s=0) was refused for the missing frame_time_s, and
+    # tau_rod_s = 0 itself never judged
+    with pytest.raises(ValueError, match=rf"^{name} must be a finite number > 0 s, got") as raised:
+        render_night([SCENE, SCENE], pixel_deg=0.05, frame_time_s=frame_time_s, **{name: value})
+    assert "\n" not in str(raised.value)
