@@ -135,7 +135,7 @@ def method(data, index):
             r"questions\[1\]\.column = 'match_cd_m2': already a column of the session CSV",
         ),
         (
-            lambda d: method(d, 1).update(labels=["a", "b", "c"], levels_cd_m2=[220.0, 1.0, 2.0]),
+            lambda d: method(d, 1).update(labels=["a", "b", "c"], levels_cd_m2=[220.0, 1000.0, 2000.0]),
             "every method needs the same number of levels",
         ),
         (
@@ -277,8 +277,27 @@ def test_names_that_differ_only_by_case_are_refused(study, edit, match):
          r"glare\.strengths repeats 0\.1: must be all different"),
         ("yoshida2008", lambda d: d["background"].update(mean_cd_m2=0.0),
          r"background\.mean_cd_m2 = 0\.0: must be above 0 cd/m²"),
+        # glare_level 1 is the weakest strength in the data and the report's level axis
+        ("spencer1995", lambda d: d["glare"].update(strengths=[2.0, 1.0, 0.5]),
+         r"glare\.strengths = \[2\.0, 1\.0, 0\.5\]: must be a list of float of length "
+         r"1-50, ascending, in \[0, 1e\+09\] \(each above the one before\)"),
+        ("spencer1995", lambda d: d["trials"].update(presentation_ms=[400.0, 400.0]),
+         r"trials\.presentation_ms repeats 400\.0: must be all different"),
+        # label A is the dimmest level: the follow-ups {A, B, C} and the level axis run up
+        ("yoshida2008",
+         lambda d: d["glare"]["methods"][0].update(
+             levels_cd_m2=[1165.0, 220.0, 2110.0, 3055.0, 4000.0, 7000.0]),
+         r"glare\.methods\[0\]\.levels_cd_m2 = \[1165\.0, 220\.0, .*\]: must be a list of "
+         r"float of length 1-26, ascending, in \[0, 1e\+09\] cd/m² \(each above the one "
+         r"before\)"),
+        ("yoshida2008",
+         lambda d: d["glare"]["methods"][1].update(
+             levels_cd_m2=[220.0, 1480.0, 1480.0, 4000.0, 7000.0, 10000.0]),
+         r"glare\.methods\[1\]\.levels_cd_m2 = .*: must be .*ascending"),
     ],
-    ids=["steps fine to coarse", "duplicate strengths", "sky of mean 0"],
+    ids=["steps fine to coarse", "duplicate strengths", "sky of mean 0",
+         "strengths descending", "duplicate presentation_ms", "levels out of order",
+         "levels repeat"],
 )  # fmt: skip
 def test_values_that_cannot_mean_what_they_say_are_refused(study, edit, match):
     data = copy.deepcopy(raw(study))

@@ -66,12 +66,13 @@ LEVEL_LABELS = Key(
 )  # fmt: skip
 LEVELS_CD_M2 = Key(
     list,
-    "input disk luminances L_disk, one per label",
+    "input disk luminances L_disk, one per label (the first label the dimmest)",
     unit="cd/m²",
     item=float,
     length=(1, 26),
     low=0.0,
     high=1e9,
+    ascending=True,
 )
 
 
