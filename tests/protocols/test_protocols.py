@@ -135,7 +135,9 @@ def method(data, index):
             r"questions\[1\]\.column = 'match_cd_m2': already a column of the session CSV",
         ),
         (
-            lambda d: method(d, 1).update(labels=["a", "b", "c"], levels_cd_m2=[220.0, 1000.0, 2000.0]),
+            lambda d: method(d, 1).update(
+                labels=["a", "b", "c"], levels_cd_m2=[220.0, 1000.0, 2000.0]
+            ),
             "every method needs the same number of levels",
         ),
         (
