@@ -296,10 +296,19 @@ def test_names_that_differ_only_by_case_are_refused(study, edit, match):
          lambda d: d["glare"]["methods"][1].update(
              levels_cd_m2=[220.0, 1480.0, 1480.0, 4000.0, 7000.0, 10000.0]),
          r"glare\.methods\[1\]\.levels_cd_m2 = .*: must be .*ascending"),
+        # a field brighter than the display's maximum cannot be shown
+        ("spencer1995",
+         lambda d: d["contexts"][0].update(background={"kind": "uniform", "cd_m2": 500.0}),
+         r"contexts\[0\]\.background\.cd_m2 = 500\.0: above what the display shows "
+         r"\(display\.max_cd_m2 = 50\.0\); must be in \[0, 50\] cd/m²"),
+        ("yoshida2008",
+         lambda d: d.update(background={"kind": "uniform", "cd_m2": 1000.0}),
+         r"background\.cd_m2 = 1000\.0: above what the display shows \(display\.max_cd_m2"),
     ],
     ids=["steps fine to coarse", "duplicate strengths", "sky of mean 0",
          "strengths descending", "duplicate presentation_ms", "levels out of order",
-         "levels repeat"],
+         "levels repeat", "uniform field above the display",
+         "uniform background above the display"],
 )  # fmt: skip
 def test_values_that_cannot_mean_what_they_say_are_refused(study, edit, match):
     data = copy.deepcopy(raw(study))

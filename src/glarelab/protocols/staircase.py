@@ -303,7 +303,11 @@ def check(p: dict, problems: list[str], folder: Path | None) -> None:
         )
     for i, context in enumerate(contexts):
         background = check_background(
-            context.get("background"), f"contexts[{i}].background", problems, folder
+            context.get("background"),
+            f"contexts[{i}].background",
+            problems,
+            folder,
+            display_max_cd_m2=p["display"]["max_cd_m2"],
         )
         if background is not None:
             context["background"] = background
