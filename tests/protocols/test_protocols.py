@@ -321,3 +321,20 @@ def test_values_that_cannot_mean_what_they_say_are_refused(study, edit, match):
 def test_a_protocol_that_is_not_a_table_is_named(data):
     with pytest.raises(ProtocolError, match=r"must be a table \(a mapping of keys\)"):
         parse_protocol(data, source="api")
+
+
+@pytest.mark.parametrize("name", ["yoshida2008", "Yoshida2008", "luidolt2020"])
+def test_a_shipped_studys_name_is_refused_for_another_paradigm(name):
+    # its sessions would be named P01_<name>_s1_* like the shipped study's own
+    data = copy.deepcopy(raw("spencer1995"))
+    data["study"]["name"] = name
+    with pytest.raises(ProtocolError, match=rf"study\.name = '{name}': the name of the shipped "
+                       r"'(matching|rating)' study, but study\.paradigm = 'staircase'; must be a "
+                       r"name of its own"):  # fmt: skip
+        parse_protocol(data, source="test.toml", folder=PROTOCOLS)
+
+
+def test_a_lab_copy_keeps_its_shipped_studys_name():
+    data = copy.deepcopy(raw("yoshida2008"))
+    data["display"]["max_cd_m2"] = 500.0  # the lab's own display
+    assert parse_protocol(data, source="lab.toml", folder=PROTOCOLS).study == "yoshida2008"
