@@ -120,6 +120,20 @@ def test_an_empty_render_output_is_named_as_empty(scene, capsys, tmp_path, monke
 
 
 @pytest.mark.parametrize(
+    ("extra", "named"),
+    [
+        (["--readings", "5"], "--readings without --photometer"),
+        (["--settle-s", "0.5"], "--settle-s without --photometer"),
+        (["--readings", "3", "--photometer-serial", "X1"],
+         "--readings, --photometer-serial without --photometer"),
+    ],
+)  # fmt: skip
+def test_photometer_options_without_a_photometer_are_refused(extra, named, capsys, tmp_path):
+    argv = ["check-display", "spencer1995", "--out", tmp_path / "c.json", *extra]
+    refused(argv, capsys, tmp_path, named)
+
+
+@pytest.mark.parametrize(
     "argv",
     [
         ["run", "luidolt2020", "--simulate", "--participant", "P1", "--out", ""],
