@@ -12,7 +12,6 @@ from glarelab.protocols import load_protocol
 from .common import add_monitor_options, apply_monitor, claim_output, count, number, output_file
 from .common import log as _log
 
-
 # the options that act only through the photometer, with their defaults
 PHOTOMETER_OPTIONS = {"readings": 3, "settle_s": 1.0, "photometer_serial": None}
 

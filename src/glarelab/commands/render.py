@@ -307,7 +307,10 @@ def _render(args: argparse.Namespace) -> int:
         if args.preview:
             claim_output(args.preview, "render --preview")
             preview_png(
-                args.preview, result.image, l_dmax_cd_m2=args.l_dmax, scale=args.preview_scale or "display"
+                args.preview,
+                result.image,
+                l_dmax_cd_m2=args.l_dmax,
+                scale=args.preview_scale or "display",
             )
             _log(f"wrote {args.preview}")
     return 0
