@@ -284,7 +284,7 @@ def test_names_that_differ_only_by_case_are_refused(study, edit, match):
          r"glare\.strengths = \[2\.0, 1\.0, 0\.5\]: must be a list of float of length "
          r"1-50, ascending, in \[0, 1e\+09\] \(each above the one before\)"),
         ("spencer1995", lambda d: d["trials"].update(presentation_ms=[400.0, 400.0]),
-         r"trials\.presentation_ms repeats 400\.0: must be all different"),
+         r"trials\.presentation_ms repeats 400\.0: must be all different$"),
         # label A is the dimmest level: the follow-ups {A, B, C} and the level axis run up
         ("yoshida2008",
          lambda d: d["glare"]["methods"][0].update(

@@ -245,9 +245,9 @@ def _check_key(value: Any, key: Key, path: str, problems: list[str]) -> Any:
         repeated = sorted(
             {v for v, f in zip(items, folded, strict=True) if folded.count(f) > 1}, key=str
         )
+        folding = " (ignoring case)" if any(isinstance(v, str) for v in items) else ""
         problems.append(
-            f"{path} repeats {', '.join(map(repr, repeated))}: must be all different "
-            "(ignoring case)"
+            f"{path} repeats {', '.join(map(repr, repeated))}: must be all different{folding}"
         )
         return None
     if key.ascending and any(b <= a for a, b in pairwise(items)):
