@@ -103,10 +103,33 @@ def scene(tmp_path):
         (["--seed", "3"], "--seed without --flare-lines"),
         (["--model", "wave", "--aperture-spacing-mm", "2"],
          "--aperture-spacing-mm without --aperture-image"),
+        (["--preview-scale", "log"], "--preview-scale log without --preview"),
+        (["--preview-scale", "display"], "--preview-scale display without --preview"),
     ],
 )  # fmt: skip
 def test_render_options_that_would_be_ignored_are_refused(extra, named, scene, capsys, tmp_path):
     argv = ["render", scene, tmp_path / "out.exr", "--pixel-deg", "0.02", *extra]
+    refused(argv, capsys, tmp_path, named)
+
+
+def test_an_empty_render_output_is_named_as_empty(scene, capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # '' would otherwise mean this folder, with in.exr in it
+    line = refused(["render", "in.exr", "", "--pixel-deg", "0.02"], capsys, tmp_path,
+                   "output '' is empty (an unset shell variable?)")  # fmt: skip
+    assert "overwrite" not in line
+
+
+@pytest.mark.parametrize(
+    ("extra", "named"),
+    [
+        (["--readings", "5"], "--readings without --photometer"),
+        (["--settle-s", "0.5"], "--settle-s without --photometer"),
+        (["--readings", "3", "--photometer-serial", "X1"],
+         "--readings, --photometer-serial without --photometer"),
+    ],
+)  # fmt: skip
+def test_photometer_options_without_a_photometer_are_refused(extra, named, capsys, tmp_path):
+    argv = ["check-display", "spencer1995", "--out", tmp_path / "c.json", *extra]
     refused(argv, capsys, tmp_path, named)
 
 

@@ -135,7 +135,9 @@ def method(data, index):
             r"questions\[1\]\.column = 'match_cd_m2': already a column of the session CSV",
         ),
         (
-            lambda d: method(d, 1).update(labels=["a", "b", "c"], levels_cd_m2=[220.0, 1.0, 2.0]),
+            lambda d: method(d, 1).update(
+                labels=["a", "b", "c"], levels_cd_m2=[220.0, 1000.0, 2000.0]
+            ),
             "every method needs the same number of levels",
         ),
         (
@@ -277,8 +279,36 @@ def test_names_that_differ_only_by_case_are_refused(study, edit, match):
          r"glare\.strengths repeats 0\.1: must be all different"),
         ("yoshida2008", lambda d: d["background"].update(mean_cd_m2=0.0),
          r"background\.mean_cd_m2 = 0\.0: must be above 0 cd/m²"),
+        # glare_level 1 is the weakest strength in the data and the report's level axis
+        ("spencer1995", lambda d: d["glare"].update(strengths=[2.0, 1.0, 0.5]),
+         r"glare\.strengths = \[2\.0, 1\.0, 0\.5\]: must be a list of float of length "
+         r"1-50, ascending, in \[0, 1e\+09\] \(each above the one before\)"),
+        ("spencer1995", lambda d: d["trials"].update(presentation_ms=[400.0, 400.0]),
+         r"trials\.presentation_ms repeats 400\.0: must be all different$"),
+        # label A is the dimmest level: the follow-ups {A, B, C} and the level axis run up
+        ("yoshida2008",
+         lambda d: d["glare"]["methods"][0].update(
+             levels_cd_m2=[1165.0, 220.0, 2110.0, 3055.0, 4000.0, 7000.0]),
+         r"glare\.methods\[0\]\.levels_cd_m2 = \[1165\.0, 220\.0, .*\]: must be a list of "
+         r"float of length 1-26, ascending, in \[0, 1e\+09\] cd/m² \(each above the one "
+         r"before\)"),
+        ("yoshida2008",
+         lambda d: d["glare"]["methods"][1].update(
+             levels_cd_m2=[220.0, 1480.0, 1480.0, 4000.0, 7000.0, 10000.0]),
+         r"glare\.methods\[1\]\.levels_cd_m2 = .*: must be .*ascending"),
+        # a field brighter than the display's maximum cannot be shown
+        ("spencer1995",
+         lambda d: d["contexts"][0].update(background={"kind": "uniform", "cd_m2": 500.0}),
+         r"contexts\[0\]\.background\.cd_m2 = 500\.0: above what the display shows "
+         r"\(display\.max_cd_m2 = 50\.0\); must be in \[0, 50\] cd/m²"),
+        ("yoshida2008",
+         lambda d: d.update(background={"kind": "uniform", "cd_m2": 1000.0}),
+         r"background\.cd_m2 = 1000\.0: above what the display shows \(display\.max_cd_m2"),
     ],
-    ids=["steps fine to coarse", "duplicate strengths", "sky of mean 0"],
+    ids=["steps fine to coarse", "duplicate strengths", "sky of mean 0",
+         "strengths descending", "duplicate presentation_ms", "levels out of order",
+         "levels repeat", "uniform field above the display",
+         "uniform background above the display"],
 )  # fmt: skip
 def test_values_that_cannot_mean_what_they_say_are_refused(study, edit, match):
     data = copy.deepcopy(raw(study))
@@ -291,3 +321,20 @@ def test_values_that_cannot_mean_what_they_say_are_refused(study, edit, match):
 def test_a_protocol_that_is_not_a_table_is_named(data):
     with pytest.raises(ProtocolError, match=r"must be a table \(a mapping of keys\)"):
         parse_protocol(data, source="api")
+
+
+@pytest.mark.parametrize("name", ["yoshida2008", "Yoshida2008", "luidolt2020"])
+def test_a_shipped_studys_name_is_refused_for_another_paradigm(name):
+    # its sessions would be named P01_<name>_s1_* like the shipped study's own
+    data = copy.deepcopy(raw("spencer1995"))
+    data["study"]["name"] = name
+    with pytest.raises(ProtocolError, match=rf"study\.name = '{name}': the name of the shipped "
+                       r"'(matching|rating)' study, but study\.paradigm = 'staircase'; must be a "
+                       r"name of its own"):  # fmt: skip
+        parse_protocol(data, source="test.toml", folder=PROTOCOLS)
+
+
+def test_a_lab_copy_keeps_its_shipped_studys_name():
+    data = copy.deepcopy(raw("yoshida2008"))
+    data["display"]["max_cd_m2"] = 500.0  # the lab's own display
+    assert parse_protocol(data, source="lab.toml", folder=PROTOCOLS).study == "yoshida2008"

@@ -12,10 +12,20 @@ from glarelab.protocols import load_protocol
 from .common import add_monitor_options, apply_monitor, claim_output, count, number, output_file
 from .common import log as _log
 
+# the options that act only through the photometer, with their defaults
+PHOTOMETER_OPTIONS = {"readings": 3, "settle_s": 1.0, "photometer_serial": None}
+
 
 def _check_display(args: argparse.Namespace) -> int:
     from glarelab.frontend.check_display import check_display, write_check
 
+    given = [name for name in PHOTOMETER_OPTIONS if getattr(args, name) is not None]
+    if given and args.photometer is None:
+        shown = ", ".join("--" + name.replace("_", "-") for name in given)
+        raise ValueError(
+            f"{shown} without --photometer: only the photometer's readings use it, so it would "
+            "be ignored; give --photometer MODEL --port PORT, or leave it out"
+        )
     protocol, monitor = apply_monitor(args, load_protocol(args.protocol))
     calibration = Calibration.load(args.calibration) if args.calibration else None
     if args.out is not None:
@@ -118,7 +128,11 @@ def _check_display(args: argparse.Namespace) -> int:
 def _patch_protocol(args: argparse.Namespace):
     from glarelab.display.photometer import PatchProtocol
 
-    return PatchProtocol(readings=args.readings, settle_s=args.settle_s)
+    values = {
+        name: PHOTOMETER_OPTIONS[name] if getattr(args, name) is None else getattr(args, name)
+        for name in ("readings", "settle_s")
+    }
+    return PatchProtocol(**values)
 
 
 def add(commands) -> None:
@@ -169,9 +183,15 @@ def add(commands) -> None:
         "--photometer-serial", default=None, help="the photometer's serial number, recorded"
     )
     check.add_argument(
-        "--readings", type=count(1, 100), default=3, help="photometer readings per patch"
+        "--readings",
+        type=count(1, 100),
+        default=None,
+        help="photometer readings per patch (default 3; with --photometer)",
     )
     check.add_argument(
-        "--settle-s", type=number(0, 600), default=1.0, help="seconds before a patch is read"
+        "--settle-s",
+        type=number(0, 600),
+        default=None,
+        help="seconds before a patch is read (default 1; with --photometer)",
     )
     check.set_defaults(run=_check_display)

@@ -217,6 +217,18 @@ def _render(args: argparse.Namespace) -> int:
     *inputs, output = args.paths
     if not inputs:
         raise ValueError("render needs an input EXR and an output EXR (or folder)")
+    for i, text in enumerate(args.paths):
+        if not text.strip():
+            role = "output" if i == len(args.paths) - 1 else "input"
+            raise ValueError(
+                f"{role} {text!r} is empty (an unset shell variable?): give a path; an empty "
+                "one would mean the working folder"
+            )
+    if args.preview_scale is not None and args.preview is None:
+        raise ValueError(
+            f"--preview-scale {args.preview_scale} without --preview: it scales the PNG "
+            "preview, so without one it would be ignored"
+        )
     for source in inputs:  # a folder, a FIFO, /dev/null: named as what they are
         if not Path(source).exists() and not Path(source).is_symlink():
             raise FileNotFoundError(f"input {source}: no such file")
@@ -295,7 +307,10 @@ def _render(args: argparse.Namespace) -> int:
         if args.preview:
             claim_output(args.preview, "render --preview")
             preview_png(
-                args.preview, result.image, l_dmax_cd_m2=args.l_dmax, scale=args.preview_scale
+                args.preview,
+                result.image,
+                l_dmax_cd_m2=args.l_dmax,
+                scale=args.preview_scale or "display",
             )
             _log(f"wrote {args.preview}")
     return 0
@@ -646,7 +661,12 @@ def add(commands) -> None:
     )
     render.add_argument("--explain", action="store_true", help="print the plan and its bound")
     render.add_argument("--preview", type=Path, help="also write a PNG preview here")
-    render.add_argument("--preview-scale", choices=("display", "log"), default="display")
+    render.add_argument(
+        "--preview-scale",
+        choices=("display", "log"),
+        default=None,
+        help="the preview's tone scale (default display; with --preview)",
+    )
     render.add_argument("--force", action="store_true", help=FORCE_HELP)
     _add_model_options(render)
     render.set_defaults(run=_render)

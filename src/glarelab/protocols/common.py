@@ -66,12 +66,13 @@ LEVEL_LABELS = Key(
 )  # fmt: skip
 LEVELS_CD_M2 = Key(
     list,
-    "input disk luminances L_disk, one per label",
+    "input disk luminances L_disk, one per label (the first label the dimmest)",
     unit="cd/m²",
     item=float,
     length=(1, 26),
     low=0.0,
     high=1e9,
+    ascending=True,
 )
 
 
@@ -137,7 +138,12 @@ BACKGROUNDS: dict[str, Schema] = {
 
 
 def check_background(
-    table: Any, where: str, problems: list[str], folder: Path | None
+    table: Any,
+    where: str,
+    problems: list[str],
+    folder: Path | None,
+    *,
+    display_max_cd_m2: float | None = None,
 ) -> dict | None:
     """A background table validated for its ``kind`` (an EXR's path must exist).
 
@@ -153,6 +159,9 @@ def check_background(
     folder
         The protocol file's folder, which an EXR's relative ``path`` is read from; ``None``:
         relative to the working folder.
+    display_max_cd_m2
+        The display's maximum luminance, cd/m²: a uniform field above it cannot be shown and
+        is refused; ``None`` (default): not checked.
 
     Returns
     -------
@@ -178,6 +187,17 @@ def check_background(
     if kind == "sky" and result.get("cloud_min_deg") and result.get("cloud_max_deg"):
         if result["cloud_min_deg"] >= result["cloud_max_deg"]:
             problems.append(f"{where}.cloud_min_deg: must be below {where}.cloud_max_deg")
+    if (
+        kind == "uniform"
+        and display_max_cd_m2 is not None
+        and result.get("cd_m2") is not None
+        and result["cd_m2"] > display_max_cd_m2
+    ):
+        problems.append(
+            f"{where}.cd_m2 = {result['cd_m2']!r}: above what the display shows "
+            f"(display.max_cd_m2 = {display_max_cd_m2!r}); must be in [0, {display_max_cd_m2:g}] "
+            "cd/m²"
+        )
     if kind == "exr" and result.get("path") is not None:
         path = Path(result["path"])
         if not path.is_absolute() and folder is not None:

@@ -192,6 +192,7 @@ def parse_protocol(
     problems: list[str] = []
     validated = validate(data, {"study": _study_schema(), **module.SCHEMA}, "", problems)
     if not problems:
+        _check_shipped_name(validated["study"], problems)
         module.check(validated, problems, folder)
     if problems:
         raise ProtocolError(source, problems)
@@ -204,6 +205,34 @@ def parse_protocol(
         sha256=hashlib.sha256(canonical.encode()).hexdigest(),
         folder=folder,
     )
+
+
+def _shipped_paradigms() -> dict[str, str]:
+    """Each shipped study's name, case-folded, and its paradigm (read from its ``[study]``)."""
+    paradigms = {}
+    for path in SHIPPED.glob("*.toml"):
+        try:
+            study = tomllib.loads(path.read_text(encoding="utf-8")).get("study", {})
+        except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+            continue  # a broken shipped file is the shipped-protocol tests' to report
+        name, paradigm = study.get("name"), study.get("paradigm")
+        if isinstance(name, str) and isinstance(paradigm, str):
+            paradigms[name.casefold()] = paradigm
+    return paradigms
+
+
+def _check_shipped_name(study: Mapping[str, Any], problems: list[str]) -> None:
+    """A study named like a shipped study must be of its paradigm: a lab's copy keeps the
+    name, but sessions and reports of another paradigm under it would read as that study's
+    (its files are named after it)."""
+    name, paradigm = study["name"], study["paradigm"]
+    shipped = _shipped_paradigms().get(name.casefold())
+    if shipped is not None and shipped != paradigm:
+        problems.append(
+            f"study.name = {name!r}: the name of the shipped {shipped!r} study, but "
+            f"study.paradigm = {paradigm!r}; must be a name of its own (not one of the shipped "
+            f"studies of another paradigm: their data files and reports are named after them)"
+        )
 
 
 def shipped_protocols() -> list[str]:

@@ -11,6 +11,7 @@ import math
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass
+from itertools import pairwise
 from typing import Any
 
 __all__ = ["TOKEN", "Key", "ProtocolError", "Schema", "Tables", "check_token", "validate"]
@@ -73,6 +74,9 @@ class Key:
     unique
         Whether a list's elements must all differ (strings ignoring case, as file names on
         macOS and Windows do); default ``False``.
+    ascending
+        Whether a list's numbers must rise strictly from first to last (its order numbers the
+        levels the data and the report name, 1 the lowest); default ``False``.
     """
 
     kind: type
@@ -86,6 +90,7 @@ class Key:
     length: int | tuple[int, int] | None = None
     token: bool = False
     unique: bool = False
+    ascending: bool = False
 
     @property
     def required(self) -> bool:
@@ -99,7 +104,9 @@ class Key:
                 what += f" of length {self.length}"
             elif self.length:
                 what += f" of length {self.length[0]}-{self.length[1]}"
-            if self.unique:
+            if self.ascending:
+                what += ", ascending"
+            elif self.unique:
                 what += ", all different"
             parts.append(what)
         elif self.kind is dict:
@@ -238,10 +245,13 @@ def _check_key(value: Any, key: Key, path: str, problems: list[str]) -> Any:
         repeated = sorted(
             {v for v, f in zip(items, folded, strict=True) if folded.count(f) > 1}, key=str
         )
+        folding = " (ignoring case)" if any(isinstance(v, str) for v in items) else ""
         problems.append(
-            f"{path} repeats {', '.join(map(repr, repeated))}: must be all different "
-            "(ignoring case)"
+            f"{path} repeats {', '.join(map(repr, repeated))}: must be all different{folding}"
         )
+        return None
+    if key.ascending and any(b <= a for a, b in pairwise(items)):
+        problems.append(f"{path} = {items!r}: must be {key.allowed()} (each above the one before)")
         return None
     return items
 

@@ -240,7 +240,9 @@ def check(p: dict, problems: list[str], folder: Path | None) -> None:
     if s["disk_deg"] >= s["size_deg"]:
         problems.append("stimulus.disk_deg: must be smaller than stimulus.size_deg")
     _check_layout(p, problems)
-    background = check_background(p["background"], "background", problems, folder)
+    background = check_background(
+        p["background"], "background", problems, folder, display_max_cd_m2=maximum
+    )
     if background is not None:
         p["background"] = background
         if background["kind"] == "sky" and background["mean_cd_m2"] > g["l_dmax_cd_m2"]:

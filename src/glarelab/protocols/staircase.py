@@ -76,12 +76,13 @@ SCHEMA: Schema = {
         ),
         "strengths": Key(
             list,
-            "source excess over the peak, one per glare level",
+            "source excess over the peak, one per glare level (glare_level 1 the weakest)",
             item=float,
             length=(1, 50),
             low=0.0,
             high=1e9,
             unique=True,
+            ascending=True,
         ),
     },
     "trials": {
@@ -93,6 +94,7 @@ SCHEMA: Schema = {
             length=(1, 4),
             low=10.0,
             high=10_000.0,
+            unique=True,
         ),
         "start_fraction": Key(
             float, "disc intensity the staircases start at (fraction of max)", low=0.0, high=1.0
@@ -301,7 +303,11 @@ def check(p: dict, problems: list[str], folder: Path | None) -> None:
         )
     for i, context in enumerate(contexts):
         background = check_background(
-            context.get("background"), f"contexts[{i}].background", problems, folder
+            context.get("background"),
+            f"contexts[{i}].background",
+            problems,
+            folder,
+            display_max_cd_m2=p["display"]["max_cd_m2"],
         )
         if background is not None:
             context["background"] = background
