@@ -480,6 +480,7 @@ def load_sessions(
         raise DataError(["no CSV files given"])
     paradigm = paradigm_analysis(protocol)
     design: Design = paradigm.design(protocol)
+    given: dict[Path, Path] = {}  # each file as resolved → as given first
     for raw in paths:
         path = Path(raw)
         if not path.is_file():
@@ -487,6 +488,15 @@ def load_sessions(
                 f"{path}: no such file" if not path.exists() else f"{path}: not a file"
             )
             continue
+        resolved = path.resolve()
+        if resolved in given:
+            problems.append(
+                f"{path}: given twice"
+                + (f" (also as {given[resolved]})" if given[resolved] != path else "")
+                + "; give each session file once"
+            )
+            continue
+        given[resolved] = path
         found = len(problems)
         sidecar = _read_sidecar(path, problems)
         read = _read_file(path, protocol, sidecar, problems)
