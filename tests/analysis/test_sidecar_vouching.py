@@ -47,3 +47,32 @@ def test_the_same_file_given_twice_is_named(luidolt):
     protocol, files = luidolt
     with pytest.raises(DataError, match=re.escape(f"{files[0]}: given twice")):
         load_sessions(protocol, [*files, files[0]])
+
+
+def test_a_data_format_this_version_does_not_know_is_refused(luidolt, tmp_path):
+    protocol, files = luidolt
+    copies = edited(files, tmp_path, {"data_format": "9.9"})
+    with pytest.raises(
+        DataError, match=re.escape('data_format "9.9" is not a format this version of glarelab')
+    ) as refused:
+        load_sessions(protocol, copies)
+    assert str(copies[0].with_suffix(".json")) in str(refused.value)
+    assert "0.1, 0.2, 0.3, 0.4" in str(refused.value)
+
+
+@pytest.mark.parametrize(
+    ("change", "named"),
+    [
+        ({"resumed": float("nan")}, "resumed is NaN; must be a whole number ≥ 0"),
+        ({"trials": "6"}, 'trials is "6"; must be a whole number ≥ 0'),
+        ({"counterbalance": 7}, "counterbalance is 7; must be null (no counterbalancing), 0"),
+        ({"refresh_hz": float("inf")}, "refresh_hz is Infinity; must be null or a finite"),
+        ({"status": "done"}, 'status is "done"; must be one of running, completed'),
+        ({"calibration": "none"}, 'calibration is "none"; must be null or an object'),
+    ],
+)
+def test_a_sidecar_field_no_session_writes_is_refused_naming_it(luidolt, tmp_path, change, named):
+    protocol, files = luidolt
+    copies = edited(files, tmp_path, change)
+    with pytest.raises(DataError, match=re.escape(f"{copies[0].with_suffix('.json')}: {named}")):
+        load_sessions(protocol, copies)

@@ -41,7 +41,7 @@ import pandas as pd
 
 from glarelab.analysis.dataset import DataError, Dataset, Design, where
 from glarelab.analysis.paradigms import paradigm_analysis
-from glarelab.protocols import columns
+from glarelab.protocols import DATA_FORMAT, columns
 from glarelab.protocols.keys import TOKEN
 
 if TYPE_CHECKING:
@@ -58,6 +58,12 @@ _FILE_NAME = (
 )
 
 __all__ = ["DataError", "Dataset", "Design", "load_sessions", "where"]
+
+# every data format session files were written in, oldest first: the ones before, then the
+# current one (a sidecar naming another is of a newer version or edited, and is refused)
+DATA_FORMATS = ("0.1", "0.2", "0.3", DATA_FORMAT)
+# the session statuses a sidecar records
+STATUSES = ("running", "completed", "aborted", "interrupted")
 
 # columns added after the first data format, as files written before them are read: every
 # trial of those files counted (no presentation was repeated); the others are missing
@@ -253,6 +259,95 @@ def _read_sidecar(path: Path, problems: list[str]) -> dict | None:
         problems.append(f"{sidecar_path}: a sidecar must be a JSON object")
         return None
     return sidecar
+
+
+def _json(value) -> str:
+    """A sidecar value as its JSON text (``true``, ``NaN``, ``"0.4"``)."""
+    try:
+        return json.dumps(value)
+    except (TypeError, ValueError):
+        return repr(value)
+
+
+def _whole(low: int):
+    def check(value) -> bool:
+        return isinstance(value, int) and not isinstance(value, bool) and value >= low
+
+    return check
+
+
+def _text_or_null(value) -> bool:
+    return value is None or isinstance(value, str)
+
+
+def _object_or_null(value) -> bool:
+    return value is None or isinstance(value, dict)
+
+
+# the sidecar fields the analysis reads or reports, with what a session writes in them: a
+# field present with another value (a hand edit: NaN, a string for a number, a counterbalance
+# no engine has) is refused, naming it
+_SIDECAR_FIELDS = {
+    "study": (lambda v: isinstance(v, str), "a study name (text)"),
+    "participant": (lambda v: isinstance(v, str), "a participant id (text)"),
+    "session": (_whole(1), "a whole number ≥ 1"),
+    "status": (lambda v: v in STATUSES, f"one of {', '.join(STATUSES)}"),
+    "trials": (_whole(0), "a whole number ≥ 0"),
+    "resumed": (_whole(0), "a whole number ≥ 0 (the runs after the first)"),
+    "simulated": (lambda v: isinstance(v, bool), "true or false"),
+    "pilot": (lambda v: isinstance(v, bool), "true or false"),
+    "counterbalance": (
+        lambda v: v is None or (isinstance(v, int) and not isinstance(v, bool) and v in (0, 1)),
+        "null (no counterbalancing), 0 (the protocol's block order) or 1 (reversed)",
+    ),
+    "refresh_hz": (
+        lambda v: (
+            v is None
+            or (
+                isinstance(v, int | float)
+                and not isinstance(v, bool)
+                and math.isfinite(v)
+                and v > 0
+            )
+        ),
+        "null or a finite number > 0, Hz",
+    ),
+    "bit_depth": (lambda v: v is None or _whole(1)(v), "null or a whole number ≥ 1"),
+    "protocol_sha256": (_text_or_null, "null or a sha256 (text)"),
+    "stimulus_set_manifest_sha256": (_text_or_null, "null or a sha256 (text)"),
+    "started": (_text_or_null, "null or a date and time (text)"),
+    "ended": (_text_or_null, "null or a date and time (text)"),
+    "participant_info": (_object_or_null, "an object"),
+    "calibration": (_object_or_null, "null or an object"),
+    "images_encoded_with": (_object_or_null, "null or an object"),
+    "packages": (_object_or_null, "an object"),
+    "runs": (lambda v: isinstance(v, list), "a list of runs"),
+    "trial_order": (lambda v: v is None or isinstance(v, list), "null or a list"),
+}
+
+
+def _sidecar_fields(path: Path, sidecar: dict) -> list[str]:
+    """A sidecar's fields as a session writes them: a data format this version knows, and
+    each field the analysis reads of its type and range."""
+    where_ = path.with_suffix(".json")
+    problems = []
+    if "data_format" in sidecar and sidecar["data_format"] not in DATA_FORMATS:
+        problems.append(
+            f"{where_}: data_format {_json(sidecar['data_format'])} is not a format this version "
+            f"of glarelab reads ({', '.join(DATA_FORMATS)}): a file of a newer version (update "
+            "glarelab) or edited by hand"
+        )
+    for key, (valid, allowed) in _SIDECAR_FIELDS.items():
+        if key in sidecar and not valid(sidecar[key]):
+            problems.append(f"{where_}: {key} is {_json(sidecar[key])}; must be {allowed}")
+    for key in ("calibration", "images_encoded_with"):
+        record = sidecar.get(key)
+        if isinstance(record, dict) and not _text_or_null(record.get("readings_sha256")):
+            problems.append(
+                f"{where_}: {key}.readings_sha256 is {_json(record['readings_sha256'])}; must "
+                "be null or a sha256 (text)"
+            )
+    return problems
 
 
 def _short(value) -> str:
@@ -499,6 +594,10 @@ def load_sessions(
         given[resolved] = path
         found = len(problems)
         sidecar = _read_sidecar(path, problems)
+        if sidecar is not None:
+            problems += _sidecar_fields(path, sidecar)
+            if len(problems) > found:
+                continue
         read = _read_file(path, protocol, sidecar, problems)
         if len(problems) > found:
             continue
