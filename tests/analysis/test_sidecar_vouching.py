@@ -76,3 +76,17 @@ def test_a_sidecar_field_no_session_writes_is_refused_naming_it(luidolt, tmp_pat
     copies = edited(files, tmp_path, change)
     with pytest.raises(DataError, match=re.escape(f"{copies[0].with_suffix('.json')}: {named}")):
         load_sessions(protocol, copies)
+
+
+def test_a_simulated_session_relabelled_real_is_refused(luidolt, tmp_path):
+    protocol, files = luidolt
+    copies = edited(files, tmp_path, {"simulated": False})
+    with pytest.raises(
+        DataError,
+        match=re.escape(
+            f"{copies[0].with_suffix('.json')}: simulated is false, but its calibration status "
+            "is 'simulated', its participant_info holds simulated_observer_seed, its runs' "
+            "keyboard is 'simulated observer'"
+        ),
+    ):
+        load_sessions(protocol, copies)

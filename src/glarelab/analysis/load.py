@@ -347,7 +347,29 @@ def _sidecar_fields(path: Path, sidecar: dict) -> list[str]:
                 f"{where_}: {key}.readings_sha256 is {_json(record['readings_sha256'])}; must "
                 "be null or a sha256 (text)"
             )
+    if sidecar.get("simulated") is False and not problems:
+        problems += _simulated_signs(where_, sidecar)
     return problems
+
+
+def _simulated_signs(where_: Path, sidecar: dict) -> list[str]:
+    """A sidecar saying ``simulated: false`` whose other fields only a simulated observer's
+    session writes: its calibration status ``simulated``, the observer's seed among the
+    participant's information, a run's keyboard the simulated observer."""
+    signs = []
+    if (sidecar.get("calibration") or {}).get("status") == "simulated":
+        signs.append("its calibration status is 'simulated'")
+    if "simulated_observer_seed" in (sidecar.get("participant_info") or {}):
+        signs.append("its participant_info holds simulated_observer_seed")
+    runs = sidecar.get("runs") or []
+    if any(isinstance(run, dict) and run.get("keyboard") == "simulated observer" for run in runs):
+        signs.append("its runs' keyboard is 'simulated observer'")
+    if not signs:
+        return []
+    return [
+        f"{where_}: simulated is false, but {', '.join(signs)}: a simulated observer's session "
+        "(the sidecar edited?); a session is analysed as what it is (simulated: true)"
+    ]
 
 
 def _short(value) -> str:
