@@ -177,7 +177,7 @@ def test_files_of_the_first_data_format_still_load(simulated, tmp_path):
             writer.writeheader()
             writer.writerows(rows)
         old.append(target)
-    dataset = load_sessions(load_protocol("spencer1995"), old)
+    dataset = load_sessions(load_protocol("spencer1995"), old, include_no_sidecar=True)
     assert dataset.trials["counted"].all()  # every trial of an old file moved its staircase
     assert dataset.trials["onset_s"].isna().all()
     new = load_sessions(load_protocol("spencer1995"), csvs(simulated, "spencer1995"))

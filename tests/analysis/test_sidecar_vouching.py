@@ -90,3 +90,18 @@ def test_a_simulated_session_relabelled_real_is_refused(luidolt, tmp_path):
         ),
     ):
         load_sessions(protocol, copies)
+
+
+def test_a_csv_without_its_sidecar_is_refused_unless_admitted_and_then_listed(luidolt, tmp_path):
+    from glarelab.analysis.report import write_report
+
+    protocol, files = luidolt
+    copies = edited(files, tmp_path, {})
+    copies[0].with_suffix(".json").unlink()
+    with pytest.raises(DataError, match=re.escape(f"{copies[0]}: no sidecar")) as refused:
+        load_sessions(protocol, copies)
+    assert "--include-no-sidecar" in str(refused.value)
+    dataset = load_sessions(protocol, copies, include_no_sidecar=True)
+    assert [s["status"] for s in dataset.sessions] == ["no sidecar", "completed"]
+    report = write_report(protocol, copies, tmp_path / "report", include_no_sidecar=True)
+    assert "no sidecar" in report.read_text()

@@ -543,6 +543,7 @@ def load_sessions(
     exclude_incomplete: bool = False,
     include_aborted: bool = False,
     include_pilots: bool = False,
+    include_no_sidecar: bool = False,
     stimuli: dict | None = None,
 ) -> Dataset:
     """Load and validate session CSVs of one study (its protocol sets the columns, the design
@@ -564,6 +565,11 @@ def load_sessions(
     include_pilots
         Analyse pilot sessions (sidecar ``pilot: true``) as participants; by default they
         are left out. Either way they are listed in ``Dataset.pilots``.
+    include_no_sidecar
+        Analyse session CSVs that have no sidecar (a file of the first data format, or one
+        whose sidecar was lost): nothing vouches for their protocol, status, pilot or
+        simulated flag. By default they are refused; either way they are listed in
+        ``Dataset.sessions`` (status ``no sidecar``), and the report lists them.
     stimuli
         The stimulus set the report is given, as ``{"manifest_sha256": …, "readings_sha256":
         …}`` (the sha256 of its manifest and of its calibration's readings): sessions that ran
@@ -582,7 +588,8 @@ def load_sessions(
         Naming file, line and column of every bad cell; a sidecar that disagrees with its
         CSV, its file name, the protocol or the stimulus set; values the protocol or its
         display cannot produce; trials duplicated or missing; a header not on the first line;
-        a row cut short; a CSV of another study; two sessions of one participant; sessions
+        a row cut short; a CSV of another study; a CSV without its sidecar (unless
+        ``include_no_sidecar``); a file given twice; two sessions of one participant; sessions
         that did not complete or hold no trials (unless ``include_aborted``); nothing left
         but pilots; and (unless ``exclude_incomplete``) every participant missing a design
         cell.
@@ -620,6 +627,13 @@ def load_sessions(
             problems += _sidecar_fields(path, sidecar)
             if len(problems) > found:
                 continue
+        elif not include_no_sidecar and len(problems) == found:
+            problems.append(
+                f"{path}: no sidecar ({path.with_suffix('.json').name}): nothing vouches for "
+                "its protocol, status or whether it is a pilot or simulated; "
+                "--include-no-sidecar analyses such files and the report lists them"
+            )
+            continue
         read = _read_file(path, protocol, sidecar, problems)
         if len(problems) > found:
             continue
