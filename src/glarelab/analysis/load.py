@@ -627,13 +627,14 @@ def load_sessions(
             problems += _sidecar_fields(path, sidecar)
             if len(problems) > found:
                 continue
-        elif not include_no_sidecar and len(problems) == found:
+        unvouched = sidecar is None and not include_no_sidecar and len(problems) == found
+        if unvouched:  # its rows are read all the same, so that their problems are named too
             problems.append(
                 f"{path}: no sidecar ({path.with_suffix('.json').name}): nothing vouches for "
                 "its protocol, status or whether it is a pilot or simulated; "
                 "--include-no-sidecar analyses such files and the report lists them"
             )
-            continue
+            found = len(problems)
         read = _read_file(path, protocol, sidecar, problems)
         if len(problems) > found:
             continue
@@ -649,7 +650,7 @@ def load_sessions(
         if len(problems) > found:
             continue
         problems += _recorded_trials(path, sidecar, read)
-        if len(problems) > found:
+        if len(problems) > found or unvouched:
             continue
         session = _session(path, read, sidecar)
         sessions.append(session)
