@@ -1177,7 +1177,7 @@ def test_a_sidecar_that_contradicts_its_csv_is_refused(sandbox, tmp_path, capsys
     for change, named in [
         ({"participant": "P77"}, "participant 'P77'"),
         ({"study": "spencer1995"}, "study 'spencer1995'"),
-        ({"simulated": "no"}, "simulated is 'no'"),
+        ({"simulated": "no"}, 'simulated is "no"; must be true or false'),
         ({"session": 2}, "session 2"),
     ]:
         csv = shutil.copy(source, tmp_path / source.name)
