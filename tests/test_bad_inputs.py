@@ -1177,7 +1177,7 @@ def test_a_sidecar_that_contradicts_its_csv_is_refused(sandbox, tmp_path, capsys
     for change, named in [
         ({"participant": "P77"}, "participant 'P77'"),
         ({"study": "spencer1995"}, "study 'spencer1995'"),
-        ({"simulated": "no"}, "simulated is 'no'"),
+        ({"simulated": "no"}, 'simulated is "no"; must be true or false'),
         ({"session": 2}, "session 2"),
     ]:
         csv = shutil.copy(source, tmp_path / source.name)
@@ -1196,7 +1196,10 @@ def test_a_csv_without_sidecar_is_listed_with_its_origin_unknown(sandbox, tmp_pa
         csvs.append(shutil.copy(source, tmp_path / source.name))
         if len(csvs) > 1:
             shutil.copy(source.with_suffix(".json"), tmp_path / source.with_suffix(".json").name)
-    assert main(["analyse", "yoshida2008", *map(str, csvs), "--out", str(tmp_path / "r")]) == 0
+    argv = ["analyse", "yoshida2008", *map(str, csvs), "--out", str(tmp_path / "r")]
+    status, err = refused(argv, capsys)
+    assert status == 2 and f"{csvs[0]}: no sidecar" in err and "--include-no-sidecar" in err, err
+    assert main([*argv, "--include-no-sidecar"]) == 0
     origin = json.loads((tmp_path / "r" / "provenance.json").read_text())
     assert origin["simulated"] == "mixed"
     first = next(s for s in origin["sessions"] if s["file"] == Path(csvs[0]).name)

@@ -136,11 +136,16 @@ def test_missing_column_other_study_duplicates_and_unbalanced(simulated, tmp_pat
         DataError,
         match=r"participant sim01 has no trial at \{'method': '\w+', 'level_index': \d\}",
     ):
-        load_sessions(load_protocol("yoshida2008"), [short, *csvs(simulated, "yoshida2008")[1:]])
+        load_sessions(
+            load_protocol("yoshida2008"),
+            [short, *csvs(simulated, "yoshida2008")[1:]],
+            include_no_sidecar=True,
+        )
     dataset = load_sessions(
         load_protocol("yoshida2008"),
         [short, *csvs(simulated, "yoshida2008")[1:]],
         exclude_incomplete=True,
+        include_no_sidecar=True,
     )
     assert list(dataset.excluded) == ["sim01"] and "sim01" not in set(
         dataset.trials["participant"]
@@ -177,7 +182,7 @@ def test_files_of_the_first_data_format_still_load(simulated, tmp_path):
             writer.writeheader()
             writer.writerows(rows)
         old.append(target)
-    dataset = load_sessions(load_protocol("spencer1995"), old)
+    dataset = load_sessions(load_protocol("spencer1995"), old, include_no_sidecar=True)
     assert dataset.trials["counted"].all()  # every trial of an old file moved its staircase
     assert dataset.trials["onset_s"].isna().all()
     new = load_sessions(load_protocol("spencer1995"), csvs(simulated, "spencer1995"))

@@ -41,7 +41,7 @@ import pandas as pd
 
 from glarelab.analysis.dataset import DataError, Dataset, Design, where
 from glarelab.analysis.paradigms import paradigm_analysis
-from glarelab.protocols import columns
+from glarelab.protocols import DATA_FORMAT, columns
 from glarelab.protocols.keys import TOKEN
 
 if TYPE_CHECKING:
@@ -58,6 +58,12 @@ _FILE_NAME = (
 )
 
 __all__ = ["DataError", "Dataset", "Design", "load_sessions", "where"]
+
+# every data format session files were written in, oldest first: the ones before, then the
+# current one (a sidecar naming another is of a newer version or edited, and is refused)
+DATA_FORMATS = ("0.1", "0.2", "0.3", DATA_FORMAT)
+# the session statuses a sidecar records
+STATUSES = ("running", "completed", "aborted", "interrupted")
 
 # columns added after the first data format, as files written before them are read: every
 # trial of those files counted (no presentation was repeated); the others are missing
@@ -255,6 +261,117 @@ def _read_sidecar(path: Path, problems: list[str]) -> dict | None:
     return sidecar
 
 
+def _json(value) -> str:
+    """A sidecar value as its JSON text (``true``, ``NaN``, ``"0.4"``)."""
+    try:
+        return json.dumps(value)
+    except (TypeError, ValueError):
+        return repr(value)
+
+
+def _whole(low: int):
+    def check(value) -> bool:
+        return isinstance(value, int) and not isinstance(value, bool) and value >= low
+
+    return check
+
+
+def _text_or_null(value) -> bool:
+    return value is None or isinstance(value, str)
+
+
+def _object_or_null(value) -> bool:
+    return value is None or isinstance(value, dict)
+
+
+# the sidecar fields the analysis reads or reports, with what a session writes in them: a
+# field present with another value (a hand edit: NaN, a string for a number, a counterbalance
+# no engine has) is refused, naming it
+_SIDECAR_FIELDS = {
+    "study": (lambda v: isinstance(v, str), "a study name (text)"),
+    "participant": (lambda v: isinstance(v, str), "a participant id (text)"),
+    "session": (_whole(1), "a whole number ≥ 1"),
+    "status": (lambda v: v in STATUSES, f"one of {', '.join(STATUSES)}"),
+    "trials": (_whole(0), "a whole number ≥ 0"),
+    "resumed": (_whole(0), "a whole number ≥ 0 (the runs after the first)"),
+    "simulated": (lambda v: isinstance(v, bool), "true or false"),
+    "pilot": (lambda v: isinstance(v, bool), "true or false"),
+    "counterbalance": (
+        lambda v: v is None or (isinstance(v, int) and not isinstance(v, bool) and v in (0, 1)),
+        "null (no counterbalancing), 0 (the protocol's block order) or 1 (reversed)",
+    ),
+    "refresh_hz": (
+        lambda v: (
+            v is None
+            or (
+                isinstance(v, int | float)
+                and not isinstance(v, bool)
+                and math.isfinite(v)
+                and v > 0
+            )
+        ),
+        "null or a finite number > 0, Hz",
+    ),
+    "bit_depth": (lambda v: v is None or _whole(1)(v), "null or a whole number ≥ 1"),
+    "protocol_sha256": (_text_or_null, "null or a sha256 (text)"),
+    "stimulus_set_manifest_sha256": (_text_or_null, "null or a sha256 (text)"),
+    "started": (_text_or_null, "null or a date and time (text)"),
+    "ended": (_text_or_null, "null or a date and time (text)"),
+    "participant_info": (_object_or_null, "an object"),
+    "calibration": (_object_or_null, "null or an object"),
+    "images_encoded_with": (_object_or_null, "null or an object"),
+    "packages": (_object_or_null, "an object"),
+    "runs": (lambda v: isinstance(v, list), "a list of runs"),
+    "trial_order": (lambda v: v is None or isinstance(v, list), "null or a list"),
+}
+
+
+def _sidecar_fields(path: Path, sidecar: dict) -> list[str]:
+    """A sidecar's fields as a session writes them: a data format this version knows, and
+    each field the analysis reads of its type and range."""
+    where_ = path.with_suffix(".json")
+    problems = []
+    if "data_format" in sidecar and sidecar["data_format"] not in DATA_FORMATS:
+        problems.append(
+            f"{where_}: data_format {_json(sidecar['data_format'])} is not a format this version "
+            f"of glarelab reads ({', '.join(DATA_FORMATS)}): a file of a newer version (update "
+            "glarelab) or edited by hand"
+        )
+    for key, (valid, allowed) in _SIDECAR_FIELDS.items():
+        if key in sidecar and not valid(sidecar[key]):
+            problems.append(f"{where_}: {key} is {_json(sidecar[key])}; must be {allowed}")
+    for key in ("calibration", "images_encoded_with"):
+        record = sidecar.get(key)
+        if isinstance(record, dict) and not _text_or_null(record.get("readings_sha256")):
+            problems.append(
+                f"{where_}: {key}.readings_sha256 is {_json(record['readings_sha256'])}; must "
+                "be null or a sha256 (text)"
+            )
+    if sidecar.get("simulated") is False and not problems:
+        problems += _simulated_signs(where_, sidecar)
+    return problems
+
+
+def _simulated_signs(where_: Path, sidecar: dict) -> list[str]:
+    """A sidecar saying ``simulated: false`` whose other fields only a simulated observer's
+    session writes: its calibration status ``simulated``, the observer's seed among the
+    participant's information, a run's keyboard the simulated observer."""
+    signs = []
+    if (sidecar.get("calibration") or {}).get("status") == "simulated":
+        signs.append("its calibration status is 'simulated'")
+    if "simulated_observer_seed" in (sidecar.get("participant_info") or {}):
+        signs.append("its participant_info holds simulated_observer_seed")
+    runs = sidecar.get("runs") or []
+    if any(isinstance(run, dict) and run.get("keyboard") == "simulated observer" for run in runs):
+        signs.append("its runs' keyboard is 'simulated observer'")
+    if not signs:
+        return []
+    return [
+        f"{where_}: simulated is false, but {', '.join(signs)}: a simulated observer's session "
+        "(the sidecar edited?); a session is analysed as what it is (simulated: true)"
+    ]
+
+
 def _short(value) -> str:
     return f"{str(value)[:12]}…" if value else repr(value)
 
@@ -426,6 +543,7 @@ def load_sessions(
     exclude_incomplete: bool = False,
     include_aborted: bool = False,
     include_pilots: bool = False,
+    include_no_sidecar: bool = False,
     stimuli: dict | None = None,
 ) -> Dataset:
     """Load and validate session CSVs of one study (its protocol sets the columns, the design
@@ -447,6 +565,11 @@ def load_sessions(
     include_pilots
         Analyse pilot sessions (sidecar ``pilot: true``) as participants; by default they
         are left out. Either way they are listed in ``Dataset.pilots``.
+    include_no_sidecar
+        Analyse session CSVs that have no sidecar (a file of the first data format, or one
+        whose sidecar was lost): nothing vouches for their protocol, status, pilot or
+        simulated flag. By default they are refused; either way they are listed in
+        ``Dataset.sessions`` (status ``no sidecar``), and the report lists them.
     stimuli
         The stimulus set the report is given, as ``{"manifest_sha256": …, "readings_sha256":
         …}`` (the sha256 of its manifest and of its calibration's readings): sessions that ran
@@ -465,7 +588,8 @@ def load_sessions(
         Naming file, line and column of every bad cell; a sidecar that disagrees with its
         CSV, its file name, the protocol or the stimulus set; values the protocol or its
         display cannot produce; trials duplicated or missing; a header not on the first line;
-        a row cut short; a CSV of another study; two sessions of one participant; sessions
+        a row cut short; a CSV of another study; a CSV without its sidecar (unless
+        ``include_no_sidecar``); a file given twice; two sessions of one participant; sessions
         that did not complete or hold no trials (unless ``include_aborted``); nothing left
         but pilots; and (unless ``exclude_incomplete``) every participant missing a design
         cell.
@@ -480,6 +604,7 @@ def load_sessions(
         raise DataError(["no CSV files given"])
     paradigm = paradigm_analysis(protocol)
     design: Design = paradigm.design(protocol)
+    given: dict[Path, Path] = {}  # each file as resolved → as given first
     for raw in paths:
         path = Path(raw)
         if not path.is_file():
@@ -487,8 +612,29 @@ def load_sessions(
                 f"{path}: no such file" if not path.exists() else f"{path}: not a file"
             )
             continue
+        resolved = path.resolve()
+        if resolved in given:
+            problems.append(
+                f"{path}: given twice"
+                + (f" (also as {given[resolved]})" if given[resolved] != path else "")
+                + "; give each session file once"
+            )
+            continue
+        given[resolved] = path
         found = len(problems)
         sidecar = _read_sidecar(path, problems)
+        if sidecar is not None:
+            problems += _sidecar_fields(path, sidecar)
+            if len(problems) > found:
+                continue
+        unvouched = sidecar is None and not include_no_sidecar and len(problems) == found
+        if unvouched:  # its rows are read all the same, so that their problems are named too
+            problems.append(
+                f"{path}: no sidecar ({path.with_suffix('.json').name}): nothing vouches for "
+                "its protocol, status or whether it is a pilot or simulated; "
+                "--include-no-sidecar analyses such files and the report lists them"
+            )
+            found = len(problems)
         read = _read_file(path, protocol, sidecar, problems)
         if len(problems) > found:
             continue
@@ -504,7 +650,7 @@ def load_sessions(
         if len(problems) > found:
             continue
         problems += _recorded_trials(path, sidecar, read)
-        if len(problems) > found:
+        if len(problems) > found or unvouched:
             continue
         session = _session(path, read, sidecar)
         sessions.append(session)

@@ -116,6 +116,7 @@ def analyse(
     exclude_incomplete: bool = False,
     include_aborted: bool = False,
     include_pilots: bool = False,
+    include_no_sidecar: bool = False,
     stimuli: Path | None = None,
 ) -> tuple[Dataset, dict]:
     """Load the sessions of the protocol's study (checked against the stimulus set, if
@@ -127,7 +128,7 @@ def analyse(
         The study's protocol.
     paths
         The session CSVs.
-    exclude_incomplete, include_aborted, include_pilots
+    exclude_incomplete, include_aborted, include_pilots, include_no_sidecar
         As for :func:`glarelab.analysis.load.load_sessions`; default False each.
     stimuli
         The stimulus set's folder, whose hashes the sessions must have recorded; default
@@ -151,6 +152,7 @@ def analyse(
         exclude_incomplete=exclude_incomplete,
         include_aborted=include_aborted,
         include_pilots=include_pilots,
+        include_no_sidecar=include_no_sidecar,
         stimuli=None if stimuli is None else set_hashes(stimuli),
     )
     return dataset, paradigm_analysis(protocol).analyse(dataset, protocol)
@@ -504,6 +506,7 @@ def write_report(
     exclude_incomplete: bool = False,
     include_aborted: bool = False,
     include_pilots: bool = False,
+    include_no_sidecar: bool = False,
     stimuli: str | Path | None = None,
 ) -> Path:
     """Analyse session CSVs and write the report folder; returns the path of report.html.
@@ -521,7 +524,7 @@ def write_report(
         The session CSVs.
     out
         The report's folder, replaced whole; a folder holding other files is refused.
-    exclude_incomplete, include_aborted, include_pilots
+    exclude_incomplete, include_aborted, include_pilots, include_no_sidecar
         As for :func:`glarelab.analysis.load.load_sessions`; default False each.
     stimuli
         The stimulus set's folder; default None: no stimulus figures, sessions not checked
@@ -549,6 +552,7 @@ def write_report(
         exclude_incomplete=exclude_incomplete,
         include_aborted=include_aborted,
         include_pilots=include_pilots,
+        include_no_sidecar=include_no_sidecar,
         stimuli=stimuli,
     )
     result = result | {"tables": {k: corrected_beside(t) for k, t in result["tables"].items()}}

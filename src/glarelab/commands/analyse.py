@@ -36,6 +36,7 @@ def _analyse(args: argparse.Namespace) -> int:
         exclude_incomplete=args.exclude_incomplete,
         include_aborted=args.include_aborted,
         include_pilots=args.include_pilots,
+        include_no_sidecar=args.include_no_sidecar,
         stimuli=args.stimuli,
     )
     _log(f"wrote {report} with its tables and figures")
@@ -121,6 +122,13 @@ def add(commands) -> None:
         action="store_true",
         help="analyse pilot sessions (sidecar pilot: true) with the participants' instead of "
         "leaving them out (either way the report lists them)",
+    )
+    analyse.add_argument(
+        "--include-no-sidecar",
+        action="store_true",
+        help="analyse session CSVs without their .json sidecar (nothing vouches for their "
+        "protocol, status, pilot or simulated flag; the report lists them) instead of refusing "
+        "them",
     )
     analyse.set_defaults(run=_analyse)
     imports = commands.add_parser(
