@@ -1366,3 +1366,16 @@ def test_a_link_loop_met_anywhere_else_is_named_not_a_bug():
         message
         == "'/data/loop/c.json': a loop of symbolic links on the way; give a path without one"
     )
+
+
+def test_a_rebuild_refuses_a_set_whose_readme_a_lab_edited(sandbox, tmp_path, capsys):
+    """Issue 38 item 3 (attack case b007): a note added to the set's README.md is kept and
+    the rebuild refused, naming the file."""
+    folder = _copy_set(sandbox, tmp_path)
+    with (folder / "README.md").open("a") as readme:
+        readme.write("LAB NOTE\n")
+    before = snapshot(folder)
+    status, err = refused(["stimuli", "build", "yoshida2008", "--out", str(folder)], capsys)
+    assert status == 2 and "edited since glarelab wrote them (README.md)" in err
+    assert "--out" in err.strip().splitlines()[-1]
+    assert snapshot(folder) == before
