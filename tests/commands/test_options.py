@@ -80,6 +80,13 @@ def test_a_stimulus_set_for_a_questionnaire_is_refused(capsys, tmp_path):
     refused([*argv, "--stimuli", tmp_path / "set"], capsys, tmp_path, "--stimuli", "no images")
 
 
+def test_a_correction_for_a_study_without_an_anova_is_refused(capsys, tmp_path):
+    """Attack case m009: the rating study's Wilcoxon tests have no sphericity to correct."""
+    argv = ["power", "luidolt2020", "--participants", "4", "--replications", "2",
+            "--workers", "0", "--out", tmp_path / "pw", "--correction", "hf"]  # fmt: skip
+    refused(argv, capsys, tmp_path, "--correction hf", "no ANOVA")
+
+
 def test_unknown_scripted_key_names_are_refused(capsys, tmp_path):
     pytest.importorskip("psychopy")
     (tmp_path / "keys.txt").write_text("space retrun 1 spcae\n")
