@@ -1272,7 +1272,7 @@ def test_absurd_readings_and_repeated_follow_up_names_are_refused(tmp_path, caps
         ],
         capsys,
     )
-    assert status == 2 and "code 1023" in err and "1e+308" in err, err
+    assert status == 2 and "line 5: code 1023" in err and "1e308;" in err, err  # as written
     text = (PROTOCOLS / "yoshida2008.toml").read_text()
     assert text.count("[[analysis.followups]]") >= 2
     start = text.index("[[analysis.followups]]")
