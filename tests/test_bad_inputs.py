@@ -1368,10 +1368,15 @@ def test_a_link_loop_met_anywhere_else_is_named_not_a_bug():
     )
 
 
-def test_a_rebuild_refuses_a_set_whose_readme_a_lab_edited(sandbox, tmp_path, capsys):
+@pytest.mark.parametrize("listing", ["with contents", "of an earlier version"])
+def test_a_rebuild_refuses_a_set_whose_readme_a_lab_edited(listing, sandbox, tmp_path, capsys):
     """Issue 38 item 3 (attack case b007): a note added to the set's README.md is kept and
-    the rebuild refused, naming the file."""
+    the rebuild refused, naming the file; for a set whose listing records no contents (an
+    earlier version's), the manifest's sha256 tells."""
     folder = _copy_set(sandbox, tmp_path)
+    if listing == "of an earlier version":
+        kept = json.loads((folder / ".glarelab-files.json").read_text())
+        (folder / ".glarelab-files.json").write_text(json.dumps({"files": kept["files"]}))
     with (folder / "README.md").open("a") as readme:
         readme.write("LAB NOTE\n")
     before = snapshot(folder)
