@@ -13,7 +13,7 @@ ROOT = Path(__file__).resolve().parent
 # calibrations in calibrations/ are not among them
 SHIPPED = {
     "examples": ["*.exr"],
-    "calibrations": ["README.md", "example-readings.csv", "SYNTHETIC-*.json"],
+    "calibrations": ["README.md", "example-readings*.csv", "SYNTHETIC-*.json"],
 }
 
 

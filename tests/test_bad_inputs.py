@@ -1275,7 +1275,7 @@ def test_absurd_readings_and_repeated_follow_up_names_are_refused(tmp_path, caps
         ],
         capsys,
     )
-    assert status == 2 and "code 1023" in err and "1e+308" in err, err
+    assert status == 2 and "line 5: code 1023" in err and "1e308;" in err, err  # as written
     text = (PROTOCOLS / "yoshida2008.toml").read_text()
     assert text.count("[[analysis.followups]]") >= 2
     start = text.index("[[analysis.followups]]")
@@ -1369,3 +1369,21 @@ def test_a_link_loop_met_anywhere_else_is_named_not_a_bug():
         message
         == "'/data/loop/c.json': a loop of symbolic links on the way; give a path without one"
     )
+
+
+@pytest.mark.parametrize("listing", ["with contents", "of an earlier version"])
+def test_a_rebuild_refuses_a_set_whose_readme_a_lab_edited(listing, sandbox, tmp_path, capsys):
+    """Issue 38 item 3 (attack case b007): a note added to the set's README.md is kept and
+    the rebuild refused, naming the file; for a set whose listing records no contents (an
+    earlier version's), the manifest's sha256 tells."""
+    folder = _copy_set(sandbox, tmp_path)
+    if listing == "of an earlier version":
+        kept = json.loads((folder / ".glarelab-files.json").read_text())
+        (folder / ".glarelab-files.json").write_text(json.dumps({"files": kept["files"]}))
+    with (folder / "README.md").open("a") as readme:
+        readme.write("LAB NOTE\n")
+    before = snapshot(folder)
+    status, err = refused(["stimuli", "build", "yoshida2008", "--out", str(folder)], capsys)
+    assert status == 2 and "edited since glarelab wrote them (README.md)" in err
+    assert "--out" in err.strip().splitlines()[-1]
+    assert snapshot(folder) == before

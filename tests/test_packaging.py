@@ -76,6 +76,8 @@ def test_the_wheel_carries_the_license_author_and_classifiers(dist):
         "glarelab/shipped/calibrations/README.md",
         "glarelab/shipped/calibrations/SYNTHETIC-spencer1995-50cd-8bit.json",
         "glarelab/shipped/calibrations/SYNTHETIC-yoshida2008-433cd-10bit.json",
+        "glarelab/shipped/calibrations/example-readings-night2026.csv",
+        "glarelab/shipped/calibrations/example-readings-spencer1995.csv",
         "glarelab/shipped/calibrations/example-readings.csv",
         "glarelab/shipped/examples/night.exr",
         "glarelab/shipped/examples/scene.exr",

@@ -80,6 +80,28 @@ def test_a_stimulus_set_for_a_questionnaire_is_refused(capsys, tmp_path):
     refused([*argv, "--stimuli", tmp_path / "set"], capsys, tmp_path, "--stimuli", "no images")
 
 
+def test_a_correction_for_a_study_without_an_anova_is_refused(capsys, tmp_path):
+    """Attack case m009: the rating study's Wilcoxon tests have no sphericity to correct."""
+    argv = ["power", "luidolt2020", "--participants", "4", "--replications", "2",
+            "--workers", "0", "--out", tmp_path / "pw", "--correction", "hf"]  # fmt: skip
+    refused(argv, capsys, tmp_path, "--correction hf", "no ANOVA")
+
+
+@pytest.mark.parametrize("study", ["luidolt2020", "yoshida2008"])
+def test_a_block_order_for_a_protocol_without_blocks_is_refused(study, capsys, tmp_path):
+    """Attack case r020: a questionnaire's or matching study's order is the participant's
+    own; only the staircase orders its blocks by --counterbalance."""
+    argv = ["run", study, "--simulate", "--participants", "2", "--seed", "1",
+            "--counterbalance", "1", "--out", tmp_path / "data"]  # fmt: skip
+    refused(argv, capsys, tmp_path, "--counterbalance 1", "no blocks to order")
+
+
+def test_a_missing_argument_names_what_the_given_ones_were_read_as(capsys, tmp_path):
+    """Attack case m041: a file given without the study is read as the study."""
+    argv = ["import-psychopy", "/dev/null", "--out", tmp_path / "x"]
+    refused(argv, capsys, tmp_path, "required: csv; read STUDY as '/dev/null'")
+
+
 def test_unknown_scripted_key_names_are_refused(capsys, tmp_path):
     pytest.importorskip("psychopy")
     (tmp_path / "keys.txt").write_text("space retrun 1 spcae\n")

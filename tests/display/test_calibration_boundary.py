@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from glarelab.display.calibration import fit_calibration
+from glarelab.display.calibration import fit_calibration, read_readings
 
 SETTINGS = settings(max_examples=30, deadline=None)
 READINGS = [(0, 0.1), (85, 5.0), (170, 40.0), (255, 100.0)]
@@ -74,7 +74,7 @@ def test_the_issue_cases_are_refused(readings, bit_depth, match):
 @SETTINGS
 @given(
     steps=st.lists(st.floats(1e-3, 1e3), min_size=3, max_size=8),
-    black=st.floats(0.0, 1.0),
+    black=st.one_of(st.just(0.0), st.floats(1e-6, 1.0)),
     method=st.sampled_from(["pchip-log", "pchip"]),
     numpy_types=st.booleans(),
 )
@@ -86,3 +86,27 @@ def test_valid_readings_give_a_finite_increasing_table(steps, black, method, num
         readings = list(zip(codes, values, strict=True))  # np.int64 and np.float64 are numbers
     lut = fit_calibration(readings, bit_depth=8, method=method).lut
     assert np.isfinite(lut).all() and (np.diff(lut) >= 0).all()
+
+
+@pytest.mark.parametrize(
+    ("cell", "named"),
+    [
+        ("5e-324", "luminance_cd_m2 5e-324"),  # attack case c031: a subnormal float
+        ("1e-9", "luminance_cd_m2 1e-9"),
+        ("1e300", "luminance_cd_m2 1e300"),  # attack case c030: named as written
+        ("-0.5", "luminance_cd_m2 -0.5"),
+    ],
+)
+def test_a_luminance_no_photometer_reads_is_refused_naming_file_line_and_value(
+    cell, named, tmp_path
+):
+    path = tmp_path / "r.csv"
+    path.write_text(f"code,luminance_cd_m2\n0,{cell}\n85,5\n170,40\n255,100\n")
+    with pytest.raises(ValueError, match=rf"r\.csv, line 2: code 0 has {named}; must be 0 "):
+        read_readings(path)
+
+
+def test_a_subnormal_luminance_is_refused_by_the_fit_too():
+    with pytest.raises(ValueError, match=r"code 0 has luminance 5e-324; must be 0 \("):
+        fit_calibration([(0, 5e-324), *READINGS[1:]], bit_depth=8)
+    assert fit_calibration([(0, 0.0), *READINGS[1:]], bit_depth=8).black_cd_m2 == 0

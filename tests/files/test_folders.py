@@ -1,8 +1,17 @@
 """A folder replaced whole while another process puts its own output at the same place."""
 
+import json
 from pathlib import Path
 
-from glarelab.files.folders import listed_files, replace_folder
+import pytest
+
+from glarelab.files.folders import (
+    LISTING,
+    check_replaceable,
+    listed_files,
+    record_files,
+    replace_folder,
+)
 
 
 def test_an_output_put_in_place_meanwhile_is_replaced_not_a_crash(tmp_path, monkeypatch):
@@ -27,3 +36,34 @@ def test_an_output_put_in_place_meanwhile_is_replaced_not_a_crash(tmp_path, monk
     assert not (final / "b.txt").exists()
     assert "a.txt" in listed_files(final)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["set"]
+
+
+def test_a_whole_folder_output_refuses_a_file_edited_since_it_was_written(tmp_path):
+    """Issue 38 item 3: a file glarelab wrote and a user edited since is kept, the command
+    refused, naming the file; an untouched folder is still replaced."""
+    staging = tmp_path / ".set.building-1"
+    staging.mkdir()
+    (staging / "README.md").write_text("# the set\n")
+    (staging / "a.exr").write_bytes(b"pixels")
+    replace_folder(staging, tmp_path / "set", kind="stimulus set")
+    final = tmp_path / "set"
+    assert check_replaceable(final, kind="stimulus set", what="stimulus set") == final
+    with (final / "README.md").open("a") as readme:
+        readme.write("LAB NOTE\n")
+    with pytest.raises(ValueError, match=r"edited since glarelab wrote them \(README\.md\)"):
+        check_replaceable(final, kind="stimulus set", what="stimulus set")
+    record_files(final, "report")  # listed anew: its content now is what glarelab wrote
+    assert check_replaceable(final, kind="report", what="report") == final
+
+
+def test_a_folder_listed_before_contents_were_recorded_is_still_replaceable(tmp_path):
+    (tmp_path / "a.txt").write_text("older output")
+    (tmp_path / LISTING).write_text(json.dumps({"files": {"a.txt": "report"}}))
+    assert check_replaceable(tmp_path, kind="report", what="report") == tmp_path
+
+
+def test_a_folder_of_other_files_is_refused_naming_the_out_option(tmp_path):
+    """Attack case b003: the refusal says which option to change."""
+    (tmp_path / "keep.txt").write_text("mine")
+    with pytest.raises(ValueError, match=r"\(keep\.txt\).*give a new or empty folder as --out"):
+        check_replaceable(tmp_path, kind="stimulus set", what="stimulus set")

@@ -98,8 +98,33 @@ class Parser(argparse.ArgumentParser):
         message
             What is wrong, as argparse words it.
         """
+        required = "the following arguments are required: "
+        if message.startswith(required) and any(
+            not name.startswith("-") for name in message.removeprefix(required).split(", ")
+        ):  # a positional argument missing: the ones given may have been read as another
+            message += self._positionals_read()
         print(f"{self.prog}: {message} (see {self.prog} --help)", file=sys.stderr)
         raise SystemExit(2)
+
+    def _positionals_read(self) -> str:
+        """What the positional arguments given were read as (``import-psychopy /dev/null``
+        reads the file as the study), for a refusal of missing ones; empty if none given."""
+        given, tokens = [], iter(getattr(self, "_arguments", ()))
+        for token in tokens:
+            if token == "--":
+                given += list(tokens)
+            elif token.startswith("-") and len(token) > 1:
+                action = self._option_string_actions.get(token.split("=", 1)[0])
+                if action is not None and action.nargs != 0 and "=" not in token:
+                    next(tokens, None)  # the option's value
+            else:
+                given.append(token)
+        positionals = [a for a in self._actions if not a.option_strings]
+        read = [
+            f"{(action.metavar or action.dest).upper()} as {token!r}"
+            for action, token in zip(positionals, given, strict=False)
+        ]
+        return f"; read {', '.join(read)}" if read else ""
 
     # options that may be given more than once (each adds to a list, or counts)
     _REPEATABLE = (
@@ -130,6 +155,7 @@ class Parser(argparse.ArgumentParser):
             The namespace and the list of arguments not parsed.
         """
         self._given: set[int] = set()  # the options met in this parse
+        self._arguments = [str(a) for a in (sys.argv[1:] if args is None else args)]
         return super().parse_known_args(args, namespace)
 
     def _get_values(self, action, arg_strings):

@@ -207,9 +207,16 @@ def _power(args: argparse.Namespace) -> int:
 
     from glarelab.experiments.session import shows_images
     from glarelab.files.folders import restore_folder
+    from glarelab.planning.effects import WITHOUT_F_TESTS
     from glarelab.planning.power import check_run_folder, power_analysis, run_inputs
 
     protocol = load_protocol(args.protocol)
+    if args.correction is not None and protocol.paradigm in WITHOUT_F_TESTS:
+        raise ValueError(
+            f"--correction {args.correction}: the {protocol.study} protocol's analysis "
+            f"({protocol.paradigm}) runs no ANOVA, so there is no sphericity to correct; give "
+            "no --correction"
+        )
     if args.stimuli is not None:
         if not shows_images(protocol):
             raise ValueError(
@@ -236,7 +243,7 @@ def _power(args: argparse.Namespace) -> int:
             replications=args.replications,
             seed=args.seed,
             alpha=args.alpha,
-            correction=args.correction,
+            correction=args.correction or "gg",
             target=args.target_power,
             stimuli=args.stimuli,
             client=client,
@@ -332,10 +339,10 @@ def add(commands) -> None:
     power.add_argument(
         "--correction",
         choices=CORRECTIONS,
-        default="gg",
+        default=None,
         help="the p that judges an ANOVA effect: gg (Greenhouse-Geisser, the default, as the "
         "reports), hf (Huynh-Feldt), girden (GG when eps < 0.75, else HF), none; where "
-        "sphericity is not estimable, the lower bound",
+        "sphericity is not estimable, the lower bound; refused for a study without an ANOVA",
     )
     power.add_argument(
         "--target-power",

@@ -111,7 +111,7 @@ def _flag(name: str) -> str:
 
 def _check_run_options(args: argparse.Namespace, protocol) -> None:
     """Refuse every option the session would ignore, in one line."""
-    from glarelab.experiments.session import shows_images
+    from glarelab.experiments.session import check_counterbalance, shows_images
 
     defaults = {a.dest: a.default for a in _parser_actions()}
     given = [n for n in (*SCREEN_ONLY, *SIMULATED_ONLY) if getattr(args, n) != defaults[n]]
@@ -145,6 +145,7 @@ def _check_run_options(args: argparse.Namespace, protocol) -> None:
             f"--stimuli {args.stimuli}: the {protocol.study} protocol ({protocol.paradigm}) "
             "shows no images, so it would ignore a stimulus set"
         )
+    check_counterbalance(protocol, args.counterbalance)
 
 
 def _parser_actions():

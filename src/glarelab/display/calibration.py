@@ -65,6 +65,22 @@ METHODS = ("pchip-log", "pchip", "gog")
 # the brightest displays reach about 1e4 cd/m² (HDR reference monitors); a reading ten
 # times that is a typo or a reading in another unit, never a display
 MAX_DISPLAY_CD_M2 = 1e5
+# the eye's absolute threshold is near 1e-6 cd/m² (Hood & Finkelstein 1986, Handbook of
+# Perception and Human Performance, vol. 1, ch. 5) and photometers stop orders of magnitude
+# above it: a positive reading below it (5e-324, a subnormal float) is no measurement; a
+# black below the photometer's floor is read as 0
+MIN_READING_CD_M2 = 1e-6
+READING_RANGE = (
+    f"0 (below the photometer's floor) or {MIN_READING_CD_M2:g}-{MAX_DISPLAY_CD_M2:g} cd/m² "
+    "(no display is brighter, no photometer reads less: a typo or a unit slip?)"
+)
+
+
+def _plausible_reading(value: float) -> bool:
+    """A luminance a photometer can have read off a display: 0, or within the range above."""
+    return bool(
+        np.isfinite(value) and (value == 0 or MIN_READING_CD_M2 <= value <= MAX_DISPLAY_CD_M2)
+    )
 
 
 @dataclass(frozen=True)
@@ -627,10 +643,9 @@ def _check_readings(
             raise ValueError(
                 f"{source}: code {code} is outside 0-{top} for a {bit_depth}-bit display"
             )
-        if not (np.isfinite(value) and 0 <= value <= MAX_DISPLAY_CD_M2):
+        if not _plausible_reading(value):
             raise ValueError(
-                f"{source}: code {code} has luminance {value!r}; must be 0-"
-                f"{MAX_DISPLAY_CD_M2:g} cd/m² (no display is brighter: a typo or a unit slip?)"
+                f"{source}: code {code} has luminance {value!r}; must be {READING_RANGE}"
             )
     for (c0, v0), (c1, v1) in itertools.pairwise(ordered):
         if c1 == c0:
@@ -669,7 +684,9 @@ def read_readings(path: str | Path) -> list[tuple[int, float]]:
         If ``path`` is a folder.
     ValueError
         If ``path`` is not a regular file (a FIFO, a device), is in another encoding (naming
-        the byte), a column is missing or a cell is not a number (naming the line).
+        the byte), a column is missing, a cell is not a number, or a luminance is no
+        reading of a display: negative, not finite, above ``MAX_DISPLAY_CD_M2`` or positive
+        below ``MIN_READING_CD_M2`` (naming the line and the value as written).
     """
     path = as_path(path, what="readings file")
     text = read_input_text(path, what="readings file")
@@ -692,11 +709,17 @@ def read_readings(path: str | Path) -> list[tuple[int, float]]:
                 f"{path}, line {line}: code and luminance_cd_m2 both need a value; got {row}"
             )
         try:
-            rows.append((int(row["code"]), float(row["luminance_cd_m2"])))
+            code, value = int(row["code"]), float(row["luminance_cd_m2"])
         except ValueError:
             raise ValueError(
                 f"{path}, line {line}: code and luminance_cd_m2 must be numbers; got {row}"
             ) from None
+        if not _plausible_reading(value):  # named as written in the file
+            raise ValueError(
+                f"{path}, line {line}: code {code} has luminance_cd_m2 "
+                f"{row['luminance_cd_m2'].strip()}; must be {READING_RANGE}"
+            )
+        rows.append((code, value))
     return rows
 
 
@@ -734,7 +757,8 @@ def fit_calibration(
     ValueError
         For a ``bit_depth`` other than the integers 8, 10, 12, 16, fewer than 4 readings, a
         reading that is not a pair of a whole-number code and a luminance number, codes
-        outside the bit depth, a repeated code, readings that do not increase with code
+        outside the bit depth, a luminance neither 0 nor within ``MIN_READING_CD_M2``-
+        ``MAX_DISPLAY_CD_M2``, a repeated code, readings that do not increase with code
         (named), readings without code 0 and the top code, or another ``method``.
     """
     if isinstance(readings, str | bytes | dict) or not hasattr(readings, "__iter__"):

@@ -103,6 +103,9 @@ class Engine(ABC):
     """Base of the protocol engines: the interface, and defaults where one fits all."""
 
     study: str = ""
+    counterbalanced: bool = False
+    """Whether the engine orders its blocks by ``counterbalance`` (otherwise a given
+    ``counterbalance`` is refused: there is nothing for it to order)."""
 
     @property
     @abstractmethod

@@ -59,6 +59,7 @@ if TYPE_CHECKING:
 __all__ = [
     "SessionAborted",
     "SimulatedFrontend",
+    "check_counterbalance",
     "make_engine",
     "make_observer",
     "run_session",
@@ -84,6 +85,36 @@ def shows_images(protocol: Protocol) -> bool:
         Whether it does (:func:`glarelab.stimuli.stimulus_set.shows_images`).
     """
     return _shows_images(protocol)
+
+
+def check_counterbalance(protocol: Protocol, counterbalance: int | None) -> None:
+    """Refuse a block order for a paradigm without blocks to order.
+
+    Parameters
+    ----------
+    protocol
+        The study's protocol.
+    counterbalance
+        The block order asked for; None: none asked for (always accepted).
+
+    Raises
+    ------
+    ValueError
+        For a ``counterbalance`` given to a paradigm whose engine does not order blocks by it
+        (:attr:`glarelab.experiments.engine.Engine.counterbalanced`).
+
+    Examples
+    --------
+    >>> from glarelab.protocols import load_protocol
+    >>> check_counterbalance(load_protocol("spencer1995"), 1)
+    >>> check_counterbalance(load_protocol("luidolt2020"), None)
+    """
+    if counterbalance is not None and not paradigm_run(protocol).engine.counterbalanced:
+        raise ValueError(
+            f"--counterbalance {counterbalance}: the {protocol.study} protocol's paradigm "
+            f"({protocol.paradigm}) has no blocks to order (its order is randomised per "
+            "participant); give no --counterbalance"
+        )
 
 
 def make_engine(
@@ -518,6 +549,7 @@ def run_session(
     """
     started = _now()
     check_session_id(participant, session)
+    check_counterbalance(protocol, counterbalance)
     # a participant's session is held before anything is checked (verifying a set takes
     # seconds), whatever its folder; simulated ones, run by the thousand, hold their folder
     lock = None

@@ -200,6 +200,8 @@ class StaircaseEngine(Engine):
         The display's refresh rate, Hz, > 0: the flash's duration in frames. Default 60.
     """
 
+    counterbalanced = True
+
     def __init__(
         self,
         protocol: Protocol,

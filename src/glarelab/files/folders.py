@@ -17,6 +17,7 @@ import contextlib
 import ctypes
 import ctypes.util
 import errno
+import hashlib
 import json
 import os
 import shutil
@@ -54,6 +55,30 @@ def _listing(folder: Path) -> dict[str, str]:
     if not isinstance(files, dict):
         return {}
     return {str(name): str(kind) for name, kind in files.items()}
+
+
+def _hashes(folder: Path) -> dict[str, str]:
+    """``{relative path: sha256}`` of the files as glarelab wrote them into ``folder`` (empty
+    for a listing written before the listing kept them)."""
+    try:
+        listing = json.loads((folder / LISTING).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    hashes = listing.get("sha256") if isinstance(listing, dict) else None
+    if not isinstance(hashes, dict):
+        return {}
+    return {str(name): str(digest) for name, digest in hashes.items()}
+
+
+def _sha256(path: Path) -> str | None:
+    """The sha256 of a regular file's content; None for a symbolic link or anything else."""
+    if path.is_symlink() or not path.is_file():
+        return None
+    digest = hashlib.sha256()
+    with path.open("rb") as handle:
+        for block in iter(lambda: handle.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
 
 
 def _entries(folder: Path) -> list[str]:
@@ -153,17 +178,27 @@ def check_replaceable(
     if not out.is_dir():
         return out
     listed = _listing(out)
-    foreign = [e for e in _entries(out) if listed.get(e) != kind]
+    entries = _entries(out)
+    foreign = [e for e in entries if listed.get(e) != kind]
     if foreign:
-        shown = ", ".join(foreign[:3]) + (
-            f" and {len(foreign) - 3} more" if len(foreign) > 3 else ""
-        )
         raise ValueError(
-            f"{out} holds files that are not an earlier {what} glarelab wrote ({shown}); the "
-            f"{what} replaces its folder whole, so give a new or empty folder (nothing was "
-            "changed)"
+            f"{out} holds files that are not an earlier {what} glarelab wrote "
+            f"({_shown(foreign)}); the {what} replaces its folder whole, so give a new or "
+            "empty folder as --out (nothing was changed)"
+        )
+    written = _hashes(out)
+    edited = [e for e in entries if e in written and _sha256(out / e) != written[e]]
+    if edited:
+        raise ValueError(
+            f"{out} holds files edited since glarelab wrote them ({_shown(edited)}); the "
+            f"{what} replaces its folder whole, so copy what you added elsewhere and remove "
+            "the edited files, or give another folder as --out (nothing was changed)"
         )
     return out
+
+
+def _shown(names: list[str]) -> str:
+    return ", ".join(names[:3]) + (f" and {len(names) - 3} more" if len(names) > 3 else "")
 
 
 def record_files(folder: Path, kind: str) -> None:
@@ -178,8 +213,13 @@ def record_files(folder: Path, kind: str) -> None:
         The kind of output the listing records the files as (``'stimulus set'``, ``'report'``,
         ``'power'``, ...): an output replaces or overwrites only files of its own kind.
     """
-    files = {entry: kind for entry in _entries(folder)}
-    _write_listing(folder, files)
+    entries = _entries(folder)
+    hashes = {entry: _sha256(folder / entry) for entry in entries}
+    _write_listing(
+        folder,
+        dict.fromkeys(entries, kind),
+        {entry: digest for entry, digest in hashes.items() if digest is not None},
+    )
 
 
 def claim_files(folder: Path, names: Iterable[str], kind: str) -> None:
@@ -211,7 +251,14 @@ def claim_files(folder: Path, names: Iterable[str], kind: str) -> None:
                     f"{path} exists and glarelab did not write it there; {kind} would "
                     "overwrite it, so give another folder or move the file (nothing was changed)"
                 )
-        _write_listing(folder, listed | dict.fromkeys(names, kind))
+        _write_listing(folder, listed | dict.fromkeys(names, kind), _hashes_but(folder, names))
+
+
+def _hashes_but(folder: Path, names: Iterable[str]) -> dict[str, str]:
+    """The recorded content of the listed files, but for ``names`` (about to be written anew,
+    their content not recorded)."""
+    names = set(names)
+    return {name: digest for name, digest in _hashes(folder).items() if name not in names}
 
 
 def listed_files(folder: Path) -> dict[str, str]:
@@ -245,8 +292,11 @@ def list_files(folder: Path, names: Iterable[str], kind: str) -> None:
         ``'power'``, ...): an output replaces or overwrites only files of its own kind.
     """
     folder = Path(folder)
+    names = list(names)
     with _listing_held(folder):
-        _write_listing(folder, _listing(folder) | dict.fromkeys(names, kind))
+        _write_listing(
+            folder, _listing(folder) | dict.fromkeys(names, kind), _hashes_but(folder, names)
+        )
 
 
 LISTING_WAIT_S = 60.0  # how long a process waits for another's update of a folder's listing
@@ -276,9 +326,15 @@ def _listing_held(folder: Path):
         lock.release()
 
 
-def _write_listing(folder: Path, files: dict[str, str]) -> None:
-    text = json.dumps({"written_by": "glarelab", "files": dict(sorted(files.items()))}, indent=1)
-    write_text(folder / LISTING, text + "\n")
+def _write_listing(
+    folder: Path, files: dict[str, str], hashes: dict[str, str] | None = None
+) -> None:
+    """Write ``folder``'s listing: each file's kind, and the sha256 of the content glarelab
+    wrote where known (a whole-folder output is refused over a file edited since)."""
+    listing: dict = {"written_by": "glarelab", "files": dict(sorted(files.items()))}
+    if hashes:
+        listing["sha256"] = dict(sorted(hashes.items()))
+    write_text(folder / LISTING, json.dumps(listing, indent=1) + "\n")
 
 
 def _aside_stem(final: Path) -> str:

@@ -13,7 +13,7 @@ __all__ = ["SHIPPED", "copy_shipped", "shipped_folder"]
 # what is shipped of each folder (setup.py and MANIFEST.in list the same)
 SHIPPED: dict[str, tuple[str, ...]] = {
     "examples": ("*.exr",),
-    "calibrations": ("README.md", "example-readings.csv", "SYNTHETIC-*.json"),
+    "calibrations": ("README.md", "example-readings*.csv", "SYNTHETIC-*.json"),
 }
 
 

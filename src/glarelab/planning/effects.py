@@ -46,6 +46,7 @@ __all__ = [
     "CORRECTIONS",
     "GIRDEN_EPSILON",
     "PARADIGMS",
+    "WITHOUT_F_TESTS",
     "SphericityChoice",
     "anova_effects",
     "chosen_p",
@@ -165,6 +166,10 @@ def _rating(
         )
     return rows
 
+
+WITHOUT_F_TESTS = frozenset({"rating"})
+"""The paradigms whose analysis runs no F test (:func:`_rating`: Wilcoxon tests): a sphericity
+correction has nothing to judge there."""
 
 PARADIGMS: dict[str, Callable[[Mapping[str, pd.DataFrame], object, int], list[dict]]] = {
     "matching": _matching,

@@ -509,6 +509,14 @@ def build_stimulus_set(
     ):
         record_files(Path(out), "stimulus set")  # a whole set of an earlier version: its own
     final = check_replaceable(out, kind="stimulus set", what="stimulus set")
+    edited = _edited_since_built(final)
+    if edited:  # a set listed before the listing kept contents: its manifest says
+        shown = ", ".join(edited[:3]) + (f" and {len(edited) - 3} more" if len(edited) > 3 else "")
+        raise ValueError(
+            f"{final} holds files edited since glarelab wrote them ({shown}); the stimulus set "
+            "replaces its folder whole, so copy what you added elsewhere and remove the edited "
+            "files, or give another folder as --out (nothing was changed)"
+        )
     built = paradigm_stimuli(protocol).build(protocol, progress=progress)
     out = staging_folder(final)
     try:
@@ -518,6 +526,22 @@ def build_stimulus_set(
     finally:
         shutil.rmtree(out, ignore_errors=True)
     return manifest
+
+
+def _edited_since_built(folder: Path) -> list[str]:
+    """The files of the set in ``folder`` whose content differs from its manifest's record (none
+    where there is no readable manifest)."""
+    try:
+        listed = _manifest_of(folder)["files"]
+    except (OSError, ValueError):
+        return []
+    return [
+        name
+        for name, expected in sorted(listed.items())
+        if (folder / name).is_file()
+        and not (folder / name).is_symlink()
+        and _sha256(folder / name) != expected
+    ]
 
 
 def _write_set(out: Path, protocol: Protocol, built: dict, calibration: Calibration) -> dict:
