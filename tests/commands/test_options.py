@@ -168,6 +168,12 @@ def test_an_empty_out_is_refused(argv, capsys, tmp_path, monkeypatch):
     refused(argv, capsys, tmp_path, "--out is empty")
 
 
+def test_an_empty_copy_destination_is_refused(capsys, tmp_path, monkeypatch):
+    # an unset shell variable: the copy would land in the working folder without a word
+    monkeypatch.chdir(tmp_path)
+    refused(["protocol", "copy", "spencer1995", ""], capsys, tmp_path, "destination is empty")
+
+
 @pytest.fixture(scope="module")
 def stimulus_set(tmp_path_factory):
     from glarelab.protocols import load_protocol

@@ -86,5 +86,7 @@ def add(commands) -> None:
         help="write out a shipped protocol's TOML to edit into a study of your own",
     )
     copy.add_argument("name", help="a shipped protocol (yoshida2008, spencer1995, …)")
-    copy.add_argument("destination", help="a new .toml file, or a folder to write NAME.toml in")
+    copy.add_argument(
+        "destination", type=Path, help="a new .toml file, or a folder to write NAME.toml in"
+    )
     copy.set_defaults(run=_protocol_copy)
