@@ -454,6 +454,11 @@ class LiveNight:
             # the renderer spreads the excess over L_dmax: L_dmax + E has the excess E
             spread = np.asarray(renderer.render(self.l_dmax + excess).spread)
             entry = np.broadcast_to(spread, self.scene.shape).astype(self.dtype)
+        return self._store(key, entry, start)
+
+    def _store(self, key: tuple, entry, start: float):
+        """Keep a new bank entry (dropping the least recently used beyond ``bank_size``),
+        count it and its time since ``start``, and return it."""
         self._bank[key] = entry
         self.bank_entries += 1
         while len(self._bank) > self.bank_size:
@@ -658,12 +663,7 @@ class LiveNight:
             clamped[..., 0] | (clamped[..., 1] << 1) | (clamped[..., 2] << 2),
             np.maximum(np.ceil(REACH_SIGMAS * upper), 1).astype(np.int16),
         )
-        self._bank[key] = entry
-        self.bank_entries += 1
-        while len(self._bank) > self.bank_size:
-            self._bank.popitem(last=False)
-        self.build_s += time.perf_counter() - start
-        return entry
+        return self._store(key, entry, start)
 
     def _acuity(self, exposure: float, pupil: float) -> int:
         """Replace the display in ``_out`` by its acuity loss: the bank's interpolation, and
