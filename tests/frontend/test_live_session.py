@@ -167,6 +167,11 @@ def test_a_live_session_follows_the_mouse_survives_blinks_and_a_lost_tracker(scr
     assert n == len(recorded) and dropped == sum(r["dropped"] == "1" for r in recorded)
     assert lost_n == sum(r["valid_gaze"] == "0" for r in recorded) and blinks >= 1
     assert disconnects > 0
+    # the bank was made before the first frame: no frame froze to make an entry (the gaze
+    # visited the scene's corners and its inside)
+    prepared = re.search(r"trial 1 live: (\d+) bank entries prepared in", log)
+    assert prepared is not None and int(prepared.group(1)) > 0, log[-2000:]
+    assert {r["new_bank_entries"] for r in recorded} == {"0"}
     # the gaze followed each move within one frame of the tracker's sample: the first frame
     # whose recorded gaze is the new place is at most one frame after the first frame that
     # began after the tracker's first sample there (ioHub's clock, in its hdf5 store)

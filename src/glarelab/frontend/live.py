@@ -287,6 +287,7 @@ def run_live(
         scene_cd_m2, pixel_deg=pixel_deg, display_max_cd_m2=display_max_cd_m2,
         adapted_display_cd_m2=adapted_display_cd_m2, scotopic=scotopic,
     )  # fmt: skip
+    live.prepare()  # every bank entry a gaze on the scene can need, before the first frame
     height, width = live.shape
     lut = synthetic_calibration(
         max_cd_m2=display_max_cd_m2, black_cd_m2=display_max_cd_m2 / 1000, bit_depth=bits

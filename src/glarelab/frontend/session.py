@@ -531,6 +531,7 @@ class PsychoPyFrontend:
             acuity="acuity" in screen["live"]["effects"],
             scotopic="scotopic" in screen["live"]["effects"],
         )  # fmt: skip
+        self._prepare_live(live, screen)
         bits = self.window_bits
         calibration = self.calibration
         if calibration is None or len(calibration.lut) != 2**bits:
@@ -597,6 +598,33 @@ class PsychoPyFrontend:
             offset_s=flips[-1],
             frames=screen["frames"],
             dropped_frames=summary["dropped"],
+        )
+
+    def _prepare_live(self, live, screen: dict) -> None:
+        """Make the live scene's bank before its first frame (:meth:`LiveNight.prepare`), the
+        progress on the screen; Escape ends the session between two entries."""
+        from glarelab.experiments.loop import SessionAborted
+
+        what = f"trial {screen['trial']} live"
+
+        def preparing(made: int, total: int) -> None:
+            self.screen_text.draw_text(f"Preparing the scene: {made} of {total}")
+            self.window.flip()
+            if self.scripted is None:
+                self.keys.held += self.keys.read(text_entry=False)
+                if any(name == "escape" for name, _ in self.keys.held):
+                    self.log(f"trial {screen['trial']} aborted: escape while its live scene "
+                             f"was prepared ({made} of {total} bank entries made)")  # fmt: skip
+                    self.records.flush()
+                    raise SessionAborted(f"escape while the live scene of trial "
+                                         f"{screen['trial']} was prepared")  # fmt: skip
+
+        prepared = live.prepare(progress=preparing)
+        low, high = prepared.adaptation_cd_m2
+        self.log(
+            f"{what}: {prepared.entries} bank entries prepared in {prepared.seconds:.1f} s "
+            f"({prepared.bytes / 2**20:.0f} MiB) for adapted luminances {low:.4g}-{high:.4g} "
+            "cd/m²"
         )
 
     def _escape_during(self, screen: dict, flips: list[float]) -> None:

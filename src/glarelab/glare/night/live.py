@@ -36,6 +36,7 @@ import dataclasses
 import math
 import time
 from collections import OrderedDict
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Literal
@@ -44,6 +45,7 @@ import numpy as np
 from scipy import ndimage
 from threadpoolctl import ThreadpoolController
 
+from glarelab.files.memory import check_memory
 from glarelab.glare._colour import colour
 from glarelab.glare._validation import check_choice, check_image, check_in_range, check_positive
 from glarelab.glare.models import _resolve
@@ -79,6 +81,7 @@ __all__ = [
     "PUPIL_BANK_MM",
     "LiveFrame",
     "LiveNight",
+    "LivePreparation",
     "pupil_bank_mm",
 ]
 
@@ -792,3 +795,159 @@ class LiveNight:
         flat = self._out.reshape(-1, 3)
         np.matmul(flat, matrix, out=self._work.reshape(-1, 3))
         np.clip(self._work, 0.0, self.l_dmax, out=self._out)
+
+    # before the first frame ----------------------------------------------------------------
+    def adaptation_range(self) -> tuple[float, float]:
+        """The least and the greatest adapted luminance a gaze on the scene leads to, cd/m².
+
+        Returns
+        -------
+        tuple of float
+            ``(low, high)``: the extremes of the windowed target (§5.1) over gazes on the
+            scene's pixels (every ``σ / 8`` of the window, and the scene's last row and column)
+            and of ``initial_adaptation_cd_m2`` when given.
+
+        Notes
+        -----
+        Eq. 5.2 moves the adapted luminance towards the target by a fraction
+        ``1 - e^{-ft/τ}`` in ``[0, 1]`` each frame, so it never leaves the range of the
+        targets it has followed and the state it began in. The target of a gaze at ``(g, h)``
+        is ``R_g · Y · C_h / (ΣR_g ΣC_h)`` with Gaussian rows ``R`` and columns ``C``
+        (:func:`~glarelab.glare.night.adaptation.window_mean`): every gaze of the grid in two
+        matrix products.
+
+        References
+        ----------
+        Luidolt 2020, §5.1, eq. 5.2.
+
+        Examples
+        --------
+        >>> scene = np.full((24, 32), 0.02)
+        >>> scene[:, 16:] = 2.0
+        >>> low, high = LiveNight(scene, pixel_deg=0.1).adaptation_range()
+        >>> bool(0.02 < low < high < 2.0)
+        True
+        """
+        sigma_px = self.window_sigma_deg / self.pixel_deg
+        step = max(1.0, sigma_px / 8.0)
+
+        def weights(size: int) -> np.ndarray:
+            places = np.unique(np.append(np.arange(0.0, size - 1.0, step), size - 1.0))
+            pixels = np.arange(size)
+            return np.exp(-0.5 * ((pixels[None, :] - places[:, None]) / sigma_px) ** 2)
+
+        rows, cols = weights(self.shape[0]), weights(self.shape[1])
+        with self._threads.limit(limits=1, user_api="blas"):
+            means = rows @ self._y @ cols.T / np.outer(rows.sum(axis=1), cols.sum(axis=1))
+        targets = np.exp(means) if self.adaptation_mean == "log" else means
+        low, high = float(targets.min()), float(targets.max())
+        if self._state is not None:
+            low, high = min(low, self._state), max(high, self._state)
+        return low, high
+
+    def prepare(self, *, progress: Callable[[int, int], None] | None = None) -> LivePreparation:
+        """Make, before the first frame, every bank entry a gaze on the scene can need.
+
+        A frame that needs an entry the bank lacks makes it (:attr:`LiveFrame.new_entries`),
+        which takes about one offline render and freezes the screen meanwhile. This makes
+        them all at once: for the adaptation levels between the extremes of
+        :meth:`adaptation_range` (one bank step beyond each) and every pupil of the bank, the
+        glare entries and, with ``acuity=True``, the acuity entries. ``bank_size`` grows to
+        hold them. A gaze off the scene may still need an entry (made when needed, counted).
+
+        Parameters
+        ----------
+        progress
+            Called with ``(made, total)`` before the first entry and after each; default None.
+
+        Returns
+        -------
+        LivePreparation
+
+        Raises
+        ------
+        ValueError
+            When the entries would not fit in the memory available (before making any).
+
+        Notes
+        -----
+        The adapted luminances are sampled at ratios of ``r^{1/4}`` (``r`` the
+        ``threshold_ratio``) from ``low / r`` to ``high · r``; each is given to the frame's own
+        choice of bank entries, so that the frames find what they look up.
+
+        References
+        ----------
+        Luidolt 2020, Fig. 6.1 ("In the pre-processing step, we calculate all data, that does
+        not change during our simulation").
+
+        Examples
+        --------
+        >>> scene = np.full((24, 32, 3), 0.02)
+        >>> scene[10:12, 15:17] = 5e4
+        >>> live = LiveNight(scene, pixel_deg=0.1, pupils_mm=(4.0, 6.0))
+        >>> made = live.prepare()
+        >>> frame = live.frame(gaze_px=(2.0, 3.0), pupil_mm=5.0, frame_time_s=0.0)
+        >>> made.entries > 0, frame.new_entries
+        (True, 0)
+        """
+        start = time.perf_counter()
+        low, high = self.adaptation_range()
+        ratio = self.threshold_ratio
+        count = max(2, math.ceil(4 * math.log(high * ratio / (low / ratio)) / math.log(ratio)) + 1)
+        levels = np.geomspace(low / ratio, high * ratio, count)
+        wanted: dict[tuple, tuple[int, float]] = {}
+        for adaptation in levels:
+            exposure = self.key / max(float(adaptation), MIN_LUMINANCE_CD_M2)
+            for pupil in self.pupils_mm:
+                for step, p, _ in self._terms(exposure, float(pupil)):
+                    model = self._model_for(p)
+                    wanted.setdefault((step, model), (step, p))
+                    if self.acuity:
+                        wanted.setdefault(("acuity", step, model), (step, p))
+        missing = [key for key in wanted if key not in self._bank]
+        pixels = self.shape[0] * self.shape[1]
+        image_bytes = pixels * 3 * self.dtype.itemsize
+        needed = sum(
+            image_bytes + pixels * 3 if key[0] == "acuity" else image_bytes for key in missing
+        )  # an acuity entry also keeps its white mask (1 byte) and reach (2 bytes) per pixel
+        check_memory(needed, f"the live scene's {len(missing)} bank entries")
+        self.bank_size = max(self.bank_size, len(self._bank) + len(missing) + BANK_SIZE)
+        made = self.bank_entries
+        if progress is not None:
+            progress(0, len(missing))
+        for index, key in enumerate(missing, start=1):
+            step, pupil = wanted[key]
+            if key[0] == "acuity":
+                self._acuity_entry(step, pupil)
+            else:
+                self._entry(step, pupil)
+            if progress is not None:
+                progress(index, len(missing))
+        return LivePreparation(
+            entries=self.bank_entries - made,
+            seconds=time.perf_counter() - start,
+            adaptation_cd_m2=(low, high),
+            bytes=needed,
+        )
+
+
+@dataclass(frozen=True)
+class LivePreparation:
+    """What :meth:`LiveNight.prepare` made.
+
+    Attributes
+    ----------
+    entries
+        Bank entries made.
+    seconds
+        Wall time, s.
+    adaptation_cd_m2
+        The range of adapted luminances prepared for, cd/m² (:meth:`LiveNight.adaptation_range`).
+    bytes
+        Memory of the entries made, bytes.
+    """
+
+    entries: int
+    seconds: float
+    adaptation_cd_m2: tuple[float, float]
+    bytes: int
