@@ -34,7 +34,7 @@ from glarelab import glare
 from glarelab.display.calibration import synthetic_calibration
 from glarelab.files.atomic import atomic_open, write_text
 from glarelab.glare.night.live import LiveNight
-from glarelab.glare.rendering.display import display_codes
+from glarelab.glare.rendering.display import CodeTable, display_codes
 from glarelab.stimuli.night import night_street
 
 __all__ = ["LIVE_WORKLOADS", "PIPELINES", "live_bench", "live_table", "write_live_bench"]
@@ -147,7 +147,8 @@ def _bench_one(name, size, scene, pipeline, frames, compared, repeats, lut, log)
     prepared = live.prepare()  # as a session does before its first frame
     build_s, entries = prepared.seconds, prepared.entries
     compare_at = set(np.linspace(0, frames - 1, compared).astype(int))
-    times, cpu, exact, late, states, shown = [], [], [], 0, [], {}
+    times, cpu, exact, late, states, shown, encode = [], [], [], 0, [], {}, []
+    table = CodeTable(lut)  # the codes the session shows each frame (frontend.live.LiveView)
     previous = live.frame(gaze_px=path[0][0], pupil_mm=path[0][1], frame_time_s=FRAME_S)
     for repeat in range(repeats):
         for index, (gaze, pupil) in enumerate(path):
@@ -156,6 +157,9 @@ def _bench_one(name, size, scene, pipeline, frames, compared, repeats, lut, log)
             frame = live.frame(gaze_px=gaze, pupil_mm=pupil, frame_time_s=FRAME_S)
             times.append(1e3 * (time.perf_counter() - start))
             cpu.append(1e3 * (time.process_time() - start_cpu))
+            start = time.perf_counter()
+            table(frame.image)
+            encode.append(1e3 * (time.perf_counter() - start))
             exact.append(frame.exact_px)
             late += frame.new_entries > 0
             if repeat == 0 and index in compare_at:
@@ -190,6 +194,7 @@ def _bench_one(name, size, scene, pipeline, frames, compared, repeats, lut, log)
         "render_ms_p99": float(np.quantile(times, 0.99)),
         "fps": 1e3 / median,
         "cpu_ms_median": float(np.median(cpu)),
+        "encode_ms_median": float(np.median(encode)),
         "late_frames": int(late),
         "exact_px_median": float(np.median(exact)),
         "build_s": build_s,
@@ -203,7 +208,8 @@ def _bench_one(name, size, scene, pipeline, frames, compared, repeats, lut, log)
     }
     log(
         f"    {median:.2f} ms/frame median ({row['fps']:.0f} fps), p99 "
-        f"{row['render_ms_p99']:.2f} ms, CPU {row['cpu_ms_median']:.2f} ms; bank {entries} "
+        f"{row['render_ms_p99']:.2f} ms, CPU {row['cpu_ms_median']:.2f} ms, codes "
+        f"{row['encode_ms_median']:.2f} ms; bank {entries} "
         f"entries in {build_s:.1f} s; render_night {row['offline_ms']:.0f} ms; error "
         f"{row['max_codes']:.4f} codes ({row['max_codes_exact']:.4f} against the exact "
         f"render); load {load_before:.1f} → {load_after:.1f}"
@@ -226,14 +232,15 @@ def live_table(rows: list[dict]) -> str:
     """
     lines = [
         "| workload | pipeline | ms/frame (median) | ms/frame (99 %) | fps | CPU ms/frame "
-        "| bank (entries, s) | render_night ms/frame (0.5 codes, exact) "
+        "| codes ms/frame | bank (entries, s) | render_night ms/frame (0.5 codes, exact) "
         "| max error, codes (vs 0.5-code, vs exact) | load (before, after) |",
-        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
     ]
     for r in rows:
         lines.append(
             f"| {r['workload']} | {r['pipeline']} | {r['render_ms_median']:.2f} | "
             f"{r['render_ms_p99']:.2f} | {r['fps']:.0f} | {r['cpu_ms_median']:.2f} | "
+            f"{r['encode_ms_median']:.2f} | "
             f"{r['bank_entries']}, {r['build_s']:.1f} | "
             f"{r['offline_ms']:.0f}, {r['offline_exact_ms']:.0f} | "
             f"{r['max_codes']:.4f}, {r['max_codes_exact']:.4f} | "

@@ -1,0 +1,57 @@
+"""CodeTable: the nearest display codes by a table look-up, equal to display_codes rounded."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra import numpy as hnp
+
+from glarelab.glare.rendering.display import CodeTable, Display, display_codes
+
+
+def nearest(image, lut):
+    return np.rint(display_codes(image, lut))
+
+
+luts = st.builds(
+    lambda white, black_fraction, gamma, bits: (
+        Display.gamma(white, black_cd_m2=white * black_fraction, gamma=gamma, bits=bits).lut
+    ),
+    st.sampled_from([1e-3, 0.5, 100.0, 433.0, 1e4, 1e9]),
+    st.sampled_from([0.0, 1e-4, 1e-3, 0.05]),
+    st.floats(1.0, 3.0),
+    st.sampled_from([8, 10, 12]),
+)
+
+
+@settings(max_examples=15, deadline=None)
+@given(lut=luts, data=st.data())
+def test_every_float32_near_each_code_boundary_gets_the_interpolated_code(lut, data):
+    # the boundaries of rint: halfway between two codes' luminances, and ±64 floats around
+    halfway = ((lut[:-1] + lut[1:]) / 2).astype(np.float32)
+    steps = np.arange(-64, 65, dtype=np.int32)
+    around = (halfway.view(np.int32)[:, None] + steps[None, :]).ravel().view(np.float32)
+    around = around[np.isfinite(around) & (around >= 0)]
+    extra = data.draw(
+        hnp.arrays(np.float32, st.integers(1, 200),
+                   elements=st.floats(0.0, float(np.float32(lut[-1] * 4)), width=32)),
+    )  # fmt: skip
+    for image in (around, extra, lut.astype(np.float32), np.float32([0.0, lut[0], lut[-1]])):
+        np.testing.assert_array_equal(CodeTable(lut)(image), nearest(image, lut))
+
+
+def test_an_image_keeps_its_shape_and_other_dtypes_are_interpolated():
+    lut = Display.gamma(200.0, black_cd_m2=0.2).lut
+    image = np.random.default_rng(4).uniform(0.0, 250.0, size=(6, 7, 3))
+    table = CodeTable(lut)
+    assert table(image.astype(np.float32)).shape == (6, 7, 3)
+    np.testing.assert_array_equal(table(image), nearest(image, lut))  # float64: not rounded
+
+
+def test_a_table_below_zero_is_refused():
+    with pytest.raises(ValueError, match="lut must begin at >= 0"):
+        CodeTable(np.array([-1.0, 0.0, 1.0]))
+    with pytest.raises(ValueError, match="increasing"):
+        CodeTable(np.array([1.0, 1.0]))
