@@ -277,8 +277,8 @@ class LiveNight:
         :data:`MAX_HALVINGS` times), > 0; default 0.08 (measured against
         :func:`~glarelab.glare.render_night` on the night study's street at 640 × 400, 61
         adaptation levels from 0.001 to 100 cd/m² and the worst found, pupils 2-8 mm: at most
-        0.35 codes, 1.67 without halving, at 0.0225 cd/m²; with the acuity loss 0.07 there,
-        0.995 without). None: no halving (thresholds ``r^j`` only).
+        0.35 codes, 1.67 without halving, at 0.0225 cd/m²; with the acuity loss at most
+        0.37, 0.07 there, 0.995 without). None: no halving (thresholds ``r^j`` only).
     bank_size
         Bank entries kept, >= 4 (the least recently used are dropped); default 64.
     scotopic
