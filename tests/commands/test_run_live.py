@@ -27,6 +27,10 @@ from glarelab.protocols import ProtocolError, load_protocol
             "--eyetracker with --simulate",
         ),
         (
+            ["luidolt2020", "--participant", "P1", "--pupil-calibration-s", "0.5"],
+            "--pupil-calibration-s 0.5: the pupil calibration runs with an eye tracker",
+        ),
+        (
             ["luidolt2020-live", "--participant", "P1", "--eyetracker", "eyelinx"],
             "--eyetracker 'eyelinx': must be one of eyelink, gazepoint, mouse",
         ),

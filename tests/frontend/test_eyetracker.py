@@ -86,3 +86,28 @@ def test_calibrate_pupil_shows_white_then_black_and_maps_their_means():
     c = calibrate_pupil(screen, Eye(screen), screen_s=0.05)
     assert (c.white_raw, c.black_raw) == (3.0, 7.0)  # blinks left out of both means
     assert screen.color == (0.0, 0.0, 0.0) and screen.flips > 4  # the colour put back
+
+
+def test_a_simulated_pupil_calibration_is_moon_and_spencers_pupil_of_each_screen():
+    # MouseGaze's pupil is a constant 5 mm: the simulated eye's is Moon & Spencer's of the
+    # screen (200 and 0.05 cd/m²: 2.299 and 5.260 mm), blinks still left out, and recorded
+    screen = Screen()
+    c = calibrate_pupil(screen, Constant(), screen_s=0.03, simulate_cd_m2=(200.0, 0.05))
+    assert (round(c.white_raw, 3), round(c.black_raw, 3)) == (2.299, 5.26)
+    record = c.as_dict()
+    assert record["screen_s"] == 0.03 and record["unit"] == "mm"
+    assert min(record["valid_samples"]) > 0 and "Moon & Spencer" in record["simulated"]
+    assert record["offset_mm"] + record["slope_mm_per_unit"] * c.black_raw == pytest.approx(8.0)
+    with pytest.raises(ValueError, match="simulate_cd_m2 must be"):
+        calibrate_pupil(screen, Constant(), screen_s=0.03, simulate_cd_m2=(0.05, 200.0))
+
+
+class Constant:
+    """MouseGaze: a constant 5 mm pupil, blinking (no pupil) every third sample."""
+
+    def __init__(self):
+        self.n = 0
+
+    def sample(self):
+        self.n += 1
+        return 10.0, 10.0, None if self.n % 3 == 0 else 5.0

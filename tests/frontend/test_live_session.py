@@ -19,7 +19,9 @@ import numpy as np
 import pytest
 
 from glarelab.display.calibration import synthetic_calibration
+from glarelab.frontend.eyetracker import PupilCalibration
 from glarelab.glare import VosGlare, render_night
+from glarelab.glare.models.eye import pupil_diameter_mm
 from glarelab.glare.rendering.display import display_codes
 from glarelab.protocols import load_protocol
 from glarelab.protocols.common import glare_model
@@ -66,8 +68,18 @@ def test_a_live_session_follows_the_mouse_survives_blinks_and_a_lost_tracker(scr
     data = tmp_path / "data"
     screen.run(
         "run", "luidolt2020-live", "--pilot", "--eyetracker", "mouse", "--participant", "P1",
-        "--out", data,
+        "--out", data, "--pupil-calibration-s", "0.3",
     )  # fmt: skip
+    # Luidolt's pupil range (§5.2.1 ii), MouseGaze's pupil simulated: Moon & Spencer's of the
+    # display's white and black; the scene's 5 mm samples then map through it
+    protocol = load_protocol("luidolt2020-live")
+    display = protocol["display"]
+    simulated = PupilCalibration(
+        white_raw=float(pupil_diameter_mm(display["max_cd_m2"])),
+        black_raw=float(pupil_diameter_mm(display["black_cd_m2"])),
+    )
+    mapped = f"{simulated.to_mm(5.0):.4f}"
+    assert mapped != "5.0000"
     screen.wait_for_log(data, r"instructions screen onset")
     screen.focus_window()
     screen.key("space")
@@ -96,7 +108,7 @@ def test_a_live_session_follows_the_mouse_survives_blinks_and_a_lost_tracker(scr
             env=screen.env, check=True,
         )  # fmt: skip
         row = wait_for(screen, frames, lambda r, x=x, y=y: gaze(r) == (x, y))
-        assert row["valid_gaze"] == "1" and row["pupil_mm"] == "5.0000"  # MouseGaze: 5 mm
+        assert row["valid_gaze"] == "1" and row["pupil_mm"] == mapped  # MouseGaze's 5 mm
         moves.append((x, y, row))
     # a blink (MouseGaze: both buttons held): the gaze lost, the last gaze and pupil held
     xdotool = [_need("xdotool")]
@@ -104,7 +116,7 @@ def test_a_live_session_follows_the_mouse_survives_blinks_and_a_lost_tracker(scr
     subprocess.run([*xdotool, "mousedown", "1", "mousedown", "3"], env=screen.env, check=True)
     blink = wait_for(screen, frames, lambda r: int(r["frame"]) > held and r["valid_gaze"] == "0")
     subprocess.run([*xdotool, "mouseup", "1", "mouseup", "3"], env=screen.env, check=True)
-    assert gaze(blink) == (float(left), float(top)) and blink["pupil_mm"] == "5.0000"
+    assert gaze(blink) == (float(left), float(top)) and blink["pupil_mm"] == mapped
     back = wait_for(
         screen, frames, lambda r: int(r["frame"]) > int(blink["frame"]) and r["valid_gaze"] == "1"
     )
@@ -117,13 +129,13 @@ def test_a_live_session_follows_the_mouse_survives_blinks_and_a_lost_tracker(scr
         and abs(float(r["adaptation_cd_m2"]) / float(r["target_cd_m2"]) - 1) < 1e-4,
     )  # fmt: skip
     shown = screen.codes((win_x + left, win_y + top, width, height))
-    protocol = load_protocol("luidolt2020-live")
-    scene, display = protocol["scene"], protocol["display"]
+    scene = protocol["scene"]
     street = night_scene(protocol)
     assert glare_model(scene["glare_model"], scene["glare_parameters"]) == VosGlare()
     settings = dict(
         pixel_deg=street["pixel_deg"], effects=("adaptation", "glare", "acuity", "scotopic"),
-        glare_model=VosGlare(pupil_mm=5.0), pupil_from_adaptation=False, frame_time_s=0.0,
+        glare_model=VosGlare(pupil_mm=float(mapped)), pupil_from_adaptation=False,
+        frame_time_s=0.0,
         display_max_cd_m2=display["max_cd_m2"],
         adapted_display_cd_m2=scene["adapted_display_cd_m2"], tolerance_codes=0.0,
     )  # fmt: skip
@@ -154,7 +166,19 @@ def test_a_live_session_follows_the_mouse_survives_blinks_and_a_lost_tracker(scr
     assert screen.wait(timeout=60) == 3, screen.stderr[-3000:]  # aborted, as any Escape
     sidecar = json.loads(next(data.glob("*.json")).read_text())
     assert sidecar["status"] == "aborted"
+    # the calibration recorded with the run: the raw means, the mapping, how it was made
+    recorded_calibration = sidecar["runs"][-1]["pupil_calibration"]
+    for name in ("white_raw", "black_raw"):
+        assert recorded_calibration[name] == pytest.approx(getattr(simulated, name), rel=1e-9)
+    assert recorded_calibration["range_mm"] == [2.0, 8.0]
+    assert (
+        recorded_calibration["screen_s"] == 0.3 and min(recorded_calibration["valid_samples"]) > 0
+    )
+    slope, offset = recorded_calibration["slope_mm_per_unit"], recorded_calibration["offset_mm"]
+    assert f"{offset + slope * 5.0:.4f}" == mapped
+    assert "Moon & Spencer" in recorded_calibration["simulated"]
     log = next(data.glob("*.log")).read_text()
+    assert re.search(r"pupil calibration: white 2\.299, black 5\.26 mm \(\d+, \d+ samples\)", log)
     counts = re.search(
         r"trial 1 live: (\d+) frames, (\d+) dropped.*?(\d+) lost samples, (\d+) blinks, "
         r"(\d+) off the scene, (\d+) disconnects",

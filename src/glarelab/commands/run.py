@@ -91,6 +91,7 @@ def _run(args: argparse.Namespace) -> int:
 # the options of a session on a screen, which a simulated one would ignore, and the reverse
 SCREEN_ONLY = (
     "eyetracker",
+    "pupil_calibration_s",
     "screenshot",
     "scripted_keys",
     "age",
@@ -134,6 +135,11 @@ def _check_run_options(args: argparse.Namespace, protocol) -> None:
         raise ValueError(
             f"--eyetracker {args.eyetracker}: the {protocol.study} protocol shows no live scene "
             "(a rating protocol's [scene] with live = true), so it would ignore the tracker"
+        )
+    if args.pupil_calibration_s is not None and args.eyetracker is None:
+        raise ValueError(
+            f"--pupil-calibration-s {args.pupil_calibration_s:g}: the pupil calibration runs "
+            "with an eye tracker; give --eyetracker"
         )
     if live and not args.simulate and args.eyetracker is None:
         raise ValueError(
@@ -263,6 +269,7 @@ def _run_session(args: argparse.Namespace) -> int:
     frontend = PsychoPyFrontend(
         protocol,
         eyetracker=eyetracker,
+        pupil_calibration_s=args.pupil_calibration_s,
         stimuli=args.stimuli,
         calibration=calibration,
         fullscreen=args.fullscreen,
@@ -385,6 +392,15 @@ def add(commands) -> None:
         help="the eye tracker of a live scene (scene.live): 'mouse' (ioHub's MouseGaze, the "
         "mouse as the gaze; both buttons held: a blink), or an ioHub eye tracker's "
         "configuration file (.yaml; docs/night-vision.md)",
+    )
+    run.add_argument(
+        "--pupil-calibration-s",
+        type=number(0, above=True),
+        default=None,
+        metavar="S",
+        help="with --eyetracker: seconds of each screen (white, black) of Luidolt's pupil range "
+        "calibration, run as the tracker starts (default 5, his protocol's; MouseGaze's pupil "
+        "is simulated)",
     )
     run.add_argument("--screenshot", type=Path, default=None, help="save the first trial's screen")
     run.add_argument("--simulate", action="store_true", help="simulated observers, no screen")

@@ -709,6 +709,10 @@ def _run_session_locked(
                     frames_path=files.frames_path if facts is not None else None,
                     log_path=files.log_path if facts is not None else None,
                 )
+                pupil = getattr(frontend, "pupil_calibration", None)
+                if pupil is not None:  # Luidolt's pupil range, measured as the run started
+                    sidecar["runs"][-1]["pupil_calibration"] = pupil.as_dict()
+                    files.write_sidecar(sidecar)
                 started_run = True  # from here the files are the run's record, kept
                 _run_trials(engine, frontend, files, sidecar, protocol, rate, resume, stop)
             finally:

@@ -168,6 +168,13 @@ class PupilCalibration:
         The tracker's pupil unit (``'mm'``, ``'px'``, ``'area'``...), recorded.
     range_mm
         The range mapped to, mm; default Luidolt's 2-8.
+    screen_s
+        How long each screen was shown, s (recorded); None: not measured here.
+    valid_samples
+        The valid pupil samples of the white and the black screen (recorded).
+    simulated
+        How the pupil was simulated (a tracker without one, MouseGaze), recorded; None: the
+        tracker's own.
 
     Raises
     ------
@@ -186,6 +193,9 @@ class PupilCalibration:
     black_raw: float
     unit: str = "mm"
     range_mm: tuple[float, float] = LUIDOLT2020_PUPIL_RANGE_MM
+    screen_s: float | None = None
+    valid_samples: tuple[int, int] | None = None
+    simulated: str | None = None
 
     def __post_init__(self) -> None:
         low, high = (float(v) for v in self.range_mm)
@@ -206,7 +216,13 @@ class PupilCalibration:
 
     @classmethod
     def from_samples(
-        cls, white_raw: np.ndarray, black_raw: np.ndarray, *, unit: str = "mm"
+        cls,
+        white_raw: np.ndarray,
+        black_raw: np.ndarray,
+        *,
+        unit: str = "mm",
+        screen_s: float | None = None,
+        simulated: str | None = None,
     ) -> PupilCalibration:
         """The calibration from the pupil samples of the two screens (blinks, 0, dropped).
 
@@ -216,6 +232,8 @@ class PupilCalibration:
             The tracker's pupil samples during the white and the black screen.
         unit
             Their unit, recorded.
+        screen_s, simulated
+            Recorded (see the class).
 
         Returns
         -------
@@ -231,14 +249,18 @@ class PupilCalibration:
         >>> PupilCalibration.from_samples([3.0, 0.0, 3.2], [6.0, 6.4]).white_raw
         3.1
         """
-        means = []
+        means, counts = [], []
         for name, values in (("white_raw", white_raw), ("black_raw", black_raw)):
             array = np.asarray(values, dtype=float).reshape(-1)
             valid = array[np.isfinite(array) & (array > 0)]
             if valid.size == 0:
                 raise ValueError(f"{name} holds no valid pupil sample (all missing or 0)")
             means.append(round(float(valid.mean()), 12))
-        return cls(white_raw=means[0], black_raw=means[1], unit=unit)
+            counts.append(int(valid.size))
+        return cls(
+            white_raw=means[0], black_raw=means[1], unit=unit, screen_s=screen_s,
+            valid_samples=(counts[0], counts[1]), simulated=simulated,
+        )  # fmt: skip
 
     def to_mm(self, raw: float) -> float:
         """The pupil in mm of a tracker value (linear between the two screens, clamped).
@@ -263,14 +285,29 @@ class PupilCalibration:
         Returns
         -------
         dict
-            The two means, the unit, the range and the rule.
+            The two means (the raw minimum, white, and maximum, black), the unit, the range,
+            the mapping ``pupil_mm = offset_mm + slope_mm_per_unit · raw`` (clamped to the
+            range) and its rule, the screens' duration, the valid samples and the simulation.
+
+        Examples
+        --------
+        >>> d = PupilCalibration(white_raw=20.0, black_raw=50.0, unit="px").as_dict()
+        >>> d["slope_mm_per_unit"], d["offset_mm"]
+        (0.2, -2.0)
         """
+        low, high = (float(v) for v in self.range_mm)
+        slope = (high - low) / (self.black_raw - self.white_raw)
         return {
             "white_raw": self.white_raw,
             "black_raw": self.black_raw,
             "unit": self.unit,
-            "range_mm": list(self.range_mm),
+            "range_mm": [low, high],
+            "slope_mm_per_unit": round(slope, 12),
+            "offset_mm": round(low - slope * self.white_raw, 12),
             "rule": "linear from white (min) to black (max), clamped (Luidolt 2020 §5.2.1 ii)",
+            "screen_s": self.screen_s,
+            "valid_samples": None if self.valid_samples is None else list(self.valid_samples),
+            "simulated": self.simulated,
         }
 
 
@@ -430,7 +467,12 @@ class GazeFilter:
 
 
 def calibrate_pupil(
-    window, source, *, screen_s: float = CALIBRATION_SCREEN_S, unit: str = "mm"
+    window,
+    source,
+    *,
+    screen_s: float = CALIBRATION_SCREEN_S,
+    unit: str = "mm",
+    simulate_cd_m2: tuple[float, float] | None = None,
 ) -> PupilCalibration:
     """Luidolt's pupil range calibration: a white screen, then a black one, ``screen_s`` each.
 
@@ -446,6 +488,12 @@ def calibrate_pupil(
         How long each screen is shown, s, > 0; default 5 (Luidolt §5.2.1 ii).
     unit
         The tracker's pupil unit, recorded.
+    simulate_cd_m2
+        ``(white, black)`` luminance of the two screens, cd/m², for a tracker that does not
+        measure the pupil (``MouseGaze``'s is a constant 5 mm): each valid sample's pupil is
+        replaced by Moon & Spencer's pupil of the screen's luminance
+        (:func:`glarelab.glare.models.eye.pupil_diameter_mm`), a simulated eye; default None:
+        the tracker's pupil.
 
     Returns
     -------
@@ -456,7 +504,7 @@ def calibrate_pupil(
     ------
     ValueError
         For a bad duration, or a screen without a valid pupil or with no range between them
-        (MouseGaze reports 5 mm on both: run a simulated session without a calibration).
+        (MouseGaze reports 5 mm on both: give ``simulate_cd_m2``).
 
     Notes
     -----
@@ -468,8 +516,29 @@ def calibrate_pupil(
     """
     import time
 
+    from glarelab.glare.models.eye import pupil_diameter_mm
+
     if not (math.isfinite(screen_s) and screen_s > 0):
         raise ValueError(f"screen_s must be a duration > 0 s; got {screen_s!r}")
+    simulated = None
+    if simulate_cd_m2 is not None:
+        try:
+            white_cd_m2, black_cd_m2 = (float(v) for v in simulate_cd_m2)
+        except (TypeError, ValueError):
+            raise ValueError(
+                f"simulate_cd_m2 must be (white, black) in cd/m²; got {simulate_cd_m2!r}"
+            ) from None
+        if not (math.isfinite(white_cd_m2) and white_cd_m2 > black_cd_m2 >= 0):
+            raise ValueError(
+                f"simulate_cd_m2 must be (white, black) cd/m² with white > black >= 0; got "
+                f"{simulate_cd_m2!r}"
+            )
+        screens = {"white": white_cd_m2, "black": black_cd_m2}
+        simulated = (
+            f"Moon & Spencer's pupil of each screen (white {white_cd_m2:g} cd/m², black "
+            f"{black_cd_m2:g} cd/m²) in place of the tracker's"
+        )
+        unit = "mm"
     before = getattr(window, "color", None)
     samples: dict[str, list[float]] = {}
     try:
@@ -481,12 +550,17 @@ def calibrate_pupil(
             while time.monotonic() < end:
                 window.flip()
                 pupil = source.sample()[2]
+                if simulated is not None and _finite(pupil) and pupil > 0:  # not a blink
+                    pupil = float(pupil_diameter_mm(screens[name]))
                 pupils.append(math.nan if pupil is None else float(pupil))
     finally:
         if before is not None:
             window.color = before
         window.flip()
-    return PupilCalibration.from_samples(samples["white"], samples["black"], unit=unit)
+    return PupilCalibration.from_samples(
+        samples["white"], samples["black"], unit=unit, screen_s=float(screen_s),
+        simulated=simulated,
+    )  # fmt: skip
 
 
 class IoHubEyeTracker:

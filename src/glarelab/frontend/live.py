@@ -23,6 +23,7 @@ import numpy as np
 from glarelab.display.calibration import synthetic_calibration
 from glarelab.files.atomic import write_text
 from glarelab.frontend.eyetracker import (
+    CALIBRATION_SCREEN_S,
     GazeFilter,
     IoHubEyeTracker,
     PupilCalibration,
@@ -223,6 +224,7 @@ def run_live(
     settings: dict | None = None,
     calibration: PupilCalibration | None = None,
     calibrate: bool = False,
+    calibration_s: float = CALIBRATION_SCREEN_S,
     scotopic: bool = False,
     display_max_cd_m2: float = 100.0,
     adapted_display_cd_m2: float = 10.0,
@@ -252,7 +254,12 @@ def run_live(
         Luidolt's pupil range, or None: the tracker's pupil in mm, clamped to 2-8 mm.
     calibrate
         Measure the pupil range first (:func:`~glarelab.frontend.eyetracker.calibrate_pupil`,
-        a white and a black screen of 5 s), in place of ``calibration``; default False.
+        a white and a black screen of ``calibration_s`` each), in place of ``calibration``;
+        default False. With ``tracker='mouse'`` the pupil on the two screens is simulated
+        (Moon & Spencer's of ``display_max_cd_m2`` and of a thousandth of it, the display's
+        black here).
+    calibration_s
+        How long each calibration screen is shown, s; default 5 (Luidolt 2020 §5.2.1 ii).
     scotopic
         Also Luidolt's scotopic colour of the adapted luminance (§5.4); default False.
     display_max_cd_m2, adapted_display_cd_m2
@@ -302,7 +309,12 @@ def run_live(
         source = IoHubEyeTracker(window, tracker=tracker, settings=settings)
         if calibrate:
             source.start()
-            calibration = calibrate_pupil(window, source)
+            simulate = (
+                (display_max_cd_m2, display_max_cd_m2 / 1000) if tracker == "mouse" else None
+            )
+            calibration = calibrate_pupil(
+                window, source, screen_s=calibration_s, simulate_cd_m2=simulate
+            )
         window_pos = [int(v) for v in getattr(window, "pos", (0, 0))]
         facts = {
             "tracker": tracker,

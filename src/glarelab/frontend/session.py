@@ -25,6 +25,7 @@ order, for the session loop.
 from __future__ import annotations
 
 import json
+import math
 import time
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -84,6 +85,11 @@ class PsychoPyFrontend:
     eyetracker
         The eye tracker of a live scene (``scene.live``): ``(device, settings)`` as
         :func:`glarelab.frontend.eyetracker.tracker_config` gives them; default None.
+    pupil_calibration_s
+        How long each screen of Luidolt's pupil range calibration is shown when the tracker
+        starts (:func:`glarelab.frontend.eyetracker.calibrate_pupil`), s, > 0; default 5
+        (Luidolt 2020 §5.2.1 ii). With ``MouseGaze`` the pupil of the two screens is
+        simulated (Moon & Spencer's of the display's white and black).
     """
 
     def __init__(
@@ -99,10 +105,21 @@ class PsychoPyFrontend:
         pilot: bool = False,
         monitor=None,
         eyetracker: tuple[str, dict] | None = None,
+        pupil_calibration_s: float | None = None,
     ):
+        from glarelab.frontend.eyetracker import CALIBRATION_SCREEN_S
+
         self.protocol = protocol
         self.eyetracker = eyetracker
         self.tracker = None  # the ioHub eye tracker, started with the session
+        if pupil_calibration_s is None:
+            pupil_calibration_s = CALIBRATION_SCREEN_S
+        if not (math.isfinite(pupil_calibration_s) and pupil_calibration_s > 0):
+            raise ValueError(
+                f"pupil_calibration_s must be a duration > 0 s; got {pupil_calibration_s!r}"
+            )
+        self.pupil_calibration_s = float(pupil_calibration_s)
+        self.pupil_calibration = None  # Luidolt's pupil range, measured when the tracker starts
         self.monitor = monitor
         self.pilot = pilot
         fullscreen = fullscreen and not pilot
@@ -240,8 +257,10 @@ class PsychoPyFrontend:
 
     def _start_tracker(self, run: int, frames_path: Path | None) -> None:
         """Launch ioHub with the eye tracker, its hdf5 store beside the session's files, the
-        tracker's own calibration (not MouseGaze's), and start recording."""
-        from glarelab.frontend.eyetracker import IoHubEyeTracker
+        tracker's own calibration (not MouseGaze's), start recording, and measure Luidolt's
+        pupil range (§5.2.1 ii; MouseGaze's pupil simulated), logged and kept in
+        ``pupil_calibration``."""
+        from glarelab.frontend.eyetracker import IoHubEyeTracker, calibrate_pupil
 
         device, settings = self.eyetracker
         store = None
@@ -269,6 +288,27 @@ class PsychoPyFrontend:
             f"eye tracker {device} recording"
             + (f"; ioHub's raw events kept in {store.name} (session run{run})" if store else "")
         )
+        display = self.protocol.data.get("display") or {}
+        simulate = None
+        if device == "mouse":  # MouseGaze's pupil is a constant 5 mm: a simulated eye's
+            simulate = (float(display["max_cd_m2"]), float(display["black_cd_m2"]))
+        self.log(
+            f"pupil calibration: a white screen, then a black one, {self.pupil_calibration_s:g} "
+            "s each (Luidolt 2020 §5.2.1 ii)"
+        )
+        calibration = calibrate_pupil(
+            self.window, self.tracker, screen_s=self.pupil_calibration_s, simulate_cd_m2=simulate
+        )
+        self.pupil_calibration = calibration
+        record = calibration.as_dict()
+        self.log(
+            f"pupil calibration: white {record['white_raw']:.4g}, black {record['black_raw']:.4g} "
+            f"{record['unit']} ({record['valid_samples'][0]}, {record['valid_samples'][1]} "
+            f"samples) → {record['range_mm'][0]:g}-{record['range_mm'][1]:g} mm: pupil_mm = "
+            f"{record['offset_mm']:.6g} + {record['slope_mm_per_unit']:.6g} × raw, clamped"
+            + (f"; simulated: {record['simulated']}" if record["simulated"] else "")
+        )
+        self.records.flush()
 
     @property
     def frames_path(self) -> Path | None:
@@ -538,7 +578,9 @@ class PsychoPyFrontend:
             calibration = synthetic_calibration(
                 max_cd_m2=display["max_cd_m2"], black_cd_m2=display["black_cd_m2"], bit_depth=bits
             )
-        view = LiveView(self.window, live, lut=calibration.lut, bits=bits)
+        view = LiveView(
+            self.window, live, lut=calibration.lut, bits=bits, calibration=self.pupil_calibration
+        )
         what = f"trial {screen['trial']} live"
         self.log(
             f"{what}: scene {live.shape[1]} x {live.shape[0]} px at window pixels "

@@ -82,6 +82,33 @@ def test_the_threshold_is_interpolated_between_the_bank_levels(scene):
     assert np.abs(codes(frame.image) - codes(offline(scene, frame, None, None).frames)).max() < 0.2
 
 
+def test_the_bank_is_denser_where_a_plateau_of_the_scene_meets_the_threshold():
+    # a wall of one luminance between two of the bank's levels (r^20.6, r = 1.02) and a lamp:
+    # the threshold at the wall puts 1280 pixels (12.8 deg²) on the kink of Yoshida's eq. 1,
+    # where the interpolation in T errs most; measured 0.67 codes with levels 2 % apart only,
+    # 0.17 with the interval halved twice (the budget: 0.005 × 12.8 deg² <= 0.08)
+    wall = 1.02**20.6
+    scene = np.full((48, 72, 3), 0.02)
+    scene[20:22, 10:12] = 5e4
+    scene[8:40, 30:70] = wall
+    reference = render_night(
+        scene, pixel_deg=PIXEL_DEG, effects=("adaptation", "glare"),
+        glare_model=VosGlare(pupil_mm=5.0), pupil_from_adaptation=False, gaze_px=(0.0, 0.0),
+        initial_adaptation_cd_m2=wall / 10.0, frame_time_s=0.0, tolerance_codes=0.0,
+    ).frames  # fmt: skip
+    errors = {}
+    for budget in (None, 0.08):
+        live = LiveNight(
+            scene, pixel_deg=PIXEL_DEG, initial_adaptation_cd_m2=wall / 10.0,
+            band_budget_deg2=budget,
+        )  # fmt: skip
+        frame = live.frame(gaze_px=(0, 0), pupil_mm=5.0, frame_time_s=0.0)
+        errors[budget] = np.abs(codes(frame.image) - codes(reference)).max()
+    assert errors[None] > 0.5  # the old spacing: the test can see the kink
+    assert errors[0.08] < 0.25, errors
+    assert live._halvings(20) == 2 and live._halvings(0) == 0  # only where the wall is
+
+
 def test_the_gaze_falloff_equals_render_nights_and_keeps_the_glare_near_the_gaze(scene):
     # Luidolt §5.2.3: the glared frame blended with the unglared one by a Gaussian falloff
     live = LiveNight(scene, pixel_deg=PIXEL_DEG, glare_falloff_deg=1.0)

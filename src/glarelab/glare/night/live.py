@@ -8,8 +8,8 @@ pre-processing step, we calculate all data, that does not change during our simu
 - **Once per adaptation level and pupil** (a bank, filled as the gaze visits them): the excess
   over the display's maximum at exposure ``s`` is ``s·max(X - T, 0)`` with the threshold
   ``T = L_dmax / s`` (Yoshida 2008 eq. 1), so its spread is ``s · (max(X - T, 0) ⊛ K_p)``.
-  The bank holds ``max(X - T_j, 0) ⊛ K_p`` on thresholds ``T_j = r^j`` (``r`` = 1.02) and on
-  the pupils ``p`` of :func:`pupil_bank_mm`.
+  The bank holds ``max(X - T_j, 0) ⊛ K_p`` on thresholds ``T_j = r^j`` (``r`` = 1.02),
+  halved where the scene needs it (below), and on the pupils ``p`` of :func:`pupil_bank_mm`.
 - **Per frame**: the windowed target around the gaze (§5.1,
   :func:`~glarelab.glare.night.adaptation.window_mean` of the log luminance), one step of
   eqs. 5.2-5.4 (:func:`~glarelab.glare.night.adaptation.adaptation_step`), the exposure, the
@@ -18,7 +18,16 @@ pre-processing step, we calculate all data, that does not change during our simu
 
 ``max(X - T, 0)`` is linear in ``T`` for every pixel outside ``[T_j, T_{j+1})``, so the
 interpolation in ``T`` errs only on the pixels within that band, by at most
-``(T_{j+1} - T_j) / 4`` each (before spreading). The glare kernels are exact
+``(T_{j+1} - T_j) / 4`` each (before spreading): the kink of Yoshida's eq. 1 at ``X = T``,
+the only part of the frame that is not linear in the threshold (the adaptation, eqs. 5.2-5.4,
+sets ``T`` and does not enter the spread; the display's tone curve only magnifies the error in
+codes where the glare falls on a dark part of the frame). The error thus grows with the step
+and with the area of the scene within it: a façade of one luminance that the threshold
+crosses puts thousands of pixels into one band (on the night study's street at 640 × 400,
+9555 pixels at 1.5 cd/m²: 1.67 codes at an adaptation of 0.0225 cd/m², 0.995 with the
+acuity loss). Each interval whose area times ``r - 1`` exceeds ``band_budget_deg2`` is
+halved, up to :data:`MAX_HALVINGS` times, so the bank is dense only where the scene has such
+plateaus (counted once from the sorted channels, without a render). The glare kernels are exact
 (``tolerance_codes=0``). The Vos PSF depends on the pupil only through its halo, which a pupil
 under 3 mm drops (Spencer §2.1): the bank holds both sides of that step, so no interval spans it
 and the interpolation in the pupil is exact; a model whose kernel changes continuously with the
@@ -91,6 +100,15 @@ PRECISIONS = ("float32", "float64")
 # the bank's thresholds T_j = r^j cd/m²: interpolating max(X - T, 0) linearly in T between them
 # errs only on pixels within [T_j, T_{j+1}), by at most (T_{j+1} - T_j) / 4 of the scene
 THRESHOLD_RATIO = 1.02
+# where many pixels lie between two levels the interval is halved (up to MAX_HALVINGS times,
+# ratio 1.02^(1/16) = 1.0012) until (ratio - 1) × their area is at most BAND_BUDGET_DEG2: the
+# interpolation's error is at most (T_{j+1} - T_j)/4 on each of them (Yoshida eq. 1's kink),
+# so it grows with the step times the area of the scene within it. Measured on the night
+# study's street at 640 × 400 (0.0297° pixels): 1.67 codes at the worst level for 0.02 × 8.4
+# deg² (a façade at 1.5 cd/m², 9555 pixels in one channel), 0.12 with the interval halved
+# twice (0.005 × 8.4 = 0.04 deg²), at most 0.34 near it
+BAND_BUDGET_DEG2 = 0.02 * 4.0
+MAX_HALVINGS = 4
 BANK_SIZE = 64  # entries kept (the least recently used are dropped)
 # with the acuity loss, the pixels within this many σ (of the ladder level above their own σ,
 # at least one pixel) of a pixel that meets the white between two bank levels are blurred
@@ -255,10 +273,15 @@ class LiveNight:
         ``'float64'``.
     threshold_ratio
         Ratio ``r`` of the bank's neighbouring thresholds ``T_j = r^j`` cd/m², > 1; default
-        1.02 (measured against :func:`~glarelab.glare.render_night` on the night study's
-        street at 640 × 400: 2e-4 display codes on the bench's path, at most 0.29 over 30
-        adaptation levels from 0.005 to 1 cd/m², 0.98 at 0.02 cd/m²; 0.28 there at 1.01): the
-        error grows with the pixels of the scene within one step of the threshold.
+        1.02, each interval halved as ``band_budget_deg2`` asks.
+    band_budget_deg2
+        The most ``(ratio - 1) × area`` (deg², the channel with the most pixels between two
+        thresholds) an interval of the bank may have before it is halved (at most
+        :data:`MAX_HALVINGS` times), > 0; default 0.08 (measured against
+        :func:`~glarelab.glare.render_night` on the night study's street at 640 × 400, 61
+        adaptation levels from 0.001 to 100 cd/m² and the worst found, pupils 2-8 mm: at most
+        0.35 codes, 1.67 without halving, at 0.0225 cd/m²; with the acuity loss at most
+        0.37, 0.07 there, 0.995 without). None: no halving (thresholds ``r^j`` only).
     bank_size
         Bank entries kept, >= 4 (the least recently used are dropped); default 64.
     scotopic
@@ -340,6 +363,7 @@ class LiveNight:
         colourspace: str = "ITU-R BT.709",
         precision: Literal["float32", "float64"] = "float32",
         threshold_ratio: float = THRESHOLD_RATIO,
+        band_budget_deg2: float | None = BAND_BUDGET_DEG2,
         bank_size: int = BANK_SIZE,
         glare_falloff_deg: float | None = None,
         scotopic: bool = False,
@@ -401,6 +425,15 @@ class LiveNight:
         self.threshold_ratio = check_in_range(
             "threshold_ratio", threshold_ratio, 1.0, math.inf, unit="", low_inclusive=False
         )
+        self.band_budget_deg2 = (
+            None
+            if band_budget_deg2 is None
+            else check_positive("band_budget_deg2", band_budget_deg2, unit="deg²")
+        )
+        self._fine = 2**MAX_HALVINGS  # a bank level i is the threshold r^(i / 2^MAX_HALVINGS)
+        # each channel's values sorted: the pixels between two thresholds, by bisection
+        self._sorted = np.sort(self.scene.reshape(-1, 3), axis=0).T.copy()
+        self._halved: dict[int, int] = {}
         self.bank_size = int(bank_size)
         if self.bank_size < 4:
             raise ValueError(f"bank_size must be an integer >= 4; got {bank_size!r}")
@@ -443,7 +476,7 @@ class LiveNight:
             self._bank.move_to_end(key)
             return self._bank[key]
         start = time.perf_counter()
-        excess = np.maximum(self.scene - self.threshold_ratio**level, 0.0)
+        excess = np.maximum(self.scene - self._threshold(level), 0.0)
         entry = None
         if excess.any():
             renderer = self._renderers.get(model)
@@ -458,6 +491,34 @@ class LiveNight:
             spread = np.asarray(renderer.render(self.l_dmax + excess).spread)
             entry = np.broadcast_to(spread, self.scene.shape).astype(self.dtype)
         return self._store(key, entry, start)
+
+    def _threshold(self, level: int) -> float:
+        """The threshold ``T`` of a bank level, cd/m²: ``r^(level / 2^MAX_HALVINGS)``."""
+        return self.threshold_ratio ** (level / self._fine)
+
+    def _halvings(self, base: int) -> int:
+        """How often the interval ``[r^base, r^(base + 1))`` is halved: the least ``h`` (at
+        most :data:`MAX_HALVINGS`) for which ``(r^(1/2^h) - 1)`` times the area of the scene
+        within it (deg², the channel with the most pixels there) is within
+        ``band_budget_deg2``; 0 without a budget."""
+        if base in self._halved:
+            return self._halved[base]
+        halvings = 0
+        if self.band_budget_deg2 is not None:
+            low, high = self.threshold_ratio**base, self.threshold_ratio ** (base + 1)
+            pixels = max(
+                int(np.searchsorted(values, high) - np.searchsorted(values, low))
+                for values in self._sorted
+            )
+            area_deg2 = pixels * self.pixel_deg**2
+            while (
+                halvings < MAX_HALVINGS
+                and (self.threshold_ratio ** (0.5**halvings) - 1.0) * area_deg2
+                > self.band_budget_deg2
+            ):
+                halvings += 1
+        self._halved[base] = halvings
+        return halvings
 
     def _store(self, key: tuple, entry, start: float):
         """Keep a new bank entry (dropping the least recently used beyond ``bank_size``),
@@ -581,8 +642,14 @@ class LiveNight:
         ``T = L_dmax / s`` (between ``T_j = r^j`` and ``T_{j+1}``) and pupil (between the
         bank's ``p_i`` and ``p_{i+1}``): bilinear weights, those of 0 left out."""
         threshold = self.l_dmax / exposure
-        level = math.floor(math.log(threshold) / math.log(self.threshold_ratio))
-        t_low, t_high = self.threshold_ratio**level, self.threshold_ratio ** (level + 1)
+        place = math.log(threshold) / math.log(self.threshold_ratio)
+        base = math.floor(place)
+        halvings = self._halvings(base)
+        step = self._fine >> halvings
+        level = base * self._fine + step * min(
+            math.floor((place - base) * 2**halvings), 2**halvings - 1
+        )
+        t_low, t_high = self._threshold(level), self._threshold(level + step)
         u = min(max((threshold - t_low) / (t_high - t_low), 0.0), 1.0)
         index = int(np.searchsorted(self.pupils_mm, pupil, side="right")) - 1
         index = min(max(index, 0), len(self.pupils_mm) - 1)
@@ -593,8 +660,8 @@ class LiveNight:
             if t > 0 and self._model_for(p0) != self._model_for(p1):
                 pupils = [(p0, 1.0 - t), (p1, t)]
         return [
-            (step, p, weight_t * weight_p)
-            for step, weight_t in ((level, 1.0 - u), (level + 1, u))
+            (index_t, p, weight_t * weight_p)
+            for index_t, weight_t in ((level, 1.0 - u), (level + step, u))
             if weight_t > 0
             for p, weight_p in pupils
         ]
@@ -643,7 +710,7 @@ class LiveNight:
         if key in self._bank:
             self._bank.move_to_end(key)
             return self._bank[key]
-        exposure = self.l_dmax / self.threshold_ratio**level
+        exposure = self.l_dmax / self._threshold(level)
         display = self.scene * exposure
         spread = self._entry(level, pupil)  # counted and timed there
         start = time.perf_counter()
