@@ -18,9 +18,11 @@ SHAPE = (20, 28)
 
 
 def scene_of(rng: np.random.Generator) -> np.ndarray:
-    """A dark street with a bright half and two lamps: targets over a range of 30×."""
+    """A dark street with a bright half, a uniform wall and two lamps: targets over a range of
+    30×, and a plateau that makes the bank halve the intervals around it."""
     scene = np.full((*SHAPE, 3), 0.01) * rng.uniform(0.5, 2.0, size=(*SHAPE, 1))
     scene[:, SHAPE[1] // 2 :] *= 30.0
+    scene[:10, 20:] = 0.3
     scene[3:5, 4:6] = 5e4
     scene[14:16, 22:24] = 2e3
     return scene
@@ -78,7 +80,7 @@ def prepared(scene):
     for acuity in (False, True):
         live = LiveNight(
             scene, pixel_deg=PIXEL_DEG, acuity=acuity, scotopic=acuity, bank_size=4,
-            threshold_ratio=1.1, window_sigma_deg=0.6,
+            threshold_ratio=1.1, window_sigma_deg=0.6, band_budget_deg2=0.005,
         )  # fmt: skip
         made[acuity] = (live, live.prepare())
     return made
@@ -91,6 +93,7 @@ def prepared(scene):
 def test_no_frame_on_the_scene_makes_an_entry_after_the_preparation(prepared, path, acuity):
     live, preparation = prepared[acuity]
     assert preparation.entries > 4 and live.bank_entries == preparation.entries
+    assert max(live._halvings(base) for base in range(-60, 60)) > 1  # halved intervals too
     live._state, live._gaze, live._pupil = None, None, None  # a new viewer, the same bank
     for gaze, pupil, frame_time_s in path:
         frame = live.frame(gaze_px=gaze, pupil_mm=pupil, frame_time_s=frame_time_s)

@@ -938,9 +938,10 @@ class LiveNight:
 
         Notes
         -----
-        The adapted luminances are sampled at ratios of ``r^{1/4}`` (``r`` the
-        ``threshold_ratio``) from ``low / r`` to ``high · r``; each is given to the frame's own
-        choice of bank entries, so that the frames find what they look up.
+        The thresholds ``T = L_dmax / s`` of the range's ends give the bank's places
+        ``log_r T``; the middle of every interval between them, and of one more below and
+        above, each halved interval's parts included, is given to the frame's own choice of
+        bank entries, so that the frames find what they look up.
 
         References
         ----------
@@ -959,12 +960,18 @@ class LiveNight:
         """
         start = time.perf_counter()
         low, high = self.adaptation_range()
-        ratio = self.threshold_ratio
-        count = max(2, math.ceil(4 * math.log(high * ratio / (low / ratio)) / math.log(ratio)) + 1)
-        levels = np.geomspace(low / ratio, high * ratio, count)
+        log_ratio = math.log(self.threshold_ratio)
+        places = [  # the bank places (log_r T) of the two ends, T = L_dmax / s = L_dmax A / key
+            math.log(self.l_dmax * max(a, MIN_LUMINANCE_CD_M2) / self.key) / log_ratio
+            for a in (low, high)
+        ]
+        samples = []  # the middle of every (halved) interval from one step below to one above
+        for base in range(math.floor(places[0]) - 1, math.floor(places[1]) + 2):
+            parts = 2 ** self._halvings(base)
+            samples += [base + (k + 0.5) / parts for k in range(parts)]
         wanted: dict[tuple, tuple[int, float]] = {}
-        for adaptation in levels:
-            exposure = self.key / max(float(adaptation), MIN_LUMINANCE_CD_M2)
+        for place in samples:
+            exposure = self.l_dmax / self.threshold_ratio**place
             for pupil in self.pupils_mm:
                 for step, p, _ in self._terms(exposure, float(pupil)):
                     model = self._model_for(p)
