@@ -891,12 +891,14 @@ class _LineSet:
         nodes = math.ceil((offsets[-1] + cell) * math.sqrt(2.0) / step)
         s = np.arange(-nodes, nodes + 1) * step
         table = half_plane_coverage(s[:, None] - along.ravel(), self.angle_rad, cell) @ pair
-        x, y = grid.coordinates()
-        d = self._offset(x.flat[index], y.flat[index])
+        x = (index % grid.n - grid.n // 2) * grid.spacing_mm
+        y = -(index // grid.n - grid.n // 2) * grid.spacing_mm
+        d = self._offset(x, y)
         half = self.line_mm / 2
-        # every line within the filter's reach (on a coarse grid the filter's square, 2.6
-        # samples wide, spans more than the nearest line); beyond it both profiles are 0 or 1
-        near = math.ceil((s[-1] + half) / self.pitch_mm)
+        # every line within the filter's reach of a sample (on a coarse grid the filter's
+        # square, 2.6 samples wide, spans more than the nearest line); beyond it both
+        # profiles are 0 or 1
+        near = math.floor((s[-1] + half + self.pitch_mm / 2) / self.pitch_mm)
         line = np.zeros(d.shape)
         for k in range(-near, near + 1):
             centre = d - k * self.pitch_mm
@@ -992,6 +994,29 @@ class _Bitmap:
         ]
 
 
+def _axis_line_cover(component, grid: ApertureGrid, width_mm: float) -> np.ndarray | None:
+    """The cover of the squares of side ``width_mm`` around the samples by line sets along the
+    axes (a function of one coordinate each), from the axes alone; None for other
+    components."""
+    if isinstance(component, _Crossed):
+        sets = component.sets
+    elif isinstance(component, _LineSet):
+        sets = (component,)
+    else:
+        return None
+    axis = (np.arange(grid.n) - grid.n // 2) * grid.spacing_mm
+    zero = np.zeros_like(axis)
+    t = np.ones((grid.n, grid.n))
+    for line_set in sets:
+        if abs(math.sin(line_set.angle_rad)) < 1e-12:  # lines along y: a function of x
+            t = t * line_set.cover(axis, zero, width_mm)[None, :]
+        elif abs(math.cos(line_set.angle_rad)) < 1e-12:  # along x: of y, rows running down
+            t = t * line_set.cover(zero, -axis, width_mm)[:, None]
+        else:
+            return None
+    return t
+
+
 def _prefiltered_product(
     grid: ApertureGrid, components: list, prefilter: tuple[int, int]
 ) -> np.ndarray:
@@ -1014,6 +1039,8 @@ def _prefiltered_product(
             wide = component.band(x, y, support * math.sqrt(2.0))
         elif isinstance(component, _Bitmap):
             wide = component.box_cover(grid, support)
+        elif (separable := _axis_line_cover(component, grid, support)) is not None:
+            wide = separable
         else:
             wide = component.cover(
                 x, y, support * (math.sqrt(2.0) if isinstance(component, _Lid) else 1.0)
