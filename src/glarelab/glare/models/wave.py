@@ -135,7 +135,8 @@ OBSTACLE_SAMPLES = 12  # samples across a particle or an eyelash
 DIAPHRAGM_PREFILTER = (5, 3)
 # the same behind a trigonal cross screen, whose three line sets cross everywhere and are drawn
 # sub-cell by sub-cell there: 25 sub-cells, not 169 (scripts/measure_combined_prefilter.py
-# --others: within 0.25 % where the one-sample cover was 0.93 % off, at 1.5-2 times its time)
+# --others: within 0.25 % where the one-sample cover was 0.93 % off, at 1.0-3.6 times its
+# time for two wavelengths on 31² at 0.02°/px)
 TRIGONAL_PREFILTER = (3, 2)
 OBSTACLE_SAMPLES_FAST = 4  # the same for aperture_grid="fast"
 SPECTRAL_METHODS = ("reference", "scaled", "kakimoto")
