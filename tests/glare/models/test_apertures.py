@@ -174,3 +174,52 @@ def test_diaphragm_behind_lid_and_cross_screen_is_the_weighted_cover_of_its_sub_
     # filter of a product of a function of x and one of y); the table of an edge's filtered
     # profile: within 1e-6
     assert_allclose(t, np.einsum("abij,i,j->ab", cover, weights, weights), atol=1e-6)
+
+
+def test_round_pupil_behind_a_bitmap_is_the_weighted_cover_of_its_sub_cells():
+    # a round pupil of 4.8 mm (each sub-cell by its ramp) behind a random bitmap of 0.2 mm
+    # pixels read as area coverage (each sub-cell's overlap with each pixel, summed here
+    # directly), the lid and a 4-point screen: every sample the prefilter's weights over the
+    # sub-cells
+    rng = np.random.default_rng(3)
+    image = np.where(rng.random((25, 23)) < 0.3, rng.random((25, 23)), 1.0)
+    grid, prefilter, spacing = ap.ApertureGrid(41, 0.125), (5, 3), 0.2
+    t = ap.aperture_diaphragm_prefiltered(
+        grid, 4.8, None, eyelid=True, cross_screen="4-point", obstacle_image=image,
+        obstacle_spacing_mm=spacing, prefilter=prefilter,
+    )  # fmt: skip
+    weights, cell = ap.prefilter_weights(prefilter), grid.spacing_mm / 5
+    offsets = (np.arange(weights.size) - weights.size // 2) * cell
+    x, y = grid.coordinates()
+    px, py = np.broadcast_arrays(
+        x[..., None, None] + offsets[None, None, None, :],
+        y[..., None, None] + offsets[None, None, :, None],
+    )
+    cover = np.clip(0.5 + (ap.ramp_radius_mm(2.4, cell) - np.hypot(px, py)) / cell, 0.0, 1.0)
+
+    def overlaps(centre, pixels):  # each sub-cell's overlap with each pixel along one axis
+        edges = (np.arange(pixels + 1) - pixels // 2 - 0.5) * spacing
+        low = np.clip(centre[..., None] - cell / 2, edges[:-1], edges[1:])
+        return (np.clip(centre[..., None] + cell / 2, edges[:-1], edges[1:]) - low) / cell
+
+    cover *= 1.0 + ((overlaps(-py, 25) @ (image - 1.0)) * overlaps(px, 23)).sum(axis=-1)
+    sag = 12.0 - np.sqrt(12.0**2 - px**2)  # the lid 2.2 mm up, curved with a 12 mm radius
+    cover *= np.clip(0.5 + ((2.2 - sag) - py) / cell, 0.0, 1.0)
+    for angle in (0.0, math.pi / 2):  # lines of 0.03 mm every 0.25 mm
+        d = (px * math.cos(angle) + py * math.sin(angle) + 0.125) % 0.25 - 0.125
+        line = ap.half_plane_coverage(0.015 - d, angle, cell)
+        cover *= 1.0 - (line - ap.half_plane_coverage(-0.015 - d, angle, cell))
+    assert_allclose(t, np.einsum("abij,i,j->ab", cover, weights, weights), atol=1e-6)
+
+
+@pytest.mark.parametrize(
+    ("spacing", "prefilter"), [(0.013, (1, 1)), (0.05, (5, 3)), (0.11, (3, 2))]
+)
+def test_an_image_read_as_area_coverage_blocks_its_bitmaps_area(spacing, prefilter):
+    # each pixel a square of its value: the samples' blocked area is the bitmap's, whatever
+    # the two spacings and the prefilter
+    rng = np.random.default_rng(1)
+    image = rng.random((40, 33))
+    t = ap.aperture_image_cover(ap.ApertureGrid(160, 0.037), image, spacing, prefilter=prefilter)
+    blocked = (1.0 - t).sum() * 0.037**2
+    assert_allclose(blocked, (1.0 - image).sum() * spacing**2, rtol=1e-12)

@@ -22,6 +22,7 @@ Kakimoto et al. 2004, §3.2 and Fig. 5; Luidolt 2020, §5.2.1 and §5.2.4; Ritsc
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 from dataclasses import dataclass
@@ -41,6 +42,7 @@ __all__ = [
     "aperture_eyelashes",
     "aperture_eyelid",
     "aperture_from_image",
+    "aperture_image_cover",
     "aperture_particles",
     "aperture_pupil",
     "half_plane_coverage",
@@ -705,6 +707,92 @@ def aperture_from_image(image: np.ndarray, *, name: str = "aperture") -> np.ndar
     return array
 
 
+def _cover_matrix(
+    grid: ApertureGrid,
+    pixels: int,
+    spacing_mm: float,
+    prefilter: tuple[int, int],
+    *,
+    box_mm: float | None = None,
+) -> np.ndarray:
+    """``(grid.n, pixels)``: each grid sample's prefilter weight on each of a bitmap's
+    ``pixels`` cells along one axis (cells of ``spacing_mm``, cell ``pixels // 2`` centred on
+    the grid's centre sample), the exact overlap of every sub-cell with every cell; with
+    ``box_mm``, one box of that width instead of the prefilter."""
+    if box_mm is None:
+        weights = prefilter_weights(prefilter)
+        cell = grid.spacing_mm / prefilter[0]
+        offsets = (np.arange(weights.size) - weights.size // 2) * cell
+    else:
+        weights, offsets, cell = np.ones(1), np.zeros(1), box_mm
+    samples = (np.arange(grid.n) - grid.n // 2) * grid.spacing_mm
+    edges = (np.arange(pixels + 1) - pixels // 2 - 0.5) * spacing_mm
+    matrix = np.zeros((grid.n, pixels))
+    for weight, offset in zip(weights, offsets, strict=True):
+        low = np.clip((samples + offset - cell / 2)[:, None], edges[:-1], edges[1:])
+        high = np.clip((samples + offset + cell / 2)[:, None], edges[:-1], edges[1:])
+        matrix += weight / cell * (high - low)
+    return matrix
+
+
+def aperture_image_cover(
+    grid: ApertureGrid,
+    image: np.ndarray,
+    spacing_mm: float,
+    *,
+    prefilter: tuple[int, int] = PREFILTER_BOX,
+) -> np.ndarray:
+    """A transmittance bitmap read as area coverage: each of its pixels a square of side
+    ``spacing_mm`` holding its value, pixel ``(rows // 2, cols // 2)`` centred on the optical
+    axis, open (1) beyond the bitmap; each sample the bitmap filtered by ``prefilter``.
+
+    Parameters
+    ----------
+    grid
+        The pupil-plane sampling grid.
+    image
+        The transmittance, 2-D, 0 (opaque) to 1 (clear), its first row at the top
+        (:func:`aperture_from_image` checks it).
+    spacing_mm
+        The bitmap's pixel size, mm, > 0.
+    prefilter
+        ``(subsamples, smoothing)`` as for :func:`aperture_diaphragm`; default ``(1, 1)``: each
+        sample the bitmap's cover of the sample's own cell.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(n, n)`` amplitude transmittance in [0, 1].
+
+    Raises
+    ------
+    ValueError
+        For a bad image, spacing or prefilter.
+
+    Notes
+    -----
+    The bitmap is the function ``B = 1 + Σ (b_rc - 1) □((x - x_c)/s) □((y - y_r)/s)``; the
+    prefilter is separable and so is every pixel, so the samples are ``1 + M_y (b - 1) M_xᵀ``,
+    ``M`` each sample's weights on each bitmap column (row): the overlaps of its sub-cells
+    with the bitmap's cells, exact whatever the two spacings. A bitmap is a sampled image: the
+    aperture it describes is this one, its own pixels' edges included (their streaks run
+    along the axes), not a smooth interpolation of it.
+
+    Examples
+    --------
+    >>> image = np.ones((5, 5))
+    >>> image[2, 2] = 0.0  # one opaque pixel of 0.1 mm: 0.01 mm² blocked
+    >>> t = aperture_image_cover(ApertureGrid(16, 0.03), image, 0.1)
+    >>> round(float((1 - t).sum()) * 0.03**2, 6)
+    0.01
+    """
+    b = aperture_from_image(image, name="image")
+    spacing = check_positive("spacing_mm", spacing_mm, unit="mm")
+    rows = _cover_matrix(grid, b.shape[0], spacing, prefilter)
+    cols = _cover_matrix(grid, b.shape[1], spacing, prefilter)
+    return np.clip(1.0 + rows @ (b - 1.0) @ cols.T, 0.0, 1.0)
+
+
 # --- a diaphragm with lids and cross screens under one prefilter -------------------------------
 
 _EDGE_TABLE_STEPS_PER_CELL = 64  # nodes of a filtered straight edge's profile per sub-cell
@@ -803,10 +891,18 @@ class _LineSet:
         nodes = math.ceil((offsets[-1] + cell) * math.sqrt(2.0) / step)
         s = np.arange(-nodes, nodes + 1) * step
         table = half_plane_coverage(s[:, None] - along.ravel(), self.angle_rad, cell) @ pair
-        x, y = grid.coordinates()
-        d = self._offset(x.flat[index], y.flat[index])
+        x = (index % grid.n - grid.n // 2) * grid.spacing_mm
+        y = -(index // grid.n - grid.n // 2) * grid.spacing_mm
+        d = self._offset(x, y)
         half = self.line_mm / 2
-        line = np.interp(half - d, s, table) - np.interp(-half - d, s, table)
+        # every line within the filter's reach of a sample (on a coarse grid the filter's
+        # square, 2.6 samples wide, spans more than the nearest line); beyond it both
+        # profiles are 0 or 1
+        near = math.floor((s[-1] + half + self.pitch_mm / 2) / self.pitch_mm)
+        line = np.zeros(d.shape)
+        for k in range(-near, near + 1):
+            centre = d - k * self.pitch_mm
+            line += np.interp(half - centre, s, table) - np.interp(-half - centre, s, table)
         return 1.0 - line
 
 
@@ -829,6 +925,98 @@ class _Crossed:
         )
 
 
+@dataclass(frozen=True)
+class _Disc:
+    """The round pupil of :func:`aperture_pupil`, each sub-cell by its ramp, which holds the
+    disc's area (:func:`ramp_radius_mm`)."""
+
+    diameter_mm: float
+
+    def cover(self, px: np.ndarray, py: np.ndarray, cell_mm: float) -> np.ndarray:
+        radius = ramp_radius_mm(self.diameter_mm / 2, cell_mm)
+        return np.clip(0.5 + (radius - np.hypot(px, py)) / cell_mm, 0.0, 1.0)
+
+    def band(self, px: np.ndarray, py: np.ndarray, width_mm: float) -> np.ndarray:
+        """In (0, 1) where the circle passes within ``width_mm / 2`` of the point."""
+        return np.clip(0.5 + (self.diameter_mm / 2 - np.hypot(px, py)) / width_mm, 0.0, 1.0)
+
+    def alone(self, grid: ApertureGrid, prefilter: tuple[int, int], index: np.ndarray) -> None:
+        return None  # a curved edge: its samples are drawn sub-cell by sub-cell
+
+
+@dataclass(frozen=True, eq=False)
+class _Bitmap:
+    """A bitmap read as area coverage (:func:`aperture_image_cover`); each sub-cell's cover
+    from the bitmap's summed-area table, whose bilinear interpolation between the cells'
+    corners is the exact integral of the bitmap."""
+
+    image: np.ndarray
+    spacing_mm: float
+
+    @functools.cached_property
+    def _table(self) -> np.ndarray:
+        table = np.zeros((self.image.shape[0] + 1, self.image.shape[1] + 1))
+        table[1:, 1:] = np.cumsum(np.cumsum(self.image - 1.0, axis=0), axis=1)
+        return table * self.spacing_mm**2
+
+    def _integral(self, x: np.ndarray, down: np.ndarray) -> np.ndarray:
+        from scipy.ndimage import map_coordinates
+
+        rows, cols = self.image.shape
+        r = np.clip(down / self.spacing_mm + rows // 2 + 0.5, 0.0, rows)
+        c = np.clip(x / self.spacing_mm + cols // 2 + 0.5, 0.0, cols)
+        flat = map_coordinates(self._table, [r.ravel(), c.ravel()], order=1, mode="nearest")
+        return flat.reshape(r.shape)
+
+    def cover(self, px: np.ndarray, py: np.ndarray, cell_mm: float) -> np.ndarray:
+        px, down, h = np.asarray(px, dtype=float), -np.asarray(py, dtype=float), cell_mm / 2
+        blocked = (
+            self._integral(px + h, down + h)
+            - self._integral(px - h, down + h)
+            - self._integral(px + h, down - h)
+            + self._integral(px - h, down - h)
+        )
+        return np.clip(1.0 + blocked / cell_mm**2, 0.0, 1.0)
+
+    def box_cover(self, grid: ApertureGrid, width_mm: float) -> np.ndarray:
+        """Each sample's cover of the square of side ``width_mm`` around it."""
+        rows, cols = (
+            _cover_matrix(grid, pixels, self.spacing_mm, PREFILTER_BOX, box_mm=width_mm)
+            for pixels in self.image.shape
+        )
+        return np.clip(1.0 + rows @ (self.image - 1.0) @ cols.T, 0.0, 1.0)
+
+    def alone(
+        self, grid: ApertureGrid, prefilter: tuple[int, int], index: np.ndarray
+    ) -> np.ndarray:
+        return aperture_image_cover(grid, self.image, self.spacing_mm, prefilter=prefilter).flat[
+            index
+        ]
+
+
+def _axis_line_cover(component, grid: ApertureGrid, width_mm: float) -> np.ndarray | None:
+    """The cover of the squares of side ``width_mm`` around the samples by line sets along the
+    axes (a function of one coordinate each), from the axes alone; None for other
+    components."""
+    if isinstance(component, _Crossed):
+        sets = component.sets
+    elif isinstance(component, _LineSet):
+        sets = (component,)
+    else:
+        return None
+    axis = (np.arange(grid.n) - grid.n // 2) * grid.spacing_mm
+    zero = np.zeros_like(axis)
+    t = np.ones((grid.n, grid.n))
+    for line_set in sets:
+        if abs(math.sin(line_set.angle_rad)) < 1e-12:  # lines along y: a function of x
+            t = t * line_set.cover(axis, zero, width_mm)[None, :]
+        elif abs(math.cos(line_set.angle_rad)) < 1e-12:  # along x: of y, rows running down
+            t = t * line_set.cover(zero, -axis, width_mm)[:, None]
+        else:
+            return None
+    return t
+
+
 def _prefiltered_product(
     grid: ApertureGrid, components: list, prefilter: tuple[int, int]
 ) -> np.ndarray:
@@ -846,10 +1034,17 @@ def _prefiltered_product(
     values, edges = [], []
     for component in components:
         # the cover of the whole square is 0 or 1 where no edge crosses it (the lid's ramp
-        # taken over the square's diagonal, to be safe)
-        wide = component.cover(
-            x, y, support * (math.sqrt(2.0) if isinstance(component, _Lid) else 1.0)
-        )
+        # and the circle's band taken over the square's diagonal, to be safe)
+        if isinstance(component, _Disc):
+            wide = component.band(x, y, support * math.sqrt(2.0))
+        elif isinstance(component, _Bitmap):
+            wide = component.box_cover(grid, support)
+        elif (separable := _axis_line_cover(component, grid, support)) is not None:
+            wide = separable
+        else:
+            wide = component.cover(
+                x, y, support * (math.sqrt(2.0) if isinstance(component, _Lid) else 1.0)
+            )
         edge = (wide > 0.0) & (wide < 1.0)
         values.append(np.where(edge, 1.0, np.rint(wide)))
         edges.append(edge)
@@ -885,23 +1080,27 @@ def _prefiltered_product(
 def aperture_diaphragm_prefiltered(
     grid: ApertureGrid,
     diameter_mm: float,
-    sides: int,
+    sides: int | None,
     *,
     rotation_deg: float = 0.0,
     eyelid: bool = False,
     eyelid_shift_x_mm: float = 0.0,
     cross_screen: Literal["4-point", "trigonal"] | None = None,
+    obstacle_image: np.ndarray | None = None,
+    obstacle_spacing_mm: float | None = None,
     prefilter: tuple[int, int] = PREFILTER_BOX,
 ) -> np.ndarray:
-    """A polygonal diaphragm with the default eyelid and cross screen in front of it, the
-    whole aperture filtered by one ``prefilter``, so that every edge has its transfer.
+    """A polygonal diaphragm or a round pupil with the default eyelid, a cross screen and an
+    obstacle bitmap in front of it, the whole aperture filtered by one ``prefilter``, so that
+    every edge has its transfer.
 
     Parameters
     ----------
     grid
         The pupil-plane sampling grid.
     diameter_mm, sides, rotation_deg
-        The diaphragm, as for :func:`aperture_diaphragm`.
+        The diaphragm, as for :func:`aperture_diaphragm`; ``sides=None``: a round pupil of
+        ``diameter_mm`` (:func:`aperture_pupil`, each sub-cell by its ramp).
     eyelid
         Put :func:`aperture_eyelid`'s default upper lid in front; default False.
     eyelid_shift_x_mm
@@ -909,6 +1108,9 @@ def aperture_diaphragm_prefiltered(
     cross_screen
         ``'4-point'`` or ``'trigonal'``: :func:`aperture_cross_screen`'s default filter in
         front; default None.
+    obstacle_image, obstacle_spacing_mm
+        A transmittance bitmap and its pixel size, mm, read as area coverage
+        (:func:`aperture_image_cover`); default None.
     prefilter
         ``(subsamples, smoothing)`` as for :func:`aperture_diaphragm`; default ``(1, 1)``.
 
@@ -921,17 +1123,19 @@ def aperture_diaphragm_prefiltered(
     Raises
     ------
     ValueError
-        For a bad diaphragm, cross screen or prefilter.
+        For a bad diaphragm, cross screen, bitmap or prefilter.
 
     Notes
     -----
     Where no obstacle has an edge within the prefilter's square, a sample is the product of
     their values; where one has, that obstacle filtered alone (the diaphragm by
     :func:`aperture_diaphragm`, a line set by its filtered edge profile tabulated once over
-    the square's reach) times the others; where two or more have, or the curved lid, the
-    product over the sub-cells, weighted. The samples' spectrum is then the aperture's times
-    :func:`prefilter_transfer` plus its copies, as for the diaphragm alone: with the
-    one-sample cover the streaks of a lid or a diaphragm along an axis met their copies.
+    the square's reach, the bitmap by :func:`aperture_image_cover`) times the others; where
+    two or more have, or the curved lid or pupil, the product over the sub-cells, weighted
+    (a bitmap's sub-cell cover from its summed-area table). The samples' spectrum is then the
+    aperture's times :func:`prefilter_transfer` plus its copies, as for the diaphragm alone:
+    with the one-sample cover the streaks of a lid, a cross screen, a bitmap's pixels or a
+    diaphragm along an axis met their copies.
 
     Examples
     --------
@@ -942,11 +1146,19 @@ def aperture_diaphragm_prefiltered(
     True
     >>> round(float(alone.sum() - t.sum()) * 0.05**2, 2)  # mm² under the lid, 2.2 mm up
     1.44
+    >>> disc = aperture_diaphragm_prefiltered(grid, 6.0, None, cross_screen="4-point",
+    ...                                       prefilter=(5, 3))
+    >>> round(float(disc.sum()) * 0.05**2, 2)  # π 3² (1 - 0.03/0.25)²
+    21.9
     """
     diameter_mm = check_positive("diameter_mm", diameter_mm, unit="mm")
-    sides = check_positive_int("sides", sides, minimum=3)
     prefilter_weights(prefilter)  # checks it
-    components: list = [_Polygon(diameter_mm, sides, rotation_deg)]
+    components: list
+    if sides is None:
+        components = [_Disc(diameter_mm)]
+    else:
+        sides = check_positive_int("sides", sides, minimum=3)
+        components = [_Polygon(diameter_mm, sides, rotation_deg)]
     if eyelid:
         components.append(_Lid(shift_x_mm=eyelid_shift_x_mm))
     if cross_screen is not None:
@@ -954,4 +1166,8 @@ def aperture_diaphragm_prefiltered(
         sets = 2 if cross_screen == "4-point" else 3
         lines = [_LineSet(math.radians(k * 180.0 / sets), 0.25, 0.03) for k in range(sets)]
         components += [_Crossed((lines[0], lines[1]))] if sets == 2 else lines
+    if obstacle_image is not None:
+        image = aperture_from_image(obstacle_image, name="obstacle_image")
+        spacing = check_positive("obstacle_spacing_mm", obstacle_spacing_mm, unit="mm")
+        components.append(_Bitmap(image, spacing))
     return _prefiltered_product(grid, components, prefilter)

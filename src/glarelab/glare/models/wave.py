@@ -22,13 +22,18 @@ out, so that the kernel is the pattern of the aperture described, not of its sam
 PSF's period is three kernel widths (:meth:`WaveOpticsGlare.grid_for`). Against the
 pixel-integrated Airy pattern, ring energies from 0.3° to 2.5° and the kernel's border are
 within 0.6 % for 380-780 nm and 2-8 mm (``tests/glare/models/test_wave_rings.py``). A
-diaphragm, alone or behind the lid or a 4-point cross screen, is drawn with a smoother
-prefilter (:data:`DIAPHRAGM_PREFILTER`; with the lid and the screen under it,
+diaphragm, alone or behind the lid, a cross screen or an obstacle image, and a round pupil
+behind any of these, is drawn with a smoother prefilter (:data:`DIAPHRAGM_PREFILTER`, or
+:data:`TRIGONAL_PREFILTER` behind a trigonal screen; the obstacles under it,
 :func:`glarelab.glare.models.apertures.aperture_diaphragm_prefiltered`), whose transfer is
 divided out instead: a streak along an axis otherwise meets its own copies in the periodic
 spectrum, and a 2 mm square at 45° had its border 9.5 % off at 380 nm (+17.6 % for an 8 mm
-square behind lid and screen); now polygons of 3-8 sides are within 0.51 % of their
-transform, and within 0.44 % behind the lid or the screen.
+square behind lid and screen, +4.7 % for a round pupil behind a 4-point screen); now
+polygons of 3-8 sides are within 0.51 % of their transform, and within 0.44 % behind the lid
+or a 4-point screen, 0.3 % behind a trigonal one. An obstacle image is a bitmap read as area
+coverage (each pixel a square of its value,
+:func:`glarelab.glare.models.apertures.aperture_image_cover`): linearly interpolated onto the
+grid, its pattern was up to 65 % off at the border; now within 1.1 %.
 ``pixel_integration='rebin'`` spreads the DFT's samples over the pixels instead (:func:`rebin`:
 exact for the energy, not for the pattern when a pixel spans few samples).
 
@@ -103,6 +108,7 @@ __all__ = [
     "PUPIL_CONVENTIONS",
     "SIGMOID_FORMS",
     "SPECTRAL_METHODS",
+    "TRIGONAL_PREFILTER",
     "DiffractionPSF",
     "WaveOpticsGlare",
     "compare_spectral_methods",
@@ -123,9 +129,15 @@ PSF_PERIOD_KERNELS = 3.0  # the PSF's period at the shortest wavelength, in kern
 PSF_PERIOD_KERNELS_FAST = 2.0  # the same for aperture_grid="fast" (the grid before issue 33)
 APERTURE_GRIDS = ("exact", "fast")
 OBSTACLE_SAMPLES = 12  # samples across a particle or an eyelash
-# (subsamples, smoothing) of a diaphragm, alone or behind the lid or a 4-point screen: its
-# streaks' aliases 0.65 % of them, not 9.7 %
+# (subsamples, smoothing) of a diaphragm, alone or behind the lid, a 4-point screen or an
+# obstacle image, and of a round pupil behind these: its streaks' aliases 0.65 % of them, not
+# 9.7 %
 DIAPHRAGM_PREFILTER = (5, 3)
+# the same behind a trigonal cross screen, whose three line sets cross everywhere and are drawn
+# sub-cell by sub-cell there: 25 sub-cells, not 169 (scripts/measure_combined_prefilter.py
+# --others: within 0.25 % where the one-sample cover was 0.93 % off, at 1.0-3.6 times its
+# time for two wavelengths on 31² at 0.02°/px)
+TRIGONAL_PREFILTER = (3, 2)
 OBSTACLE_SAMPLES_FAST = 4  # the same for aperture_grid="fast"
 SPECTRAL_METHODS = ("reference", "scaled", "kakimoto")
 PIXEL_INTEGRATION_METHODS = ("exact", "rebin")
@@ -245,7 +257,10 @@ class WaveOpticsGlare(GlareModel):
     obstacle_image, obstacle_spacing_mm
         A user-supplied obstacle transmittance (hand-drawn or photographed, Kakimoto §5), 2-D
         in [0, 1], centred on the optical axis, with its sample spacing in mm; it multiplies
-        the other obstacles. Default None.
+        the other obstacles. It is read as area coverage: each pixel a square of side
+        ``obstacle_spacing_mm`` holding its value, open beyond the image
+        (:func:`glarelab.glare.models.apertures.aperture_image_cover`), so its pixels' edges
+        diffract as drawn. Default None.
     pixel_integration
         ``'exact'`` (default): each wavelength's PSF integrated exactly over each pixel
         (:func:`glarelab.glare.models.fraunhofer.pixel_integrated_psf`); ``'rebin'``: the PSF
@@ -463,19 +478,21 @@ class WaveOpticsGlare(GlareModel):
         return full
 
     def _prefilter(self) -> tuple[int, int]:
-        """The diaphragm's prefilter for the exact pixel integration: :data:`DIAPHRAGM_PREFILTER`
-        for a diaphragm alone or behind the lid or a 4-point cross screen (the whole aperture
-        filtered, :func:`glarelab.glare.models.apertures.aperture_diaphragm_prefiltered`),
-        whose transfer is then divided out; the one-sample box with lashes, particles, a
-        trigonal cross screen or an obstacle image, whose edges are drawn with the one-sample
-        ramp (lashes and particles make the grid fine: 12 samples across them)."""
-        one_sample = (
-            self.eyelashes
-            or self.particles
-            or self.cross_screen == "trigonal"
-            or self.obstacle_image is not None
-        )
-        if self.diaphragm_sides is not None and not one_sample:
+        """The prefilter for the exact pixel integration, whose transfer is then divided out:
+        :data:`DIAPHRAGM_PREFILTER` for a diaphragm, alone or behind the lid, a 4-point cross
+        screen or an obstacle image, and for a round pupil behind any of them (the whole
+        aperture filtered,
+        :func:`glarelab.glare.models.apertures.aperture_diaphragm_prefiltered`);
+        :data:`TRIGONAL_PREFILTER` behind a trigonal cross screen; the one-sample box for a
+        round pupil alone, and with lashes or particles, whose edges are drawn with the
+        one-sample ramp (lashes and particles make the grid fine: 12 samples across them)."""
+        if self.eyelashes or self.particles:
+            return ap.PREFILTER_BOX
+        if self.cross_screen == "trigonal":
+            return TRIGONAL_PREFILTER
+        if self.diaphragm_sides is not None:
+            return DIAPHRAGM_PREFILTER
+        if self.eyelid or self.cross_screen is not None or self.obstacle_image is not None:
             return DIAPHRAGM_PREFILTER
         return ap.PREFILTER_BOX
 
@@ -491,12 +508,10 @@ class WaveOpticsGlare(GlareModel):
         shift = self.obstacle_distance_mm * math.tan(math.radians(self.source_x_deg))
         together = (
             prefilter != ap.PREFILTER_BOX
-            and (self.eyelid or self.cross_screen is not None)
-            and not (self.eyelashes or self.particles or self.obstacle_image is not None)
+            and (self.eyelid or self.cross_screen is not None or self.obstacle_image is not None)
+            and not (self.eyelashes or self.particles)
         )
-        if self.diaphragm_sides is None:
-            t = ap.aperture_pupil(crop, diameter)
-        elif together:  # the lid and the cross screen under the diaphragm's prefilter
+        if together:  # the lid, the cross screen and the image under the pupil's prefilter
             return ap.aperture_diaphragm_prefiltered(
                 crop,
                 diameter,
@@ -505,8 +520,12 @@ class WaveOpticsGlare(GlareModel):
                 eyelid=self.eyelid,
                 eyelid_shift_x_mm=shift,
                 cross_screen=self.cross_screen,
+                obstacle_image=self.obstacle_image,
+                obstacle_spacing_mm=self.obstacle_spacing_mm,
                 prefilter=prefilter,
             )
+        if self.diaphragm_sides is None:
+            t = ap.aperture_pupil(crop, diameter)
         else:
             t = ap.aperture_diaphragm(
                 crop,
@@ -534,7 +553,7 @@ class WaveOpticsGlare(GlareModel):
         if self.cross_screen is not None:
             t = t * ap.aperture_cross_screen(crop, self.cross_screen)
         if self.obstacle_image is not None:
-            t = t * _resample_obstacle(self.obstacle_image, self.obstacle_spacing_mm, crop)
+            t = t * ap.aperture_image_cover(crop, self.obstacle_image, self.obstacle_spacing_mm)
         return t
 
     # --- PSFs ---------------------------------------------------------------------------
@@ -757,17 +776,6 @@ class WaveOpticsGlare(GlareModel):
             float(x): self.at_source(x).kernel(pixel_deg, shape, colour=colour)
             for x in positions_deg
         }
-
-
-def _resample_obstacle(image: np.ndarray, spacing_mm: float, grid: ap.ApertureGrid) -> np.ndarray:
-    """A user obstacle image (centred, ``spacing_mm`` per sample) resampled onto ``grid``
-    (linear interpolation); open (1) beyond the image."""
-    from scipy.ndimage import map_coordinates
-
-    x, y = grid.coordinates()
-    rows = image.shape[0] // 2 - y / spacing_mm
-    cols = image.shape[1] // 2 + x / spacing_mm
-    return np.clip(map_coordinates(image, [rows, cols], order=1, mode="constant", cval=1.0), 0, 1)
 
 
 def _lab(rgb: np.ndarray, colourspace: str, scale: float) -> np.ndarray:
