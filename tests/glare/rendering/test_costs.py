@@ -3,9 +3,8 @@ on each path in turn, the renders are timed in alternating rounds (each round st
 renderer later, each timed render just after an untimed one of its own: a forced path run
 right after the planner's choice of it would find its kernel and memory warm), and the
 planner's render, its plan included, is within 1.2× of the fastest path that keeps the
-tolerance: the median over the rounds of the ratio of the planner's time to the fastest
-path's in the same round, so that a busy moment of a shared machine falls on every path
-alike."""
+tolerance (medians of the rounds, so that a busy moment of a shared machine falls on every
+path alike)."""
 
 import json
 import os
@@ -91,9 +90,10 @@ def test_the_planner_chooses_within_1_2x_of_the_fastest_path(tmp_path):
                 start = time.perf_counter()
                 kept[label].render(image)
                 times[label].append(time.perf_counter() - start)
-        paths = np.array([t for label, t in times.items() if label != "planner"])
-        ratio = float(np.median(np.asarray(times["planner"]) / paths.min(axis=0)))
+        # medians, not per-round ratios to each round's fastest path: the least of three
+        # noisy times is biased low, and a ratio to it biased high
+        medians = {label: float(np.median(t)) for label, t in times.items()}
+        ratio = medians["planner"] / min(v for k, v in medians.items() if k != "planner")
         if ratio > SLOWEST_RATIO:
-            medians = {label: float(np.median(t)) for label, t in times.items()}
             failures.append((name, renderers["planner"].plan(image).path, ratio, medians))
     assert not failures, failures

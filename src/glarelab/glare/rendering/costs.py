@@ -108,9 +108,28 @@ def _fastest(functions: dict, rounds: int = ROUNDS) -> dict:
 def coarse_lengths(
     shape: tuple[int, int], kernel_half: tuple[int, int], factor: int
 ) -> tuple[int, int]:
-    """The transform lengths of the far tail's coarse convolution of an image of ``shape``
-    with a kernel of half-size ``kernel_half`` at ``factor`` pixels a node (its whole grid
-    against its whole coarse kernel, ``fftconvolve(mode='full')``: the largest it can be)."""
+    """The transform lengths of the far tail's coarse convolution: the whole coarse grid
+    against the whole coarse kernel, ``fftconvolve(mode='full')`` (the largest it can be).
+
+    Parameters
+    ----------
+    shape
+        The image's ``(H, W)``, pixels.
+    kernel_half
+        The reference kernel's half-size ``(rows, cols)``, pixels.
+    factor
+        Pixels per coarse node ``f``.
+
+    Returns
+    -------
+    tuple of int
+        ``(N0, N1)``: fast real-FFT lengths.
+
+    Examples
+    --------
+    >>> coarse_lengths((1024, 1024), (1023, 1023), 8), coarse_lengths((512, 512), (511, 511), 4)
+    ((400, 400), (400, 400))
+    """
     import scipy.fft
 
     from glarelab.glare.rendering.multires import FOOTPRINT_NODES, grid_shape
@@ -123,7 +142,23 @@ def coarse_lengths(
 
 
 def n_log_n(lengths: tuple[int, int]) -> float:
-    """``n log2 n`` of an ``N0 × N1`` transform."""
+    """``n log2 n`` of an ``N0 × N1`` transform, the unit of the FFT costs.
+
+    Parameters
+    ----------
+    lengths
+        ``(N0, N1)``.
+
+    Returns
+    -------
+    float
+        ``n log2 n`` with ``n = N0 N1``.
+
+    Examples
+    --------
+    >>> n_log_n((4, 4))
+    64.0
+    """
     n = int(lengths[0]) * int(lengths[1])
     return n * math.log2(max(n, 2))
 
