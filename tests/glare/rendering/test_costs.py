@@ -49,7 +49,7 @@ def _scenes():
     reason="times every path (minutes on a loaded machine): set GLARELAB_TIME_PATHS=1",
 )
 @pytest.mark.xfail(
-    reason="issue 35 item 2: passed once at a load average of 8; at 9.5-10 the planner took "
+    reason="issue 35 item 2: passed once at a load average of 8; at 4-10 the planner took "
     "the direct path for two lamps and a glint (estimated 0.7x the FFT, measured 1.0-2.2x)",
     strict=False,
 )
