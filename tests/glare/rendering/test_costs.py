@@ -1,7 +1,10 @@
 """The planner chooses the fastest of its paths with the costs measured on this machine: forced
-on each path in turn, the renders are timed in alternating rounds, and the planner's choice is
-within 1.2× of the fastest path that keeps the tolerance (medians of the rounds, so that a busy
-moment of a shared machine falls on every path alike)."""
+on each path in turn, the renders are timed in alternating rounds (each round starting one
+renderer later, each timed render just after an untimed one of its own: a forced path run
+right after the planner's choice of it would find its kernel and memory warm), and the
+planner's render, its plan included, is within 1.2× of the fastest path that keeps the
+tolerance (medians of the rounds, so that a busy moment of a shared machine falls on every
+path alike)."""
 
 import json
 import os
@@ -16,7 +19,7 @@ from glarelab.glare.models.cache import KernelCache
 from glarelab.glare.rendering.costs import PathCosts, cores, machine_costs
 from glarelab.glare.rendering.renderer import GlareRenderer
 
-ROUNDS = 5
+ROUNDS = 9
 SLOWEST_RATIO = 1.2  # issue 35: the planner's choice within 1.2× of the fastest path
 
 
@@ -46,8 +49,8 @@ def _scenes():
     reason="times every path (minutes on a loaded machine): set GLARELAB_TIME_PATHS=1",
 )
 @pytest.mark.xfail(
-    reason="issue 35 item 2 is open: the planner took the far tail for two lamps and a "
-    "glint at 512², 1.5-2.5x slower than the FFT, in two of three runs",
+    reason="issue 35 item 2: passed once at a load average of 8; at 4-10 the planner took "
+    "the direct path for two lamps and a glint (estimated 0.7x the FFT, measured 1.0-2.2x)",
     strict=False,
 )
 def test_the_planner_chooses_within_1_2x_of_the_fastest_path(tmp_path):
@@ -82,13 +85,20 @@ def test_the_planner_chooses_within_1_2x_of_the_fastest_path(tmp_path):
             if label == "planner" or (path == label and not result.fallback):
                 kept[label] = renderer  # a forced path that fell back is not that path
         times = {label: [] for label in kept}
-        for _ in range(ROUNDS):
-            for label, renderer in kept.items():
+        labels = list(kept)
+        for index in range(ROUNDS):
+            shift = index % len(labels)
+            for label in labels[shift:] + labels[:shift]:
+                # each timed render follows one of its own path: otherwise a forced path run
+                # just after the planner's choice of it finds its kernel and memory warm
+                kept[label].render(image)
                 start = time.perf_counter()
-                renderer.render(image)
+                kept[label].render(image)
                 times[label].append(time.perf_counter() - start)
+        # medians, not per-round ratios to each round's fastest path: the least of three
+        # noisy times is biased low, and a ratio to it biased high
         medians = {label: float(np.median(t)) for label, t in times.items()}
-        fastest = min(v for k, v in medians.items() if k != "planner")
-        if medians["planner"] > SLOWEST_RATIO * fastest:
-            failures.append((name, renderers["planner"].plan(image).path, medians))
+        ratio = medians["planner"] / min(v for k, v in medians.items() if k != "planner")
+        if ratio > SLOWEST_RATIO:
+            failures.append((name, renderers["planner"].plan(image).path, ratio, medians))
     assert not failures, failures

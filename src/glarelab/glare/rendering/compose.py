@@ -24,6 +24,7 @@ __all__ = [
     "check_composition",
     "compose",
     "excess",
+    "over_channels",
 ]
 
 COMPOSITIONS = ("Yoshida2008", "Spencer1995")
@@ -102,7 +103,38 @@ def excess(planes: np.ndarray, l_dmax_cd_m2: float) -> np.ndarray:
     [0.0, 80.0]
     """
     dtype = planes.dtype.type
-    return np.maximum(planes - dtype(l_dmax_cd_m2), dtype(0))
+    out = np.subtract(planes, dtype(l_dmax_cd_m2))
+    return np.maximum(out, dtype(0), out=out)  # in place: one array, not two
+
+
+def over_channels(values: np.ndarray, ufunc) -> np.ndarray:
+    """``ufunc`` over the channels (the last axis) of ``(H, W, C)``, one pixel at a time.
+
+    The channels are copied apart first (channel-major) and reduced element-wise: several
+    times faster than ``ufunc.reduce(values, axis=2)`` or element-wise calls on the
+    interleaved channels. One channel returns a view.
+
+    Parameters
+    ----------
+    values
+        ``(H, W, C)`` array.
+    ufunc
+        A binary ufunc (``np.minimum``, ``np.maximum``, ``np.logical_or``).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(H, W)``.
+
+    Examples
+    --------
+    >>> values = np.array([[[1.0, 5.0, 3.0]]])
+    >>> over_channels(values, np.minimum).tolist(), over_channels(values, np.maximum).tolist()
+    ([[1.0]], [[5.0]])
+    """
+    if values.shape[-1] == 1:
+        return values[..., 0]
+    return ufunc.reduce(np.ascontiguousarray(np.moveaxis(values, -1, 0)), axis=0)
 
 
 def compose(

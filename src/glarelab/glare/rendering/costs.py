@@ -4,15 +4,17 @@ The planner chooses the cheapest path by estimated seconds; only their ratios ma
 constants must be measured where the render runs, at the number of threads it will use: the
 FFTs run on every core (``scipy.fft`` workers), the direct spread shares its rows among the
 cores, and the far tail's splat and interpolation are numpy products on one. The first
-renderer on a machine with a kernel cache measures them (about a quarter of a second) and
-writes them next to the kernels (``costs-<threads>-threads.json``, written to a temporary name
-and renamed); later processes read them. Without a cache, the constants measured on a 2-core
+renderer on a machine with a kernel cache measures them (about half a second on a quiet
+machine, five rounds, the fastest kept) and writes them next to the kernels
+(``costs-<threads>-threads.json``, written to a temporary name and renamed); later processes
+read them. Without a cache, the constants measured on a 2-core
 machine are used (:data:`DEFAULT_COSTS`).
 """
 
 from __future__ import annotations
 
 import json
+import math
 import os
 import time
 from dataclasses import asdict, dataclass, fields
@@ -20,9 +22,18 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["DEFAULT_COSTS", "PathCosts", "cores", "machine_costs", "measure_costs"]
+__all__ = [
+    "DEFAULT_COSTS",
+    "PathCosts",
+    "coarse_lengths",
+    "cores",
+    "machine_costs",
+    "measure_costs",
+    "n_log_n",
+]
 
-COSTS_VERSION = 3  # bump when what is measured changes
+COSTS_VERSION = 5  # bump when what is measured changes
+ROUNDS = 5  # calibration rounds; the fastest is kept
 
 
 def cores() -> int:
@@ -47,8 +58,19 @@ class PathCosts:
     correlate_s, correlate_weight_s
         A cluster's correlation, per output pixel, plus per pixel of the cluster's box.
     multires_s
-        The far tail's splat, coarse convolution, interpolation and per-pixel error bound,
-        per image pixel.
+        The far tail's splat and interpolation, per image pixel.
+    bound_s
+        The error bound of a spread with a relative error (the far tail's, float32
+        round-off's), per image pixel and channel: checked by blocks, with no block over the
+        tolerance (those are checked again pixel by pixel; where the preview predicts the
+        error, few are).
+    coarse_fft_s
+        One convolution on the coarse grid (``scipy.signal.fftconvolve``: three real FFTs
+        and the product), per ``n log2 n`` of its ``N0 × N1`` transform: its size follows
+        the coarse grid, not the image.
+    preview_s
+        The plan's preview of the far tail, but for its coarse convolution: the darkest
+        pixel of each cell and the brightest channel's splat, per image pixel.
     threads
         The threads they were measured with.
     """
@@ -58,23 +80,87 @@ class PathCosts:
     direct_pixel_s: float = 2.5e-9
     correlate_s: float = 4.5e-9
     correlate_weight_s: float = 0.4e-9
-    multires_s: float = 3.5e-8
+    # the far tail's, the bound's and the preview's: their ratios to fft_s in the fastest of
+    # five rounds on the 2-core machine (at a load average of 6-9: 9, 20, 3.3 and 4)
+    multires_s: float = 4.0e-9
+    bound_s: float = 9.0e-9
+    coarse_fft_s: float = 1.5e-9
+    preview_s: float = 2.0e-9
     threads: int = 2
 
 
 DEFAULT_COSTS = PathCosts()
 
 
-def _medians(functions: dict, rounds: int = 5) -> dict:
-    """Median seconds of each function, run in turn ``rounds`` times (alternating rounds: a
-    busy moment of a shared machine falls on all of them alike)."""
+def _fastest(functions: dict, rounds: int = ROUNDS) -> dict:
+    """Fastest seconds of each function, run in turn ``rounds`` times (alternating rounds: a
+    busy moment of a shared machine falls on all of them alike, and the fastest round is
+    the one least disturbed by it; medians measured twice under other load differed 3×)."""
     times = {name: [] for name in functions}
     for _ in range(rounds):
         for name, function in functions.items():
             start = time.perf_counter()
             function()
             times[name].append(time.perf_counter() - start)
-    return {name: float(np.median(t)) for name, t in times.items()}
+    return {name: float(np.min(t)) for name, t in times.items()}
+
+
+def coarse_lengths(
+    shape: tuple[int, int], kernel_half: tuple[int, int], factor: int
+) -> tuple[int, int]:
+    """The transform lengths of the far tail's coarse convolution: the whole coarse grid
+    against the whole coarse kernel, ``fftconvolve(mode='full')`` (the largest it can be).
+
+    Parameters
+    ----------
+    shape
+        The image's ``(H, W)``, pixels.
+    kernel_half
+        The reference kernel's half-size ``(rows, cols)``, pixels.
+    factor
+        Pixels per coarse node ``f``.
+
+    Returns
+    -------
+    tuple of int
+        ``(N0, N1)``: fast real-FFT lengths.
+
+    Examples
+    --------
+    >>> coarse_lengths((1024, 1024), (1023, 1023), 8), coarse_lengths((512, 512), (511, 511), 4)
+    ((400, 400), (400, 400))
+    """
+    import scipy.fft
+
+    from glarelab.glare.rendering.multires import FOOTPRINT_NODES, grid_shape
+
+    grid = grid_shape(shape, factor)
+    kernel = [2 * (-(-h // factor) + FOOTPRINT_NODES) + 1 for h in kernel_half]
+    return tuple(
+        scipy.fft.next_fast_len(g + k - 1, real=True) for g, k in zip(grid, kernel, strict=True)
+    )
+
+
+def n_log_n(lengths: tuple[int, int]) -> float:
+    """``n log2 n`` of an ``N0 × N1`` transform, the unit of the FFT costs.
+
+    Parameters
+    ----------
+    lengths
+        ``(N0, N1)``.
+
+    Returns
+    -------
+    float
+        ``n log2 n`` with ``n = N0 N1``.
+
+    Examples
+    --------
+    >>> n_log_n((4, 4))
+    64.0
+    """
+    n = int(lengths[0]) * int(lengths[1])
+    return n * math.log2(max(n, 2))
 
 
 def measure_costs() -> PathCosts:
@@ -92,7 +178,13 @@ def measure_costs() -> PathCosts:
         spectral_spread,
     )
     from glarelab.glare.rendering.display import CodeBound, block_reduce, display_lut
-    from glarelab.glare.rendering.multires import far_spread, grid_shape, splat, upsample
+    from glarelab.glare.rendering.multires import (
+        FOOTPRINT_NODES,
+        far_spread,
+        grid_shape,
+        splat,
+        upsample,
+    )
 
     rng = np.random.default_rng(0)
     n = 512  # a 512² box into a 1024² transform: large enough for the threads to matter
@@ -105,31 +197,42 @@ def measure_costs() -> PathCosts:
     work = {np.float64: excess, np.float32: excess.astype(np.float32)}
     spectra = {np.float64: full, np.float32: full.astype(np.complex64)}
     into = np.zeros((n, n))
-    kernel_small = kernel[: n + 1, : n + 1]
+    # the quadrant of a symmetric kernel too large to unfold, read through reversed views
+    # where the offsets are negative: how the renderer spreads a full-reach kernel directly
+    quadrant = kernel[: n + 1, : n + 1]
     centre = (n // 2, n // 2)
     one = np.ones((1, 1))
     small, big = np.ones((3, 3)), np.ones((12, 12))
     small_groups = [((slice(0, 3), slice(0, 3)), np.ones((3, 3), bool))]
     big_groups = [((slice(0, 12), slice(0, 12)), np.ones((12, 12), bool))]
-    # far tail: splat, coarse convolution, interpolation, the plan's preview and the
-    # per-pixel bound, for a 1024² image at 1/8
+    # far tail of a 1024² image at 1/8: splat, interpolation and the per-pixel bound; its
+    # coarse convolution; the plan's preview (the darkest pixel of each cell and a splat)
     size, factor = 1024, 8
     image = rng.random((size, size))
-    far = rng.random((2 * (size // factor + 5) + 1,) * 2)
+    far = rng.random((2 * (size // factor + FOOTPRINT_NODES) + 1,) * 2)
     whole = (0, size, 0, size)
+    grid = grid_shape((size, size), factor)
+    nodes = splat(image, factor, whole, grid)
+    coarse = coarse_lengths((size, size), (size - 1, size - 1), factor)
     bound = CodeBound(display_lut(None, 220.0), 220.0, "Yoshida2008")
     planes = image[..., None] * 100.0
 
     def far_tail():
-        nodes = splat(image, factor, whole, grid_shape((size, size), factor))
-        far_spread(None, whole, (size, size), far, factor, nodes=True, splatted=nodes)
+        splatted = splat(image, factor, whole, grid)
+        upsample(nodes, factor, (size, size))
+        return splatted
+
+    checked = planes[:n, :n]
+
+    def check():  # by blocks of a 512² image; none over the tolerance
+        bound.codes(checked, checked, absolute=0.0, relative=1e-4, tolerance_codes=0.5)
+
+    def preview():
         block_reduce(image, np.minimum, factor)
-        spread = far_spread(None, whole, (size, size), far, factor, nodes=True, splatted=nodes)
-        fine = upsample(spread, factor, (size, size))
-        bound.codes(planes, fine[..., None], absolute=0.0, relative=1e-4, tolerance_codes=0.5)
+        return splat(image, factor, whole, grid)
 
     workers = cores()
-    medians = _medians(
+    fastest = _fastest(
         {
             "fft64": lambda: spectral_spread(
                 work[np.float64], box, out, spectra[np.float64], lengths
@@ -137,28 +240,51 @@ def measure_costs() -> PathCosts:
             "fft32": lambda: spectral_spread(
                 work[np.float32], box, out, spectra[np.float32], lengths
             ),
-            "pixel": lambda: direct_spread(one, centre, kernel_small, out, into, workers=workers),
+            "pixel": lambda: direct_spread(
+                one, centre, quadrant, out, into, quadrant=True, workers=workers
+            ),
             "small": lambda: direct_spread(
-                small, centre, kernel_small, out, into, workers=workers, groups=small_groups
+                small,
+                centre,
+                quadrant,
+                out,
+                into,
+                quadrant=True,
+                workers=workers,
+                groups=small_groups,
             ),
             "big": lambda: direct_spread(
-                big, centre, kernel_small, out, into, workers=workers, groups=big_groups
+                big,
+                centre,
+                quadrant,
+                out,
+                into,
+                quadrant=True,
+                workers=workers,
+                groups=big_groups,
             ),
             "far": far_tail,
+            "bound": check,
+            "coarse": lambda: far_spread(
+                None, whole, (size, size), far, factor, nodes=True, splatted=nodes
+            ),
+            "preview": preview,
         }
     )
-    pixel_s = medians["pixel"] / (n * n)
-    cluster_s = medians["small"] / (n * n)
-    weight_s = max((medians["big"] / (n * n) - cluster_s) / (144 - 9), 1e-12)
-    multires_s = medians["far"] / (size * size)
-    per = {np.float64: medians["fft64"] / unit, np.float32: medians["fft32"] / unit}
+    pixel_s = fastest["pixel"] / (n * n)
+    cluster_s = fastest["small"] / (n * n)
+    weight_s = max((fastest["big"] / (n * n) - cluster_s) / (144 - 9), 1e-12)
+    per = {np.float64: fastest["fft64"] / unit, np.float32: fastest["fft32"] / unit}
     return PathCosts(
         fft_s=per[np.float64],
         fft32_s=per[np.float32],
         direct_pixel_s=pixel_s,
         correlate_s=max(cluster_s - 9 * weight_s, 1e-12),
         correlate_weight_s=weight_s,
-        multires_s=multires_s,
+        multires_s=fastest["far"] / (size * size),
+        bound_s=fastest["bound"] / (n * n),
+        coarse_fft_s=fastest["coarse"] / n_log_n(coarse),
+        preview_s=fastest["preview"] / (size * size),
         threads=cores(),
     )
 

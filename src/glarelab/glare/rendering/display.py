@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from glarelab.glare._validation import check_positive
-from glarelab.glare.rendering.compose import METHODS, compose
+from glarelab.glare.rendering.compose import METHODS, compose, over_channels
 
 __all__ = [
     "DISPLAY_BITS",
@@ -391,7 +391,7 @@ def _channel_extremes(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Smallest and largest channel of each pixel of ``(H, W, C)`` (views for one channel)."""
     if values.shape[2] == 1:
         return values[..., 0], values[..., 0]
-    return values.min(axis=2), values.max(axis=2)
+    return over_channels(values, np.minimum), over_channels(values, np.maximum)
 
 
 def _failing_pixels(planes: np.ndarray, spread: np.ndarray, failing: np.ndarray):

@@ -39,7 +39,8 @@ import numpy as np
 
 from glarelab.glare.models.base import GlareModel
 from glarelab.glare.rendering._convolve import fft_length, fft_roundoff
-from glarelab.glare.rendering.costs import DEFAULT_COSTS, PathCosts
+from glarelab.glare.rendering.compose import over_channels
+from glarelab.glare.rendering.costs import DEFAULT_COSTS, PathCosts, coarse_lengths, n_log_n
 from glarelab.glare.rendering.display import block_reduce
 from glarelab.glare.rendering.multires import PAD_NODES, far_spread
 from glarelab.glare.rendering.scene import Scene
@@ -61,8 +62,11 @@ FAR_ERROR_SAFETY = 0.25
 # Costs: glarelab.glare.rendering.costs.PathCosts, measured on the machine at the threads the
 # render uses (a forward and an inverse real FFT of n points per n log2 n, FFT_LARGE times
 # that beyond FFT_LARGE_POINTS, where the arrays leave the caches; the direct spread per
-# output pixel; the far tail per image pixel). Only their ratios choose the path. A kernel
-# spectrum is made once per renderer and FFT length, so it is not counted.
+# output pixel; the far tail's splat and interpolation per image pixel, its coarse
+# convolution per n log2 n of its own transform, the preview when not made yet, and the error
+# bound that grows with the spread per image pixel, for the far tail and float32 transforms).
+# Only their ratios choose the path. A kernel spectrum is made once per renderer and FFT
+# length, so it is not counted.
 FFT_LARGE = 5.5 / 4.5
 FFT_LARGE_POINTS = 2**25
 
@@ -413,6 +417,8 @@ def make_plan(renderer, scene: Scene) -> GlarePlan:
                 renderer, scene, plan, lengths, step, 1
             )
     costs = {"fft": fft_cost(lengths, machine, precision) * convolutions}
+    if precision == "float32":  # its round-off grows with the spread: checked pixel by pixel
+        costs["fft"] += machine.bound_s * scene.planes.shape[0] * scene.planes.shape[1]
     costs["direct"] = (
         direct
         if direct >= costs["fft"] / convolutions or direct < optimistic
@@ -493,7 +499,10 @@ def _choose_precision(renderer, scene: Scene, plan: GlarePlan, lengths, step: fl
             (f"float64 transforms: float32 round-off up to {absolute:.3g} cd/m² would show"),
         )
     if renderer.tail_bound(plan.colour_kernel) is not None:
-        preview = _preview(renderer, scene, max(factor, MULTIRES_FACTORS[0]), plan.colour_kernel)
+        # the far tail's own grid, or the coarsest: one preview serves both questions
+        preview = _preview(
+            renderer, scene, factor if factor > 1 else MULTIRES_FACTORS[0], plan.colour_kernel
+        )
         predicted = preview(
             0.0, absolute=absolute, spread_scale=PREVIEW_MARGIN, relative_extra=relative
         )
@@ -516,7 +525,6 @@ def _choose_multires(
     """The cheapest coarse factor and split whose far path fits ``FAR_SHARE`` of the
     tolerance, predicted on the coarse grid with the measured relative error; ``None`` when
     none fits or none is cheaper than ``lengths_cost``. Returns ``(f, R0, codes, cost)``."""
-    height, width = scene.planes.shape[:2]
     reach = plan.geometric_reach_px  # the far tail covers the whole geometric reach
     budget = FAR_SHARE * plan.tolerance_codes
     source, out = plan.source_box, plan.out_box
@@ -528,7 +536,7 @@ def _choose_multires(
         ]
         if not ratios:
             continue
-        far_cost = renderer.costs.multires_s * height * width * plan.convolutions
+        far_cost = _far_cost(renderer, scene, factor, plan.colour_kernel, plan.convolutions)
         preview = None
         for k in ratios:
             split = k * factor
@@ -556,26 +564,47 @@ def _choose_multires(
     return None
 
 
+def _far_cost(renderer, scene: Scene, factor: int, colour_kernel: bool, convolutions: int):
+    """Estimated seconds of the far tail at ``factor``: per image pixel its splat,
+    interpolation and bound; its coarse convolutions by their own transform size (the coarse
+    grid's, which a 512² image at 1/4 shares with a 1024² image at 1/8); and the plan's
+    preview when it is not made yet (the multi-resolution path cannot be taken without it)."""
+    machine = renderer.costs
+    height, width = scene.planes.shape[:2]
+    coarse = machine.coarse_fft_s * n_log_n(
+        coarse_lengths((height, width), renderer.kernel_half, factor)
+    )
+    cost = (machine.multires_s * height * width + coarse) * convolutions
+    cost += machine.bound_s * height * width * scene.planes.shape[2]
+    if ("preview", factor, colour_kernel) not in scene._splats:
+        cost += machine.preview_s * height * width + coarse
+    return cost
+
+
 def _preview(renderer, scene: Scene, factor: int, colour_kernel: bool):
     """A function from the far path's relative error to the predicted largest error in codes:
     the scene's spread at the coarse nodes (the model digitised at ``f`` pixels) over the
-    darkest pixel of each cell."""
-    coarse = renderer.coarse_kernel(factor, colour_kernel)
-    brightest = coarse if coarse.ndim == 2 else coarse.max(axis=2)
-    height, width = scene.planes.shape[:2]
-    nodes = far_spread(
-        None,
-        scene.source_box,
-        (height, width),
-        brightest / factor**2,
-        factor,
-        nodes=True,
-        splatted=scene.splat(factor, None),
-    )
-    cells = -(-height // factor), -(-width // factor)
-    spread_cells = nodes[PAD_NODES : PAD_NODES + cells[0], PAD_NODES : PAD_NODES + cells[1]]
-    planes = scene.planes[..., 0] if scene.planes.shape[2] == 1 else scene.planes.min(axis=2)
-    darkest = block_reduce(planes, np.minimum, factor)
+    darkest pixel of each cell (made once per scene, factor and kernel: the precision and the
+    far tail ask the same)."""
+    key = ("preview", factor, colour_kernel)
+    if key not in scene._splats:
+        coarse = renderer.coarse_kernel(factor, colour_kernel)
+        brightest = coarse if coarse.ndim == 2 else coarse.max(axis=2)
+        height, width = scene.planes.shape[:2]
+        nodes = far_spread(
+            None,
+            scene.source_box,
+            (height, width),
+            brightest / factor**2,
+            factor,
+            nodes=True,
+            splatted=scene.splat(factor, None),
+        )
+        cells = -(-height // factor), -(-width // factor)
+        spread_cells = nodes[PAD_NODES : PAD_NODES + cells[0], PAD_NODES : PAD_NODES + cells[1]]
+        darkest = block_reduce(over_channels(scene.planes, np.minimum), np.minimum, factor)
+        scene._splats[key] = (darkest[..., None], np.maximum(spread_cells, 0.0)[..., None])
+    darkest, spread_cells = scene._splats[key]
 
     def codes(
         relative: float,
@@ -585,8 +614,8 @@ def _preview(renderer, scene: Scene, factor: int, colour_kernel: bool):
         relative_extra: float = 0.0,
     ) -> float:
         return renderer.code_bound.codes(
-            darkest[..., None],
-            spread_scale * np.maximum(spread_cells, 0.0)[..., None],
+            darkest,
+            spread_scale * spread_cells,
             absolute=absolute,
             relative=relative / max(1.0 - relative, 1e-12) + relative_extra,
         )

@@ -13,6 +13,7 @@ import numpy as np
 
 from glarelab.glare.rendering._convolve import clusters
 from glarelab.glare.rendering.compose import excess as excess_of
+from glarelab.glare.rendering.compose import over_channels
 from glarelab.glare.rendering.multires import grid_shape, splat
 
 __all__ = ["Scene"]
@@ -68,15 +69,16 @@ class Scene:
     def clusters(self) -> list[tuple[tuple[slice, slice], np.ndarray]]:
         """The connected groups of bright pixels in the source box (made once)."""
         if "clusters" not in self._splats:
-            self._splats["clusters"] = clusters((self.excess > 0).any(axis=2))
+            self._splats["clusters"] = clusters(over_channels(self.excess > 0, np.logical_or))
         return self._splats["clusters"]
 
     def excess_norms(self) -> tuple[float, float]:
         """``ΣΔL`` and ``(ΣΔL²)^½``, cd/m², the largest over the channels (found once)."""
         if "norms" not in self._splats:
-            excess = self.excess.astype(np.float64, copy=False)
-            l1 = float(excess.sum(axis=(0, 1)).max())
-            l2 = float(np.sqrt(np.einsum("ijc,ijc->c", excess, excess).max()))
+            flat = self.excess.reshape(-1, self.excess.shape[2])
+            flat = flat.astype(np.float64, copy=False)
+            l1 = _channel_sums(self.excess)
+            l2 = float(np.sqrt(np.einsum("ij,ij->j", flat, flat).max()))
             self._splats["norms"] = (l1, l2)
         return self._splats["norms"]
 
@@ -101,7 +103,11 @@ class Scene:
             channel = 0
         key = (factor, channel)
         if key not in self._splats:
-            excess = self.excess.max(axis=2) if channel is None else self.excess[..., channel]
+            excess = (
+                over_channels(self.excess, np.maximum)
+                if channel is None
+                else self.excess[..., channel]
+            )
             self._splats[key] = splat(
                 excess.astype(np.float64, copy=False),
                 factor,
@@ -133,11 +139,11 @@ class Scene:
         colour = image.ndim == 3
         planes = (image if colour else image[..., None]).astype(dtype, copy=False)
         bright = planes > l_dmax
-        bright = bright.any(axis=2) if colour else bright[..., 0]
+        bright = over_channels(bright, np.logical_or)
         source = _box(bright)
         if method == "Yoshida2008":
             targets = planes < l_dmax
-            targets = targets.any(axis=2) if colour else targets[..., 0]
+            targets = over_channels(targets, np.logical_or)
             target_box, n_targets = _box(targets), int(np.count_nonzero(targets))
         else:
             target_box, n_targets = (0, planes.shape[0], 0, planes.shape[1]), bright.size
@@ -159,12 +165,18 @@ class Scene:
             bright_pixels=int(np.count_nonzero(bright)) if source is not None else 0,
             target_pixels=n_targets,
             max_excess=float(excess.max()) if excess is not None else 0.0,
-            total_excess=float(excess.sum(axis=(0, 1), dtype=np.float64).max())
-            if excess is not None
-            else 0.0,
+            total_excess=_channel_sums(excess) if excess is not None else 0.0,
             darkest=float(planes.min()),
             achromatic=achromatic,
         )
+
+
+def _channel_sums(excess: np.ndarray) -> float:
+    """The largest over the channels of ``ΣΔL``, in float64 (``einsum`` for interleaved
+    channels: ``sum(axis=(0, 1))`` over ``(H, W, 3)`` is several times slower)."""
+    if excess.shape[2] == 1:
+        return float(excess.sum(dtype=np.float64))
+    return float(np.einsum("ijc->c", excess, dtype=np.float64).max())
 
 
 def _box(mask: np.ndarray) -> tuple[int, int, int, int] | None:
