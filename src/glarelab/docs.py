@@ -172,6 +172,16 @@ def data_reference() -> str:
         "reads every image of the set). A sequence (a night scene) is checked frame by frame, "
         "each record with its `frame` number.",
         "",
+        "A session with an eye tracker (a live scene) measures Luidolt's pupil range as its "
+        "tracker",
+        "starts, and its run's `pupil_calibration` keeps it: `white_raw` and `black_raw` (the "
+        "mean",
+        "pupil on the white and the black screen, the raw minimum and maximum, in the tracker's",
+        "`unit`), `range_mm` (2-8), the mapping `pupil_mm = offset_mm + slope_mm_per_unit · raw`",
+        "(clamped to the range), `screen_s`, `valid_samples` per screen, and `simulated` (how",
+        "MouseGaze's pupil was simulated, null for a tracker's own; "
+        "[night vision](night-vision.md)).",
+        "",
     ]
 
     def table(columns) -> list[str]:
