@@ -271,10 +271,12 @@ class WaveOpticsGlare(GlareModel):
         ``'exact'`` (default): the aperture sampled so that the PSF's period at the shortest
         wavelength is :data:`PSF_PERIOD_KERNELS` (3) kernel widths: ring energies of a round
         pupil within 0.6 % of the Airy pattern's out to the kernel's border. ``'fast'``: two
-        kernel widths (2.25 times fewer multiply-adds), and particles and lashes resolved
-        by :data:`OBSTACLE_SAMPLES_FAST` (4) samples instead of 12: rings within 1 %, the
-        border within 2-4 %, and a small kernel no longer the large one's centre to 1 %
-        (docs/speed-accuracy.md gives its error in display codes).
+        kernel widths (2.25 times fewer multiply-adds), particles and lashes resolved
+        by :data:`OBSTACLE_SAMPLES_FAST` (4) samples instead of 12, and every aperture drawn
+        with the one-sample box instead of the prefilters of polygons, the lid, cross screens
+        and images: rings within 1 %, the border within 2-4 % (for a round pupil), and a small
+        kernel no longer the large one's centre to 1 % (docs/speed-accuracy.md gives its error
+        in display codes).
     pupil_convention
         ``'unit-energy'`` (default): the kernel holds the light that passes the aperture, all
         of the source's excess, whatever the pupil; a larger pupil only narrows the PSF.
@@ -485,8 +487,11 @@ class WaveOpticsGlare(GlareModel):
         :func:`glarelab.glare.models.apertures.aperture_diaphragm_prefiltered`);
         :data:`TRIGONAL_PREFILTER` behind a trigonal cross screen; the one-sample box for a
         round pupil alone, and with lashes or particles, whose edges are drawn with the
-        one-sample ramp (lashes and particles make the grid fine: 12 samples across them)."""
-        if self.eyelashes or self.particles:
+        one-sample ramp (lashes and particles make the grid fine: 12 samples across them).
+        ``aperture_grid='fast'`` draws every aperture with the one-sample box (the drawing
+        before the prefilters, 1.3-30 times faster; its error in display codes is in
+        docs/speed-accuracy.md)."""
+        if self.aperture_grid == "fast" or self.eyelashes or self.particles:
             return ap.PREFILTER_BOX
         if self.cross_screen == "trigonal":
             return TRIGONAL_PREFILTER
