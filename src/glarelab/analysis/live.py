@@ -10,6 +10,8 @@ counts them per session; :func:`live_sentence` says it in the report.
 from __future__ import annotations
 
 import csv
+import math
+import re
 from pathlib import Path
 
 import pandas as pd
@@ -19,6 +21,101 @@ __all__ = ["live_frames", "live_sentence"]
 
 def _frames_path(csv_path: Path) -> Path:
     return csv_path.with_name(csv_path.stem + "_frames.tsv")
+
+
+# the header glarelab.frontend.live writes (its FRAME_COLUMNS after what, frame, interval_ms)
+LIVE_HEADER = (
+    "what", "frame", "interval_ms", "time_s", "tracker_time_s", "gaze_x_px", "gaze_y_px",
+    "pupil_mm", "target_cd_m2", "adaptation_cd_m2", "render_ms", "dropped", "valid_gaze",
+    "valid_pupil", "clamped", "new_bank_entries",
+)  # fmt: skip
+_LIVE_WHAT = re.compile(r"trial [1-9][0-9]* live")
+_FLAGS = ("dropped", "valid_gaze", "valid_pupil", "clamped")
+_TIMES = ("time_s", "tracker_time_s", "render_ms", "target_cd_m2", "adaptation_cd_m2")
+
+
+def _live_records(path: Path) -> list[dict]:
+    """The live rows of a frame record, each checked: a row the session could not have
+    written (a value out of its range, a field too many or too few, a frame missing,
+    repeated or out of order, a cut last line) is refused with its file, line and column."""
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as error:
+        raise ValueError(f"{path}: not a frame record (not UTF-8 text: {error.reason})") from None
+    lines = text.splitlines()
+    if not lines:
+        raise ValueError(f"{path}: empty; a frame record begins with its header line")
+    live = [
+        (number, fields)
+        for number, fields in enumerate(csv.reader(lines, delimiter="\t"), start=1)
+        if fields and fields[0].endswith(" live")
+    ]
+    if not live:
+        return []
+    header = tuple(next(csv.reader(lines[:1], delimiter="\t")))
+    if header != LIVE_HEADER:
+        raise ValueError(
+            f"{path}, line 1: the header is not a live frame record's ({', '.join(LIVE_HEADER)})"
+        )
+    if not text.endswith("\n"):
+        raise ValueError(f"{path}, line {len(lines)}: the last line is cut (no line end)")
+    records = []
+    previous: tuple[str, int, int] | None = None  # what, frame, run
+    runs = [n for n, line in enumerate(lines, start=1) if line.startswith("run ")]
+    for number, fields in live:
+        where = f"{path}, line {number}"
+        if not _LIVE_WHAT.fullmatch(fields[0]):
+            raise ValueError(f"{where}, column what: {fields[0]!r} is not 'trial N live'")
+        if len(fields) != len(LIVE_HEADER):
+            raise ValueError(f"{where}: {len(fields)} fields, the header has {len(LIVE_HEADER)}")
+        record = dict(zip(LIVE_HEADER, fields, strict=True))
+        for column in _FLAGS:
+            if record[column] not in ("0", "1"):
+                raise ValueError(f"{where}, column {column}: {record[column]!r} is not 0 or 1")
+        for column in ("frame", "new_bank_entries"):
+            if not record[column].isdigit():
+                raise ValueError(
+                    f"{where}, column {column}: {record[column]!r} is not a whole number >= 0"
+                )
+        numbers = {
+            c: record[c] for c in (*_TIMES, "gaze_x_px", "gaze_y_px", "pupil_mm", "interval_ms")
+        }
+        for column, value in numbers.items():
+            if column == "interval_ms" and record["frame"] == "0" and value == "":
+                continue  # the first frame has no flip before it
+            try:
+                x = float(value)
+            except ValueError:
+                raise ValueError(f"{where}, column {column}: {value!r} is not a number") from None
+            low = 0.0 if column in (*_TIMES, "interval_ms") else -math.inf
+            if (
+                not math.isfinite(x)
+                or x < low
+                or (column in ("pupil_mm", "interval_ms") and x <= 0)
+            ):
+                allowed = (
+                    "> 0"
+                    if column in ("pupil_mm", "interval_ms")
+                    else (">= 0" if low == 0.0 else "finite")
+                )
+                raise ValueError(
+                    f"{where}, column {column}: {value!r}; allowed: a number {allowed}"
+                )
+        run = sum(r < number for r in runs)
+        frame = int(record["frame"])
+        expected = (
+            previous[1] + 1 if previous is not None and previous[::2] == (fields[0], run) else 0
+        )
+        if frame != expected:
+            raise ValueError(
+                f"{where}, column frame: frame {frame} of {fields[0]} where frame {expected} "
+                "was due (a frame missing, repeated or out of order)"
+            )
+        if frame == 0 and any(r["what"] == fields[0] and r["_run"] == run for r in records):
+            raise ValueError(f"{where}: {fields[0]} begins a second time in run {run}")
+        previous = (fields[0], frame, run)
+        records.append(record | {"_run": run})
+    return records
 
 
 def live_frames(files: list[str | Path]) -> pd.DataFrame | None:
@@ -36,6 +133,14 @@ def live_frames(files: list[str | Path]) -> pd.DataFrame | None:
         ``dropped_pct``, ``gaze_lost``, ``gaze_lost_pct``, ``pupil_lost``, ``off_scene``,
         ``render_ms_median``); None when no session showed a live scene.
 
+    Raises
+    ------
+    ValueError
+        For a frame record the session could not have written, naming its file, line and
+        column: a live row with a value out of its range or a field too many or too few, a
+        frame missing, repeated or out of order, a cut last line, a header that is not the
+        record's, an empty file.
+
     Examples
     --------
     >>> live_frames([]) is None
@@ -46,18 +151,13 @@ def live_frames(files: list[str | Path]) -> pd.DataFrame | None:
         path = _frames_path(Path(file))
         if not path.is_file():
             continue
-        with path.open(newline="", encoding="utf-8") as handle:
-            records = [
-                r
-                for r in csv.DictReader(handle, delimiter="\t")
-                if (r.get("what") or "").endswith(" live") and r.get("valid_gaze") in ("0", "1")
-            ]
+        records = _live_records(path)
         if not records:
             continue
         n = len(records)
         dropped = sum(r["dropped"] == "1" for r in records)
         lost = sum(r["valid_gaze"] == "0" for r in records)
-        render = pd.to_numeric(pd.Series([r["render_ms"] for r in records]), errors="coerce")
+        render = pd.Series([float(r["render_ms"]) for r in records])
         rows.append(
             {
                 "session": Path(file).stem,
