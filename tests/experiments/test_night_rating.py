@@ -146,7 +146,11 @@ def test_a_simulated_study_and_its_report_show_the_stimulus_rated(small, tmp_pat
         (lambda d: d["conditions"][1].update(name="full"), "names repeat"),
         (lambda d: d["scene"].update(size_px=[4000, 400]), "must fit the display"),
         (lambda d: d["scene"].update(sequence="sunrise"), "scene.sequence"),
-        (lambda d: d["scene"].update(glare_model="sun"), "scene.model = 'sun'"),
+        (lambda d: d["scene"].update(glare_model="sun"), "scene.glare_model = 'sun'"),
+        (
+            lambda d: d["scene"].update(glare_parameters={"age": 300}),
+            "scene.glare_parameters: age must be",
+        ),
         (lambda d: d["scene"].update(colour=1), "scene.colour: unknown key"),
         (lambda d: d["observer"]["category_effects"].update(Overall="glow"), "'glow'"),
     ],

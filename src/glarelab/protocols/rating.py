@@ -238,7 +238,13 @@ def _check_scene(p: dict, problems: list[str]) -> None:
     if any("glare" in c["effects"] for c in conditions):
         from glarelab.protocols.common import check_glare_model
 
-        check_glare_model(model, p["scene"]["glare_parameters"], "scene", problems)
+        check_glare_model(
+            model,
+            p["scene"]["glare_parameters"],
+            "scene",
+            problems,
+            keys=("glare_model", "glare_parameters"),
+        )
     if p["scene"]["live"]:
         _check_live(p, problems)
         return
