@@ -286,3 +286,20 @@ def test_shuffled_duplicated_or_truncated_rows_give_the_result_or_a_named_refusa
             return
     for name, table in expected.items():  # untouched: the same analysis, to the last digit
         pd.testing.assert_frame_equal(result[name], table, check_exact=True)
+
+
+@pytest.mark.parametrize(
+    ("column", "value", "named"),
+    [
+        ("offset_s", "0.5", "line 5, column offset_s: 0.5 is before onset_s"),
+        ("shown_ms", "100.0", "line 5, column shown_ms: 100.0 is not offset_s - onset_s"),
+    ],
+)
+def test_a_presentation_that_ends_before_it_begins_or_lasts_another_time_is_refused(
+    simulated, tmp_path, column, value, named
+):
+    protocol = load_protocol("spencer1995")
+    files = csvs(simulated, "spencer1995")
+    bad = copy_session(files[0], tmp_path, rows=lambda lines: _set_cell(lines, 5, column, value))
+    with pytest.raises(DataError, match=re.escape(named)):
+        load_sessions(protocol, [bad, *files[1:]])

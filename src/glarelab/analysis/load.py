@@ -231,8 +231,30 @@ def _read_file(
             for c in expected
         }
         parsed["_file"], parsed["_line"] = str(path), line
+        _presentation_times(parsed, f"{path}, line {line}", problems)
         rows.append(parsed)
     return rows
+
+
+SHOWN_MS_TOLERANCE = 0.01  # ms: shown_ms is written as 1000 (offset_s - onset_s), unrounded
+
+
+def _presentation_times(row: dict, where: str, problems: list[str]) -> None:
+    """A row's presentation as the session measured it: the flip that ended it is not before
+    the one that began it, and ``shown_ms`` is their difference (docs/data.md)."""
+    onset, offset, shown = row.get("onset_s"), row.get("offset_s"), row.get("shown_ms")
+    if not all(isinstance(v, float) and math.isfinite(v) for v in (onset, offset)):
+        return
+    if offset < onset:
+        problems.append(
+            f"{where}, column offset_s: {offset!r} is before onset_s {onset!r} (the flip that "
+            "ended the presentation comes after the one that began it)"
+        )
+    elif isinstance(shown, float) and abs(shown - 1000.0 * (offset - onset)) > SHOWN_MS_TOLERANCE:
+        problems.append(
+            f"{where}, column shown_ms: {shown!r} is not offset_s - onset_s "
+            f"({1000.0 * (offset - onset):.3f} ms), as every session writes it"
+        )
 
 
 def _since(expected, name: str) -> str:
