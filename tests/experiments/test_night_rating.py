@@ -151,6 +151,10 @@ def test_a_simulated_study_and_its_report_show_the_stimulus_rated(small, tmp_pat
             lambda d: d["scene"].update(glare_parameters={"age": 300}),
             "scene.glare_parameters: age must be",
         ),
+        (
+            lambda d: d["scene"].update(glare_parameters={"pupil_mm": 3.0}),
+            r"scene.glare_parameters: pupil_mm = 3.0: a scene's eye state is each frame's",
+        ),
         (lambda d: d["scene"].update(colour=1), "scene.colour: unknown key"),
         (lambda d: d["observer"]["category_effects"].update(Overall="glow"), "'glow'"),
     ],

@@ -245,6 +245,15 @@ def _check_scene(p: dict, problems: list[str]) -> None:
             problems,
             keys=("glare_model", "glare_parameters"),
         )
+        parameters = p["scene"]["glare_parameters"] or {}
+        fixed = [k for k in SCENE_EYE_STATE if k in parameters]
+        if fixed:
+            problems.append(
+                f"scene.glare_parameters: {', '.join(f'{k} = {parameters[k]!r}' for k in fixed)}"
+                ": a scene's eye state is each frame's (the pupil and regime of its adapted "
+                "luminance, or a live scene's tracked pupil), so the value would be ignored; "
+                "remove it"
+            )
     if p["scene"]["live"]:
         _check_live(p, problems)
         return
@@ -275,6 +284,10 @@ def _check_scene(p: dict, problems: list[str]) -> None:
             f"scene.size_px = {[width, height]}: must fit the display's "
             f"{[screen_w, screen_h]} pixels"
         )
+
+
+# the glare model's fields a scene sets per frame (glare.night.pipeline.adapted_model, LiveNight)
+SCENE_EYE_STATE = ("pupil_mm", "regime")
 
 
 def _check_live(p: dict, problems: list[str]) -> None:
