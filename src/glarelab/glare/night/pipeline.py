@@ -264,9 +264,20 @@ def render_night(
     # another argument is missing too
     tau_rod_s = check_positive("tau_rod_s", tau_rod_s, unit="s")
     tau_cone_s = check_positive("tau_cone_s", tau_cone_s, unit="s")
+    if isinstance(effects, str):
+        raise ValueError(f"effects = {effects!r}: must be a sequence of names of {EFFECTS}")
     chosen = tuple(effects)
     for effect in chosen:
         check_choice("effects", effect, EFFECTS)
+    twice = sorted({e for e in chosen if chosen.count(e) > 1})
+    if twice:
+        raise ValueError(f"effects = {chosen!r}: {', '.join(twice)} given twice; each once")
+    if frame_time_s is not None and not np.isscalar(frame_time_s):
+        if len(frame_time_s) != n:
+            raise ValueError(
+                f"frame_time_s: {len(frame_time_s)} durations for {n} frames; give one per "
+                "frame (or one number for all)"
+            )
     l_dmax = check_positive("display_max_cd_m2", display_max_cd_m2, unit="cd/m²")
     key = check_in_range(
         "adapted_display_cd_m2", adapted_display_cd_m2, 0.0, l_dmax, unit="cd/m²",
