@@ -35,9 +35,12 @@ def test_a_time_constant_that_is_not_positive_is_refused_naming_it(name, value, 
         ({"effects": ("glare", "glare")}, "effects = ('glare', 'glare'): glare given twice"),
         ({"effects": "glare"}, "effects = 'glare': must be a sequence of names"),
         ({"frame_time_s": [0.1, 0.1]}, "frame_time_s: 2 durations for 3 frames"),
+        ({"desaturation": 0.3}, "desaturation = 0.3: only Spencer's scotopic colour takes it"),
     ],
 )
-def test_effects_given_twice_or_durations_for_other_frames_are_refused(options, named):
+def test_effects_given_twice_durations_for_other_frames_or_an_ignored_option_are_refused(
+    options, named
+):
     # a repeated effect was applied once without a word, and two durations for three frames
     # ended in numpy's broadcasting error, naming no argument
     with pytest.raises(ValueError, match=re.escape(named)):

@@ -233,7 +233,8 @@ def render_night(
         Acuity (:func:`glarelab.glare.night.acuity.acuity_blur`); the lightness is taken for the
         display's white.
     scotopic_method, desaturation
-        Colour (:func:`glarelab.glare.night.scotopic.scotopic_colour`).
+        Colour (:func:`glarelab.glare.night.scotopic.scotopic_colour`); ``desaturation``
+        only with the effect ``'scotopic'`` and ``scotopic_method='Spencer1995'``.
     colourspace
         The RGB colourspace of the scene and the display; default Rec. 709.
     progress
@@ -285,6 +286,13 @@ def render_night(
     )  # fmt: skip
     check_choice("acuity_method", acuity_method, SIGMA_METHODS)
     check_choice("scotopic_method", scotopic_method, SCOTOPIC_METHODS)
+    if desaturation != SPENCER1995_DESATURATION and (
+        "scotopic" not in chosen or scotopic_method != "Spencer1995"
+    ):
+        raise ValueError(
+            f"desaturation = {desaturation!r}: only Spencer's scotopic colour takes it "
+            "(effects with 'scotopic' and scotopic_method='Spencer1995'); it would be ignored"
+        )
     gazes = _gazes(gaze_px, n)
     targets = np.array(
         [
