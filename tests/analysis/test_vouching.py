@@ -57,12 +57,18 @@ def yoshida(simulated):
 def test_a_pilot_is_left_out_listed_and_analysed_only_when_asked(yoshida, tmp_path):
     protocol, files = yoshida
     source = files[0]
+    runs = json.loads(source.with_suffix(".json").read_text())["runs"]
     pilot = copy_session(
         source,
         tmp_path,
         name=source.name.replace("sim01", "pil01").replace(".csv", "_pilot.csv"),
         rows=lambda lines: renamed(lines, "sim01", "pil01"),
-        sidecar={"pilot": True, "participant": "pil01"},
+        # a pilot's sidecar says it at the top and in each run, as a --pilot run writes it
+        sidecar={
+            "pilot": True,
+            "participant": "pil01",
+            "runs": [r | {"pilot": True} for r in runs],
+        },
     )
     dataset = load_sessions(protocol, [*files, pilot])
     assert "pil01" not in set(dataset.trials["participant"])
@@ -94,6 +100,7 @@ def test_a_pilot_is_left_out_listed_and_analysed_only_when_asked(yoshida, tmp_pa
             "the session's calibration (readings bbbbbbbbbbbb…) is not the one its images",
         ),
         ({"trials": 16}, "trial 16 of the 16 the completed session recorded missing"),
+        ({"runs": [{"pilot": True}]}, "pilot is false, but run(s) 1 say pilot true"),
     ],
 )  # fmt: skip
 def test_a_sidecar_that_disagrees_is_refused_with_the_reason(yoshida, tmp_path, change, named):

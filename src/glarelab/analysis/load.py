@@ -424,6 +424,17 @@ def _sidecar_contradictions(
         )
     if not isinstance(sidecar.get("pilot", False), bool):
         problems.append(f"{where_}: pilot is {sidecar.get('pilot')!r}; must be true or false")
+    else:  # a pilot session resumes only as a pilot, and a session only as a session
+        runs = [r for r in sidecar.get("runs") or [] if isinstance(r, dict) and "pilot" in r]
+        other = [
+            n for n, r in enumerate(runs, start=1) if r["pilot"] != sidecar.get("pilot", False)
+        ]
+        if other:
+            problems.append(
+                f"{where_}: pilot is {_json(sidecar.get('pilot', False))}, but run(s) "
+                f"{', '.join(map(str, other))} say pilot {_json(runs[other[0] - 1]['pilot'])}: a "
+                "session's runs are all pilots or none (the sidecar edited?)"
+            )
     for key in ("participant", "session"):
         values = {str(row.get(key)) for row in rows}
         if rows and values != {str(sidecar.get(key))}:
