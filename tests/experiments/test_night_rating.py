@@ -146,6 +146,10 @@ def test_a_simulated_study_and_its_report_show_the_stimulus_rated(small, tmp_pat
         (lambda d: d["conditions"][1].update(name="full"), "names repeat"),
         (lambda d: d["scene"].update(size_px=[4000, 400]), "must fit the display"),
         (lambda d: d["scene"].update(sequence="sunrise"), "scene.sequence"),
+        (
+            lambda d: d["scene"].update(adapted_display_cd_m2=1e4),
+            r"scene.adapted_display_cd_m2 = 10000: above the display's white",
+        ),
         (lambda d: d["scene"].update(glare_model="sun"), "scene.glare_model = 'sun'"),
         (
             lambda d: d["scene"].update(glare_parameters={"age": 300}),

@@ -225,6 +225,12 @@ def _check_scene(p: dict, problems: list[str]) -> None:
     if problems:
         return
     check_display(p["display"], problems)
+    adapted, white = p["scene"]["adapted_display_cd_m2"], p["display"]["max_cd_m2"]
+    if isinstance(white, (int, float)) and adapted > white:
+        problems.append(
+            f"scene.adapted_display_cd_m2 = {adapted:g}: above the display's white "
+            f"(display.max_cd_m2 = {white:g}); the adapting luminance is shown at most at white"
+        )
     if not conditions:
         problems.append("[[conditions]]: missing (a [scene] is shown once per condition)")
         return
