@@ -36,6 +36,10 @@ def test_a_time_constant_that_is_not_positive_is_refused_naming_it(name, value, 
         ({"effects": "glare"}, "effects = 'glare': must be a sequence of names"),
         ({"frame_time_s": [0.1, 0.1]}, "frame_time_s: 2 durations for 3 frames"),
         ({"desaturation": 0.3}, "desaturation = 0.3: only Spencer's scotopic colour takes it"),
+        (
+            {"initial_adaptation_cd_m2": -1.0, "frame_time_s": None},
+            "initial_adaptation_cd_m2 must be in [0, inf) cd/m², got -1",
+        ),
     ],
 )
 def test_effects_given_twice_durations_for_other_frames_or_an_ignored_option_are_refused(

@@ -265,6 +265,11 @@ def render_night(
     # another argument is missing too
     tau_rod_s = check_positive("tau_rod_s", tau_rod_s, unit="s")
     tau_cone_s = check_positive("tau_cone_s", tau_cone_s, unit="s")
+    if initial_adaptation_cd_m2 is not None:  # judged by itself too
+        initial_adaptation_cd_m2 = check_in_range(
+            "initial_adaptation_cd_m2", initial_adaptation_cd_m2, 0.0, math.inf, unit="cd/m²",
+            high_inclusive=False,
+        )  # fmt: skip
     if isinstance(effects, str):
         raise ValueError(f"effects = {effects!r}: must be a sequence of names of {EFFECTS}")
     chosen = tuple(effects)
