@@ -147,6 +147,10 @@ def test_a_simulated_study_and_its_report_show_the_stimulus_rated(small, tmp_pat
         (lambda d: d["scene"].update(size_px=[4000, 400]), "must fit the display"),
         (lambda d: d["scene"].update(sequence="sunrise"), "scene.sequence"),
         (
+            lambda d: d["scene"].update(sequence="still", live=True, frame_rate_hz=30.0),
+            r"scene.frame_rate_hz = 30.0: not used by a live scene",
+        ),
+        (
             lambda d: d["scene"].update(adapted_display_cd_m2=1e4),
             r"scene.adapted_display_cd_m2 = 10000: above the display's white",
         ),

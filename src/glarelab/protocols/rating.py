@@ -216,6 +216,7 @@ def _check_scene(p: dict, problems: list[str]) -> None:
             if p[name] is not None:
                 problems.append(f"[{name}]: only a study with a [scene] uses it")
         return
+    given = set(scene) if isinstance(scene, dict) else set()
     p["scene"] = validate(scene, SCENE, "scene", problems)
     for name, schema in (("display", DISPLAY), ("viewing", VIEWING)):
         if p[name] is None:
@@ -260,6 +261,11 @@ def _check_scene(p: dict, problems: list[str]) -> None:
                 "luminance, or a live scene's tracked pupil), so the value would be ignored; "
                 "remove it"
             )
+    if p["scene"]["live"] and "frame_rate_hz" in given:  # a value there would do nothing
+        problems.append(
+            f"scene.frame_rate_hz = {p['scene']['frame_rate_hz']!r}: not used by a live scene "
+            "(it renders at every refresh); remove it"
+        )
     if p["scene"]["live"]:
         _check_live(p, problems)
         return
