@@ -126,3 +126,26 @@ def test_a_cut_last_frame_row_or_a_foreign_header_is_refused(tmp_path):
     with pytest.raises(ValueError, match=r"a_frames\.tsv: empty"):
         live_frames([tmp_path / "a.csv"])
     assert "\t".join(LIVE_HEADER) == HEADER  # the analysis reads what the front-end writes
+
+
+@pytest.mark.parametrize(
+    ("run_line", "named"),
+    [
+        ("run 1 started T; log time 0 = Unix time 200.000 s", "records its run 1 at 100.000 s"),
+        ("run 2 started T; log time 0 = Unix time 100.000 s", "records 1 run(s)"),
+        ("run 1 started T; log time 0 = Unix time 100.000 s; PILOT run", "is a pilot's but the"),
+    ],
+)
+def test_a_frame_record_of_another_session_is_refused(tmp_path, run_line, named):
+    # frame records swapped between sessions, or a pilot's put beside a participant's
+    # session, were counted as the session's own
+    rows = [frame_row(i) for i in range(3)]
+    (tmp_path / "a.csv").write_text("x\n")
+    (tmp_path / "a.json").write_text('{"runs": [{"clock_epoch_s": 100.0004}]}')
+    frames = tmp_path / "a_frames.tsv"
+    frames.write_text("\n".join([HEADER, run_line + "\t\t", *rows]) + "\n")
+    with pytest.raises(ValueError, match=re.escape(named)):
+        live_frames([tmp_path / "a.csv"])
+    own = "run 1 started T; log time 0 = Unix time 100.000 s"
+    frames.write_text("\n".join([HEADER, own + "\t\t", *rows]) + "\n")
+    assert live_frames([tmp_path / "a.csv"])["frames"].tolist() == [3]

@@ -10,6 +10,7 @@ counts them per session; :func:`live_sentence` says it in the report.
 from __future__ import annotations
 
 import csv
+import json
 import math
 import re
 from pathlib import Path
@@ -118,6 +119,54 @@ def _live_records(path: Path) -> list[dict]:
     return records
 
 
+_RUN_LINE = re.compile(r"run (\d+) started [^;]*; log time 0 = Unix time ([0-9.]+) s(; PILOT)?")
+
+
+def _runs_of_this_session(path: Path, csv_path: Path) -> None:
+    """The frame record's runs are its session's: each run line's clock epoch is the one the
+    sidecar's run recorded, no run more than the sidecar's, and a pilot's runs only in a
+    pilot's file (a ``_pilot`` stem), a participant's only in a participant's."""
+    pilot = csv_path.stem.endswith("_pilot")
+    sidecar_path = csv_path.with_suffix(".json")
+    try:
+        sidecar = json.loads(sidecar_path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        sidecar = None  # no sidecar (--include-no-sidecar) or one the loader judged already
+    runs = sidecar.get("runs") if isinstance(sidecar, dict) else None
+    lines = path.read_text(encoding="utf-8").splitlines()
+    for number, line in enumerate(lines, start=1):
+        match = _RUN_LINE.match(line)
+        if match is None:
+            continue
+        run, epoch = int(match[1]), float(match[2])
+        if bool(match[3]) != pilot:
+            raise ValueError(
+                f"{path}, line {number}: run {run} is {'a pilot' if match[3] else 'a session'}'s"
+                f" but the session {csv_path.name} is {'a pilot' if pilot else 'not a pilot'}: "
+                "the frame record of another session?"
+            )
+        if not isinstance(runs, list):
+            continue
+        recorded = runs[run - 1] if 1 <= run <= len(runs) else None
+        clock = recorded.get("clock_epoch_s") if isinstance(recorded, dict) else None
+        if recorded is None or (
+            isinstance(clock, int | float) and abs(clock - epoch) > RUN_EPOCH_TOLERANCE_S
+        ):
+            raise ValueError(
+                f"{path}, line {number}: run {run} began at Unix time {epoch:.3f} s, but "
+                f"{sidecar_path.name} "
+                + (
+                    f"records {len(runs)} run(s)"
+                    if recorded is None
+                    else f"records its run {run} at {clock:.3f} s"
+                )
+                + ": the frame record of another session?"
+            )
+
+
+RUN_EPOCH_TOLERANCE_S = 0.002  # the run line writes the epoch to 1 ms
+
+
 def live_frames(files: list[str | Path]) -> pd.DataFrame | None:
     """Per session, the frames of its live scenes: how many, dropped, without gaze or pupil.
 
@@ -154,6 +203,7 @@ def live_frames(files: list[str | Path]) -> pd.DataFrame | None:
         records = _live_records(path)
         if not records:
             continue
+        _runs_of_this_session(path, Path(file))
         n = len(records)
         dropped = sum(r["dropped"] == "1" for r in records)
         lost = sum(r["valid_gaze"] == "0" for r in records)
