@@ -371,6 +371,22 @@ def _sidecar_fields(path: Path, sidecar: dict) -> list[str]:
             )
     if sidecar.get("simulated") is False and not problems:
         problems += _simulated_signs(where_, sidecar)
+    if sidecar.get("simulated") is True and not problems:
+        keyboards = sorted(
+            {
+                run["keyboard"]
+                for run in sidecar.get("runs") or []
+                if isinstance(run, dict)
+                and isinstance(run.get("keyboard"), str)
+                and run["keyboard"] != "simulated observer"
+            }
+        )
+        if keyboards:
+            problems.append(
+                f"{where_}: simulated is true, but its runs' keyboard is {', '.join(keyboards)}, "
+                "not the simulated observer: a session on a screen (the sidecar edited?); a "
+                "session is analysed as what it is (simulated: false)"
+            )
     return problems
 
 
