@@ -13,6 +13,7 @@ from glarelab.frontend.eyetracker import (
     GazeFilter,
     PupilCalibration,
     calibrate_pupil,
+    datastore_settings,
 )
 
 
@@ -86,3 +87,12 @@ def test_calibrate_pupil_shows_white_then_black_and_maps_their_means():
     c = calibrate_pupil(screen, Eye(screen), screen_s=0.05)
     assert (c.white_raw, c.black_raw) == (3.0, 7.0)  # blinks left out of both means
     assert screen.color == (0.0, 0.0, 0.0) and screen.flips > 4  # the colour put back
+
+
+def test_iohubs_store_is_named_absolute_beside_the_session(tmp_path, monkeypatch):
+    # ioHub's server runs in glarelab's package folder: a relative --out put the session's
+    # _iohub.hdf5 there (src/glarelab/data/...), not beside its CSV
+    monkeypatch.chdir(tmp_path)
+    store = datastore_settings("data/P01_iohub.hdf5", "run1")
+    assert store["datastore_name"] == str(tmp_path / "data" / "P01_iohub")
+    assert store["session_code"] == "run1"
