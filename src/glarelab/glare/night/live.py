@@ -516,6 +516,20 @@ class LiveNight:
         """
         start = time.perf_counter()
         if gaze_px is not None:
+            if (
+                isinstance(gaze_px, str | bytes)
+                or np.ndim(gaze_px) != 1
+                or len(gaze_px) != 2
+                or not all(
+                    isinstance(v, int | float | np.integer | np.floating)
+                    and not isinstance(v, bool | np.bool_)
+                    for v in gaze_px
+                )
+            ):
+                raise ValueError(
+                    f"gaze_px must be (row, column), two numbers in scene pixels, or None; "
+                    f"got {gaze_px!r}"
+                )
             gaze = (float(gaze_px[0]), float(gaze_px[1]))
         elif self._gaze is not None:
             gaze = self._gaze
