@@ -125,11 +125,14 @@ def scene(tmp_path):
         (["--seed", "3"], "--seed without --flare-lines"),
         (["--model", "wave", "--aperture-spacing-mm", "2"],
          "--aperture-spacing-mm without --aperture-image"),
+        (["--model", "wave", "--aperture-image", "{scene}"],
+         "without --aperture-spacing-mm: give the size of one of the image's pixels"),
         (["--preview-scale", "log"], "--preview-scale log without --preview"),
         (["--preview-scale", "display"], "--preview-scale display without --preview"),
     ],
 )  # fmt: skip
 def test_render_options_that_would_be_ignored_are_refused(extra, named, scene, capsys, tmp_path):
+    extra = [str(scene) if a == "{scene}" else a for a in extra]
     argv = ["render", scene, tmp_path / "out.exr", "--pixel-deg", "0.02", *extra]
     refused(argv, capsys, tmp_path, named)
 
