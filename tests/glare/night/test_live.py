@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -190,3 +192,17 @@ def test_a_gaze_that_is_not_two_numbers_is_refused(gaze):
     live = LiveNight(np.ones((8, 8)), pixel_deg=0.1, pupils_mm=(4.0,))
     with pytest.raises(ValueError, match=r"gaze_px must be \(row, column\), two numbers"):
         live.frame(gaze_px=gaze, pupil_mm=4.0, frame_time_s=0.0)
+
+
+@pytest.mark.parametrize(
+    ("options", "named"),
+    [
+        ({"bank_size": 4.5}, "bank_size must be an integer >= 4; got 4.5"),
+        ({"bank_size": True}, "bank_size must be an integer >= 4; got True"),
+        ({"acuity_method": "Luidolt2020"}, "without acuity=True: the acuity loss is off"),
+    ],
+)
+def test_a_fractional_bank_or_acuity_options_without_acuity_are_refused(options, named):
+    # bank_size 4.5 was truncated to 4, and the acuity options were ignored without a word
+    with pytest.raises(ValueError, match=re.escape(named)):
+        LiveNight(np.ones((8, 8)), pixel_deg=0.1, pupils_mm=(4.0,), **options)
