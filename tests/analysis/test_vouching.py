@@ -101,6 +101,7 @@ def test_a_pilot_is_left_out_listed_and_analysed_only_when_asked(yoshida, tmp_pa
         ),
         ({"trials": 16}, "trial 16 of the 16 the completed session recorded missing"),
         ({"runs": [{"pilot": True}]}, "pilot is false, but run(s) 1 say pilot true"),
+        ({"data_format": 0.4}, 'data_format is 0.4, not text: a session writes it as a string'),
         (
             {"simulated": True, "runs": [{"keyboard": "psychtoolbox"}]},
             "simulated is true, but its runs' keyboard is psychtoolbox, not the simulated",

@@ -353,9 +353,15 @@ def _sidecar_fields(path: Path, sidecar: dict) -> list[str]:
     each field the analysis reads of its type and range."""
     where_ = path.with_suffix(".json")
     problems = []
-    if "data_format" in sidecar and sidecar["data_format"] not in DATA_FORMATS:
+    value = sidecar.get("data_format")
+    if "data_format" in sidecar and not isinstance(value, str):
         problems.append(
-            f"{where_}: data_format {_json(sidecar['data_format'])} is not a format this version "
+            f"{where_}: data_format is {_json(value)}, not text: a session writes it as a "
+            f"string, one of {', '.join(map(_json, DATA_FORMATS))} (edited by hand?)"
+        )
+    elif "data_format" in sidecar and value not in DATA_FORMATS:
+        problems.append(
+            f"{where_}: data_format {_json(value)} is not a format this version "
             f"of glarelab reads ({', '.join(DATA_FORMATS)}): a file of a newer version (update "
             "glarelab) or edited by hand"
         )
