@@ -97,6 +97,10 @@ def _field(rows, index, column, value):
         (lambda r: _field(r, 2, "render_ms", "-5"), "line 5, column render_ms: '-5'; allowed"),
         (lambda r: _field(r, 2, "pupil_mm", "-3"), "line 5, column pupil_mm: '-3'; allowed"),
         (
+            lambda r: _field(r, 2, "pupil_mm", "50"),
+            "line 5, column pupil_mm: '50'; allowed: a number in [2, 8] mm",
+        ),
+        (
             lambda r: _field(r, 2, "frame", "1.5"),
             "line 5, column frame: '1.5' is not a whole number",
         ),

@@ -30,6 +30,9 @@ LIVE_HEADER = (
     "pupil_mm", "target_cd_m2", "adaptation_cd_m2", "render_ms", "dropped", "valid_gaze",
     "valid_pupil", "clamped", "new_bank_entries",
 )  # fmt: skip
+# the pupils a live frame is rendered for: the tracker's clamped to Luidolt's 2-8 mm
+# (§5.2.1 ii; glarelab.glare.night.live's bank), so a frame record holds no other
+PUPIL_RANGE_MM = (2.0, 8.0)
 _LIVE_WHAT = re.compile(r"trial [1-9][0-9]* live")
 _FLAGS = ("dropped", "valid_gaze", "valid_pupil", "clamped")
 _TIMES = ("time_s", "tracker_time_s", "render_ms", "target_cd_m2", "adaptation_cd_m2")
@@ -93,10 +96,13 @@ def _live_records(path: Path) -> list[dict]:
                 not math.isfinite(x)
                 or x < low
                 or (column in ("pupil_mm", "interval_ms") and x <= 0)
+                or (column == "pupil_mm" and not PUPIL_RANGE_MM[0] <= x <= PUPIL_RANGE_MM[1])
             ):
                 allowed = (
-                    "> 0"
-                    if column in ("pupil_mm", "interval_ms")
+                    f"in [{PUPIL_RANGE_MM[0]:g}, {PUPIL_RANGE_MM[1]:g}] mm"
+                    if column == "pupil_mm"
+                    else "> 0"
+                    if column == "interval_ms"
                     else (">= 0" if low == 0.0 else "finite")
                 )
                 raise ValueError(
