@@ -129,6 +129,13 @@ def test_a_cut_last_frame_row_or_a_foreign_header_is_refused(tmp_path):
     frames.write_text("")
     with pytest.raises(ValueError, match=r"a_frames\.tsv: empty"):
         live_frames([tmp_path / "a.csv"])
+    frames.write_text(_edited(rows, lambda r: r).replace("\t", ","))  # a spreadsheet's save
+    with pytest.raises(ValueError, match="line 3: a live frame row not separated by tabs"):
+        live_frames([tmp_path / "a.csv"])
+    frames.unlink()
+    frames.mkdir()
+    with pytest.raises(ValueError, match=r"a_frames\.tsv: not a file"):
+        live_frames([tmp_path / "a.csv"])
     assert "\t".join(LIVE_HEADER) == HEADER  # the analysis reads what the front-end writes
 
 

@@ -34,6 +34,7 @@ LIVE_HEADER = (
 # (§5.2.1 ii; glarelab.glare.night.live's bank), so a frame record holds no other
 PUPIL_RANGE_MM = (2.0, 8.0)
 _LIVE_WHAT = re.compile(r"trial [1-9][0-9]* live")
+_FOREIGN_LIVE = re.compile(r"trial [1-9][0-9]* live[^\t]")
 _FLAGS = ("dropped", "valid_gaze", "valid_pupil", "clamped")
 _TIMES = ("time_s", "tracker_time_s", "render_ms", "target_cd_m2", "adaptation_cd_m2")
 
@@ -55,6 +56,14 @@ def _live_records(path: Path) -> list[dict]:
         if fields and fields[0].endswith(" live")
     ]
     if not live:
+        foreign = next(
+            (n for n, line in enumerate(lines, start=1) if _FOREIGN_LIVE.match(line)), None
+        )
+        if foreign is not None:  # a spreadsheet saved it with another separator
+            raise ValueError(
+                f"{path}, line {foreign}: a live frame row not separated by tabs; a frame "
+                "record is tab-separated"
+            )
         return []
     header = tuple(next(csv.reader(lines[:1], delimiter="\t")))
     if header != LIVE_HEADER:
@@ -204,6 +213,8 @@ def live_frames(files: list[str | Path]) -> pd.DataFrame | None:
     rows = []
     for file in files:
         path = _frames_path(Path(file))
+        if path.exists() and not path.is_file():
+            raise ValueError(f"{path}: not a file; a session's frame record is a text file")
         if not path.is_file():
             continue
         records = _live_records(path)
