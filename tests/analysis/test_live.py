@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
-import pandas as pd
+import re
 
-from glarelab.analysis.live import live_frames
+import pandas as pd
+import pytest
+
+from glarelab.analysis.live import LIVE_HEADER, live_frames
 from glarelab.analysis.report import write_report
 from glarelab.cli import main
 from glarelab.frontend.live import FRAME_COLUMNS
@@ -55,3 +58,105 @@ def test_sessions_without_live_frames_add_nothing(tmp_path):
     (tmp_path / "a.csv").write_text("x\n")
     (tmp_path / "a_frames.tsv").write_text("what\tframe\tinterval_ms\nwindow opened\t1\t16.7\n")
     assert live_frames([tmp_path / "a.csv"]) is None
+
+
+def _edited(rows: list[str], edit) -> str:
+    lines = [HEADER, "run 1 started 2026-01-01T00:00:00+00:00\t\t", *edit(list(rows))]
+    return "\n".join(lines) + "\n"
+
+
+def _cut(rows):
+    rows[-1] = rows[-1][: len(rows[-1]) // 2]
+    return rows
+
+
+def _field(rows, index, column, value):
+    fields = rows[index].split("\t")
+    fields[HEADER.split("\t").index(column)] = value
+    rows[index] = "\t".join(fields)
+    return rows
+
+
+@pytest.mark.parametrize(
+    ("edit", "named"),
+    [
+        (lambda r: r[:3] + r[4:], "line 6, column frame: frame 4 of trial 1 live where frame 3"),
+        (lambda r: [*r[:4], r[3], *r[4:]], "line 7, column frame: frame 3 of trial 1 live"),
+        (lambda r: r[::-1], "line 3, column frame: frame 9 of trial 1 live where frame 0"),
+        (lambda r: r + r, "line 13, column frame: frame 0 of trial 1 live where frame 10"),
+        (
+            lambda r: r + [x.replace("trial 1", "trial 2") for x in r[:2]] + r[:1],
+            "line 15: trial 1 live begins a second time in run 1",
+        ),
+        (lambda r: _field(r, 2, "dropped", "2"), "line 5, column dropped: '2' is not 0 or 1"),
+        (
+            lambda r: _field(r, 2, "valid_gaze", "yes"),
+            "line 5, column valid_gaze: 'yes' is not 0 or 1",
+        ),
+        (lambda r: _field(r, 2, "render_ms", "nan"), "line 5, column render_ms: 'nan'; allowed"),
+        (lambda r: _field(r, 2, "render_ms", "-5"), "line 5, column render_ms: '-5'; allowed"),
+        (lambda r: _field(r, 2, "pupil_mm", "-3"), "line 5, column pupil_mm: '-3'; allowed"),
+        (
+            lambda r: _field(r, 2, "pupil_mm", "50"),
+            "line 5, column pupil_mm: '50'; allowed: a number in [2, 8] mm",
+        ),
+        (
+            lambda r: _field(r, 2, "frame", "1.5"),
+            "line 5, column frame: '1.5' is not a whole number",
+        ),
+        (lambda r: _field(r, 2, "what", "trial 1x live"), "line 5, column what: 'trial 1x live'"),
+        (lambda r: [*r[:2], r[2] + "\t9", *r[3:]], "line 5: 17 fields, the header has 16"),
+    ],
+)
+def test_a_frame_record_the_session_could_not_have_written_is_refused(tmp_path, edit, named):
+    rows = [frame_row(i) for i in range(10)]
+    (tmp_path / "a.csv").write_text("x\n")
+    (tmp_path / "a_frames.tsv").write_text(_edited(rows, edit))
+    with pytest.raises(ValueError, match=re.escape(f"a_frames.tsv, {named}")):
+        live_frames([tmp_path / "a.csv"])
+
+
+def test_a_cut_last_frame_row_or_a_foreign_header_is_refused(tmp_path):
+    rows = [frame_row(i) for i in range(10)]
+    (tmp_path / "a.csv").write_text("x\n")
+    frames = tmp_path / "a_frames.tsv"
+    frames.write_text(_edited(rows, _cut).rstrip("\n"))
+    with pytest.raises(ValueError, match="line 12: the last line is cut"):
+        live_frames([tmp_path / "a.csv"])
+    frames.write_text(_edited(rows, lambda r: r).replace("\tdropped\t", "\tdrop\t"))
+    with pytest.raises(ValueError, match="line 1: the header is not a live frame record's"):
+        live_frames([tmp_path / "a.csv"])
+    frames.write_text("")
+    with pytest.raises(ValueError, match=r"a_frames\.tsv: empty"):
+        live_frames([tmp_path / "a.csv"])
+    frames.write_text(_edited(rows, lambda r: r).replace("\t", ","))  # a spreadsheet's save
+    with pytest.raises(ValueError, match="line 3: a live frame row not separated by tabs"):
+        live_frames([tmp_path / "a.csv"])
+    frames.unlink()
+    frames.mkdir()
+    with pytest.raises(ValueError, match=r"a_frames\.tsv: not a file"):
+        live_frames([tmp_path / "a.csv"])
+    assert "\t".join(LIVE_HEADER) == HEADER  # the analysis reads what the front-end writes
+
+
+@pytest.mark.parametrize(
+    ("run_line", "named"),
+    [
+        ("run 1 started T; log time 0 = Unix time 200.000 s", "records its run 1 at 100.000 s"),
+        ("run 2 started T; log time 0 = Unix time 100.000 s", "records 1 run(s)"),
+        ("run 1 started T; log time 0 = Unix time 100.000 s; PILOT run", "is a pilot's but the"),
+    ],
+)
+def test_a_frame_record_of_another_session_is_refused(tmp_path, run_line, named):
+    # frame records swapped between sessions, or a pilot's put beside a participant's
+    # session, were counted as the session's own
+    rows = [frame_row(i) for i in range(3)]
+    (tmp_path / "a.csv").write_text("x\n")
+    (tmp_path / "a.json").write_text('{"runs": [{"clock_epoch_s": 100.0004}]}')
+    frames = tmp_path / "a_frames.tsv"
+    frames.write_text("\n".join([HEADER, run_line + "\t\t", *rows]) + "\n")
+    with pytest.raises(ValueError, match=re.escape(named)):
+        live_frames([tmp_path / "a.csv"])
+    own = "run 1 started T; log time 0 = Unix time 100.000 s"
+    frames.write_text("\n".join([HEADER, own + "\t\t", *rows]) + "\n")
+    assert live_frames([tmp_path / "a.csv"])["frames"].tolist() == [3]

@@ -6,11 +6,12 @@ import math
 import re
 
 import numpy as np
+import pandas as pd
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from glarelab.analysis.stats import holm, holm_confidence, similarity_groups
+from glarelab.analysis.stats import corrected_p, holm, holm_confidence, similarity_groups
 
 SETTINGS = settings(max_examples=30, deadline=None)
 P = st.floats(0.0, 1.0)
@@ -126,3 +127,17 @@ def test_similarity_groups_refuses_a_nan_p_value_naming_its_pair(means, data):
 def test_similarity_groups_refuses_an_unknown_missing(missing):
     with pytest.raises(ValueError, match=r"^similarity_groups: missing must be 'raise' or"):
         similarity_groups({"A": 1, "B": 2}, {("A", "B"): 0.5}, missing=missing)
+
+
+@pytest.mark.parametrize(
+    ("row", "error", "named"),
+    [
+        ({"p": 0.01, "df1": 2.0}, TypeError, "corrected_p: row must be a row of rm_anova's table"),
+        (pd.Series({"p": 0.01}), ValueError, "corrected_p: row lacks df1, eps_gg"),
+        (pd.Series({"df1": 3.0, "eps_gg": 0.5}), ValueError, "corrected_p: row lacks p_gg"),
+    ],
+)
+def test_corrected_p_of_a_row_that_is_not_rm_anovas_is_refused(row, error, named):
+    # a dict, or a row without its columns, ended in KeyError 'df1'
+    with pytest.raises(error, match=re.escape(named)):
+        corrected_p(row)

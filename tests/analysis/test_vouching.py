@@ -57,12 +57,18 @@ def yoshida(simulated):
 def test_a_pilot_is_left_out_listed_and_analysed_only_when_asked(yoshida, tmp_path):
     protocol, files = yoshida
     source = files[0]
+    runs = json.loads(source.with_suffix(".json").read_text())["runs"]
     pilot = copy_session(
         source,
         tmp_path,
         name=source.name.replace("sim01", "pil01").replace(".csv", "_pilot.csv"),
         rows=lambda lines: renamed(lines, "sim01", "pil01"),
-        sidecar={"pilot": True, "participant": "pil01"},
+        # a pilot's sidecar says it at the top and in each run, as a --pilot run writes it
+        sidecar={
+            "pilot": True,
+            "participant": "pil01",
+            "runs": [r | {"pilot": True} for r in runs],
+        },
     )
     dataset = load_sessions(protocol, [*files, pilot])
     assert "pil01" not in set(dataset.trials["participant"])
@@ -94,6 +100,12 @@ def test_a_pilot_is_left_out_listed_and_analysed_only_when_asked(yoshida, tmp_pa
             "the session's calibration (readings bbbbbbbbbbbb…) is not the one its images",
         ),
         ({"trials": 16}, "trial 16 of the 16 the completed session recorded missing"),
+        ({"runs": [{"pilot": True}]}, "pilot is false, but run(s) 1 say pilot true"),
+        ({"data_format": 0.4}, 'data_format is 0.4, not text: a session writes it as a string'),
+        (
+            {"simulated": True, "runs": [{"keyboard": "psychtoolbox"}]},
+            "simulated is true, but its runs' keyboard is psychtoolbox, not the simulated",
+        ),
     ],
 )  # fmt: skip
 def test_a_sidecar_that_disagrees_is_refused_with_the_reason(yoshida, tmp_path, change, named):
@@ -286,3 +298,20 @@ def test_shuffled_duplicated_or_truncated_rows_give_the_result_or_a_named_refusa
             return
     for name, table in expected.items():  # untouched: the same analysis, to the last digit
         pd.testing.assert_frame_equal(result[name], table, check_exact=True)
+
+
+@pytest.mark.parametrize(
+    ("column", "value", "named"),
+    [
+        ("offset_s", "0.5", "line 5, column offset_s: 0.5 is before onset_s"),
+        ("shown_ms", "100.0", "line 5, column shown_ms: 100.0 is not offset_s - onset_s"),
+    ],
+)
+def test_a_presentation_that_ends_before_it_begins_or_lasts_another_time_is_refused(
+    simulated, tmp_path, column, value, named
+):
+    protocol = load_protocol("spencer1995")
+    files = csvs(simulated, "spencer1995")
+    bad = copy_session(files[0], tmp_path, rows=lambda lines: _set_cell(lines, 5, column, value))
+    with pytest.raises(DataError, match=re.escape(named)):
+        load_sessions(protocol, [bad, *files[1:]])

@@ -125,11 +125,14 @@ def scene(tmp_path):
         (["--seed", "3"], "--seed without --flare-lines"),
         (["--model", "wave", "--aperture-spacing-mm", "2"],
          "--aperture-spacing-mm without --aperture-image"),
+        (["--model", "wave", "--aperture-image", "{scene}"],
+         "without --aperture-spacing-mm: give the size of one of the image's pixels"),
         (["--preview-scale", "log"], "--preview-scale log without --preview"),
         (["--preview-scale", "display"], "--preview-scale display without --preview"),
     ],
 )  # fmt: skip
 def test_render_options_that_would_be_ignored_are_refused(extra, named, scene, capsys, tmp_path):
+    extra = [str(scene) if a == "{scene}" else a for a in extra]
     argv = ["render", scene, tmp_path / "out.exr", "--pixel-deg", "0.02", *extra]
     refused(argv, capsys, tmp_path, named)
 
@@ -192,6 +195,8 @@ def stimulus_set(tmp_path_factory):
         ["docs", "--out", "{set}/docs"],
         ["bench", "--out", "{set}/bench"],
         ["demo", "--out", "{set}/demo"],
+        ["protocol", "copy", "spencer1995", "{set}"],
+        ["protocol", "copy", "spencer1995", "{set}/mine.toml"],
     ],
 )
 def test_no_output_inside_a_stimulus_set(argv, stimulus_set, capsys, tmp_path, monkeypatch):
@@ -200,6 +205,14 @@ def test_no_output_inside_a_stimulus_set(argv, stimulus_set, capsys, tmp_path, m
     before = sorted(stimulus_set.rglob("*"))
     refused(argv, capsys, tmp_path, "inside the stimulus set")
     assert sorted(stimulus_set.rglob("*")) == before
+
+
+def test_a_protocol_copy_never_replaces_a_link(capsys, tmp_path, monkeypatch):
+    # a dangling link's target does not exist, yet the link is someone's: it was replaced
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "p.toml").symlink_to(tmp_path / "elsewhere.toml")
+    refused(["protocol", "copy", "spencer1995", "p.toml"], capsys, tmp_path, "symbolic link")
+    assert (tmp_path / "p.toml").is_symlink()
 
 
 def test_a_measurement_without_verification_points_is_refused_before_it_starts(capsys, tmp_path):

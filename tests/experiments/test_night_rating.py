@@ -146,7 +146,23 @@ def test_a_simulated_study_and_its_report_show_the_stimulus_rated(small, tmp_pat
         (lambda d: d["conditions"][1].update(name="full"), "names repeat"),
         (lambda d: d["scene"].update(size_px=[4000, 400]), "must fit the display"),
         (lambda d: d["scene"].update(sequence="sunrise"), "scene.sequence"),
-        (lambda d: d["scene"].update(glare_model="sun"), "scene.model = 'sun'"),
+        (
+            lambda d: d["scene"].update(sequence="still", live=True, frame_rate_hz=30.0),
+            r"scene.frame_rate_hz = 30.0: not used by a live scene",
+        ),
+        (
+            lambda d: d["scene"].update(adapted_display_cd_m2=1e4),
+            r"scene.adapted_display_cd_m2 = 10000: above the display's white",
+        ),
+        (lambda d: d["scene"].update(glare_model="sun"), "scene.glare_model = 'sun'"),
+        (
+            lambda d: d["scene"].update(glare_parameters={"age": 300}),
+            "scene.glare_parameters: age must be",
+        ),
+        (
+            lambda d: d["scene"].update(glare_parameters={"pupil_mm": 3.0}),
+            r"scene.glare_parameters: pupil_mm = 3.0: a scene's eye state is each frame's",
+        ),
         (lambda d: d["scene"].update(colour=1), "scene.colour: unknown key"),
         (lambda d: d["observer"]["category_effects"].update(Overall="glow"), "'glow'"),
     ],

@@ -378,3 +378,18 @@ def test_a_disk_that_fills_during_a_session_stops_it_with_its_reason(
     assert sidecar["runs"][0]["ended_by"].startswith("could not write")
     assert "No space left on device" in sidecar["runs"][0]["ended_by"]
     assert not list(small_disk.glob(".*.reserve"))  # the room set aside is given back
+
+
+def test_a_live_scene_given_a_calibration_checks_it_before_anything_is_written(tmp_path):
+    # the live scene was encoded through --calibration while the sidecar said the calibration
+    # was "not needed": another display's calibration (here a synthetic 50 cd/m² one, the
+    # protocol's display is 200 cd/m²) went unchecked and unrecorded
+    from glarelab.display.calibration import synthetic_calibration
+
+    other = synthetic_calibration(max_cd_m2=50.0, black_cd_m2=0.05, bit_depth=8)
+    with pytest.raises(ValueError, match="calibration"):
+        run_session(
+            load_protocol("luidolt2020-live"), "P01", out=tmp_path / "data", frontend=object(),
+            calibration=other,
+        )  # fmt: skip
+    assert not (tmp_path / "data").exists()

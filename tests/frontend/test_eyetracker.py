@@ -13,6 +13,7 @@ from glarelab.frontend.eyetracker import (
     GazeFilter,
     PupilCalibration,
     calibrate_pupil,
+    datastore_settings,
 )
 
 
@@ -111,3 +112,12 @@ class Constant:
     def sample(self):
         self.n += 1
         return 10.0, 10.0, None if self.n % 3 == 0 else 5.0
+
+
+def test_iohubs_store_is_named_absolute_beside_the_session(tmp_path, monkeypatch):
+    # ioHub's server runs in glarelab's package folder: a relative --out put the session's
+    # _iohub.hdf5 there (src/glarelab/data/...), not beside its CSV
+    monkeypatch.chdir(tmp_path)
+    store = datastore_settings("data/P01_iohub.hdf5", "run1")
+    assert store["datastore_name"] == str(tmp_path / "data" / "P01_iohub")
+    assert store["session_code"] == "run1"

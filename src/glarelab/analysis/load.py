@@ -231,8 +231,30 @@ def _read_file(
             for c in expected
         }
         parsed["_file"], parsed["_line"] = str(path), line
+        _presentation_times(parsed, f"{path}, line {line}", problems)
         rows.append(parsed)
     return rows
+
+
+SHOWN_MS_TOLERANCE = 0.01  # ms: shown_ms is written as 1000 (offset_s - onset_s), unrounded
+
+
+def _presentation_times(row: dict, where: str, problems: list[str]) -> None:
+    """A row's presentation as the session measured it: the flip that ended it is not before
+    the one that began it, and ``shown_ms`` is their difference (docs/data.md)."""
+    onset, offset, shown = row.get("onset_s"), row.get("offset_s"), row.get("shown_ms")
+    if not all(isinstance(v, float) and math.isfinite(v) for v in (onset, offset)):
+        return
+    if offset < onset:
+        problems.append(
+            f"{where}, column offset_s: {offset!r} is before onset_s {onset!r} (the flip that "
+            "ended the presentation comes after the one that began it)"
+        )
+    elif isinstance(shown, float) and abs(shown - 1000.0 * (offset - onset)) > SHOWN_MS_TOLERANCE:
+        problems.append(
+            f"{where}, column shown_ms: {shown!r} is not offset_s - onset_s "
+            f"({1000.0 * (offset - onset):.3f} ms), as every session writes it"
+        )
 
 
 def _since(expected, name: str) -> str:
@@ -331,9 +353,15 @@ def _sidecar_fields(path: Path, sidecar: dict) -> list[str]:
     each field the analysis reads of its type and range."""
     where_ = path.with_suffix(".json")
     problems = []
-    if "data_format" in sidecar and sidecar["data_format"] not in DATA_FORMATS:
+    value = sidecar.get("data_format")
+    if "data_format" in sidecar and not isinstance(value, str):
         problems.append(
-            f"{where_}: data_format {_json(sidecar['data_format'])} is not a format this version "
+            f"{where_}: data_format is {_json(value)}, not text: a session writes it as a "
+            f"string, one of {', '.join(map(_json, DATA_FORMATS))} (edited by hand?)"
+        )
+    elif "data_format" in sidecar and value not in DATA_FORMATS:
+        problems.append(
+            f"{where_}: data_format {_json(value)} is not a format this version "
             f"of glarelab reads ({', '.join(DATA_FORMATS)}): a file of a newer version (update "
             "glarelab) or edited by hand"
         )
@@ -349,6 +377,22 @@ def _sidecar_fields(path: Path, sidecar: dict) -> list[str]:
             )
     if sidecar.get("simulated") is False and not problems:
         problems += _simulated_signs(where_, sidecar)
+    if sidecar.get("simulated") is True and not problems:
+        keyboards = sorted(
+            {
+                run["keyboard"]
+                for run in sidecar.get("runs") or []
+                if isinstance(run, dict)
+                and isinstance(run.get("keyboard"), str)
+                and run["keyboard"] != "simulated observer"
+            }
+        )
+        if keyboards:
+            problems.append(
+                f"{where_}: simulated is true, but its runs' keyboard is {', '.join(keyboards)}, "
+                "not the simulated observer: a session on a screen (the sidecar edited?); a "
+                "session is analysed as what it is (simulated: false)"
+            )
     return problems
 
 
@@ -402,6 +446,17 @@ def _sidecar_contradictions(
         )
     if not isinstance(sidecar.get("pilot", False), bool):
         problems.append(f"{where_}: pilot is {sidecar.get('pilot')!r}; must be true or false")
+    else:  # a pilot session resumes only as a pilot, and a session only as a session
+        runs = [r for r in sidecar.get("runs") or [] if isinstance(r, dict) and "pilot" in r]
+        other = [
+            n for n, r in enumerate(runs, start=1) if r["pilot"] != sidecar.get("pilot", False)
+        ]
+        if other:
+            problems.append(
+                f"{where_}: pilot is {_json(sidecar.get('pilot', False))}, but run(s) "
+                f"{', '.join(map(str, other))} say pilot {_json(runs[other[0] - 1]['pilot'])}: a "
+                "session's runs are all pilots or none (the sidecar edited?)"
+            )
     for key in ("participant", "session"):
         values = {str(row.get(key)) for row in rows}
         if rows and values != {str(sidecar.get(key))}:

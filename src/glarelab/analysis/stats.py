@@ -1160,6 +1160,20 @@ GG_BELOW = 0.75  # Girden (1992): Greenhouse–Geisser's ε below .75, Huynh–F
 Correction = Literal["none", "GG", "HF", "LB"]
 
 
+def _anova_row(row, keys: tuple[str, ...], function: str) -> None:
+    """``row`` is a row of :func:`rm_anova`'s table (a pandas Series) with ``keys``."""
+    if not isinstance(row, pd.Series):
+        raise TypeError(
+            f"{function}: row must be a row of rm_anova's table (a pandas Series), got "
+            f"{type(row).__name__}"
+        )
+    missing = [k for k in keys if k not in row.index]
+    if missing:
+        raise ValueError(
+            f"{function}: row lacks {', '.join(missing)}; give a row of rm_anova's table"
+        )
+
+
 def correction(row) -> Correction:
     """The correction an ``rm_anova`` row is reported with and decided on (module docstring).
 
@@ -1191,6 +1205,7 @@ def correction(row) -> Correction:
     >>> correction(pd.Series({"df1": 11.0, "eps_gg": float("nan"), "eps_hf": float("nan")}))
     'LB'
     """
+    _anova_row(row, ("df1", "eps_gg"), "correction")
     if float(row["df1"]) <= 1 or ("F" in row.index and math.isnan(float(row["F"]))):
         return "none"
     if math.isnan(float(row["eps_gg"])):
@@ -1212,8 +1227,11 @@ def corrected_p(row) -> float:
     float
         The p-value.
     """
+    _anova_row(row, ("df1", "eps_gg"), "corrected_p")
     chosen = correction(row)
-    return float(row["p"] if chosen == "none" else row[f"p_{chosen.lower()}"])
+    key = "p" if chosen == "none" else f"p_{chosen.lower()}"
+    _anova_row(row, (key,), "corrected_p")
+    return float(row[key])
 
 
 def corrected_df(row) -> tuple[float, float]:

@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import argparse
+import os
 from pathlib import Path
 
 from glarelab.protocols import PARADIGMS, describe_schema, load_protocol
 
-from .common import PROTOCOL_HELP
+from .common import PROTOCOL_HELP, inside_whole_output
 
 
 def _protocol_keys(args: argparse.Namespace) -> int:
@@ -53,10 +54,21 @@ def _protocol_copy(args: argparse.Namespace) -> int:
         destination = destination / source.name
     if destination.suffix != ".toml":
         raise ValueError(f"copy to {destination}: must end in .toml (or be a folder)")
+    if destination.is_symlink():  # a dangling link does not "exist", yet it is someone's
+        raise ValueError(
+            f"copy to {destination}: a symbolic link (to {os.readlink(destination)}); it is "
+            "never replaced or written through"
+        )
     if destination.exists():
         raise ValueError(f"copy to {destination}: the file exists; it is never replaced")
     if not destination.parent.is_dir():
         raise ValueError(f"copy: no folder {destination.parent}")
+    whole = inside_whole_output(destination)
+    if whole is not None:
+        raise ValueError(
+            f"copy to {destination}: inside the {whole}, which glarelab writes and checks as a "
+            "whole; copy the protocol elsewhere (nothing was changed)"
+        )
     write_bytes(destination, source.read_bytes())
     print(destination.resolve())
     return 0

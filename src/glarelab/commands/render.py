@@ -75,6 +75,11 @@ def _check_options(args: argparse.Namespace) -> None:
             "--aperture-spacing-mm without --aperture-image: the spacing scales the obstacle "
             "image, so without one it would be ignored"
         )
+    if "aperture_image" in given and "aperture_spacing_mm" not in given:
+        raise ValueError(
+            f"--aperture-image {args.aperture_image} without --aperture-spacing-mm: give the "
+            "size of one of the image's pixels on the pupil, mm (a number > 0)"
+        )
 
 
 def build_model(args: argparse.Namespace) -> glare.GlareModel:

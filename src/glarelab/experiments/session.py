@@ -609,7 +609,9 @@ def _run_session_locked(
     if simulated:
         calibration_record = {"calibrated": False, "status": "simulated", "readings_sha256": None}
         checks = []
-    elif not shows_images(protocol):  # a questionnaire shows no luminances
+    elif not shows_images(protocol) and not (
+        calibration is not None and (protocol.data.get("scene") or {}).get("live")
+    ):  # a questionnaire shows no luminances (a live scene encodes through a given calibration)
         calibration_record = {"calibrated": False, "status": "not needed", "readings_sha256": None}
         checks = []
     else:

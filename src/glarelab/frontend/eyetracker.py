@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -44,6 +45,7 @@ __all__ = [
     "PupilCalibration",
     "TrackerError",
     "calibrate_pupil",
+    "datastore_settings",
     "tracker_config",
 ]
 
@@ -563,6 +565,41 @@ def calibrate_pupil(
     )  # fmt: skip
 
 
+def datastore_settings(datastore, session_code: str) -> dict:
+    """ioHub's settings for its hdf5 store at ``datastore`` (none for None).
+
+    The store's name is made absolute: ioHub's server process runs in another working folder
+    (glarelab's package folder), where a relative name would put the store.
+
+    Parameters
+    ----------
+    datastore
+        The store's file (``.hdf5``), or None.
+    session_code
+        ioHub's session code in the store.
+
+    Returns
+    -------
+    dict
+        ``experiment_code``, ``session_code`` and ``datastore_name`` (without ``.hdf5``).
+
+    Examples
+    --------
+    >>> datastore_settings("/data/P01_iohub.hdf5", "run1")["datastore_name"]
+    '/data/P01_iohub'
+    >>> datastore_settings(None, "run1")
+    {}
+    """
+    if datastore is None:
+        return {}
+    name = str(Path(datastore).absolute())
+    return {
+        "experiment_code": "glarelab",
+        "session_code": session_code,
+        "datastore_name": name[: -len(".hdf5")] if name.endswith(".hdf5") else name,
+    }
+
+
 class IoHubEyeTracker:
     """The samples of an ioHub eye tracker, in window pixels from the top-left.
 
@@ -629,14 +666,7 @@ class IoHubEyeTracker:
             "bino": list(BinocularEyeSampleEvent.CLASS_ATTRIBUTE_NAMES),
         }
         config = {**(settings or {}), "name": "tracker"}
-        store = {}
-        if datastore is not None:
-            name = str(datastore)
-            store = {
-                "experiment_code": "glarelab",
-                "session_code": session_code,
-                "datastore_name": name[: -len(".hdf5")] if name.endswith(".hdf5") else name,
-            }
+        store = datastore_settings(datastore, session_code)
         try:
             self.io = launchHubServer(
                 window=window, udp_port=_free_udp_port(), **store, **{device: config}

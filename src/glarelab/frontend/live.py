@@ -136,7 +136,9 @@ class LiveView:
         stop
             Called after every frame; True ends the run.
         duration_s
-            End after this long, s; None: only ``stop``.
+            End this long after the first frame's flip, s (the scene's onset: the render of
+            the first frame, which builds the renderer's bank, is not viewing time); None:
+            only ``stop``.
 
         Returns
         -------
@@ -146,11 +148,11 @@ class LiveView:
         from psychopy import core
 
         period = 1.0 / refresh_hz
-        start = clock.getTime()
+        start = None  # the first frame's flip: the viewing runs from the scene's onset
         flips: list[float] = []
         last_now = None
         left, top = self.origin_px
-        while duration_s is None or clock.getTime() - start < duration_s:
+        while duration_s is None or start is None or clock.getTime() - start < duration_s:
             now = clock.getTime()
             tracker_now = source.time_s()
             x, y, pupil = source.sample()
@@ -179,6 +181,7 @@ class LiveView:
             lost = interval is not None and interval > DROPPED_FACTOR * period
             self.dropped += lost
             flips.append(flipped)
+            start = flips[0]
             self.render_ms.append(frame.render_ms)
             values = (
                 self.frames, f"{now:.6f}", f"{tracker_now:.6f}",

@@ -266,7 +266,14 @@ def glare_model(model: str, parameters: Mapping[str, Any]):
     return make_model(model, **values)
 
 
-def check_glare_model(model: Any, parameters: Any, where: str, problems: list[str]) -> None:
+def check_glare_model(
+    model: Any,
+    parameters: Any,
+    where: str,
+    problems: list[str],
+    *,
+    keys: tuple[str, str] = ("model", "parameters"),
+) -> None:
     """The model exists and takes these parameters (its own checks name what is wrong).
 
     Parameters
@@ -279,17 +286,23 @@ def check_glare_model(model: Any, parameters: Any, where: str, problems: list[st
         The method's dotted name in the messages (``'methods[0]'``).
     problems
         The list each problem found is appended to, one line naming the key and its value.
+    keys
+        The names of the model's and the parameters' keys in the messages; default
+        ``('model', 'parameters')`` (a scene's are ``('glare_model', 'glare_parameters')``).
     """
+    model_key, parameters_key = keys
     names = _glare_models()
     if model not in names:
-        problems.append(f"{where}.model = {model!r}: must be one of {', '.join(map(repr, names))}")
+        problems.append(
+            f"{where}.{model_key} = {model!r}: must be one of {', '.join(map(repr, names))}"
+        )
         return
     try:
         glare_model(model, parameters or {})
     except TypeError as error:
-        problems.append(f"{where}.parameters: {error}")
+        problems.append(f"{where}.{parameters_key}: {error}")
     except ValueError as error:
-        problems.append(f"{where}.parameters: {error}")
+        problems.append(f"{where}.{parameters_key}: {error}")
 
 
 def repeated_names(names: list) -> list:

@@ -216,6 +216,7 @@ def _check_scene(p: dict, problems: list[str]) -> None:
             if p[name] is not None:
                 problems.append(f"[{name}]: only a study with a [scene] uses it")
         return
+    given = set(scene) if isinstance(scene, dict) else set()
     p["scene"] = validate(scene, SCENE, "scene", problems)
     for name, schema in (("display", DISPLAY), ("viewing", VIEWING)):
         if p[name] is None:
@@ -225,6 +226,12 @@ def _check_scene(p: dict, problems: list[str]) -> None:
     if problems:
         return
     check_display(p["display"], problems)
+    adapted, white = p["scene"]["adapted_display_cd_m2"], p["display"]["max_cd_m2"]
+    if isinstance(white, (int, float)) and adapted > white:
+        problems.append(
+            f"scene.adapted_display_cd_m2 = {adapted:g}: above the display's white "
+            f"(display.max_cd_m2 = {white:g}); the adapting luminance is shown at most at white"
+        )
     if not conditions:
         problems.append("[[conditions]]: missing (a [scene] is shown once per condition)")
         return
@@ -238,7 +245,27 @@ def _check_scene(p: dict, problems: list[str]) -> None:
     if any("glare" in c["effects"] for c in conditions):
         from glarelab.protocols.common import check_glare_model
 
-        check_glare_model(model, p["scene"]["glare_parameters"], "scene", problems)
+        check_glare_model(
+            model,
+            p["scene"]["glare_parameters"],
+            "scene",
+            problems,
+            keys=("glare_model", "glare_parameters"),
+        )
+        parameters = p["scene"]["glare_parameters"] or {}
+        fixed = [k for k in SCENE_EYE_STATE if k in parameters]
+        if fixed:
+            problems.append(
+                f"scene.glare_parameters: {', '.join(f'{k} = {parameters[k]!r}' for k in fixed)}"
+                ": a scene's eye state is each frame's (the pupil and regime of its adapted "
+                "luminance, or a live scene's tracked pupil), so the value would be ignored; "
+                "remove it"
+            )
+    if p["scene"]["live"] and "frame_rate_hz" in given:  # a value there would do nothing
+        problems.append(
+            f"scene.frame_rate_hz = {p['scene']['frame_rate_hz']!r}: not used by a live scene "
+            "(it renders at every refresh); remove it"
+        )
     if p["scene"]["live"]:
         _check_live(p, problems)
         return
@@ -269,6 +296,10 @@ def _check_scene(p: dict, problems: list[str]) -> None:
             f"scene.size_px = {[width, height]}: must fit the display's "
             f"{[screen_w, screen_h]} pixels"
         )
+
+
+# the glare model's fields a scene sets per frame (glare.night.pipeline.adapted_model, LiveNight)
+SCENE_EYE_STATE = ("pupil_mm", "regime")
 
 
 def _check_live(p: dict, problems: list[str]) -> None:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -209,3 +211,25 @@ def test_pixels_that_meet_the_white_between_two_levels_are_blurred_directly(scen
 def test_acuity_with_the_gaze_falloff_is_refused(scene):
     with pytest.raises(ValueError, match="acuity=True does not combine with glare_falloff_deg"):
         LiveNight(scene, pixel_deg=PIXEL_DEG, acuity=True, glare_falloff_deg=2.0)
+
+
+@pytest.mark.parametrize("gaze", ["16,16", (16.0, 16.0, 1.0), (True, 3.0), [[1.0, 2.0]]])
+def test_a_gaze_that_is_not_two_numbers_is_refused(gaze):
+    # '16,16' was read as the gaze (1, 6): a string's first two characters
+    live = LiveNight(np.ones((8, 8)), pixel_deg=0.1, pupils_mm=(4.0,))
+    with pytest.raises(ValueError, match=r"gaze_px must be \(row, column\), two numbers"):
+        live.frame(gaze_px=gaze, pupil_mm=4.0, frame_time_s=0.0)
+
+
+@pytest.mark.parametrize(
+    ("options", "named"),
+    [
+        ({"bank_size": 4.5}, "bank_size must be an integer >= 4; got 4.5"),
+        ({"bank_size": True}, "bank_size must be an integer >= 4; got True"),
+        ({"acuity_method": "Luidolt2020"}, "without acuity=True: the acuity loss is off"),
+    ],
+)
+def test_a_fractional_bank_or_acuity_options_without_acuity_are_refused(options, named):
+    # bank_size 4.5 was truncated to 4, and the acuity options were ignored without a word
+    with pytest.raises(ValueError, match=re.escape(named)):
+        LiveNight(np.ones((8, 8)), pixel_deg=0.1, pupils_mm=(4.0,), **options)

@@ -1,6 +1,8 @@
 """render_night at its boundary: its adaptation time constants are judged by themselves and
 named, whatever else is missing."""
 
+import re
+
 import numpy as np
 import pytest
 from hypothesis import given
@@ -25,3 +27,25 @@ def test_a_time_constant_that_is_not_positive_is_refused_naming_it(name, value, 
     with pytest.raises(ValueError, match=rf"^{name} must be a finite number > 0 s, got") as raised:
         render_night([SCENE, SCENE], pixel_deg=0.05, frame_time_s=frame_time_s, **{name: value})
     assert "\n" not in str(raised.value)
+
+
+@pytest.mark.parametrize(
+    ("options", "named"),
+    [
+        ({"effects": ("glare", "glare")}, "effects = ('glare', 'glare'): glare given twice"),
+        ({"effects": "glare"}, "effects = 'glare': must be a sequence of names"),
+        ({"frame_time_s": [0.1, 0.1]}, "frame_time_s: 2 durations for 3 frames"),
+        ({"desaturation": 0.3}, "desaturation = 0.3: only Spencer's scotopic colour takes it"),
+        (
+            {"initial_adaptation_cd_m2": -1.0, "frame_time_s": None},
+            "initial_adaptation_cd_m2 must be in [0, inf) cd/m², got -1",
+        ),
+    ],
+)
+def test_effects_given_twice_durations_for_other_frames_or_an_ignored_option_are_refused(
+    options, named
+):
+    # a repeated effect was applied once without a word, and two durations for three frames
+    # ended in numpy's broadcasting error, naming no argument
+    with pytest.raises(ValueError, match=re.escape(named)):
+        render_night([SCENE] * 3, pixel_deg=0.05, **({"frame_time_s": 0.1} | options))

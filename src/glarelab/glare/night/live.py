@@ -296,7 +296,8 @@ class LiveNight:
         with ``blur='layers'``) of each frame, after the glare and before the scotopic colour,
         as ``render_night`` with the effect ``'acuity'``; default False. See Notes.
     acuity_method, acuity_space, levels_per_octave
-        As ``render_night``'s (defaults ``'Krawczyk2005'``, ``'lightness'``, 16).
+        As ``render_night``'s (defaults ``'Krawczyk2005'``, ``'lightness'``, 16); others
+        only with ``acuity=True``.
 
     Raises
     ------
@@ -434,9 +435,13 @@ class LiveNight:
         # each channel's values sorted: the pixels between two thresholds, by bisection
         self._sorted = np.sort(self.scene.reshape(-1, 3), axis=0).T.copy()
         self._halved: dict[int, int] = {}
-        self.bank_size = int(bank_size)
-        if self.bank_size < 4:
+        if (
+            isinstance(bank_size, bool)
+            or not isinstance(bank_size, int | np.integer)
+            or bank_size < 4
+        ):
             raise ValueError(f"bank_size must be an integer >= 4; got {bank_size!r}")
+        self.bank_size = int(bank_size)
         self._bank: OrderedDict[tuple, np.ndarray | None] = OrderedDict()
         self.bank_entries = 0
         self._threads = ThreadpoolController()
@@ -453,6 +458,16 @@ class LiveNight:
             raise ValueError(
                 "acuity=True does not combine with glare_falloff_deg (the falloff's blend "
                 "precedes the blur, which the bank cannot interpolate): give one of them"
+            )
+        if not acuity and (acuity_method, acuity_space, levels_per_octave) != (
+            "Krawczyk2005",
+            "lightness",
+            LEVELS_PER_OCTAVE,
+        ):
+            raise ValueError(
+                f"acuity_method={acuity_method!r}, acuity_space={acuity_space!r}, "
+                f"levels_per_octave={levels_per_octave!r} without acuity=True: the acuity loss "
+                "is off, so they would be ignored"
             )
         self.acuity_method = check_choice("acuity_method", acuity_method, SIGMA_METHODS)
         self.acuity_space = check_choice("acuity_space", acuity_space, ("lightness", "linear"))
@@ -580,6 +595,20 @@ class LiveNight:
         """
         start = time.perf_counter()
         if gaze_px is not None:
+            if (
+                isinstance(gaze_px, str | bytes)
+                or np.ndim(gaze_px) != 1
+                or len(gaze_px) != 2
+                or not all(
+                    isinstance(v, int | float | np.integer | np.floating)
+                    and not isinstance(v, bool | np.bool_)
+                    for v in gaze_px
+                )
+            ):
+                raise ValueError(
+                    f"gaze_px must be (row, column), two numbers in scene pixels, or None; "
+                    f"got {gaze_px!r}"
+                )
             gaze = (float(gaze_px[0]), float(gaze_px[1]))
         elif self._gaze is not None:
             gaze = self._gaze

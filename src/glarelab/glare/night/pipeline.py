@@ -233,7 +233,8 @@ def render_night(
         Acuity (:func:`glarelab.glare.night.acuity.acuity_blur`); the lightness is taken for the
         display's white.
     scotopic_method, desaturation
-        Colour (:func:`glarelab.glare.night.scotopic.scotopic_colour`).
+        Colour (:func:`glarelab.glare.night.scotopic.scotopic_colour`); ``desaturation``
+        only with the effect ``'scotopic'`` and ``scotopic_method='Spencer1995'``.
     colourspace
         The RGB colourspace of the scene and the display; default Rec. 709.
     progress
@@ -264,9 +265,25 @@ def render_night(
     # another argument is missing too
     tau_rod_s = check_positive("tau_rod_s", tau_rod_s, unit="s")
     tau_cone_s = check_positive("tau_cone_s", tau_cone_s, unit="s")
+    if initial_adaptation_cd_m2 is not None:  # judged by itself too
+        initial_adaptation_cd_m2 = check_in_range(
+            "initial_adaptation_cd_m2", initial_adaptation_cd_m2, 0.0, math.inf, unit="cd/m²",
+            high_inclusive=False,
+        )  # fmt: skip
+    if isinstance(effects, str):
+        raise ValueError(f"effects = {effects!r}: must be a sequence of names of {EFFECTS}")
     chosen = tuple(effects)
     for effect in chosen:
         check_choice("effects", effect, EFFECTS)
+    twice = sorted({e for e in chosen if chosen.count(e) > 1})
+    if twice:
+        raise ValueError(f"effects = {chosen!r}: {', '.join(twice)} given twice; each once")
+    if frame_time_s is not None and not np.isscalar(frame_time_s):
+        if len(frame_time_s) != n:
+            raise ValueError(
+                f"frame_time_s: {len(frame_time_s)} durations for {n} frames; give one per "
+                "frame (or one number for all)"
+            )
     l_dmax = check_positive("display_max_cd_m2", display_max_cd_m2, unit="cd/m²")
     key = check_in_range(
         "adapted_display_cd_m2", adapted_display_cd_m2, 0.0, l_dmax, unit="cd/m²",
@@ -274,6 +291,13 @@ def render_night(
     )  # fmt: skip
     check_choice("acuity_method", acuity_method, SIGMA_METHODS)
     check_choice("scotopic_method", scotopic_method, SCOTOPIC_METHODS)
+    if desaturation != SPENCER1995_DESATURATION and (
+        "scotopic" not in chosen or scotopic_method != "Spencer1995"
+    ):
+        raise ValueError(
+            f"desaturation = {desaturation!r}: only Spencer's scotopic colour takes it "
+            "(effects with 'scotopic' and scotopic_method='Spencer1995'); it would be ignored"
+        )
     gazes = _gazes(gaze_px, n)
     targets = np.array(
         [
