@@ -190,8 +190,11 @@ def far_spread(
     )
     rows = np.flatnonzero(coarse.any(axis=1))
     cols = np.flatnonzero(coarse.any(axis=0))
-    box_nodes = (slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1))
-    spread_coarse = spread(coarse, far, box_nodes)
+    if rows.size == 0:  # a channel without excess (a tinted source): nothing to spread
+        spread_coarse = np.zeros(coarse.shape)
+    else:
+        box_nodes = (slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1))
+        spread_coarse = spread(coarse, far, box_nodes)
     return spread_coarse if nodes else upsample(spread_coarse, factor, shape)
 
 
