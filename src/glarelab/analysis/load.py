@@ -243,6 +243,13 @@ def _presentation_times(row: dict, where: str, problems: list[str]) -> None:
     """A row's presentation as the session measured it: the flip that ended it is not before
     the one that began it, and ``shown_ms`` is their difference (docs/data.md)."""
     onset, offset, shown = row.get("onset_s"), row.get("offset_s"), row.get("shown_ms")
+    if shown is not None and offset is None:
+        problems.append(
+            f"{where}, column shown_ms: {shown!r} without an offset_s: a session writes the "
+            "time shown only with the flip that ended the presentation (a row that showed "
+            "nothing new has neither)"
+        )
+        return
     if not all(isinstance(v, float) and math.isfinite(v) for v in (onset, offset)):
         return
     if offset < onset:
