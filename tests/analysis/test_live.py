@@ -63,6 +63,15 @@ def test_the_report_counts_dropped_frames_and_tracker_loss_per_session(tmp_path,
     ]  # fmt: skip
     lines = [HEADER, "run 1 started 2026-01-01T00:00:00+00:00\t\t", "window opened\t1\t16.7"]
     first.with_name(first.stem + "_frames.tsv").write_text("\n".join([*lines, *rows]) + "\n")
+    with pytest.raises(
+        ValueError, match=r"line 2, column dropped_frames: 0, but its frame record"
+    ):
+        live_frames([first, second])  # the session counted the dropped frames in its CSV too
+    written = first.read_text().splitlines()
+    column = written[0].split(",").index("dropped_frames")
+    cells = written[1].split(",")
+    cells[column] = "3"
+    first.write_text("\n".join([written[0], ",".join(cells), *written[2:]]) + "\n")
     table = live_frames([first, second])  # the second session has no frame record
     assert table.to_dict("records") == [
         {

@@ -179,6 +179,35 @@ def _runs_of_this_session(path: Path, csv_path: Path) -> None:
             )
 
 
+def _dropped_as_in_the_csv(path: Path, csv_path: Path, records: list[dict]) -> None:
+    """The CSV's ``dropped_frames`` of a trial that showed a live scene is the count of its
+    frames flagged dropped in the record (:meth:`LiveView.run`'s count; the last run's, when a
+    resumed session showed the trial again)."""
+    last: dict[int, tuple[int, int]] = {}  # trial: (run, dropped)
+    for record in records:
+        trial = int(record["what"].split()[1])
+        run, dropped = last.get(trial, (record["_run"], 0))
+        if record["_run"] != run:
+            run, dropped = record["_run"], 0
+        last[trial] = (run, dropped + (record["dropped"] == "1"))
+    try:
+        with csv_path.open(encoding="utf-8", newline="") as handle:
+            rows = list(csv.DictReader(handle))
+    except (OSError, UnicodeDecodeError, csv.Error):
+        return  # the loader judged the CSV already
+    for line, row in enumerate(rows, start=2):
+        try:
+            trial, written = int(row.get("trial") or ""), int(row.get("dropped_frames") or "")
+        except ValueError:
+            continue
+        if trial in last and row.get("offset_s") and written != last[trial][1]:
+            raise ValueError(
+                f"{csv_path}, line {line}, column dropped_frames: {written}, but its frame "
+                f"record {path.name} flags {last[trial][1]} of trial {trial}'s live frames "
+                "dropped (one of them edited, or the record of another session?)"
+            )
+
+
 RUN_EPOCH_TOLERANCE_S = 0.002  # the run line writes the epoch to 1 ms
 
 
@@ -264,6 +293,7 @@ def live_frames(
         if not records:
             continue
         _runs_of_this_session(path, Path(file))
+        _dropped_as_in_the_csv(path, Path(file), records)
         n = len(records)
         dropped = sum(r["dropped"] == "1" for r in records)
         lost = sum(r["valid_gaze"] == "0" for r in records)
