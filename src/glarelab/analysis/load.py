@@ -34,6 +34,7 @@ import io
 import json
 import math
 import re
+from datetime import datetime
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -382,6 +383,8 @@ def _sidecar_fields(path: Path, sidecar: dict) -> list[str]:
                 f"{where_}: {key}.readings_sha256 is {_json(record['readings_sha256'])}; must "
                 "be null or a sha256 (text)"
             )
+    if not problems:
+        problems += _sidecar_consistency(where_, sidecar)
     if sidecar.get("simulated") is False and not problems:
         problems += _simulated_signs(where_, sidecar)
     if sidecar.get("simulated") is True and not problems:
@@ -400,6 +403,53 @@ def _sidecar_fields(path: Path, sidecar: dict) -> list[str]:
                 "not the simulated observer: a session on a screen (the sidecar edited?); a "
                 "session is analysed as what it is (simulated: false)"
             )
+    return problems
+
+
+AGE_RANGE_YEARS = (0, 120)  # what glarelab run accepts (--age, the dialog)
+
+
+def _sidecar_consistency(where_: Path, sidecar: dict) -> list[str]:
+    """The fields the analysis does not read, as a session writes them: an age a session
+    accepts, times that are dates with the end not before the start, at least one run, and
+    ``resumed`` the runs after the first."""
+    problems = []
+    age = (sidecar.get("participant_info") or {}).get("age")
+    if age is not None and not (
+        isinstance(age, int)
+        and not isinstance(age, bool)
+        and AGE_RANGE_YEARS[0] <= age <= AGE_RANGE_YEARS[1]
+    ):
+        problems.append(
+            f"{where_}: participant_info.age is {_json(age)}; must be null or whole years, "
+            f"{AGE_RANGE_YEARS[0]}-{AGE_RANGE_YEARS[1]} (what a session accepts)"
+        )
+    times = {}
+    for key in ("started", "ended"):
+        if isinstance(sidecar.get(key), str):
+            try:
+                times[key] = datetime.fromisoformat(sidecar[key])
+            except ValueError:
+                problems.append(
+                    f"{where_}: {key} is {_json(sidecar[key])}; must be null or an ISO date "
+                    "and time, as a session writes it"
+                )
+    try:
+        backwards = len(times) == 2 and times["ended"] < times["started"]
+    except TypeError:  # one with a time zone, one without
+        backwards = False
+    if backwards:
+        problems.append(
+            f"{where_}: ended {sidecar['ended']} is before started {sidecar['started']}"
+        )
+    runs = sidecar.get("runs")
+    if isinstance(runs, list) and not runs:
+        problems.append(f"{where_}: runs is empty; every session records its first run")
+    elif isinstance(runs, list) and "resumed" in sidecar and sidecar["resumed"] != len(runs) - 1:
+        problems.append(
+            f"{where_}: resumed is {sidecar['resumed']}, but it records {len(runs)} run(s): "
+            f"resumed counts the runs after the first ({len(runs) - 1})"
+        )
     return problems
 
 
