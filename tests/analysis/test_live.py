@@ -33,7 +33,7 @@ def as_on_a_screen(csv_path) -> None:
     sidecar = json.loads(sidecar_path.read_text())
     sidecar["simulated"] = False
     sidecar["calibration"]["status"] = "not needed"
-    del sidecar["participant_info"]["simulated_observer_seed"]
+    sidecar["participant_info"].pop("simulated_observer_seed", None)
     for run in sidecar["runs"]:
         run["keyboard"] = "keyboard"
         run["frame_intervals"] = csv_path.stem + "_frames.tsv"
@@ -99,6 +99,12 @@ def test_a_live_session_without_its_frames_or_a_simulated_one_with_frames_is_ref
     frames.write_text("\n".join([HEADER, *rows]) + "\n")  # given to a simulated session
     with pytest.raises(ValueError, match=r"_frames\.tsv: live frame rows, but the session showed "
                        "no live scene: it is a simulated observer's"):  # fmt: skip
+        write_report(protocol, [first, second], tmp_path / "rep")
+    as_on_a_screen(first)
+    sidecar = json.loads(first.with_suffix(".json").read_text())
+    sidecar["runs"][0]["frame_intervals"] = second.stem + "_frames.tsv"
+    first.with_suffix(".json").write_text(json.dumps(sidecar))
+    with pytest.raises(ValueError, match=r"its runs' frame_intervals name .*, but a live session"):
         write_report(protocol, [first, second], tmp_path / "rep")
     as_on_a_screen(first)
     for text, named in [

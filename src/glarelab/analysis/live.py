@@ -273,6 +273,21 @@ def live_frames(
                     "false; the protocol: scene.live) and wrote its frames there"
                 )
             continue
+        named = (
+            {
+                run.get("frame_intervals")
+                for run in sidecar.get("runs") or []
+                if isinstance(run, dict)
+            }
+            if live
+            else set()
+        )
+        if named - {path.name}:
+            raise ValueError(
+                f"{Path(file).with_suffix('.json')}: its runs' frame_intervals name "
+                f"{', '.join(sorted(map(json.dumps, named - {path.name})))}, but a live "
+                f"session's runs write its frames to {path.name} (the sidecar edited?)"
+            )
         records = _live_records(path)
         if live and not records:
             raise ValueError(
