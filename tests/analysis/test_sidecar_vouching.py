@@ -75,6 +75,10 @@ def test_a_data_format_this_version_does_not_know_is_refused(luidolt, tmp_path):
         ({"ended": "2020-01-01T00:00:00+00:00"}, "ended 2020-01-01T00:00:00+00:00 is before"),
         ({"runs": []}, "runs is empty; every session records its first run"),
         ({"resumed": 1}, "resumed is 1, but it records 1 run(s)"),
+        (
+            {"bit_depth": 10, "runs": [{"display": {"bits_per_channel": 8}}]},
+            "bit_depth is 10, but its runs' displays showed 8 bits per channel",
+        ),
     ],
 )
 def test_a_sidecar_field_no_session_writes_is_refused_naming_it(luidolt, tmp_path, change, named):

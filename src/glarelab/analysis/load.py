@@ -443,6 +443,16 @@ def _sidecar_consistency(where_: Path, sidecar: dict) -> list[str]:
             f"{where_}: ended {sidecar['ended']} is before started {sidecar['started']}"
         )
     runs = sidecar.get("runs")
+    depths = {
+        (run.get("display") or {}).get("bits_per_channel")
+        for run in runs or []
+        if isinstance(run, dict) and isinstance(run.get("display"), dict)
+    } - {None}
+    if isinstance(sidecar.get("bit_depth"), int) and depths - {sidecar["bit_depth"]}:
+        problems.append(
+            f"{where_}: bit_depth is {sidecar['bit_depth']}, but its runs' displays showed "
+            f"{', '.join(map(str, sorted(depths)))} bits per channel"
+        )
     if isinstance(runs, list) and not runs:
         problems.append(f"{where_}: runs is empty; every session records its first run")
     elif isinstance(runs, list) and "resumed" in sidecar and sidecar["resumed"] != len(runs) - 1:
