@@ -77,7 +77,7 @@ def test_a_data_format_this_version_does_not_know_is_refused(luidolt, tmp_path):
         ({"resumed": 1}, "resumed is 1, but it records 1 run(s)"),
         (
             {"bit_depth": 10, "runs": [{"display": {"bits_per_channel": 8}}]},
-            "bit_depth is 10, but its runs' displays showed 8 bits per channel",
+            "bit_depth is 10, but its last run's display showed 8 bits per channel",
         ),
     ],
 )

@@ -443,15 +443,15 @@ def _sidecar_consistency(where_: Path, sidecar: dict) -> list[str]:
             f"{where_}: ended {sidecar['ended']} is before started {sidecar['started']}"
         )
     runs = sidecar.get("runs")
-    depths = {
-        (run.get("display") or {}).get("bits_per_channel")
-        for run in runs or []
+    shown = [  # the sidecar's bit_depth is its last run's display's (a resume may move)
+        run["display"].get("bits_per_channel")
+        for run in (runs if isinstance(runs, list) else [])
         if isinstance(run, dict) and isinstance(run.get("display"), dict)
-    } - {None}
-    if isinstance(sidecar.get("bit_depth"), int) and depths - {sidecar["bit_depth"]}:
+    ]
+    if isinstance(sidecar.get("bit_depth"), int) and shown and shown[-1] != sidecar["bit_depth"]:
         problems.append(
-            f"{where_}: bit_depth is {sidecar['bit_depth']}, but its runs' displays showed "
-            f"{', '.join(map(str, sorted(depths)))} bits per channel"
+            f"{where_}: bit_depth is {sidecar['bit_depth']}, but its last run's display showed "
+            f"{shown[-1]} bits per channel"
         )
     if isinstance(runs, list) and not runs:
         problems.append(f"{where_}: runs is empty; every session records its first run")
