@@ -33,6 +33,8 @@ def small_night_protocol(**scene) -> str:
         "seconds": "0.3",
         "start_cd_m2": "100.0",
     } | {k: (None if v is None else repr(v).replace("'", '"')) for k, v in scene.items()}
+    if scene.get("sequence", "enter_dark") != "enter_dark":  # only enter_dark reads it
+        values["start_cd_m2"] = None
     lines = []
     in_scene = False
     for line in text.splitlines():

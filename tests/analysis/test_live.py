@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import json
 import re
+import shutil
 
 import pandas as pd
 import pytest
@@ -24,13 +26,35 @@ def frame_row(frame: int, *, dropped: int = 0, gaze: int = 1, pupil: int = 1) ->
     return "\t".join(map(str, values))
 
 
-def test_the_report_counts_dropped_frames_and_tracker_loss_per_session(tmp_path):
-    data = tmp_path / "data"
+def as_on_a_screen(csv_path) -> None:
+    """Edit a simulated session's sidecar to what a session on a screen writes (a live scene
+    shown, its frames recorded), the simulated observer's answers kept."""
+    sidecar_path = csv_path.with_suffix(".json")
+    sidecar = json.loads(sidecar_path.read_text())
+    sidecar["simulated"] = False
+    sidecar["calibration"]["status"] = "not needed"
+    sidecar["participant_info"].pop("simulated_observer_seed", None)
+    for run in sidecar["runs"]:
+        run["keyboard"] = "keyboard"
+        run["frame_intervals"] = csv_path.stem + "_frames.tsv"
+    sidecar_path.write_text(json.dumps(sidecar))
+
+
+@pytest.fixture(scope="module")
+def two_sessions(tmp_path_factory):
+    data = tmp_path_factory.mktemp("live") / "data"
     assert (
         main(["run", "luidolt2020-live", "--simulate", "--participants", "2", "--out", str(data)])
         == 0
     )
+    return data
+
+
+def test_the_report_counts_dropped_frames_and_tracker_loss_per_session(tmp_path, two_sessions):
+    data = tmp_path / "data"
+    shutil.copytree(two_sessions, data)
     first, second = sorted(data.glob("*.csv"))
+    as_on_a_screen(first)  # the first session showed the scene live; the second simulated
     # the first session: 200 frames, 3 dropped, 10 without gaze (a blink: no pupil either)
     rows = [
         frame_row(i, dropped=int(i in (5, 6, 7)), gaze=int(not 50 <= i < 60),
@@ -39,6 +63,15 @@ def test_the_report_counts_dropped_frames_and_tracker_loss_per_session(tmp_path)
     ]  # fmt: skip
     lines = [HEADER, "run 1 started 2026-01-01T00:00:00+00:00\t\t", "window opened\t1\t16.7"]
     first.with_name(first.stem + "_frames.tsv").write_text("\n".join([*lines, *rows]) + "\n")
+    with pytest.raises(
+        ValueError, match=r"line 2, column dropped_frames: 0, but its frame record"
+    ):
+        live_frames([first, second])  # the session counted the dropped frames in its CSV too
+    written = first.read_text().splitlines()
+    column = written[0].split(",").index("dropped_frames")
+    cells = written[1].split(",")
+    cells[column] = "3"
+    first.write_text("\n".join([written[0], ",".join(cells), *written[2:]]) + "\n")
     table = live_frames([first, second])  # the second session has no frame record
     assert table.to_dict("records") == [
         {
@@ -52,6 +85,41 @@ def test_the_report_counts_dropped_frames_and_tracker_loss_per_session(tmp_path)
     text = report.read_text()
     assert "200 frames over 1 session: 3 dropped (1.5 %" in text
     assert "10 without a gaze from the tracker (5.0 %" in text
+
+
+def test_a_live_session_without_its_frames_or_a_simulated_one_with_frames_is_refused(
+    tmp_path, two_sessions
+):
+    data = tmp_path / "data"
+    shutil.copytree(two_sessions, data)
+    first, second = sorted(data.glob("*.csv"))
+    protocol = load_protocol("luidolt2020-live")
+    frames = first.with_name(first.stem + "_frames.tsv")
+    rows = [frame_row(i) for i in range(5)]
+    frames.write_text("\n".join([HEADER, *rows]) + "\n")  # given to a simulated session
+    with pytest.raises(ValueError, match=r"_frames\.tsv: live frame rows, but the session showed "
+                       "no live scene: it is a simulated observer's"):  # fmt: skip
+        write_report(protocol, [first, second], tmp_path / "rep")
+    as_on_a_screen(first)
+    sidecar = json.loads(first.with_suffix(".json").read_text())
+    sidecar["runs"][0]["frame_intervals"] = second.stem + "_frames.tsv"
+    first.with_suffix(".json").write_text(json.dumps(sidecar))
+    with pytest.raises(ValueError, match=r"its runs' frame_intervals name .*, but a live session"):
+        write_report(protocol, [first, second], tmp_path / "rep")
+    as_on_a_screen(first)
+    for text, named in [
+        (HEADER + "\n", "no live frame rows"),
+        (f"{HEADER}\nrun 1 started 2026-01-01T00:00:00+00:00\t\t\nwindow opened\t1\t16.7\n",
+         "no live frame rows"),
+        (None, "missing; the session showed a live scene"),
+    ]:  # fmt: skip
+        if text is None:
+            frames.unlink()
+        else:
+            frames.write_text(text)
+        with pytest.raises(ValueError, match=re.escape(f"{frames.name}: {named}")):
+            write_report(protocol, [first, second], tmp_path / "rep")
+    assert not (tmp_path / "rep").exists()
 
 
 def test_sessions_without_live_frames_add_nothing(tmp_path):

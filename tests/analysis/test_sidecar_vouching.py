@@ -69,6 +69,16 @@ def test_a_data_format_this_version_does_not_know_is_refused(luidolt, tmp_path):
         ({"refresh_hz": float("inf")}, "refresh_hz is Infinity; must be null or a finite"),
         ({"status": "done"}, 'status is "done"; must be one of running, completed'),
         ({"calibration": "none"}, 'calibration is "none"; must be null or an object'),
+        ({"participant_info": {"age": -5}}, "participant_info.age is -5; must be null or whole"),
+        ({"participant_info": {"age": "31"}}, 'participant_info.age is "31"; must be null'),
+        ({"started": "yesterday"}, 'started is "yesterday"; must be null or an ISO date'),
+        ({"ended": "2020-01-01T00:00:00+00:00"}, "ended 2020-01-01T00:00:00+00:00 is before"),
+        ({"runs": []}, "runs is empty; every session records its first run"),
+        ({"resumed": 1}, "resumed is 1, but it records 1 run(s)"),
+        (
+            {"bit_depth": 10, "runs": [{"display": {"bits_per_channel": 8}}]},
+            "bit_depth is 10, but its last run's display showed 8 bits per channel",
+        ),
     ],
 )
 def test_a_sidecar_field_no_session_writes_is_refused_naming_it(luidolt, tmp_path, change, named):

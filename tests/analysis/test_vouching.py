@@ -305,6 +305,7 @@ def test_shuffled_duplicated_or_truncated_rows_give_the_result_or_a_named_refusa
     [
         ("offset_s", "0.5", "line 5, column offset_s: 0.5 is before onset_s"),
         ("shown_ms", "100.0", "line 5, column shown_ms: 100.0 is not offset_s - onset_s"),
+        ("offset_s", "", " without an offset_s: a session writes"),  # shown, no end
     ],
 )
 def test_a_presentation_that_ends_before_it_begins_or_lasts_another_time_is_refused(

@@ -338,3 +338,19 @@ def test_a_lab_copy_keeps_its_shipped_studys_name():
     data = copy.deepcopy(raw("yoshida2008"))
     data["display"]["max_cd_m2"] = 500.0  # the lab's own display
     assert parse_protocol(data, source="lab.toml", folder=PROTOCOLS).study == "yoshida2008"
+
+
+@pytest.mark.parametrize("sequence", ["still", "gaze"])
+def test_start_cd_m2_on_a_scene_that_does_not_enter_the_dark_is_refused(sequence):
+    data = copy.deepcopy(raw("night2026"))  # enter_dark from start_cd_m2 = 100
+    data["scene"]["sequence"] = sequence
+    with pytest.raises(
+        ProtocolError,
+        match=rf"scene\.start_cd_m2 = 100\.0: only an 'enter_dark' sequence uses it .*"
+        rf"scene\.sequence = '{sequence}'; remove it",
+    ):
+        parse_protocol(data, source="test.toml", folder=PROTOCOLS)
+    del data["scene"]["start_cd_m2"]
+    assert (
+        parse_protocol(data, source="test.toml", folder=PROTOCOLS)["scene"]["start_cd_m2"] == 100
+    )

@@ -179,16 +179,64 @@ def _runs_of_this_session(path: Path, csv_path: Path) -> None:
             )
 
 
+def _dropped_as_in_the_csv(path: Path, csv_path: Path, records: list[dict]) -> None:
+    """The CSV's ``dropped_frames`` of a trial that showed a live scene is the count of its
+    frames flagged dropped in the record (:meth:`LiveView.run`'s count; the last run's, when a
+    resumed session showed the trial again)."""
+    last: dict[int, tuple[int, int]] = {}  # trial: (run, dropped)
+    for record in records:
+        trial = int(record["what"].split()[1])
+        run, dropped = last.get(trial, (record["_run"], 0))
+        if record["_run"] != run:
+            run, dropped = record["_run"], 0
+        last[trial] = (run, dropped + (record["dropped"] == "1"))
+    try:
+        with csv_path.open(encoding="utf-8", newline="") as handle:
+            rows = list(csv.DictReader(handle))
+    except (OSError, UnicodeDecodeError, csv.Error):
+        return  # the loader judged the CSV already
+    for line, row in enumerate(rows, start=2):
+        try:
+            trial, written = int(row.get("trial") or ""), int(row.get("dropped_frames") or "")
+        except ValueError:
+            continue
+        if trial in last and row.get("offset_s") and written != last[trial][1]:
+            raise ValueError(
+                f"{csv_path}, line {line}, column dropped_frames: {written}, but its frame "
+                f"record {path.name} flags {last[trial][1]} of trial {trial}'s live frames "
+                "dropped (one of them edited, or the record of another session?)"
+            )
+
+
 RUN_EPOCH_TOLERANCE_S = 0.002  # the run line writes the epoch to 1 ms
 
 
-def live_frames(files: list[str | Path]) -> pd.DataFrame | None:
+def _showed_live(sidecar: dict, scene_live: bool) -> bool:
+    """Whether the session of this sidecar showed its protocol's live scene: a session on a
+    screen (``simulated: false``) of a protocol with ``scene.live``; a simulated observer
+    answers without a screen and writes no frame record (its runs' ``frame_intervals`` null)."""
+    return scene_live and sidecar.get("simulated") is False
+
+
+def live_frames(
+    files: list[str | Path],
+    *,
+    sidecars: dict[str, dict] | None = None,
+    scene_live: bool = False,
+) -> pd.DataFrame | None:
     """Per session, the frames of its live scenes: how many, dropped, without gaze or pupil.
 
     Parameters
     ----------
     files
         The session CSVs; each one's ``STEM_frames.tsv`` is read when it exists.
+    sidecars
+        The sessions' sidecars by CSV path (:class:`glarelab.analysis.dataset.Dataset`'s);
+        default None: none known. A session with a sidecar is held to what it says: one
+        that showed a live scene (``simulated: false`` and ``scene_live``) must have a frame
+        record with live rows, one that did not may have none.
+    scene_live
+        Whether the protocol's scene is live (``scene.live``); default False.
 
     Returns
     -------
@@ -203,7 +251,8 @@ def live_frames(files: list[str | Path]) -> pd.DataFrame | None:
         For a frame record the session could not have written, naming its file, line and
         column: a live row with a value out of its range or a field too many or too few, a
         frame missing, repeated or out of order, a cut last line, a header that is not the
-        record's, an empty file.
+        record's, an empty file; a live session whose frame record is missing or holds no
+        live rows; live rows in the record of a session that showed no live scene.
 
     Examples
     --------
@@ -213,14 +262,53 @@ def live_frames(files: list[str | Path]) -> pd.DataFrame | None:
     rows = []
     for file in files:
         path = _frames_path(Path(file))
+        sidecar = (sidecars or {}).get(str(file))
+        live = None if sidecar is None else _showed_live(sidecar, scene_live)
         if path.exists() and not path.is_file():
             raise ValueError(f"{path}: not a file; a session's frame record is a text file")
         if not path.is_file():
+            if live:
+                raise ValueError(
+                    f"{path}: missing; the session showed a live scene (its sidecar: simulated "
+                    "false; the protocol: scene.live) and wrote its frames there"
+                )
             continue
+        named = (
+            {
+                run.get("frame_intervals")
+                for run in sidecar.get("runs") or []
+                if isinstance(run, dict)
+            }
+            if live
+            else set()
+        )
+        if named - {path.name}:
+            raise ValueError(
+                f"{Path(file).with_suffix('.json')}: its runs' frame_intervals name "
+                f"{', '.join(sorted(map(json.dumps, named - {path.name})))}, but a live "
+                f"session's runs write its frames to {path.name} (the sidecar edited?)"
+            )
         records = _live_records(path)
+        if live and not records:
+            raise ValueError(
+                f"{path}: no live frame rows ('trial N live'); the session showed a live scene "
+                "(its sidecar: simulated false; the protocol: scene.live) and wrote a row per "
+                "frame (the record cut or of another session?)"
+            )
+        if live is False and records:
+            why = (
+                "it is a simulated observer's (its sidecar: simulated true)"
+                if sidecar.get("simulated")
+                else "the protocol's scene is not live"
+            )
+            raise ValueError(
+                f"{path}: live frame rows, but the session showed no live scene: {why}; the "
+                "frame record of another session?"
+            )
         if not records:
             continue
         _runs_of_this_session(path, Path(file))
+        _dropped_as_in_the_csv(path, Path(file), records)
         n = len(records)
         dropped = sum(r["dropped"] == "1" for r in records)
         lost = sum(r["valid_gaze"] == "0" for r in records)

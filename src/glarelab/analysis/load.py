@@ -34,6 +34,7 @@ import io
 import json
 import math
 import re
+from datetime import datetime
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -243,6 +244,13 @@ def _presentation_times(row: dict, where: str, problems: list[str]) -> None:
     """A row's presentation as the session measured it: the flip that ended it is not before
     the one that began it, and ``shown_ms`` is their difference (docs/data.md)."""
     onset, offset, shown = row.get("onset_s"), row.get("offset_s"), row.get("shown_ms")
+    if shown is not None and offset is None:
+        problems.append(
+            f"{where}, column shown_ms: {shown!r} without an offset_s: a session writes the "
+            "time shown only with the flip that ended the presentation (a row that showed "
+            "nothing new has neither)"
+        )
+        return
     if not all(isinstance(v, float) and math.isfinite(v) for v in (onset, offset)):
         return
     if offset < onset:
@@ -375,6 +383,8 @@ def _sidecar_fields(path: Path, sidecar: dict) -> list[str]:
                 f"{where_}: {key}.readings_sha256 is {_json(record['readings_sha256'])}; must "
                 "be null or a sha256 (text)"
             )
+    if not problems:
+        problems += _sidecar_consistency(where_, sidecar)
     if sidecar.get("simulated") is False and not problems:
         problems += _simulated_signs(where_, sidecar)
     if sidecar.get("simulated") is True and not problems:
@@ -393,6 +403,63 @@ def _sidecar_fields(path: Path, sidecar: dict) -> list[str]:
                 "not the simulated observer: a session on a screen (the sidecar edited?); a "
                 "session is analysed as what it is (simulated: false)"
             )
+    return problems
+
+
+AGE_RANGE_YEARS = (0, 120)  # what glarelab run accepts (--age, the dialog)
+
+
+def _sidecar_consistency(where_: Path, sidecar: dict) -> list[str]:
+    """The fields the analysis does not read, as a session writes them: an age a session
+    accepts, times that are dates with the end not before the start, at least one run, and
+    ``resumed`` the runs after the first."""
+    problems = []
+    age = (sidecar.get("participant_info") or {}).get("age")
+    if age is not None and not (
+        isinstance(age, int)
+        and not isinstance(age, bool)
+        and AGE_RANGE_YEARS[0] <= age <= AGE_RANGE_YEARS[1]
+    ):
+        problems.append(
+            f"{where_}: participant_info.age is {_json(age)}; must be null or whole years, "
+            f"{AGE_RANGE_YEARS[0]}-{AGE_RANGE_YEARS[1]} (what a session accepts)"
+        )
+    times = {}
+    for key in ("started", "ended"):
+        if isinstance(sidecar.get(key), str):
+            try:
+                times[key] = datetime.fromisoformat(sidecar[key])
+            except ValueError:
+                problems.append(
+                    f"{where_}: {key} is {_json(sidecar[key])}; must be null or an ISO date "
+                    "and time, as a session writes it"
+                )
+    try:
+        backwards = len(times) == 2 and times["ended"] < times["started"]
+    except TypeError:  # one with a time zone, one without
+        backwards = False
+    if backwards:
+        problems.append(
+            f"{where_}: ended {sidecar['ended']} is before started {sidecar['started']}"
+        )
+    runs = sidecar.get("runs")
+    shown = [  # the sidecar's bit_depth is its last run's display's (a resume may move)
+        run["display"].get("bits_per_channel")
+        for run in (runs if isinstance(runs, list) else [])
+        if isinstance(run, dict) and isinstance(run.get("display"), dict)
+    ]
+    if isinstance(sidecar.get("bit_depth"), int) and shown and shown[-1] != sidecar["bit_depth"]:
+        problems.append(
+            f"{where_}: bit_depth is {sidecar['bit_depth']}, but its last run's display showed "
+            f"{shown[-1]} bits per channel"
+        )
+    if isinstance(runs, list) and not runs:
+        problems.append(f"{where_}: runs is empty; every session records its first run")
+    elif isinstance(runs, list) and "resumed" in sidecar and sidecar["resumed"] != len(runs) - 1:
+        problems.append(
+            f"{where_}: resumed is {sidecar['resumed']}, but it records {len(runs)} run(s): "
+            f"resumed counts the runs after the first ({len(runs) - 1})"
+        )
     return problems
 
 

@@ -556,7 +556,11 @@ def write_report(
         stimuli=stimuli,
     )
     result = result | {"tables": {k: corrected_beside(t) for k, t in result["tables"].items()}}
-    live = live_frames(dataset.files)
+    live = live_frames(
+        dataset.files,
+        sidecars=dataset.sidecars,
+        scene_live=bool((protocol.data.get("scene") or {}).get("live")),
+    )
     if live is not None:  # a live scene: its dropped frames and tracker loss per session
         paragraphs = result.get("results") or [f"{k}: {v}." for k, v in result["text"].items()]
         result = result | {

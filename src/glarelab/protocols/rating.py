@@ -261,6 +261,12 @@ def _check_scene(p: dict, problems: list[str]) -> None:
                 "luminance, or a live scene's tracked pupil), so the value would be ignored; "
                 "remove it"
             )
+    if "start_cd_m2" in given and p["scene"]["sequence"] != "enter_dark":  # would do nothing
+        problems.append(
+            f"scene.start_cd_m2 = {p['scene']['start_cd_m2']!r}: only an 'enter_dark' sequence "
+            f"uses it (the eye's luminance before), not scene.sequence = "
+            f"{p['scene']['sequence']!r}; remove it"
+        )
     if p["scene"]["live"] and "frame_rate_hz" in given:  # a value there would do nothing
         problems.append(
             f"scene.frame_rate_hz = {p['scene']['frame_rate_hz']!r}: not used by a live scene "
