@@ -7,6 +7,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from glarelab.frontend.live import LiveView
+from glarelab.glare.rendering.display import CodeTable
 
 
 class Clock:
@@ -39,6 +40,8 @@ def _view(clock: Clock, first_render_s: float, render_s: float) -> LiveView:
     view.live = SimpleNamespace(frame=frame)
     view.lut = np.linspace(0.0, 1.0, 256)
     view.top = 255
+    view.encode = CodeTable(view.lut)
+    view.levels = (np.arange(256) / 255).astype(np.float32)
     view.stim = SimpleNamespace(image=None, draw=lambda: None)
     view.window = SimpleNamespace(flip=lambda: clock.t)
     view.origin_px = (0.0, 0.0)

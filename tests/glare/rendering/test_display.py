@@ -55,3 +55,13 @@ def test_a_table_below_zero_is_refused():
         CodeTable(np.array([-1.0, 0.0, 1.0]))
     with pytest.raises(ValueError, match="increasing"):
         CodeTable(np.array([1.0, 1.0]))
+
+
+@pytest.mark.parametrize("black", [0.0005, 0.0003])
+def test_the_tables_ends_are_held_where_float32_rounds_them_inwards(black):
+    # float32(0.0005) > 0.0005: clipped to it, a black pixel took code 1 of a 12-bit table
+    # whose first codes lie within one float32 step (found by the property test above)
+    lut = Display.gamma(0.5, black_cd_m2=black, gamma=3.0, bits=12).lut
+    ends = np.float32([0.0, lut[0], lut[1], lut[-1], 1.0])
+    ends = np.concatenate([ends, np.nextafter(ends, np.float32(0)), np.nextafter(ends, 1)])
+    np.testing.assert_array_equal(CodeTable(lut)(ends), nearest(ends, lut))

@@ -199,7 +199,13 @@ class CodeTable:
             raise ValueError(f"lut must begin at >= 0 cd/m²; got {lut[0]!r}")
         self.lut = lut
         self._codes = np.arange(lut.size, dtype=float)
+        # the float32 range that holds the table's: its ends rounded outwards, so that a value
+        # clipped to them is clipped to the table's own ends by the interpolation
         self.low, self.high = np.float32(lut[0]), np.float32(lut[-1])
+        if float(self.low) > lut[0]:
+            self.low = np.nextafter(self.low, np.float32(0.0))
+        if float(self.high) < lut[-1]:
+            self.high = np.nextafter(self.high, np.float32(np.inf))
         first = int(np.array(self.low).view(np.uint32)) >> CODE_TABLE_SHIFT
         last = int(np.array(self.high).view(np.uint32)) >> CODE_TABLE_SHIFT
         bins = np.arange(first, last + 1, dtype=np.uint32)
