@@ -232,6 +232,12 @@ def measure_costs() -> PathCosts:
         return splat(image, factor, whole, grid)
 
     workers = cores()
+
+    def clustered(points, groups):
+        return direct_spread(
+            points, centre, quadrant, out, into, quadrant=True, workers=workers, groups=groups
+        )
+
     fastest = _fastest(
         {
             "fft64": lambda: spectral_spread(
@@ -243,26 +249,8 @@ def measure_costs() -> PathCosts:
             "pixel": lambda: direct_spread(
                 one, centre, quadrant, out, into, quadrant=True, workers=workers
             ),
-            "small": lambda: direct_spread(
-                small,
-                centre,
-                quadrant,
-                out,
-                into,
-                quadrant=True,
-                workers=workers,
-                groups=small_groups,
-            ),
-            "big": lambda: direct_spread(
-                big,
-                centre,
-                quadrant,
-                out,
-                into,
-                quadrant=True,
-                workers=workers,
-                groups=big_groups,
-            ),
+            "small": lambda: clustered(small, small_groups),
+            "big": lambda: clustered(big, big_groups),
             "far": far_tail,
             "bound": check,
             "coarse": lambda: far_spread(
