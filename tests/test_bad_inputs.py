@@ -638,7 +638,8 @@ CASES = [
     ),
     (
         "render-aperture-not-an-image",
-        "render {box}/good.exr {box}/out.exr --pixel-deg 0.02 --model wave --aperture-image {box}/afile.txt",
+        "render {box}/good.exr {box}/out.exr --pixel-deg 0.02 --model wave --aperture-image "
+        "{box}/afile.txt --aperture-spacing-mm 0.01",
         "afile.txt: not an image",
     ),
     (

@@ -100,3 +100,24 @@ def test_sessions_and_reports_at_once_lose_nothing(tmp_path):
     assert all(d.returncode == 0 for d in done), [d.stderr for d in done]
     assert (report / "results.md").is_file()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["data", "report"]
+
+
+def test_a_name_claimed_between_the_look_and_the_check_sends_the_run_to_the_next(
+    tmp_path, monkeypatch
+):
+    # another run creates lab.json (its empty claim, not yet listed) after this one saw the
+    # name free and before its check: this run takes lab-2.json (it was refused as "glarelab
+    # did not write it there", one run in four at once on a loaded machine)
+    from glarelab.commands import calibrate
+
+    out = tmp_path / "lab.json"
+    real = calibrate.output_file
+
+    def raced(path, *args, **options):
+        if Path(path) == out and not out.exists():
+            out.touch()  # the other run's claim
+        return real(path, *args, **options)
+
+    monkeypatch.setattr(calibrate, "output_file", raced)
+    assert calibrate.calibration_out(out, replace=False, claim=True) == tmp_path / "lab-2.json"
+    assert out.stat().st_size == 0  # the other run's name, left to it

@@ -82,7 +82,9 @@ def calibration_out(path: Path, *, replace: bool, inputs=(), claim: bool = False
     """
     path = Path(path)
     if not (path.exists() or path.is_symlink()):
-        output_file(path, (".json",), "calibration", inputs=inputs)
+        # with claim another run may create the name between the look and the check: its
+        # empty claim is not yet listed, so its listing is not asked (the claim decides)
+        output_file(path, (".json",), "calibration", inputs=inputs, shared=claim)
         if not claim or _claim(path):
             return path
     if not replace:
