@@ -6,8 +6,8 @@ pre-processing step, we calculate all data, that does not change during our simu
 
 - **Once**: the scene's log luminance (the adaptation's input, eq. 5.1).
 - **Once per adaptation level and pupil** (a bank, made before the first frame by
-  :meth:`LiveNight.prepare`, or as the gaze visits them): the excess over the display's
-  maximum at exposure ``s`` is ``s·max(X - T, 0)`` with the threshold
+  :meth:`~glarelab.glare.night.live.LiveNight.prepare`, or as the gaze visits them): the
+  excess over the display's maximum at exposure ``s`` is ``s·max(X - T, 0)`` with the threshold
   ``T = L_dmax / s`` (Yoshida 2008 eq. 1), so its spread is ``s · (max(X - T, 0) ⊛ K_p)``.
   The bank holds ``max(X - T_j, 0) ⊛ K_p`` on thresholds ``T_j = r^j`` (``r`` = 1.02),
   halved where the scene needs it (below), and on the pupils ``p`` of :func:`pupil_bank_mm`.
