@@ -38,9 +38,8 @@ def _view(clock: Clock, first_render_s: float, render_s: float) -> LiveView:
 
     view.filter = SimpleNamespace(update=lambda *a: state)
     view.live = SimpleNamespace(frame=frame)
-    view.lut = np.linspace(0.0, 1.0, 256)
     view.top = 255
-    view.encode = CodeTable(view.lut)
+    view.encode = CodeTable(np.linspace(0.0, 1.0, 256))
     view.levels = (np.arange(256) / 255).astype(np.float32)
     view.stim = SimpleNamespace(image=None, draw=lambda: None)
     view.window = SimpleNamespace(flip=lambda: clock.t)

@@ -90,7 +90,6 @@ class LiveView:
         height, width = live.shape
         self.window = window
         self.live = live
-        self.lut = lut
         self.top = 2**bits - 1
         self.encode = CodeTable(lut)  # np.rint(display_codes(...)), a tenth of the time
         # each code as the texture value PsychoPy makes of code / top (float32)
