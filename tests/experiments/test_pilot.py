@@ -24,15 +24,18 @@ CENTRE = (SCREEN[0] // 2, SCREEN[1] // 2)
 
 @pytest.fixture(scope="module")
 def spencer(tmp_path_factory):
-    """Spencer 1995 with a break after every trial, its stimulus set, and an unverified
-    calibration of its display (8 bits, white 50 cd/m² as §1 and the protocol say: fitted
-    readings, no verification)."""
+    """Spencer 1995 with a break after every trial and 1.5-1.8 s flashes, its stimulus set, and
+    an unverified calibration of its display (8 bits, white 50 cd/m² as §1 and the protocol say:
+    fitted readings, no verification)."""
     from glarelab.cli import main
 
     folder = tmp_path_factory.mktemp("spencer")
     text = (ROOT / "src" / "glarelab" / "protocols" / "spencer1995.toml").read_text()
     protocol = folder / "spencer_breaks.toml"
-    protocol.write_text(re.sub(r"(?m)^break_every = \d+", "break_every = 1", text))
+    text = re.sub(r"(?m)^break_every = \d+", "break_every = 1", text)
+    # flashes long enough for a key sent by xdotool to land in them on a loaded machine
+    text = re.sub(r"(?m)^presentation_ms = .*$", "presentation_ms = [1500.0, 1800.0]", text)
+    protocol.write_text(text)
     assert main(["stimuli", "build", str(protocol), "--out", str(folder / "set")]) == 0
     readings = [(c, 0.1 + 49.9 * (c / 255) ** 2.2) for c in range(0, 255, 17)] + [(255, 50.0)]
     calibration = fit_calibration(readings, bit_depth=8, label="a CRT, 50 cd/m²")
@@ -110,7 +113,7 @@ def test_a_pilot_runs_marked_and_recorded_its_breaks_logged_and_escape_ends_a_fl
     Image.fromarray(screen.screenshot()).save(tmp_path / "break.png")
     screen.key("space")  # (the log is written when the session waits for keys: not now)
     _wait_for_flash(screen)
-    screen.key("Escape")  # during the second flash (400 or 700 ms)
+    screen.key("Escape")  # during the second flash
     assert screen.wait() == 3, screen.stderr[-2000:]
 
     # the dry run's own screenshot (the first flash, as drawn) carries the PILOT mark too
