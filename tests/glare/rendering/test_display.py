@@ -8,7 +8,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
-from glarelab.glare.rendering.display import CodeTable, Display, display_codes
+from glarelab.glare.rendering.display import (
+    CODE_TABLE_SHIFT,
+    CodeTable,
+    Display,
+    display_codes,
+)
 
 
 def nearest(image, lut):
@@ -65,3 +70,23 @@ def test_the_tables_ends_are_held_where_float32_rounds_them_inwards(black):
     ends = np.float32([0.0, lut[0], lut[1], lut[-1], 1.0])
     ends = np.concatenate([ends, np.nextafter(ends, np.float32(0)), np.nextafter(ends, 1)])
     np.testing.assert_array_equal(CodeTable(lut)(ends), nearest(ends, lut))
+
+
+@pytest.mark.parametrize("bits", [8, 10])
+def test_every_float32_of_every_bin_of_two_codes_gets_the_interpolated_code(bits):
+    # the bins a code boundary crosses are compared with the least float of the greater code
+    # (found by bisection when the table is made): every float of each such bin, checked
+    lut = Display.gamma(200.0, black_cd_m2=0.05, bits=bits).lut
+    table = CodeTable(lut)
+    two = np.flatnonzero(np.isfinite(table._switch))
+    assert two.size > lut.size / 2  # most of the codes' boundaries
+    starts = (two + table._first).astype(np.int64) << CODE_TABLE_SHIFT
+    floats = (starts[:, None] + np.arange(2**CODE_TABLE_SHIFT)).ravel().astype(np.int32)
+    image = floats.view(np.float32)
+    np.testing.assert_array_equal(table(image), nearest(image, lut))
+
+
+def test_negative_and_out_of_range_floats_take_the_ends_codes():
+    lut = Display.gamma(200.0, black_cd_m2=0.05).lut
+    image = np.float32([-0.0, -1e-30, -5.0, -np.inf, 0.0, 1e-30, 0.05, 200.0, 1e9, np.inf])
+    assert CodeTable(lut)(image).tolist() == [0, 0, 0, 0, 0, 0, 0, 1023, 1023, 1023]
