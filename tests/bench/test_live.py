@@ -16,6 +16,7 @@ def test_live_bench_times_frames_and_measures_them_against_render_night():
         assert row["max_codes_exact"] < 0.5 and row["max_codes"] < 1.0  # offline 0.5 + ours
         assert row["fps"] == 1e3 / row["render_ms_median"] and row["bank_entries"] > 0
         assert row["render_ms_p99"] >= row["render_ms_median"] and row["frames"] == 5
+        assert 0 <= row["over_budget_frames"] <= 5
     assert "| street_240x150 | full |" in live_table(rows)
 
 

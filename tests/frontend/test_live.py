@@ -28,12 +28,13 @@ def _view(clock: Clock, first_render_s: float, render_s: float) -> LiveView:
     )  # fmt: skip
     rendered = []
 
-    def frame(**_):
+    def frame(*, encode, **_):
         clock.t += render_s if rendered else first_render_s
         rendered.append(clock.t)
+        image = np.zeros((4, 4), dtype=np.float32)
         return SimpleNamespace(
-            image=np.zeros((4, 4)), render_ms=1.0, target_cd_m2=1.0, adaptation_cd_m2=1.0,
-            new_entries=0,
+            image=image, codes=encode(image), render_ms=1.0, target_cd_m2=1.0,
+            adaptation_cd_m2=1.0, new_entries=0,
         )  # fmt: skip
 
     view.filter = SimpleNamespace(update=lambda *a: state)

@@ -91,7 +91,7 @@ class LiveView:
         self.window = window
         self.live = live
         self.top = 2**bits - 1
-        self.encode = CodeTable(lut)  # np.rint(display_codes(...)), a tenth of the time
+        self.encode = CodeTable(lut)  # np.rint(display_codes(...)) by a table look-up
         # each code as the texture value PsychoPy makes of code / top (float32)
         self.levels = (np.arange(lut.size) / self.top).astype(np.float32)
         self.stim = visual.ImageStim(
@@ -164,8 +164,9 @@ class LiveView:
                 gaze_px=(state.gaze_y_px, state.gaze_x_px),
                 pupil_mm=state.pupil_mm,
                 frame_time_s=elapsed,
+                encode=self.encode,  # encoded while the second core blurs (with acuity)
             )
-            codes = self.encode(frame.image)
+            codes = frame.codes
             # a colour array is shown as it is in [0, 1] (ImageBank.levels), rows bottom-up
             self.stim.image = np.flipud(self.levels[codes])
             self.stim.draw()

@@ -9,7 +9,7 @@ import pytest
 
 from glarelab.glare import VosGlare, render_night
 from glarelab.glare.night.live import LiveNight, pupil_bank_mm
-from glarelab.glare.rendering.display import display_codes, display_lut
+from glarelab.glare.rendering.display import CodeTable, display_codes, display_lut
 from glarelab.stimuli.night import night_street
 
 PIXEL_DEG = 0.1
@@ -233,3 +233,30 @@ def test_a_fractional_bank_or_acuity_options_without_acuity_are_refused(options,
     # bank_size 4.5 was truncated to 4, and the acuity options were ignored without a word
     with pytest.raises(ValueError, match=re.escape(named)):
         LiveNight(np.ones((8, 8)), pixel_deg=0.1, pupils_mm=(4.0,), **options)
+
+
+@pytest.mark.parametrize(
+    ("scotopic", "colourspace"),
+    [(True, "ITU-R BT.709"), (False, "ITU-R BT.709"), (True, "ITU-R BT.2020")],
+)
+def test_frames_encoded_while_the_kinks_are_blurred_equal_frames_encoded_after(
+    scene, scotopic, colourspace
+):
+    # the codes (and the scotopic colour) of the frame are made while the second core blurs
+    # the pixels near a kink, and theirs after: the same image and the same codes as encoding
+    # the finished frame (BT.2020's rod weights < 0 take scotopic_colour after the blur)
+    table = CodeTable(display_lut(None, L_DMAX))
+    options = dict(
+        pixel_deg=PIXEL_DEG, initial_adaptation_cd_m2=0.3, acuity=True, scotopic=scotopic,
+        threshold_ratio=1.05, colourspace=colourspace,
+    )  # fmt: skip
+    fused, plain = LiveNight(scene, **options), LiveNight(scene, **options)
+    exact = 0
+    for gaze, pupil in (((0.0, 0.0), 5.0), ((20.0, 30.0), 2.5), ((47.0, 71.0), 7.0)):
+        encoded = fused.frame(gaze_px=gaze, pupil_mm=pupil, frame_time_s=0.05, encode=table)
+        frame = plain.frame(gaze_px=gaze, pupil_mm=pupil, frame_time_s=0.05)
+        np.testing.assert_array_equal(encoded.image, frame.image)
+        np.testing.assert_array_equal(encoded.codes, table(frame.image))
+        assert frame.codes is None
+        exact += encoded.exact_px
+    assert exact > 0  # some pixels were blurred directly

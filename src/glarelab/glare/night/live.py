@@ -47,7 +47,7 @@ import math
 import time
 from collections import OrderedDict
 from collections.abc import Callable
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Literal
 
@@ -84,6 +84,7 @@ from glarelab.glare.night.adaptation import (
 )
 from glarelab.glare.night.scotopic import rod_weights, scotopic_colour
 from glarelab.glare.rendering.compose import check_composition, compose
+from glarelab.glare.rendering.display import CodeTable
 from glarelab.glare.rendering.renderer import GlareRenderer
 
 __all__ = [
@@ -116,6 +117,7 @@ BANK_SIZE = 64  # entries kept (the least recently used are dropped)
 # directly: measured within 0.008 codes of blurring all within the kernels' 4σ on the night
 # street at 640 × 400 (0.16 codes for the meeting pixels alone), with half the pixels
 REACH_SIGMAS = 1.0
+GEOMETRY_KEPT = 16  # pairs of acuity entries whose pixels to blur directly are kept
 
 
 _CIE_DELTA = 6.0 / 29.0  # CIE 1976 L*a*b*: the cube root's knee
@@ -212,7 +214,7 @@ class LiveFrame:
     exposure
         Display cd/m² per scene cd/m².
     render_ms
-        Wall time of the frame, ms.
+        Wall time of the frame, ms (with its codes when asked for them).
     new_entries
         Entries of the bank this frame had to make (0 once the gaze has visited the
         adaptation levels and pupils before; each costs about one offline glare render, or
@@ -221,6 +223,9 @@ class LiveFrame:
         With the acuity loss: pixels whose blur this frame computed directly (those within
         the blur's reach of a pixel that meets the display's white between the two bank
         levels); 0 without.
+    codes
+        The display's codes of ``image`` (a new array) when the frame was asked for them
+        (``encode``), else None.
     """
 
     image: np.ndarray
@@ -232,6 +237,7 @@ class LiveFrame:
     render_ms: float
     new_entries: int
     exact_px: int = 0
+    codes: np.ndarray | None = None
 
 
 class LiveNight:
@@ -479,6 +485,12 @@ class LiveNight:
             raise ValueError(f"levels_per_octave must be an integer; got {levels_per_octave!r}")
         # the scotopic blend of eq. 5.18 is linear in RGB for a frame's L_i: one 3 × 3 matrix
         self._rod_positive = bool((rod_weights(colourspace) >= 0).all())
+        # the direct blur's colour: the space, its luminance row (summing to 1) and white
+        self._space_rgb = colour.RGB_COLOURSPACES[colourspace]
+        self._y_row = np.asarray(self._space_rgb.matrix_RGB_to_XYZ[1], float)
+        self._y_row = self._y_row / self._y_row.sum()
+        self._white = colour.xy_to_XYZ(self._space_rgb.whitepoint)
+        self._geometries: OrderedDict[tuple, list] = OrderedDict()
         self.build_s = 0.0
         self.frames = 0
 
@@ -563,6 +575,7 @@ class LiveNight:
         gaze_px: tuple[float, float] | None,
         pupil_mm: float | None,
         frame_time_s: float,
+        encode: CodeTable | None = None,
     ) -> LiveFrame:
         """The next frame for a gaze and a pupil, after ``frame_time_s`` of adaptation.
 
@@ -577,6 +590,11 @@ class LiveNight:
             last valid pupil is held (the bank's middle before the first).
         frame_time_s
             Time since the previous frame, s, >= 0 (``ft`` of eq. 5.2; 0 for the first).
+        encode
+            The display's codes (:class:`~glarelab.glare.rendering.display.CodeTable`), or
+            None (default): with the acuity loss, the frame is encoded (and coloured) while
+            the second core blurs the pixels near a kink, whose codes follow; the codes are
+            ``encode(frame.image)`` exactly (:attr:`LiveFrame.codes`).
 
         Returns
         -------
@@ -645,18 +663,24 @@ class LiveNight:
         )
         exposure = self.key / max(self._state, MIN_LUMINANCE_CD_M2)
         made = self.bank_entries
-        exact = 0
-        if self.acuity:  # §5.3, of the glared display, before the colour (Luidolt ch. 4)
-            with self._threads.limit(limits=1, user_api="blas"):
-                exact = self._acuity(exposure, pupil)
-        else:
-            self._compose(exposure, pupil, gaze)
-        if self.scotopic:  # §5.4: "after tone mapping", of the adapted luminance
-            with self._threads.limit(limits=1, user_api="blas"):
-                self._scotopic(self._state)
+        exact, direct, matrix, codes = 0, None, None, None
+        with self._threads.limit(limits=1, user_api="blas"):
+            if self.acuity:  # §5.3, of the glared display, before the colour (Luidolt ch. 4)
+                direct = self._acuity(exposure, pupil)
+            else:
+                self._compose(exposure, pupil, gaze)
+            if direct is not None and self.scotopic and not self._rod_positive:
+                exact, direct = self._patch(direct.result(), None, None, None), None
+            if self.scotopic:  # §5.4: "after tone mapping", of the adapted luminance
+                matrix = self._scotopic(self._state)
+            if encode is not None:
+                codes = encode(self._out)
+            if direct is not None:  # the pixels blurred directly meanwhile: coloured, encoded
+                exact = self._patch(direct.result(), matrix, encode, codes)
         self.frames += 1
         return LiveFrame(
             image=self._out,
+            codes=codes,
             gaze_px=gaze,
             pupil_mm=pupil,
             target_cd_m2=target,
@@ -765,55 +789,101 @@ class LiveNight:
         )
         return self._store(key, entry, start)
 
-    def _acuity(self, exposure: float, pupil: float) -> int:
-        """Replace the display in ``_out`` by its acuity loss: the bank's interpolation, and
-        the pixels near a kink blurred directly. Returns how many were."""
+    def _acuity(self, exposure: float, pupil: float) -> Future | None:
+        """Replace the display in ``_out`` by its acuity loss from the bank's interpolation;
+        the pixels near a kink are blurred directly on the second core: their future
+        (:meth:`_blur_kinks`, for :meth:`_patch`), or None when there are none."""
         dtype = self.dtype.type
         out, work = self._out, self._work
-        kinks, radii, by_model, spreads, blurred = None, [], {}, [], []
+        keys, masks, radii, spreads, blurred = [], [], [], [], []
         for step, p, weight in self._terms(exposure, pupil):
             entry, clamped, radius = self._acuity_entry(step, p)
             blurred.append((entry, dtype(weight * exposure)))
             spread = self._entry(step, p)
             if spread is not None:
                 spreads.append((spread, weight))
-            by_model.setdefault(self._model_for(p), []).append(clamped)
+            keys.append((step, self._model_for(p)))
+            masks.append(clamped)
             radii.append(radius)
-        for masks in by_model.values():
-            if len(masks) == 2:  # two levels: where a channel meets the white between them
-                kink = masks[0] != masks[1]
-                kinks = kink if kinks is None else kinks | kink
+        geometry = self._geometry(tuple(keys), masks, radii)
         direct = None
-        if kinks is not None and kinks.any():
+        if geometry:
             # the direct blur on the second core while this one interpolates (numpy lets go
             # of the GIL in both)
             if self._pool is None:
                 self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="LiveNight")
-            direct = self._pool.submit(self._blur_kinks, kinks, radii, exposure, spreads)
+            direct = self._pool.submit(self._blur_kinks, geometry, exposure, spreads)
         for index, (entry, weight) in enumerate(blurred):
             if index == 0:
                 np.multiply(entry, weight, out=out)
             else:
                 out += np.multiply(entry, weight, out=work)
+        return direct
+
+    def _patch(
+        self,
+        found: list,
+        matrix: np.ndarray | None,
+        encode: CodeTable | None,
+        codes: np.ndarray | None,
+    ) -> int:
+        """Write the pixels blurred directly (:meth:`_blur_kinks`) into ``_out``, through the
+        scotopic ``matrix`` and clip of :meth:`_scotopic` when given, and their codes into
+        ``codes``. Returns how many pixels."""
         exact = 0
-        if direct is not None:
-            for rows, cols, values in direct.result():
-                out[rows, cols] = values
-                exact += rows.size
+        for rows, cols, values in found:
+            values = values.astype(self.dtype)
+            if matrix is not None:
+                values = np.clip(values @ matrix, 0.0, self.l_dmax).astype(self.dtype)
+            self._out[rows, cols] = values
+            if codes is not None:
+                codes[rows, cols] = encode(values)
+            exact += rows.size
         return exact
 
+    def _geometry(
+        self, keys: tuple, masks: list, radii: list
+    ) -> list[tuple[tuple[slice, slice], np.ndarray, np.ndarray, int]]:
+        """The pixels to blur directly between the bank's acuity entries ``keys`` (their
+        white masks and reaches): per box around a group of kinks, the box, the rows and
+        columns of its pixels within reach of a kink, and the box's largest reach. They
+        depend on the entries only, so they are kept with them (:data:`GEOMETRY_KEPT` sets)."""
+        if keys in self._geometries:
+            self._geometries.move_to_end(keys)
+            return self._geometries[keys]
+        kinks = None
+        by_model: dict = {}
+        for (_, model), mask in zip(keys, masks, strict=True):
+            by_model.setdefault(model, []).append(mask)
+        for found in by_model.values():
+            if len(found) == 2:  # two levels: where a channel meets the white between them
+                kink = found[0] != found[1]
+                kinks = kink if kinks is None else kinks | kink
+        geometry = []
+        if kinks is not None and kinks.any():
+            most = int(max(radius.max() for radius in radii))
+            for box in _clusters(kinks, most):
+                reach = radii[0][box]
+                for radius in radii[1:]:
+                    reach = np.maximum(reach, radius[box])
+                distance = ndimage.distance_transform_cdt(~kinks[box], metric="chessboard")
+                near_rows, near_cols = np.nonzero(distance <= reach)
+                geometry.append(
+                    (box, near_rows + box[0].start, near_cols + box[1].start, int(reach.max()))
+                )
+        self._geometries[keys] = geometry
+        while len(self._geometries) > GEOMETRY_KEPT:
+            self._geometries.popitem(last=False)
+        return geometry
+
     def _blur_kinks(
-        self, kinks: np.ndarray, radii: list, exposure: float, spreads: list
+        self, geometry: list, exposure: float, spreads: list
     ) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
-        """:meth:`_blur_near` of each box around a group of kinks."""
-        most = int(max(radius.max() for radius in radii))
-        found = []
-        for box in _clusters(kinks, most):
-            reach = radii[0][box]
-            for radius in radii[1:]:
-                reach = np.maximum(reach, radius[box])
-            found.append(self._blur_near(kinks, reach, exposure, spreads, box))
-        return found
+        """:meth:`_blur_near` of each box of :meth:`_geometry`."""
+        return [
+            self._blur_near(near_rows, near_cols, most, exposure, spreads, box)
+            for box, near_rows, near_cols, most in geometry
+        ]
 
     def _display_in(self, exposure: float, spreads: list, rows: slice, cols: slice) -> np.ndarray:
         """The glared display ``min(s X + S, L_dmax)`` of a part of the frame (as
@@ -826,24 +896,19 @@ class LiveNight:
 
     def _blur_near(
         self,
-        kinks: np.ndarray,
-        reach: np.ndarray,
+        near_rows: np.ndarray,
+        near_cols: np.ndarray,
+        most: int,
         exposure: float,
         spreads: list,
         box: tuple[slice, slice],
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The pixels of ``box`` within ``reach`` (each pixel's in the box, pixels) of a kink,
-        blurred directly from the frame's display as
-        :func:`~glarelab.glare.night.acuity.acuity_blur` does: rows, columns, display RGB."""
+        """The pixels ``(near_rows, near_cols)`` of ``box`` (those within their reach of a
+        kink; ``most`` the largest reach, pixels), blurred directly from the frame's display
+        as :func:`~glarelab.glare.night.acuity.acuity_blur` does: rows, columns, display RGB."""
         height, width = self.shape
         top, bottom, left, right = box[0].start, box[0].stop, box[1].start, box[1].stop
-        most = int(reach.max())
-        distance = ndimage.distance_transform_cdt(~kinks[box], metric="chessboard")
-        near_rows, near_cols = np.nonzero(distance <= reach)
-        near_rows, near_cols = near_rows + top, near_cols + left
-        space_rgb = colour.RGB_COLOURSPACES[self.colourspace]
-        y_row = np.asarray(space_rgb.matrix_RGB_to_XYZ[1], float)
-        y_row = y_row / y_row.sum()
+        space_rgb, y_row, white = self._space_rgb, self._y_row, self._white
         margin = 4 * most  # the radius ⌊4σ + ½⌋ of a reach ⌈σ⌉
         while True:  # the crop holds every pixel the kernels reach (or the image's border)
             c_top, c_bottom = max(top - margin, 0), min(bottom + margin, height)
@@ -869,7 +934,6 @@ class LiveNight:
             margin = needed
         blurred = _layers_at(planes, sigma, r, c, self.levels_per_octave)
         if self.acuity_space == "lightness":  # the blurred L* with the pixel's a*, b*
-            white = colour.xy_to_XYZ(space_rgb.whitepoint)
             f = _cie_f((crop[r, c] / self.l_dmax) @ space_rgb.matrix_RGB_to_XYZ.T / white)
             # a* = 500 (f_X - f_Y), b* = 200 (f_Y - f_Z) kept: f_X, f_Z move with f_Y
             f += ((blurred[:, 0] + 16.0) / 116.0 - f[:, 1])[:, None]
@@ -877,21 +941,22 @@ class LiveNight:
             blurred = (xyz @ space_rgb.matrix_XYZ_to_RGB.T) * self.l_dmax
         return near_rows, near_cols, np.maximum(blurred, 0.0)
 
-    def _scotopic(self, adaptation: float) -> None:
+    def _scotopic(self, adaptation: float) -> np.ndarray | None:
         """Luidolt's eq. 5.18 of ``_out``: for Rec. 709 (rod weights >= 0) one 3 × 3 matrix,
-        the shift of each primary."""
+        the shift of each primary (returned, for the pixels blurred meanwhile), else None."""
         if not self._rod_positive:
             shifted = scotopic_colour(
                 self._out, adaptation_luminance_cd_m2=adaptation, colourspace=self.colourspace
             )
             np.clip(shifted, 0.0, self.l_dmax, out=self._out, casting="same_kind")
-            return
+            return None
         matrix = scotopic_colour(
             np.eye(3), adaptation_luminance_cd_m2=adaptation, colourspace=self.colourspace
         ).astype(self.dtype)
         flat = self._out.reshape(-1, 3)
         np.matmul(flat, matrix, out=self._work.reshape(-1, 3))
         np.clip(self._work, 0.0, self.l_dmax, out=self._out)
+        return matrix
 
     # before the first frame ----------------------------------------------------------------
     def adaptation_range(self) -> tuple[float, float]:
