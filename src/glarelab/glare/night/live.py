@@ -80,6 +80,7 @@ from glarelab.glare.night.adaptation import (
     adaptation_step,
     gaze_falloff,
     luminance,
+    rod_sensitivity,
     window_mean,
 )
 from glarelab.glare.night.scotopic import rod_weights, scotopic_colour
@@ -485,6 +486,11 @@ class LiveNight:
             raise ValueError(f"levels_per_octave must be an integer; got {levels_per_octave!r}")
         # the scotopic blend of eq. 5.18 is linear in RGB for a frame's L_i: one 3 × 3 matrix
         self._rod_positive = bool((rod_weights(colourspace) >= 0).all())
+        # its rod image, σ(0) = 1 (eq. 5.4): each primary's T L'
+        self._rod_matrix = scotopic_colour(
+            np.eye(3), adaptation_luminance_cd_m2=0.0, colourspace=colourspace
+        )
+        self._models: dict[float, GlareModel] = {}  # the bank's model of each pupil
         # the direct blur's colour: the space, its luminance row (summing to 1) and white
         self._space_rgb = colour.RGB_COLOURSPACES[colourspace]
         self._y_row = np.asarray(self._space_rgb.matrix_RGB_to_XYZ[1], float)
@@ -566,7 +572,11 @@ class LiveNight:
         if isinstance(self.model, VosGlare):
             below = pupil < HALO_PUPIL_MM
             pupil = float(np.nextafter(HALO_PUPIL_MM, 0.0)) if below else HALO_PUPIL_MM
-        return dataclasses.replace(self.model, pupil_mm=float(pupil))
+        pupil = float(pupil)
+        model = self._models.get(pupil)
+        if model is None:  # made once: a model checks its fields as it is made
+            model = self._models[pupil] = dataclasses.replace(self.model, pupil_mm=pupil)
+        return model
 
     # one frame ---------------------------------------------------------------------------
     def frame(
@@ -950,9 +960,9 @@ class LiveNight:
             )
             np.clip(shifted, 0.0, self.l_dmax, out=self._out, casting="same_kind")
             return None
-        matrix = scotopic_colour(
-            np.eye(3), adaptation_luminance_cd_m2=adaptation, colourspace=self.colourspace
-        ).astype(self.dtype)
+        # eq. 5.18 is RGB (1 - σ) + T L' σ: the matrix I (1 - σ) + R σ, R its rod image (σ = 1)
+        sigma = rod_sensitivity(adaptation)
+        matrix = (np.eye(3) * (1.0 - sigma) + self._rod_matrix * sigma).astype(self.dtype)
         flat = self._out.reshape(-1, 3)
         np.matmul(flat, matrix, out=self._work.reshape(-1, 3))
         np.clip(self._work, 0.0, self.l_dmax, out=self._out)
