@@ -159,7 +159,7 @@ def display_codes(luminance_cd_m2: np.ndarray, lut: np.ndarray) -> np.ndarray:
 
 class CodeTable:
     """The nearest display codes of float32 luminances by a table look-up: equal to
-    ``np.rint(display_codes(x, lut))`` for every float32 ``x``, in a twentieth of the time (a
+    ``np.rint(display_codes(x, lut))`` for every float32 ``x``, in a tenth of the time or less (a
     live frame's encoding at the display's refresh rate).
 
     Parameters
