@@ -2,7 +2,7 @@
 
 import pytest
 
-from glarelab.bench.live import live_bench, live_table
+from glarelab.bench.live import live_bench, live_table, over_budget
 
 
 def test_live_bench_times_frames_and_measures_them_against_render_night():
@@ -23,3 +23,9 @@ def test_live_bench_times_frames_and_measures_them_against_render_night():
 def test_an_unknown_pipeline_is_refused():
     with pytest.raises(ValueError, match="pipelines must be of"):
         live_bench(pipelines=("bloom",), log=lambda line: None)
+
+
+def test_a_frame_over_the_refresh_period_is_counted():
+    # 1/60 s is 16.667 ms: the frames beyond it are counted, those within it are not
+    assert over_budget([1.0, 16.66, 16.666, 16.67, 40.0], 1 / 60) == 2
+    assert over_budget([], 1 / 60) == 0

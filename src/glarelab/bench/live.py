@@ -39,7 +39,14 @@ from glarelab.glare.night.live import LiveNight
 from glarelab.glare.rendering.display import CodeTable, display_codes
 from glarelab.stimuli.night import night_street
 
-__all__ = ["LIVE_WORKLOADS", "PIPELINES", "live_bench", "live_table", "write_live_bench"]
+__all__ = [
+    "LIVE_WORKLOADS",
+    "PIPELINES",
+    "live_bench",
+    "live_table",
+    "over_budget",
+    "write_live_bench",
+]
 
 LIVE_WORKLOADS = {"street_640x400": (640, 400), "street_1280x720": (1280, 720)}
 PIXEL_DEG = 0.0297  # the night study's display (27 in, 1920 × 1080 at 0.6 m)
@@ -137,6 +144,29 @@ def live_bench(
     return rows
 
 
+def over_budget(render_ms: list[float], frame_s: float) -> int:
+    """Frames whose time exceeds the refresh period: each would miss its refresh.
+
+    Parameters
+    ----------
+    render_ms
+        Each frame's time with its codes, ms.
+    frame_s
+        The refresh period, s, > 0.
+
+    Returns
+    -------
+    int
+        How many frames took longer than ``frame_s``.
+
+    Examples
+    --------
+    >>> over_budget([10.0, 16.6, 16.7, 30.0], 1 / 60)  # 1/60 s is 16.667 ms
+    2
+    """
+    return int(np.sum(np.asarray(render_ms, dtype=float) > 1e3 * frame_s))
+
+
 def _bench_one(name, size, scene, pipeline, frames, compared, repeats, lut, log) -> dict:
     effects = PIPELINES[pipeline]
     full = "acuity" in effects
@@ -197,7 +227,7 @@ def _bench_one(name, size, scene, pipeline, frames, compared, repeats, lut, log)
         "render_ms_median": median,
         "render_ms_p95": float(np.quantile(times, 0.95)),
         "render_ms_p99": float(np.quantile(times, 0.99)),
-        "over_budget_frames": int(np.sum(np.asarray(times) > 1e3 * FRAME_S)),
+        "over_budget_frames": over_budget(times, FRAME_S),
         "fps": 1e3 / median,
         "cpu_ms_median": float(np.median(cpu)),
         "encode_ms_median": float(np.median(encode)),
