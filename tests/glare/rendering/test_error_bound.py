@@ -273,9 +273,17 @@ def test_float32_fft_round_off_is_within_its_bound_at_every_pixel(image, model, 
     # pixel by pixel, |ΔS| <= a + r S, forced on every scene (the plan takes float32 only
     # where the bound fits the tolerance)
     plane = image if image.ndim == 2 else image[..., 0]
-    excess = np.maximum(plane - L_DMAX, 0.0)
-    if not excess.any():
+    if not (plane > L_DMAX).any():
         return
+    worst = _roundoff_over_bound(plane, model, pixel_deg)
+    event(f"round-off / bound {10 ** np.ceil(np.log10(max(worst, 1e-6))):g}")
+    assert worst <= 1.0, worst
+
+
+def _roundoff_over_bound(plane, model, pixel_deg) -> float:
+    """The largest ratio over the pixels of the float32 spread's error (against float64) to
+    its bound ``a + r S`` (:func:`fft_roundoff`)."""
+    excess = np.maximum(plane - L_DMAX, 0.0)
     rows, cols = np.flatnonzero(excess.any(axis=1)), np.flatnonzero(excess.any(axis=0))
     box = (int(rows[0]), int(rows[-1]) + 1, int(cols[0]), int(cols[-1]) + 1)
     height, width = plane.shape
@@ -297,6 +305,35 @@ def test_float32_fft_round_off_is_within_its_bound_at_every_pixel(image, model, 
         float(np.sqrt((kernel**2).sum())),
         np.float32,
     )
-    worst = float(np.max(np.abs(single - exact) / (a + r * np.abs(exact))))
-    event(f"round-off / bound {10 ** np.ceil(np.log10(max(worst, 1e-6))):g}")
-    assert worst <= 1.0, worst
+    return float(np.max(np.abs(single - exact) / (a + r * np.abs(exact))))
+
+
+@pytest.mark.parametrize(
+    "model", [VosGlare(), GaussianGlare(sampling="pixel")], ids=["vos", "gauss"]
+)
+@pytest.mark.parametrize("where", ["corner", "edge", "centre"])
+@pytest.mark.parametrize("source", ["lamp", "glint"])
+def test_float32_round_off_of_one_source_is_within_its_bound(model, where, source):
+    # where the bound is tightest: one source alone (its round-off is the least white; one
+    # 3 × 3 lamp reached 0.63-0.65 of the bound, a city of 2,000 lamps 0.16), at the
+    # corners and edges where the pruned transforms are the most lopsided
+    rng = np.random.default_rng(35)
+    image = 10 ** rng.uniform(-2, 0, (96, 160))
+    size, level = (3, 1e5) if source == "lamp" else (2, 1e9)
+    row, col = _place(rng, where, image.shape, size)
+    image[row : row + size, col : col + size] = level
+    assert _roundoff_over_bound(image, model, 0.04) <= 1.0
+
+
+def test_float32_round_off_is_within_its_bound_on_the_tightest_scene_measured():
+    # the tightest of 52 scenes measured for the bound (a glint of 6e8 cd/m² next to a lamp,
+    # mesopic Vos, drawn as the property test draws them): 0.65 of the bound
+    image = scene(
+        (135, 165),
+        seed=37729,
+        background_cd_m2=2.92,
+        sources=[("lamp", "anywhere", 5.259013300108505), ("glint", "anywhere", 8.78330557002095)],
+        colour=False,
+    )
+    worst = _roundoff_over_bound(image, VosGlare(regime="mesopic"), 0.05)
+    assert 0.3 < worst <= 1.0, worst

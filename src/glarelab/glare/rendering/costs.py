@@ -5,7 +5,8 @@ constants must be measured where the render runs, at the number of threads it wi
 FFTs run on every core (``scipy.fft`` workers), the direct spread shares its rows among the
 cores, and the far tail's splat and interpolation are numpy products on one. The first
 renderer on a machine with a kernel cache measures them (about half a second on a quiet
-machine, five rounds, the fastest kept) and writes them next to the kernels
+machine: seven alternating rounds, each unit's median ratio to the FFT's in the same round,
+scaled by the FFT's fastest round) and writes them next to the kernels
 (``costs-<threads>-threads.json``, written to a temporary name and renamed); later processes
 read them. Without a cache, the constants measured on a 2-core
 machine are used (:data:`DEFAULT_COSTS`).
@@ -32,8 +33,8 @@ __all__ = [
     "n_log_n",
 ]
 
-COSTS_VERSION = 5  # bump when what is measured changes
-ROUNDS = 5  # calibration rounds; the fastest is kept
+COSTS_VERSION = 6  # bump when what is measured changes
+ROUNDS = 7  # calibration rounds: the FFT's fastest, the others' median ratio to it
 
 
 def cores() -> int:
@@ -92,17 +93,26 @@ class PathCosts:
 DEFAULT_COSTS = PathCosts()
 
 
-def _fastest(functions: dict, rounds: int = ROUNDS) -> dict:
-    """Fastest seconds of each function, run in turn ``rounds`` times (alternating rounds: a
-    busy moment of a shared machine falls on all of them alike, and the fastest round is
-    the one least disturbed by it; medians measured twice under other load differed 3×)."""
+def _relative(functions: dict, reference: str, rounds: int = ROUNDS) -> dict:
+    """Seconds of each function: the ``reference``'s fastest round times the median, over
+    rounds, of the function's time over the reference's in the same round.
+
+    The functions run in turn ``rounds`` times (alternating rounds: a busy moment of a shared
+    machine falls on all of them alike). The planner compares only ratios, and the planner
+    test and the benchmark compare paths by medians of per-round times and ratios; the
+    fastest round of each function alone pairs a quiet moment of one with a busy one of
+    another: at a load average of 2-8 on the 2-core machine, three calibrations by fastest
+    rounds put a 3 × 3 cluster's direct spread at 0.29, 0.39 and 0.61 of the FFT unit.
+    """
     times = {name: [] for name in functions}
     for _ in range(rounds):
         for name, function in functions.items():
             start = time.perf_counter()
             function()
             times[name].append(time.perf_counter() - start)
-    return {name: float(np.min(t)) for name, t in times.items()}
+    base = np.asarray(times[reference])
+    fastest = float(base.min())
+    return {name: fastest * float(np.median(np.asarray(t) / base)) for name, t in times.items()}
 
 
 def coarse_lengths(
@@ -238,7 +248,7 @@ def measure_costs() -> PathCosts:
             points, centre, quadrant, out, into, quadrant=True, workers=workers, groups=groups
         )
 
-    fastest = _fastest(
+    fastest = _relative(
         {
             "fft64": lambda: spectral_spread(
                 work[np.float64], box, out, spectra[np.float64], lengths
@@ -257,7 +267,8 @@ def measure_costs() -> PathCosts:
                 None, whole, (size, size), far, factor, nodes=True, splatted=nodes
             ),
             "preview": preview,
-        }
+        },
+        "fft64",
     )
     pixel_s = fastest["pixel"] / (n * n)
     cluster_s = fastest["small"] / (n * n)
