@@ -99,6 +99,8 @@ __all__ = [
     "APERTURE_GRIDS",
     "DIAPHRAGM_PREFILTER",
     "FRESNEL_DISTANCE_MM_LUIDOLT2020",
+    "IMAGE_PHASE_REFINEMENT",
+    "IMAGE_TRANSFER_PARTS",
     "KAKIMOTO2004_WAVELENGTHS_NM",
     "LUIDOLT2020_PUPIL_RANGE_MM",
     "MIN_APERTURE_SAMPLES",
@@ -139,6 +141,14 @@ DIAPHRAGM_PREFILTER = (5, 3)
 # time for two wavelengths on 31² at 0.02°/px)
 TRIGONAL_PREFILTER = (3, 2)
 OBSTACLE_SAMPLES_FAST = 4  # the same for aperture_grid="fast"
+# parts of a pixel along each axis over which the prefilter's transfer is divided out for an
+# obstacle image: at each pixel's centre, bars cut by a 3 mm pupil (0.01 mm pixels) were
+# +1.06 % at the border, their grating's order inside the border pixels; over fifths +0.02 %
+# (scripts/measure_combined_prefilter.py --others)
+IMAGE_TRANSFER_PARTS = 5
+# the most an obstacle image's pixel edges may refine the grid to sit a quarter of a sample
+# from its samples (grid_for); beyond it the grid is left as the kernel asks
+IMAGE_PHASE_REFINEMENT = 3.0
 SPECTRAL_METHODS = ("reference", "scaled", "kakimoto")
 PIXEL_INTEGRATION_METHODS = ("exact", "rebin")
 PUPIL_CONVENTIONS = ("unit-energy", "Luidolt2020")
@@ -447,8 +457,10 @@ class WaveOpticsGlare(GlareModel):
             )
         binding = min(limits, key=limits.get)
         spacing = limits[binding]
-        n = scipy.fft.next_fast_len(math.ceil(2.1 * diameter / spacing))
-        n += n % 2
+        n = self._grid_size(spacing)
+        locked = self._image_phase_spacing(spacing)
+        if locked is not None and self._grid_size(locked) <= MAX_GRID:
+            spacing, n = locked, self._grid_size(locked)
         if n > MAX_GRID:
             raise ValueError(
                 f"the aperture grid would need {n}² samples (more than {MAX_GRID}²) for "
@@ -456,6 +468,37 @@ class WaveOpticsGlare(GlareModel):
                 "or a smaller psf_extent_deg"
             )
         return ap.ApertureGrid(n, spacing)
+
+    def _grid_size(self, spacing_mm: float) -> int:
+        """Samples per side of a grid of ``spacing_mm`` that spans 2.1 pupils (even)."""
+        n = scipy.fft.next_fast_len(math.ceil(2.1 * self.pupil_diameter / spacing_mm))
+        return n + n % 2
+
+    def _image_phase_spacing(self, spacing_mm: float) -> float | None:
+        """For an obstacle image under a prefilter: the largest spacing ``δ <= spacing_mm`` with
+        ``s / δ`` half an odd integer (``s`` the image's pixel), which puts every edge of its
+        pixels, at ``(k + 1/2) s`` from the axis, a quarter of a sample from the grid's
+        samples; None without an image, on the fast grid, or where that would refine the grid
+        by more than :data:`IMAGE_PHASE_REFINEMENT`.
+
+        A straight edge along an axis at ``x₀`` meets its own copies in the sampled
+        aperture's periodic spectrum, ``j / δ`` apart along that axis; the streak and its
+        copy ``j`` differ in phase by ``2π j x₀ / δ``, which does not vary along the edge, so
+        their cross term adds ``2 cos(2π j x₀ / δ)`` times the copy's amplitude to the
+        streak's light (the (5, 3) prefilter leaves the copies 0.65 % of it: the border of a
+        square bitmap of 2.025 mm was +1.00 % at 380 nm, of a square diaphragm of 2.000 to
+        2.050 mm between −0.52 % and +1.12 %). A quarter of a sample puts the nearest copies
+        (``j = ±1``, and every odd ``j``) in quadrature: their cross term vanishes for every
+        edge of the bitmap, whatever its size (for the diaphragm swept over those sizes,
+        −0.11 % to −0.09 %).
+        """
+        if self.obstacle_image is None or self._prefilter() == ap.PREFILTER_BOX:
+            return None
+        pixel_mm = float(self.obstacle_spacing_mm)
+        odd = math.ceil(2.0 * pixel_mm / spacing_mm - 1e-9)
+        odd += 1 - odd % 2
+        locked = 2.0 * pixel_mm / odd
+        return locked if spacing_mm / locked <= IMAGE_PHASE_REFINEMENT else None
 
     def aperture(self, grid: ap.ApertureGrid) -> np.ndarray:
         """The composite amplitude transmittance on ``grid`` (Kakimoto eq. 5: ``t_o · P``).
@@ -600,6 +643,8 @@ class WaveOpticsGlare(GlareModel):
         if self.pixel_integration == "exact":
             reach_deg = self._extent_deg(pixel_deg, shape)
             prefilter = self._prefilter()
+            image = self.obstacle_image is not None and prefilter != ap.PREFILTER_BOX
+            parts = IMAGE_TRANSFER_PARTS if image else 1
             t = self._aperture_crop(grid, prefilter)
             per_wavelength = self.fresnel and self.spectral != "scaled"
             acf = None
@@ -618,6 +663,7 @@ class WaveOpticsGlare(GlareModel):
                     reach_deg=reach_deg,
                     edge_transfer=True,
                     prefilter=prefilter,
+                    transfer_parts=parts,
                 )
             open_area_mm2 = float(np.abs(t).sum()) * grid.spacing_mm**2
         elif self.pixel_integration == "rebin":
