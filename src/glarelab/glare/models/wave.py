@@ -33,7 +33,13 @@ polygons of 3-8 sides are within 0.51 % of their transform, and within 0.44 % be
 or a 4-point screen, 0.3 % behind a trigonal one. An obstacle image is a bitmap read as area
 coverage (each pixel a square of its value,
 :func:`glarelab.glare.models.apertures.aperture_image_cover`): linearly interpolated onto the
-grid, its pattern was up to 65 % off at the border; now within 1.1 %.
+grid, its pattern was up to 65 % off at the border. Its pixels' edges lie along the axes, where
+the prefilter's leftover copies add in phase at some edge positions (+1.00 % for a square of
+2.025 mm in 0.025 mm pixels): the grid's spacing is made ``2 s / m`` (``m`` odd), which puts
+every pixel edge a quarter of a sample from the samples, where the nearest copies are in
+quadrature, and the transfer is divided out over fifths of each pixel
+(:data:`IMAGE_TRANSFER_PARTS`; +1.06 % for bars cut by the pupil at the pixel's centre): now
+within 0.1 %.
 ``pixel_integration='rebin'`` spreads the DFT's samples over the pixels instead (:func:`rebin`:
 exact for the energy, not for the pattern when a pixel spans few samples).
 
@@ -143,8 +149,9 @@ TRIGONAL_PREFILTER = (3, 2)
 OBSTACLE_SAMPLES_FAST = 4  # the same for aperture_grid="fast"
 # parts of a pixel along each axis over which the prefilter's transfer is divided out for an
 # obstacle image: at each pixel's centre, bars cut by a 3 mm pupil (0.01 mm pixels) were
-# +1.06 % at the border, their grating's order inside the border pixels; over fifths +0.02 %
-# (scripts/measure_combined_prefilter.py --others)
+# +1.06 % at the border, their grating's order inside the border pixels; over fifths -0.01 %
+# (+0.42 % with the grid's lock of grid_for alone; scripts/measure_combined_prefilter.py
+# --others)
 IMAGE_TRANSFER_PARTS = 5
 # the most an obstacle image's pixel edges may refine the grid to sit a quarter of a sample
 # from its samples (grid_for); beyond it the grid is left as the kernel asks
@@ -270,7 +277,8 @@ class WaveOpticsGlare(GlareModel):
         the other obstacles. It is read as area coverage: each pixel a square of side
         ``obstacle_spacing_mm`` holding its value, open beyond the image
         (:func:`glarelab.glare.models.apertures.aperture_image_cover`), so its pixels' edges
-        diffract as drawn. Default None.
+        diffract as drawn; on the exact grid the grid is locked to its pixels (:meth:`grid_for`)
+        and the transfer divided out over fifths of each kernel pixel. Default None.
     pixel_integration
         ``'exact'`` (default): each wavelength's PSF integrated exactly over each pixel
         (:func:`glarelab.glare.models.fraunhofer.pixel_integrated_psf`); ``'rebin'``: the PSF
@@ -407,7 +415,11 @@ class WaveOpticsGlare(GlareModel):
         spectrum folds far outside it, and the edges' transfer divided out is at most
         ``sinc²(1/6)`` = 0.91 at the border, 0.83 in the corners), resolves the pupil by 64
         samples and particles and lashes by :data:`OBSTACLE_SAMPLES` (12), and samples the
-        Fresnel chirp (if on) below Nyquist; the grid spans twice the pupil.
+        Fresnel chirp (if on) below Nyquist; the grid spans twice the pupil. With an obstacle
+        image (on the exact grid) the spacing is then made ``2 s / m``, ``m`` the smallest odd
+        integer that keeps it no coarser, ``s`` the image's pixel (at most
+        :data:`IMAGE_PHASE_REFINEMENT` times finer, and within 8192²): its pixel edges a
+        quarter of a sample from the samples (:meth:`_image_phase_spacing`).
 
         With twice the kernel's width and 2 samples across particles and lashes (before issue
         33), the light at 1-2.5° of a round pupil was 22 % low at 380 nm, and the spacing,
@@ -487,10 +499,11 @@ class WaveOpticsGlare(GlareModel):
         their cross term adds ``2 cos(2π j x₀ / δ)`` times the copy's amplitude to the
         streak's light (the (5, 3) prefilter leaves the copies 0.65 % of it: the border of a
         square bitmap of 2.025 mm was +1.00 % at 380 nm, of a square diaphragm of 2.000 to
-        2.050 mm between −0.52 % and +1.12 %). A quarter of a sample puts the nearest copies
+        2.050 mm between −0.52 % and +1.00 %). A quarter of a sample puts the nearest copies
         (``j = ±1``, and every odd ``j``) in quadrature: their cross term vanishes for every
-        edge of the bitmap, whatever its size (for the diaphragm swept over those sizes,
-        −0.11 % to −0.09 %).
+        edge of the bitmap, whatever its size (the diaphragm swept over those sizes on such a
+        grid, the transfer divided over fifths: −0.11 % to −0.09 %;
+        ``scripts/measure_combined_prefilter.py --sweep``).
         """
         if self.obstacle_image is None or self._prefilter() == ap.PREFILTER_BOX:
             return None
