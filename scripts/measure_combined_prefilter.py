@@ -27,7 +27,8 @@ samples rebinned onto the pixels. For a triangle alone the first agrees with the
 exact transform (a sum over its edges) to 0.09 % (``--check``).
 
 ``--sweep`` prints a square diaphragm at 45° alone (its edges along the axes), of side
-2.000-2.050 mm in steps of 0.005 mm (edges swept over two samples of the grid), at 380 nm
+2.000-2.050 mm in steps of 0.005 mm (edges swept over two samples of the grid) and with its
+edges exactly on a sample and half-way between two, at 380 nm
 against its transform: the border and the 0.2-0.3° ring under (5, 3), (5, 4) and (7, 4),
 the transfer divided out at each pixel's centre or over fifths, and under (5, 3) on a grid
 whose spacing puts the edges a quarter of a sample from the samples.
@@ -329,10 +330,14 @@ def sweep() -> None:
     variants = [((5, 3), 1, False), ((5, 3), 5, False), ((5, 4), 5, False), ((7, 4), 1, False),
                 ((7, 4), 5, False), ((5, 3), 1, True), ((5, 3), 5, True)]  # fmt: skip
     worst: dict[tuple, float] = {}
-    for side in np.round(np.arange(2.000, 2.0501, 0.005), 3):
+    # and the edges exactly on a sample and exactly half-way between two (86 and 86.5 samples
+    # from the axis), where every copy adds in phase
+    sides = [*np.round(np.arange(2.000, 2.0501, 0.005), 3), 2 * 86.0 * required,
+             2 * 86.5 * required]  # fmt: skip
+    for side in sides:
         diameter = float(side) * math.sqrt(2.0)
         reference = polygon_pixels(4, diameter, 45.0, 380.0, PIXEL_DEG, 15, everywhere)
-        line = [f"{side:.3f} mm"]
+        line = [f"{side:.5f} mm"]
         for prefilter, parts, quarter in variants:
             spacing = required
             if quarter:  # the edges, side/2 from the axis, at a quarter of a sample

@@ -498,8 +498,9 @@ class WaveOpticsGlare(GlareModel):
         copy ``j`` differ in phase by ``2π j x₀ / δ``, which does not vary along the edge, so
         their cross term adds ``2 cos(2π j x₀ / δ)`` times the copy's amplitude to the
         streak's light (the (5, 3) prefilter leaves the copies 0.65 % of it: the border of a
-        square bitmap of 2.025 mm was +1.00 % at 380 nm, of a square diaphragm of 2.000 to
-        2.050 mm between −0.52 % and +1.00 %). A quarter of a sample puts the nearest copies
+        square bitmap of 2.025 mm was +1.00 % at 380 nm, a square diaphragm of 2.000 to
+        2.050 mm between −0.96 % and +1.06 %, the extremes with its edges on a sample or
+        half-way between two). A quarter of a sample puts the nearest copies
         (``j = ±1``, and every odd ``j``) in quadrature: their cross term vanishes for every
         edge of the bitmap, whatever its size (the diaphragm swept over those sizes on such a
         grid, the transfer divided over fifths: −0.11 % to −0.09 %;
