@@ -383,7 +383,9 @@ def test_an_obstacle_image_is_its_bitmap_read_as_area_coverage():
     # a bitmap of 0.01 mm pixels, an open square of 2.01 mm inside a 3.6 mm pupil, opaque
     # around it: its pattern is exactly the bitmap's squares'. The bitmap linearly
     # interpolated onto the grid (before) was -6.7 % at the border at 380 nm, and a bitmap of
-    # 0.04 mm pixels -65 %; read as area coverage under the diaphragm's prefilter, -0.5 %
+    # 0.04 mm pixels -65 %; read as area coverage under the diaphragm's prefilter, -0.53 %,
+    # and -0.04 % with the grid locked to its pixels (scripts/measure_combined_prefilter.py
+    # --others)
     spacing = 0.01
     axis = (np.arange(401) - 200) * spacing
     image = np.outer(np.abs(axis) <= 1.0 + 1e-9, np.abs(axis) <= 1.0 + 1e-9).astype(float)
@@ -394,7 +396,7 @@ def test_an_obstacle_image_is_its_bitmap_read_as_area_coverage():
     kernels, nm = model.monochromatic_kernels(0.02, (31, 31))
     reference = _bitmap_pixels(image, spacing, float(nm[0]))
     for name, mask in _ring_and_border().items():
-        assert_allclose(kernels[0][mask].sum(), reference[mask].sum(), rtol=0.01, err_msg=name)
+        assert_allclose(kernels[0][mask].sum(), reference[mask].sum(), rtol=0.003, err_msg=name)
 
 
 def _square_bitmap(spacing_mm, half_side_mm, *, half_mm=2.0):
