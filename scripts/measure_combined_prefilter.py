@@ -328,7 +328,8 @@ def sweep() -> None:
     everywhere = np.logical_or(*regions.values())
     required = 380e-6 / (wave.PSF_PERIOD_KERNELS * math.radians(SHAPE[0] * PIXEL_DEG))
     variants = [((5, 3), 1, False), ((5, 3), 5, False), ((5, 4), 5, False), ((7, 4), 1, False),
-                ((7, 4), 5, False), ((5, 3), 1, True), ((5, 3), 5, True)]  # fmt: skip
+                ((7, 4), 5, False), ((5, 3), 1, True), ((5, 3), 5, True),
+                ((5, 3), 1, "model")]  # fmt: skip
     worst: dict[tuple, float] = {}
     # and the edges exactly on a sample and exactly half-way between two (86 and 86.5 samples
     # from the axis), where every copy adds in phase
@@ -340,7 +341,12 @@ def sweep() -> None:
         line = [f"{side:.5f} mm"]
         for prefilter, parts, quarter in variants:
             spacing = required
-            if quarter:  # the edges, side/2 from the axis, at a quarter of a sample
+            if quarter == "model":  # the model's grid (WaveOpticsGlare._diaphragm_phase_spacing)
+                spacing = WaveOpticsGlare(
+                    pupil_mm=diameter, diaphragm_sides=4, diaphragm_rotation_deg=45.0, **NONE,
+                    spectrum=TWO_WAVELENGTHS,
+                ).grid_for(PIXEL_DEG, SHAPE).spacing_mm  # fmt: skip
+            elif quarter:  # the edges, side/2 from the axis, at a quarter of a sample
                 spacing = side / 2 / (math.ceil(side / 2 / required - 0.25) + 0.25)
             n = 2 * (math.ceil(diameter / 2 / spacing) + 2) + 1
             t = ap.aperture_diaphragm(ap.ApertureGrid(n, spacing), diameter, 4,
@@ -352,12 +358,13 @@ def sweep() -> None:
             errors = [k[mask].sum() / reference[mask].sum() - 1 for mask in regions.values()]
             key = (prefilter, parts, quarter)
             worst[key] = max(worst.get(key, 0.0), *map(abs, errors))
-            line.append(f"{prefilter}/{parts}{' quarter' if quarter else ''}: "
+            line.append(f"{prefilter}/{parts}{' ' + str(quarter) if quarter else ''}: "
                         f"ring {errors[0]:+.4f} border {errors[1]:+.4f}")  # fmt: skip
         print(" | ".join(line), flush=True)
     for (prefilter, parts, quarter), value in worst.items():
         print(f"worst {prefilter}, transfer over {parts} part(s)"
-              f"{', quarter-sample grid' if quarter else ''}: {value:.4f}")  # fmt: skip
+              f"{', the model grid' if quarter == 'model' else ''}"
+              f"{', quarter-sample grid' if quarter is True else ''}: {value:.4f}")  # fmt: skip
 
 
 def others(out: Path) -> None:

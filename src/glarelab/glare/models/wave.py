@@ -156,6 +156,8 @@ IMAGE_TRANSFER_PARTS = 5
 # the most an obstacle image's pixel edges may refine the grid to sit a quarter of a sample
 # from its samples (grid_for); beyond it the grid is left as the kernel asks
 IMAGE_PHASE_REFINEMENT = 3.0
+# an edge's normal this close to an axis is along it (diaphragm_rotation_deg is given in degrees)
+_AXIS_TOLERANCE_DEG = 1e-6
 SPECTRAL_METHODS = ("reference", "scaled", "kakimoto")
 PIXEL_INTEGRATION_METHODS = ("exact", "rebin")
 PUPIL_CONVENTIONS = ("unit-energy", "Luidolt2020")
@@ -471,6 +473,8 @@ class WaveOpticsGlare(GlareModel):
         spacing = limits[binding]
         n = self._grid_size(spacing)
         locked = self._image_phase_spacing(spacing)
+        if locked is None:
+            locked = self._diaphragm_phase_spacing(spacing)
         if locked is not None and self._grid_size(locked) <= MAX_GRID:
             spacing, n = locked, self._grid_size(locked)
         if n > MAX_GRID:
@@ -513,6 +517,42 @@ class WaveOpticsGlare(GlareModel):
         odd += 1 - odd % 2
         locked = 2.0 * pixel_mm / odd
         return locked if spacing_mm / locked <= IMAGE_PHASE_REFINEMENT else None
+
+    def _diaphragm_phase_spacing(self, spacing_mm: float) -> float | None:
+        """For a polygonal diaphragm under a prefilter with an edge along an axis: the largest
+        spacing ``δ <= spacing_mm`` with ``4 a / δ`` an odd integer (``a`` the apothem, every
+        edge's distance from the centre), which puts the axis edges, at ``±a``, a quarter of
+        a sample from the samples; None for a round pupil, a polygon without an edge along an
+        axis, with an obstacle image (locked to its pixels instead), behind a cross screen
+        (whose lines along the axes have phases of their own), or on the fast grid.
+
+        The copies of an axis edge's streak in the sampled aperture's spectrum lie on the
+        streak, ``j / δ`` apart, in the phase ``2π j a / δ`` that does not vary along the edge
+        (:meth:`_image_phase_spacing`): a square diaphragm at 45°, 380 nm, was +1.06 % at the
+        border with its edges half-way between two samples and −0.96 % on them. A quarter of
+        a sample puts the odd copies in quadrature (the spacing moves by less than
+        ``δ / (2 a)``, under 1 % for a pupil of 64 samples or more). An edge at 45°
+        (``x ± y = ±a√2``) has copies on its streak too, at ``(j, j) / δ``, but they are
+        ``√2`` times farther and weakened by the prefilter's transfer along both axes, a
+        hundredth of an axis edge's; the other angles of 3-8 sides put no copy on the
+        streak (``tan θ`` irrational). A polygon whose normals miss the axes keeps its grid.
+        """
+        if (
+            self.diaphragm_sides is None
+            or self.obstacle_image is not None
+            or self.cross_screen is not None
+            or self._prefilter() == ap.PREFILTER_BOX
+        ):
+            return None
+        sides = int(self.diaphragm_sides)
+        normals_deg = self.diaphragm_rotation_deg + (np.arange(sides) + 0.5) * 360.0 / sides
+        off_axis_deg = np.abs((normals_deg + 45.0) % 90.0 - 45.0)
+        if not np.any(off_axis_deg < _AXIS_TOLERANCE_DEG):
+            return None
+        apothem_mm = self.pupil_diameter / 2.0 * math.cos(math.pi / sides)
+        odd = math.ceil(4.0 * apothem_mm / spacing_mm - 1e-9)
+        odd += 1 - odd % 2
+        return 4.0 * apothem_mm / odd
 
     def aperture(self, grid: ap.ApertureGrid) -> np.ndarray:
         """The composite amplitude transmittance on ``grid`` (Kakimoto eq. 5: ``t_o · P``).
