@@ -30,8 +30,12 @@ exact transform (a sum over its edges) to 0.09 % (``--check``).
 2.000-2.050 mm in steps of 0.005 mm (edges swept over two samples of the grid) and with its
 edges exactly on a sample and half-way between two, at 380 nm
 against its transform: the border and the 0.2-0.3° ring under (5, 3), (5, 4) and (7, 4),
-the transfer divided out at each pixel's centre or over fifths, and under (5, 3) on a grid
-whose spacing puts the edges a quarter of a sample from the samples.
+the transfer divided out at each pixel's centre or over fifths, under (5, 3) on a grid
+whose spacing puts the edges a quarter of a sample from the samples, and on the model's grid
+(``WaveOpticsGlare._diaphragm_phase_spacing``: the same lock, at ``m + 1/4`` or ``m + 3/4``
+samples).
+
+``--only CASE ...`` reruns those cases of ``combined_prefilter.csv`` and keeps its other rows.
 
 ``--others`` writes ``others_prefilter.csv`` instead: the apertures that kept the one-sample
 cover until they were measured (a round pupil behind the lid alone, a round pupil behind a
@@ -160,11 +164,12 @@ def one_sample_kernels(model: WaveOpticsGlare) -> np.ndarray:
 
 
 def unlocked_grid(model: WaveOpticsGlare) -> ap.ApertureGrid:
-    """The grid the kernel asks for, without an obstacle image's phase lock."""
+    """The grid the kernel asks for, without an obstacle image's or a polygon's phase lock
+    (a round pupil's: the diaphragm does not bind the spacing)."""
     saved = wave.IMAGE_PHASE_REFINEMENT
     wave.IMAGE_PHASE_REFINEMENT = 0.0
     try:
-        return model.grid_for(PIXEL_DEG, SHAPE)
+        return replace(model, diaphragm_sides=None).grid_for(PIXEL_DEG, SHAPE)
     finally:
         wave.IMAGE_PHASE_REFINEMENT = saved
 
@@ -429,6 +434,11 @@ def main() -> None:
     parser.add_argument("--no-fft", action="store_true", help="leave out the 8192² FFT check")
     parser.add_argument("--others", action="store_true", help="write others_prefilter.csv")
     parser.add_argument("--sweep", action="store_true", help="a square's edge over the grid")
+    parser.add_argument(
+        "--only", nargs="+", metavar="CASE",
+        help="rerun these cases of combined_prefilter.csv, keep the other rows (and, with "
+        "--no-fft, their reference_check, which does not depend on the model)",
+    )  # fmt: skip
     args = parser.parse_args()
     if args.check:
         check()
@@ -441,7 +451,17 @@ def main() -> None:
         others(args.out)
         return
     rows = []
+    kept = {}
+    if args.only:
+        unknown = sorted(set(args.only) - set(CASES))
+        if unknown:
+            raise SystemExit(f"--only: unknown cases {unknown}; allowed: {list(CASES)}")
+        with open(args.out / "combined_prefilter.csv", newline="") as f:
+            kept = {(r["case"], r["wavelength_nm"], r["region"]): r for r in csv.DictReader(f)}
     for case, parameters in CASES.items():
+        if args.only and case not in args.only:
+            rows.extend(r for key, r in kept.items() if key[0] == case)
+            continue
         model = WaveOpticsGlare(**parameters, spectral="reference", spectrum=TWO_WAVELENGTHS)
         before, before_s = timed(one_sample_kernels, model)
         (now, nm), now_s = timed(model.monochromatic_kernels, PIXEL_DEG, SHAPE)
@@ -451,6 +471,8 @@ def main() -> None:
             for name, mask in masks().items():
                 ref = reference[i][mask].sum()
                 check_ = "" if other is None else f"{other[i][mask].sum() / ref - 1:+.4f}"
+                if other is None and kept:
+                    check_ = kept[(case, f"{w:g}", name)]["reference_check"]
                 rows.append(
                     {"case": case, "wavelength_nm": f"{w:g}", "region": name,
                      "one_sample": f"{before[i][mask].sum() / ref - 1:+.4f}",

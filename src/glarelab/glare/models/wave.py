@@ -421,7 +421,10 @@ class WaveOpticsGlare(GlareModel):
         image (on the exact grid) the spacing is then made ``2 s / m``, ``m`` the smallest odd
         integer that keeps it no coarser, ``s`` the image's pixel (at most
         :data:`IMAGE_PHASE_REFINEMENT` times finer, and within 8192²): its pixel edges a
-        quarter of a sample from the samples (:meth:`_image_phase_spacing`).
+        quarter of a sample from the samples (:meth:`_image_phase_spacing`). Without one, a
+        polygonal diaphragm with an edge along an axis (not behind a cross screen) makes it
+        ``4 a / m``, ``m`` odd, ``a`` its apothem: those edges a quarter of a sample from the
+        samples, the spacing under 1 % finer (:meth:`_diaphragm_phase_spacing`).
 
         With twice the kernel's width and 2 samples across particles and lashes (before issue
         33), the light at 1-2.5° of a round pupil was 22 % low at 380 nm, and the spacing,
