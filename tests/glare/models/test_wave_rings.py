@@ -214,7 +214,7 @@ def test_a_diaphragm_behind_the_lid_keeps_the_polygons_transform(sides, rotation
     # the lid (2.2 mm above the centre) leaves a 2 mm diaphragm whole, so the reference is
     # the polygon's transform (test_wave_exact.polygon_pixels); with the lid the diaphragm was
     # drawn by the one-sample cover and its axis streaks met their copies
-    # (scripts/measure_combined_prefilter.py: border +9.8 % and -3.7 %, now +0.2 %, -0.4 %)
+    # (scripts/measure_combined_prefilter.py: border +9.8 % and -3.7 %, now +0.13 %, -0.14 %)
     from tests.glare.models.test_wave_exact import polygon_pixels
 
     pixel_deg, shape = 0.02, (31, 31)

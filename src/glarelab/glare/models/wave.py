@@ -28,9 +28,13 @@ behind any of these, is drawn with a smoother prefilter (:data:`DIAPHRAGM_PREFIL
 :func:`glarelab.glare.models.apertures.aperture_diaphragm_prefiltered`), whose transfer is
 divided out instead: a streak along an axis otherwise meets its own copies in the periodic
 spectrum, and a 2 mm square at 45° had its border 9.5 % off at 380 nm (+17.6 % for an 8 mm
-square behind lid and screen, +4.7 % for a round pupil behind a 4-point screen); now
-polygons of 3-8 sides are within 0.51 % of their transform, and within 0.44 % behind the lid
-or a 4-point screen, 0.3 % behind a trigonal one. An obstacle image is a bitmap read as area
+square behind lid and screen, +4.7 % for a round pupil behind a 4-point screen). An edge along
+an axis still meets its copies in a phase constant along it, and the grid's spacing is set so
+that it lies a quarter of a sample from the samples, where the nearest copies are in
+quadrature (:meth:`WaveOpticsGlare._diaphragm_phase_spacing`; a square's border was +1.06 %
+with its edges half-way between two samples, now 0.34 % at worst). Polygons of 3-8 sides are
+within 0.31 % of their transform, 0.18 % behind the lid, 0.34 % behind a 4-point screen and
+0.3 % behind a trigonal one. An obstacle image is a bitmap read as area
 coverage (each pixel a square of its value,
 :func:`glarelab.glare.models.apertures.aperture_image_cover`): linearly interpolated onto the
 grid, its pattern was up to 65 % off at the border. Its pixels' edges lie along the axes, where
@@ -424,7 +428,7 @@ class WaveOpticsGlare(GlareModel):
         quarter of a sample from the samples (:meth:`_image_phase_spacing`). Without one, a
         polygonal diaphragm with an edge along an axis (not behind a cross screen) makes it
         ``4 a / m``, ``m`` odd, ``a`` its apothem: those edges a quarter of a sample from the
-        samples, the spacing under 1 % finer (:meth:`_diaphragm_phase_spacing`).
+        samples, the spacing at most ``δ / (2 a)`` finer (:meth:`_diaphragm_phase_spacing`).
 
         With twice the kernel's width and 2 samples across particles and lashes (before issue
         33), the light at 1-2.5° of a round pupil was 22 % low at 380 nm, and the spacing,
@@ -533,8 +537,9 @@ class WaveOpticsGlare(GlareModel):
         streak, ``j / δ`` apart, in the phase ``2π j a / δ`` that does not vary along the edge
         (:meth:`_image_phase_spacing`): a square diaphragm at 45°, 380 nm, was +1.06 % at the
         border with its edges half-way between two samples and −0.96 % on them. A quarter of
-        a sample puts the odd copies in quadrature (the spacing moves by less than
-        ``δ / (2 a)``, under 1 % for a pupil of 64 samples or more). An edge at 45°
+        a sample puts the odd copies in quadrature (the spacing becomes finer by less than
+        ``δ / (2 a)``: 0.4 % for a 2 mm square on 31² at 0.02°/px; at most 3 % where the
+        pupil's 64 samples set it, a triangle's apothem a quarter of its diameter). An edge at 45°
         (``x ± y = ±a√2``) has copies on its streak too, at ``(j, j) / δ``, but they are
         ``√2`` times farther and weakened by the prefilter's transfer along both axes, a
         hundredth of an axis edge's; the other angles of 3-8 sides put no copy on the
