@@ -26,6 +26,17 @@ first - 1: that drawing zero-padded to 8192², one FFT, the cells' transfer divi
 samples rebinned onto the pixels. For a triangle alone the first agrees with the polygon's
 exact transform (a sum over its edges) to 0.09 % (``--check``).
 
+``--sweep`` prints a square diaphragm at 45° alone (its edges along the axes), of side
+2.000-2.050 mm in steps of 0.005 mm (edges swept over two samples of the grid) and with its
+edges exactly on a sample and half-way between two, at 380 nm
+against its transform: the border and the 0.2-0.3° ring under (5, 3), (5, 4) and (7, 4),
+the transfer divided out at each pixel's centre or over fifths, under (5, 3) on a grid
+whose spacing puts the edges a quarter of a sample from the samples, and on the model's grid
+(``WaveOpticsGlare._diaphragm_phase_spacing``: the same lock, at ``m + 1/4`` or ``m + 3/4``
+samples).
+
+``--only CASE ...`` reruns those cases of ``combined_prefilter.csv`` and keeps its other rows.
+
 ``--others`` writes ``others_prefilter.csv`` instead: the apertures that kept the one-sample
 cover until they were measured (a round pupil behind the lid alone, a round pupil behind a
 4-point screen, a trigonal cross screen, an obstacle image), the same regions and
@@ -35,11 +46,17 @@ wavelengths:
 - ``interpolated``: for an obstacle image, the model before (the bitmap linearly interpolated
   onto the grid);
 - ``prefilter``: the whole aperture under ``DIAPHRAGM_PREFILTER``, (5, 3)
-  (``apertures.aperture_diaphragm_prefiltered``, a round pupil with ``sides=None``);
+  (``apertures.aperture_diaphragm_prefiltered``, a round pupil with ``sides=None``), on the
+  grid the kernel asks for, its transfer divided out at each pixel's centre (for an obstacle
+  image, the model before its grid was locked to the image's pixels);
 - ``trigonal_prefilter``: the same under ``TRIGONAL_PREFILTER``, (3, 2), 25 sub-cells;
-- ``model``: the model (which of these it uses: ``model_uses``);
+- ``model``: the model (which prefilter it uses: ``model_uses``; for an obstacle image the
+  grid spacing ``2 s / m``, ``m`` odd, that puts the image's pixel edges a quarter of a sample
+  from the samples, and the transfer divided out over fifths of each pixel:
+  ``WaveOpticsGlare._image_phase_spacing``, ``IMAGE_TRANSFER_PARTS``);
 - ``before_s``, ``model_s``: the time of the model before (the one-sample cover; for an
   image, the interpolation) and of the model, two wavelengths, the shortest of three runs;
+  ``prefilter_s``: for an image, the time of ``prefilter``;
 - ``reference``: ``fine`` as above, or ``bitmap``: for an obstacle bitmap whose open part lies
   inside the pupil, the bitmap read as area coverage (each pixel a square of its value), whose
   transform is exactly ``s² sinc(θ_x s/λ) sinc(θ_y s/λ)`` times the bitmap's discrete
@@ -63,6 +80,7 @@ import scipy.fft
 
 from glarelab.glare import WaveOpticsGlare
 from glarelab.glare.models import apertures as ap
+from glarelab.glare.models import wave
 from glarelab.glare.models.fraunhofer import (
     aperture_autocorrelation,
     pixel_integrated_psf,
@@ -145,12 +163,24 @@ def one_sample_kernels(model: WaveOpticsGlare) -> np.ndarray:
     return prefilter_kernels(model, ap.PREFILTER_BOX)
 
 
+def unlocked_grid(model: WaveOpticsGlare) -> ap.ApertureGrid:
+    """The grid the kernel asks for, without an obstacle image's or a polygon's phase lock
+    (a round pupil's: the diaphragm does not bind the spacing)."""
+    saved = wave.IMAGE_PHASE_REFINEMENT
+    wave.IMAGE_PHASE_REFINEMENT = 0.0
+    try:
+        return replace(model, diaphragm_sides=None).grid_for(PIXEL_DEG, SHAPE)
+    finally:
+        wave.IMAGE_PHASE_REFINEMENT = saved
+
+
 def prefilter_kernels(
     model: WaveOpticsGlare, prefilter: tuple[int, int], aperture: np.ndarray | None = None
 ) -> np.ndarray:
-    """The model's kernels with the whole aperture (or ``aperture``, on the model's grid)
-    drawn under ``prefilter``, whose transfer is divided out."""
-    grid = model.grid_for(PIXEL_DEG, SHAPE)
+    """The model's kernels with the whole aperture (or ``aperture``, on the grid the kernel
+    asks for) drawn under ``prefilter``, whose transfer is divided out at each pixel's
+    centre."""
+    grid = unlocked_grid(model)
     t = model._aperture_crop(grid, prefilter) if aperture is None else aperture
     acf = aperture_autocorrelation(t, grid.spacing_mm)
     reach = model._extent_deg(PIXEL_DEG, SHAPE)
@@ -166,7 +196,7 @@ def interpolated_kernels(model: WaveOpticsGlare) -> np.ndarray:
     times the bitmap linearly interpolated onto the grid (open beyond it)."""
     from scipy.ndimage import map_coordinates
 
-    grid = model.grid_for(PIXEL_DEG, SHAPE)
+    grid = unlocked_grid(model)
     plain = replace(model, obstacle_image=None, obstacle_spacing_mm=None)
     t = plain._aperture_crop(grid)
     x, y = ap.ApertureGrid(t.shape[0], grid.spacing_mm).coordinates()
@@ -295,6 +325,53 @@ def check() -> None:
             print(f"{w:g} nm {name}: {reference[i][mask].sum() / exact[mask].sum() - 1:+.5f}")
 
 
+def sweep() -> None:
+    """A square diaphragm at 45° of side 2.000-2.050 mm, 380 nm, against its transform."""
+    from tests.glare.models.test_wave_exact import polygon_pixels
+
+    regions = masks()
+    everywhere = np.logical_or(*regions.values())
+    required = 380e-6 / (wave.PSF_PERIOD_KERNELS * math.radians(SHAPE[0] * PIXEL_DEG))
+    variants = [((5, 3), 1, False), ((5, 3), 5, False), ((5, 4), 5, False), ((7, 4), 1, False),
+                ((7, 4), 5, False), ((5, 3), 1, True), ((5, 3), 5, True),
+                ((5, 3), 1, "model")]  # fmt: skip
+    worst: dict[tuple, float] = {}
+    # and the edges exactly on a sample and exactly half-way between two (86 and 86.5 samples
+    # from the axis), where every copy adds in phase
+    sides = [*np.round(np.arange(2.000, 2.0501, 0.005), 3), 2 * 86.0 * required,
+             2 * 86.5 * required]  # fmt: skip
+    for side in sides:
+        diameter = float(side) * math.sqrt(2.0)
+        reference = polygon_pixels(4, diameter, 45.0, 380.0, PIXEL_DEG, 15, everywhere)
+        line = [f"{side:.5f} mm"]
+        for prefilter, parts, quarter in variants:
+            spacing = required
+            if quarter == "model":  # the model's grid (WaveOpticsGlare._diaphragm_phase_spacing)
+                spacing = WaveOpticsGlare(
+                    pupil_mm=diameter, diaphragm_sides=4, diaphragm_rotation_deg=45.0, **NONE,
+                    spectrum=TWO_WAVELENGTHS,
+                ).grid_for(PIXEL_DEG, SHAPE).spacing_mm  # fmt: skip
+            elif quarter:  # the edges, side/2 from the axis, at a quarter of a sample
+                spacing = side / 2 / (math.ceil(side / 2 / required - 0.25) + 0.25)
+            n = 2 * (math.ceil(diameter / 2 / spacing) + 2) + 1
+            t = ap.aperture_diaphragm(ap.ApertureGrid(n, spacing), diameter, 4,
+                                      rotation_deg=45.0, prefilter=prefilter)  # fmt: skip
+            acf = aperture_autocorrelation(t, spacing)
+            k = pixel_integrated_psf(acf, 380.0, PIXEL_DEG, SHAPE, reach_deg=SHAPE[0] * PIXEL_DEG,
+                                     edge_transfer=True, prefilter=prefilter,
+                                     transfer_parts=parts)  # fmt: skip
+            errors = [k[mask].sum() / reference[mask].sum() - 1 for mask in regions.values()]
+            key = (prefilter, parts, quarter)
+            worst[key] = max(worst.get(key, 0.0), *map(abs, errors))
+            line.append(f"{prefilter}/{parts}{' ' + str(quarter) if quarter else ''}: "
+                        f"ring {errors[0]:+.4f} border {errors[1]:+.4f}")  # fmt: skip
+        print(" | ".join(line), flush=True)
+    for (prefilter, parts, quarter), value in worst.items():
+        print(f"worst {prefilter}, transfer over {parts} part(s)"
+              f"{', the model grid' if quarter == 'model' else ''}"
+              f"{', quarter-sample grid' if quarter is True else ''}: {value:.4f}")  # fmt: skip
+
+
 def others(out: Path) -> None:
     """``others_prefilter.csv``: the lid, cross screens and obstacle images before and now."""
     from glarelab.glare.models.wave import DIAPHRAGM_PREFILTER, TRIGONAL_PREFILTER
@@ -310,7 +387,9 @@ def others(out: Path) -> None:
     for case, (parameters, exact) in cases.items():
         model = WaveOpticsGlare(**parameters, spectral="reference", spectrum=TWO_WAVELENGTHS)
         one_sample, one_sample_s = timed(one_sample_kernels, model)
-        prefiltered = prefilter_kernels(model, DIAPHRAGM_PREFILTER)
+        prefiltered, prefilter_s = prefilter_kernels(model, DIAPHRAGM_PREFILTER), None
+        if model.obstacle_image is not None:
+            prefiltered, prefilter_s = timed(prefilter_kernels, model, DIAPHRAGM_PREFILTER)
         trigonal = prefilter_kernels(model, TRIGONAL_PREFILTER)
         interpolated, interpolated_s = (None, None)
         if model.obstacle_image is not None:
@@ -338,6 +417,7 @@ def others(out: Path) -> None:
                      "trigonal_prefilter": ratio(trigonal, i, mask, ref),
                      "model": ratio(now, i, mask, ref), "model_uses": uses,
                      "reference": source, "before_s": f"{before_s:.3f}",
+                     "prefilter_s": "" if prefilter_s is None else f"{prefilter_s:.3f}",
                      "model_s": f"{now_s:.3f}"}
                 )  # fmt: skip
                 print(rows[-1], flush=True)
@@ -353,16 +433,35 @@ def main() -> None:
     parser.add_argument("--check", action="store_true", help="only check the reference")
     parser.add_argument("--no-fft", action="store_true", help="leave out the 8192² FFT check")
     parser.add_argument("--others", action="store_true", help="write others_prefilter.csv")
+    parser.add_argument("--sweep", action="store_true", help="a square's edge over the grid")
+    parser.add_argument(
+        "--only", nargs="+", metavar="CASE",
+        help="rerun these cases of combined_prefilter.csv, keep the other rows (and, with "
+        "--no-fft, their reference_check, which does not depend on the model)",
+    )  # fmt: skip
     args = parser.parse_args()
     if args.check:
         check()
+        return
+    if args.sweep:
+        sweep()
         return
     args.out.mkdir(parents=True, exist_ok=True)
     if args.others:
         others(args.out)
         return
     rows = []
+    kept = {}
+    if args.only:
+        unknown = sorted(set(args.only) - set(CASES))
+        if unknown:
+            raise SystemExit(f"--only: unknown cases {unknown}; allowed: {list(CASES)}")
+        with open(args.out / "combined_prefilter.csv", newline="") as f:
+            kept = {(r["case"], r["wavelength_nm"], r["region"]): r for r in csv.DictReader(f)}
     for case, parameters in CASES.items():
+        if args.only and case not in args.only:
+            rows.extend(r for key, r in kept.items() if key[0] == case)
+            continue
         model = WaveOpticsGlare(**parameters, spectral="reference", spectrum=TWO_WAVELENGTHS)
         before, before_s = timed(one_sample_kernels, model)
         (now, nm), now_s = timed(model.monochromatic_kernels, PIXEL_DEG, SHAPE)
@@ -372,6 +471,8 @@ def main() -> None:
             for name, mask in masks().items():
                 ref = reference[i][mask].sum()
                 check_ = "" if other is None else f"{other[i][mask].sum() / ref - 1:+.4f}"
+                if other is None and kept:
+                    check_ = kept[(case, f"{w:g}", name)]["reference_check"]
                 rows.append(
                     {"case": case, "wavelength_nm": f"{w:g}", "region": name,
                      "one_sample": f"{before[i][mask].sum() / ref - 1:+.4f}",

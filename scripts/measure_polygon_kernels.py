@@ -8,8 +8,10 @@ polygons) as CSV:
 ``polygon_rings.csv``: for 3-8 sides at a rotation that puts a streak on an axis, 2, 5 and
 8 mm, 380 and 780 nm, the 0.2-0.3° ring and the border of a 31² kernel at 0.02°/px, model /
 reference - 1, with the diaphragm drawn by the one-sample cover (``prefilter=(1, 1)``, the
-kernel before) and by the model's prefilter. The reference is the polygon's transform as a sum
-over its edges, integrated over each pixel by Gauss-Legendre quadrature
+kernel before, on the grid the kernel asks for) and by the model (its prefilter, and for an
+edge along an axis the spacing that puts it a quarter of a sample from the samples). The
+reference is the polygon's transform as a sum over its edges, integrated over each pixel by
+Gauss-Legendre quadrature
 (``tests/glare/models/test_wave_exact.polygon_pixels``).
 
 ``polygon_fine.csv``: a third computation, independent of both: the polygon drawn by exactly
@@ -23,6 +25,7 @@ from __future__ import annotations
 import argparse
 import csv
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -56,8 +59,10 @@ def axis_rotation_deg(sides: int) -> float:
 
 
 def box_kernels(model: WaveOpticsGlare) -> tuple[np.ndarray, np.ndarray]:
-    """The model's kernels with the diaphragm drawn by the one-sample cover."""
-    grid = model.grid_for(PIXEL_DEG, SHAPE)
+    """The model's kernels with the diaphragm drawn by the one-sample cover (the kernel before),
+    on the grid the kernel asks for: a round pupil's, without the quarter-sample lock of a
+    polygon's axis edges (``WaveOpticsGlare._diaphragm_phase_spacing``)."""
+    grid = replace(model, diaphragm_sides=None).grid_for(PIXEL_DEG, SHAPE)
     crop = ap.ApertureGrid(
         2 * (math.ceil(model.pupil_diameter / 2 / grid.spacing_mm) + 2) + 1, grid.spacing_mm
     )

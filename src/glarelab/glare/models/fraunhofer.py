@@ -44,7 +44,12 @@ import numpy as np
 import scipy.fft
 import scipy.sparse
 
-from glarelab.glare._validation import check_in_range, check_pixel_deg, check_positive
+from glarelab.glare._validation import (
+    check_in_range,
+    check_pixel_deg,
+    check_positive,
+    check_positive_int,
+)
 from glarelab.glare.models import apertures as ap
 from glarelab.glare.models.vos import WAVELENGTH_RANGE_NM
 
@@ -380,13 +385,37 @@ def aperture_autocorrelation(field: np.ndarray, spacing_mm: float) -> ApertureAu
 
 
 def _phase_matrices(
-    lags: np.ndarray, beta_p: float, centres_px: np.ndarray
+    lags: np.ndarray,
+    beta_p: float,
+    centres_px: np.ndarray,
+    prefilter: tuple[int, int] | None = None,
+    parts: int = 1,
 ) -> tuple[np.ndarray, np.ndarray]:
     """``sinc(k β p) cos(2π k β c)`` and ``sinc(k β p) sin(2π k β c)``, ``(centres, lags)``,
-    for centres ``c`` in pixels (``β p`` periods per pixel)."""
-    weight = np.sinc(lags * beta_p)
+    for centres ``c`` in pixels (``β p`` periods per pixel).
+
+    With ``prefilter``: the pixel's integral of ``e^{-2π i k β x} / Φ²(x β p)`` instead, the
+    prefilter's transfer divided out over ``parts`` parts of the pixel (each
+    part's integral exact, ``Φ²`` at its centre): ``Σ_s sinc(k β p / n) e^{-2π i k β c_s}
+    / (n Φ²(c_s β p))``, which is the plain matrix when ``Φ = 1``."""
+    if prefilter is None:
+        weight = np.sinc(lags * beta_p)
+        phase = 2.0 * np.pi * beta_p * np.outer(centres_px, lags)
+        return weight * np.cos(phase), weight * np.sin(phase)
+    n = parts
+    offsets = (np.arange(n) - (n - 1) / 2.0) / n  # the parts' centres, pixels from c
+    # e^{i(a + b)} = e^{ia} e^{ib}: the parts' phases are the centre's times each offset's
+    gain = 1.0 / (
+        n * ap.prefilter_transfer((centres_px[:, None] + offsets) * beta_p, prefilter) ** 2
+    )
+    offset_phase = 2.0 * np.pi * beta_p * np.outer(offsets, lags)
+    weight = np.sinc(lags * beta_p / n)
+    # einsum: a matrix product over 5 parts is slow in BLAS (0.02 s here against 0.2 ms)
+    gain_cos = np.einsum("cs,sk->ck", gain, weight * np.cos(offset_phase))
+    gain_sin = np.einsum("cs,sk->ck", gain, weight * np.sin(offset_phase))
     phase = 2.0 * np.pi * beta_p * np.outer(centres_px, lags)
-    return weight * np.cos(phase), weight * np.sin(phase)
+    cos_c, sin_c = np.cos(phase), np.sin(phase)
+    return cos_c * gain_cos - sin_c * gain_sin, sin_c * gain_cos + cos_c * gain_sin
 
 
 def _folded(c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -415,6 +444,7 @@ def pixel_integrated_psf(
     reach_deg: float | None = None,
     edge_transfer: bool = False,
     prefilter: tuple[int, int] = ap.PREFILTER_BOX,
+    transfer_parts: int = 1,
 ) -> np.ndarray:
     """The PSF of an aperture integrated exactly over each pixel of a centred kernel.
 
@@ -439,9 +469,14 @@ def pixel_integrated_psf(
     prefilter
         With ``edge_transfer``: the prefilter the edges were drawn with
         (:func:`glarelab.glare.models.apertures.aperture_diaphragm`). Default ``(1, 1)``: the
-        one-sample ramp or box, divided out as ``sinc²(ρ δ / λ)``; any other is divided out
-        as its separable transfer ``Φ²(θ_x δ / λ) Φ²(θ_y δ / λ)``
-        (:func:`glarelab.glare.models.apertures.prefilter_transfer`).
+        one-sample ramp or box, divided out as ``sinc²(ρ δ / λ)`` at each pixel's centre; any
+        other is divided out as its separable transfer ``Φ²(θ_x δ / λ) Φ²(θ_y δ / λ)``
+        (:func:`glarelab.glare.models.apertures.prefilter_transfer`), at each pixel's centre
+        or over ``transfer_parts`` parts of it.
+    transfer_parts
+        With ``edge_transfer`` and a prefilter other than ``(1, 1)``: the parts of a pixel
+        along each axis over which its transfer is divided out, >= 1. Default 1: at the
+        pixel's centre (see Notes).
 
     Returns
     -------
@@ -482,7 +517,13 @@ def pixel_integrated_psf(
     samples' pattern is the described aperture's times ``sinc²(f δ)``, ``f = θ / λ``: at the
     border of a kernel half the PSF's period wide, ``f δ = 1/4``, 19 % dim; in its corners
     35 %. ``edge_transfer=True`` divides it out at each pixel's centre (its variation over a
-    pixel is of order ``(β p)²``).
+    pixel is of order ``(β p)²`` where the pattern is smooth across the pixel). With
+    ``transfer_parts = n > 1`` a prefilter's transfer, separable, is divided out inside the
+    matrices ``W`` instead: ``W_{ck} = Σ_s \\mathrm{sinc}(k β p / n)\\,
+    e^{-2π i k β c_s} / (n Φ²(c_s β))`` over the ``n`` parts of the pixel centred at ``c_s``
+    (the same number of products): where the pattern varies strongly within a pixel (a
+    grating's order inside a border pixel), the transfer's slope across the pixel matters
+    to first order.
 
     Examples
     --------
@@ -515,23 +556,28 @@ def pixel_integrated_psf(
     rows_px = np.arange(-half_h, half_h + 1, dtype=float)
     row_lags = np.arange(c.shape[0]) - c.shape[0] // 2
     col_lags = np.arange(c.shape[1]) - c.shape[1] // 2
+    # a prefilter's separable transfer is divided out inside the pixel integral (W below)
+    parts = check_positive_int("transfer_parts", transfer_parts)
+    within = None
+    if edge_transfer and tuple(prefilter) != ap.PREFILTER_BOX and parts > 1:
+        within = tuple(prefilter)
     if real:  # centro-symmetric: fold the lags, and columns 0 .. half_w suffice
         even, odd = acf.folded
-        cos_y, sin_y = _phase_matrices(row_lags[row_lags >= 0], beta_p, rows_px)
+        cos_y, sin_y = _phase_matrices(row_lags[row_lags >= 0], beta_p, rows_px, within, parts)
         sin_y = sin_y[:, 1:]
         cols_px = np.arange(0, half_w + 1, dtype=float)
     else:
-        cos_y, sin_y = _phase_matrices(row_lags, beta_p, rows_px)
+        cos_y, sin_y = _phase_matrices(row_lags, beta_p, rows_px, within, parts)
         cols_px = np.arange(-half_w, half_w + 1, dtype=float)
     block = max(1, _BLOCK_ELEMENTS // max(c.shape[0], 1))
     part = np.empty((rows_px.size, cols_px.size))
     for start in range(0, cols_px.size, block):
         centres = cols_px[start : start + block]
         if real:
-            cos_x, sin_x = _phase_matrices(col_lags[col_lags >= 0], beta_p, centres)
+            cos_x, sin_x = _phase_matrices(col_lags[col_lags >= 0], beta_p, centres, within, parts)
             value = cos_y @ (even @ cos_x.T) - sin_y @ (odd @ sin_x[:, 1:].T)
         else:  # Re[(Wc - i Ws)_y (Cr + i Ci) (Wc - i Ws)_xᵀ]
-            cos_x, sin_x = _phase_matrices(col_lags, beta_p, centres)
+            cos_x, sin_x = _phase_matrices(col_lags, beta_p, centres, within, parts)
             cr, ci = c.real, c.imag
             value = cos_y @ (cr @ cos_x.T - ci @ sin_x.T) - sin_y @ (cr @ sin_x.T + ci @ cos_x.T)
         part[:, start : start + block] = value
@@ -540,7 +586,7 @@ def pixel_integrated_psf(
         # sinc²(f δ) of the antialiased edges, f δ = ρ β p at ρ pixels
         radius_px = np.hypot(rows_px[:, None], cols_px[None, :])
         part /= np.sinc(radius_px * beta_p) ** 2
-    elif edge_transfer:
+    elif edge_transfer and within is None:
         along_rows = ap.prefilter_transfer(rows_px * beta_p, prefilter) ** 2
         along_cols = ap.prefilter_transfer(cols_px * beta_p, prefilter) ** 2
         part /= along_rows[:, None] * along_cols[None, :]

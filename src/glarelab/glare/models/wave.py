@@ -28,12 +28,22 @@ behind any of these, is drawn with a smoother prefilter (:data:`DIAPHRAGM_PREFIL
 :func:`glarelab.glare.models.apertures.aperture_diaphragm_prefiltered`), whose transfer is
 divided out instead: a streak along an axis otherwise meets its own copies in the periodic
 spectrum, and a 2 mm square at 45° had its border 9.5 % off at 380 nm (+17.6 % for an 8 mm
-square behind lid and screen, +4.7 % for a round pupil behind a 4-point screen); now
-polygons of 3-8 sides are within 0.51 % of their transform, and within 0.44 % behind the lid
-or a 4-point screen, 0.3 % behind a trigonal one. An obstacle image is a bitmap read as area
+square behind lid and screen, +4.7 % for a round pupil behind a 4-point screen). An edge along
+an axis still meets its copies in a phase constant along it, and the grid's spacing is set so
+that it lies a quarter of a sample from the samples, where the nearest copies are in
+quadrature (:meth:`WaveOpticsGlare._diaphragm_phase_spacing`; a square's border was +1.06 %
+with its edges half-way between two samples, now 0.34 % at worst). Polygons of 3-8 sides are
+within 0.31 % of their transform, 0.18 % behind the lid, 0.34 % behind a 4-point screen and
+0.3 % behind a trigonal one. An obstacle image is a bitmap read as area
 coverage (each pixel a square of its value,
 :func:`glarelab.glare.models.apertures.aperture_image_cover`): linearly interpolated onto the
-grid, its pattern was up to 65 % off at the border; now within 1.1 %.
+grid, its pattern was up to 65 % off at the border. Its pixels' edges lie along the axes, where
+the prefilter's leftover copies add in phase at some edge positions (+1.00 % for a square of
+2.025 mm in 0.025 mm pixels): the grid's spacing is made ``2 s / m`` (``m`` odd), which puts
+every pixel edge a quarter of a sample from the samples, where the nearest copies are in
+quadrature, and the transfer is divided out over fifths of each pixel
+(:data:`IMAGE_TRANSFER_PARTS`; +1.06 % for bars cut by the pupil at the pixel's centre): now
+within 0.1 %.
 ``pixel_integration='rebin'`` spreads the DFT's samples over the pixels instead (:func:`rebin`:
 exact for the energy, not for the pattern when a pixel spans few samples).
 
@@ -99,6 +109,8 @@ __all__ = [
     "APERTURE_GRIDS",
     "DIAPHRAGM_PREFILTER",
     "FRESNEL_DISTANCE_MM_LUIDOLT2020",
+    "IMAGE_PHASE_REFINEMENT",
+    "IMAGE_TRANSFER_PARTS",
     "KAKIMOTO2004_WAVELENGTHS_NM",
     "LUIDOLT2020_PUPIL_RANGE_MM",
     "MIN_APERTURE_SAMPLES",
@@ -139,6 +151,17 @@ DIAPHRAGM_PREFILTER = (5, 3)
 # time for two wavelengths on 31² at 0.02°/px)
 TRIGONAL_PREFILTER = (3, 2)
 OBSTACLE_SAMPLES_FAST = 4  # the same for aperture_grid="fast"
+# parts of a pixel along each axis over which the prefilter's transfer is divided out for an
+# obstacle image: at each pixel's centre, bars cut by a 3 mm pupil (0.01 mm pixels) were
+# +1.06 % at the border, their grating's order inside the border pixels; over fifths -0.01 %
+# (+0.42 % with the grid's lock of grid_for alone; scripts/measure_combined_prefilter.py
+# --others)
+IMAGE_TRANSFER_PARTS = 5
+# the most an obstacle image's pixel edges may refine the grid to sit a quarter of a sample
+# from its samples (grid_for); beyond it the grid is left as the kernel asks
+IMAGE_PHASE_REFINEMENT = 3.0
+# an edge's normal this close to an axis is along it (diaphragm_rotation_deg is given in degrees)
+_AXIS_TOLERANCE_DEG = 1e-6
 SPECTRAL_METHODS = ("reference", "scaled", "kakimoto")
 PIXEL_INTEGRATION_METHODS = ("exact", "rebin")
 PUPIL_CONVENTIONS = ("unit-energy", "Luidolt2020")
@@ -260,7 +283,8 @@ class WaveOpticsGlare(GlareModel):
         the other obstacles. It is read as area coverage: each pixel a square of side
         ``obstacle_spacing_mm`` holding its value, open beyond the image
         (:func:`glarelab.glare.models.apertures.aperture_image_cover`), so its pixels' edges
-        diffract as drawn. Default None.
+        diffract as drawn; on the exact grid the grid is locked to its pixels (:meth:`grid_for`)
+        and the transfer divided out over fifths of each kernel pixel. Default None.
     pixel_integration
         ``'exact'`` (default): each wavelength's PSF integrated exactly over each pixel
         (:func:`glarelab.glare.models.fraunhofer.pixel_integrated_psf`); ``'rebin'``: the PSF
@@ -397,7 +421,14 @@ class WaveOpticsGlare(GlareModel):
         spectrum folds far outside it, and the edges' transfer divided out is at most
         ``sinc²(1/6)`` = 0.91 at the border, 0.83 in the corners), resolves the pupil by 64
         samples and particles and lashes by :data:`OBSTACLE_SAMPLES` (12), and samples the
-        Fresnel chirp (if on) below Nyquist; the grid spans twice the pupil.
+        Fresnel chirp (if on) below Nyquist; the grid spans twice the pupil. With an obstacle
+        image (on the exact grid) the spacing is then made ``2 s / m``, ``m`` the smallest odd
+        integer that keeps it no coarser, ``s`` the image's pixel (at most
+        :data:`IMAGE_PHASE_REFINEMENT` times finer, and within 8192²): its pixel edges a
+        quarter of a sample from the samples (:meth:`_image_phase_spacing`). Without one, a
+        polygonal diaphragm with an edge along an axis (not behind a cross screen) makes it
+        ``4 a / m``, ``m`` odd, ``a`` its apothem: those edges a quarter of a sample from the
+        samples, the spacing at most ``δ / (2 a)`` finer (:meth:`_diaphragm_phase_spacing`).
 
         With twice the kernel's width and 2 samples across particles and lashes (before issue
         33), the light at 1-2.5° of a round pupil was 22 % low at 380 nm, and the spacing,
@@ -447,8 +478,12 @@ class WaveOpticsGlare(GlareModel):
             )
         binding = min(limits, key=limits.get)
         spacing = limits[binding]
-        n = scipy.fft.next_fast_len(math.ceil(2.1 * diameter / spacing))
-        n += n % 2
+        n = self._grid_size(spacing)
+        locked = self._image_phase_spacing(spacing)
+        if locked is None:
+            locked = self._diaphragm_phase_spacing(spacing)
+        if locked is not None and self._grid_size(locked) <= MAX_GRID:
+            spacing, n = locked, self._grid_size(locked)
         if n > MAX_GRID:
             raise ValueError(
                 f"the aperture grid would need {n}² samples (more than {MAX_GRID}²) for "
@@ -456,6 +491,76 @@ class WaveOpticsGlare(GlareModel):
                 "or a smaller psf_extent_deg"
             )
         return ap.ApertureGrid(n, spacing)
+
+    def _grid_size(self, spacing_mm: float) -> int:
+        """Samples per side of a grid of ``spacing_mm`` that spans 2.1 pupils (even)."""
+        n = scipy.fft.next_fast_len(math.ceil(2.1 * self.pupil_diameter / spacing_mm))
+        return n + n % 2
+
+    def _image_phase_spacing(self, spacing_mm: float) -> float | None:
+        """For an obstacle image under a prefilter: the largest spacing ``δ <= spacing_mm`` with
+        ``s / δ`` half an odd integer (``s`` the image's pixel), which puts every edge of its
+        pixels, at ``(k + 1/2) s`` from the axis, a quarter of a sample from the grid's
+        samples; None without an image, on the fast grid, or where that would refine the grid
+        by more than :data:`IMAGE_PHASE_REFINEMENT`.
+
+        A straight edge along an axis at ``x₀`` meets its own copies in the sampled
+        aperture's periodic spectrum, ``j / δ`` apart along that axis; the streak and its
+        copy ``j`` differ in phase by ``2π j x₀ / δ``, which does not vary along the edge, so
+        their cross term adds ``2 cos(2π j x₀ / δ)`` times the copy's amplitude to the
+        streak's light (the (5, 3) prefilter leaves the copies 0.65 % of it: the border of a
+        square bitmap of 2.025 mm was +1.00 % at 380 nm, a square diaphragm of 2.000 to
+        2.050 mm between −0.96 % and +1.06 %, the extremes with its edges on a sample or
+        half-way between two). A quarter of a sample puts the nearest copies
+        (``j = ±1``, and every odd ``j``) in quadrature: their cross term vanishes for every
+        edge of the bitmap, whatever its size (the diaphragm swept over those sizes on such a
+        grid, the transfer divided over fifths: −0.11 % to −0.09 %;
+        ``scripts/measure_combined_prefilter.py --sweep``).
+        """
+        if self.obstacle_image is None or self._prefilter() == ap.PREFILTER_BOX:
+            return None
+        pixel_mm = float(self.obstacle_spacing_mm)
+        odd = math.ceil(2.0 * pixel_mm / spacing_mm - 1e-9)
+        odd += 1 - odd % 2
+        locked = 2.0 * pixel_mm / odd
+        return locked if spacing_mm / locked <= IMAGE_PHASE_REFINEMENT else None
+
+    def _diaphragm_phase_spacing(self, spacing_mm: float) -> float | None:
+        """For a polygonal diaphragm under a prefilter with an edge along an axis: the largest
+        spacing ``δ <= spacing_mm`` with ``4 a / δ`` an odd integer (``a`` the apothem, every
+        edge's distance from the centre), which puts the axis edges, at ``±a``, a quarter of
+        a sample from the samples; None for a round pupil, a polygon without an edge along an
+        axis, with an obstacle image (locked to its pixels instead), behind a cross screen
+        (whose lines along the axes have phases of their own), or on the fast grid.
+
+        The copies of an axis edge's streak in the sampled aperture's spectrum lie on the
+        streak, ``j / δ`` apart, in the phase ``2π j a / δ`` that does not vary along the edge
+        (:meth:`_image_phase_spacing`): a square diaphragm at 45°, 380 nm, was +1.06 % at the
+        border with its edges half-way between two samples and −0.96 % on them. A quarter of
+        a sample puts the odd copies in quadrature (the spacing becomes finer by less than
+        ``δ / (2 a)``: 0.4 % for a 2 mm square on 31² at 0.02°/px; at most 3 % where the
+        pupil's 64 samples set it, a triangle's apothem a quarter of its diameter). An edge at 45°
+        (``x ± y = ±a√2``) has copies on its streak too, at ``(j, j) / δ``, but they are
+        ``√2`` times farther and weakened by the prefilter's transfer along both axes, a
+        hundredth of an axis edge's; the other angles of 3-8 sides put no copy on the
+        streak (``tan θ`` irrational). A polygon whose normals miss the axes keeps its grid.
+        """
+        if (
+            self.diaphragm_sides is None
+            or self.obstacle_image is not None
+            or self.cross_screen is not None
+            or self._prefilter() == ap.PREFILTER_BOX
+        ):
+            return None
+        sides = int(self.diaphragm_sides)
+        normals_deg = self.diaphragm_rotation_deg + (np.arange(sides) + 0.5) * 360.0 / sides
+        off_axis_deg = np.abs((normals_deg + 45.0) % 90.0 - 45.0)
+        if not np.any(off_axis_deg < _AXIS_TOLERANCE_DEG):
+            return None
+        apothem_mm = self.pupil_diameter / 2.0 * math.cos(math.pi / sides)
+        odd = math.ceil(4.0 * apothem_mm / spacing_mm - 1e-9)
+        odd += 1 - odd % 2
+        return 4.0 * apothem_mm / odd
 
     def aperture(self, grid: ap.ApertureGrid) -> np.ndarray:
         """The composite amplitude transmittance on ``grid`` (Kakimoto eq. 5: ``t_o · P``).
@@ -600,6 +705,8 @@ class WaveOpticsGlare(GlareModel):
         if self.pixel_integration == "exact":
             reach_deg = self._extent_deg(pixel_deg, shape)
             prefilter = self._prefilter()
+            image = self.obstacle_image is not None and prefilter != ap.PREFILTER_BOX
+            parts = IMAGE_TRANSFER_PARTS if image else 1
             t = self._aperture_crop(grid, prefilter)
             per_wavelength = self.fresnel and self.spectral != "scaled"
             acf = None
@@ -618,6 +725,7 @@ class WaveOpticsGlare(GlareModel):
                     reach_deg=reach_deg,
                     edge_transfer=True,
                     prefilter=prefilter,
+                    transfer_parts=parts,
                 )
             open_area_mm2 = float(np.abs(t).sum()) * grid.spacing_mm**2
         elif self.pixel_integration == "rebin":
