@@ -173,6 +173,17 @@ def _calibrate_export_monitor(args: argparse.Namespace) -> int:
 
     calibration = Calibration.load(args.calibration)
     protocol = load_protocol(args.protocol) if args.protocol else None
+    if protocol is not None:
+        from glarelab.display.checks import check_calibration
+
+        for fits in check_calibration(protocol, calibration):
+            if not fits.passed:  # the monitor would pair one display's geometry and another's
+                raise ValueError(  # calibration (stimuli build refuses the same pair)
+                    f"--protocol {args.protocol}: {args.calibration} is not of the "
+                    f"{protocol.study} protocol's display: it is {fits.actual}, the protocol "
+                    f"asks for {fits.expected}; export the calibration of that display, or "
+                    "leave out --protocol (the monitor keeps its own size, width and distance)"
+                )
     path, name = export_calibration(
         calibration,
         args.monitor,
