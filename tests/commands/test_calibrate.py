@@ -5,6 +5,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
+
 from glarelab.cli import main
 
 ROOT = Path(__file__).parents[2]
@@ -33,3 +35,27 @@ def test_export_monitor_refuses_a_protocol_of_another_display(tmp_path, capsys):
     assert "--protocol yoshida2008" in line
     assert "8-bit" in line and "10-bit" in line and "433" in line
     assert list(folder.iterdir()) == []
+
+
+@pytest.mark.parametrize(
+    ("simulate", "named"),
+    [(["0.1", "100", "2.2"], "WHITE (0.1 cd/m²) must be above BLACK (100 cd/m²)"),
+     (["100", "100", "2.2"], "WHITE (100 cd/m²) must be above BLACK"),
+     (["100", "0.1", "0"], "GAMMA must be > 0")],
+)  # fmt: skip
+def test_measure_refuses_a_simulated_display_before_measuring(
+    tmp_path, capsys, monkeypatch, simulate, named
+):
+    # white below black, or gamma 0, ran the whole measurement in a window, then blamed
+    # "photometer drift" for readings that could never be fitted
+    import glarelab.frontend.measure
+
+    def measured(*args, **kwargs):
+        raise AssertionError("the measurement ran")
+
+    monkeypatch.setattr(glarelab.frontend.measure, "run_measurement", measured)
+    line = refused(["calibrate", "measure", "--windowed", "--bit-depth", "8", "--points", "5",
+                    "--out", tmp_path / "m.json", "--simulate", *simulate], capsys)  # fmt: skip
+    assert line.startswith(f"glarelab calibrate: --simulate {' '.join(simulate)}: "), line
+    assert named in line
+    assert list(tmp_path.iterdir()) == []
