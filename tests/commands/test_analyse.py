@@ -30,17 +30,27 @@ def test_protocol_instead_of_study_reads_every_csv_as_a_session(sessions, tmp_pa
     assert all(session.name in provenance for session in sessions)  # both, none as the study
 
 
-@pytest.mark.parametrize(
-    ("argv", "message"),
-    [
-        (["analyse", "a.csv", "b.csv", "--out", "rep"],
-         "STUDY 'a.csv' is a CSV file: give the study first"),
-        (["analyse", "luidolt2020", "--out", "rep"],
-         "no session CSV files given; read STUDY as 'luidolt2020'"),
-    ],
-)  # fmt: skip
-def test_a_csv_as_study_or_no_csv_is_refused_in_one_line(argv, message, tmp_path, capsys):
-    status = main(argv)
+def test_csvs_after_the_options_are_sessions_too(sessions, tmp_path, capsys):
+    # the form the attack round used: STUDY, options, then the CSVs
+    argv = ["import-psychopy", "luidolt2020", "--out", str(tmp_path / "im"),
+            "--set", "participant=P99", *map(str, sessions)]  # fmt: skip
+    assert main(argv) == 2
     err = capsys.readouterr().err
-    assert status == 2
-    assert message in err and len(err.strip().splitlines()) == 1, err
+    assert "--set participant=P99: the file records 'participant'" in err, err
+
+
+def test_a_csv_as_study_is_refused_in_one_line(capsys):
+    assert main(["analyse", "a.csv", "b.csv", "--out", "rep"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == (
+        "glarelab analyse: STUDY 'a.csv' is a CSV file: give the study first (a shipped name "
+        "or a protocol TOML), or --protocol FILE before the session CSV files"
+    )
+
+
+def test_protocol_with_a_single_csv_says_how(capsys):
+    with pytest.raises(SystemExit):
+        main(["analyse", "--protocol", "p.toml", "a.csv", "--out", "rep"])
+    err = capsys.readouterr().err.strip()
+    assert "read STUDY as 'a.csv'; with --protocol FILE give two or more CSVs, or one CSV " in err
+    assert len(err.splitlines()) == 1

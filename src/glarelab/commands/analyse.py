@@ -13,8 +13,9 @@ from .common import log as _log
 
 def _study_or_csv(args: argparse.Namespace, what: str) -> None:
     """``--protocol FILE CSV…`` (no STUDY, as the help says): the first positional is a CSV,
-    not the study; without ``--protocol`` a CSV as STUDY is refused naming it; no CSV at all
-    is refused."""
+    not the study; without ``--protocol`` a CSV as STUDY is refused naming it. (The CSVs stay
+    ``nargs="+"``: with ``"*"`` argparse ends them at the first option, and CSVs after
+    ``--out`` would be refused.)"""
     if Path(args.study).suffix.lower() == ".csv":
         if args.protocol is None:
             raise ValueError(
@@ -23,11 +24,6 @@ def _study_or_csv(args: argparse.Namespace, what: str) -> None:
             )
         args.csv = [Path(args.study), *args.csv]
         args.study = None
-    if not args.csv:
-        raise ValueError(
-            f"no {what} given; read STUDY as {args.study!r}: give the study (or --protocol "
-            "FILE), then at least one CSV"
-        )
 
 
 def _analyse(args: argparse.Namespace) -> int:
@@ -113,7 +109,7 @@ def add(commands) -> None:
     analyse.add_argument(
         "study", metavar="STUDY", help=f"the protocol: {PROTOCOL_HELP}; left out with --protocol"
     )
-    analyse.add_argument("csv", nargs="*", type=Path, metavar="CSV", help="session CSV files")
+    analyse.add_argument("csv", nargs="+", type=Path, metavar="CSV", help="session CSV files")
     analyse.add_argument(
         "--out",
         type=Path,
@@ -124,8 +120,8 @@ def add(commands) -> None:
         "--protocol",
         type=Path,
         default=None,
-        help="a protocol TOML file, instead of STUDY (--protocol FILE CSV…) or with it (then "
-        "the file must be STUDY's protocol)",
+        help="a protocol TOML file, instead of STUDY (--protocol FILE CSV CSV…; with a single "
+        "CSV, STUDY CSV --protocol FILE) or with it (then the file must be STUDY's protocol)",
     )
     analyse.add_argument(
         "--stimuli",
@@ -168,7 +164,7 @@ def add(commands) -> None:
     imports.add_argument(
         "study", metavar="STUDY", help=f"the protocol: {PROTOCOL_HELP}; left out with --protocol"
     )
-    imports.add_argument("csv", nargs="*", type=Path, metavar="CSV", help="PsychoPy data CSVs")
+    imports.add_argument("csv", nargs="+", type=Path, metavar="CSV", help="PsychoPy data CSVs")
     imports.add_argument(
         "--out", type=Path, required=True, help="folder for the session files (existing files "
         "are never replaced)"
@@ -177,8 +173,8 @@ def add(commands) -> None:
         "--protocol",
         type=Path,
         default=None,
-        help="a protocol TOML file, instead of STUDY (--protocol FILE CSV…) or with it (then "
-        "the file must be STUDY's protocol)",
+        help="a protocol TOML file, instead of STUDY (--protocol FILE CSV CSV…; with a single "
+        "CSV, STUDY CSV --protocol FILE) or with it (then the file must be STUDY's protocol)",
     )
     imports.add_argument(
         "--column",
