@@ -280,3 +280,16 @@ def test_protocol_commands(tmp_path, capsys):
     assert "| glare.methods[].model |  | required | str |" in out
     assert main(["protocol", "keys", "yoshida2008"]) == 0  # a protocol: its paradigm's keys
     assert capsys.readouterr().out == out
+
+
+def test_an_unclear_no_cache_value_is_refused_before_the_command(tmp_path, capsys, monkeypatch):
+    # GLARELAB_NO_CACHE=maybe was taken as 'use the cache' (psf wrote its kernel)
+    monkeypatch.setenv("GLARELAB_NO_CACHE", "maybe")
+    out = tmp_path / "k.png"
+    assert main(["psf", "--out", str(out), "--size", "33", "--model", "gaussian"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == (
+        "glarelab psf: GLARELAB_NO_CACHE must be 1 (no kernel cache, as --no-cache), 0 or unset "
+        "(the cache), got 'maybe'"
+    )
+    assert list(tmp_path.iterdir()) == []

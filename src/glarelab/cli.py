@@ -198,6 +198,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.no_cache:  # for this command and the processes it starts (Dask workers)
             os.environ[NO_CACHE_ENV] = "1"
         try:
+            if os.environ.get(NO_CACHE_ENV, "") not in ("", "0", "1"):  # cache.NO_CACHE_VALUES
+                raise ValueError(
+                    f"{NO_CACHE_ENV} must be 1 (no kernel cache, as --no-cache), 0 or unset (the "
+                    f"cache), got {os.environ[NO_CACHE_ENV]!r}"
+                )
             with warnings.catch_warnings():  # restores Python's own printing afterwards
                 warnings.showwarning = _one_line_warning
                 if program:  # the command ends its own work on Ctrl-C (KeyboardInterrupt)

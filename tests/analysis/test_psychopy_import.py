@@ -171,6 +171,26 @@ def test_a_required_column_not_recorded_is_refused_by_name(tmp_path):
     )
 
 
+def test_set_of_a_recorded_column_is_refused_not_ignored(tmp_path):
+    # --set participant=P99 on a file that records participant was ignored (the session stayed
+    # the recorded participant's): --set fills only what the experiment did not record
+    protocol = load_protocol("yoshida2008")
+    names = [c.name for c in columns(protocol)]
+    source = tmp_path / "run.csv"
+    source.write_text(",".join([*names, "thisRow.t", "notes", ""]) + "\n")
+    with pytest.raises(DataError, match=r"--set participant=P99: the file records 'participant'"):
+        import_psychopy(protocol, [source], tmp_path / "out", values={"participant": "P99"})
+    mapped = tmp_path / "rt.csv"  # recorded under another name, mapped with --column
+    mapped.write_text(",".join("rt" if n == "time_s" else n for n in names) + "\n")
+    with pytest.raises(
+        DataError, match=r"--set time_s=1: the file records 'time_s' \(column 'rt'"
+    ):
+        import_psychopy(
+            protocol, [mapped], tmp_path / "out", mapping={"rt": "time_s"}, values={"time_s": "1"}
+        )
+    assert not (tmp_path / "out").exists()
+
+
 def test_a_named_last_column_with_data_is_not_dropped(tmp_path):
     protocol = load_protocol("yoshida2008")
     names = [c.name for c in columns(protocol)]

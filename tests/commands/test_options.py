@@ -99,7 +99,7 @@ def test_a_block_order_for_a_protocol_without_blocks_is_refused(study, capsys, t
 def test_a_missing_argument_names_what_the_given_ones_were_read_as(capsys, tmp_path):
     """Attack case m041: a file given without the study is read as the study."""
     argv = ["import-psychopy", "/dev/null", "--out", tmp_path / "x"]
-    refused(argv, capsys, tmp_path, "required: csv; read STUDY as '/dev/null'")
+    refused(argv, capsys, tmp_path, "required: CSV; read STUDY as '/dev/null'")
 
 
 def test_unknown_scripted_key_names_are_refused(capsys, tmp_path):

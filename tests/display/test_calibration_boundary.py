@@ -110,3 +110,18 @@ def test_a_subnormal_luminance_is_refused_by_the_fit_too():
     with pytest.raises(ValueError, match=r"code 0 has luminance 5e-324; must be 0 \("):
         fit_calibration([(0, 5e-324), *READINGS[1:]], bit_depth=8)
     assert fit_calibration([(0, 0.0), *READINGS[1:]], bit_depth=8).black_cd_m2 == 0
+
+
+@pytest.mark.parametrize(
+    ("row", "shown", "fix"),
+    [("48,1,176", "'48,1,176'", "write 48,1.176 (luminance 1.176)"),
+     ("512,94,830825", "'512,94,830825'", "write 512,94.830825 (luminance 94.830825)")],
+)  # fmt: skip
+def test_a_decimal_comma_is_shown_as_written_with_its_own_fix(tmp_path, row, shown, fix):
+    # '48,1,176' was answered with a canned 'a decimal comma (94,83) ...: write 94.83'
+    path = tmp_path / "r.csv"
+    path.write_text(f"code,luminance_cd_m2\n0,0.1\n16,0.186\n32,0.5233\n{row}\n64,2.185\n")
+    with pytest.raises(ValueError, match=r"line 5: 3 cells for 2 columns") as refused:
+        read_readings(path)
+    assert shown in str(refused.value) and str(refused.value).endswith(fix)
+    assert "94,83)" not in str(refused.value)

@@ -35,3 +35,12 @@ def test_short_names_stay_distinct():
     first, second = ("x" * 250 + "1"), ("x" * 250 + "2")
     assert short_name(first, room=40) != short_name(second, room=40)
     assert short_name("table", room=40) == "table"
+
+
+def test_a_file_that_cannot_be_created_is_named_not_its_temporary_name(tmp_path):
+    # export-monitor --monitor a/b said "No such file or directory: 'mf/a/.b.partial-….json'"
+    target = tmp_path / "missing" / "b.json"
+    with pytest.raises(FileNotFoundError) as missing:
+        write_text(target, "{}")
+    assert missing.value.filename == str(target)
+    assert "partial" not in str(missing.value)

@@ -11,6 +11,7 @@ from glarelab.files.folders import (
     listed_files,
     record_files,
     replace_folder,
+    staging_folder,
 )
 
 
@@ -67,3 +68,13 @@ def test_a_folder_of_other_files_is_refused_naming_the_out_option(tmp_path):
     (tmp_path / "keep.txt").write_text("mine")
     with pytest.raises(ValueError, match=r"\(keep\.txt\).*give a new or empty folder as --out"):
         check_replaceable(tmp_path, kind="stimulus set", what="stimulus set")
+
+
+@pytest.mark.skipif(not Path("/proc/self").is_dir(), reason="needs Linux's /proc")
+def test_a_folder_that_takes_no_new_folder_is_named_not_the_staging_name():
+    # analyse --out /proc/rep said "No such file or directory: '/proc/.rep.building-31384'"
+    with pytest.raises(
+        ValueError, match=r"^--out /proc/rep: no folder can be made in /proc"
+    ) as no:
+        staging_folder(Path("/proc/rep"))
+    assert "building" not in str(no.value)

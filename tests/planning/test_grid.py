@@ -6,7 +6,7 @@ from glarelab.planning.grid import GridError, apply_setting, grid, parse_setting
 
 
 @settings(max_examples=50, deadline=None)
-@given(st.lists(st.floats(0.01, 1e6, allow_nan=False), min_size=1, max_size=6))
+@given(st.lists(st.floats(0.01, 1e6, allow_nan=False), min_size=1, max_size=6, unique=True))
 def test_numbers_come_back_as_written(values):
     setting = parse_setting("stimulus.disk_deg=" + ",".join(repr(v) for v in values))
     assert setting.values == tuple(values)
@@ -48,6 +48,18 @@ def test_bad_paths_are_refused_naming_the_key(key, message):
 def test_bad_settings_are_refused(text):
     with pytest.raises(GridError, match="--set"):
         parse_setting(text)
+
+
+@pytest.mark.parametrize(
+    ("text", "twice"),
+    [("trials.reversals=6,6", "6"), ("stimulus.disk_deg=0.2,0.3,0.20", "0.2"),
+     ("trials.reversals=6,6.0", "6.0"), ("a.b=[1, 2],[1, 2]", r"\[1, 2\]")],
+)  # fmt: skip
+def test_a_value_given_twice_is_refused(text, twice):
+    # trials.reversals=6,6 built the same stimulus set twice without a word
+    with pytest.raises(GridError, match=rf"^--set [a-z._]+: the value {twice} is given twice"):
+        parse_setting(text)
+    assert parse_setting("a.b=true,1").values == (True, 1)  # a bool and a number differ
 
 
 def test_a_grid_is_every_combination_each_validated():

@@ -354,3 +354,19 @@ def test_start_cd_m2_on_a_scene_that_does_not_enter_the_dark_is_refused(sequence
     assert (
         parse_protocol(data, source="test.toml", folder=PROTOCOLS)["scene"]["start_cd_m2"] == 100
     )
+
+
+def test_a_list_of_tables_headed_as_a_single_table_is_named(tmp_path):
+    # [contexts] typed for [[contexts]] got only the parser's "Cannot overwrite a value"
+    text = (PROTOCOLS / "spencer1995.toml").read_text()
+    first = text.index("[[contexts]]")
+    path = tmp_path / "p.toml"
+    path.write_text(text[:first] + text[first:].replace("[[contexts]]", "[contexts]", 1))
+    line = text[:first].count("\n") + 1
+    with pytest.raises(ProtocolError) as caught:
+        load_protocol(path)
+    (problem,) = caught.value.problems
+    second = text[: text.index("[[contexts]]", first + 1)].count("\n") + 1
+    assert problem.startswith(f"contexts (line {second}): headed [[contexts]] here"), problem
+    assert f"and [contexts] on line {line}" in problem
+    assert "a list of tables heads every entry [[contexts]]" in problem

@@ -222,8 +222,10 @@ def import_psychopy(
     glarelab.analysis.dataset.DataError
         Naming every problem of every file (nothing is written then): a mapping from a column
         the file lacks or to a column the study does not have, a required column neither
-        recorded nor given, two columns mapped to one, a participant id that cannot name a
-        file, a session file that exists already, a last column with no name that holds data.
+        recorded nor given, a value given for a column the file records (the participant
+        stays the one the experiment recorded), two columns mapped to one, a participant id
+        that cannot name a file, a session file that exists already, a last column with no
+        name that holds data.
 
     Examples
     --------
@@ -285,6 +287,15 @@ def import_psychopy(
             problems.append(
                 f"{source}, line 1: two columns give {', '.join(clash)} (one by its name, one "
                 "mapped to it); map or drop one"
+            )
+            continue
+        recorded = [name for name in values if name in taken]
+        if recorded:  # --set is for what was not recorded: never over the file's own values
+            problems.extend(
+                f"{source}, line 1: --set {name}={values[name]}: the file records {name!r} "
+                f"(column {header[renamed.index(name)]!r}); --set gives a value only to a "
+                "column the experiment did not record (correct the recorded values in the file)"
+                for name in recorded
             )
             continue
         filled: dict[str, str] = {}

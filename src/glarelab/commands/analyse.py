@@ -11,11 +11,27 @@ from .common import PROTOCOL_HELP
 from .common import log as _log
 
 
+def _study_or_csv(args: argparse.Namespace, what: str) -> None:
+    """``--protocol FILE CSV…`` (no STUDY, as the help says): the first positional is a CSV,
+    not the study; without ``--protocol`` a CSV as STUDY is refused naming it. (The CSVs stay
+    ``nargs="+"``: with ``"*"`` argparse ends them at the first option, and CSVs after
+    ``--out`` would be refused.)"""
+    if Path(args.study).suffix.lower() == ".csv":
+        if args.protocol is None:
+            raise ValueError(
+                f"STUDY {args.study!r} is a CSV file: give the study first (a shipped name or "
+                f"a protocol TOML), or --protocol FILE before the {what}"
+            )
+        args.csv = [Path(args.study), *args.csv]
+        args.study = None
+
+
 def _analyse(args: argparse.Namespace) -> int:
     from glarelab.analysis.report import write_report
 
+    _study_or_csv(args, "session CSV files")
     protocol = load_protocol(args.protocol or args.study)
-    if args.protocol is not None and protocol.study != args.study:
+    if args.protocol is not None and args.study is not None and protocol.study != args.study:
         named = load_protocol(args.study).study if Path(args.study).suffix else args.study
         if named != protocol.study:
             raise ValueError(
@@ -60,6 +76,7 @@ def _pairs(option: str, items: list[str]) -> dict[str, str]:
 def _import_psychopy(args: argparse.Namespace) -> int:
     from glarelab.analysis.psychopy_import import import_psychopy
 
+    _study_or_csv(args, "PsychoPy CSV files")
     protocol = load_protocol(args.protocol or args.study)
     for csv in args.csv:
         if Path(csv).suffix.lower() != ".csv":
@@ -89,8 +106,10 @@ def add(commands) -> None:
         module's commands are added to them.
     """
     analyse = commands.add_parser("analyse", help="analyse session CSVs: tables, figures, report")
-    analyse.add_argument("study", help=f"the protocol: {PROTOCOL_HELP}")
-    analyse.add_argument("csv", nargs="+", type=Path, help="session CSV files")
+    analyse.add_argument(
+        "study", metavar="STUDY", help=f"the protocol: {PROTOCOL_HELP}; left out with --protocol"
+    )
+    analyse.add_argument("csv", nargs="+", type=Path, metavar="CSV", help="session CSV files")
     analyse.add_argument(
         "--out",
         type=Path,
@@ -98,7 +117,11 @@ def add(commands) -> None:
         help="report folder: new, empty, or an earlier report (replaced whole)",
     )
     analyse.add_argument(
-        "--protocol", type=Path, default=None, help="a protocol TOML file (instead of STUDY)"
+        "--protocol",
+        type=Path,
+        default=None,
+        help="a protocol TOML file, instead of STUDY (--protocol FILE CSV CSV…; with a single "
+        "CSV, STUDY CSV --protocol FILE) or with it (then the file must be STUDY's protocol)",
     )
     analyse.add_argument(
         "--stimuli",
@@ -138,14 +161,20 @@ def add(commands) -> None:
         "session format and write it as a session (CSV and sidecar) for glarelab analyse; "
         "prints the columns and rows it dropped and the columns it filled.",
     )
-    imports.add_argument("study", help=f"the protocol: {PROTOCOL_HELP}")
-    imports.add_argument("csv", nargs="+", type=Path, help="PsychoPy data CSVs")
+    imports.add_argument(
+        "study", metavar="STUDY", help=f"the protocol: {PROTOCOL_HELP}; left out with --protocol"
+    )
+    imports.add_argument("csv", nargs="+", type=Path, metavar="CSV", help="PsychoPy data CSVs")
     imports.add_argument(
         "--out", type=Path, required=True, help="folder for the session files (existing files "
         "are never replaced)"
     )  # fmt: skip
     imports.add_argument(
-        "--protocol", type=Path, default=None, help="a protocol TOML file (instead of STUDY)"
+        "--protocol",
+        type=Path,
+        default=None,
+        help="a protocol TOML file, instead of STUDY (--protocol FILE CSV CSV…; with a single "
+        "CSV, STUDY CSV --protocol FILE) or with it (then the file must be STUDY's protocol)",
     )
     imports.add_argument(
         "--column",

@@ -173,6 +173,17 @@ def _calibrate_export_monitor(args: argparse.Namespace) -> int:
 
     calibration = Calibration.load(args.calibration)
     protocol = load_protocol(args.protocol) if args.protocol else None
+    if protocol is not None:
+        from glarelab.display.checks import check_calibration
+
+        for fits in check_calibration(protocol, calibration):
+            if not fits.passed:  # the monitor would pair one display's geometry and another's
+                raise ValueError(  # calibration (stimuli build refuses the same pair)
+                    f"--protocol {args.protocol}: {args.calibration} is not of the "
+                    f"{protocol.study} protocol's display: it is {fits.actual}, the protocol "
+                    f"asks for {fits.expected}; export the calibration of that display, or "
+                    "leave out --protocol (the monitor keeps its own size, width and distance)"
+                )
     path, name = export_calibration(
         calibration,
         args.monitor,
@@ -241,6 +252,18 @@ def _open_meter(args: argparse.Namespace, instrument: dict | None):
 def _calibrate_measure(args: argparse.Namespace) -> int:
     from glarelab.display.measure import MeasurementLock
 
+    if args.simulate is not None:  # before any window: its readings could never be fitted
+        white, black, gamma = args.simulate
+        given = f"--simulate {white:g} {black:g} {gamma:g}"
+        if not white > black:
+            raise ValueError(
+                f"{given}: WHITE ({white:g} cd/m²) must be above BLACK ({black:g} cd/m²); the "
+                "order is WHITE BLACK GAMMA"
+            )
+        if not gamma > 0:
+            raise ValueError(
+                f"{given}: GAMMA must be > 0 (a display's is about 2.2), got {gamma:g}"
+            )
     if Path(args.out).suffix.lower() != ".json":
         output_file(args.out, (".json",), "calibration")  # refuses, naming the suffix
     # an existing calibration (one that calibrate fit wrote, too) is kept: the new one gets the
@@ -515,7 +538,8 @@ def add(commands) -> None:
         nargs=3,
         metavar=("WHITE", "BLACK", "GAMMA"),
         default=None,
-        help="a simulated photometer instead of typed readings (dry runs)",
+        help="a simulated photometer instead of typed readings (dry runs): a display of "
+        "L = BLACK + (WHITE - BLACK) x^GAMMA, WHITE > BLACK >= 0 cd/m², GAMMA > 0",
     )
     measure.add_argument(
         "--photometer",

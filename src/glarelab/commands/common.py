@@ -103,6 +103,11 @@ class Parser(argparse.ArgumentParser):
             not name.startswith("-") for name in message.removeprefix(required).split(", ")
         ):  # a positional argument missing: the ones given may have been read as another
             message += self._positionals_read()
+            if "--protocol" in getattr(self, "_arguments", ()) and "STUDY as" in message:
+                message += (
+                    "; with --protocol FILE give two or more CSVs, or one CSV after the study "
+                    "(STUDY CSV --protocol FILE)"
+                )
         print(f"{self.prog}: {message} (see {self.prog} --help)", file=sys.stderr)
         raise SystemExit(2)
 

@@ -55,14 +55,32 @@ def _bench(args: argparse.Namespace) -> int:
     from glarelab.bench.run import run_bench
     from glarelab.bench.scenes import WORKLOADS
 
+    if args.live and args.acuity:
+        raise ValueError("--live and --acuity are two benches of their own: give one of them")
+    if args.live or args.acuity:  # the standard bench's options, which these two would ignore
+        bench = "--live" if args.live else "--acuity"
+        ignored = [
+            option
+            for option, given in (
+                ("--large", args.large),
+                ("--no-spectral", args.no_spectral),
+                ("--no-fresh", args.no_fresh),
+                ("--no-startup", args.no_startup),
+            )
+            if given
+        ]
+        if ignored:
+            raise ValueError(
+                f"{bench} runs its own workloads: {' and '.join(ignored)} (of the standard "
+                f"bench) would do nothing; leave {'them' if len(ignored) > 1 else 'it'} out"
+            )
     if args.live:
         from glarelab.bench.live import LIVE_WORKLOADS, live_bench, write_live_bench
 
         unknown = sorted(set(args.only or ()) - set(LIVE_WORKLOADS))
-        if unknown or args.large or args.acuity:
+        if unknown:
             raise ValueError(
-                f"--live runs its own workloads: --only "
-                f"{' '.join(unknown or ['--large' if args.large else '--acuity'])} is not one; "
+                f"--live runs its own workloads: --only {' '.join(unknown)} is not one; "
                 f"choose from {', '.join(LIVE_WORKLOADS)}"
             )
         out = output_folder(args.out, "bench")
@@ -76,10 +94,10 @@ def _bench(args: argparse.Namespace) -> int:
         from glarelab.bench.acuity import ACUITY_WORKLOADS, acuity_bench, write_acuity_bench
 
         unknown = sorted(set(args.only or ()) - set(ACUITY_WORKLOADS))
-        if unknown or args.large:
+        if unknown:
             raise ValueError(
-                f"--acuity runs its own workloads: --only {' '.join(unknown or ['--large'])} "
-                f"is not one; choose from {', '.join(ACUITY_WORKLOADS)}"
+                f"--acuity runs its own workloads: --only {' '.join(unknown)} is not one; "
+                f"choose from {', '.join(ACUITY_WORKLOADS)}"
             )
         out = output_folder(args.out, "bench")
         only = tuple(args.only) if args.only else None

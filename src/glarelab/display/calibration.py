@@ -699,10 +699,17 @@ def read_readings(path: str | Path) -> list[tuple[int, float]]:
         )
     for line, row in enumerate(reader, start=2):
         if None in row:  # more cells than columns: a decimal comma splits a number
+            cells = [row[name] or "" for name in reader.fieldnames] + list(row[None])
+            written = ",".join(cells)
+            if list(reader.fieldnames) == ["code", "luminance_cd_m2"] and len(cells) == 3:
+                # the code is a whole number: the comma is in the luminance
+                fix = f"write {cells[0]},{cells[1]}.{cells[2]} (luminance {cells[1]}.{cells[2]})"
+            else:
+                fix = "write each number with a decimal point"
             raise ValueError(
-                f"{path}, line {line}: {len(reader.fieldnames) + len(row[None])} cells for "
-                f"{len(reader.fieldnames)} columns ({', '.join(reader.fieldnames)}); a "
-                "decimal comma (94,83) splits a number: write 94.83"
+                f"{path}, line {line}: {len(cells)} cells for {len(reader.fieldnames)} columns "
+                f"({', '.join(reader.fieldnames)}) in {written!r}; a decimal comma splits a "
+                f"number: {fix}"
             )
         if not (row.get("code") or "").strip() or not (row.get("luminance_cd_m2") or "").strip():
             raise ValueError(

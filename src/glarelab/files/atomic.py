@@ -231,12 +231,15 @@ def atomic_open(
     if mode not in ("w", "wb"):
         raise ValueError(f"mode must be 'w' or 'wb'; got {mode!r}")
     with atomic_path(path) as temporary:
-        if mode == "wb":
-            with temporary.open("wb") as handle:
-                yield handle
-        else:
-            with temporary.open("w", encoding=encoding, newline=newline) as handle:
-                yield handle
+        try:
+            if mode == "wb":
+                handle = temporary.open("wb")
+            else:
+                handle = temporary.open("w", encoding=encoding, newline=newline)
+        except OSError as error:  # named by the file asked for, not its temporary name
+            raise type(error)(error.errno, error.strerror, str(path)) from None
+        with handle:
+            yield handle
 
 
 def write_text(path: str | Path, text: str, *, encoding: str = "utf-8") -> Path:

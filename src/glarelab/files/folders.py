@@ -391,13 +391,25 @@ def staging_folder(final: Path) -> Path:
     -------
     pathlib.Path
         ``.NAME.building-PID`` beside ``final``, empty.
+
+    Raises
+    ------
+    ValueError
+        When no folder can be made beside ``final`` (a read-only or virtual file system such
+        as ``/proc``), naming ``final``, not the temporary name.
     """
     final = Path(final).resolve()
     final.parent.mkdir(parents=True, exist_ok=True)
     _leftovers(final)
     staging = final.with_name(f".{_aside_stem(final)}.building-{os.getpid()}")
     shutil.rmtree(staging, ignore_errors=True)  # a build of this process that was cut short
-    staging.mkdir()
+    try:
+        staging.mkdir()
+    except OSError as error:  # named by the output asked for, not the temporary name
+        raise ValueError(
+            f"--out {final}: no folder can be made in {final.parent} ({error.strerror}); "
+            "give another --out"
+        ) from None
     return staging
 
 

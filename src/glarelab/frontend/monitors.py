@@ -87,6 +87,25 @@ def _read_calibs(path: Path) -> dict:
     return calibs
 
 
+def _check_monitor_name(name: str) -> None:
+    """Refuse a monitor name that is not one file name of the monitor folder: empty (an unset
+    shell variable; it would be the hidden file ``.json``), with a path separator, ``.`` or
+    ``..`` at its start, or blank."""
+    if not isinstance(name, str):
+        raise TypeError(f"--monitor must be a name (str), got {type(name).__name__} {name!r}")
+    if not name.strip():
+        raise ValueError(
+            f"--monitor {name!r}: a monitor name must not be empty or blank (an unset shell "
+            "variable?); give the name Monitor Center shows, e.g. --monitor lab"
+        )
+    bad = [c for c in ("/", "\\", "\0") if c in name]
+    if bad or name.startswith("."):
+        raise ValueError(
+            f"--monitor {name!r}: a monitor name is one file name of the monitor folder: it "
+            "must not hold '/', '\\' or a NUL, nor start with '.'"
+        )
+
+
 def load_monitor(name: str, *, folder: str | Path | None = None):
     """The Monitor Center monitor ``name`` (its latest calibration current), from ``folder``
     (default :func:`default_monitor_folder`).
@@ -107,8 +126,10 @@ def load_monitor(name: str, *, folder: str | Path | None = None):
     Raises
     ------
     ValueError
-        For a monitor that is not there (naming those that are) or a file that is not one.
+        For a monitor that is not there (naming those that are), a file that is not one, or a
+        name that is not one file name (empty, with ``/``, or starting with ``.``).
     """
+    _check_monitor_name(name)
     folder = Path(folder) if folder is not None else default_monitor_folder()
     path = folder / f"{name}.json"
     if not path.is_file():
@@ -299,8 +320,10 @@ def export_calibration(
     Raises
     ------
     ValueError
-        For a ``folder`` that does not exist or a monitor file that is not one.
+        For a ``folder`` that does not exist, a monitor file that is not one, or a ``name``
+        that is not one file name (empty, with ``/``, or starting with ``.``).
     """
+    _check_monitor_name(name)
     folder = Path(folder) if folder is not None else default_monitor_folder()
     if not folder.is_dir():
         raise ValueError(f"--monitor-folder {folder}: no such folder")

@@ -54,7 +54,7 @@ class Setting:
     Raises
     ------
     GridError
-        For a key that is not a dotted path, or no values.
+        For a key that is not a dotted path, no values, or a value given twice.
     """
 
     key: str
@@ -64,6 +64,14 @@ class Setting:
         _segments(self.key)
         if not self.values:
             raise GridError(f"--set {self.key}: no values")
+        for index, value in enumerate(self.values):
+            for earlier in self.values[:index]:  # 6 and 6.0 are one value; true and 1 are not
+                if earlier == value and isinstance(earlier, bool) == isinstance(value, bool):
+                    raise GridError(
+                        f"--set {self.key}: the value {value!r} is given twice (values "
+                        f"{', '.join(map(repr, self.values))}); each grid value once, or the "
+                        "grid builds the same protocol twice"
+                    )
 
 
 @dataclass(frozen=True)

@@ -317,6 +317,7 @@ def load_protocol(path: str | Path) -> Protocol:
 _TOML_PLACE = re.compile(r"\(at line (\d+), column (\d+)\)")
 _TOML_BARE_OR_QUOTED = r"""(?:[A-Za-z0-9_-]+|"[^"]*"|'[^']*')"""
 _TOML_KEY = re.compile(rf"^\s*({_TOML_BARE_OR_QUOTED}(?:\s*\.\s*{_TOML_BARE_OR_QUOTED})*)\s*=")
+_TOML_HEADER = re.compile(r"^\s*(\[\[?)\s*([^\[\]]+?)\s*(\]\]?)\s*(?:#.*)?$")
 _TOML_TABLE = re.compile(r"^\s*\[\[?\s*([^\]]+?)\s*\]\]?\s*(?:#.*)?$")
 
 
@@ -358,6 +359,26 @@ def toml_problem(text: str, error: tomllib.TOMLDecodeError) -> str:
             "; a quoted string ends on the line it starts on: close its quote there, or use "
             "triple quotes for text of several lines"
         )
+    header = _TOML_HEADER.match(line)
+    if header is not None:  # [X] where [[X]] is meant, or the other way round
+        name = re.sub(r"\s*\.\s*", ".", header.group(2))
+        single = {f"[{name}]", f"[[{name}]]"} - {f"{header.group(1)}{name}{header.group(3)}"}
+        other = next(
+            (
+                index
+                for index, earlier in enumerate(lines, start=1)
+                if (found := _TOML_HEADER.match(earlier))
+                and re.sub(r"\s*\.\s*", ".", found.group(2)) == name
+                and found.group(1) != header.group(1)
+            ),
+            None,
+        )
+        if other is not None:
+            return (
+                f"{name} (line {number}): headed {header.group(1)}{name}{header.group(3)} here "
+                f"and {single.pop()} on line {other}; a list of tables heads every entry "
+                f"[[{name}]], a single table [{name}] once ({message})"
+            )
     key = _TOML_KEY.match(line)
     if key is None:
         return message

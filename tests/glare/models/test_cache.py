@@ -282,6 +282,18 @@ def test_the_environment_chooses_the_folder_and_turns_it_off(tmp_path, monkeypat
     assert not (tmp_path / "kernels").exists()
     monkeypatch.setenv("GLARELAB_NO_CACHE", "0")
     assert default_cache() is not None
+    for unclear in ("maybe", "yes", "true", " 1", "2"):  # 'maybe' used the cache unasked
+        monkeypatch.setenv("GLARELAB_NO_CACHE", unclear)
+        with pytest.raises(ValueError, match=rf"^GLARELAB_NO_CACHE must be 1 .*got {unclear!r}"):
+            default_cache()
+
+
+@pytest.mark.parametrize("megabytes", ["-5", "0", "nan", "inf", "-inf"])
+def test_a_size_out_of_range_names_the_variable_and_its_value(tmp_path, monkeypatch, megabytes):
+    # -5 was refused as 'max_bytes ... got -5242880.0', naming neither the variable nor '-5'
+    monkeypatch.setenv("GLARELAB_CACHE_MAX_MB", megabytes)
+    with pytest.raises(ValueError, match=rf"^GLARELAB_CACHE_MAX_MB .* MiB, got '{megabytes}'$"):
+        KernelCache(tmp_path)
 
 
 def test_the_user_cache_folder_honours_xdg_cache_home(tmp_path):

@@ -45,6 +45,13 @@ def test_pupil_rejects_impossible_luminance(bad):
         eye.pupil_diameter_mm(bad)
 
 
+@pytest.mark.parametrize("text", ["100", b"100", np.array(["100"]), [True, False]])
+def test_pupil_rejects_what_is_not_a_number(text):
+    # pupil_diameter_mm('100') gave 2.399 mm: the string was read as a number
+    with pytest.raises((TypeError, ValueError), match=r"^field_luminance_cd_m2 must .*numbers"):
+        eye.pupil_diameter_mm(text)
+
+
 @pytest.mark.parametrize(
     ("luminance", "expected"),
     [

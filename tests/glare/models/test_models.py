@@ -175,3 +175,12 @@ def test_models_are_reachable_by_name():
         glare.make_model("kakimoto")
     with pytest.raises(ValueError, match="model must be a glare model"):
         glare.kernel(42, 0.1, (3, 3))
+
+
+def test_a_model_name_given_as_model_is_refused_naming_model():
+    # render_glare(image, model='Vos') said "method must be one of ...": no such argument
+    with pytest.raises(ValueError, match=r"^model must be one of .*; got 'Vos' \(names are "
+                       r"case-sensitive: 'vos'\)$"):  # fmt: skip
+        glare.render_glare(np.ones((8, 8)), model="Vos", pixel_deg=0.05)
+    with pytest.raises(ValueError, match=r"^model must be one of .*; got 'kakimoto'$"):
+        glare.kernel("kakimoto", 0.1, (3, 3))

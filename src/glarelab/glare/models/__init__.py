@@ -115,6 +115,12 @@ def make_model(method: str, **parameters) -> GlareModel:
 
 def _resolve(model: GlareModel | str) -> GlareModel:
     if isinstance(model, str):
+        if model not in GLARE_MODELS:  # named as the caller's argument, not make_model's
+            same = [name for name in GLARE_MODELS if name.lower() == model.strip().lower()]
+            raise ValueError(
+                f"model must be one of {', '.join(repr(m) for m in GLARE_MODELS)}; got "
+                f"{model!r}" + (f" (names are case-sensitive: {same[0]!r})" if same else "")
+            )
         return make_model(model)
     if isinstance(model, GlareModel) or callable(getattr(model, "kernel", None)):
         return as_model(model)

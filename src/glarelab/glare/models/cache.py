@@ -427,8 +427,41 @@ def _megabytes(text: str) -> float:
     try:
         value = float(text)
     except ValueError:
-        raise ValueError(f"{MAX_MB_ENV} must be a positive number of MiB, got {text!r}") from None
+        value = math.nan
+    if not math.isfinite(value) or value <= 0:  # named here: max_bytes would show bytes
+        raise ValueError(f"{MAX_MB_ENV} must be a positive number of MiB, got {text!r}")
     return value * 2**20
+
+
+NO_CACHE_VALUES = ("", "0", "1")
+"""What ``GLARELAB_NO_CACHE`` may be: unset, empty or ``0`` (the cache is used), ``1`` (off)."""
+
+
+def no_cache_from_env() -> bool:
+    """Whether ``GLARELAB_NO_CACHE`` turns the cache off: ``1`` yes; unset, empty or ``0`` no.
+
+    Returns
+    -------
+    bool
+        True for ``1``.
+
+    Raises
+    ------
+    ValueError
+        For any other value (``maybe``, ``yes``, ``true``), naming the variable: a value
+        that might mean either is not guessed.
+
+    Examples
+    --------
+    >>> os.environ.get(NO_CACHE_ENV, "") in NO_CACHE_VALUES
+    True
+    """
+    value = os.environ.get(NO_CACHE_ENV, "")
+    if value not in NO_CACHE_VALUES:
+        raise ValueError(
+            f"{NO_CACHE_ENV} must be 1 (no kernel cache), 0 or unset (the cache), got {value!r}"
+        )
+    return value == "1"
 
 
 def _encode(kernel: Kernel, key: str) -> bytes | None:
@@ -499,8 +532,9 @@ def _decode(data: bytes, key: str) -> Kernel | None:
 
 
 def default_cache() -> KernelCache | None:
-    """The user's kernel cache, or ``None`` when ``GLARELAB_NO_CACHE`` is set (not ``0``)."""
-    if os.environ.get(NO_CACHE_ENV, "") not in ("", "0"):
+    """The user's kernel cache, or ``None`` when ``GLARELAB_NO_CACHE`` is ``1`` (any value
+    but 1, 0 or empty is refused, :func:`no_cache_from_env`)."""
+    if no_cache_from_env():
         return None
     return KernelCache()
 

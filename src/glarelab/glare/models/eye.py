@@ -55,7 +55,9 @@ def pupil_diameter_mm(field_luminance_cd_m2: float | np.ndarray) -> float | np.n
     Raises
     ------
     ValueError
-        If the luminance is negative, NaN or infinite.
+        If the luminance is negative, NaN or infinite, or an array that does not hold numbers.
+    TypeError
+        If the luminance is a string.
 
     Notes
     -----
@@ -72,9 +74,14 @@ def pupil_diameter_mm(field_luminance_cd_m2: float | np.ndarray) -> float | np.n
     >>> round(pupil_diameter_mm(10.0), 2)
     2.91
     """
-    array = check_image(
-        "field_luminance_cd_m2", np.atleast_2d(np.asarray(field_luminance_cd_m2, float))
-    )
+    if isinstance(field_luminance_cd_m2, str | bytes):  # np.asarray(.., float) reads '100'
+        raise TypeError(
+            "field_luminance_cd_m2 must be a number or an array of numbers (cd/m²), got the "
+            f"{type(field_luminance_cd_m2).__name__} {field_luminance_cd_m2!r}"
+        )
+    array = check_image(  # its own dtype checked (strings and bools refused), then float
+        "field_luminance_cd_m2", np.atleast_2d(np.asarray(field_luminance_cd_m2))
+    ).astype(float)
     with np.errstate(divide="ignore"):
         log_l = np.log10(array)  # -inf at L = 0, where tanh(-inf) = -1 gives the 7.9 mm limit
     diameter = _MOON_SPENCER_MEAN_MM - _MOON_SPENCER_SWING_MM * np.tanh(

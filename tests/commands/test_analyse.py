@@ -1,0 +1,56 @@
+"""``glarelab analyse`` and ``import-psychopy``'s arguments: ``--protocol FILE CSV…`` is the
+form without a study (the first CSV is a session, not the study), and what is missing or
+misplaced is refused in one line naming it."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from glarelab.cli import main
+
+
+@pytest.fixture(scope="module")
+def sessions(tmp_path_factory) -> list[Path]:
+    folder = tmp_path_factory.mktemp("sessions")
+    assert main(["run", "luidolt2020", "--simulate", "--participants", "2", "--seed", "1",
+                 "--out", str(folder)]) == 0  # fmt: skip
+    return sorted(folder.glob("*.csv"))
+
+
+def test_protocol_instead_of_study_reads_every_csv_as_a_session(sessions, tmp_path, capsys):
+    # the help's '--protocol FILE (instead of STUDY)' read the first CSV as the protocol
+    protocol = tmp_path / "p.toml"
+    assert main(["protocol", "copy", "luidolt2020", str(protocol)]) == 0
+    out = tmp_path / "rep"
+    argv = ["analyse", "--protocol", str(protocol), *map(str, sessions), "--out", str(out)]
+    assert main(argv) == 0, capsys.readouterr().err
+    provenance = (out / "provenance.json").read_text()
+    assert all(session.name in provenance for session in sessions)  # both, none as the study
+
+
+def test_csvs_after_the_options_are_sessions_too(sessions, tmp_path, capsys):
+    # the form the attack round used: STUDY, options, then the CSVs
+    argv = ["import-psychopy", "luidolt2020", "--out", str(tmp_path / "im"),
+            "--set", "participant=P99", *map(str, sessions)]  # fmt: skip
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "--set participant=P99: the file records 'participant'" in err, err
+
+
+def test_a_csv_as_study_is_refused_in_one_line(capsys):
+    assert main(["analyse", "a.csv", "b.csv", "--out", "rep"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == (
+        "glarelab analyse: STUDY 'a.csv' is a CSV file: give the study first (a shipped name "
+        "or a protocol TOML), or --protocol FILE before the session CSV files"
+    )
+
+
+def test_protocol_with_a_single_csv_says_how(capsys):
+    with pytest.raises(SystemExit):
+        main(["analyse", "--protocol", "p.toml", "a.csv", "--out", "rep"])
+    err = capsys.readouterr().err.strip()
+    assert "read STUDY as 'a.csv'; with --protocol FILE give two or more CSVs, or one CSV " in err
+    assert len(err.splitlines()) == 1
