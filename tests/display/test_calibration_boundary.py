@@ -110,3 +110,31 @@ def test_a_subnormal_luminance_is_refused_by_the_fit_too():
     with pytest.raises(ValueError, match=r"code 0 has luminance 5e-324; must be 0 \("):
         fit_calibration([(0, 5e-324), *READINGS[1:]], bit_depth=8)
     assert fit_calibration([(0, 0.0), *READINGS[1:]], bit_depth=8).black_cd_m2 == 0
+
+
+def test_a_calibration_made_in_python_is_admitted_only_as_its_file_would_be(tmp_path):
+    """A status ``passed`` without a verification pass (or with one not its own) is refused by
+    a session and a build, as it is in a file (``Calibration.load``)."""
+    from dataclasses import replace
+
+    from glarelab.display.calibration import usable_calibration
+    from glarelab.protocols import load_protocol
+    from glarelab.stimuli.stimulus_set import build_stimulus_set
+
+    fitted = fit_calibration(READINGS, bit_depth=8)
+    white = float(fitted.decode(np.array([255]))[0])
+    passed = fitted.verified([(white, 255, white)])
+    assert usable_calibration(passed) == {
+        "calibrated": True,
+        "status": "passed",
+        "readings_sha256": fitted.readings_sha256,
+    }
+    forged = replace(fitted, status="passed")
+    with pytest.raises(ValueError, match="status 'passed' without verification measurements"):
+        usable_calibration(forged)
+    with pytest.raises(ValueError, match="status 'passed' without verification measurements"):
+        build_stimulus_set(load_protocol("spencer1995"), tmp_path / "set", calibration=forged)
+    assert not (tmp_path / "set").exists()
+    invented = replace(forged, verification={"measurements": [], "tolerance_fraction": 0.5})
+    with pytest.raises(ValueError, match="without verification measurements"):
+        usable_calibration(invented)
