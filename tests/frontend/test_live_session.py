@@ -156,9 +156,11 @@ def test_a_live_session_follows_the_mouse_survives_blinks_and_a_lost_tracker(scr
     # a lost tracker: ioHub's server ends; the scene goes on, the last gaze held, counted
     import psutil
 
+    from glarelab.frontend.iohub_guard import SERVER_SCRIPT  # the server, not its guard
+
     session = psutil.Process(screen.process.pid)
     server = next(
-        p for p in session.children(recursive=True) if "iohub" in " ".join(p.cmdline()).lower()
+        p for p in session.children(recursive=True) if SERVER_SCRIPT in " ".join(p.cmdline())
     )
     last = int(live_rows(frames)[-1]["frame"])
     server.kill()
@@ -180,7 +182,7 @@ def test_a_live_session_follows_the_mouse_survives_blinks_and_a_lost_tracker(scr
     slope, offset = recorded_calibration["slope_mm_per_unit"], recorded_calibration["offset_mm"]
     assert f"{offset + slope * 5.0:.4f}" == mapped
     assert "Moon & Spencer" in recorded_calibration["simulated"]
-    log = next(data.glob("*.log")).read_text()
+    log = next(data.glob("*_pilot.log")).read_text()  # not ioHub's _iohub.log
     assert re.search(r"pupil calibration: white 2\.299, black 5\.26 mm \(\d+, \d+ samples\)", log)
     counts = re.search(
         r"trial 1 live: (\d+) frames, (\d+) dropped.*?(\d+) lost samples, (\d+) blinks, "
