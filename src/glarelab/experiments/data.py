@@ -570,7 +570,11 @@ class SessionFiles:
             self._fd = None
         self.release_reserve()
         if self.created and not self.rows:
+            stem = self.csv_path.name.removesuffix(".csv")
+            tracker = [self.out / f"{stem}_iohub.{ext}" for ext in ("hdf5", "log")]  # ioHub's
             for path in (self.csv_path, self.sidecar_path, self.log_path, self.frames_path):
+                path.unlink(missing_ok=True)
+            for path in tracker:
                 path.unlink(missing_ok=True)
             self.created = False
 
