@@ -113,7 +113,7 @@ def _contract() -> SimpleNamespace:
             Column("glows", bool, "the answer: the disk glows"),
         )
 
-    return SimpleNamespace(SCHEMA=schema, check=check, columns=columns)
+    return SimpleNamespace(SCHEMA=schema, check=check, columns=columns, SESSION_ORDER=())
 
 
 # --- stimuli -----------------------------------------------------------------------------
@@ -405,3 +405,14 @@ def test_incomplete_entries_are_refused_at_registration():
         Blind(None, "p", seed=1, stimuli=None)
     for registry, _, _ in REGISTRIES.values():
         assert NAME not in registry
+
+
+def test_a_contract_must_name_its_session_order():
+    contract = _contract()
+    del contract.SESSION_ORDER
+    with pytest.raises(ValueError, match="lacks SESSION_ORDER"):
+        protocols_core.register_paradigm(NAME, contract)
+    contract.SESSION_ORDER = ("block_order",)  # not a field a sidecar has
+    with pytest.raises(ValueError, match=r"lacks SESSION_ORDER .*counterbalance, trial_order"):
+        protocols_core.register_paradigm(NAME, contract)
+    assert NAME not in protocols_core.PARADIGMS

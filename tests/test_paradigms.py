@@ -93,3 +93,17 @@ def test_the_branch_scan_sees_a_branch():
     assert branches_on_a_paradigm('if paradigm == "matching":\n    pass\n') == [1]
     assert branches_on_a_paradigm('ok = p not in ("matching", "staircase")\n') == [1]
     assert branches_on_a_paradigm('x = {"rating": 1}\n') == []
+
+
+def test_each_contract_names_the_order_fields_its_engine_records():
+    """A session writes ``counterbalance`` from an engine that orders its blocks by it and
+    ``trial_order`` from an engine's ``order``; the contract's ``SESSION_ORDER`` (what the
+    analysis admits in a sidecar) names exactly those."""
+    for name, contract in protocols.PARADIGMS.items():
+        engine = experiments_paradigms.PARADIGMS[name].engine
+        recorded = {
+            "counterbalance": engine.counterbalanced,
+            "trial_order": isinstance(getattr(engine, "order", None), property),
+        }
+        assert set(contract.SESSION_ORDER) == {k for k, v in recorded.items() if v}, name
+        assert protocols.core.session_order(name) == contract.SESSION_ORDER

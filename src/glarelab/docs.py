@@ -109,6 +109,9 @@ def data_reference() -> str:
         "gave a gaze and a pupil ([night vision](night-vision.md)) |",
         "| `STEM_iohub.hdf5` | a live scene's eye tracker: ioHub's own store of every event "
         "(raw samples, blinks, fixations), one ioHub session per run (`run1`, ...) |",
+        "| `STEM_iohub.log` | a live scene's eye tracker: the output of ioHub's server (its "
+        "errors), appended by every run; a server left behind by a killed session is stopped "
+        "by a guard |",
         "| `.STEM.reserve` | 256 KiB a running session sets aside, given back when a write "
         "fails (a full disk) so that the sidecar can still say why the session ended; removed "
         "when it ends |",

@@ -79,6 +79,37 @@ def test_a_data_format_this_version_does_not_know_is_refused(luidolt, tmp_path):
             {"bit_depth": 10, "runs": [{"display": {"bits_per_channel": 8}}]},
             "bit_depth is 10, but its last run's display showed 8 bits per channel",
         ),
+        # a rating session records no order (protocols.rating.SESSION_ORDER)
+        ({"trial_order": [3, 1, 2]}, "trial_order is [3, 1, 2]; must be null: a rating session"),
+        ({"counterbalance": 1}, "counterbalance is 1; must be null: a rating session records no"),
+        (  # a status comes only from a calibration file's readings and verification pass
+            {"calibration": {"calibrated": True, "readings_sha256": None, "status": "passed"}},
+            "calibration.readings_sha256 is null, but its status is passed: must be the sha256",
+        ),
+        (
+            {"calibration": {"calibrated": True, "readings_sha256": "ab", "status": "unverified"}},
+            'calibration.readings_sha256 is "ab", but its status is unverified',
+        ),
+        (
+            {"calibration": {"calibrated": True, "readings_sha256": None, "status": "missing"}},
+            "calibration.calibrated is true; a session whose calibration is missing records false",
+        ),
+        (
+            {"calibration": {"calibrated": False, "readings_sha256": "a" * 64, "status": "none"}},
+            'calibration.status is "none"; must be one of "passed", "unverified"',
+        ),
+        (
+            {
+                "simulated": False,
+                "calibration": {
+                    "calibrated": True,
+                    "readings_sha256": "a" * 64,
+                    "status": "unverified",
+                    "accepted_unverified_by": "--pilot",
+                },
+            },
+            'calibration.accepted_unverified_by is "--pilot"; must be --allow-uncalibrated (in',
+        ),
     ],
 )
 def test_a_sidecar_field_no_session_writes_is_refused_naming_it(luidolt, tmp_path, change, named):

@@ -96,7 +96,8 @@ def test_a_pilot_is_left_out_listed_and_analysed_only_when_asked(yoshida, tmp_pa
         ({"participant": "sim07"}, "participant 'sim07', but its CSV's rows say sim01"),
         (
             {"images_encoded_with": {"readings_sha256": "a" * 64, "source": "session"},
-             "calibration": {"readings_sha256": "b" * 64}},
+             "calibration": {"calibrated": True, "status": "passed",
+                             "readings_sha256": "b" * 64}},
             "the session's calibration (readings bbbbbbbbbbbb…) is not the one its images",
         ),
         ({"trials": 16}, "trial 16 of the 16 the completed session recorded missing"),

@@ -125,3 +125,31 @@ def test_a_decimal_comma_is_shown_as_written_with_its_own_fix(tmp_path, row, sho
         read_readings(path)
     assert shown in str(refused.value) and str(refused.value).endswith(fix)
     assert "94,83)" not in str(refused.value)
+
+
+def test_a_calibration_made_in_python_is_admitted_only_as_its_file_would_be(tmp_path):
+    """A status ``passed`` without a verification pass (or with one not its own) is refused by
+    a session and a build, as it is in a file (``Calibration.load``)."""
+    from dataclasses import replace
+
+    from glarelab.display.calibration import usable_calibration
+    from glarelab.protocols import load_protocol
+    from glarelab.stimuli.stimulus_set import build_stimulus_set
+
+    fitted = fit_calibration(READINGS, bit_depth=8)
+    white = float(fitted.decode(np.array([255]))[0])
+    passed = fitted.verified([(white, 255, white)])
+    assert usable_calibration(passed) == {
+        "calibrated": True,
+        "status": "passed",
+        "readings_sha256": fitted.readings_sha256,
+    }
+    forged = replace(fitted, status="passed")
+    with pytest.raises(ValueError, match="status 'passed' without verification measurements"):
+        usable_calibration(forged)
+    with pytest.raises(ValueError, match="status 'passed' without verification measurements"):
+        build_stimulus_set(load_protocol("spencer1995"), tmp_path / "set", calibration=forged)
+    assert not (tmp_path / "set").exists()
+    invented = replace(forged, verification={"measurements": [], "tolerance_fraction": 0.5})
+    with pytest.raises(ValueError, match="without verification measurements"):
+        usable_calibration(invented)

@@ -393,3 +393,22 @@ def test_a_live_scene_given_a_calibration_checks_it_before_anything_is_written(t
             calibration=other,
         )  # fmt: skip
     assert not (tmp_path / "data").exists()
+
+
+def test_a_session_that_could_not_start_leaves_no_iohub_file(tmp_path):
+    """ioHub's store and log of a live session whose tracker started but that ran no trial
+    are removed with its other files: none is left to refuse the next attempt."""
+    files = SessionFiles(
+        load_protocol("luidolt2020"), "P01", 1, tmp_path, resume=False, started=datetime.now()
+    )
+    try:
+        files.open()
+        stem = files.csv_path.name.removesuffix(".csv")
+        names = {f"{stem}_iohub.hdf5", f"{stem}_iohub.log"}
+        for name in names:
+            (tmp_path / name).write_text("ioHub")
+        assert names < {p.name for p in session_files(tmp_path, "P01", "luidolt2020", 1)}
+        files.discard()
+        assert session_files(tmp_path, "P01", "luidolt2020", 1) == []
+    finally:
+        files.close()

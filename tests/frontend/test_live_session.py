@@ -12,7 +12,10 @@ from __future__ import annotations
 import csv
 import json
 import re
+import shlex
+import signal
 import subprocess
+import sys
 import time
 
 import numpy as np
@@ -153,9 +156,11 @@ def test_a_live_session_follows_the_mouse_survives_blinks_and_a_lost_tracker(scr
     # a lost tracker: ioHub's server ends; the scene goes on, the last gaze held, counted
     import psutil
 
+    from glarelab.frontend.iohub_guard import SERVER_SCRIPT  # the server, not its guard
+
     session = psutil.Process(screen.process.pid)
     server = next(
-        p for p in session.children(recursive=True) if "iohub" in " ".join(p.cmdline()).lower()
+        p for p in session.children(recursive=True) if SERVER_SCRIPT in " ".join(p.cmdline())
     )
     last = int(live_rows(frames)[-1]["frame"])
     server.kill()
@@ -177,7 +182,7 @@ def test_a_live_session_follows_the_mouse_survives_blinks_and_a_lost_tracker(scr
     slope, offset = recorded_calibration["slope_mm_per_unit"], recorded_calibration["offset_mm"]
     assert f"{offset + slope * 5.0:.4f}" == mapped
     assert "Moon & Spencer" in recorded_calibration["simulated"]
-    log = next(data.glob("*.log")).read_text()
+    log = next(data.glob("*_pilot.log")).read_text()  # not ioHub's _iohub.log
     assert re.search(r"pupil calibration: white 2\.299, black 5\.26 mm \(\d+, \d+ samples\)", log)
     counts = re.search(
         r"trial 1 live: (\d+) frames, (\d+) dropped.*?(\d+) lost samples, (\d+) blinks, "
@@ -213,3 +218,40 @@ def test_a_live_session_follows_the_mouse_survives_blinks_and_a_lost_tracker(scr
         began_after = int(np.argmax(starts > first_sample))
         first_new = next(int(r["frame"]) for r in recorded if gaze(r) == (x, y))
         assert first_new <= began_after + 1, (x, y, first_new, began_after)
+
+
+def test_a_killed_live_session_leaves_no_iohub_server_holding_its_output(screen, tmp_path):
+    """SIGKILL of a live session once ioHub's server is up: a caller capturing the session's
+    output gets its end (the server writes to the session's _iohub.log, not to the caller's
+    pipe), and the server ends (PsychoPy's own watch of the process that launched it shuts its
+    devices down but leaves it serving its port; glarelab's guard stops it)."""
+    from glarelab.frontend.iohub_guard import STOP_GRACE_S, servers_of
+
+    data, pid_file, servers_file = tmp_path / "data", tmp_path / "pid", tmp_path / "servers"
+    command = [
+        sys.executable, "-m", "glarelab", "run", "luidolt2020-live", "--pilot", "--eyetracker",
+        "mouse", "--participant", "P1", "--out", str(data), "--pupil-calibration-s", "30",
+    ]  # fmt: skip
+    script = (  # the session in the background, killed once ioHub's server has made its store
+        f"{shlex.join(command)} & pid=$!; echo $pid > {pid_file}; for i in $(seq 1800); do "
+        f"ls {data}/*_iohub.hdf5 >/dev/null 2>&1 && break; sleep 0.1; done; sleep 1; "
+        f"pgrep -f 'start_iohub_process.py .* '$pid'$' > {servers_file}; kill -KILL $pid; wait $pid"
+    )
+    started = time.time() - 1.0
+    try:
+        done = subprocess.run(
+            ["bash", "-c", script], env=screen.env, capture_output=True, text=True, timeout=240
+        )  # waits for the end of the output: every process holding the pipe gone
+        pid = int(pid_file.read_text())
+        deadline = time.time() + STOP_GRACE_S + 10.0
+        while servers_of(pid, since=started) and time.time() < deadline:
+            time.sleep(0.1)
+        left = servers_of(pid, since=started)
+        assert not left, [server.cmdline() for server in left]
+    finally:  # not to leave a server behind when the test fails
+        if pid_file.exists():
+            for server in servers_of(int(pid_file.read_text()), since=started):
+                server.kill()
+    assert done.returncode == 128 + signal.SIGKILL, done.stderr[-3000:]
+    assert servers_file.read_text().split()  # killed with ioHub's server up
+    assert next(data.glob("*_iohub.log")).is_file()  # where the server wrote

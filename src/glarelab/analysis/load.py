@@ -43,6 +43,7 @@ import pandas as pd
 from glarelab.analysis.dataset import DataError, Dataset, Design, where
 from glarelab.analysis.paradigms import paradigm_analysis
 from glarelab.protocols import DATA_FORMAT, columns
+from glarelab.protocols.core import ORDER_FIELDS, session_order
 from glarelab.protocols.keys import TOKEN
 
 if TYPE_CHECKING:
@@ -407,6 +408,21 @@ def _sidecar_fields(path: Path, sidecar: dict) -> list[str]:
 
 
 AGE_RANGE_YEARS = (0, 120)  # what glarelab run accepts (--age, the dialog)
+# what a session records of its display's calibration (glarelab.experiments.session, through
+# glarelab.display.calibration.usable_calibration): each status with ``calibrated`` and whether
+# the calibration's readings are named (their sha256); a calibration file's status comes only
+# from its readings and verification pass, so a status without readings is no session's
+CALIBRATION_RECORDS = {
+    "passed": (True, True),
+    "unverified": (True, True),
+    "failed": (False, True),
+    "synthetic": (False, True),
+    "missing": (False, False),
+    "not needed": (False, False),
+    "simulated": (False, False),
+}
+UNVERIFIED_ACCEPTED_BY = ("--pilot", "--allow-uncalibrated")
+_SHA256 = re.compile(r"[0-9a-f]{64}")
 
 
 def _sidecar_consistency(where_: Path, sidecar: dict) -> list[str]:
@@ -442,6 +458,7 @@ def _sidecar_consistency(where_: Path, sidecar: dict) -> list[str]:
         problems.append(
             f"{where_}: ended {sidecar['ended']} is before started {sidecar['started']}"
         )
+    problems += _calibration_record(where_, sidecar)
     runs = sidecar.get("runs")
     shown = [  # the sidecar's bit_depth is its last run's display's (a resume may move)
         run["display"].get("bits_per_channel")
@@ -459,6 +476,56 @@ def _sidecar_consistency(where_: Path, sidecar: dict) -> list[str]:
         problems.append(
             f"{where_}: resumed is {sidecar['resumed']}, but it records {len(runs)} run(s): "
             f"resumed counts the runs after the first ({len(runs) - 1})"
+        )
+    return problems
+
+
+def _calibration_record(where_: Path, sidecar: dict) -> list[str]:
+    """The sidecar's ``calibration`` as a session records it (:data:`CALIBRATION_RECORDS`): a
+    known status, ``calibrated`` as that status gives it, the readings' sha256 named exactly
+    when there is a calibration file, and an unverified calibration accepted by ``--pilot``
+    (in a pilot) or ``--allow-uncalibrated``."""
+    record = sidecar.get("calibration")
+    if record is None:
+        return []
+    status = record.get("status")
+    if status not in CALIBRATION_RECORDS:
+        return [
+            f"{where_}: calibration.status is {_json(status)}; must be one of "
+            f"{', '.join(map(_json, CALIBRATION_RECORDS))}, as a session records it"
+        ]
+    calibrated, with_readings = CALIBRATION_RECORDS[status]
+    problems = []
+    if record.get("calibrated") is not calibrated:
+        problems.append(
+            f"{where_}: calibration.calibrated is {_json(record.get('calibrated'))}; a session "
+            f"whose calibration is {status} records {_json(calibrated)}"
+        )
+    readings = record.get("readings_sha256")
+    if with_readings and not (isinstance(readings, str) and _SHA256.fullmatch(readings)):
+        problems.append(
+            f"{where_}: calibration.readings_sha256 is {_json(readings)}, but its status is "
+            f"{status}: must be the sha256 (64 hex digits) of the calibration's readings, from "
+            "which alone a status comes (the sidecar edited?)"
+        )
+    elif not with_readings and readings is not None:
+        problems.append(
+            f"{where_}: calibration.readings_sha256 is {_json(readings)}, but its status is "
+            f"{status}: must be null (a session {status} names no calibration)"
+        )
+    accepted = record.get("accepted_unverified_by")
+    allowed = (
+        UNVERIFIED_ACCEPTED_BY if sidecar.get("pilot") is True else UNVERIFIED_ACCEPTED_BY[1:]
+    )
+    if "accepted_unverified_by" in record and (status != "unverified" or accepted not in allowed):
+        problems.append(
+            f"{where_}: calibration.accepted_unverified_by is {_json(accepted)}"
+            + (
+                f" with status {status}: only an unverified calibration is accepted"
+                if status != "unverified"
+                else f"; must be {' or '.join(allowed)} (in a "
+                f"{'pilot' if sidecar.get('pilot') is True else 'session not a pilot'})"
+            )
         )
     return problems
 
@@ -523,6 +590,19 @@ def _sidecar_contradictions(
                 f"{where_}: pilot is {_json(sidecar.get('pilot', False))}, but run(s) "
                 f"{', '.join(map(str, other))} say pilot {_json(runs[other[0] - 1]['pilot'])}: a "
                 "session's runs are all pilots or none (the sidecar edited?)"
+            )
+    recorded_order = session_order(protocol.paradigm)
+    for key in ORDER_FIELDS:
+        if key not in recorded_order and sidecar.get(key) is not None:
+            problems.append(
+                f"{where_}: {key} is {_json(sidecar[key])}; must be null: a "
+                f"{protocol.paradigm} session records "
+                + (
+                    f"its order in {' and '.join(recorded_order)}"
+                    if recorded_order
+                    else f"no order ({' or '.join(ORDER_FIELDS)})"
+                )
+                + " (the sidecar edited?)"
             )
     for key in ("participant", "session"):
         values = {str(row.get(key)) for row in rows}

@@ -445,6 +445,39 @@ class Calibration:
         _check_consistent(calibration, data, source)
         return calibration
 
+    def checked(self, *, source: str = "calibration") -> Calibration:
+        """This calibration, checked as its file would be (:meth:`from_json` of
+        :meth:`to_json`): one made in Python is admitted only as one read from a file is.
+
+        Parameters
+        ----------
+        source
+            Its name in the messages; default ``'calibration'``.
+
+        Returns
+        -------
+        Calibration
+            The calibration.
+
+        Raises
+        ------
+        ValueError
+            As :meth:`from_json`: a status its verification pass does not give (``passed``
+            without verification measurements), a model its readings do not give, ...
+
+        Examples
+        --------
+        >>> readings = [(0, 0.5), (128, 40.0), (200, 120.0), (255, 200.0)]
+        >>> fit_calibration(readings, bit_depth=8).checked().status
+        'unverified'
+        >>> forged = replace(fit_calibration(readings, bit_depth=8), status="passed")
+        >>> forged.checked()  # doctest: +ELLIPSIS
+        Traceback (most recent call last):
+        ...
+        ValueError: calibration: status 'passed' without verification measurements; ...
+        """
+        return Calibration.from_json(self.to_json(), source=source)
+
     @classmethod
     def load(cls, path: str | Path) -> Calibration:
         """Read a calibration file, checking its format and the hash of its readings.
@@ -872,8 +905,12 @@ def usable_calibration(
     Raises
     ------
     ValueError
-        If the calibration is missing, failed or synthetic and ``allow_uncalibrated`` is False.
+        If the calibration is missing, failed or synthetic and ``allow_uncalibrated`` is False,
+        or is not one a calibration file can hold (:meth:`Calibration.checked`: a status
+        ``passed`` without verification measurements).
     """
+    if calibration is not None:  # as its file would be read (a Calibration made in Python)
+        calibration = calibration.checked()
     status = calibration.status if calibration is not None else "missing"
     record = {
         "calibrated": status in ("passed", "unverified"),

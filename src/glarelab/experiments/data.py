@@ -118,8 +118,8 @@ def session_files(out: Path, participant: str, study: str, session: int) -> list
     Returns
     -------
     list of pathlib.Path
-        The session's CSV, sidecar, log and frame times, sorted; empty for a missing
-        folder.
+        The session's CSV, sidecar, log, frame times and ioHub's store and log, sorted;
+        empty for a missing folder.
 
     Raises
     ------
@@ -129,7 +129,8 @@ def session_files(out: Path, participant: str, study: str, session: int) -> list
     check_session_id(participant, session)
     pattern = re.compile(
         re.escape(_prefix(participant, study, session))
-        + r"_\d{4}-\d{2}-\d{2}_\d{4}(_pilot)?(\.csv|\.json|\.log|_frames\.tsv|_iohub\.hdf5)\Z"
+        + r"_\d{4}-\d{2}-\d{2}_\d{4}(_pilot)?"
+        + r"(\.csv|\.json|\.log|_frames\.tsv|_iohub\.hdf5|_iohub\.log)\Z"
     )
     folder = Path(out)
     if not folder.is_dir():
@@ -569,7 +570,11 @@ class SessionFiles:
             self._fd = None
         self.release_reserve()
         if self.created and not self.rows:
+            stem = self.csv_path.name.removesuffix(".csv")
+            tracker = [self.out / f"{stem}_iohub.{ext}" for ext in ("hdf5", "log")]  # ioHub's
             for path in (self.csv_path, self.sidecar_path, self.log_path, self.frames_path):
+                path.unlink(missing_ok=True)
+            for path in tracker:
                 path.unlink(missing_ok=True)
             self.created = False
 

@@ -27,12 +27,18 @@ Luidolt, L. (2020). Perception of light in virtual reality. TU Wien, §5.2.1 ii,
 
 from __future__ import annotations
 
+import contextlib
 import math
+import os
+import subprocess
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from glarelab.frontend.iohub_guard import start_guard
 
 __all__ = [
     "CALIBRATION_SCREEN_S",
@@ -74,6 +80,7 @@ MOUSE_GAZE_SETTINGS = {
 }
 
 
+GUARD_WAIT_S = 5.0  # how long to wait for a killed guard to end (it ends at once)
 # how long a request to ioHub's server may wait for its answer before the sample is counted
 # lost (an assumption: ioHub answers in about a millisecond; a loaded machine, far slower)
 REQUEST_TIMEOUT_S = 2.0
@@ -91,6 +98,32 @@ def _free_udp_port() -> int:
     with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
         probe.bind(("127.0.0.1", 0))
         return int(probe.getsockname()[1])
+
+
+@contextlib.contextmanager
+def _output_to(path):
+    """This process's stdout and stderr (file descriptors 1 and 2, which a process started
+    meanwhile inherits) appended to ``path`` (None: discarded), restored after.
+
+    ioHub's server is started with the launching process's stdout (and its stderr joined to
+    it): a server outliving its session would hold the session's terminal, or the pipe of a
+    program waiting for the session's output to end.
+    """
+    sys.stdout.flush()
+    sys.stderr.flush()
+    target = os.open(path or os.devnull, os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o644)
+    saved = [os.dup(1), os.dup(2)]
+    try:
+        os.dup2(target, 1)
+        os.dup2(target, 2)
+        yield
+    finally:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os.dup2(saved[0], 1)
+        os.dup2(saved[1], 2)
+        for fd in (*saved, target):
+            os.close(fd)
 
 
 def tracker_config(spec: str) -> tuple[str, dict]:
@@ -618,6 +651,11 @@ class IoHubEyeTracker:
         (default): none. Needs PyTables (the ``eyetracker`` extra).
     session_code
         ioHub's name of this recording in the store (unique within the file).
+    server_log
+        Where ioHub's server writes its output (stdout and stderr: its errors), appended;
+        None (default): discarded. The server never writes to this process's terminal or
+        pipes, and a guard (:mod:`glarelab.frontend.iohub_guard`) stops it when this process
+        ends without stopping it (killed).
 
     Raises
     ------
@@ -640,7 +678,9 @@ class IoHubEyeTracker:
         settings: dict | None = None,
         datastore=None,
         session_code: str = "live",
+        server_log=None,
     ) -> None:
+        import msgpack  # ioHub's wire format (a PsychoPy dependency)
         from psychopy.iohub import launchHubServer
         from psychopy.iohub.devices.eyetracker.eye_events import (
             BinocularEyeSampleEvent,
@@ -667,20 +707,26 @@ class IoHubEyeTracker:
         }
         config = {**(settings or {}), "name": "tracker"}
         store = datastore_settings(datastore, session_code)
+        port = _free_udp_port()
+        # the request ioHub's client sends to stop its server, packed as its client packs it
+        self._guard = start_guard(port, msgpack.Packer().pack(("STOP_IOHUB_SERVER",)))
         try:
-            self.io = launchHubServer(
-                window=window, udp_port=_free_udp_port(), **store, **{device: config}
-            )
+            with _output_to(server_log):
+                self.io = launchHubServer(
+                    window=window, udp_port=port, **store, **{device: config}
+                )
             self.device_handle = self.io.getDevice("tracker")
             # ioHub's client waits for each answer without a limit: a server that ends between
             # a request and its answer would freeze the frame for ever
             self.io.udp_client.sock.settimeout(REQUEST_TIMEOUT_S)
         except Exception as error:  # ioHub raises many kinds; the session needs one message
+            self._stop_guard()
             raise TrackerError(
                 f"ioHub could not start the eye tracker {tracker!r}: {error}"
             ) from error
         if self.device_handle is None:
             self.io.quit()
+            self._stop_guard()
             raise TrackerError(f"ioHub started without the eye tracker {tracker!r}")
         self.disconnects = 0
 
@@ -752,6 +798,13 @@ class IoHubEyeTracker:
                 self.io.quit()
             except Exception:  # the server already gone: nothing to quit
                 pass
+            self._stop_guard()
+
+    def _stop_guard(self) -> None:
+        """Stop the guard of a server this process quit (or never started)."""
+        self._guard.kill()
+        with contextlib.suppress(subprocess.TimeoutExpired):
+            self._guard.wait(timeout=GUARD_WAIT_S)
 
 
 def _finite(value) -> bool:

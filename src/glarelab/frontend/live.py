@@ -247,7 +247,7 @@ def run_live(
     frames_path
         The per-frame record, a ``..._frames.tsv`` file (its folder must exist); a
         ``..._live.json`` beside it holds the window's position, the tracker, the calibration
-        and, at the end, the counts.
+        and, at the end, the counts; ``..._iohub.log``, the output of ioHub's server.
     tracker
         An ioHub eye tracker name (:data:`~glarelab.frontend.eyetracker.TRACKERS`) or class
         path; default ``'mouse'``.
@@ -309,7 +309,10 @@ def run_live(
     sidecar = frames_path.with_name(frames_path.name[: -len("_frames.tsv")] + "_live.json")
     source = None
     try:
-        source = IoHubEyeTracker(window, tracker=tracker, settings=settings)
+        source = IoHubEyeTracker(
+            window, tracker=tracker, settings=settings,
+            server_log=sidecar.with_name(sidecar.name.replace("_live.json", "_iohub.log")),
+        )  # fmt: skip
         if calibrate:
             source.start()
             simulate = (

@@ -263,7 +263,11 @@ class PsychoPyFrontend:
         from glarelab.frontend.eyetracker import IoHubEyeTracker, calibrate_pupil
 
         device, settings = self.eyetracker
-        store = None
+        store = server_log = None
+        if frames_path is not None:  # ioHub's server's own output (its errors) beside them
+            server_log = frames_path.with_name(
+                frames_path.name[: -len("_frames.tsv")] + "_iohub.log"
+            )
         if frames_path is None:
             self.log("eye tracker: ioHub's hdf5 store not kept (the session writes no files)")
         else:
@@ -279,7 +283,7 @@ class PsychoPyFrontend:
                 store = frames_path.with_name(f"{stem}_iohub.hdf5")
         self.tracker = IoHubEyeTracker(
             self.window, tracker=device, settings=settings, datastore=store,
-            session_code=f"run{run}",
+            session_code=f"run{run}", server_log=server_log,
         )  # fmt: skip
         if device != "mouse":  # the tracker's own calibration (MouseGaze needs none)
             self.tracker.device_handle.runSetupProcedure()

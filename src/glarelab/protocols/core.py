@@ -26,6 +26,7 @@ from glarelab.protocols.common import display_pixel_deg
 from glarelab.protocols.keys import Key, ProtocolError, Schema, Tables, validate
 
 __all__ = [
+    "ORDER_FIELDS",
     "PARADIGMS",
     "SHIPPED",
     "Protocol",
@@ -35,6 +36,7 @@ __all__ = [
     "pixel_deg",
     "protocol_path",
     "register_paradigm",
+    "session_order",
     "shipped_protocols",
 ]
 
@@ -44,6 +46,9 @@ PARADIGMS: dict[str, ModuleType] = {
     "staircase": staircase,
     "rating": rating,
 }
+ORDER_FIELDS = ("counterbalance", "trial_order")
+"""The sidecar fields in which a session may record its participant's order; each paradigm's
+contract names those its sessions write (``SESSION_ORDER``), the others are null."""
 STUDY: Schema = {
     "name": Key(str, "the study's name: names its data files and report", token=True),
     "paradigm": Key(str, "how the study is run", choices=tuple(PARADIGMS)),
@@ -59,8 +64,10 @@ def _study_schema() -> Schema:
 
 def register_paradigm(name: str, contract: ModuleType | Any) -> None:
     """Register a paradigm's contract: a module (or any object) with ``SCHEMA`` (the protocol's
-    keys besides ``[study]``), ``check(validated, problems, folder)`` (the rules between keys)
-    and ``columns(protocol)`` (the session CSV's columns of the paradigm).
+    keys besides ``[study]``), ``check(validated, problems, folder)`` (the rules between keys),
+    ``columns(protocol)`` (the session CSV's columns of the paradigm) and ``SESSION_ORDER``
+    (the sidecar fields of :data:`ORDER_FIELDS` in which its sessions record the participant's
+    order; the analysis refuses a sidecar giving another of them).
 
     The other layers register the paradigm in their own registries
     (:mod:`glarelab.stimuli.paradigms`, :mod:`glarelab.experiments.paradigms`,
@@ -72,33 +79,74 @@ def register_paradigm(name: str, contract: ModuleType | Any) -> None:
         The paradigm's name: a lower-case identifier, not yet registered.
     contract
         Its contract: an object (usually a module) with ``SCHEMA`` (a mapping), ``check`` and
-        ``columns`` (callables).
+        ``columns`` (callables) and ``SESSION_ORDER`` (a tuple of :data:`ORDER_FIELDS`).
 
     Raises
     ------
     ValueError
         For a name already registered or not a lower-case token, or a contract that lacks one
-        of the three.
+        of the four.
     """
     if not isinstance(name, str) or not name.isidentifier() or name != name.lower():
         raise ValueError(f"paradigm name must be a lower-case identifier; got {name!r}")
     if name in PARADIGMS:
         raise ValueError(f"paradigm {name!r}: already registered in protocols")
+    order = getattr(contract, "SESSION_ORDER", None)
     missing = [
         key
         for key, ok in (
             ("SCHEMA", isinstance(getattr(contract, "SCHEMA", None), Mapping)),
             ("check", callable(getattr(contract, "check", None))),
             ("columns", callable(getattr(contract, "columns", None))),
+            (
+                "SESSION_ORDER",
+                isinstance(order, tuple) and set(order) <= set(ORDER_FIELDS),
+            ),
         )
         if not ok
     ]
     if missing:
         raise ValueError(
             f"paradigm {name!r}: its contract {contract!r} lacks {', '.join(missing)} (a "
-            "paradigm's contract names SCHEMA, check and columns)"
+            "paradigm's contract names SCHEMA, check, columns and SESSION_ORDER, a tuple of "
+            f"{', '.join(ORDER_FIELDS)})"
         )
     PARADIGMS[name] = contract
+
+
+def session_order(paradigm: str) -> tuple[str, ...]:
+    """The sidecar fields in which a session of ``paradigm`` records its participant's order.
+
+    Parameters
+    ----------
+    paradigm
+        A registered paradigm's name (a protocol's ``paradigm``).
+
+    Returns
+    -------
+    tuple of str
+        Its contract's ``SESSION_ORDER``: some of :data:`ORDER_FIELDS`; a session writes the
+        others null.
+
+    Raises
+    ------
+    ValueError
+        For a paradigm not registered here.
+
+    Examples
+    --------
+    >>> session_order("staircase")
+    ('counterbalance',)
+    >>> session_order("rating")
+    ()
+    """
+    try:
+        return PARADIGMS[paradigm].SESSION_ORDER
+    except KeyError:
+        raise ValueError(
+            f"paradigm {paradigm!r} has no contract registered in "
+            f"glarelab.protocols.core.PARADIGMS ({', '.join(sorted(PARADIGMS))})"
+        ) from None
 
 
 @dataclass(frozen=True)

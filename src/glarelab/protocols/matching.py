@@ -31,7 +31,7 @@ from glarelab.protocols.keys import Key, Schema, Tables
 if TYPE_CHECKING:
     from glarelab.protocols.core import Protocol
 
-__all__ = ["SCHEMA", "check", "columns", "reference_name"]
+__all__ = ["SCHEMA", "SESSION_ORDER", "check", "columns", "reference_name"]
 
 QUESTION: Schema = {
     "column": Key(str, "the CSV column of the answers (true/false)", token=True),
@@ -55,6 +55,10 @@ FOLLOWUP: Schema = {
         unique=True,
     ),
 }
+SESSION_ORDER = ("trial_order",)
+"""The sidecar fields in which a session records its participant's order: ``trial_order``, the
+trials as ``block:method:level`` (seeded per participant); its ``counterbalance`` is null."""
+
 SCHEMA: Schema = {
     "display": DISPLAY,
     "viewing": VIEWING,

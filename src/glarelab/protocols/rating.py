@@ -27,7 +27,16 @@ from glarelab.protocols.keys import Key, Schema, Tables, validate
 if TYPE_CHECKING:
     from glarelab.protocols.core import Protocol
 
-__all__ = ["CONDITION", "EFFECTS", "LIVE_EFFECTS", "SCENE", "SCHEMA", "check", "columns"]
+__all__ = [
+    "CONDITION",
+    "EFFECTS",
+    "LIVE_EFFECTS",
+    "SCENE",
+    "SCHEMA",
+    "SESSION_ORDER",
+    "check",
+    "columns",
+]
 
 EFFECTS = (
     "adaptation",
@@ -116,6 +125,11 @@ CONDITION: Schema = {
         choices=EFFECTS,
     ),
 }
+
+SESSION_ORDER: tuple[str, ...] = ()
+"""The sidecar fields in which a session records its participant's order: none (the
+conditions' order is seeded per participant and checked row by row); its ``counterbalance`` and
+``trial_order`` are null."""
 
 SCHEMA: Schema = {
     "instructions": INSTRUCTIONS,

@@ -31,12 +31,24 @@ from glarelab.protocols.keys import Key, Schema, Tables
 if TYPE_CHECKING:
     from glarelab.protocols.core import Protocol
 
-__all__ = ["SCHEMA", "check", "columns", "comparison_terms", "glare_name", "intensity_grid"]
+__all__ = [
+    "SCHEMA",
+    "SESSION_ORDER",
+    "check",
+    "columns",
+    "comparison_terms",
+    "glare_name",
+    "intensity_grid",
+]
 
 CONTEXT: Schema = {
     "name": Key(str, "the context's name in the data (a block)", token=True),
     "background": Key(dict, "the scene around the source: kind and its keys"),
 }
+SESSION_ORDER = ("counterbalance",)
+"""The sidecar fields in which a session records its participant's order: ``counterbalance``,
+0 (the protocol's order of the contexts) or 1 (reversed); its ``trial_order`` is null."""
+
 SCHEMA: Schema = {
     "display": DISPLAY,
     "viewing": VIEWING,

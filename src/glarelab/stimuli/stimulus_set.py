@@ -476,8 +476,10 @@ def build_stimulus_set(
         For a protocol without stimuli, a calibration whose bit depth is not the display's or
         (unless ``accept_mismatch``) whose white is not its ``max_cd_m2`` within its
         ``white_tolerance`` (:func:`glarelab.display.checks.check_calibration`: the images
-        would be encoded for another display, most of their pixels clipped), or an ``out``
-        that is a file or a folder holding something other than a stimulus set.
+        would be encoded for another display, most of their pixels clipped), a calibration no
+        calibration file can hold (:meth:`glarelab.display.calibration.Calibration.checked`: a
+        status ``passed`` without verification measurements), or an ``out`` that is a file or
+        a folder holding something other than a stimulus set.
     """
     if not shows_images(protocol):
         raise ValueError(
@@ -485,6 +487,7 @@ def build_stimulus_set(
             "there is no stimulus set to build"
         )
     calibration = calibration or default_calibration(protocol)
+    calibration = calibration.checked()  # one made in Python, as its file would be read
     if calibration.bit_depth != protocol["display"]["bit_depth"]:
         raise ValueError(
             f"the calibration is for a {calibration.bit_depth}-bit display, the protocol's "
