@@ -467,39 +467,6 @@ def _sidecar_consistency(where_: Path, sidecar: dict) -> list[str]:
     return problems
 
 
-def _runs_record(where_: Path, sidecar: dict) -> list[str]:
-    """The session's status and trial count are its last run's (a run's end writes both,
-    :func:`glarelab.experiments.session._finish_run`), and no run ends with fewer trials than
-    it began with."""
-    runs = [run for run in sidecar.get("runs") or [] if isinstance(run, dict)]
-    if not runs or len(runs) != len(sidecar.get("runs") or []):
-        return []
-    problems = []
-    last = runs[-1]
-    status = last.get("status")
-    if "status" in sidecar and "status" in last and status != sidecar["status"]:
-        problems.append(
-            f"{where_}: runs[{len(runs) - 1}].status is {_json(status)}, but the session's "
-            f"status is {_json(sidecar['status'])}: must be the same, the last run's end is "
-            "the session's (the sidecar edited?)"
-        )
-    after = last.get("trials_after")
-    if after is not None and "trials" in sidecar and after != sidecar["trials"]:
-        problems.append(
-            f"{where_}: runs[{len(runs) - 1}].trials_after is {_json(after)}, but the session "
-            f"recorded {_json(sidecar['trials'])} trials: must be the same, the last run's "
-            "count is the session's (the sidecar edited?)"
-        )
-    for number, run in enumerate(runs):
-        before, after = run.get("trials_before"), run.get("trials_after")
-        if _whole(0)(before) and _whole(0)(after) and after < before:
-            problems.append(
-                f"{where_}: runs[{number}].trials_after is {after}, below its trials_before "
-                f"{before}: must be ≥ {before}, a run only adds trials (the sidecar edited?)"
-            )
-    return problems
-
-
 def _simulated_signs(where_: Path, sidecar: dict) -> list[str]:
     """A sidecar saying ``simulated: false`` whose other fields only a simulated observer's
     session writes: its calibration status ``simulated``, the observer's seed among the
@@ -589,6 +556,39 @@ def _sidecar_contradictions(
                 f"{where_}: the session's images were encoded with the calibration of its "
                 f"stimulus set (readings {_short(encoded)}), the set given has "
                 f"{_short(stimuli['readings_sha256'])}"
+            )
+    return problems
+
+
+def _runs_record(where_: Path, sidecar: dict) -> list[str]:
+    """The session's status and trial count are its last run's (a run's end writes both,
+    :func:`glarelab.experiments.session._finish_run`), and no run ends with fewer trials than
+    it began with."""
+    runs = [run for run in sidecar.get("runs") or [] if isinstance(run, dict)]
+    if not runs or len(runs) != len(sidecar.get("runs") or []):
+        return []
+    problems = []
+    last = runs[-1]
+    status = last.get("status")
+    if "status" in sidecar and "status" in last and status != sidecar["status"]:
+        problems.append(
+            f"{where_}: runs[{len(runs) - 1}].status is {_json(status)}, but the session's "
+            f"status is {_json(sidecar['status'])}: must be the same, the last run's end is "
+            "the session's (the sidecar edited?)"
+        )
+    after = last.get("trials_after")
+    if after is not None and "trials" in sidecar and after != sidecar["trials"]:
+        problems.append(
+            f"{where_}: runs[{len(runs) - 1}].trials_after is {_json(after)}, but the session "
+            f"recorded {_json(sidecar['trials'])} trials: must be the same, the last run's "
+            "count is the session's (the sidecar edited?)"
+        )
+    for number, run in enumerate(runs):
+        before, after = run.get("trials_before"), run.get("trials_after")
+        if _whole(0)(before) and _whole(0)(after) and after < before:
+            problems.append(
+                f"{where_}: runs[{number}].trials_after is {after}, below its trials_before "
+                f"{before}: must be ≥ {before}, a run only adds trials (the sidecar edited?)"
             )
     return problems
 
