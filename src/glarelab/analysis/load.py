@@ -11,6 +11,9 @@ A session is counted only if the analysis can vouch for it:
 - its sidecar (the ``.json`` beside the CSV) is a file of this study, run with this protocol
   (its sha256), with the stimulus set and calibration the report is given, and names the
   participant and session its rows and its file name name;
+- its sidecar agrees with itself and its CSV: the session's status and trial count are its last
+  run's, ``refresh_hz`` a rate a session of the protocol times at, its blocks in the order its
+  ``counterbalance`` gives; and every session counted ran on one stimulus set;
 - its rows are complete and in order by their own trial numbers (a spreadsheet's sorting does
   not change the analysis): a trial missing or given twice is named, and so are a header that
   is not on the first line, a last row cut short, values no session can write (an infinite
@@ -42,6 +45,7 @@ import pandas as pd
 
 from glarelab.analysis.dataset import DataError, Dataset, Design, where
 from glarelab.analysis.paradigms import paradigm_analysis
+from glarelab.display.checks import REFRESH_TOLERANCE_FRACTION
 from glarelab.protocols import DATA_FORMAT, columns
 from glarelab.protocols.core import ORDER_FIELDS, session_order
 from glarelab.protocols.keys import TOKEN
@@ -636,6 +640,115 @@ def _sidecar_contradictions(
     return problems
 
 
+def _runs_record(where_: Path, sidecar: dict) -> list[str]:
+    """The session's status and trial count are its last run's (a run's end writes both,
+    :func:`glarelab.experiments.session._finish_run`), and no run ends with fewer trials than
+    it began with."""
+    runs = [run for run in sidecar.get("runs") or [] if isinstance(run, dict)]
+    if not runs or len(runs) != len(sidecar.get("runs") or []):
+        return []
+    problems = []
+    last = runs[-1]
+    status = last.get("status")
+    if "status" in sidecar and "status" in last and status != sidecar["status"]:
+        problems.append(
+            f"{where_}: runs[{len(runs) - 1}].status is {_json(status)}, but the session's "
+            f"status is {_json(sidecar['status'])}: must be the same, the last run's end is "
+            "the session's (the sidecar edited?)"
+        )
+    after = last.get("trials_after")
+    if after is not None and "trials" in sidecar and after != sidecar["trials"]:
+        problems.append(
+            f"{where_}: runs[{len(runs) - 1}].trials_after is {_json(after)}, but the session "
+            f"recorded {_json(sidecar['trials'])} trials: must be the same, the last run's "
+            "count is the session's (the sidecar edited?)"
+        )
+    for number, run in enumerate(runs):
+        before, after = run.get("trials_before"), run.get("trials_after")
+        if _whole(0)(before) and _whole(0)(after) and after < before:
+            problems.append(
+                f"{where_}: runs[{number}].trials_after is {after}, below its trials_before "
+                f"{before}: must be ≥ {before}, a run only adds trials (the sidecar edited?)"
+            )
+    return problems
+
+
+def _refresh_record(path: Path, sidecar: dict, protocol: Protocol) -> list[str]:
+    """The sidecar's ``refresh_hz`` is a rate the session could time at: its protocol's
+    ``display.refresh_hz``, or one measured within :data:`REFRESH_TOLERANCE_FRACTION` of it
+    (:func:`glarelab.display.checks.timing_rate_hz`), and its last run's timing rate where
+    that run recorded its display."""
+    rate = sidecar.get("refresh_hz")
+    if rate is None or isinstance(rate, bool) or not isinstance(rate, int | float):
+        return []
+    if "data_format" not in sidecar:  # before 0.2: the front-end's rate, not the timing rate
+        return []
+    where_ = path.with_suffix(".json")
+    nominal = (protocol.data.get("display") or {}).get("refresh_hz", 60.0)
+    if abs(rate - nominal) > REFRESH_TOLERANCE_FRACTION * nominal:
+        return [
+            f"{where_}: refresh_hz is {_json(rate)}; must be within "
+            f"{100 * REFRESH_TOLERANCE_FRACTION:g} % of the protocol's display.refresh_hz "
+            f"{nominal:g} Hz (a session times at that rate or a measured one close to it; the "
+            "sidecar edited, or of another protocol?)"
+        ]
+    runs = sidecar.get("runs") or []
+    display = runs[-1].get("display") if runs and isinstance(runs[-1], dict) else None
+    timed = display.get("timing_refresh_hz") if isinstance(display, dict) else None
+    if isinstance(timed, int | float) and not isinstance(timed, bool) and timed != rate:
+        return [
+            f"{where_}: refresh_hz is {_json(rate)}, but its last run timed at "
+            f"{_json(timed)} Hz (runs[{len(runs) - 1}].display.timing_refresh_hz): must be the "
+            "same (the sidecar edited?)"
+        ]
+    return []
+
+
+def _block_order(path: Path, sidecar: dict, rows: list[dict], design: Design) -> list[str]:
+    """A session's blocks, in the order of their first trials, follow its ``counterbalance``:
+    0, the protocol's order of the blocks; 1, reversed (a session aborted early has the first
+    of them)."""
+    counterbalance = sidecar.get("counterbalance")
+    if counterbalance not in (0, 1) or isinstance(counterbalance, bool):
+        return []
+    ordered = sorted(
+        (row for row in rows if isinstance(row.get("trial"), int)), key=lambda r: r["trial"]
+    )
+    shown = list(dict.fromkeys(row["block"] for row in ordered))  # by their first trials
+    if not set(shown) <= set(design.blocks):  # a block no session writes: named elsewhere
+        return []
+    expected = list(design.blocks) if counterbalance == 0 else list(design.blocks)[::-1]
+    if shown == expected[: len(shown)]:
+        return []
+    return [
+        f"{path.with_suffix('.json')}: counterbalance is {counterbalance}, but its CSV's blocks "
+        f"begin in the order {', '.join(shown)}: counterbalance {counterbalance} runs them "
+        f"{', '.join(expected)}"
+        + ("" if counterbalance == 0 else " (the protocol's order reversed)")
+        + " (the sidecar or the rows edited?)"
+    ]
+
+
+def _one_stimulus_set(sidecars: dict[str, dict]) -> list[str]:
+    """The sessions of one analysis ran on one stimulus set: name each set their sidecars'
+    ``stimulus_set_manifest_sha256`` give, with its sessions."""
+    sets: dict[str | None, list[str]] = {}
+    for name, sidecar in sidecars.items():
+        if "stimulus_set_manifest_sha256" in sidecar:
+            sets.setdefault(sidecar["stimulus_set_manifest_sha256"], []).append(Path(name).name)
+    if len(sets) < 2:
+        return []
+    listed = "; ".join(
+        f"{'no set' if used is None else _short(used)}: {', '.join(names)}"
+        for used, names in sets.items()
+    )
+    return [
+        f"the sessions ran on {len(sets)} stimulus sets (stimulus_set_manifest_sha256 of their "
+        f"sidecars): {listed}; must be one set: analyse the sessions of each set apart (a set "
+        "rebuilt between sessions, or a sidecar edited?)"
+    ]
+
+
 def _recorded_trials(path: Path, sidecar: dict | None, rows: list[dict]) -> list[str]:
     """A completed session's CSV holds the trials its sidecar recorded: name the trials
     missing at its end (rows deleted, or the file cut at a line break), or the rows beyond
@@ -790,7 +903,9 @@ def load_sessions(
         Naming file, line and column of every bad cell; a sidecar that disagrees with its
         CSV, its file name, the protocol or the stimulus set; values the protocol or its
         display cannot produce; trials duplicated or missing; a header not on the first line;
-        a row cut short; a CSV of another study; a CSV without its sidecar (unless
+        a row cut short; a sidecar whose status, trial count, refresh rate or counterbalance
+        contradicts its runs, its protocol or its CSV's block order; sessions that ran on
+        different stimulus sets; a CSV of another study; a CSV without its sidecar (unless
         ``include_no_sidecar``); a file given twice; two sessions of one participant; sessions
         that did not complete or hold no trials (unless ``include_aborted``); nothing left
         but pilots; and (unless ``exclude_incomplete``) every participant missing a design
@@ -842,6 +957,8 @@ def load_sessions(
             continue
         if sidecar is not None:
             problems += _sidecar_contradictions(path, sidecar, read, protocol, stimuli)
+            problems += _refresh_record(path, sidecar, protocol)
+            problems += _block_order(path, sidecar, read, design)
         problems += _name_contradictions(path, read, sidecar, protocol.study)
         if len({(row["participant"], row["session"]) for row in read}) > 1:
             problems.append(
@@ -852,6 +969,8 @@ def load_sessions(
         if len(problems) > found:
             continue
         problems += _recorded_trials(path, sidecar, read)
+        if sidecar is not None:
+            problems += _runs_record(path.with_suffix(".json"), sidecar)
         if len(problems) > found or unvouched:
             continue
         session = _session(path, read, sidecar)
@@ -874,6 +993,7 @@ def load_sessions(
         rows += read
         if sidecar is not None:
             sidecars[str(path)] = sidecar
+    problems += _one_stimulus_set(sidecars)
     if problems:
         raise DataError(problems)
     if not rows and pilots and not include_pilots:

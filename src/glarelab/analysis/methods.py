@@ -74,6 +74,7 @@ def provenance(
             "status": s.get("status"),
             "simulated": s.get("simulated") if isinstance(s.get("simulated"), bool) else None,
             "protocol_sha256": s.get("protocol_sha256"),
+            "stimulus_set_manifest_sha256": s.get("stimulus_set_manifest_sha256"),
             "calibration": s.get("calibration"),
             "images_encoded_with": s.get("images_encoded_with"),
             "glarelab": (s.get("packages") or {}).get("glarelab"),
@@ -86,6 +87,9 @@ def provenance(
     record = {
         "protocol_sha256": protocol_sha256,
         "protocol_sha256_in_sessions": sorted({s["protocol_sha256"] for s in sessions} - {None}),
+        "stimulus_set_manifest_sha256_in_sessions": sorted(
+            {s["stimulus_set_manifest_sha256"] for s in sessions} - {None}
+        ),
         "simulated": simulated if sessions else None,
         "calibrations_in_sessions": len(calibrations),
         "packages": {
