@@ -641,6 +641,17 @@ def _trial_sequence(path: Path, rows: list[dict]) -> list[str]:
     return problems
 
 
+def _paradigm_session_checks(
+    paradigm, path: Path, rows: list[dict], sidecar: dict | None, protocol: Protocol
+) -> list[str]:
+    """What a paradigm checks in one session's rows as a whole (its ``check_session``, if it
+    has one: a staircase replays its staircases), once the trials are known to be unique."""
+    check_session = getattr(paradigm, "check_session", None)
+    if check_session is None:
+        return []
+    return check_session(path, rows, sidecar, protocol)
+
+
 def _session(path: Path, rows: list[dict], sidecar: dict | None) -> dict:
     """What the report says of one session file: who, how many trials, how it ended."""
     first = rows[0] if rows else {}
@@ -772,6 +783,8 @@ def load_sessions(
         if len(problems) > found:
             continue
         problems += _recorded_trials(path, sidecar, read)
+        if len(problems) == found:
+            problems += _paradigm_session_checks(paradigm, path, read, sidecar, protocol)
         if len(problems) > found or unvouched:
             continue
         session = _session(path, read, sidecar)
