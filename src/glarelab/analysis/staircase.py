@@ -275,8 +275,8 @@ def check_session(
     """One session's staircases replayed from the protocol's rules, and its flashes' frames.
 
     Each staircase (a context's glare level) is run again with the session's own staircase
-    (:class:`glarelab.protocols.staircase.Staircase`: ``trials.start_fraction``, the steps of
-    ``trials.step_fractions`` halved at each reversal, ``trials.neither``, ending after
+    (:class:`glarelab.protocols.staircase.Staircase`: ``trials.start_fraction``, the next step of
+    ``trials.step_fractions`` at each reversal, ``trials.neither``, ending after
     ``trials.reversals``) on the recorded responses in trial order: every row's
     ``disc_fraction`` must be where the answers before it put the disc, its ``reversal`` and
     ``step_fraction`` what its own answer gave (a flash that did not count moves nothing), and
