@@ -733,6 +733,7 @@ def load_sessions(
     sessions: list[dict] = []
     pilots: list[dict] = []
     files = []
+    replayed: list[str] = []  # what the paradigm's replay of each session finds
     if not paths:
         raise DataError(["no CSV files given"])
     paradigm = paradigm_analysis(protocol)
@@ -783,8 +784,6 @@ def load_sessions(
         if len(problems) > found:
             continue
         problems += _recorded_trials(path, sidecar, read)
-        if len(problems) == found:
-            problems += _paradigm_session_checks(paradigm, path, read, sidecar, protocol)
         if len(problems) > found or unvouched:
             continue
         session = _session(path, read, sidecar)
@@ -805,6 +804,9 @@ def load_sessions(
             continue
         files.append(str(path))
         rows += read
+        # named after the values no session can write (paradigm.check), which a replay of the
+        # staircase would only echo as a step out of place
+        replayed += _paradigm_session_checks(paradigm, path, read, sidecar, protocol)
         if sidecar is not None:
             sidecars[str(path)] = sidecar
     if problems:
@@ -830,6 +832,7 @@ def load_sessions(
     trials = trials.drop(columns="_order").reset_index(drop=True)
     problems += _blocks(trials, design)
     problems += paradigm.check(trials, protocol)
+    problems += replayed
     analysed = trials[trials["block"] == design.block] if design.block else trials
     excluded: dict[str, str] = {}
     factors = list(design.factors)
