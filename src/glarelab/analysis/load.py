@@ -834,6 +834,17 @@ def _trial_sequence(path: Path, rows: list[dict]) -> list[str]:
     return problems
 
 
+def _paradigm_session_checks(
+    paradigm, path: Path, rows: list[dict], sidecar: dict | None, protocol: Protocol
+) -> list[str]:
+    """What a paradigm checks in one session's rows as a whole (its ``check_session``, if it
+    has one: a staircase replays its staircases), once the trials are known to be unique."""
+    check_session = getattr(paradigm, "check_session", None)
+    if check_session is None:
+        return []
+    return check_session(path, rows, sidecar, protocol)
+
+
 def _session(path: Path, rows: list[dict], sidecar: dict | None) -> dict:
     """What the report says of one session file: who, how many trials, how it ended."""
     first = rows[0] if rows else {}
@@ -917,6 +928,7 @@ def load_sessions(
     sessions: list[dict] = []
     pilots: list[dict] = []
     files = []
+    replayed: list[str] = []  # what the paradigm's replay of each session finds
     if not paths:
         raise DataError(["no CSV files given"])
     paradigm = paradigm_analysis(protocol)
@@ -991,6 +1003,9 @@ def load_sessions(
             continue
         files.append(str(path))
         rows += read
+        # named after the values no session can write (paradigm.check), which a replay of the
+        # staircase would only echo as a step out of place
+        replayed += _paradigm_session_checks(paradigm, path, read, sidecar, protocol)
         if sidecar is not None:
             sidecars[str(path)] = sidecar
     problems += _one_stimulus_set(sidecars)
@@ -1017,6 +1032,7 @@ def load_sessions(
     trials = trials.drop(columns="_order").reset_index(drop=True)
     problems += _blocks(trials, design)
     problems += paradigm.check(trials, protocol)
+    problems += replayed
     analysed = trials[trials["block"] == design.block] if design.block else trials
     excluded: dict[str, str] = {}
     factors = list(design.factors)

@@ -178,6 +178,34 @@ def check(trials: pd.DataFrame, protocol: Protocol) -> list[str]:
                     f"{where(row)}, column match_cd_m2: {row['match_cd_m2']!r} is not the mean "
                     f"of the settings ({mean!r})"
                 )
+    problems += _adjustments(trials, protocol)
+    return problems
+
+
+def _adjustments(trials: pd.DataFrame, protocol: Protocol) -> list[str]:
+    """Rows whose ``adjustments`` cannot have produced their settings: each adjustment moves
+    one target (its disk, by a step), so a trial whose ``k`` targets left their start
+    luminances (``stimulus.target_start_cd_m2``) needs at least ``k`` adjustments."""
+    starts = protocol["stimulus"]["target_start_cd_m2"]
+    bounds = protocol["trials"]["settings"] == "bounds"
+    targets = (
+        list(zip(("darker_cd_m2", "brighter_cd_m2"), starts, strict=True))
+        if bounds
+        else [("match_cd_m2", starts[-1])]
+    )
+    problems = []
+    for _, row in trials.iterrows():
+        moved = [
+            f"{column} {row[column]!r} (started at {start:g})"
+            for column, start in targets
+            if not np.isclose(row[column], start, rtol=1e-9, atol=1e-12)
+        ]
+        if int(row["adjustments"]) < len(moved):
+            problems.append(
+                f"{where(row)} (trial {row['trial']}), column adjustments: "
+                f"{row['adjustments']!r}, but {' and '.join(moved)} moved from the start: "
+                f"at least {len(moved)} adjustment(s) (each moves one target)"
+            )
     return problems
 
 

@@ -48,14 +48,19 @@ from glarelab.analysis.stats import (
     correction,
     rm_anova,
 )
-from glarelab.protocols.staircase import intensity_grid
+from glarelab.protocols import format_value
+from glarelab.protocols.columns import Column
+from glarelab.protocols.staircase import Staircase, flash_frames, intensity_grid
 
 if TYPE_CHECKING:
+    from pathlib import Path
+
     from glarelab.protocols import Protocol
 
 __all__ = [
     "analyse",
     "check",
+    "check_session",
     "design",
     "methods",
     "on_grid",
@@ -169,11 +174,12 @@ def check(trials: pd.DataFrame, protocol: Protocol) -> list[str]:
     for _, row in trials.iterrows():
         if row["participant"] != previous:
             repeated, previous = 0, row["participant"]
-        expected = strengths[int(row["glare_level"]) - 1]
-        if not np.isclose(row["strength"], expected, rtol=1e-6):
+        expected = written(strengths[int(row["glare_level"]) - 1])
+        if row["strength"] != expected:
             problems.append(
-                f"{where(row)}, column strength: {row['strength']!r}; the protocol's glare "
-                f"level {int(row['glare_level'])} has strength {expected:g}"
+                f"{where(row)} (trial {row['trial']}), column strength: recorded "
+                f"{row['strength']!r}; the protocol's glare level {int(row['glare_level'])} has "
+                f"strength {expected!r} (a session writes it exactly; a cell edited?)"
             )
         if not np.isclose(durations, row["duration_ms"]).any():
             problems.append(
@@ -235,6 +241,154 @@ def check(trials: pd.DataFrame, protocol: Protocol) -> list[str]:
             f"participant {participant}: none of their trials counted (every presentation "
             "failed?); leave their files out of the analysis, or the report cannot show them"
         )
+    return problems
+
+
+STRENGTH_COLUMN = Column("strength", float, "source excess over the displayed peak")
+
+
+def written(value: float) -> float:
+    """A protocol's float as a session's CSV holds it, read back: the text the session writes
+    (:func:`glarelab.protocols.columns.format_value`) parsed as the analysis parses it.
+
+    Parameters
+    ----------
+    value
+        The protocol's value.
+
+    Returns
+    -------
+    float
+        The value read back from its cell.
+
+    Examples
+    --------
+    >>> written(2.68), written(0.0254)
+    (2.68, 0.0254)
+    """
+    return float(format_value(value, STRENGTH_COLUMN))
+
+
+def check_session(
+    path: Path, rows: list[dict], sidecar: dict | None, protocol: Protocol
+) -> list[str]:
+    """One session's staircases replayed from the protocol's rules, and its flashes' frames.
+
+    Each staircase (a context's glare level) is run again with the session's own staircase
+    (:class:`glarelab.protocols.staircase.Staircase`: ``trials.start_fraction``, the next step of
+    ``trials.step_fractions`` at each reversal, ``trials.neither``, ending after
+    ``trials.reversals``) on the recorded responses in trial order: every row's
+    ``disc_fraction`` must be where the answers before it put the disc, its ``reversal`` and
+    ``step_fraction`` what its own answer gave (a flash that did not count moves nothing), and
+    no row may follow the staircase's end. The first disagreement of a staircase is named
+    (the later rows of that staircase follow from it). ``frames`` must be the whole frames of
+    ``duration_ms`` at a refresh rate the sidecar records
+    (:func:`glarelab.protocols.staircase.flash_frames`).
+
+    Parameters
+    ----------
+    path
+        The session's CSV (named in the problems).
+    rows
+        Its trials, typed by the protocol's columns (``_file`` and ``_line`` name each), with
+        trial numbers unique; in any order.
+    sidecar
+        Its sidecar, or None (then ``frames`` is not checked).
+    protocol : glarelab.protocols.Protocol
+        The study's protocol, of this paradigm.
+
+    Returns
+    -------
+    list of str
+        One problem per line: file, line, trial, column, the recorded and the expected value.
+    """
+    t = protocol["trials"]
+    grid = intensity_grid(t)
+    strengths = protocol["glare"]["strengths"]
+    staircases: dict[tuple[str, int], Staircase] = {}
+    broken: set[tuple[str, int]] = set()
+    problems = []
+
+    def same(recorded: float, expected: float) -> bool:
+        if grid is not None:
+            return abs(recorded * grid - expected * grid) <= GRID_TOLERANCE
+        return bool(np.isclose(recorded, expected, rtol=1e-9, atol=1e-12))
+
+    def text(value) -> str:
+        if isinstance(value, bool):
+            return "true" if value else "false"
+        return f"{value!r}"
+
+    for row in sorted(rows, key=lambda r: r["trial"]):
+        key = (row["context"], int(row["glare_level"]))
+        if key in broken:
+            continue
+        if key not in staircases:
+            staircases[key] = Staircase(
+                level=key[1],
+                strength=strengths[key[1] - 1],
+                fraction=t["start_fraction"],
+                steps=tuple(t["step_fractions"]),
+                reversals_needed=t["reversals"],
+                neither=t["neither"],
+                grid=grid,
+            )
+        s = staircases[key]
+        label = f"{where(row)} (trial {row['trial']}, context {key[0]}, glare level {key[1]})"
+        if s.done:
+            problems.append(
+                f"{label}: the staircase had ended before it ({s.reversals} reversals after "
+                f"{s.trials} answers; trials.reversals = {t['reversals']}): no session shows "
+                "it again"
+            )
+            broken.add(key)
+            continue
+        found = []
+        if not same(row["disc_fraction"], s.fraction):
+            found.append(("disc_fraction", row["disc_fraction"], s.fraction))
+        reversal = s.update(row["response"]) if bool(row["counted"]) else False
+        if bool(row["reversal"]) != reversal:
+            found.append(("reversal", bool(row["reversal"]), reversal))
+        if not np.isclose(row["step_fraction"], s.step, rtol=1e-9, atol=0.0):
+            found.append(("step_fraction", row["step_fraction"], s.step))
+        if found:
+            column, recorded, expected = found[0]
+            problems.append(
+                f"{label}, column {column}: recorded {text(recorded)}, the staircase replayed "
+                f"from the responses gives {text(expected)} (start {t['start_fraction']:g}, "
+                f"steps {', '.join(f'{x:g}' for x in t['step_fractions'])} by reversals, "
+                "counted responses in trial order): a cell edited, or a response changed?"
+            )
+            broken.add(key)
+    problems += _frames(rows, sidecar)
+    return problems
+
+
+def _frames(rows: list[dict], sidecar: dict | None) -> list[str]:
+    """Rows whose ``frames`` are not ``duration_ms`` at a refresh rate of the session's runs."""
+    rates = []
+    for value in [
+        (sidecar or {}).get("refresh_hz"),
+        *(
+            run.get("timing_refresh_hz")
+            for run in (sidecar or {}).get("runs") or []
+            if isinstance(run, dict)
+        ),
+    ]:
+        if isinstance(value, int | float) and not isinstance(value, bool) and value > 0:
+            rates.append(float(value))
+    if not rates:
+        return []
+    problems = []
+    for row in sorted(rows, key=lambda r: r["trial"]):
+        expected = sorted({flash_frames(row["duration_ms"], rate) for rate in rates})
+        if row["frames"] not in expected:
+            problems.append(
+                f"{where(row)} (trial {row['trial']}), column frames: recorded "
+                f"{row['frames']!r}; {row['duration_ms']:g} ms at the session's "
+                f"{' or '.join(f'{r:g}' for r in sorted(set(rates)))} Hz (its sidecar's "
+                f"refresh_hz) is {' or '.join(map(str, expected))} frame(s)"
+            )
     return problems
 
 

@@ -36,11 +36,16 @@ from __future__ import annotations
 
 import re
 from collections.abc import Mapping
-from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from glarelab.experiments.engine import Engine, LookingObserver, participant_rng
-from glarelab.protocols.staircase import comparison_terms, glare_name, intensity_grid
+from glarelab.protocols.staircase import (
+    Staircase,
+    comparison_terms,
+    flash_frames,
+    glare_name,
+    intensity_grid,
+)
 
 if TYPE_CHECKING:
     from glarelab.protocols import Protocol
@@ -83,103 +88,6 @@ def counterbalance_for(participant: str) -> int:
             "give --counterbalance 0 or 1"
         )
     return 0 if int(digits[-1]) % 2 == 1 else 1
-
-
-@dataclass
-class Staircase:
-    """One staircase on the disc intensity (fraction of the display maximum).
-
-    Attributes
-    ----------
-    level
-        The glare level it belongs to, from 1.
-    strength
-        That level's source excess over the displayed peak (``glare.strengths``).
-    fraction
-        The disc's intensity now, a fraction of the display maximum, 0-1.
-    steps
-        The step sizes, fractions of the maximum: the first until the first reversal, and so
-        on; the last is kept.
-    reversals_needed
-        The reversals after which it is done.
-    neither
-        How a "neither brighter" answer moves it: ``'hold'`` or ``'alternate'``.
-    grid
-        ``N`` of the intensities ``k / N`` it moves on
-        (:func:`glarelab.protocols.staircase.intensity_grid`); None: plain floats.
-    direction
-        Its last move: +1 up, -1 down, 0 not moved yet.
-    reversals
-        Reversals so far.
-    trials
-        Trials so far.
-    history
-        ``(response, reversal)`` of each trial.
-    """
-
-    level: int
-    strength: float
-    fraction: float
-    steps: tuple[float, ...]
-    reversals_needed: int
-    neither: str
-    grid: int | None = None  # intensities k / grid (glarelab.protocols.staircase.intensity_grid)
-    direction: int = 0  # +1 up, -1 down, 0 not moved yet
-    reversals: int = 0
-    trials: int = 0
-    history: list = field(default_factory=list)
-
-    @property
-    def step(self) -> float:
-        return self.steps[min(self.reversals, len(self.steps) - 1)]
-
-    @property
-    def done(self) -> bool:
-        return (
-            self.reversals >= self.reversals_needed
-            or self.trials >= 4 * self.reversals_needed + 20
-        )
-
-    def update(self, response: str) -> bool:
-        """Apply a response ('glare', 'disc', 'neither'); return whether it was a reversal.
-
-        Parameters
-        ----------
-        response
-            ``'glare'`` (the glare image looked brighter: up), ``'disc'`` (down) or
-            ``'neither'``.
-
-        Returns
-        -------
-        bool
-            Whether it was a reversal (a "neither" always is).
-
-        Raises
-        ------
-        ValueError
-            For another response.
-        """
-        self.trials += 1
-        if response == "glare":
-            move = +1
-        elif response == "disc":
-            move = -1
-        elif response == "neither":
-            move = 0 if self.neither == "hold" else (-self.direction or +1)
-        else:
-            raise ValueError(f"response must be 'glare', 'disc' or 'neither'; got {response!r}")
-        reversal = response == "neither" or (self.direction != 0 and move == -self.direction)
-        if reversal:  # as PsychoPy's StairHandler: the reversing move already takes the next step
-            self.reversals += 1
-        if move:
-            if self.grid is None:
-                self.fraction = min(max(self.fraction + move * self.step, 0.0), 1.0)
-            else:  # whole steps of the grid: 0.84 stays 0.84, never 0.8400000000000001
-                k = round(self.fraction * self.grid) + move * round(self.step * self.grid)
-                self.fraction = min(max(k, 0), self.grid) / self.grid
-            self.direction = move
-        self.history.append((response, reversal))
-        return reversal
 
 
 class StaircaseEngine(Engine):
@@ -262,7 +170,7 @@ class StaircaseEngine(Engine):
         self.glare_side = ("left", "right")[int(self.rng.integers(2))]
         durations = self.protocol["trials"]["presentation_ms"]
         self.duration_ms = float(durations[int(self.rng.integers(len(durations)))])
-        self.frames = max(1, round(self.duration_ms * self.refresh_hz / 1000.0))
+        self.frames = flash_frames(self.duration_ms, self.refresh_hz)
         self.presentation_ok = True
 
     @property

@@ -9,6 +9,7 @@ its own (uniform black, a procedural lamp scene, or a linear EXR).
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from fractions import Fraction
 from itertools import pairwise
 from math import gcd, lcm
@@ -34,9 +35,11 @@ if TYPE_CHECKING:
 __all__ = [
     "SCHEMA",
     "SESSION_ORDER",
+    "Staircase",
     "check",
     "columns",
     "comparison_terms",
+    "flash_frames",
     "glare_name",
     "intensity_grid",
 ]
@@ -211,6 +214,127 @@ def intensity_grid(trials: dict) -> int | None:
     unit = Fraction(gcd(*(int(f * denominator) for f in fractions)), denominator)
     grid = unit.denominator if unit.numerator == 1 else None
     return grid if grid is not None and grid <= GRID_DENOMINATOR_LIMIT else None
+
+
+@dataclass
+class Staircase:
+    """One staircase on the disc intensity (fraction of the display maximum).
+
+    Attributes
+    ----------
+    level
+        The glare level it belongs to, from 1.
+    strength
+        That level's source excess over the displayed peak (``glare.strengths``).
+    fraction
+        The disc's intensity now, a fraction of the display maximum, 0-1.
+    steps
+        The step sizes, fractions of the maximum: the first until the first reversal, and so
+        on; the last is kept.
+    reversals_needed
+        The reversals after which it is done.
+    neither
+        How a "neither brighter" answer moves it: ``'hold'`` or ``'alternate'``.
+    grid
+        ``N`` of the intensities ``k / N`` it moves on
+        (:func:`glarelab.protocols.staircase.intensity_grid`); None: plain floats.
+    direction
+        Its last move: +1 up, -1 down, 0 not moved yet.
+    reversals
+        Reversals so far.
+    trials
+        Trials so far.
+    history
+        ``(response, reversal)`` of each trial.
+    """
+
+    level: int
+    strength: float
+    fraction: float
+    steps: tuple[float, ...]
+    reversals_needed: int
+    neither: str
+    grid: int | None = None  # intensities k / grid (glarelab.protocols.staircase.intensity_grid)
+    direction: int = 0  # +1 up, -1 down, 0 not moved yet
+    reversals: int = 0
+    trials: int = 0
+    history: list = field(default_factory=list)
+
+    @property
+    def step(self) -> float:
+        return self.steps[min(self.reversals, len(self.steps) - 1)]
+
+    @property
+    def done(self) -> bool:
+        return (
+            self.reversals >= self.reversals_needed
+            or self.trials >= 4 * self.reversals_needed + 20
+        )
+
+    def update(self, response: str) -> bool:
+        """Apply a response ('glare', 'disc', 'neither'); return whether it was a reversal.
+
+        Parameters
+        ----------
+        response
+            ``'glare'`` (the glare image looked brighter: up), ``'disc'`` (down) or
+            ``'neither'``.
+
+        Returns
+        -------
+        bool
+            Whether it was a reversal (a "neither" always is).
+
+        Raises
+        ------
+        ValueError
+            For another response.
+        """
+        self.trials += 1
+        if response == "glare":
+            move = +1
+        elif response == "disc":
+            move = -1
+        elif response == "neither":
+            move = 0 if self.neither == "hold" else (-self.direction or +1)
+        else:
+            raise ValueError(f"response must be 'glare', 'disc' or 'neither'; got {response!r}")
+        reversal = response == "neither" or (self.direction != 0 and move == -self.direction)
+        if reversal:  # as PsychoPy's StairHandler: the reversing move already takes the next step
+            self.reversals += 1
+        if move:
+            if self.grid is None:
+                self.fraction = min(max(self.fraction + move * self.step, 0.0), 1.0)
+            else:  # whole steps of the grid: 0.84 stays 0.84, never 0.8400000000000001
+                k = round(self.fraction * self.grid) + move * round(self.step * self.grid)
+                self.fraction = min(max(k, 0), self.grid) / self.grid
+            self.direction = move
+        self.history.append((response, reversal))
+        return reversal
+
+
+def flash_frames(duration_ms: float, refresh_hz: float) -> int:
+    """The whole frames a flash of ``duration_ms`` takes at ``refresh_hz`` (at least one): the
+    ``frames`` a staircase session records.
+
+    Parameters
+    ----------
+    duration_ms
+        The presentation time asked for, ms.
+    refresh_hz
+        The display's refresh rate, Hz, > 0.
+
+    Returns
+    -------
+    int
+        ``max(1, round(duration_ms · refresh_hz / 1000))``.
+
+    Examples
+    --------
+    >>> flash_frames(400.0, 76.0), flash_frames(700.0, 76.0), flash_frames(1.0, 60.0)
+    (30, 53, 1)
+    """
+    return max(1, round(duration_ms * refresh_hz / 1000.0))
 
 
 def glare_name(context: str, level: int) -> str:
