@@ -108,7 +108,8 @@ def data_reference() -> str:
         "adaptation's target and state (cd/m²), `render_ms`, `dropped` and whether the sample "
         "gave a gaze and a pupil ([night vision](night-vision.md)) |",
         "| `STEM_iohub.hdf5` | a live scene's eye tracker: ioHub's own store of every event "
-        "(raw samples, blinks, fixations), one ioHub session per run (`run1`, ...) |",
+        "(raw samples, blinks, fixations) of the first run, ioHub session `run1`; a resumed run N "
+        "keeps its own in `STEM_iohub_runN.hdf5` (ioHub rewrites a store it opens) |",
         "| `STEM_iohub.log` | a live scene's eye tracker: the output of ioHub's server (its "
         "errors), appended by every run; a server left behind by a killed session is stopped "
         "by a guard |",

@@ -412,3 +412,41 @@ def test_a_session_that_could_not_start_leaves_no_iohub_file(tmp_path):
         assert session_files(tmp_path, "P01", "luidolt2020", 1) == []
     finally:
         files.close()
+
+
+def test_a_resumed_live_run_keeps_its_own_iohub_store(tmp_path, monkeypatch):
+    """ioHub opens its hdf5 store anew: a resumed run (run 2) given the first run's store
+    erased the first run's raw samples. Each run gets its own store, listed with the
+    session's files."""
+    pytest.importorskip("tables")
+    from types import SimpleNamespace
+
+    import glarelab.frontend.eyetracker as eyetracker
+    from glarelab.experiments.data import tracker_store_name
+    from glarelab.frontend.session import PsychoPyFrontend
+
+    stem = "P01_luidolt2020-live_s1_2026-12-03_2100"
+    stores = []
+
+    class Launched(Exception):
+        pass
+
+    def launch(window, *, datastore, **_):
+        stores.append(datastore)
+        raise Launched
+
+    monkeypatch.setattr(eyetracker, "IoHubEyeTracker", launch)
+    frontend = SimpleNamespace(eyetracker=("mouse", {}), window=None, log=lambda line: None)
+    for run in (1, 2, 3):
+        with pytest.raises(Launched):
+            PsychoPyFrontend._start_tracker(frontend, run, tmp_path / f"{stem}_frames.tsv")
+    assert [p.name for p in stores] == [
+        f"{stem}_iohub.hdf5", f"{stem}_iohub_run2.hdf5", f"{stem}_iohub_run3.hdf5"
+    ]  # fmt: skip
+    for store in stores:
+        store.write_bytes(b"")
+    listed = {p.name for p in session_files(tmp_path, "P01", "luidolt2020-live", 1)}
+    assert {p.name for p in stores} <= listed
+    for run in (0, -1, True, 1.0):
+        with pytest.raises(ValueError, match="run must be a whole number >= 1"):
+            tracker_store_name(stem, run)

@@ -55,6 +55,7 @@ __all__ = [
     "lock_folder",
     "read_rows",
     "session_files",
+    "tracker_store_name",
 ]
 
 _ID = re.compile(r"[A-Za-z0-9][A-Za-z0-9_-]{0,63}\Z")  # \Z: "$" admits a final newline
@@ -101,6 +102,43 @@ def _prefix(participant: str, study: str, session: int) -> str:
     return f"{participant}_{study}_s{session}"
 
 
+def tracker_store_name(stem: str, run: int) -> str:
+    """The file of ioHub's hdf5 store for one run of a session: ``STEM_iohub.hdf5`` for the
+    first, ``STEM_iohub_runN.hdf5`` for a resumed run N.
+
+    ioHub opens its store for writing anew (its ``multiple_sessions`` setting, which
+    ``launchHubServer`` cannot set, is false), so a resumed run given the first run's store
+    would erase its raw samples; a killed run's store is never opened again either.
+
+    Parameters
+    ----------
+    stem
+        The session's file name without ``.csv``.
+    run
+        The run's number (1 for the session's first).
+
+    Returns
+    -------
+    str
+        The store's file name.
+
+    Raises
+    ------
+    ValueError
+        For a run below 1.
+
+    Examples
+    --------
+    >>> tracker_store_name("P01_luidolt2020-live_s1_2026-12-03_2100", 1)
+    'P01_luidolt2020-live_s1_2026-12-03_2100_iohub.hdf5'
+    >>> tracker_store_name("P01_luidolt2020-live_s1_2026-12-03_2100", 2)
+    'P01_luidolt2020-live_s1_2026-12-03_2100_iohub_run2.hdf5'
+    """
+    if isinstance(run, bool) or not isinstance(run, int) or run < 1:
+        raise ValueError(f"run must be a whole number >= 1, got {run!r}")
+    return f"{stem}_iohub.hdf5" if run == 1 else f"{stem}_iohub_run{run}.hdf5"
+
+
 def session_files(out: Path, participant: str, study: str, session: int) -> list[Path]:
     """Every file of one participant's session of a study in ``out`` (whatever its date).
 
@@ -130,7 +168,7 @@ def session_files(out: Path, participant: str, study: str, session: int) -> list
     pattern = re.compile(
         re.escape(_prefix(participant, study, session))
         + r"_\d{4}-\d{2}-\d{2}_\d{4}(_pilot)?"
-        + r"(\.csv|\.json|\.log|_frames\.tsv|_iohub\.hdf5|_iohub\.log)\Z"
+        + r"(\.csv|\.json|\.log|_frames\.tsv|_iohub(_run[1-9]\d*)?\.hdf5|_iohub\.log)\Z"
     )
     folder = Path(out)
     if not folder.is_dir():
@@ -571,7 +609,7 @@ class SessionFiles:
         self.release_reserve()
         if self.created and not self.rows:
             stem = self.csv_path.name.removesuffix(".csv")
-            tracker = [self.out / f"{stem}_iohub.{ext}" for ext in ("hdf5", "log")]  # ioHub's
+            tracker = [self.out / tracker_store_name(stem, 1), self.out / f"{stem}_iohub.log"]
             for path in (self.csv_path, self.sidecar_path, self.log_path, self.frames_path):
                 path.unlink(missing_ok=True)
             for path in tracker:

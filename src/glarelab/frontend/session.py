@@ -260,6 +260,7 @@ class PsychoPyFrontend:
         tracker's own calibration (not MouseGaze's), start recording, and measure Luidolt's
         pupil range (§5.2.1 ii; MouseGaze's pupil simulated), logged and kept in
         ``pupil_calibration``."""
+        from glarelab.experiments.data import tracker_store_name
         from glarelab.frontend.eyetracker import IoHubEyeTracker, calibrate_pupil
 
         device, settings = self.eyetracker
@@ -279,8 +280,8 @@ class PsychoPyFrontend:
                     "not installed (pip install 'glarelab[eyetracker]')"
                 )
             else:
-                stem = frames_path.name[: -len("_frames.tsv")]
-                store = frames_path.with_name(f"{stem}_iohub.hdf5")
+                stem = frames_path.name[: -len("_frames.tsv")]  # a store per run: ioHub
+                store = frames_path.with_name(tracker_store_name(stem, run))  # rewrites one
         self.tracker = IoHubEyeTracker(
             self.window, tracker=device, settings=settings, datastore=store,
             session_code=f"run{run}", server_log=server_log,
