@@ -141,3 +141,23 @@ def test_yoshida_adjustments_that_cannot_move_the_settings_are_refused(simulated
     path = edited(first(simulated, "yoshida2008"), tmp_path, none_made)
     with pytest.raises(DataError, match=r"\(trial \d+\), column adjustments: 1, but darker_cd_m2"):
         load_sessions(protocol, [path])
+
+
+def test_a_completed_session_with_an_unfinished_staircase_is_refused(simulated):
+    """A completed session ran every staircase to its end (trials.reversals reversals or the
+    trial cap): a staircase's last row gone leaves it unfinished and is named, with what it
+    reached and what ending needs; an aborted session may stop anywhere."""
+    protocol = load_protocol("spencer1995")
+    path = first(simulated, "spencer1995")
+    rows = load_sessions(protocol, [path]).trials.to_dict("records")
+    sidecar = json.loads(path.with_suffix(".json").read_text())
+    assert sidecar["status"] == "completed"
+    last = max(rows, key=lambda r: r["trial"])
+    key = (last["context"], last["glare_level"])
+    kept = [r for r in rows if r is not last]
+    problems = check_session(path, kept, sidecar, protocol)
+    assert len(problems) == 1, problems
+    assert f"staircase context {key[0]}, glare level {key[1]} ended with " in problems[0]
+    assert "status is completed" in problems[0]
+    assert f"trials.reversals = {protocol['trials']['reversals']}" in problems[0]
+    assert check_session(path, kept, {**sidecar, "status": "aborted"}, protocol) == []

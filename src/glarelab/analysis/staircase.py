@@ -280,9 +280,10 @@ def check_session(
     ``trials.reversals``) on the recorded responses in trial order: every row's
     ``disc_fraction`` must be where the answers before it put the disc, its ``reversal`` and
     ``step_fraction`` what its own answer gave (a flash that did not count moves nothing), and
-    no row may follow the staircase's end. The first disagreement of a staircase is named
-    (the later rows of that staircase follow from it). ``frames`` must be the whole frames of
-    ``duration_ms`` at a refresh rate the sidecar records
+    no row may follow the staircase's end. In a session whose sidecar status is ``completed``
+    every staircase of the protocol must have ended by that rule. The first disagreement of a
+    staircase is named (the later rows of that staircase follow from it). ``frames`` must be
+    the whole frames of ``duration_ms`` at a refresh rate the sidecar records
     (:func:`glarelab.protocols.staircase.flash_frames`).
 
     Parameters
@@ -360,6 +361,24 @@ def check_session(
                 "counted responses in trial order): a cell edited, or a response changed?"
             )
             broken.add(key)
+    if (sidecar or {}).get("status") == "completed":
+        # a completed session ran every staircase to its end (an aborted one may stop anywhere)
+        cap = 4 * t["reversals"] + 20
+        for context in protocol["contexts"]:
+            for level in range(1, len(strengths) + 1):
+                key = (context["name"], level)
+                if key in broken:
+                    continue
+                s = staircases.get(key)
+                reached = (0, 0) if s is None else (s.reversals, s.trials)
+                if s is None or not s.done:
+                    problems.append(
+                        f"{path}: staircase context {key[0]}, glare level {key[1]} ended with "
+                        f"{reached[0]} reversals after {reached[1]} answers, but the sidecar's "
+                        f"status is completed: a staircase ends after trials.reversals = "
+                        f"{t['reversals']} reversals or {cap} answers (rows deleted, or a "
+                        "response changed?)"
+                    )
     problems += _frames(rows, sidecar)
     return problems
 
