@@ -70,6 +70,10 @@ def _run(key, value):
             _run("trials_before", 400),
             "runs[0].trials_after is 321, below its trials_before 400: must be ≥ 400",
         ),
+        (
+            _run("ended_by", "escape"),
+            'runs[0].ended_by is "escape", but the run\'s status is "completed": must be null',
+        ),
     ],
 )
 def test_a_sidecar_contradicting_itself_its_csv_or_its_protocol_is_refused(

@@ -642,8 +642,8 @@ def _sidecar_contradictions(
 
 def _runs_record(where_: Path, sidecar: dict) -> list[str]:
     """The session's status and trial count are its last run's (a run's end writes both,
-    :func:`glarelab.experiments.session._finish_run`), and no run ends with fewer trials than
-    it began with."""
+    :func:`glarelab.experiments.session._finish_run`), no run ends with fewer trials than
+    it began with, and a completed run has no ``ended_by`` (what ended an aborted one)."""
     runs = [run for run in sidecar.get("runs") or [] if isinstance(run, dict)]
     if not runs or len(runs) != len(sidecar.get("runs") or []):
         return []
@@ -664,6 +664,13 @@ def _runs_record(where_: Path, sidecar: dict) -> list[str]:
             "count is the session's (the sidecar edited?)"
         )
     for number, run in enumerate(runs):
+        ended_by = run.get("ended_by")
+        if run.get("status") == "completed" and ended_by is not None:
+            problems.append(
+                f"{where_}: runs[{number}].ended_by is {_json(ended_by)}, but the run's status "
+                'is "completed": must be null, a run that completed was not ended by a key or '
+                "an error (the sidecar edited?)"
+            )
         before, after = run.get("trials_before"), run.get("trials_after")
         if _whole(0)(before) and _whole(0)(after) and after < before:
             problems.append(
