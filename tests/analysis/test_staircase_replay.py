@@ -161,3 +161,37 @@ def test_a_completed_session_with_an_unfinished_staircase_is_refused(simulated):
     assert "status is completed" in problems[0]
     assert f"trials.reversals = {protocol['trials']['reversals']}" in problems[0]
     assert check_session(path, kept, {**sidecar, "status": "aborted"}, protocol) == []
+
+
+def test_yoshida_rows_against_their_recorded_trial_order_are_refused(simulated, tmp_path):
+    """The sidecar's trial_order is each trial's block:method:level, trial 1 first: two main
+    trials relabelled with each other's reference are named; the first trials alone (an
+    aborted session) follow it."""
+    from glarelab.analysis.load import _trial_order
+    from glarelab.analysis.matching import design as matching_design
+
+    protocol = load_protocol("yoshida2008")
+    source = first(simulated, "yoshida2008")
+    swapped = ("method", "level", "level_index", "l_disk_cd_m2")
+
+    def relabel(rows):
+        main = [r for r in rows if r["block"] == "main"]
+        a = main[0]
+        b = next(r for r in main if (r["method"], r["level"]) != (a["method"], a["level"]))
+        for key in swapped:
+            a[key], b[key] = b[key], a[key]
+
+    path = edited(source, tmp_path, relabel)
+    with pytest.raises(DataError) as raised:
+        load_sessions(protocol, [path])
+    message = str(raised.value)
+    assert re.search(
+        rf"{re.escape(path.name)}, line \d+ \(trial \d+\): block:method:level is main:\S+, but "
+        r"the sidecar's trial_order has main:\S+ at trial \d+",
+        message,
+    ), message
+    rows = load_sessions(protocol, [source]).trials.to_dict("records")
+    sidecar = json.loads(source.with_suffix(".json").read_text())
+    design = matching_design(protocol)
+    assert _trial_order(source, sidecar, rows, design) == []
+    assert _trial_order(source, sidecar, rows[:5], design) == []

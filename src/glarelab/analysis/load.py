@@ -736,6 +736,39 @@ def _block_order(path: Path, sidecar: dict, rows: list[dict], design: Design) ->
     ]
 
 
+def _trial_order(path: Path, sidecar: dict, rows: list[dict], design: Design) -> list[str]:
+    """A session that records its ``trial_order`` (``block:method:level`` of each trial, trial
+    1 first: :attr:`glarelab.experiments.matching.MatchingEngine.order`) ran its trials in that
+    order: the row of trial ``n`` is entry ``n`` (a resumed session continues the order, an
+    aborted one has its first trials). A block no session writes is named elsewhere."""
+    order = sidecar.get("trial_order")
+    if not isinstance(order, list):
+        return []
+    problems = []
+    for row in sorted(
+        (row for row in rows if isinstance(row.get("trial"), int)), key=lambda r: r["trial"]
+    ):
+        if not all(key in row for key in ("block", "method", "level")):
+            return []
+        if row["block"] not in design.blocks:
+            continue
+        shown = f"{row['block']}:{row['method']}:{row['level']}"
+        trial = row["trial"]
+        expected = order[trial - 1] if 1 <= trial <= len(order) else None
+        if shown != expected:
+            problems.append(
+                f"{path}, line {row['_line']} (trial {trial}): block:method:level is {shown}, "
+                + (
+                    f"but the sidecar's trial_order has {expected} at trial {trial}"
+                    if expected is not None
+                    else f"but the sidecar's trial_order has {len(order)} trials"
+                )
+                + ": a session runs its trials in its recorded order (the rows or the "
+                "sidecar edited?)"
+            )
+    return problems
+
+
 def _one_stimulus_set(sidecars: dict[str, dict]) -> list[str]:
     """The sessions of one analysis ran on one stimulus set: name each set their sidecars'
     ``stimulus_set_manifest_sha256`` give, with its sessions."""
@@ -978,6 +1011,7 @@ def load_sessions(
             problems += _sidecar_contradictions(path, sidecar, read, protocol, stimuli)
             problems += _refresh_record(path, sidecar, protocol)
             problems += _block_order(path, sidecar, read, design)
+            problems += _trial_order(path, sidecar, read, design)
         problems += _name_contradictions(path, read, sidecar, protocol.study)
         if len({(row["participant"], row["session"]) for row in read}) > 1:
             problems.append(
