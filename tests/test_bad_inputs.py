@@ -154,13 +154,21 @@ def sandbox(tmp_path_factory) -> Path:
     main_row = int(pd.read_csv(first)["block"].eq("main").idxmax())
     _variant(first, bad / "relabelled.csv", set_cell("level", "Z", main_row))
     level = pd.read_csv(first, keep_default_na=False).loc[main_row, "level"]
-    _variant(
+    mislabelled = _variant(
         first, bad / "mislabelled.csv", set_cell("level", "B" if level != "B" else "C", main_row)
     )
+    # the sidecar's trial order edited to agree (else that check names the row first)
+    sidecar = json.loads(mislabelled.with_suffix(".json").read_text())
+    entry = sidecar["trial_order"][main_row].rsplit(":", 1)[0]
+    sidecar["trial_order"][main_row] = f"{entry}:{'B' if level != 'B' else 'C'}"
+    mislabelled.with_suffix(".json").write_text(json.dumps(sidecar))
     _variant(first, bad / "header-only.csv", lambda frame: frame.iloc[:0])
     aborted = _variant(first, bad / "aborted.csv", lambda frame: frame.iloc[:-3])
     sidecar = json.loads(aborted.with_suffix(".json").read_text())
-    aborted.with_suffix(".json").write_text(json.dumps(sidecar | {"status": "aborted"}))
+    trials = len(pd.read_csv(aborted))
+    sidecar |= {"status": "aborted", "trials": trials}  # its runs as a session writes them
+    sidecar["runs"][-1] |= {"status": "aborted", "trials_after": trials, "ended_by": "escape"}
+    aborted.with_suffix(".json").write_text(json.dumps(sidecar))
     shutil.copy(second, bad / "second.csv")
     shutil.copy(second.with_suffix(".json"), bad / "second.json")
     (box / "scripted-none.txt").write_text("\n")

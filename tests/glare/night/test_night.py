@@ -198,7 +198,7 @@ def test_a_luminance_image_is_shown_as_grey_rgb():
         ),
         ({"acuity_method": "Ferwerda"}, "acuity_method"),
         ({"scotopic_method": "Krawczyk"}, "scotopic_method"),
-        ({"glare_model": "bloom"}, "method"),
+        ({"glare_model": "bloom"}, "model"),
     ],
 )
 def test_bad_input_is_refused_by_name(kwargs, pattern):
