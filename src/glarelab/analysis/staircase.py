@@ -50,7 +50,7 @@ from glarelab.analysis.stats import (
 )
 from glarelab.protocols import format_value
 from glarelab.protocols.columns import Column
-from glarelab.protocols.staircase import Staircase, flash_frames, intensity_grid
+from glarelab.protocols.staircase import Staircase, answer_limit, flash_frames, intensity_grid
 
 if TYPE_CHECKING:
     from pathlib import Path
@@ -363,7 +363,7 @@ def check_session(
             broken.add(key)
     if (sidecar or {}).get("status") == "completed":
         # a completed session ran every staircase to its end (an aborted one may stop anywhere)
-        cap = 4 * t["reversals"] + 20
+        cap = answer_limit(t["reversals"])
         for context in protocol["contexts"]:
             for level in range(1, len(strengths) + 1):
                 key = (context["name"], level)

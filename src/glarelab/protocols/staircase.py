@@ -36,6 +36,7 @@ __all__ = [
     "SCHEMA",
     "SESSION_ORDER",
     "Staircase",
+    "answer_limit",
     "check",
     "columns",
     "comparison_terms",
@@ -266,9 +267,8 @@ class Staircase:
 
     @property
     def done(self) -> bool:
-        return (
-            self.reversals >= self.reversals_needed
-            or self.trials >= 4 * self.reversals_needed + 20
+        return self.reversals >= self.reversals_needed or self.trials >= answer_limit(
+            self.reversals_needed
         )
 
     def update(self, response: str) -> bool:
@@ -311,6 +311,19 @@ class Staircase:
             self.direction = move
         self.history.append((response, reversal))
         return reversal
+
+
+def answer_limit(reversals_needed: int) -> int:
+    """The answers after which a staircase ends even if it has not reversed
+    ``reversals_needed`` times (an observer who never changes their answer):
+    ``4 × reversals_needed + 20``, a safeguard of this suite, not Spencer et al.'s.
+
+    Examples
+    --------
+    >>> answer_limit(8)
+    52
+    """
+    return 4 * reversals_needed + 20
 
 
 def flash_frames(duration_ms: float, refresh_hz: float) -> int:
