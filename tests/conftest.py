@@ -1,7 +1,10 @@
 """Test-wide settings: one cache of simulated observers' stimulus sets per test run, in a
 temporary folder (never the user's ~/.cache)."""
 
+import csv
+import json
 import os
+from pathlib import Path
 
 import pytest
 
@@ -60,3 +63,24 @@ def night_toml(tmp_path):
     path = tmp_path / "night_small.toml"
     path.write_text(small_night_protocol())
     return path
+
+
+def reseal(csv_path) -> None:
+    """Record in a session's sidecar the digests of its CSV's rows as they are now
+    (``row_sha256``, trial n at entry n), as a session writes them: a test that forges a
+    session (rows cut, renamed or changed to make its case) seals it again, so that the check
+    it tests meets the case, not the check that the rows are the ones a session wrote."""
+    from glarelab.protocols import row_digest
+
+    path = Path(csv_path)
+    with path.open(newline="", encoding="utf-8") as handle:
+        header, *records = list(csv.reader(handle))
+    if "trial" not in header:  # a header moved away from the first line: nothing to seal
+        return
+    rows = [dict(zip(header, cells, strict=False)) for cells in records]
+    rows = sorted((row for row in rows if row.get("trial", "").isdigit()),
+                  key=lambda row: int(row["trial"]))  # fmt: skip
+    sidecar_path = path.with_suffix(".json")
+    sidecar = json.loads(sidecar_path.read_text(encoding="utf-8"))
+    sidecar["row_sha256"] = [row_digest(row[name] for name in header) for row in rows]
+    sidecar_path.write_text(json.dumps(sidecar, indent=2), encoding="utf-8")

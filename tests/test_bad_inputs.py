@@ -27,6 +27,7 @@ from glarelab.files.folders import record_files
 from glarelab.protocols import load_protocol
 from glarelab.stimuli.exr import write_exr
 from glarelab.stimuli.stimulus_set import cached_stimulus_set, verify_stimulus_set
+from tests.conftest import reseal
 
 ROOT = Path(__file__).parents[1]
 PROTOCOLS = ROOT / "src" / "glarelab" / "protocols"
@@ -1305,6 +1306,7 @@ def test_a_comment_never_runs_as_a_spreadsheet_formula(sandbox, tmp_path):
     csv = tmp_path / source.name
     frame.to_csv(csv, index=False)
     shutil.copy(source.with_suffix(".json"), csv.with_suffix(".json"))
+    reseal(csv)  # as the session would have written the participant's comments
     assert main(["analyse", "luidolt2020", str(csv), "--out", str(tmp_path / "r")]) == 0
     comments = pd.read_csv(tmp_path / "r" / "comments.csv", keep_default_na=False)
     assert '\'=HYPERLINK("http://example.org","click")' in set(comments["comment"])

@@ -14,6 +14,7 @@ from glarelab.analysis.report import write_report
 from glarelab.cli import main
 from glarelab.frontend.live import FRAME_COLUMNS
 from glarelab.protocols import load_protocol
+from tests.conftest import reseal
 
 HEADER = "\t".join(("what", "frame", "interval_ms", *FRAME_COLUMNS[1:]))
 
@@ -72,6 +73,7 @@ def test_the_report_counts_dropped_frames_and_tracker_loss_per_session(tmp_path,
     cells = written[1].split(",")
     cells[column] = "3"
     first.write_text("\n".join([written[0], ",".join(cells), *written[2:]]) + "\n")
+    reseal(first)  # as the session would have written it
     table = live_frames([first, second])  # the second session has no frame record
     assert table.to_dict("records") == [
         {

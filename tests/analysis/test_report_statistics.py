@@ -150,7 +150,7 @@ def _dry_sessions(simulated, tmp_path, status="aborted"):
         target = tmp_path / source.name
         target.write_text("\n".join(source.read_text().splitlines()[:4]) + "\n")
         sidecar = json.loads(source.with_suffix(".json").read_text())
-        sidecar |= {"status": status, "trials": 3}
+        sidecar |= {"status": status, "trials": 3, "row_sha256": sidecar["row_sha256"][:3]}
         sidecar["runs"][-1] |= {"status": status, "trials_after": 3}  # as a session writes it
         target.with_suffix(".json").write_text(json.dumps(sidecar))
         files.append(target)

@@ -21,7 +21,8 @@ from glarelab.analysis.dataset import DataError
 from glarelab.analysis.load import load_sessions
 from glarelab.analysis.paradigms import PARADIGMS
 from glarelab.analysis.report import write_report
-from glarelab.protocols import load_protocol
+from glarelab.protocols import DATA_FORMAT, load_protocol
+from tests.conftest import reseal
 
 
 def csvs(folder, study):
@@ -30,7 +31,8 @@ def csvs(folder, study):
 
 def copy_session(source: Path, folder: Path, *, name=None, rows=None, sidecar=None) -> Path:
     """A copy of a session's CSV and sidecar in ``folder``: ``name`` its new file name,
-    ``rows`` changes its text lines, ``sidecar`` its sidecar's keys."""
+    ``rows`` changes its text lines (the rows' digests recorded anew, as a session that wrote
+    them would have), ``sidecar`` its sidecar's keys."""
     target = folder / (name or source.name)
     lines = source.read_text().splitlines(keepends=True)
     target.write_text("".join(rows(lines) if rows else lines))
@@ -38,6 +40,8 @@ def copy_session(source: Path, folder: Path, *, name=None, rows=None, sidecar=No
     if sidecar is not None:
         data |= sidecar
     target.with_suffix(".json").write_text(json.dumps(data))
+    if rows is not None:
+        reseal(target)
     return target
 
 
@@ -217,7 +221,8 @@ def test_a_file_of_a_format_that_has_counted_must_have_it(simulated, tmp_path):
     frame.to_csv(tmp_path / source.name, index=False)
     shutil.copy(source.with_suffix(".json"), (tmp_path / source.name).with_suffix(".json"))
     with pytest.raises(
-        DataError, match=r"missing \['counted'\] \(its sidecar says data format 0\.4, whose files"
+        DataError,
+        match=re.escape(f"missing ['counted'] (its sidecar says data format {DATA_FORMAT}, whose"),
     ):
         load_sessions(protocol, [tmp_path / source.name])
     sidecar = json.loads(source.with_suffix(".json").read_text()) | {"data_format": "0.1"}

@@ -19,6 +19,9 @@ A session is counted only if the analysis can vouch for it:
   is not on the first line, a last row cut short, values no session can write (an infinite
   time, a block the experiment does not have, contradictory flags) and a file of a data format
   that must have a column it lacks;
+- its rows are the ones its session wrote: each row's digest is its sidecar's
+  ``row_sha256`` entry (data format 0.5 on), so a value changed in a spreadsheet, an answer
+  flipped or a label swapped is named by file, line and trial;
 - it is not a pilot (sidecar ``pilot: true``): pilot sessions are left out and listed, or
   analysed and listed when the caller asks (``include_pilots``);
 - it is the only session of its participant among the files.
@@ -46,7 +49,7 @@ import pandas as pd
 from glarelab.analysis.dataset import DataError, Dataset, Design, where
 from glarelab.analysis.paradigms import paradigm_analysis
 from glarelab.display.checks import REFRESH_TOLERANCE_FRACTION
-from glarelab.protocols import DATA_FORMAT, columns
+from glarelab.protocols import DATA_FORMAT, ROW_DIGESTS_SINCE, columns, row_digest
 from glarelab.protocols.core import ORDER_FIELDS, session_order
 from glarelab.protocols.keys import TOKEN
 
@@ -57,6 +60,7 @@ if TYPE_CHECKING:
 # "2_50" as 250 and surrounding spaces)
 _INTEGER = re.compile(r"[+-]?\d+")
 _NUMBER = re.compile(r"[+-]?(\d+(\.\d*)?|\.\d+)([eE][+-]?\d+)?|[+-]?(nan|inf|infinity)", re.I)
+_DIGEST = re.compile(r"[0-9a-f]{16}")  # a row_digest
 # the name a session's files get: PARTICIPANT_STUDY_sN_YYYY-MM-DD_HHMM[_pilot].csv
 _FILE_NAME = (
     r"(?P<participant>.+)_{study}_s(?P<session>\d+)_\d{{4}}-\d{{2}}-\d{{2}}_\d{{4}}"
@@ -67,7 +71,7 @@ __all__ = ["DataError", "Dataset", "Design", "load_sessions", "where"]
 
 # every data format session files were written in, oldest first: the ones before, then the
 # current one (a sidecar naming another is of a newer version or edited, and is refused)
-DATA_FORMATS = ("0.1", "0.2", "0.3", DATA_FORMAT)
+DATA_FORMATS = ("0.1", "0.2", "0.3", "0.4", DATA_FORMAT)
 # the session statuses a sidecar records
 STATUSES = ("running", "completed", "aborted", "interrupted")
 
@@ -237,6 +241,7 @@ def _read_file(
             for c in expected
         }
         parsed["_file"], parsed["_line"] = str(path), line
+        parsed["_digest"] = row_digest(record.get(name, "") for name in names)
         _presentation_times(parsed, f"{path}, line {line}", problems)
         rows.append(parsed)
     return rows
@@ -358,6 +363,12 @@ _SIDECAR_FIELDS = {
     "packages": (_object_or_null, "an object"),
     "runs": (lambda v: isinstance(v, list), "a list of runs"),
     "trial_order": (lambda v: v is None or isinstance(v, list), "null or a list"),
+    "row_sha256": (
+        lambda v: (
+            isinstance(v, list) and all(isinstance(d, str) and _DIGEST.fullmatch(d) for d in v)
+        ),
+        "a list of row digests (16 lowercase hexadecimal digits each)",
+    ),
 }
 
 
@@ -769,6 +780,55 @@ def _trial_order(path: Path, sidecar: dict, rows: list[dict], design: Design) ->
     return problems
 
 
+def _row_digests(path: Path, sidecar: dict | None, rows: list[dict]) -> list[str]:
+    """Each row is the one the session wrote: its :func:`~glarelab.protocols.row_digest` is
+    the sidecar's ``row_sha256`` entry of its trial (trial n is entry n; sidecars of data
+    format :data:`~glarelab.protocols.ROW_DIGESTS_SINCE` on). A value changed by hand or in a
+    spreadsheet, labels swapped, a row copied from another session: the row is named. The
+    rows' order does not matter. Rows after the last entry are allowed only while the
+    sidecar says ``running`` (the run that wrote them was killed before it recorded its end);
+    ``_digest`` is taken off every row."""
+    digests = [row.pop("_digest", None) for row in rows]
+    data_format = _version((sidecar or {}).get("data_format"))
+    if sidecar is None or data_format is None or data_format < _version(ROW_DIGESTS_SINCE):
+        return []
+    recorded = sidecar.get("row_sha256")
+    if recorded is None:
+        return [
+            f"{path.with_suffix('.json')}: no row_sha256, which every session of data format "
+            f"{sidecar.get('data_format')} records (each row's digest): the analysis cannot "
+            "tell its rows are the ones the session wrote (the sidecar edited?)"
+        ]
+    problems = []
+    for row, digest in zip(rows, digests, strict=True):
+        trial = row.get("trial")
+        if not isinstance(trial, int) or trial < 1:
+            continue  # named by the trial checks
+        if trial > len(recorded):
+            if sidecar.get("status") != "running":
+                problems.append(
+                    f"{path}, line {row['_line']} (trial {trial}): not among the "
+                    f"{len(recorded)} rows the session recorded in its sidecar's row_sha256 "
+                    "(a row added by hand, or from another file?)"
+                )
+        elif digest != recorded[trial - 1]:
+            problems.append(
+                f"{path}, line {row['_line']} (trial {trial}): the row is not the one the "
+                f"session wrote (its digest {digest}, the sidecar's row_sha256 has "
+                f"{recorded[trial - 1]}): a value changed by hand or in a spreadsheet, or the "
+                "row taken from another session? The analysis counts rows as written"
+            )
+    trials = {row.get("trial") for row in rows}
+    absent = [n for n in range(1, len(recorded) + 1) if n not in trials]
+    if absent:
+        listed = ", ".join(map(str, absent[:10])) + (" …" if len(absent) > 10 else "")
+        problems.append(
+            f"{path}: trial{'s' if len(absent) > 1 else ''} {listed} of the {len(recorded)} "
+            "the session recorded (its sidecar's row_sha256) missing (rows deleted?)"
+        )
+    return problems
+
+
 def _one_stimulus_set(sidecars: dict[str, dict]) -> list[str]:
     """The sessions of one analysis ran on one stimulus set: name each set their sidecars'
     ``stimulus_set_manifest_sha256`` give, with its sessions."""
@@ -969,6 +1029,7 @@ def load_sessions(
     pilots: list[dict] = []
     files = []
     replayed: list[str] = []  # what the paradigm's replay of each session finds
+    edited: list[str] = []  # rows that are not the ones their session wrote
     if not paths:
         raise DataError(["no CSV files given"])
     paradigm = paradigm_analysis(protocol)
@@ -1042,6 +1103,8 @@ def load_sessions(
             continue
         if not read:
             continue
+        # named after every other check: an edited row is also named for what it breaks
+        edited += _row_digests(path, sidecar, read)
         files.append(str(path))
         rows += read
         # named after the values no session can write (paradigm.check), which a replay of the
@@ -1051,7 +1114,7 @@ def load_sessions(
             sidecars[str(path)] = sidecar
     problems += _one_stimulus_set(sidecars)
     if problems:
-        raise DataError(problems)
+        raise DataError(problems + edited)
     if not rows and pilots and not include_pilots:
         names = ", ".join(Path(s["file"]).name for s in pilots)
         raise DataError(
@@ -1065,7 +1128,7 @@ def load_sessions(
         raise DataError([f"{', '.join(s['file'] for s in sessions)}: no trials"])
     problems += _several_sessions(trials)
     if problems:
-        raise DataError(problems)
+        raise DataError(problems + edited)
     # the analysis sees the trials in the order of their own numbers, whatever the order of
     # the files or of their rows (a spreadsheet's sort changes nothing)
     trials["_order"] = trials["participant"].map(str)
@@ -1073,7 +1136,7 @@ def load_sessions(
     trials = trials.drop(columns="_order").reset_index(drop=True)
     problems += _blocks(trials, design)
     problems += paradigm.check(trials, protocol)
-    problems += replayed
+    problems += replayed + edited
     analysed = trials[trials["block"] == design.block] if design.block else trials
     excluded: dict[str, str] = {}
     factors = list(design.factors)

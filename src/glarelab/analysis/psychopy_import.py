@@ -47,7 +47,7 @@ from pathlib import Path
 from glarelab.analysis.dataset import DataError
 from glarelab.files.atomic import write_text
 from glarelab.protocols import columns
-from glarelab.protocols.columns import DATA_FORMAT
+from glarelab.protocols.columns import DATA_FORMAT, row_digest
 from glarelab.protocols.keys import TOKEN
 
 __all__ = ["PSYCHOPY_BOOKKEEPING", "Imported", "import_psychopy", "psychopy_bookkeeping"]
@@ -409,6 +409,7 @@ def import_psychopy(
                 "simulated": False,
                 "pilot": False,
                 "data_format": DATA_FORMAT,
+                "row_sha256": [row_digest(row[c.name] for c in schema) for row in cells_rows],
                 "started": started.isoformat(),
                 "packages": {"psychopy": version} if version else {},
                 "imported_from": {

@@ -40,7 +40,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from glarelab.files.locks import ProcessLock
-from glarelab.protocols import columns, format_value
+from glarelab.protocols import columns, format_value, row_digest
 
 if TYPE_CHECKING:
     from glarelab.protocols import Protocol
@@ -520,6 +520,11 @@ class SessionFiles:
         self._write_line(cells)
         self.rows.append(dict(zip(self.names, cells, strict=True)))
         self.check_in_place()
+
+    def row_digests(self) -> list[str]:
+        """Each trial's :func:`~glarelab.protocols.row_digest`, trial 1 first: the sidecar's
+        ``row_sha256``, against which the analysis checks the rows it counts."""
+        return [row_digest(row[name] for name in self.names) for row in self.rows]
 
     def check_in_place(self) -> None:
         """The CSV this session appends to is still the file at its path.

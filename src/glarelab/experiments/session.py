@@ -828,6 +828,7 @@ def _start_run(
         "runs": runs,
         "resumed": len(runs) - 1,
         "trials": len(files.rows),
+        "row_sha256": files.row_digests(),
     }
 
 
@@ -909,6 +910,7 @@ def _finish_run(sidecar, files, engine, loop, status, reason) -> None:
             "status": status,
             "ended": _iso(ended),
             "trials": len(files.rows),
+            "row_sha256": files.row_digests(),
         }
         try:
             files.write_sidecar(sidecar)

@@ -7,7 +7,15 @@ experiments that write data and the analysis that reads it agree by construction
 imports nothing of the suite but :mod:`glarelab.glare` (to check glare models' parameters).
 """
 
-from glarelab.protocols.columns import COMMON, DATA_FORMAT, Column, columns, format_value
+from glarelab.protocols.columns import (
+    COMMON,
+    DATA_FORMAT,
+    ROW_DIGESTS_SINCE,
+    Column,
+    columns,
+    format_value,
+    row_digest,
+)
 from glarelab.protocols.core import (
     PARADIGMS,
     SHIPPED,
@@ -27,6 +35,7 @@ __all__ = [
     "COMMON",
     "DATA_FORMAT",
     "PARADIGMS",
+    "ROW_DIGESTS_SINCE",
     "SHIPPED",
     "Column",
     "Key",
@@ -41,6 +50,7 @@ __all__ = [
     "pixel_deg",
     "protocol_path",
     "register_paradigm",
+    "row_digest",
     "shipped_protocols",
     "with_monitor",
 ]

@@ -13,15 +13,29 @@ analysis reads them with the column missing (``counted`` as true).
 
 from __future__ import annotations
 
+import hashlib
+import json
+from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from glarelab.protocols.core import Protocol
 
-__all__ = ["COMMON", "DATA_FORMAT", "Column", "columns", "format_value"]
+__all__ = [
+    "COMMON",
+    "DATA_FORMAT",
+    "ROW_DIGESTS_SINCE",
+    "Column",
+    "columns",
+    "format_value",
+    "row_digest",
+]
 
-DATA_FORMAT = "0.4"  # the version of the session files written now (recorded in the sidecar)
+DATA_FORMAT = "0.5"  # the version of the session files written now (recorded in the sidecar)
+# the data format from which a sidecar records each row's digest (row_sha256, row_digest)
+ROW_DIGESTS_SINCE = "0.5"
+ROW_DIGEST_HEX_DIGITS = 16  # of a row's sha256 kept in the sidecar (64 bits per row)
 
 
 @dataclass(frozen=True)
@@ -153,3 +167,31 @@ def format_value(value: object, column: Column) -> str:
     if column.kind is float:
         return repr(float(value))
     return str(value)
+
+
+def row_digest(cells: Iterable[str]) -> str:
+    """The digest of one CSV row as a session wrote it, kept in the sidecar's ``row_sha256``.
+
+    An edit to a row (a value changed in a spreadsheet, a label swapped, a row copied from
+    another session) changes its digest, so the analysis can name the row; the digest is taken
+    over the cells' text in the schema's column order, so moving a column, re-ordering the rows
+    or changing the line endings does not.
+
+    Parameters
+    ----------
+    cells
+        The row's cells as written (:func:`format_value`), in the order of :func:`columns`.
+
+    Returns
+    -------
+    str
+        The first :data:`ROW_DIGEST_HEX_DIGITS` hexadecimal digits of the sha256 of the cells
+        as a JSON list (compact, UTF-8), so that no two rows share a text.
+
+    Examples
+    --------
+    >>> row_digest(["p01", "1", "true"])
+    '5e2465a763afae07'
+    """
+    text = json.dumps(list(cells), ensure_ascii=False, separators=(",", ":"))
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()[:ROW_DIGEST_HEX_DIGITS]
