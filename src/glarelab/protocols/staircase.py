@@ -318,6 +318,16 @@ def answer_limit(reversals_needed: int) -> int:
     ``reversals_needed`` times (an observer who never changes their answer):
     ``4 × reversals_needed + 20``, a safeguard of this suite, not Spencer et al.'s.
 
+    Parameters
+    ----------
+    reversals_needed
+        The reversals after which the staircase is done (``trials.reversals``).
+
+    Returns
+    -------
+    int
+        The most answers a staircase is given.
+
     Examples
     --------
     >>> answer_limit(8)
