@@ -39,9 +39,24 @@ def _stopped_part_way(tmp_path, keep: int):
     (csv,) = tmp_path.glob("P01_luidolt2020_s1_*.csv")
     sidecar = json.loads(csv.with_suffix(".json").read_text())
     sidecar["status"] = "aborted"  # as a session stopped part-way
+    # killed while it wrote trial `keep`: the digests are those recorded before it
+    sidecar["row_sha256"] = sidecar["row_sha256"][: keep - 1]
     csv.with_suffix(".json").write_text(json.dumps(sidecar))
     lines = csv.read_text().splitlines(keepends=True)[: keep + 1]
     return csv, lines
+
+
+def test_a_csv_whose_rows_were_changed_is_not_resumed(tmp_path):
+    csv, lines = _stopped_part_way(tmp_path, keep=4)
+    cells, rating = lines[2].split(","), lines[0].split(",").index("rating")
+    cells[rating] = "1" if cells[rating] != "1" else "2"  # trial 2's rating, in a spreadsheet
+    csv.write_text("".join([*lines[:2], ",".join(cells), *lines[3:]]))
+    before = data_files(tmp_path)
+    done = simulated(tmp_path, "luidolt2020", "P01", "--resume")
+    assert done.returncode == 2, done.stderr
+    message = done.stderr.strip().splitlines()
+    assert len(message) == 1 and "trial 2 is not the row the session wrote" in message[0]
+    assert data_files(tmp_path) == before
 
 
 def test_a_whole_last_row_without_its_newline_is_neither_deleted_nor_run_again(tmp_path):

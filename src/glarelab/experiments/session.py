@@ -417,6 +417,21 @@ def _check_resume(
         raise SessionError(
             f"{files.csv_path.name} is a completed session: there is nothing to resume"
         )
+    recorded = sidecar.get("row_sha256")
+    if isinstance(recorded, list):  # data format 0.5 on: the rows are the ones it wrote
+        rows = files.row_digests()
+        pairs = zip(rows, recorded, strict=False)  # rows after the last: a killed run's
+        edited = [n for n, (a, b) in enumerate(pairs, start=1) if a != b]
+        if edited or len(rows) < len(recorded):
+            what = (
+                f"trial {edited[0]} is not the row the session wrote (changed since?)"
+                if edited
+                else f"it holds {len(rows)} trials, the session recorded {len(recorded)}"
+            )
+            raise SessionError(
+                f"{files.csv_path.name}: {what}; a session is resumed only with the rows it "
+                "wrote: keep the file for the record and start a new session number"
+            )
     changed = []
     for what, key, now in (
         ("protocol", "protocol_sha256", protocol.sha256),
