@@ -9,6 +9,8 @@ import shutil
 
 import pandas as pd
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from glarelab.analysis.dataset import DataError
 from glarelab.analysis.load import load_sessions
@@ -139,3 +141,30 @@ def test_rows_cut_from_an_aborted_session_are_named_and_a_killed_runs_last_rows_
     copy(source, tmp_path, frame, row_sha256=sidecar["row_sha256"][:cut])
     with pytest.raises(DataError, match=rf"line {cut + 2} \(trial {cut + 1}\): not among the"):
         load_sessions(protocol, [target])
+
+
+@settings(
+    max_examples=30,
+    deadline=None,
+    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
+)
+@given(
+    study=st.sampled_from(["yoshida2008", "spencer1995", "luidolt2020"]),
+    where=st.tuples(st.floats(0, 1, exclude_max=True), st.floats(0, 1, exclude_max=True)),
+    other=st.floats(0, 1, exclude_max=True),
+)
+def test_any_cell_changed_to_another_columns_value_is_named(
+    simulated, tmp_path_factory, study, where, other
+):
+    """A cell of any row and column given a value the column holds elsewhere (what a
+    spreadsheet's fill or a hand's copy does), or text where every cell is alike: the row is
+    named."""
+    source = csvs(simulated, study)[1]
+    frame = rows(source)
+    row, column = int(where[0] * len(frame)), frame.columns[int(where[1] * frame.shape[1])]
+    values = sorted(set(frame[column]) - {frame.at[row, column]}) or ["a word typed in"]
+    frame.at[row, column] = values[int(other * len(values))]
+    target = copy(source, tmp_path_factory.mktemp("cell"), frame)
+    with pytest.raises(DataError) as refused:
+        load_sessions(load_protocol(study), [target])
+    assert any(re.search(rf"line {row + 2}\b", p) for p in refused.value.problems), refused.value
