@@ -538,6 +538,11 @@ CASES = [
         "built from another protocol",
     ),
     (
+        "run-simulate-other-set",  # the observers looked at the set before it was checked
+        "run spencer1995 --simulate --participants 1 --stimuli {box}/set --out {box}/runs",
+        "built from another protocol (yoshida2008)",
+    ),
+    (
         "analyse-night-other-data",
         "analyse {box}/night-small.toml {box}/data/*luidolt2020*.csv --out {box}/nightreport",
         "columns do not match",

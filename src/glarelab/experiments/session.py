@@ -191,6 +191,8 @@ def make_observer(protocol: Protocol, participant: str, *, seed: int, stimuli):
         raise ValueError(
             f"a simulated {protocol.study} observer needs the stimulus set to look at"
         )
+    if stimuli is not None and not isinstance(stimuli, ObservedSet):
+        _check_set_protocol(protocol, Path(stimuli))
     return observer(
         protocol,
         participant,
@@ -362,14 +364,25 @@ def _check_stimuli(protocol: Protocol, stimuli: Path | None) -> str | None:
         raise ValueError(
             f"the stimulus set {stimuli} fails its manifest: " + "; ".join(problems[:5])
         )
-    manifest = json.loads((Path(stimuli) / "manifest.json").read_text())
-    if manifest.get("protocol_sha256") != protocol.sha256:
+    _check_set_protocol(protocol, Path(stimuli))
+    return hashlib.sha256((Path(stimuli) / "manifest.json").read_bytes()).hexdigest()
+
+
+def _check_set_protocol(protocol: Protocol, stimuli: Path) -> None:
+    """The stimulus set was built from this protocol (its manifest's ``protocol_sha256``)."""
+    try:
+        manifest = json.loads((stimuli / "manifest.json").read_text(encoding="utf-8"))
+        built = manifest.get("protocol_sha256") if isinstance(manifest, dict) else None
+    except (OSError, ValueError):
+        built = None  # no readable manifest: named by the set's proof
+    if built is not None and built != protocol.sha256:
+        study = manifest.get("study")
         raise ValueError(
-            f"the stimulus set {stimuli} was built from another protocol (sha256 "
-            f"{manifest.get('protocol_sha256', '?')[:12]}…, this one {protocol.sha256[:12]}…); "
+            f"the stimulus set {stimuli} was built from another protocol"
+            + (f" ({study})" if isinstance(study, str) and study != protocol.study else "")
+            + f" (sha256 {str(built)[:12]}…, this one {protocol.sha256[:12]}…); "
             "rebuild it with glarelab stimuli build"
         )
-    return hashlib.sha256((Path(stimuli) / "manifest.json").read_bytes()).hexdigest()
 
 
 def _check_set_in_use(frontend, stimuli: Path | None, manifest_sha: str | None) -> None:
