@@ -111,6 +111,13 @@ def test_a_sidecar_without_row_digests_is_refused_unless_of_an_older_format(simu
         load_sessions(protocol, [target])
     target.with_suffix(".json").write_text(json.dumps(sidecar | {"data_format": "0.4"}))
     assert len(load_sessions(protocol, [target]).trials) == len(rows(source))
+    # a sidecar made to look older keeps its digests: they are checked all the same
+    frame = rows(source)
+    frame.at[0, "rating"] = "5" if frame.at[0, "rating"] != "5" else "3"
+    (tmp_path / "older").mkdir()
+    older = copy(source, tmp_path / "older", frame, data_format="0.4")
+    with pytest.raises(DataError, match=r"predates row_sha256(.|\n)*line 2 \(trial 1\): the row"):
+        load_sessions(protocol, [older])
     for bad in (["ABC"], "digests", [1]):
         target.with_suffix(".json").write_text(json.dumps(sidecar | {"row_sha256": bad}))
         with pytest.raises(DataError, match=r"row_sha256 .*a list of row digests"):

@@ -783,23 +783,35 @@ def _trial_order(path: Path, sidecar: dict, rows: list[dict], design: Design) ->
 def _row_digests(path: Path, sidecar: dict | None, rows: list[dict]) -> list[str]:
     """Each row is the one the session wrote: its :func:`~glarelab.protocols.row_digest` is
     the sidecar's ``row_sha256`` entry of its trial (trial n is entry n; sidecars of data
-    format :data:`~glarelab.protocols.ROW_DIGESTS_SINCE` on). A value changed by hand or in a
-    spreadsheet, labels swapped, a row copied from another session: the row is named. The
-    rows' order does not matter. Rows after the last entry are allowed only while the
+    format :data:`~glarelab.protocols.ROW_DIGESTS_SINCE` on, and any sidecar that has them).
+    A value changed by hand or in a spreadsheet, labels swapped, a row copied from another
+    session: the row is named. The rows' order does not matter. Rows after the last entry are allowed only while the
     sidecar says ``running`` (the run that wrote them was killed before it recorded its end);
     ``_digest`` is taken off every row."""
     digests = [row.pop("_digest", None) for row in rows]
-    data_format = _version((sidecar or {}).get("data_format"))
-    if sidecar is None or data_format is None or data_format < _version(ROW_DIGESTS_SINCE):
+    if sidecar is None:
         return []
+    data_format = _version(sidecar.get("data_format"))
+    older = data_format is None or data_format < _version(ROW_DIGESTS_SINCE)
     recorded = sidecar.get("row_sha256")
     if recorded is None:
-        return [
-            f"{path.with_suffix('.json')}: no row_sha256, which every session of data format "
-            f"{sidecar.get('data_format')} records (each row's digest): the analysis cannot "
-            "tell its rows are the ones the session wrote (the sidecar edited?)"
-        ]
+        return (
+            []
+            if older
+            else [
+                f"{path.with_suffix('.json')}: no row_sha256, which every session of data "
+                f"format {sidecar.get('data_format')} records (each row's digest): the "
+                "analysis cannot tell its rows are the ones the session wrote (the sidecar "
+                "edited?)"
+            ]
+        )
     problems = []
+    if older:  # its rows are checked all the same
+        problems.append(
+            f"{path.with_suffix('.json')}: data_format {_json(sidecar.get('data_format'))} "
+            f"predates row_sha256 (data format {ROW_DIGESTS_SINCE}), which the sidecar has: "
+            "the sidecar edited?"
+        )
     for row, digest in zip(rows, digests, strict=True):
         trial = row.get("trial")
         if not isinstance(trial, int) or trial < 1:
