@@ -98,6 +98,7 @@ def sandbox(tmp_path_factory) -> Path:
     (box / "special" / "loop").symlink_to(box / "special" / "loop-back")  # a loop of links
     (box / "special" / "loop-back").symlink_to(box / "special" / "loop")
     shutil.copy(ROOT / "calibrations" / "example-readings.csv", box / "readings-good.csv")
+    (box / "readings-tab.csv").write_text("code\tluminance_cd_m2\n0\t0.5\n255\t200\n")
     # protocols
     yoshida = (PROTOCOLS / "yoshida2008.toml").read_text()
     assert 'labels = ["A", "B", "C", "D", "E", "F"]' in yoshida
@@ -444,6 +445,13 @@ CASES = [
         "fit-latin1",
         "calibrate fit {box}/readings-latin1.csv --out {box}/c.json",
         "readings-latin1.csv: byte 32 is not UTF-8 text; save it as UTF-8",
+    ),
+    (
+        "fit-tab-separated",  # its header read as one column's name
+        "calibrate fit {box}/readings-tab.csv --out {box}/c.json",
+        "readings-tab.csv, line 1: missing column(s) ['code', 'luminance_cd_m2']: the first "
+        "line must name the columns, comma-separated (code,luminance_cd_m2; other columns are "
+        "ignored); it is 'code\\tluminance_cd_m2'",
     ),
     (
         "fit-out-loop",
@@ -959,6 +967,17 @@ def test_a_bad_input_is_refused_by_name_and_changes_nothing(sandbox, capsys, com
     assert err.count("usage:") == 0, err  # one line, not the usage text
     after = snapshot(sandbox)
     assert after == before, {k for k in before.keys() ^ after.keys()} or "a file changed"
+
+
+def test_a_label_of_more_than_one_line_is_refused(sandbox, capsys):
+    before = snapshot(sandbox)
+    for command in ("fit", "measure"):
+        argv = ["calibrate", command, f"{sandbox}/readings-good.csv", "--label", "lab 2\nPR-655"]
+        if command == "measure":
+            argv[2:3] = ["--simulate", "400", "0.5", "2.2"]
+        status, err = refused([*argv, "--out", f"{sandbox}/c.json"], capsys)
+        assert status == 2 and "--label: 'lab 2\\nPR-655' holds '\\n': must be one line" in err
+    assert snapshot(sandbox) == before
 
 
 def test_a_size_beyond_memory_is_refused_before_allocating(sandbox, capsys, monkeypatch):

@@ -17,7 +17,7 @@ from glarelab.display.photometer import PHOTOMETERS
 from glarelab.files.atomic import write_bytes
 from glarelab.files.locks import ProcessLock
 
-from .common import claim_output, count, number, output_file
+from .common import claim_output, count, number, one_line, output_file
 from .common import log as _log
 
 if TYPE_CHECKING:
@@ -453,7 +453,7 @@ def add(commands) -> None:
         "gamma-2.2 space (earlier calibrations; misses a linear toe); gog: a fitted "
         "gain-offset-gamma curve with its residuals",
     )
-    fit.add_argument("--label", default="", help="display, photometer, operator")
+    fit.add_argument("--label", default="", type=one_line, help="display, photometer, operator")
     fit.add_argument("--replace", action="store_true", help=REPLACE_HELP)
     fit.set_defaults(run=_calibrate_fit)
 
@@ -516,7 +516,9 @@ def add(commands) -> None:
     measure.add_argument(
         "--seed", type=count(0), default=None, help="seed of the code order (default 0)"
     )
-    measure.add_argument("--label", default=None, help="display, photometer, operator")
+    measure.add_argument(
+        "--label", default=None, type=one_line, help="display, photometer, operator"
+    )
     measure.add_argument(
         "--protocol",
         nargs="+",

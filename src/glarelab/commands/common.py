@@ -260,6 +260,34 @@ def count(low: int = 1, high: int | None = None):
     return parse
 
 
+def one_line(text: str) -> str:
+    """An argparse type: text of one line, no control characters (a label that goes into
+    files and one-line messages).
+
+    Parameters
+    ----------
+    text
+        The option's value.
+
+    Returns
+    -------
+    str
+        ``text``, unchanged.
+
+    Raises
+    ------
+    argparse.ArgumentTypeError
+        For a line break, a tab or another control character, naming it.
+    """
+    control = next((ch for ch in text if not ch.isprintable()), None)
+    if control is not None:
+        raise argparse.ArgumentTypeError(
+            f"{text!r} holds {control!r}: must be one line of text, without line breaks, "
+            "tabs or other control characters"
+        )
+    return text
+
+
 def output_folder(path: Path, command: str) -> Path:
     """The folder a command fills with files of its choosing: created if new, and reused only
     when the same command made it (a previous output, which it may replace). A file, or a

@@ -727,8 +727,11 @@ def read_readings(path: str | Path) -> list[tuple[int, float]]:
     reader = csv.DictReader(io.StringIO(text, newline=""))  # quoted newlines kept
     missing = {"code", "luminance_cd_m2"} - set(reader.fieldnames or [])
     if missing:
+        first = text.splitlines()[0] if text.strip() else ""
         raise ValueError(
-            f"{path}: missing column(s) {sorted(missing)}; need code, luminance_cd_m2"
+            f"{path}, line 1: missing column(s) {sorted(missing)}: the first line must name "
+            f"the columns, comma-separated (code,luminance_cd_m2; other columns are ignored); "
+            f"it is {first[:80]!r}"
         )
     for line, row in enumerate(reader, start=2):
         if None in row:  # more cells than columns: a decimal comma splits a number
