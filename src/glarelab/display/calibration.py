@@ -559,8 +559,9 @@ def _check_consistent(calibration: Calibration, data: dict, source: str) -> None
             value = calibration.model.get(name)
             if not is_real(value):
                 raise ValueError(
-                    f"{source}: the model's {name} is {value!r}; its readings give "
-                    f"{refit[name]:.6g} (a gain-offset-gamma model needs numbers)"
+                    f"{source}: method 'gog' with model {name} {value!r}: a gain-offset-gamma "
+                    f"calibration records its model's numbers ({name} {refit[name]:.6g} from its "
+                    "readings); a method or model edited?"
                 )
             if not _close(float(value), refit[name]):
                 raise ValueError(
