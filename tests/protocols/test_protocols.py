@@ -370,3 +370,19 @@ def test_a_list_of_tables_headed_as_a_single_table_is_named(tmp_path):
     assert problem.startswith(f"contexts (line {second}): headed [[contexts]] here"), problem
     assert f"and [contexts] on line {line}" in problem
     assert "a list of tables heads every entry [[contexts]]" in problem
+
+
+def test_a_shipped_name_that_is_also_a_file_here_is_refused_and_a_folder_does_not_shadow_it(
+    tmp_path, monkeypatch
+):
+    from glarelab.protocols import protocol_path
+    from glarelab.protocols.core import SHIPPED
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "yoshida2008").write_text("the lab's notes\n")
+    with pytest.raises(ValueError, match=r"give \./yoshida2008 for the file"):
+        protocol_path("yoshida2008")
+    assert protocol_path("./yoshida2008") == Path("yoshida2008")
+    assert protocol_path(Path("yoshida2008")) == Path("yoshida2008")  # a Path is a path
+    (tmp_path / "spencer1995").mkdir()  # e.g. a stimulus set built with --out spencer1995
+    assert protocol_path("spencer1995") == SHIPPED / "spencer1995.toml"

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
 import re
 import tomllib
 from collections.abc import Mapping
@@ -294,9 +295,10 @@ def protocol_path(name: str | Path) -> Path:
     Parameters
     ----------
     name
-        A path (ending in ``.toml``, existing, or with a folder in it), taken as it is; or the
-        name of a shipped protocol (:func:`shipped_protocols`: the TOML files of
-        ``src/glarelab/protocols/``, without the suffix).
+        A path (a :class:`~pathlib.Path`, text ending in ``.toml`` or with a folder in it, or
+        an existing file), taken as it is; or the name of a shipped protocol
+        (:func:`shipped_protocols`: the TOML files of ``src/glarelab/protocols/``, without
+        the suffix), also where a folder of that name is in the working folder.
 
     Returns
     -------
@@ -307,13 +309,29 @@ def protocol_path(name: str | Path) -> Path:
     ------
     FileNotFoundError
         If ``name`` is neither a path nor a shipped protocol's name.
+    ValueError
+        If ``name`` is a shipped protocol's name and a file of the working folder.
     """
     path = as_path(name, what="protocol")
-    if path.suffix == ".toml" or path.exists() or len(path.parts) > 1:
+    text = str(name)
+    if (
+        isinstance(name, Path)
+        or path.suffix == ".toml"
+        or "/" in text
+        or os.sep in text
+        or len(path.parts) > 1
+    ):
         return path
     shipped = SHIPPED / f"{name}.toml"
     if shipped.is_file():
+        if path.exists() and not path.is_dir():  # a folder is never a protocol: its output?
+            raise ValueError(
+                f"protocol {text!r}: both a shipped protocol and a file in {Path.cwd()}; give "
+                f"./{text} for the file, or name the shipped one from another folder"
+            )
         return shipped
+    if path.exists():
+        return path
     raise FileNotFoundError(
         f"no protocol {str(name)!r}: give a TOML file or one of the shipped protocols "
         f"({', '.join(shipped_protocols())})"
