@@ -2,7 +2,8 @@
 comes: while Python imports the command (the first second of ``stimuli build`` and
 ``analyse``), while the command runs, and through an ``eval`` of a string (as
 ``collections.namedtuple`` does at import), after which CPython would otherwise kill itself by
-SIGINT (status -2) instead of returning 3."""
+SIGINT (status -2) instead of returning 3; also where a library swallows the KeyboardInterrupt
+or fails for what it cut, and at the very end, as Python tears its modules down."""
 
 from __future__ import annotations
 
@@ -97,3 +98,66 @@ def test_an_interrupt_through_eval_still_ends_with_3(tmp_path):
     )
     assert done.returncode == 3, (done.returncode, done.stderr)
     assert "Traceback" not in done.stderr and "stopped by SIGINT" in done.stderr, done.stderr
+
+
+SWALLOWING = """
+import os, signal, sys, time
+from glarelab import __main__ as entry
+from glarelab.commands import load
+
+def interrupt_here():
+    os.kill(os.getpid(), signal.SIGINT)
+    time.sleep(1.0)  # the handler runs in the meantime
+
+def swallowed(args):  # a library that catches BaseException and goes on
+    try:
+        interrupt_here()
+    except BaseException:
+        pass
+    return 0
+
+def broken(args):  # the interrupt cut a library's stream, which then fails (zlib.error)
+    try:
+        interrupt_here()
+    except BaseException:
+        raise RuntimeError("Error -2 while flushing: inconsistent stream state") from None
+
+class Late:
+    def __del__(self):  # runs as Python tears its modules down, SIGINT back at its default
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(0.2)
+
+def finished(args):
+    sys.modules["late_holder"] = holder = type(sys)("late_holder")
+    holder.late = Late()
+    return 0
+
+load("protocol")._protocol_check = {"swallowed": swallowed, "broken": broken,
+                                    "finished": finished}[sys.argv.pop()]
+sys.argv = ["glarelab", "protocol", "check", "yoshida2008"]
+sys.exit(entry.main())
+"""
+
+
+@pytest.mark.parametrize(
+    ("case", "status", "said"),
+    [
+        ("swallowed", 3, "stopped by SIGINT as it ended"),
+        ("broken", 3, "protocol: stopped by SIGINT; nothing more was written"),
+        ("finished", 0, ""),  # Ctrl-C after the command finished, while Python tears down
+    ],
+)
+def test_an_interrupt_a_library_swallows_or_that_comes_at_exit_ends_as_the_command_chose(
+    tmp_path, case, status, said
+):
+    (tmp_path / "swallowing_glarelab.py").write_text(SWALLOWING)
+    done = subprocess.run(
+        [sys.executable, "-m", "swallowing_glarelab", case],
+        capture_output=True,
+        text=True,
+        env=ENV,
+        cwd=tmp_path,
+        preexec_fn=_terminal_sigint,
+    )
+    assert done.returncode == status, (done.returncode, done.stderr)
+    assert "Traceback" not in done.stderr and said in done.stderr, done.stderr

@@ -8,6 +8,7 @@ see KeyboardInterrupt, to end its work as the module docstring of :mod:`glarelab
 """
 
 import _signal  # the signal module's C part: ``signal`` itself imports enum, 10-50 ms
+import atexit
 import os
 import sys
 
@@ -20,8 +21,16 @@ def _stopped_while_starting(number: int, frame: object) -> None:
     os._exit(3)
 
 
+def _ignore_sigint_in_teardown() -> None:
+    """The last exit handler (registered first): after it Python puts SIGINT back to the
+    system's default and tears its modules down, and a Ctrl-C then would kill the finished
+    program (status -2 to the shell, not 3); ignored, it ends with the status it chose."""
+    _signal.signal(_signal.SIGINT, _signal.SIG_IGN)
+
+
 def main() -> int:
     """Run the ``glarelab`` program with :data:`sys.argv`; returns its exit status."""
+    atexit.register(_ignore_sigint_in_teardown)  # first registered, last run
     if _signal.getsignal(_signal.SIGINT) is not _signal.SIG_IGN:  # ignored: a background job
         _signal.signal(_signal.SIGINT, _stopped_while_starting)
     from glarelab.cli import main as run

@@ -163,10 +163,12 @@ def _forget_interrupt() -> None:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``glarelab`` command; returns the exit status.
 
-    Ctrl-C (SIGINT) ends any command with status 3 and one line, whenever it comes; a closed
-    pipe on stdout (SIGPIPE, ``| head``) ends it quietly with status 0. Run as the program
-    (``argv`` None), a Ctrl-C before the command starts, or after it returned, ends the
-    process at once: nothing is being written then.
+    Ctrl-C (SIGINT) ends any command with status 3 and one line, whenever it comes, also
+    where a library caught the KeyboardInterrupt and went on, or failed for what it cut; a
+    closed pipe on stdout (SIGPIPE, ``| head``) ends it quietly with status 0. Run as the
+    program (``argv`` None), a Ctrl-C before the command starts, or after it returned, ends
+    the process at once: nothing is being written then (once Python tears its modules down,
+    the last moment of all, it is ignored and the status is the command's).
 
     Parameters
     ----------
@@ -189,6 +191,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     previous = os.environ.get(NO_CACHE_ENV)
     args = None
+    received: list[int] = []  # SIGINTs the command was sent while it ran
+
+    def interrupted(number: int, frame) -> None:
+        received.append(number)  # kept even where a library swallows the KeyboardInterrupt
+        signal.default_int_handler(number, frame)
+
     try:
         parser = _parser(argv)
         args = parser.parse_args(argv)
@@ -206,8 +214,16 @@ def main(argv: Sequence[str] | None = None) -> int:
             with warnings.catch_warnings():  # restores Python's own printing afterwards
                 warnings.showwarning = _one_line_warning
                 if program:  # the command ends its own work on Ctrl-C (KeyboardInterrupt)
-                    signal.signal(signal.SIGINT, signal.default_int_handler)
-                return args.run(args)
+                    signal.signal(signal.SIGINT, interrupted)
+                status = args.run(args)
+            if received:  # a library swallowed the KeyboardInterrupt and the command went on
+                signal.signal(signal.SIGINT, signal.SIG_IGN)
+                _log(
+                    f"{command}: stopped by SIGINT as it ended: every file it wrote is whole, "
+                    "but a step the interrupt cut short may be missing; run it again"
+                )
+                return 3
+            return status
         except SessionAborted as stop:
             why = stop.args[0] if stop.args else "SIGINT"
             _log(f"{args.command}: stopped by {why}; nothing more was written")
@@ -215,6 +231,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         except (KeyboardInterrupt, BrokenPipeError):
             raise
         except Exception as error:
+            if received:  # raised by what the interrupt broke (a stream cut in a library)
+                raise KeyboardInterrupt from error
             message = _refusal(error)
             if message is None:
                 traceback.print_exc()
@@ -240,6 +258,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 os.environ[NO_CACHE_ENV] = previous
         if program:  # Python shuts down next: a Ctrl-C then ends it at once, status 3
             stopping = signal.signal(signal.SIGINT, signal.SIG_IGN) is signal.SIG_IGN
+            _forget_interrupt()  # one swallowed in a library would make Python kill itself
             for stream in (sys.stdout, sys.stderr):  # os._exit would lose what is buffered
                 with contextlib.suppress(OSError, ValueError):
                     stream.flush()
