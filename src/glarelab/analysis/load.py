@@ -785,9 +785,9 @@ def _row_digests(path: Path, sidecar: dict | None, rows: list[dict]) -> list[str
     the sidecar's ``row_sha256`` entry of its trial (trial n is entry n; sidecars of data
     format :data:`~glarelab.protocols.ROW_DIGESTS_SINCE` on, and any sidecar that has them).
     A value changed by hand or in a spreadsheet, labels swapped, a row copied from another
-    session: the row is named. The rows' order does not matter. Rows after the last entry are allowed only while the
-    sidecar says ``running`` (the run that wrote them was killed before it recorded its end);
-    ``_digest`` is taken off every row."""
+    session: the row is named. The rows' order does not matter. Rows after the last entry are
+    allowed only while the sidecar says ``running`` (the run that wrote them was killed before
+    it recorded its end); ``_digest`` is taken off every row."""
     digests = [row.pop("_digest", None) for row in rows]
     if sidecar is None:
         return []
