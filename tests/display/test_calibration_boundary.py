@@ -3,6 +3,7 @@ fractional or bool codes, and luminances that are not numbers are refused naming
 (they were truncated and accepted); valid readings give a finite, increasing table."""
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -76,16 +77,33 @@ def test_the_issue_cases_are_refused(readings, bit_depth, match):
     steps=st.lists(st.floats(1e-3, 1e3), min_size=3, max_size=8),
     black=st.one_of(st.just(0.0), st.floats(1e-6, 1.0)),
     method=st.sampled_from(["pchip-log", "pchip"]),
-    numpy_types=st.booleans(),
+    given_as=st.sampled_from(["python", "numpy scalars", "an (N, 2) array"]),
 )
-def test_valid_readings_give_a_finite_increasing_table(steps, black, method, numpy_types):
+def test_valid_readings_give_a_finite_increasing_table(steps, black, method, given_as):
     codes = np.unique(np.linspace(0, 255, len(steps) + 1).round().astype(int))
     values = black + np.concatenate([[0.0], np.cumsum(steps[: codes.size - 1])])
     readings = list(zip(codes.tolist(), values.tolist(), strict=True))
-    if numpy_types:
-        readings = list(zip(codes, values, strict=True))  # np.int64 and np.float64 are numbers
-    lut = fit_calibration(readings, bit_depth=8, method=method).lut
-    assert np.isfinite(lut).all() and (np.diff(lut) >= 0).all()
+    fitted = fit_calibration(readings, bit_depth=8, method=method)
+    assert np.isfinite(fitted.lut).all() and (np.diff(fitted.lut) >= 0).all()
+    if given_as == "numpy scalars":  # np.int64 and np.float64 are numbers
+        readings = list(zip(codes, values, strict=True))
+    elif given_as == "an (N, 2) array":  # one dtype: the codes are whole floats
+        readings = np.column_stack([codes, values])
+    assert fit_calibration(readings, bit_depth=8, method=method).readings == fitted.readings
+
+
+@pytest.mark.parametrize(
+    ("array", "named"),
+    [
+        ([[0.5, 0.4], [100, 20], [200, 120], [255, 200]], "code must be a whole number"),
+        ([[0, 0.4j], [100, 20], [200, 120], [255, 200]], "real numbers of shape (N, 2)"),
+        (np.ones((4, 3)), "real numbers of shape (N, 2), one (code, cd/m²) per row; got float64"),
+    ],
+    ids=["fractional code", "complex", "three columns"],
+)
+def test_readings_as_an_array_that_is_not_codes_and_luminances_are_refused(array, named):
+    with pytest.raises(ValueError, match=re.escape(named)):
+        fit_calibration(np.asarray(array), bit_depth=8)
 
 
 @pytest.mark.parametrize(

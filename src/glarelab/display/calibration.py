@@ -647,10 +647,24 @@ def _check_status(calibration: Calibration, source: str) -> None:
 
 
 def _check_readings(
-    readings: list[tuple[int, float]], bit_depth: int, source: str
+    readings: list[tuple[int, float]] | np.ndarray, bit_depth: int, source: str
 ) -> list[tuple[int, float]]:
     if not is_whole(bit_depth) or bit_depth not in (8, 10, 12, 16):
         raise ValueError(f"bit_depth must be one of 8, 10, 12, 16; got {bit_depth!r}")
+    if isinstance(readings, np.ndarray):  # one (code, cd/m²) per row: codes as whole floats
+        if readings.ndim != 2 or readings.shape[1] != 2 or readings.dtype.kind not in "iuf":
+            raise ValueError(
+                f"{source}: readings as an array must be real numbers of shape (N, 2), one "
+                f"(code, cd/m²) per row; got {readings.dtype} of shape {readings.shape}"
+            )
+        codes = readings[:, 0]
+        fractional = ~(np.isfinite(codes) & (codes == np.round(codes)))
+        if fractional.any():
+            raise ValueError(
+                f"{source}: a reading's code must be a whole number (a drive level); got "
+                f"{float(codes[fractional][0])!r} in row {int(np.argmax(fractional))}"
+            )
+        readings = [(int(code), value.item()) for code, value in readings]
     if len(readings) < 4:
         raise ValueError(f"{source}: at least 4 readings are needed, got {len(readings)}")
     for reading in readings:
@@ -768,7 +782,7 @@ def read_readings(path: str | Path) -> list[tuple[int, float]]:
 
 
 def fit_calibration(
-    readings: list[tuple[int, float]],
+    readings: list[tuple[int, float]] | np.ndarray,
     *,
     bit_depth: int,
     method: Literal["pchip-log", "pchip", "gog"] = "pchip-log",
@@ -780,8 +794,9 @@ def fit_calibration(
     Parameters
     ----------
     readings
-        ``(drive code, luminance cd/m²)`` pairs, in any order: at least 4, codes 0 and
-        2^bit_depth − 1 among them, luminance increasing with code.
+        ``(drive code, luminance cd/m²)`` pairs, in any order (or an ``(N, 2)`` array, codes
+        whole numbers): at least 4, codes 0 and 2^bit_depth − 1 among them, luminance
+        increasing with code.
     bit_depth
         Bits per channel of the display.
     method
@@ -811,7 +826,9 @@ def fit_calibration(
         )
     if method not in METHODS:
         raise ValueError(f"method must be one of {', '.join(METHODS)}; got {method!r}")
-    ordered = _check_readings(list(readings), bit_depth, source)
+    ordered = _check_readings(
+        readings if isinstance(readings, np.ndarray) else list(readings), bit_depth, source
+    )
     model: dict = {}
     if method == "gog":
         data = np.array(ordered, dtype=float)
