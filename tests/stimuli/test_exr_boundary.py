@@ -46,6 +46,8 @@ BAD_IMAGES = st.one_of(
             np.ma.masked_array(np.ones((4, 4)), mask=np.eye(4, dtype=bool)),
             np.ones(4),
             np.ones((4, 4, 2)),
+            np.ones((0, 4)),  # no pixel
+            np.ones((3, 0, 3)),
         ]
     ),
 )
@@ -143,3 +145,17 @@ def test_a_multi_part_file_is_refused_not_read_as_its_first_part(tmp_path):
         ValueError, match=r"stereo.exr: multi-part OpenEXR \(2 parts: 'left', 'right'\)"
     ):
         read_exr(path)
+
+
+@pytest.mark.parametrize(
+    ("name", "match"),
+    [
+        ("o.png", r"path must name an \.exr file \(OpenEXR is written\); got '.*o\.png'"),
+        ("folder.exr", r"path '.*folder\.exr' is a folder; give the EXR file's name in it"),
+    ],
+)
+def test_a_path_that_is_no_exr_file_is_refused(tmp_path, name, match):
+    (tmp_path / "folder.exr").mkdir()
+    with pytest.raises(ValueError, match=match):
+        write_exr(tmp_path / name, np.ones((2, 2)))
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["folder.exr"]

@@ -33,10 +33,10 @@ def write_exr(path: str | Path, image: np.ndarray) -> Path:
     Parameters
     ----------
     path
-        Output file.
+        Output file, ending in ``.exr``.
     image
         ``(H, W)`` luminance, written as channel ``Y``, or ``(H, W, 3)`` linear RGB, written as
-        channels ``R``, ``G``, ``B``. Values must be finite.
+        channels ``R``, ``G``, ``B``; at least one pixel. Values must be finite.
 
     Returns
     -------
@@ -46,9 +46,9 @@ def write_exr(path: str | Path, image: np.ndarray) -> Path:
     Raises
     ------
     ValueError
-        For another shape, a masked array, values that are not real numbers, non-finite or
-        negative values, or values above float32's largest (3.4e38, they would be written as
-        inf).
+        For another shape or no pixel, a masked array, values that are not real numbers,
+        non-finite or negative values, values above float32's largest (3.4e38, they would be
+        written as inf), or a path that does not end in ``.exr`` or is a folder.
     """
     if isinstance(image, np.ma.MaskedArray):
         raise ValueError(
@@ -56,10 +56,16 @@ def write_exr(path: str | Path, image: np.ndarray) -> Path:
             "give image.filled(value)"
         )
     array = np.asarray(image)
-    if not (array.ndim == 2 or (array.ndim == 3 and array.shape[2] == 3)):
+    if not (array.ndim == 2 or (array.ndim == 3 and array.shape[2] == 3)) or not array.size:
         raise ValueError(
-            f"image must be (H, W) luminance or (H, W, 3) RGB; got shape {array.shape}"
+            "image must be (H, W) luminance or (H, W, 3) RGB with at least one pixel; got "
+            f"shape {array.shape}"
         )
+    path = Path(path)
+    if path.suffix.lower() != ".exr":
+        raise ValueError(f"path must name an .exr file (OpenEXR is written); got {str(path)!r}")
+    if path.is_dir():
+        raise ValueError(f"path {str(path)!r} is a folder; give the EXR file's name in it")
     if array.dtype.kind not in "iuf":
         raise ValueError(
             f"image must hold real numbers (integer or float) to be written as EXR; got dtype "
@@ -83,7 +89,6 @@ def write_exr(path: str | Path, image: np.ndarray) -> Path:
     array = np.ascontiguousarray(array, dtype=np.float32)
     channels = {"Y": array} if array.ndim == 2 else {"RGB": array}
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
-    path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     try:
         with atomic_path(path) as temporary, OpenEXR.File(header, channels) as exr:
