@@ -536,8 +536,10 @@ def test_nan_or_infinite_values_are_refused_by_name(seed, bad, position):
 
 def test_rm_anova_refuses_bad_arguments_by_name():
     df, names = random_design((3,), n=5, seed=0)
-    with pytest.raises(ValueError, match=r"column dv='v' must be numeric; got dtype"):
+    with pytest.raises(ValueError, match=r"column dv='v' must be real numbers; got dtype"):
         rm_anova(df.astype({"v": str}), "v", names, "s")
+    with pytest.raises(ValueError, match=r"column dv='v' must be real numbers; got dtype complex"):
+        rm_anova(df.astype({"v": complex}), "v", names, "s")  # its imaginary part was dropped
     with pytest.raises(
         ValueError,
         match=r"must be different columns; got dv='v', subject='s', within=\['f0', 'f0'\]",

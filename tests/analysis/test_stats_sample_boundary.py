@@ -138,8 +138,9 @@ def _long(values):
     [
         ([1.0, 2.0, math.nan, 4.0, 5.0, 7.0], r"^anova_residuals: dv 'y' is nan in row 2; every"),
         ([1.0, 2.0, math.inf, 4.0, 5.0, 7.0], r"^anova_residuals: dv 'y' is inf in row 2"),
-        (["1", "2", "3", "4", "5", "7"], r"^anova_residuals: column dv='y' must be numeric"),
-        ([True, False] * 3, r"^anova_residuals: column dv='y' must be numeric"),
+        (["1", "2", "3", "4", "5", "7"], r"^anova_residuals: column dv='y' must be real numbers"),
+        ([True, False] * 3, r"^anova_residuals: column dv='y' must be real numbers"),
+        ([1, 2, 3, 4, 5, 7 + 1j], r"^anova_residuals: column dv='y' must be real numbers"),
     ],
 )
 def test_anova_residuals_refuses_what_is_not_a_finite_number(values, match):

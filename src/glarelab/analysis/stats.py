@@ -123,8 +123,15 @@ def _finite(values: np.ndarray, name: str, where) -> None:
 
 
 def _numeric(df: pd.DataFrame, dv: str, caller: str) -> np.ndarray:
-    if not pd.api.types.is_numeric_dtype(df[dv]) or pd.api.types.is_bool_dtype(df[dv]):
-        raise ValueError(f"{caller}: column dv={dv!r} must be numeric; got dtype {df[dv].dtype}")
+    column = df[dv]
+    if (
+        not pd.api.types.is_numeric_dtype(column)
+        or pd.api.types.is_bool_dtype(column)
+        or pd.api.types.is_complex_dtype(column)
+    ):
+        raise ValueError(
+            f"{caller}: column dv={dv!r} must be real numbers; got dtype {column.dtype}"
+        )
     return df[dv].to_numpy(float)
 
 
