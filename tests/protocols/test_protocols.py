@@ -285,6 +285,10 @@ def test_names_that_differ_only_by_case_are_refused(study, edit, match):
          r"1-50, ascending, in \[0, 1e\+09\] \(each above the one before\)"),
         ("spencer1995", lambda d: d["trials"].update(presentation_ms=[400.0, 400.0]),
          r"trials\.presentation_ms repeats 400\.0: must be all different$"),
+        # at the protocol's 76 Hz both are 30 frames: one flash under two names
+        ("spencer1995", lambda d: d["trials"].update(presentation_ms=[400.0, 401.0]),
+         r"trials\.presentation_ms\[1\] = 401: 30 frames at 76 Hz, as 400 ms is: the two "
+         r"durations would show the same flash"),
         # label A is the dimmest level: the follow-ups {A, B, C} and the level axis run up
         ("yoshida2008",
          lambda d: d["glare"]["methods"][0].update(
@@ -306,7 +310,8 @@ def test_names_that_differ_only_by_case_are_refused(study, edit, match):
          r"background\.cd_m2 = 1000\.0: above what the display shows \(display\.max_cd_m2"),
     ],
     ids=["steps fine to coarse", "duplicate strengths", "sky of mean 0",
-         "strengths descending", "duplicate presentation_ms", "levels out of order",
+         "strengths descending", "duplicate presentation_ms", "presentation_ms one flash",
+         "levels out of order",
          "levels repeat", "uniform field above the display",
          "uniform background above the display"],
 )  # fmt: skip

@@ -439,9 +439,17 @@ def check(p: dict, problems: list[str], folder: Path | None) -> None:
     refresh_hz = p["display"]["refresh_hz"]
     frame_ms = 1000.0 / refresh_hz
     tolerance_ms = p["trials"]["timing_tolerance_ms"]
+    shown_as: dict[int, float] = {}  # frames → the first duration shown as that many
     for i, shown_ms in enumerate(p["trials"]["presentation_ms"]):
         frames = round(shown_ms / frame_ms)
         where = f"trials.presentation_ms[{i}] = {shown_ms:g}"
+        if frames >= 1 and frames in shown_as:
+            problems.append(
+                f"{where}: {frames} frames at {refresh_hz:g} Hz, as {shown_as[frames]:g} ms is: "
+                "the two durations would show the same flash; make them differ by a frame "
+                f"({frame_ms:.2f} ms) or more"
+            )
+        shown_as.setdefault(frames, shown_ms)
         if shown_ms < frame_ms:
             problems.append(
                 f"{where}: shorter than one frame of the {refresh_hz:g} Hz display "
