@@ -914,16 +914,19 @@ def _results(
     peak = protocol["glare"]["peak_fraction"]
     weakest, strongest = summary["glare_level"].min(), summary["glare_level"].max()
     ranges = []
+
+    def sem(value: float) -> str:  # one participant's matches have no SEM
+        return f" (SEM {fixed(100 * value, 1)})" if np.isfinite(value) else ""
+
     for context in contexts:
         part = summary[summary["context"] == context].set_index("glare_level")
         if part.empty:
             continue
         ranges.append(
-            f"{fixed(100 * part.loc[weakest, 'match_mean'], 1)} % "
-            f"(SEM {fixed(100 * part.loc[weakest, 'match_sem'], 1)}) at the weakest and "
-            f"{fixed(100 * part.loc[strongest, 'match_mean'], 1)} % "
-            f"(SEM {fixed(100 * part.loc[strongest, 'match_sem'], 1)}) at the strongest glare "
-            f"in context {context}"
+            f"{fixed(100 * part.loc[weakest, 'match_mean'], 1)} %"
+            f"{sem(part.loc[weakest, 'match_sem'])} at the weakest and "
+            f"{fixed(100 * part.loc[strongest, 'match_mean'], 1)} %"
+            f"{sem(part.loc[strongest, 'match_sem'])} at the strongest glare in context {context}"
         )
     identified = int(matches["match_psychometric"].notna().sum())
     reasons = (
@@ -941,7 +944,9 @@ def _results(
         else ""
     )
     paragraphs.append(
-        "The matched intensity (per cent of the display maximum; mean over participants) was "
+        "The matched intensity (per cent of the display maximum; "
+        + ("mean over participants" if n > 1 else "one participant, no SEM")
+        + ") was "
         f"{series(ranges)}; the glare image's actual peak was {100 * peak:g} %. The "
         f"logistic fits (maximum likelihood, as R's glm) located the match for {identified} "
         f"of {len(matches)} staircases{why}. {repeated} of {flashes} flashes missed their "
