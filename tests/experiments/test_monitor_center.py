@@ -69,10 +69,17 @@ def test_an_exported_calibration_is_psychopys_own_monitor(tmp_path, spencer_cali
                             k=grid[0, 5])  # fmt: skip
     assert_allclose(psychopy_lum, gog.decode(codes), rtol=1e-5)
     assert protocol["display"]["max_cd_m2"] == pytest.approx(grid[0, 1], rel=0.01)
-    # a second export keeps the first calibration and makes the new one current
+    # a second export keeps the first calibration, and the note a user added to it, under its
+    # name; the new one, of the same glarelab calibration, gets the next
+    saved = json.loads((monitors / "crt.json").read_text())
+    (first,) = saved
+    saved[first]["notes"] = "the lab's note: measured after the lamp was changed"
+    (monitors / "crt.json").write_text(json.dumps(saved))
     assert main(["calibrate", "export-monitor", str(spencer_calibration), "--monitor", "crt",
                  "--monitor-folder", str(monitors)]) == 0  # fmt: skip
-    assert len(json.loads((monitors / "crt.json").read_text())) == 1  # the same stamp
+    again = json.loads((monitors / "crt.json").read_text())
+    assert sorted(again) == [first, f"{first} (2)"]
+    assert again[first]["notes"] == "the lab's note: measured after the lamp was changed"
 
 
 def test_a_monitor_sets_a_sets_geometry_and_encoding(tmp_path, spencer_calibration):

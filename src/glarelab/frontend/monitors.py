@@ -27,6 +27,7 @@ same curve with ``a = black``, ``b = offset·(max − black)^(1/γ)`` and
 
 from __future__ import annotations
 
+import itertools
 import json
 import time
 from pathlib import Path
@@ -284,8 +285,8 @@ def export_calibration(
     folder: str | Path | None = None,
 ) -> tuple[Path, str]:
     """Write ``calibration`` into the Monitor Center monitor ``name`` (made if new, its earlier
-    calibrations kept) as a new calibration, and make it current; the file and the
-    calibration's name.
+    calibrations kept, also one exported from the same calibration before) as a new
+    calibration, and make it current; the file and the calibration's name.
 
     The new calibration holds the gamma grid of the calibration's gain-offset-gamma fit, its
     readings as Monitor Center's luminance measurements (levels 0-255, as Monitor Center
@@ -315,7 +316,7 @@ def export_calibration(
     -------
     tuple of (pathlib.Path, str)
         The monitor file written and the new calibration's name
-        (``glarelab DATE HASH``).
+        (``glarelab DATE HASH``, with `` (2)``, `` (3)``, … where it was exported before).
 
     Raises
     ------
@@ -331,6 +332,9 @@ def export_calibration(
     calibs = _read_calibs(path) if path.is_file() else {}
     monitor = _monitor_class()(name, calibs) if calibs else None
     stamp = f"glarelab {calibration.created} {calibration.readings_sha256[:12]}"
+    taken = set(calibs)
+    if stamp in taken:  # exported before: that entry (and what was added to it) is kept
+        stamp = next(f"{stamp} ({n})" for n in itertools.count(2) if f"{stamp} ({n})" not in taken)
     if monitor is None:
         monitor = _monitor_class()(name, {stamp: {}})
         monitor.calibs, monitor.calibNames = {}, []
