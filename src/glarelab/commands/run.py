@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
+import json
 import sys
 from pathlib import Path
 
@@ -110,6 +112,23 @@ def _flag(name: str) -> str:
     return "--" + name.replace("_", "-")
 
 
+def _batch_resume(out: Path, participant: str, study: str, session: int) -> bool | None:
+    """How ``--resume`` goes on with one simulated participant of a batch: None for a
+    session that completed (kept as it is), True for one that did not (resumed), False for
+    one that never started (run from its start)."""
+    from glarelab.experiments.data import session_files
+
+    files = session_files(out, participant, study, session)
+    if not any(p.suffix == ".csv" for p in files):
+        return False
+    for sidecar in (p for p in files if p.suffix == ".json"):
+        with contextlib.suppress(OSError, ValueError):
+            data = json.loads(sidecar.read_text(encoding="utf-8"))
+            if isinstance(data, dict) and data.get("status") == "completed":
+                return None
+    return True  # resumed, or refused by the session's own checks, naming why
+
+
 def _check_run_options(args: argparse.Namespace, protocol) -> None:
     """Refuse every option the session would ignore, in one line."""
     from glarelab.experiments.session import check_counterbalance, shows_images
@@ -211,7 +230,14 @@ def _run_session(args: argparse.Namespace) -> int:
             _log(f"building (or reusing) the {protocol.study} stimulus set the observers look at")
             stimuli = cached_stimulus_set(protocol)
             _log(f"stimulus set: {stimuli}")
+        batch = args.participant is None
         for number, participant in enumerate(ids, start=1):
+            resume = args.resume
+            if resume and batch:  # a batch goes on where it stopped
+                resume = _batch_resume(out, participant, protocol.study, args.session)
+                if resume is None:
+                    _log(f"[{number}/{len(ids)}] {participant}: completed before, kept")
+                    continue
             observer = make_observer(protocol, participant, seed=args.seed, stimuli=stimuli)
             frontend = SimulatedFrontend(observer, trial_delay_s=args.trial_delay_ms / 1000)
             sidecar = run_session(
@@ -221,7 +247,7 @@ def _run_session(args: argparse.Namespace) -> int:
                 frontend=frontend,
                 session=args.session,
                 stimuli=stimuli,
-                resume=args.resume,
+                resume=resume,
                 counterbalance=args.counterbalance,
                 simulated=True,
                 participant_info={"simulated_observer_seed": args.seed},
@@ -361,7 +387,12 @@ def add(commands) -> None:
         default=Path("data"),
         help="folder for the session files (default data)",
     )
-    run.add_argument("--resume", action="store_true", help="continue an interrupted session")
+    run.add_argument(
+        "--resume",
+        action="store_true",
+        help="continue an interrupted session (a simulated batch: the sessions that did not "
+        "complete, and those not yet run)",
+    )
     run.add_argument(
         "--fullscreen", action="store_true", help="full screen on the lab display (else a window)"
     )
