@@ -507,7 +507,8 @@ def p_cell(p: float) -> str:
 
 
 def number(value: float, decimals: int) -> str:
-    """A number with fixed decimals and thousands separators (APA §6.38); NaN empty.
+    """A number with fixed decimals and thousands separators (APA §6.38); NaN empty, an
+    infinite one ∞ (a slope the data leave unbounded).
 
     Parameters
     ----------
@@ -527,9 +528,13 @@ def number(value: float, decimals: int) -> str:
     ('10,000', '275.3', '-0.50', '')
     >>> number(-0.004, 2)  # no negative zero
     '0.00'
+    >>> number(float("-inf"), 1)
+    '-∞'
     """
     if value is None or (isinstance(value, float) and math.isnan(value)):
         return ""
+    if math.isinf(value):
+        return "-∞" if value < 0 else "∞"
     text = f"{value:,.{decimals}f}"
     return text.removeprefix("-") if float(text.replace(",", "")) == 0 else text
 
