@@ -226,6 +226,7 @@ def test_a_file_of_a_format_that_has_counted_must_have_it(simulated, tmp_path):
     ):
         load_sessions(protocol, [tmp_path / source.name])
     sidecar = json.loads(source.with_suffix(".json").read_text()) | {"data_format": "0.1"}
+    del sidecar["row_sha256"]  # a file of the first data format, which had no row digests
     (tmp_path / source.name).with_suffix(".json").write_text(json.dumps(sidecar))
     assert load_sessions(protocol, [tmp_path / source.name]).trials["counted"].all()
 
