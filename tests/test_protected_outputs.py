@@ -158,8 +158,8 @@ def _edited(box: Path, change, method: str = "gog") -> Path:
     [
         (lambda d: d["model"].update(gamma=1.0), "gamma is 1.0, its readings give"),
         (lambda d: d["model"].update(gamma=float("nan")), "gamma is nan"),
-        (lambda d: d["model"].update(gamma="2.2"), "gamma is '2.2'"),
-        (lambda d: d["model"].pop("gain"), "gain is None"),
+        (lambda d: d["model"].update(gamma="2.2"), "with model gamma '2.2': a gain-offset-gamma"),
+        (lambda d: d["model"].pop("gain"), "with model gain None: a gain-offset-gamma"),
         (lambda d: d.update(max_cd_m2=5000.0), "max_cd_m2 is 5000.0"),
         (lambda d: d.update(status="passed"), "without verification measurements"),
         (lambda d: d.update(status="great"), "status 'great' is not one of"),
