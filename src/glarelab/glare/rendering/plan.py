@@ -38,11 +38,11 @@ from typing import Literal
 import numpy as np
 
 from glarelab.glare.models.base import GlareModel
-from glarelab.glare.rendering._convolve import fft_length, fft_roundoff
+from glarelab.glare.rendering._convolve import fft_length, fft_roundoff, spread
 from glarelab.glare.rendering.compose import over_channels
 from glarelab.glare.rendering.costs import DEFAULT_COSTS, PathCosts, coarse_lengths, n_log_n
 from glarelab.glare.rendering.display import block_reduce
-from glarelab.glare.rendering.multires import PAD_NODES, far_spread
+from glarelab.glare.rendering.multires import PAD_NODES, cell_sums, channels, far_spread
 from glarelab.glare.rendering.scene import Scene
 
 __all__ = ["CUT_SHARE", "FAR_SHARE", "PATHS", "GlarePlan", "plan_glare"]
@@ -52,7 +52,11 @@ PATHS = ("direct", "fft", "multires")
 CUT_SHARE = 0.25  # share of the tolerance the reach cut may spend (its bound is rigorous)
 FAR_SHARE = 0.5  # share the multi-resolution far tail may spend (checked per pixel afterwards)
 ROUNDOFF_SHARE = 0.25  # share float32 FFT round-off may spend (checked per pixel afterwards)
-PREVIEW_MARGIN = 0.5  # the predicted spread at a coarse cell, times this, for the darkest output
+# Cells of LEAST_FACTOR² pixels over which the precision's question bounds the spread from
+# below (_least_spread): the kernel's least value over offsets ±(f - 1) around each cell
+# offset. On the 1024² city at night (Vos, 0.04°/px) the bound at its darkest cell was 0.83
+# of the exact spread's minimum at 8 pixels; a coarse convolution of 128² cells, 2-3 ms.
+LEAST_FACTOR = 8
 MULTIRES_FACTORS = (8, 4)  # coarse grid factors tried, coarsest first
 SPLIT_RATIOS = (16, 24, 32, 48, 64)  # R0 / f tried, shortest first: error falls as (f / R0)²
 MULTIRES_MIN_REACH = 4  # multi-resolution only when the reach is at least 4 R0
@@ -107,12 +111,12 @@ class GlarePlan:
         of convolutions planned.
     halo
         What happens to the lenticular halo (the model says, :meth:`GlareModel.halo`).
-    fft_precision, roundoff_cd_m2
+    fft_precision, roundoff_cd_m2, roundoff_codes
         The precision of the FFTs (``'float32'`` where their round-off bound,
         :func:`~glarelab.glare.rendering._convolve.fft_roundoff`, keeps
-        :data:`ROUNDOFF_SHARE` of the tolerance, else ``'float64'``) and that bound's part
-        that does not grow with the spread, cd/m² (0 for float64: its round-off is counted
-        by the render).
+        :data:`ROUNDOFF_SHARE` of the tolerance, else ``'float64'``), that bound's part
+        that does not grow with the spread, cd/m², and the whole bound in display codes as
+        planned (both 0 for float64: its round-off is counted by the render).
     costs
         Estimated seconds of each path considered.
     notes
@@ -141,6 +145,7 @@ class GlarePlan:
     halo: str
     fft_precision: str = "float64"
     roundoff_cd_m2: float = 0.0
+    roundoff_codes: float = 0.0
     costs: dict = field(default_factory=dict)
     notes: tuple[str, ...] = field(default_factory=tuple)
 
@@ -197,7 +202,7 @@ class GlarePlan:
                 f"  transforms: {self.fft_precision}"
                 + (
                     f", round-off at most {self.roundoff_cd_m2:.3g} cd/m² plus a share of "
-                    "the spread"
+                    f"the spread, {self.roundoff_codes:.2g} codes"
                     if self.fft_precision == "float32"
                     else ""
                 )
@@ -407,14 +412,14 @@ def make_plan(renderer, scene: Scene) -> GlarePlan:
         fft_length(source[2:], out[2:], reach[1]),
     )
     machine = renderer.costs
-    precision, roundoff, precision_note = renderer.dtype.name, 0.0, None
+    precision, roundoff, roundoff_codes, precision_note = renderer.dtype.name, 0.0, 0.0, None
     optimistic = fft_cost(lengths, machine, "float32")
     direct = _direct_cost(scene, out, reach, optimistic, machine)
     if tolerance > 0:
         precision = "float64"
         if direct >= optimistic:  # the FFT may win: plan its precision
-            precision, roundoff, precision_note = _choose_precision(
-                renderer, scene, plan, lengths, step, 1
+            precision, roundoff, roundoff_codes, precision_note = _choose_precision(
+                renderer, scene, plan, lengths, step, reach
             )
     costs = {"fft": fft_cost(lengths, machine, precision) * convolutions}
     if precision == "float32":  # its round-off grows with the spread: checked pixel by pixel
@@ -439,13 +444,19 @@ def make_plan(renderer, scene: Scene) -> GlarePlan:
                 f"{predicted:.3g} codes predicted on the coarse grid"
             )
     if path == "multires":  # the near part's transforms
-        precision, roundoff, precision_note = _choose_precision(
-            renderer, scene, plan, _lengths(source, out, (2 * split,) * 2), step, factor
+        precision, roundoff, roundoff_codes, precision_note = _choose_precision(
+            renderer,
+            scene,
+            plan,
+            _lengths(source, out, (2 * split,) * 2),
+            step,
+            geometric,
+            far_error=renderer.multires(factor, split, colour_kernel).relative_error,
         )
     if path in ("fft", "multires") and precision_note is not None:
         notes.append(precision_note)
     if path not in ("fft", "multires"):
-        precision, roundoff = "float64", 0.0
+        precision, roundoff, roundoff_codes = "float64", 0.0, 0.0
     if len(renderer.paths) < len(PATHS):
         notes.append(f"path {path}: of the paths allowed, {', '.join(renderer.paths)}")
     else:
@@ -454,11 +465,13 @@ def make_plan(renderer, scene: Scene) -> GlarePlan:
         **{
             k: v
             for k, v in plan.__dict__.items()
-            if k not in ("path", "costs", "notes", "fft_precision", "roundoff_cd_m2")
+            if k
+            not in ("path", "costs", "notes", "fft_precision", "roundoff_cd_m2", "roundoff_codes")
         }
         | {"path": path, "multires_factor": factor, "split_px": split},
         fft_precision=precision,
         roundoff_cd_m2=roundoff,
+        roundoff_codes=roundoff_codes,
         costs=costs,
         notes=tuple(notes),
     )
@@ -478,12 +491,26 @@ def _lengths(source, out, half) -> tuple[int, int]:
     )
 
 
-def _choose_precision(renderer, scene: Scene, plan: GlarePlan, lengths, step: float, factor):
+def _choose_precision(
+    renderer, scene: Scene, plan: GlarePlan, lengths, step: float, reach, *, far_error=0.0
+):
     """``'float32'`` transforms when their round-off bound (:func:`fft_roundoff`) keeps
     :data:`ROUNDOFF_SHARE` of the tolerance: at the darkest pixel's code step, or else, when
-    it could, at each coarse cell's darkest output predicted from the scene's spread on the
-    coarse grid (the render checks it pixel by pixel and falls back to float64). Returns
-    ``(precision, a, note)``."""
+    it could, at the darkest output each cell of :data:`LEAST_FACTOR` pixels can have
+    (:meth:`~glarelab.glare.rendering.display.CodeBound.roundoff_codes`; the render checks it
+    pixel by pixel and falls back to float64). Returns ``(precision, a, codes, note)``: the
+    bound's absolute part ``a`` and the whole bound in codes for float32, zeros for float64.
+
+    The spread the kernel applied to ``reach`` pixels (the path's; the far tail's, of
+    relative error ``far_error``, covers the whole kernel) gives every pixel of a cell is
+    bounded from below by :func:`_least_spread`, a rigorous bound: the far tail's spread is at
+    least ``1 - far_error`` times the full kernel's. The round-off's relative part, ``r S``
+    at a pixel of spread ``S``, is at most ``r`` times the pixel's own output, which is at
+    most ``L / step(L)`` codes anywhere on the display; its absolute part ``a`` is counted at
+    each cell's lowest output. On the 1024² city at night (2,000 lamps, Vos) the coarse
+    preview of the far tail, halved, put outputs at the display's black (0.5 cd/m², steps of
+    1e-4 cd/m²) where the spread is at least 7.4 cd/m², and predicted 460 codes; this bound
+    is within a factor of about 1.5 of the one over the exact spread."""
     budget = ROUNDOFF_SHARE * plan.tolerance_codes
     l1, l2 = scene.excess_norms()
     k1, k2 = renderer.kernel_norms(plan.colour_kernel)
@@ -491,32 +518,69 @@ def _choose_precision(renderer, scene: Scene, plan: GlarePlan, lengths, step: fl
     relative_codes = relative * renderer.code_bound.relative_codes
     at_darkest = absolute / step + relative_codes
     if at_darkest <= budget:
-        return "float32", absolute, f"float32 transforms: {at_darkest:.2g} codes of round-off"
+        note = f"float32 transforms: {at_darkest:.2g} codes of round-off"
+        return "float32", absolute, at_darkest, note
     if absolute / renderer.code_bound.largest_step > budget:  # nowhere within the budget
-        return (
-            "float64",
-            0.0,
-            (f"float64 transforms: float32 round-off up to {absolute:.3g} cd/m² would show"),
-        )
-    if renderer.tail_bound(plan.colour_kernel) is not None:
-        # the far tail's own grid, or the coarsest: one preview serves both questions
-        preview = _preview(
-            renderer, scene, factor if factor > 1 else MULTIRES_FACTORS[0], plan.colour_kernel
-        )
-        predicted = preview(
-            0.0, absolute=absolute, spread_scale=PREVIEW_MARGIN, relative_extra=relative
+        note = f"float64 transforms: float32 round-off up to {absolute:.3g} cd/m² would show"
+        return "float64", 0.0, 0.0, note
+    predicted = at_darkest
+    # the round-off bound's constants were measured on the models with a tail bound
+    if renderer.tail_bound(plan.colour_kernel) is not None and far_error < 1.0:
+        least = _least_spread(renderer, scene, plan.colour_kernel, reach)
+        predicted = renderer.code_bound.roundoff_codes(
+            _darkest_cells(scene, LEAST_FACTOR),
+            (1.0 - far_error) * least,
+            absolute=absolute,
+            relative=relative,
         )
         if predicted <= budget:
-            return (
-                "float32",
-                absolute,
-                (
-                    f"float32 transforms: {predicted:.2g} codes of round-off predicted where the "
-                    "glare lifts the darkest pixels"
-                ),
+            note = (
+                f"float32 transforms: at most {predicted:.2g} codes of round-off at the "
+                "darkest output the glare leaves"
             )
-    note = f"float64 transforms: float32 round-off would reach {at_darkest:.2g} codes"
-    return "float64", 0.0, note
+            return "float32", absolute, predicted, note
+    note = f"float64 transforms: float32 round-off could reach {predicted:.2g} codes"
+    return "float64", 0.0, 0.0, note
+
+
+def _darkest_cells(scene: Scene, factor: int) -> np.ndarray:
+    """The darkest value of each cell of ``factor × factor`` pixels over the channels (made
+    once per scene and factor)."""
+    key = ("darkest", factor)
+    if key not in scene._splats:
+        darkest = over_channels(scene.planes, np.minimum)
+        scene._splats[key] = block_reduce(darkest, np.minimum, factor)
+    return scene._splats[key]
+
+
+def _least_spread(renderer, scene: Scene, colour_kernel: bool, reach) -> np.ndarray:
+    """A lower bound on the spread, cd/m², at every pixel of each cell of
+    :data:`LEAST_FACTOR` pixels and in every channel, for the kernel cut at ``reach`` (made
+    once per scene, kernel and reach).
+
+    Each cell's excess, summed, spread with the kernel's least value between the two cells'
+    pixels (:meth:`~glarelab.glare.GlareRenderer.least_kernel`): every pixel ``q`` of a cell
+    ``A`` adds ``ΔL(q) K(p - q) >= ΔL(q) m(B - A)`` to each pixel ``p`` of cell ``B``. The
+    coarse convolution's own float64 round-off (about ``ε log2 n`` times its largest value)
+    is taken off."""
+    key = ("least", colour_kernel, tuple(reach))
+    if key not in scene._splats:
+        factor = LEAST_FACTOR
+        shape = scene.planes.shape[:2]
+        sums = cell_sums(scene.excess, factor, scene.source_box, shape)
+        kernels = channels(renderer.least_kernel(factor, colour_kernel, reach))
+        rows = np.flatnonzero(sums.any(axis=(1, 2)))
+        cols = np.flatnonzero(sums.any(axis=(0, 2)))
+        box = (slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1))
+        least = None
+        for c in range(sums.shape[2]):
+            kernel = kernels[min(c, len(kernels) - 1)]
+            part = spread(sums[..., c], kernel, box)
+            n = 4 * part.size
+            part -= np.finfo(np.float64).eps * math.log2(n) * sums[..., c].sum() * kernel.max()
+            least = part if least is None else np.minimum(least, part)
+        scene._splats[key] = np.maximum(least, 0.0)
+    return scene._splats[key]
 
 
 def _choose_multires(
@@ -584,8 +648,9 @@ def _far_cost(renderer, scene: Scene, factor: int, colour_kernel: bool, convolut
 def _preview(renderer, scene: Scene, factor: int, colour_kernel: bool):
     """A function from the far path's relative error to the predicted largest error in codes:
     the scene's spread at the coarse nodes (the model digitised at ``f`` pixels) over the
-    darkest pixel of each cell (made once per scene, factor and kernel: the precision and the
-    far tail ask the same)."""
+    darkest pixel of each cell (made once per scene, factor and kernel). A prediction, not a
+    bound: the cubic splat's negative weights next to a lamp can leave a node's spread far
+    below the spread at the pixels of its cell; the render measures the far tail's error."""
     key = ("preview", factor, colour_kernel)
     if key not in scene._splats:
         coarse = renderer.coarse_kernel(factor, colour_kernel)
@@ -602,22 +667,16 @@ def _preview(renderer, scene: Scene, factor: int, colour_kernel: bool):
         )
         cells = -(-height // factor), -(-width // factor)
         spread_cells = nodes[PAD_NODES : PAD_NODES + cells[0], PAD_NODES : PAD_NODES + cells[1]]
-        darkest = block_reduce(over_channels(scene.planes, np.minimum), np.minimum, factor)
+        darkest = _darkest_cells(scene, factor)
         scene._splats[key] = (darkest[..., None], np.maximum(spread_cells, 0.0)[..., None])
     darkest, spread_cells = scene._splats[key]
 
-    def codes(
-        relative: float,
-        *,
-        absolute: float = 0.0,
-        spread_scale: float = 1.0,
-        relative_extra: float = 0.0,
-    ) -> float:
+    def codes(relative: float) -> float:
         return renderer.code_bound.codes(
             darkest,
-            spread_scale * spread_cells,
-            absolute=absolute,
-            relative=relative / max(1.0 - relative, 1e-12) + relative_extra,
+            spread_cells,
+            absolute=0.0,
+            relative=relative / max(1.0 - relative, 1e-12),
         )
 
     return codes
