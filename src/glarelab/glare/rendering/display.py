@@ -403,7 +403,9 @@ class CodeBound:
         Returns
         -------
         float
-            Codes, at least :meth:`codes` of the spread computed with that round-off.
+            Codes, at least what :meth:`codes` finds pixel by pixel for the spread computed
+            with that round-off (its first, per-block bound may be larger, but below the
+            tolerance: above it, :meth:`codes` looks at the block's pixels).
 
         Notes
         -----

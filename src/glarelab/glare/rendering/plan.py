@@ -51,7 +51,6 @@ PATHS = ("direct", "fft", "multires")
 
 CUT_SHARE = 0.25  # share of the tolerance the reach cut may spend (its bound is rigorous)
 FAR_SHARE = 0.5  # share the multi-resolution far tail may spend (checked per pixel afterwards)
-ROUNDOFF_SHARE = 0.25  # share float32 FFT round-off may spend (checked per pixel afterwards)
 # Cells of LEAST_FACTOR² pixels over which the precision's question bounds the spread from
 # below (_least_spread): the kernel's least value over offsets ±(f - 1) around each cell
 # offset. On the 1024² city at night (Vos, 0.04°/px) the bound at its darkest cell was 0.83
@@ -113,8 +112,8 @@ class GlarePlan:
         What happens to the lenticular halo (the model says, :meth:`GlareModel.halo`).
     fft_precision, roundoff_cd_m2, roundoff_codes
         The precision of the FFTs (``'float32'`` where their round-off bound,
-        :func:`~glarelab.glare.rendering._convolve.fft_roundoff`, keeps
-        :data:`ROUNDOFF_SHARE` of the tolerance, else ``'float64'``), that bound's part
+        :func:`~glarelab.glare.rendering._convolve.fft_roundoff`, with the cut's, keeps what
+        the far tail leaves of the tolerance, else ``'float64'``), that bound's part
         that does not grow with the spread, cd/m², and the whole bound in display codes as
         planned (both 0 for float64: its round-off is counted by the render).
     costs
@@ -433,26 +432,47 @@ def make_plan(renderer, scene: Scene) -> GlarePlan:
     path, factor, split = min(exact_paths, key=costs.get), 1, 0
     if bound is not None and tolerance > 0 and "multires" in renderer.paths:
         limit = costs[path] if len(renderer.paths) > 1 else math.inf
-        choice = _choose_multires(renderer, scene, plan, lengths_cost=limit, precision=precision)
-        if choice is not None:
-            factor, split, predicted, cost = choice
-            costs["multires"] = cost
-            path = "multires"
-            notes.append(
-                f"far tail beyond {split} px at 1/{factor} resolution: measured relative error "
-                f"{renderer.multires(factor, split, colour_kernel).relative_error:.3g}, "
-                f"{predicted:.3g} codes predicted on the coarse grid"
-            )
-    if path == "multires":  # the near part's transforms
-        precision, roundoff, roundoff_codes, precision_note = _choose_precision(
+        choice = _choose_multires(
             renderer,
             scene,
             plan,
-            _lengths(source, out, (2 * split,) * 2),
-            step,
-            geometric,
-            far_error=renderer.multires(factor, split, colour_kernel).relative_error,
+            lengths_cost=limit,
+            # its near part's precision with the whole budget: float64 here is float64 for sure
+            near_precision=lambda lengths: _choose_precision(
+                renderer, scene, plan, lengths, step, geometric
+            )[0],
         )
+        if choice is not None:
+            factor, split, predicted, cost = choice
+            far_error = renderer.multires(factor, split, colour_kernel).relative_error
+            near_lengths = _lengths(source, out, (2 * split,) * 2)
+            near = _choose_precision(
+                renderer,
+                scene,
+                plan,
+                near_lengths,
+                step,
+                geometric,
+                far_error=far_error,
+                far_codes=predicted,
+            )
+            if near[0] == "float64":  # estimated in float32, the far tail's share not yet known
+                cost += (
+                    fft_cost(near_lengths, machine, "float64")
+                    - fft_cost(near_lengths, machine, "float32")
+                ) * convolutions
+            costs["multires"] = cost
+            far_note = (
+                f"far tail beyond {split} px at 1/{factor} resolution: measured relative error "
+                f"{far_error:.3g}, {predicted:.3g} codes predicted on the coarse grid"
+            )
+            if cost < costs[path] or len(renderer.paths) == 1:
+                path = "multires"
+                precision, roundoff, roundoff_codes, precision_note = near
+                notes.append(far_note)
+            else:
+                factor, split = 1, 0
+                notes.append(f"{far_note}: its near part needs {near[0]} transforms, dearer")
     if path in ("fft", "multires") and precision_note is not None:
         notes.append(precision_note)
     if path not in ("fft", "multires"):
@@ -492,11 +512,20 @@ def _lengths(source, out, half) -> tuple[int, int]:
 
 
 def _choose_precision(
-    renderer, scene: Scene, plan: GlarePlan, lengths, step: float, reach, *, far_error=0.0
+    renderer,
+    scene: Scene,
+    plan: GlarePlan,
+    lengths,
+    step: float,
+    reach,
+    *,
+    far_error=0.0,
+    far_codes=0.0,
 ):
-    """``'float32'`` transforms when their round-off bound (:func:`fft_roundoff`) keeps
-    :data:`ROUNDOFF_SHARE` of the tolerance: at the darkest pixel's code step, or else, when
-    it could, at the darkest output each cell of :data:`LEAST_FACTOR` pixels can have
+    """``'float32'`` transforms when their round-off bound (:func:`fft_roundoff`), with the
+    cut's, keeps what the far tail (``far_codes`` predicted) leaves of the tolerance: at the
+    darkest pixel's code step, or else, when it could, at the darkest output each cell of
+    :data:`LEAST_FACTOR` pixels can have
     (:meth:`~glarelab.glare.rendering.display.CodeBound.roundoff_codes`; the render checks it
     pixel by pixel and falls back to float64). Returns ``(precision, a, codes, note)``: the
     bound's absolute part ``a`` and the whole bound in codes for float32, zeros for float64.
@@ -506,22 +535,30 @@ def _choose_precision(
     bounded from below by :func:`_least_spread`, a rigorous bound: the far tail's spread is at
     least ``1 - far_error`` times the full kernel's. The round-off's relative part, ``r S``
     at a pixel of spread ``S``, is at most ``r`` times the pixel's own output, which is at
-    most ``L / step(L)`` codes anywhere on the display; its absolute part ``a`` is counted at
-    each cell's lowest output. On the 1024² city at night (2,000 lamps, Vos) the coarse
-    preview of the far tail, halved, put outputs at the display's black (0.5 cd/m², steps of
-    1e-4 cd/m²) where the spread is at least 7.4 cd/m², and predicted 460 codes; this bound
-    is within a factor of about 1.5 of the one over the exact spread."""
-    budget = ROUNDOFF_SHARE * plan.tolerance_codes
+    most ``L / step(L)`` codes anywhere on the display; its absolute part ``a``, with the
+    cut's bound and what the render adds for float64 round-off, is counted at each cell's
+    lowest output: without a far tail, a bound on what the render's check finds pixel by
+    pixel, so that float32 so planned is kept (the check is the render's, afterwards, all
+    the same). On the 1024² city at night (2,000 lamps, Vos) the coarse preview of the far
+    tail, halved, put outputs at the display's black (0.5 cd/m², steps of 1e-4 cd/m²) where
+    the spread is at least 7.4 cd/m², and predicted 460 codes; this bound is 0.46 codes, 0.43
+    from the exact spread's least value in each cell (0.035 reached).
+
+    The cut, the far tail and the round-off once had fixed shares of the tolerance (a
+    quarter, a half, a quarter); the round-off now takes what the other two leave, since its
+    bound is checked with theirs, pixel by pixel, by the same render."""
+    budget = plan.tolerance_codes - far_codes
     l1, l2 = scene.excess_norms()
     k1, k2 = renderer.kernel_norms(plan.colour_kernel)
-    absolute, relative = fft_roundoff(lengths, l1, l2, k1, k2, np.float32)
+    own, relative = fft_roundoff(lengths, l1, l2, k1, k2, np.float32)
+    absolute = own + renderer._absolute(scene, plan, set())  # the cut's, as the render adds
     relative_codes = relative * renderer.code_bound.relative_codes
     at_darkest = absolute / step + relative_codes
     if at_darkest <= budget:
         note = f"float32 transforms: {at_darkest:.2g} codes of round-off"
-        return "float32", absolute, at_darkest, note
+        return "float32", own, float(at_darkest), note
     if absolute / renderer.code_bound.largest_step > budget:  # nowhere within the budget
-        note = f"float64 transforms: float32 round-off up to {absolute:.3g} cd/m² would show"
+        note = f"float64 transforms: float32 round-off up to {own:.3g} cd/m² would show"
         return "float64", 0.0, 0.0, note
     predicted = at_darkest
     # the round-off bound's constants were measured on the models with a tail bound
@@ -538,7 +575,7 @@ def _choose_precision(
                 f"float32 transforms: at most {predicted:.2g} codes of round-off at the "
                 "darkest output the glare leaves"
             )
-            return "float32", absolute, predicted, note
+            return "float32", own, predicted, note
     note = f"float64 transforms: float32 round-off could reach {predicted:.2g} codes"
     return "float64", 0.0, 0.0, note
 
@@ -584,11 +621,13 @@ def _least_spread(renderer, scene: Scene, colour_kernel: bool, reach) -> np.ndar
 
 
 def _choose_multires(
-    renderer, scene: Scene, plan: GlarePlan, *, lengths_cost: float, precision: str
+    renderer, scene: Scene, plan: GlarePlan, *, lengths_cost: float, near_precision
 ):
     """The cheapest coarse factor and split whose far path fits ``FAR_SHARE`` of the
     tolerance, predicted on the coarse grid with the measured relative error; ``None`` when
-    none fits or none is cheaper than ``lengths_cost``. Returns ``(f, R0, codes, cost)``."""
+    none fits or none is cheaper than ``lengths_cost``. Returns ``(f, R0, codes, cost)``, the
+    cost with the near part in float32 where ``near_precision`` (of its FFT lengths) says
+    it may be."""
     reach = plan.geometric_reach_px  # the far tail covers the whole geometric reach
     budget = FAR_SHARE * plan.tolerance_codes
     source, out = plan.source_box, plan.out_box
@@ -614,9 +653,16 @@ def _choose_multires(
                 fft_length(source[:2], near[:2], 2 * split),
                 fft_length(source[2:], near[2:], 2 * split),
             )
-            cost = far_cost + fft_cost(near_lengths, renderer.costs, precision) * plan.convolutions
+            cost = far_cost + fft_cost(near_lengths, renderer.costs, "float32") * plan.convolutions
             if cost >= lengths_cost:
-                break  # longer splits cost more
+                break  # longer splits cost more, at either precision
+            if near_precision(near_lengths) == "float64":
+                cost += plan.convolutions * (
+                    fft_cost(near_lengths, renderer.costs, "float64")
+                    - fft_cost(near_lengths, renderer.costs, "float32")
+                )
+                if cost >= lengths_cost:
+                    continue  # a longer split's near part may take float32
             if preview is None:
                 preview = _preview(renderer, scene, factor, plan.colour_kernel)
             if preview(FAR_ERROR_SAFETY / k**2) > budget:
