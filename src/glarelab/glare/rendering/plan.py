@@ -432,18 +432,21 @@ def make_plan(renderer, scene: Scene) -> GlarePlan:
     path, factor, split = min(exact_paths, key=costs.get), 1, 0
     if bound is not None and tolerance > 0 and "multires" in renderer.paths:
         limit = costs[path] if len(renderer.paths) > 1 else math.inf
+        far_share = FAR_SHARE * tolerance
         choice = _choose_multires(
             renderer,
             scene,
             plan,
             lengths_cost=limit,
-            # its near part's precision with the whole budget: float64 here is float64 for sure
+            # its near part's precision if the far tail takes all it may: float32 then is
+            # float32 for sure (an estimate hoping for float32 built the far tail's preview
+            # for nothing on the RGB street, 14-47 ms a plan)
             near_precision=lambda lengths: _choose_precision(
-                renderer, scene, plan, lengths, step, geometric
+                renderer, scene, plan, lengths, step, geometric, far_codes=far_share
             )[0],
         )
         if choice is not None:
-            factor, split, predicted, cost = choice
+            factor, split, predicted, cost, cost_precision = choice
             far_error = renderer.multires(factor, split, colour_kernel).relative_error
             near_lengths = _lengths(source, out, (2 * split,) * 2)
             near = _choose_precision(
@@ -456,10 +459,10 @@ def make_plan(renderer, scene: Scene) -> GlarePlan:
                 far_error=far_error,
                 far_codes=predicted,
             )
-            if near[0] == "float64":  # estimated in float32, the far tail's share not yet known
+            if near[0] != cost_precision:  # the far tail's own share and measured error
                 cost += (
-                    fft_cost(near_lengths, machine, "float64")
-                    - fft_cost(near_lengths, machine, "float32")
+                    fft_cost(near_lengths, machine, near[0])
+                    - fft_cost(near_lengths, machine, cost_precision)
                 ) * convolutions
             costs["multires"] = cost
             far_note = (
@@ -624,9 +627,9 @@ def _choose_multires(
 ):
     """The cheapest coarse factor and split whose far path fits ``FAR_SHARE`` of the
     tolerance, predicted on the coarse grid with the measured relative error; ``None`` when
-    none fits or none is cheaper than ``lengths_cost``. Returns ``(f, R0, codes, cost)``, the
-    cost with the near part in float32 where ``near_precision`` (of its FFT lengths) says
-    it may be."""
+    none fits or none is cheaper than ``lengths_cost``. Returns ``(f, R0, codes, cost,
+    precision)``, the cost with the near part in the precision ``near_precision`` (of its FFT
+    lengths) gives."""
     reach = plan.geometric_reach_px  # the far tail covers the whole geometric reach
     budget = FAR_SHARE * plan.tolerance_codes
     source, out = plan.source_box, plan.out_box
@@ -655,7 +658,8 @@ def _choose_multires(
             cost = far_cost + fft_cost(near_lengths, renderer.costs, "float32") * plan.convolutions
             if cost >= lengths_cost:
                 break  # longer splits cost more, at either precision
-            if near_precision(near_lengths) == "float64":
+            precision = near_precision(near_lengths)
+            if precision == "float64":
                 cost += plan.convolutions * (
                     fft_cost(near_lengths, renderer.costs, "float64")
                     - fft_cost(near_lengths, renderer.costs, "float32")
@@ -669,7 +673,7 @@ def _choose_multires(
             measured = renderer.multires(factor, split, plan.colour_kernel).relative_error
             predicted = preview(measured) if measured < 1.0 else math.inf
             if predicted <= budget:
-                return factor, split, predicted, cost
+                return factor, split, predicted, cost, precision
     return None
 
 
