@@ -1,6 +1,9 @@
-"""CodeTable: the nearest display codes by a table look-up, equal to display_codes rounded."""
+"""CodeTable: the nearest display codes by a table look-up, equal to display_codes rounded;
+CodeBound: its bounds before and after the spread is known."""
 
 from __future__ import annotations
+
+import itertools
 
 import numpy as np
 import pytest
@@ -9,9 +12,12 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
 from glarelab.glare.rendering.display import (
+    BLOCK_PX,
     CODE_TABLE_SHIFT,
+    CodeBound,
     CodeTable,
     Display,
+    block_reduce,
     display_codes,
 )
 
@@ -90,3 +96,59 @@ def test_negative_and_out_of_range_floats_take_the_ends_codes():
     lut = Display.gamma(200.0, black_cd_m2=0.05).lut
     image = np.float32([-0.0, -1e-30, -5.0, -np.inf, 0.0, 1e-30, 0.05, 200.0, 1e9, np.inf])
     assert CodeTable(lut)(image).tolist() == [0, 0, 0, 0, 0, 0, 0, 1023, 1023, 1023]
+
+
+def _night(rng, shape=(96, 112), floor=(-1.0, 1.0)):
+    """A dark street (0.01-1 cd/m²) with a few lamps, and a spread that peaks at them and
+    lifts the rest: a floor (log10 cd/m² drawn from ``floor``) and 1/r² wings."""
+    image = 10 ** rng.uniform(-2, 0, shape)
+    rows, cols = rng.integers(0, shape[0], 6), rng.integers(0, shape[1], 6)
+    image[rows, cols] = 10 ** rng.uniform(3, 5, 6)
+    y, x = np.indices(shape)
+    spread = np.full(shape, 10 ** rng.uniform(*floor))
+    for row, col in zip(rows, cols, strict=True):
+        spread += 10 ** rng.uniform(2, 4) / (1.0 + (y - row) ** 2 + (x - col) ** 2)
+    return image[..., None], spread[..., None]
+
+
+@pytest.mark.parametrize("method", ["Yoshida2008", "Spencer1995"])
+def test_a_blocks_bound_holds_for_each_of_its_pixels(method):
+    # the check bounds blocks of 16 × 16 pixels first and looks at the pixels only of blocks
+    # over the tolerance: a block's bound (the smaller of two) must be at least each of its
+    # pixels' (the bench's display, black 0.5 cd/m², and the reference display)
+    rng = np.random.default_rng(35)
+    for lut in (
+        Display.gamma(433.0, black_cd_m2=0.5).lut,
+        Display.gamma(220.0, black_cd_m2=0.22).lut,
+    ):
+        bound = CodeBound(lut, 220.0, method)
+        for absolute, relative in ((0.035, 1.3e-5), (1e-3, 1e-4), (0.3, 0.0), (0.0, 2e-3)):
+            planes, spread = _night(rng)
+            blocks = bound.codes(planes, spread, absolute=absolute, relative=relative,
+                                 tolerance_codes=np.inf)  # fmt: skip
+            pixels = bound.codes(planes, spread, absolute=absolute, relative=relative)
+            assert pixels > 0 and blocks >= pixels, (absolute, relative, blocks, pixels)
+
+
+def test_the_bound_before_the_spread_is_known_holds_for_each_pixel():
+    # CodeBound.roundoff_codes: from each block's darkest pixel and a lower bound on its
+    # spread, at least what codes finds pixel by pixel once the spread is computed (a spread
+    # off by at most a + r S of the exact one, S the exact spread, r as float32 FFTs have
+    # it). Where the glare lifts the dark pixels well above the display's black (the city at
+    # night: to 7.4 cd/m² or more) and the absolute part dominates (the city's a), within
+    # 1.5× of it (the relative part is bounded over the whole display)
+    rng = np.random.default_rng(36)
+    lut = Display.gamma(433.0, black_cd_m2=0.5).lut
+    bound = CodeBound(lut, 220.0, "Yoshida2008")
+    for (absolute, relative), floor in itertools.product(
+        ((0.035, 1.3e-5), (0.005, 2e-5)), ((-1.0, 0.0), (0.5, 1.0))
+    ):
+        planes, exact = _night(rng, floor=floor)
+        computed = np.maximum(exact - (absolute + relative * exact), 0.0)  # the lowest
+        darkest = block_reduce(planes[..., 0], np.minimum, BLOCK_PX)
+        least = block_reduce(exact[..., 0], np.minimum, BLOCK_PX)
+        before = bound.roundoff_codes(darkest, least, absolute=absolute, relative=relative)
+        after = bound.codes(planes, computed, absolute=absolute, relative=relative)
+        assert after <= before, (after, before)
+        if floor[0] > 0 and absolute > 0.01:
+            assert before < 1.5 * after, (after, before)

@@ -10,7 +10,8 @@ from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 from glarelab import glare
-from glarelab.bench.scenes import lamps_scene, yoshida_scene
+from glarelab.bench.scenes import CALIBRATION, lamps_scene, yoshida_scene
+from glarelab.display.calibration import Calibration
 from glarelab.glare import GaussianGlare, GlareRenderer, HybridGlare, VosGlare, WaveOpticsGlare
 from glarelab.glare.rendering._convolve import (
     fft_length,
@@ -19,6 +20,7 @@ from glarelab.glare.rendering._convolve import (
     spectral_spread,
 )
 from glarelab.glare.rendering.display import display_codes, display_lut
+from glarelab.glare.rendering.plan import LEAST_FACTOR, _least_spread
 
 L_DMAX = 220.0
 SLACK_CODES = 1e-9  # and the exact render's own FFT round-off: see _check
@@ -258,6 +260,33 @@ def test_precision_is_planned_float32_for_a_disk_and_float64_next_to_a_sun(model
     error, result = _check(night, model, pixel, 0.5, paths=("fft",))
     assert result.plan.fft_precision == "float64"
     assert error <= result.error_bound_codes <= 0.5
+
+
+def test_a_city_at_night_takes_float32_within_its_planned_bound():
+    # issue 35: lamps all over a 0.01-1 cd/m² street, the glare lifting every pixel between
+    # them (at 1024² and 2,000 lamps, to 7.4 cd/m² at least). The coarse preview of the far
+    # tail, halved, put dark outputs at the display's black, where its steps are 1e-4 cd/m²,
+    # and kept float64 (here the bound is now 0.40 codes; that preview predicted 8.9, and
+    # half its spread was above the exact spread's least value in half of the cells)
+    image, pixel = lamps_scene((256, 256), 300, pixel_deg=0.04)
+    lut = Calibration.load(CALIBRATION).lut
+    renderer = GlareRenderer(VosGlare(), pixel_deg=pixel, shape=image.shape, display=lut)
+    kernel = renderer.kernel()
+    error, result = _check(
+        image, VosGlare(), pixel, 0.5, paths=("fft",), kernel=kernel, display=lut
+    )
+    plan = result.plan
+    assert plan.fft_precision == "float32" and not result.fallback, str(plan)
+    assert plan.exact  # the full kernel: the error is the float32 transforms' alone
+    assert error <= plan.roundoff_codes <= 0.5, (error, plan.roundoff_codes)
+    assert error <= result.error_bound_codes <= 0.5
+    # the spread the plan bounds from below, against the exact spread at every pixel
+    scene = renderer._scene(image)[1]
+    least = _least_spread(renderer, scene, False, plan.reach_px)
+    exact = glare.render_glare(image, VosGlare(), pixel_deg=pixel, kernel=kernel).spread
+    cells = exact.reshape(256 // LEAST_FACTOR, LEAST_FACTOR, 256 // LEAST_FACTOR, LEAST_FACTOR)
+    assert np.all(least <= cells.min(axis=(1, 3))), float(np.max(least - cells.min(axis=(1, 3))))
+    assert least.min() > 0.5 * exact.min()  # and not a vacuous one
 
 
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])

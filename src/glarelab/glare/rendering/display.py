@@ -353,6 +353,13 @@ class CodeBound:
         # codes per relative change of the output, at most: L / step over the display's range
         self.relative_codes = float(np.max(self.lut[:-1][shown] / self.steps[shown], initial=0))
         self.largest_step = float(self.steps.max())
+        # the same over the step table: L / _table_step(L) at most, for L up to the top (each
+        # bin's upper edge over its step; a hair more for the rounding of the bin's index)
+        upper = np.exp(self._u0 + np.arange(1, STEP_TABLE_SIZE + 1) / self._scale) - self._offset
+        lower = np.concatenate([[self.black], upper[:-1]])
+        inside = lower <= self.top
+        ratios = np.minimum(upper, self.top)[inside] / self._table[inside]
+        self._table_relative_codes = float(ratios.max(initial=0.0)) * (1.0 + 1e-9)
 
     def step(self, luminance_cd_m2: np.ndarray | float) -> np.ndarray:
         """Smallest code step (cd/m²) at or above each luminance's code.
@@ -369,6 +376,67 @@ class CodeBound:
         """
         code = np.searchsorted(self.lut, luminance_cd_m2, side="right") - 1
         return self.steps[np.clip(code, 0, self.steps.size - 1)]
+
+    def roundoff_codes(
+        self,
+        darkest_cd_m2: np.ndarray,
+        spread_cd_m2: np.ndarray,
+        *,
+        absolute: float,
+        relative: float,
+    ) -> float:
+        """A bound, before the spread is computed, on what :meth:`codes` will find for a
+        spread off by at most ``absolute + relative · S`` (FFT round-off, ``S`` the spread
+        without it), from lower bounds on the pixels and on ``S``.
+
+        Parameters
+        ----------
+        darkest_cd_m2
+            For each part of the image (a coarse cell), a value at most each of its pixels,
+            cd/m² (every channel).
+        spread_cd_m2
+            For each part, a value at most the spread without round-off at each of its pixels,
+            cd/m² (every channel), of ``darkest_cd_m2``'s shape.
+        absolute, relative
+            The round-off's bound, ``a`` cd/m² and ``r`` (< 1).
+
+        Returns
+        -------
+        float
+            Codes, at least what :meth:`codes` finds pixel by pixel for the spread computed
+            with that round-off (its first, per-block bound may be larger, but below the
+            tolerance: above it, :meth:`codes` looks at the block's pixels).
+
+        Notes
+        -----
+        With ``S̃`` the spread computed, ``|S̃ - S| <= a + r S`` gives
+        ``S̃ >= (1 - r) S - a``, so the lowest spread :meth:`codes` considers at a pixel,
+        ``S̃ - b`` with ``b = a + r S̃``, is at least ``(1 - r)² S - 2a``: its lowest output
+        is at least ``lo``, that output for the part's darkest pixel and spread. Where the
+        output can move at all (neither end clamped), ``(1 - r) S̃ - a <= lo``, so
+        ``b <= (a + r lo) / (1 - r)`` and the error is at most
+        ``a / ((1 - r) step(lo)) + r / (1 - r) · L / step(L)``: the first term at the part's
+        ``lo`` (steps grow with the luminance), the second over the display's range (the
+        step table's, which :meth:`codes` reads pixel by pixel and which is never larger
+        than :meth:`step`).
+        """
+        if relative >= 1.0:
+            return math.inf
+        spread = np.maximum((1.0 - relative) ** 2 * spread_cd_m2 - 2.0 * absolute, 0.0)
+        low = np.clip(
+            compose(darkest_cd_m2, spread, self.l_dmax, self.method), self.black, self.top
+        )
+        return float(np.max(self._moving_codes(low, absolute, relative), initial=0.0))
+
+    def _moving_codes(self, low_cd_m2: np.ndarray, absolute: float, relative: float):
+        """``a / ((1 - r) step(lo)) + r / (1 - r) · max L / step(L)``: the codes of a pixel
+        whose lowest output is at least ``lo`` and whose spread ``S̃`` is off by at most
+        ``a + r S̃`` (:meth:`roundoff_codes`), with the step table's steps, as :meth:`codes`
+        reads them pixel by pixel (``r < 1``)."""
+        scale = 1.0 / (1.0 - relative)
+        return (absolute * scale) / self._table_step(low_cd_m2) + (
+            relative * scale * self._table_relative_codes
+        )
 
     def _table_step(self, luminance_cd_m2: np.ndarray) -> np.ndarray:
         """:meth:`step` from the log-luminance table: never larger, no search."""
@@ -406,6 +474,16 @@ class CodeBound:
             The spread's bound: ``absolute + relative · spread`` cd/m².
         tolerance_codes
             Blocks whose bound is within it are not looked at pixel by pixel.
+
+        Notes
+        -----
+        A block's bound is the smaller of two: its spread's range through the display at
+        its lowest output ``lo``, and ``a / ((1 - r) step(lo)) + r / (1 - r) · max L /
+        step(L)`` (the relative part at most ``r`` times each pixel's own output, as in
+        :meth:`roundoff_codes`), which does not grow with the block's brightest spread. On
+        the 1024² city at night (2,000 lamps, float32 transforms) the first alone put 1,157
+        of the 4,096 blocks over half a code, looked at pixel by pixel (7 ms; the bound
+        0.50 codes, 0.36 by every pixel); with the second none (2.6 ms, 0.37 codes).
         """
         if absolute == 0.0 and relative == 0.0:
             return 0.0
@@ -417,6 +495,8 @@ class CodeBound:
         _, high = self._outputs(p_max, 0.0, (1.0 + relative) * s_max + absolute)
         width = np.clip(high - low, 0.0, absolute + relative * s_max)
         blocks = width / self.step(low)
+        if relative < 1.0:  # or, at each pixel, within _moving_codes of its lowest output
+            blocks = np.minimum(blocks, self._moving_codes(low, absolute, relative))
         worst = float(blocks.max())
         if worst <= tolerance_codes:
             return worst

@@ -21,7 +21,15 @@ import numpy as np
 
 from glarelab.glare.rendering._convolve import spread
 
-__all__ = ["FOOTPRINT_NODES", "PAD_NODES", "MultiresKernels", "far_spread", "multires_kernels"]
+__all__ = [
+    "FOOTPRINT_NODES",
+    "PAD_NODES",
+    "MultiresKernels",
+    "cell_sums",
+    "far_spread",
+    "least_kernel",
+    "multires_kernels",
+]
 
 PAD_NODES = 2  # nodes in front of the first cell, so that every cubic weight is on the grid
 # A source splats onto nodes up to 2 cells from it and a target interpolates from nodes up to
@@ -196,6 +204,106 @@ def far_spread(
         box_nodes = (slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1))
         spread_coarse = spread(coarse, far, box_nodes)
     return spread_coarse if nodes else upsample(spread_coarse, factor, shape)
+
+
+def cell_sums(excess: np.ndarray, factor: int, box, shape: tuple[int, int]) -> np.ndarray:
+    """The sum of an excess over each cell of ``factor × factor`` pixels of an image.
+
+    Parameters
+    ----------
+    excess
+        The excess, cd/m², ``(rows, cols[, C])``: the image's ``box``, zero elsewhere.
+    factor
+        Pixels per cell side ``f``: cell ``(i, j)`` holds rows ``i f … i f + f - 1`` and
+        columns ``j f … j f + f - 1``.
+    box
+        ``(r0, r1, c0, c1)``: where ``excess`` lies in the image, pixels.
+    shape
+        The image's ``(H, W)``, pixels.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(ceil(H / f), ceil(W / f)[, C])``, cd/m² × pixels, float64.
+
+    Notes
+    -----
+    Columns first: ``np.add.reduceat`` along the last pixel axis runs over contiguous memory
+    (1 ms at 1024², three channels 3.5 ms; along the rows first, 7-20 ms).
+
+    Examples
+    --------
+    >>> cell_sums(np.ones((3, 3)), 2, (1, 4, 1, 4), (4, 4)).tolist()
+    [[1.0, 2.0], [2.0, 4.0]]
+    """
+    r0, r1, c0, c1 = box
+    rows = np.arange(r0 // factor * factor + factor, r1, factor) - r0
+    cols = np.arange(c0 // factor * factor + factor, c1, factor) - c0
+    sums = np.add.reduceat(excess, np.r_[0, cols], axis=1, dtype=np.float64)
+    sums = np.add.reduceat(sums, np.r_[0, rows], axis=0)
+    cells = np.zeros((-(-shape[0] // factor), -(-shape[1] // factor), *excess.shape[2:]))
+    top, left = r0 // factor, c0 // factor
+    cells[top : top + sums.shape[0], left : left + sums.shape[1]] = sums
+    return cells
+
+
+def least_kernel(
+    values: np.ndarray, factor: int, reach: tuple[int, int], shape: tuple[int, int]
+) -> np.ndarray:
+    """The kernel's least value between any pixel of one cell of ``factor × factor`` pixels
+    and any pixel of another, for each offset between the cells, in an image of ``shape``.
+
+    Parameters
+    ----------
+    values
+        The kernel, centred, odd, ``(KH, KW[, C])``.
+    factor
+        Pixels per cell side ``f``.
+    reach
+        ``(rows, columns)``: the kernel is applied up to these offsets and is 0 beyond.
+    shape
+        The image's ``(H, W)``: offsets beyond ``H - 1``, ``W - 1`` cannot occur and are left
+        out.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(2 ceil(H / f) - 1, 2 ceil(W / f) - 1[, C])``, centred: at cell offset ``D`` the least
+        ``K(o)`` over the pixel offsets ``o`` between the two cells, ``|o - D f| <= f - 1``
+        along each axis (0 where some of them lie beyond the reach).
+
+    Notes
+    -----
+    With ``E(A)`` the excess summed over cell ``A`` (:func:`cell_sums`), the spread at every
+    pixel of cell ``B`` is at least ``Σ_A E(A) m(B - A)`` for a non-negative excess: each
+    pixel's share ``ΔL(q) K(p - q)`` is at least ``ΔL(q) m(B - A)``. The window of offsets
+    ``[D f - f + 1, D f + f - 1]`` is two blocks of ``f``, ``[(D - 1) f + 1, D f]`` and
+    ``[D f, D f + f - 1]``: two reshaped minima per axis, one axis at a time.
+
+    Examples
+    --------
+    >>> kernel = np.arange(1.0, 26.0).reshape(5, 5)  # offsets -2 … 2 along each axis
+    >>> least_kernel(kernel, 2, (2, 2), (3, 3))[1].tolist()  # cells in the same row of cells
+    [6.0, 7.0, 9.0]
+    >>> least_kernel(kernel, 2, (1, 1), (3, 3))[1].tolist()  # cut beyond 1 pixel
+    [0.0, 7.0, 0.0]
+    """
+    half = (values.shape[0] // 2, values.shape[1] // 2)
+    least = values
+    for axis in (0, 1):
+        n, cells = shape[axis], -(-shape[axis] // factor)
+        kept = min(reach[axis], half[axis], n - 1)
+        centre = cells * factor - 1  # offsets -centre … centre: every window fits
+        part = np.moveaxis(least, axis, 0)[half[axis] - kept : half[axis] + kept + 1]
+        padded = np.full((2 * centre + 1, *part.shape[1:]), np.inf)
+        padded[centre - (n - 1) : centre + n] = 0.0  # beyond the reach, within the image
+        padded[centre - kept : centre + kept + 1] = part
+        blocks = 2 * cells - 1
+        lower = padded[: blocks * factor].reshape(blocks, factor, *part.shape[1:]).min(axis=1)
+        upper = padded[factor - 1 : factor - 1 + blocks * factor]
+        upper = upper.reshape(blocks, factor, *part.shape[1:]).min(axis=1)
+        least = np.moveaxis(np.minimum(lower, upper), 0, axis)
+    return least
 
 
 @dataclass(frozen=True)

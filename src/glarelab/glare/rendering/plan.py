@@ -38,11 +38,11 @@ from typing import Literal
 import numpy as np
 
 from glarelab.glare.models.base import GlareModel
-from glarelab.glare.rendering._convolve import fft_length, fft_roundoff
+from glarelab.glare.rendering._convolve import fft_length, fft_roundoff, spread
 from glarelab.glare.rendering.compose import over_channels
 from glarelab.glare.rendering.costs import DEFAULT_COSTS, PathCosts, coarse_lengths, n_log_n
 from glarelab.glare.rendering.display import block_reduce
-from glarelab.glare.rendering.multires import PAD_NODES, far_spread
+from glarelab.glare.rendering.multires import PAD_NODES, cell_sums, far_spread
 from glarelab.glare.rendering.scene import Scene
 
 __all__ = ["CUT_SHARE", "FAR_SHARE", "PATHS", "GlarePlan", "plan_glare"]
@@ -51,8 +51,11 @@ PATHS = ("direct", "fft", "multires")
 
 CUT_SHARE = 0.25  # share of the tolerance the reach cut may spend (its bound is rigorous)
 FAR_SHARE = 0.5  # share the multi-resolution far tail may spend (checked per pixel afterwards)
-ROUNDOFF_SHARE = 0.25  # share float32 FFT round-off may spend (checked per pixel afterwards)
-PREVIEW_MARGIN = 0.5  # the predicted spread at a coarse cell, times this, for the darkest output
+# Cells of LEAST_FACTOR² pixels over which the precision's question bounds the spread from
+# below (_least_spread): the kernel's least value over offsets ±(f - 1) around each cell
+# offset. On the 1024² city at night (Vos, 0.04°/px) the bound at its darkest cell was 0.83
+# of the exact spread's minimum at 8 pixels; a coarse convolution of 128² cells, 2-3 ms.
+LEAST_FACTOR = 8
 MULTIRES_FACTORS = (8, 4)  # coarse grid factors tried, coarsest first
 SPLIT_RATIOS = (16, 24, 32, 48, 64)  # R0 / f tried, shortest first: error falls as (f / R0)²
 MULTIRES_MIN_REACH = 4  # multi-resolution only when the reach is at least 4 R0
@@ -107,12 +110,12 @@ class GlarePlan:
         of convolutions planned.
     halo
         What happens to the lenticular halo (the model says, :meth:`GlareModel.halo`).
-    fft_precision, roundoff_cd_m2
+    fft_precision, roundoff_cd_m2, roundoff_codes
         The precision of the FFTs (``'float32'`` where their round-off bound,
-        :func:`~glarelab.glare.rendering._convolve.fft_roundoff`, keeps
-        :data:`ROUNDOFF_SHARE` of the tolerance, else ``'float64'``) and that bound's part
-        that does not grow with the spread, cd/m² (0 for float64: its round-off is counted
-        by the render).
+        :func:`~glarelab.glare.rendering._convolve.fft_roundoff`, with the cut's, keeps what
+        the far tail leaves of the tolerance, else ``'float64'``), that bound's part
+        that does not grow with the spread, cd/m², and the whole bound in display codes as
+        planned (both 0 for float64: its round-off is counted by the render).
     costs
         Estimated seconds of each path considered.
     notes
@@ -141,6 +144,7 @@ class GlarePlan:
     halo: str
     fft_precision: str = "float64"
     roundoff_cd_m2: float = 0.0
+    roundoff_codes: float = 0.0
     costs: dict = field(default_factory=dict)
     notes: tuple[str, ...] = field(default_factory=tuple)
 
@@ -197,7 +201,7 @@ class GlarePlan:
                 f"  transforms: {self.fft_precision}"
                 + (
                     f", round-off at most {self.roundoff_cd_m2:.3g} cd/m² plus a share of "
-                    "the spread"
+                    f"the spread, {self.roundoff_codes:.2g} codes"
                     if self.fft_precision == "float32"
                     else ""
                 )
@@ -407,14 +411,14 @@ def make_plan(renderer, scene: Scene) -> GlarePlan:
         fft_length(source[2:], out[2:], reach[1]),
     )
     machine = renderer.costs
-    precision, roundoff, precision_note = renderer.dtype.name, 0.0, None
+    precision, roundoff, roundoff_codes, precision_note = renderer.dtype.name, 0.0, 0.0, None
     optimistic = fft_cost(lengths, machine, "float32")
     direct = _direct_cost(scene, out, reach, optimistic, machine)
     if tolerance > 0:
         precision = "float64"
         if direct >= optimistic:  # the FFT may win: plan its precision
-            precision, roundoff, precision_note = _choose_precision(
-                renderer, scene, plan, lengths, step, 1
+            precision, roundoff, roundoff_codes, precision_note = _choose_precision(
+                renderer, scene, plan, lengths, step, reach
             )
     costs = {"fft": fft_cost(lengths, machine, precision) * convolutions}
     if precision == "float32":  # its round-off grows with the spread: checked pixel by pixel
@@ -428,24 +432,54 @@ def make_plan(renderer, scene: Scene) -> GlarePlan:
     path, factor, split = min(exact_paths, key=costs.get), 1, 0
     if bound is not None and tolerance > 0 and "multires" in renderer.paths:
         limit = costs[path] if len(renderer.paths) > 1 else math.inf
-        choice = _choose_multires(renderer, scene, plan, lengths_cost=limit, precision=precision)
-        if choice is not None:
-            factor, split, predicted, cost = choice
-            costs["multires"] = cost
-            path = "multires"
-            notes.append(
-                f"far tail beyond {split} px at 1/{factor} resolution: measured relative error "
-                f"{renderer.multires(factor, split, colour_kernel).relative_error:.3g}, "
-                f"{predicted:.3g} codes predicted on the coarse grid"
-            )
-    if path == "multires":  # the near part's transforms
-        precision, roundoff, precision_note = _choose_precision(
-            renderer, scene, plan, _lengths(source, out, (2 * split,) * 2), step, factor
+        far_share = FAR_SHARE * tolerance
+        choice = _choose_multires(
+            renderer,
+            scene,
+            plan,
+            lengths_cost=limit,
+            # its near part's precision if the far tail takes all it may: float32 then is
+            # float32 for sure (an estimate hoping for float32 built the far tail's preview
+            # for nothing on the RGB street, 14-47 ms a plan)
+            near_precision=lambda lengths: _choose_precision(
+                renderer, scene, plan, lengths, step, geometric, far_codes=far_share
+            )[0],
         )
+        if choice is not None:
+            factor, split, predicted, cost, cost_precision = choice
+            far_error = renderer.multires(factor, split, colour_kernel).relative_error
+            near_lengths = _lengths(source, out, (2 * split,) * 2)
+            near = _choose_precision(
+                renderer,
+                scene,
+                plan,
+                near_lengths,
+                step,
+                geometric,
+                far_error=far_error,
+                far_codes=predicted,
+            )
+            if near[0] != cost_precision:  # the far tail's own share and measured error
+                cost += (
+                    fft_cost(near_lengths, machine, near[0])
+                    - fft_cost(near_lengths, machine, cost_precision)
+                ) * convolutions
+            costs["multires"] = cost
+            far_note = (
+                f"far tail beyond {split} px at 1/{factor} resolution: measured relative error "
+                f"{far_error:.3g}, {predicted:.3g} codes predicted on the coarse grid"
+            )
+            if cost < costs[path] or len(renderer.paths) == 1:
+                path = "multires"
+                precision, roundoff, roundoff_codes, precision_note = near
+                notes.append(far_note)
+            else:
+                factor, split = 1, 0
+                notes.append(f"{far_note}: its near part needs {near[0]} transforms, dearer")
     if path in ("fft", "multires") and precision_note is not None:
         notes.append(precision_note)
     if path not in ("fft", "multires"):
-        precision, roundoff = "float64", 0.0
+        precision, roundoff, roundoff_codes = "float64", 0.0, 0.0
     if len(renderer.paths) < len(PATHS):
         notes.append(f"path {path}: of the paths allowed, {', '.join(renderer.paths)}")
     else:
@@ -454,11 +488,13 @@ def make_plan(renderer, scene: Scene) -> GlarePlan:
         **{
             k: v
             for k, v in plan.__dict__.items()
-            if k not in ("path", "costs", "notes", "fft_precision", "roundoff_cd_m2")
+            if k
+            not in ("path", "costs", "notes", "fft_precision", "roundoff_cd_m2", "roundoff_codes")
         }
         | {"path": path, "multires_factor": factor, "split_px": split},
         fft_precision=precision,
         roundoff_cd_m2=roundoff,
+        roundoff_codes=roundoff_codes,
         costs=costs,
         notes=tuple(notes),
     )
@@ -478,53 +514,122 @@ def _lengths(source, out, half) -> tuple[int, int]:
     )
 
 
-def _choose_precision(renderer, scene: Scene, plan: GlarePlan, lengths, step: float, factor):
-    """``'float32'`` transforms when their round-off bound (:func:`fft_roundoff`) keeps
-    :data:`ROUNDOFF_SHARE` of the tolerance: at the darkest pixel's code step, or else, when
-    it could, at each coarse cell's darkest output predicted from the scene's spread on the
-    coarse grid (the render checks it pixel by pixel and falls back to float64). Returns
-    ``(precision, a, note)``."""
-    budget = ROUNDOFF_SHARE * plan.tolerance_codes
+def _choose_precision(
+    renderer,
+    scene: Scene,
+    plan: GlarePlan,
+    lengths,
+    step: float,
+    reach,
+    *,
+    far_error=0.0,
+    far_codes=0.0,
+):
+    """``'float32'`` transforms when their round-off bound (:func:`fft_roundoff`), with the
+    cut's, keeps what the far tail (``far_codes`` predicted) leaves of the tolerance: at the
+    darkest pixel's code step, or else, when it could, at the darkest output each cell of
+    :data:`LEAST_FACTOR` pixels can have
+    (:meth:`~glarelab.glare.rendering.display.CodeBound.roundoff_codes`; the render checks it
+    pixel by pixel and falls back to float64). Returns ``(precision, a, codes, note)``: the
+    bound's absolute part ``a`` and the whole bound in codes for float32, zeros for float64.
+
+    The spread the kernel applied to ``reach`` pixels (the path's; the far tail's, of
+    relative error ``far_error``, covers the whole kernel) gives every pixel of a cell is
+    bounded from below by :func:`_least_spread`, a rigorous bound: the far tail's spread is at
+    least ``1 - far_error`` times the full kernel's. The round-off's relative part, ``r S``
+    at a pixel of spread ``S``, is at most ``r`` times the pixel's own output, which is at
+    most ``L / step(L)`` codes anywhere on the display; its absolute part ``a``, with the
+    cut's bound and what the render adds for float64 round-off, is counted at each cell's
+    lowest output: without a far tail, a bound on what the render's check finds pixel by
+    pixel, so that float32 so planned is kept (the check is the render's, afterwards, all
+    the same). On the 1024² city at night (2,000 lamps, Vos) the coarse preview of the far
+    tail, halved, put outputs at the display's black (0.5 cd/m², steps of 1e-4 cd/m²) where
+    the spread is at least 7.4 cd/m², and predicted 460 codes; this bound is 0.46 codes, 0.43
+    from the exact spread's least value in each cell (0.035 reached).
+
+    The cut, the far tail and the round-off once had fixed shares of the tolerance (a
+    quarter, a half, a quarter); the round-off now takes what the other two leave, since its
+    bound is checked with theirs, pixel by pixel, by the same render."""
+    budget = plan.tolerance_codes - far_codes
     l1, l2 = scene.excess_norms()
     k1, k2 = renderer.kernel_norms(plan.colour_kernel)
-    absolute, relative = fft_roundoff(lengths, l1, l2, k1, k2, np.float32)
+    own, relative = fft_roundoff(lengths, l1, l2, k1, k2, np.float32)
+    absolute = own + renderer._absolute(scene, plan, set())  # the cut's, as the render adds
     relative_codes = relative * renderer.code_bound.relative_codes
     at_darkest = absolute / step + relative_codes
     if at_darkest <= budget:
-        return "float32", absolute, f"float32 transforms: {at_darkest:.2g} codes of round-off"
+        note = f"float32 transforms: {at_darkest:.2g} codes of round-off"
+        return "float32", own, float(at_darkest), note
     if absolute / renderer.code_bound.largest_step > budget:  # nowhere within the budget
-        return (
-            "float64",
-            0.0,
-            (f"float64 transforms: float32 round-off up to {absolute:.3g} cd/m² would show"),
-        )
-    if renderer.tail_bound(plan.colour_kernel) is not None:
-        # the far tail's own grid, or the coarsest: one preview serves both questions
-        preview = _preview(
-            renderer, scene, factor if factor > 1 else MULTIRES_FACTORS[0], plan.colour_kernel
-        )
-        predicted = preview(
-            0.0, absolute=absolute, spread_scale=PREVIEW_MARGIN, relative_extra=relative
+        note = f"float64 transforms: float32 round-off up to {own:.3g} cd/m² would show"
+        return "float64", 0.0, 0.0, note
+    predicted = at_darkest
+    # the round-off bound's constants were measured on the models with a tail bound
+    if renderer.tail_bound(plan.colour_kernel) is not None and far_error < 1.0:
+        least = _least_spread(renderer, scene, plan.colour_kernel, reach)
+        predicted = renderer.code_bound.roundoff_codes(
+            _darkest_cells(scene, LEAST_FACTOR),
+            (1.0 - far_error) * least,
+            absolute=absolute,
+            relative=relative,
         )
         if predicted <= budget:
-            return (
-                "float32",
-                absolute,
-                (
-                    f"float32 transforms: {predicted:.2g} codes of round-off predicted where the "
-                    "glare lifts the darkest pixels"
-                ),
+            note = (
+                f"float32 transforms: at most {predicted:.2g} codes of round-off at the "
+                "darkest output the glare leaves"
             )
-    note = f"float64 transforms: float32 round-off would reach {at_darkest:.2g} codes"
-    return "float64", 0.0, note
+            return "float32", own, predicted, note
+    note = f"float64 transforms: float32 round-off could reach {predicted:.2g} codes"
+    return "float64", 0.0, 0.0, note
+
+
+def _darkest_cells(scene: Scene, factor: int) -> np.ndarray:
+    """The darkest value of each cell of ``factor × factor`` pixels over the channels (made
+    once per scene and factor)."""
+    key = ("darkest", factor)
+    if key not in scene._splats:
+        darkest = over_channels(scene.planes, np.minimum)
+        scene._splats[key] = block_reduce(darkest, np.minimum, factor)
+    return scene._splats[key]
+
+
+def _least_spread(renderer, scene: Scene, colour_kernel: bool, reach) -> np.ndarray:
+    """A lower bound on the spread, cd/m², at every pixel of each cell of
+    :data:`LEAST_FACTOR` pixels and in every channel, for the kernel cut at ``reach`` (made
+    once per scene, kernel and reach).
+
+    Each cell's excess, summed, spread with the kernel's least value between the two cells'
+    pixels (:meth:`~glarelab.glare.GlareRenderer.least_kernel`): every pixel ``q`` of a cell
+    ``A`` adds ``ΔL(q) K(p - q) >= ΔL(q) m(B - A)`` to each pixel ``p`` of cell ``B``. Over
+    the channels, each cell's least sum with the least kernel over the channels bounds every
+    channel: one coarse convolution (on the RGB street, whose blue has the least excess in
+    every cell, it is the blue channel's own bound). The coarse convolution's float64
+    round-off (about ``ε log2 n`` times its largest value) is taken off."""
+    key = ("least", colour_kernel, tuple(reach))
+    if key not in scene._splats:
+        shape = scene.planes.shape[:2]
+        sums = cell_sums(scene.excess, LEAST_FACTOR, scene.source_box, shape).min(axis=2)
+        kernel = renderer.least_kernel(LEAST_FACTOR, colour_kernel, reach)
+        kernel = kernel if kernel.ndim == 2 else kernel.min(axis=2)
+        rows, cols = np.flatnonzero(sums.any(axis=1)), np.flatnonzero(sums.any(axis=0))
+        least = np.zeros(sums.shape)
+        if rows.size:  # a tinted scene's least channel may have no excess at all
+            box = (slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1))
+            least = spread(sums, kernel, box)
+            n = 4 * least.size
+            least -= np.finfo(np.float64).eps * math.log2(n) * sums.sum() * kernel.max()
+        scene._splats[key] = np.maximum(least, 0.0)
+    return scene._splats[key]
 
 
 def _choose_multires(
-    renderer, scene: Scene, plan: GlarePlan, *, lengths_cost: float, precision: str
+    renderer, scene: Scene, plan: GlarePlan, *, lengths_cost: float, near_precision
 ):
     """The cheapest coarse factor and split whose far path fits ``FAR_SHARE`` of the
     tolerance, predicted on the coarse grid with the measured relative error; ``None`` when
-    none fits or none is cheaper than ``lengths_cost``. Returns ``(f, R0, codes, cost)``."""
+    none fits or none is cheaper than ``lengths_cost``. Returns ``(f, R0, codes, cost,
+    precision)``, the cost with the near part in the precision ``near_precision`` (of its FFT
+    lengths) gives."""
     reach = plan.geometric_reach_px  # the far tail covers the whole geometric reach
     budget = FAR_SHARE * plan.tolerance_codes
     source, out = plan.source_box, plan.out_box
@@ -550,9 +655,17 @@ def _choose_multires(
                 fft_length(source[:2], near[:2], 2 * split),
                 fft_length(source[2:], near[2:], 2 * split),
             )
-            cost = far_cost + fft_cost(near_lengths, renderer.costs, precision) * plan.convolutions
+            cost = far_cost + fft_cost(near_lengths, renderer.costs, "float32") * plan.convolutions
             if cost >= lengths_cost:
-                break  # longer splits cost more
+                break  # longer splits cost more, at either precision
+            precision = near_precision(near_lengths)
+            if precision == "float64":
+                cost += plan.convolutions * (
+                    fft_cost(near_lengths, renderer.costs, "float64")
+                    - fft_cost(near_lengths, renderer.costs, "float32")
+                )
+                if cost >= lengths_cost:
+                    continue  # a longer split's near part may take float32
             if preview is None:
                 preview = _preview(renderer, scene, factor, plan.colour_kernel)
             if preview(FAR_ERROR_SAFETY / k**2) > budget:
@@ -560,7 +673,7 @@ def _choose_multires(
             measured = renderer.multires(factor, split, plan.colour_kernel).relative_error
             predicted = preview(measured) if measured < 1.0 else math.inf
             if predicted <= budget:
-                return factor, split, predicted, cost
+                return factor, split, predicted, cost, precision
     return None
 
 
@@ -584,8 +697,9 @@ def _far_cost(renderer, scene: Scene, factor: int, colour_kernel: bool, convolut
 def _preview(renderer, scene: Scene, factor: int, colour_kernel: bool):
     """A function from the far path's relative error to the predicted largest error in codes:
     the scene's spread at the coarse nodes (the model digitised at ``f`` pixels) over the
-    darkest pixel of each cell (made once per scene, factor and kernel: the precision and the
-    far tail ask the same)."""
+    darkest pixel of each cell (made once per scene, factor and kernel). A prediction, not a
+    bound: the cubic splat's negative weights next to a lamp can leave a node's spread far
+    below the spread at the pixels of its cell; the render measures the far tail's error."""
     key = ("preview", factor, colour_kernel)
     if key not in scene._splats:
         coarse = renderer.coarse_kernel(factor, colour_kernel)
@@ -602,22 +716,16 @@ def _preview(renderer, scene: Scene, factor: int, colour_kernel: bool):
         )
         cells = -(-height // factor), -(-width // factor)
         spread_cells = nodes[PAD_NODES : PAD_NODES + cells[0], PAD_NODES : PAD_NODES + cells[1]]
-        darkest = block_reduce(over_channels(scene.planes, np.minimum), np.minimum, factor)
+        darkest = _darkest_cells(scene, factor)
         scene._splats[key] = (darkest[..., None], np.maximum(spread_cells, 0.0)[..., None])
     darkest, spread_cells = scene._splats[key]
 
-    def codes(
-        relative: float,
-        *,
-        absolute: float = 0.0,
-        spread_scale: float = 1.0,
-        relative_extra: float = 0.0,
-    ) -> float:
+    def codes(relative: float) -> float:
         return renderer.code_bound.codes(
             darkest,
-            spread_scale * spread_cells,
-            absolute=absolute,
-            relative=relative / max(1.0 - relative, 1e-12) + relative_extra,
+            spread_cells,
+            absolute=0.0,
+            relative=relative / max(1.0 - relative, 1e-12),
         )
 
     return codes

@@ -48,6 +48,7 @@ from glarelab.glare.rendering.multires import (
     MultiresKernels,
     channels,
     far_spread,
+    least_kernel,
     multires_kernels,
     upsample,
 )
@@ -58,6 +59,7 @@ from glarelab.glare.rendering.scene import Scene
 __all__ = ["SPECTRA_BYTES", "GlareRenderer", "GlareResult", "PlannedGlare"]
 
 SPECTRA_BYTES = 512 * 2**20  # kernel spectra a renderer keeps (the one in use always)
+LEAST_KERNELS = 8  # cell-to-cell least kernels kept (one per grid, reach and channel set)
 # When the FFT's round-off bound exceeds the tolerance, the image is spread directly (no
 # round-off) if that is estimated to cost at most DIRECT_FALLBACK times the FFT.
 DIRECT_FALLBACK = 50.0
@@ -201,6 +203,7 @@ class GlareRenderer:
         self._bounds: dict[bool, TailBound | None] = {}
         self._coarse: dict[tuple, np.ndarray] = {}
         self._multires: dict[tuple, MultiresKernels] = {}
+        self._least: OrderedDict[tuple, np.ndarray] = OrderedDict()
         self._spectra: OrderedDict[tuple, np.ndarray] = OrderedDict()
 
     # what is kept between images ----------------------------------------------------------
@@ -360,6 +363,36 @@ class GlareRenderer:
             self._coarse[key] = coarse.values
         return self._coarse[key]
 
+    def least_kernel(self, factor: int, colour: bool, reach: tuple[int, int]) -> np.ndarray:
+        """The reference kernel's least value between the pixels of two cells of ``factor``
+        pixels, for each offset between the cells
+        (:func:`~glarelab.glare.rendering.multires.least_kernel`).
+
+        Parameters
+        ----------
+        factor
+            Pixels per cell side ``f``.
+        colour
+            Whether the colour kernel (one per channel) is meant, else the luminance kernel.
+        reach
+            ``(rows, columns)``: the kernel is cut beyond these offsets.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(2 ceil(H / f) - 1, 2 ceil(W / f) - 1[, C])``, centred; the last
+            :data:`LEAST_KERNELS` made are kept.
+        """
+        key = (factor, colour, tuple(int(r) for r in reach))
+        if key in self._least:
+            self._least.move_to_end(key)
+        else:
+            values = np.asarray(self.kernel(colour).values, dtype=np.float64)
+            self._least[key] = least_kernel(values, factor, key[2], self.shape)
+            while len(self._least) > LEAST_KERNELS:
+                self._least.popitem(last=False)
+        return self._least[key]
+
     def multires(self, factor: int, split_px: int, colour: bool) -> MultiresKernels:
         """Near and far kernels of one split, with the far path's error measured over the
         whole kernel (kept for the next images).
@@ -503,7 +536,7 @@ class GlareRenderer:
                 "float64 transforms"
             )
             self.say(result["fallback"])
-            plan = replace(plan, fft_precision="float64", roundoff_cd_m2=0.0)
+            plan = replace(plan, fft_precision="float64", roundoff_cd_m2=0.0, roundoff_codes=0.0)
             spread, used, roundoff = self._spread(scene, plan)
             out = compose(scene.planes, spread, self.l_dmax, self.method)
             error = self._error(scene, plan, spread, used, roundoff, relative)
