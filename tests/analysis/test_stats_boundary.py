@@ -141,3 +141,42 @@ def test_corrected_p_of_a_row_that_is_not_rm_anovas_is_refused(row, error, named
     # a dict, or a row without its columns, ended in KeyError 'df1'
     with pytest.raises(error, match=re.escape(named)):
         corrected_p(row)
+
+
+@pytest.mark.parametrize(
+    ("means", "p_adjusted", "error", "match"),
+    [
+        # a pair left out was read as "not different": every level shared one letter
+        ({"a": 1.0, "b": 2.0, "c": 3.0}, {("a", "b"): 0.5}, ValueError,
+         r"p_adjusted has no p-value for 2 pair\(s\) of levels, e\.g\. \('a', 'c'\)"),
+        ({"a": 1.0, "b": 2.0}, {("a", "b"): 0.5, ("a", "a"): 0.01}, ValueError,
+         r"p_adjusted has a level paired with itself: \('a', 'a'\)"),
+        ({"a": 1.0, "b": 2.0}, {("a", "b"): 0.5, ("b", "a"): 0.001}, ValueError,
+         r"p_adjusted has the pair \('a', 'b'\) twice \(also as \('b', 'a'\)\)"),
+        ([1.0, 2.0], {(0, 1): 0.5}, TypeError, r"means must be a dict, got list"),
+        ({"a": 1.0, "b": 2.0}, [0.5], TypeError, r"p_adjusted must be a dict, got list"),
+        ({}, {}, ValueError, r"means must hold at least one level"),
+    ],
+)  # fmt: skip
+def test_similarity_groups_refuses_pair_tables_that_cannot_be_read_one_way(
+    means, p_adjusted, error, match
+):
+    with pytest.raises(error, match=rf"^similarity_groups: {match}"):
+        similarity_groups(means, p_adjusted)
+
+
+def test_similarity_groups_leaves_absent_pairs_out_only_when_asked():
+    letters = similarity_groups({"a": 1.0, "b": 2.0, "c": 3.0}, {("a", "c"): 0.01}, missing="omit")
+    assert letters == {"c": "a", "b": "ab", "a": "b"}
+
+
+def test_rm_anova_refuses_rows_without_their_subject_and_what_is_no_table():
+    from glarelab.analysis.stats import rm_anova
+
+    long = pd.DataFrame(
+        {"subject": [0, 0, 1, 1, np.nan, np.nan], "level": [0, 1] * 3, "y": [1.0, 2, 3, 5, 4, 4]}
+    )
+    with pytest.raises(ValueError, match=r"^rm_anova: column 'subject' has no value in 2 row"):
+        rm_anova(long, "y", "level", "subject")
+    with pytest.raises(TypeError, match=r"^rm_anova: df must be a pandas DataFrame .*got list$"):
+        rm_anova(long.to_dict("records"), "y", "level", "subject")

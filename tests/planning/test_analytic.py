@@ -61,3 +61,25 @@ def test_simulated_power_agrees_with_the_noncentral_f(tmp_path):
     corrected, _ = summarise(records, alpha=0.05, correction="gg")
     assert (corrected["power"].to_numpy() <= power["power"].to_numpy()).all()
     assert (sizes_table["size"] == "partial eta squared").all()
+
+
+@pytest.mark.parametrize(
+    ("bad", "match"),
+    [
+        ({"subjects": 10.5}, r"subjects must be a whole number >= 2; got 10\.5"),
+        ({"subjects": True}, r"subjects must be a whole number >= 2; got True"),
+        ({"error_sd": "1"}, r"error_sd must be a finite number > 0; got '1'"),
+        ({"error_sd": float("inf")}, r"error_sd must be a finite number > 0; got inf"),
+        ({"alpha": "0.05"}, r"alpha must be a number in \(0, 1\); got '0\.05'"),
+    ],
+)
+def test_values_that_cannot_mean_a_design_are_refused_naming_them(bad, match):
+    arguments = {"error_sd": 1.0, "subjects": 8, "alpha": 0.05} | bad
+    with pytest.raises(ValueError, match=match):
+        one_way_power(MEANS, **arguments)
+
+
+def test_an_overwhelming_effect_has_power_one_not_nan():
+    # λ overflows to inf (1e200 / 1e-200), and scipy's ncf.sf is NaN near λ = 1e300
+    assert one_way_power([0.0, 1e200], error_sd=1e-200, subjects=10) == 1.0
+    assert one_way_power([0.0, 1e150], error_sd=1.0, subjects=10) == 1.0

@@ -120,3 +120,20 @@ def test_spencer_with_fewer_participants_than_levels_uses_the_lower_bound(tmp_pa
     assert power.loc["ANOVA: glare_level", "p_used"] == "lower bound"
     assert power.loc["ANOVA: context", "p_used"] == "GG"  # 1 df: sphericity holds
     assert (tmp_path / "power_curves.png").read_bytes()[:4] == b"\x89PNG"
+
+
+@pytest.mark.parametrize(
+    ("arguments", "match"),
+    [
+        ((1, 10, 95), r"level must be a confidence level in \(0, 1\), e\.g\. 0\.95; got 95"),
+        ((1, 10, 0), r"level must be a confidence level in \(0, 1\)"),
+        ((1.5, 10, 0.95), r"successes must be a whole number; got 1\.5"),
+        (("1", 10, 0.95), r"successes must be a whole number; got '1'"),
+        ((1, True, 0.95), r"trials must be a whole number; got True"),
+    ],
+)
+def test_binomial_interval_refuses_what_is_no_count_or_level(arguments, match):
+    # a level of 95 gave (nan, nan) and a level of 0 a narrow interval, without a word
+    successes, trials, level = arguments
+    with pytest.raises(ValueError, match=match):
+        binomial_interval(successes, trials, level=level)

@@ -159,3 +159,36 @@ def test_a_path_that_is_no_exr_file_is_refused(tmp_path, name, match):
     with pytest.raises(ValueError, match=match):
         write_exr(tmp_path / name, np.ones((2, 2)))
     assert sorted(p.name for p in tmp_path.iterdir()) == ["folder.exr"]
+
+
+@pytest.mark.parametrize(
+    ("path", "match"),
+    [
+        ("", r"^path must name an \.exr file; got ''$"),
+        (None, r"^path must name an \.exr file; got None$"),
+        (b"x.exr", r"^path must name an \.exr file; got b'x\.exr'$"),
+        ("a" * 300 + ".exr", r"^path's file name is 304 bytes long; file systems allow 255"),
+    ],
+)
+def test_a_path_that_cannot_be_a_file_name_is_refused_before_writing(
+    tmp_path, monkeypatch, path, match
+):
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(ValueError, match=match):
+        write_exr(path, np.ones((2, 2)))
+    assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("image", ["a string", None, [[1.0, 2.0], [3.0]]])
+def test_an_image_that_is_no_array_is_refused_naming_image(tmp_path, image):
+    with pytest.raises(ValueError, match=r"^image must be an \(H, W\) or \(H, W, 3\) array"):
+        write_exr(tmp_path / "o.exr", image)
+
+
+def test_a_damaged_chunk_is_refused_not_read_as_nan(tmp_path):
+    image = np.random.default_rng(0).uniform(0, 1, (64, 64))
+    data = bytearray(write_exr(tmp_path / "good.exr", image).read_bytes())
+    data[-50:-40] = b"\xff" * 10  # inside the last ZIP chunk: OpenEXR decodes NaN, no error
+    (tmp_path / "bad.exr").write_bytes(bytes(data))
+    with pytest.raises(ValueError, match=r"bad\.exr holds NaN or Inf \(damaged, or not a lum"):
+        read_exr(tmp_path / "bad.exr")

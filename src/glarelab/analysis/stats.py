@@ -58,7 +58,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Literal
 
 import numpy as np
@@ -307,12 +307,24 @@ def rm_anova(
     >>> table.loc[0, "sphericity"]
     'estimated'
     """
+    if not isinstance(df, pd.DataFrame):
+        raise TypeError(
+            f"rm_anova: df must be a pandas DataFrame (long format), got {type(df).__name__}"
+        )
     factors = [within] if isinstance(within, str) else list(within)
     if not factors:
         raise ValueError("rm_anova: within must name at least one factor; got none")
     missing = [c for c in (dv, subject, *factors) if c not in df.columns]
     if missing:
         raise ValueError(f"rm_anova: column(s) {missing} not in the data")
+    for column in (subject, *factors):
+        absent = df[column].isna()
+        if absent.any():
+            raise ValueError(
+                f"rm_anova: column {column!r} has no value in {int(absent.sum())} row(s) (first "
+                f"at index {df.index[absent.to_numpy()][0]!r}); every row needs its subject and "
+                "levels"
+            )
     names = [dv, subject, *factors]
     if len(set(names)) < len(names):
         raise ValueError(
@@ -1041,11 +1053,13 @@ def similarity_groups(
     Raises
     ------
     TypeError
-        For a mean, a p-value or ``alpha`` that is not a number (a string, a bool).
+        For ``means`` or ``p_adjusted`` not a dict, or a mean, a p-value or ``alpha`` that
+        is not a number (a string, a bool).
     ValueError
-        For ``alpha`` outside (0, 1), a non-finite mean, a p-value outside [0, 1], a NaN
-        p-value unless ``missing="omit"``, an unknown ``missing``, or a key of ``p_adjusted``
-        that is not a pair of levels of ``means``.
+        For ``alpha`` outside (0, 1), no level, a non-finite mean, a p-value outside [0, 1],
+        a NaN or absent p-value unless ``missing="omit"``, an unknown ``missing``, a key of
+        ``p_adjusted`` that is not a pair of two levels of ``means``, or a pair given twice
+        (in either order).
 
     Notes
     -----
@@ -1062,6 +1076,13 @@ def similarity_groups(
     alpha = _alpha("similarity_groups", alpha)
     if missing not in ("raise", "omit"):
         raise ValueError(f"similarity_groups: missing must be 'raise' or 'omit'; got {missing!r}")
+    for name, value in (("means", means), ("p_adjusted", p_adjusted)):
+        if not isinstance(value, Mapping):
+            raise TypeError(
+                f"similarity_groups: {name} must be a dict, got {type(value).__name__}"
+            )
+    if not means:
+        raise ValueError("similarity_groups: means must hold at least one level; got {}")
     for level, mean in means.items():
         if not is_real(mean):
             raise TypeError(
@@ -1093,6 +1114,32 @@ def similarity_groups(
             raise ValueError(
                 f"similarity_groups: p_adjusted values must be in [0, 1] or NaN; got {p!r} for "
                 f"{pair!r}"
+            )
+    seen: dict[frozenset, tuple] = {}
+    for pair in p_adjusted:
+        if pair[0] == pair[1]:
+            raise ValueError(
+                f"similarity_groups: p_adjusted has a level paired with itself: {pair!r}"
+            )
+        key = frozenset(pair)
+        if key in seen:
+            raise ValueError(
+                f"similarity_groups: p_adjusted has the pair {seen[key]!r} twice (also as "
+                f"{pair!r}); give each pair once"
+            )
+        seen[key] = pair
+    if missing == "raise":
+        absent = [
+            (a, b)
+            for i, a in enumerate(means)
+            for b in list(means)[i + 1 :]
+            if frozenset((a, b)) not in seen
+        ]
+        if absent:
+            raise ValueError(
+                f"similarity_groups: p_adjusted has no p-value for {len(absent)} pair(s) of "
+                f"levels, e.g. {absent[0]!r}; give every pair (missing='omit' leaves untested "
+                "pairs out)"
             )
     levels = sorted(means, key=lambda k: -means[k])
     groups = [set(levels)]

@@ -142,10 +142,17 @@ def check_image(name: str, image: object, *, channels: tuple[int, ...] = ()) -> 
             f"{name} must be a plain array, not a masked array (its mask would be ignored); "
             "give image.filled(value) with the value the masked pixels should have"
         )
-    array = np.asarray(image)
     allowed = "a 2-D (H, W) array"
     if channels:
         allowed += " or a 3-D (H, W, C) array with C in " + str(list(channels))
+    if isinstance(image, str | bytes | dict | set) or image is None:
+        raise ValueError(f"{name} must be {allowed} of numbers; got {type(image).__name__}")
+    try:
+        array = np.asarray(image)
+    except ValueError:  # rows of different lengths
+        raise ValueError(
+            f"{name} must be {allowed} of numbers; got rows of different lengths"
+        ) from None
     if array.ndim == 3 and channels:
         if array.shape[2] not in channels:
             raise ValueError(f"{name} must be {allowed}; got shape {array.shape}")

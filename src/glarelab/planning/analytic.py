@@ -33,6 +33,10 @@ from glarelab.planning.effects import anova_effects
 
 __all__ = ["OneWayJob", "noncentrality", "one_way_power"]
 
+# above this noncentrality the power is 1 to double precision for any design of up to 1,000
+# conditions at alpha >= 1e-12 (scipy's ncf.sf gives 1.0 from about 1e3 on and NaN near 1e300)
+SURE_NONCENTRALITY = 1e8
+
 
 def _means(means_per_condition: Sequence[float]) -> np.ndarray:
     means = np.asarray(means_per_condition, float)
@@ -41,6 +45,24 @@ def _means(means_per_condition: Sequence[float]) -> np.ndarray:
             f"means_per_condition must be at least two finite numbers; got {means_per_condition!r}"
         )
     return means
+
+
+def _subjects(subjects: object) -> int:
+    """``subjects`` as a whole number >= 2 (not a bool, not a fraction)."""
+    if isinstance(subjects, bool | np.bool_) or not isinstance(subjects, int | np.integer):
+        raise ValueError(f"subjects must be a whole number >= 2; got {subjects!r}")
+    if subjects < 2:
+        raise ValueError(f"subjects must be >= 2; got {subjects!r}")
+    return int(subjects)
+
+
+def _error_sd(error_sd: object) -> float:
+    """``error_sd`` as a finite number > 0."""
+    if isinstance(error_sd, bool | np.bool_) or not isinstance(error_sd, int | float | np.number):
+        raise ValueError(f"error_sd must be a finite number > 0; got {error_sd!r}")
+    if not (np.isfinite(error_sd) and error_sd > 0):
+        raise ValueError(f"error_sd must be a finite number > 0; got {error_sd!r}")
+    return float(error_sd)
 
 
 def noncentrality(
@@ -73,11 +95,11 @@ def noncentrality(
     5.0
     """
     means = _means(means_per_condition)
-    if not error_sd > 0:
-        raise ValueError(f"error_sd must be > 0; got {error_sd!r}")
-    if subjects < 2:
-        raise ValueError(f"subjects must be >= 2; got {subjects!r}")
-    return float(subjects * np.sum((means - means.mean()) ** 2) / error_sd**2)
+    error_sd = _error_sd(error_sd)
+    subjects = _subjects(subjects)
+    with np.errstate(over="ignore"):  # an effect of 1e200 σ is λ = inf: the power is 1
+        centred = (means - means.mean()) / error_sd
+        return float(subjects * np.sum(centred**2))
 
 
 def one_way_power(
@@ -105,15 +127,20 @@ def one_way_power(
     >>> round(one_way_power([0.0, 0.3, 0.6, 0.9], error_sd=1.0, subjects=12), 4)
     0.4246
     """
+    if isinstance(alpha, bool | np.bool_) or not isinstance(alpha, int | float | np.number):
+        raise ValueError(f"alpha must be a number in (0, 1); got {alpha!r}")
     if not 0 < alpha < 1:
         raise ValueError(f"alpha must be in (0, 1); got {alpha!r}")
     k = _means(means_per_condition).size
-    df1, df2 = k - 1, (subjects - 1) * (k - 1)
     lam = noncentrality(means_per_condition, error_sd=error_sd, subjects=subjects)
+    df1, df2 = k - 1, (int(subjects) - 1) * (k - 1)
     critical = sps.f.isf(alpha, df1, df2)
     if lam == 0:
         return float(alpha)
-    return float(sps.ncf.sf(critical, df1, df2, lam))
+    power = float(sps.ncf.sf(critical, df1, df2, lam))
+    if not np.isfinite(power) and lam > SURE_NONCENTRALITY:
+        return 1.0  # the noncentral F's tail fails to compute where it is 1 to double precision
+    return power
 
 
 class OneWayJob:

@@ -103,7 +103,8 @@ def binomial_interval(successes: int, trials: int, *, level: float = 0.95) -> tu
     Raises
     ------
     ValueError
-        For counts outside those ranges.
+        For counts that are not whole numbers or outside those ranges, or a level outside
+        (0, 1) (95 is not 0.95).
 
     Examples
     --------
@@ -113,8 +114,17 @@ def binomial_interval(successes: int, trials: int, *, level: float = 0.95) -> tu
     """
     from statsmodels.stats.proportion import proportion_confint
 
+    for name, value in (("successes", successes), ("trials", trials)):
+        if isinstance(value, bool | np.bool_) or not isinstance(value, int | np.integer):
+            raise ValueError(f"{name} must be a whole number; got {value!r}")
     if trials < 1 or not 0 <= successes <= trials:
         raise ValueError(f"need 0 <= successes <= trials, trials >= 1; got {successes}, {trials}")
+    if (
+        isinstance(level, bool | np.bool_)
+        or not isinstance(level, int | float | np.number)
+        or not 0 < level < 1
+    ):
+        raise ValueError(f"level must be a confidence level in (0, 1), e.g. 0.95; got {level!r}")
     low, high = proportion_confint(successes, trials, alpha=1 - level, method="beta")
     return float(low), float(high)
 

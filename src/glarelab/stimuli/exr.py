@@ -7,12 +7,13 @@ Half floats overflow at 65,504, far below the luminance of a lamp or the sun (Sp
 from __future__ import annotations
 
 import errno
+import os
 from pathlib import Path
 
 import numpy as np
 import OpenEXR
 
-from glarelab.files.atomic import atomic_path
+from glarelab.files.atomic import NAME_MAX_BYTES, atomic_path
 
 __all__ = ["read_exr", "write_exr"]
 
@@ -48,20 +49,35 @@ def write_exr(path: str | Path, image: np.ndarray) -> Path:
     ValueError
         For another shape or no pixel, a masked array, values that are not real numbers,
         non-finite or negative values, values above float32's largest (3.4e38, they would be
-        written as inf), or a path that does not end in ``.exr`` or is a folder.
+        written as inf), or a path that is empty or not a path, does not end in ``.exr``, is
+        a folder, or has a file name longer than the file system allows.
     """
     if isinstance(image, np.ma.MaskedArray):
         raise ValueError(
             "image must be a plain array, not a masked array (its mask would not be written); "
             "give image.filled(value)"
         )
-    array = np.asarray(image)
+    if isinstance(image, str | bytes) or image is None:
+        raise ValueError(
+            f"image must be an (H, W) or (H, W, 3) array of luminances; got {type(image).__name__}"
+        )
+    try:
+        array = np.asarray(image)
+    except ValueError:  # rows of different lengths
+        raise ValueError("image must be an (H, W) or (H, W, 3) array; got ragged rows") from None
     if not (array.ndim == 2 or (array.ndim == 3 and array.shape[2] == 3)) or not array.size:
         raise ValueError(
             "image must be (H, W) luminance or (H, W, 3) RGB with at least one pixel; got "
             f"shape {array.shape}"
         )
+    if not isinstance(path, str | os.PathLike) or not str(path):
+        raise ValueError(f"path must name an .exr file; got {path!r}")
     path = Path(path)
+    if len(path.name.encode()) > NAME_MAX_BYTES:
+        raise ValueError(
+            f"path's file name is {len(path.name.encode())} bytes long; file systems allow "
+            f"{NAME_MAX_BYTES}: {path.name[:40]}…"
+        )
     if path.suffix.lower() != ".exr":
         raise ValueError(f"path must name an .exr file (OpenEXR is written); got {str(path)!r}")
     if path.is_dir():
@@ -203,7 +219,8 @@ def read_exr(path: str | Path) -> np.ndarray:
     Raises
     ------
     ValueError
-        If the file is not OpenEXR, is damaged, holds neither a ``Y`` channel nor ``R``,
+        If the file is not OpenEXR, is damaged, holds a NaN or infinite pixel (a damaged
+        chunk decodes as NaN), holds neither a ``Y`` channel nor ``R``,
         ``G`` and ``B``, has more than one part, a ``pixelAspectRatio`` other than 1, or a
         ``dataWindow`` other than its ``displayWindow`` (a data window that equals the display
         window is read whole, wherever its origin).
@@ -237,9 +254,16 @@ def read_exr(path: str | Path) -> np.ndarray:
             "so write the file with either (not both)"
         )
     if {"R", "G", "B"} <= channels.keys():
-        return np.stack([channels[c] for c in "RGB"], axis=-1).astype(np.float32, copy=False)
-    if "Y" in channels:
-        return channels["Y"].astype(np.float32, copy=False)
-    raise ValueError(
-        f"{path} must hold a Y channel or R, G, B channels; it holds {sorted(channels)}"
-    )
+        image = np.stack([channels[c] for c in "RGB"], axis=-1).astype(np.float32, copy=False)
+    elif "Y" in channels:
+        image = channels["Y"].astype(np.float32, copy=False)
+    else:
+        raise ValueError(
+            f"{path} must hold a Y channel or R, G, B channels; it holds {sorted(channels)}"
+        )
+    if not np.isfinite(image).all():  # OpenEXR decodes a damaged chunk as NaN, silently
+        raise ValueError(
+            f"{path} holds NaN or Inf (damaged, or not a luminance image): "
+            + _first(image, ~np.isfinite(image))
+        )
+    return image

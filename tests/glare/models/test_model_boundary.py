@@ -186,3 +186,28 @@ def test_a_kernel_too_large_for_the_memory_is_refused_before_allocating(model):
     if not isinstance(model, str):  # the model's own kernel method too
         with pytest.raises(ValueError, match=r"^shape \(100001, 100001\) .* GiB are available"):
             model.kernel(0.01, (100001, 100001))
+
+
+@pytest.mark.parametrize("wavelength_nm", [True, "568", [500.0, "x"], [[500.0], [1.0, 2.0]]])
+def test_a_wavelength_that_is_no_number_is_refused_not_kept_or_read_as_one(wavelength_nm):
+    # True was read as 1.0 nm and '568' kept as a string in the model
+    with pytest.raises(ValueError, match=r"^wavelength_nm must be a number or an array of numb"):
+        VosGlare(wavelength_nm=wavelength_nm)
+
+
+def test_a_colour_flag_given_as_a_word_is_refused():
+    # 'no' is true to `if`: it gave a colour kernel
+    from glarelab.glare import digitise_kernel
+
+    with pytest.raises(ValueError, match=r"^colour must be True or False, got 'no'$"):
+        digitise_kernel("vos", 0.05, (5, 5), colour="no", cache=False)
+
+
+def test_an_obstacle_image_that_passes_no_light_is_refused_not_a_kernel_of_nothing():
+    with pytest.raises(ValueError, match=r"^obstacle_image is 0 \(opaque\) everywhere"):
+        WaveOpticsGlare(obstacle_image=np.zeros((64, 64)), obstacle_spacing_mm=0.1)
+    opaque_centre = np.ones((64, 64))
+    opaque_centre[16:48, 16:48] = 0.0  # 16 mm of it opaque: the whole pupil is covered
+    model = WaveOpticsGlare(obstacle_image=opaque_centre, obstacle_spacing_mm=0.5)
+    with pytest.raises(ValueError, match=r"^the aperture passes no light: .* opaque over the wh"):
+        kernel(model, 0.05, (31, 31))

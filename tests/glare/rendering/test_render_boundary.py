@@ -9,7 +9,15 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from glarelab.glare import GaussianGlare, VosGlare, add_glare, render_glare
+from glarelab.glare import (
+    GaussianGlare,
+    GlareRenderer,
+    VosGlare,
+    add_glare,
+    digitise_kernel,
+    kernel_shape_for,
+    render_glare,
+)
 
 from ..strategies import NOT_A_NUMBER, NOT_FINITE_POSITIVE, SETTINGS
 
@@ -34,7 +42,15 @@ BAD_KERNEL_SHAPE = st.one_of(
     st.text(max_size=3),
     st.integers(1, 9),
 )
+BAD_DISPLAY = st.one_of(
+    st.text(min_size=1, max_size=8),  # a display's name is no table
+    st.just([1.0, 2.0, math.nan]),
+    st.just([2.0, 1.0]),
+    st.just([[1.0], [2.0, 3.0]]),
+    st.just([True, False]),
+)
 BAD = {
+    "display": BAD_DISPLAY,
     "pixel_deg": BAD_PIXEL_DEG,
     "l_dmax_cd_m2": st.one_of(NOT_A_NUMBER, NOT_FINITE_POSITIVE),
     "composition": st.one_of(st.text(max_size=12), st.none(), st.integers()),
@@ -48,6 +64,9 @@ def bad_images():
     of another shape."""
     masked = np.ma.masked_array(IMAGE.copy(), mask=IMAGE > 100)
     return st.one_of(
+        st.just("a string"),
+        st.just(None),
+        st.just([[1.0, 2.0], [3.0]]),  # rows of different lengths
         st.just(masked),
         st.just(IMAGE > 100),
         st.just(IMAGE.astype(complex)),
@@ -152,3 +171,43 @@ def test_valid_extremes_give_finite_images(pixels, log_pixel_deg, model, composi
     assert np.isfinite(result.excess_energy)
     quick = add_glare(image, model, pixel_deg=pixel_deg, composition=composition, cache=False)
     assert np.isfinite(quick).all()
+
+
+@pytest.mark.parametrize(
+    ("kernel", "match"),
+    [
+        (np.ones((3, 3)) / 9, r"^kernel must be a Kernel .*got ndarray$"),
+        (
+            digitise_kernel(VosGlare(), 0.05, (31, 31), cache=False),
+            r"^kernel was digitised by VosGlare, not by the model given \(GaussianGlare\)$",
+        ),
+        (
+            digitise_kernel(GaussianGlare(sigma_deg=0.2), 0.05, (31, 31), cache=False),
+            r"^kernel was digitised by GaussianGlare with sigma_deg = 0.2, not the model's "
+            r"sigma_deg = 0.1$",
+        ),
+    ],
+)
+def test_a_kernel_of_another_model_is_refused_not_rendered_under_this_ones_name(kernel, match):
+    with pytest.raises((ValueError, TypeError), match=match):
+        render_glare(IMAGE, MODEL, pixel_deg=0.05, kernel=kernel, cache=False)
+
+
+def test_the_models_own_kernel_renders_as_without_it():
+    kernel = digitise_kernel(MODEL, 0.05, (31, 31), cache=False)
+    given = render_glare(IMAGE, MODEL, pixel_deg=0.05, kernel=kernel, cache=False).image
+    made = render_glare(IMAGE, MODEL, pixel_deg=0.05, kernel_shape=(31, 31), cache=False).image
+    np.testing.assert_allclose(given, made, rtol=1e-12, atol=0)
+
+
+@pytest.mark.parametrize("shape", ["21x21", (21.5, 21), (True, 21), (0, 5), (5,), None, 7])
+def test_an_image_shape_that_is_not_pixel_counts_is_refused(shape):
+    with pytest.raises(ValueError, match=r"shape must be \(H, W\) of whole pixel counts >= 1"):
+        GlareRenderer(MODEL, pixel_deg=0.05, shape=shape)
+    with pytest.raises(ValueError, match=r"image_shape must be \(H, W\) of whole pixel counts"):
+        kernel_shape_for(shape)
+
+
+def test_a_model_class_is_refused_naming_the_object_to_give():
+    with pytest.raises(ValueError, match=r"e\.g\. VosGlare\(\), not the class VosGlare itself"):
+        add_glare(IMAGE, VosGlare, pixel_deg=0.05, cache=False)

@@ -122,6 +122,11 @@ def _resolve(model: GlareModel | str) -> GlareModel:
                 f"{model!r}" + (f" (names are case-sensitive: {same[0]!r})" if same else "")
             )
         return make_model(model)
+    if isinstance(model, type):
+        raise ValueError(
+            f"model must be a glare model object, e.g. {model.__name__}(), not the class "
+            f"{model.__name__} itself"
+        )
     if isinstance(model, GlareModel) or callable(getattr(model, "kernel", None)):
         return as_model(model)
     raise ValueError(
@@ -169,12 +174,13 @@ def digitise_kernel(
     >>> k.values.shape, round(float(k.energy_outside), 3)
     ((21, 21), 0.094)
     """
-    from glarelab.glare._validation import check_pixel_deg
+    from glarelab.glare._validation import check_flag, check_pixel_deg
     from glarelab.glare.models.cache import resolve_cache
     from glarelab.glare.models.digitise import check_kernel_shape
 
     resolved = _resolve(model)
     check_pixel_deg(pixel_deg)  # before the cache builds a key of them
+    colour = check_flag("colour", colour)
     shape = check_kernel_shape(shape)
     chosen = resolve_cache(cache)
     if chosen is None:

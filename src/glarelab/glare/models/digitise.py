@@ -40,6 +40,7 @@ from glarelab.glare.models._radial import radial_mass, rectangle_mass
 
 __all__ = [
     "Kernel",
+    "check_image_shape",
     "check_kernel_shape",
     "digitise_radial",
     "digitise_radial_quadrant",
@@ -246,13 +247,56 @@ def kernel_shape_for(image_shape: Sequence[int]) -> tuple[int, int]:
     tuple of int
         ``(2H - 1, 2W - 1)``.
 
+    Raises
+    ------
+    ValueError
+        Unless the first two entries are whole numbers >= 1.
+
     Examples
     --------
     >>> kernel_shape_for((300, 200))
     (599, 399)
     """
-    height, width = (int(n) for n in image_shape[:2])
+    height, width = check_image_shape(image_shape, name="image_shape")
     return 2 * height - 1, 2 * width - 1
+
+
+def check_image_shape(shape: Sequence[int], *, name: str = "shape") -> tuple[int, int]:
+    """An image's ``(H, W[, C])`` as ``(H, W)``, each a whole number of pixels >= 1.
+
+    Parameters
+    ----------
+    shape
+        The image's shape; entries after the second (channels) are not looked at.
+    name
+        The argument's name in the error.
+
+    Returns
+    -------
+    tuple of int
+        ``(H, W)``.
+
+    Raises
+    ------
+    ValueError
+        For a string, fewer than two entries, or an entry that is a bool, a fraction or < 1.
+
+    Examples
+    --------
+    >>> check_image_shape((300, 200, 3))
+    (300, 200)
+    """
+    message = f"{name} must be (H, W) of whole pixel counts >= 1, got {shape!r}"
+    if isinstance(shape, str | bytes) or not hasattr(shape, "__len__") or len(shape) < 2:
+        raise ValueError(message)
+    sides = []
+    for side in tuple(shape)[:2]:
+        if isinstance(side, bool | np.bool_) or not isinstance(side, int | np.integer):
+            raise ValueError(message)
+        if side < 1:
+            raise ValueError(message)
+        sides.append(int(side))
+    return sides[0], sides[1]
 
 
 # bytes a pixel of a luminance kernel takes while it is digitised (about 110 measured, as the

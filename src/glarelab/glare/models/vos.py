@@ -95,8 +95,22 @@ AGE_COEFFICIENT_PER_YEAR4: Final = 6.9e-9  # Spencer 1995 eq. 10 (Vos 1984): mov
 AGE_VALIDATED_YEARS: Final = (20.0, 70.0)
 
 
+def _numbers(name: str, values: object) -> np.ndarray:
+    """``values`` as a float array, refusing bools, strings and other non-numbers (which
+    ``asarray(dtype=float)`` would turn into 1.0 or 568.0)."""
+    try:
+        array = np.asarray(values)
+    except ValueError:  # a ragged list
+        raise ValueError(
+            f"{name} must be a number or an array of numbers, got {values!r}"
+        ) from None
+    if array.dtype.kind not in "iuf":
+        raise ValueError(f"{name} must be a number or an array of numbers, got {values!r}")
+    return array.astype(float, copy=False)
+
+
 def _theta(theta_deg: float | np.ndarray) -> np.ndarray:
-    theta = np.asarray(theta_deg, dtype=float)
+    theta = _numbers("theta_deg", theta_deg)
     bad = ~np.isfinite(theta) | (theta < 0)
     if bad.any():
         value = theta[bad].flat[0] if theta.ndim else float(theta)
@@ -105,7 +119,7 @@ def _theta(theta_deg: float | np.ndarray) -> np.ndarray:
 
 
 def _wavelength(wavelength_nm: float | np.ndarray) -> np.ndarray:
-    wavelength = np.asarray(wavelength_nm, dtype=float)
+    wavelength = _numbers("wavelength_nm", wavelength_nm)
     low, high = WAVELENGTH_RANGE_NM
     bad = ~np.isfinite(wavelength) | (wavelength < low) | (wavelength > high)
     if bad.any():

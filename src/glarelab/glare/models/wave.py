@@ -160,6 +160,9 @@ IMAGE_TRANSFER_PARTS = 5
 # the most an obstacle image's pixel edges may refine the grid to sit a quarter of a sample
 # from its samples (grid_for); beyond it the grid is left as the kernel asks
 IMAGE_PHASE_REFINEMENT = 3.0
+# an aperture passing less of the round pupil's light than this is taken as closed (a kernel of
+# no light would render no glare without a word)
+LEAST_OPEN_SHARE = 1e-6
 # an edge's normal this close to an axis is along it (diaphragm_rotation_deg is given in degrees)
 _AXIS_TOLERANCE_DEG = 1e-6
 SPECTRAL_METHODS = ("reference", "scaled", "kakimoto")
@@ -361,7 +364,12 @@ class WaveOpticsGlare(GlareModel):
         for flag in ("eyelashes", "eyelid", "fresnel"):
             check_flag(flag, getattr(self, flag))
         if self.obstacle_image is not None:
-            ap.aperture_from_image(self.obstacle_image, name="obstacle_image")
+            image = ap.aperture_from_image(self.obstacle_image, name="obstacle_image")
+            if not np.any(image > 0):
+                raise ValueError(
+                    "obstacle_image is 0 (opaque) everywhere: no light would reach the retina; "
+                    "give transmittances in [0, 1] with some above 0"
+                )
             check_positive("obstacle_spacing_mm", self.obstacle_spacing_mm, unit="mm")
         if self.pupil_mm is not None:
             check_in_range("pupil_mm", self.pupil_mm, 1.0, 10.0, unit="mm")
@@ -610,7 +618,26 @@ class WaveOpticsGlare(GlareModel):
         self, grid: ap.ApertureGrid, prefilter: tuple[int, int] = ap.PREFILTER_BOX
     ) -> np.ndarray:
         """The aperture over the pupil's bounding box (odd size, centred on ``grid``'s centre),
-        the diaphragm drawn with ``prefilter``."""
+        the diaphragm drawn with ``prefilter``.
+
+        Raises
+        ------
+        ValueError
+            If it passes less than :data:`LEAST_OPEN_SHARE` of the round pupil's light (an
+            obstacle image opaque over the whole pupil): the kernel would hold no light and
+            the glare would vanish without a word.
+        """
+        t = self._drawn_aperture(grid, prefilter)
+        open_mm2 = float(np.abs(t).sum()) * grid.spacing_mm**2
+        if open_mm2 < LEAST_OPEN_SHARE * math.pi * (self.pupil_diameter / 2.0) ** 2:
+            raise ValueError(
+                "the aperture passes no light: the obstacle image (or lid, lashes, particles) "
+                f"is opaque over the whole {self.pupil_diameter:g} mm pupil"
+            )
+        return t
+
+    def _drawn_aperture(self, grid: ap.ApertureGrid, prefilter: tuple[int, int]) -> np.ndarray:
+        """:meth:`_aperture_crop` as drawn, unchecked."""
         rng_lashes, rng_particles = np.random.default_rng(self.seed).spawn(2)
         diameter = self.pupil_diameter
         n_crop = min(grid.n, 2 * (math.ceil(diameter / 2 / grid.spacing_mm) + 2) + 1)

@@ -120,16 +120,30 @@ def display_lut(display, l_dmax_cd_m2: float) -> np.ndarray:
     Raises
     ------
     ValueError
-        For a table that is not 1-D and increasing with at least two codes.
+        For anything but a 1-D, finite, increasing table of numbers with at least two codes
+        (a display's name, a ragged list).
     """
     if display is None:
         l_dmax = check_positive("l_dmax_cd_m2", l_dmax_cd_m2, unit="cd/m²")
         return Display.gamma(l_dmax, black_cd_m2=l_dmax / DISPLAY_CONTRAST).lut
-    lut = np.asarray(getattr(display, "lut", display), dtype=float)
-    if lut.ndim != 1 or lut.size < 2 or not np.all(np.diff(lut) > 0):
-        raise ValueError(
-            "display must have a 1-D increasing code → cd/m² table (.lut) of >= 2 codes"
-        )
+    allowed = (
+        "a Display, a calibration, or a 1-D increasing code → cd/m² table of >= 2 finite "
+        "luminances"
+    )
+    try:
+        lut = np.asarray(getattr(display, "lut", display))
+    except ValueError:  # a ragged list
+        raise ValueError(f"display must be {allowed}; got {display!r}") from None
+    if lut.dtype.kind not in "iuf":
+        raise ValueError(f"display must be {allowed}; got {display!r}")
+    lut = lut.astype(float, copy=False)
+    if (
+        lut.ndim != 1
+        or lut.size < 2
+        or not np.all(np.isfinite(lut))
+        or not np.all(np.diff(lut) > 0)
+    ):
+        raise ValueError(f"display must be {allowed}; got {display!r:.80}")
     return lut
 
 

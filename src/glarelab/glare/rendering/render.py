@@ -22,6 +22,7 @@ from glarelab.glare._validation import (
 from glarelab.glare.models import GlareModel, _resolve
 from glarelab.glare.models.digitise import Kernel, check_kernel_shape
 from glarelab.glare.rendering.compose import check_composition
+from glarelab.glare.rendering.display import display_lut
 from glarelab.glare.rendering.renderer import (
     MAX_RENDER_PIXEL_DEG,
     PRECISIONS,
@@ -217,6 +218,7 @@ def add_glare(
         check_choice("precision", precision, PRECISIONS)
         if kernel_shape is not None:
             check_kernel_shape(kernel_shape, name="kernel_shape")
+        display_lut(display, l_dmax)
         _resolve(model)
         return image.copy()
     renderer = GlareRenderer(

@@ -30,7 +30,12 @@ from glarelab.glare._validation import (
 from glarelab.glare.models import _resolve
 from glarelab.glare.models.base import GlareModel, TailBound
 from glarelab.glare.models.cache import resolve_cache
-from glarelab.glare.models.digitise import Kernel, check_kernel_shape, kernel_shape_for
+from glarelab.glare.models.digitise import (
+    Kernel,
+    check_image_shape,
+    check_kernel_shape,
+    kernel_shape_for,
+)
 from glarelab.glare.rendering._convolve import (
     FLOAT32_NOISE_LIMIT_CD_M2,
     convolution_dtype,
@@ -164,17 +169,12 @@ class GlareRenderer:
         check_choice("precision", precision, PRECISIONS)
         self.method, self.dtype = self.composition, np.dtype(precision)
         self.tolerance_codes = check_tolerance(tolerance_codes)
-        try:
-            height, width = (int(n) for n in tuple(shape)[:2])
-        except (TypeError, ValueError):
-            raise ValueError(f"shape must be (H, W) of positive integers, got {shape!r}") from None
-        if height < 1 or width < 1:
-            raise ValueError(f"shape must be (H, W) of positive integers, got {shape!r}")
-        self.shape = (height, width)
+        self.shape = check_image_shape(shape)
         self.lut = display_lut(display, self.l_dmax)
         self.code_bound = CodeBound(self.lut, self.l_dmax, self.composition)
         self._given = None
         if kernel is not None:
+            _check_kernel_of(kernel, self.model)
             if not np.isclose(kernel.pixel_deg, self.pixel_deg, rtol=1e-12, atol=0):
                 raise ValueError(
                     f"kernel was digitised for pixel_deg = {kernel.pixel_deg!r}, not {pixel_deg!r}"
@@ -719,6 +719,36 @@ class GlareRenderer:
             spread[..., c][near_box[0] : near_box[1], near_box[2] : near_box[3]] += part
         np.maximum(spread, 0.0, out=spread)  # FFT round-off is not non-negative
         return spread, used, roundoff
+
+
+def _check_kernel_of(kernel, model: GlareModel) -> None:
+    """Refuse a ``kernel`` that is not a :class:`Kernel`, or whose description names another
+    model or other parameters than ``model`` (a kernel built by hand, with no ``model`` in its
+    description, is taken as given)."""
+    if not isinstance(kernel, Kernel):
+        raise TypeError(
+            "kernel must be a Kernel digitised by the model (glarelab.glare.digitise_kernel), "
+            f"got {type(kernel).__name__}"
+        )
+    described = kernel.description or {}
+    if "model" not in described:
+        return
+    own = model.description(len(kernel.shape) == 3)
+    if described["model"] != own["model"]:
+        raise ValueError(
+            f"kernel was digitised by {described['model']}, not by the model given "
+            f"({own['model']})"
+        )
+    scalar = (int, float, str, bool, type(None))
+    for key, value in own.items():
+        given = described.get(key, value)
+        if key == "colour" or not isinstance(value, scalar) or not isinstance(given, scalar):
+            continue
+        if given != value:
+            raise ValueError(
+                f"kernel was digitised by {own['model']} with {key} = {given!r}, not the "
+                f"model's {key} = {value!r}"
+            )
 
 
 def check_tolerance(tolerance_codes: float | None) -> float:
