@@ -69,3 +69,28 @@ def test_participant_ids_are_file_name_safe_and_refuse_bad_numbers():
     assert participant_id(0, 1) == "rep000000-p001"
     with pytest.raises(ValueError, match="replication must be >= 0 and number >= 1"):
         participant_id(-1, 1)
+
+
+def test_a_ctrl_c_during_a_simulated_session_stops_the_study_not_one_replication(
+    yoshida, monkeypatch
+):
+    # the session took the SIGINT as its end (status aborted), the analysis refused the short
+    # session, and power counted a failed replication, went on and ended with 0
+    import os
+    import signal
+
+    import glarelab.planning.simulate as simulate
+
+    class Interrupted(SimulatedFrontend):
+        shown = 0
+
+        def show(self, screen):
+            Interrupted.shown += 1
+            if Interrupted.shown == 5:
+                os.kill(os.getpid(), signal.SIGINT)
+            return super().show(screen)
+
+    monkeypatch.setattr(simulate, "SimulatedFrontend", Interrupted)
+    protocol, stimuli = yoshida
+    with pytest.raises(KeyboardInterrupt, match="SIGINT"):
+        simulate_replication(protocol, 0, participants=(2,), seed=5, stimuli=stimuli)

@@ -107,7 +107,7 @@ def _simulate_sessions(
     csvs = []
     for participant in participants:
         observer = make_observer(protocol, participant, seed=seed, stimuli=looks_at)
-        run_session(
+        sidecar = run_session(
             protocol,
             participant,
             out=out,
@@ -116,6 +116,10 @@ def _simulate_sessions(
             simulated=True,
             participant_info={"simulated_observer_seed": seed},
         )
+        if sidecar["status"] != "completed":
+            # a simulated session ends early only when it is told to stop (Ctrl-C, SIGTERM):
+            # the whole study stops, rather than count this replication as a failed one
+            raise KeyboardInterrupt(sidecar["runs"][-1].get("ended_by") or sidecar["status"])
         files = session_files(out, participant, protocol.study, 1)
         csvs += [f for f in files if f.suffix == ".csv"]
     return csvs
