@@ -36,7 +36,7 @@ room_lux = 10.0
 
 [stimulus]
 size_deg = 1.6
-disk_deg = 0.25
+disk_deg = 0.24
 supersample = 1
 target_start_cd_m2 = [150.0]
 gap_deg = 0.3

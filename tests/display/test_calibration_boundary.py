@@ -171,3 +171,48 @@ def test_a_calibration_made_in_python_is_admitted_only_as_its_file_would_be(tmp_
     invented = replace(forged, verification={"measurements": [], "tolerance_fraction": 0.5})
     with pytest.raises(ValueError, match="without verification measurements"):
         usable_calibration(invented)
+
+
+@pytest.mark.parametrize(
+    ("text", "match"),
+    [
+        # the second luminance column was read and the first ignored
+        ("code,luminance_cd_m2,luminance_cd_m2\n0,0.5,1\n255,100,2\n",
+         r"line 1: the column\(s\) \['luminance_cd_m2'\] appear more than once"),
+        # Python's int() reads '12_8' as 128
+        ("code,luminance_cd_m2\n0,0.5\n12_8,50\n255,100\n",
+         r"line 3: code must be a whole number .*got code '12_8'"),
+        ("code,luminance_cd_m2\n0,0.5\n128,5_0\n255,100\n",
+         r"line 3: .*luminance_cd_m2 '5_0'"),
+        ("code,luminance_cd_m2\n0,0.5\n128.0,50\n255,100\n", r"line 3: .*got code '128\.0'"),
+    ],
+)  # fmt: skip
+def test_a_readings_cell_is_read_as_written_not_as_python_reads_numbers(tmp_path, text, match):
+    path = tmp_path / "readings.csv"
+    path.write_text(text)
+    with pytest.raises(ValueError, match=match):
+        read_readings(path)
+
+
+def test_numbers_as_people_write_them_are_read(tmp_path):
+    path = tmp_path / "readings.csv"
+    path.write_text("code,luminance_cd_m2\n0, 0.5\n+128,5e1\n255,1.0E2\n")
+    assert read_readings(path) == [(0, 0.5), (128, 50.0), (255, 100.0)]
+
+
+@pytest.mark.parametrize(
+    ("arguments", "match"),
+    [
+        ({"max_cd_m2": 100.0, "black_cd_m2": -1.0}, r"^black_cd_m2 must be 0 .*got -1\.0$"),
+        ({"max_cd_m2": 1.0, "black_cd_m2": 5.0}, r"^black_cd_m2 = 5\.0 must be below max_cd_m2"),
+        ({"max_cd_m2": math.nan, "black_cd_m2": 0.5}, r"^max_cd_m2 must be .*got nan$"),
+        ({"max_cd_m2": "100", "black_cd_m2": 0.5}, r"^max_cd_m2 must be .*got '100'$"),
+        ({"max_cd_m2": 100.0, "black_cd_m2": 0.5, "bit_depth": 9}, r"^bit_depth must be one"),
+    ],
+)
+def test_a_synthetic_display_is_refused_naming_the_argument_not_readings(arguments, match):
+    # the messages spoke of readings and codes the caller never gave
+    from glarelab.display.calibration import synthetic_calibration
+
+    with pytest.raises(ValueError, match=match):
+        synthetic_calibration(**({"bit_depth": 8} | arguments))

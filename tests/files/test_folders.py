@@ -78,3 +78,11 @@ def test_a_folder_that_takes_no_new_folder_is_named_not_the_staging_name():
     ) as no:
         staging_folder(Path("/proc/rep"))
     assert "building" not in str(no.value)
+
+
+def test_a_folder_where_the_listing_goes_is_named_not_a_raw_error(tmp_path):
+    (tmp_path / LISTING).mkdir()
+    (tmp_path / "out.exr").write_bytes(b"x")
+    with pytest.raises(ValueError, match=r"\.glarelab-files\.json is not a file \(a folder\?\)"):
+        record_files(tmp_path, "render")
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == [LISTING]

@@ -89,3 +89,13 @@ def test_readings_of_the_wrong_type_are_a_type_error(value):
 
     with pytest.raises(TypeError, match=r"^readings: readings must be a sequence of \(code"):
         fit_calibration(value, bit_depth=10)
+
+
+@pytest.mark.parametrize("text", ["", "  "])
+def test_an_empty_path_is_refused_not_read_as_the_working_folder(text):
+    from glarelab.files.inputs import as_path
+
+    with pytest.raises(ValueError, match=r"^protocol: the path is empty \(an unset shell var"):
+        as_path(text, what="protocol")
+    with pytest.raises(ValueError, match=r"^protocol: the path is empty"):
+        load_protocol(text)

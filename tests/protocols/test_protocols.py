@@ -75,7 +75,7 @@ def method(data, index):
         ),
         (
             lambda d: method(d, 0)["parameters"].update(sigma=0.3),
-            r"glare\.methods\[0\]\.parameters: .*unexpected keyword argument 'sigma'",
+            r"glare\.methods\[0\]\.parameters: 'gaussian' has no parameter 'sigma'; its parameters",
         ),
         (
             lambda d: method(d, 1).update(model="kakimoto"),
@@ -308,12 +308,19 @@ def test_names_that_differ_only_by_case_are_refused(study, edit, match):
         ("yoshida2008",
          lambda d: d.update(background={"kind": "uniform", "cd_m2": 1000.0}),
          r"background\.cd_m2 = 1000\.0: above what the display shows \(display\.max_cd_m2"),
+        # a disk of 0.85 display pixels is drawn as the render pixels whose centres it holds:
+        # 1.78 × its light; on a 16 × 16 display it vanished (every reference the background)
+        ("yoshida2008", lambda d: d["stimulus"].update(disk_deg=0.01),
+         r"stimulus\.disk_deg = 0\.01: 0\.85 display pixels across at 0\.01182°/px, so drawn "
+         r"in pixels \(supersample = 2\) the disk holds 1\.780 × its light \(allowed: within 1%\)"),
+        ("yoshida2008", lambda d: d["stimulus"].update(disk_deg=0.05, supersample=1),
+         r"stimulus\.disk_deg = 0\.05: 4\.23 display pixels .* holds 0\.926 × its light"),
     ],
     ids=["steps fine to coarse", "duplicate strengths", "sky of mean 0",
          "strengths descending", "duplicate presentation_ms", "presentation_ms one flash",
          "levels out of order",
          "levels repeat", "uniform field above the display",
-         "uniform background above the display"],
+         "uniform background above the display", "disk below a pixel", "disk of 4 pixels"],
 )  # fmt: skip
 def test_values_that_cannot_mean_what_they_say_are_refused(study, edit, match):
     data = copy.deepcopy(raw(study))
@@ -391,3 +398,60 @@ def test_a_shipped_name_that_is_also_a_file_here_is_refused_and_a_folder_does_no
     assert protocol_path(Path("yoshida2008")) == Path("yoshida2008")  # a Path is a path
     (tmp_path / "spencer1995").mkdir()  # e.g. a stimulus set built with --out spencer1995
     assert protocol_path("spencer1995") == SHIPPED / "spencer1995.toml"
+
+
+@pytest.mark.parametrize(
+    ("disk_deg", "pixel_deg", "supersample"),
+    [(0.3, 0.01182, 2), (0.01, 0.01182, 2), (0.3, 0.2, 1), (0.05, 0.0118, 1), (0.1, 0.0118, 4),
+     (1.0, 0.05, 3)],
+)  # fmt: skip
+def test_the_disks_light_is_counted_as_the_build_draws_it(disk_deg, pixel_deg, supersample):
+    import math
+
+    import numpy as np
+
+    from glarelab.protocols.matching import disk_light_ratio
+
+    sides = round(3.2 / pixel_deg)
+    n = (sides + 1 - sides % 2) * supersample
+    fine = pixel_deg / supersample
+    axis = (np.arange(n) - (n - 1) / 2) * fine  # as build_matching places the render's pixels
+    drawn = (np.hypot(axis[None, :], axis[:, None]) <= disk_deg / 2).sum() * fine**2
+    expected = drawn / (math.pi * (disk_deg / 2) ** 2)
+    assert disk_light_ratio(disk_deg, 3.2, pixel_deg, supersample) == pytest.approx(
+        expected, rel=1e-12
+    )
+
+
+def test_an_unknown_model_parameter_is_named_with_the_models_parameters():
+    data = copy.deepcopy(raw("yoshida2008"))
+    data["glare"]["methods"][0]["parameters"]["sigma"] = 1.0
+    with pytest.raises(
+        ProtocolError,
+        match=r"glare\.methods\[0\]\.parameters: 'gaussian' has no parameter 'sigma'; its "
+        r"parameters are sigma_deg, sampling, normalisation",
+    ):
+        parse_protocol(data, source="test.toml", folder=PROTOCOLS)
+
+
+def test_a_scale_of_one_rating_is_named_once_with_its_values():
+    data = copy.deepcopy(raw("luidolt2020"))
+    data["questionnaire"]["scale_max"] = data["questionnaire"]["scale_min"]
+    with pytest.raises(ProtocolError) as raised:
+        parse_protocol(data, source="test.toml", folder=PROTOCOLS)
+    text = str(raised.value)
+    assert "questionnaire.scale_min = 1: must be below questionnaire.scale_max = 1" in text
+    assert "1 problem(s)" in text  # not one more per category's rating probabilities
+
+
+def test_a_table_whose_keys_all_have_defaults_may_be_left_out():
+    # docs/protocols.md gives [[questionnaire.questions]] the default []; leaving the whole
+    # [questionnaire] out was refused as a missing table
+    data = copy.deepcopy(raw("yoshida2008"))
+    del data["questionnaire"]
+    protocol = parse_protocol(data, source="test.toml", folder=PROTOCOLS)
+    assert protocol["questionnaire"]["questions"] == []
+    data = copy.deepcopy(raw("yoshida2008"))
+    del data["stimulus"]  # its disk and size are required
+    with pytest.raises(ProtocolError, match=r"\[stimulus\]: missing table"):
+        parse_protocol(data, source="test.toml", folder=PROTOCOLS)

@@ -24,6 +24,7 @@ __all__ = [
     "check_memory",
     "claim_output",
     "count",
+    "folder_to_write",
     "inside_whole_output",
     "log",
     "number",
@@ -353,11 +354,35 @@ def writes_into(path: Path, names: list[str], command: str) -> Path:
     ValueError
         If ``path`` is a file, or a file of ``names`` is there and glarelab did not write it.
     """
+    path = folder_to_write(path, names)
+    path.mkdir(parents=True, exist_ok=True)
+    claim_files(path, names, command)
+    return path
+
+
+def folder_to_write(path: Path, names: list[str]) -> Path:
+    """:func:`writes_into`'s checks of ``path`` alone, before anything is made.
+
+    Parameters
+    ----------
+    path
+        The folder.
+    names
+        The files to be written in it (named in the error).
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``, a symbolic link loop resolved away.
+
+    Raises
+    ------
+    ValueError
+        If ``path`` is a file.
+    """
     path = without_link_loop(path, what=", ".join(names))
     if path.exists() and not path.is_dir():
         raise ValueError(f"{path} is a file; give a folder for {', '.join(names)}")
-    path.mkdir(parents=True, exist_ok=True)
-    claim_files(path, names, command)
     return path
 
 

@@ -13,6 +13,7 @@ from glarelab import glare
 from glarelab.display.calibration import Calibration
 from glarelab.files.atomic import atomic_path, write_text
 from glarelab.files.inputs import input_file
+from glarelab.glare._validation import check_image
 from glarelab.stimuli.apertures import load_aperture_image
 from glarelab.stimuli.exr import read_exr, write_exr
 from glarelab.stimuli.preview import preview_png, psf_figure, psf_png
@@ -23,6 +24,7 @@ from .common import (
     check_memory,
     claim_output,
     count,
+    folder_to_write,
     number,
     output_file,
     writes_into,
@@ -248,6 +250,12 @@ def _render(args: argparse.Namespace) -> int:
                 "inputs of the same file name would write the same output: "
                 f"{sorted({n for n in names if names.count(n) > 1})}"
             )
+        folder_to_write(Path(output), names)
+        for source in inputs:  # every input read and checked before any output is made
+            try:
+                check_image("luminance", read_exr(source), channels=(3,))
+            except ValueError as error:
+                raise ValueError(f"input {source}: {error}; nothing was rendered") from None
         writes_into(Path(output), names, "render")
         targets = [Path(output) / name for name in names]
     else:

@@ -33,6 +33,7 @@ import hashlib
 import io
 import itertools
 import json
+import re
 import warnings
 from dataclasses import dataclass, field, replace
 from functools import cached_property
@@ -70,6 +71,12 @@ MAX_DISPLAY_CD_M2 = 1e5
 # above it: a positive reading below it (5e-324, a subnormal float) is no measurement; a
 # black below the photometer's floor is read as 0
 MIN_READING_CD_M2 = 1e-6
+# a readings cell as a person writes a number: digits, a decimal point, an exponent (nan and
+# inf are read, then refused as readings with their line); not Python's '12_8' (= 128)
+WHOLE_NUMBER = re.compile(r"[+-]?\d+")
+DECIMAL_NUMBER = re.compile(
+    r"[+-]?(\d+(\.\d*)?|\.\d+)([eE][+-]?\d+)?|[+-]?(nan|inf|infinity)", re.IGNORECASE
+)
 READING_RANGE = (
     f"0 (below the photometer's floor) or {MIN_READING_CD_M2:g}-{MAX_DISPLAY_CD_M2:g} cd/m² "
     "(no display is brighter, no photometer reads less: a typo or a unit slip?)"
@@ -646,11 +653,15 @@ def _check_status(calibration: Calibration, source: str) -> None:
         )
 
 
+def _check_bit_depth(bit_depth: object) -> None:
+    if not is_whole(bit_depth) or bit_depth not in (8, 10, 12, 16):
+        raise ValueError(f"bit_depth must be one of 8, 10, 12, 16; got {bit_depth!r}")
+
+
 def _check_readings(
     readings: list[tuple[int, float]] | np.ndarray, bit_depth: int, source: str
 ) -> list[tuple[int, float]]:
-    if not is_whole(bit_depth) or bit_depth not in (8, 10, 12, 16):
-        raise ValueError(f"bit_depth must be one of 8, 10, 12, 16; got {bit_depth!r}")
+    _check_bit_depth(bit_depth)
     if isinstance(readings, np.ndarray):  # one (code, cd/m²) per row: codes as whole floats
         if readings.ndim != 2 or readings.shape[1] != 2 or readings.dtype.kind not in "iuf":
             raise ValueError(
@@ -748,6 +759,13 @@ def read_readings(path: str | Path) -> list[tuple[int, float]]:
             f"the columns, comma-separated (code,luminance_cd_m2; other columns are ignored); "
             f"it is {first[:80]!r}"
         )
+    names = [name.strip() for name in reader.fieldnames or []]
+    repeated = sorted({name for name in names if names.count(name) > 1 and name})
+    if repeated:
+        raise ValueError(
+            f"{path}, line 1: the column(s) {repeated} appear more than once; which one holds "
+            "the readings? Name each column once"
+        )
     for line, row in enumerate(reader, start=2):
         if None in row:  # more cells than columns: a decimal comma splits a number
             cells = [row[name] or "" for name in reader.fieldnames] + list(row[None])
@@ -766,12 +784,15 @@ def read_readings(path: str | Path) -> list[tuple[int, float]]:
             raise ValueError(
                 f"{path}, line {line}: code and luminance_cd_m2 both need a value; got {row}"
             )
-        try:
-            code, value = int(row["code"]), float(row["luminance_cd_m2"])
-        except ValueError:
+        code_text, value_text = row["code"].strip(), row["luminance_cd_m2"].strip()
+        # as written, not as Python reads numbers ('12_8' is 128 to int(), '1_0.5' 10.5)
+        if not (WHOLE_NUMBER.fullmatch(code_text) and DECIMAL_NUMBER.fullmatch(value_text)):
             raise ValueError(
-                f"{path}, line {line}: code and luminance_cd_m2 must be numbers; got {row}"
-            ) from None
+                f"{path}, line {line}: code must be a whole number and luminance_cd_m2 a "
+                f"decimal number (e.g. 512,94.83); got code {code_text!r}, luminance_cd_m2 "
+                f"{value_text!r}"
+            )
+        code, value = int(code_text), float(value_text)
         if not _plausible_reading(value):  # named as written in the file
             raise ValueError(
                 f"{path}, line {line}: code {code} has luminance_cd_m2 "
@@ -885,7 +906,19 @@ def synthetic_calibration(
     Calibration
         ``black + (max − black) (code / top)^2.2`` read at 33 codes and fitted (``'pchip'``),
         status ``synthetic``.
+
+    Raises
+    ------
+    ValueError
+        For a luminance no photometer reads off a display, a black not below the white, or
+        a bit depth other than 8, 10, 12 or 16.
     """
+    for name, value in (("max_cd_m2", max_cd_m2), ("black_cd_m2", black_cd_m2)):
+        if not is_real(value) or not _plausible_reading(float(value)):
+            raise ValueError(f"{name} must be {READING_RANGE}; got {value!r}")
+    if not black_cd_m2 < max_cd_m2:
+        raise ValueError(f"black_cd_m2 = {black_cd_m2!r} must be below max_cd_m2 = {max_cd_m2!r}")
+    _check_bit_depth(bit_depth)
     top = 2**bit_depth - 1
     codes = np.unique(np.round(np.linspace(0, top, 33)).astype(int))
     values = black_cd_m2 + (max_cd_m2 - black_cd_m2) * (codes / top) ** SYNTHETIC_GAMMA

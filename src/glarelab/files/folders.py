@@ -334,7 +334,13 @@ def _write_listing(
     listing: dict = {"written_by": "glarelab", "files": dict(sorted(files.items()))}
     if hashes:
         listing["sha256"] = dict(sorted(hashes.items()))
-    write_text(folder / LISTING, json.dumps(listing, indent=1) + "\n")
+    path = folder / LISTING
+    if path.is_dir() or (path.exists() and not path.is_file()):
+        raise ValueError(
+            f"{path} is not a file (a folder?): glarelab keeps the list of the files it wrote "
+            f"into {folder} under that name; move it away"
+        )
+    write_text(path, json.dumps(listing, indent=1) + "\n")
 
 
 def _aside_stem(final: Path) -> str:

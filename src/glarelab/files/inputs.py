@@ -46,6 +46,8 @@ def as_path(path: object, *, what: str) -> Path:
     ------
     TypeError
         For anything else, naming ``what`` and the value.
+    ValueError
+        For an empty text (``Path('')`` would be the working folder).
 
     Examples
     --------
@@ -56,6 +58,8 @@ def as_path(path: object, *, what: str) -> Path:
     """
     if isinstance(path, Path):
         return path
+    if isinstance(path, str) and not path.strip():  # Path('') is the working folder
+        raise ValueError(f"{what}: the path is empty (an unset shell variable?); give a file")
     if isinstance(path, str) or (
         isinstance(path, os.PathLike) and isinstance(os.fspath(path), str)
     ):

@@ -297,6 +297,21 @@ def check_glare_model(
             f"{where}.{model_key} = {model!r}: must be one of {', '.join(map(repr, names))}"
         )
         return
+    import dataclasses
+
+    from glarelab.glare import GLARE_MODELS
+
+    cls = GLARE_MODELS[model]
+    if dataclasses.is_dataclass(cls) and isinstance(parameters, Mapping):
+        allowed = [f.name for f in dataclasses.fields(cls) if f.init]
+        unknown = [key for key in parameters if key not in allowed]
+        if unknown:
+            problems.append(
+                f"{where}.{parameters_key}: {model!r} has no parameter "
+                f"{', '.join(map(repr, unknown))}; its parameters are "
+                f"{', '.join(allowed)}"
+            )
+            return
     try:
         glare_model(model, parameters or {})
     except TypeError as error:

@@ -289,6 +289,8 @@ def validate(data: Mapping[str, Any], schema: Schema, path: str, problems: list[
             result[name] = _tables(data.get(name), spec, where, problems)
         elif isinstance(spec, Mapping):
             table = data.get(name)
+            if table is None and _all_optional(spec):
+                table = {}  # every key has a default: the table left out is the defaults
             if table is None:
                 problems.append(f"[{where}]: missing table")
                 continue
@@ -303,6 +305,18 @@ def validate(data: Mapping[str, Any], schema: Schema, path: str, problems: list[
         else:
             result[name] = spec.default
     return result
+
+
+def _all_optional(schema: Mapping) -> bool:
+    """Whether every key of a table (and of the tables in it) has a default."""
+    for spec in schema.values():
+        if isinstance(spec, Tables | Key):
+            if spec.required:
+                return False
+        elif isinstance(spec, Mapping):
+            if not _all_optional(spec):
+                return False
+    return True
 
 
 def _tables(value: Any, spec: Tables, where: str, problems: list[str]) -> list[dict] | None:

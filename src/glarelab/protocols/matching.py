@@ -11,6 +11,7 @@ follow-up analyses named by level positions.
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -173,6 +174,57 @@ def reference_name(method: str, label: str) -> str:
 
 
 MAX_RENDER_PX = 16384  # a side rendered (with supersampling) beyond this needs > 20 GB
+# the disk is drawn as the render's pixels whose centres lie within its radius: their light
+# must be the disk's (π r² × its luminance) to within this fraction (a disk of a few pixels
+# is not: 0.85 px across holds 1.78 × its light, 0.2 px none)
+DISK_LIGHT_TOLERANCE = 0.01
+
+
+def disk_light_ratio(
+    disk_deg: float, size_deg: float, pixel_deg: float, supersample: int
+) -> float:
+    """The light of the disk as :func:`glarelab.stimuli.matching.build_matching` draws it,
+    as a multiple of the disk's own (``π (disk_deg / 2)²`` times its luminance).
+
+    Parameters
+    ----------
+    disk_deg
+        The disk's diameter, degrees.
+    size_deg
+        The image's side, degrees (an odd number of display pixels, the disk on the middle
+        one).
+    pixel_deg
+        A display pixel, degrees.
+    supersample
+        Render pixels per display pixel along each axis.
+
+    Returns
+    -------
+    float
+        The render pixels whose centres lie within the radius, times their area, over the
+        disk's area; 1 for a disk drawn exactly.
+
+    Examples
+    --------
+    >>> round(disk_light_ratio(0.3, 3.2, 0.01182, 2), 4)
+    0.9962
+    >>> round(disk_light_ratio(0.01, 3.2, 0.01182, 2), 2)
+    1.78
+    """
+    sides = round(size_deg / pixel_deg)
+    n = (sides + 1 - sides % 2) * supersample
+    fine = pixel_deg / supersample
+    radius = disk_deg / 2.0
+    centre = (n - 1) / 2.0
+    count = 0
+    for row in range(n):
+        y = (row - centre) * fine
+        if abs(y) > radius:
+            continue
+        half = math.sqrt(radius * radius - y * y) / fine  # in render pixels
+        low, high = max(0, math.ceil(centre - half)), min(n - 1, math.floor(centre + half))
+        count += max(0, high - low + 1)
+    return count * fine * fine / (math.pi * radius * radius)
 
 
 def _check_layout(p: dict, problems: list[str]) -> None:
@@ -197,6 +249,18 @@ def _check_layout(p: dict, problems: list[str]) -> None:
         problems.append(
             f"stimulus.size_deg = {s['size_deg']!r} at supersample = {s['supersample']!r}: "
             f"{side * s['supersample']:.0f} px a side to render, above {MAX_RENDER_PX}"
+        )
+        return
+    if s["disk_deg"] >= s["size_deg"]:
+        return  # named by the caller
+    ratio = disk_light_ratio(s["disk_deg"], s["size_deg"], deg, s["supersample"])
+    if abs(ratio - 1.0) > DISK_LIGHT_TOLERANCE:
+        problems.append(
+            f"stimulus.disk_deg = {s['disk_deg']!r}: {s['disk_deg'] / deg:.2f} display pixels "
+            f"across at {deg:.4g}°/px, so drawn in pixels (supersample = "
+            f"{s['supersample']!r}) the disk holds {ratio:.3f} × its light (allowed: within "
+            f"{DISK_LIGHT_TOLERANCE:.0%}); give a larger disk_deg, a larger supersample or a "
+            "display of smaller pixels"
         )
 
 

@@ -192,8 +192,12 @@ def check(p: dict, problems: list[str], folder: Path | None) -> None:
     """
     q = p["questionnaire"]
     _check_scene(p, problems)
-    if q["scale_min"] >= q["scale_max"]:
-        problems.append("questionnaire.scale_min: must be below questionnaire.scale_max")
+    scale_ok = q["scale_min"] < q["scale_max"]
+    if not scale_ok:
+        problems.append(
+            f"questionnaire.scale_min = {q['scale_min']!r}: must be below "
+            f"questionnaire.scale_max = {q['scale_max']!r} (a scale of at least two ratings)"
+        )
     if len(q["categories"]) != len(q["prompts"]):
         problems.append("questionnaire.prompts: one prompt per category is needed")
     size = q["scale_max"] - q["scale_min"] + 1
@@ -207,7 +211,7 @@ def check(p: dict, problems: list[str], folder: Path | None) -> None:
         where = f"observer.ratings.{category!r}"
         if category not in q["categories"]:
             problems.append(f"{where}: not a category of questionnaire.categories")
-        elif (
+        elif scale_ok and (
             not isinstance(probabilities, list)
             or len(probabilities) != size
             or not all(isinstance(x, int | float) and 0 <= x <= 1 for x in probabilities)

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from glarelab.glare import HybridGlare, VosGlare, WaveOpticsGlare
+from glarelab.glare import HybridGlare, VosGlare, WaveOpticsGlare, digitise_kernel
 from glarelab.glare.models import apertures as ap
 from glarelab.glare.models.wave import (
     compare_spectral_methods,
@@ -287,3 +287,17 @@ def test_the_fast_grid_keeps_the_one_sample_drawing_beside_the_prefilters(apertu
     plain = {"eyelashes": False, "eyelid": False, "particles": 0, **aperture}
     assert WaveOpticsGlare(**plain)._prefilter() != ap.PREFILTER_BOX
     assert WaveOpticsGlare(**plain, aperture_grid="fast")._prefilter() == ap.PREFILTER_BOX
+
+
+@pytest.mark.parametrize("colour", [False, True])
+def test_under_luidolts_convention_only_light_beyond_the_support_is_booked_outside(colour):
+    # the pupil's share of the light was booked as outside: 0.938 for a 2 mm pupil, where the
+    # light beyond the 31² support is 0.012 of what enters the eye
+    own = WaveOpticsGlare(pupil_mm=2.0)
+    luidolt = WaveOpticsGlare(pupil_mm=2.0, pupil_convention="Luidolt2020")
+    unit = digitise_kernel(own, 0.05, (31, 31), colour=colour, cache=False)
+    scaled = digitise_kernel(luidolt, 0.05, (31, 31), colour=colour, cache=False)
+    share = scaled.description["admitted_share"]
+    assert_allclose(scaled.energy_outside, share * np.asarray(unit.energy_outside), rtol=1e-9)
+    total = scaled.values.sum(axis=(0, 1)) + scaled.energy_outside
+    assert_allclose(total, share, rtol=1e-12)

@@ -49,3 +49,18 @@ def test_effects_given_twice_durations_for_other_frames_or_an_ignored_option_are
     # ended in numpy's broadcasting error, naming no argument
     with pytest.raises(ValueError, match=re.escape(named)):
         render_night([SCENE] * 3, pixel_deg=0.05, **({"frame_time_s": 0.1} | options))
+
+
+@pytest.mark.parametrize(
+    ("option", "match"),
+    [
+        ({"blur": "fast"}, r"^blur must be one of 'layers', 'separable', 'exact'; got 'fast'$"),
+        ({"adaptation_mean": "median"}, r"^adaptation_mean must be one of 'log', 'arithmetic'"),
+    ],
+)
+def test_a_method_is_refused_under_its_own_argument_name(option, match):
+    # the lower functions' names came through: "method must be ...", "mean must be ..."
+    image = np.full((16, 16, 3), 0.05)
+    image[8, 8] = 5000.0
+    with pytest.raises(ValueError, match=match):
+        render_night(image, pixel_deg=0.05, **option)

@@ -89,7 +89,10 @@ class Kernel:
     Attributes
     ----------
     values
-        The full kernel; each channel sums to ``1 - energy_outside``.
+        The full kernel; each channel sums to ``1 - energy_outside``, or, for a model that
+        admits only a share of the light (a wave-optics kernel under Luidolt's pupil
+        convention, ``description['admitted_share']``), to that share less
+        ``energy_outside``.
     quadrant
         The quadrant of a kernel made from one, else None. It and the ``values`` unfolded
         from it are read-only: the direct path spreads from the one and the FFT path from

@@ -722,6 +722,14 @@ class WaveOpticsGlare(GlareModel):
         wavelengths : numpy.ndarray
             The wavelengths, nm.
         """
+        kernels, wavelengths, _ = self._monochromatic(pixel_deg, shape)
+        return kernels, wavelengths
+
+    def _monochromatic(
+        self, pixel_deg: float, shape: tuple[int, int]
+    ) -> tuple[np.ndarray, np.ndarray, float]:
+        """:meth:`monochromatic_kernels` and the share of the source's light they admit
+        (:meth:`pupil_share`; 1 under ``'unit-energy'``)."""
         pixel_deg = check_pixel_deg(pixel_deg)
         shape = check_kernel_shape(shape)
         grid = self.grid_for(pixel_deg, shape)
@@ -778,8 +786,9 @@ class WaveOpticsGlare(GlareModel):
                 f"pixel_integration must be one of {PIXEL_INTEGRATION_METHODS}; "
                 f"got {self.pixel_integration!r}"
             )
-        kernels *= self.pupil_share(open_area_mm2)
-        return kernels, wavelengths
+        share = self.pupil_share(open_area_mm2)
+        kernels *= share
+        return kernels, wavelengths, share
 
     def pupil_share(self, open_area_mm2: float | None = None) -> float:
         """The factor on the unit-energy PSF that ``pupil_convention`` asks for.
@@ -835,9 +844,13 @@ class WaveOpticsGlare(GlareModel):
         -------
         Kernel
             The kernel, each channel summing to its PSF energy inside the support, with its
-            energy account.
+            energy account: ``energy_outside`` is the light beyond the support as a fraction
+            of the source's. Under ``pupil_convention='Luidolt2020'`` the kernel admits only
+            the pupil's share of the light (``description['admitted_share']``,
+            :meth:`pupil_share`), so it sums to that share less ``energy_outside``; the rest
+            never entered the eye and is not booked as outside.
         """
-        kernels, wavelengths = self.monochromatic_kernels(pixel_deg, shape)
+        kernels, wavelengths, share = self._monochromatic(pixel_deg, shape)
         if self.spectral == "kakimoto":
             rgb = kernels  # Kakimoto §3.2: each wavelength is one display channel
             weights_y = _luminance_weights(self.spectrum.colourspace)
@@ -852,9 +865,12 @@ class WaveOpticsGlare(GlareModel):
             sums = values.sum(axis=(1, 2))
             values = np.maximum(values, 0.0)
             values *= (sums / values.sum(axis=(1, 2)))[:, None, None]
-        energy_outside = 1.0 - values.sum(axis=(1, 2))
+        # beyond the support, as a fraction of the source's light: under 'Luidolt2020' the
+        # kernel admits only the pupil's share, and the rest never entered the eye
+        energy_outside = share - values.sum(axis=(1, 2))
         description = {
             "model": "WaveOpticsGlare",
+            "admitted_share": share,
             **{k: v for k, v in asdict(self).items() if k not in ("spectrum", "obstacle_image")},
             "obstacle_image": None if self.obstacle_image is None else "user image",
             "spectrum": asdict(self.spectrum),

@@ -305,6 +305,7 @@ def acuity_blur(
     check_choice("space", space, ("lightness", "linear"))
     check_choice("colourspace", colourspace, sorted(colour.RGB_COLOURSPACES))
     check_choice("method", method, SIGMA_METHODS)
+    check_choice("blur", blur, BLUR_METHODS)
     space_rgb = colour.RGB_COLOURSPACES[colourspace]
     white_xy = space_rgb.whitepoint
     planes_of, image_of, luminance_of = _space(image, space, white, space_rgb, white_xy)

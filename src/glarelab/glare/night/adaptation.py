@@ -35,6 +35,7 @@ from glarelab.glare._validation import check_choice, check_image, check_in_range
 
 __all__ = [
     "ABSOLUTE_THRESHOLD_CD_M2",
+    "ADAPTATION_MEANS",
     "RGB_TO_Y_LUIDOLT2020",
     "SIGMA_HALF_CD_M2",
     "TAU_CONE_S",
@@ -59,6 +60,7 @@ RGB_TO_Y_LUIDOLT2020 = (0.2125, 0.7154, 0.0721)
 # Luidolt §5.1 weights the frame by a Gaussian around the gaze without giving its width; we
 # assume σ = 5°, a window whose half maximum (11.8° across) covers the central visual field
 WINDOW_SIGMA_DEG = 5.0
+ADAPTATION_MEANS = ("log", "arithmetic")  # the adapting luminance's mean over the window
 ABSOLUTE_THRESHOLD_CD_M2 = 1e-6  # Luidolt §3.3: human vision spans 1e-6 to 1e8 cd/m²
 
 
@@ -362,7 +364,7 @@ def frame_luminance(
     """
     image = check_image("image_cd_m2", image_cd_m2, channels=(3,))
     pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
-    check_choice("mean", mean, ("log", "arithmetic"))
+    check_choice("mean", mean, ADAPTATION_MEANS)
     y = luminance(image, colourspace=colourspace) if image.ndim == 3 else image.astype(float)
     if mean == "log":
         y = np.log(np.maximum(y, ABSOLUTE_THRESHOLD_CD_M2))

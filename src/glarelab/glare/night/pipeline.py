@@ -52,12 +52,14 @@ from glarelab.glare.models import _resolve
 from glarelab.glare.models.base import GlareModel
 from glarelab.glare.models.eye import pupil_diameter_mm, regime
 from glarelab.glare.night.acuity import (
+    BLUR_METHODS,
     LEVELS_PER_OCTAVE,
     MIN_LUMINANCE_CD_M2,
     SIGMA_METHODS,
     acuity_blur,
 )
 from glarelab.glare.night.adaptation import (
+    ADAPTATION_MEANS,
     TAU_CONE_S,
     TAU_ROD_S,
     WINDOW_SIGMA_DEG,
@@ -290,6 +292,8 @@ def render_night(
         low_inclusive=False,
     )  # fmt: skip
     check_choice("acuity_method", acuity_method, SIGMA_METHODS)
+    check_choice("blur", blur, BLUR_METHODS)
+    check_choice("adaptation_mean", adaptation_mean, ADAPTATION_MEANS)
     check_choice("scotopic_method", scotopic_method, SCOTOPIC_METHODS)
     if desaturation != SPENCER1995_DESATURATION and (
         "scotopic" not in chosen or scotopic_method != "Spencer1995"

@@ -1,0 +1,53 @@
+"""``glarelab render`` of several files into a folder: an input that cannot be rendered is
+refused before the first output is written (exit 2 means nothing written)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from glarelab.cli import main
+from glarelab.stimuli.exr import write_exr
+
+
+def _scene() -> np.ndarray:
+    image = np.full((17, 17), 10.0)
+    image[8, 8] = 1e5
+    return image
+
+
+@pytest.mark.parametrize(
+    ("second", "named"),
+    [
+        (b"hi\n", "is not an OpenEXR file"),
+        ("negative", "must be >= 0 cd/m²"),
+    ],
+)
+def test_a_bad_second_input_leaves_no_output_of_the_first(
+    tmp_path, monkeypatch, capsys, second, named
+):
+    monkeypatch.chdir(tmp_path)
+    write_exr("in.exr", _scene())
+    if second == "negative":
+        import OpenEXR
+
+        values = np.full(
+            (17, 17), -1.0, np.float32
+        )  # write_exr refuses it; a foreign tool does not
+        header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+        with OpenEXR.File(header, {"Y": values}) as exr:
+            exr.write("second.exr")
+    else:
+        (tmp_path / "second.exr").write_bytes(second)
+    assert main(["render", "in.exr", "second.exr", "outdir/", "--pixel-deg", "0.05"]) == 2
+    err = capsys.readouterr().err
+    assert "input second.exr: " in err and named in err and "nothing was rendered" in err, err
+    assert not (tmp_path / "outdir").exists() or not list((tmp_path / "outdir").iterdir())
+
+
+def test_good_inputs_are_all_rendered(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    write_exr("a.exr", _scene())
+    write_exr("b.exr", _scene())
+    assert main(["render", "a.exr", "b.exr", "outdir/", "--pixel-deg", "0.05"]) == 0
+    assert sorted(p.name for p in (tmp_path / "outdir").glob("*.exr")) == ["a.exr", "b.exr"]
