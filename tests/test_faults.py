@@ -39,6 +39,8 @@ def tiny_matching_protocol() -> str:
     text = text.replace("size_deg = 3.2 ", "size_deg = 1.2 ")
     text = text.replace("cloud_max_deg = 3.2", "cloud_max_deg = 1.2")
     text = text.replace("supersample = 2 ", "supersample = 1 ")
+    # 6.9 display pixels across: a disk whose drawn pixels hold its light to 0.2 %
+    text = text.replace("disk_deg = 0.3 ", "disk_deg = 0.325 ")
     text = text[: text.index("[[glare.methods]]     # Method II")] + text[text.index("[trials]") :]
     text = text.replace(
         'labels = ["A", "B", "C", "D", "E", "F"]\n'

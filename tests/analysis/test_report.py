@@ -261,3 +261,23 @@ def test_one_participant_gets_a_report_that_says_why_there_are_no_tests(
     for text in (results, re.sub(r"<[^>]+>", " ", without_images(report.read_text()))):
         # "SEM nan" was printed, and an unbounded slope as "-inf"
         assert not {"nan", "inf"} & set(re.findall(r"[\w.]+", text.lower())), text
+
+
+@pytest.mark.parametrize(
+    ("comment", "cell"),
+    [
+        ("left | right looked the same", r"left \| right looked the same"),
+        ("line one\nline two", "line one<br>line two"),
+        ("line one\r\nline two", "line one<br>line two"),
+    ],
+)
+def test_a_comment_stays_in_its_markdown_cell(comment, cell):
+    # a '|' split the comment into another cell, a line break ended the table's row
+    import pandas as pd
+
+    from glarelab.analysis.report import _markdown
+
+    text = _markdown(pd.DataFrame({"participant": ["sim01"], "comment": [comment]}))
+    lines = text.splitlines()
+    assert len(lines) == 3 and lines[2] == f"| sim01 | {cell} |"
+    assert [line.replace(r"\|", "").count("|") for line in lines] == [3, 3, 3]

@@ -120,6 +120,22 @@ def test_a_sidecar_that_disagrees_is_refused_with_the_reason(yoshida, tmp_path, 
         load_sessions(protocol, [bad, *files[1:]])
 
 
+@pytest.mark.parametrize(
+    "key",
+    ["protocol_sha256", "status", "study", "participant", "simulated", "pilot", "started"],
+)
+def test_a_sidecar_key_every_session_writes_is_missed_by_name(yoshida, tmp_path, key):
+    # a protocol_sha256 deleted let a session of another protocol be counted, and a status
+    # deleted was reported as a session that "did not complete (unknown)"
+    protocol, files = yoshida
+    bad = copy_session(files[0], tmp_path)
+    data = json.loads(bad.with_suffix(".json").read_text())
+    del data[key]
+    bad.with_suffix(".json").write_text(json.dumps(data))
+    with pytest.raises(DataError, match=re.escape(f".json: no {key}: every session and import")):
+        load_sessions(protocol, [bad, *files[1:]])
+
+
 def test_a_session_of_another_stimulus_set_is_refused(yoshida):
     protocol, files = yoshida
     other = {"manifest_sha256": "c" * 64, "readings_sha256": None}
@@ -131,6 +147,26 @@ def test_a_session_of_another_stimulus_set_is_refused(yoshida):
 def test_a_file_renamed_to_another_participant_is_refused(yoshida, tmp_path):
     protocol, files = yoshida
     moved = copy_session(files[0], tmp_path, name=files[0].name.replace("sim01", "sim11"))
+    with pytest.raises(
+        DataError, match="the file name says participant sim11, its rows say sim01"
+    ):
+        load_sessions(protocol, [moved, *files[1:]])
+
+
+@pytest.mark.parametrize(
+    "name",
+    [
+        "sim11_yoshida2008_s1.csv",
+        "sim11_yoshida2008_s1_2026-12-04.csv",
+        "sim11_yoshida2008_s1 copy.csv",
+    ],
+)
+def test_a_file_renamed_to_another_participant_without_its_date_is_refused(
+    yoshida, tmp_path, name
+):
+    # only whole PARTICIPANT_STUDY_sN_DATE_TIME names were checked
+    protocol, files = yoshida
+    moved = copy_session(files[0], tmp_path, name=name)
     with pytest.raises(
         DataError, match="the file name says participant sim11, its rows say sim01"
     ):
@@ -192,8 +228,12 @@ def _set_cell(lines, line, column, value):
         ("time_s", "inf", "line 5, column time_s: 'inf' is not a finite number"),
         ("onset_s", "inf", "line 5, column onset_s: 'inf' is not a finite number"),
         ("block", "Training", "line 5, column block: 'Training' is not a block of this protocol"),
+        # no analysed number read it, but the docs promise no value a session cannot write
+        ("ignored_keys", "hello world",
+         "line 5, column ignored_keys: 'hello world' is not the key presses a session records"),
+        ("ignored_keys", "space@0.5", "'space@0.5' is not the key presses"),
     ],
-)
+)  # fmt: skip
 def test_impossible_values_are_refused_with_file_and_line(yoshida, tmp_path, column, value, named):
     protocol, files = yoshida
     bad = copy_session(files[0], tmp_path, rows=lambda lines: _set_cell(lines, 5, column, value))

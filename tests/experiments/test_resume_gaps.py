@@ -12,11 +12,21 @@ from .test_session_safety import data_files, simulated
     ("edit", "found"),
     [
         (lambda lines: lines[:3] + lines[4:], "trial '4' after trial 2 (expected 3)"),  # deleted
-        (lambda lines: [*lines[:2], lines[3], lines[2], *lines[4:]], "trial '3' after trial 1"),
         (lambda lines: [lines[0], *lines[2:]], "trial '2' after trial 0 (expected 1)"),
+        # a row pasted twice: the resume counted it as a trial done and skipped the next one
+        (lambda lines: [*lines[:4], lines[3], *lines[4:]], "trial 3 is there twice"),
+        # an editor's blank line: the resumed file was one the analysis refuses
+        (lambda lines: [*lines[:3], "\n", *lines[3:]], "line 4 is blank"),
+        (lambda lines: [*lines, "   \n"], "is blank (added by an editor?)"),
+        (lambda lines: [*lines, "   "], "is blank (added by an editor?)"),  # was a traceback
+        (lambda lines: [line.replace("\n", "\r\n") for line in lines], "end in CR LF"),
+        (lambda lines: ["\ufeff" + lines[0], *lines[1:]], "starts with a byte-order mark"),
+        (lambda lines: [",".join(reversed(line.rstrip("\n").split(","))) + "\n" for line in lines],
+         "columns are in another order"),
     ],
-    ids=["a middle row deleted", "two rows swapped", "the first row deleted"],
-)
+    ids=["a middle row deleted", "the first row deleted", "a row twice", "a blank line",
+         "a line of spaces", "spaces at the end", "CR LF", "a byte-order mark", "columns moved"],
+)  # fmt: skip
 def test_a_csv_with_rows_deleted_or_moved_is_not_resumed(tmp_path, edit, found):
     assert simulated(tmp_path).returncode == 0
     (csv,) = tmp_path.glob("P01_luidolt2020_s1_*.csv")
@@ -78,3 +88,18 @@ def test_a_row_cut_by_a_crash_is_dropped_and_its_trial_run_again(tmp_path):
     rows = csv.read_text().splitlines()
     assert [row.split(",")[3] for row in rows[1:5]] == ["1", "2", "3", "4"]
     assert rows[1:4] == [line.rstrip("\n") for line in lines[1:4]]
+
+
+def test_rows_sorted_in_a_spreadsheet_are_resumed_in_trial_order(tmp_path):
+    # the analysis reads any row order; the resume refused it ("rows were deleted or moved")
+    from glarelab.analysis.load import load_sessions
+    from glarelab.protocols import load_protocol
+
+    csv, lines = _stopped_part_way(tmp_path, keep=4)
+    csv.write_text("".join([lines[0], *reversed(lines[1:])]))
+    done = simulated(tmp_path, "luidolt2020", "P01", "--resume")
+    assert done.returncode == 0, done.stderr
+    trials = [int(row.split(",")[3]) for row in csv.read_text().splitlines()[1:]]
+    assert trials[:4] == [4, 3, 2, 1] and sorted(trials) == list(range(1, len(trials) + 1))
+    dataset = load_sessions(load_protocol("luidolt2020"), [csv])
+    assert sorted(dataset.trials["trial"]) == list(range(1, len(trials) + 1))

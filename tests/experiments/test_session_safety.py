@@ -450,3 +450,43 @@ def test_a_resumed_live_run_keeps_its_own_iohub_store(tmp_path, monkeypatch):
     for run in (0, -1, True, 1.0):
         with pytest.raises(ValueError, match="run must be a whole number >= 1"):
             tracker_store_name(stem, run)
+
+
+def test_a_ctrl_c_while_a_completed_sessions_end_is_written_is_delivered_after_it(
+    tmp_path, monkeypatch
+):
+    # the end was written with SIGINT ignored: the Ctrl-C was lost, and a simulated batch
+    # went on to its next participant and ended with 0
+    import json
+    import os
+    import signal
+
+    import glarelab.experiments.session as session
+    from glarelab.experiments.session import (
+        SessionAborted,
+        SimulatedFrontend,
+        make_observer,
+        run_session,
+    )
+    from glarelab.protocols import load_protocol
+
+    calls = []
+    real_now = session._now
+
+    def now():
+        calls.append(1)
+        if len(calls) == 2:  # the run's end, inside its writing
+            os.kill(os.getpid(), signal.SIGINT)
+        return real_now()
+
+    monkeypatch.setattr(session, "_now", now)
+    protocol = load_protocol("luidolt2020")
+    observer = make_observer(protocol, "P01", seed=1, stimuli=None)
+    with pytest.raises(SessionAborted, match="SIGINT"):  # the command's exit 3
+        run_session(
+            protocol, "P01", out=tmp_path, frontend=SimulatedFrontend(observer), simulated=True
+        )
+    (sidecar,) = tmp_path.glob("P01_*.json")
+    record = json.loads(sidecar.read_text())
+    assert record["status"] == "completed" and record["runs"][-1]["status"] == "completed"
+    assert len(calls) == 2

@@ -49,6 +49,7 @@ import pandas as pd
 from glarelab.analysis.dataset import DataError, Dataset, Design, where
 from glarelab.analysis.paradigms import paradigm_analysis
 from glarelab.display.checks import REFRESH_TOLERANCE_FRACTION
+from glarelab.files.values import DECIMAL_TEXT, WHOLE_TEXT
 from glarelab.protocols import DATA_FORMAT, ROW_DIGESTS_SINCE, columns, row_digest
 from glarelab.protocols.core import ORDER_FIELDS, session_order
 from glarelab.protocols.keys import TOKEN
@@ -58,14 +59,17 @@ if TYPE_CHECKING:
 
 # the numbers a session CSV holds, as format_value writes them (int() and float() also read
 # "2_50" as 250 and surrounding spaces)
-_INTEGER = re.compile(r"[+-]?\d+")
-_NUMBER = re.compile(r"[+-]?(\d+(\.\d*)?|\.\d+)([eE][+-]?\d+)?|[+-]?(nan|inf|infinity)", re.I)
+# ignored_keys as the session loop writes it: name@seconds (3 decimals), ';' between
+_IGNORED_KEYS = re.compile(r"[^;@\s]+@-?\d+\.\d{3}(;[^;@\s]+@-?\d+\.\d{3})*")
 _DIGEST = re.compile(r"[0-9a-f]{16}")  # a row_digest
 # the name a session's files get: PARTICIPANT_STUDY_sN_YYYY-MM-DD_HHMM[_pilot].csv
 _FILE_NAME = (
     r"(?P<participant>.+)_{study}_s(?P<session>\d+)_\d{{4}}-\d{{2}}-\d{{2}}_\d{{4}}"
     r"(?P<pilot>_pilot)?\.csv"
 )
+# a name that keeps a session's PARTICIPANT_STUDY_sN and loses or changes the rest (the date
+# cut off, a note added) still names its participant and session
+_NAMED_SESSION = r"(?P<participant>.+)_{study}_s(?P<session>\d+)(?:[_.\- ].*)?\.csv"
 
 __all__ = ["DataError", "Dataset", "Design", "load_sessions", "where"]
 
@@ -98,13 +102,20 @@ def _parse(cell: str, column, where: str, problems: list[str]):
                 raise ValueError
             value = cell == "true"
         elif column.kind is int:
-            if not _INTEGER.fullmatch(cell):  # int() reads "2_50" as 250 and " 7" as 7
+            if not WHOLE_TEXT.fullmatch(cell):  # int() reads "2_50" as 250 and " 7" as 7
                 raise ValueError
             value = int(cell)
         elif column.kind is float:
-            if not _NUMBER.fullmatch(cell):  # float() reads "2_50" as 250.0
+            if not DECIMAL_TEXT.fullmatch(cell):  # float() reads "2_50" as 250.0
                 raise ValueError
             value = float(cell)
+        elif column.name == "ignored_keys" and not _IGNORED_KEYS.fullmatch(cell):
+            problems.append(
+                f"{where}: {cell!r} is not the key presses a session records (name@seconds "
+                "from the onset with three decimals, separated by ';', e.g. "
+                "'space@-0.120;left@0.503')"
+            )
+            return None
         elif column.name == "participant" and not TOKEN.match(cell):
             problems.append(
                 f"{where}: {cell!r} is not a participant id (letters, digits, '_', '-', '.'; "
@@ -372,6 +383,22 @@ _SIDECAR_FIELDS = {
 }
 
 
+# what every sidecar of data format 0.5 on holds (sessions and PsychoPy imports): one without
+# them was edited, and the analysis could not vouch for it (a protocol_sha256 deleted let a
+# session of another protocol be counted)
+WRITTEN_SINCE_0_5 = (
+    "study",
+    "participant",
+    "session",
+    "status",
+    "trials",
+    "simulated",
+    "pilot",
+    "protocol_sha256",
+    "started",
+)  # and row_sha256, whose absence _row_digests names
+
+
 def _sidecar_fields(path: Path, sidecar: dict) -> list[str]:
     """A sidecar's fields as a session writes them: a data format this version knows, and
     each field the analysis reads of its type and range."""
@@ -389,6 +416,17 @@ def _sidecar_fields(path: Path, sidecar: dict) -> list[str]:
             f"of glarelab reads ({', '.join(DATA_FORMATS)}): a file of a newer version (update "
             "glarelab) or edited by hand"
         )
+    if (
+        isinstance(value, str)
+        and value in DATA_FORMATS
+        and not _version(value) < _version(ROW_DIGESTS_SINCE)
+    ):
+        for key in WRITTEN_SINCE_0_5:
+            if key not in sidecar:
+                problems.append(
+                    f"{where_}: no {key}: every session and import of data format {value} "
+                    "writes it (deleted by hand?); the analysis counts a session only with it"
+                )
     for key, (valid, allowed) in _SIDECAR_FIELDS.items():
         if key in sidecar and not valid(sidecar[key]):
             problems.append(f"{where_}: {key} is {_json(sidecar[key])}; must be {allowed}")
@@ -895,21 +933,22 @@ def _name_contradictions(
     """Where a session file's name disagrees with its rows (a file renamed to another
     participant or session, or a pilot's file renamed to a participant's)."""
     match = re.fullmatch(_FILE_NAME.format(study=re.escape(study)), path.name)
-    if match is None or not rows:
+    named = match or re.fullmatch(_NAMED_SESSION.format(study=re.escape(study)), path.name)
+    if named is None or not rows:
         return []
     problems = []
     first = rows[0]
-    if match["participant"] != str(first.get("participant")):
+    if named["participant"] != str(first.get("participant")):
         problems.append(
-            f"{path}: the file name says participant {match['participant']}, its rows say "
+            f"{path}: the file name says participant {named['participant']}, its rows say "
             f"{first.get('participant')} (a file renamed?)"
         )
-    if int(match["session"]) != first.get("session"):
+    if int(named["session"]) != first.get("session"):
         problems.append(
-            f"{path}: the file name says session {match['session']}, its rows say "
+            f"{path}: the file name says session {named['session']}, its rows say "
             f"{first.get('session')} (a file renamed?)"
         )
-    if sidecar is not None and isinstance(sidecar.get("pilot", False), bool):
+    if match is not None and sidecar is not None and isinstance(sidecar.get("pilot", False), bool):
         if bool(match["pilot"]) != bool(sidecar.get("pilot", False)):
             problems.append(
                 f"{path}: the file name says {'a pilot' if match['pilot'] else 'not a pilot'}, "

@@ -409,6 +409,7 @@ def import_psychopy(
                 "simulated": False,
                 "pilot": False,
                 "data_format": DATA_FORMAT,
+                "protocol_sha256": protocol.sha256,
                 "row_sha256": [row_digest(row[c.name] for c in schema) for row in cells_rows],
                 "started": started.isoformat(),
                 "packages": {"psychopy": version} if version else {},

@@ -101,11 +101,23 @@ code{background:#f3f3f3;padding:0 0.2em}.note{color:#555;font-size:0.92em}
 """
 
 
+def _markdown_cell(value: object) -> str:
+    """A table cell's text as Markdown keeps it in its cell: a ``|`` escaped, a line break
+    written as ``<br>`` (a participant's comment may hold either)."""
+    text = str(value).replace("\\", "\\\\").replace("|", "\\|")
+    return "<br>".join(text.splitlines()) if ("\n" in text or "\r" in text) else text
+
+
 def _markdown(table: pd.DataFrame) -> str:
     formatted = format_table(table)
-    header_row = "| " + " | ".join(header(str(c)) for c in formatted.columns) + " |"
+    header_row = (
+        "| " + " | ".join(_markdown_cell(header(str(c))) for c in formatted.columns) + " |"
+    )
     rule = "| " + " | ".join("---" for _ in formatted.columns) + " |"
-    rows = ["| " + " | ".join(map(str, row)) + " |" for row in formatted.itertuples(index=False)]
+    rows = [
+        "| " + " | ".join(map(_markdown_cell, row)) + " |"
+        for row in formatted.itertuples(index=False)
+    ]
     return "\n".join([header_row, rule, *rows]) + "\n"
 
 

@@ -33,7 +33,6 @@ import hashlib
 import io
 import itertools
 import json
-import re
 import warnings
 from dataclasses import dataclass, field, replace
 from functools import cached_property
@@ -46,7 +45,7 @@ from scipy.optimize import curve_fit
 
 from glarelab.files.atomic import write_text
 from glarelab.files.inputs import as_path, read_input_text
-from glarelab.files.values import is_real, is_whole
+from glarelab.files.values import DECIMAL_TEXT, WHOLE_TEXT, is_real, is_whole
 
 __all__ = [
     "Calibration",
@@ -71,12 +70,6 @@ MAX_DISPLAY_CD_M2 = 1e5
 # above it: a positive reading below it (5e-324, a subnormal float) is no measurement; a
 # black below the photometer's floor is read as 0
 MIN_READING_CD_M2 = 1e-6
-# a readings cell as a person writes a number: digits, a decimal point, an exponent (nan and
-# inf are read, then refused as readings with their line); not Python's '12_8' (= 128)
-WHOLE_NUMBER = re.compile(r"[+-]?\d+")
-DECIMAL_NUMBER = re.compile(
-    r"[+-]?(\d+(\.\d*)?|\.\d+)([eE][+-]?\d+)?|[+-]?(nan|inf|infinity)", re.IGNORECASE
-)
 READING_RANGE = (
     f"0 (below the photometer's floor) or {MIN_READING_CD_M2:g}-{MAX_DISPLAY_CD_M2:g} cd/m² "
     "(no display is brighter, no photometer reads less: a typo or a unit slip?)"
@@ -786,7 +779,7 @@ def read_readings(path: str | Path) -> list[tuple[int, float]]:
             )
         code_text, value_text = row["code"].strip(), row["luminance_cd_m2"].strip()
         # as written, not as Python reads numbers ('12_8' is 128 to int(), '1_0.5' 10.5)
-        if not (WHOLE_NUMBER.fullmatch(code_text) and DECIMAL_NUMBER.fullmatch(value_text)):
+        if not (WHOLE_TEXT.fullmatch(code_text) and DECIMAL_TEXT.fullmatch(value_text)):
             raise ValueError(
                 f"{path}, line {line}: code must be a whole number and luminance_cd_m2 a "
                 f"decimal number (e.g. 512,94.83); got code {code_text!r}, luminance_cd_m2 "

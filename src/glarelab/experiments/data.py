@@ -196,8 +196,9 @@ def read_rows(path: Path) -> list[dict[str, str]]:
 
 
 def _check_trial_sequence(path: Path, rows: list[dict[str, str]]) -> None:
-    """A resumed CSV's trials run 1, 2, 3, … (a trial's rows together): a gap or a step back
-    means rows were deleted or moved by hand, and resuming would record a trial twice.
+    """A resumed CSV's trials run 1, 2, 3, … once each (rows a spreadsheet sorted are put in
+    trial order first): a gap means rows were deleted, a repeat a row pasted twice, and
+    resuming would record a trial twice or skip one.
 
     Raises
     ------
@@ -207,17 +208,79 @@ def _check_trial_sequence(path: Path, rows: list[dict[str, str]]) -> None:
     previous = 0
     for line, row in enumerate(rows, start=2):
         value = row.get("trial", "")
-        try:
-            trial = int(value)
-        except ValueError:
-            trial = None
-        if trial is None or trial < 1 or trial not in (previous, previous + 1):
+        trial = _trial_number(value)
+        if trial is not None and trial == previous:
+            raise SessionError(
+                f"{path}, line {line}: trial {trial} is there twice (a row pasted twice?); each "
+                "trial has "
+                "one row, and resuming would count the copy as a trial done: delete the copy "
+                "and resume, or keep the file for the record and start a new session number"
+            )
+        if trial is None or trial != previous + 1:
             raise SessionError(
                 f"{path}, line {line}: trial {value!r} after trial {previous} (expected "
-                f"{previous + 1}): rows were deleted or moved, so resuming would record a trial "
+                f"{previous + 1}): rows were deleted, so resuming would record a trial "
                 "twice; keep the file for the record and start a new session number"
             )
         previous = trial
+
+
+def _trial_number(value) -> int | None:
+    """A row's trial number, or None for a cell that is not a whole number >= 1."""
+    try:
+        trial = int(value)
+    except (TypeError, ValueError):
+        return None
+    return trial if trial >= 1 else None
+
+
+def _in_trial_order(rows: list[dict[str, str]]) -> list[dict[str, str]]:
+    """``rows`` sorted by trial when they hold each of trials 1 … n once (a spreadsheet's
+    sort, which the analysis reads too); otherwise as they are, for the sequence check to
+    name what is wrong."""
+    numbers = [_trial_number(row.get("trial")) for row in rows]
+    if None in numbers or sorted(numbers) != list(range(1, len(rows) + 1)):
+        return rows
+    return [row for _, row in sorted(zip(numbers, rows, strict=True), key=lambda p: p[0])]
+
+
+def _check_no_blank_line(path: Path, data: bytes) -> None:
+    """A blank line in a session CSV (an editor's, or ``echo >>``) is refused by the analysis:
+    a resume would append after it and complete a file that cannot be analysed.
+
+    Raises
+    ------
+    SessionError
+        Naming the first blank line.
+    """
+    lines = data.split(b"\n")
+    for number, line in enumerate(lines[1:], start=2):
+        last = number == len(lines)
+        if not line.strip(b" \t\r") and (line or not last):
+            raise SessionError(
+                f"{path}, line {number} is blank (added by an editor?): the analysis refuses a "
+                "blank line, so the session is not resumed with it; delete the line and resume"
+            )
+
+
+def _header_problem(first: str, names: list[str], study: str) -> str:
+    """What is wrong with a resumed CSV's first line, in words."""
+    if first.startswith("\ufeff"):
+        return (
+            "it starts with a byte-order mark (saved again by a spreadsheet or editor); the "
+            "session appends rows to the file as written"
+        )
+    if first.endswith("\r"):
+        return (
+            "its lines end in CR LF (saved again by a Windows editor or a spreadsheet); the "
+            "session appends rows to the file as written"
+        )
+    if sorted(first.split(",")) == sorted(names):
+        return (
+            "its columns are in another order than the session writes them (moved in a "
+            "spreadsheet?): rows appended now would not match the header"
+        )
+    return f"it has no valid {study} header"
 
 
 def _check_unended_row(path: Path, data: bytes, n_columns: int, n_rows: int) -> None:
@@ -413,11 +476,14 @@ class SessionFiles:
         first = data.split(b"\n", 1)[0].decode("utf-8", "replace")
         if b"\n" not in data or first != ",".join(self.names):
             found = "an empty file" if not data else f"first line {first[:80]!r}"
+            what = _header_problem(first, self.names, study)
             raise SessionError(
-                f"{path} has no valid {study} header ({found}): it cannot be resumed; keep it "
-                "for the record and start a new session number"
+                f"{path}: {what} ({found}): it cannot be resumed as it is; restore the file "
+                f"as the session wrote it, or keep it for the record and start a new session "
+                "number"
             )
-        self.rows = read_rows(path)
+        _check_no_blank_line(path, data)
+        self.rows = _in_trial_order(read_rows(path))
         _check_trial_sequence(path, self.rows)
         _check_unended_row(path, data, len(self.names), len(self.rows))
         return path

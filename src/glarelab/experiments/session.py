@@ -504,6 +504,17 @@ def _signals(handler):
             signal.signal(number, old)
 
 
+@contextlib.contextmanager
+def _signals_deferred():
+    """SIGINT, SIGTERM and SIGHUP held while the block runs (a sidecar's end is written
+    whole), then delivered to the handlers in place after it: a Ctrl-C then is not lost."""
+    held: list[int] = []
+    with _signals(lambda number, frame: held.append(number)):
+        yield
+    if held:
+        signal.raise_signal(held[0])
+
+
 class _StopRequest:
     """A signal to stop: raised at once, and remembered, so that a library that swallows the
     exception (PsychoPy opening its window catches broadly) cannot keep the session going."""
@@ -924,8 +935,8 @@ def _run_trials(engine, frontend, files, sidecar, protocol: Protocol, rate, resu
 
 
 def _finish_run(sidecar, files, engine, loop, status, reason) -> None:
-    """Write the run's end into the sidecar; a second Ctrl-C cannot interrupt it."""
-    with _signals(signal.SIG_IGN):
+    """Write the run's end into the sidecar whole; a Ctrl-C meanwhile is delivered after it."""
+    with _signals_deferred():
         ended = _now()
         sidecar["runs"][-1] |= {
             "ended": _iso(ended),
