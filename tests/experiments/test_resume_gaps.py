@@ -103,3 +103,38 @@ def test_rows_sorted_in_a_spreadsheet_are_resumed_in_trial_order(tmp_path):
     assert trials[:4] == [4, 3, 2, 1] and sorted(trials) == list(range(1, len(trials) + 1))
     dataset = load_sessions(load_protocol("luidolt2020"), [csv])
     assert sorted(dataset.trials["trial"]) == list(range(1, len(trials) + 1))
+
+
+def test_a_row_changed_after_a_run_was_killed_is_not_resumed(tmp_path):
+    # the digests were recorded at a run's start and end only: a run killed by SIGKILL left
+    # its rows without them, and a value changed before --resume was sealed and analysed
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    process = subprocess.Popen(
+        [sys.executable, "-m", "glarelab", "run", "luidolt2020", "--simulate", "--participant",
+         "P01", "--out", str(tmp_path), "--trial-delay-ms", "300"],
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+    )  # fmt: skip
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline:
+        found = list(tmp_path.glob("P01_luidolt2020_s1_*.csv"))
+        if found and len(found[0].read_text().splitlines()) >= 5:  # the header, 4 trials
+            break
+        time.sleep(0.05)
+    process.send_signal(signal.SIGKILL)
+    process.wait(timeout=60)
+    (csv,) = tmp_path.glob("P01_luidolt2020_s1_*.csv")
+    sidecar = json.loads(csv.with_suffix(".json").read_text())
+    lines = csv.read_text().splitlines(keepends=True)
+    assert sidecar["status"] == "running" and len(sidecar["row_sha256"]) >= len(lines) - 2
+    cells, rating = lines[2].split(","), lines[0].split(",").index("rating")
+    cells[rating] = "1" if cells[rating] != "1" else "2"  # trial 2's rating, by hand
+    csv.write_text("".join([*lines[:2], ",".join(cells), *lines[3:]]))
+    before = data_files(tmp_path)
+    done = simulated(tmp_path, "luidolt2020", "P01", "--resume")
+    assert done.returncode == 2, done.stderr
+    assert "trial 2 is not the row the session wrote" in done.stderr
+    assert data_files(tmp_path) == before

@@ -893,9 +893,17 @@ def _interrupted(run: dict, files: SessionFiles) -> dict:
 
 def _run_trials(engine, frontend, files, sidecar, protocol: Protocol, rate, resume, stop) -> None:
     trials = protocol.data.get("trials", {})
+
+    def record(row: dict) -> None:
+        """A trial's row, then its digest in the sidecar: a run killed later (power lost)
+        leaves every row it wrote vouched for, so a row changed before --resume is named."""
+        files.write_row(row)
+        sidecar["row_sha256"] = files.row_digests()
+        files.write_sidecar(sidecar)
+
     loop = SessionLoop(
         frontend,
-        files.write_row,
+        record,
         refresh_hz=rate,
         timing_tolerance_ms=trials.get("timing_tolerance_ms", 10.0),
         break_every=trials.get("break_every", 0),
