@@ -490,3 +490,33 @@ def test_a_ctrl_c_while_a_completed_sessions_end_is_written_is_delivered_after_i
     record = json.loads(sidecar.read_text())
     assert record["status"] == "completed" and record["runs"][-1]["status"] == "completed"
     assert len(calls) == 2
+
+
+def test_a_ctrl_c_on_the_end_screen_ends_the_command_with_the_session_complete(tmp_path):
+    # it was taken as closing the end screen: a simulated batch went on and ended with 0
+    import json
+    import os
+    import signal
+
+    from glarelab.experiments.session import (
+        SessionAborted,
+        SimulatedFrontend,
+        make_observer,
+        run_session,
+    )
+    from glarelab.protocols import load_protocol
+
+    class CtrlCAtTheEnd(SimulatedFrontend):
+        def show(self, screen):
+            if screen.get("kind") == "end":
+                os.kill(os.getpid(), signal.SIGINT)
+            return super().show(screen)
+
+    protocol = load_protocol("luidolt2020")
+    observer = make_observer(protocol, "P01", seed=1, stimuli=None)
+    with pytest.raises(SessionAborted, match="SIGINT"):
+        run_session(
+            protocol, "P01", out=tmp_path, frontend=CtrlCAtTheEnd(observer), simulated=True
+        )
+    (sidecar,) = tmp_path.glob("P01_*.json")
+    assert json.loads(sidecar.read_text())["status"] == "completed"

@@ -940,6 +940,8 @@ def _run_trials(engine, frontend, files, sidecar, protocol: Protocol, rate, resu
     if status == "completed":
         with contextlib.suppress(SessionAborted), _signals(stop):
             loop.pause({"kind": "end", "text": END_TEXT, "keys": {"space": "close"}})
+        if stop.reason is not None:  # a signal on the end screen: the session is whole, and
+            raise SessionAborted(stop.reason)  # the command stops as Ctrl-C asks (exit 3)
 
 
 def _finish_run(sidecar, files, engine, loop, status, reason) -> None:
