@@ -46,7 +46,11 @@ def test_luidolt_share_is_the_open_area_and_names_its_range():
     k, u = model.kernel(0.05, (21, 21)), unit.kernel(0.05, (21, 21))
     assert_allclose(k.values, u.values * model.pupil_share(), rtol=2e-3)
     assert_allclose(model.pupil_share(), 0.25, rtol=1e-12)  # (4 / 8)² for the round pupil
-    assert_allclose(k.values.sum() + k.energy_outside, 1.0, atol=1e-9)  # the rest is stopped
+    # the rest never entered the eye: only light beyond the support is booked as outside
+    share = k.description["admitted_share"]
+    assert_allclose(share, 0.25, rtol=2e-3)  # the drawn disc's area
+    assert_allclose(k.values.sum() + k.energy_outside, share, atol=1e-9)
+    assert_allclose(k.energy_outside, share * u.energy_outside, rtol=1e-6)
     assert unit.pupil_share() == 1.0
     with pytest.warns(UserWarning, match="outside Luidolt's 2-8 mm range"):
         WaveOpticsGlare(pupil_mm=9.0, pupil_convention="Luidolt2020")
