@@ -223,7 +223,10 @@ def test_the_scale_from_display_to_scene_sets_the_blur():
         (lambda: acuity.acuity_blur(np.ones((3, 3)), pixel_deg=0.0), "pixel_deg"),
         (lambda: acuity.acuity_blur(np.ones((3, 3)), pixel_deg=0.1, space="Lab"), "space"),
         (lambda: acuity.acuity_blur(np.ones((3, 3)), pixel_deg=0.1, white_cd_m2=0), "white_cd_m2"),
-        (lambda: acuity.acuity_blur(np.ones((3, 3)), pixel_deg=0.1, blur="box"), "blur must be one of"),
+        (
+            lambda: acuity.acuity_blur(np.ones((3, 3)), pixel_deg=0.1, blur="box"),
+            "blur must be one of",
+        ),
         (lambda: acuity.acuity_blur(np.full((3, 3), np.nan), pixel_deg=0.1), "image_cd_m2"),
         (lambda: acuity.varying_blur(np.ones((3, 3)), np.ones((3, 4))), "sigma_px"),
         (lambda: acuity.varying_blur(np.ones((3, 3)), -np.ones((3, 3))), "sigma_px"),
