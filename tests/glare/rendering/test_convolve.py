@@ -105,3 +105,26 @@ def test_each_pixel_of_a_sparse_scene_adds_one_view_of_a_small_kernel(monkeypatc
     assert pieces == []
     reference = plain_spread(excess, (0, 0), mirror_quadrant(quadrant), (0, 64, 0, 64), (64, 64))
     assert_allclose(got, reference, rtol=1e-12, atol=0)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    a_shape=st.tuples(st.integers(1, 40), st.integers(1, 40)),
+    b_shape=st.tuples(st.integers(1, 40), st.integers(1, 40)),
+    dtypes=st.sampled_from(
+        [(np.float64, np.float64), (np.float32, np.float32), (np.float32, np.float64)]
+    ),
+    seed=st.integers(0, 2**32 - 1),
+)
+def test_the_full_convolution_is_fftconvolves_to_the_bit(a_shape, b_shape, dtypes, seed):
+    """The spread's convolution (without importing scipy.signal) is the same numbers, dtype
+    and shape as ``scipy.signal.fftconvolve(mode='full')``, one-pixel axes included."""
+    from scipy.signal import fftconvolve
+
+    rng = np.random.default_rng(seed)
+    a = (rng.random(a_shape) * 10.0 ** rng.integers(-3, 9)).astype(dtypes[0])
+    b = rng.random(b_shape).astype(dtypes[1])
+    expected = fftconvolve(a, b, mode="full")
+    got = _convolve._full_convolution(a, b)
+    assert got.dtype == expected.dtype and got.shape == expected.shape
+    np.testing.assert_array_equal(got, expected)

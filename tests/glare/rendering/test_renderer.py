@@ -140,3 +140,26 @@ def test_a_grey_scene_given_a_colour_kernel_reports_the_channel_it_was_rendered_
     np.testing.assert_array_equal(result.image, alone.image)
     assert_allclose(result.energy_outside_image, alone.energy_outside_image, rtol=1e-12, atol=0)
     assert_allclose(result.energy_outside_kernel, alone.energy_outside_kernel, rtol=1e-12, atol=0)
+
+
+@pytest.mark.parametrize("channels", [(), (3,)])
+@pytest.mark.parametrize("form", ["quadrant", "values"])
+def test_the_kernel_norms_are_the_full_kernels_sums(form, channels):
+    """``Σ|K|`` and ``(ΣK²)^½`` (the round-off bound's), summed by blocks of rows and, for a
+    quadrant, weighted for the offsets it stands for: the sums over the unfolded kernel, the
+    largest channel's, negative weights included; rows past one block (601 > 2 × 256)."""
+    from glarelab.glare.models.digitise import Kernel, mirror_quadrant
+
+    rng = np.random.default_rng(7)
+    quadrant = rng.random((301, 283, *channels)) - 0.2
+    full = mirror_quadrant(quadrant)
+    given = (  # made by hand: no model in its description
+        Kernel(quadrant=quadrant, pixel_deg=0.05)
+        if form == "quadrant"
+        else Kernel(full, pixel_deg=0.05)
+    )
+    renderer = GlareRenderer(VosGlare(), pixel_deg=0.05, shape=(64, 64), kernel=given, cache=False)
+    l1 = np.abs(full).sum(axis=(0, 1))
+    l2 = np.sqrt((full * full).sum(axis=(0, 1)))
+    colour = bool(channels)
+    assert_allclose(renderer.kernel_norms(colour), (l1.max(), l2.max()), rtol=1e-13)

@@ -66,7 +66,7 @@ class PathCosts:
         tolerance (those are checked again pixel by pixel; where the preview predicts the
         error, few are).
     coarse_fft_s
-        One convolution on the coarse grid (``scipy.signal.fftconvolve``: three real FFTs
+        One convolution on the coarse grid (a full linear convolution: three real FFTs
         and the product), per ``n log2 n`` of its ``N0 × N1`` transform: its size follows
         the coarse grid, not the image.
     preview_s
@@ -119,7 +119,7 @@ def coarse_lengths(
     shape: tuple[int, int], kernel_half: tuple[int, int], factor: int
 ) -> tuple[int, int]:
     """The transform lengths of the far tail's coarse convolution: the whole coarse grid
-    against the whole coarse kernel, ``fftconvolve(mode='full')`` (the largest it can be).
+    against the whole coarse kernel, a full linear convolution (the largest it can be).
 
     Parameters
     ----------

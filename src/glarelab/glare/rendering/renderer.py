@@ -297,21 +297,16 @@ class GlareRenderer:
         """
         if colour not in self._norms:
             kernel = self.kernel(colour)
-            if kernel.quadrant is not None:
-                q = np.asarray(kernel.quadrant, dtype=np.float64)
-                weights = np.full(q.shape[:2], 4.0)
-                weights[0, :] = 2.0
-                weights[:, 0] = 2.0
-                weights[0, 0] = 1.0
-                if q.ndim == 3:
-                    weights = weights[..., None]
-                l1 = np.sum(weights * np.abs(q), axis=(0, 1))
-                l2 = np.sqrt(np.sum(weights * q * q, axis=(0, 1)))
+            if kernel.quadrant is not None:  # an offset off the axes stands for four
+                q = kernel.quadrant
+                whole, row, col, centre = (_sums(part) for part in (q, q[:1], q[:, :1], q[:1, :1]))
+                l1, l2 = (
+                    4 * w - 2 * r - 2 * c + o
+                    for w, r, c, o in zip(whole, row, col, centre, strict=True)
+                )
             else:
-                v = np.asarray(kernel.values, dtype=np.float64)
-                l1 = np.abs(v).sum(axis=(0, 1))
-                l2 = np.sqrt(np.einsum("ij...,ij...->...", v, v))
-            self._norms[colour] = (float(np.max(l1)), float(np.max(l2)))
+                l1, l2 = _sums(kernel.values)
+            self._norms[colour] = (float(np.max(l1)), float(np.sqrt(np.max(l2))))
         return self._norms[colour]
 
     def tail_bound(self, colour: bool) -> TailBound | None:
@@ -719,6 +714,21 @@ class GlareRenderer:
             spread[..., c][near_box[0] : near_box[1], near_box[2] : near_box[3]] += part
         np.maximum(spread, 0.0, out=spread)  # FFT round-off is not non-negative
         return spread, used, roundoff
+
+
+_SUM_ROWS = 256  # rows of a kernel summed at once (no temporary of the kernel's size)
+
+
+def _sums(part: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``Σ|K|`` and ``ΣK²`` of ``part`` over its first two axes, in float64, by blocks of
+    rows: a new process pays for every page it touches, and the whole-kernel temporaries
+    these sums once made (a weight array, ``|K|``, ``K²``) cost a fresh 2048² render 68 ms."""
+    l1 = l2 = np.zeros(part.shape[2:])
+    for start in range(0, part.shape[0], _SUM_ROWS):
+        block = np.asarray(part[start : start + _SUM_ROWS], dtype=np.float64)
+        l1 = l1 + np.abs(block).sum(axis=(0, 1))
+        l2 = l2 + (block * block).sum(axis=(0, 1))
+    return l1, l2
 
 
 def _check_kernel_of(kernel, model: GlareModel) -> None:
