@@ -3,8 +3,11 @@
 from __future__ import annotations
 
 import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
+from glarelab.glare.rendering import multires
 from glarelab.glare.rendering.multires import cell_sums, far_spread, grid_shape, least_kernel
 
 
@@ -52,3 +55,31 @@ def test_cell_sums_add_the_excess_of_each_cell():
     for y, x in np.ndindex(11, 13):
         expected[y // 4, x // 4] += image[y, x]
     assert_allclose(cell_sums(excess, 4, (3, 8, 2, 9), (11, 13)), expected, rtol=1e-12)
+
+
+@settings(max_examples=80, deadline=None)
+@given(
+    factor=st.sampled_from([2, 3, 4, 8]),
+    size=st.tuples(st.integers(1, 70), st.integers(1, 70)),
+    origin=st.tuples(st.integers(0, 40), st.integers(0, 40)),
+    margin=st.tuples(st.integers(0, 9), st.integers(0, 9)),
+    bright=st.integers(0, 40),
+    seed=st.integers(0, 2**32 - 1),
+)
+def test_a_splat_pixel_by_pixel_is_the_dense_splat(factor, size, origin, margin, bright, seed):
+    """Lamps and glints are splatted pixel by pixel, any other box by dense products per cell:
+    the same nodes to the rounding of the sums (8 decades of luminance, pixels at the box's
+    and the image's borders, empty boxes, and boxes dense enough to take the dense way)."""
+    rng = np.random.default_rng(seed)
+    excess = np.zeros(size)
+    excess[rng.integers(0, size[0], bright), rng.integers(0, size[1], bright)] = rng.random(
+        bright
+    ) * 10.0 ** rng.integers(0, 9, bright)
+    box = (origin[0], origin[0] + size[0], origin[1], origin[1] + size[1])
+    grid = multires.grid_shape((box[1] + margin[0], box[3] + margin[1]), factor)
+    columns = multires._splat_last(excess, factor, box[2], grid[1])
+    dense = multires._splat_last(columns.T, factor, box[0], grid[0]).T
+    got = multires.splat(excess, factor, box, grid)
+    assert got.shape == dense.shape
+    assert_allclose(got, dense, rtol=0, atol=1e-14 * max(excess.sum(), 1e-300))
+    assert_allclose(got.sum(), excess.sum(), rtol=1e-12)  # the splat keeps the total

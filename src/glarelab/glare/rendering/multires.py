@@ -24,6 +24,7 @@ from glarelab.glare.rendering._convolve import spread
 __all__ = [
     "FOOTPRINT_NODES",
     "PAD_NODES",
+    "SPARSE_SPLAT_SHARE",
     "MultiresKernels",
     "cell_sums",
     "far_spread",
@@ -36,6 +37,11 @@ PAD_NODES = 2  # nodes in front of the first cell, so that every cubic weight is
 # 2 cells from it: the coarse kernel must reach ceil(R / f) + 4 nodes for offsets up to R,
 # plus one for the rounding of R / f.
 FOOTPRINT_NODES = 5
+# A splat by pixel (sixteen weights each) where at most this share of the box is bright: on
+# the 2048² night with a glint of the sun (31 bright pixels in a 1150 × 1076 box) it took
+# the plan's preview of the far tail (splat, darkest cells, coarse convolution) from 60 to
+# 48 ms, medians of nine alternating rounds at a load average of 3.5
+SPARSE_SPLAT_SHARE = 1 / 16
 
 
 def channels(values: np.ndarray) -> list[np.ndarray]:
@@ -65,14 +71,21 @@ def grid_shape(shape: tuple[int, int], factor: int) -> tuple[int, int]:
 
 def _cubic(n_fine: int, factor: int, start: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """Cubic-convolution weights (Keys 1981, a = -½) between fine pixels
-    ``start … start + n_fine - 1`` and the nodes of a grid ``f`` times coarser.
+    ``start … start + n_fine - 1`` and the nodes of a grid ``f`` times coarser
+    (:func:`_cubic_at`)."""
+    return _cubic_at(np.arange(start, start + n_fine), factor)
+
+
+def _cubic_at(pixels: np.ndarray, factor: int) -> tuple[np.ndarray, np.ndarray]:
+    """Cubic-convolution weights (Keys 1981, a = -½) between the fine ``pixels`` (indices
+    along one axis) and the nodes of a grid ``f`` times coarser.
 
     Node ``j`` sits at the centre of coarse cell ``j - PAD_NODES``, fine coordinate
     ``(j - PAD_NODES) f + (f - 1) / 2``. Returns each pixel's first node (of four) and the
-    ``(n_fine, 4)`` weights. The weights reproduce quadratics, so interpolating with them, or
+    ``(n, 4)`` weights. The weights reproduce quadratics, so interpolating with them, or
     splatting with them (the adjoint), is exact to second order.
     """
-    u = (np.arange(start, start + n_fine) + 0.5) / factor - 0.5
+    u = (pixels + 0.5) / factor - 0.5
     base = np.floor(u)
     t = (u - base)[:, None]
     weights = np.hstack(
@@ -133,9 +146,24 @@ def _upsample_last(nodes: np.ndarray, factor: int, start: int, n_fine: int) -> n
 def splat(excess: np.ndarray, factor: int, box, grid: tuple[int, int]) -> np.ndarray:
     """Distribute each pixel of ``excess`` (the image's ``box = (r0, r1, c0, c1)``) over its
     4 × 4 nearest coarse nodes with cubic weights: the total, centroid and second moments of
-    the excess are kept, so the coarse convolution is off only in third order of ``f / r``."""
-    columns = _splat_last(excess, factor, box[2], grid[1])
-    return _splat_last(columns.T, factor, box[0], grid[0]).T
+    the excess are kept, so the coarse convolution is off only in third order of ``f / r``.
+
+    A box whose bright pixels are at most :data:`SPARSE_SPLAT_SHARE` of it (lamps, glints,
+    a sun) is splatted pixel by pixel, sixteen products each; any other by dense products
+    per cell along each axis. The two agree to the rounding of their sums."""
+    rows, cols = np.nonzero(excess)
+    if rows.size > SPARSE_SPLAT_SHARE * excess.size:
+        columns = _splat_last(excess, factor, box[2], grid[1])
+        return _splat_last(columns.T, factor, box[0], grid[0]).T
+    first_row, row_weights = _cubic_at(rows + box[0], factor)
+    first_col, col_weights = _cubic_at(cols + box[2], factor)
+    values = excess[rows, cols].astype(np.float64, copy=False)
+    index = (first_row[:, None, None] + np.arange(4)[:, None]) * grid[1] + (
+        first_col[:, None, None] + np.arange(4)
+    )
+    weights = values[:, None, None] * row_weights[:, :, None] * col_weights[:, None, :]
+    nodes = np.bincount(index.ravel(), weights.ravel(), minlength=grid[0] * grid[1])
+    return nodes.reshape(grid)
 
 
 def upsample(coarse: np.ndarray, factor: int, shape: tuple[int, int], start=(0, 0)) -> np.ndarray:
