@@ -5,7 +5,7 @@ constants must be measured where the render runs, at the number of threads it wi
 FFTs run on every core (``scipy.fft`` workers), the direct spread shares its rows among the
 cores, and the far tail's splat and interpolation are numpy products on one. The first
 renderer on a machine with a kernel cache measures them (about half a second on a quiet
-machine: seven alternating rounds, each unit's median ratio to the FFT's in the same round,
+machine: 21 alternating rounds, each unit's median ratio to the FFT's in the same round,
 scaled by the FFT's fastest round) and writes them next to the kernels
 (``costs-<threads>-threads.json``, written to a temporary name and renamed); later processes
 read them. Without a cache, the constants measured on a 2-core
@@ -33,8 +33,13 @@ __all__ = [
     "n_log_n",
 ]
 
-COSTS_VERSION = 6  # bump when what is measured changes
-ROUNDS = 7  # calibration rounds: the FFT's fastest, the others' median ratio to it
+COSTS_VERSION = 7  # bump when what is measured changes (7: 21 rounds, not 7)
+# calibration rounds: the FFT's fastest, the others' median ratio to it. Four calibrations
+# on the quiet 2-core machine put a scaled kernel copy at 13.8-21.6 FFT units with 7 rounds
+# (0.5 s), 14.2-16.2 with 21 (1.3 s, once per machine): on two lamps and a glint (512²)
+# the direct path and the FFT are within 15 % of each other, and the wider spread chose
+# the FFT where the direct spread was faster
+ROUNDS = 21
 
 
 def cores() -> int:
