@@ -4,7 +4,7 @@ The planner chooses the cheapest path by estimated seconds; only their ratios ma
 constants must be measured where the render runs, at the number of threads it will use: the
 FFTs run on every core (``scipy.fft`` workers), the direct spread shares its rows among the
 cores, and the far tail's splat and interpolation are numpy products on one. The first
-renderer on a machine with a kernel cache measures them (about half a second on a quiet
+renderer on a machine with a kernel cache measures them (about 1.3 s on a quiet
 machine: 21 alternating rounds, each unit's median ratio to the FFT's in the same round,
 scaled by the FFT's fastest round) and writes them next to the kernels
 (``costs-<threads>-threads.json``, written to a temporary name and renamed); later processes
