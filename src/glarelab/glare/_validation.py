@@ -18,6 +18,7 @@ __all__ = [
     "check_flag",
     "check_image",
     "check_in_range",
+    "check_luminances",
     "check_pixel_deg",
     "check_positive",
     "check_positive_int",
@@ -171,6 +172,29 @@ def check_image(name: str, image: object, *, channels: tuple[int, ...] = ()) -> 
     if low < 0:
         raise ValueError(f"{name} must be >= 0 cd/m²; got {_first(array, array < 0)}")
     return array
+
+
+def check_luminances(name: str, value: object) -> np.ndarray:
+    """Return ``value`` (a number or an array of any shape) as a float array of luminances,
+    finite and >= 0, else raise ``ValueError`` naming ``name``: a string (``'100'``), a bool,
+    a complex number or a masked array is refused, not converted."""
+    if isinstance(value, str | bytes | bool | np.bool_) or value is None:
+        raise ValueError(
+            f"{name} must be a number or an array of numbers >= 0 (cd/m²); got "
+            f"{type(value).__name__} {value!r}"
+        )
+    try:
+        array = np.asarray(value)
+    except ValueError:  # rows of different lengths
+        raise ValueError(
+            f"{name} must be an array of numbers; got rows of different lengths"
+        ) from None
+    if isinstance(value, np.ma.MaskedArray):
+        check_image(name, value)  # its message: the mask would be ignored
+    if array.dtype == bool:
+        raise ValueError(f"{name} must hold numbers >= 0 (cd/m²), not True/False")
+    check_image(name, array.reshape(1, -1) if array.size else np.zeros((1, 1)))
+    return array.astype(float)
 
 
 def _first(array: np.ndarray, bad: np.ndarray) -> str:

@@ -217,6 +217,8 @@ def test_the_scale_from_display_to_scene_sets_the_blur():
     ("call", "pattern"),
     [
         (lambda: acuity.acuity_cpd(-1.0), "luminance_cd_m2"),
+        (lambda: acuity.acuity_cpd(True), "luminance_cd_m2"),  # was 1 cd/m²
+        (lambda: acuity.acuity_cpd("0.03"), "luminance_cd_m2"),  # was 0.03 cd/m²
         (lambda: acuity.luminance_for_acuity(60.0), "cpd"),
         (lambda: acuity.luminance_for_acuity(0.0), "cpd"),
         (lambda: acuity.blur_sigma_deg(1.0, method="Ferwerda1996"), "method"),

@@ -140,6 +140,13 @@ def test_a_small_lamp_does_not_make_the_night_day():
     [
         (lambda: adaptation.rod_sensitivity(-1.0), "luminance_cd_m2"),
         (lambda: adaptation.rod_sensitivity(float("nan")), "luminance_cd_m2"),
+        # a bool, a string and a complex number were read as 1, 100 and its real part
+        (lambda: adaptation.rod_sensitivity(True), "luminance_cd_m2"),
+        (lambda: adaptation.rod_sensitivity("100"), "luminance_cd_m2"),
+        (lambda: adaptation.rod_sensitivity(np.array([1.0, 2.0]) + 1j), "luminance_cd_m2"),
+        (lambda: adaptation.rod_sensitivity(np.array([True, False])), "luminance_cd_m2"),
+        (lambda: adaptation.adaptation_step(True, 1.0, 0.1), "previous_cd_m2"),
+        (lambda: adaptation.adaptation_luminance(["1", "2"], 0.1), "targets_cd_m2"),
         (lambda: adaptation.adaptation_time_s(1.0, tau_rod_s=0.0), "tau_rod_s"),
         (lambda: adaptation.adaptation_step(1.0, 1.0, -0.1), "frame_time_s"),
         (lambda: adaptation.adaptation_step(-1.0, 1.0, 0.1), "previous_cd_m2"),

@@ -152,3 +152,30 @@ def test_the_bound_before_the_spread_is_known_holds_for_each_pixel():
         assert after <= before, (after, before)
         if floor[0] > 0 and absolute > 0.01:
             assert before < 1.5 * after, (after, before)
+
+
+@pytest.mark.parametrize(
+    ("options", "pattern"),
+    [
+        ({"black_cd_m2": True}, "black_cd_m2"),
+        ({"black_cd_m2": "0.1"}, "black_cd_m2"),
+        ({"black_cd_m2": float("nan")}, "black_cd_m2"),
+        ({"black_cd_m2": 100.0}, "black_cd_m2"),
+        ({"black_cd_m2": 0.1, "bits": True}, "bits"),
+        ({"black_cd_m2": 0.1, "bits": 0}, "bits"),
+        ({"black_cd_m2": 0.1, "bits": 10.0}, "bits"),
+        ({"black_cd_m2": 0.1, "bits": 40}, "bits"),
+        ({"black_cd_m2": 0.1, "gamma": True}, "gamma"),
+        ({"black_cd_m2": 0.1, "gamma": [2.2]}, "gamma"),
+        ({"black_cd_m2": 0.1, "gamma": float("nan")}, "gamma"),
+        ({"black_cd_m2": 0.1, "gamma": float("inf")}, "gamma"),
+        ({"black_cd_m2": 0.1, "gamma": -2.2}, "gamma"),
+        ({"black_cd_m2": 0.1, "gamma": 0.0}, "gamma"),
+        ({"black_cd_m2": 0.1, "gamma": 2.2 + 0j}, "gamma"),
+    ],
+)
+def test_a_gamma_display_refuses_what_cannot_be_a_display(options, pattern):
+    """Each of these made a table: a bool as 1 or 0, a string read as its number, NaN and
+    negative gammas tables of NaN and inf, 0 bits one code, 40 bits an 8 TiB allocation."""
+    with pytest.raises(ValueError, match=pattern):
+        Display.gamma(100.0, **options)

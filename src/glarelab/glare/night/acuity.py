@@ -57,7 +57,13 @@ import numpy as np
 from scipy import ndimage
 
 from glarelab.glare._colour import colour
-from glarelab.glare._validation import check_choice, check_image, check_in_range, check_positive
+from glarelab.glare._validation import (
+    check_choice,
+    check_image,
+    check_in_range,
+    check_luminances,
+    check_positive,
+)
 
 __all__ = [
     "BLUR_METHODS",
@@ -120,7 +126,7 @@ def acuity_cpd(luminance_cd_m2: float | np.ndarray) -> float | np.ndarray:
     >>> round(acuity_cpd(0.03), 2), round(acuity_cpd(100.0), 2)
     (7.44, 47.51)
     """
-    y = np.maximum(_luminances("luminance_cd_m2", luminance_cd_m2), MIN_LUMINANCE_CD_M2)
+    y = np.maximum(check_luminances("luminance_cd_m2", luminance_cd_m2), MIN_LUMINANCE_CD_M2)
     a, b, c, d = LARSON1997
     r = a * np.arctan(b * np.log10(y) + c) + d
     return float(r) if np.ndim(luminance_cd_m2) == 0 else r
@@ -185,7 +191,7 @@ def lightness(luminance_cd_m2, *, white_cd_m2: float = LAB_WHITE_CD_M2_LUIDOLT20
     >>> round(lightness(luminance_for_acuity(13.85)), 2)  # Luidolt §5.3.2: "approximately 1.31"
     1.31
     """
-    y = _luminances("luminance_cd_m2", luminance_cd_m2)
+    y = check_luminances("luminance_cd_m2", luminance_cd_m2)
     white = check_positive("white_cd_m2", white_cd_m2, unit="cd/m²")
     value = colour.colorimetry.lightness_CIE1976(y / white * 100.0, 100.0)
     return float(value) if np.ndim(luminance_cd_m2) == 0 else np.asarray(value)
@@ -646,9 +652,3 @@ def _patches(planes: np.ndarray, rows: np.ndarray, cols: np.ndarray, reach: int)
     patch = planes[np.clip(r, 0, height - 1), np.clip(c, 0, width - 1)]
     patch[~inside] = 0.0
     return patch
-
-
-def _luminances(name: str, value) -> np.ndarray:
-    array = np.asarray(value, dtype=float)
-    check_image(name, array.reshape(1, -1) if array.size else np.zeros((1, 1)))
-    return array

@@ -31,7 +31,13 @@ from typing import Literal
 import numpy as np
 
 from glarelab.glare._colour import colour
-from glarelab.glare._validation import check_choice, check_image, check_in_range, check_positive
+from glarelab.glare._validation import (
+    check_choice,
+    check_image,
+    check_in_range,
+    check_luminances,
+    check_positive,
+)
 
 __all__ = [
     "ABSOLUTE_THRESHOLD_CD_M2",
@@ -134,7 +140,7 @@ def rod_sensitivity(luminance_cd_m2: float | np.ndarray) -> float | np.ndarray:
     >>> rod_sensitivity(0.04), rod_sensitivity(0.0)
     (0.5, 1.0)
     """
-    y = _luminances("luminance_cd_m2", luminance_cd_m2)
+    y = check_luminances("luminance_cd_m2", luminance_cd_m2)
     sigma = SIGMA_HALF_CD_M2 / (SIGMA_HALF_CD_M2 + y)
     return float(sigma) if np.ndim(luminance_cd_m2) == 0 else sigma
 
@@ -218,8 +224,8 @@ def adaptation_step(
     >>> round(adaptation_step(1.0, 0.0, 0.4), 6)  # one rod time constant in the dark: 1/e left
     0.367879
     """
-    previous = float(_luminances("previous_cd_m2", previous_cd_m2))
-    target = float(_luminances("target_cd_m2", target_cd_m2))
+    previous = float(check_luminances("previous_cd_m2", previous_cd_m2))
+    target = float(check_luminances("target_cd_m2", target_cd_m2))
     frame_time_s = check_in_range("frame_time_s", frame_time_s, 0.0, math.inf, unit="s")
     tau = adaptation_time_s(target, tau_rod_s=tau_rod_s, tau_cone_s=tau_cone_s)
     # the convex combination of eq. 5.2, each weight computed to full precision: never
@@ -272,7 +278,7 @@ def adaptation_luminance(
     >>> [round(float(v), 3) for v in steps]  # τ(0.04) = 0.25 s: 1/e of the step left per frame
     [3.704, 1.388, 0.536, 0.222]
     """
-    targets = _luminances("targets_cd_m2", np.asarray(targets_cd_m2, float)).reshape(-1)
+    targets = check_luminances("targets_cd_m2", targets_cd_m2).reshape(-1)
     if targets.size == 0 or np.ndim(targets_cd_m2) != 1:
         raise ValueError(
             f"targets_cd_m2 must be a 1-D sequence of at least one luminance; got shape "
@@ -510,10 +516,3 @@ def gaze_falloff(
     rows = np.exp(-0.5 * ((np.arange(int(shape[0])) - row) / sigma_px) ** 2)
     cols = np.exp(-0.5 * ((np.arange(int(shape[1])) - col) / sigma_px) ** 2)
     return rows, cols
-
-
-def _luminances(name: str, value) -> np.ndarray:
-    """``value`` as a float array of luminances, finite and >= 0 (else ValueError naming it)."""
-    array = np.asarray(value, dtype=float)
-    check_image(name, array.reshape(1, -1) if array.size else np.zeros((1, 1)))
-    return array

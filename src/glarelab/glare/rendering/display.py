@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from glarelab.glare._validation import check_positive
+from glarelab.glare._validation import check_in_range, check_positive, check_positive_int
 from glarelab.glare.rendering.compose import METHODS, compose, over_channels
 
 __all__ = [
@@ -33,6 +33,8 @@ __all__ = [
 # for 10 bits), gamma 2.2, 1000:1 display whose white is L_dmax.
 DISPLAY_BITS = 10
 DISPLAY_GAMMA = 2.2
+MAX_DISPLAY_BITS = 16  # codes per channel a display table may have: 2^16
+MAX_DISPLAY_GAMMA = 10.0  # displays measure 1.8-2.6; beyond 10 a table is all black but one code
 DISPLAY_CONTRAST = 1000.0
 BLOCK_PX = 16  # the check bounds blocks of 16 × 16 pixels first, then pixels of failing blocks
 STEP_TABLE_SIZE = 2**16  # log-luminance bins of the step table (ratio 1.0001 over 1000:1)
@@ -73,9 +75,10 @@ class Display:
         black_cd_m2
             Code 0's luminance, cd/m², in ``[0, white_cd_m2)``.
         bits
-            Bits per channel: ``2^bits`` codes; default :data:`DISPLAY_BITS`.
+            Bits per channel, 1 to :data:`MAX_DISPLAY_BITS`: ``2^bits`` codes; default
+            :data:`DISPLAY_BITS`.
         gamma
-            The exponent ``γ``; default :data:`DISPLAY_GAMMA`.
+            The exponent ``γ``, in ``(0, MAX_DISPLAY_GAMMA]``; default :data:`DISPLAY_GAMMA`.
 
         Returns
         -------
@@ -85,7 +88,9 @@ class Display:
         Raises
         ------
         ValueError
-            For a white that is not positive, or a black outside ``[0, white)``.
+            For a white that is not positive, a black outside ``[0, white)``, bits that are
+            not a whole number in ``[1, MAX_DISPLAY_BITS]`` or a gamma outside
+            ``(0, MAX_DISPLAY_GAMMA]`` (bools, strings and NaN included).
 
         Examples
         --------
@@ -94,9 +99,13 @@ class Display:
         (1024, 0.22, 220.0)
         """
         white = check_positive("white_cd_m2", white_cd_m2, unit="cd/m²")
-        black = float(black_cd_m2)
-        if not 0.0 <= black < white:
-            raise ValueError(f"black_cd_m2 must lie in [0, {white:g}) cd/m², got {black_cd_m2!r}")
+        black = check_in_range(
+            "black_cd_m2", black_cd_m2, 0.0, white, unit="cd/m²", high_inclusive=False
+        )
+        bits = check_positive_int("bits", bits)
+        if bits > MAX_DISPLAY_BITS:
+            raise ValueError(f"bits must be an integer in [1, {MAX_DISPLAY_BITS}], got {bits!r}")
+        gamma = check_in_range("gamma", gamma, 0.0, MAX_DISPLAY_GAMMA, low_inclusive=False)
         levels = np.linspace(0.0, 1.0, 2**bits)
         return cls(lut=black + (white - black) * levels**gamma)
 
