@@ -211,3 +211,39 @@ def test_an_obstacle_image_that_passes_no_light_is_refused_not_a_kernel_of_nothi
     model = WaveOpticsGlare(obstacle_image=opaque_centre, obstacle_spacing_mm=0.5)
     with pytest.raises(ValueError, match=r"^the aperture passes no light: .* opaque over the wh"):
         kernel(model, 0.05, (31, 31))
+
+
+@pytest.mark.parametrize(
+    ("options", "name"),
+    [
+        ({"obstacle_spacing_mm": 0.01}, "obstacle_spacing_mm"),
+        ({"eyelashes": False, "eyelash_count": 10}, "eyelash_count"),
+        ({"eyelashes": False, "eyelash_thickness_mm": 0.2}, "eyelash_thickness_mm"),
+        ({"eyelashes": False, "eyelash_curvature": 1.0}, "eyelash_curvature"),
+        ({"eyelashes": False, "eye": "left"}, "eye"),
+        ({"particles": 0, "particle_size_mm": 0.1}, "particle_size_mm"),
+        ({"fresnel_distance_mm": 30.0}, "fresnel_distance_mm"),
+        ({"diaphragm_rotation_deg": 30.0}, "diaphragm_rotation_deg"),
+        ({"seed": 5, "eyelashes": False, "particles": 0}, "seed"),
+    ],
+)
+def test_a_wave_option_that_shapes_nothing_drawn_is_refused(options, name):
+    """Each was accepted and the kernel was the default's, its description claiming it."""
+    with pytest.raises(ValueError, match=f"^{name}=.* has no effect"):
+        WaveOpticsGlare(pupil_mm=3.0, **options)
+
+
+@pytest.mark.parametrize(
+    "options",
+    [
+        {"seed": 5},
+        {"eyelashes": False, "seed": 5},  # the particles are still drawn
+        {"fresnel": True, "fresnel_distance_mm": 30.0},
+        {"diaphragm_sides": 6, "diaphragm_rotation_deg": 30.0},
+        {"eyelashes": True, "eyelash_count": 10, "eye": "left"},
+        {"particles": 10, "particle_size_mm": 0.1},
+    ],
+)
+def test_the_same_options_with_what_they_shape_are_taken(options):
+    model = WaveOpticsGlare(pupil_mm=3.0, **options)
+    assert all(getattr(model, key) == value for key, value in options.items())

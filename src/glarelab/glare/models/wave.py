@@ -71,13 +71,14 @@ from __future__ import annotations
 import math
 import time
 import warnings
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, field, fields, replace
 from typing import Literal
 
 import numpy as np
 import scipy.fft
 import scipy.sparse
 
+from glarelab.files.values import is_real
 from glarelab.glare._colour import colour
 from glarelab.glare._validation import (
     check_choice,
@@ -393,6 +394,7 @@ class WaveOpticsGlare(GlareModel):
         check_choice("pixel_integration", self.pixel_integration, PIXEL_INTEGRATION_METHODS)
         check_choice("pupil_convention", self.pupil_convention, PUPIL_CONVENTIONS)
         check_choice("aperture_grid", self.aperture_grid, APERTURE_GRIDS)
+        self._refuse_idle_options()
         if self.pupil_convention == "Luidolt2020":
             low, high = LUIDOLT2020_PUPIL_RANGE_MM
             if not low <= self.pupil_diameter <= high:
@@ -402,6 +404,35 @@ class WaveOpticsGlare(GlareModel):
                     "the 8 mm disc's, which exceeds 1 above 8 mm",
                     stacklevel=3,
                 )
+
+    def _refuse_idle_options(self) -> None:
+        """Refuse an option set away from its default where what it shapes is not drawn (the
+        lashes' count without lashes, a rotation without a polygon, ...): the kernel would be
+        the default's, and the model's description would claim what it does not do."""
+        idle = {
+            "eyelashes": ("eyelash_count", "eyelash_thickness_mm", "eyelash_curvature", "eye"),
+            "particles": ("particle_size_mm",),
+            "fresnel": ("fresnel_distance_mm",),
+            "diaphragm_sides": ("diaphragm_rotation_deg",),
+            "obstacle_image": ("obstacle_spacing_mm",),
+        }
+        defaults = {f.name: f.default for f in fields(self)}
+        for enabler, options in idle.items():
+            value = getattr(self, enabler)
+            if value is not None and value is not False and not (is_real(value) and value == 0):
+                continue
+            for option in options:
+                if getattr(self, option) != defaults[option]:
+                    raise ValueError(
+                        f"{option}={getattr(self, option)!r} has no effect with "
+                        f"{enabler}={value!r}: leave {option} at its default "
+                        f"({defaults[option]!r}) or set {enabler}"
+                    )
+        if self.seed != defaults["seed"] and not (self.eyelashes or self.particles):
+            raise ValueError(
+                f"seed={self.seed!r} has no effect without eyelashes or particles (the "
+                "only random obstacles): leave it at 0 or draw them"
+            )
 
     # --- aperture -----------------------------------------------------------------------
 
