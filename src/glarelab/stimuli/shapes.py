@@ -3,11 +3,12 @@ as a session draws them."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from glarelab.glare._validation import check_positive
+from glarelab.glare._validation import check_in_range, check_positive
 
 __all__ = ["ImageRow", "disk"]
 
@@ -27,18 +28,23 @@ def disk(
     field_deg
         Side of the square field in degrees, > 0.
     pixel_deg
-        Visual angle of a pixel in degrees, > 0. The field has an odd number of pixels so the
-        disk has a centre pixel.
+        Visual angle of a pixel in degrees, > 0 and at most ``field_deg``. The field has an
+        odd number of pixels so the disk has a centre pixel.
     disk_diameter_deg
-        Diameter of the disk in degrees, > 0.
+        Diameter of the disk in degrees, > 0 and less than ``field_deg``.
     disk_cd_m2, background_cd_m2
-        Luminances in cd/m², >= 0.
+        Luminances in cd/m², finite and >= 0 (numbers, not bools or strings).
 
     Returns
     -------
     dict
         ``img`` (float64 luminance), ``mask`` (bool, the disk: pixel centres within the
         radius) and the parameters, in the style of stimupy.
+
+    Raises
+    ------
+    ValueError
+        For any argument outside its range, naming it.
 
     Examples
     --------
@@ -50,9 +56,18 @@ def disk(
     field_deg = check_positive("field_deg", field_deg, unit="deg")
     pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
     diameter = check_positive("disk_diameter_deg", disk_diameter_deg, unit="deg")
+    if pixel_deg > field_deg:
+        raise ValueError(
+            f"pixel_deg must be at most field_deg ({field_deg:g}°) for the field to hold a "
+            f"pixel, got {pixel_deg:g}"
+        )
+    if diameter >= field_deg:
+        raise ValueError(
+            f"disk_diameter_deg must be less than field_deg ({field_deg:g}°) for the disk to "
+            f"lie on the field, got {diameter:g}"
+        )
     for name, value in (("disk_cd_m2", disk_cd_m2), ("background_cd_m2", background_cd_m2)):
-        if not (np.isfinite(value) and value >= 0):
-            raise ValueError(f"{name} must be a finite luminance >= 0 cd/m², got {value!r}")
+        check_in_range(name, value, 0.0, math.inf, unit="cd/m²")
     n = round(field_deg / pixel_deg)
     n += 1 - n % 2
     y, x = (np.indices((n, n)) - n // 2) * pixel_deg

@@ -184,3 +184,19 @@ def test_a_model_name_given_as_model_is_refused_naming_model():
         glare.render_glare(np.ones((8, 8)), model="Vos", pixel_deg=0.05)
     with pytest.raises(ValueError, match=r"^model must be one of .*; got 'kakimoto'$"):
         glare.kernel("kakimoto", 0.1, (3, 3))
+
+
+@pytest.mark.parametrize(
+    ("options", "name"),
+    [
+        ({"shape": (11, 11), "rng": None}, "rng"),  # was an AttributeError
+        ({"shape": (11, 11), "rng": 5}, "rng"),  # an int seed: was an AttributeError
+        ({"shape": (10, 10), "rng": np.random.default_rng(0)}, "shape"),  # was 11 × 11
+        ({"shape": (11,), "rng": np.random.default_rng(0)}, "shape"),
+    ],
+)
+def test_flare_lines_refuse_what_cannot_be_their_kernel_or_randomness(options, name):
+    from glarelab.glare.models.flare import flare_line_pattern
+
+    with pytest.raises(ValueError, match=f"^{name} must"):
+        flare_line_pattern(n_lines=5, **options)

@@ -21,6 +21,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from glarelab.glare._validation import check_positive, check_positive_int
+from glarelab.glare.models.digitise import check_kernel_shape
 
 __all__ = ["CORONA_LINES", "HALO_LINES", "flare_line_pattern"]
 
@@ -57,6 +58,12 @@ def flare_line_pattern(
         (exactly, for the continuous pattern); 1 within ``line_width_px / π`` of the centre,
         where the lines cover every angle.
 
+    Raises
+    ------
+    ValueError
+        For a shape that is not two odd positive integers, an ``rng`` that is not a
+        ``numpy.random.Generator``, or a count or width out of range.
+
     Notes
     -----
     At radius ``r`` and angle ``φ`` the lines give
@@ -75,9 +82,13 @@ def flare_line_pattern(
     >>> p.shape, bool(p.min() >= 0)
     ((101, 101), True)
     """
+    if not isinstance(rng, np.random.Generator):
+        raise ValueError(
+            f"rng must be a numpy.random.Generator (np.random.default_rng(seed)), got {rng!r}"
+        )
     n_lines = check_positive_int("n_lines", n_lines)
     width = check_positive("line_width_px", line_width_px, unit="px")
-    height, breadth = (int(n) for n in shape)
+    height, breadth = check_kernel_shape(shape)
     angles = np.sort(rng.uniform(0.0, 2.0 * np.pi, n_lines))
     intensity = rng.uniform(0.0, 1.0, n_lines)
     # periodic copies so that windows crossing 0 or 2π need no special case
