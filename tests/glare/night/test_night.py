@@ -205,3 +205,16 @@ def test_bad_input_is_refused_by_name(kwargs, pattern):
     arguments = {"scene_cd_m2": np.ones((3, 3)), "pixel_deg": 0.1} | kwargs
     with pytest.raises(ValueError, match=pattern):
         night.render_night(arguments.pop("scene_cd_m2"), **arguments)
+
+
+def test_a_sequence_with_the_gaze_falloff_renders_each_frame_as_alone():
+    """The falloff's unglared frame once took the glare model's name, and the second frame of
+    every sequence ended in a TypeError."""
+    first = np.full((32, 32), 0.05)
+    first[16, 16] = 500.0
+    second = np.roll(first, 5, axis=1)
+    options = {"pixel_deg": 0.05, "effects": ("glare",), "gaze_px": (16, 16)}
+    both = glare.render_night([first, second], glare_falloff_deg=1.0, **options).frames
+    for frame, alone in zip(both, (first, second), strict=True):
+        expected = glare.render_night(alone, glare_falloff_deg=1.0, **options).frames
+        np.testing.assert_allclose(frame, expected.reshape(frame.shape), rtol=1e-12, atol=0)

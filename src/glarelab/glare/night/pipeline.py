@@ -201,7 +201,11 @@ def render_night(
         Visual angle of a pixel, degrees, > 0.
     effects
         Which of ``'adaptation'``, ``'glare'``, ``'acuity'``, ``'scotopic'`` to apply; default
-        all. The exposure is always applied.
+        all. The exposure is always applied. The options of an effect left out (a glare model,
+        an initial adaptation, an acuity method) are taken and unused, so that one set of
+        options serves every ablation of a pipeline (``NightResult.effects`` says what ran);
+        an option that the chosen effect's method would ignore is refused (``desaturation``
+        with Luidolt's scotopic colour).
     glare_model
         The glare model (an object or a name of :data:`glarelab.glare.GLARE_MODELS`); default
         the Vos PSF (Spencer 1995).
@@ -355,8 +359,8 @@ def render_night(
                     display.shape[:2], pixel_deg=pixel_deg, gaze_px=gazes[index],
                     sigma_deg=glare_falloff_deg,
                 )  # fmt: skip
-                base = np.minimum(display, l_dmax)
-                glared = base + (rows[:, None, None] * cols[None, :, None]) * (glared - base)
+                shown = np.minimum(display, l_dmax)
+                glared = shown + (rows[:, None, None] * cols[None, :, None]) * (glared - shown)
             display, bound = glared, result.error_bound_codes
         display = np.minimum(display, l_dmax)  # what the display can show (Spencer's sum too)
         if "acuity" in chosen:
