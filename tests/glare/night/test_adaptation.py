@@ -142,6 +142,10 @@ def test_a_small_lamp_does_not_make_the_night_day():
         (lambda: adaptation.rod_sensitivity(float("nan")), "luminance_cd_m2"),
         # a bool, a string and a complex number were read as 1, 100 and its real part
         (lambda: adaptation.rod_sensitivity(True), "luminance_cd_m2"),
+        (
+            lambda: adaptation.frame_luminance(np.ones((4, 4)), pixel_deg=0.1, gaze_px=(True, 2)),
+            "gaze_px",
+        ),
         (lambda: adaptation.rod_sensitivity("100"), "luminance_cd_m2"),
         (lambda: adaptation.rod_sensitivity(np.array([1.0, 2.0]) + 1j), "luminance_cd_m2"),
         (lambda: adaptation.rod_sensitivity(np.array([True, False])), "luminance_cd_m2"),

@@ -218,3 +218,8 @@ def test_a_sequence_with_the_gaze_falloff_renders_each_frame_as_alone():
     for frame, alone in zip(both, (first, second), strict=True):
         expected = glare.render_night(alone, glare_falloff_deg=1.0, **options).frames
         np.testing.assert_allclose(frame, expected.reshape(frame.shape), rtol=1e-12, atol=0)
+
+
+def test_a_gaze_of_true_is_refused_not_read_as_row_1():
+    with pytest.raises(ValueError, match="gaze_px"):
+        glare.render_night(np.full((16, 16), 0.05), pixel_deg=0.05, gaze_px=(True, 5))

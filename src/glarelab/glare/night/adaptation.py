@@ -37,6 +37,7 @@ from glarelab.glare._validation import (
     check_in_range,
     check_luminances,
     check_positive,
+    real_number,
 )
 
 __all__ = [
@@ -441,7 +442,7 @@ def window_mean(
     if y.ndim != 2:
         raise ValueError(f"values must be an (H, W) array; got shape {y.shape}")
     try:
-        row, col = (float(v) for v in gaze_px)
+        row, col = (real_number(v) for v in gaze_px)  # not a bool, a string or an array
     except (TypeError, ValueError):
         raise ValueError(f"gaze_px must be (row, column) in pixels; got {gaze_px!r}") from None
     if not (math.isfinite(row) and math.isfinite(col)):
@@ -507,7 +508,7 @@ def gaze_falloff(
     pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
     sigma_deg = check_positive("sigma_deg", sigma_deg, unit="deg")
     try:
-        row, col = (float(v) for v in gaze_px)
+        row, col = (real_number(v) for v in gaze_px)  # not a bool, a string or an array
     except (TypeError, ValueError):
         raise ValueError(f"gaze_px must be (row, column) in pixels; got {gaze_px!r}") from None
     if not (math.isfinite(row) and math.isfinite(col)):

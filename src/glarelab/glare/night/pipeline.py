@@ -417,9 +417,9 @@ def _gazes(gaze_px, n: int) -> list:
     if (
         isinstance(gaze_px, Sequence)
         and len(gaze_px) == 2
-        and all(isinstance(v, int | float | np.number) for v in gaze_px)
+        and all(isinstance(v, int | float | np.number | np.bool_) for v in gaze_px)
     ):
-        return [tuple(float(v) for v in gaze_px)] * n
+        return [tuple(gaze_px)] * n  # each checked where it is used (a bool refused)
     gazes = list(gaze_px)
     if len(gazes) != n:
         raise ValueError(
