@@ -11,9 +11,13 @@ from PIL import Image
 
 from glarelab.files.atomic import atomic_path
 from glarelab.glare._colour import colour
+from glarelab.glare._validation import check_choice, check_image, check_in_range, check_positive
 from glarelab.glare.models.wave import sigmoid_Kakimoto2004
 
 __all__ = ["preview_png", "psf_png", "psf_to_display", "to_display"]
+
+DEFAULT_DECADES = 4.0  # decades below white the log preview shows
+MAX_DECADES = 20.0  # beyond, every float64 luminance ratio of an image fits
 
 
 def _write_png(path: str | Path, encode: Callable[[], np.ndarray]) -> Path:
@@ -32,7 +36,7 @@ def to_display(
     *,
     l_dmax_cd_m2: float,
     scale: Literal["display", "log"] = "display",
-    decades: float = 4.0,
+    decades: float = DEFAULT_DECADES,
 ) -> np.ndarray:
     """Encode linear luminance as 8-bit sRGB for viewing.
 
@@ -53,8 +57,29 @@ def to_display(
     -------
     numpy.ndarray
         uint8 image, ``(H, W)`` or ``(H, W, 3)``.
+
+    Raises
+    ------
+    ValueError
+        For an image that is not finite, non-negative numbers of those shapes, a white that
+        is not positive, decades outside (0, 20], or decades given with ``scale='display'``
+        (which would ignore them).
+
+    Examples
+    --------
+    >>> to_display(np.array([[0.0, 50.0, 100.0, 400.0]]), l_dmax_cd_m2=100.0).tolist()
+    [[0, 188, 255, 255]]
     """
-    relative = np.asarray(luminance_cd_m2, dtype=np.float64) / float(l_dmax_cd_m2)
+    image = check_image("luminance_cd_m2", luminance_cd_m2, channels=(3,))
+    l_dmax = check_positive("l_dmax_cd_m2", l_dmax_cd_m2, unit="cd/m²")
+    check_choice("scale", scale, ("display", "log"))
+    decades = check_in_range("decades", decades, 0.0, MAX_DECADES, low_inclusive=False)
+    if scale == "display" and decades != DEFAULT_DECADES:
+        raise ValueError(
+            f"decades = {decades:g} is used only with scale='log'; with 'display' it would "
+            "be ignored"
+        )
+    relative = image.astype(np.float64) / l_dmax
     if scale == "display":
         encoded = colour.cctf_encoding(np.clip(relative, 0.0, 1.0), function="sRGB")
     elif scale == "log":
@@ -120,10 +145,24 @@ def psf_to_display(
     -------
     numpy.ndarray
         uint8, the shape of ``values``.
+
+    Raises
+    ------
+    ValueError
+        For values that are not finite numbers of those shapes, a dynamic range that is not
+        a finite number > 0, or a peak that is not a finite number > 0.
     """
-    array = np.asarray(values, dtype=float)
+    if isinstance(values, str | bytes) or values is None:
+        raise ValueError(f"values must be an (H, W) or (H, W, 3) kernel; got {values!r}")
+    array = np.asarray(values)
+    # negative values are allowed (taken as 0): the kernel's sign is checked as its magnitude
+    check_image("values", np.abs(array) if array.dtype.kind in "iuf" else array, channels=(3,))
+    array = array.astype(float)
+    dynamic_range = check_positive("dynamic_range", dynamic_range)
     if peak is None:
         peak = float(array.max())
+    else:
+        peak = check_positive("peak", peak)
     x = np.clip(array, 0.0, None) / (peak if peak > 0 else 1.0) * dynamic_range
     return np.round(np.clip(sigmoid_Kakimoto2004(x), 0.0, 255.0)).astype(np.uint8)
 
