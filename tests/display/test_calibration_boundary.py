@@ -216,3 +216,25 @@ def test_a_synthetic_display_is_refused_naming_the_argument_not_readings(argumen
 
     with pytest.raises(ValueError, match=match):
         synthetic_calibration(**({"bit_depth": 8} | arguments))
+
+
+@pytest.mark.parametrize(
+    ("call", "name"),
+    [
+        # each was encoded: the mask dropped, '50' read as 50 cd/m², True as 1 cd/m²
+        (lambda c: c.encode(np.ma.array([50.0, 500.0], mask=[0, 1])), "luminance_cd_m2"),
+        (lambda c: c.encode(np.array(["50", "1"])), "luminance_cd_m2"),
+        (lambda c: c.encode(np.array([True, False])), "luminance_cd_m2"),
+        (lambda c: c.encode(np.array([50.0, np.inf])), "luminance_cd_m2"),
+        # each was decoded: 10.7 as code 10, True as code 1
+        (lambda c: c.decode([10.7]), "codes"),
+        (lambda c: c.decode(np.array([True])), "codes"),
+        (lambda c: c.decode([256]), "codes"),
+    ],
+)
+def test_encode_and_decode_refuse_what_is_not_a_luminance_or_a_code(call, name):
+    from glarelab.display.calibration import synthetic_calibration
+
+    calibration = synthetic_calibration(max_cd_m2=100.0, black_cd_m2=0.1, bit_depth=8)
+    with pytest.raises(ValueError, match=f"^{name} must"):
+        call(calibration)

@@ -83,6 +83,23 @@ def _plausible_reading(value: float) -> bool:
     )
 
 
+def _array_of(name: str, value: object) -> np.ndarray:
+    """``value`` as an array, refusing what ``np.asarray`` would take wrongly: a masked array
+    (its mask dropped), a string, or rows of different lengths."""
+    if isinstance(value, np.ma.MaskedArray):
+        raise ValueError(
+            f"{name} must be a plain array, not a masked array (its mask would be ignored)"
+        )
+    if isinstance(value, str | bytes) or value is None:
+        raise ValueError(f"{name} must be an array of numbers; got {value!r}")
+    try:
+        return np.asarray(value)
+    except ValueError:
+        raise ValueError(
+            f"{name} must be an array of numbers; got rows of different lengths"
+        ) from None
+
+
 @dataclass(frozen=True)
 class EncodeReport:
     """What encoding did to an image: pixels clipped above the maximum or below black.
@@ -245,9 +262,14 @@ class Calibration:
         Raises
         ------
         ValueError
-            For a code outside the display's range.
+            For a code outside the display's range, or codes that are not integers (10.7,
+            True, '12').
         """
-        codes = np.asarray(codes)
+        codes = _array_of("codes", codes)
+        if codes.dtype.kind not in "iu":
+            raise ValueError(
+                f"codes must be integer drive codes (an integer array); got dtype {codes.dtype}"
+            )
         if codes.size and (codes.min() < 0 or codes.max() >= self.n_codes):
             raise ValueError(
                 f"codes must be in [0, {self.n_codes - 1}] for a {self.bit_depth}-bit display"
@@ -276,9 +298,15 @@ class Calibration:
         Raises
         ------
         ValueError
-            If a luminance is not finite.
+            If a luminance is not a finite real number (strings, bools, complex numbers and
+            masked arrays are refused, not converted).
         """
-        values = np.asarray(luminance_cd_m2, dtype=float)
+        values = _array_of("luminance_cd_m2", luminance_cd_m2)
+        if values.dtype.kind not in "iuf":
+            raise ValueError(
+                f"luminance_cd_m2 must hold real numbers (cd/m²); got dtype {values.dtype}"
+            )
+        values = values.astype(float)
         if not np.isfinite(values).all():
             raise ValueError("luminance_cd_m2 must be finite to be encoded")
         lut = self.lut
