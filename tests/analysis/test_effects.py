@@ -248,3 +248,35 @@ def test_hodges_lehmann_reports_the_level_r_reaches_in_small_samples(
         [low, high, level, estimate],
         atol=1e-12,
     )
+
+
+@pytest.mark.parametrize(
+    ("dv_values", "pattern"),
+    [
+        (["1", "2", "3", "4"], "real numbers"),  # was an interval from text
+        ([True, False, True, True], "real numbers"),
+        ([1.0, np.nan, 3.0, 4.0], "NaN"),
+    ],
+)
+def test_a_within_subject_interval_refuses_a_dv_that_is_not_numbers(dv_values, pattern):
+    from glarelab.analysis.effects import within_subject_ci
+
+    data = pd.DataFrame({"s": [1, 1, 2, 2], "c": ["x", "y"] * 2, "v": dv_values})
+    with pytest.raises(ValueError, match=pattern):
+        within_subject_ci(data, "v", ["c"], "s")
+
+
+@pytest.mark.parametrize(
+    ("call", "name"),
+    [
+        (lambda f: f(-1.0, 2, 20), "f_value"),
+        (lambda f: f(5.0, 0, 20), "df1"),
+        (lambda f: f(5.0, 2, float("inf")), "df2"),
+        (lambda f: f("5", 2, 20), "f_value"),
+    ],
+)
+def test_the_eta_interval_names_the_argument_it_refuses(call, name):
+    from glarelab.analysis.effects import eta2_partial_ci
+
+    with pytest.raises(ValueError, match=name):
+        call(eta2_partial_ci)

@@ -83,3 +83,13 @@ def test_an_overwhelming_effect_has_power_one_not_nan():
     # λ overflows to inf (1e200 / 1e-200), and scipy's ncf.sf is NaN near λ = 1e300
     assert one_way_power([0.0, 1e200], error_sd=1e-200, subjects=10) == 1.0
     assert one_way_power([0.0, 1e150], error_sd=1.0, subjects=10) == 1.0
+
+
+@pytest.mark.parametrize(
+    "means",
+    [["1", "2", "3"], [True, False, True], np.ma.array([1.0, 2.0, 9.0], mask=[0, 0, 1])],
+)
+def test_means_that_are_not_plain_numbers_are_refused(means):
+    """Strings were read as numbers, bools as 0 and 1, a masked mean counted (power 1.0)."""
+    with pytest.raises(ValueError, match="means_per_condition"):
+        one_way_power(means, error_sd=1.0, subjects=10)

@@ -46,6 +46,7 @@ from glarelab.analysis.stats import (
     corrected_df,
     signed_rank_counts,
 )
+from glarelab.files.values import is_real
 
 __all__ = [
     "eta2_partial_ci",
@@ -107,10 +108,14 @@ def eta2_partial_ci(
     (0.545, 0.768)
     """
     confidence = _confidence(confidence, "eta2_partial_ci")
-    if not (math.isfinite(f_value) and f_value >= 0):
-        raise ValueError(f"eta2_partial_ci: F must be a finite number ≥ 0; got {f_value!r}")
-    if not (df1 > 0 and df2 > 0 and math.isfinite(df1) and math.isfinite(df2)):
-        raise ValueError(f"eta2_partial_ci: df must be positive; got {df1!r}, {df2!r}")
+    if not (is_real(f_value) and math.isfinite(f_value) and f_value >= 0):
+        raise ValueError(f"eta2_partial_ci: f_value must be a finite number ≥ 0; got {f_value!r}")
+    for name, df in (("df1", df1), ("df2", df2)):
+        if not (is_real(df) and math.isfinite(df) and df > 0):
+            raise ValueError(
+                f"eta2_partial_ci: {name} must be a finite number > 0 (degrees of freedom); "
+                f"got {df!r}"
+            )
     alpha = 1 - confidence
 
     def cdf(x, ncp):
@@ -479,6 +484,23 @@ def zeroin(f, low: float, high: float, f_low: float, f_high: float, *, tol: floa
     return b
 
 
+def _numeric_column(data: object, dv: str, caller: str) -> None:
+    """Refuse a ``data`` that is not a DataFrame with a column ``dv`` of finite real numbers
+    (strings would be averaged as text or read as numbers, bools as 0 and 1)."""
+    if not isinstance(data, pd.DataFrame):
+        raise ValueError(f"{caller}: data must be a pandas DataFrame; got {type(data).__name__}")
+    if dv not in data.columns:
+        raise ValueError(f"{caller}: dv {dv!r} is not a column of data ({list(data.columns)})")
+    column = data[dv]
+    kind = column.dtype.kind
+    if kind not in "iuf":
+        raise ValueError(
+            f"{caller}: the dv column {dv!r} must hold real numbers; got dtype {column.dtype}"
+        )
+    if not np.isfinite(column.to_numpy(float)).all():
+        raise ValueError(f"{caller}: the dv column {dv!r} holds NaN or infinite values")
+
+
 def within_subject_ci(
     data: pd.DataFrame,
     dv: str,
@@ -527,6 +549,7 @@ def within_subject_ci(
     0.2041
     """
     confidence = _confidence(confidence, "within_subject_ci")
+    _numeric_column(data, dv, "within_subject_ci")
     within = list(within)
     wide = data.pivot_table(index=subject, columns=within, values=dv, aggfunc="count")
     if wide.isna().any().any() or (wide != 1).any().any():
@@ -584,6 +607,7 @@ def marginal_means(
     [3.0, 4.0]
     """
     confidence = _confidence(confidence, "marginal_means")
+    _numeric_column(data, dv, "marginal_means")
     rows = []
     for factor in within:
         by = data.pivot_table(index=subject, columns=factor, values=dv, aggfunc="mean")

@@ -39,7 +39,20 @@ SURE_NONCENTRALITY = 1e8
 
 
 def _means(means_per_condition: Sequence[float]) -> np.ndarray:
-    means = np.asarray(means_per_condition, float)
+    """The means as floats: at least two finite real numbers (strings, bools, complex
+    numbers and masked arrays refused, not converted)."""
+    given = means_per_condition
+    if isinstance(given, np.ma.MaskedArray | str | bytes):
+        raise ValueError(
+            f"means_per_condition must be a plain sequence of numbers; got {type(given).__name__}"
+        )
+    try:
+        raw = np.asarray(given)
+    except ValueError:  # nested sequences of different lengths
+        raw = np.asarray([None])
+    if raw.dtype.kind not in "iuf":
+        raise ValueError(f"means_per_condition must be at least two finite numbers; got {given!r}")
+    means = raw.astype(float)
     if means.ndim != 1 or means.size < 2 or not np.all(np.isfinite(means)):
         raise ValueError(
             f"means_per_condition must be at least two finite numbers; got {means_per_condition!r}"
