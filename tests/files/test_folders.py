@@ -28,6 +28,7 @@ def test_an_output_put_in_place_meanwhile_is_replaced_not_a_crash(tmp_path, monk
             raced.append(True)
             final.mkdir()
             (final / "b.txt").write_text("the other build")
+            record_files(final, "stimulus set")  # a build lists what it wrote
         return real(self, target)
 
     monkeypatch.setattr(Path, "rename", racing)
@@ -86,3 +87,53 @@ def test_a_folder_where_the_listing_goes_is_named_not_a_raw_error(tmp_path):
     with pytest.raises(ValueError, match=r"\.glarelab-files\.json is not a file \(a folder\?\)"):
         record_files(tmp_path, "render")
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == [LISTING]
+
+
+@pytest.mark.parametrize("exchange", [True, False], ids=["swapped", "renamed"])
+def test_files_saved_into_a_folder_while_its_replacement_is_made_are_kept(
+    tmp_path, monkeypatch, exchange
+):
+    """A note saved into a report folder during the analysis, and a table edited there, were
+    deleted with the earlier report when the new one was swapped in (the start's check had
+    passed): they are now moved into the new folder, the edited table as ``NAME.kept``."""
+    from glarelab.files import folders
+    from glarelab.files.folders import record_files, replace_folder, staging_folder
+
+    final = tmp_path / "report"
+    final.mkdir()
+    (final / "table.csv").write_text("old\n")
+    record_files(final, "report")
+    staging = staging_folder(final)
+    (staging / "table.csv").write_text("new\n")
+    (staging / "results.md").write_text("# new\n")
+    # meanwhile, a person at work in the earlier report
+    (final / "my-notes.txt").write_text("keep me\n")
+    (final / "sub").mkdir()
+    (final / "sub" / "draft.md").write_text("draft\n")
+    (final / "table.csv").write_text("old, with my edit\n")
+    if not exchange:
+        monkeypatch.setattr(folders, "_exchange", lambda first, second: False)
+    with pytest.warns(UserWarning, match="kept in it"):
+        replace_folder(staging, final, kind="report")
+    assert (final / "table.csv").read_text() == "new\n"
+    assert (final / "results.md").read_text() == "# new\n"
+    assert (final / "my-notes.txt").read_text() == "keep me\n"
+    assert (final / "sub" / "draft.md").read_text() == "draft\n"
+    assert (final / "table.csv.kept").read_text() == "old, with my edit\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["report"]  # nothing else left
+
+
+def test_an_unchanged_earlier_output_is_replaced_without_a_word(tmp_path, recwarn):
+    from glarelab.files.folders import record_files, replace_folder, staging_folder
+
+    final = tmp_path / "report"
+    final.mkdir()
+    (final / "table.csv").write_text("old\n")
+    record_files(final, "report")
+    staging = staging_folder(final)
+    (staging / "table.csv").write_text("new\n")
+    replace_folder(staging, final, kind="report")
+    assert sorted(p.name for p in final.iterdir() if p.name != ".glarelab-files.json") == [
+        "table.csv"
+    ]
+    assert not [w for w in recwarn if issubclass(w.category, UserWarning)]

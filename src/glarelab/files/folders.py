@@ -22,6 +22,7 @@ import json
 import os
 import shutil
 import time
+import warnings
 from collections.abc import Iterable
 from pathlib import Path
 
@@ -484,7 +485,7 @@ def replace_folder(
     for _attempt in range(5):  # another process may put its own output there meanwhile
         if final.is_dir() and not final.is_symlink() and _exchange(staging, final):
             fsync_folder(final.parent)
-            shutil.rmtree(staging, ignore_errors=True)  # now the earlier output
+            _remove_earlier(staging, final, kind)  # staging is now the earlier output
             return
         old = None
         if final.exists():
@@ -507,6 +508,69 @@ def replace_folder(
             raise
         fsync_folder(final.parent)
         if old is not None:
-            shutil.rmtree(old, ignore_errors=True)
+            _remove_earlier(old, final, kind)
         return
     raise OSError(errno.EBUSY, "other processes kept replacing the folder", str(final))
+
+
+def _same_entry(first: Path, second: Path) -> bool:
+    """Whether two paths are one file (hard links) or two symbolic links to one target."""
+    try:
+        if first.is_symlink() or second.is_symlink():
+            both = first.is_symlink() and second.is_symlink()
+            return both and os.readlink(first) == os.readlink(second)
+        return os.path.samefile(first, second)
+    except OSError:
+        return False
+
+
+def _remove_earlier(earlier: Path, final: Path, kind: str) -> None:
+    """Remove the output ``final`` replaced, once the files a person saved into it while the
+    new one was made (files glarelab did not write there, or edited since) are moved into
+    ``final``, at their own paths (``NAME.kept`` where the new output has a file of that
+    name); the command's start had checked the folder, but a note saved during a minutes-long
+    build was deleted with it. Where one cannot be moved, the earlier folder is kept beside
+    ``final`` as ``NAME.kept-PID``. Either way a warning names them."""
+    listed, written = _listing(earlier), _hashes(earlier)
+    moved, failed = [], False
+    for entry in _entries(earlier):
+        source = earlier / entry
+        if listed.get(entry) == kind and (
+            entry not in written or _sha256(source) == written[entry]
+        ):
+            continue  # glarelab's, as written: replaced by the new output
+        target = final / entry
+        if target.exists() or target.is_symlink():
+            if _same_entry(source, target):
+                continue  # the same file (or link), carried into the new output
+            number, stem = 1, target.name + ".kept"
+            target = target.with_name(stem)
+            while target.exists() or target.is_symlink():
+                number += 1
+                target = target.with_name(f"{stem}-{number}")
+        try:
+            target.parent.mkdir(parents=True, exist_ok=True)
+            source.rename(target)
+        except OSError:
+            failed = True
+            continue
+        moved.append(target.relative_to(final).as_posix())
+    if failed:
+        kept = final.with_name(f"{final.name}.kept-{os.getpid()}")
+        try:
+            earlier.rename(kept)
+        except OSError:
+            kept = earlier
+        warnings.warn(
+            f"{final}: files saved into it while the new {kind} was made could not all be "
+            f"moved into it; the earlier folder is kept as {kept}",
+            stacklevel=3,
+        )
+        return
+    shutil.rmtree(earlier, ignore_errors=True)
+    if moved:
+        warnings.warn(
+            f"{final}: {len(moved)} file(s) saved into it while the new {kind} was made were "
+            f"kept in it: {', '.join(moved[:5])}{' ...' if len(moved) > 5 else ''}",
+            stacklevel=3,
+        )
