@@ -281,3 +281,29 @@ def test_a_comment_stays_in_its_markdown_cell(comment, cell):
     lines = text.splitlines()
     assert len(lines) == 3 and lines[2] == f"| sim01 | {cell} |"
     assert [line.replace(r"\|", "").count("|") for line in lines] == [3, 3, 3]
+
+
+@pytest.mark.parametrize("study", ["yoshida2008", "luidolt2020"])
+def test_a_report_is_written_under_a_locale_that_is_not_utf8(simulated, tmp_path, study):
+    """Under LANG=C (or Windows' cp1252) the tables and texts, with η, ∞ and −, ended the
+    analysis in a bare codec error: every file is written as UTF-8 whatever the locale."""
+    import os
+    import subprocess
+    import sys
+
+    files = [str(f) for f in sorted(simulated.glob(f"*_{study}_s1_*.csv"))]
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("LC_", "LANG", "PYTHONUTF8"))}
+    env |= {"LC_ALL": "C", "LANG": "C", "PYTHONUTF8": "0"}
+    done = subprocess.run(
+        [sys.executable, "-m", "glarelab", "analyse", study, *files, "--out", str(tmp_path / "r")],
+        capture_output=True,
+        text=True,
+        encoding="utf-8",
+        errors="replace",
+        env=env,
+        timeout=600,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr
+    text = (tmp_path / "r" / "results.md").read_text(encoding="utf-8")
+    assert "η" in text or "−" in text or "∞" in text or "Holm" in text

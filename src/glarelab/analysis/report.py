@@ -585,12 +585,16 @@ def write_report(
         for name, table in result["tables"].items():
             if name in EXPORTS:
                 raise ValueError(f"a paradigm's table may not be named {name!r} ({EXPORTS})")
-            (staging / f"{name}.csv").write_text(csv_text(_spreadsheet_safe(table)))
-            (staging / f"{name}.md").write_text(_markdown(table))
-        (staging / "trials.csv").write_text(csv_text(_spreadsheet_safe(_trials(dataset))))
+            (staging / f"{name}.csv").write_text(
+                csv_text(_spreadsheet_safe(table)), encoding="utf-8"
+            )
+            (staging / f"{name}.md").write_text(_markdown(table), encoding="utf-8")
+        (staging / "trials.csv").write_text(
+            csv_text(_spreadsheet_safe(_trials(dataset))), encoding="utf-8"
+        )
         if result.get("wide") is not None:
             (staging / "participants_wide.csv").write_text(
-                csv_text(_spreadsheet_safe(result["wide"]))
+                csv_text(_spreadsheet_safe(result["wide"])), encoding="utf-8"
             )
         for name, item in result["figures"].items():
             _write_figure(staging / name, as_figure(item, name))
@@ -614,11 +618,15 @@ def write_report(
             protocol.sha256,
             origin.get("stimulus_set_manifest_sha256"),
         )
-        (staging / "provenance.json").write_text(json.dumps(origin, indent=2, default=str))
+        (staging / "provenance.json").write_text(
+            json.dumps(origin, indent=2, default=str), encoding="utf-8"
+        )
         if methods:
-            (staging / "methods.md").write_text(methods + "\n")
+            (staging / "methods.md").write_text(methods + "\n", encoding="utf-8")
         if result.get("results"):
-            (staging / "results.md").write_text("\n\n".join(result["results"]) + "\n")
+            (staging / "results.md").write_text(
+                "\n\n".join(result["results"]) + "\n", encoding="utf-8"
+            )
         (staging / REPORT).write_text(
             _html(protocol, dataset, result, methods, origin, rows, shown, stimuli is not None),
             encoding="utf-8",

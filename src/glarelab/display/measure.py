@@ -472,7 +472,7 @@ class MeasurementSession:
         if not path.is_file():
             raise FileNotFoundError(f"no measurement session at {path} to resume")
         try:
-            data = json.loads(path.read_text())
+            data = json.loads(path.read_text(encoding="utf-8"))
         except (json.JSONDecodeError, UnicodeDecodeError) as error:
             raise ValueError(f"{path}: a measurement session must be JSON; {error}") from None
         if not isinstance(data, dict) or data.get("format") != SESSION_FORMAT:

@@ -80,7 +80,9 @@ def _read_calibs(path: Path) -> dict:
     import json_tricks
 
     try:
-        calibs = json_tricks.loads(path.read_text(), ignore_comments=False, preserve_order=False)
+        calibs = json_tricks.loads(
+            path.read_text(encoding="utf-8"), ignore_comments=False, preserve_order=False
+        )
     except (ValueError, UnicodeDecodeError) as error:
         raise ValueError(f"{path}: not a Monitor Center monitor ({error})") from None
     if not isinstance(calibs, dict) or not calibs:

@@ -66,7 +66,7 @@ def set_image_codes(image: str | Path) -> tuple[np.ndarray, int]:
     if manifest.is_file() and path.suffix == ".png":
         import json
 
-        data = json.loads(manifest.read_text())
+        data = json.loads(manifest.read_text(encoding="utf-8"))
         bits = int(data.get("calibration", {}).get("bit_depth", 8))
         if path.stem in data.get("images", {}) and bits > 8:
             path = path.with_name(codes_png(path.stem, bits))

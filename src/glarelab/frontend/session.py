@@ -162,7 +162,7 @@ class PsychoPyFrontend:
         if self.stimuli is None:
             return None
         manifest_path = self.stimuli / "manifest.json"
-        manifest = json.loads(manifest_path.read_text())
+        manifest = json.loads(manifest_path.read_text(encoding="utf-8"))
         return Calibration.from_json(
             manifest["calibration"], source=f"{manifest_path} calibration"
         )

@@ -553,7 +553,7 @@ def check_run_folder(out: str | Path, run: dict) -> None:
     if not path.is_file():
         return
     try:
-        before = json.loads(path.read_text())
+        before = json.loads(path.read_text(encoding="utf-8"))
     except (json.JSONDecodeError, UnicodeDecodeError) as error:
         raise ValueError(
             f"{path} is not valid JSON ({error}): delete the folder to start again"
@@ -580,7 +580,7 @@ def _check_stimuli(stimuli: Path, protocol: Protocol) -> None:
     if problems:
         more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
         raise ValueError(f"stimuli {stimuli}: not an intact stimulus set: {problems[0]}{more}")
-    manifest = json.loads((Path(stimuli) / "manifest.json").read_text())
+    manifest = json.loads((Path(stimuli) / "manifest.json").read_text(encoding="utf-8"))
     if manifest.get("protocol_sha256") != protocol.sha256:
         raise ValueError(
             f"stimuli {stimuli}: built from another protocol than {protocol.study}'s (its "

@@ -51,7 +51,7 @@ def _in_place(folder: Path, protocol: Protocol) -> bool:
 
     if not (folder / "manifest.json").is_file() or verify_stimulus_set(folder):
         return False
-    manifest = json.loads((folder / "manifest.json").read_text())
+    manifest = json.loads((folder / "manifest.json").read_text(encoding="utf-8"))
     return manifest.get("protocol_sha256") == protocol.sha256
 
 
@@ -124,7 +124,7 @@ class SweepJob:
                     os.replace(staging, folder)
                 finally:
                     shutil.rmtree(staging, ignore_errors=True)
-            manifest = json.loads((folder / "manifest.json").read_text())
+            manifest = json.loads((folder / "manifest.json").read_text(encoding="utf-8"))
             record |= {
                 "folder": str(folder.relative_to(self.out)),
                 "manifest_sha256": _manifest_sha(folder),
@@ -233,7 +233,7 @@ def prepare(
     path = Path(out) / "sweep.json"
     if path.is_file():
         try:
-            before = json.loads(path.read_text())
+            before = json.loads(path.read_text(encoding="utf-8"))
         except (json.JSONDecodeError, UnicodeDecodeError):
             before = None
         if before != config:
