@@ -1,4 +1,6 @@
 import copy
+import datetime
+import re
 import tomllib
 from pathlib import Path
 
@@ -455,3 +457,33 @@ def test_a_table_whose_keys_all_have_defaults_may_be_left_out():
     del data["stimulus"]  # its disk and size are required
     with pytest.raises(ProtocolError, match=r"\[stimulus\]: missing table"):
         parse_protocol(data, source="test.toml", folder=PROTOCOLS)
+
+
+@pytest.mark.parametrize(
+    ("change", "named"),
+    [
+        (lambda d: d["display"].update(max_cd_m2=10**400), "display.max_cd_m2"),
+        (
+            lambda d: d["glare"]["methods"][0]["levels_cd_m2"].__setitem__(0, 10**400),
+            "levels_cd_m2[0]",
+        ),
+        (
+            lambda d: d.setdefault("observer", {}).update(when=datetime.datetime(1979, 5, 27)),
+            "observer.when",
+        ),
+    ],
+)
+def test_a_huge_integer_or_a_toml_date_is_a_problem_named_not_a_traceback(change, named):
+    """An integer of 401 digits ended `protocol check` in an OverflowError, a TOML date-time
+    in a free-form table in a TypeError from the protocol's hash."""
+    import copy
+    import tomllib
+
+    from glarelab.protocols import parse_protocol
+    from glarelab.protocols.core import ProtocolError
+
+    shipped = Path(__file__).resolve().parents[2] / "src/glarelab/protocols/yoshida2008.toml"
+    data = copy.deepcopy(tomllib.loads(shipped.read_text(encoding="utf-8")))
+    change(data)
+    with pytest.raises(ProtocolError, match=re.escape(named)):
+        parse_protocol(data)

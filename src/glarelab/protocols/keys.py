@@ -7,6 +7,7 @@ No other module of the suite is imported here.
 
 from __future__ import annotations
 
+import datetime
 import math
 import re
 from collections.abc import Mapping
@@ -180,12 +181,30 @@ def check_token(value: str, where: str, problems: list[str]) -> bool:
     return False
 
 
+def _dates_in(value: Any, path: str) -> list[str]:
+    """The keys under ``value`` (a free-form table) that hold a TOML date or time."""
+    if isinstance(value, datetime.date | datetime.time):
+        return [f"{path} = {value.isoformat()}"]
+    if isinstance(value, Mapping):
+        return [d for k, v in value.items() for d in _dates_in(v, f"{path}.{k}")]
+    if isinstance(value, list | tuple):
+        return [d for i, v in enumerate(value) for d in _dates_in(v, f"{path}[{i}]")]
+    return []
+
+
 def _check_scalar(value: Any, kind: type, key: Key, path: str, problems: list[str]) -> Any:
     if kind is float:
         if isinstance(value, bool) or not isinstance(value, int | float):
             problems.append(f"{path} = {value!r}: must be a number ({key.allowed()})")
             return None
-        value = float(value)
+        try:
+            value = float(value)
+        except OverflowError:  # an integer of hundreds of digits
+            digits = int(value.bit_length() * math.log10(2)) + 1
+            problems.append(
+                f"{path} = an integer of {digits} digits: must be finite ({key.allowed()})"
+            )
+            return None
         if not math.isfinite(value):
             problems.append(f"{path} = {value!r}: must be finite ({key.allowed()})")
             return None
@@ -206,6 +225,13 @@ def _check_scalar(value: Any, kind: type, key: Key, path: str, problems: list[st
     elif kind is dict:
         if not isinstance(value, Mapping):
             problems.append(f"{path} = {value!r}: must be a table")
+            return None
+        dated = _dates_in(value, path)
+        if dated:
+            problems.append(
+                f"{dated[0]}: a TOML date or time is not a protocol value; write it as a "
+                "string (in quotes)"
+            )
             return None
         return dict(value)
     if key.choices is not None and value not in key.choices:
