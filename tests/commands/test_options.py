@@ -219,3 +219,17 @@ def test_a_measurement_without_verification_points_is_refused_before_it_starts(c
     argv = ["calibrate", "measure", "--out", tmp_path / "c.json", "--simulate", "300", "0.1",
             "2.2", "--verify-points", "0"]  # fmt: skip
     refused(argv, capsys, tmp_path, "--verify-points", "0")
+
+
+@pytest.mark.parametrize("text", ["0.0_2", "1_0", " 0.5", "0.5 ", "0x10", "１"])
+def test_a_number_option_is_read_as_a_number_is_written(text):
+    """``float`` reads Python's 0.0_2 as 0.02 and pads of spaces away: a typo taken as a
+    pixel size (as the readings files already refuse ``12_8``)."""
+    import argparse
+
+    from glarelab.commands.common import count, number
+
+    with pytest.raises(argparse.ArgumentTypeError, match="is not a"):
+        number(0.0, 100.0)(text)
+    with pytest.raises(argparse.ArgumentTypeError, match="is not a"):
+        count(0)(text.replace(".", ""))

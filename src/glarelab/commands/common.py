@@ -14,6 +14,7 @@ from pathlib import Path
 from glarelab.files.atomic import write_text
 from glarelab.files.folders import claim_files, list_files, listed_files, without_link_loop
 from glarelab.files.memory import available_memory, refuse_beyond
+from glarelab.files.values import DECIMAL_TEXT, WHOLE_TEXT
 
 __all__ = [
     "FORCE_HELP",
@@ -212,10 +213,10 @@ def number(low: float | None = None, high: float | None = None, *, above: bool =
     """
 
     def parse(text: str) -> float:
-        try:
-            value = float(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+        # as a number is written: not Python's 0.0_2 (0.02) or a number padded with spaces
+        if DECIMAL_TEXT.fullmatch(text) is None:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a number")
+        value = float(text)
         bad = not math.isfinite(value)
         bad |= low is not None and (value <= low if above else value < low)
         bad |= high is not None and value > high
@@ -248,10 +249,9 @@ def count(low: int = 1, high: int | None = None):
     """
 
     def parse(text: str) -> int:
-        try:
-            value = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+        if WHOLE_TEXT.fullmatch(text) is None:  # not Python's 1_000, nor ' 12'
+            raise argparse.ArgumentTypeError(f"{text!r} is not a whole number")
+        value = int(text)
         if value < low or (high is not None and value > high):
             raise argparse.ArgumentTypeError(
                 f"{value} must be a whole number from {low}{f' to {high}' if high else ' up'}"

@@ -18,9 +18,9 @@ __all__ = ["DECIMAL_TEXT", "WHOLE_TEXT", "is_real", "is_whole", "real_array"]
 # a number as a person or a program writes it in a text file: digits, a decimal point, an
 # exponent (nan and inf read, for the caller to refuse with its own words); not what Python
 # also reads ("2_50" is 250 to int() and float(), " 7" is 7)
-WHOLE_TEXT = re.compile(r"[+-]?\d+")
+WHOLE_TEXT = re.compile(r"[+-]?\d+", re.ASCII)  # ASCII: not a full-width １
 DECIMAL_TEXT = re.compile(
-    r"[+-]?(\d+(\.\d*)?|\.\d+)([eE][+-]?\d+)?|[+-]?(nan|inf|infinity)", re.IGNORECASE
+    r"[+-]?(\d+(\.\d*)?|\.\d+)([eE][+-]?\d+)?|[+-]?(nan|inf|infinity)", re.IGNORECASE | re.ASCII
 )
 
 
