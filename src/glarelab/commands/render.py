@@ -33,6 +33,7 @@ from .common import log as _log
 
 # bytes per pixel a render needs at its peak (measured on 512²-2048² scenes, exact and planned
 # renders: 230-240 for luminance, 300 for RGB; with headroom)
+DEFAULT_L_DMAX_CD_M2 = 220.0  # --l-dmax without a calibration: Yoshida 2008 §3's display
 RENDER_BYTES_PER_PIXEL = {1: 260, 3: 340}
 # a kernel's digitisation: about 110 bytes per pixel, plus the wave model's pupil spectra
 PSF_BYTES_PER_PIXEL = 128
@@ -269,6 +270,14 @@ def _render(args: argparse.Namespace) -> int:
                     force=args.force)  # fmt: skip
     model = build_model(args)  # reads the aperture image: after the outputs are checked
     display = Calibration.load(args.calibration) if args.calibration else None
+    if args.l_dmax is None:
+        args.l_dmax = display.max_cd_m2 if display is not None else DEFAULT_L_DMAX_CD_M2
+    elif display is not None and args.l_dmax > display.max_cd_m2 * (1.0 + 1e-9):
+        raise ValueError(
+            f"--l-dmax {args.l_dmax:g} is above the --calibration's white "
+            f"({display.max_cd_m2:g} cd/m²): the display cannot show it; leave --l-dmax out "
+            "to use the white"
+        )
     renderers: dict[tuple, glare.GlareRenderer] = {}
     for index, (source, target) in enumerate(zip(inputs, targets, strict=True), start=1):
         _log(f"[{index}/{len(inputs)}] reading {source}")
@@ -652,7 +661,10 @@ def add(commands) -> None:
         help="visual angle of a pixel, degrees (0-10)",
     )
     render.add_argument(
-        "--l-dmax", type=number(0, 1e9, above=True), default=220.0, help="display maximum, cd/m²"
+        "--l-dmax",
+        type=number(0, 1e9, above=True),
+        default=None,
+        help="display maximum, cd/m²; default the --calibration's white, else 220",
     )
     render.add_argument(
         "--composition",

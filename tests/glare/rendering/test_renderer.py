@@ -163,3 +163,17 @@ def test_the_kernel_norms_are_the_full_kernels_sums(form, channels):
     l2 = np.sqrt((full * full).sum(axis=(0, 1)))
     colour = bool(channels)
     assert_allclose(renderer.kernel_norms(colour), (l1.max(), l2.max()), rtol=1e-13)
+
+
+def test_an_l_dmax_above_the_displays_white_is_refused():
+    """Rendered for 500 cd/m² and counted on a display of white 433, the image held
+    luminances the display cannot show, without a word."""
+    from glarelab.glare import Display
+
+    display = Display.gamma(433.0, black_cd_m2=0.4)
+    with pytest.raises(ValueError, match="above the display's white"):
+        GlareRenderer(VosGlare(), pixel_deg=0.05, shape=(8, 8), l_dmax_cd_m2=500.0,
+                      display=display, cache=False)  # fmt: skip
+    kept = GlareRenderer(VosGlare(), pixel_deg=0.05, shape=(8, 8), l_dmax_cd_m2=300.0,
+                         display=display, cache=False)  # fmt: skip
+    assert kept.l_dmax == 300.0

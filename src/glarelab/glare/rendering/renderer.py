@@ -69,6 +69,9 @@ LEAST_KERNELS = 8  # cell-to-cell least kernels kept (one per grid, reach and ch
 # round-off) if that is estimated to cost at most DIRECT_FALLBACK times the FFT.
 DIRECT_FALLBACK = 50.0
 PRECISIONS = ("float64", "float32")
+WHITE_ROUNDING = (
+    1e-9  # l_dmax above the display's white by less is its rounding (a JSON round trip)
+)
 # as the command line's --pixel-deg: a coarse grid of the far tail (up to 8 pixels a node)
 # then stays within the 180° a kernel's pixel can subtend
 MAX_RENDER_PIXEL_DEG = 10.0
@@ -101,7 +104,8 @@ class GlareRenderer:
         0 (or ``None``): exact paths only.
     display
         The display the error is counted on (a calibration, a :class:`glarelab.glare.Display`, or a
-        code → cd/m² table); ``None``: 10-bit, gamma 2.2, 1000:1, white at ``L_dmax``.
+        code → cd/m² table) whose white is at least ``l_dmax_cd_m2``; ``None``: 10-bit, gamma
+        2.2, 1000:1, white at ``L_dmax``.
     kernel_shape
         Odd shape of the reference kernel; default ``(2H - 1, 2W - 1)`` (every pixel reaches
         every other, Spencer §3.2).
@@ -171,6 +175,13 @@ class GlareRenderer:
         self.tolerance_codes = check_tolerance(tolerance_codes)
         self.shape = check_image_shape(shape)
         self.lut = display_lut(display, self.l_dmax)
+        white = float(self.lut[-1])
+        if self.l_dmax > white * (1.0 + WHITE_ROUNDING):
+            raise ValueError(
+                f"l_dmax_cd_m2 = {self.l_dmax:g} is above the display's white ({white:g} cd/m²): "
+                "the render would put luminances there that the display cannot show; give "
+                f"l_dmax_cd_m2 <= {white:g} (the display's white, or the calibration's)"
+            )
         self.code_bound = CodeBound(self.lut, self.l_dmax, self.composition)
         self._given = None
         if kernel is not None:
