@@ -137,3 +137,18 @@ def test_an_unchanged_earlier_output_is_replaced_without_a_word(tmp_path, recwar
         "table.csv"
     ]
     assert not [w for w in recwarn if issubclass(w.category, UserWarning)]
+
+
+def test_a_file_browsers_own_files_do_not_make_a_folder_foreign(tmp_path):
+    """A .DS_Store in an earlier report folder (opened in Finder) made `analyse --out` refuse
+    it as holding files glarelab did not write."""
+    out = tmp_path / "report"
+    out.mkdir()
+    (out / "table.csv").write_text("a\n")
+    record_files(out, "report")
+    (out / ".DS_Store").write_bytes(b"Bud1")
+    (out / "._table.csv").write_bytes(b"\x00")
+    assert check_replaceable(out, kind="report", what="report") == out
+    (out / "mine.txt").write_text("x")
+    with pytest.raises(ValueError, match=r"mine\.txt"):
+        check_replaceable(out, kind="report", what="report")

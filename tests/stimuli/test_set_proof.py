@@ -122,3 +122,13 @@ def test_a_session_refuses_a_set_whose_manifest_does_not_rebuild(copy, tmp_path)
     assert done.returncode == 2, done.stderr
     assert "fails its manifest" in done.stderr and "disk_cd_m2" in done.stderr
     assert not (tmp_path / "data").exists()
+
+
+@pytest.mark.parametrize("name", [".DS_Store", "._reference_gaussian_A.exr", "Thumbs.db"])
+def test_a_file_browsers_own_file_in_a_copied_set_is_no_problem(copy, name):
+    """A set copied with macOS Finder or opened in Windows Explorer gained a .DS_Store, ._NAME
+    resource forks or Thumbs.db, and then failed verification, so sessions refused it."""
+    (copy / name).write_bytes(b"\x00\x00\x00\x01Bud1")
+    assert prove_stimulus_set(copy) == []
+    (copy / "notes.txt").write_text("a person's file is still named\n")
+    assert any("notes.txt" in p for p in prove_stimulus_set(copy))

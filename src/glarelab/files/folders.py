@@ -82,6 +82,33 @@ def _sha256(path: Path) -> str | None:
     return digest.hexdigest()
 
 
+SYSTEM_FILES = frozenset({".DS_Store", "Thumbs.db", "desktop.ini"})  # a file browser's own
+
+
+def is_system_file(name: str) -> bool:
+    """Whether a file of this name is one a file browser writes by itself: macOS Finder's
+    ``.DS_Store`` and the ``._NAME`` resource forks it leaves on USB sticks and network
+    drives, Windows Explorer's ``Thumbs.db`` and ``desktop.ini``. Copying a stimulus set or
+    opening a report folder leaves them; they are no one's data.
+
+    Parameters
+    ----------
+    name
+        A file's name (not its path).
+
+    Returns
+    -------
+    bool
+        True for those names.
+
+    Examples
+    --------
+    >>> is_system_file(".DS_Store"), is_system_file("._image.exr"), is_system_file("a.exr")
+    (True, True, False)
+    """
+    return name in SYSTEM_FILES or name.startswith("._")
+
+
 def _entries(folder: Path) -> list[str]:
     """Every file, folder link and file link under ``folder`` (symbolic links not followed)."""
     found = []
@@ -90,7 +117,8 @@ def _entries(folder: Path) -> list[str]:
         links = [d for d in dirs if (here / d).is_symlink()]
         dirs[:] = [d for d in dirs if d not in links]
         for name in [*files, *links]:
-            found.append((here / name).relative_to(folder).as_posix())
+            if not is_system_file(name):
+                found.append((here / name).relative_to(folder).as_posix())
     return sorted(entry for entry in found if entry != LISTING)
 
 

@@ -40,6 +40,7 @@ from glarelab.files.atomic import atomic_path, write_bytes, write_text
 from glarelab.files.folders import (
     LISTING,
     check_replaceable,
+    is_system_file,
     record_files,
     replace_folder,
     staging_folder,
@@ -731,6 +732,8 @@ def verify_stimulus_set(folder: str | Path) -> list[str]:
             problems.append(f"{name}: changed (sha256 differs from the manifest)")
     for path in sorted(folder.iterdir()):
         if path.name not in listed and path.name not in (MANIFEST, LISTING):
+            if is_system_file(path.name):
+                continue  # a file browser's .DS_Store, ._NAME
             problems.append(f"{path.name}: not in the manifest (added after the build?)")
     images = manifest.get("images")
     if isinstance(images, dict):
