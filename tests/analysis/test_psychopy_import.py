@@ -199,3 +199,40 @@ def test_a_named_last_column_with_data_is_not_dropped(tmp_path):
     source.write_text(",".join([*names, ""]) + "\n" + ",".join([*cells, "kept"]) + "\n")
     with pytest.raises(DataError, match="last column has no name but holds data"):
         import_psychopy(protocol, [source], tmp_path / "out")
+
+
+def test_an_excel_resave_is_imported_and_a_missing_date_is_said(simulated, tmp_path):
+    """Re-saved by Excel, the date became 03/02/2026 14:05 and true TRUE: the session was
+    dated by the file's modification time without a word, and TRUE refused by the analysis."""
+    pytest.importorskip("psychopy.data")
+    protocol = load_protocol("yoshida2008")
+    own = sorted(simulated.glob("*_yoshida2008_s1_*.csv"))[0]
+    source = write_psychopy(own, protocol, tmp_path, rt_name="time_s")
+    rows = list(csv.reader(source.open(encoding="utf-8")))
+    date = rows[0].index("date")
+    for row in rows[1:]:
+        if len(row) > date and row[date]:
+            row[date] = "03/02/2026 14:05"
+        row[:] = [{"True": "TRUE", "False": "FALSE", "true": "TRUE"}.get(c, c) for c in row]
+    with source.open("w", encoding="utf-8", newline="") as handle:
+        csv.writer(handle).writerows(rows)
+    (imported,) = import_psychopy(protocol, [source], tmp_path / "out")
+    assert "modification time" in imported.summary()
+    written = imported.csv.read_text(encoding="utf-8")
+    assert "TRUE" not in written and ("true" in written or "false" in written)
+
+
+def test_an_import_into_a_stimulus_set_is_refused(tmp_path):
+    """Session files written into a set made it fail verification (sessions then refuse it)."""
+    from glarelab.stimuli.stimulus_set import build_stimulus_set
+
+    folder = tmp_path / "set"
+    build_stimulus_set(load_protocol("yoshida2008"), folder, progress=None)
+    source = tmp_path / "run.csv"
+    source.write_text("participant,session\n")
+    done = subprocess.run(
+        [sys.executable, "-m", "glarelab", "import-psychopy", "yoshida2008", str(source),
+         "--out", str(folder)],
+        capture_output=True, text=True, timeout=300, check=False,
+    )  # fmt: skip
+    assert done.returncode == 2 and "inside the stimulus set" in done.stderr, done.stderr

@@ -61,7 +61,10 @@ PSYCHOPY_BOOKKEEPING = re.compile(
     r"(?:.+\.)?(?:thisRepN|thisTrialN|thisN|thisIndex|ran|order)|"
     r".+\.(?:started|stopped|startedRefresh|stoppedRefresh)"
 )
-_BOOLEANS = {"True": "true", "False": "false", "true": "true", "false": "false"}
+_BOOLEANS = {  # Python's, the session format's, and a spreadsheet's re-save (Excel: TRUE)
+    "True": "true", "False": "false", "true": "true", "false": "false",
+    "TRUE": "true", "FALSE": "false",
+}  # fmt: skip
 _INTEGRAL = re.compile(r"[+-]?\d+(\.0*)?")
 # PsychoPy's data.getDateStr(): 2026-12-03_07h29.22.123
 _DATE = re.compile(r"(\d{4}-\d{2}-\d{2})_(\d{2})h(\d{2})")
@@ -354,6 +357,11 @@ def import_psychopy(
         if len(problems) > found:
             continue
         started = _started(originals, source)
+        if not any(_DATE.match(row.get("date", "")) for row in originals):
+            filled["started"] = (
+                f"the file's modification time, {started:%Y-%m-%d %H:%M}: no PsychoPy date "
+                "(a 'date' column as 2026-12-03_07h29.22) in the file"
+            )
         digest = hashlib.sha256(source.read_bytes()).hexdigest()
         version = next((r["psychopyVersion"] for r in originals if r.get("psychopyVersion")), None)
         for (participant, session), trial_rows in sessions.items():

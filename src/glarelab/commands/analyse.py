@@ -7,7 +7,7 @@ from pathlib import Path
 
 from glarelab.protocols import load_protocol
 
-from .common import PROTOCOL_HELP
+from .common import PROTOCOL_HELP, inside_whole_output
 from .common import log as _log
 
 
@@ -77,6 +77,12 @@ def _import_psychopy(args: argparse.Namespace) -> int:
     from glarelab.analysis.psychopy_import import import_psychopy
 
     _study_or_csv(args, "PsychoPy CSV files")
+    whole = inside_whole_output(Path(args.out) / "session.csv")
+    if whole is not None:  # a stimulus set or a report would no longer verify or be remade
+        raise ValueError(
+            f"--out {args.out} is inside the {whole}, which glarelab replaces and checks as a "
+            "whole: give a folder of its own for the session files (nothing was written)"
+        )
     protocol = load_protocol(args.protocol or args.study)
     for csv in args.csv:
         if Path(csv).suffix.lower() != ".csv":
