@@ -307,3 +307,15 @@ def test_a_report_is_written_under_a_locale_that_is_not_utf8(simulated, tmp_path
     assert done.returncode == 0, done.stderr
     text = (tmp_path / "r" / "results.md").read_text(encoding="utf-8")
     assert "η" in text or "−" in text or "∞" in text or "Holm" in text
+
+
+def test_one_participants_ratings_are_not_tested_in_the_tables_either(simulated, tmp_path):
+    """The results said 'no test' for one participant while the tables gave each category a
+    Wilcoxon V, p = 1 and intervals at the level 0."""
+    import pandas as pd
+
+    files = sorted(simulated.glob("*_luidolt2020_s1_*.csv"))[:1]
+    out = write_report(load_protocol("luidolt2020"), files, tmp_path / "r").parent
+    summary = pd.read_csv(out / "summary.csv")
+    assert summary["p"].isna().all() and summary["wilcoxon_V"].isna().all()
+    assert summary["test"].str.contains("one participant").all()

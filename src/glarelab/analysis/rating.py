@@ -405,6 +405,7 @@ def _results(summary: pd.DataFrame, midpoint: float, n: int) -> list[str]:
 
 
 NOT_COMPUTED = "not computed: every rating at the midpoint"
+ONE_PARTICIPANT = "not computed: one participant gives nothing to test against"
 UNREACHED = "see below"
 
 
@@ -435,8 +436,11 @@ NO_DIFFERENCE = "not computed: no participant rated the two conditions different
 def _wilcoxon(values: pd.Series, mu: float, reason: str) -> dict:
     """The Wilcoxon test of ``values`` against ``mu`` with the rank-biserial correlation; NaN
     and the reason where every value equals ``mu`` (R's ``wilcox.test`` gives NaN there). The
-    values stay in ``_values`` for the Hodges–Lehmann shift (:func:`_corrected`)."""
-    if (values != mu).any():
+    values stay in ``_values`` for the Hodges–Lehmann shift (:func:`_corrected`). One
+    participant's value is not tested (the results say so; the table printed V and p = 1)."""
+    if values.count() < 2:
+        reason = ONE_PARTICIPANT
+    if values.count() >= 2 and (values != mu).any():
         test = wilcoxon_signed_rank(values, mu=mu)
         effect = rank_biserial(values, mu=mu)
         return {
