@@ -38,6 +38,8 @@ def small_night_protocol(**scene) -> str:
     } | {k: (None if v is None else repr(v).replace("'", '"')) for k, v in scene.items()}
     if scene.get("sequence", "enter_dark") != "enter_dark":  # only enter_dark reads it
         values["start_cd_m2"] = None
+    if scene.get("sequence") == "still" and "frame_rate_hz" not in scene:  # one frame
+        values["frame_rate_hz"] = None
     lines = []
     in_scene = False
     for line in text.splitlines():

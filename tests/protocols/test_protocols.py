@@ -365,6 +365,8 @@ def test_start_cd_m2_on_a_scene_that_does_not_enter_the_dark_is_refused(sequence
     ):
         parse_protocol(data, source="test.toml", folder=PROTOCOLS)
     del data["scene"]["start_cd_m2"]
+    if sequence == "still":  # one frame: a frame rate would do nothing either
+        del data["scene"]["frame_rate_hz"]
     assert (
         parse_protocol(data, source="test.toml", folder=PROTOCOLS)["scene"]["start_cd_m2"] == 100
     )
@@ -485,5 +487,56 @@ def test_a_huge_integer_or_a_toml_date_is_a_problem_named_not_a_traceback(change
     shipped = Path(__file__).resolve().parents[2] / "src/glarelab/protocols/yoshida2008.toml"
     data = copy.deepcopy(tomllib.loads(shipped.read_text(encoding="utf-8")))
     change(data)
+    with pytest.raises(ProtocolError, match=re.escape(named)):
+        parse_protocol(data)
+
+
+@pytest.mark.parametrize(
+    ("change", "named"),
+    [
+        (lambda q: q["prompts"].__setitem__(0, ""), "questionnaire.prompts[0] is empty"),
+        (lambda q: q["prompts"].__setitem__(1, "   "), "questionnaire.prompts[1] is empty"),
+        (lambda q: q["anchors"].__setitem__(0, ""), "questionnaire.anchors[0] is empty"),
+        (lambda q: q.__setitem__("anchors", ["same", "same"]), "the scale's two ends"),
+    ],
+)
+def test_a_questionnaire_a_participant_could_not_read_is_refused(change, named):
+    """An empty prompt or anchor, and two anchors alike, were accepted and shown."""
+    from glarelab.protocols.core import ProtocolError
+
+    data = raw("luidolt2020")
+    change(data["questionnaire"])
+    with pytest.raises(ProtocolError, match=re.escape(named)):
+        parse_protocol(data)
+
+
+@pytest.mark.parametrize("key", ["source_radius_px", "disc_radius_px", "annulus_outer_px"])
+def test_a_staircase_stimulus_larger_than_its_window_is_refused(key):
+    """A source or annulus of 100 px in a 64 px window was accepted, and cut off."""
+    from glarelab.protocols.core import ProtocolError
+
+    data = raw("spencer1995")
+    data["stimulus"]["window_px"] = 64
+    data["stimulus"]["annulus_outer_px"] = 30.0
+    data["stimulus"][key] = 40.0 if key == "annulus_outer_px" else 33.0
+    with pytest.raises(ProtocolError, match=re.escape(f"stimulus.{key} = ")):
+        parse_protocol(data)
+
+
+@pytest.mark.parametrize(
+    ("scene", "named"),
+    [
+        ({"seconds": 0.05}, "scene.seconds = 0.05"),  # half a frame at 10 Hz, shown for 0.1 s
+        ({"seconds": 3.05}, "scene.seconds = 3.05"),
+        ({"sequence": "still", "frame_rate_hz": 10.0}, "scene.frame_rate_hz = 10"),
+    ],
+)
+def test_a_scene_shown_for_another_time_than_it_says_is_refused(scene, named):
+    from glarelab.protocols.core import ProtocolError
+
+    data = raw("night2026")
+    data["scene"].update(scene)
+    if scene.get("sequence") == "still":
+        data["scene"].pop("start_cd_m2", None)
     with pytest.raises(ProtocolError, match=re.escape(named)):
         parse_protocol(data)

@@ -200,6 +200,19 @@ def check(p: dict, problems: list[str], folder: Path | None) -> None:
         )
     if len(q["categories"]) != len(q["prompts"]):
         problems.append("questionnaire.prompts: one prompt per category is needed")
+    for key in ("categories", "prompts", "anchors"):
+        for index, text in enumerate(q.get(key) or []):
+            if isinstance(text, str) and not text.strip():
+                problems.append(
+                    f"questionnaire.{key}[{index}] is empty: a participant would see nothing "
+                    "there (give its words)"
+                )
+    anchors = q.get("anchors") or []
+    if len(anchors) == 2 and isinstance(anchors[0], str) and anchors[0] == anchors[1]:
+        problems.append(
+            f"questionnaire.anchors = {anchors!r}: the scale's two ends say the same; give "
+            "each end its own words"
+        )
     size = q["scale_max"] - q["scale_min"] + 1
     for category, effect in p["observer"]["category_effects"].items():
         where = f"observer.category_effects.{category!r}"
@@ -305,8 +318,22 @@ def _check_scene(p: dict, problems: list[str]) -> None:
             f"refreshes of the {refresh_hz:g} Hz display (e.g. {refresh_hz / 2:g} or "
             f"{refresh_hz / 6:g} Hz)"
         )
+    seconds = p["scene"]["seconds"]
+    if p["scene"]["sequence"] == "still" and "frame_rate_hz" in given:
+        problems.append(
+            f"scene.frame_rate_hz = {rate_hz:g}: a still scene is one frame, shown for "
+            "scene.seconds; remove it"
+        )
+    elif p["scene"]["sequence"] != "still" and (
+        seconds * rate_hz < 1 - 1e-9 or abs(seconds * rate_hz - round(seconds * rate_hz)) > 1e-6
+    ):
+        problems.append(
+            f"scene.seconds = {seconds:g}: must be a whole number of frames, at least one, at "
+            f"scene.frame_rate_hz = {rate_hz:g} ({1 / rate_hz:g} s each); it would be shown "
+            f"for {max(1, round(seconds * rate_hz)) / rate_hz:g} s"
+        )
     width, height = p["scene"]["size_px"]
-    frames = max(1, round(p["scene"]["seconds"] * rate_hz))
+    frames = max(1, round(seconds * rate_hz))
     if width * height * frames > MAX_PIXEL_FRAMES:
         problems.append(
             f"scene: {width} × {height} px × {frames} frames ({p['scene']['seconds']:g} s at "

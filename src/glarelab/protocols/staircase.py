@@ -433,9 +433,20 @@ def check(p: dict, problems: list[str], folder: Path | None) -> None:
     s = p["stimulus"]
     if s["annulus_outer_px"] <= s["disc_radius_px"]:
         problems.append("stimulus.annulus_outer_px: must exceed stimulus.disc_radius_px")
+    half = s["window_px"] / 2
+    for key in ("source_radius_px", "disc_radius_px", "annulus_outer_px"):
+        if s[key] > half:
+            problems.append(
+                f"stimulus.{key} = {s[key]:g}: must fit its window (at most half of "
+                f"stimulus.window_px = {s['window_px']}, {half:g} px); it would be cut off"
+            )
     width, height = p["display"]["resolution_px"]
     if 2 * s["window_px"] + s["window_gap_px"] > width or s["window_px"] > height:
-        problems.append("stimulus.window_px: two windows and their gap do not fit the display")
+        problems.append(
+            f"stimulus.window_px = {s['window_px']}, window_gap_px = {s['window_gap_px']}: two "
+            f"windows and their gap ({2 * s['window_px'] + s['window_gap_px']} × "
+            f"{s['window_px']} px) do not fit the display ({width} × {height} px)"
+        )
     refresh_hz = p["display"]["refresh_hz"]
     frame_ms = 1000.0 / refresh_hz
     tolerance_ms = p["trials"]["timing_tolerance_ms"]
