@@ -129,10 +129,20 @@ def scene(tmp_path):
          "without --aperture-spacing-mm: give the size of one of the image's pixels"),
         (["--preview-scale", "log"], "--preview-scale log without --preview"),
         (["--preview-scale", "display"], "--preview-scale display without --preview"),
+        # given at their defaults to a model that ignores them: were taken
+        (["--model", "gaussian", "--regime", "photopic"], "--regime: not an option of"),
+        (["--model", "gaussian", "--particles", "1000"], "--particles: not an option of"),
+        (["--model", "wave", "--source-x-deg", "10", "--no-eyelashes", "--no-eyelid"],
+         "--source-x-deg with --no-eyelashes and --no-eyelid"),
+        (["--model", "wave", "--seed", "3", "--no-eyelashes", "--particles", "0"],
+         "--seed with --no-eyelashes and --particles 0"),
+        (["--l-dmax", "500", "--calibration", "{calibration}"], "above the --calibration's"),
     ],
 )  # fmt: skip
 def test_render_options_that_would_be_ignored_are_refused(extra, named, scene, capsys, tmp_path):
-    extra = [str(scene) if a == "{scene}" else a for a in extra]
+    shipped = Path(__file__).parents[2] / "calibrations" / "SYNTHETIC-yoshida2008-433cd-10bit.json"
+    names = {"{scene}": str(scene), "{calibration}": str(shipped)}
+    extra = [names.get(a, a) for a in extra]
     argv = ["render", scene, tmp_path / "out.exr", "--pixel-deg", "0.02", *extra]
     refused(argv, capsys, tmp_path, named)
 

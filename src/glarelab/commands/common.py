@@ -163,7 +163,13 @@ class Parser(argparse.ArgumentParser):
         """
         self._given: set[int] = set()  # the options met in this parse
         self._arguments = [str(a) for a in (sys.argv[1:] if args is None else args)]
-        return super().parse_known_args(args, namespace)
+        namespace, extras = super().parse_known_args(args, namespace)
+        # which options were given, whatever their value: an option given at its default
+        # value to a mode that ignores it is refused too (--regime photopic with --model
+        # gaussian); a subcommand's parser has set its own already
+        mine = {a.dest for a in self._actions if id(a) in self._given}
+        namespace.given_options = set(getattr(namespace, "given_options", set())) | mine
+        return namespace, extras
 
     def _get_values(self, action, arg_strings):
         # called once for each option on the command line: a second one would silently win

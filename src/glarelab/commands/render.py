@@ -59,15 +59,12 @@ def _check_options(args: argparse.Namespace) -> None:
     _add_model_options(defaults)
     default = vars(defaults.parse_args([]))
     every = set().union(*MODEL_OPTIONS.values())
-    ignored = sorted(
-        name
-        for name in every - MODEL_OPTIONS[args.model]
-        if getattr(args, name, default[name]) != default[name]
-    )
+    given = {n for n in default if getattr(args, n, default[n]) != default[n]}
+    given |= set(getattr(args, "given_options", set())) & set(default)  # at a default too
+    ignored = sorted(name for name in every - MODEL_OPTIONS[args.model] if name in given)
     if ignored:
         shown = ", ".join("--" + name.replace("_", "-") for name in ignored)
         raise ValueError(f"{shown}: not an option of --model {args.model}, which would ignore it")
-    given = {n for n in default if getattr(args, n, default[n]) != default[n]}
     if args.model == "vos" and "seed" in given and "flare_lines" not in given:
         raise ValueError(
             "--seed without --flare-lines: the seed places Spencer's flare lines, and the vos "
@@ -78,6 +75,19 @@ def _check_options(args: argparse.Namespace) -> None:
             "--aperture-spacing-mm without --aperture-image: the spacing scales the obstacle "
             "image, so without one it would be ignored"
         )
+    if args.model in ("wave", "hybrid") and "source_x_deg" in given:
+        if getattr(args, "no_eyelashes", False) and getattr(args, "no_eyelid", False):
+            raise ValueError(
+                "--source-x-deg with --no-eyelashes and --no-eyelid: the source's direction "
+                "moves the lashes and the lid across the pupil, so without them it would be "
+                "ignored"
+            )
+    if args.model in ("wave", "hybrid") and "seed" in given:
+        if getattr(args, "no_eyelashes", False) and getattr(args, "particles", 1) == 0:
+            raise ValueError(
+                "--seed with --no-eyelashes and --particles 0: the seed draws the lashes and "
+                "the particles, so without them it would be ignored"
+            )
     if "aperture_image" in given and "aperture_spacing_mm" not in given:
         raise ValueError(
             f"--aperture-image {args.aperture_image} without --aperture-spacing-mm: give the "
