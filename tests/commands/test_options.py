@@ -243,3 +243,23 @@ def test_a_number_option_is_read_as_a_number_is_written(text):
         number(0.0, 100.0)(text)
     with pytest.raises(argparse.ArgumentTypeError, match="is not a"):
         count(0)(text.replace(".", ""))
+
+
+@pytest.mark.parametrize(
+    ("argv", "named"),
+    [
+        (["sweep", "yoshida2008", "--set", "disk.diameter_deg=0.3,0.4", "--seed", "3"],
+         "--seed without --simulate"),
+        (["stimuli", "build", "yoshida2008", "--accept-mismatch", "calibration"],
+         "--accept-mismatch calibration without --calibration"),
+        (["calibrate", "measure", "--simulate", "100", "0.1", "2.2", "--settle-s", "0.5"],
+         "--settle-s with --simulate"),
+        (["calibrate", "measure", "--simulate", "100", "0.1", "2.2", "--photometer-serial",
+          "ABC"], "--photometer-serial with --simulate"),
+    ],
+)  # fmt: skip
+def test_an_option_its_mode_ignores_is_refused(argv, named, capsys, tmp_path):
+    """Each ran and ignored the option (the simulated photometer's settling time, a seed for
+    a sweep that simulates no one, a mismatch accepted of no calibration)."""
+    out = {"sweep": "s", "stimuli": "set", "calibrate": "c.json"}[argv[0]]
+    refused([*argv, "--out", tmp_path / out], capsys, tmp_path, named)

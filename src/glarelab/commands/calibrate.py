@@ -301,6 +301,16 @@ def _measure_locked(args: argparse.Namespace) -> int:
     from glarelab.display.photometer import PatchProtocol
     from glarelab.frontend.measure import run_measurement
 
+    if args.simulate is not None:
+        for dest, flag in (
+            ("photometer_serial", "--photometer-serial"),
+            ("settle_s", "--settle-s"),
+        ):
+            if dest in getattr(args, "given_options", ()):
+                raise ValueError(
+                    f"{flag} with --simulate: the simulated photometer has neither serial "
+                    "number nor settling time, so it would be ignored"
+                )
     session_path = args.out.with_suffix(".session.json")
     given = {  # the reading protocol's options given on the command line
         name: value

@@ -262,6 +262,11 @@ def _power(args: argparse.Namespace) -> int:
 def _sweep(args: argparse.Namespace) -> int:
     from glarelab.planning.sweep import prepare, sweep
 
+    if "seed" in getattr(args, "given_options", ()) and not args.simulate:
+        raise ValueError(
+            "--seed without --simulate: the seed draws the simulated observers, and a sweep "
+            "that only builds the sets would ignore it"
+        )
     prepare(args.protocol, args.set, args.out, simulate=args.simulate, seed=args.seed)
     _check_workers(args)
     with contextlib.ExitStack() as stack:

@@ -17,6 +17,11 @@ from .common import log as _log
 
 def _stimuli_build(args: argparse.Namespace) -> int:
     protocol, monitor = apply_monitor(args, load_protocol(args.protocol))
+    if "calibration" in (args.accept_mismatch or ()) and not args.calibration and monitor is None:
+        raise ValueError(
+            "--accept-mismatch calibration without --calibration (or --monitor): there is no "
+            "calibration whose mismatch could be accepted, so it would be ignored"
+        )
     calibration = Calibration.load(args.calibration) if args.calibration else None
     if calibration is None and monitor is not None:
         from glarelab.frontend.monitors import calibration_from_monitor
