@@ -238,3 +238,13 @@ def test_encode_and_decode_refuse_what_is_not_a_luminance_or_a_code(call, name):
     calibration = synthetic_calibration(max_cd_m2=100.0, black_cd_m2=0.1, bit_depth=8)
     with pytest.raises(ValueError, match=f"^{name} must"):
         call(calibration)
+
+
+def test_a_code_out_of_range_is_named():
+    from glarelab.display.calibration import synthetic_calibration
+
+    calibration = synthetic_calibration(max_cd_m2=100.0, black_cd_m2=0.1, bit_depth=8)
+    with pytest.raises(ValueError, match=r"in \[0, 255\].*got 300"):
+        calibration.decode([10, 300])
+    with pytest.raises(ValueError, match="got -1"):
+        calibration.decode([-1])

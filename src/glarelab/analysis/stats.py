@@ -670,7 +670,14 @@ def ttest_one_sample(x: Sequence[float], *, mu: float = 0.0, confidence: float =
         raise ValueError(f"ttest_one_sample needs at least 2 values; got {x.size}")
     mean = float(x.mean())
     se = float(x.std(ddof=1)) / math.sqrt(x.size)
-    result = _t_result(mean - mu, se, x.size - 1, confidence, abs(mean), "the values")
+    result = _t_result(
+        mean - mu,
+        se,
+        x.size - 1,
+        confidence,
+        abs(mean),
+        "the values" if mu == 0 else f"the values minus mu = {mu:g}",
+    )
     result["mean"] = mean
     result["ci_low"] += mu
     result["ci_high"] += mu

@@ -183,7 +183,7 @@ def _add_model_options(parser: argparse.ArgumentParser, default: str = "vos") ->
     wave.add_argument("--particles", type=count(0, MAX_PARTICLES), default=1000)
     wave.add_argument("--fresnel", action="store_true", help="Luidolt eq. 5.6 Fresnel term")
     wave.add_argument("--spectral", choices=glare.wave.SPECTRAL_METHODS, default="scaled")
-    wave.add_argument("--source-x-deg", type=number(-90, 90), default=0.0)
+    wave.add_argument("--source-x-deg", type=number(-60, 60), default=0.0)
     wave.add_argument("--diaphragm-sides", type=count(3, 360), default=None)
     wave.add_argument("--cross-screen", choices=("4-point", "trigonal"), default=None)
     wave.add_argument("--aperture-image", type=Path, default=None, help="obstacle PNG/EXR")

@@ -271,8 +271,10 @@ class Calibration:
                 f"codes must be integer drive codes (an integer array); got dtype {codes.dtype}"
             )
         if codes.size and (codes.min() < 0 or codes.max() >= self.n_codes):
+            bad = codes.min() if codes.min() < 0 else codes.max()
             raise ValueError(
-                f"codes must be in [0, {self.n_codes - 1}] for a {self.bit_depth}-bit display"
+                f"codes must be in [0, {self.n_codes - 1}] for a {self.bit_depth}-bit display; "
+                f"got {int(bad)}"
             )
         return self.lut[codes.astype(np.int64)]
 

@@ -177,3 +177,9 @@ def test_an_l_dmax_above_the_displays_white_is_refused():
     kept = GlareRenderer(VosGlare(), pixel_deg=0.05, shape=(8, 8), l_dmax_cd_m2=300.0,
                          display=display, cache=False)  # fmt: skip
     assert kept.l_dmax == 300.0
+
+
+def test_a_log_that_cannot_be_called_is_refused_when_the_renderer_is_made():
+    """log=5 was taken and failed at the first render: 'int' object is not callable."""
+    with pytest.raises(ValueError, match="log must be a function"):
+        GlareRenderer(VosGlare(), pixel_deg=0.05, shape=(8, 8), log=5, cache=False)

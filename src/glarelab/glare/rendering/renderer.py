@@ -203,6 +203,10 @@ class GlareRenderer:
             check_choice("paths", path, PATHS)
         if not self.paths:
             raise ValueError(f"paths must name at least one of {PATHS}; got {paths!r}")
+        if log is not None and not callable(log):
+            raise ValueError(
+                f"log must be a function taking one line of text, or None; got {log!r}"
+            )
         self.say = log or (lambda line: None)
         self._kernels: dict[bool, Kernel] = {}
         self._given_grey: Kernel | None = None  # a given colour kernel's first channel
