@@ -540,3 +540,26 @@ def test_a_scene_shown_for_another_time_than_it_says_is_refused(scene, named):
         data["scene"].pop("start_cd_m2", None)
     with pytest.raises(ProtocolError, match=re.escape(named)):
         parse_protocol(data)
+
+
+@pytest.mark.parametrize(
+    ("study", "change", "named"),
+    [
+        ("spencer1995", lambda d: d["trials"].update(reversals=2), "would never be used"),
+        ("spencer1995",
+         lambda d: d["trials"].update(repeat_failed_presentations=False, repeat_limit=5),
+         "trials.repeat_limit = 5"),
+        ("yoshida2008",
+         lambda d: d["analysis"].update(quote_welch_tests=True, compare_methods_at=[]),
+         "quote_welch_tests = true without"),
+    ],
+)  # fmt: skip
+def test_a_protocol_value_that_would_be_ignored_is_refused(study, change, named):
+    """Each was accepted: the last steps never taken, a repeat limit of flashes never
+    repeated, Welch tests quoted of no comparison."""
+    from glarelab.protocols.core import ProtocolError
+
+    data = raw(study)
+    change(data)
+    with pytest.raises(ProtocolError, match=re.escape(named)):
+        parse_protocol(data)

@@ -367,6 +367,11 @@ def check(p: dict, problems: list[str], folder: Path | None) -> None:
             )
     if a["compare_methods_at"] and len(methods) < 2:
         problems.append("analysis.compare_methods_at: needs at least two glare methods")
+    if a.get("quote_welch_tests") and not a["compare_methods_at"]:
+        problems.append(
+            "analysis.quote_welch_tests = true without analysis.compare_methods_at: it quotes "
+            "the methods' comparisons, and with none to quote it would be ignored"
+        )
 
 
 def _fixed_columns(p: dict) -> tuple[Column, ...]:

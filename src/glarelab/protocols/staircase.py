@@ -425,6 +425,21 @@ def check(p: dict, problems: list[str], folder: Path | None) -> None:
     """
     check_display(p["display"], problems)
     steps = p["trials"]["step_fractions"] or []
+    reversals = p["trials"]["reversals"]
+    if len(steps) > reversals:  # step k is taken after k reversals
+        problems.append(
+            f"trials.step_fractions = {steps!r}: {len(steps)} steps for trials.reversals = "
+            f"{reversals}; a staircase takes step k after k reversals, so "
+            f"{steps[reversals:]!r} would never be used"
+        )
+    if p["trials"]["repeat_limit"] != 0 and not p["trials"]["repeat_failed_presentations"]:
+        limit = p["trials"]["repeat_limit"]
+        default = SCHEMA["trials"]["repeat_limit"].default
+        if limit != default:
+            problems.append(
+                f"trials.repeat_limit = {limit}: failed flashes are not shown again "
+                "(trials.repeat_failed_presentations = false), so it would be ignored"
+            )
     if any(b >= a for a, b in pairwise(steps)):
         problems.append(
             f"trials.step_fractions = {steps!r}: must run from coarse to fine (each smaller "
