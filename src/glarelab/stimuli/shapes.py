@@ -10,7 +10,9 @@ import numpy as np
 
 from glarelab.glare._validation import check_in_range, check_positive
 
-__all__ = ["ImageRow", "disk"]
+__all__ = ["MAX_FIELD_PX", "ImageRow", "disk"]
+
+MAX_FIELD_PX = 2**15  # a field wider than this many pixels is a typo of pixel_deg (8 GiB)
 
 
 def disk(
@@ -60,6 +62,12 @@ def disk(
         raise ValueError(
             f"pixel_deg must be at most field_deg ({field_deg:g}°) for the field to hold a "
             f"pixel, got {pixel_deg:g}"
+        )
+    if field_deg / pixel_deg > MAX_FIELD_PX:
+        raise ValueError(
+            f"pixel_deg = {pixel_deg:g}: the {field_deg:g}° field would be "
+            f"{field_deg / pixel_deg:.3g} pixels wide, more than {MAX_FIELD_PX}; give a larger "
+            "pixel_deg"
         )
     if diameter >= field_deg:
         raise ValueError(

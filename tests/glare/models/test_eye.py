@@ -78,3 +78,14 @@ def test_halo_needs_a_pupil_over_3_mm_and_mesopic_fields_give_one():
     # Spencer §3.1.1: halo only for pupils > 3 mm; the brightest mesopic field (3 cd/m²)
     # still has a 3.3 mm pupil, so the mesopic PSF (with halo) is consistent with it.
     assert eye.pupil_diameter_mm(eye.MESOPIC_UPPER_CD_M2) > eye.HALO_PUPIL_MM
+
+
+def test_a_masked_luminance_is_refused_not_its_masked_value_used():
+    """np.asarray dropped the mask: the masked element got a pupil of its hidden value."""
+    import numpy as np
+    import pytest
+
+    from glarelab.glare.models.eye import pupil_diameter_mm
+
+    with pytest.raises(ValueError, match="masked array"):
+        pupil_diameter_mm(np.ma.array([10.0, 100.0], mask=[False, True]))

@@ -79,6 +79,8 @@ def pupil_diameter_mm(field_luminance_cd_m2: float | np.ndarray) -> float | np.n
             "field_luminance_cd_m2 must be a number or an array of numbers (cd/m²), got the "
             f"{type(field_luminance_cd_m2).__name__} {field_luminance_cd_m2!r}"
         )
+    if isinstance(field_luminance_cd_m2, np.ma.MaskedArray):  # asarray would drop the mask
+        check_image("field_luminance_cd_m2", field_luminance_cd_m2)
     array = check_image(  # its own dtype checked (strings and bools refused), then float
         "field_luminance_cd_m2", np.atleast_2d(np.asarray(field_luminance_cd_m2))
     ).astype(float)
