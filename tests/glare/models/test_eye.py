@@ -82,10 +82,5 @@ def test_halo_needs_a_pupil_over_3_mm_and_mesopic_fields_give_one():
 
 def test_a_masked_luminance_is_refused_not_its_masked_value_used():
     """np.asarray dropped the mask: the masked element got a pupil of its hidden value."""
-    import numpy as np
-    import pytest
-
-    from glarelab.glare.models.eye import pupil_diameter_mm
-
     with pytest.raises(ValueError, match="masked array"):
-        pupil_diameter_mm(np.ma.array([10.0, 100.0], mask=[False, True]))
+        eye.pupil_diameter_mm(np.ma.array([10.0, 100.0], mask=[False, True]))
