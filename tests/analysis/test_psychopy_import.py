@@ -222,6 +222,19 @@ def test_an_excel_resave_is_imported_and_a_missing_date_is_said(simulated, tmp_p
     assert "TRUE" not in written and ("true" in written or "false" in written)
 
 
+def test_empty_lines_at_the_end_import_as_the_untouched_file(simulated, tmp_path):
+    pytest.importorskip("psychopy.data")
+    protocol = load_protocol("yoshida2008")
+    own = sorted(simulated.glob("*_yoshida2008_s1_*.csv"))[0]
+    source = write_psychopy(own, protocol, tmp_path / "a", rt_name="time_s")
+    edited = tmp_path / "b" / source.name
+    edited.parent.mkdir()
+    edited.write_text(source.read_text(encoding="utf-8") + "\n\n", encoding="utf-8")
+    (plain,) = import_psychopy(protocol, [source], tmp_path / "out_a")
+    (padded,) = import_psychopy(protocol, [edited], tmp_path / "out_b")
+    assert padded.csv.read_bytes() == plain.csv.read_bytes()
+
+
 def test_an_import_into_a_stimulus_set_is_refused(tmp_path):
     """Session files written into a set made it fail verification (sessions then refuse it)."""
     from glarelab.stimuli.stimulus_set import build_stimulus_set

@@ -214,6 +214,28 @@ def test_rows_deleted_repeated_or_moved_are_named(yoshida, tmp_path, edit, named
         load_sessions(protocol, [bad, *files[1:]])
 
 
+@pytest.mark.parametrize(
+    "ending", ["\n", "\n\n\n", "\r\n", ",,,,\n", ",,,,\n,,,,"], ids=repr
+)  # fmt: skip
+def test_empty_lines_a_spreadsheet_leaves_at_the_end_change_nothing(yoshida, tmp_path, ending):
+    protocol, files = yoshida
+    width = files[0].read_text().splitlines()[0].count(",")
+    ending = ending.replace(",,,,", "," * width)
+    edited = tmp_path / files[0].name
+    edited.write_text(files[0].read_text() + ending)
+    shutil.copy(files[0].with_suffix(".json"), edited.with_suffix(".json"))
+    before, after = tables(protocol, files), tables(protocol, [edited, *files[1:]])
+    for name in before:
+        pd.testing.assert_frame_equal(before[name], after[name], check_exact=True)
+
+
+def test_an_empty_line_among_the_rows_is_named(yoshida, tmp_path):
+    protocol, files = yoshida
+    bad = copy_session(files[0], tmp_path, rows=lambda lines: [*lines[:6], "\n", *lines[6:]])
+    with pytest.raises(DataError, match=r"line 7: an empty line among the data rows"):
+        load_sessions(protocol, [bad, *files[1:]])
+
+
 def _set_cell(lines, line, column, value):
     header = lines[0].rstrip("\n").split(",")
     cells = lines[line - 1].rstrip("\n").split(",")

@@ -175,7 +175,10 @@ def _read_file(
             "(a copy interrupted?) or a quote left open"
         )
         return rows
-    if not text.endswith(("\n", "\r")):
+    cut = bool(records) and any(records[-1][1]) and not text.endswith(("\n", "\r"))
+    while len(records) > 1 and not any(records[-1][1]):
+        records.pop()  # empty lines (or rows of empty cells) a spreadsheet left at the end
+    if cut:
         problems.append(
             f"{path}, line {records[-1][0]}: the file ends inside its last row (no line break "
             "after it): the row may be cut short (a copy interrupted?); if it is complete "
@@ -233,6 +236,12 @@ def _read_file(
         )
         return rows
     for line, cells in records[1:]:
+        if not any(cells):
+            problems.append(
+                f"{path}, line {line}: an empty line among the data rows (a row deleted in a "
+                "spreadsheet?); delete the line, or put the trial's row back"
+            )
+            continue
         if len(cells) != len(header):
             problems.append(
                 f"{path}, line {line}: {len(cells)} cells, the header has {len(header)}"
