@@ -45,6 +45,33 @@ def test_reversed_order_trajectory_and_a_passing_calibration(tmp_path):
     assert saved["status"] == "passed" and len(saved["verification"]["measurements"]) == 4
 
 
+def test_a_simulated_photometers_calibration_is_synthetic_never_passed(tmp_path):
+    """``calibrate measure --simulate`` saved ``status: passed``: a build and a session took
+    made-up readings as a measured display."""
+    from glarelab.display.calibration import Calibration, usable_calibration
+
+    session = MeasurementSession(
+        bit_depth=8, out=tmp_path / "d.json", rng=np.random.default_rng(0), points=9,
+        verify_points=3, label="bench",
+    )  # fmt: skip
+    photometer = gamma_display(top=255)
+    while session.phase != "done":
+        session.record(photometer(session.current()["code"]), source="simulated")
+    saved = Calibration.load(tmp_path / "d.json")  # its verification pass consistent
+    assert saved.status == "synthetic" and saved.label == "SYNTHETIC: simulated photometer; bench"
+    assert saved.verification["max_relative_error"] <= saved.verification["tolerance_fraction"]
+    assert json.loads(session.session_path.read_text())["status"] == "synthetic"
+    with pytest.raises(ValueError, match="the display calibration is synthetic"):
+        usable_calibration(saved, allow_uncalibrated=False)
+    # the readings typed: the same display measured is passed
+    typed = MeasurementSession(
+        bit_depth=8, out=tmp_path / "t.json", rng=np.random.default_rng(0), points=9,
+        verify_points=3,
+    )  # fmt: skip
+    run(typed, photometer)
+    assert Calibration.load(tmp_path / "t.json").status == "passed"
+
+
 def test_random_order_is_seeded(tmp_path):
     a = MeasurementSession(bit_depth=8, out=tmp_path / "a.json", rng=np.random.default_rng(5))
     b = MeasurementSession(bit_depth=8, out=tmp_path / "b.json", rng=np.random.default_rng(5))
@@ -289,7 +316,7 @@ def test_psychopy_front_end_shows_each_code(tmp_path):
     lines = [line for line in done.stdout.splitlines() if line.startswith("RESULT")]
     assert lines, done.stderr[-3000:]
     result = json.loads(lines[0][len("RESULT ") :])
-    assert result["status"] == "passed"
+    assert result["status"] == "synthetic" and result["verification"] == "passed"
     assert len(result["shown"]) == 9 + 1 + 3
     for code, pixel in result["shown"]:
         assert abs(pixel - code) <= 1  # the patch shows the drive code (8-bit frame buffer)

@@ -29,7 +29,7 @@ from __future__ import annotations
 import datetime as dt
 import itertools
 import json
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Literal
 
@@ -540,6 +540,12 @@ class MeasurementSession:
                 save=False,  # saved with the next reading
             )
 
+    @property
+    def simulated(self) -> bool:
+        """Whether a reading came from a simulated photometer (its calibration is then
+        ``synthetic``, whatever its verification pass gives)."""
+        return any(entry.get("source") == "simulated" for entry in self.log)
+
     def _monotonicity(self, code: int) -> list[str]:
         value = self.readings[code]
         flags = []
@@ -570,6 +576,10 @@ class MeasurementSession:
             self.refused = f"the readings cannot be fitted: {error}"
             self.phase = "done"
             return
+        if self.simulated:  # made-up readings: a synthetic display, never a measured one
+            label = "SYNTHETIC: simulated photometer"
+            label += f"; {self.label}" if self.label else ""
+            self.calibration = replace(self.calibration, status="synthetic", label=label)
         bends = self._bends(ordered) if self._refinements < REFINE_ROUNDS else []
         if bends:  # the curve bends between readings: measure there before verifying
             self._refinements += 1

@@ -116,7 +116,9 @@ def run_measurement(
     Returns
     -------
     dict
-        ``status`` of the calibration (or ``'stopped'``), ``flags``, ``bits_per_channel`` the
+        ``status`` of the calibration (or ``'stopped'``; ``'synthetic'`` with a simulated
+        ``photometer``), ``verification`` (``'passed'``, ``'failed'`` or None: what its
+        verification pass gave), ``flags``, ``bits_per_channel`` the
         window gave, ``faults`` (the photometer's messages), and ``shown``: the ``(code, pixel
         value read back from the frame)`` of each patch.
 
@@ -136,8 +138,13 @@ def run_measurement(
     shown: list[tuple[int, int]] = []
 
     def result(status: str) -> dict:
+        verification = session.calibration.verification if session.calibration else {}
+        worst = verification.get("max_relative_error")
         return {
             "status": status,
+            "verification": None
+            if worst is None
+            else ("passed" if worst <= verification["tolerance_fraction"] else "failed"),
             "flags": session.flags,
             "shown": shown,
             "bits_per_channel": bits,
