@@ -121,12 +121,61 @@ def test_a_uniform_background_and_a_users_exr(tmp_path):
                         folder=tmp_path)  # fmt: skip
     assert coarse.shape == (5, 10)
     assert_allclose(coarse.mean(), gradient[5:25, 0:40].mean(), rtol=0.05)  # luminance kept
-    with pytest.raises(ValueError, match=r"covers 0\.8° × 0\.6°, the stimulus needs 2° × 2°"):
+    with pytest.raises(ValueError, match=r"covers 0\.8° × 0\.6° .*the stimulus needs 2° × 2°"):
         background(spec, (100, 100), pixel_deg=0.02, rng=rng, ceiling_cd_m2=220.0,
                    folder=tmp_path)  # fmt: skip
     with pytest.raises(ValueError, match="above 20 cd/m² where glare is added"):
         background(spec, (10, 20), pixel_deg=0.02, rng=rng, ceiling_cd_m2=20.0,
                    folder=tmp_path)  # fmt: skip
+
+
+def _bilinear(image, y, x):
+    """The image at (row, column) y, x, read bilinearly, the border pixel held beyond it."""
+    y = min(max(y, 0.0), image.shape[0] - 1.0)
+    x = min(max(x, 0.0), image.shape[1] - 1.0)
+    y0, x0 = min(int(y), image.shape[0] - 2), min(int(x), image.shape[1] - 2)
+    fy, fx = y - y0, x - x0
+    patch = image[y0 : y0 + 2, x0 : x0 + 2]
+    return (1 - fy) * ((1 - fx) * patch[0, 0] + fx * patch[0, 1]) + fy * (
+        (1 - fx) * patch[1, 0] + fx * patch[1, 1]
+    )
+
+
+@pytest.mark.parametrize(
+    ("file_px", "file_deg", "shape", "pixel_deg"),
+    [((16, 16), 0.2, (161, 161), 0.2 * 16 / 160.6),  # a field 161 px ≈ exactly the file
+     ((30, 40), 0.02, (7, 9), 0.07),  # the file finer than the field's pixels
+     ((9, 11), 0.5, (40, 50), 0.1)],  # the file coarser
+)  # fmt: skip
+def test_an_exr_is_read_at_each_pixel_centre(tmp_path, file_px, file_deg, shape, pixel_deg):
+    """The field's pixel centres, aligned on the file's centre, read bilinearly: a file that
+    covers the field exactly was refused ('covers 3.2° × 3.2°, needs 3.2° × 3.2°': the zoomed
+    file came out a pixel short), and a coarse one was zoomed whole (1024 px of 1° pixels:
+    'not enough memory')."""
+    rng = np.random.default_rng(1)
+    image = rng.uniform(1.0, 100.0, file_px).astype(np.float32)
+    write_exr(tmp_path / "f.exr", image)
+    spec = {"kind": "exr", "path": "f.exr", "pixel_deg": file_deg}
+    got = background(spec, shape, pixel_deg=pixel_deg, rng=rng, ceiling_cd_m2=220.0,
+                     folder=tmp_path)  # fmt: skip
+    assert got.shape == shape
+    centre = [(n - 1) / 2 for n in file_px]
+    for i, j in [(0, 0), (shape[0] - 1, shape[1] - 1), (shape[0] // 2, 1), (1, shape[1] - 2)]:
+        y = (i - (shape[0] - 1) / 2) * pixel_deg / file_deg + centre[0]
+        x = (j - (shape[1] - 1) / 2) * pixel_deg / file_deg + centre[1]
+        assert_allclose(got[i, j], _bilinear(image.astype(float), y, x), rtol=1e-12)
+    wider = (shape[0], int(np.ceil(file_px[1] * file_deg / pixel_deg)) + 2)  # past its edge
+    with pytest.raises(ValueError, match=r"f\.exr covers .*background\.pixel_deg"):
+        background(spec, wider, pixel_deg=pixel_deg, rng=rng, ceiling_cd_m2=220.0,
+                   folder=tmp_path)  # fmt: skip
+
+
+def test_a_coarse_exr_is_not_zoomed_whole(tmp_path):
+    write_exr(tmp_path / "big.exr", np.full((1024, 1024), 50.0, np.float32))
+    spec = {"kind": "exr", "path": "big.exr", "pixel_deg": 1.0}
+    got = background(spec, (542, 542), pixel_deg=0.0059, rng=np.random.default_rng(0),
+                     ceiling_cd_m2=220.0, folder=tmp_path)  # fmt: skip
+    assert_allclose(got, 50.0, rtol=1e-14)
 
 
 def test_wave_optics_glare_around_a_disk_on_a_uniform_field(tmp_path):

@@ -28,6 +28,17 @@ def _protocol_check(args: argparse.Namespace) -> int:
     observer = paradigm_run(protocol).observer
     if observer is not None:
         observer.check(protocol)  # the simulated observers' parameters
+    from glarelab.protocols import ProtocolError
+    from glarelab.stimuli.backgrounds import check_backgrounds
+    from glarelab.stimuli.paradigms import paradigm_stimuli
+
+    problems = check_backgrounds(  # drawn as a build draws them: what it would refuse
+        paradigm_stimuli(protocol).backgrounds(protocol),
+        seed=protocol.seed,
+        folder=protocol.folder,
+    )
+    if problems:
+        raise ProtocolError(args.protocol, problems)
     print(
         f"{args.protocol}: valid protocol of the {protocol.paradigm} paradigm (study "
         f"{protocol.study}), sha256 {protocol.sha256}"

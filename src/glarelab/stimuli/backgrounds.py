@@ -5,8 +5,13 @@
 - ``uniform``: a field of one luminance (Spencer et al. 1995: "a black field");
 - ``lamp``: a desk lamp on a desk in a dark room, drawn procedurally (Spencer §4's context
   photograph is not available), the bulb at the centre;
-- ``exr``: a linear luminance EXR of the lab's own (cd/m²), at its own pixel size: resampled
-  (bilinear, luminance kept) to the stimulus's pixels and cut from its centre.
+- ``exr``: a linear luminance EXR of the lab's own (cd/m²), at its own pixel size: cut from
+  its centre, at the stimulus's pixel size as it is, else read at the centre of each of the
+  stimulus's pixels (bilinear, luminance kept); it must cover every pixel centre.
+
+Each paradigm says which backgrounds its builder draws (:class:`BackgroundField`: the protocol's
+table, the field it fills, the ceiling), so ``glarelab protocol check`` refuses what a build
+would (:func:`check_backgrounds`) before anything is rendered.
 
 Every background is a luminance image in cd/m², drawn from the protocol's seed where it is
 random.
@@ -14,6 +19,8 @@ random.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -22,7 +29,7 @@ from scipy import ndimage
 from glarelab.stimuli.exr import read_exr
 from glarelab.stimuli.sky import cloudy_sky
 
-__all__ = ["ROOM_CD_M2", "background", "lamp_scene"]
+__all__ = ["ROOM_CD_M2", "BackgroundField", "background", "check_backgrounds", "lamp_scene"]
 
 ROOM_CD_M2 = 0.05  # a darkened room (Spencer §4)
 
@@ -30,6 +37,79 @@ ROOM_CD_M2 = 0.05  # a darkened room (Spencer §4)
 # the RMS contrast a sky delivers may differ from the one asked by sampling (1-2 % at 0.15);
 # more means the ceiling cut its clouds, and the manifest would state a contrast not shown
 CONTRAST_TOLERANCE = 0.1
+
+
+@dataclass(frozen=True)
+class BackgroundField:
+    """A background a paradigm's builder draws.
+
+    Attributes
+    ----------
+    where
+        The protocol's key of its table, for messages (``'background'``,
+        ``'contexts[1].background'``).
+    spec
+        The validated table (``kind`` and its keys).
+    shape
+        (height, width) of the field it fills, pixels.
+    pixel_deg
+        Visual angle of the field's pixels, degrees.
+    ceiling_cd_m2
+        What no background pixel may exceed, cd/m² (see :func:`background`).
+    """
+
+    where: str
+    spec: dict
+    shape: tuple[int, int]
+    pixel_deg: float
+    ceiling_cd_m2: float
+
+
+def check_backgrounds(
+    fields: Sequence[BackgroundField], *, seed: int, folder: Path | None = None
+) -> list[str]:
+    """What a build would refuse of a protocol's backgrounds, each drawn as its builder draws
+    it (one generator from ``seed``, in order): an EXR that cannot be read, that holds values
+    that are not luminances, that does not cover the field, or that is above the ceiling; a
+    sky whose contrast the ceiling cuts.
+
+    Parameters
+    ----------
+    fields
+        The paradigm's backgrounds (its stimuli entry's ``backgrounds(protocol)``).
+    seed
+        The protocol's seed.
+    folder
+        Where a relative EXR path is found (the protocol's folder); default None: the working
+        folder.
+
+    Returns
+    -------
+    list of str
+        One line per background refused, naming its key; empty when a build would draw all.
+
+    Examples
+    --------
+    >>> field = BackgroundField("background", {"kind": "uniform", "cd_m2": 500.0}, (4, 4),
+    ...                         0.1, 220.0)
+    >>> check_backgrounds([field], seed=0)
+    ['background: the uniform background reaches 500 cd/m², above 220 cd/m² where glare is added: it would glare itself']
+    """  # noqa: E501
+    rng = np.random.default_rng(seed)
+    problems = []
+    for field_ in fields:
+        try:
+            background(
+                field_.spec,
+                field_.shape,
+                pixel_deg=field_.pixel_deg,
+                rng=rng,
+                ceiling_cd_m2=field_.ceiling_cd_m2,
+                folder=folder,
+            )
+        except (ValueError, OSError) as error:
+            problems.append(f"{field_.where}: {error}")
+    return problems
 
 
 def background(
@@ -113,19 +193,31 @@ def _from_exr(spec: dict, shape: tuple[int, int], *, pixel_deg: float, folder) -
         image = image @ np.array([0.2126, 0.7152, 0.0722])
     if not np.isfinite(image).all() or image.min() < 0:
         raise ValueError(f"{path}: a background needs finite luminances >= 0 cd/m²")
-    scale = spec["pixel_deg"] / pixel_deg
-    if not np.isclose(scale, 1.0, rtol=1e-6):
-        image = ndimage.zoom(image, scale, order=1, mode="nearest")  # bilinear
+    file_deg = spec["pixel_deg"]
     height, width = shape
-    if image.shape[0] < height or image.shape[1] < width:
-        field = (height * pixel_deg, width * pixel_deg)
-        have = (image.shape[0] * pixel_deg, image.shape[1] * pixel_deg)
+    same = np.isclose(file_deg, pixel_deg, rtol=1e-6)
+    # each of the stimulus's pixel centres in the file's pixel coordinates, the centres aligned
+    rows, columns = (
+        (np.arange(n) - (n - 1) / 2) * pixel_deg / file_deg + (have - 1) / 2
+        for n, have in zip(shape, image.shape, strict=True)
+    )
+    reach = 0.5 + 1e-9  # a file's pixel covers half a pixel on each side of its centre
+    if (image.shape[0] < height or image.shape[1] < width) if same else (
+        rows[0] < -reach or rows[-1] > image.shape[0] - 1 + reach
+        or columns[0] < -reach or columns[-1] > image.shape[1] - 1 + reach
+    ):  # fmt: skip
         raise ValueError(
-            f"{path} covers {have[1]:.3g}° × {have[0]:.3g}°, the stimulus needs "
-            f"{field[1]:.3g}° × {field[0]:.3g}°"
+            f"{path} covers {image.shape[1] * file_deg:.6g}° × {image.shape[0] * file_deg:.6g}° "
+            f"({image.shape[1]} × {image.shape[0]} pixels of background.pixel_deg = "
+            f"{file_deg:g}°); the stimulus needs {width * pixel_deg:.6g}° × "
+            f"{height * pixel_deg:.6g}° ({width} × {height} pixels of {pixel_deg:.6g}°): "
+            "give a larger image, or its true pixel size"
         )
-    top, left = (image.shape[0] - height) // 2, (image.shape[1] - width) // 2
-    return image[top : top + height, left : left + width].copy()
+    if same:  # cut from the centre as it is
+        top, left = (image.shape[0] - height) // 2, (image.shape[1] - width) // 2
+        return image[top : top + height, left : left + width].copy()
+    grid = np.meshgrid(rows, columns, indexing="ij")
+    return ndimage.map_coordinates(image, grid, order=1, mode="nearest")  # bilinear
 
 
 def _polygon_mask(shape: tuple[int, int], vertices: list[tuple[float, float]]) -> np.ndarray:

@@ -21,10 +21,17 @@ from glarelab.glare.models.digitise import kernel_shape_for
 from glarelab.protocols import Protocol, pixel_deg
 from glarelab.protocols.common import glare_model
 from glarelab.protocols.matching import reference_name
-from glarelab.stimuli.backgrounds import background
+from glarelab.stimuli.backgrounds import BackgroundField, background
 from glarelab.stimuli.shapes import ImageRow
 
-__all__ = ["box_filter", "build_matching", "compose_target", "matching_row", "target_terms"]
+__all__ = [
+    "box_filter",
+    "build_matching",
+    "compose_target",
+    "matching_backgrounds",
+    "matching_row",
+    "target_terms",
+]
 
 
 def box_filter(image: np.ndarray, factor: int) -> np.ndarray:
@@ -96,6 +103,34 @@ def _odd(n: float) -> int:
     return k + 1 - k % 2
 
 
+def matching_backgrounds(protocol: Protocol) -> list[BackgroundField]:
+    """The background a matching protocol's builder draws: its field at the supersampled
+    resolution, under the glare's ``l_dmax_cd_m2``.
+
+    Parameters
+    ----------
+    protocol
+        A validated protocol of the matching paradigm.
+
+    Returns
+    -------
+    list of BackgroundField
+        The one background, ``[background]``.
+    """
+    s = protocol["stimulus"]
+    factor = s["supersample"]
+    n = _odd(s["size_deg"] / pixel_deg(protocol)) * factor
+    return [
+        BackgroundField(
+            "background",
+            protocol["background"],
+            (n, n),
+            pixel_deg(protocol) / factor,
+            protocol["glare"]["l_dmax_cd_m2"],
+        )
+    ]
+
+
 def build_matching(protocol: Protocol, *, progress=None) -> dict:
     """Render the reference and target images of a matching protocol.
 
@@ -121,12 +156,13 @@ def build_matching(protocol: Protocol, *, progress=None) -> dict:
     fine_p = p / factor
     fine_n = n * factor
     rng = np.random.default_rng(protocol.seed)
+    (drawn,) = matching_backgrounds(protocol)
     field = background(
-        protocol["background"],
-        (fine_n, fine_n),
-        pixel_deg=fine_p,
+        drawn.spec,
+        drawn.shape,
+        pixel_deg=drawn.pixel_deg,
         rng=rng,
-        ceiling_cd_m2=g["l_dmax_cd_m2"],
+        ceiling_cd_m2=drawn.ceiling_cd_m2,
         folder=protocol.folder,
     )
     # fine pixel centres in degrees; the disk centre is the centre of native pixel n // 2

@@ -2,10 +2,11 @@
 
 A paradigm's stimulus module gives how its images are rendered (``build``), how a session draws
 its first trial's images side by side (``first_row``, which ``glarelab protocol check`` reports
-on the protocol's display), how a set's profile plots group its images, and whether a protocol
-shows images at all. Every entry names all four, so a new paradigm cannot leave one out and be
-passed over silently; code outside the paradigms' modules finds an entry through
-:func:`paradigm_stimuli`, which names the registry when the entry is missing.
+on the protocol's display), how a set's profile plots group its images, whether a protocol
+shows images at all, and the backgrounds its builder draws (which ``glarelab protocol check``
+draws to refuse what a build would). Every entry names all five, so a new paradigm cannot
+leave one out and be passed over silently; code outside the paradigms' modules finds an entry
+through :func:`paradigm_stimuli`, which names the registry when the entry is missing.
 """
 
 from __future__ import annotations
@@ -14,16 +15,18 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from glarelab.protocols import Protocol
-from glarelab.stimuli.matching import build_matching, matching_row
+from glarelab.stimuli.backgrounds import BackgroundField
+from glarelab.stimuli.matching import build_matching, matching_backgrounds, matching_row
 from glarelab.stimuli.night import build_night, night_row, shows_scene
 from glarelab.stimuli.shapes import ImageRow
-from glarelab.stimuli.staircase import build_staircase, staircase_row
+from glarelab.stimuli.staircase import build_staircase, staircase_backgrounds, staircase_row
 
 __all__ = [
     "PARADIGMS",
     "ImageRow",
     "ParadigmStimuli",
     "always_shows",
+    "no_backgrounds",
     "paradigm_stimuli",
     "register_paradigm",
 ]
@@ -47,12 +50,17 @@ class ParadigmStimuli:
     shows
         ``shows(protocol)``: whether a protocol of the paradigm shows images (and so has a
         stimulus set; a questionnaire without a scene shows none).
+    backgrounds
+        ``backgrounds(protocol)``: the backgrounds the builder draws, in the order it draws
+        them (:class:`glarelab.stimuli.backgrounds.BackgroundField`); :func:`no_backgrounds`
+        for a paradigm that draws none.
     """
 
     build: Callable[..., dict]
     first_row: Callable[[Protocol, float], ImageRow | None]
     profile_groups: tuple[str, str] | None
     shows: Callable[[Protocol], bool]
+    backgrounds: Callable[[Protocol], list[BackgroundField]]
 
 
 def always_shows(protocol: Protocol) -> bool:
@@ -71,6 +79,22 @@ def always_shows(protocol: Protocol) -> bool:
     return True
 
 
+def no_backgrounds(protocol: Protocol) -> list[BackgroundField]:
+    """``backgrounds`` of a paradigm whose builder draws no protocol background.
+
+    Parameters
+    ----------
+    protocol : glarelab.protocols.Protocol
+        The study's protocol (not read).
+
+    Returns
+    -------
+    list
+        Always empty.
+    """
+    return []
+
+
 PARADIGMS: dict[str, ParadigmStimuli] = {}
 
 
@@ -82,7 +106,8 @@ def register_paradigm(name: str, stimuli: ParadigmStimuli) -> None:
     name
         The paradigm's name, as a protocol's ``paradigm`` gives it (not yet registered).
     stimuli
-        Its entry: callable ``build``, ``first_row`` and ``shows``, and ``profile_groups``
+        Its entry: callable ``build``, ``first_row``, ``shows`` and ``backgrounds``, and
+        ``profile_groups``
         None or two names (image kind, key).
 
     Raises
@@ -95,7 +120,7 @@ def register_paradigm(name: str, stimuli: ParadigmStimuli) -> None:
         raise ValueError(f"paradigm {name!r}: already registered in stimuli")
     if not isinstance(stimuli, ParadigmStimuli):
         raise ValueError(f"paradigm {name!r}: expected a ParadigmStimuli entry; got {stimuli!r}")
-    for key in ("build", "first_row", "shows"):
+    for key in ("build", "first_row", "shows", "backgrounds"):
         if not callable(getattr(stimuli, key)):
             raise ValueError(f"paradigm {name!r}: stimuli.{key} must be callable")
     groups = stimuli.profile_groups
@@ -110,13 +135,19 @@ def register_paradigm(name: str, stimuli: ParadigmStimuli) -> None:
 
 register_paradigm(
     "matching",
-    ParadigmStimuli(build_matching, matching_row, ("reference", "method"), always_shows),
+    ParadigmStimuli(
+        build_matching, matching_row, ("reference", "method"), always_shows, matching_backgrounds
+    ),
 )
 register_paradigm(
     "staircase",
-    ParadigmStimuli(build_staircase, staircase_row, ("glare", "context"), always_shows),
+    ParadigmStimuli(
+        build_staircase, staircase_row, ("glare", "context"), always_shows, staircase_backgrounds
+    ),
 )
-register_paradigm("rating", ParadigmStimuli(build_night, night_row, None, shows_scene))
+register_paradigm(
+    "rating", ParadigmStimuli(build_night, night_row, None, shows_scene, no_backgrounds)
+)
 
 
 def paradigm_stimuli(protocol: Protocol) -> ParadigmStimuli:

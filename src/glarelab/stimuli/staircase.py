@@ -27,10 +27,10 @@ from glarelab.protocols import Protocol
 from glarelab.protocols import pixel_deg as display_pixel_deg
 from glarelab.protocols.common import glare_model
 from glarelab.protocols.staircase import glare_name
-from glarelab.stimuli.backgrounds import background
+from glarelab.stimuli.backgrounds import BackgroundField, background
 from glarelab.stimuli.shapes import ImageRow
 
-__all__ = ["build_staircase", "compose_comparison", "staircase_row"]
+__all__ = ["build_staircase", "compose_comparison", "staircase_backgrounds", "staircase_row"]
 
 
 def compose_comparison(
@@ -64,6 +64,30 @@ def _circle_coverage(size: int, radius: float, factor: int = 8) -> np.ndarray:
     offsets = (np.arange(size * factor) + 0.5) / factor - size / 2
     inside = np.hypot(offsets[None, :], offsets[:, None]) <= radius
     return inside.reshape(size, factor, size, factor).mean(axis=(1, 3))
+
+
+def staircase_backgrounds(protocol: Protocol) -> list[BackgroundField]:
+    """The backgrounds a staircase protocol's builder draws: each context's, filling the
+    window, under the source's peak (``peak_fraction`` of the display's maximum).
+
+    Parameters
+    ----------
+    protocol
+        A validated protocol of the staircase paradigm.
+
+    Returns
+    -------
+    list of BackgroundField
+        One per context, in the protocol's order (the order they are drawn in).
+    """
+    s = protocol["stimulus"]
+    size = s["window_px"]
+    p = s["pixel_deg"] if s["pixel_deg"] > 0 else display_pixel_deg(protocol)
+    peak = protocol["glare"]["peak_fraction"] * protocol["display"]["max_cd_m2"]
+    return [
+        BackgroundField(f"contexts[{i}].background", c["background"], (size, size), p, peak)
+        for i, c in enumerate(protocol["contexts"])
+    ]
 
 
 def build_staircase(protocol: Protocol, *, progress=None) -> dict:
@@ -104,14 +128,14 @@ def build_staircase(protocol: Protocol, *, progress=None) -> dict:
     }
     total = len(protocol["contexts"]) * (len(g["strengths"]) + 1)
     done = 0
-    for context in protocol["contexts"]:
+    for context, drawn in zip(protocol["contexts"], staircase_backgrounds(protocol), strict=True):
         name = context["name"]
         scene = background(
-            context["background"],
-            (size, size),
-            pixel_deg=p,
+            drawn.spec,
+            drawn.shape,
+            pixel_deg=drawn.pixel_deg,
             rng=rng,
-            ceiling_cd_m2=peak,
+            ceiling_cd_m2=drawn.ceiling_cd_m2,
             folder=protocol.folder,
         )
         images[f"scene_{name}"] = {"img": scene, "kind": "component", "context": name}

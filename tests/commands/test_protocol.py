@@ -1,0 +1,100 @@
+"""``glarelab protocol check`` refuses the backgrounds a build would refuse, naming the key:
+an EXR too small for the field, holding NaN, or brighter than where glare is added passed the
+check, and the build then refused it."""
+
+from __future__ import annotations
+
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from glarelab.cli import main
+from glarelab.protocols import parse_protocol
+from glarelab.stimuli.exr import write_exr
+from glarelab.stimuli.matching import build_matching
+
+PROTOCOLS = Path(__file__).parents[2] / "src" / "glarelab" / "protocols"
+
+
+def _nan_exr(path: Path) -> None:
+    import OpenEXR
+
+    image = np.full((64, 64), 50.0, np.float32)
+    image[3, 3] = np.nan
+    header = {"type": OpenEXR.scanlineimage, "compression": OpenEXR.ZIP_COMPRESSION}
+    OpenEXR.File(header, {"Y": image}).write(str(path))
+
+
+def _glint_exr(path: Path) -> None:
+    image = np.full((400, 400), 50.0, np.float32)
+    image[200, 200] = 5e4  # above the glare's l_dmax of 220 cd/m²
+    write_exr(path, image)
+
+
+FILES = {
+    "small": (lambda p: write_exr(p, np.full((64, 64), 50.0, np.float32)), 0.01, "covers 0.64°"),
+    "nan": (_nan_exr, 0.05, "holds NaN or Inf"),
+    "glint": (_glint_exr, 0.06, "above 220 cd/m² where glare is added"),
+}
+
+
+def _protocol(tmp_path: Path, study: str, background: dict) -> Path:
+    """The shipped study with ``background`` (a uniform context's, for a staircase)."""
+    text = (PROTOCOLS / f"{study}.toml").read_text(encoding="utf-8")
+    inline = ", ".join(f"{k} = {v!r}".replace("'", '"') for k, v in background.items())
+    if study == "spencer1995":
+        text = text.replace('background = { kind = "uniform", cd_m2 = 0.0 }',
+                            f"background = {{ {inline} }}")  # fmt: skip
+    else:
+        start = text.index("[background]")
+        end = text.index("\n[", start + 1)
+        text = text[:start] + "[background]\n" + inline.replace(", ", "\n") + text[end:]
+    path = tmp_path / f"{study}.toml"
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def _check(path: Path, capsys) -> tuple[int, str]:
+    capsys.readouterr()
+    try:
+        status = main(["protocol", "check", str(path)])
+    except SystemExit as stop:
+        status = stop.code
+    return status, capsys.readouterr().err
+
+
+@pytest.mark.parametrize("name", FILES)
+def test_a_background_the_build_refuses_is_refused_by_the_check(name, tmp_path, capsys):
+    make, file_deg, named = FILES[name]
+    make(tmp_path / f"{name}.exr")
+    background = {"kind": "exr", "path": f"{name}.exr", "pixel_deg": file_deg}
+    path = _protocol(tmp_path, "yoshida2008", background)
+    status, err = _check(path, capsys)
+    assert status == 2 and "  - background: " in err and named in err, err
+    assert "Traceback" not in err
+    protocol = parse_protocol(tomllib.loads(path.read_text()), folder=tmp_path)
+    with pytest.raises(ValueError) as built:  # the build's own words, after the key
+        build_matching(protocol)
+    assert f"background: {built.value}" in err
+
+
+def test_a_staircase_contexts_background_is_named_by_its_context(tmp_path, capsys):
+    write_exr(tmp_path / "small.exr", np.full((8, 8), 0.5, np.float32))
+    background = {"kind": "exr", "path": "small.exr", "pixel_deg": 0.01}
+    status, err = _check(_protocol(tmp_path, "spencer1995", background), capsys)
+    assert status == 2 and "  - contexts[0].background: " in err and "covers 0.08°" in err, err
+
+
+def test_a_file_covering_the_field_exactly_passes_and_builds(tmp_path, capsys):
+    """16 pixels of 0.2° for Yoshida's 3.2° field: refused by the build as 'covers 3.2° ×
+    3.2°, the stimulus needs 3.2° × 3.2°' (the field is 271 px, 3.204°)."""
+    write_exr(tmp_path / "exact.exr", np.full((16, 16), 50.0, np.float32))
+    background = {"kind": "exr", "path": "exact.exr", "pixel_deg": 0.2}
+    path = _protocol(tmp_path, "yoshida2008", background)
+    status, err = _check(path, capsys)
+    assert status == 0, err
+    protocol = parse_protocol(tomllib.loads(path.read_text()), folder=tmp_path)
+    field = build_matching(protocol)["images"]["background"]["img"]
+    np.testing.assert_allclose(field, 50.0, rtol=1e-12)
