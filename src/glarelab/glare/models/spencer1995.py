@@ -66,7 +66,9 @@ class VosGlare(GlareModel):
         would act on nothing).
     wavelength_nm
         ``None`` (default): the halo of a white source, integrated over 400-700 nm.
-        A number: a monochromatic halo at that wavelength (380-780 nm).
+        A number: a monochromatic halo at that wavelength (380-780 nm); refused for a model
+        without a halo (the photopic regime, or a pupil under 3 mm), where it would act on
+        nothing.
     halo_spectrum
         Wavelength sampling and display primaries of the coloured halo.
     samples_per_pixel, center_samples_per_pixel, center_radius_px
@@ -129,6 +131,20 @@ class VosGlare(GlareModel):
             check_in_range("pupil_mm", self.pupil_mm, *PUPIL_RANGE_MM, unit="mm")
         if self.wavelength_nm is not None:
             vos.f3(0.0, self.wavelength_nm)  # validates the wavelength
+            if vos.WEIGHTS[self.regime][3] == 0.0:  # the wavelength colours only the halo
+                raise ValueError(
+                    f"wavelength_nm={self.wavelength_nm!r} with regime={self.regime!r}: the "
+                    "wavelength sets only the lenticular halo (Spencer eq. 9), which the "
+                    f"{self.regime} PSF (eq. 5) does not have; leave wavelength_nm None, or "
+                    "choose a regime with a halo"
+                )
+            if self.halo_skipped:
+                raise ValueError(
+                    f"wavelength_nm={self.wavelength_nm!r} with pupil_mm={self.pupil_mm!r}: the "
+                    "wavelength sets only the lenticular halo (Spencer eq. 9), which a pupil "
+                    "under 3 mm drops (§2.1); leave wavelength_nm None, or give a pupil of 3 mm "
+                    "or more"
+                )
         check_positive_int("seed", self.seed, minimum=0)
         if self.seed != 0 and not self.flare_lines:  # as the command line's --seed alone
             raise ValueError(
