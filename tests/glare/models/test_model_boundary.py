@@ -242,8 +242,12 @@ def test_an_obstacle_image_that_passes_no_light_is_refused_not_a_kernel_of_nothi
         ({"fresnel_distance_mm": 30.0}, "fresnel_distance_mm"),
         ({"diaphragm_rotation_deg": 30.0}, "diaphragm_rotation_deg"),
         ({"seed": 5, "eyelashes": False, "particles": 0}, "seed"),
+        ({"eyelashes": False, "eyelid": False, "source_x_deg": 10.0}, "source_x_deg"),
+        ({"eyelashes": False, "eyelid": False, "obstacle_distance_mm": 5.0},
+         "obstacle_distance_mm"),
+        ({"field_luminance_cd_m2": 0.001}, "field_luminance_cd_m2"),  # the pupil is given
     ],
-)
+)  # fmt: skip
 def test_a_wave_option_that_shapes_nothing_drawn_is_refused(options, name):
     """Each was accepted and the kernel was the default's, its description claiming it."""
     with pytest.raises(ValueError, match=f"^{name}=.* has no effect"):
@@ -259,8 +263,21 @@ def test_a_wave_option_that_shapes_nothing_drawn_is_refused(options, name):
         {"diaphragm_sides": 6, "diaphragm_rotation_deg": 30.0},
         {"eyelashes": True, "eyelash_count": 10, "eye": "left"},
         {"particles": 10, "particle_size_mm": 0.1},
+        {"eyelashes": False, "source_x_deg": 10.0},  # the lid is still moved
+        {"eyelid": False, "obstacle_distance_mm": 5.0, "source_x_deg": 10.0},
     ],
 )
 def test_the_same_options_with_what_they_shape_are_taken(options):
     model = WaveOpticsGlare(pupil_mm=3.0, **options)
     assert all(getattr(model, key) == value for key, value in options.items())
+
+
+def test_a_source_angle_of_an_eye_without_lashes_and_lid_keeps_its_kernel():
+    """``at_source`` (``kernel_set``) of such an eye was refused once its angle was; it is the
+    same eye, and the same kernel, at every angle."""
+    bare = WaveOpticsGlare(pupil_mm=3.0, eyelashes=False, eyelid=False, particles=0)
+    assert bare.at_source(20.0) is bare
+    with pytest.raises(ValueError, match="source_x_deg"):
+        bare.at_source(90.0)
+    lid = WaveOpticsGlare(pupil_mm=3.0, eyelashes=False, particles=0)
+    assert lid.at_source(20.0).source_x_deg == 20.0

@@ -13,6 +13,7 @@ from glarelab import glare
 from glarelab.glare import night
 from glarelab.glare.models import eye
 from glarelab.glare.night import acuity, adaptation, scotopic
+from glarelab.glare.night.live import LiveNight
 
 PIXEL = 0.05
 
@@ -136,6 +137,19 @@ def test_adapted_model_leaves_a_model_without_an_eye_alone():
     assert night.adapted_model(gaussian, 0.01) is gaussian
     vos = night.adapted_model(glare.VosGlare(flare_lines=True, seed=3), 1e-4)
     assert (vos.regime, vos.flare_lines, vos.seed) == ("scotopic", True, 3)
+
+
+def test_an_eye_whose_pupil_a_field_luminance_set_is_adapted_to_the_pupil_alone():
+    """The pupil the adaptation gives replaces the one the model's field luminance set (a
+    model with both is refused: the luminance would act on nothing)."""
+    wave = glare.WaveOpticsGlare(field_luminance_cd_m2=0.01, particles=0)
+    used = night.adapted_model(wave, 100.0)
+    assert used.pupil_mm == pytest.approx(glare.pupil_diameter_mm(100.0), abs=0.05)
+    assert used.field_luminance_cd_m2 == glare.WaveOpticsGlare().field_luminance_cd_m2
+    live = LiveNight(np.full((8, 10, 3), 0.5), pixel_deg=0.1, glare_model=wave,
+                           pupils_mm=(3.0, 5.0))  # fmt: skip
+    frame = live.frame(gaze_px=(4.0, 5.0), pupil_mm=5.0, frame_time_s=1 / 60)
+    assert frame.pupil_mm == 5.0 and np.isfinite(frame.image).all()
 
 
 @pytest.mark.parametrize("frames", [1, 3])

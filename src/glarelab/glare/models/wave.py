@@ -428,6 +428,22 @@ class WaveOpticsGlare(GlareModel):
                         f"{enabler}={value!r}: leave {option} at its default "
                         f"({defaults[option]!r}) or set {enabler}"
                     )
+        if not (self.eyelashes or self.eyelid):  # the source's angle moves only lashes and lid
+            for option in ("source_x_deg", "obstacle_distance_mm"):
+                if getattr(self, option) != defaults[option]:
+                    raise ValueError(
+                        f"{option}={getattr(self, option)!r} has no effect without eyelashes or "
+                        f"eyelid (it places them across the pupil): leave it at its default "
+                        f"({defaults[option]!r}) or draw them"
+                    )
+        if self.pupil_mm is not None and (
+            self.field_luminance_cd_m2 != defaults["field_luminance_cd_m2"]
+        ):
+            raise ValueError(
+                f"field_luminance_cd_m2={self.field_luminance_cd_m2!r} has no effect with "
+                f"pupil_mm={self.pupil_mm!r} (it sets the pupil only when pupil_mm is None): "
+                "give one of them"
+            )
         if self.seed != defaults["seed"] and not (self.eyelashes or self.particles):
             raise ValueError(
                 f"seed={self.seed!r} has no effect without eyelashes or particles (the "
@@ -928,8 +944,12 @@ class WaveOpticsGlare(GlareModel):
         Returns
         -------
         WaveOpticsGlare
-            A copy with that source position.
+            A copy with that source position; the model itself without eyelashes and eyelid,
+            whose kernel does not depend on it.
         """
+        if not (self.eyelashes or self.eyelid):  # nothing the angle moves: the same kernel
+            check_in_range("source_x_deg", source_x_deg, -60.0, 60.0, unit="deg")
+            return self
         return replace(self, source_x_deg=source_x_deg)
 
     def kernel_set(

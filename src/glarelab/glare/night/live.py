@@ -575,7 +575,10 @@ class LiveNight:
         pupil = float(pupil)
         model = self._models.get(pupil)
         if model is None:  # made once: a model checks its fields as it is made
-            model = self._models[pupil] = dataclasses.replace(self.model, pupil_mm=pupil)
+            given = {"pupil_mm": pupil}
+            if hasattr(type(self.model), "field_luminance_cd_m2"):  # it set the pupil: unused
+                given["field_luminance_cd_m2"] = type(self.model).field_luminance_cd_m2
+            model = self._models[pupil] = dataclasses.replace(self.model, **given)
         return model
 
     # one frame ---------------------------------------------------------------------------

@@ -153,6 +153,8 @@ def adapted_model(
     if "pupil_mm" in names:
         pupil = float(pupil_diameter_mm(luminance))
         changes["pupil_mm"] = round(round(pupil / step) * step, 6)
+        if "field_luminance_cd_m2" in names:  # the pupil is given: what set it is not used
+            changes["field_luminance_cd_m2"] = type(model).field_luminance_cd_m2
     if "regime" in names:
         changes["regime"] = regime(luminance)
     for name in names:
