@@ -404,7 +404,8 @@ def scotopic_colour(
     Raises
     ------
     ValueError
-        For an unknown method, or Luidolt2020 without an adaptation luminance.
+        For an unknown method, Luidolt2020 without an adaptation luminance, or Spencer1995
+        with one (it would act on nothing).
 
     Examples
     --------
@@ -421,6 +422,12 @@ def scotopic_colour(
             )
         return scotopic_shift_Luidolt2020(rgb, adaptation_luminance_cd_m2, **options)
     if method == "Spencer1995":
+        if adaptation_luminance_cd_m2 is not None:
+            raise ValueError(
+                f"adaptation_luminance_cd_m2={adaptation_luminance_cd_m2!r} with method "
+                "'Spencer1995': its desaturation is the same at every adaptation level; leave "
+                "it None, or use method 'Luidolt2020', which blends by it"
+            )
         return desaturate_Spencer1995(rgb, **options)
     raise ValueError(f"method must be one of {METHODS}; got {method!r}")
 
