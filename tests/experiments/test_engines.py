@@ -176,3 +176,27 @@ def test_likert_ratings_and_comments(protocols):
         engine.press("5")
         rows.append(engine.press("return"))
     assert [r["category"] for r in rows][-1] == "Overall" and len(rows) == 5
+
+
+@pytest.mark.parametrize(
+    ("study", "key", "value"),
+    [("yoshida2008", "neither_band", 0.5), ("yoshida2008", "block_sd", 0.5),
+     ("spencer1995", "glow_criterion", 0.9), ("spencer1995", "margin", 0.2)],
+)  # fmt: skip
+def test_observer_noise_of_another_paradigm_is_refused(study, key, value):
+    """A matching study's ``neither_band`` (a staircase answer) passed protocol check and
+    changed nothing: its observers never compare."""
+    import tomllib
+    from pathlib import Path
+
+    from glarelab.experiments.paradigms import paradigm_run
+    from glarelab.protocols import load_protocol, parse_protocol
+
+    shipped = Path(__file__).parents[2] / "src" / "glarelab" / "protocols" / f"{study}.toml"
+    data = tomllib.loads(shipped.read_text(encoding="utf-8"))
+    observer = paradigm_run(load_protocol(study)).observer
+    protocol = parse_protocol({**data, "observer": {"gain_sd": 0.2, key: value}}, source="p")
+    with pytest.raises(ValueError, match=rf"^p: observer\.{key} = {value}: the .* paradigm's "
+                       "observers do not read it"):  # fmt: skip
+        observer.check(protocol)
+    observer.check(parse_protocol({**data, "observer": {"gain_sd": 0.2}}, source="p"))

@@ -20,8 +20,8 @@ from __future__ import annotations
 import hashlib
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
-from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from dataclasses import dataclass, fields
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
@@ -255,9 +255,14 @@ class LookingObserver(ABC):
             What the observers judge.
         """
 
-    @staticmethod
-    def check(protocol: Protocol) -> None:
-        """Refuse an ``[observer]`` table the model and the noise do not take (ValueError).
+    #: The :class:`glarelab.observers.noise.ObserverNoise` parameters this paradigm's
+    #: observers read; ``None``: all of them. An ``[observer]`` key of the others is refused.
+    NOISE_KEYS: ClassVar[frozenset[str] | None] = None
+
+    @classmethod
+    def check(cls, protocol: Protocol) -> None:
+        """Refuse an ``[observer]`` table the model and the noise do not take, or that sets
+        noise this paradigm's observers do not read (ValueError).
 
         Parameters
         ----------
@@ -269,9 +274,20 @@ class LookingObserver(ABC):
         ValueError
             Naming the key of ``[observer]`` that is wrong.
         """
-        from glarelab.observers.noise import observer_parameters
+        from glarelab.observers.noise import ObserverNoise, observer_parameters
 
-        observer_parameters(protocol["observer"], source=protocol.source)
+        table = protocol["observer"]
+        observer_parameters(table, source=protocol.source)
+        if cls.NOISE_KEYS is None:
+            return
+        noise = {f.name for f in fields(ObserverNoise)}
+        idle = sorted(k for k in table if k in noise and k not in cls.NOISE_KEYS)
+        if idle:
+            raise ValueError(
+                f"{protocol.source}: observer.{idle[0]} = {table[idle[0]]!r}: the "
+                f"{protocol.paradigm} paradigm's observers do not read it (noise of another "
+                f"paradigm's); they read {', '.join(sorted(cls.NOISE_KEYS))}"
+            )
 
     def __init__(self, protocol: Protocol, participant: str, *, seed: int, stimuli):
         self.participant = _check_text("participant", participant)
@@ -282,6 +298,7 @@ class LookingObserver(ABC):
         from glarelab.observers.noise import observer_parameters
 
         self.protocol = protocol
+        self.check(protocol)
         self.model, self.noise = observer_parameters(protocol["observer"], source=protocol.source)
         self.observer = self.noise.draw(
             participant_rng(protocol.seed, participant, f"observer {seed}")

@@ -324,6 +324,11 @@ class MatchingObserver(LookingObserver):
         percepts).
     """
 
+    NOISE_KEYS = frozenset(
+        {"gain_sd", "setting_sd", "margin", "glow_criterion", "glow_criterion_sd",
+         "ring_criterion", "ring_criterion_sd", "size_tolerance", "size_tolerance_sd"}
+    )  # fmt: skip
+
     @staticmethod
     def judged(protocol: Protocol | Mapping[str, Any], geometry: dict):
         """Each method's references, their levels over the clamp ``L_dmax``, the disk of

@@ -363,6 +363,8 @@ class StaircaseObserver(LookingObserver):
         percepts).
     """
 
+    NOISE_KEYS = frozenset({"gain_sd", "comparison_sd", "neither_band", "block_sd"})
+
     @staticmethod
     def judged(protocol: Protocol | Mapping[str, Any], geometry: dict):
         """The glare at each strength over the clamp (the display's peak), the source of
