@@ -372,6 +372,36 @@ def test_start_cd_m2_on_a_scene_that_does_not_enter_the_dark_is_refused(sequence
     )
 
 
+def _no_glare(data):
+    for condition in data["conditions"]:
+        condition["effects"] = [e for e in condition["effects"] if e != "glare"] or ["acuity"]
+
+
+def _no_conditions(data):
+    for key in ("scene", "conditions", "display", "viewing"):
+        del data[key]
+    del data["observer"]["category_effects"]
+
+
+@pytest.mark.parametrize(
+    ("edit", "named"),
+    [(_no_glare, r"scene\.glare_model = 'vos': no condition's effects include 'glare'"),
+     (_no_conditions, r"observer\.missing_effect_shift: only a study with \[\[conditions\]\]"),
+     (lambda d: d["observer"].pop("category_effects"),
+      r"observer\.missing_effect_shift = 2\.0: no observer\.category_effects names"),
+     (lambda d: d["observer"].pop("missing_effect_shift"),
+      r"observer\.category_effects: without observer\.missing_effect_shift")],
+    ids=["glare model, no glare", "shift, no conditions", "shift, no effects", "effects, no shift"],
+)  # fmt: skip
+def test_a_rating_key_that_shapes_nothing_is_refused(edit, named):
+    """Each passed protocol check and changed nothing: a glare model no condition renders, a
+    shift of ratings with no condition to lack an effect, or no effect or shift to apply."""
+    data = copy.deepcopy(raw("night2026"))
+    edit(data)
+    with pytest.raises(ProtocolError, match=named):
+        parse_protocol(data, source="test.toml", folder=PROTOCOLS)
+
+
 def test_a_list_of_tables_headed_as_a_single_table_is_named(tmp_path):
     # [contexts] typed for [[contexts]] got only the parser's "Cannot overwrite a value"
     text = (PROTOCOLS / "spencer1995.toml").read_text()

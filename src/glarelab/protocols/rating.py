@@ -214,6 +214,7 @@ def check(p: dict, problems: list[str], folder: Path | None) -> None:
             "each end its own words"
         )
     size = q["scale_max"] - q["scale_min"] + 1
+    _check_effect_shift(p, problems)
     for category, effect in p["observer"]["category_effects"].items():
         where = f"observer.category_effects.{category!r}"
         if category not in q["categories"]:
@@ -234,6 +235,32 @@ def check(p: dict, problems: list[str], folder: Path | None) -> None:
                 f"{where} = {probabilities!r}: must be {size} probabilities (ratings "
                 f"{q['scale_min']}-{q['scale_max']}), each in [0, 1], summing to 1"
             )
+
+
+def _check_effect_shift(p: dict, problems: list[str]) -> None:
+    """The simulated observers' shift for a missing effect acts only together: a category's
+    effect, a shift above 0, and conditions that leave effects out."""
+    observer = p["observer"]
+    effects, shift = observer["category_effects"], observer["missing_effect_shift"]
+    if not (effects or shift):
+        return
+    conditions = p["conditions"] or []
+    if not conditions:
+        problems.append(
+            f"observer.{'category_effects' if effects else 'missing_effect_shift'}: only a "
+            "study with [[conditions]] uses it (a category is rated lower when the condition "
+            "shown lacks its effect); remove it"
+        )
+    elif not effects:
+        problems.append(
+            f"observer.missing_effect_shift = {shift!r}: no observer.category_effects names "
+            "the effect a category is about, so nothing is shifted; give them, or remove it"
+        )
+    elif not shift:
+        problems.append(
+            "observer.category_effects: without observer.missing_effect_shift (default 0) a "
+            "missing effect lowers no rating; give the shift, or remove them"
+        )
 
 
 def _check_scene(p: dict, problems: list[str]) -> None:
@@ -273,7 +300,15 @@ def _check_scene(p: dict, problems: list[str]) -> None:
             f"conditions: names repeat {repeated}: each must be different (ignoring case)"
         )
     model = p["scene"]["glare_model"]
-    if any("glare" in c["effects"] for c in conditions):
+    if not any("glare" in c["effects"] for c in conditions):  # the keys would shape nothing
+        for key in ("glare_model", "glare_parameters"):
+            if key in given:
+                problems.append(
+                    f"scene.{key} = {p['scene'][key]!r}: no condition's effects include "
+                    "'glare', so no frame is rendered with it; remove it, or add 'glare' to a "
+                    "condition"
+                )
+    else:
         from glarelab.protocols.common import check_glare_model
 
         check_glare_model(
