@@ -235,6 +235,32 @@ def test_empty_lines_at_the_end_import_as_the_untouched_file(simulated, tmp_path
     assert padded.csv.read_bytes() == plain.csv.read_bytes()
 
 
+def test_a_session_imported_again_after_a_touch_is_refused(simulated, tmp_path):
+    """A file without PsychoPy's date is dated by its modification time: touched and imported
+    again, it became a second copy of the session under another name."""
+    import os
+
+    pytest.importorskip("psychopy.data")
+    protocol = load_protocol("yoshida2008")
+    own = sorted(simulated.glob("*_yoshida2008_s1_*.csv"))[0]
+    source = write_psychopy(own, protocol, tmp_path, rt_name="time_s")
+    rows = list(csv.reader(source.open(encoding="utf-8")))
+    date = rows[0].index("date")
+    for row in rows[1:]:
+        if len(row) > date:
+            row[date] = ""
+    with source.open("w", encoding="utf-8", newline="") as handle:
+        csv.writer(handle).writerows(rows)
+    (first,) = import_psychopy(protocol, [source], tmp_path / "out")
+    later = source.stat().st_mtime + 3600
+    os.utime(source, (later, later))
+    with pytest.raises(DataError, match=rf"session 1 is in .* already \({first.csv.name};"):
+        import_psychopy(protocol, [source], tmp_path / "out")
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == sorted(
+        [first.csv.name, first.csv.with_suffix(".json").name]
+    )
+
+
 def test_an_import_into_a_stimulus_set_is_refused(tmp_path):
     """Session files written into a set made it fail verification (sessions then refuse it)."""
     from glarelab.stimuli.stimulus_set import build_stimulus_set

@@ -387,6 +387,19 @@ def import_psychopy(
                 continue
             stem = f"{participant}_{protocol.study}_s{number}_{started:%Y-%m-%d_%H%M}"
             target = out / f"{stem}.csv"
+            earlier = sorted(
+                p
+                for p in out.glob(f"{participant}_{protocol.study}_s{number}_*.csv")
+                if p != target
+            )
+            if earlier:  # the analysis would refuse the pair as one session in two files
+                problems.append(
+                    f"{source}: participant {participant}'s session {number} is in "
+                    f"{out} already ({earlier[0].name}; imported again, dated by another "
+                    "time?): an import never adds a second copy of a session; remove the "
+                    "earlier one, or give another --out"
+                )
+                continue
             for existing in (target, target.with_suffix(".json")):
                 if existing.exists():
                     problems.append(
