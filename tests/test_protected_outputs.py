@@ -284,7 +284,11 @@ def test_analysis_refuses_ids_with_line_breaks_repeated_columns_and_digit_groups
     column = header.index("participant")
     for name, edit, culprit in [
         ("newline", lambda c: c.__setitem__(column, '"P1\n"'), "is not a participant id"),
-        ("group", lambda c: c.__setitem__(header.index("trial"), "2_50"), "'2_50' is not a int"),
+        (
+            "group",
+            lambda c: c.__setitem__(header.index("trial"), "2_50"),
+            "'2_50' is not a whole number",
+        ),
     ]:
         changed = list(cells)
         edit(changed)

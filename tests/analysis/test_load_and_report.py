@@ -105,7 +105,7 @@ def test_bad_cells_are_named_by_file_line_and_column(simulated, tmp_path):
     lines[3] = ",".join(cells)
     bad = write_csv(tmp_path / "bad.csv", "\n".join(lines) + "\n")
     with pytest.raises(
-        DataError, match=r"bad\.csv, line 4, column darker_cd_m2: 'bright' is not a float"
+        DataError, match=r"bad\.csv, line 4, column darker_cd_m2: 'bright' is not a number"
     ):
         load_sessions(load_protocol("yoshida2008"), [bad])
 

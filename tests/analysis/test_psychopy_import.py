@@ -11,6 +11,7 @@ a ``TrialHandler`` loop named ``trials`` (its thisRepN/thisTrialN/thisN/thisInde
 from __future__ import annotations
 
 import csv
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -188,6 +189,20 @@ def test_set_of_a_recorded_column_is_refused_not_ignored(tmp_path):
         import_psychopy(
             protocol, [mapped], tmp_path / "out", mapping={"rt": "time_s"}, values={"time_s": "1"}
         )
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize(
+    ("value", "named"),
+    [("dropped_frames=zero", "--set dropped_frames=zero: 'zero' is not a whole number"),
+     ("dropped_frames=-1", "--set dropped_frames=-1: '-1' is outside [0, inf]"),
+     ("q1_glow=yes", "--set q1_glow=yes: 'yes' is not true or false")],
+)  # fmt: skip
+def test_a_set_value_the_analysis_would_refuse_is_refused_at_once(value, named, tmp_path):
+    """--set dropped_frames=zero was written into every row; only the analysis refused it."""
+    name, text = value.split("=")
+    with pytest.raises(DataError, match=re.escape(named)):
+        import_psychopy(load_protocol("yoshida2008"), [], tmp_path / "out", values={name: text})
     assert not (tmp_path / "out").exists()
 
 

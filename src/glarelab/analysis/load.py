@@ -125,7 +125,10 @@ def _parse(cell: str, column, where: str, problems: list[str]):
         else:
             value = cell
     except ValueError:
-        problems.append(f"{where}: {cell!r} is not a {column.kind.__name__} ({column.doc})")
+        kind = {int: "a whole number", float: "a number", bool: "true or false"}.get(
+            column.kind, f"a {column.kind.__name__}"
+        )
+        problems.append(f"{where}: {cell!r} is not {kind} ({column.doc})")
         return None
     if column.choices is not None and value not in column.choices:
         problems.append(f"{where}: {cell!r} is not one of {', '.join(column.choices)}")

@@ -45,6 +45,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 
 from glarelab.analysis.dataset import DataError
+from glarelab.analysis.load import _parse
 from glarelab.files.atomic import write_text
 from glarelab.protocols import columns
 from glarelab.protocols.columns import DATA_FORMAT, row_digest
@@ -254,6 +255,9 @@ def import_psychopy(
     twice = sorted({t for t in mapping.values() if list(mapping.values()).count(t) > 1})
     if twice:
         problems.append(f"several PsychoPy columns mapped to {', '.join(twice)}")
+    for name, value in values.items():  # read as the analysis will read every row's cell
+        if name in by_name:
+            _parse(value, by_name[name], f"--set {name}={value}", problems)
     if problems:
         raise DataError(problems)
     out = Path(out)
