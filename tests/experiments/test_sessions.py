@@ -212,7 +212,7 @@ def test_sessions_refuse_bad_stimuli_and_calibration_before_any_trial(tmp_path, 
 KEYS = {
     "yoshida2008": "space return y n y escape",
     "spencer1995": "space left escape",
-    "luidolt2020": "space 5 return escape",
+    "luidolt2020": "space 5 g o o d space l a m p x backspace return escape",
 }
 
 
@@ -253,6 +253,8 @@ def test_a_scripted_dry_run_shows_the_calibrated_codes(tmp_path, sets, study):
     assert sidecar["refresh_hz"] > 0 and sidecar["runs"][0]["keyboard"] == "scripted keys"
     if study == "luidolt2020":
         assert sidecar["calibration"]["status"] == "not needed"
+        # the letters typed into the comment's box (they were lost: a dry run typed nothing)
+        assert rows[0]["comment"] == "good lamp"
         return
     accepted = {"resolution"} | ({"bit-depth"} if study == "yoshida2008" else set())
     # Xvfb's refresh is either measured (and unlike the protocol's) or, on a loaded machine,

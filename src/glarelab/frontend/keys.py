@@ -22,7 +22,7 @@ from glarelab.frontend.window import (
     typed_text,
 )
 
-__all__ = ["ScriptedKeys", "SessionKeys", "unknown_key_names"]
+__all__ = ["ScriptedKeys", "SessionKeys", "scripted_text_event", "unknown_key_names"]
 
 
 def unknown_key_names(names: list[str]) -> list[str]:
@@ -43,6 +43,46 @@ def unknown_key_names(names: list[str]) -> list[str]:
 
     known = set(keyNamesLinux.values()) | set(keyNamesMac.values()) | set(keyNamesWin.values())
     return sorted({name for name in names if name not in known})
+
+
+# a scripted key's text event in a comment's box: what typing the key (unshifted, US layout)
+# sends the window; other keys (shift, f1, ...) type nothing
+SCRIPTED_TEXT = {"space": " ", "return": "\r", "num_enter": "\r", "comma": ",", "period": ".",
+                 "minus": "-", "apostrophe": "'", "semicolon": ";", "slash": "/"}  # fmt: skip
+SCRIPTED_MOTION = {"backspace": "MOTION_BACKSPACE", "delete": "MOTION_DELETE",
+                   "left": "MOTION_LEFT", "right": "MOTION_RIGHT",
+                   "home": "MOTION_BEGINNING_OF_LINE", "end": "MOTION_END_OF_LINE"}  # fmt: skip
+
+
+def scripted_text_event(name: str) -> tuple[str, str] | None:
+    """The text event (:func:`glarelab.frontend.window.typed_text`) a scripted key makes in a
+    comment's box: a letter or digit itself, ``space`` a space, ``return`` the Enter that ends
+    the comment, ``backspace`` and the arrows their motions; None for a key that types nothing.
+
+    Parameters
+    ----------
+    name
+        A PsychoPy key name (``--scripted-keys``).
+
+    Returns
+    -------
+    tuple of (str, str) or None
+        ``("text", characters)``, ``("motion", name)`` or None.
+
+    Examples
+    --------
+    >>> [scripted_text_event(n) for n in ("g", "space", "backspace", "lshift")]
+    [('text', 'g'), ('text', ' '), ('motion', 'MOTION_BACKSPACE'), None]
+    """
+    if len(name) == 1 and name.isprintable():
+        return ("text", name)
+    if name.startswith("num_") and len(name) == 5 and name[-1].isdigit():
+        return ("text", name[-1])
+    if name in SCRIPTED_TEXT:
+        return ("text", SCRIPTED_TEXT[name])
+    if name in SCRIPTED_MOTION:
+        return ("motion", SCRIPTED_MOTION[name])
+    return None
 
 
 class ScriptedKeys:
@@ -128,6 +168,11 @@ class SessionKeys:
             ``(key name, time)`` of each new press, s on the session clock.
         """
         presses = self.reader.read()
+        if self.scripted is not None and text_entry:  # a dry run types as the keyboard would
+            for name, _ in presses:
+                event = scripted_text_event(name)
+                if event is not None:
+                    self.typing.events.append(event)
         if self.scripted is not None or not any(
             name in ("return", "num_enter") for name, _ in presses
         ):
