@@ -49,6 +49,9 @@ def _stimuli_build(args: argparse.Namespace) -> int:
 
 
 def _stimuli_verify(args: argparse.Namespace) -> int:
+    from glarelab.files.folders import restore_folder
+
+    restore_folder(args.folder)  # a build killed mid-swap: the set back, its leftovers gone
     if not Path(args.folder).is_dir():  # one line, exit 2: there is nothing to verify
         what = "not a folder" if Path(args.folder).exists() else "no such folder"
         raise FileNotFoundError(f"{args.folder}: {what} (give a stimulus set's folder)")
