@@ -281,3 +281,12 @@ def test_a_source_angle_of_an_eye_without_lashes_and_lid_keeps_its_kernel():
         bare.at_source(90.0)
     lid = WaveOpticsGlare(pupil_mm=3.0, eyelashes=False, particles=0)
     assert lid.at_source(20.0).source_x_deg == 20.0
+
+
+@pytest.mark.parametrize("wavelength_nm", [[500.0, 600.0], np.array([568.0])])
+def test_the_psf_of_many_wavelengths_at_once_is_refused_by_name(wavelength_nm):
+    """It ended in numpy's 'only length-1 arrays can be converted to Python scalars'."""
+    from glarelab.glare.models import vos
+
+    with pytest.raises(ValueError, match=r"^wavelength_nm must be one wavelength \(a number\)"):
+        vos.psf(1.0, "mesopic", wavelength_nm=wavelength_nm)

@@ -421,8 +421,8 @@ def psf(
     Raises
     ------
     ValueError
-        For a negative or non-finite angle, an unknown regime, a wavelength outside 380-780 nm
-        or an age outside eq. 10's range (see :func:`weights`).
+        For a negative or non-finite angle, an unknown regime, a wavelength that is not one
+        number in 380-780 nm, or an age outside eq. 10's range (see :func:`weights`).
 
     Notes
     -----
@@ -444,7 +444,13 @@ def psf(
     """
     w0, w1, w2, w3 = weights(regime, age)
     theta = _theta(theta_deg)
-    wavelength = float(_wavelength(wavelength_nm))
+    wavelength = _wavelength(wavelength_nm)
+    if wavelength.ndim:  # one PSF per call: its angles may be an array, its wavelength not
+        raise ValueError(
+            f"wavelength_nm must be one wavelength (a number) for psf; got {wavelength_nm!r} "
+            "(call psf once per wavelength, or f3 for the halo at many)"
+        )
+    wavelength = float(wavelength)
     values = w0 * f0(theta) + w1 * f1(theta) + w2 * f2(theta)
     if w3:
         values = values + w3 * f3(theta, wavelength)
