@@ -216,6 +216,16 @@ def test_a_named_last_column_with_data_is_not_dropped(tmp_path):
         import_psychopy(protocol, [source], tmp_path / "out")
 
 
+def _edit_rows(source: Path, edit) -> None:
+    """Rewrite a PsychoPy CSV with ``edit(row, date_column)`` applied to each data row."""
+    rows = list(csv.reader(source.open(encoding="utf-8")))
+    date = rows[0].index("date")
+    for row in rows[1:]:
+        edit(row, date)
+    with source.open("w", encoding="utf-8", newline="") as handle:
+        csv.writer(handle).writerows(rows)
+
+
 def test_an_excel_resave_is_imported_and_a_missing_date_is_said(simulated, tmp_path):
     """Re-saved by Excel, the date became 03/02/2026 14:05 and true TRUE: the session was
     dated by the file's modification time without a word, and TRUE refused by the analysis."""
@@ -223,14 +233,13 @@ def test_an_excel_resave_is_imported_and_a_missing_date_is_said(simulated, tmp_p
     protocol = load_protocol("yoshida2008")
     own = sorted(simulated.glob("*_yoshida2008_s1_*.csv"))[0]
     source = write_psychopy(own, protocol, tmp_path, rt_name="time_s")
-    rows = list(csv.reader(source.open(encoding="utf-8")))
-    date = rows[0].index("date")
-    for row in rows[1:]:
+
+    def excel(row, date):
         if len(row) > date and row[date]:
             row[date] = "03/02/2026 14:05"
         row[:] = [{"True": "TRUE", "False": "FALSE", "true": "TRUE"}.get(c, c) for c in row]
-    with source.open("w", encoding="utf-8", newline="") as handle:
-        csv.writer(handle).writerows(rows)
+
+    _edit_rows(source, excel)
     (imported,) = import_psychopy(protocol, [source], tmp_path / "out")
     assert "modification time" in imported.summary()
     written = imported.csv.read_text(encoding="utf-8")
@@ -259,13 +268,7 @@ def test_a_session_imported_again_after_a_touch_is_refused(simulated, tmp_path):
     protocol = load_protocol("yoshida2008")
     own = sorted(simulated.glob("*_yoshida2008_s1_*.csv"))[0]
     source = write_psychopy(own, protocol, tmp_path, rt_name="time_s")
-    rows = list(csv.reader(source.open(encoding="utf-8")))
-    date = rows[0].index("date")
-    for row in rows[1:]:
-        if len(row) > date:
-            row[date] = ""
-    with source.open("w", encoding="utf-8", newline="") as handle:
-        csv.writer(handle).writerows(rows)
+    _edit_rows(source, lambda row, date: row.__setitem__(date, "") if len(row) > date else None)
     (first,) = import_psychopy(protocol, [source], tmp_path / "out")
     later = source.stat().st_mtime + 3600
     os.utime(source, (later, later))

@@ -45,7 +45,7 @@ from scipy.optimize import curve_fit
 
 from glarelab.files.atomic import write_text
 from glarelab.files.inputs import as_path, read_input_text
-from glarelab.files.values import DECIMAL_TEXT, WHOLE_TEXT, is_real, is_whole
+from glarelab.files.values import DECIMAL_TEXT, WHOLE_TEXT, is_real, is_whole, plain_array
 
 __all__ = [
     "Calibration",
@@ -81,23 +81,6 @@ def _plausible_reading(value: float) -> bool:
     return bool(
         np.isfinite(value) and (value == 0 or MIN_READING_CD_M2 <= value <= MAX_DISPLAY_CD_M2)
     )
-
-
-def _array_of(name: str, value: object) -> np.ndarray:
-    """``value`` as an array, refusing what ``np.asarray`` would take wrongly: a masked array
-    (its mask dropped), a string, or rows of different lengths."""
-    if isinstance(value, np.ma.MaskedArray):
-        raise ValueError(
-            f"{name} must be a plain array, not a masked array (its mask would be ignored)"
-        )
-    if isinstance(value, str | bytes) or value is None:
-        raise ValueError(f"{name} must be an array of numbers; got {value!r}")
-    try:
-        return np.asarray(value)
-    except ValueError:
-        raise ValueError(
-            f"{name} must be an array of numbers; got rows of different lengths"
-        ) from None
 
 
 @dataclass(frozen=True)
@@ -265,7 +248,7 @@ class Calibration:
             For a code outside the display's range, or codes that are not integers (10.7,
             True, '12').
         """
-        codes = _array_of("codes", codes)
+        codes = plain_array("codes", codes)
         if codes.dtype.kind not in "iu":
             raise ValueError(
                 f"codes must be integer drive codes (an integer array); got dtype {codes.dtype}"
@@ -303,7 +286,7 @@ class Calibration:
             If a luminance is not a finite real number (strings, bools, complex numbers and
             masked arrays are refused, not converted).
         """
-        values = _array_of("luminance_cd_m2", luminance_cd_m2)
+        values = plain_array("luminance_cd_m2", luminance_cd_m2)
         if values.dtype.kind not in "iuf":
             raise ValueError(
                 f"luminance_cd_m2 must hold real numbers (cd/m²); got dtype {values.dtype}"

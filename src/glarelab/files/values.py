@@ -13,7 +13,7 @@ import re
 
 import numpy as np
 
-__all__ = ["DECIMAL_TEXT", "WHOLE_TEXT", "is_real", "is_whole", "real_array"]
+__all__ = ["DECIMAL_TEXT", "WHOLE_TEXT", "is_real", "is_whole", "plain_array", "real_array"]
 
 # a number as a person or a program writes it in a text file: digits, a decimal point, an
 # exponent (nan and inf read, for the caller to refuse with its own words); not what Python
@@ -68,6 +68,51 @@ def is_whole(value: object) -> bool:
     (True, True, False, False)
     """
     return not isinstance(value, bool | np.bool_) and isinstance(value, int | np.integer)
+
+
+def plain_array(name: str, value: object) -> np.ndarray:
+    """``value`` as an array (``np.asarray``), refusing what NumPy would take wrongly: a masked
+    array (its mask dropped), a string, None, or rows of different lengths. Its dtype is the
+    caller's to check (codes must be integers, luminances real numbers).
+
+    Parameters
+    ----------
+    name
+        The argument, as the message should name it.
+    value
+        A number, a sequence or an array.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``np.asarray(value)``.
+
+    Raises
+    ------
+    ValueError
+        Naming ``name`` and what it got.
+
+    Examples
+    --------
+    >>> plain_array("codes", [1, 2]).tolist()
+    [1, 2]
+    >>> plain_array("codes", [[1, 2], [3]])
+    Traceback (most recent call last):
+    ...
+    ValueError: codes must be an array of numbers; got rows of different lengths
+    """
+    if isinstance(value, np.ma.MaskedArray):
+        raise ValueError(
+            f"{name} must be a plain array, not a masked array (its mask would be ignored)"
+        )
+    if isinstance(value, str | bytes) or value is None:
+        raise ValueError(f"{name} must be a number or an array of numbers; got {value!r}")
+    try:
+        return np.asarray(value)
+    except ValueError:
+        raise ValueError(
+            f"{name} must be an array of numbers; got rows of different lengths"
+        ) from None
 
 
 def real_array(values: object, what: str) -> np.ndarray:

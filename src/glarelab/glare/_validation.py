@@ -11,7 +11,7 @@ from collections.abc import Iterable
 
 import numpy as np
 
-from glarelab.files.values import is_real, is_whole
+from glarelab.files.values import is_real, is_whole, plain_array
 
 __all__ = [
     "check_choice",
@@ -178,19 +178,7 @@ def check_luminances(name: str, value: object) -> np.ndarray:
     """Return ``value`` (a number or an array of any shape) as a float array of luminances,
     finite and >= 0, else raise ``ValueError`` naming ``name``: a string (``'100'``), a bool,
     a complex number or a masked array is refused, not converted."""
-    if isinstance(value, str | bytes | bool | np.bool_) or value is None:
-        raise ValueError(
-            f"{name} must be a number or an array of numbers >= 0 (cd/m²); got "
-            f"{type(value).__name__} {value!r}"
-        )
-    try:
-        array = np.asarray(value)
-    except ValueError:  # rows of different lengths
-        raise ValueError(
-            f"{name} must be an array of numbers; got rows of different lengths"
-        ) from None
-    if isinstance(value, np.ma.MaskedArray):
-        check_image(name, value)  # its message: the mask would be ignored
+    array = plain_array(name, value)
     if array.dtype == bool:
         raise ValueError(f"{name} must hold numbers >= 0 (cd/m²), not True/False")
     check_image(name, array.reshape(1, -1) if array.size else np.zeros((1, 1)))

@@ -29,6 +29,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats as sps
 
+from glarelab.files.values import plain_array
 from glarelab.planning.effects import anova_effects
 
 __all__ = ["OneWayJob", "noncentrality", "one_way_power"]
@@ -42,14 +43,7 @@ def _means(means_per_condition: Sequence[float]) -> np.ndarray:
     """The means as floats: at least two finite real numbers (strings, bools, complex
     numbers and masked arrays refused, not converted)."""
     given = means_per_condition
-    if isinstance(given, np.ma.MaskedArray | str | bytes):
-        raise ValueError(
-            f"means_per_condition must be a plain sequence of numbers; got {type(given).__name__}"
-        )
-    try:
-        raw = np.asarray(given)
-    except ValueError:  # nested sequences of different lengths
-        raw = np.asarray([None])
+    raw = plain_array("means_per_condition", given)
     if raw.dtype.kind not in "iuf":
         raise ValueError(f"means_per_condition must be at least two finite numbers; got {given!r}")
     means = raw.astype(float)
