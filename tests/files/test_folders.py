@@ -89,6 +89,19 @@ def test_a_folder_where_the_listing_goes_is_named_not_a_raw_error(tmp_path):
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == [LISTING]
 
 
+def _a_report_being_rebuilt(tmp_path: Path) -> tuple[Path, Path]:
+    """An earlier report (one table, recorded) and its replacement begun beside it."""
+    from glarelab.files.folders import record_files, staging_folder
+
+    final = tmp_path / "report"
+    final.mkdir()
+    (final / "table.csv").write_text("old\n")
+    record_files(final, "report")
+    staging = staging_folder(final)
+    (staging / "table.csv").write_text("new\n")
+    return final, staging
+
+
 @pytest.mark.parametrize("exchange", [True, False], ids=["swapped", "renamed"])
 def test_files_saved_into_a_folder_while_its_replacement_is_made_are_kept(
     tmp_path, monkeypatch, exchange
@@ -97,14 +110,9 @@ def test_files_saved_into_a_folder_while_its_replacement_is_made_are_kept(
     deleted with the earlier report when the new one was swapped in (the start's check had
     passed): they are now moved into the new folder, the edited table as ``NAME.kept``."""
     from glarelab.files import folders
-    from glarelab.files.folders import record_files, replace_folder, staging_folder
+    from glarelab.files.folders import replace_folder
 
-    final = tmp_path / "report"
-    final.mkdir()
-    (final / "table.csv").write_text("old\n")
-    record_files(final, "report")
-    staging = staging_folder(final)
-    (staging / "table.csv").write_text("new\n")
+    final, staging = _a_report_being_rebuilt(tmp_path)
     (staging / "results.md").write_text("# new\n")
     # meanwhile, a person at work in the earlier report
     (final / "my-notes.txt").write_text("keep me\n")
@@ -124,14 +132,9 @@ def test_files_saved_into_a_folder_while_its_replacement_is_made_are_kept(
 
 
 def test_an_unchanged_earlier_output_is_replaced_without_a_word(tmp_path, recwarn):
-    from glarelab.files.folders import record_files, replace_folder, staging_folder
+    from glarelab.files.folders import replace_folder
 
-    final = tmp_path / "report"
-    final.mkdir()
-    (final / "table.csv").write_text("old\n")
-    record_files(final, "report")
-    staging = staging_folder(final)
-    (staging / "table.csv").write_text("new\n")
+    final, staging = _a_report_being_rebuilt(tmp_path)
     replace_folder(staging, final, kind="report")
     assert sorted(p.name for p in final.iterdir() if p.name != ".glarelab-files.json") == [
         "table.csv"
