@@ -136,14 +136,21 @@ def test_rows_cut_from_an_aborted_session_are_named_and_a_killed_runs_last_rows_
     target = copy(source, tmp_path, frame.iloc[:cut], status="aborted", trials=cut, runs=runs)
     with pytest.raises(DataError, match=rf"trials {cut + 1}, {cut + 2} of the {len(frame)} the"):
         load_sessions(protocol, [target], include_aborted=True)
-    # resumed, and killed during its last two trials: the sidecar still says running and has
-    # their digests only up to the second run's start
+    # resumed, and killed after writing its last trial's row, before its digest: the sidecar
+    # still says running and has the digests of all rows but that one
     started = {k: v for k, v in sidecar["runs"][-1].items() if k not in FINISHED}
     killed = [*runs, started | {"status": "running", "ended": None, "trials_before": cut}]
     copy(source, tmp_path, frame, status="running", trials=cut, runs=killed, resumed=1,
-         row_sha256=sidecar["row_sha256"][:cut])  # fmt: skip
+         row_sha256=sidecar["row_sha256"][: cut + 1])  # fmt: skip
     read = load_sessions(protocol, [target], include_aborted=True)
     assert len(read.trials) == len(frame)
+    # two rows without digests: a session records each row's digest right after it, so the
+    # second was added by hand (or the sidecar is an earlier one)
+    copy(source, tmp_path, frame, status="running", trials=cut, runs=killed, resumed=1,
+         row_sha256=sidecar["row_sha256"][:cut])  # fmt: skip
+    with pytest.raises(DataError, match=rf"\(trial {cut + 2}\): beyond the {cut} rows the "
+                       rf"session recorded .* by more than the one row \(trial {cut + 1}\)"):  # fmt: skip
+        load_sessions(protocol, [target], include_aborted=True)
     # the same rows in a session that says it completed are rows added after it
     copy(source, tmp_path, frame, row_sha256=sidecar["row_sha256"][:cut])
     with pytest.raises(DataError, match=rf"line {cut + 2} \(trial {cut + 1}\): not among the"):

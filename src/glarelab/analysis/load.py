@@ -873,6 +873,13 @@ def _row_digests(path: Path, sidecar: dict | None, rows: list[dict]) -> list[str
                     f"{len(recorded)} rows the session recorded in its sidecar's row_sha256 "
                     "(a row added by hand, or from another file?)"
                 )
+            elif trial > len(recorded) + 1:  # a session records each row's digest after it
+                problems.append(
+                    f"{path}, line {row['_line']} (trial {trial}): beyond the {len(recorded)} "
+                    "rows the session recorded in its sidecar's row_sha256, by more than the "
+                    f"one row (trial {len(recorded) + 1}) a run killed between a row and its "
+                    "digest leaves (rows added by hand, or the sidecar of an earlier moment?)"
+                )
         elif digest != recorded[trial - 1]:
             problems.append(
                 f"{path}, line {row['_line']} (trial {trial}): the row is not the one the "
