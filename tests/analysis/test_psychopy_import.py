@@ -279,6 +279,26 @@ def test_a_session_imported_again_after_a_touch_is_refused(simulated, tmp_path):
     )
 
 
+def test_a_file_whose_rows_were_sorted_imports_as_the_session_wrote_it(simulated, tmp_path):
+    """Rows in another order (sorted in a spreadsheet, trial numbers kept) were written in that
+    order with their digests in it, and the analysis refused every row as changed."""
+    from glarelab.analysis.load import load_sessions
+
+    pytest.importorskip("psychopy.data")
+    protocol = load_protocol("yoshida2008")
+    own = sorted(simulated.glob("*_yoshida2008_s1_*.csv"))[0]
+    source = write_psychopy(own, protocol, tmp_path / "a", rt_name="time_s")
+    rows = list(csv.reader(source.open(encoding="utf-8")))
+    sorted_file = tmp_path / "b" / source.name
+    sorted_file.parent.mkdir()
+    with sorted_file.open("w", encoding="utf-8", newline="") as handle:
+        csv.writer(handle).writerows([*rows[:2], *reversed(rows[2:])])  # the header, instructions
+    (plain,) = import_psychopy(protocol, [source], tmp_path / "out_a")
+    (moved,) = import_psychopy(protocol, [sorted_file], tmp_path / "out_b")
+    assert moved.csv.read_bytes() == plain.csv.read_bytes()
+    assert len(load_sessions(protocol, [moved.csv]).trials) == 15
+
+
 def test_an_import_into_a_stimulus_set_is_refused(tmp_path):
     """Session files written into a set made it fail verification (sessions then refuse it)."""
     from glarelab.stimuli.stimulus_set import build_stimulus_set

@@ -384,6 +384,10 @@ def import_psychopy(
                     else:
                         row[column.name] = ""
                 cells_rows.append(row)
+            if all(_INTEGRAL.fullmatch(r["trial"]) for r in cells_rows):
+                # in trial order, as a session writes them: row_sha256 is by trial (trial n at
+                # entry n), and a file sorted in a spreadsheet keeps its trials' numbers
+                cells_rows.sort(key=lambda r: int(r["trial"]))
             try:
                 number = int(session)
             except ValueError:
