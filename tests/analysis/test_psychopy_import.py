@@ -299,6 +299,34 @@ def test_a_file_whose_rows_were_sorted_imports_as_the_session_wrote_it(simulated
     assert len(load_sessions(protocol, [moved.csv]).trials) == 15
 
 
+def test_a_full_disk_leaves_no_session_of_the_import(simulated, tmp_path, monkeypatch):
+    """The disk filled after the first of six sessions: it stayed, and the import run again
+    refused it as existing."""
+    import errno
+
+    from glarelab.analysis import psychopy_import
+
+    pytest.importorskip("psychopy.data")
+    protocol = load_protocol("yoshida2008")
+    own = sorted(simulated.glob("*_yoshida2008_s1_*.csv"))[:2]
+    sources = [write_psychopy(p, protocol, tmp_path / "pp", rt_name="time_s") for p in own]
+    calls = []
+    real = psychopy_import.write_text
+
+    def filling(path, text):
+        calls.append(path)
+        if len(calls) == 3:
+            raise OSError(errno.ENOSPC, "No space left on device", str(path))
+        return real(path, text)
+
+    monkeypatch.setattr(psychopy_import, "write_text", filling)
+    with pytest.raises(OSError, match="No space left"):
+        import_psychopy(protocol, sources, tmp_path / "out")
+    assert list((tmp_path / "out").iterdir()) == []
+    monkeypatch.setattr(psychopy_import, "write_text", real)
+    assert len(import_psychopy(protocol, sources, tmp_path / "out")) == 2
+
+
 def test_an_import_into_a_stimulus_set_is_refused(tmp_path):
     """Session files written into a set made it fail verification (sessions then refuse it)."""
     from glarelab.stimuli.stimulus_set import build_stimulus_set

@@ -460,11 +460,20 @@ def import_psychopy(
     if problems:
         raise DataError(problems)
     out.mkdir(parents=True, exist_ok=True)
-    for imported, text, sidecar in planned:
-        write_text(imported.csv, text)
-        write_text(
-            imported.csv.with_suffix(".json"), json.dumps(sidecar, indent=2, sort_keys=True) + "\n"
-        )
+    written: list[Path] = []
+    try:  # every session or none: a full disk must not leave half an import
+        for imported, text, sidecar in planned:
+            written.append(write_text(imported.csv, text))
+            written.append(
+                write_text(
+                    imported.csv.with_suffix(".json"),
+                    json.dumps(sidecar, indent=2, sort_keys=True) + "\n",
+                )
+            )
+    except BaseException:
+        for path in written:  # new files (existing names were refused above)
+            path.unlink(missing_ok=True)
+        raise
     return [p[0] for p in planned]
 
 
