@@ -230,3 +230,11 @@ def test_a_frame_record_of_another_session_is_refused(tmp_path, run_line, named)
     own = "run 1 started T; log time 0 = Unix time 100.000 s"
     frames.write_text("\n".join([HEADER, own + "\t\t", *rows]) + "\n")
     assert live_frames([tmp_path / "a.csv"])["frames"].tolist() == [3]
+
+
+def test_a_session_file_with_a_name_near_the_longest_has_no_frame_record(tmp_path):
+    """A 249-character CSV name: its ``STEM_frames.tsv`` would be longer than a file name can
+    be, and looking for it ended the analysis in 'File name too long'."""
+    long = tmp_path / ("x" * 245 + ".csv")
+    long.write_text("study\n")
+    assert live_frames([long]) is None

@@ -10,6 +10,7 @@ counts them per session; :func:`live_sentence` says it in the report.
 from __future__ import annotations
 
 import csv
+import errno
 import json
 import math
 import re
@@ -264,9 +265,15 @@ def live_frames(
         path = _frames_path(Path(file))
         sidecar = (sidecars or {}).get(str(file))
         live = None if sidecar is None else _showed_live(sidecar, scene_live)
-        if path.exists() and not path.is_file():
+        try:
+            exists, is_file = path.exists(), path.is_file()
+        except OSError as error:  # the CSV's name is too long for a longer one beside it
+            if error.errno != errno.ENAMETOOLONG:
+                raise
+            exists = is_file = False  # no session could have written it
+        if exists and not is_file:
             raise ValueError(f"{path}: not a file; a session's frame record is a text file")
-        if not path.is_file():
+        if not is_file:
             if live:
                 raise ValueError(
                     f"{path}: missing; the session showed a live scene (its sidecar: simulated "
