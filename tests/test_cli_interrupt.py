@@ -161,3 +161,27 @@ def test_an_interrupt_a_library_swallows_or_that_comes_at_exit_ends_as_the_comma
     )
     assert done.returncode == status, (done.returncode, done.stderr)
     assert "Traceback" not in done.stderr and said in done.stderr, done.stderr
+
+
+@pytest.mark.parametrize("number", [signal.SIGTERM, signal.SIGHUP], ids=["SIGTERM", "SIGHUP"])
+def test_a_kill_or_a_closed_terminal_during_a_build_ends_it_as_ctrl_c_does(number, tmp_path):
+    """SIGTERM (a kill, a job manager) ended a build at once with Python's default: its
+    half-built ``.set.building-PID`` stayed beside the set. Now it ends as Ctrl-C does:
+    status 3, one line naming the signal, the staging folder removed."""
+    out = tmp_path / "set"
+    process = subprocess.Popen(
+        [sys.executable, "-m", "glarelab", "stimuli", "build", "yoshida2008", "--out", str(out)],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV, cwd=tmp_path,
+        preexec_fn=_terminal_sigint,
+    )  # fmt: skip
+    deadline = time.monotonic() + 120
+    while not list(tmp_path.glob(".set.building-*")) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert list(tmp_path.glob(".set.building-*")), "the build never started"
+    time.sleep(0.5)  # into its rendering
+    process.send_signal(number)
+    _, err = process.communicate(timeout=120)
+    name = signal.Signals(number).name
+    assert process.returncode == 3, (process.returncode, err)
+    assert "Traceback" not in err and f"stopped by {name}; nothing more was written" in err, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == [], sorted(tmp_path.iterdir())

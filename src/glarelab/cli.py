@@ -4,9 +4,10 @@
 Exit statuses: 0 done; 1 a check that found problems (``stimuli verify``, ``check-display``,
 ``calibrate measure`` whose calibration failed); 2 refused: a bad argument, file or value, named
 in one line on stderr, nothing written; 3 a session stopped before it completed (Escape,
-Ctrl-C, kill); 4 a session stopped because its files could not be written (a full disk): its
-trials so far are on disk and its sidecar says why. An unexpected error prints its traceback
-and asks for a bug report.
+Ctrl-C, kill), or any command stopped by Ctrl-C, SIGTERM or SIGHUP (every file it wrote whole,
+its unfinished output removed); 4 a session stopped because its files could not be written (a
+full disk): its trials so far are on disk and its sidecar says why. An unexpected error prints
+its traceback and asks for a bug report.
 """
 
 from __future__ import annotations
@@ -163,7 +164,8 @@ def _forget_interrupt() -> None:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``glarelab`` command; returns the exit status.
 
-    Ctrl-C (SIGINT) ends any command with status 3 and one line, whenever it comes, also
+    Ctrl-C (SIGINT), and as the program SIGTERM (a kill) and SIGHUP (a closed terminal), ends
+    any command with status 3 and one line, whenever it comes, also
     where a library caught the KeyboardInterrupt and went on, or failed for what it cut; a
     closed pipe on stdout (SIGPIPE, ``| head``) ends it quietly with status 0. Run as the
     program (``argv`` None), a Ctrl-C before the command starts, or after it returned, ends
@@ -191,7 +193,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     previous = os.environ.get(NO_CACHE_ENV)
     args = None
-    received: list[int] = []  # SIGINTs the command was sent while it ran
+    received: list[int] = []  # SIGINTs (SIGTERMs, SIGHUPs) the command was sent while it ran
+    caught: list[int] = []  # the signals besides SIGINT handled as it, restored at the end
 
     def interrupted(number: int, frame) -> None:
         received.append(number)  # kept even where a library swallows the KeyboardInterrupt
@@ -215,11 +218,17 @@ def main(argv: Sequence[str] | None = None) -> int:
                 warnings.showwarning = _one_line_warning
                 if program:  # the command ends its own work on Ctrl-C (KeyboardInterrupt)
                     signal.signal(signal.SIGINT, interrupted)
+                    for name in ("SIGTERM", "SIGHUP"):  # a kill or a closed terminal alike
+                        number = getattr(signal, name, None)
+                        if number is not None and signal.getsignal(number) is signal.SIG_DFL:
+                            signal.signal(number, interrupted)
+                            caught.append(number)
                 status = args.run(args)
             if received:  # a library swallowed the KeyboardInterrupt and the command went on
                 signal.signal(signal.SIGINT, signal.SIG_IGN)
                 _log(
-                    f"{command}: stopped by SIGINT as it ended: every file it wrote is whole, "
+                    f"{command}: stopped by {signal.Signals(received[-1]).name} as it ended: "
+                    "every file it wrote is whole, "
                     "but a step the interrupt cut short may be missing; run it again"
                 )
                 return 3
@@ -245,12 +254,15 @@ def main(argv: Sequence[str] | None = None) -> int:
         _forget_interrupt()
         # a session's own trials are on disk and its sidecar says how it ended; every other
         # file is written whole or not at all, so an interruption leaves the output as it was
-        _log(f"{command}: stopped by SIGINT; nothing more was written")
+        name = signal.Signals(received[-1]).name if received else "SIGINT"
+        _log(f"{command}: stopped by {name}; nothing more was written")
         return 3
     except BrokenPipeError:
         _quiet_stdout()
         return 0
     finally:
+        for number in caught:
+            signal.signal(number, signal.SIG_DFL)
         if args is not None and args.no_cache:
             if previous is None:
                 os.environ.pop(NO_CACHE_ENV, None)
