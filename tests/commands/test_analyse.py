@@ -54,3 +54,12 @@ def test_protocol_with_a_single_csv_says_how(capsys):
     err = capsys.readouterr().err.strip()
     assert "read STUDY as 'a.csv'; with --protocol FILE give two or more CSVs, or one CSV " in err
     assert len(err.splitlines()) == 1
+
+
+def test_a_folder_among_the_sessions_is_named_as_one(sessions, tmp_path, capsys):
+    argv = ["analyse", "luidolt2020", *map(str, sessions), str(sessions[0].parent),
+            "--out", str(tmp_path / "rep")]  # fmt: skip
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert f"{sessions[0].parent}: a folder; give the session CSV files in it" in err, err
+    assert not (tmp_path / "rep").exists()

@@ -971,7 +971,11 @@ def _name_contradictions(
         if bool(match["pilot"]) != bool(sidecar.get("pilot", False)):
             problems.append(
                 f"{path}: the file name says {'a pilot' if match['pilot'] else 'not a pilot'}, "
-                f"its sidecar says pilot {str(bool(sidecar.get('pilot'))).lower()}"
+                f"its sidecar says pilot {str(bool(sidecar.get('pilot'))).lower()}; a pilot is "
+                "marked by both (the CSV and its sidecar named …_pilot.csv and …_pilot.json, "
+                '"pilot": true), so a session made a pilot afterwards, or back, is renamed as '
+                "well as edited (pilots are then left out and listed; --include-pilots "
+                "analyses them)"
             )
     return problems
 

@@ -39,6 +39,10 @@ def _analyse(args: argparse.Namespace) -> int:
                 f"of {args.study!r}; give the study's own protocol"
             )
     for csv in args.csv:
+        if Path(csv).is_dir():  # a shell's glob of a folder: the folder itself, not its files
+            raise ValueError(
+                f"{csv}: a folder; give the session CSV files in it (e.g. {Path(csv) / '*.csv'})"
+            )
         if Path(csv).suffix.lower() != ".csv":
             raise ValueError(
                 f"{csv}: session data are CSV files (each one's .json sidecar is read with it)"
