@@ -341,3 +341,14 @@ def test_an_import_into_a_stimulus_set_is_refused(tmp_path):
         capture_output=True, text=True, timeout=300, check=False,
     )  # fmt: skip
     assert done.returncode == 2 and "inside the stimulus set" in done.stderr, done.stderr
+
+
+def test_a_file_saved_with_semicolons_is_named_as_such(tmp_path):
+    """A spreadsheet in a German locale saved the run with ';': 'no column key_resp.rt'."""
+    protocol = load_protocol("yoshida2008")
+    names = [c.name for c in columns(protocol) if c.name != "time_s"]
+    source = tmp_path / "run.csv"
+    source.write_text(";".join([*names, "key_resp.rt"]) + "\n" + ";".join("1" * 23) + "\n")
+    with pytest.raises(DataError, match=r"line 1: not comma-separated \(its first line is one "
+                       r"cell holding ';'.*save it with ',' between cells\)"):  # fmt: skip
+        import_psychopy(protocol, [source], tmp_path / "out", mapping={"key_resp.rt": "time_s"})

@@ -91,6 +91,37 @@ def _version(text) -> tuple[int, ...] | None:
     return tuple(int(part) for part in text.split("."))
 
 
+def _other_delimiter(header: list[str]) -> str:
+    """What a header read as one cell says of its file: separated by ``;`` or tabs (a
+    spreadsheet set to another locale saves its "CSV" so), for a message; empty otherwise.
+
+    Parameters
+    ----------
+    header
+        The first row as the ``csv`` module read it (comma-separated).
+
+    Returns
+    -------
+    str
+        A clause naming the delimiter and the fix, or ``""``.
+
+    Examples
+    --------
+    >>> _other_delimiter(["study;participant;session"])
+    " (its first line is one cell holding ';': cells separated by ';', as a spreadsheet in a locale with a decimal comma saves CSV; save it with ',' between cells)"
+    """  # noqa: E501
+    if len(header) != 1:
+        return ""
+    for mark, name in ((";", "';'"), ("\t", "tabs")):
+        if mark in header[0]:
+            return (
+                f" (its first line is one cell holding {name}: cells separated by {name}, as a "
+                "spreadsheet in a locale with a decimal comma saves CSV; save it with ',' "
+                "between cells)"
+            )
+    return ""
+
+
 def _parse(cell: str, column, where: str, problems: list[str]):
     if cell == "":
         if not column.optional:
@@ -222,7 +253,7 @@ def _read_file(
         other = first.get("study")
         newer = [n for n in missing if _since(expected, n) != "0.1"]
         problems.append(
-            f"{path}, line 1: columns do not match the {study} schema"
+            f"{path}, line 1: columns do not match the {study} schema{_other_delimiter(header)}"
             + (
                 f" (its study column says {other!r}: a CSV of another study?)"
                 if other and other != study

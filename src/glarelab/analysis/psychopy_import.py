@@ -45,7 +45,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 
 from glarelab.analysis.dataset import DataError
-from glarelab.analysis.load import _parse
+from glarelab.analysis.load import _other_delimiter, _parse
 from glarelab.files.atomic import write_text
 from glarelab.protocols import columns
 from glarelab.protocols.columns import DATA_FORMAT, row_digest
@@ -282,6 +282,9 @@ def import_psychopy(
         duplicated = sorted({n for n in header if header.count(n) > 1})
         if duplicated:
             problems.append(f"{source}, line 1: column(s) {', '.join(duplicated)} appear twice")
+            continue
+        if _other_delimiter(header):
+            problems.append(f"{source}, line 1: not comma-separated{_other_delimiter(header)}")
             continue
         absent = [name for name in mapping if name not in header]
         if absent:
