@@ -185,6 +185,9 @@ def test_a_calibration_made_in_python_is_admitted_only_as_its_file_would_be(tmp_
         ("code,luminance_cd_m2\n0,0.5\n128,5_0\n255,100\n",
          r"line 3: .*luminance_cd_m2 '5_0'"),
         ("code,luminance_cd_m2\n0,0.5\n128.0,50\n255,100\n", r"line 3: .*got code '128\.0'"),
+        # empty lines are the file's lines too (they were not counted: 'line 5')
+        ("code,luminance_cd_m2\n0,0.5\n\n64,10\n\n\n128,abc\n255,100\n",
+         r"readings\.csv, line 7: .*luminance_cd_m2 'abc'"),
     ],
 )  # fmt: skip
 def test_a_readings_cell_is_read_as_written_not_as_python_reads_numbers(tmp_path, text, match):

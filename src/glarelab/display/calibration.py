@@ -777,7 +777,8 @@ def read_readings(path: str | Path) -> list[tuple[int, float]]:
             f"{path}, line 1: the column(s) {repeated} appear more than once; which one holds "
             "the readings? Name each column once"
         )
-    for line, row in enumerate(reader, start=2):
+    for row in reader:
+        line = reader.line_num  # the file's own line: empty lines are skipped, not counted
         if None in row:  # more cells than columns: a decimal comma splits a number
             cells = [row[name] or "" for name in reader.fieldnames] + list(row[None])
             written = ",".join(cells)
