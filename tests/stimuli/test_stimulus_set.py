@@ -215,8 +215,13 @@ def test_a_calibration_for_another_bit_depth_is_refused(tmp_path):
 
     protocol = load_protocol(PROTOCOLS / "yoshida2008.toml")
     eight_bit = synthetic_calibration(max_cd_m2=433.0, black_cd_m2=0.5, bit_depth=8)
-    with pytest.raises(ValueError, match="8-bit display, the protocol's display is 10-bit"):
+    with pytest.raises(ValueError, match="8-bit display, the protocol's display is 10-bit: "
+                       "the set's images are that display's codes, so no mismatch of bit depth "
+                       "can be accepted; calibrate"):  # fmt: skip
         build_stimulus_set(protocol, tmp_path, calibration=eight_bit, progress=None)
+    with pytest.raises(ValueError, match="no mismatch of bit depth can be accepted"):
+        build_stimulus_set(protocol, tmp_path, calibration=eight_bit, progress=None,
+                           accept_mismatch=True)  # fmt: skip
     luidolt = load_protocol(PROTOCOLS / "luidolt2020.toml")
     with pytest.raises(ValueError, match="shows no images: there is no stimulus set to build"):
         build_stimulus_set(luidolt, tmp_path, progress=None)

@@ -492,7 +492,9 @@ def build_stimulus_set(
     if calibration.bit_depth != protocol["display"]["bit_depth"]:
         raise ValueError(
             f"the calibration is for a {calibration.bit_depth}-bit display, the protocol's "
-            f"display is {protocol['display']['bit_depth']}-bit"
+            f"display is {protocol['display']['bit_depth']}-bit: the set's images are that "
+            "display's codes, so no mismatch of bit depth can be accepted; calibrate the "
+            "protocol's display, or set the protocol's display.bit_depth to your display's"
         )
     from glarelab.display.checks import check_calibration
 
