@@ -51,3 +51,16 @@ def test_good_inputs_are_all_rendered(tmp_path, monkeypatch):
     write_exr("b.exr", _scene())
     assert main(["render", "a.exr", "b.exr", "outdir/", "--pixel-deg", "0.05"]) == 0
     assert sorted(p.name for p in (tmp_path / "outdir").glob("*.exr")) == ["a.exr", "b.exr"]
+
+
+def test_several_inputs_into_a_file_name_are_refused(tmp_path, monkeypatch, capsys):
+    """``render a.exr b.exr out.exr`` made a folder named out.exr holding both."""
+    monkeypatch.chdir(tmp_path)
+    write_exr("a.exr", _scene())
+    write_exr("b.exr", _scene())
+    assert main(["render", "a.exr", "b.exr", "out.exr", "--pixel-deg", "0.05"]) == 2
+    err = capsys.readouterr().err
+    assert "2 inputs and the output out.exr, a file's name" in err, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.exr", "b.exr"]
+    (tmp_path / "out.exr").mkdir()  # a folder of that name is a folder
+    assert main(["render", "a.exr", "b.exr", "out.exr", "--pixel-deg", "0.05"]) == 0

@@ -252,6 +252,12 @@ def _render(args: argparse.Namespace) -> int:
             raise FileNotFoundError(f"input {source}: no such file")
         input_file(source, what="input")
     folder = len(inputs) > 1 or output.endswith(("/", "\\")) or Path(output).is_dir()
+    if folder and len(inputs) > 1 and Path(output).suffix.lower() == ".exr":
+        if not Path(output).is_dir():  # a file's name: a folder called out.exr was made
+            raise ValueError(
+                f"{len(inputs)} inputs and the output {output}, a file's name: several inputs "
+                "are written into a folder (give a folder, e.g. with_glare/)"
+            )
     if folder:  # many files: one renderer per image shape, its kernel made once
         if args.preview:
             raise ValueError("--preview is for one output file; render that file on its own")
