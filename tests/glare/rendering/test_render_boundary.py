@@ -200,6 +200,20 @@ def test_the_models_own_kernel_renders_as_without_it():
     np.testing.assert_allclose(given, made, rtol=1e-12, atol=0)
 
 
+def test_a_kernel_shape_beside_a_kernel_of_another_is_refused():
+    """The kernel given was used and the shape asked for ignored, without a word."""
+    kernel = digitise_kernel(MODEL, 0.05, (9, 9), cache=False)
+    with pytest.raises(ValueError, match=r"kernel_shape=\(7, 7\) with a kernel of shape \(9, 9\)"):
+        render_glare(IMAGE, MODEL, pixel_deg=0.05, kernel=kernel, kernel_shape=(7, 7))
+    render_glare(IMAGE, MODEL, pixel_deg=0.05, kernel=kernel, kernel_shape=(9, 9))
+
+
+@pytest.mark.parametrize("shape", [(10, 10, 4), (10, 10, 2), (10, 10, 3, 1)])
+def test_an_image_shape_of_no_luminance_or_rgb_image_is_refused(shape):
+    with pytest.raises(ValueError, match=r"shape must be \(H, W\) or \(H, W, C\) of a luminance"):
+        GlareRenderer(MODEL, pixel_deg=0.05, shape=shape)
+
+
 @pytest.mark.parametrize("shape", ["21x21", (21.5, 21), (True, 21), (0, 5), (5,), None, 7])
 def test_an_image_shape_that_is_not_pixel_counts_is_refused(shape):
     with pytest.raises(ValueError, match=r"shape must be \(H, W\) of whole pixel counts >= 1"):

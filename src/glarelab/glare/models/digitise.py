@@ -270,7 +270,7 @@ def check_image_shape(shape: Sequence[int], *, name: str = "shape") -> tuple[int
     Parameters
     ----------
     shape
-        The image's shape; entries after the second (channels) are not looked at.
+        The image's shape; a third entry (channels), if any, must be 1 or 3.
     name
         The argument's name in the error.
 
@@ -282,7 +282,8 @@ def check_image_shape(shape: Sequence[int], *, name: str = "shape") -> tuple[int
     Raises
     ------
     ValueError
-        For a string, fewer than two entries, or an entry that is a bool, a fraction or < 1.
+        For a string, fewer than two or more than three entries, channels other than 1 or
+        3, or an entry that is a bool, a fraction or < 1.
 
     Examples
     --------
@@ -292,6 +293,11 @@ def check_image_shape(shape: Sequence[int], *, name: str = "shape") -> tuple[int
     message = f"{name} must be (H, W) of whole pixel counts >= 1, got {shape!r}"
     if isinstance(shape, str | bytes) or not hasattr(shape, "__len__") or len(shape) < 2:
         raise ValueError(message)
+    if len(shape) > 3 or (len(shape) == 3 and shape[2] not in (1, 3)):  # no image has them
+        raise ValueError(
+            f"{name} must be (H, W) or (H, W, C) of a luminance or RGB image (C 1 or 3), got "
+            f"{shape!r}"
+        )
     sides = []
     for side in tuple(shape)[:2]:
         if isinstance(side, bool | np.bool_) or not isinstance(side, int | np.integer):

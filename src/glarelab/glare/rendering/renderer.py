@@ -192,6 +192,14 @@ class GlareRenderer:
                 )
             if len(kernel.shape) == 3 and kernel.shape[2] != 3:
                 raise ValueError(f"kernel must have 1 or 3 channels; got {kernel.shape}")
+            if kernel_shape is not None and (
+                check_kernel_shape(kernel_shape, name="kernel_shape") != tuple(kernel.shape[:2])
+            ):
+                raise ValueError(
+                    f"kernel_shape={kernel_shape!r} with a kernel of shape "
+                    f"{tuple(kernel.shape[:2])}: the kernel given is the one used; leave "
+                    "kernel_shape None"
+                )
             kernel_shape = check_kernel_shape(kernel.shape[:2], allocating=False)
             self._given = kernel
         elif kernel_shape is not None:
