@@ -156,7 +156,8 @@ def digitise_kernel(
         Odd kernel shape ``(KH, KW)``, pixels.
     colour
         Whether a kernel per colour channel ``(KH, KW, C)`` is wanted instead of the
-        luminance kernel ``(KH, KW)``; default False.
+        luminance kernel ``(KH, KW)``; default False. The Gaussian, the same in every
+        channel, gives its one ``(KH, KW)`` kernel either way.
     cache
         ``None`` (default) or ``True``: the kernel is read from (or kept in) the user's
         kernel cache (:mod:`glarelab.glare.models.cache`, off when ``GLARELAB_NO_CACHE`` is

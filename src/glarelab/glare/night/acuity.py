@@ -398,7 +398,10 @@ def varying_blur(
                           {\\sum_{y} g_{\\sigma(x)}(x - y)}
 
     over the pixels ``y`` inside the image within ``⌊4σ(x) + ½⌋`` of ``x`` in each axis
-    (``'exact'``). ``'layers'`` replaces ``g_σ`` by ``(1 - t) g_a + t g_b`` for the levels
+    (``'exact'``): each output pixel gathers its neighbourhood with its own σ, so light is
+    not conserved where σ varies (a bright point in the dark keeps its light, sharp, and the
+    dark pixels around it, blurred wide, gather some of it too). ``'layers'`` replaces
+    ``g_σ`` by ``(1 - t) g_a + t g_b`` for the levels
     ``a ≤ σ < b`` around it, ``t = (σ² - a²) / (b² - a²)``: exact wherever σ is a level and in
     every region where the image is linear.
 
