@@ -256,10 +256,12 @@ def test_a_number_option_is_read_as_a_number_is_written(text):
          "--settle-s with --simulate"),
         (["calibrate", "measure", "--simulate", "100", "0.1", "2.2", "--photometer-serial",
           "ABC"], "--photometer-serial with --simulate"),
+        (["power", "yoshida2008", "--participants", "6", "8", "6"],
+         "--participants 6 8 6: 6 given more than once"),
     ],
 )  # fmt: skip
 def test_an_option_its_mode_ignores_is_refused(argv, named, capsys, tmp_path):
     """Each ran and ignored the option (the simulated photometer's settling time, a seed for
     a sweep that simulates no one, a mismatch accepted of no calibration)."""
-    out = {"sweep": "s", "stimuli": "set", "calibrate": "c.json"}[argv[0]]
+    out = {"sweep": "s", "stimuli": "set", "calibrate": "c.json", "power": "p"}[argv[0]]
     refused([*argv, "--out", tmp_path / out], capsys, tmp_path, named)

@@ -210,6 +210,12 @@ def _power(args: argparse.Namespace) -> int:
     from glarelab.planning.effects import WITHOUT_F_TESTS
     from glarelab.planning.power import check_run_folder, power_analysis, run_inputs
 
+    twice = sorted({n for n in args.participants if args.participants.count(n) > 1})
+    if twice:  # the same size twice is simulated once: say so rather than drop it
+        raise ValueError(
+            f"--participants {' '.join(map(str, args.participants))}: "
+            f"{', '.join(map(str, twice))} given more than once; give each sample size once"
+        )
     protocol = load_protocol(args.protocol)
     if args.correction is not None and protocol.paradigm in WITHOUT_F_TESTS:
         raise ValueError(
