@@ -402,6 +402,24 @@ def test_a_rating_key_that_shapes_nothing_is_refused(edit, named):
         parse_protocol(data, source="test.toml", folder=PROTOCOLS)
 
 
+def test_two_conditions_of_the_same_effects_are_refused():
+    data = copy.deepcopy(raw("night2026"))
+    data["conditions"][1]["effects"] = list(data["conditions"][0]["effects"])
+    first, second = data["conditions"][0]["name"], data["conditions"][1]["name"]
+    with pytest.raises(ProtocolError, match=rf"conditions '{first}' and '{second}': the same "
+                       r"effects \['acuity', 'adaptation', 'glare', 'scotopic'\]"):  # fmt: skip
+        parse_protocol(data, source="test.toml", folder=PROTOCOLS)
+
+
+def test_a_target_starting_below_the_displays_black_is_refused():
+    data = copy.deepcopy(raw("yoshida2008"))
+    data["display"]["black_cd_m2"] = 0.5
+    data["stimulus"]["target_start_cd_m2"] = [0.2, 400.0]
+    with pytest.raises(ProtocolError, match=r"stimulus\.target_start_cd_m2\[0\] = 0\.2: below "
+                       r"what the display shows \(display\.black_cd_m2 = 0\.5\)"):  # fmt: skip
+        parse_protocol(data, source="test.toml", folder=PROTOCOLS)
+
+
 def test_a_list_of_tables_headed_as_a_single_table_is_named(tmp_path):
     # [contexts] typed for [[contexts]] got only the parser's "Cannot overwrite a value"
     text = (PROTOCOLS / "spencer1995.toml").read_text()

@@ -302,6 +302,12 @@ def check(p: dict, problems: list[str], folder: Path | None) -> None:
                 f"stimulus.target_start_cd_m2[{i}] = {start!r}: above what the display "
                 f"shows (display.max_cd_m2 = {maximum!r})"
             )
+        elif start < display["black_cd_m2"]:
+            problems.append(
+                f"stimulus.target_start_cd_m2[{i}] = {start!r}: below what the display "
+                f"shows (display.black_cd_m2 = {display['black_cd_m2']!r}); must be in "
+                f"[{display['black_cd_m2']:g}, {maximum:g}] cd/m²"
+            )
     if len(starts) == 2 and starts[0] >= starts[1]:
         problems.append(
             f"stimulus.target_start_cd_m2 = {starts!r}: the darker target must start below "

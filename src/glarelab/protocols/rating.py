@@ -299,6 +299,17 @@ def _check_scene(p: dict, problems: list[str]) -> None:
         problems.append(
             f"conditions: names repeat {repeated}: each must be different (ignoring case)"
         )
+    seen: dict[frozenset, str] = {}
+    for condition in conditions:  # the same effects render the same frames
+        effects = frozenset(condition["effects"])
+        if effects in seen:
+            problems.append(
+                f"conditions {seen[effects]!r} and {condition['name']!r}: the same effects "
+                f"{sorted(effects)}, so the same frames under two names (their ratings "
+                "could differ only by chance); give each condition its own effects"
+            )
+        else:
+            seen[effects] = condition["name"]
     model = p["scene"]["glare_model"]
     if not any("glare" in c["effects"] for c in conditions):  # the keys would shape nothing
         for key in ("glare_model", "glare_parameters"):
