@@ -8,6 +8,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from glarelab import glare
 from glarelab.glare.night.pipeline import render_night
 
 from ..strategies import NOT_A_NUMBER, NOT_FINITE_POSITIVE, SETTINGS
@@ -64,3 +65,22 @@ def test_a_method_is_refused_under_its_own_argument_name(option, match):
     image[8, 8] = 5000.0
     with pytest.raises(ValueError, match=match):
         render_night(image, pixel_deg=0.05, **option)
+
+
+@pytest.mark.parametrize(
+    ("call", "match"),
+    [
+        # numpy's 'operands could not be broadcast together with remapped shapes'
+        (lambda: glare.adaptation_luminance(np.array([1.0, 2.0]), np.array([0.1, 0.1, 0.1])),
+         r"^frame_time_s must be a number or one per frame \(2\); got shape \(3,\)"),
+        # numpy's 'setting an array element with a sequence'
+        (lambda: glare.pupil_diameter_mm([[1.0, 2.0], [3.0]]),
+         r"^field_luminance_cd_m2 must be an array of numbers; got rows of different lengths"),
+        # 'embedded null byte', from the file system
+        (lambda: glare.digitise_kernel("vos", 0.05, (5, 5), cache="kernels\0"),
+         r"^cache must name a folder; got 'kernels\\x00'"),
+    ],
+)  # fmt: skip
+def test_a_wrong_shape_or_name_is_refused_naming_the_argument(call, match):
+    with pytest.raises(ValueError, match=match):
+        call()

@@ -565,5 +565,7 @@ def resolve_cache(cache) -> KernelCache | None:
     if isinstance(cache, KernelCache):
         return cache
     if isinstance(cache, str | os.PathLike):
+        if "\0" in os.fspath(cache) or not str(os.fspath(cache)).strip():  # no folder's name
+            raise ValueError(f"cache must name a folder; got {cache!r}")
         return KernelCache(cache)
     raise ValueError(f"cache must be True, False, None, a KernelCache or a folder; got {cache!r}")

@@ -14,6 +14,7 @@ from typing import Literal
 
 import numpy as np
 
+from glarelab.files.values import plain_array
 from glarelab.glare._validation import check_image
 
 __all__ = [
@@ -82,7 +83,8 @@ def pupil_diameter_mm(field_luminance_cd_m2: float | np.ndarray) -> float | np.n
     if isinstance(field_luminance_cd_m2, np.ma.MaskedArray):  # asarray would drop the mask
         check_image("field_luminance_cd_m2", field_luminance_cd_m2)
     array = check_image(  # its own dtype checked (strings and bools refused), then float
-        "field_luminance_cd_m2", np.atleast_2d(np.asarray(field_luminance_cd_m2))
+        "field_luminance_cd_m2",
+        np.atleast_2d(plain_array("field_luminance_cd_m2", field_luminance_cd_m2)),
     ).astype(float)
     with np.errstate(divide="ignore"):
         log_l = np.log10(array)  # -inf at L = 0, where tanh(-inf) = -1 gives the 7.9 mm limit

@@ -285,7 +285,6 @@ def adaptation_luminance(
             f"targets_cd_m2 must be a 1-D sequence of at least one luminance; got shape "
             f"{np.shape(targets_cd_m2)}"
         )
-    times = np.broadcast_to(np.asarray(frame_time_s, dtype=float), targets.shape)
     if np.ndim(frame_time_s) not in (0, 1) or (
         np.ndim(frame_time_s) == 1 and np.size(frame_time_s) != targets.size
     ):
@@ -293,6 +292,7 @@ def adaptation_luminance(
             f"frame_time_s must be a number or one per frame ({targets.size}); got shape "
             f"{np.shape(frame_time_s)}"
         )
+    times = np.broadcast_to(np.asarray(frame_time_s, dtype=float), targets.shape)
     if not (np.isfinite(times).all() and (times >= 0).all()):
         raise ValueError(f"frame_time_s must be finite and >= 0 s; got {frame_time_s!r}")
     state = float(targets[0]) if initial_cd_m2 is None else initial_cd_m2
