@@ -290,3 +290,11 @@ def test_the_psf_of_many_wavelengths_at_once_is_refused_by_name(wavelength_nm):
 
     with pytest.raises(ValueError, match=r"^wavelength_nm must be one wavelength \(a number\)"):
         vos.psf(1.0, "mesopic", wavelength_nm=wavelength_nm)
+
+
+@pytest.mark.parametrize("name", ["corona_lines", "halo_lines"])
+def test_a_count_of_flare_lines_without_flare_lines_is_refused(name):
+    """``VosGlare(corona_lines=10)`` was taken, and no line drawn."""
+    with pytest.raises(ValueError, match=rf"^{name}=10 without flare_lines=True"):
+        VosGlare(**{name: 10})
+    assert getattr(VosGlare(flare_lines=True, **{name: 10}), name) == 10

@@ -84,3 +84,8 @@ def test_a_method_is_refused_under_its_own_argument_name(option, match):
 def test_a_wrong_shape_or_name_is_refused_naming_the_argument(call, match):
     with pytest.raises(ValueError, match=match):
         call()
+
+
+def test_an_unknown_colourspace_is_refused_for_a_grey_image_too():
+    with pytest.raises(ValueError, match="colourspace"):
+        glare.frame_luminance(np.full((20, 20), 3.0), pixel_deg=0.1, colourspace="sRGB-ish")

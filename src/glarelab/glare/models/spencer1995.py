@@ -158,6 +158,14 @@ class VosGlare(GlareModel):
         check_positive("halo_spacing_deg", self.halo_spacing_deg, unit="deg")
         check_positive_int("corona_lines", self.corona_lines)
         check_positive_int("halo_lines", self.halo_lines)
+        if not self.flare_lines:  # as the seed: the lines' counts shape only the lines
+            for name, default in (("corona_lines", CORONA_LINES), ("halo_lines", HALO_LINES)):
+                if getattr(self, name) != default:
+                    raise ValueError(
+                        f"{name}={getattr(self, name)!r} without flare_lines=True: it counts "
+                        f"Spencer's flare lines, and without them it would be ignored; give "
+                        f"flare_lines=True or leave {name} at {default}"
+                    )
 
     @classmethod
     def from_field_luminance(cls, field_luminance_cd_m2: float, **options) -> VosGlare:

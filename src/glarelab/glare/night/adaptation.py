@@ -372,6 +372,7 @@ def frame_luminance(
     image = check_image("image_cd_m2", image_cd_m2, channels=(3,))
     pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
     check_choice("mean", mean, ADAPTATION_MEANS)
+    check_choice("colourspace", colourspace, sorted(colour.RGB_COLOURSPACES))  # grey too
     y = luminance(image, colourspace=colourspace) if image.ndim == 3 else image.astype(float)
     if mean == "log":
         y = np.log(np.maximum(y, ABSOLUTE_THRESHOLD_CD_M2))
