@@ -39,3 +39,19 @@ def test_a_questionnaire_sweep_needs_simulation_and_gives_its_tests(tmp_path):
     assert set(effects["point"]) == {0, 1}
     assert "Wilcoxon Overall vs 4 (Holm)" in set(effects["effect"])
     assert (tmp_path / "b" / "simulated" / "001" / "report" / "report.html").is_file()
+
+
+def test_a_sweep_run_again_after_a_kill_leaves_no_half_built_set(tmp_path):
+    """SIGKILL during a sweep left ``sets/.building-XXXX`` and a staging folder inside it that
+    the run started again never removed."""
+    import subprocess
+    import sys
+
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True, check=True).stdout.strip()  # fmt: skip
+    staging = tmp_path / "sets" / f".000.building-{dead}"
+    staging.mkdir(parents=True)
+    (staging / "reference_vos_b_10bit.png").write_bytes(b"half")
+    sweep("yoshida2008", [parse_setting("stimulus.disk_deg=0.2")], tmp_path, **SILENT)
+    assert sorted(p.name for p in (tmp_path / "sets").iterdir()) == ["000"]
+    assert not verify_stimulus_set(tmp_path / "sets" / "000")

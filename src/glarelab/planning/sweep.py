@@ -20,9 +20,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-import os
 import shutil
-import tempfile
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -113,17 +111,11 @@ class SweepJob:
         if shows_images(protocol):
             folder = self.out / "sets" / f"{index:03d}"
             start = time.perf_counter()
-            if not _in_place(folder, protocol):
-                folder.parent.mkdir(parents=True, exist_ok=True)
-                staging = Path(tempfile.mkdtemp(prefix=".building-", dir=folder.parent))
-                try:
-                    build_stimulus_set(
-                        protocol, staging, calibration=default_calibration(protocol), progress=None
-                    )
-                    shutil.rmtree(folder, ignore_errors=True)
-                    os.replace(staging, folder)
-                finally:
-                    shutil.rmtree(staging, ignore_errors=True)
+            if not _in_place(folder, protocol):  # built beside it and put in place whole; a
+                # build killed before leaves its staging folder, cleared by the next one
+                build_stimulus_set(
+                    protocol, folder, calibration=default_calibration(protocol), progress=None
+                )
             manifest = json.loads((folder / "manifest.json").read_text(encoding="utf-8"))
             record |= {
                 "folder": str(folder.relative_to(self.out)),
