@@ -418,16 +418,30 @@ def test_a_darker_target_set_above_the_brighter_is_flagged():
     assert flags[0].startswith("p01.csv, line 5: participant p01, gaussian D: the darker target")
 
 
-def test_matches_at_the_display_maximum_are_said_to_bound_the_boost():
+@pytest.mark.parametrize("all_at_maximum", [False, True], ids=["nine", "all"])
+def test_matches_at_the_display_maximum_are_said_to_bound_the_boost(all_at_maximum):
     """Every participant at the display's maximum (433 cd/m²) at the highest level: the boost
-    is what the display allows, and the sentence says so instead of reporting it as a finding."""
+    is what the display allows, and the sentence says so instead of reporting it as a finding
+    (all ten there: 'could not be tested', and the bound was not said)."""
     protocol = load_protocol("yoshida2008")
     labels = {m["name"]: m["labels"] for m in protocol["glare"]["methods"]}
     disk = {m["name"]: m["levels_cd_m2"] for m in protocol["glare"]["methods"]}
     rng = np.random.default_rng(1)
     matches = 250 + np.linspace(0, 60, 6) + rng.normal(0, 15, (10, 2, 6))
     matches[:, :, 5] = protocol["display"]["max_cd_m2"]
+    if all_at_maximum:  # the boosts then all alike: not testable, and still bounded
+        text, counts = _at_maximum(protocol, labels, disk, matches)
+        assert text.count("the boost could not be tested") == 2
+        assert text.count("10 of 10 participants matched at the display's maximum") == 2
+        assert (counts == 10).all()
+        return
     matches[0, :, 5] -= 1.0  # one participant just below: the rest are counted
+    text, counts = _at_maximum(protocol, labels, disk, matches)
+    assert text.count("9 of 10 participants matched at the display's maximum, 433 cd/m²") == 2
+    assert (counts == 9).all()
+
+
+def _at_maximum(protocol, labels, disk, matches):
     rows = [
         {
             "participant": f"p{p + 1:02d}",
@@ -448,9 +462,7 @@ def test_matches_at_the_display_maximum_are_said_to_bound_the_boost():
         for k in range(6)
     ]
     result = matching.analyse(Dataset("yoshida2008", pd.DataFrame(rows), []), protocol)
-    text = result["results"][2]
-    assert text.count("9 of 10 participants matched at the display's maximum, 433 cd/m²") == 2
-    assert (result["tables"]["boost_test"]["n_at_display_max"] == 9).all()
+    return result["results"][2], result["tables"]["boost_test"]["n_at_display_max"]
 
 
 def luidolt_ratings(first_category: list[int]) -> Dataset:

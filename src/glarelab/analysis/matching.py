@@ -928,10 +928,17 @@ def _boost_sentence(boost: pd.DataFrame, study: _Study) -> str:
             f"with {study.titles[row['method']]} at {row['level']} "
             f"({row['l_disk_cd_m2']:,.0f} cd/m²)"
         )
+        ceiling = ""
+        if row["n_at_display_max"] > 0:
+            ceiling = (
+                f" ({row['n_at_display_max']} of {row['n']} participants matched at the "
+                f"display's maximum, {row['display_max_cd_m2']:,.0f} cd/m², so the boost is "
+                "bounded by what the display can show)"
+            )
         if row["note"]:
             parts.append(
                 f"{where_} the boost could not be tested: "
-                f"{row['note'].removeprefix('not testable: ')}"
+                f"{row['note'].removeprefix('not testable: ')}{ceiling}"
             )
             continue
         corrected = " (Holm)" if family > 1 else ""
@@ -947,13 +954,6 @@ def _boost_sentence(boost: pd.DataFrame, study: _Study) -> str:
             verdict = f"fell short of it by {_mean(-mean)} %"
         else:
             verdict = f"did not differ from it (M = {_mean(mean)} %)"
-        ceiling = ""
-        if row["n_at_display_max"] > 0:
-            ceiling = (
-                f" ({row['n_at_display_max']} of {row['n']} participants matched at the "
-                f"display's maximum, {row['display_max_cd_m2']:,.0f} cd/m², so the boost is "
-                "bounded by what the display can show)"
-            )
         parts.append(f"{where_} the matches {verdict}{ceiling}, {stats_}")
     return (
         "At the highest level, compared with the luminance the display showed of the disk "
