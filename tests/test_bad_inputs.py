@@ -403,7 +403,11 @@ CASES = [
     ),
     ("build-rating", "stimuli build luidolt2020 --out {box}/newset", "shows no images"),
     ("verify-not-folder", "stimuli verify {box}/afile.txt", "not a folder"),
-    ("verify-no-manifest", "stimuli verify {box}/foreign", "manifest.json: missing"),
+    (
+        "verify-no-manifest",
+        "stimuli verify {box}/foreign",
+        "foreign: no manifest.json, so not a stimulus set",
+    ),
     # protocol
     ("protocol-missing-file", "protocol check {box}/none.toml", "none.toml"),
     ("protocol-scale-10", "protocol check {box}/scale10.toml", "questionnaire.scale_max"),

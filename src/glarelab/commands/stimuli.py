@@ -55,6 +55,11 @@ def _stimuli_verify(args: argparse.Namespace) -> int:
     if not Path(args.folder).is_dir():  # one line, exit 2: there is nothing to verify
         what = "not a folder" if Path(args.folder).exists() else "no such folder"
         raise FileNotFoundError(f"{args.folder}: {what} (give a stimulus set's folder)")
+    if not (Path(args.folder) / "manifest.json").exists():  # a folder, but no set's
+        raise FileNotFoundError(
+            f"{args.folder}: no manifest.json, so not a stimulus set (give a set's folder, as "
+            "glarelab stimuli build wrote it)"
+        )
     problems = prove_stimulus_set(args.folder)
     if problems:
         for problem in problems:
