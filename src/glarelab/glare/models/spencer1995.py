@@ -83,7 +83,9 @@ class VosGlare(GlareModel):
         Pupil diameter in mm (0.5-10), or ``None`` (default): the pupil the regime implies.
         Below 3 mm the lenticular halo is dropped and its weight returned to ``f0``: a beam
         narrower than 3 mm passes the clear centre of the lens (Spencer §2.1), and eq. 8's
-        halo weight is "diverted from the central peak" (§3.1.1).
+        halo weight is "diverted from the central peak" (§3.1.1). The photopic PSF has no
+        halo, so there the pupil changes nothing; it is still taken, as the eye's state that
+        the night pipeline and the live mode give every frame's model in every regime.
     normalisation
         ``'psf'`` (default): each component holds the PSF's energy inside the kernel, and the
         energy beyond it is reported as ``energy_outside`` (not spread). ``'Spencer1995'``:
