@@ -4,7 +4,10 @@ name, so that it is written, not refused after the work with ENAMETOOLONG."""
 from __future__ import annotations
 
 import os
+import stat
+from pathlib import Path
 
+import numpy as np
 import pytest
 
 from glarelab.files.atomic import NAME_MAX_BYTES, _temporary, short_name, write_text
@@ -44,3 +47,27 @@ def test_a_file_that_cannot_be_created_is_named_not_its_temporary_name(tmp_path)
         write_text(target, "{}")
     assert missing.value.filename == str(target)
     assert "partial" not in str(missing.value)
+
+
+def _special(path: Path, kind: str) -> None:
+    if kind == "fifo":
+        os.mkfifo(path)
+    else:  # a private /dev/null: a character device (root only)
+        os.mknod(path, 0o600 | stat.S_IFCHR, os.makedev(1, 3))
+
+
+@pytest.mark.parametrize("kind", ["fifo", "device"])
+def test_a_device_or_pipe_at_the_path_is_refused_and_kept(tmp_path, kind):
+    """write_exr('/dev/null', …) as root renamed a file over /dev/null: the device was gone."""
+    from glarelab.stimuli.exr import write_exr
+
+    if kind == "device" and os.geteuid() != 0:
+        pytest.skip("making a device takes root")
+    target = tmp_path / "out.exr"
+    _special(target, kind)
+    with pytest.raises(ValueError, match=r"out\.exr: a (named pipe|character device).* not a "
+                       "file; .*give a file's path"):  # fmt: skip
+        write_exr(target, np.ones((2, 2)))
+    mode = os.lstat(target).st_mode
+    assert stat.S_ISFIFO(mode) if kind == "fifo" else stat.S_ISCHR(mode)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.exr"]

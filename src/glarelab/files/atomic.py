@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import stat
 import threading
 from collections.abc import Iterator
 from pathlib import Path
@@ -137,6 +138,30 @@ def _fsync_file(path: Path) -> None:
         os.close(handle)
 
 
+_SPECIAL = (  # a folder is left to the rename, which fails on it
+    (stat.S_ISCHR, "a character device (as /dev/null)"),
+    (stat.S_ISBLK, "a block device"),
+    (stat.S_ISFIFO, "a named pipe (FIFO)"),
+    (stat.S_ISSOCK, "a socket"),
+)
+
+
+def _refuse_special(path: Path) -> None:
+    """Refuse a ``path`` that is there and is no regular file: the rename that puts a new
+    file in place would replace the folder's entry (a device, such as /dev/null for root,
+    would be gone)."""
+    try:
+        mode = os.lstat(path).st_mode
+    except OSError:  # not there (or not reachable: the write says why)
+        return
+    for test, what in _SPECIAL:
+        if test(mode):
+            raise ValueError(
+                f"{path}: {what}, not a file; glarelab writes a file whole and renames it into "
+                "place, which would replace it; give a file's path"
+            )
+
+
 @contextlib.contextmanager
 def atomic_path(path: str | Path) -> Iterator[Path]:
     """A temporary path to write ``path``'s new content to; renamed over ``path`` when the
@@ -158,6 +183,8 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
     OSError
         When the content cannot be written or renamed (a full disk: nothing is left behind,
         and an earlier ``path`` is as it was).
+    ValueError
+        When ``path`` is a device, a named pipe or a socket (the rename would replace it).
 
     Examples
     --------
@@ -171,6 +198,7 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
     ['table.csv']
     """
     path = Path(path)
+    _refuse_special(path)
     _remove_stale(path)
     temporary = _temporary(path)
     try:
