@@ -225,3 +225,17 @@ def test_an_image_shape_that_is_not_pixel_counts_is_refused(shape):
 def test_a_model_class_is_refused_naming_the_object_to_give():
     with pytest.raises(ValueError, match=r"e\.g\. VosGlare\(\), not the class VosGlare itself"):
         add_glare(IMAGE, VosGlare, pixel_deg=0.05, cache=False)
+
+
+@pytest.mark.parametrize(
+    "lut",
+    [np.array([0.0, 1.0, 0.5]), np.array([1.0]), np.array([0.0, np.nan, 2.0]),
+     np.array([-1.0, 2.0]), "sRGB"],
+    ids=["not increasing", "one code", "NaN", "negative", "a name"],
+)  # fmt: skip
+def test_a_display_table_no_display_has_is_refused_when_made(lut):
+    """``Display(np.array([0, 1, 0.5]))`` was made, and failed only where it was used."""
+    from glarelab.glare import Display
+
+    with pytest.raises(ValueError, match=r"^lut must be"):
+        Display(lut)

@@ -52,10 +52,25 @@ class Display:
     Attributes
     ----------
     lut
-        The display's code → luminance table, cd/m², increasing, one entry per code.
+        The display's code → luminance table, cd/m², increasing, one entry per code, at
+        least two, finite and >= 0 (else ValueError).
     """
 
     lut: np.ndarray
+
+    def __post_init__(self) -> None:  # a table as display_lut takes it, or refused now
+        if isinstance(self.lut, str | bytes) or hasattr(self.lut, "lut"):
+            raise ValueError(f"lut must be a code → cd/m² table; got {self.lut!r:.80}")
+        try:
+            lut = display_lut(self.lut, 1.0)
+            if lut[0] < 0:
+                raise ValueError
+        except ValueError:
+            raise ValueError(
+                "lut must be a 1-D increasing code → cd/m² table of >= 2 finite luminances "
+                f">= 0; got {self.lut!r:.80}"
+            ) from None
+        object.__setattr__(self, "lut", lut)
 
     @classmethod
     def gamma(
