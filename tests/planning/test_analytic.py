@@ -93,3 +93,9 @@ def test_means_that_are_not_plain_numbers_are_refused(means):
     """Strings were read as numbers, bools as 0 and 1, a masked mean counted (power 1.0)."""
     with pytest.raises(ValueError, match="means_per_condition"):
         one_way_power(means, error_sd=1.0, subjects=10)
+
+
+def test_a_complex_error_sd_is_refused():
+    """np.complex128(1 + 1j) was taken as 1 (with numpy's ComplexWarning)."""
+    with pytest.raises(ValueError, match=r"^error_sd must be a finite number > 0"):
+        one_way_power([0.0, 1.0], error_sd=np.complex128(1 + 1j), subjects=5)

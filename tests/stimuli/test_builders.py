@@ -1,3 +1,4 @@
+import re
 import tomllib
 from pathlib import Path
 
@@ -200,3 +201,25 @@ def test_wave_optics_glare_around_a_disk_on_a_uniform_field(tmp_path):
     assert_allclose(low, plain, atol=1e-9)  # nothing above L_dmax: no glare
     ring = high - plain
     assert ring.min() >= -1e-9 and ring.sum() > 0  # glare light around the disk
+
+
+@pytest.mark.parametrize(
+    ("options", "named"),
+    [({"cloud_min_deg": 2.0, "cloud_max_deg": 0.05}, "cloud_min_deg = 2.0 must be above 0 and below"),
+     ({"ceiling_cd_m2": 50.0}, "mean_cd_m2 = 100.0 must be above 0 and below ceiling_cd_m2 = 50.0")],
+)  # fmt: skip
+def test_a_sky_that_cannot_be_what_is_asked_is_refused(options, named):
+    """Each made a sky: the sizes reversed gave the mean asked, the ceiling below the mean a
+    flat 50 cd/m² for a sky of 100."""
+    from glarelab.stimuli.sky import cloudy_sky
+
+    asked = {"mean_cd_m2": 100.0, "contrast": 0.2, "cloud_min_deg": 0.05,
+             "cloud_max_deg": 2.0, "slope": 1.0, "ceiling_cd_m2": 1000.0} | options  # fmt: skip
+    with pytest.raises(ValueError, match=re.escape(named)):
+        cloudy_sky((64, 64), pixel_deg=0.01, rng=np.random.default_rng(1), **asked)
+
+
+def test_a_negative_uniform_background_is_refused():
+    with pytest.raises(ValueError, match=r"uniform background's cd_m2 must be >= 0; got -5\.0"):
+        background({"kind": "uniform", "cd_m2": -5.0}, (4, 6), pixel_deg=0.01,
+                   rng=np.random.default_rng(0), ceiling_cd_m2=100.0)  # fmt: skip

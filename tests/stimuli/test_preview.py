@@ -37,3 +37,14 @@ def test_the_display_scale_and_the_log_scale_show_what_they_say():
         np.array([[1e-3, 1e-1, 1.0, 10.0]]), l_dmax_cd_m2=10.0, scale="log", decades=4
     )
     np.testing.assert_array_equal(log, [[0, 128, 191, 255]])
+
+
+def test_a_preview_under_another_suffix_is_refused(tmp_path):
+    """PNG bytes were written to ``x.jpg``."""
+    from glarelab.stimuli.preview import preview_png, psf_png
+
+    with pytest.raises(ValueError, match=r"^path must name a \.png file; got '.*x\.jpg'"):
+        preview_png(tmp_path / "x.jpg", np.ones((2, 2)), l_dmax_cd_m2=220.0)
+    with pytest.raises(ValueError, match=r"^path must name a \.png file"):
+        psf_png(tmp_path / "k.tif", np.ones((3, 3)))
+    assert list(tmp_path.iterdir()) == []

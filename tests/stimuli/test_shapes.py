@@ -41,3 +41,11 @@ def test_the_disk_is_the_pixel_centres_within_its_radius_on_an_odd_field():
 def test_what_cannot_be_a_disk_on_its_field_is_refused_by_name(changes, name):
     with pytest.raises(ValueError, match=f"^{name}( must| = )"):
         disk(**(GOOD | changes))
+
+
+@pytest.mark.parametrize("gap_px", [-1, 2.5, True])
+def test_a_row_of_images_refuses_a_gap_that_is_no_pixel_count(gap_px):
+    from glarelab.stimuli.shapes import ImageRow
+
+    with pytest.raises(ValueError, match=r"^gap_px must be a whole number of pixels >= 0"):
+        ImageRow(sizes_px=[(10, 10)], gap_px=gap_px)

@@ -65,7 +65,9 @@ def _subjects(subjects: object) -> int:
 
 def _error_sd(error_sd: object) -> float:
     """``error_sd`` as a finite number > 0."""
-    if isinstance(error_sd, bool | np.bool_) or not isinstance(error_sd, int | float | np.number):
+    if isinstance(error_sd, bool | np.bool_ | complex | np.complexfloating) or not isinstance(
+        error_sd, int | float | np.number
+    ):
         raise ValueError(f"error_sd must be a finite number > 0; got {error_sd!r}")
     if not (np.isfinite(error_sd) and error_sd > 0):
         raise ValueError(f"error_sd must be a finite number > 0; got {error_sd!r}")

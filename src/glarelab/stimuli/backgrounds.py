@@ -167,6 +167,8 @@ def background(
                 "contrast or a lower mean"
             )
     elif kind == "uniform":
+        if not (np.isfinite(spec["cd_m2"]) and spec["cd_m2"] >= 0):
+            raise ValueError(f"a uniform background's cd_m2 must be >= 0; got {spec['cd_m2']!r}")
         image = np.full(shape, float(spec["cd_m2"]))
     elif kind == "lamp":
         if shape[0] != shape[1]:

@@ -24,8 +24,10 @@ def _write_png(path: str | Path, encode: Callable[[], np.ndarray]) -> Path:
     """Create ``path``'s folder, then write the 8-bit image ``encode()`` returns to ``path``
     whole or not at all; return ``path``."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
+    if path.suffix.lower() != ".png":  # PNG bytes under another name would mislead a viewer
+        raise ValueError(f"path must name a .png file; got {str(path)!r}")
     pixels = encode()
+    path.parent.mkdir(parents=True, exist_ok=True)
     with atomic_path(path) as temporary:
         Image.fromarray(pixels).save(temporary, format="PNG")
     return path

@@ -112,3 +112,9 @@ class ImageRow:
     gap_px: int
     pixel_deg: float | None = None
     notes: list[str] = field(default_factory=list)
+
+    def __post_init__(self) -> None:
+        if isinstance(self.gap_px, bool) or not isinstance(self.gap_px, int | np.integer):
+            raise ValueError(f"gap_px must be a whole number of pixels >= 0; got {self.gap_px!r}")
+        if self.gap_px < 0:  # images drawn over each other
+            raise ValueError(f"gap_px must be a whole number of pixels >= 0; got {self.gap_px!r}")

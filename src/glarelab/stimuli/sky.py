@@ -60,6 +60,12 @@ def cloudy_sky(
     numpy.ndarray
         ``shape`` luminances, cd/m².
 
+    Raises
+    ------
+    ValueError
+        For cloud sizes not in increasing order, or a ceiling not above the mean (the sky
+        would have neither the mean nor the contrast asked).
+
     Examples
     --------
     >>> sky = cloudy_sky((64, 64), pixel_deg=0.05, rng=np.random.default_rng(0),
@@ -68,6 +74,16 @@ def cloudy_sky(
     >>> round(float(sky.mean()), 6), bool(sky.max() <= 220.0)
     (150.0, True)
     """
+    if not 0 < cloud_min_deg < cloud_max_deg:
+        raise ValueError(
+            f"cloud_min_deg = {cloud_min_deg!r} must be above 0 and below cloud_max_deg = "
+            f"{cloud_max_deg!r}"
+        )
+    if not 0 < mean_cd_m2 < ceiling_cd_m2:
+        raise ValueError(
+            f"mean_cd_m2 = {mean_cd_m2!r} must be above 0 and below ceiling_cd_m2 = "
+            f"{ceiling_cd_m2!r} (no sky of that mean stays under it)"
+        )
     height, width = shape
     noise = rng.standard_normal(shape)
     fy = np.fft.fftfreq(height, d=pixel_deg)[:, None]
