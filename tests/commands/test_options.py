@@ -207,11 +207,19 @@ def stimulus_set(tmp_path_factory):
         ["demo", "--out", "{set}/demo"],
         ["protocol", "copy", "spencer1995", "{set}"],
         ["protocol", "copy", "spencer1995", "{set}/mine.toml"],
+        # into the set's own folder: written there, and the set then failed verification
+        ["docs", "--out", "{set}"],
+        ["gallery", "--out", "{set}", "--size", "5"],
+        ["looks", "--out", "{set}"],
+        ["examples", "{set}"],
+        ["calibrate", "export-monitor", "calibrations/SYNTHETIC-spencer1995-50cd-8bit.json",
+         "--monitor", "lab", "--monitor-folder", "{set}"],
     ],
-)
+)  # fmt: skip
 def test_no_output_inside_a_stimulus_set(argv, stimulus_set, capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    argv = [a.replace("{set}", str(stimulus_set)) for a in argv]
+    argv = [a.replace("{set}", str(stimulus_set)).replace("calibrations/", f"{ROOT}/calibrations/")
+            for a in argv]  # fmt: skip
     before = sorted(stimulus_set.rglob("*"))
     refused(argv, capsys, tmp_path, "inside the stimulus set")
     assert sorted(stimulus_set.rglob("*")) == before

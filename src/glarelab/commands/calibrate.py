@@ -17,7 +17,7 @@ from glarelab.display.photometer import PHOTOMETERS
 from glarelab.files.atomic import write_bytes
 from glarelab.files.locks import ProcessLock
 
-from .common import claim_output, count, number, one_line, output_file
+from .common import claim_output, count, folder_to_write, number, one_line, output_file
 from .common import log as _log
 
 if TYPE_CHECKING:
@@ -172,6 +172,8 @@ def _calibrate_export_monitor(args: argparse.Namespace) -> int:
     from glarelab.protocols import load_protocol
 
     calibration = Calibration.load(args.calibration)
+    if args.monitor_folder is not None:  # not a file, a stimulus set or a report
+        folder_to_write(Path(args.monitor_folder), [f"{args.monitor}.json"])
     protocol = load_protocol(args.protocol) if args.protocol else None
     if protocol is not None:
         from glarelab.display.checks import check_calibration

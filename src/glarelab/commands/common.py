@@ -384,11 +384,17 @@ def folder_to_write(path: Path, names: list[str]) -> Path:
     Raises
     ------
     ValueError
-        If ``path`` is a file.
+        If ``path`` is a file, or a stimulus set or report (or inside one).
     """
     path = without_link_loop(path, what=", ".join(names))
     if path.exists() and not path.is_dir():
         raise ValueError(f"{path} is a file; give a folder for {', '.join(names)}")
+    whole = inside_whole_output(path / names[0]) if names else None
+    if whole is not None:  # the folder is a stimulus set or report, or inside one
+        raise ValueError(
+            f"{path} is or is inside the {whole}, which glarelab writes and checks as a "
+            "whole: write elsewhere (nothing was changed)"
+        )
     return path
 
 

@@ -7,7 +7,7 @@ from pathlib import Path
 
 from glarelab.files.atomic import write_text
 
-from .common import PROTOCOL_HELP, count, output_folder, writes_into
+from .common import PROTOCOL_HELP, count, folder_to_write, output_folder, writes_into
 from .common import log as _log
 
 
@@ -42,6 +42,7 @@ def _docs(args: argparse.Namespace) -> int:
 def _examples(args: argparse.Namespace) -> int:
     from glarelab.files.shipped import copy_shipped
 
+    folder_to_write(Path(args.destination), ["examples"])  # not a file, a set or a report
     try:
         written = copy_shipped(args.destination)
     except FileExistsError as error:
