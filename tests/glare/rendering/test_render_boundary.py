@@ -239,3 +239,11 @@ def test_a_display_table_no_display_has_is_refused_when_made(lut):
 
     with pytest.raises(ValueError, match=r"^lut must be"):
         Display(lut)
+
+
+@pytest.mark.parametrize("tolerance", [0, None])
+def test_the_far_tail_alone_for_an_exact_render_is_refused(tolerance):
+    """It was taken, and an exact path rendered instead without a word."""
+    with pytest.raises(ValueError, match=r"paths=\('multires',\) with tolerance_codes="):
+        GlareRenderer(MODEL, pixel_deg=0.05, shape=(10, 10), paths=("multires",),
+                      tolerance_codes=tolerance)  # fmt: skip

@@ -211,6 +211,12 @@ class GlareRenderer:
             check_choice("paths", path, PATHS)
         if not self.paths:
             raise ValueError(f"paths must name at least one of {PATHS}; got {paths!r}")
+        if self.paths == ("multires",) and not self.tolerance_codes:
+            raise ValueError(
+                f"paths={paths!r} with tolerance_codes={tolerance_codes!r}: the far tail's "
+                "approximation is never taken for an exact render; give a tolerance, or an "
+                "exact path ('direct', 'fft')"
+            )
         if log is not None and not callable(log):
             raise ValueError(
                 f"log must be a function taking one line of text, or None; got {log!r}"
