@@ -98,3 +98,10 @@ def test_a_file_covering_the_field_exactly_passes_and_builds(tmp_path, capsys):
     protocol = parse_protocol(tomllib.loads(path.read_text()), folder=tmp_path)
     field = build_matching(protocol)["images"]["background"]["img"]
     np.testing.assert_allclose(field, 50.0, rtol=1e-12)
+
+
+def test_keys_of_a_protocol_that_is_refused_print_no_table(capsys):
+    """``protocol keys ''`` printed the table's header, then the refusal."""
+    assert main(["protocol", "keys", ""]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == "" and "the path is empty" in captured.err

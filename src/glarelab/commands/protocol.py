@@ -12,10 +12,10 @@ from .common import PROTOCOL_HELP, inside_whole_output
 
 
 def _protocol_keys(args: argparse.Namespace) -> int:
-    print("| key | unit | default | allowed | meaning |\n| --- | --- | --- | --- | --- |")
     paradigm = args.paradigm
-    if paradigm not in PARADIGMS:  # a protocol: its paradigm
+    if paradigm not in PARADIGMS:  # a protocol: its paradigm (a refusal prints no table)
         paradigm = load_protocol(paradigm).paradigm
+    print("| key | unit | default | allowed | meaning |\n| --- | --- | --- | --- | --- |")
     for row in describe_schema(paradigm):
         print("| " + " | ".join(row) + " |")
     return 0
