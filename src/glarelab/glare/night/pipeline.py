@@ -221,7 +221,9 @@ def render_night(
         with adaptation.
     gaze_px
         ``(row, column)`` of the gaze, one for all frames or one per frame (None: the whole
-        frame alike).
+        frame alike); it may lie outside the frame (a look off the screen: the adaptation
+        window's weights then fall on the frame's nearer side, as
+        :func:`glarelab.glare.night.adaptation.frame_luminance` weighs them).
     initial_adaptation_cd_m2
         Adapted luminance before the first frame, cd/m²; default: adapted to the first frame.
     pupil_from_adaptation
