@@ -298,3 +298,15 @@ def test_a_count_of_flare_lines_without_flare_lines_is_refused(name):
     with pytest.raises(ValueError, match=rf"^{name}=10 without flare_lines=True"):
         VosGlare(**{name: 10})
     assert getattr(VosGlare(flare_lines=True, **{name: 10}), name) == 10
+
+
+@pytest.mark.parametrize("regime", ["mesopic", "scotopic"])
+def test_spencers_renormalisation_of_a_halo_the_kernel_does_not_reach_is_finite(regime):
+    """A 21 × 21 colour kernel at 0.05° holds none of the green channel's halo: renormalised
+    to sum to one, 0 / 0 made every pixel of it NaN, and every RGB render with it."""
+    model = VosGlare(regime=regime, normalisation="Spencer1995")
+    k = model.kernel(0.05, (21, 21), colour=True)
+    assert np.isfinite(k.values).all() and np.isfinite(k.energy_outside).all()
+    sums = k.values.sum(axis=(0, 1)) + k.energy_outside  # each channel's light accounted for
+    np.testing.assert_allclose(sums, 1.0, rtol=1e-9)
+    assert (k.values >= 0).all()

@@ -92,7 +92,11 @@ class VosGlare(GlareModel):
         as Spencer §3.2 does, "calculate each filter proportional to a given function, and
         then renormalize the filter so that all pixels sum to one": each of ``f0``-``f3``
         sums to 1 over the kernel, so the light the PSF sends beyond the kernel is put back
-        inside it, in proportion (``energy_outside`` 0).
+        inside it, in proportion (``energy_outside`` 0); a colour channel whose halo the
+        kernel does not reach at all (a kernel under about 1° across) has nothing to
+        renormalise, adds nothing, and its halo weight is its ``energy_outside``.
+
+    Notes
     -----
     The kernel is ``w0 K0 + (w1 K1 + w2 K2) S_c + w3 K3 S_h`` with ``K_i`` the digitised
     unit-volume components, weights from :func:`glarelab.glare.models.vos.weights` and ``S`` the
@@ -372,8 +376,9 @@ class VosGlare(GlareModel):
                 support_deg=HALO_TABLE_MAX_DEG,
                 symmetric=symmetric,
             )
-            if spencer:
-                total = inside
+            if spencer:  # a channel whose halo the kernel does not reach has nothing to
+                # renormalise: it adds nothing, and its weight is reported outside the kernel
+                total = np.where(inside > 0, inside, np.inf)
             halo = w3 * pieces / total[:, None, None]
             halo_outside = w3 * (1 - inside / total)
             errors += [
