@@ -371,3 +371,13 @@ def test_a_fifo_under_an_entrys_name_is_a_miss_not_a_hang(tmp_path):
     made = cache.kernel(model, 0.05, SHAPE)  # digitised and stored over the FIFO
     assert cache.path(key).is_file() and not cache.path(key).is_fifo()
     _same(cache.get(key), made)
+
+
+def test_a_cache_variable_naming_a_file_is_refused_by_name(tmp_path, monkeypatch):
+    """``GLARELAB_CACHE=FILE glarelab cache info`` reported an empty cache in FILE/kernels."""
+    from glarelab.glare.models.cache import CACHE_DIR_ENV, KernelCache
+
+    (tmp_path / "f").write_text("x\n")
+    monkeypatch.setenv(CACHE_DIR_ENV, str(tmp_path / "f"))
+    with pytest.raises(ValueError, match=rf"^{CACHE_DIR_ENV}=.*f: not a folder"):
+        KernelCache()

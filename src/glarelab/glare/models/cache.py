@@ -146,6 +146,11 @@ class KernelCache:
     def __init__(self, directory: str | os.PathLike | None = None, *, max_bytes=None) -> None:
         if directory is None:
             root = os.environ.get(CACHE_DIR_ENV)
+            if root and Path(root).exists() and not Path(root).is_dir():
+                raise ValueError(
+                    f"{CACHE_DIR_ENV}={root}: not a folder; set it to a folder (the kernel cache "
+                    "and the observers' stimulus sets are kept there), or unset it"
+                )
             if not root:
                 import platformdirs
 
