@@ -91,7 +91,8 @@ def acuity_bench(
         def blur(how: str, levels: int = 4, image=image, exposure=exposure, pixel=pixel):
             return lambda: glare.acuity_blur(
                 image, pixel_deg=pixel, blur=how, white_cd_m2=DISPLAY_MAX_CD_M2,
-                luminance_scale=1.0 / exposure, levels_per_octave=levels,
+                luminance_scale=1.0 / exposure,
+                levels_per_octave=levels if how == "layers" else None,
             )  # fmt: skip
 
         variants = {"exact": blur("exact")}

@@ -230,6 +230,19 @@ def test_the_scale_from_display_to_scene_sets_the_blur():
             "blur must be one of",
         ),
         (lambda: acuity.acuity_blur(np.full((3, 3), np.nan), pixel_deg=0.1), "image_cd_m2"),
+        # each was taken and acted on nothing
+        (
+            lambda: acuity.acuity_blur(
+                np.ones((3, 3)), pixel_deg=0.1, space="linear", white_cd_m2=50.0
+            ),
+            "white_cd_m2=50.0 with space='linear'",
+        ),
+        (
+            lambda: acuity.acuity_blur(
+                np.ones((3, 3)), pixel_deg=0.1, blur="exact", levels_per_octave=4
+            ),
+            "levels_per_octave=4 with blur='exact'",
+        ),
         (lambda: acuity.varying_blur(np.ones((3, 3)), np.ones((3, 4))), "sigma_px"),
         (lambda: acuity.varying_blur(np.ones((3, 3)), -np.ones((3, 3))), "sigma_px"),
         (

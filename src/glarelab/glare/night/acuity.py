@@ -251,9 +251,9 @@ def acuity_blur(
     method: Literal["Krawczyk2005", "Luidolt2020"] = "Krawczyk2005",
     blur: Literal["layers", "separable", "exact"] = "layers",
     space: Literal["lightness", "linear"] = "lightness",
-    white_cd_m2: float = LAB_WHITE_CD_M2_LUIDOLT2020,
+    white_cd_m2: float | None = None,
     luminance_scale: float = 1.0,
-    levels_per_octave: int = LEVELS_PER_OCTAVE,
+    levels_per_octave: int | None = None,
     colourspace: str = "ITU-R BT.709",
 ) -> np.ndarray:
     """The image as the dark-adapted eye resolves it: each pixel blurred by the σ of its
@@ -277,13 +277,15 @@ def acuity_blur(
         white of ``white_cd_m2`` (channels clipped at 0 where a kept chroma does not fit a
         lower lightness); ``'linear'``: every channel is blurred as light.
     white_cd_m2
-        The white of L*, a*, b*, cd/m² (in the image's units); default 100 (eq. 5.16's).
+        The white of L*, a*, b*, cd/m² (in the image's units), for ``space='lightness'``;
+        default None: 100 (eq. 5.16's). Refused with ``space='linear'``, which has no white.
     luminance_scale
         The scene luminance σ follows from is the image's luminance times this; default 1
         (the image is the scene). The night pipeline blurs a display image: 1 / exposure.
     levels_per_octave
-        Levels of the ``'layers'`` ladder per doubling of σ; default 16
+        Levels of the ``'layers'`` ladder per doubling of σ; default None: 16
         (:data:`LEVELS_PER_OCTAVE`: within half a code of a 10-bit display, measured).
+        Refused with another ``blur``, which has no ladder.
     colourspace
         The RGB colourspace of an RGB image.
 
@@ -306,12 +308,27 @@ def acuity_blur(
     """
     image = check_image("image_cd_m2", image_cd_m2, channels=(3,))
     pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
-    white = check_positive("white_cd_m2", white_cd_m2, unit="cd/m²")
     scale = check_positive("luminance_scale", luminance_scale)
     check_choice("space", space, ("lightness", "linear"))
+    check_choice("blur", blur, BLUR_METHODS)
+    if white_cd_m2 is not None and space == "linear":  # options that would act on nothing
+        raise ValueError(
+            f"white_cd_m2={white_cd_m2!r} with space='linear': it is the white of L*a*b*, "
+            "which a linear blur does not use; leave it None or blur in space='lightness'"
+        )
+    if levels_per_octave is not None and blur != "layers":
+        raise ValueError(
+            f"levels_per_octave={levels_per_octave!r} with blur={blur!r}: it spaces the "
+            "'layers' ladder, which that blur does not use; leave it None"
+        )
+    white = check_positive(
+        "white_cd_m2",
+        LAB_WHITE_CD_M2_LUIDOLT2020 if white_cd_m2 is None else white_cd_m2,
+        unit="cd/m²",
+    )
+    levels_per_octave = LEVELS_PER_OCTAVE if levels_per_octave is None else levels_per_octave
     check_choice("colourspace", colourspace, sorted(colour.RGB_COLOURSPACES))
     check_choice("method", method, SIGMA_METHODS)
-    check_choice("blur", blur, BLUR_METHODS)
     space_rgb = colour.RGB_COLOURSPACES[colourspace]
     white_xy = space_rgb.whitepoint
     planes_of, image_of, luminance_of = _space(image, space, white, space_rgb, white_xy)

@@ -786,7 +786,8 @@ class LiveNight:
         display = np.minimum(display, self.l_dmax)
         blurred = acuity_blur(
             display, pixel_deg=self.pixel_deg, method=self.acuity_method, blur="layers",
-            space=self.acuity_space, white_cd_m2=self.l_dmax, luminance_scale=1.0 / exposure,
+            space=self.acuity_space, luminance_scale=1.0 / exposure,
+            white_cd_m2=self.l_dmax if self.acuity_space == "lightness" else None,
             levels_per_octave=self.levels_per_octave, colourspace=self.colourspace,
         )  # fmt: skip
         # each pixel's reach: the radius of the ladder's level above its σ

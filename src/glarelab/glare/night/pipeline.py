@@ -370,8 +370,9 @@ def render_night(
         if "acuity" in chosen:
             display = acuity_blur(
                 display, pixel_deg=pixel_deg, method=acuity_method, blur=blur,
-                space=acuity_space, white_cd_m2=l_dmax, luminance_scale=1.0 / scale,
-                levels_per_octave=levels_per_octave, colourspace=colourspace,
+                space=acuity_space, luminance_scale=1.0 / scale, colourspace=colourspace,
+                white_cd_m2=l_dmax if acuity_space == "lightness" else None,
+                levels_per_octave=levels_per_octave if blur == "layers" else None,
             )  # fmt: skip
         if "scotopic" in chosen:
             options = (
