@@ -251,3 +251,15 @@ def test_a_code_out_of_range_is_named():
         calibration.decode([10, 300])
     with pytest.raises(ValueError, match="got -1"):
         calibration.decode([-1])
+
+
+def test_a_luminance_at_the_top_or_bottom_reading_is_not_counted_as_clipped():
+    """433 cd/m², the top reading, was counted above the maximum: the fitted table ends at
+    432.9999999999998."""
+    from glarelab.display.calibration import fit_calibration
+
+    readings = [(0, 0.5), (256, 30.0), (512, 120.0), (768, 270.0), (1023, 433.0)]
+    calibration = fit_calibration(readings, bit_depth=10)
+    codes, report = calibration.encode(np.array([433.0, 0.5, 0.0, 1000.0]))
+    assert codes.tolist() == [1023, 0, 0, 1023]
+    assert (report.above_max, report.below_black) == (1, 1)  # 1000 and 0 only

@@ -301,11 +301,14 @@ class Calibration:
         codes = np.where(nearer_upper, upper, lower)
         codes = np.where(values >= lut[-1], self.n_codes - 1, codes)
         codes = np.where(values <= lut[0], 0, codes)
+        # the table's ends as the readings give them: a luminance equal to the top reading
+        # is not above the maximum when the fitted curve ends 1e-16 below it
+        top, bottom = lut[-1] * (1 + ENDS_TOLERANCE), lut[0] * (1 - ENDS_TOLERANCE)
         inside = (values >= lut[0]) & (values <= lut[-1])
         error = np.abs(lut[codes] - values)[inside]
         report = EncodeReport(
-            above_max=int((values > lut[-1]).sum()),
-            below_black=int((values < lut[0]).sum()),
+            above_max=int((values > top).sum()),
+            below_black=int((values < bottom).sum()),
             max_error_cd_m2=float(error.max()) if error.size else 0.0,
             pixels=int(values.size),
         )
@@ -541,6 +544,7 @@ def _verification_sha256(readings_sha256: str, verification: dict) -> str:
 
 
 STATUSES = ("unverified", "passed", "failed", "synthetic")
+ENDS_TOLERANCE = 1e-9  # relative: a luminance this close to the table's end is at it
 MODEL_TOLERANCE = 1e-6  # relative: a model re-fitted from the same readings agrees to 1e-9
 
 
