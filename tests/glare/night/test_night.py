@@ -237,3 +237,13 @@ def test_a_sequence_with_the_gaze_falloff_renders_each_frame_as_alone():
 def test_a_gaze_of_true_is_refused_not_read_as_row_1():
     with pytest.raises(ValueError, match="gaze_px"):
         glare.render_night(np.full((16, 16), 0.05), pixel_deg=0.05, gaze_px=(True, 5))
+
+
+def test_a_monochromatic_halo_adapted_to_daylight_drops_its_wavelength():
+    """The photopic PSF refuses a wavelength (it has no halo to colour); a frame adapted to
+    daylight makes a mesopic 500 nm model photopic, and must not be refused for it."""
+    model = glare.VosGlare(regime="mesopic", wavelength_nm=500.0)
+    bright = night.adapted_model(model, 100.0)
+    assert (bright.regime, bright.wavelength_nm) == ("photopic", None)
+    dim = night.adapted_model(model, 0.05)
+    assert (dim.regime, dim.wavelength_nm) == ("mesopic", 500.0)

@@ -66,9 +66,9 @@ class VosGlare(GlareModel):
         would act on nothing).
     wavelength_nm
         ``None`` (default): the halo of a white source, integrated over 400-700 nm.
-        A number: a monochromatic halo at that wavelength (380-780 nm); refused for a model
-        without a halo (the photopic regime, or a pupil under 3 mm), where it would act on
-        nothing.
+        A number: a monochromatic halo at that wavelength (380-780 nm); refused in the
+        photopic regime, which has no halo, and beside a ``halo_spectrum`` (one of them
+        would be ignored). A pupil under 3 mm, the eye's state, drops the halo it colours.
     halo_spectrum
         Wavelength sampling and display primaries of the coloured halo.
     samples_per_pixel, center_samples_per_pixel, center_radius_px
@@ -144,12 +144,11 @@ class VosGlare(GlareModel):
                     f"{self.regime} PSF (eq. 5) does not have; leave wavelength_nm None, or "
                     "choose a regime with a halo"
                 )
-            if self.halo_skipped:
+            if self.halo_spectrum != HaloSpectrum():  # one of the two would be ignored
                 raise ValueError(
-                    f"wavelength_nm={self.wavelength_nm!r} with pupil_mm={self.pupil_mm!r}: the "
-                    "wavelength sets only the lenticular halo (Spencer eq. 9), which a pupil "
-                    "under 3 mm drops (§2.1); leave wavelength_nm None, or give a pupil of 3 mm "
-                    "or more"
+                    f"wavelength_nm={self.wavelength_nm!r} with halo_spectrum="
+                    f"{self.halo_spectrum!r}: a monochromatic halo uses no spectrum; give one "
+                    "of them"
                 )
         check_positive_int("seed", self.seed, minimum=0)
         if self.seed != 0 and not self.flare_lines:  # as the command line's --seed alone

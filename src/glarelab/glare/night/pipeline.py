@@ -157,6 +157,8 @@ def adapted_model(
             changes["field_luminance_cd_m2"] = type(model).field_luminance_cd_m2
     if "regime" in names:
         changes["regime"] = regime(luminance)
+        if getattr(model, "wavelength_nm", None) is not None and changes["regime"] == "photopic":
+            changes["wavelength_nm"] = None  # it colours the halo, which photopic has not
     for name in names:
         value = getattr(model, name)
         if isinstance(value, GlareModel) and dataclasses.is_dataclass(value):
