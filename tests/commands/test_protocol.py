@@ -105,3 +105,24 @@ def test_keys_of_a_protocol_that_is_refused_print_no_table(capsys):
     assert main(["protocol", "keys", ""]) == 2
     captured = capsys.readouterr()
     assert captured.out == "" and "the path is empty" in captured.err
+
+
+def test_a_protocol_the_check_refuses_for_its_observer_is_not_built(tmp_path, capsys):
+    """An unknown [observer] key: protocol check refused it, and stimuli build built it."""
+    text = (PROTOCOLS / "yoshida2008.toml").read_text(encoding="utf-8")
+    path = tmp_path / "p.toml"
+    path.write_text(text + "\n[observer]\nbogus_param = 1.0\n", encoding="utf-8")
+    for argv in (["protocol", "check", str(path)],
+                 ["stimuli", "build", str(path), "--out", str(tmp_path / "set")]):  # fmt: skip
+        capsys.readouterr()
+        assert main(argv) == 2
+        assert "observer: unknown key(s) bogus_param" in capsys.readouterr().err
+    assert not (tmp_path / "set").exists()
+
+
+def test_an_unknown_key_of_a_nested_parameter_table_is_named():
+    """'Spectrum.__init__() got an unexpected keyword argument 'x''."""
+    from glarelab.protocols.common import glare_model
+
+    with pytest.raises(ValueError, match=r"^halo_spectrum\.x: not a key of halo_spectrum"):
+        glare_model("vos", {"halo_spectrum": {"x": 1}})

@@ -16,7 +16,12 @@ from .common import log as _log
 
 
 def _stimuli_build(args: argparse.Namespace) -> int:
+    from glarelab.experiments.paradigms import paradigm_run
+
     protocol, monitor = apply_monitor(args, load_protocol(args.protocol))
+    observer = paradigm_run(protocol).observer
+    if observer is not None:  # a protocol that protocol check refuses is not built either
+        observer.check(protocol)
     if "calibration" in (args.accept_mismatch or ()) and not args.calibration and monitor is None:
         raise ValueError(
             "--accept-mismatch calibration without --calibration (or --monitor): there is no "

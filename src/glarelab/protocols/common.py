@@ -262,6 +262,13 @@ def glare_model(model: str, parameters: Mapping[str, Any]):
             if isinstance(value, Mapping) and field.default_factory is not dataclasses.MISSING:
                 nested = field.default_factory()
                 if dataclasses.is_dataclass(nested):
+                    keys = {f.name for f in dataclasses.fields(nested) if f.init}
+                    unknown = sorted(set(value) - keys)
+                    if unknown:  # named by key, not by the constructor's TypeError
+                        raise ValueError(
+                            f"{field.name}.{unknown[0]}: not a key of {field.name} (its keys: "
+                            f"{', '.join(sorted(keys))})"
+                        )
                     values[field.name] = type(nested)(**value)
     return make_model(model, **values)
 
