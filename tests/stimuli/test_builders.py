@@ -223,3 +223,12 @@ def test_a_negative_uniform_background_is_refused():
     with pytest.raises(ValueError, match=r"uniform background's cd_m2 must be >= 0; got -5\.0"):
         background({"kind": "uniform", "cd_m2": -5.0}, (4, 6), pixel_deg=0.01,
                    rng=np.random.default_rng(0), ceiling_cd_m2=100.0)  # fmt: skip
+
+
+def test_clouds_smaller_than_two_pixels_are_refused_by_their_size():
+    """The build said the ceiling cut the sky's contrast: no cloud could be drawn at all."""
+    spec = {"kind": "sky", "mean_cd_m2": 150.0, "contrast": 0.15, "cloud_min_deg": 0.001,
+            "cloud_max_deg": 0.002, "spectrum_slope": 1.0}  # fmt: skip
+    with pytest.raises(ValueError, match=r"cloud_max_deg = 0\.002° is under two pixels"):
+        background(spec, (32, 32), pixel_deg=0.0059, rng=np.random.default_rng(0),
+                   ceiling_cd_m2=220.0)  # fmt: skip

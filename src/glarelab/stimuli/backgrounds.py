@@ -147,6 +147,12 @@ def background(
     """
     kind = spec["kind"]
     if kind == "sky":
+        if spec["cloud_max_deg"] < 2 * pixel_deg:  # no frequency of the band is drawn
+            raise ValueError(
+                f"background.cloud_max_deg = {spec['cloud_max_deg']:g}° is under two pixels "
+                f"({2 * pixel_deg:.4g}° at {pixel_deg:.4g}°/px): no cloud of that size can be "
+                "drawn; give clouds of at least two pixels"
+            )
         image = cloudy_sky(
             shape,
             pixel_deg=pixel_deg,
