@@ -273,3 +273,22 @@ def test_an_option_its_mode_ignores_is_refused(argv, named, capsys, tmp_path):
     a sweep that simulates no one, a mismatch accepted of no calibration)."""
     out = {"sweep": "s", "stimuli": "set", "calibrate": "c.json", "power": "p"}[argv[0]]
     refused([*argv, "--out", tmp_path / out], capsys, tmp_path, named)
+
+
+def test_a_vos_pupil_acts_where_there_is_a_halo_and_is_refused_where_there_is_none(
+    capsys, tmp_path, monkeypatch
+):
+    """--pupil-mm was refused for the vos model, whose pupil under 3 mm drops the halo."""
+    monkeypatch.chdir(tmp_path)
+    image = np.full((101, 101), 1.0)  # 5° across: the halo's ring at 2-4° inside the kernel
+    image[50, 50] = 1e6
+    write_exr("in.exr", image)
+    base = ["--pixel-deg", "0.05", "--model", "vos", "--regime", "mesopic"]
+    assert main(["render", "in.exr", "with.exr", *base]) == 0
+    assert main(["render", "in.exr", "small.exr", *base, "--pupil-mm", "2.5"]) == 0
+    from glarelab.stimuli.exr import read_exr
+
+    assert not np.array_equal(read_exr("with.exr"), read_exr("small.exr"))  # the halo dropped
+    refused(["render", "in.exr", "out.exr", "--pixel-deg", "0.05", "--model", "vos",
+             "--pupil-mm", "2.5"], capsys, tmp_path, "--pupil-mm with --model vos --regime "
+            "photopic")  # fmt: skip

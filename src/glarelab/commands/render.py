@@ -43,7 +43,7 @@ PSF_FIXED_BYTES = 0.5 * 2**30
 # the options each model takes; one given to a model that ignores it is refused
 MODEL_OPTIONS = {
     "gaussian": {"sigma_deg"},
-    "vos": {"regime", "age", "flare_lines", "seed", "wavelength_nm"},
+    "vos": {"regime", "age", "flare_lines", "seed", "wavelength_nm", "pupil_mm"},
     "wave": {
         "pupil_mm", "no_eyelashes", "no_eyelid", "particles", "fresnel", "spectral", "seed",
         "source_x_deg", "diaphragm_sides", "cross_screen", "aperture_image",
@@ -65,6 +65,12 @@ def _check_options(args: argparse.Namespace) -> None:
     if ignored:
         shown = ", ".join("--" + name.replace("_", "-") for name in ignored)
         raise ValueError(f"{shown}: not an option of --model {args.model}, which would ignore it")
+    if args.model == "vos" and "pupil_mm" in given and args.regime == "photopic":
+        raise ValueError(
+            "--pupil-mm with --model vos --regime photopic: the pupil drops the lenticular "
+            "halo when under 3 mm (Spencer §2.1), and the photopic PSF has none, so it would "
+            "be ignored; give --regime mesopic or scotopic"
+        )
     if args.model == "vos" and "seed" in given and "flare_lines" not in given:
         raise ValueError(
             "--seed without --flare-lines: the seed places Spencer's flare lines, and the vos "
@@ -126,6 +132,7 @@ def build_model(args: argparse.Namespace) -> glare.GlareModel:
             flare_lines=args.flare_lines,
             seed=args.seed,
             wavelength_nm=args.wavelength_nm,
+            pupil_mm=args.pupil_mm,
         )
     if args.model in ("wave", "hybrid"):
         image = None
@@ -176,7 +183,11 @@ def _add_model_options(parser: argparse.ArgumentParser, default: str = "vos") ->
     )
     wave = parser.add_argument_group("wave optics (--model wave|hybrid)")
     wave.add_argument(
-        "--pupil-mm", type=number(0, above=True), default=None, help="default: Moon-Spencer"
+        "--pupil-mm",
+        type=number(0, above=True),
+        default=None,
+        help="pupil, mm (wave, hybrid: default from the field luminance, Moon-Spencer; vos: "
+        "under 3 mm the halo is dropped, mesopic and scotopic only)",
     )
     wave.add_argument("--no-eyelashes", action="store_true")
     wave.add_argument("--no-eyelid", action="store_true")
