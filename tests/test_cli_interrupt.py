@@ -163,6 +163,13 @@ def test_an_interrupt_a_library_swallows_or_that_comes_at_exit_ends_as_the_comma
     assert "Traceback" not in done.stderr and said in done.stderr, done.stderr
 
 
+def _terminal_signals() -> None:
+    """SIGINT and SIGHUP as a terminal delivers them: a test runner started with nohup has
+    SIGHUP ignored, and glarelab keeps what its parent ignores (as for SIGINT)."""
+    _terminal_sigint()
+    signal.signal(signal.SIGHUP, signal.SIG_DFL)
+
+
 @pytest.mark.parametrize("number", [signal.SIGTERM, signal.SIGHUP], ids=["SIGTERM", "SIGHUP"])
 def test_a_kill_or_a_closed_terminal_during_a_build_ends_it_as_ctrl_c_does(number, tmp_path):
     """SIGTERM (a kill, a job manager) ended a build at once with Python's default: its
@@ -172,7 +179,7 @@ def test_a_kill_or_a_closed_terminal_during_a_build_ends_it_as_ctrl_c_does(numbe
     process = subprocess.Popen(
         [sys.executable, "-m", "glarelab", "stimuli", "build", "yoshida2008", "--out", str(out)],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV, cwd=tmp_path,
-        preexec_fn=_terminal_sigint,
+        preexec_fn=_terminal_signals,
     )  # fmt: skip
     deadline = time.monotonic() + 120
     while not list(tmp_path.glob(".set.building-*")) and time.monotonic() < deadline:

@@ -285,7 +285,15 @@ class KernelCache:
             return False
         try:
             self.directory.mkdir(parents=True, exist_ok=True)
-            with atomic_path(self.path(key)) as temporary:
+            path = self.path(key)
+            if (
+                path.is_fifo()
+                or path.is_socket()
+                or path.is_char_device()
+                or path.is_block_device()
+            ):
+                path.unlink()  # the cache's own entry's name: what is there is no kernel
+            with atomic_path(path) as temporary:
                 temporary.write_bytes(encoded)
         except OSError as error:
             if not self._warned:
