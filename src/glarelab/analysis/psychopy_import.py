@@ -283,8 +283,9 @@ def import_psychopy(
         if duplicated:
             problems.append(f"{source}, line 1: column(s) {', '.join(duplicated)} appear twice")
             continue
-        if _other_delimiter(header):
-            problems.append(f"{source}, line 1: not comma-separated{_other_delimiter(header)}")
+        delimiter = _other_delimiter(header)
+        if delimiter:
+            problems.append(f"{source}, line 1: not comma-separated{delimiter}")
             continue
         absent = [name for name in mapping if name not in header]
         if absent:

@@ -27,6 +27,7 @@ __all__ = [
     "atomic_path",
     "fsync_folder",
     "short_name",
+    "special_file",
     "write_bytes",
     "write_text",
 ]
@@ -146,20 +147,37 @@ _SPECIAL = (  # a folder is left to the rename, which fails on it
 )
 
 
+def special_file(path: str | Path) -> str | None:
+    """What ``path`` is if it is a device, a named pipe or a socket (``'a named pipe
+    (FIFO)'``), which a rename over it would replace; None for anything else or nothing.
+
+    Parameters
+    ----------
+    path
+        The path, not followed if it is a link.
+
+    Returns
+    -------
+    str or None
+        The kind, for a message, or None.
+    """
+    try:
+        mode = os.lstat(path).st_mode
+    except OSError:  # not there (or not reachable: the write says why)
+        return None
+    return next((what for test, what in _SPECIAL if test(mode)), None)
+
+
 def _refuse_special(path: Path) -> None:
     """Refuse a ``path`` that is there and is no regular file: the rename that puts a new
     file in place would replace the folder's entry (a device, such as /dev/null for root,
     would be gone)."""
-    try:
-        mode = os.lstat(path).st_mode
-    except OSError:  # not there (or not reachable: the write says why)
-        return
-    for test, what in _SPECIAL:
-        if test(mode):
-            raise ValueError(
-                f"{path}: {what}, not a file; glarelab writes a file whole and renames it into "
-                "place, which would replace it; give a file's path"
-            )
+    what = special_file(path)
+    if what is not None:
+        raise ValueError(
+            f"{path}: {what}, not a file; glarelab writes a file whole and renames it into "
+            "place, which would replace it; give a file's path"
+        )
 
 
 @contextlib.contextmanager

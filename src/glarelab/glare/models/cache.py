@@ -52,7 +52,7 @@ from pathlib import Path
 
 import numpy as np
 
-from glarelab.files.atomic import PARTIAL, atomic_path
+from glarelab.files.atomic import PARTIAL, atomic_path, special_file
 from glarelab.glare.models.digitise import Kernel, mirror_quadrant
 
 __all__ = [
@@ -286,12 +286,7 @@ class KernelCache:
         try:
             self.directory.mkdir(parents=True, exist_ok=True)
             path = self.path(key)
-            if (
-                path.is_fifo()
-                or path.is_socket()
-                or path.is_char_device()
-                or path.is_block_device()
-            ):
+            if special_file(path) is not None:
                 path.unlink()  # the cache's own entry's name: what is there is no kernel
             with atomic_path(path) as temporary:
                 temporary.write_bytes(encoded)
