@@ -352,3 +352,28 @@ def test_a_file_saved_with_semicolons_is_named_as_such(tmp_path):
     with pytest.raises(DataError, match=r"line 1: not comma-separated \(its first line is one "
                        r"cell holding ';'.*save it with ',' between cells\)"):  # fmt: skip
         import_psychopy(protocol, [source], tmp_path / "out", mapping={"key_resp.rt": "time_s"})
+
+
+@pytest.mark.parametrize(
+    "date, stem",
+    [
+        ("2026_Dec_03_0729", "2026-12-03_0729"),  # older PsychoPy releases' getDateStr
+        ("2026-12-03_07h29.22.123", "2026-12-03_0729"),
+        ("2026_Feb_30_0729", None),  # no such day: dated by the file, the value named
+        ("03/12/2026 07:29", None),  # a spreadsheet's re-save
+    ],
+)
+def test_each_psychopy_date_format_dates_the_session(simulated, tmp_path, date, stem):
+    """PsychoPy's older date, 2026_Dec_03_0729, was not read: the session was dated by the
+    file's modification time and the message said the file had no date."""
+    pytest.importorskip("psychopy.data")
+    protocol = load_protocol("yoshida2008")
+    own = sorted(simulated.glob("*_yoshida2008_s1_*.csv"))[0]
+    source = write_psychopy(own, protocol, tmp_path, rt_name="time_s")
+    _edit_rows(source, lambda row, at: row.__setitem__(at, date) if len(row) > at else None)
+    (imported,) = import_psychopy(protocol, [source], tmp_path / "out")
+    if stem is None:
+        assert f"its 'date' {date!r} is not PsychoPy's" in imported.summary()
+    else:
+        assert imported.csv.stem.endswith(stem)
+        assert "modification time" not in imported.summary()

@@ -67,8 +67,11 @@ _BOOLEANS = {  # Python's, the session format's, and a spreadsheet's re-save (Ex
     "TRUE": "true", "FALSE": "false",
 }  # fmt: skip
 _INTEGRAL = re.compile(r"[+-]?\d+(\.0*)?")
-# PsychoPy's data.getDateStr(): 2026-12-03_07h29.22.123
-_DATE = re.compile(r"(\d{4}-\d{2}-\d{2})_(\d{2})h(\d{2})")
+# PsychoPy's data.getDateStr(): 2026-12-03_07h29.22.123, and in older releases
+# "%Y_%b_%d_%H%M", 2026_Dec_03_0729, its month abbreviated in English (the C locale)
+_DATE = re.compile(r"(\d{4})-(\d{2})-(\d{2})_(\d{2})h(\d{2})")
+_OLD_DATE = re.compile(r"(\d{4})_([A-Za-z]{3})_(\d{2})_(\d{2})(\d{2})")
+_MONTHS = ("jan", "feb", "mar", "apr", "may", "jun", "jul", "aug", "sep", "oct", "nov", "dec")
 _FILLED = ("study", "participant", "session")  # not trial data: the same on every row
 
 
@@ -164,13 +167,41 @@ def _cell(value: str, column) -> str:
     return value
 
 
-def _started(rows: list[dict[str, str]], source: Path) -> datetime:
-    """When the run started: PsychoPy's ``date`` column, else the file's modification time."""
+def _psychopy_date(value: str) -> datetime | None:
+    """A ``date`` cell as either of PsychoPy's formats wrote it, else None."""
+    match = _DATE.fullmatch(value.split(".")[0])
+    if match:
+        numbers = [int(part) for part in match.groups()]
+    else:
+        match = _OLD_DATE.fullmatch(value)
+        if not match or match[2].lower() not in _MONTHS:
+            return None
+        numbers = [int(match[1]), _MONTHS.index(match[2].lower()) + 1]
+        numbers += [int(part) for part in match.groups()[2:]]
+    try:
+        return datetime(*numbers)
+    except ValueError:  # 2026-02-30, 25h: not a date PsychoPy writes
+        return None
+
+
+def _started(rows: list[dict[str, str]], source: Path) -> tuple[datetime, str | None]:
+    """When the run started, and why not by PsychoPy's ``date`` if it is not.
+
+    The first row whose ``date`` is one of PsychoPy's formats dates the run; with none, the
+    file's modification time does, and the second value says so, naming a ``date`` that is
+    there in another format (a spreadsheet's re-save)."""
     for row in rows:
-        match = _DATE.match(row.get("date", ""))
-        if match:
-            return datetime.strptime(f"{match[1]} {match[2]}:{match[3]}", "%Y-%m-%d %H:%M")
-    return datetime.fromtimestamp(source.stat().st_mtime)
+        started = _psychopy_date(row.get("date", ""))
+        if started is not None:
+            return started, None
+    started = datetime.fromtimestamp(source.stat().st_mtime)
+    other = next((row["date"] for row in rows if row.get("date")), None)
+    found = f"its 'date' {other!r} is not PsychoPy's" if other is not None else "no PsychoPy date"
+    return started, (
+        f"the file's modification time, {started:%Y-%m-%d %H:%M}: {found} "
+        "(a 'date' column as 2026-12-03_07h29.22 or, from older PsychoPy releases, "
+        "2026_Dec_03_0729)"
+    )
 
 
 def _read(source: Path, problems: list[str]) -> tuple[list[str], list[tuple[int, list[str]]]]:
@@ -364,12 +395,9 @@ def import_psychopy(
             sessions.setdefault((participant, session), []).append(record)
         if len(problems) > found:
             continue
-        started = _started(originals, source)
-        if not any(_DATE.match(row.get("date", "")) for row in originals):
-            filled["started"] = (
-                f"the file's modification time, {started:%Y-%m-%d %H:%M}: no PsychoPy date "
-                "(a 'date' column as 2026-12-03_07h29.22) in the file"
-            )
+        started, undated = _started(originals, source)
+        if undated is not None:
+            filled["started"] = undated
         digest = hashlib.sha256(source.read_bytes()).hexdigest()
         version = next((r["psychopyVersion"] for r in originals if r.get("psychopyVersion")), None)
         for (participant, session), trial_rows in sessions.items():
