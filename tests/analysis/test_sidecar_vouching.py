@@ -91,6 +91,28 @@ def test_a_data_format_this_version_does_not_know_is_refused(luidolt, tmp_path):
             'calibration.readings_sha256 is "ab", but its status is unverified',
         ),
         (
+            {
+                "calibration": {
+                    "calibrated": True,
+                    "readings_sha256": "a" * 64,
+                    "curve_sha256": None,
+                    "status": "passed",
+                }
+            },
+            "calibration.curve_sha256 is null, but its status is passed: must be the sha256",
+        ),
+        (
+            {
+                "calibration": {
+                    "calibrated": False,
+                    "readings_sha256": None,
+                    "curve_sha256": "a" * 64,
+                    "status": "simulated",
+                }
+            },
+            'calibration.curve_sha256 is "aaaa',
+        ),
+        (
             {"calibration": {"calibrated": True, "readings_sha256": None, "status": "missing"}},
             "calibration.calibrated is true; a session whose calibration is missing records false",
         ),

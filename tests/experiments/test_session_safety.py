@@ -189,6 +189,46 @@ def test_a_resume_with_another_protocol_is_refused(tmp_path):
     assert data_files(tmp_path) == before
 
 
+def test_a_resume_with_the_readings_refitted_by_another_method_is_refused(tmp_path, stimulus_sets):
+    """Only the readings' digest was compared: the same readings fitted by another method (a
+    curve that encodes every luminance otherwise) resumed the session without a word."""
+    protocol = load_protocol("yoshida2008")
+    readings = [(c, 0.5 + 432.5 * (c / 1023) ** 2.2) for c in range(0, 1024, 31)] + [(1023, 433.0)]
+    fitted = fit_calibration(sorted(set(readings)), bit_depth=10, label="Barco, 433 cd/m²")
+    refitted = fit_calibration(sorted(set(readings)), bit_depth=10, method="gog", label="Barco")
+    relabelled = fit_calibration(sorted(set(readings)), bit_depth=10, label="Barco, relabelled")
+    assert refitted.readings_sha256 == fitted.readings_sha256
+    display = protocol["display"]
+    facts = ScreenFacts(tuple(display["resolution_px"]), display["refresh_hz"], 10)
+    out = tmp_path / "data"
+
+    def run(calibration, **options):
+        return run_session(
+            protocol,
+            "P01",
+            out=out,
+            frontend=_Screen(protocol, facts, stimulus_sets / "yoshida2008"),
+            stimuli=stimulus_sets / "yoshida2008",
+            calibration=calibration,
+            allow_uncalibrated=True,
+            **options,
+        )
+
+    with pytest.warns(UserWarning, match="not been verified"):
+        first = run(fitted)
+    assert first["calibration"]["curve_sha256"] == fitted.curve_sha256
+    (sidecar,) = out.glob("*.json")  # as if it had ended with Escape
+    sidecar.write_text(sidecar.read_text().replace('"status": "completed"', '"status": "aborted"'))
+    before = data_files(out)
+    with pytest.warns(UserWarning, match="not been verified"):
+        with pytest.raises(SessionError, match=r"other inputs: the calibration \(curve sha256"):
+            run(refitted, resume=True)
+    assert data_files(out) == before
+    with pytest.warns(UserWarning, match="not been verified"):
+        resumed = run(relabelled, resume=True)  # the same curve: its label is no input
+    assert resumed["calibration"]["curve_sha256"] == fitted.curve_sha256
+
+
 @pytest.mark.parametrize("content", [b"", b"study,participant\n", b"trial 1 lost its header"])
 def test_a_session_without_a_valid_header_is_not_resumed(tmp_path, content):
     csv = tmp_path / "P01_luidolt2020_s1_2026-11-30_1432.csv"

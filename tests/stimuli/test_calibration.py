@@ -156,6 +156,7 @@ def test_sessions_refuse_missing_failed_or_synthetic_calibrations():
             "calibrated": False,
             "status": status,
             "readings_sha256": None if calibration is None else calibration.readings_sha256,
+            "curve_sha256": None if calibration is None else calibration.curve_sha256,
         }
     assert usable_calibration(passed)["calibrated"] is True
     with pytest.warns(UserWarning, match="not been verified"):

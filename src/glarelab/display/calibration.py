@@ -188,6 +188,17 @@ class Calibration:
         text = json.dumps([[int(c), float(v)] for c, v in self.readings])
         return hashlib.sha256(text.encode()).hexdigest()
 
+    @property
+    def curve_sha256(self) -> str:
+        """The sha256 of what fixes each code's luminance: bit depth, method, readings, model.
+
+        Two calibrations of one digest encode every luminance alike, whatever their label,
+        date or verification; a refit of the same readings by another method differs."""
+        text = json.dumps(
+            [self.bit_depth, self.method, self.readings_sha256, self.model], sort_keys=True
+        )
+        return hashlib.sha256(text.encode()).hexdigest()
+
     @cached_property
     def lut(self) -> np.ndarray:
         """Luminance of every code, cd/m² (monotone non-decreasing; computed once, read-only)."""
@@ -970,7 +981,8 @@ def usable_calibration(
     Returns
     -------
     dict
-        ``calibrated`` (bool), ``status``, ``readings_sha256`` (None without a calibration).
+        ``calibrated`` (bool), ``status``, ``readings_sha256`` and ``curve_sha256``
+        (:attr:`Calibration.curve_sha256`; both None without a calibration).
 
     Raises
     ------
@@ -986,6 +998,7 @@ def usable_calibration(
         "calibrated": status in ("passed", "unverified"),
         "status": status,
         "readings_sha256": calibration.readings_sha256 if calibration is not None else None,
+        "curve_sha256": calibration.curve_sha256 if calibration is not None else None,
     }
     if status in ("missing", "failed", "synthetic") and not allow_uncalibrated:
         raise ValueError(

@@ -454,11 +454,16 @@ def _check_resume(
             changed.append(
                 f"the {what} (sha256 {str(sidecar.get(key))[:12]}… then, {str(now)[:12]}… now)"
             )
-    before = (sidecar.get("calibration") or {}).get("readings_sha256")
-    if before != calibration_record["readings_sha256"]:
+    recorded = sidecar.get("calibration") or {}
+    # the curve's digest where the session recorded it (a refit of the same readings by another
+    # method encodes otherwise), else the readings' (sessions before it was recorded)
+    key = "curve_sha256" if "curve_sha256" in recorded else "readings_sha256"
+    before = recorded.get(key)
+    if before != calibration_record[key]:
+        what = "curve" if key == "curve_sha256" else "readings"
         changed.append(
-            f"the calibration (readings sha256 {str(before)[:12]}… then, "
-            f"{str(calibration_record['readings_sha256'])[:12]}… now)"
+            f"the calibration ({what} sha256 {str(before)[:12]}… then, "
+            f"{str(calibration_record[key])[:12]}… now)"
         )
     if changed:
         raise SessionError(
@@ -646,12 +651,22 @@ def _run_session_locked(
         accept |= {"resolution", "refresh", "bit-depth", "refresh-unmeasured"}
     manifest_sha = _check_stimuli(protocol, stimuli)
     if simulated:
-        calibration_record = {"calibrated": False, "status": "simulated", "readings_sha256": None}
+        calibration_record = {
+            "calibrated": False,
+            "status": "simulated",
+            "readings_sha256": None,
+            "curve_sha256": None,
+        }
         checks = []
     elif not shows_images(protocol) and not (
         calibration is not None and (protocol.data.get("scene") or {}).get("live")
     ):  # a questionnaire shows no luminances (a live scene encodes through a given calibration)
-        calibration_record = {"calibrated": False, "status": "not needed", "readings_sha256": None}
+        calibration_record = {
+            "calibrated": False,
+            "status": "not needed",
+            "readings_sha256": None,
+            "curve_sha256": None,
+        }
         checks = []
     else:
         calibration_record = usable_calibration(calibration, allow_uncalibrated=allow_uncalibrated)
