@@ -152,7 +152,7 @@ def _first_row(protocol, display_pixel_deg: float) -> ImageRow:
 
 STIMULI = stimuli_paradigms.ParadigmStimuli(
     _build, _first_row, ("glare", "model"), stimuli_paradigms.always_shows,
-    stimuli_paradigms.no_backgrounds,
+    stimuli_paradigms.no_backgrounds, stimuli_paradigms.no_kernels,
 )  # fmt: skip
 
 

@@ -126,3 +126,46 @@ def test_an_unknown_key_of_a_nested_parameter_table_is_named():
 
     with pytest.raises(ValueError, match=r"^halo_spectrum\.x: not a key of halo_spectrum"):
         glare_model("vos", {"halo_spectrum": {"x": 1}})
+
+
+def _edited(tmp_path: Path, study: str, old: str, new: str) -> Path:
+    text = (PROTOCOLS / f"{study}.toml").read_text(encoding="utf-8")
+    assert old in text
+    path = tmp_path / f"{study}.toml"
+    path.write_text(text.replace(old, new), encoding="utf-8")
+    return path
+
+
+def test_a_kernel_the_build_refuses_is_refused_by_the_check(tmp_path, capsys):
+    """Luidolt's wave-optics method with its Fresnel term at a 6 mm pupil passed the check; the
+    build refused its aperture grid after rendering the methods before it."""
+    from glarelab.stimuli.matching import matching_kernels
+
+    path = _edited(tmp_path, "glare_methods2026", "particles = 1000, seed = 2026 }",
+                   "particles = 1000, seed = 2026, fresnel = true }")  # fmt: skip
+    status, err = _check(path, capsys)
+    assert status == 2 and "Traceback" not in err, err
+    assert "  - glare.methods[3].parameters: the aperture grid would need 8748² samples" in err
+    assert "a fresnel_distance_mm above 24 (the pixels do not set this grid)" in err
+    protocol = parse_protocol(tomllib.loads(path.read_text()), folder=tmp_path)
+    use = matching_kernels(protocol)[3]
+    with pytest.raises(ValueError) as built:  # the build's own words, after the key
+        use.model.kernel(use.pixel_deg, use.shape)
+    assert f"glare.methods[3].parameters: {built.value}" in err
+
+
+def test_spencers_renormalisation_of_a_window_too_small_for_the_halo_is_refused(tmp_path, capsys):
+    """A 31-pixel window: the kernel held 1e-22 of the halo, which renormalisation made the
+    whole halo; the check now refuses it as the kernel does."""
+    from glarelab.stimuli.staircase import staircase_kernels
+
+    path = _edited(tmp_path, "spencer1995", "window_px = 300 ", "window_px = 31 ")
+    status, err = _check(path, capsys)
+    assert status == 2 and "  - glare.parameters: normalisation='Spencer1995'" in err, err
+    assert "holds under 1 % of the mesopic halo of a channel" in err
+    protocol = parse_protocol(tomllib.loads(path.read_text()), folder=tmp_path)
+    (use,) = staircase_kernels(protocol)
+    with pytest.raises(ValueError, match="holds under 1 % of the mesopic halo"):
+        use.model.kernel(use.pixel_deg, use.shape)
+    shipped = _edited(tmp_path, "spencer1995", "window_px = 300 ", "window_px = 300 ")
+    assert _check(shipped, capsys)[0] in (0, 1)  # 1: a drawing rounded on the display

@@ -30,13 +30,16 @@ def _protocol_check(args: argparse.Namespace) -> int:
         observer.check(protocol)  # the simulated observers' parameters
     from glarelab.protocols import ProtocolError
     from glarelab.stimuli.backgrounds import check_backgrounds
+    from glarelab.stimuli.kernels import check_kernels
     from glarelab.stimuli.paradigms import paradigm_stimuli
 
+    stimuli = paradigm_stimuli(protocol)
     problems = check_backgrounds(  # drawn as a build draws them: what it would refuse
-        paradigm_stimuli(protocol).backgrounds(protocol),
+        stimuli.backgrounds(protocol),
         seed=protocol.seed,
         folder=protocol.folder,
     )
+    problems += check_kernels(stimuli.kernels(protocol))  # each model asked of its kernel
     if problems:
         raise ProtocolError(args.protocol, problems)
     print(

@@ -22,6 +22,7 @@ from glarelab.protocols import Protocol, pixel_deg
 from glarelab.protocols.common import glare_model
 from glarelab.protocols.matching import reference_name
 from glarelab.stimuli.backgrounds import BackgroundField, background
+from glarelab.stimuli.kernels import KernelUse
 from glarelab.stimuli.shapes import ImageRow
 
 __all__ = [
@@ -131,6 +132,33 @@ def matching_backgrounds(protocol: Protocol) -> list[BackgroundField]:
     ]
 
 
+def matching_kernels(protocol: Protocol) -> list[KernelUse]:
+    """The kernels :func:`build_matching` digitises: each method's, at the supersampled pixel.
+
+    Parameters
+    ----------
+    protocol
+        A validated protocol of the matching paradigm.
+
+    Returns
+    -------
+    list of KernelUse
+        One per glare method, in the protocol's order.
+    """
+    s = protocol["stimulus"]
+    fine_p = pixel_deg(protocol) / s["supersample"]
+    fine_n = _odd(s["size_deg"] / pixel_deg(protocol)) * s["supersample"]
+    return [
+        KernelUse(
+            f"glare.methods[{index}].parameters",
+            glare_model(method["model"], method["parameters"]),
+            fine_p,
+            kernel_shape_for((fine_n, fine_n)),
+        )
+        for index, method in enumerate(protocol["glare"]["methods"])
+    ]
+
+
 def build_matching(protocol: Protocol, *, progress=None) -> dict:
     """Render the reference and target images of a matching protocol.
 
@@ -185,8 +213,8 @@ def build_matching(protocol: Protocol, *, progress=None) -> dict:
     done = 0
     shape = kernel_shape_for((fine_n, fine_n))
     models = {}
-    for method in g["methods"]:
-        model = glare_model(method["model"], method["parameters"])
+    for method, use in zip(g["methods"], matching_kernels(protocol), strict=True):
+        model = use.model
         models[method["name"]] = repr(model)
         kernel = glare.digitise_kernel(model, fine_p, shape)  # from the kernel cache
         renderer = glare.GlareRenderer(  # exact; the kernel's spectrum is kept across levels

@@ -3,8 +3,9 @@
 A paradigm's stimulus module gives how its images are rendered (``build``), how a session draws
 its first trial's images side by side (``first_row``, which ``glarelab protocol check`` reports
 on the protocol's display), how a set's profile plots group its images, whether a protocol
-shows images at all, and the backgrounds its builder draws (which ``glarelab protocol check``
-draws to refuse what a build would). Every entry names all five, so a new paradigm cannot
+shows images at all, the backgrounds its builder draws (which ``glarelab protocol check``
+draws to refuse what a build would), and the glare kernels it digitises (which the check asks
+each model whether it can make). Every entry names all six, so a new paradigm cannot
 leave one out and be passed over silently; code outside the paradigms' modules finds an entry
 through :func:`paradigm_stimuli`, which names the registry when the entry is missing.
 """
@@ -16,10 +17,21 @@ from dataclasses import dataclass
 
 from glarelab.protocols import Protocol
 from glarelab.stimuli.backgrounds import BackgroundField
-from glarelab.stimuli.matching import build_matching, matching_backgrounds, matching_row
+from glarelab.stimuli.kernels import KernelUse, no_kernels
+from glarelab.stimuli.matching import (
+    build_matching,
+    matching_backgrounds,
+    matching_kernels,
+    matching_row,
+)
 from glarelab.stimuli.night import build_night, night_row, shows_scene
 from glarelab.stimuli.shapes import ImageRow
-from glarelab.stimuli.staircase import build_staircase, staircase_backgrounds, staircase_row
+from glarelab.stimuli.staircase import (
+    build_staircase,
+    staircase_backgrounds,
+    staircase_kernels,
+    staircase_row,
+)
 
 __all__ = [
     "PARADIGMS",
@@ -27,6 +39,7 @@ __all__ = [
     "ParadigmStimuli",
     "always_shows",
     "no_backgrounds",
+    "no_kernels",
     "paradigm_stimuli",
     "register_paradigm",
 ]
@@ -54,6 +67,11 @@ class ParadigmStimuli:
         ``backgrounds(protocol)``: the backgrounds the builder draws, in the order it draws
         them (:class:`glarelab.stimuli.backgrounds.BackgroundField`); :func:`no_backgrounds`
         for a paradigm that draws none.
+    kernels
+        ``kernels(protocol)``: the glare kernels the builder digitises
+        (:class:`glarelab.stimuli.kernels.KernelUse`); :func:`~glarelab.stimuli.kernels.no_kernels`
+        where none is known before the build (a rating scene's night pipeline plans its
+        kernels per frame, from the adaptation).
     """
 
     build: Callable[..., dict]
@@ -61,6 +79,7 @@ class ParadigmStimuli:
     profile_groups: tuple[str, str] | None
     shows: Callable[[Protocol], bool]
     backgrounds: Callable[[Protocol], list[BackgroundField]]
+    kernels: Callable[[Protocol], list[KernelUse]]
 
 
 def always_shows(protocol: Protocol) -> bool:
@@ -106,7 +125,8 @@ def register_paradigm(name: str, stimuli: ParadigmStimuli) -> None:
     name
         The paradigm's name, as a protocol's ``paradigm`` gives it (not yet registered).
     stimuli
-        Its entry: callable ``build``, ``first_row``, ``shows`` and ``backgrounds``, and
+        Its entry: callable ``build``, ``first_row``, ``shows``, ``backgrounds`` and
+        ``kernels``, and
         ``profile_groups``
         None or two names (image kind, key).
 
@@ -120,7 +140,7 @@ def register_paradigm(name: str, stimuli: ParadigmStimuli) -> None:
         raise ValueError(f"paradigm {name!r}: already registered in stimuli")
     if not isinstance(stimuli, ParadigmStimuli):
         raise ValueError(f"paradigm {name!r}: expected a ParadigmStimuli entry; got {stimuli!r}")
-    for key in ("build", "first_row", "shows", "backgrounds"):
+    for key in ("build", "first_row", "shows", "backgrounds", "kernels"):
         if not callable(getattr(stimuli, key)):
             raise ValueError(f"paradigm {name!r}: stimuli.{key} must be callable")
     groups = stimuli.profile_groups
@@ -136,17 +156,28 @@ def register_paradigm(name: str, stimuli: ParadigmStimuli) -> None:
 register_paradigm(
     "matching",
     ParadigmStimuli(
-        build_matching, matching_row, ("reference", "method"), always_shows, matching_backgrounds
+        build_matching,
+        matching_row,
+        ("reference", "method"),
+        always_shows,
+        matching_backgrounds,
+        matching_kernels,
     ),
 )
 register_paradigm(
     "staircase",
     ParadigmStimuli(
-        build_staircase, staircase_row, ("glare", "context"), always_shows, staircase_backgrounds
+        build_staircase,
+        staircase_row,
+        ("glare", "context"),
+        always_shows,
+        staircase_backgrounds,
+        staircase_kernels,
     ),
 )
 register_paradigm(
-    "rating", ParadigmStimuli(build_night, night_row, None, shows_scene, no_backgrounds)
+    "rating",
+    ParadigmStimuli(build_night, night_row, None, shows_scene, no_backgrounds, no_kernels),
 )
 
 

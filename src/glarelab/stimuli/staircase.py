@@ -28,6 +28,7 @@ from glarelab.protocols import pixel_deg as display_pixel_deg
 from glarelab.protocols.common import glare_model
 from glarelab.protocols.staircase import glare_name
 from glarelab.stimuli.backgrounds import BackgroundField, background
+from glarelab.stimuli.kernels import KernelUse
 from glarelab.stimuli.shapes import ImageRow
 
 __all__ = ["build_staircase", "compose_comparison", "staircase_backgrounds", "staircase_row"]
@@ -90,6 +91,26 @@ def staircase_backgrounds(protocol: Protocol) -> list[BackgroundField]:
     ]
 
 
+def staircase_kernels(protocol: Protocol) -> list[KernelUse]:
+    """The kernel :func:`build_staircase` digitises: the study's one model, over the window.
+
+    Parameters
+    ----------
+    protocol
+        A validated protocol of the staircase paradigm.
+
+    Returns
+    -------
+    list of KernelUse
+        The one kernel, ``[kernel]``.
+    """
+    s, g = protocol["stimulus"], protocol["glare"]
+    size = s["window_px"]
+    p = s["pixel_deg"] if s["pixel_deg"] > 0 else display_pixel_deg(protocol)
+    model = glare_model(g["model"], g["parameters"])
+    return [KernelUse("glare.parameters", model, p, kernel_shape_for((size, size)))]
+
+
 def build_staircase(protocol: Protocol, *, progress=None) -> dict:
     """Render the glare and comparison images of a staircase protocol.
 
@@ -117,8 +138,9 @@ def build_staircase(protocol: Protocol, *, progress=None) -> dict:
     disc = _circle_coverage(size, s["disc_radius_px"])
     annulus = _circle_coverage(size, s["annulus_outer_px"]) - disc
     cover = np.clip(disc + annulus, 0.0, 1.0)
-    model = glare_model(g["model"], g["parameters"])
-    kernel = glare.digitise_kernel(model, p, kernel_shape_for((size, size)))  # kernel cache
+    (use,) = staircase_kernels(protocol)
+    model = use.model
+    kernel = glare.digitise_kernel(model, p, use.shape)  # kernel cache
     renderer = glare.GlareRenderer(  # exact; the kernel's spectrum is kept across images
         model, pixel_deg=p, shape=(size, size), l_dmax_cd_m2=peak, tolerance_codes=0, kernel=kernel
     )

@@ -3,6 +3,7 @@ a ValueError or TypeError naming it (never another exception, never a NaN kernel
 sizes across the allowed range (1e-5° to 180°) give finite kernels."""
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -307,12 +308,19 @@ def test_a_count_of_flare_lines_without_flare_lines_is_refused(name):
 
 
 @pytest.mark.parametrize("regime", ["mesopic", "scotopic"])
-def test_spencers_renormalisation_of_a_halo_the_kernel_does_not_reach_is_finite(regime):
-    """A 21 × 21 colour kernel at 0.05° holds none of the green channel's halo: renormalised
-    to sum to one, 0 / 0 made every pixel of it NaN, and every RGB render with it."""
+@pytest.mark.parametrize("colour", [True, False])
+def test_spencers_renormalisation_of_a_halo_the_kernel_barely_holds_is_refused(regime, colour):
+    """A 21 × 21 kernel at 0.05° holds none of the green halo and 1e-21 of the red and blue
+    (their rings' numerical tails): renormalised to sum to one, green was NaN, and red and blue
+    were those tails multiplied into the whole halo; at 61 px red held 0.04 % of its halo."""
     model = VosGlare(regime=regime, normalisation="Spencer1995")
-    k = model.kernel(0.05, (21, 21), colour=True)
-    assert np.isfinite(k.values).all() and np.isfinite(k.energy_outside).all()
-    sums = k.values.sum(axis=(0, 1)) + k.energy_outside  # each channel's light accounted for
-    np.testing.assert_allclose(sums, 1.0, rtol=1e-9)
-    assert (k.values >= 0).all()
+    for n in (21, 61):
+        with pytest.raises(ValueError, match=r"holds under 1 % of the .* halo of a channel") as e:
+            model.kernel(0.05, (n, n), colour=colour)
+    across = int(re.search(r"at least (\d+) px across", str(e.value))[1])
+    k = model.kernel(0.05, (across, across), colour=colour)  # the size the message names
+    assert np.isfinite(k.values).all() and (k.values >= 0).all()
+    np.testing.assert_allclose(k.values.sum(axis=(0, 1)), 1.0, rtol=1e-9)
+    np.testing.assert_allclose(k.energy_outside, 0.0, atol=1e-12)
+    psf = VosGlare(regime=regime).kernel(0.05, (21, 21), colour=colour)  # no renormalisation
+    np.testing.assert_allclose(psf.values.sum(axis=(0, 1)) + psf.energy_outside, 1.0, rtol=1e-9)

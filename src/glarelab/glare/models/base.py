@@ -106,6 +106,32 @@ class GlareModel(abc.ABC):
         """
         return None
 
+    def check_kernel(
+        self, pixel_deg: float, shape: tuple[int, int], *, colour: bool = False
+    ) -> None:
+        """Refuse, before any work, a kernel this model cannot make at this size.
+
+        ``protocol check`` calls it for every kernel a stimulus set's build would digitise, so
+        what the build would refuse is refused by key, in a second. The default knows no such
+        limit; a model with one (the wave-optics aperture grid, Spencer's renormalisation)
+        checks it here as cheaply as it can.
+
+        Parameters
+        ----------
+        pixel_deg
+            Visual angle of one pixel in degrees, in [1e-5, 180].
+        shape
+            Odd kernel shape ``(KH, KW)``, pixels.
+        colour
+            Whether the colour kernel would be made; default False.
+
+        Raises
+        ------
+        ValueError
+            If :meth:`kernel` would refuse this size, with its message.
+        """
+        return None
+
     @property
     def achromatic(self) -> bool:
         """True when the colour kernel is the same in every channel."""

@@ -70,6 +70,28 @@ class HybridGlare(GlareModel):
     def halo(self) -> str:
         return self._vos().halo()
 
+    def check_kernel(
+        self, pixel_deg: float, shape: tuple[int, int], *, colour: bool = False
+    ) -> None:
+        """Refuse a kernel either part would refuse (:meth:`GlareModel.check_kernel`).
+
+        Parameters
+        ----------
+        pixel_deg
+            Visual angle of one pixel in degrees, in [1e-5, 180].
+        shape
+            Odd kernel shape ``(KH, KW)``, pixels.
+        colour
+            Whether the colour kernel would be made; default False.
+
+        Raises
+        ------
+        ValueError
+            If the wave-optics or the Vos part would refuse this size.
+        """
+        self.wave.check_kernel(pixel_deg, shape, colour=colour)
+        self._vos().check_kernel(pixel_deg, shape, colour=colour)
+
     def description(self, colour: bool) -> dict:
         """The model's name and parameters, for logs.
 

@@ -20,7 +20,7 @@ from glarelab.glare._validation import (
     check_positive_int,
 )
 from glarelab.glare.models import vos
-from glarelab.glare.models._radial import radial_mass
+from glarelab.glare.models._radial import radial_mass, rectangle_mass
 from glarelab.glare.models.base import GlareModel, TailBound
 from glarelab.glare.models.digitise import (
     Kernel,
@@ -34,7 +34,14 @@ from glarelab.glare.models.eye import HALO_PUPIL_MM, Regime, regime
 from glarelab.glare.models.flare import CORONA_LINES, HALO_LINES, flare_line_pattern
 from glarelab.glare.models.spectral import HALO_TABLE_MAX_DEG, HaloSpectrum, halo_profiles
 
-__all__ = ["HALO_MAX_SPACING_DEG", "NORMALISATIONS", "PUPIL_RANGE_MM", "TAIL_MARGIN", "VosGlare"]
+__all__ = [
+    "HALO_MAX_SPACING_DEG",
+    "NORMALISATIONS",
+    "PUPIL_RANGE_MM",
+    "SPENCER_MIN_HALO_HELD",
+    "TAIL_MARGIN",
+    "VosGlare",
+]
 
 NORMALISATIONS = ("psf", "Spencer1995")  # Spencer 1995 §3.2: "renormalize the filter"
 
@@ -46,6 +53,10 @@ PUPIL_RANGE_MM = (0.5, 10.0)  # accepted pupil diameters; the eye spans about 2-
 MAX_HALO_SAMPLES = 2000
 HALO_MAX_SPACING_DEG = 0.01
 TAIL_MARGIN = 1.02  # the peak beyond a radius is found on a grid; 2 % covers the ring's crest
+# glarelab's, not the paper's: Spencer's renormalisation (§3.2) divides each halo filter by the
+# share of the halo the kernel holds; under 1 % it would multiply a sliver of the ring (or the
+# 1e-39 tail of a colour channel's halo) into the whole halo, so such a kernel is refused
+SPENCER_MIN_HALO_HELD = 0.01
 
 
 @dataclass(frozen=True)
@@ -92,9 +103,9 @@ class VosGlare(GlareModel):
         as Spencer §3.2 does, "calculate each filter proportional to a given function, and
         then renormalize the filter so that all pixels sum to one": each of ``f0``-``f3``
         sums to 1 over the kernel, so the light the PSF sends beyond the kernel is put back
-        inside it, in proportion (``energy_outside`` 0); a colour channel whose halo the
-        kernel does not reach at all (a kernel under about 1° across) has nothing to
-        renormalise, adds nothing, and its halo weight is its ``energy_outside``.
+        inside it, in proportion (``energy_outside`` 0). A kernel that holds under 1 % of a
+        channel's halo (:data:`SPENCER_MIN_HALO_HELD`) is refused: its filter would multiply
+        a sliver of the ring into the whole halo.
 
     Notes
     -----
@@ -375,9 +386,11 @@ class VosGlare(GlareModel):
                 support_deg=HALO_TABLE_MAX_DEG,
                 symmetric=symmetric,
             )
-            if spencer:  # a channel whose halo the kernel does not reach has nothing to
-                # renormalise: it adds nothing, and its weight is reported outside the kernel
-                total = np.where(inside > 0, inside, np.inf)
+            if spencer:
+                held = inside / total
+                if (held < SPENCER_MIN_HALO_HELD).any():
+                    raise ValueError(self._unreached_halo(pixel_deg, shape, profiles, held))
+                total = inside
             halo = w3 * pieces / total[:, None, None]
             halo_outside = w3 * (1 - inside / total)
             errors += [
@@ -393,6 +406,72 @@ class VosGlare(GlareModel):
             "halo_outside": halo_outside,
             "errors": errors,
         }
+
+    def check_kernel(
+        self, pixel_deg: float, shape: tuple[int, int], *, colour: bool = False
+    ) -> None:
+        """Refuse a kernel Spencer's renormalisation cannot make (:data:`SPENCER_MIN_HALO_HELD`).
+
+        The share of each channel's halo the kernel holds is its energy in the kernel's
+        rectangle (:func:`~glarelab.glare.models._radial.rectangle_mass`), a second's work
+        where digitising the halo takes longer; a share within 1 % of the threshold is left
+        to :meth:`kernel`, which measures it on the digitised pixels.
+
+        Parameters
+        ----------
+        pixel_deg
+            Visual angle of one pixel in degrees, in [1e-5, 180].
+        shape
+            Odd kernel shape ``(KH, KW)``, pixels.
+        colour
+            Whether the colour kernel would be made; default False.
+
+        Raises
+        ------
+        ValueError
+            If the kernel holds under 1 % of a channel's halo under
+            ``normalisation='Spencer1995'``.
+        """
+        pixel_deg = check_pixel_deg(pixel_deg)
+        shape = check_kernel_shape(shape)
+        if self.normalisation != "Spencer1995" or self.weights[3] == 0:
+            return
+        profiles = halo_profiles(
+            "RGB" if colour else "Y", self.halo_spectrum, wavelength_nm=self.wavelength_nm
+        )
+        half_h, half_w = (shape[0] * pixel_deg / 2, shape[1] * pixel_deg / 2)
+        held = np.array(
+            [
+                rectangle_mass(profile, half_w, half_h, breakpoints=(2.0, 3.0, 4.0))
+                / radial_mass(profile, np.array([180.0]))[0]
+                for profile in profiles
+            ]
+        )
+        if (held < 0.99 * SPENCER_MIN_HALO_HELD).any():
+            raise ValueError(self._unreached_halo(pixel_deg, shape, profiles, held))
+
+    def _unreached_halo(self, pixel_deg, shape, profiles, held) -> str:
+        """Why Spencer's renormalisation cannot hold: a channel's halo lies beyond the kernel."""
+        names = "RGB" if len(profiles) == 3 else "Y"
+        short = ", ".join(
+            f"{names[i]} {100 * held[i]:.2g} %"
+            for i in np.flatnonzero(held < SPENCER_MIN_HALO_HELD)
+        )
+        theta = np.arange(0.0, HALO_TABLE_MAX_DEG + 0.005, 0.01)
+        reach = 0.0
+        for profile in profiles:  # the disc holding the least accepted share of each halo
+            mass = radial_mass(profile, theta, breakpoints=(2.0, 3.0, 4.0))
+            share = mass / radial_mass(profile, np.array([180.0]))[0]
+            reach = max(reach, float(theta[np.argmax(share >= SPENCER_MIN_HALO_HELD)]))
+        across = 2 * math.ceil(reach / pixel_deg) + 1
+        return (
+            f"normalisation='Spencer1995' renormalises each filter to sum to one over the "
+            f"kernel (Spencer 1995 §3.2), but a {shape[0]} × {shape[1]} px kernel at "
+            f"pixel_deg={pixel_deg:g} holds under {100 * SPENCER_MIN_HALO_HELD:g} % of the "
+            f"{self.regime} halo of a channel ({short}), which it would multiply by more than "
+            f"{1 / SPENCER_MIN_HALO_HELD:g}: give a kernel at least {across} px across, or "
+            "normalisation='psf'"
+        )
 
     def parts(self, pixel_deg: float, shape: tuple[int, int], *, colour: bool = False) -> dict:
         """The digitised parts of the PSF, each with its energy outside the support.

@@ -540,12 +540,39 @@ class WaveOpticsGlare(GlareModel):
         if locked is not None and self._grid_size(locked) <= MAX_GRID:
             spacing, n = locked, self._grid_size(locked)
         if n > MAX_GRID:
+            if binding == "the Fresnel term below Nyquist":  # set by the pupil alone
+                advice = (
+                    f"use a smaller pupil or a fresnel_distance_mm above "
+                    f"{self.fresnel_distance_mm:g} (the pixels do not set this grid)"
+                )
+            else:
+                advice = "use a smaller pupil, coarser pixels or a smaller psf_extent_deg"
             raise ValueError(
                 f"the aperture grid would need {n}² samples (more than {MAX_GRID}²) for "
-                f"{binding} with a {diameter:g} mm pupil; use a smaller pupil, coarser pixels "
-                "or a smaller psf_extent_deg"
+                f"{binding} with a {diameter:g} mm pupil; {advice}"
             )
         return ap.ApertureGrid(n, spacing)
+
+    def check_kernel(
+        self, pixel_deg: float, shape: tuple[int, int], *, colour: bool = False
+    ) -> None:
+        """Refuse a kernel whose aperture grid would be too large (:meth:`grid_for`).
+
+        Parameters
+        ----------
+        pixel_deg
+            Visual angle of one pixel in degrees, in [1e-5, 180].
+        shape
+            Odd kernel shape ``(KH, KW)``, pixels.
+        colour
+            Whether the colour kernel would be made (the grid is the same); default False.
+
+        Raises
+        ------
+        ValueError
+            If that grid would exceed 8192² samples.
+        """
+        self.grid_for(check_pixel_deg(pixel_deg), check_kernel_shape(shape))
 
     def _grid_size(self, spacing_mm: float) -> int:
         """Samples per side of a grid of ``spacing_mm`` that spans 2.1 pupils (even)."""
