@@ -377,3 +377,22 @@ def test_each_psychopy_date_format_dates_the_session(simulated, tmp_path, date, 
     else:
         assert imported.csv.stem.endswith(stem)
         assert "modification time" not in imported.summary()
+
+
+def test_a_named_pipe_a_folder_or_nothing_is_refused_without_opening_it(tmp_path):
+    """A named pipe among the sources blocked the import forever (it waited for a writer)."""
+    import os
+
+    fifo = tmp_path / "run.csv"
+    os.mkfifo(fifo)
+    (tmp_path / "folder.csv").mkdir()
+    protocol = load_protocol("yoshida2008")
+    sources = [fifo, tmp_path / "folder.csv", tmp_path / "none.csv"]
+    with pytest.raises(DataError) as refused:
+        import_psychopy(protocol, sources, tmp_path / "out")
+    assert refused.value.problems == [
+        f"PsychoPy file {fifo}: a named pipe (FIFO), not a regular file",
+        f"PsychoPy file {tmp_path / 'folder.csv'}: a folder, not a file",
+        f"no PsychoPy file at {tmp_path / 'none.csv'}",
+    ]
+    assert not (tmp_path / "out").exists()

@@ -47,6 +47,7 @@ from pathlib import Path
 from glarelab.analysis.dataset import DataError
 from glarelab.analysis.load import _other_delimiter, _parse
 from glarelab.files.atomic import write_text
+from glarelab.files.inputs import input_file
 from glarelab.protocols import columns
 from glarelab.protocols.columns import DATA_FORMAT, row_digest
 from glarelab.protocols.keys import TOKEN
@@ -205,6 +206,11 @@ def _started(rows: list[dict[str, str]], source: Path) -> tuple[datetime, str | 
 
 
 def _read(source: Path, problems: list[str]) -> tuple[list[str], list[tuple[int, list[str]]]]:
+    try:  # a named pipe or a device is refused before it is opened: reading one may not end
+        input_file(source, what="PsychoPy file")
+    except (OSError, ValueError) as error:
+        problems.append(str(error))
+        return [], []
     try:
         text = source.read_text(encoding="utf-8-sig")
     except (OSError, UnicodeDecodeError) as error:
