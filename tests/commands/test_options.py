@@ -147,6 +147,24 @@ def test_render_options_that_would_be_ignored_are_refused(extra, named, scene, c
     refused(argv, capsys, tmp_path, named)
 
 
+def test_hybrid_flare_lines_act_and_their_seed_with_them(scene, tmp_path):
+    """``render --model hybrid --flare-lines`` was refused as an option hybrid ignores; the
+    hybrid model takes Spencer's flare lines (on its Vos part) and their seed."""
+    from glarelab.stimuli.exr import read_exr
+
+    def render(name, *extra):
+        argv = ["render", str(scene), str(tmp_path / name), "--pixel-deg", "0.05",
+                "--model", "hybrid", "--no-eyelashes", "--particles", "0", *extra]  # fmt: skip
+        assert main(argv) == 0
+        return read_exr(tmp_path / name)
+
+    plain = render("plain.exr")
+    lines = render("lines.exr", "--flare-lines")
+    other = render("other.exr", "--flare-lines", "--seed", "7")
+    assert np.abs(lines - plain).max() > 1e-6 * plain.max()  # the lines streak the glare
+    assert np.abs(other - lines).max() > 1e-6 * plain.max()  # placed by the seed
+
+
 def test_an_empty_render_output_is_named_as_empty(scene, capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)  # '' would otherwise mean this folder, with in.exr in it
     line = refused(["render", "in.exr", "", "--pixel-deg", "0.02"], capsys, tmp_path,

@@ -50,7 +50,7 @@ MODEL_OPTIONS = {
         "aperture_spacing_mm",
     },
 }  # fmt: skip
-MODEL_OPTIONS["hybrid"] = MODEL_OPTIONS["wave"] | {"regime", "age"}
+MODEL_OPTIONS["hybrid"] = MODEL_OPTIONS["wave"] | {"regime", "age", "flare_lines"}
 
 
 def _check_options(args: argparse.Namespace) -> None:
@@ -89,10 +89,16 @@ def _check_options(args: argparse.Namespace) -> None:
                 "ignored"
             )
     if args.model in ("wave", "hybrid") and "seed" in given:
-        if getattr(args, "no_eyelashes", False) and getattr(args, "particles", 1) == 0:
+        flare_lines = args.model == "hybrid" and getattr(args, "flare_lines", False)
+        if (
+            getattr(args, "no_eyelashes", False)
+            and getattr(args, "particles", 1) == 0
+            and not flare_lines
+        ):
             raise ValueError(
                 "--seed with --no-eyelashes and --particles 0: the seed draws the lashes and "
-                "the particles, so without them it would be ignored"
+                "the particles (and, with --model hybrid, places the flare lines), so without "
+                "them it would be ignored"
             )
     if "aperture_image" in given and "aperture_spacing_mm" not in given:
         raise ValueError(
@@ -145,7 +151,9 @@ def build_model(args: argparse.Namespace) -> glare.GlareModel:
             particles=args.particles,
             fresnel=args.fresnel,
             spectral=args.spectral,
-            seed=args.seed,
+            # the seed draws the lashes and particles; without them it is the flare lines'
+            # alone (hybrid), which the wave part would refuse as a seed without effect
+            seed=args.seed if (not args.no_eyelashes or args.particles) else 0,
             source_x_deg=args.source_x_deg,
             diaphragm_sides=args.diaphragm_sides,
             cross_screen=args.cross_screen,
@@ -154,7 +162,13 @@ def build_model(args: argparse.Namespace) -> glare.GlareModel:
         )
         if args.model == "wave":
             return wave
-        return glare.HybridGlare(wave=wave, regime=args.regime, age=args.age)
+        return glare.HybridGlare(
+            wave=wave,
+            regime=args.regime,
+            age=args.age,
+            flare_lines=args.flare_lines,
+            seed=args.seed,
+        )
     raise ValueError(f"--model must be one of {MODEL_CHOICES}; got {args.model!r}")
 
 
@@ -173,8 +187,15 @@ def _add_model_options(parser: argparse.ArgumentParser, default: str = "vos") ->
     group.add_argument(
         "--age", type=number(0, 120), default=None, help="observer age, years (eq. 10)"
     )
-    group.add_argument("--flare-lines", action="store_true", help="add Spencer's flare lines")
-    group.add_argument("--seed", type=count(0), default=0, help="seed of the flare lines")
+    group.add_argument(
+        "--flare-lines", action="store_true", help="add Spencer's flare lines (vos, hybrid)"
+    )
+    group.add_argument(
+        "--seed",
+        type=count(0),
+        default=0,
+        help="seed of the flare lines (vos, hybrid), the eyelashes and the particles (wave)",
+    )
     group.add_argument(
         "--wavelength-nm",
         type=number(0, above=True),
