@@ -78,8 +78,38 @@ def test_an_exported_calibration_is_psychopys_own_monitor(tmp_path, spencer_cali
     assert main(["calibrate", "export-monitor", str(spencer_calibration), "--monitor", "crt",
                  "--monitor-folder", str(monitors)]) == 0  # fmt: skip
     again = json.loads((monitors / "crt.json").read_text())
-    assert sorted(again) == [first, f"{first} (2)"]
+    assert len(again) == 2 and sorted(again)[0] == first  # the new one sorts last: current
     assert again[first]["notes"] == "the lab's note: measured after the lamp was changed"
+
+
+def test_the_calibration_exported_last_is_the_one_a_build_uses(tmp_path, spencer_calibration):
+    """Named ``glarelab DATE HASH``, two calibrations exported on one day sorted by their
+    readings' hash, and PsychoPy makes the name that sorts last current: a build used the
+    older calibration whenever its hash sorted later."""
+    from glarelab.frontend.monitors import load_monitor, monitor_display
+
+    monitors = tmp_path / "monitors"
+    monitors.mkdir()
+    readings = read_readings(SPENCER_READINGS)
+    names = []
+    for scale in (1.0, 0.9, 1.1, 0.8):  # hashes in every order
+        path = tmp_path / f"c{scale}.json"
+        fit_calibration([(c, v * scale) for c, v in readings], bit_depth=8).save(path)
+        assert main(["calibrate", "export-monitor", str(path), "--monitor", "crt",
+                     "--monitor-folder", str(monitors)]) == 0  # fmt: skip
+        current = monitor_display(load_monitor("crt", folder=monitors))["calibration"]
+        assert current not in names and current.endswith(
+            Calibration.load(path).readings_sha256[:12]
+        )
+        names.append(current)
+    assert names == sorted(names)
+    saved = json.loads((monitors / "crt.json").read_text())
+    saved["zz the lab's own"] = saved[names[0]]  # a name that sorts after any export
+    (monitors / "crt.json").write_text(json.dumps(saved))
+    before = (monitors / "crt.json").read_bytes()
+    assert main(["calibrate", "export-monitor", str(spencer_calibration), "--monitor", "crt",
+                 "--monitor-folder", str(monitors)]) == 2  # fmt: skip
+    assert (monitors / "crt.json").read_bytes() == before
 
 
 def test_a_monitor_sets_a_sets_geometry_and_encoding(tmp_path, spencer_calibration):

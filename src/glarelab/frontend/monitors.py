@@ -30,6 +30,7 @@ from __future__ import annotations
 import itertools
 import json
 import time
+from datetime import datetime
 from pathlib import Path
 
 import numpy as np
@@ -318,13 +319,17 @@ def export_calibration(
     -------
     tuple of (pathlib.Path, str)
         The monitor file written and the new calibration's name
-        (``glarelab DATE HASH``, with `` (2)``, `` (3)``, … where it was exported before).
+        (``YYYY_MM_DD HH:MM:SS.ffffff glarelab HASH``, the local time of the export as
+        Monitor Center names its own): it sorts after every earlier calibration, so PsychoPy
+        makes it current.
 
     Raises
     ------
     ValueError
-        For a ``folder`` that does not exist, a monitor file that is not one, or a ``name``
-        that is not one file name (empty, with ``/``, or starting with ``.``).
+        For a ``folder`` that does not exist, a monitor file that is not one, a ``name``
+        that is not one file name (empty, with ``/``, or starting with ``.``), or a monitor
+        with a calibration whose name sorts after the new one's (PsychoPy would keep that one
+        current).
     """
     _check_monitor_name(name)
     folder = Path(folder) if folder is not None else default_monitor_folder()
@@ -333,10 +338,22 @@ def export_calibration(
     path = folder / f"{name}.json"
     calibs = _read_calibs(path) if path.is_file() else {}
     monitor = _monitor_class()(name, calibs) if calibs else None
-    stamp = f"glarelab {calibration.created} {calibration.readings_sha256[:12]}"
+    # PsychoPy makes the calibration whose name sorts last current, and names its own by the
+    # time they were made ("2026_12_04 14:05"): so are these, to the microsecond, to sort
+    # after every earlier one, Monitor Center's own among them
+    now = datetime.now().strftime("%Y_%m_%d %H:%M:%S.%f")
+    stamp = f"{now} glarelab {calibration.readings_sha256[:12]}"
     taken = set(calibs)
-    if stamp in taken:  # exported before: that entry (and what was added to it) is kept
+    if stamp in taken:  # a clock set back: that entry is kept, the next number given
         stamp = next(f"{stamp} ({n})" for n in itertools.count(2) if f"{stamp} ({n})" not in taken)
+    later = sorted(n for n in taken if n > stamp)
+    if later:
+        raise ValueError(
+            f"--monitor {name!r}: its calibration {later[-1]!r} sorts after the new one "
+            f"({stamp!r}), and PsychoPy makes the calibration whose name sorts last current, "
+            "so the new one would not be used: rename or delete it in Monitor Center, or "
+            "export to another --monitor"
+        )
     if monitor is None:
         monitor = _monitor_class()(name, {stamp: {}})
         monitor.calibs, monitor.calibNames = {}, []
