@@ -277,6 +277,31 @@ def test_the_verification_includes_the_luminances_the_studies_name(tmp_path):
     assert resumed["protocol_targets"] == named
 
 
+def test_the_studies_luminances_a_display_cannot_show_are_said(tmp_path):
+    """On a 50 cd/m² display, Yoshida's 100-400 cd/m² were left out of the verification pass
+    without a word, and the pass was reported as passed."""
+    from glarelab.display.measure import protocol_luminances
+    from glarelab.protocols import load_protocol
+
+    named = protocol_luminances(load_protocol("yoshida2008"))
+    session = MeasurementSession(
+        bit_depth=8,
+        out=tmp_path / "d.json",
+        rng=np.random.default_rng(0),
+        protocol_targets=named,
+    )
+    said = []
+    display = gamma_display(white=50.0, black=0.1, top=255)
+    while session.phase != "done":
+        said += session.record(float(display(session.current()["code"])))
+    (line,) = [s for s in said if "are not verified" in s]
+    above = sorted(t for t in named if t >= 50.0)
+    assert f"luminances {', '.join(f'{t:g}' for t in above)} cd/m² are not verified" in line
+    assert "white 50 cd/m²" in line and "cannot show them" in line
+    targets = [row["target_cd_m2"] for row in session.calibration.verification["measurements"]]
+    assert not set(above) & set(targets)
+
+
 def test_bad_entries_are_refused(tmp_path):
     session = MeasurementSession(
         bit_depth=8, out=tmp_path / "d.json", rng=np.random.default_rng(0)

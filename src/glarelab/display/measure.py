@@ -53,8 +53,10 @@ UNSTEADY_RETRIES = 2  # an unsteady patch is read again this many times before r
 def protocol_luminances(protocol: Protocol) -> list[float]:
     """The luminances (cd/m²) a study names for what it shows: every ``*_cd_m2`` value of its
     protocol's tables (a matching study's target starts and background mean, a glare level, a
-    night scene's adapted and starting luminance), but not its display's own range, its
-    simulated observer's or an adjustment's step; sorted, each once.
+    night scene's adapted and starting luminance) up to its display's ``max_cd_m2``, but not
+    its display's own range, its simulated observer's or an adjustment's step; sorted, each
+    once. A value above the display's maximum is the scene's, never shown as it is (a glare
+    source of 10,000 cd/m² is what the glare is rendered from).
 
     Parameters
     ----------
@@ -69,7 +71,7 @@ def protocol_luminances(protocol: Protocol) -> list[float]:
     Examples
     --------
     >>> from glarelab.protocols import load_protocol
-    >>> [t for t in protocol_luminances(load_protocol("yoshida2008")) if t <= 433]
+    >>> protocol_luminances(load_protocol("yoshida2008"))  # on its 433 cd/m² display
     [100.0, 150.0, 220.0, 400.0]
     """
     found: set[float] = set()
@@ -92,7 +94,9 @@ def protocol_luminances(protocol: Protocol) -> list[float]:
             found.add(float(table))
 
     walk(protocol.data)
-    return sorted(found)
+    display = protocol.data.get("display") or {}
+    top = display.get("max_cd_m2", float("inf"))
+    return sorted(t for t in found if t <= top)
 
 
 class SessionInUse(ValueError):
@@ -603,6 +607,14 @@ class MeasurementSession:
         targets = np.geomspace(low, 0.9 * white, self.verify_points).tolist()
         studies = [t for t in self.protocol_targets if low <= t < white and t not in targets]
         self.targets = sorted(targets + studies)
+        outside = [t for t in self.protocol_targets if not low <= t < white]
+        if outside:  # said, not dropped silently: the display cannot show them
+            shown = ", ".join(f"{t:g}" for t in outside)
+            new.append(
+                f"the studies' luminances {shown} cd/m² are not verified: they are outside "
+                f"the {low:.3g}-{white:.4g} cd/m² this display is verified over (white "
+                f"{white:.4g} cd/m²), so it cannot show them as the study asks"
+            )
         if not self._replaying:  # unverified until the verification pass is done
             self.calibration.save(self.out)
         self.phase = "verify"
