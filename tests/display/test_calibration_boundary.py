@@ -161,6 +161,7 @@ def test_a_calibration_made_in_python_is_admitted_only_as_its_file_would_be(tmp_
         "calibrated": True,
         "status": "passed",
         "readings_sha256": fitted.readings_sha256,
+        "curve_sha256": fitted.curve_sha256,
     }
     forged = replace(fitted, status="passed")
     with pytest.raises(ValueError, match="status 'passed' without verification measurements"):
@@ -263,3 +264,20 @@ def test_a_luminance_at_the_top_or_bottom_reading_is_not_counted_as_clipped():
     codes, report = calibration.encode(np.array([433.0, 0.5, 0.0, 1000.0]))
     assert codes.tolist() == [1023, 0, 0, 1023]
     assert (report.above_max, report.below_black) == (1, 1)  # 1000 and 0 only
+
+
+def test_several_dark_codes_at_the_photometers_floor_are_named_with_the_fix(tmp_path):
+    """An OLED's darkest codes all read 0 on the photometer: refused as 'not increasing
+    (photometer drift or a misread value?)', which no re-measurement can mend."""
+    with pytest.raises(ValueError, match=r"codes 0, 32, 64 all read 0 cd/m², below the "
+                       r"photometer's floor: keep the reading of code 0 and leave out"):  # fmt: skip
+        fit_calibration([(0, 0.0), (32, 0.0), (64, 0.0), (128, 10.0), (255, 100.0)], bit_depth=8)
+    fit_calibration([(0, 0.0), (128, 10.0), (255, 100.0), (64, 1.0)], bit_depth=8)
+
+
+def test_a_header_typed_with_spaces_after_the_commas_is_read(tmp_path):
+    """'code, luminance_cd_m2' was refused as missing luminance_cd_m2."""
+    plain, spaced = tmp_path / "plain.csv", tmp_path / "spaced.csv"
+    plain.write_text("code,luminance_cd_m2\n0,0.5\n128,20\n255,100\n64,5\n")
+    spaced.write_text("code, luminance_cd_m2 \n0,0.5\n128,20\n255,100\n64,5\n")
+    assert read_readings(spaced) == read_readings(plain)

@@ -735,6 +735,14 @@ def _check_readings(
     for (c0, v0), (c1, v1) in itertools.pairwise(ordered):
         if c1 == c0:
             raise ValueError(f"{source}: code {c0} is measured twice; average the readings first")
+        if v1 == v0 == 0:  # an OLED's darkest codes below the photometer's floor
+            zeros = [c for c, v in ordered if v == 0]
+            raise ValueError(
+                f"{source}: codes {', '.join(map(str, zeros))} all read 0 cd/m², below the "
+                f"photometer's floor: keep the reading of code {zeros[0]} and leave out the "
+                "others (a 0 says only that a luminance is under what the photometer reads; "
+                "the fit then runs from black to the first reading above 0)"
+            )
         if v1 <= v0:
             raise ValueError(
                 f"{source}: luminance is not increasing: code {c1} → {v1:g} cd/m² is not above "
@@ -777,6 +785,8 @@ def read_readings(path: str | Path) -> list[tuple[int, float]]:
     text = read_input_text(path, what="readings file")
     rows = []
     reader = csv.DictReader(io.StringIO(text, newline=""))  # quoted newlines kept
+    if reader.fieldnames:  # 'code, luminance_cd_m2' as typed: the names without the spaces
+        reader.fieldnames = [name.strip() for name in reader.fieldnames]
     missing = {"code", "luminance_cd_m2"} - set(reader.fieldnames or [])
     if missing:
         first = text.splitlines()[0] if text.strip() else ""
