@@ -170,16 +170,30 @@ def _terminal_signals() -> None:
     signal.signal(signal.SIGHUP, signal.SIG_DFL)
 
 
-@pytest.mark.parametrize("number", [signal.SIGTERM, signal.SIGHUP], ids=["SIGTERM", "SIGHUP"])
-def test_a_kill_or_a_closed_terminal_during_a_build_ends_it_as_ctrl_c_does(number, tmp_path):
+def _background_job() -> None:
+    """As a shell script's ``cmd &`` starts a job: SIGINT ignored, SIGTERM at its default."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGHUP, signal.SIG_DFL)
+
+
+@pytest.mark.parametrize(
+    ("number", "start"),
+    [(signal.SIGTERM, _terminal_signals), (signal.SIGHUP, _terminal_signals),
+     (signal.SIGTERM, _background_job)],
+    ids=["SIGTERM", "SIGHUP", "SIGTERM-to-a-background-job"],
+)  # fmt: skip
+def test_a_kill_or_a_closed_terminal_during_a_build_ends_it_as_ctrl_c_does(
+    number, start, tmp_path
+):
     """SIGTERM (a kill, a job manager) ended a build at once with Python's default: its
     half-built ``.set.building-PID`` stayed beside the set. Now it ends as Ctrl-C does:
-    status 3, one line naming the signal, the staging folder removed."""
+    status 3, one line naming the signal, the staging folder removed; also for a job a script
+    started in the background (SIGINT ignored), which had no handler at all."""
     out = tmp_path / "set"
     process = subprocess.Popen(
         [sys.executable, "-m", "glarelab", "stimuli", "build", "yoshida2008", "--out", str(out)],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV, cwd=tmp_path,
-        preexec_fn=_terminal_signals,
+        preexec_fn=start,
     )  # fmt: skip
     deadline = time.monotonic() + 120
     while not list(tmp_path.glob(".set.building-*")) and time.monotonic() < deadline:

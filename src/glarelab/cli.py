@@ -188,6 +188,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     # the glarelab program, not a call from Python (a test, a script), and not started with
     # SIGINT ignored (a background job of a shell script, nohup), which it keeps
     program = argv is None and signal.getsignal(signal.SIGINT) is not signal.SIG_IGN
+    # SIGTERM and SIGHUP are handled by the program whatever SIGINT's disposition: a script's
+    # background job ignores SIGINT, and is stopped by its `kill`
+    as_program = argv is None
     if program:
         signal.signal(signal.SIGINT, _stopped_while_starting)
     argv = sys.argv[1:] if argv is None else list(argv)
@@ -218,6 +221,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 warnings.showwarning = _one_line_warning
                 if program:  # the command ends its own work on Ctrl-C (KeyboardInterrupt)
                     signal.signal(signal.SIGINT, interrupted)
+                if as_program:
                     for name in ("SIGTERM", "SIGHUP"):  # a kill or a closed terminal alike
                         number = getattr(signal, name, None)
                         if number is not None and signal.getsignal(number) is signal.SIG_DFL:
