@@ -54,6 +54,7 @@ __all__ = [
     "read_readings",
     "synthetic_calibration",
     "usable_calibration",
+    "verification_outcome",
 ]
 
 FORMAT = "glarelab display calibration v1"
@@ -375,7 +376,7 @@ class Calibration:
         if self.status == "synthetic":
             status = "synthetic"
         else:
-            status = "passed" if worst <= tolerance_fraction else "failed"
+            status = verification_outcome(worst, tolerance_fraction)
         verification = {
             "tolerance_fraction": tolerance_fraction,
             "max_relative_error": worst,
@@ -546,6 +547,31 @@ def _whole(name: str, value, source: str) -> None:
         raise ValueError(f"{source}: {name} is {value!r}; must be a whole number")
 
 
+def verification_outcome(max_relative_error: float, tolerance_fraction: float) -> str:
+    """``'passed'`` when a verification pass's worst relative error is within its tolerance,
+    else ``'failed'``: the one rule a calibration's status, its file's check and the
+    measurement's report read.
+
+    Parameters
+    ----------
+    max_relative_error
+        The pass's largest ``|measured - target| / target``.
+    tolerance_fraction
+        The largest it may be.
+
+    Returns
+    -------
+    str
+        ``'passed'`` or ``'failed'``.
+
+    Examples
+    --------
+    >>> verification_outcome(0.03, 0.03), verification_outcome(0.031, 0.03)
+    ('passed', 'failed')
+    """
+    return "passed" if max_relative_error <= tolerance_fraction else "failed"
+
+
 def _verification_sha256(readings_sha256: str, verification: dict) -> str:
     """The hash binding a verification pass to the readings it verified (as the readings'
     own hash: an edited tolerance, status or measurement no longer matches)."""
@@ -671,7 +697,7 @@ def _check_status(calibration: Calibration, source: str) -> None:
         )
     if any(not 0 <= code < calibration.n_codes for code in codes):
         raise ValueError(f"{source}: a verification code is outside the display's codes")
-    given = "passed" if worst <= tolerance else "failed"
+    given = verification_outcome(worst, tolerance)
     if status != "synthetic" and given != status:
         raise ValueError(
             f"{source}: status {status!r}, but its verification measurements (worst error "

@@ -24,6 +24,7 @@ import time
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
+from glarelab.display.calibration import verification_outcome
 from glarelab.display.measure import MeasurementSession
 from glarelab.display.photometer import PatchProtocol, Photometer, PhotometerError, measure_patch
 from glarelab.frontend.window import KeyReader, dispatch_events, grab_screen, open_window
@@ -144,7 +145,7 @@ def run_measurement(
             "status": status,
             "verification": None
             if worst is None
-            else ("passed" if worst <= verification["tolerance_fraction"] else "failed"),
+            else verification_outcome(worst, verification["tolerance_fraction"]),
             "flags": session.flags,
             "shown": shown,
             "bits_per_channel": bits,
