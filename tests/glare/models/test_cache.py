@@ -61,8 +61,9 @@ def test_every_parameter_is_in_the_key(tmp_path):
     others = [
         cache.key(glare.VosGlare(age=40.0), 0.05, SHAPE, colour=False),
         cache.key(glare.VosGlare(samples_per_pixel=11), 0.05, SHAPE, colour=False),
-        cache.key(
-            glare.VosGlare(halo_spectrum=glare.HaloSpectrum(n_wavelengths=31)),
+        cache.key(glare.VosGlare(regime="mesopic"), 0.05, SHAPE, colour=False),
+        cache.key(  # the halo's spectrum (the mesopic PSF has a halo; the photopic none)
+            glare.VosGlare(regime="mesopic", halo_spectrum=glare.HaloSpectrum(n_wavelengths=31)),
             0.05,
             SHAPE,
             colour=False,

@@ -196,16 +196,48 @@ def test_a_wavelength_that_is_no_number_is_refused_not_kept_or_read_as_one(wavel
         VosGlare(wavelength_nm=wavelength_nm)
 
 
-@pytest.mark.parametrize("options", [{}, {"pupil_mm": 6.0}, {"pupil_mm": 2.0}])
-def test_a_wavelength_for_a_photopic_psf_is_refused(options):
-    """The photopic PSF (Spencer eq. 5) has no halo, the only part the wavelength colours:
-    a monochromatic 450 nm photopic kernel came back the white one, without a word."""
-    with pytest.raises(ValueError, match=r"^wavelength_nm=450\.0 with regime='photopic': the "
-                       "wavelength sets only the lenticular halo"):  # fmt: skip
-        VosGlare(wavelength_nm=450.0, **options)
-    # a pupil under 3 mm drops the halo too, but the pupil is the eye's state (the night
-    # pipeline and the live mode set it every frame), so the wavelength stays for larger ones
-    VosGlare(regime="mesopic", wavelength_nm=450.0, **options)
+@pytest.mark.parametrize(
+    ("options", "why"),
+    [
+        ({}, "the photopic PSF \\(eq. 5\\) has no lenticular halo"),
+        ({"pupil_mm": 6.0}, "the photopic PSF \\(eq. 5\\) has no lenticular halo"),
+        ({"regime": "mesopic", "pupil_mm": 2.0}, "the pupil of 2 mm drops the lenticular halo"),
+        ({"regime": "scotopic", "pupil_mm": 2.9}, "the pupil of 2.9 mm drops the lenticular"),
+    ],
+)
+@pytest.mark.parametrize(
+    "halo_option",
+    [
+        {"wavelength_nm": 450.0},
+        {"halo_spacing_deg": 0.005},
+        {"flare_lines": True, "halo_lines": 10},
+        {"halo_spectrum": "eleven"},
+    ],
+)
+def test_an_option_of_the_halo_without_a_halo_is_refused(options, why, halo_option):
+    """The photopic PSF (Spencer eq. 5) has no halo, and a pupil under 3 mm drops it: a
+    monochromatic 450 nm kernel came back the white one, and a halo's spectrum, spacing or
+    line count changed nothing, without a word."""
+    from glarelab.glare.models.spectral import HaloSpectrum
+
+    if halo_option.get("halo_spectrum") == "eleven":
+        halo_option = {"halo_spectrum": HaloSpectrum(n_wavelengths=11)}
+    name = next(k for k in halo_option if k != "flare_lines")
+    with pytest.raises(ValueError, match=rf"^{name}=.*: it shapes only the halo, and {why}"):
+        VosGlare(**options, **halo_option)
+    with_halo = {**options, "regime": options.get("regime", "mesopic"), "pupil_mm": 4.0}
+    VosGlare(**with_halo, **halo_option)  # acts where there is a halo
+
+
+def test_an_eye_state_without_a_halo_unsets_the_halo_options():
+    """The night pipeline and the live mode give each frame's model its pupil: a pupil under
+    3 mm must not refuse the frame's model for the wavelength its user chose."""
+    model = VosGlare(regime="mesopic", wavelength_nm=450.0, halo_spacing_deg=0.005)
+    small = model.with_eye_state(pupil_mm=2.0)
+    assert (small.wavelength_nm, small.halo_spacing_deg) == (None, VosGlare().halo_spacing_deg)
+    assert model.with_eye_state(pupil_mm=5.0) == VosGlare(
+        regime="mesopic", wavelength_nm=450.0, halo_spacing_deg=0.005, pupil_mm=5.0
+    )
 
 
 def test_a_wavelength_beside_a_halo_spectrum_is_refused():
@@ -304,7 +336,7 @@ def test_a_count_of_flare_lines_without_flare_lines_is_refused(name):
     """``VosGlare(corona_lines=10)`` was taken, and no line drawn."""
     with pytest.raises(ValueError, match=rf"^{name}=10 without flare_lines=True"):
         VosGlare(**{name: 10})
-    assert getattr(VosGlare(flare_lines=True, **{name: 10}), name) == 10
+    assert getattr(VosGlare(regime="mesopic", flare_lines=True, **{name: 10}), name) == 10
 
 
 @pytest.mark.parametrize("regime", ["mesopic", "scotopic"])
@@ -324,3 +356,18 @@ def test_spencers_renormalisation_of_a_halo_the_kernel_barely_holds_is_refused(r
     np.testing.assert_allclose(k.energy_outside, 0.0, atol=1e-12)
     psf = VosGlare(regime=regime).kernel(0.05, (21, 21), colour=colour)  # no renormalisation
     np.testing.assert_allclose(psf.values.sum(axis=(0, 1)) + psf.energy_outside, 1.0, rtol=1e-9)
+
+
+@pytest.mark.parametrize("name", ["corona_lines", "halo_lines"])
+def test_a_count_of_flare_lines_beyond_memory_is_refused_when_the_model_is_made(name):
+    """``corona_lines=10**9`` was taken, and the kernel then took all memory (MemoryError or
+    the process killed)."""
+    from glarelab.glare.models.flare import MAX_FLARE_LINES, flare_line_pattern
+
+    with pytest.raises(
+        ValueError, match=rf"^{name} must be at most 1,000,000 .*got 1,000,000,000"
+    ):
+        VosGlare(regime="mesopic", flare_lines=True, **{name: 10**9})
+    VosGlare(regime="mesopic", flare_lines=True, **{name: MAX_FLARE_LINES})
+    with pytest.raises(ValueError, match=r"^n_lines must be at most 1,000,000"):
+        flare_line_pattern((11, 11), rng=np.random.default_rng(0), n_lines=MAX_FLARE_LINES + 1)

@@ -260,3 +260,17 @@ def test_frames_encoded_while_the_kinks_are_blurred_equal_frames_encoded_after(
         assert frame.codes is None
         exact += encoded.exact_px
     assert exact > 0  # some pixels were blurred directly
+
+
+def test_a_pupil_that_drops_the_halo_unsets_its_wavelength_in_a_live_frame(scene):
+    """A mesopic 500 nm model behind a 2.5 mm pupil from the eye tracker: the frame's model
+    would refuse the wavelength (no halo under 3 mm), so the live mode unsets it."""
+    model = VosGlare(regime="mesopic", wavelength_nm=500.0)
+    live = LiveNight(scene, pixel_deg=PIXEL_DEG, glare_model=model)
+    small = live.frame(gaze_px=(20, 30), pupil_mm=2.5, frame_time_s=0.0)
+    bare = LiveNight(scene, pixel_deg=PIXEL_DEG, glare_model=VosGlare(regime="mesopic"))
+    np.testing.assert_array_equal(
+        small.image, bare.frame(gaze_px=(20, 30), pupil_mm=2.5, frame_time_s=0.0).image
+    )
+    large = live.frame(gaze_px=(20, 30), pupil_mm=5.0, frame_time_s=0.0)
+    assert np.isfinite(large.image).all()

@@ -23,12 +23,15 @@ import numpy as np
 from glarelab.glare._validation import check_positive, check_positive_int
 from glarelab.glare.models.digitise import check_kernel_shape
 
-__all__ = ["CORONA_LINES", "HALO_LINES", "flare_line_pattern"]
+__all__ = ["CORONA_LINES", "HALO_LINES", "MAX_FLARE_LINES", "flare_line_pattern"]
 
 # Spencer 1995 §3.2 chose the number of lines "to visually match Simpson's observations";
 # these counts give the look of Simpson's drawing (Spencer Fig. 2) at typical kernel sizes.
 CORONA_LINES = 150
 HALO_LINES = 300
+# glarelab's bound: a million lines are 72 MB of sorted angles and sums, and already a smooth
+# ring (the pattern tends to 1 as the lines fill every angle); 1e9 took all memory
+MAX_FLARE_LINES = 1_000_000
 
 
 def flare_line_pattern(
@@ -47,7 +50,7 @@ def flare_line_pattern(
     rng
         Source of randomness: line angles uniform in [0, 2π), intensities uniform in [0, 1].
     n_lines
-        Number of lines, >= 1.
+        Number of lines, 1 to :data:`MAX_FLARE_LINES`.
     line_width_px
         Full width of a line at its base in pixels (triangular profile); default 1.
 
@@ -87,6 +90,11 @@ def flare_line_pattern(
             f"rng must be a numpy.random.Generator (np.random.default_rng(seed)), got {rng!r}"
         )
     n_lines = check_positive_int("n_lines", n_lines)
+    if n_lines > MAX_FLARE_LINES:
+        raise ValueError(
+            f"n_lines must be at most {MAX_FLARE_LINES:,} (so many lines are a smooth ring "
+            f"already); got {n_lines:,}"
+        )
     width = check_positive("line_width_px", line_width_px, unit="px")
     height, breadth = check_kernel_shape(shape)
     angles = np.sort(rng.uniform(0.0, 2.0 * np.pi, n_lines))

@@ -4,6 +4,7 @@ lines: :class:`VosGlare`. The PSF's components and weights are in
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
@@ -31,11 +32,17 @@ from glarelab.glare.models.digitise import (
     quadrant_sum,
 )
 from glarelab.glare.models.eye import HALO_PUPIL_MM, Regime, regime
-from glarelab.glare.models.flare import CORONA_LINES, HALO_LINES, flare_line_pattern
+from glarelab.glare.models.flare import (
+    CORONA_LINES,
+    HALO_LINES,
+    MAX_FLARE_LINES,
+    flare_line_pattern,
+)
 from glarelab.glare.models.spectral import HALO_TABLE_MAX_DEG, HaloSpectrum, halo_profiles
 
 __all__ = [
     "HALO_MAX_SPACING_DEG",
+    "HALO_OPTIONS",
     "NORMALISATIONS",
     "PUPIL_RANGE_MM",
     "SPENCER_MIN_HALO_HELD",
@@ -57,6 +64,9 @@ TAIL_MARGIN = 1.02  # the peak beyond a radius is found on a grid; 2 % covers th
 # share of the halo the kernel holds; under 1 % it would multiply a sliver of the ring (or the
 # 1e-39 tail of a colour channel's halo) into the whole halo, so such a kernel is refused
 SPENCER_MIN_HALO_HELD = 0.01
+# VosGlare's options that shape only the lenticular halo: refused where there is none (the
+# photopic PSF, a pupil under 3 mm), and reset by the night pipeline when a frame leaves none
+HALO_OPTIONS = ("wavelength_nm", "halo_spectrum", "halo_spacing_deg", "halo_lines")
 
 
 @dataclass(frozen=True)
@@ -148,13 +158,6 @@ class VosGlare(GlareModel):
             check_in_range("pupil_mm", self.pupil_mm, *PUPIL_RANGE_MM, unit="mm")
         if self.wavelength_nm is not None:
             vos.f3(0.0, self.wavelength_nm)  # validates the wavelength
-            if vos.WEIGHTS[self.regime][3] == 0.0:  # the wavelength colours only the halo
-                raise ValueError(
-                    f"wavelength_nm={self.wavelength_nm!r} with regime={self.regime!r}: the "
-                    "wavelength sets only the lenticular halo (Spencer eq. 9), which the "
-                    f"{self.regime} PSF (eq. 5) does not have; leave wavelength_nm None, or "
-                    "choose a regime with a halo"
-                )
             if self.halo_spectrum != HaloSpectrum():  # one of the two would be ignored
                 raise ValueError(
                     f"wavelength_nm={self.wavelength_nm!r} with halo_spectrum="
@@ -174,6 +177,12 @@ class VosGlare(GlareModel):
         check_positive("halo_spacing_deg", self.halo_spacing_deg, unit="deg")
         check_positive_int("corona_lines", self.corona_lines)
         check_positive_int("halo_lines", self.halo_lines)
+        for name in ("corona_lines", "halo_lines"):  # as flare_line_pattern, when it is made
+            if getattr(self, name) > MAX_FLARE_LINES:
+                raise ValueError(
+                    f"{name} must be at most {MAX_FLARE_LINES:,} (so many lines are a smooth "
+                    f"ring already); got {getattr(self, name):,}"
+                )
         if not self.flare_lines:  # as the seed: the lines' counts shape only the lines
             for name, default in (("corona_lines", CORONA_LINES), ("halo_lines", HALO_LINES)):
                 if getattr(self, name) != default:
@@ -182,6 +191,50 @@ class VosGlare(GlareModel):
                         f"Spencer's flare lines, and without them it would be ignored; give "
                         f"flare_lines=True or leave {name} at {default}"
                     )
+        if self.weights[3] == 0.0:  # no halo: what shapes only the halo would be ignored
+            why = (
+                f"the pupil of {self.pupil_mm:g} mm drops the lenticular halo (under 3 mm, "
+                "Spencer §2.1)"
+                if self.halo_skipped
+                else f"the {self.regime} PSF (eq. 5) has no lenticular halo"
+            )
+            for name in HALO_OPTIONS:
+                value, unset = getattr(self, name), _field_default(name)
+                if value != unset:
+                    raise ValueError(
+                        f"{name}={value!r}: it shapes only the halo, and {why}, so it would be "
+                        f"ignored; leave it at its default ({unset!r}) or give a pupil and "
+                        "regime with a halo"
+                    )
+
+    def with_eye_state(self, **state) -> VosGlare:
+        """This model with another eye state (``pupil_mm``, ``regime``); where that state
+        leaves no lenticular halo (a pupil under 3 mm, the photopic regime), the options that
+        shape only the halo (:data:`HALO_OPTIONS`) return to their defaults, as the state a
+        night pipeline or a live session gives each frame is no choice of the user's.
+
+        Parameters
+        ----------
+        state
+            Fields to replace, ``pupil_mm`` and ``regime`` among them.
+
+        Returns
+        -------
+        VosGlare
+            The model of that eye.
+
+        Examples
+        --------
+        >>> m = VosGlare(regime="mesopic", wavelength_nm=550.0)
+        >>> m.with_eye_state(pupil_mm=2.0).wavelength_nm is None
+        True
+        >>> m.with_eye_state(pupil_mm=5.0).wavelength_nm
+        550.0
+        """
+        unset = {name: _field_default(name) for name in HALO_OPTIONS}
+        if dataclasses.replace(self, **{**unset, **state}).weights[3] == 0.0:
+            state = {**state, **unset}
+        return dataclasses.replace(self, **state)
 
     @classmethod
     def from_field_luminance(cls, field_luminance_cd_m2: float, **options) -> VosGlare:
@@ -612,3 +665,9 @@ def _rescaled(smooth: np.ndarray, streaked: np.ndarray) -> np.ndarray:
 def _streak(corona: np.ndarray, rng: np.random.Generator, n_lines: int) -> np.ndarray:
     pattern = flare_line_pattern(corona.shape, rng=rng, n_lines=n_lines)
     return _rescaled(corona, corona * pattern)
+
+
+def _field_default(name: str):
+    """The default of :class:`VosGlare`'s field ``name``."""
+    spec = VosGlare.__dataclass_fields__[name]
+    return spec.default_factory() if callable(spec.default_factory) else spec.default

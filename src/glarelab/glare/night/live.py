@@ -578,7 +578,11 @@ class LiveNight:
             given = {"pupil_mm": pupil}
             if hasattr(type(self.model), "field_luminance_cd_m2"):  # it set the pupil: unused
                 given["field_luminance_cd_m2"] = type(self.model).field_luminance_cd_m2
-            model = self._models[pupil] = dataclasses.replace(self.model, **given)
+            if isinstance(self.model, VosGlare):  # under 3 mm, no halo to shape
+                model = self.model.with_eye_state(**given)
+            else:
+                model = dataclasses.replace(self.model, **given)
+            self._models[pupil] = model
         return model
 
     # one frame ---------------------------------------------------------------------------

@@ -51,6 +51,7 @@ from glarelab.glare._validation import check_choice, check_image, check_in_range
 from glarelab.glare.models import _resolve
 from glarelab.glare.models.base import GlareModel
 from glarelab.glare.models.eye import pupil_diameter_mm, regime
+from glarelab.glare.models.spencer1995 import VosGlare
 from glarelab.glare.night.acuity import (
     BLUR_METHODS,
     LEVELS_PER_OCTAVE,
@@ -157,12 +158,12 @@ def adapted_model(
             changes["field_luminance_cd_m2"] = type(model).field_luminance_cd_m2
     if "regime" in names:
         changes["regime"] = regime(luminance)
-        if getattr(model, "wavelength_nm", None) is not None and changes["regime"] == "photopic":
-            changes["wavelength_nm"] = None  # it colours the halo, which photopic has not
     for name in names:
         value = getattr(model, name)
         if isinstance(value, GlareModel) and dataclasses.is_dataclass(value):
             changes[name] = adapted_model(value, luminance, pupil_step_mm=step)
+    if isinstance(model, VosGlare):  # a frame without a halo leaves what shapes it unset
+        return model.with_eye_state(**changes) if changes else model
     return dataclasses.replace(model, **changes) if changes else model
 
 
