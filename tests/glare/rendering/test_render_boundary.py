@@ -247,3 +247,37 @@ def test_the_far_tail_alone_for_an_exact_render_is_refused(tolerance):
     with pytest.raises(ValueError, match=r"paths=\('multires',\) with tolerance_codes="):
         GlareRenderer(MODEL, pixel_deg=0.05, shape=(10, 10), paths=("multires",),
                       tolerance_codes=tolerance)  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("options", "named"),
+    [({"tolerance_codes": 2.0}, "tolerance_codes"), ({"display": None, "tolerance_codes": 5.0},
+     "tolerance_codes")],
+)  # fmt: skip
+def test_a_plans_options_beside_a_kernel_shape_are_refused(options, named):
+    """``add_glare(kernel_shape=..., tolerance_codes=2)`` rendered exactly and ignored the
+    tolerance (and the display it is counted on), without a word."""
+    from glarelab.glare import Display
+
+    with pytest.raises(ValueError, match=rf"^{named} beside kernel_shape=\(31, 31\)"):
+        add_glare(IMAGE, MODEL, pixel_deg=0.05, kernel_shape=(31, 31), **options)
+    with pytest.raises(ValueError, match=r"^display beside kernel_shape=\(31, 31\)"):
+        add_glare(IMAGE, MODEL, pixel_deg=0.05, kernel_shape=(31, 31),
+                  display=Display(np.linspace(0.1, 100.0, 1024)))  # fmt: skip
+    exact = render_glare(IMAGE, MODEL, pixel_deg=0.05, kernel_shape=(31, 31), cache=False).image
+    for tolerance in (None, 0, 0.5):  # the exact render, and the default left as it is
+        shaped = add_glare(IMAGE, MODEL, pixel_deg=0.05, kernel_shape=(31, 31),
+                           tolerance_codes=tolerance, cache=False)  # fmt: skip
+        np.testing.assert_allclose(shaped, exact, rtol=1e-12, atol=0)
+
+
+def test_a_luminance_float32_cannot_hold_is_refused_not_rendered_as_inf():
+    """A pixel of 3.5e38 cd/m² under precision='float32' became inf in Spencer's sum."""
+    image = np.full((21, 21), 1.0)
+    image[10, 10] = 3.5e38
+    for composition in ("Yoshida2008", "Spencer1995"):
+        with pytest.raises(ValueError, match=r"reaches 3.5e\+38 cd/m², beyond the 3.4e\+38 that "
+                           r"precision='float32' holds"):  # fmt: skip
+            add_glare(image, MODEL, pixel_deg=0.05, precision="float32", composition=composition)
+        kept = add_glare(image, MODEL, pixel_deg=0.05, composition=composition)
+        assert np.isfinite(kept).all()

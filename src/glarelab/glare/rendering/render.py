@@ -167,7 +167,8 @@ def add_glare(
         As for :func:`render_glare`.
     kernel_shape
         ``None`` (default): planned from the scene. A shape renders exactly with that kernel,
-        as :func:`render_glare` does (no plan).
+        as :func:`render_glare` does (no plan): a ``tolerance_codes`` other than the default
+        or ``None``, or a ``display``, is then refused (the plan they are for is not made).
     tolerance_codes
         Largest error allowed against the exact render, in codes of ``display``; default 0.5
         (half a code step cannot be seen). The work is planned by :func:`glarelab.glare.plan_glare`
@@ -211,6 +212,13 @@ def add_glare(
     image = check_image("luminance_cd_m2", luminance_cd_m2, channels=(3,))
     l_dmax = check_positive("l_dmax_cd_m2", l_dmax_cd_m2, unit="cd/m²")
     check_tolerance(tolerance_codes)  # also when a kernel shape or a dim image makes it moot
+    if kernel_shape is not None and (tolerance_codes not in (None, 0, 0.5) or display is not None):
+        given = "tolerance_codes" if tolerance_codes not in (None, 0, 0.5) else "display"
+        raise ValueError(
+            f"{given} beside kernel_shape={kernel_shape!r}: a kernel shape renders exactly with "
+            f"that kernel (no plan), so the {given} the plan is made for would be ignored; give "
+            "one of them"
+        )
     if not (image > l_dmax).any():
         # nothing to spread: skip digitising a kernel, after checking the other arguments
         check_pixel_deg(pixel_deg, high=MAX_RENDER_PIXEL_DEG)

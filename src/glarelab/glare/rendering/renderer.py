@@ -478,6 +478,12 @@ class GlareRenderer:
                 f"luminance_cd_m2 must have the renderer's shape {self.shape}; "
                 f"got {image.shape[:2]}"
             )
+        top = float(np.finfo(self.dtype).max)
+        if image.size and float(image.max()) > top:  # cast, it would be inf
+            raise ValueError(
+                f"luminance_cd_m2 reaches {float(image.max()):.3g} cd/m², beyond the "
+                f"{top:.3g} that precision={self.dtype.name!r} holds; use precision='float64'"
+            )
         return image, Scene.of(image, self.l_dmax, self.method, self.dtype)
 
     def plan(self, luminance_cd_m2: np.ndarray) -> GlarePlan:
