@@ -104,7 +104,9 @@ def test_keys_of_a_protocol_that_is_refused_print_no_table(capsys):
     """``protocol keys ''`` printed the table's header, then the refusal."""
     assert main(["protocol", "keys", ""]) == 2
     captured = capsys.readouterr()
-    assert captured.out == "" and "the path is empty" in captured.err
+    assert captured.out == "" and "keys '': empty (an unset shell variable?); give a " in (
+        captured.err
+    )  # named as the paradigm argument it is, not as a protocol file's path
 
 
 def test_a_protocol_the_check_refuses_for_its_observer_is_not_built(tmp_path, capsys):

@@ -13,6 +13,11 @@ from .common import PROTOCOL_HELP, inside_whole_output
 
 def _protocol_keys(args: argparse.Namespace) -> int:
     paradigm = args.paradigm
+    if not paradigm.strip():  # named as the argument it is, not as a protocol's path
+        raise ValueError(
+            f"keys {paradigm!r}: empty (an unset shell variable?); give a paradigm "
+            f"({', '.join(PARADIGMS)}) or a protocol"
+        )
     if paradigm not in PARADIGMS:  # a protocol: its paradigm (a refusal prints no table)
         paradigm = load_protocol(paradigm).paradigm
     print("| key | unit | default | allowed | meaning |\n| --- | --- | --- | --- | --- |")
