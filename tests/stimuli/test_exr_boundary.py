@@ -192,3 +192,19 @@ def test_a_damaged_chunk_is_refused_not_read_as_nan(tmp_path):
     (tmp_path / "bad.exr").write_bytes(bytes(data))
     with pytest.raises(ValueError, match=r"bad\.exr holds NaN or Inf \(damaged, or not a lum"):
         read_exr(tmp_path / "bad.exr")
+
+
+def test_a_pipe_or_a_folder_is_named_as_what_it_is_not_as_no_such_file(tmp_path):
+    """A named pipe given as an EXR (a background, an input) was 'no EXR file at ...'."""
+    import os
+
+    from glarelab.stimuli.exr import read_exr
+
+    os.mkfifo(tmp_path / "pipe.exr")
+    (tmp_path / "folder.exr").mkdir()
+    with pytest.raises(ValueError, match=r"pipe\.exr: a named pipe \(FIFO\), not a regular"):
+        read_exr(tmp_path / "pipe.exr")
+    with pytest.raises(IsADirectoryError, match=r"folder\.exr: a folder, not a file"):
+        read_exr(tmp_path / "folder.exr")
+    with pytest.raises(FileNotFoundError, match=r"^no EXR file at .*none\.exr"):
+        read_exr(tmp_path / "none.exr")

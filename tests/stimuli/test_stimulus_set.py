@@ -1,4 +1,5 @@
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -63,6 +64,9 @@ def test_builds_in_separate_processes_are_identical_and_verify(tmp_path, study):
     ]
     path.unlink()
     assert verify_stimulus_set(tmp_path / "a") == [f"{victim}: missing"]
+    os.mkfifo(path)  # was named 'missing' though something is there
+    assert verify_stimulus_set(tmp_path / "a") == [f"{victim}: a named pipe (FIFO), not the file"]
+    path.unlink()
     command = [sys.executable, "-m", "glarelab", "stimuli", "verify", str(tmp_path / "a")]
     done = subprocess.run(command, capture_output=True, text=True, check=False)
     assert done.returncode == 1 and victim in done.stderr

@@ -14,6 +14,7 @@ import numpy as np
 import OpenEXR
 
 from glarelab.files.atomic import NAME_MAX_BYTES, atomic_path
+from glarelab.files.inputs import input_file
 
 __all__ = ["read_exr", "write_exr"]
 
@@ -219,17 +220,17 @@ def read_exr(path: str | Path) -> np.ndarray:
     Raises
     ------
     ValueError
-        If the file is not OpenEXR, is damaged, holds a NaN or infinite pixel (a damaged
-        chunk decodes as NaN), holds neither a ``Y`` channel nor ``R``,
-        ``G`` and ``B``, has more than one part, a ``pixelAspectRatio`` other than 1, or a
-        ``dataWindow`` other than its ``displayWindow`` (a data window that equals the display
-        window is read whole, wherever its origin).
+        If ``path`` is a named pipe or a device, or the file is not OpenEXR, is damaged,
+        holds a NaN or infinite pixel (a damaged chunk decodes as NaN), holds neither a ``Y``
+        channel nor ``R``, ``G`` and ``B``, has more than one part, a ``pixelAspectRatio``
+        other than 1, or a ``dataWindow`` other than its ``displayWindow`` (a data window that
+        equals the display window is read whole, wherever its origin).
     FileNotFoundError
         If the file does not exist.
+    IsADirectoryError
+        If ``path`` is a folder (a named pipe or a device is a ValueError).
     """
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"no EXR file at {path}")
+    path = input_file(path, what="EXR file")  # a pipe or a device is refused unopened
     with path.open("rb") as stream:
         magic = stream.read(4)
     if magic != EXR_MAGIC:

@@ -36,7 +36,7 @@ from PIL import Image
 from PIL.PngImagePlugin import PngInfo
 
 from glarelab.display.calibration import Calibration, synthetic_calibration
-from glarelab.files.atomic import atomic_path, write_bytes, write_text
+from glarelab.files.atomic import atomic_path, special_file, write_bytes, write_text
 from glarelab.files.folders import (
     LISTING,
     check_replaceable,
@@ -729,7 +729,8 @@ def verify_stimulus_set(folder: str | Path) -> list[str]:
     for name, expected in sorted(listed.items()):
         path = folder / name
         if not path.is_file():
-            problems.append(f"{name}: missing")
+            what = special_file(path) or ("a folder" if path.is_dir() else None)
+            problems.append(f"{name}: {what}, not the file" if what else f"{name}: missing")
         elif _sha256(path) != expected:
             problems.append(f"{name}: changed (sha256 differs from the manifest)")
     for path in sorted(folder.iterdir()):
