@@ -12,9 +12,16 @@ not glare). The mean is exact after the ceiling is applied.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-__all__ = ["cloudy_sky"]
+__all__ = ["CONTRAST_TOLERANCE", "cloudy_sky"]
+
+# the RMS contrast a sky delivers may differ from the one asked by sampling (1-2 % at 0.15);
+# more means the ceiling cut its clouds, and a stimulus set would state a contrast not shown
+CONTRAST_TOLERANCE = 0.1
+MEAN_TOLERANCE = 1e-6  # the mean is exact after the ceiling, unless the ceiling cuts too much
 
 
 def cloudy_sky(
@@ -63,8 +70,11 @@ def cloudy_sky(
     Raises
     ------
     ValueError
-        For cloud sizes not in increasing order, or a ceiling not above the mean (the sky
-        would have neither the mean nor the contrast asked).
+        For an argument out of its range (a shape of fewer than two pixels a side, an ``rng``
+        that is no ``numpy.random.Generator``, a pixel size, mean or ceiling that is not a
+        finite number above 0, a contrast that is not a finite number >= 0, a slope that is
+        not finite), cloud sizes not in increasing order, a ceiling not above the mean, or
+        a sky whose contrast (within :data:`CONTRAST_TOLERANCE`) or mean the ceiling cuts.
 
     Examples
     --------
@@ -74,6 +84,34 @@ def cloudy_sky(
     >>> round(float(sky.mean()), 6), bool(sky.max() <= 220.0)
     (150.0, True)
     """
+    if not isinstance(rng, np.random.Generator):
+        raise ValueError(
+            f"rng must be a numpy.random.Generator (np.random.default_rng(seed)), got {rng!r}"
+        )
+    if not (
+        isinstance(shape, tuple | list)
+        and len(shape) == 2
+        and all(isinstance(n, int | np.integer) and not isinstance(n, bool) for n in shape)
+        and min(shape) >= 2
+    ):
+        raise ValueError(f"shape must be two whole numbers of pixels >= 2; got {shape!r}")
+    for name, value, low in (
+        ("pixel_deg", pixel_deg, "above 0"),
+        ("mean_cd_m2", mean_cd_m2, "above 0"),
+        ("ceiling_cd_m2", ceiling_cd_m2, "above 0"),
+        ("contrast", contrast, ">= 0"),
+        ("slope", slope, None),
+        ("cloud_min_deg", cloud_min_deg, "above 0"),
+        ("cloud_max_deg", cloud_max_deg, "above 0"),
+    ):
+        number = isinstance(value, int | float | np.integer | np.floating) and not isinstance(
+            value, bool | np.bool_
+        )
+        if not (number and math.isfinite(value)) or (
+            low is not None and not (value > 0 if low == "above 0" else value >= 0)
+        ):
+            allowed = f"a finite number {low}" if low else "a finite number"
+            raise ValueError(f"{name} must be {allowed}; got {value!r}")
     if not 0 < cloud_min_deg < cloud_max_deg:
         raise ValueError(
             f"cloud_min_deg = {cloud_min_deg!r} must be above 0 and below cloud_max_deg = "
@@ -108,4 +146,16 @@ def cloudy_sky(
             break
         sky = np.minimum(sky, ceiling_cd_m2)
     sky = np.minimum(sky, ceiling_cd_m2)
+    given = float(sky.std() / sky.mean())
+    if contrast > 0 and abs(given - contrast) > CONTRAST_TOLERANCE * contrast:
+        raise ValueError(
+            f"contrast = {contrast:g}: the sky reaches only {given:.3g} under the ceiling of "
+            f"{ceiling_cd_m2:.4g} cd/m² at a mean of {mean_cd_m2:g} cd/m² (its bright clouds "
+            "are cut); ask a lower contrast or a lower mean"
+        )
+    if abs(sky.mean() - mean_cd_m2) > MEAN_TOLERANCE * mean_cd_m2:
+        raise ValueError(
+            f"mean_cd_m2 = {mean_cd_m2:g}: the ceiling of {ceiling_cd_m2:.4g} cd/m² cuts the "
+            f"sky to a mean of {sky.mean():.6g} cd/m²; ask a lower contrast or a lower mean"
+        )
     return sky
