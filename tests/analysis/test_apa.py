@@ -9,6 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from glarelab.analysis import apa
 from glarelab.analysis.apa import (
     anova_effect,
     format_table,
@@ -179,3 +180,21 @@ def test_significant_digits_round_trip(value, digits):
 )
 def test_unit_interval_drops_the_leading_zero_below_one(value, decimals, text):
     assert unit_interval(value, decimals) == text
+
+
+@pytest.mark.parametrize(
+    ("call", "match"),
+    [
+        (lambda: apa.apa_p(True), r"^apa_p: p must be a number in \[0, 1\]; got True"),
+        (lambda: apa.apa_p("0.03"), r"^apa_p: p must be a number in \[0, 1\]; got '0.03'"),
+        (lambda: apa.apa_t(-1, 2.0, 0.05), r"^apa_t: dof: degrees of freedom must be a finite"),
+        (lambda: apa.apa_F(2, 0, 3.0, 0.05), r"^apa_F: df2: degrees of freedom must be a finite"),
+        (lambda: apa.apa_F(True, 5, 3.0, 0.05), r"^apa_F: df1: degrees of freedom"),
+        (lambda: apa.number(1.5, -1), r"^number: decimals must be a whole number 0-20; got -1"),
+    ],
+)
+def test_an_impossible_statistic_is_refused_not_printed(call, match):
+    """``apa_p(True)`` printed 'p > .999', ``apa_t(-1, ...)`` 't(-1) = 2.00', ``apa_F(2, 0, ...)``
+    'F(2, 0) = 3.00', and ``number(1.5, -1)`` ended in Python's format error."""
+    with pytest.raises(ValueError, match=match):
+        call()

@@ -147,11 +147,12 @@ def apa_p(p: float) -> str:
     ('p = .034', 'p < .001', 'p > .999')
     """
     try:
-        value = float(p)
+        value = float("nan") if isinstance(p, bool | np.bool_ | str) else float(p)
     except (TypeError, ValueError):
         value = float("nan")
     if not 0 <= value <= 1:
-        shown = value if isinstance(p, int | float | np.floating) else repr(p)
+        plain = isinstance(p, int | float | np.floating) and not isinstance(p, bool)
+        shown = value if plain else repr(p)
         raise ValueError(f"apa_p: p must be a number in [0, 1]; got {shown}")
     if value < 0.001:
         return "p < .001"
@@ -174,16 +175,33 @@ def fixed(value: float, decimals: int) -> str:
     return text.removeprefix("-") if float(text) == 0 else text
 
 
+def _dof(value: object, name: str) -> float:
+    """Degrees of freedom as a number above 0, else a ValueError naming them."""
+    number = isinstance(value, int | float | np.integer | np.floating) and not isinstance(
+        value, bool | np.bool_
+    )
+    if not (number and math.isfinite(value) and value > 0):
+        raise ValueError(
+            f"{name}: degrees of freedom must be a finite number above 0; got {value!r}"
+        )
+    return float(value)
+
+
 def degrees(value: float) -> str:
     """Degrees of freedom: whole ones as integers, corrected (fractional) ones with two
     decimals; ``1 / 11 × 11`` is 1 (a float a hair from a whole number is that number).
+
+    Raises
+    ------
+    ValueError
+        For degrees of freedom that are not a finite number above 0.
 
     Examples
     --------
     >>> degrees(45.0), degrees(21.148), degrees(11 * (1 / 11))
     ('45', '21.15', '1')
     """
-    value = float(value)
+    value = _dof(value, "degrees")
     if abs(value - round(value)) < 1e-9 * max(1.0, abs(value)):
         return f"{round(value):.0f}"
     return f"{value:.2f}"
@@ -211,6 +229,7 @@ def apa_F(df1: float, df2: float, f_value: float, p: float) -> str:
     >>> apa_F(5, 45, 23.684, 0.00001)
     'F(5, 45) = 23.68, p < .001'
     """
+    _dof(df1, "apa_F: df1"), _dof(df2, "apa_F: df2")
     return f"F({degrees(df1)}, {degrees(df2)}) = {fixed(f_value, 2)}, {apa_p(p)}"
 
 
@@ -349,7 +368,8 @@ def apa_t(dof: float, t: float, p: float) -> str:
     >>> apa_t(9, -0.004, 0.997), apa_t(16.83, 1.7749, 0.048)
     ('t(9) = 0.00, p = .997', 't(16.8) = 1.77, p = .048')
     """
-    d = f"{dof:.0f}" if float(dof).is_integer() else f"{dof:.1f}"
+    dof = _dof(dof, "apa_t: dof")
+    d = f"{dof:.0f}" if dof.is_integer() else f"{dof:.1f}"
     return f"t({d}) = {fixed(t, 2)}, {apa_p(p)}"
 
 
@@ -531,6 +551,10 @@ def number(value: float, decimals: int) -> str:
     >>> number(float("-inf"), 1)
     '-∞'
     """
+    if not (isinstance(decimals, int | np.integer) and not isinstance(decimals, bool)) or not (
+        0 <= decimals <= 20
+    ):
+        raise ValueError(f"number: decimals must be a whole number 0-20; got {decimals!r}")
     if value is None or (isinstance(value, float) and math.isnan(value)):
         return ""
     if math.isinf(value):

@@ -371,3 +371,26 @@ def test_a_count_of_flare_lines_beyond_memory_is_refused_when_the_model_is_made(
     VosGlare(regime="mesopic", flare_lines=True, **{name: MAX_FLARE_LINES})
     with pytest.raises(ValueError, match=r"^n_lines must be at most 1,000,000"):
         flare_line_pattern((11, 11), rng=np.random.default_rng(0), n_lines=MAX_FLARE_LINES + 1)
+
+
+@pytest.mark.parametrize(
+    ("options", "match"),
+    [
+        ({"regime": "mesopic", "wavelength_nm": np.array([500.0, 600.0])},
+         r"^wavelength_nm must be one number \(380-780 nm\) or None; got array"),
+        ({"samples_per_pixel": 10**12}, r"^samples_per_pixel must be at most 2000"),
+        ({"center_samples_per_pixel": 10**9}, r"^center_samples_per_pixel must be at most 2000"),
+    ],
+)  # fmt: skip
+def test_a_vos_option_no_kernel_can_be_made_of_is_refused_when_the_model_is_made(options, match):
+    """An array of wavelengths failed inside the digitiser ('operands could not be broadcast'),
+    10**12 samples a pixel asked numpy for 2 TiB: both after the model was taken."""
+    with pytest.raises(ValueError, match=match):
+        VosGlare(**options)
+
+
+def test_the_volume_of_a_name_is_refused_naming_the_profile():
+    from glarelab.glare.models import vos
+
+    with pytest.raises(ValueError, match=r"^profile must be a function of angles in degrees"):
+        vos.volume("f2")

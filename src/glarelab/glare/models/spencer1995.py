@@ -89,7 +89,7 @@ class VosGlare(GlareModel):
         ``None`` (default): the halo of a white source, integrated over 400-700 nm.
         A number: a monochromatic halo at that wavelength (380-780 nm); refused in the
         photopic regime, which has no halo, and beside a ``halo_spectrum`` (one of them
-        would be ignored). A pupil under 3 mm, the eye's state, drops the halo it colours.
+        would be ignored), and behind a pupil under 3 mm, which drops the halo it colours.
     halo_spectrum
         Wavelength sampling and display primaries of the coloured halo.
     samples_per_pixel, center_samples_per_pixel, center_radius_px
@@ -158,6 +158,11 @@ class VosGlare(GlareModel):
             check_in_range("pupil_mm", self.pupil_mm, *PUPIL_RANGE_MM, unit="mm")
         if self.wavelength_nm is not None:
             vos.f3(0.0, self.wavelength_nm)  # validates the wavelength
+            if np.ndim(self.wavelength_nm) != 0:  # f3 takes arrays; a model's halo has one
+                raise ValueError(
+                    f"wavelength_nm must be one number (380-780 nm) or None; got "
+                    f"{self.wavelength_nm!r:.80}"
+                )
             if self.halo_spectrum != HaloSpectrum():  # one of the two would be ignored
                 raise ValueError(
                     f"wavelength_nm={self.wavelength_nm!r} with halo_spectrum="
@@ -171,8 +176,13 @@ class VosGlare(GlareModel):
                 "lines, and without them it would be ignored; give flare_lines=True or leave "
                 "seed at 0"
             )
-        check_positive_int("samples_per_pixel", self.samples_per_pixel)
-        check_positive_int("center_samples_per_pixel", self.center_samples_per_pixel)
+        for name in ("samples_per_pixel", "center_samples_per_pixel"):
+            check_positive_int(name, getattr(self, name))
+            if getattr(self, name) > MAX_HALO_SAMPLES:  # the digitiser's samples at once
+                raise ValueError(
+                    f"{name} must be at most {MAX_HALO_SAMPLES} ({MAX_HALO_SAMPLES}² samples a "
+                    f"pixel, about 100 MB at once); got {getattr(self, name)!r}"
+                )
         check_positive("center_radius_px", self.center_radius_px, unit="px")
         check_positive("halo_spacing_deg", self.halo_spacing_deg, unit="deg")
         check_positive_int("corona_lines", self.corona_lines)

@@ -481,5 +481,10 @@ def volume(profile, *, upper_deg: float = 90.0) -> float:
     >>> round(volume(f2), 4)
     0.9999
     """
+    if not callable(profile):
+        raise ValueError(
+            f"profile must be a function of angles in degrees (f0, f1, f2, a PSF); got "
+            f"{profile!r:.80}"
+        )
     check_in_range("upper_deg", upper_deg, 0.0, 90.0, unit="deg", low_inclusive=False)
     return float(radial_mass(profile, np.array([upper_deg]))[0])
