@@ -247,3 +247,21 @@ def test_a_monochromatic_halo_adapted_to_daylight_drops_its_wavelength():
     assert (bright.regime, bright.wavelength_nm) == ("photopic", None)
     dim = night.adapted_model(model, 0.05)
     assert (dim.regime, dim.wavelength_nm) == ("mesopic", 500.0)
+
+
+def test_a_models_own_pupil_the_adaptation_would_replace_is_refused():
+    """``render_night(glare_model=VosGlare(regime='mesopic', pupil_mm=2))`` replaced the
+    pupil by each frame's: 2 mm and 8 mm gave the same frames, without a word."""
+    scene = np.full((32, 32, 3), 0.05)
+    scene[16, 16] = 500.0
+    for model in (glare.VosGlare(regime="mesopic", pupil_mm=2.0),
+                  glare.HybridGlare(wave=glare.WaveOpticsGlare(pupil_mm=4.0))):  # fmt: skip
+        with pytest.raises(ValueError, match=r"^glare_model has pupil_mm=\S+, which "
+                           "pupil_from_adaptation=True replaces"):  # fmt: skip
+            night.render_night(scene, pixel_deg=0.1, glare_model=model)
+    kept = [
+        night.render_night(scene, pixel_deg=0.1, pupil_from_adaptation=False,
+                           glare_model=glare.VosGlare(regime="mesopic", pupil_mm=p)).frames
+        for p in (2.0, 8.0)
+    ]  # fmt: skip
+    assert np.abs(kept[0] - kept[1]).max() > 0  # the pupil acts where it is kept

@@ -119,6 +119,21 @@ class NightResult:
     effects: tuple[str, ...]
 
 
+def _given_pupil(model) -> float | None:
+    """The pupil a model (or a model inside it, ``HybridGlare.wave``) was given, else None."""
+    if not dataclasses.is_dataclass(model):
+        return None
+    if getattr(model, "pupil_mm", None) is not None:
+        return model.pupil_mm
+    for spec in dataclasses.fields(model):
+        inner = getattr(model, spec.name)
+        if isinstance(inner, GlareModel):
+            found = _given_pupil(inner)
+            if found is not None:
+                return found
+    return None
+
+
 def adapted_model(
     model: GlareModel, adaptation_luminance_cd_m2: float, *, pupil_step_mm: float = PUPIL_STEP_MM
 ) -> GlareModel:
@@ -231,7 +246,8 @@ def render_night(
         Adapted luminance before the first frame, cd/m²; default: adapted to the first frame.
     pupil_from_adaptation
         Set the glare model's pupil (and Vos regime) from ``L_i`` (:func:`adapted_model`);
-        default True.
+        default True. A model given a ``pupil_mm`` of its own is then refused (the pupil
+        would be replaced every frame): give False to keep it.
     window_sigma_deg, adaptation_mean, tau_rod_s, tau_cone_s
         Adaptation (:func:`glarelab.glare.night.adaptation.frame_luminance`, eqs. 5.2-5.4).
     glare_falloff_deg
@@ -342,6 +358,13 @@ def render_night(
     base = None
     if "glare" in chosen:
         base = _resolve(glare_model if glare_model is not None else "vos")
+        given = _given_pupil(base)
+        if pupil_from_adaptation and given is not None:  # it would be replaced every frame
+            raise ValueError(
+                f"glare_model has pupil_mm={given!r}, which pupil_from_adaptation=True replaces "
+                "by each frame's pupil (from its adaptation luminance): leave pupil_mm None, "
+                "or give pupil_from_adaptation=False to keep it"
+            )
     renderers: dict = {}
     out_frames, pupils, models, bounds = [], [], [], []
     for index, (frame, level, scale) in enumerate(zip(frames, adapted, exposure, strict=True)):
