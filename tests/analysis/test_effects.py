@@ -280,3 +280,10 @@ def test_the_eta_interval_names_the_argument_it_refuses(call, name):
 
     with pytest.raises(ValueError, match=name):
         call(eta2_partial_ci)
+
+
+@pytest.mark.parametrize("flag", ["no", 0, None])
+def test_a_dz_interval_flag_that_is_no_bool_is_refused(flag):
+    """``dz_interval='no'`` is true to ``if``: the interval was computed anyway."""
+    with pytest.raises(ValueError, match=r"^paired_effect: dz_interval must be True or False"):
+        paired_effect([1.0, 2.0, 4.0], [0.0, 1.5, 2.0], dz_interval=flag)

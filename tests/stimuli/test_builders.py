@@ -232,3 +232,26 @@ def test_clouds_smaller_than_two_pixels_are_refused_by_their_size():
     with pytest.raises(ValueError, match=r"cloud_max_deg = 0\.002° is under two pixels"):
         background(spec, (32, 32), pixel_deg=0.0059, rng=np.random.default_rng(0),
                    ceiling_cd_m2=220.0)  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("call", "match"),
+    [
+        (lambda: compose_target(np.zeros(2), np.array([0.5, 1.1]), 1000.0), "coverage must hold"),
+        (lambda: compose_target(np.zeros(2), np.ones(2), float("nan")), "disk_cd_m2 must be a"),
+        (lambda: compose_target(np.zeros(2), np.ones(2), -1.0), "disk_cd_m2 must be a finite"),
+        (lambda: compose_target(np.zeros(3), np.ones(2), 1.0), "must have one shape"),
+    ],
+)
+def test_a_target_no_disk_makes_is_refused(call, match):
+    """A coverage of 1.1 gave a 1000 cd/m² disk a 2100 cd/m² pixel, a NaN disk a NaN target."""
+    with pytest.raises(ValueError, match=match):
+        call()
+
+
+@pytest.mark.parametrize("factor", [0, 2.0, True, -1])
+def test_a_box_filter_factor_that_is_no_whole_number_is_refused(factor):
+    from glarelab.stimuli.matching import box_filter
+
+    with pytest.raises(ValueError, match=r"^factor must be a whole number >= 1"):
+        box_filter(np.ones((4, 4)), factor)

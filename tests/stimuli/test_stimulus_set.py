@@ -264,3 +264,23 @@ def test_an_image_changed_while_the_set_is_in_use_is_refused(tmp_path):
         held.image(later)
     assert held.image(first) is shown  # what was read before the change is what was verified
     assert StimulusSet(tmp_path).manifest_sha256 == held.manifest_sha256
+
+
+@pytest.mark.parametrize(
+    ("codes", "match"),
+    [
+        (np.array([[0.0, np.nan]]), r"got nan at \(0, 1\)"),
+        (np.array([[511.7, 3.0]]), r"got 511\.7 at \(0, 0\)"),
+        (np.array([[True, False]]), r"got dtype bool"),
+    ],
+)
+def test_codes_that_are_not_whole_numbers_are_refused_not_written(tmp_path, codes, match):
+    """A NaN code was written as 0 (black), 511.7 as 512, without a word."""
+    from glarelab.stimuli.stimulus_set import write_codes
+
+    with pytest.raises(
+        ValueError, match=rf"^codes must be whole numbers \(display codes\); {match}"
+    ):
+        write_codes(tmp_path / "c.png", codes, 10)
+    assert not (tmp_path / "c.png").exists()
+    write_codes(tmp_path / "c.png", np.array([[512.0, 3.0]]), 10)  # whole floats are codes

@@ -181,6 +181,8 @@ def paired_effect(
     (1.392, 0.081, 2.635)
     """
     confidence = _confidence(confidence, "paired_effect")
+    if not isinstance(dz_interval, bool | np.bool_):  # 'no' is true to `if`
+        raise ValueError(f"paired_effect: dz_interval must be True or False; got {dz_interval!r}")
     d = _pairs(a, b, "paired_effect")
     n = d.size
     if n < 2:

@@ -56,6 +56,14 @@ def to_srgb8(luminance_cd_m2: np.ndarray, max_cd_m2: float) -> np.ndarray:
     """
     from glarelab.glare._colour import colour  # numpy's print options kept
 
+    number = isinstance(max_cd_m2, int | float | np.integer | np.floating) and not isinstance(
+        max_cd_m2, bool | np.bool_
+    )
+    if not (number and np.isfinite(max_cd_m2) and max_cd_m2 > 0):
+        raise ValueError(f"max_cd_m2 must be a finite luminance above 0, cd/m²; got {max_cd_m2!r}")
+    values = np.asarray(luminance_cd_m2, dtype=float)
+    if not (np.isfinite(values).all() and (values >= 0).all()):
+        raise ValueError("luminance_cd_m2 must hold finite luminances >= 0, cd/m²")
     relative = np.clip(np.asarray(luminance_cd_m2, dtype=float) / float(max_cd_m2), 0.0, 1.0)
     return np.round(255 * colour.cctf_encoding(relative, function="sRGB")).astype(np.uint8)
 
@@ -206,6 +214,21 @@ def radial_profile(
     image = np.asarray(luminance_cd_m2, dtype=float)
     if image.ndim == 3:
         image = image @ np.array([0.2126, 0.7152, 0.0722])
+    if image.ndim != 2 or min(image.shape) < 1:
+        raise ValueError(
+            f"luminance_cd_m2 must be an (H, W) or (H, W, 3) image; got {image.shape}"
+        )
+    inside = (
+        len(centre_px) == 2
+        and all(np.isfinite(c) for c in centre_px)
+        and 0 <= centre_px[0] <= image.shape[0] - 1
+        and 0 <= centre_px[1] <= image.shape[1] - 1
+    )
+    if not inside:
+        raise ValueError(
+            f"centre_px must be (row, column) inside the {image.shape[0]} × {image.shape[1]} "
+            f"image; got {tuple(centre_px)!r}"
+        )
     rows, columns = np.indices(image.shape)
     ring = np.rint(np.hypot(rows - centre_px[0], columns - centre_px[1])).astype(int)
     reach = int(

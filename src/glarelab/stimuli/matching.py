@@ -56,6 +56,8 @@ def box_filter(image: np.ndarray, factor: int) -> np.ndarray:
     >>> box_filter(np.arange(16.0).reshape(4, 4), 2).tolist()
     [[2.5, 4.5], [10.5, 12.5]]
     """
+    if not (isinstance(factor, int | np.integer) and not isinstance(factor, bool)) or factor < 1:
+        raise ValueError(f"factor must be a whole number >= 1; got {factor!r}")
     if factor == 1:
         return image.copy()
     h, w = image.shape[0] // factor, image.shape[1] // factor
@@ -79,7 +81,33 @@ def compose_target(background: np.ndarray, coverage: np.ndarray, disk_cd_m2: flo
     -------
     numpy.ndarray
         ``background + disk_cd_m2 × coverage``, cd/m².
+
+    Raises
+    ------
+    ValueError
+        For a disk luminance that is not a finite number >= 0, a coverage outside 0-1 or
+        not finite, a background with a negative or non-finite value, or the two of other
+        shapes.
+
+    Examples
+    --------
+    >>> compose_target(np.array([5.0, 0.0]), np.array([0.0, 1.0]), 120.0).tolist()
+    [5.0, 120.0]
     """
+    number = isinstance(disk_cd_m2, int | float | np.integer | np.floating) and not isinstance(
+        disk_cd_m2, bool | np.bool_
+    )
+    if not (number and np.isfinite(disk_cd_m2) and disk_cd_m2 >= 0):
+        raise ValueError(f"disk_cd_m2 must be a finite luminance >= 0, cd/m²; got {disk_cd_m2!r}")
+    background, coverage = np.asarray(background, float), np.asarray(coverage, float)
+    if not (np.isfinite(coverage).all() and ((coverage >= 0) & (coverage <= 1)).all()):
+        raise ValueError("coverage must hold area fractions, finite and within 0-1")
+    if not (np.isfinite(background).all() and (background >= 0).all()):
+        raise ValueError("background must hold finite luminances >= 0, cd/m²")
+    if background.shape != coverage.shape:
+        raise ValueError(
+            f"background {background.shape} and coverage {coverage.shape} must have one shape"
+        )
     return background + disk_cd_m2 * coverage
 
 

@@ -263,6 +263,15 @@ def _checked_codes(codes: np.ndarray, bit_depth: int) -> np.ndarray:
         raise ValueError(f"bit_depth must be 1-16; got {bit_depth!r}")
     top = 2**bit_depth - 1
     codes = np.asarray(codes)
+    if codes.dtype.kind == "b" or codes.dtype.kind not in "uif":
+        raise ValueError(f"codes must be whole numbers (display codes); got dtype {codes.dtype}")
+    if codes.dtype.kind == "f":  # a float array of whole codes is taken; NaN or 511.7 not
+        bad = ~np.isfinite(codes) | (codes != np.round(codes))
+        if bad.any():
+            raise ValueError(
+                f"codes must be whole numbers (display codes); got {float(codes[bad].flat[0])!r} "
+                f"at {tuple(int(i) for i in np.argwhere(bad)[0])}"
+            )
     if codes.size and (codes.min() < 0 or codes.max() > top):
         raise ValueError(
             f"codes must be in [0, {top}] for bit_depth {bit_depth}; got "
