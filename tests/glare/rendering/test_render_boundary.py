@@ -271,13 +271,23 @@ def test_a_plans_options_beside_a_kernel_shape_are_refused(options, named):
         np.testing.assert_allclose(shaped, exact, rtol=1e-12, atol=0)
 
 
-def test_a_luminance_float32_cannot_hold_is_refused_not_rendered_as_inf():
-    """A pixel of 3.5e38 cd/m² under precision='float32' became inf in Spencer's sum."""
+@pytest.mark.parametrize(
+    ("value", "options"),
+    [(3.5e38, {"precision": "float32"}), (1e306, {}), (1e31, {})],
+)
+def test_a_luminance_beyond_what_the_arithmetic_holds_is_refused(value, options):
+    """A pixel of 3.5e38 cd/m² under float32 became inf in Spencer's sum; an image of 1e306
+    cd/m² ended in an IndexError of the code tables."""
     image = np.full((21, 21), 1.0)
-    image[10, 10] = 3.5e38
+    image[10, 10] = value
     for composition in ("Yoshida2008", "Spencer1995"):
-        with pytest.raises(ValueError, match=r"reaches 3.5e\+38 cd/m², beyond the 3.4e\+38 that "
-                           r"precision='float32' holds"):  # fmt: skip
-            add_glare(image, MODEL, pixel_deg=0.05, precision="float32", composition=composition)
-        kept = add_glare(image, MODEL, pixel_deg=0.05, composition=composition)
-        assert np.isfinite(kept).all()
+        with pytest.raises(ValueError, match=r"^luminance_cd_m2 reaches .* beyond the 1e\+30 "):
+            add_glare(image, MODEL, pixel_deg=0.05, composition=composition, **options)
+    with pytest.raises(ValueError, match=r"^l_dmax_cd_m2 must be at most 1e\+30 cd/m²"):
+        add_glare(image, MODEL, pixel_deg=0.05, l_dmax_cd_m2=1e300)
+    image[10, 10] = 1e30  # the largest rendered, finite in both precisions
+    for precision in ("float64", "float32"):
+        for composition in ("Yoshida2008", "Spencer1995"):
+            done = add_glare(image, MODEL, pixel_deg=0.05, composition=composition,
+                             precision=precision)  # fmt: skip
+            assert np.isfinite(done).all()

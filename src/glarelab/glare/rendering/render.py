@@ -24,6 +24,7 @@ from glarelab.glare.models.digitise import Kernel, check_kernel_shape
 from glarelab.glare.rendering.compose import check_composition
 from glarelab.glare.rendering.display import display_lut
 from glarelab.glare.rendering.renderer import (
+    MAX_LUMINANCE_CD_M2,
     MAX_RENDER_PIXEL_DEG,
     PRECISIONS,
     GlareRenderer,
@@ -211,6 +212,11 @@ def add_glare(
     """
     image = check_image("luminance_cd_m2", luminance_cd_m2, channels=(3,))
     l_dmax = check_positive("l_dmax_cd_m2", l_dmax_cd_m2, unit="cd/m²")
+    if l_dmax > MAX_LUMINANCE_CD_M2:  # as the renderer, which a dim image does not reach
+        raise ValueError(
+            f"l_dmax_cd_m2 must be at most {MAX_LUMINANCE_CD_M2:g} cd/m² (no display, and far "
+            f"beyond any light); got {l_dmax:g}"
+        )
     check_tolerance(tolerance_codes)  # also when a kernel shape or a dim image makes it moot
     if kernel_shape is not None and (tolerance_codes not in (None, 0, 0.5) or display is not None):
         given = "tolerance_codes" if tolerance_codes not in (None, 0, 0.5) else "display"

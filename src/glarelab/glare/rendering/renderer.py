@@ -75,6 +75,10 @@ WHITE_ROUNDING = (
 # as the command line's --pixel-deg: a coarse grid of the far tail (up to 8 pixels a node)
 # then stays within the 180° a kernel's pixel can subtend
 MAX_RENDER_PIXEL_DEG = 10.0
+# glarelab's bound: 6e20 times the sun's 1.6e9 cd/m², where a whole image's sums and the code
+# tables' logarithms stay finite (an image of 1e306 cd/m² overflowed them: IndexError), in
+# float32 too (3.5e38 cd/m² became inf)
+MAX_LUMINANCE_CD_M2 = 1e30
 
 
 class GlareRenderer:
@@ -169,6 +173,11 @@ class GlareRenderer:
         self.cache = resolve_cache(cache)
         self.pixel_deg = check_pixel_deg(pixel_deg, high=MAX_RENDER_PIXEL_DEG)
         self.l_dmax = check_positive("l_dmax_cd_m2", l_dmax_cd_m2, unit="cd/m²")
+        if self.l_dmax > MAX_LUMINANCE_CD_M2:
+            raise ValueError(
+                f"l_dmax_cd_m2 must be at most {MAX_LUMINANCE_CD_M2:g} cd/m² (no display, "
+                f"and far beyond any light); got {self.l_dmax:g}"
+            )
         self.composition = check_composition(composition, method, where="GlareRenderer")
         check_choice("precision", precision, PRECISIONS)
         self.method, self.dtype = self.composition, np.dtype(precision)
@@ -478,11 +487,10 @@ class GlareRenderer:
                 f"luminance_cd_m2 must have the renderer's shape {self.shape}; "
                 f"got {image.shape[:2]}"
             )
-        top = float(np.finfo(self.dtype).max)
-        if image.size and float(image.max()) > top:  # cast, it would be inf
+        if image.size and float(image.max()) > MAX_LUMINANCE_CD_M2:
             raise ValueError(
                 f"luminance_cd_m2 reaches {float(image.max()):.3g} cd/m², beyond the "
-                f"{top:.3g} that precision={self.dtype.name!r} holds; use precision='float64'"
+                f"{MAX_LUMINANCE_CD_M2:g} cd/m² glarelab renders (the sun is 1.6e9)"
             )
         return image, Scene.of(image, self.l_dmax, self.method, self.dtype)
 
