@@ -396,3 +396,67 @@ def test_a_named_pipe_a_folder_or_nothing_is_refused_without_opening_it(tmp_path
         f"no PsychoPy file at {tmp_path / 'none.csv'}",
     ]
     assert not (tmp_path / "out").exists()
+
+
+def _without_trial(source: Path, target: Path, reorder=None) -> Path:
+    """A PsychoPy file as Builder writes it (no ``trial`` column), its rows after the header
+    and the instructions' reordered by ``reorder``."""
+    rows = list(csv.reader(source.open(encoding="utf-8")))
+    keep = [i for i, name in enumerate(rows[0]) if name != "trial"]
+    rows = [[row[i] for i in keep if i < len(row)] for row in rows]
+    clock = rows[0].index("thisRow.t")
+    for number, row in enumerate(rows[1:]):  # Builder's routines time each entry
+        row[clock] = f"{1.0 + 9.5 * number:.4f}"
+    body = rows[2:] if reorder is None else reorder(rows[2:])
+    target.parent.mkdir(parents=True, exist_ok=True)
+    with target.open("w", encoding="utf-8", newline="") as handle:
+        csv.writer(handle).writerows([*rows[:2], *body])
+    return target
+
+
+@pytest.mark.parametrize("study", ["yoshida2008", "spencer1995"])
+def test_a_file_without_trial_numbers_sorted_in_a_spreadsheet_imports_as_psychopy_wrote_it(
+    study, simulated, tmp_path
+):
+    """Builder writes no trial column; sorted by a column in a spreadsheet, the rows were
+    numbered in their sorted order (training after the main trials), and a staircase's replay
+    then blamed an edited cell."""
+    pytest.importorskip("psychopy.data")
+    protocol = load_protocol(study)
+    own = sorted(simulated.glob(f"*_{study}_s1_*.csv"))[0]
+    source = write_psychopy(own, protocol, tmp_path / "w", rt_name="time_s")
+    plain = _without_trial(source, tmp_path / "a" / source.name)
+    moved = _without_trial(source, tmp_path / "b" / source.name, lambda rows: rows[::-1])
+    (first,) = import_psychopy(protocol, [plain], tmp_path / "out_a")
+    (second,) = import_psychopy(protocol, [moved], tmp_path / "out_b")
+    assert second.csv.read_bytes() == first.csv.read_bytes()
+    assert "thisRow.t), the file's rows having been moved" in second.summary()
+    rows = list(csv.reader(plain.open(encoding="utf-8")))
+    for row in rows[1:]:
+        row[rows[0].index("thisRow.t")] = ""  # an experiment that does not time its rows
+    untimed = tmp_path / "c" / source.name
+    untimed.parent.mkdir()
+    with untimed.open("w", encoding="utf-8", newline="") as handle:
+        csv.writer(handle).writerows(rows)
+    (third,) = import_psychopy(protocol, [untimed], tmp_path / "out_c")
+    assert "numbered in file order (no thisRow.t on every row" in third.summary()
+
+
+def test_an_instructions_row_with_a_trial_value_is_named_not_imported_as_a_trial(
+    simulated, tmp_path
+):
+    """An instructions row that recorded the mapped response time became trial 1 with its
+    other cells empty (16 trials of 15); only the analysis refused, at the imported lines."""
+    pytest.importorskip("psychopy.data")
+    protocol = load_protocol("yoshida2008")
+    own = sorted(simulated.glob("*_yoshida2008_s1_*.csv"))[0]
+    source = write_psychopy(own, protocol, tmp_path, rt_name="key_resp.rt")
+    rows = list(csv.reader(source.open(encoding="utf-8")))
+    rows[1][rows[0].index("key_resp.rt")] = "1.2"  # the instructions' key press, timed
+    with source.open("w", encoding="utf-8", newline="") as handle:
+        csv.writer(handle).writerows(rows)
+    with pytest.raises(DataError) as refused:
+        import_psychopy(protocol, [source], tmp_path / "out", mapping={"key_resp.rt": "time_s"})
+    (problem,) = refused.value.problems
+    assert problem.startswith(f"{source}, line 2: no ") and "outside the trial loop" in problem
+    assert not (tmp_path / "out").exists()

@@ -23,7 +23,11 @@ trial. The mapping is explicit and its result is said, never silent:
 - ``True``/``False`` become ``true``/``false``; an integer column written as ``35.0`` (a float
   PsychoPy was given) becomes ``35``; PsychoPy's zero-padded session (``001``) becomes ``1``;
 - the ``study`` column, if the experiment did not record it, is the protocol's; ``trial``, if
-  not recorded, numbers the trial rows in file order (the order ``nextEntry`` wrote them);
+  not recorded, numbers the trial rows in the order ``nextEntry`` wrote them: by ``thisRow.t``
+  (the experiment's clock at each entry, which Builder's routines record) where every trial row
+  has one, so a file sorted in a spreadsheet is put back, else in file order (said);
+- a trial row without a value that every trial records (a row outside the loop with a value
+  in a mapped column) is refused, naming its line;
   optional columns not recorded are empty; a required column not recorded is refused, unless
   ``values`` gives it one value for every trial (recorded in the sidecar).
 
@@ -39,6 +43,7 @@ import csv
 import hashlib
 import io
 import json
+import math
 import re
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
@@ -183,6 +188,28 @@ def _psychopy_date(value: str) -> datetime | None:
         return datetime(*numbers)
     except ValueError:  # 2026-02-30, 25h: not a date PsychoPy writes
         return None
+
+
+def _psychopy_order(
+    rows: list[tuple[int, dict[str, str]]],
+) -> tuple[list[tuple[int, dict[str, str]]], str]:
+    """The rows of a file that records no trial number, in the order PsychoPy wrote them:
+    by ``thisRow.t`` (the experiment clock at each entry, increasing as they are written) where
+    every row has one, so a file sorted in a spreadsheet is put back; else in file order. The
+    second value says which, for the import's summary."""
+    times = []
+    for _, record in rows:
+        try:
+            times.append(float(record.get("thisRow.t", "")))
+        except ValueError:
+            return rows, "numbered in file order (no thisRow.t on every row to order them by)"
+    if not all(math.isfinite(t) for t in times):
+        return rows, "numbered in file order (no thisRow.t on every row to order them by)"
+    order = sorted(range(len(rows)), key=times.__getitem__)  # stable: ties keep file order
+    moved = "" if order == list(range(len(rows))) else ", the file's rows having been moved"
+    return [
+        rows[i] for i in order
+    ], f"numbered in the order PsychoPy wrote them (thisRow.t){moved}"
 
 
 def _started(rows: list[dict[str, str]], source: Path) -> tuple[datetime, str | None]:
@@ -355,7 +382,7 @@ def import_psychopy(
             elif column.name == "study":
                 filled["study"] = f"the protocol's: {protocol.study}"
             elif column.name == "trial":
-                filled["trial"] = "numbered in file order"
+                pass  # numbered below, in the order PsychoPy wrote the rows
             elif column.optional:
                 filled[column.name] = "empty (not recorded)"
             else:
@@ -381,7 +408,10 @@ def import_psychopy(
                 empty_rows.append(line)
                 continue
             rows.append((line, record))
-        sessions: dict[tuple[str, str], list[dict[str, str]]] = {}
+        if "trial" not in taken:  # numbered in the order PsychoPy wrote the rows
+            rows, how = _psychopy_order(rows)
+            filled["trial"] = how
+        sessions: dict[tuple[str, str], list[tuple[int, dict[str, str]]]] = {}
         originals = [
             dict(zip(header, cells, strict=True))
             for _, cells in records
@@ -398,7 +428,7 @@ def import_psychopy(
                     "file (letters, digits, '_', '-', '.')"
                 )
             session = _cell(record.get("session", ""), by_name["session"])
-            sessions.setdefault((participant, session), []).append(record)
+            sessions.setdefault((participant, session), []).append((line, record))
         if len(problems) > found:
             continue
         started, undated = _started(originals, source)
@@ -408,7 +438,7 @@ def import_psychopy(
         version = next((r["psychopyVersion"] for r in originals if r.get("psychopyVersion")), None)
         for (participant, session), trial_rows in sessions.items():
             cells_rows = []
-            for number, record in enumerate(trial_rows, start=1):
+            for number, (line, record) in enumerate(trial_rows, start=1):
                 row = {}
                 for column in schema:
                     if column.name in record:
@@ -421,6 +451,13 @@ def import_psychopy(
                         row[column.name] = str(number)
                     else:
                         row[column.name] = ""
+                empty = [c.name for c in schema if not c.optional and row[c.name] == ""]
+                if empty:  # a row outside the trial loop with a value in a mapped column
+                    problems.append(
+                        f"{source}, line {line}: no {', '.join(empty)}, which every trial "
+                        "records: a row outside the trial loop (instructions) with a value "
+                        "in a trial column? Leave that row's trial columns empty, or remove it"
+                    )
                 cells_rows.append(row)
             if all(_INTEGRAL.fullmatch(r["trial"]) for r in cells_rows):
                 # in trial order, as a session writes them: row_sha256 is by trial (trial n at
