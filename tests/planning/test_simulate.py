@@ -94,3 +94,18 @@ def test_a_ctrl_c_during_a_simulated_session_stops_the_study_not_one_replication
     protocol, stimuli = yoshida
     with pytest.raises(KeyboardInterrupt, match="SIGINT"):
         simulate_replication(protocol, 0, participants=(2,), seed=5, stimuli=stimuli)
+
+
+def test_scratch_left_by_a_killed_run_is_removed_and_a_live_ones_kept(yoshida, tmp_path):
+    """A power run killed by SIGKILL left its sessions in /dev/shm (memory) until a reboot."""
+    import os
+
+    protocol, stimuli = yoshida
+    dead = tmp_path / "glarelab-power-999999999-x1"  # beyond any process id
+    live = tmp_path / f"glarelab-power-{os.getppid()}-x2"
+    other = tmp_path / "glarelab-power-notapid"
+    for folder in (dead, live, other):
+        folder.mkdir()
+        (folder / "P1.csv").write_text("trial\n")
+    simulate_replication(protocol, 0, participants=(2,), seed=1, stimuli=stimuli, scratch=tmp_path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([live.name, other.name])

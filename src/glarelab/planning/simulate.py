@@ -78,6 +78,28 @@ def participant_id(replication: int, number: int) -> str:
     return f"rep{replication:06d}-p{number:03d}"
 
 
+SCRATCH_PREFIX = "glarelab-power-"  # then the writing process's id: glarelab-power-PID-XXXX
+
+
+def _remove_stale(scratch: Path) -> None:
+    """Remove the scratch folders of processes that are gone (a power run killed by SIGKILL
+    cannot remove its own; in /dev/shm they would hold memory until a reboot)."""
+    try:
+        entries = list(scratch.glob(f"{SCRATCH_PREFIX}*-*"))
+    except OSError:
+        return
+    for entry in entries:
+        pid = entry.name[len(SCRATCH_PREFIX) :].split("-", 1)[0]
+        if not pid.isdigit() or int(pid) == os.getpid():
+            continue
+        try:
+            os.kill(int(pid), 0)
+        except ProcessLookupError:  # no such process: its folder is left over
+            shutil.rmtree(entry, ignore_errors=True)
+        except (PermissionError, OverflowError, OSError):
+            continue  # another user's live process, or no pid at all: not ours to remove
+
+
 def default_scratch() -> Path:
     """Where simulated sessions are written and deleted: ``/dev/shm`` (memory) where there is
     one to write to, else the system's temporary folder. Each trial's row is fsync'ed, as in
@@ -164,7 +186,9 @@ def simulate_replication(
     largest = max(participants)
     if displayed is None and stimuli is not None:
         displayed = ObservedSet(StimulusSet(stimuli))
-    folder = Path(tempfile.mkdtemp(prefix="glarelab-power-", dir=scratch or default_scratch()))
+    where = Path(scratch or default_scratch())
+    _remove_stale(where)
+    folder = Path(tempfile.mkdtemp(prefix=f"{SCRATCH_PREFIX}{os.getpid()}-", dir=where))
     try:
         ids = [participant_id(replication, number) for number in range(1, largest + 1)]
         csvs = _simulate_sessions(
