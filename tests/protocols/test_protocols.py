@@ -611,3 +611,25 @@ def test_a_protocol_value_that_would_be_ignored_is_refused(study, change, named)
     change(data)
     with pytest.raises(ProtocolError, match=re.escape(named)):
         parse_protocol(data)
+
+
+@pytest.mark.parametrize(
+    ("study", "other"), [("yoshida2008", "staircase"), ("spencer1995", "rating")]
+)
+def test_a_file_of_another_paradigm_is_named_as_such_first(study, other, tmp_path):
+    """A matching file given paradigm = 'staircase' listed 30 problems of unknown and missing
+    keys, none saying that the tables are a matching protocol's."""
+    import tomllib
+
+    from glarelab.protocols import ProtocolError, parse_protocol
+
+    path = Path(__file__).parents[2] / "src" / "glarelab" / "protocols" / f"{study}.toml"
+    data = tomllib.loads(path.read_text(encoding="utf-8"))
+    own = data["study"]["paradigm"]
+    data["study"]["paradigm"] = other
+    with pytest.raises(ProtocolError) as refused:
+        parse_protocol(data)
+    first = refused.value.problems[0]
+    assert first.startswith(
+        f"paradigm = {other!r}, but the file's tables are those of the {own!r}"
+    )

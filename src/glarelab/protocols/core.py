@@ -195,6 +195,26 @@ class Protocol:
         return self.data["study"]["title"]
 
 
+def _other_paradigm(data: dict, paradigm: str, problems: list[str]) -> str | None:
+    """A line naming the paradigm whose schema the file's tables follow, where it is not the
+    one ``paradigm`` names: every key known to that one, many unknown to this."""
+    unknown = sum("unknown key" in p for p in problems)
+    if unknown < 3:
+        return None
+    for other, module in PARADIGMS.items():
+        if other == paradigm:
+            continue
+        theirs: list[str] = []
+        validate(data, {"study": _study_schema(), **module.SCHEMA}, "", theirs)
+        if not any("unknown key" in p for p in theirs):
+            return (
+                f"paradigm = {paradigm!r}, but the file's tables are those of the {other!r} "
+                f"paradigm ({unknown} of its keys are unknown to {paradigm!r}, none to "
+                f"{other!r}): was the paradigm changed? The problems as {paradigm!r}:"
+            )
+    return None
+
+
 def parse_protocol(
     data: Mapping[str, Any], *, source: str = "<protocol>", folder: Path | None = None
 ) -> Protocol:
@@ -240,6 +260,10 @@ def parse_protocol(
     module = PARADIGMS[paradigm]
     problems: list[str] = []
     validated = validate(data, {"study": _study_schema(), **module.SCHEMA}, "", problems)
+    if problems:  # a file of another paradigm whose `paradigm` was changed: say so first
+        hint = _other_paradigm(data, paradigm, problems)
+        if hint:
+            problems.insert(0, hint)
     if not problems:
         _check_shipped_name(validated["study"], problems)
         module.check(validated, problems, folder)
