@@ -351,9 +351,10 @@ def add(commands) -> None:
         "--correction",
         choices=CORRECTIONS,
         default=None,
-        help="the p that judges an ANOVA effect: gg (Greenhouse-Geisser, the default, as the "
-        "reports), hf (Huynh-Feldt), girden (GG when eps < 0.75, else HF), none; where "
-        "sphericity is not estimable, the lower bound; refused for a study without an ANOVA",
+        help="the p that judges an ANOVA effect: gg (Greenhouse-Geisser, the default: the "
+        "more conservative, so the N it recommends is not too small), girden (GG when eps < "
+        "0.75, else HF: the reports' rule), hf (Huynh-Feldt), none; where sphericity is not "
+        "estimable, the lower bound; refused for a study without an ANOVA",
     )
     power.add_argument(
         "--target-power",

@@ -152,8 +152,10 @@ def summarise(
     alpha
         Significance level (default 0.05).
     correction
-        How ANOVA effects are judged (:func:`glarelab.planning.effects.chosen_p`; default ``"gg"``,
-        the p the suite's reports state).
+        How ANOVA effects are judged (:func:`glarelab.planning.effects.chosen_p`); default
+        ``"gg"``, Greenhouse–Geisser's p, the more conservative: the reports decide by
+        Girden's rule (``"girden"``: GG where ε < .75, else Huynh–Feldt), whose power is at
+        least as high.
     level
         Confidence level of the power's interval (default 0.95).
 
