@@ -33,3 +33,18 @@ def test_a_batch_resumed_keeps_what_completed_and_runs_the_rest(tmp_path, capsys
     assert "[1/3] sim01: completed before, kept" in err and "[3/3] sim03: 6 trials" in err
     assert first.read_bytes() == written
     assert answers(stopped) == answers(tmp_path / "whole")
+
+
+def test_a_batch_resumed_with_another_seed_is_refused(tmp_path, capsys):
+    """Resumed with --seed 9, sim01-02 (seed 4) were kept and sim03 run with seed 9: a batch
+    of two seeds, without a word; with --seed 6 'completed before, kept' said nothing either."""
+    out = tmp_path / "batch"
+    run = ["run", "luidolt2020", "--simulate", "--out", str(out)]
+    assert main([*run, "--seed", "4", "--participants", "2"]) == 0
+    before = sorted(p.name for p in out.iterdir())
+    capsys.readouterr()
+    assert main([*run, "--seed", "9", "--participants", "3", "--resume"]) == 2
+    err = capsys.readouterr().err
+    assert "--seed 9: sim01, sim02 of this batch" in err and "give --seed 4" in err
+    assert sorted(p.name for p in out.iterdir()) == before
+    assert main([*run, "--seed", "4", "--participants", "3", "--resume"]) == 0

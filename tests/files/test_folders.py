@@ -155,3 +155,35 @@ def test_a_file_browsers_own_files_do_not_make_a_folder_foreign(tmp_path):
     (out / "mine.txt").write_text("x")
     with pytest.raises(ValueError, match=r"mine\.txt"):
         check_replaceable(out, kind="report", what="report")
+
+
+def test_a_shared_file_edited_since_glarelab_wrote_it_is_not_overwritten(tmp_path):
+    """``docs``, ``gallery`` and ``looks`` wrote their files again over a user's edits (notes
+    added to data.md, a retouched figure) without a word."""
+    from glarelab.files.folders import claim_files, record_written
+
+    claim_files(tmp_path, ["a.md", "b.png"], "docs")
+    (tmp_path / "a.md").write_text("generated\n")
+    (tmp_path / "b.png").write_bytes(b"png")
+    record_written(tmp_path, ["a.md", "b.png"])
+    claim_files(tmp_path, ["a.md", "b.png"], "docs")  # unedited: written again
+    (tmp_path / "a.md").write_text("generated\n")
+    record_written(tmp_path, ["a.md", "b.png"])
+    (tmp_path / "a.md").write_text("generated\nthe lab's notes\n")
+    with pytest.raises(ValueError, match=r"a\.md was edited since glarelab wrote it; docs would"):
+        claim_files(tmp_path, ["a.md", "b.png"], "docs")
+    assert (tmp_path / "a.md").read_text() == "generated\nthe lab's notes\n"
+
+
+def test_docs_run_again_keeps_a_file_edited_since(tmp_path, capsys):
+    from glarelab.cli import main
+
+    out = tmp_path / "docs"
+    assert main(["docs", "--out", str(out)]) == 0
+    assert main(["docs", "--out", str(out)]) == 0  # its own files, unedited: written again
+    edited = (out / "data.md").read_text(encoding="utf-8") + "\nOur lab's notes.\n"
+    (out / "data.md").write_text(edited, encoding="utf-8")
+    capsys.readouterr()
+    assert main(["docs", "--out", str(out)]) == 2
+    assert "data.md was edited since glarelab wrote it" in capsys.readouterr().err
+    assert (out / "data.md").read_text(encoding="utf-8") == edited

@@ -12,6 +12,7 @@ import numpy as np
 from glarelab import glare
 from glarelab.display.calibration import Calibration
 from glarelab.files.atomic import atomic_path, write_text
+from glarelab.files.folders import record_written
 from glarelab.files.inputs import input_file
 from glarelab.glare._validation import check_image
 from glarelab.stimuli.apertures import load_aperture_image
@@ -383,6 +384,8 @@ def _render(args: argparse.Namespace) -> int:
                 scale=args.preview_scale or "display",
             )
             _log(f"wrote {args.preview}")
+    if folder:
+        record_written(Path(output), names)
     return 0
 
 
@@ -476,9 +479,8 @@ GALLERY_SERIES = "wave_particles_pupil_"  # kernels shown on one scale, that of 
 def _gallery(args: argparse.Namespace) -> int:
     models = gallery_models()
     figures = [f"{n}_axes{end}" for n in models for end in (".png", ".pdf")]
-    out = writes_into(
-        Path(args.out), [f"{n}.png" for n in models] + figures + ["wave_gallery.json"], "gallery"
-    )
+    written = [f"{n}.png" for n in models] + figures + ["wave_gallery.json"]
+    out = writes_into(Path(args.out), written, "gallery")
     check_memory(
         PSF_FIXED_BYTES + PSF_BYTES_PER_PIXEL * 3 * args.size**2, f"a {args.size}² kernel"
     )
@@ -503,6 +505,7 @@ def _gallery(args: argparse.Namespace) -> int:
                    title=captions[name]["caption"])  # fmt: skip
         _log(f"    {captions[name]['seconds']} s → {out / name}.png (the series' scale)")
     write_text(out / "wave_gallery.json", json.dumps(captions, indent=2))
+    record_written(out, written)  # a file edited since is then not overwritten unsaid
     print(out.resolve())
     return 0
 
@@ -564,7 +567,8 @@ def _looks_night(args: argparse.Namespace) -> int:
         f"no_{e}": tuple(x for x in effects if x != e) for e in effects
     }
     names = [f"{n}{end}" for n in pipelines for end in (".exr", ".png")]
-    out = writes_into(Path(args.out), [*names, "night.png", "manifest.json"], "looks --night")
+    written = [*names, "night.png", "manifest.json"]
+    out = writes_into(Path(args.out), written, "looks --night")
     spec = NIGHT_LOOKS
     street = night_street(
         spec["size_px"], pixel_deg=spec["pixel_deg"], lamps=spec["lamps"],
@@ -624,6 +628,7 @@ def _looks_night(args: argparse.Namespace) -> int:
         figure.savefig(temporary, format="png", metadata={"Software": None})
     plt.close(figure)
     write_text(out / "manifest.json", json.dumps(manifest, indent=2, default=str))
+    record_written(out, written)
     _log(f"wrote {out / 'night.png'} and {out / 'manifest.json'}")
     print(out.resolve())
     return 0
@@ -638,9 +643,8 @@ def _looks(args: argparse.Namespace) -> int:
     import matplotlib.pyplot as plt
 
     names = [f"{n}{end}" for n in DEMO_MODELS for end in (".exr", ".png", "_log.png")]
-    out = writes_into(
-        Path(args.out), ["stimulus.exr", *names, "profiles.png", "manifest.json"], "looks"
-    )
+    written = ["stimulus.exr", *names, "profiles.png", "manifest.json"]
+    out = writes_into(Path(args.out), written, "looks")
     stimulus = disk(**DEMO_DISK)
     write_exr(out / "stimulus.exr", stimulus["img"].astype(np.float32))
     pixel_deg = stimulus["pixel_deg"]
@@ -678,6 +682,7 @@ def _looks(args: argparse.Namespace) -> int:
         figure.savefig(temporary, format="png")
     plt.close(figure)
     write_text(out / "manifest.json", json.dumps(manifest, indent=2, default=str))
+    record_written(out, written)
     _log(f"wrote {out / 'profiles.png'} and {out / 'manifest.json'}")
     print(out.resolve())
     return 0

@@ -129,6 +129,29 @@ def _batch_resume(out: Path, participant: str, study: str, session: int) -> bool
     return True  # resumed, or refused by the session's own checks, naming why
 
 
+def _check_batch_seed(out: Path, ids: list[str], study: str, session: int, seed: int) -> None:
+    """Refuse a batch resumed with another seed than its sessions were simulated with (their
+    sidecars' ``simulated_observer_seed``): the batch would mix observers of two seeds."""
+    from glarelab.experiments.data import session_files
+
+    others: dict[int, list[str]] = {}
+    for participant in ids:
+        for sidecar in (p for p in session_files(out, participant, study, session)
+                        if p.suffix == ".json"):  # fmt: skip
+            with contextlib.suppress(OSError, ValueError, AttributeError):
+                info = json.loads(sidecar.read_text(encoding="utf-8")).get("participant_info")
+                used = (info or {}).get("simulated_observer_seed")
+                if isinstance(used, int) and used != seed:
+                    others.setdefault(used, []).append(participant)
+    if others:
+        used, who = next(iter(others.items()))
+        raise ValueError(
+            f"--seed {seed}: {', '.join(who[:4])}{' …' if len(who) > 4 else ''} of this batch "
+            f"in {out} were simulated with seed {used}; a batch goes on with the seed it began "
+            f"with: give --seed {used}, or another --out for a batch of seed {seed}"
+        )
+
+
 def _check_run_options(args: argparse.Namespace, protocol) -> None:
     """Refuse every option the session would ignore, in one line."""
     from glarelab.experiments.session import check_counterbalance, shows_images
@@ -231,6 +254,8 @@ def _run_session(args: argparse.Namespace) -> int:
             stimuli = cached_stimulus_set(protocol)
             _log(f"stimulus set: {stimuli}")
         batch = args.participant is None
+        if args.resume and batch:  # a batch goes on with the seed it began with
+            _check_batch_seed(out, ids, protocol.study, args.session, args.seed)
         for number, participant in enumerate(ids, start=1):
             resume = args.resume
             if resume and batch:  # a batch goes on where it stopped

@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 from glarelab.files.atomic import write_text
+from glarelab.files.folders import record_written
 
 from .common import PROTOCOL_HELP, count, folder_to_write, output_folder, writes_into
 from .common import log as _log
@@ -36,6 +37,7 @@ def _docs(args: argparse.Namespace) -> int:
     for name, text in (("protocols.md", protocol_reference()), ("data.md", data_reference())):
         write_text(out / name, text)
         print((out / name).resolve())
+    record_written(out, ["protocols.md", "data.md"])  # edited later: refused, not overwritten
     return 0
 
 

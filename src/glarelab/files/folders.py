@@ -36,6 +36,7 @@ __all__ = [
     "list_files",
     "listed_files",
     "record_files",
+    "record_written",
     "replace_folder",
     "restore_folder",
     "staging_folder",
@@ -272,7 +273,7 @@ def claim_files(folder: Path, names: Iterable[str], kind: str) -> None:
     """
     names = list(names)
     with _listing_held(Path(folder)):
-        listed = _listing(folder)
+        listed, written = _listing(folder), _hashes(folder)
         for name in names:
             path = folder / name
             if (path.exists() or path.is_symlink()) and name not in listed:
@@ -280,7 +281,34 @@ def claim_files(folder: Path, names: Iterable[str], kind: str) -> None:
                     f"{path} exists and glarelab did not write it there; {kind} would "
                     "overwrite it, so give another folder or move the file (nothing was changed)"
                 )
+            if name in written and path.exists() and _sha256(path) != written[name]:
+                raise ValueError(
+                    f"{path} was edited since glarelab wrote it; {kind} would overwrite it, so "
+                    "copy what you changed elsewhere, remove the file, or give another folder "
+                    "(nothing was changed)"
+                )
         _write_listing(folder, listed | dict.fromkeys(names, kind), _hashes_but(folder, names))
+
+
+def record_written(folder: Path, names: Iterable[str]) -> None:
+    """After a command wrote ``names`` into a shared ``folder``: record their content, so a
+    later run refuses to overwrite one edited since (:func:`claim_files`).
+
+    Parameters
+    ----------
+    folder
+        The shared folder.
+    names
+        The files just written, relative to ``folder`` (listed by :func:`claim_files`).
+    """
+    folder = Path(folder)
+    with _listing_held(folder):
+        hashes = _hashes(folder)
+        for name in names:
+            digest = _sha256(folder / name)
+            if digest is not None:
+                hashes[name] = digest
+        _write_listing(folder, _listing(folder), hashes)
 
 
 def _hashes_but(folder: Path, names: Iterable[str]) -> dict[str, str]:
