@@ -8,7 +8,8 @@ another program's ``manifest.json``, a symbolic link — is refused before anyth
 A stimulus set or a report is built in a staging folder next to its destination and moved into
 place only when complete: a failed build leaves the earlier output as it was, and a rebuild
 leaves no file of the earlier output behind. Commands that add named files to a folder shared
-with other files (``docs``, ``looks``, ``gallery``) overwrite only files the listing names.
+with other files (``docs``, ``looks``, ``gallery``) overwrite only files the listing names,
+and refuse one edited since they wrote it (its content is recorded, :func:`record_written`).
 """
 
 from __future__ import annotations
