@@ -597,32 +597,24 @@ def _calibration_record(where_: Path, sidecar: dict) -> list[str]:
             f"{where_}: calibration.calibrated is {_json(record.get('calibrated'))}; a session "
             f"whose calibration is {status} records {_json(calibrated)}"
         )
-    readings = record.get("readings_sha256")
-    if with_readings and not (isinstance(readings, str) and _SHA256.fullmatch(readings)):
-        problems.append(
-            f"{where_}: calibration.readings_sha256 is {_json(readings)}, but its status is "
-            f"{status}: must be the sha256 (64 hex digits) of the calibration's readings, from "
-            "which alone a status comes (the sidecar edited?)"
-        )
-    elif not with_readings and readings is not None:
-        problems.append(
-            f"{where_}: calibration.readings_sha256 is {_json(readings)}, but its status is "
-            f"{status}: must be null (a session {status} names no calibration)"
-        )
-    curve = record.get("curve_sha256")
-    if "curve_sha256" not in record:  # sessions before the curve's digest was recorded
-        pass
-    elif with_readings and not (isinstance(curve, str) and _SHA256.fullmatch(curve)):
-        problems.append(
-            f"{where_}: calibration.curve_sha256 is {_json(curve)}, but its status is "
-            f"{status}: must be the sha256 (64 hex digits) of the calibration's curve (the "
-            "sidecar edited?)"
-        )
-    elif not with_readings and curve is not None:
-        problems.append(
-            f"{where_}: calibration.curve_sha256 is {_json(curve)}, but its status is "
-            f"{status}: must be null (a session {status} names no calibration)"
-        )
+    for key, of in (
+        ("readings_sha256", "readings, from which alone a status comes"),
+        ("curve_sha256", "curve"),  # absent in sessions before the curve's digest was recorded
+    ):
+        if key not in record and key == "curve_sha256":
+            continue
+        digest = record.get(key)
+        if with_readings and not (isinstance(digest, str) and _SHA256.fullmatch(digest)):
+            problems.append(
+                f"{where_}: calibration.{key} is {_json(digest)}, but its status is {status}: "
+                f"must be the sha256 (64 hex digits) of the calibration's {of} (the sidecar "
+                "edited?)"
+            )
+        elif not with_readings and digest is not None:
+            problems.append(
+                f"{where_}: calibration.{key} is {_json(digest)}, but its status is {status}: "
+                f"must be null (a session {status} names no calibration)"
+            )
     accepted = record.get("accepted_unverified_by")
     allowed = (
         UNVERIFIED_ACCEPTED_BY if sidecar.get("pilot") is True else UNVERIFIED_ACCEPTED_BY[1:]
