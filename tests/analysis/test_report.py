@@ -110,7 +110,7 @@ def _find(grid, picture):
 def test_to_srgb8_encodes_relative_luminance():
     # sRGB (IEC 61966-2-1): 18 % grey is 118 of 255, 1 % is 25
     assert to_srgb8(np.array([0.0, 1.0, 18.0, 100.0]), 100.0).tolist() == [0, 25, 118, 255]
-    assert to_srgb8(np.array([-1.0, 200.0]), 100.0).tolist() == [0, 255]  # clipped
+    assert to_srgb8(np.array([0.0, 200.0]), 100.0).tolist() == [0, 255]  # above white: clipped
 
 
 def test_the_results_paragraph_and_tables_read_as_a_paper(yoshida):
