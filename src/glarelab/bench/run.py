@@ -169,12 +169,13 @@ DIRECT_LIMIT = 2e9  # multiply-adds up to which the direct path alone is timed
 
 def _reference(image, pixel, model):
     if isinstance(model, glare.VosGlare):
-        model = replace(
-            model,
-            samples_per_pixel=4 * model.samples_per_pixel,
-            center_samples_per_pixel=4 * model.center_samples_per_pixel,
-            halo_spacing_deg=model.halo_spacing_deg / 4,
-        )
+        finer = {  # the halo's spacing only where there is a halo (else refused as idle)
+            "samples_per_pixel": 4 * model.samples_per_pixel,
+            "center_samples_per_pixel": 4 * model.center_samples_per_pixel,
+        }
+        if model.weights[3] > 0:
+            finer["halo_spacing_deg"] = model.halo_spacing_deg / 4
+        model = replace(model, **finer)
     return glare.add_glare(image, model, pixel_deg=pixel, tolerance_codes=None)
 
 
