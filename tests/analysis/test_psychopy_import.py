@@ -460,3 +460,18 @@ def test_an_instructions_row_with_a_trial_value_is_named_not_imported_as_a_trial
     (problem,) = refused.value.problems
     assert problem.startswith(f"{source}, line 2: no ") and "outside the trial loop" in problem
     assert not (tmp_path / "out").exists()
+
+
+def test_a_session_glarelab_ran_is_refused_not_imported_as_psychopys(simulated, tmp_path):
+    """A pilot, simulated or aborted session of glarelab's own, given to import-psychopy, was
+    written as pilot false, simulated false, completed: the analysis then counted it."""
+    protocol = load_protocol("yoshida2008")
+    own = sorted(simulated.glob("*_yoshida2008_s1_*.csv"))[0]
+    with pytest.raises(DataError, match=r"a glarelab session file \(its sidecar .*\.json is"):
+        import_psychopy(protocol, [own], tmp_path / "out")
+    alone = tmp_path / "copied" / own.name  # the CSV copied without its sidecar
+    alone.parent.mkdir()
+    alone.write_bytes(own.read_bytes())
+    with pytest.raises(DataError, match=r"a glarelab session file's columns, exactly"):
+        import_psychopy(protocol, [alone], tmp_path / "out")
+    assert not (tmp_path / "out").exists()

@@ -190,6 +190,18 @@ def _psychopy_date(value: str) -> datetime | None:
         return None
 
 
+def _glarelab_session(source: Path) -> Path | None:
+    """The sidecar beside ``source`` if it is a session glarelab ran (or imported), else None."""
+    sidecar = source.with_suffix(".json")
+    try:
+        data = json.loads(sidecar.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    if isinstance(data, dict) and {"data_format", "runs", "status"} <= set(data):
+        return sidecar
+    return None
+
+
 def _psychopy_order(
     rows: list[tuple[int, dict[str, str]]],
 ) -> tuple[list[tuple[int, dict[str, str]]], str]:
@@ -330,6 +342,21 @@ def import_psychopy(
         source = Path(raw)
         found = len(problems)
         header, records = _read(source, problems)
+        own = _glarelab_session(source)
+        if own is not None:  # its pilot, simulated and status marks would be lost
+            problems.append(
+                f"{source}: a glarelab session file (its sidecar {own.name} is beside it, "
+                "recording a session glarelab ran): give it to glarelab analyse as it is; "
+                "import-psychopy takes the CSV PsychoPy's ExperimentHandler wrote"
+            )
+            continue
+        if header == [c.name for c in schema]:  # exactly a session file's columns, no more
+            problems.append(
+                f"{source}: a glarelab session file's columns, exactly (its sidecar missing?): "
+                "PsychoPy's files add columns of their own (thisRow.t, notes, a loop's thisN); "
+                "a session glarelab ran is analysed with its sidecar, never imported"
+            )
+            continue
         if len(problems) > found or not header:
             continue
         # the empty last column: every row of saveAsWideText ends with the delimiter
