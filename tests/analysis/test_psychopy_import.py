@@ -475,3 +475,28 @@ def test_a_session_glarelab_ran_is_refused_not_imported_as_psychopys(simulated, 
     with pytest.raises(DataError, match=r"a glarelab session file's columns, exactly"):
         import_psychopy(protocol, [alone], tmp_path / "out")
     assert not (tmp_path / "out").exists()
+
+
+def test_a_file_and_its_resave_are_not_two_participants(simulated, tmp_path):
+    """A participant's file and its spreadsheet re-save (participant 001 became 1) imported
+    as two participants with the same trials: 11 participants in the report where 10 ran."""
+    pytest.importorskip("psychopy.data")
+    protocol = load_protocol("yoshida2008")
+    own = sorted(simulated.glob("*_yoshida2008_s1_*.csv"))[0]
+    source = write_psychopy(own, protocol, tmp_path / "a", rt_name="time_s")
+    rows = list(csv.reader(source.open(encoding="utf-8")))
+    at = rows[0].index("participant")
+    for row in rows[1:]:
+        row[at] = "resaved"
+    copy = tmp_path / "b" / "resaved.csv"
+    copy.parent.mkdir()
+    with copy.open("w", encoding="utf-8", newline="") as handle:
+        csv.writer(handle).writerows(rows)
+    with pytest.raises(
+        DataError, match=r"resaved\.csv: its trials are those of .*, cell for cell"
+    ):
+        import_psychopy(protocol, [source, copy], tmp_path / "out")
+    assert not (tmp_path / "out").exists()
+    import_psychopy(protocol, [source], tmp_path / "out")
+    with pytest.raises(DataError, match=r"its trials are those of .*_yoshida2008_s1_.*\.csv"):
+        import_psychopy(protocol, [copy], tmp_path / "out")  # in a later import too

@@ -559,6 +559,7 @@ def import_psychopy(
     names = [p[0].csv for p in planned]
     for name in sorted({n for n in names if names.count(n) > 1}):
         problems.append(f"{name}: two sessions of the sources would get this name")
+    problems += _same_trials(planned, out)
     if problems:
         raise DataError(problems)
     out.mkdir(parents=True, exist_ok=True)
@@ -577,6 +578,43 @@ def import_psychopy(
             path.unlink(missing_ok=True)
         raise
     return [p[0] for p in planned]
+
+
+_WHO = ("study", "participant", "session")  # not what a participant did
+
+
+def _trials_key(text: str) -> tuple:
+    """What a session file's participant did: its rows without who and which session; empty
+    where no row holds a time (answers alone, which two people may well give alike)."""
+    rows = list(csv.DictReader(io.StringIO(text, newline="")))
+    if not any(row.get("time_s") or row.get("onset_s") for row in rows):
+        return ()
+    return tuple(tuple(v for k, v in row.items() if k not in _WHO) for row in rows)
+
+
+def _same_trials(planned: list, out: Path) -> list[str]:
+    """Sessions of this import whose trials equal another's, or a session's already in
+    ``out``, times included (no two people answer to the millisecond alike): a file and its
+    spreadsheet re-save (participant ``001`` became ``1``) were two participants with the same
+    trials."""
+    problems, seen = [], {}
+    earlier = []
+    for path in sorted(out.glob("*.csv")) if out.is_dir() else []:
+        try:
+            earlier.append((path, _trials_key(path.read_text(encoding="utf-8"))))
+        except (OSError, ValueError):
+            continue
+    for imported, text, _ in planned:
+        key = _trials_key(text)
+        twin = seen.get(key) or next((p for p, k in earlier if k == key), None)
+        if twin is not None and key:
+            problems.append(
+                f"{imported.source}: its trials are those of {twin.name}, cell for cell, as "
+                f"participant {imported.participant}'s session {imported.session}: a file and "
+                "its re-save (a spreadsheet makes 001 into 1)? Import one of them"
+            )
+        seen.setdefault(key, imported.source)
+    return problems
 
 
 def _csv_text(schema, rows: list[dict[str, str]]) -> str:
