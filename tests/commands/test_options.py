@@ -163,6 +163,9 @@ def test_hybrid_flare_lines_act_and_their_seed_with_them(scene, tmp_path):
     other = render("other.exr", "--flare-lines", "--seed", "7")
     assert np.abs(lines - plain).max() > 1e-6 * plain.max()  # the lines streak the glare
     assert np.abs(other - lines).max() > 1e-6 * plain.max()  # placed by the seed
+    argv = ["render", str(scene), str(tmp_path / "lashes.exr"), "--pixel-deg", "0.05",
+            "--model", "hybrid", "--seed", "5"]  # fmt: skip
+    assert main(argv) == 0  # the lashes' and particles' seed, without flare lines
 
 
 def test_an_empty_render_output_is_named_as_empty(scene, capsys, tmp_path, monkeypatch):

@@ -100,12 +100,17 @@ def test_scratch_left_by_a_killed_run_is_removed_and_a_live_ones_kept(yoshida, t
     """A power run killed by SIGKILL left its sessions in /dev/shm (memory) until a reboot."""
     import os
 
+    from glarelab.planning.simulate import _own_prefix
+
     protocol, stimuli = yoshida
-    dead = tmp_path / "glarelab-power-999999999-x1"  # beyond any process id
-    live = tmp_path / f"glarelab-power-{os.getppid()}-x2"
+    own = _own_prefix()
+    dead = tmp_path / f"{own}999999999-x1"  # beyond any process id
+    live = tmp_path / f"{own}{os.getppid()}-x2"
     other = tmp_path / "glarelab-power-notapid"
-    for folder in (dead, live, other):
+    elsewhere = tmp_path / "glarelab-power-otherhost.1-999999999-x3"  # ids of its own
+    for folder in (dead, live, other, elsewhere):
         folder.mkdir()
         (folder / "P1.csv").write_text("trial\n")
     simulate_replication(protocol, 0, participants=(2,), seed=1, stimuli=stimuli, scratch=tmp_path)
-    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([live.name, other.name])
+    kept = sorted([live.name, other.name, elsewhere.name])
+    assert sorted(p.name for p in tmp_path.iterdir()) == kept

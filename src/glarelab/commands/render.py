@@ -168,7 +168,7 @@ def build_model(args: argparse.Namespace) -> glare.GlareModel:
             regime=args.regime,
             age=args.age,
             flare_lines=args.flare_lines,
-            seed=args.seed,
+            seed=args.seed if args.flare_lines else 0,  # it places the flare lines alone
         )
     raise ValueError(f"--model must be one of {MODEL_CHOICES}; got {args.model!r}")
 

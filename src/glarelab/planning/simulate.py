@@ -19,8 +19,10 @@ result on any worker, in any order, in any run.
 
 from __future__ import annotations
 
+import glob
 import os
 import shutil
+import socket
 import tempfile
 import threading
 from collections.abc import Sequence
@@ -78,18 +80,32 @@ def participant_id(replication: int, number: int) -> str:
     return f"rep{replication:06d}-p{number:03d}"
 
 
-SCRATCH_PREFIX = "glarelab-power-"  # then the writing process's id: glarelab-power-PID-XXXX
+SCRATCH_PREFIX = "glarelab-power-"  # then host, PID namespace and process: see _own_prefix
+
+
+def _own_prefix() -> str:
+    """The scratch folders' prefix of this host's processes in this PID namespace: only they
+    can be told gone by their process id (a run on another host, or in a container sharing
+    /dev/shm, has ids of its own)."""
+    try:
+        namespace = str(os.stat("/proc/self/ns/pid").st_ino)
+    except OSError:
+        namespace = "0"
+    host = "".join(c if c.isalnum() else "_" for c in socket.gethostname())
+    return f"{SCRATCH_PREFIX}{host}.{namespace}-"
 
 
 def _remove_stale(scratch: Path) -> None:
-    """Remove the scratch folders of processes that are gone (a power run killed by SIGKILL
-    cannot remove its own; in /dev/shm they would hold memory until a reboot)."""
+    """Remove the scratch folders of processes of this host and PID namespace that are gone
+    (a power run killed by SIGKILL cannot remove its own; in /dev/shm they would hold memory
+    until a reboot)."""
+    own = _own_prefix()
     try:
-        entries = list(scratch.glob(f"{SCRATCH_PREFIX}*-*"))
+        entries = list(scratch.glob(f"{glob.escape(own)}*-*"))
     except OSError:
         return
     for entry in entries:
-        pid = entry.name[len(SCRATCH_PREFIX) :].split("-", 1)[0]
+        pid = entry.name[len(own) :].split("-", 1)[0]
         if not pid.isdigit() or int(pid) == os.getpid():
             continue
         try:
@@ -188,7 +204,7 @@ def simulate_replication(
         displayed = ObservedSet(StimulusSet(stimuli))
     where = Path(scratch or default_scratch())
     _remove_stale(where)
-    folder = Path(tempfile.mkdtemp(prefix=f"{SCRATCH_PREFIX}{os.getpid()}-", dir=where))
+    folder = Path(tempfile.mkdtemp(prefix=f"{_own_prefix()}{os.getpid()}-", dir=where))
     try:
         ids = [participant_id(replication, number) for number in range(1, largest + 1)]
         csvs = _simulate_sessions(
