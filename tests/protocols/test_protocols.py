@@ -633,3 +633,32 @@ def test_a_file_of_another_paradigm_is_named_as_such_first(study, other, tmp_pat
     assert first.startswith(
         f"paradigm = {other!r}, but the file's tables are those of the {own!r}"
     )
+
+
+@pytest.mark.parametrize(
+    ("parameters", "named"),
+    [
+        ({"halo_spacing_deg": 0.005, "halo_lines": 200, "flare_lines": True}, None),
+        ({"regime": "mesopic"}, "regime = 'mesopic'"),
+        ({"wave": {"pupil_mm": 4.0}}, "wave.pupil_mm = 4.0"),
+    ],
+)
+def test_a_scenes_glare_model_takes_its_halo_options_and_refuses_an_eye_state(parameters, named):
+    """A night scene's Vos options of the halo were refused (the model was checked in the
+    default photopic regime, which each frame replaces); a nested pupil passed the check and
+    the build then refused it with advice no protocol key can follow."""
+    from glarelab.protocols import ProtocolError, parse_protocol
+    from glarelab.protocols.rating import scene_glare_model
+
+    data = tomllib.loads((PROTOCOLS / "night2026.toml").read_text(encoding="utf-8"))
+    if "wave" in parameters:
+        data["scene"]["glare_model"] = "hybrid"
+    data["scene"]["glare_parameters"] = parameters
+    if named is None:
+        protocol = parse_protocol(data)
+        model = scene_glare_model(protocol["scene"])
+        assert model.halo_spacing_deg == 0.005 and model.regime == "mesopic"
+        return
+    with pytest.raises(ProtocolError) as refused:
+        parse_protocol(data)
+    assert any(f"scene.glare_parameters: {named}" in p for p in refused.value.problems)

@@ -558,7 +558,7 @@ class PsychoPyFrontend:
         from glarelab.experiments.loop import SessionAborted
         from glarelab.frontend.live import LiveView
         from glarelab.glare.night.live import LiveNight
-        from glarelab.protocols.common import glare_model
+        from glarelab.protocols.rating import scene_glare_model
         from glarelab.stimuli.night import night_scene
 
         if self.tracker is None:
@@ -570,7 +570,7 @@ class PsychoPyFrontend:
         street = night_scene(self.protocol)
         live = LiveNight(
             street["img"], pixel_deg=street["pixel_deg"],
-            glare_model=glare_model(scene["glare_model"], scene["glare_parameters"]),
+            glare_model=scene_glare_model(scene),
             display_max_cd_m2=display["max_cd_m2"],
             adapted_display_cd_m2=min(scene["adapted_display_cd_m2"], display["max_cd_m2"]),
             acuity="acuity" in screen["live"]["effects"],

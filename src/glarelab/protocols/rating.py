@@ -36,6 +36,7 @@ __all__ = [
     "SESSION_ORDER",
     "check",
     "columns",
+    "scene_glare_model",
 ]
 
 EFFECTS = (
@@ -322,18 +323,29 @@ def _check_scene(p: dict, problems: list[str]) -> None:
     else:
         from glarelab.protocols.common import check_glare_model
 
-        check_glare_model(
+        check_glare_model(  # as the frames start from it (a halo's options taken)
             model,
-            p["scene"]["glare_parameters"],
+            _start_parameters(p["scene"]),
             "scene",
             problems,
             keys=("glare_model", "glare_parameters"),
         )
         parameters = p["scene"]["glare_parameters"] or {}
-        fixed = [k for k in SCENE_EYE_STATE if k in parameters]
+        # a nested model's too (hybrid's wave = {pupil_mm = 4})
+        fixed = [k for k in (*SCENE_EYE_STATE, *SCENE_UNUSED) if k in parameters] + [
+            f"{k}.{inner}"
+            for k, v in parameters.items()
+            if isinstance(v, dict)
+            for inner in (*SCENE_EYE_STATE, *SCENE_UNUSED)
+            if inner in v
+        ]
         if fixed:
+            shown = {
+                k: parameters[k] if "." not in k else parameters[k.split(".")[0]][k.split(".")[1]]
+                for k in fixed
+            }
             problems.append(
-                f"scene.glare_parameters: {', '.join(f'{k} = {parameters[k]!r}' for k in fixed)}"
+                f"scene.glare_parameters: {', '.join(f'{k} = {v!r}' for k, v in shown.items())}"
                 ": a scene's eye state is each frame's (the pupil and regime of its adapted "
                 "luminance, or a live scene's tracked pupil), so the value would be ignored; "
                 "remove it"
@@ -397,6 +409,55 @@ def _check_scene(p: dict, problems: list[str]) -> None:
 
 # the glare model's fields a scene sets per frame (glare.night.pipeline.adapted_model, LiveNight)
 SCENE_EYE_STATE = ("pupil_mm", "regime")
+# and the one a given pupil makes unused (a wave model's field luminance sets its pupil)
+SCENE_UNUSED = ("field_luminance_cd_m2",)
+# a recorded scene's model starts in the mesopic regime: each frame replaces it with its own,
+# and a frame without a halo (photopic, a pupil under 3 mm) unsets what shapes the halo
+SCENE_START_REGIME = "mesopic"
+
+
+def scene_glare_model(scene: dict):
+    """The glare model a scene's frames start from (:func:`glarelab.protocols.common.glare_model`
+    of ``glare_model`` and ``glare_parameters``): a recorded scene's Vos PSF in the mesopic
+    regime (:data:`SCENE_START_REGIME`, which every frame replaces), so that the options of
+    its halo are taken; a live scene's as given (its frames set only the pupil).
+
+    Parameters
+    ----------
+    scene
+        A validated protocol's ``[scene]`` table.
+
+    Returns
+    -------
+    glarelab.glare.GlareModel
+        The model.
+
+    Raises
+    ------
+    ValueError, TypeError
+        As :func:`glarelab.protocols.common.glare_model` raises them.
+    """
+    from glarelab.protocols.common import glare_model
+
+    return glare_model(scene["glare_model"], _start_parameters(scene))
+
+
+def _start_parameters(scene: dict) -> dict:
+    """The scene's glare parameters with the regime its frames start from (see above)."""
+    import dataclasses
+
+    from glarelab.glare import GLARE_MODELS
+
+    parameters = dict(scene.get("glare_parameters") or {})
+    cls = GLARE_MODELS.get(scene.get("glare_model"))
+    takes_regime = (
+        cls is not None
+        and dataclasses.is_dataclass(cls)
+        and "regime" in {f.name for f in dataclasses.fields(cls)}
+    )
+    if takes_regime and not scene.get("live") and "regime" not in parameters:
+        parameters["regime"] = SCENE_START_REGIME
+    return parameters
 
 
 def _check_live(p: dict, problems: list[str]) -> None:

@@ -37,7 +37,7 @@ from glarelab import glare
 from glarelab.glare._validation import check_choice, check_in_range, check_positive
 from glarelab.protocols import Protocol
 from glarelab.protocols import pixel_deg as display_pixel_deg
-from glarelab.protocols.common import glare_model
+from glarelab.protocols.rating import scene_glare_model
 from glarelab.stimuli.preview import to_display
 from glarelab.stimuli.shapes import ImageRow
 
@@ -395,7 +395,7 @@ def build_night(protocol: Protocol, *, progress=None) -> dict:
     plan = night_plan(protocol, display["refresh_hz"])
     model = None
     if any("glare" in c["effects"] for c in protocol["conditions"]):
-        model = glare_model(scene["glare_model"], scene["glare_parameters"])
+        model = scene_glare_model(scene)  # its halo's options taken; frames set the eye
     images, previews, sequences, rendered = {}, {}, {}, {}
     conditions = protocol["conditions"]
     for index, condition in enumerate(conditions, start=1):

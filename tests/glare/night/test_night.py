@@ -146,8 +146,10 @@ def test_an_eye_whose_pupil_a_field_luminance_set_is_adapted_to_the_pupil_alone(
     used = night.adapted_model(wave, 100.0)
     assert used.pupil_mm == pytest.approx(glare.pupil_diameter_mm(100.0), abs=0.05)
     assert used.field_luminance_cd_m2 == glare.WaveOpticsGlare().field_luminance_cd_m2
-    live = LiveNight(np.full((8, 10, 3), 0.5), pixel_deg=0.1, glare_model=wave,
-                           pupils_mm=(3.0, 5.0))  # fmt: skip
+    # given to the live mode or the pipeline, whose frames set the pupil, it is refused (the
+    # frames were the same for 0.001 and 1000 cd/m²); a model without it runs
+    live = LiveNight(np.full((8, 10, 3), 0.5), pixel_deg=0.1, pupils_mm=(3.0, 5.0),
+                     glare_model=glare.WaveOpticsGlare(particles=0))  # fmt: skip
     frame = live.frame(gaze_px=(4.0, 5.0), pupil_mm=5.0, frame_time_s=1 / 60)
     assert frame.pupil_mm == 5.0 and np.isfinite(frame.image).all()
 
@@ -254,11 +256,19 @@ def test_a_models_own_pupil_the_adaptation_would_replace_is_refused():
     pupil by each frame's: 2 mm and 8 mm gave the same frames, without a word."""
     scene = np.full((32, 32, 3), 0.05)
     scene[16, 16] = 500.0
-    for model in (glare.VosGlare(regime="mesopic", pupil_mm=2.0),
-                  glare.HybridGlare(wave=glare.WaveOpticsGlare(pupil_mm=4.0))):  # fmt: skip
-        with pytest.raises(ValueError, match=r"^glare_model has pupil_mm=\S+, which "
+    for model, own in (
+        (glare.VosGlare(regime="mesopic", pupil_mm=2.0), "pupil_mm=2.0"),
+        (glare.HybridGlare(wave=glare.WaveOpticsGlare(pupil_mm=4.0)), "pupil_mm=4.0"),
+        (glare.WaveOpticsGlare(field_luminance_cd_m2=1000.0), "field_luminance_cd_m2=1000.0"),
+    ):
+        with pytest.raises(ValueError, match=rf"^glare_model has {own}, which "
                            "pupil_from_adaptation=True replaces"):  # fmt: skip
             night.render_night(scene, pixel_deg=0.1, glare_model=model)
+        if isinstance(model, glare.HybridGlare):
+            continue  # the live mode sets the pupil of a model with one of its own alone
+        with pytest.raises(ValueError, match=rf"^glare_model has {own}, which each frame's "
+                           "pupil \\(from the eye tracker\\) replaces"):  # fmt: skip
+            LiveNight(scene, pixel_deg=0.1, glare_model=model)
     kept = [
         night.render_night(scene, pixel_deg=0.1, pupil_from_adaptation=False,
                            glare_model=glare.VosGlare(regime="mesopic", pupil_mm=p)).frames

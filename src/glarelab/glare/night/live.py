@@ -83,6 +83,7 @@ from glarelab.glare.night.adaptation import (
     rod_sensitivity,
     window_mean,
 )
+from glarelab.glare.night.pipeline import given_eye_state
 from glarelab.glare.night.scotopic import rod_weights, scotopic_colour
 from glarelab.glare.rendering.compose import check_composition, compose
 from glarelab.glare.rendering.display import CodeTable
@@ -402,6 +403,12 @@ class LiveNight:
         has_pupil = dataclasses.is_dataclass(self.model) and "pupil_mm" in {
             f.name for f in dataclasses.fields(self.model)
         }
+        given = given_eye_state(self.model) if has_pupil else None
+        if given is not None:  # each frame's tracked pupil would replace it, unsaid
+            raise ValueError(
+                f"glare_model has {given}, which each frame's pupil (from the eye tracker) "
+                "replaces: leave it unset"
+            )
         self.pupils_mm = (
             pupil_bank_mm(self.model, pupils_mm)
             if has_pupil

@@ -119,16 +119,33 @@ class NightResult:
     effects: tuple[str, ...]
 
 
-def _given_pupil(model) -> float | None:
-    """The pupil a model (or a model inside it, ``HybridGlare.wave``) was given, else None."""
+def given_eye_state(model) -> str | None:
+    """What a model (or a model inside it, ``HybridGlare.wave``) was given of the pupil that
+    each frame sets (``'pupil_mm=4.0'``, or the ``field_luminance_cd_m2`` that sets a wave
+    model's pupil), else None.
+
+    Parameters
+    ----------
+    model : glarelab.glare.GlareModel
+        A glare model.
+
+    Returns
+    -------
+    str or None
+        ``'NAME=VALUE'`` for a message, or None.
+    """
     if not dataclasses.is_dataclass(model):
         return None
     if getattr(model, "pupil_mm", None) is not None:
-        return model.pupil_mm
-    for spec in dataclasses.fields(model):
-        inner = getattr(model, spec.name)
+        return f"pupil_mm={model.pupil_mm!r}"
+    names = {f.name: f for f in dataclasses.fields(model)}
+    spec = names.get("field_luminance_cd_m2")
+    if spec is not None and model.field_luminance_cd_m2 != spec.default:
+        return f"field_luminance_cd_m2={model.field_luminance_cd_m2!r}"
+    for name in names:
+        inner = getattr(model, name)
         if isinstance(inner, GlareModel):
-            found = _given_pupil(inner)
+            found = given_eye_state(inner)
             if found is not None:
                 return found
     return None
@@ -358,12 +375,12 @@ def render_night(
     base = None
     if "glare" in chosen:
         base = _resolve(glare_model if glare_model is not None else "vos")
-        given = _given_pupil(base)
+        given = given_eye_state(base)
         if pupil_from_adaptation and given is not None:  # it would be replaced every frame
             raise ValueError(
-                f"glare_model has pupil_mm={given!r}, which pupil_from_adaptation=True replaces "
-                "by each frame's pupil (from its adaptation luminance): leave pupil_mm None, "
-                "or give pupil_from_adaptation=False to keep it"
+                f"glare_model has {given}, which pupil_from_adaptation=True replaces by each "
+                "frame's pupil (from its adaptation luminance): leave it unset, or give "
+                "pupil_from_adaptation=False to keep it"
             )
     renderers: dict = {}
     out_frames, pupils, models, bounds = [], [], [], []
