@@ -65,6 +65,15 @@ def test_a_drawn_sky_has_the_mean_and_the_contrast_asked(contrast, mean, seed):
         return
     assert image.max() <= ARGS["ceiling_cd_m2"]
     np.testing.assert_allclose(image.mean(), mean, rtol=1e-6)
-    if contrast > 0:
+    cut = image.max() >= ARGS["ceiling_cd_m2"] * (1 - 1e-12)  # pixels at the ceiling
+    if contrast > 0 and cut:
         given_contrast = image.std() / image.mean()
         assert abs(given_contrast - contrast) <= CONTRAST_TOLERANCE * contrast
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_a_sky_the_ceiling_does_not_touch_is_drawn_whatever_its_sampled_contrast(seed):
+    """Contrast 0.3 on Yoshida's display was refused for 1 seed in 40 ('reaches only 0.331'),
+    blaming a ceiling that cut nothing: a few clouds sample a contrast of their own."""
+    image = sky(rng=np.random.default_rng(seed), contrast=0.3, mean_cd_m2=50.0)
+    assert image.max() < ARGS["ceiling_cd_m2"]

@@ -103,7 +103,11 @@ def check_backgrounds(
                 folder=folder,
             )
         except (ValueError, OSError) as error:
-            problems.append(f"{field_.where}: {error}")
+            text = str(error)
+            if text.startswith("background."):  # a key of the table: named under its own
+                problems.append(f"{field_.where}.{text.removeprefix('background.')}")
+            else:
+                problems.append(f"{field_.where}: {text}")
     return problems
 
 
