@@ -440,6 +440,17 @@ def test_a_file_without_trial_numbers_sorted_in_a_spreadsheet_imports_as_psychop
         csv.writer(handle).writerows(rows)
     (third,) = import_psychopy(protocol, [untimed], tmp_path / "out_c")
     assert "numbered in file order (no thisRow.t on every row" in third.summary()
+    from datetime import datetime, timedelta
+
+    start = datetime.fromisoformat("2026-12-03 07:10:14.5+01:00")
+    for number, row in enumerate(rows[1:]):  # Builder's clock set to wall-clock time: ISO
+        row[rows[0].index("thisRow.t")] = (start + timedelta(seconds=9.5 * number)).isoformat()
+    walled = tmp_path / "d" / source.name
+    walled.parent.mkdir()
+    with walled.open("w", encoding="utf-8", newline="") as handle:
+        csv.writer(handle).writerows([*rows[:2], *rows[2:][::-1]])
+    (fourth,) = import_psychopy(protocol, [walled], tmp_path / "out_d")
+    assert fourth.csv.read_bytes() == first.csv.read_bytes()
 
 
 def test_an_instructions_row_with_a_trial_value_is_named_not_imported_as_a_trial(

@@ -202,6 +202,20 @@ def _glarelab_session(source: Path) -> Path | None:
     return None
 
 
+def _clock(text: str) -> float | datetime | None:
+    """A ``thisRow.t`` as Builder writes it: seconds of the experiment's clock, or with its
+    clock set to wall-clock time, an ISO date and time; None for anything else."""
+    try:
+        seconds = float(text)
+    except ValueError:
+        try:
+            moment = datetime.fromisoformat(text.strip())
+        except ValueError:
+            return None
+        return moment.timestamp() if moment.tzinfo else moment
+    return seconds if math.isfinite(seconds) else None
+
+
 def _psychopy_order(
     rows: list[tuple[int, dict[str, str]]],
 ) -> tuple[list[tuple[int, dict[str, str]]], str]:
@@ -211,12 +225,12 @@ def _psychopy_order(
     second value says which, for the import's summary."""
     times = []
     for _, record in rows:
-        try:
-            times.append(float(record.get("thisRow.t", "")))
-        except ValueError:
+        moment = _clock(record.get("thisRow.t", ""))
+        if moment is None:
             return rows, "numbered in file order (no thisRow.t on every row to order them by)"
-    if not all(math.isfinite(t) for t in times):
-        return rows, "numbered in file order (no thisRow.t on every row to order them by)"
+        times.append(moment)
+    if len({type(t) for t in times}) > 1:  # seconds and wall-clock times: no one order
+        return rows, "numbered in file order (thisRow.t in two formats)"
     order = sorted(range(len(rows)), key=times.__getitem__)  # stable: ties keep file order
     moved = "" if order == list(range(len(rows))) else ", the file's rows having been moved"
     return [
