@@ -154,6 +154,11 @@ def test_a_kernel_the_build_refuses_is_refused_by_the_check(tmp_path, capsys):
     with pytest.raises(ValueError) as built:  # the build's own words, after the key
         use.model.kernel(use.pixel_deg, use.shape)
     assert f"glare.methods[3].parameters: {built.value}" in err
+    capsys.readouterr()  # and the build refuses it by key before rendering the others
+    assert main(["stimuli", "build", str(path), "--out", str(tmp_path / "set")]) == 2
+    err = capsys.readouterr().err
+    assert "  - glare.methods[3].parameters: the aperture grid" in err and "1/20" not in err
+    assert not (tmp_path / "set").exists() and not list(tmp_path.glob(".set.*"))
 
 
 def test_spencers_renormalisation_of_a_window_too_small_for_the_halo_is_refused(tmp_path, capsys):

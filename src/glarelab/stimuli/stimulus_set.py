@@ -46,8 +46,9 @@ from glarelab.files.folders import (
     staging_folder,
 )
 from glarelab.files.inputs import as_path
-from glarelab.protocols import Protocol
+from glarelab.protocols import Protocol, ProtocolError
 from glarelab.stimuli.exr import read_exr, write_exr
+from glarelab.stimuli.kernels import check_kernels
 from glarelab.stimuli.paradigms import paradigm_stimuli
 
 __all__ = [
@@ -532,7 +533,11 @@ def build_stimulus_set(
             "replaces its folder whole, so copy what you added elsewhere and remove the edited "
             "files, or give another folder as --out (nothing was changed)"
         )
-    built = paradigm_stimuli(protocol).build(protocol, progress=progress)
+    stimuli = paradigm_stimuli(protocol)
+    refused = check_kernels(stimuli.kernels(protocol))  # before minutes of rendering
+    if refused:
+        raise ProtocolError(protocol.source, refused)
+    built = stimuli.build(protocol, progress=progress)
     out = staging_folder(final)
     try:
         manifest = _write_set(out, protocol, built, calibration)
@@ -834,7 +839,7 @@ def prove_stimulus_set(folder: str | Path, *, progress=None) -> list[str]:
     list of str
         The problems, each naming the file or the manifest key (empty when proven).
     """
-    from glarelab.protocols import ProtocolError, parse_protocol
+    from glarelab.protocols import parse_protocol
 
     folder = Path(folder)
     problems = verify_stimulus_set(folder)

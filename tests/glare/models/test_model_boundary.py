@@ -394,3 +394,15 @@ def test_the_volume_of_a_name_is_refused_naming_the_profile():
 
     with pytest.raises(ValueError, match=r"^profile must be a function of angles in degrees"):
         vos.volume("f2")
+
+
+def test_check_kernel_refuses_what_kernel_refuses_for_the_halos_sampling():
+    """``protocol check`` said valid for halo_spacing_deg = 1e-5 and the build then refused
+    the pixels (2000² samples a pixel at most)."""
+    model = VosGlare(regime="mesopic", halo_spacing_deg=1e-5)
+    with pytest.raises(ValueError, match=r"^pixel_deg must be at most 0.02 deg") as checked:
+        model.check_kernel(0.05, (101, 101))
+    with pytest.raises(ValueError) as made:
+        model.kernel(0.05, (101, 101))
+    assert str(made.value) == str(checked.value)
+    model.check_kernel(0.01, (101, 101))

@@ -429,14 +429,7 @@ class VosGlare(GlareModel):
         halo = None
         halo_outside = np.zeros(n_channels)
         if w3 > 0:
-            samples = math.ceil(pixel_deg / self.halo_spacing_deg)
-            if samples > MAX_HALO_SAMPLES:
-                raise ValueError(
-                    f"pixel_deg must be at most {MAX_HALO_SAMPLES * self.halo_spacing_deg:g} deg "
-                    f"for the {self.regime} halo sampled every halo_spacing_deg = "
-                    f"{self.halo_spacing_deg:g} deg ({MAX_HALO_SAMPLES}² samples a pixel); got "
-                    f"{pixel_deg:g} (give a larger halo_spacing_deg)"
-                )
+            self._check_halo_samples(pixel_deg)
             channels = "RGB" if colour else "Y"
             profiles = halo_profiles(
                 channels, self.halo_spectrum, wavelength_nm=self.wavelength_nm
@@ -492,11 +485,14 @@ class VosGlare(GlareModel):
         Raises
         ------
         ValueError
-            If the kernel holds under 1 % of a channel's halo under
+            If the halo would take more than :data:`MAX_HALO_SAMPLES`² samples a pixel, or
+            the kernel holds under 1 % of a channel's halo under
             ``normalisation='Spencer1995'``.
         """
         pixel_deg = check_pixel_deg(pixel_deg)
         shape = check_kernel_shape(shape)
+        if self.weights[3] > 0:
+            self._check_halo_samples(pixel_deg)
         if self.normalisation != "Spencer1995" or self.weights[3] == 0:
             return
         profiles = halo_profiles(
@@ -512,6 +508,16 @@ class VosGlare(GlareModel):
         )
         if (held < 0.99 * SPENCER_MIN_HALO_HELD).any():
             raise ValueError(self._unreached_halo(pixel_deg, shape, profiles, held))
+
+    def _check_halo_samples(self, pixel_deg: float) -> None:
+        """Refuse pixels that would take the halo's sampling over :data:`MAX_HALO_SAMPLES`."""
+        if math.ceil(pixel_deg / self.halo_spacing_deg) > MAX_HALO_SAMPLES:
+            raise ValueError(
+                f"pixel_deg must be at most {MAX_HALO_SAMPLES * self.halo_spacing_deg:g} deg "
+                f"for the {self.regime} halo sampled every halo_spacing_deg = "
+                f"{self.halo_spacing_deg:g} deg ({MAX_HALO_SAMPLES}² samples a pixel); got "
+                f"{pixel_deg:g} (give a larger halo_spacing_deg)"
+            )
 
     def _unreached_halo(self, pixel_deg, shape, profiles, held) -> str:
         """Why Spencer's renormalisation cannot hold: a channel's halo lies beyond the kernel."""
