@@ -200,3 +200,24 @@ def test_glarelab_windows_have_a_monitor_and_keep_the_gamma_table(tmp_path, spen
     assert float(lines[2][1]) == pytest.approx(WIDTH_CM) and lines[2][2] == "60.0"
     # the monitor's gamma never reaches the card: PsychoPy keeps the system's gamma table
     assert [line[3] for line in lines] == ["True", "True", "True"]
+
+
+def test_an_earlier_releases_export_is_renamed_to_sort_by_its_date(tmp_path, spencer_calibration):
+    """Named 'glarelab 2026-12-03 HASH' by an earlier release, it sorted after every new
+    export's dated name, and each new export was refused."""
+    monitors = tmp_path / "monitors"
+    monitors.mkdir()
+    argv = ["calibrate", "export-monitor", str(spencer_calibration), "--monitor", "crt",
+            "--monitor-folder", str(monitors)]  # fmt: skip
+    assert main(argv) == 0
+    saved = json.loads((monitors / "crt.json").read_text())
+    ((name, content),) = saved.items()
+    digest = name.split()[-1]
+    (monitors / "crt.json").write_text(json.dumps({f"glarelab 2026-12-03 {digest}": content}))
+    assert main(argv) == 0
+    again = json.loads((monitors / "crt.json").read_text())
+    first, second = sorted(again)
+    assert first == f"2026_12_03 00:00:00.000000 glarelab {digest}" and again[first] == content
+    from glarelab.frontend.monitors import load_monitor, monitor_display
+
+    assert monitor_display(load_monitor("crt", folder=monitors))["calibration"] == second

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import itertools
 import json
+import re
 import time
 from datetime import datetime
 from pathlib import Path
@@ -321,7 +322,9 @@ def export_calibration(
         The monitor file written and the new calibration's name
         (``YYYY_MM_DD HH:MM:SS.ffffff glarelab HASH``, the local time of the export as
         Monitor Center names its own): it sorts after every earlier calibration, so PsychoPy
-        makes it current.
+        makes it current. An earlier release's export, ``glarelab YYYY-MM-DD HASH``, is
+        renamed to its date's form (``YYYY_MM_DD 00:00:00.000000 glarelab HASH``), its content
+        kept.
 
     Raises
     ------
@@ -337,6 +340,7 @@ def export_calibration(
         raise ValueError(f"--monitor-folder {folder}: no such folder")
     path = folder / f"{name}.json"
     calibs = _read_calibs(path) if path.is_file() else {}
+    calibs = {_dated(n): c for n, c in calibs.items()}  # earlier exports' names, sortable
     monitor = _monitor_class()(name, calibs) if calibs else None
     # PsychoPy makes the calibration whose name sorts last current, and names its own by the
     # time they were made ("2026_12_04 14:05"): so are these, to the microsecond, to sort
@@ -389,6 +393,21 @@ def export_calibration(
     json.loads(text)  # what Monitor Center reads back
     write_text(path, text)
     return path, stamp
+
+
+# the name earlier glarelab releases gave an export ("glarelab 2026-12-03 0123456789ab"),
+# which sorts after every dated name: given its date's form, so that time orders them again
+_UNDATED_EXPORT = re.compile(r"glarelab (\d{4})-(\d{2})-(\d{2}) ([0-9a-f]{12})((?: \(\d+\))?)")
+
+
+def _dated(name: str) -> str:
+    """An export's name as this release gives it: ``YYYY_MM_DD 00:00:00.000000 glarelab
+    HASH`` for an earlier release's ``glarelab YYYY-MM-DD HASH``; any other name as it is."""
+    match = _UNDATED_EXPORT.fullmatch(name)
+    if match is None:
+        return name
+    year, month, day, digest, again = match.groups()
+    return f"{year}_{month}_{day} 00:00:00.000000 glarelab {digest}{again}"
 
 
 def window_monitor(
