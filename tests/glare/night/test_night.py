@@ -275,3 +275,29 @@ def test_a_models_own_pupil_the_adaptation_would_replace_is_refused():
         for p in (2.0, 8.0)
     ]  # fmt: skip
     assert np.abs(kept[0] - kept[1]).max() > 0  # the pupil acts where it is kept
+
+
+def test_a_scene_beyond_what_a_frame_holds_is_refused_by_its_own_name():
+    """A 1e28 cd/m² scene was refused as 'luminance_cd_m2 reaches 9.83e+30' (the frame after
+    the adaptation's exposure): another argument's name, another value."""
+    scene = np.full((8, 8, 3), 1e-3)
+    scene[4, 4] = 1e28
+    with pytest.raises(ValueError, match=r"^scene_cd_m2 reaches 1e\+28 cd/m², beyond the 1e\+20"):
+        night.render_night(scene, pixel_deg=0.1)
+    with pytest.raises(ValueError, match=r"^scene_cd_m2\[1\] reaches 1e\+28 cd/m²"):
+        night.render_night([scene * 0 + 1.0, scene], pixel_deg=0.1, frame_time_s=0.1)
+
+
+def test_a_frame_adapted_to_daylight_unsets_the_options_of_the_halo():
+    """adapted_model gives a daylight frame the photopic PSF, which has no halo: the halo's
+    options the user chose are unset for that frame, not refused, and kept for a dim one."""
+    model = glare.VosGlare(regime="mesopic", halo_spacing_deg=0.005, flare_lines=True,
+                           halo_lines=200)  # fmt: skip
+    bright = night.adapted_model(model, 100.0)
+    assert (
+        bright.regime == "photopic"
+        and bright.halo_spacing_deg == glare.VosGlare().halo_spacing_deg
+    )
+    assert bright.halo_lines == glare.VosGlare().halo_lines
+    dim = night.adapted_model(model, 0.05)
+    assert (dim.halo_spacing_deg, dim.halo_lines) == (0.005, 200)

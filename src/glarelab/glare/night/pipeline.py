@@ -442,9 +442,23 @@ def render_night(
     )
 
 
+# a scene's bound: the adaptation's exposure (key / adapted luminance, at most 1e6 times
+# the key over 1e-6 cd/m²) keeps every frame within the renderer's MAX_LUMINANCE_CD_M2
+MAX_SCENE_CD_M2 = 1e20
+
+
+def _bounded(name: str, frame: np.ndarray) -> np.ndarray:
+    if frame.size and float(frame.max()) > MAX_SCENE_CD_M2:
+        raise ValueError(
+            f"{name} reaches {float(frame.max()):.3g} cd/m², beyond the {MAX_SCENE_CD_M2:g} "
+            "cd/m² a night scene may hold (the sun is 1.6e9)"
+        )
+    return frame
+
+
 def _frames(scene) -> tuple[list[np.ndarray], bool]:
     if isinstance(scene, np.ndarray):
-        return [check_image("scene_cd_m2", scene, channels=(3,))], True
+        return [_bounded("scene_cd_m2", check_image("scene_cd_m2", scene, channels=(3,)))], True
     if not isinstance(scene, Sequence) or isinstance(scene, str):
         raise ValueError(
             "scene_cd_m2 must be an image ((H, W) or (H, W, 3) array) or a sequence (list) of "
@@ -452,7 +466,10 @@ def _frames(scene) -> tuple[list[np.ndarray], bool]:
         )
     if len(scene) == 0:
         raise ValueError("scene_cd_m2 must hold at least one frame; got an empty sequence")
-    frames = [check_image(f"scene_cd_m2[{i}]", f, channels=(3,)) for i, f in enumerate(scene)]
+    frames = [
+        _bounded(f"scene_cd_m2[{i}]", check_image(f"scene_cd_m2[{i}]", f, channels=(3,)))
+        for i, f in enumerate(scene)
+    ]
     shapes = {f.shape[:2] for f in frames}
     if len(shapes) > 1:
         raise ValueError(f"the frames of scene_cd_m2 must have one shape; got {sorted(shapes)}")
