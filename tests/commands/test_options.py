@@ -313,3 +313,11 @@ def test_a_vos_pupil_acts_where_there_is_a_halo_and_is_refused_where_there_is_no
     refused(["render", "in.exr", "out.exr", "--pixel-deg", "0.05", "--model", "vos",
              "--pupil-mm", "2.5"], capsys, tmp_path, "--pupil-mm with --model vos --regime "
             "photopic")  # fmt: skip
+
+
+def test_a_models_refusal_names_the_options_given(scene, capsys, tmp_path):
+    """The model refused 'wavelength_nm=500.0', a name the command line does not have."""
+    argv = ["render", scene, tmp_path / "out.exr", "--pixel-deg", "0.05", "--model", "vos",
+            "--regime", "mesopic", "--pupil-mm", "2", "--wavelength-nm", "500"]  # fmt: skip
+    line = refused(argv, capsys, tmp_path, "--wavelength-nm 500.0: it shapes only the halo")
+    assert "wavelength_nm=" not in line

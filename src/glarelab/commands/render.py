@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import re
 import time
 from pathlib import Path
 
@@ -130,6 +131,17 @@ def build_model(args: argparse.Namespace) -> glare.GlareModel:
     if args.model not in MODEL_OPTIONS:
         raise ValueError(f"--model must be one of {MODEL_CHOICES}; got {args.model!r}")
     _check_options(args)
+    try:
+        return _made_model(args)
+    except ValueError as error:  # the model's words, with its keys named as the options
+        text = str(error)
+        for name in sorted(set().union(*MODEL_OPTIONS.values()), key=len, reverse=True):
+            text = re.sub(rf"\b{name}=", f"--{name.replace('_', '-')} ", text)
+        raise ValueError(text) from None
+
+
+def _made_model(args: argparse.Namespace) -> glare.GlareModel:
+    """:func:`build_model`'s model, once its options are checked."""
     if args.model == "gaussian":
         return glare.GaussianGlare(sigma_deg=args.sigma_deg)
     if args.model == "vos":

@@ -607,13 +607,20 @@ class MeasurementSession:
         targets = np.geomspace(low, 0.9 * white, self.verify_points).tolist()
         studies = [t for t in self.protocol_targets if low <= t < white and t not in targets]
         self.targets = sorted(targets + studies)
-        outside = [t for t in self.protocol_targets if not low <= t < white]
-        if outside:  # said, not dropped silently: the display cannot show them
-            shown = ", ".join(f"{t:g}" for t in outside)
+        above = [t for t in self.protocol_targets if t > white]
+        if above:  # said, not dropped silently: the display cannot show them
             new.append(
-                f"the studies' luminances {shown} cd/m² are not verified: they are outside "
-                f"the {low:.3g}-{white:.4g} cd/m² this display is verified over (white "
-                f"{white:.4g} cd/m²), so it cannot show them as the study asks"
+                f"the studies' luminances {', '.join(f'{t:g}' for t in above)} cd/m² are above "
+                f"this display's white ({white:.4g} cd/m²): it cannot show them as the study "
+                "asks, and they are not verified"
+            )
+        near = [t for t in self.protocol_targets if t < low or t == white]
+        if near:  # shown, but outside the range a verification measures
+            new.append(
+                f"the studies' luminances {', '.join(f'{t:g}' for t in near)} cd/m² are not "
+                f"verified: the verification measures {low:.3g} up to below white "
+                f"{white:.4g} cd/m² (near black a code's step is beyond the tolerance; white "
+                "is a reading of the fit)"
             )
         if not self._replaying:  # unverified until the verification pass is done
             self.calibration.save(self.out)
