@@ -499,6 +499,9 @@ def test_a_file_and_its_resave_are_not_two_participants(simulated, tmp_path):
     at = rows[0].index("participant")
     for row in rows[1:]:
         row[at] = "resaved"
+        for i, cell in enumerate(row):  # a spreadsheet keeps 15 digits: 7000.0 is 7000
+            if re.fullmatch(r"-?\d+\.\d+", cell):
+                row[i] = f"{float(cell):.15g}"
     copy = tmp_path / "b" / "resaved.csv"
     copy.parent.mkdir()
     with copy.open("w", encoding="utf-8", newline="") as handle:
@@ -511,3 +514,29 @@ def test_a_file_and_its_resave_are_not_two_participants(simulated, tmp_path):
     import_psychopy(protocol, [source], tmp_path / "out")
     with pytest.raises(DataError, match=r"its trials are those of .*_yoshida2008_s1_.*\.csv"):
         import_psychopy(protocol, [copy], tmp_path / "out")  # in a later import too
+
+
+def test_the_end_of_block_rows_of_an_outer_loop_are_no_trials(simulated, tmp_path):
+    """Builder's outer loop of blocks ends each block with a row of its own (the block and
+    its loop's bookkeeping): refused as an instructions row holding a trial value."""
+    pytest.importorskip("psychopy.data")
+    protocol = load_protocol("yoshida2008")
+    own = sorted(simulated.glob("*_yoshida2008_s1_*.csv"))[0]
+    source = write_psychopy(own, protocol, tmp_path / "a", rt_name="time_s")
+    rows = list(csv.reader(source.open(encoding="utf-8")))
+    block = rows[0].index("block")
+    nested = [rows[0], rows[1]]
+    for row in rows[2:]:
+        nested.append(row)
+        if row[block] == "training":  # after each training trial, as a small outer loop
+            end = [""] * len(row)
+            end[block] = "training"
+            nested.append(end)
+    target = tmp_path / "b" / source.name
+    target.parent.mkdir()
+    with target.open("w", encoding="utf-8", newline="") as handle:
+        csv.writer(handle).writerows(nested)
+    (plain,) = import_psychopy(protocol, [source], tmp_path / "out_a")
+    (blocked,) = import_psychopy(protocol, [target], tmp_path / "out_b")
+    assert blocked.csv.read_bytes() == plain.csv.read_bytes()
+    assert len(blocked.dropped_rows) > len(plain.dropped_rows)

@@ -19,7 +19,8 @@ trial. The mapping is explicit and its result is said, never silent:
   (``{"key_resp.rt": "time_s"}``);
 - every other column is dropped and listed (PsychoPy's own bookkeeping apart from the rest);
 - rows with no trial data (a routine outside the trial loop, such as instructions, ends with
-  ``nextEntry()`` too) are dropped and counted;
+  ``nextEntry()`` too, and an outer loop of blocks ends each block with a row of its ``block``
+  alone) are dropped and counted;
 - ``True``/``False`` become ``true``/``false``; an integer column written as ``35.0`` (a float
   PsychoPy was given) becomes ``35``; PsychoPy's zero-padded session (``001``) becomes ``1``;
 - the ``study`` column, if the experiment did not record it, is the protocol's; ``trial``, if
@@ -437,7 +438,8 @@ def import_psychopy(
         dropped = [h for h, n in zip(header, renamed, strict=True) if n not in by_name]
         rows: list[tuple[int, dict[str, str]]] = []
         empty_rows: list[int] = []
-        data_columns = [n for n in taken if n not in _FILLED]
+        # the block alone is no trial: an outer loop (Builder's blocks) ends with a row of it
+        data_columns = [n for n in taken if n not in _FILLED and n != "block"]
         for line, cells in records:
             if len(cells) != len(header):
                 problems.append(
@@ -603,7 +605,17 @@ def _trials_key(text: str) -> tuple:
     rows = list(csv.DictReader(io.StringIO(text, newline="")))
     if not any(row.get("time_s") or row.get("onset_s") for row in rows):
         return ()
-    return tuple(tuple(v for k, v in row.items() if k not in _WHO) for row in rows)
+    return tuple(tuple(_number(v) for k, v in row.items() if k not in _WHO) for row in rows)
+
+
+def _number(text: str) -> str:
+    """A cell as a number to 12 significant digits where it is one (a spreadsheet keeps 15:
+    1.0020008087158203 is saved as 1.00200080871582, 7000.0 as 7000), else as written."""
+    try:
+        value = float(text)
+    except ValueError:
+        return text
+    return f"{value:.12g}" if math.isfinite(value) else text
 
 
 def _same_trials(planned: list, out: Path) -> list[str]:
