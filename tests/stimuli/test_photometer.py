@@ -425,9 +425,9 @@ def test_check_display_reads_black_white_and_the_calibration(tmp_path, line):
     result = json.loads(out.read_text())
     found = result["photometer"]
     assert found["fault"] is None and found["instrument"]["model"] == "LS-100"
-    # black, white, five codes across the range and the luminance Spencer names (its lamp's
-    # 75 cd/m² peak)
-    assert len(found["readings"]) == 2 * 8
+    # black, white and five codes across the range; Spencer's lamp peak of 75 cd/m² is above
+    # its display's 50 (a glare source's luminance, never shown as it is), so it is no target
+    assert len(found["readings"]) == 2 * 7
     assert {p["code"] for p in found["patches"]} >= {0, 255}
     np.testing.assert_allclose(found["white_cd_m2"], WHITE, rtol=0.005)
     np.testing.assert_allclose(found["black_cd_m2"], BLACK, rtol=0.005)
@@ -527,7 +527,8 @@ def test_a_photometer_reading_the_screen_calibrates_curves_with_a_linear_toe(
     calibration = Calibration.load(out)
     assert calibration.status == "passed" and calibration.method == "pchip-log"
     targets = [m["target_cd_m2"] for m in calibration.verification["measurements"]]
-    assert {75.0, 100.0} <= set(targets)  # Spencer's lamp peak, the night's lit room
+    assert 100.0 in targets  # the night's lit room; Spencer's lamp peak of 75 cd/m² is above
+    assert 75.0 not in targets  # its display's 50, a glare source's, never shown as it is
     codes = np.arange(256)
     error = np.abs(calibration.decode(codes) - curve(codes)) / curve(codes)
     first = calibration.readings[1][0]
