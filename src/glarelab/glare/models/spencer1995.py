@@ -485,8 +485,8 @@ class VosGlare(GlareModel):
         Raises
         ------
         ValueError
-            If the halo would take more than :data:`MAX_HALO_SAMPLES`² samples a pixel, or
-            the kernel holds under 1 % of a channel's halo under
+            If the halo would take more than 2000² samples a pixel
+            (``MAX_HALO_SAMPLES``), or the kernel holds under 1 % of a channel's halo under
             ``normalisation='Spencer1995'``.
         """
         pixel_deg = check_pixel_deg(pixel_deg)
