@@ -321,3 +321,26 @@ def test_a_models_refusal_names_the_options_given(scene, capsys, tmp_path):
             "--regime", "mesopic", "--pupil-mm", "2", "--wavelength-nm", "500"]  # fmt: skip
     line = refused(argv, capsys, tmp_path, "--wavelength-nm 500.0: it shapes only the halo")
     assert "wavelength_nm=" not in line
+
+
+def test_a_render_edited_since_it_was_written_is_not_overwritten_without_force(
+    scene, capsys, tmp_path
+):
+    """A one-file render replaced a render the user had edited since, and a render into a
+    folder refused one even with --force."""
+    from glarelab.stimuli.exr import write_exr
+
+    out = tmp_path / "out.exr"
+    argv = ["render", str(scene), str(out), "--pixel-deg", "0.05"]
+    assert main(argv) == 0 and main(argv) == 0  # its own render, unedited: written again
+    write_exr(out, np.full((32, 32), 7.0, dtype=np.float32))  # retouched by the user
+    refused(argv, capsys, tmp_path, "out.exr was edited since glarelab wrote it")
+    assert main([*argv, "--force"]) == 0
+    folder = tmp_path / "many"
+    batch = ["render", str(scene), str(scene.with_name("in2.exr")), str(folder),
+             "--pixel-deg", "0.05"]  # fmt: skip
+    scene.with_name("in2.exr").write_bytes(scene.read_bytes())
+    assert main(batch) == 0
+    write_exr(folder / "in.exr", np.full((32, 32), 7.0, dtype=np.float32))
+    refused(batch, capsys, tmp_path, "in.exr was edited since glarelab wrote it")
+    assert main([*batch, "--force"]) == 0

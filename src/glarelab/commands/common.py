@@ -12,7 +12,13 @@ import sys
 from pathlib import Path
 
 from glarelab.files.atomic import write_text
-from glarelab.files.folders import claim_files, list_files, listed_files, without_link_loop
+from glarelab.files.folders import (
+    claim_files,
+    edited_since,
+    list_files,
+    listed_files,
+    without_link_loop,
+)
 from glarelab.files.memory import available_memory, refuse_beyond
 from glarelab.files.values import DECIMAL_TEXT, WHOLE_TEXT
 
@@ -336,7 +342,7 @@ def output_folder(path: Path, command: str) -> Path:
     return path
 
 
-def writes_into(path: Path, names: list[str], command: str) -> Path:
+def writes_into(path: Path, names: list[str], command: str, *, force: bool = False) -> Path:
     """A folder a command writes a fixed set of named files into (``docs``, ``gallery``, …):
     created if new; a file of that name glarelab did not write there is refused
     (``glarelab.files.folders.claim_files``); other files in it are left alone.
@@ -349,6 +355,9 @@ def writes_into(path: Path, names: list[str], command: str) -> Path:
         The files the command writes, relative to ``path``.
     command
         The command's name, the kind the files are listed as.
+    force
+        Whether to overwrite a file of ``names`` edited since glarelab wrote it (``--force``);
+        default False.
 
     Returns
     -------
@@ -362,7 +371,7 @@ def writes_into(path: Path, names: list[str], command: str) -> Path:
     """
     path = folder_to_write(path, names)
     path.mkdir(parents=True, exist_ok=True)
-    claim_files(path, names, command)
+    claim_files(path, names, command, force=force)
     return path
 
 
@@ -532,6 +541,11 @@ def output_file(
         raise ValueError(
             f"{path} exists and glarelab did not write it there; give another name, or --force "
             f"to overwrite it with the {what} (nothing was changed)"
+        )
+    if not force and edited_since(path.parent, path.name):  # a gallery figure retouched
+        raise ValueError(
+            f"{path} was edited since glarelab wrote it; give another name, or --force to "
+            f"overwrite it with the {what} (nothing was changed)"
         )
     return path
 

@@ -318,7 +318,7 @@ def _render(args: argparse.Namespace) -> int:
                 check_image("luminance", read_exr(source), channels=(3,))
             except ValueError as error:
                 raise ValueError(f"input {source}: {error}; nothing was rendered") from None
-        writes_into(Path(output), names, "render")
+        writes_into(Path(output), names, "render", force=args.force)
         targets = [Path(output) / name for name in names]
     else:
         targets = [Path(output)]
@@ -386,6 +386,8 @@ def _render(args: argparse.Namespace) -> int:
         if not folder:
             claim_output(target, "render")
         write_exr(target, result.image.astype(np.float32))
+        if not folder:
+            record_written(target.parent, [target.name])  # an edit later is then named
         _log(f"wrote {target}")
         if args.preview:
             claim_output(args.preview, "render --preview")

@@ -34,6 +34,7 @@ __all__ = [
     "LISTING",
     "check_replaceable",
     "claim_files",
+    "edited_since",
     "list_files",
     "listed_files",
     "record_files",
@@ -253,7 +254,28 @@ def record_files(folder: Path, kind: str) -> None:
     )
 
 
-def claim_files(folder: Path, names: Iterable[str], kind: str) -> None:
+def edited_since(folder: Path, name: str) -> bool:
+    """Whether the file ``name`` of ``folder`` was edited since glarelab wrote it there (its
+    content recorded, :func:`record_written`, and now other).
+
+    Parameters
+    ----------
+    folder
+        The folder.
+    name
+        The file, relative to ``folder``.
+
+    Returns
+    -------
+    bool
+        True for a file whose recorded content differs from what it holds now.
+    """
+    written = _hashes(Path(folder))
+    path = Path(folder) / name
+    return name in written and path.exists() and _sha256(path) != written[name]
+
+
+def claim_files(folder: Path, names: Iterable[str], kind: str, *, force: bool = False) -> None:
     """Before writing ``names`` into a shared ``folder``: refuse if one exists and glarelab did
     not write it there; otherwise list them as glarelab's.
 
@@ -266,11 +288,14 @@ def claim_files(folder: Path, names: Iterable[str], kind: str) -> None:
     kind
         The kind of output the listing records the files as (``'stimulus set'``, ``'report'``,
         ``'power'``, ...): an output replaces or overwrites only files of its own kind.
+    force
+        Whether to overwrite a listed file edited since glarelab wrote it (``--force``);
+        default False.
 
     Raises
     ------
     ValueError
-        Naming the first existing file the listing does not hold.
+        Naming the first existing file the listing does not hold, or one edited since.
     """
     names = list(names)
     with _listing_held(Path(folder)):
@@ -282,7 +307,7 @@ def claim_files(folder: Path, names: Iterable[str], kind: str) -> None:
                     f"{path} exists and glarelab did not write it there; {kind} would "
                     "overwrite it, so give another folder or move the file (nothing was changed)"
                 )
-            if name in written and path.exists() and _sha256(path) != written[name]:
+            if not force and name in written and path.exists() and _sha256(path) != written[name]:
                 raise ValueError(
                     f"{path} was edited since glarelab wrote it; {kind} would overwrite it, so "
                     "copy what you changed elsewhere, remove the file, or give another folder "

@@ -538,8 +538,9 @@ class VosGlare(GlareModel):
             f"kernel (Spencer 1995 §3.2), but a {shape[0]} × {shape[1]} px kernel at "
             f"pixel_deg={pixel_deg:g} holds under {100 * SPENCER_MIN_HALO_HELD:g} % of the "
             f"{self.regime} halo of a channel ({short}), which it would multiply by more than "
-            f"{1 / SPENCER_MIN_HALO_HELD:g}: give a kernel at least {across} px across, or "
-            "normalisation='psf'"
+            f"{1 / SPENCER_MIN_HALO_HELD:g}: give a kernel at least {across} px across (a "
+            f"stimulus set's kernel spans twice its image: an image or window of at least "
+            f"{(across + 1) // 2} px), or normalisation='psf'"
         )
 
     def parts(self, pixel_deg: float, shape: tuple[int, int], *, colour: bool = False) -> dict:
