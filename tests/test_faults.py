@@ -143,14 +143,17 @@ def test_a_killed_render_leaves_the_earlier_image_or_the_new_one(tmp_path):
     assert main([*base, "--model", "gaussian", "--sigma-deg", "0.2"]) == 0
     earlier = tmp_path / "earlier.exr"
     shutil.copy(out, earlier)
+    listing = tmp_path / ".glarelab-files.json"  # what the folder records of it, its content
+    recorded = listing.read_bytes()
     before = digest(out)
     argv = [*base, "--model", "gaussian", "--sigma-deg", "0.5"]
     assert main(argv) == 0
     after = digest(out)
     assert after != before
 
-    def reset():
+    def reset():  # the folder as the first render left it (else out.exr is 'edited since')
         shutil.copy(earlier, out)
+        listing.write_bytes(recorded)
 
     reset()
     seen = drive(kill_at_random(argv, out, before, after, seed=1), reset)
