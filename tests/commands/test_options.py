@@ -344,3 +344,15 @@ def test_a_render_edited_since_it_was_written_is_not_overwritten_without_force(
     write_exr(folder / "in.exr", np.full((32, 32), 7.0, dtype=np.float32))
     refused(batch, capsys, tmp_path, "in.exr was edited since glarelab wrote it")
     assert main([*batch, "--force"]) == 0
+
+
+def test_a_kernel_psf_wrote_and_the_user_edited_is_not_overwritten(scene, capsys, tmp_path):
+    """``psf --exr`` recorded no content of its files, so a render over one the user had
+    edited since replaced it without --force."""
+    exr = tmp_path / "kernel.exr"
+    assert main(["psf", "--out", str(tmp_path / "k.png"), "--exr", str(exr), "--model",
+                 "gaussian", "--size", "31"]) == 0  # fmt: skip
+    exr.write_text("the user's own data\n")
+    argv = ["render", str(scene), str(exr), "--pixel-deg", "0.05"]
+    refused(argv, capsys, tmp_path, "kernel.exr was edited since glarelab wrote it")
+    assert exr.read_text() == "the user's own data\n"

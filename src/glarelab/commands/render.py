@@ -440,7 +440,8 @@ def _psf(args: argparse.Namespace) -> int:
         claim_output(args.exr, "psf --exr")
         write_exr(args.exr, kernel.values.astype(np.float32))
         written.append(args.exr)
-    for path in written:
+    for path in written:  # their content recorded: an edit later is then named, not overwritten
+        record_written(Path(path).parent, [Path(path).name])
         print(Path(path).resolve())
     return 0
 
