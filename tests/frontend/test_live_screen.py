@@ -19,6 +19,8 @@ import pytest
 
 from glarelab.display.calibration import synthetic_calibration
 from glarelab.glare import VosGlare, render_night
+from glarelab.glare.models.eye import regime
+from glarelab.glare.night.pipeline import eye_state_model
 from glarelab.glare.rendering.display import display_codes
 from glarelab.stimuli.night import night_street
 from tests.experiments.xscreen import XScreen, _need
@@ -132,8 +134,11 @@ def test_the_frame_log_gaze_follows_the_mouse_and_escape_ends_as_aborted(screen,
     row = wait_for_adapted(screen, frames)
     shown = screen.codes((left, top, 160, 100))
     scene = night_street((160, 100), pixel_deg=0.1, rng=np.random.default_rng(3))["img"]
+    eye = eye_state_model(  # the frame's pupil and the regime of its L_i
+        VosGlare(), pupil_mm=5.0, regime=regime(float(row["adaptation_cd_m2"]))
+    )
     offline = render_night(
-        scene, pixel_deg=0.1, effects=("adaptation", "glare"), glare_model=VosGlare(pupil_mm=5.0),
+        scene, pixel_deg=0.1, effects=("adaptation", "glare"), glare_model=eye,
         pupil_from_adaptation=False, gaze_px=(0.0, 0.0), frame_time_s=0.0,
         initial_adaptation_cd_m2=float(row["adaptation_cd_m2"]), tolerance_codes=0.0,
     )  # fmt: skip
@@ -142,7 +147,7 @@ def test_the_frame_log_gaze_follows_the_mouse_and_escape_ends_as_aborted(screen,
     assert np.abs(shown - expected).max() <= 1
     # and not the adaptation of the first gaze: the screen tells the two apart
     other = render_night(
-        scene, pixel_deg=0.1, effects=("adaptation", "glare"), glare_model=VosGlare(pupil_mm=5.0),
+        scene, pixel_deg=0.1, effects=("adaptation", "glare"), glare_model=eye,
         pupil_from_adaptation=False, gaze_px=(30.0, 20.0), tolerance_codes=0.0,
     )  # fmt: skip
     assert np.abs(shown - np.rint(display_codes(other.frames, lut))).max() > 5

@@ -24,7 +24,8 @@ import pytest
 from glarelab.display.calibration import synthetic_calibration
 from glarelab.frontend.eyetracker import PupilCalibration
 from glarelab.glare import VosGlare, render_night
-from glarelab.glare.models.eye import pupil_diameter_mm
+from glarelab.glare.models.eye import pupil_diameter_mm, regime
+from glarelab.glare.night.pipeline import eye_state_model
 from glarelab.glare.rendering.display import display_codes
 from glarelab.protocols import load_protocol
 from glarelab.protocols.common import glare_model
@@ -137,7 +138,10 @@ def test_a_live_session_follows_the_mouse_survives_blinks_and_a_lost_tracker(scr
     assert glare_model(scene["glare_model"], scene["glare_parameters"]) == VosGlare()
     settings = dict(
         pixel_deg=street["pixel_deg"], effects=("adaptation", "glare", "acuity", "scotopic"),
-        glare_model=VosGlare(pupil_mm=float(mapped)), pupil_from_adaptation=False,
+        glare_model=eye_state_model(  # the frame's pupil and the regime of its L_i
+            VosGlare(), pupil_mm=float(mapped), regime=regime(float(row["adaptation_cd_m2"]))
+        ),
+        pupil_from_adaptation=False,
         frame_time_s=0.0,
         display_max_cd_m2=display["max_cd_m2"],
         adapted_display_cd_m2=scene["adapted_display_cd_m2"], tolerance_codes=0.0,

@@ -35,7 +35,9 @@ import numpy as np
 from glarelab import glare
 from glarelab.display.calibration import synthetic_calibration
 from glarelab.files.atomic import atomic_open, write_text
+from glarelab.glare.models.eye import regime
 from glarelab.glare.night.live import LiveNight
+from glarelab.glare.night.pipeline import eye_state_model
 from glarelab.glare.rendering.display import CodeTable, display_codes
 from glarelab.stimuli.night import night_street
 
@@ -209,7 +211,10 @@ def _bench_one(name, size, scene, pipeline, frames, compared, repeats, lut, log)
             start = time.perf_counter()
             reference = glare.render_night(
                 scene, pixel_deg=PIXEL_DEG, effects=effects,
-                glare_model=glare.VosGlare(pupil_mm=frame.pupil_mm),
+                glare_model=eye_state_model(  # the frame's pupil and regime (of its L_i)
+                    glare.VosGlare(), pupil_mm=frame.pupil_mm,
+                    regime=regime(frame.adaptation_cd_m2),
+                ),
                 pupil_from_adaptation=False, gaze_px=frame.gaze_px, frame_time_s=FRAME_S,
                 initial_adaptation_cd_m2=before, tolerance_codes=tolerance,
                 adapted_display_cd_m2=ADAPTED_DISPLAY_CD_M2, **options,

@@ -8,7 +8,9 @@ import numpy as np
 import pytest
 
 from glarelab.glare import VosGlare, render_night
+from glarelab.glare.models.eye import regime
 from glarelab.glare.night.live import LiveNight, pupil_bank_mm
+from glarelab.glare.night.pipeline import eye_state_model
 from glarelab.glare.rendering.display import CodeTable, display_codes, display_lut
 from glarelab.stimuli.night import night_street
 
@@ -25,11 +27,20 @@ def codes(image):
     return display_codes(image, display_lut(None, L_DMAX))
 
 
+def eye(pupil_mm, adaptation_cd_m2, model=None):
+    """The Vos model of a live frame: its pupil, and the regime of its L_i (Spencer §3.1)."""
+    return eye_state_model(
+        VosGlare() if model is None else model,
+        pupil_mm=pupil_mm,
+        regime=regime(adaptation_cd_m2),
+    )
+
+
 def offline(scene, frame, previous, frame_time_s):
     """render_night of one frame from the live frame's gaze, pupil and previous state."""
     return render_night(
         scene, pixel_deg=PIXEL_DEG, effects=("adaptation", "glare"),
-        glare_model=VosGlare(pupil_mm=frame.pupil_mm), pupil_from_adaptation=False,
+        glare_model=eye(frame.pupil_mm, frame.adaptation_cd_m2), pupil_from_adaptation=False,
         gaze_px=frame.gaze_px, frame_time_s=frame_time_s, initial_adaptation_cd_m2=previous,
         display_max_cd_m2=L_DMAX, tolerance_codes=0.0,
     )  # fmt: skip
@@ -95,7 +106,7 @@ def test_the_bank_is_denser_where_a_plateau_of_the_scene_meets_the_threshold():
     scene[8:40, 30:70] = wall
     reference = render_night(
         scene, pixel_deg=PIXEL_DEG, effects=("adaptation", "glare"),
-        glare_model=VosGlare(pupil_mm=5.0), pupil_from_adaptation=False, gaze_px=(0.0, 0.0),
+        glare_model=eye(5.0, wall / 10.0), pupil_from_adaptation=False, gaze_px=(0.0, 0.0),
         initial_adaptation_cd_m2=wall / 10.0, frame_time_s=0.0, tolerance_codes=0.0,
     ).frames  # fmt: skip
     errors = {}
@@ -116,8 +127,8 @@ def test_the_gaze_falloff_equals_render_nights_and_keeps_the_glare_near_the_gaze
     live = LiveNight(scene, pixel_deg=PIXEL_DEG, glare_falloff_deg=1.0)
     frame = live.frame(gaze_px=(0, 0), pupil_mm=4.0, frame_time_s=0.0)
     options = dict(
-        pixel_deg=PIXEL_DEG, effects=("adaptation", "glare"), glare_model=VosGlare(pupil_mm=4.0),
-        pupil_from_adaptation=False, gaze_px=(0.0, 0.0), tolerance_codes=0.0,
+        pixel_deg=PIXEL_DEG, effects=("adaptation", "glare"),
+        glare_model=eye(4.0, frame.adaptation_cd_m2), pupil_from_adaptation=False, gaze_px=(0.0, 0.0), tolerance_codes=0.0,
     )  # fmt: skip
     reference = render_night(scene, glare_falloff_deg=1.0, **options).frames
     assert np.abs(codes(frame.image) - codes(reference)).max() < 0.5
@@ -134,7 +145,8 @@ def test_spencers_sum_equals_render_nights(scene):
     frame = live.frame(gaze_px=(20, 30), pupil_mm=2.5, frame_time_s=0.0)
     reference = render_night(
         scene, pixel_deg=PIXEL_DEG, effects=("adaptation", "glare"), glare_method="Spencer1995",
-        glare_model=VosGlare(pupil_mm=2.5), pupil_from_adaptation=False, gaze_px=(20.0, 30.0),
+        glare_model=eye(2.5, frame.adaptation_cd_m2), pupil_from_adaptation=False,
+        gaze_px=(20.0, 30.0),
         tolerance_codes=0.0,
     )  # fmt: skip
     assert np.abs(codes(frame.image) - codes(reference.frames)).max() < 0.5
@@ -145,7 +157,8 @@ def test_scotopic_colour_of_the_adapted_luminance_equals_render_nights(scene):
     frame = live.frame(gaze_px=(47, 0), pupil_mm=6.0, frame_time_s=0.05)
     reference = render_night(
         scene, pixel_deg=PIXEL_DEG, effects=("adaptation", "glare", "scotopic"),
-        glare_model=VosGlare(pupil_mm=6.0), pupil_from_adaptation=False, gaze_px=(47.0, 0.0),
+        glare_model=eye(6.0, frame.adaptation_cd_m2), pupil_from_adaptation=False,
+        gaze_px=(47.0, 0.0),
         frame_time_s=0.05, initial_adaptation_cd_m2=0.5, tolerance_codes=0.0,
     )  # fmt: skip
     assert np.abs(codes(frame.image) - codes(reference.frames)).max() < 0.5
@@ -175,15 +188,16 @@ def test_acuity_and_scotopic_colour_equal_render_nights(scene, which, adaptation
         before = live._state
         frame = live.frame(gaze_px=gaze, pupil_mm=pupil, frame_time_s=0.02)
         reference = render_night(
-            image, pixel_deg=PIXEL_DEG, glare_model=VosGlare(pupil_mm=pupil),
+            image, pixel_deg=PIXEL_DEG, glare_model=eye(pupil, frame.adaptation_cd_m2),
             pupil_from_adaptation=False, gaze_px=gaze, frame_time_s=0.02,
             initial_adaptation_cd_m2=before, tolerance_codes=0.0, display_max_cd_m2=L_DMAX,
         )  # fmt: skip
         error = np.abs(codes(frame.image) - codes(reference.frames)).max()
         assert error < 0.5, (gaze, pupil, error)
     plain = render_night(
-        image, pixel_deg=PIXEL_DEG, effects=("adaptation", "glare"), glare_model=VosGlare(
-            pupil_mm=5.25), pupil_from_adaptation=False, gaze_px=(20.0, 30.0),
+        image, pixel_deg=PIXEL_DEG, effects=("adaptation", "glare"),
+        glare_model=eye(5.25, frame.adaptation_cd_m2), pupil_from_adaptation=False,
+        gaze_px=(20.0, 30.0),
         frame_time_s=0.02, initial_adaptation_cd_m2=before, tolerance_codes=0.0,
     ).frames  # fmt: skip
     if adaptation_cd_m2 < 1.0:  # the two effects are visible at night (little by day)
@@ -201,8 +215,8 @@ def test_pixels_that_meet_the_white_between_two_levels_are_blurred_directly(scen
     frame = live.frame(gaze_px=(0, 0), pupil_mm=5.0, frame_time_s=0.0)
     reference = render_night(
         scene, pixel_deg=PIXEL_DEG, effects=("adaptation", "glare", "acuity"),
-        glare_model=VosGlare(pupil_mm=5.0), pupil_from_adaptation=False, gaze_px=(0.0, 0.0),
-        initial_adaptation_cd_m2=0.3, frame_time_s=0.0, tolerance_codes=0.0,
+        glare_model=eye(5.0, frame.adaptation_cd_m2), pupil_from_adaptation=False,
+        gaze_px=(0.0, 0.0), initial_adaptation_cd_m2=0.3, frame_time_s=0.0, tolerance_codes=0.0,
     )  # fmt: skip
     assert frame.exact_px > 0
     assert np.abs(codes(frame.image) - codes(reference.frames)).max() < 0.5
@@ -274,3 +288,74 @@ def test_a_pupil_that_drops_the_halo_unsets_its_wavelength_in_a_live_frame(scene
     )
     large = live.frame(gaze_px=(20, 30), pupil_mm=5.0, frame_time_s=0.0)
     assert np.isfinite(large.image).all()
+
+
+def test_a_frame_takes_the_vos_regime_of_its_adaptation_as_render_night_does():
+    # a mesopic frame (L_i 0.73 cd/m²) was rendered with the photopic PSF, the model's
+    # default: 151 codes from render_night of the same pupil and adaptation (no halo)
+    scene = np.random.default_rng(3).uniform(0.01, 2.0, (48, 64, 3))
+    scene[20, 30], scene[5, 60] = 3e4, 1e4
+    reference = render_night(
+        scene, pixel_deg=PIXEL_DEG, effects=("adaptation", "glare"), gaze_px=(20.0, 30.0),
+        initial_adaptation_cd_m2=0.5, frame_time_s=0.1, tolerance_codes=0.0,
+    )  # fmt: skip
+    pupil = float(reference.pupil_mm[0])
+    live = LiveNight(
+        scene, pixel_deg=PIXEL_DEG, initial_adaptation_cd_m2=0.5, pupils_mm=(3, pupil)
+    )
+    frame = live.frame(gaze_px=(20, 30), pupil_mm=pupil, frame_time_s=0.1)
+    assert regime(frame.adaptation_cd_m2) == "mesopic"
+    np.testing.assert_allclose(frame.adaptation_cd_m2, reference.adaptation_cd_m2[0], rtol=1e-12)
+    assert np.abs(codes(frame.image) - codes(reference.frames)).max() < 0.01
+
+
+def test_the_bank_prepares_both_regimes_beside_a_regime_bound():
+    # the gaze's targets span 3 cd/m² (mesopic to photopic): every frame, however adapted,
+    # finds its regime's entries made by prepare
+    scene = np.full((32, 64, 3), 0.5)
+    scene[:, 32:] = 20.0
+    scene[15:17, 30:34] = 5e4
+    live = LiveNight(scene, pixel_deg=PIXEL_DEG, pupils_mm=(4.0, 5.0))
+    made = live.prepare()
+    low, high = made.adaptation_cd_m2
+    assert low < 3.0 < high
+    seen = set()
+    for gaze in [(16, 0), (16, 63), (16, 0), (16, 40), (16, 20)] * 3:
+        frame = live.frame(gaze_px=gaze, pupil_mm=4.5, frame_time_s=0.3)
+        assert frame.new_entries == 0, (gaze, frame.adaptation_cd_m2)
+        seen.add(regime(frame.adaptation_cd_m2))
+    assert seen == {"mesopic", "photopic"}
+    for bound in (3.0, 0.01):  # an eye adapted to either side of the bound itself
+        for state in (bound, np.nextafter(bound, 0.0), np.nextafter(bound, np.inf)):
+            live = LiveNight(
+                scene, pixel_deg=PIXEL_DEG, pupils_mm=(4.0, 5.0), initial_adaptation_cd_m2=state
+            )
+            live.prepare()
+            frame = live.frame(gaze_px=(16, 0), pupil_mm=4.5, frame_time_s=0.0)
+            assert frame.adaptation_cd_m2 == state and frame.new_entries == 0, state
+
+
+def test_a_hybrid_models_wave_pupil_follows_the_tracked_pupil():
+    # the wave optics' pupil stayed the model's own (and the Vos part photopic): 267 codes
+    # from render_night of the frame's pupil and regime; at a bank pupil it is that render
+    from glarelab.glare import HybridGlare
+
+    scene = np.full((24, 32, 3), 0.3)
+    scene[12, 16] = 3e4
+    live = LiveNight(
+        scene, pixel_deg=0.2, glare_model="hybrid", initial_adaptation_cd_m2=0.5,
+        pupils_mm=(3.0, 5.0),
+    )  # fmt: skip
+    images = {}
+    for pupil in (3.0, 5.0):
+        frame = live.frame(gaze_px=(12, 16), pupil_mm=pupil, frame_time_s=0.0)
+        images[pupil] = frame.image.copy()
+        reference = render_night(
+            scene, pixel_deg=0.2, effects=("adaptation", "glare"),
+            glare_model=eye(pupil, frame.adaptation_cd_m2, HybridGlare()),
+            pupil_from_adaptation=False, gaze_px=(12.0, 16.0), initial_adaptation_cd_m2=0.5,
+            frame_time_s=0.0, tolerance_codes=0.0,
+        )  # fmt: skip
+        assert np.abs(codes(frame.image) - codes(reference.frames)).max() < 0.01, pupil
+    assert np.abs(codes(images[3.0]) - codes(images[5.0])).max() > 1.0
+    assert pupil_bank_mm(HybridGlare(), (2.0, 4.0))[1:3].tolist() == [np.nextafter(3.0, 0), 3.0]

@@ -42,7 +42,6 @@ Luidolt, L. (2020). Perception of light in virtual reality. TU Wien, §5.1, §5.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import time
 from collections import OrderedDict
@@ -60,7 +59,14 @@ from glarelab.glare._colour import colour
 from glarelab.glare._validation import check_choice, check_image, check_in_range, check_positive
 from glarelab.glare.models import _resolve
 from glarelab.glare.models.base import GlareModel
-from glarelab.glare.models.eye import HALO_PUPIL_MM
+from glarelab.glare.models.eye import (
+    HALO_PUPIL_MM,
+    MESOPIC_UPPER_CD_M2,
+    SCOTOPIC_UPPER_CD_M2,
+    Regime,
+    regime,
+)
+from glarelab.glare.models.hybrid import HybridGlare
 from glarelab.glare.models.spencer1995 import VosGlare
 from glarelab.glare.night.acuity import (
     LEVELS_PER_OCTAVE,
@@ -83,7 +89,7 @@ from glarelab.glare.night.adaptation import (
     rod_sensitivity,
     window_mean,
 )
-from glarelab.glare.night.pipeline import given_eye_state
+from glarelab.glare.night.pipeline import eye_state_model, given_eye_state, has_eye_field
 from glarelab.glare.night.scotopic import rod_weights, scotopic_colour
 from glarelab.glare.rendering.compose import check_composition, compose
 from glarelab.glare.rendering.display import CodeTable
@@ -173,9 +179,10 @@ def pupil_bank_mm(
     Returns
     -------
     numpy.ndarray
-        Sorted unique pupils, mm. For :class:`~glarelab.glare.VosGlare` the halo's step at
-        3 mm (Spencer §2.1) is added from both sides (the largest float below 3 and 3), so
-        no interval of the bank spans it.
+        Sorted unique pupils, mm. For :class:`~glarelab.glare.VosGlare` and
+        :class:`~glarelab.glare.HybridGlare` (whose halo follows its wave model's pupil) the
+        halo's step at 3 mm (Spencer §2.1) is added from both sides (the largest float below
+        3 and 3), so no interval of the bank spans it.
 
     Raises
     ------
@@ -191,7 +198,7 @@ def pupil_bank_mm(
     bank = np.asarray(pupils_mm, dtype=float).reshape(-1)
     if bank.size == 0 or not (np.isfinite(bank).all() and (bank > 0).all()):
         raise ValueError(f"pupils_mm must be at least one finite pupil > 0 mm; got {pupils_mm!r}")
-    if isinstance(model, VosGlare) and bank.min() < HALO_PUPIL_MM <= bank.max():
+    if isinstance(model, VosGlare | HybridGlare) and bank.min() < HALO_PUPIL_MM <= bank.max():
         bank = np.concatenate([bank, [np.nextafter(HALO_PUPIL_MM, 0.0), HALO_PUPIL_MM]])
     return np.unique(bank)
 
@@ -253,8 +260,14 @@ class LiveNight:
     pixel_deg
         Visual angle of a pixel, degrees, > 0.
     glare_model
-        The glare model (an object or a name); default the Vos PSF. Its ``pupil_mm`` is set to
-        each pupil of the bank (a model without one has a bank of one entry).
+        The glare model (an object or a name); default the Vos PSF. Each frame sets its eye
+        state as :func:`~glarelab.glare.night.render_night` does
+        (:func:`~glarelab.glare.night.pipeline.eye_state_model`): its ``pupil_mm`` (a hybrid
+        model's wave pupil) to each pupil of the bank (a model without one has a bank of one
+        entry), and the Vos ``regime`` to that of the frame's ``L_i`` (Spencer §3.1). A
+        wave-optics kernel is not linear in the pupil: between two bank pupils it is
+        interpolated (measured up to 12 codes at 3.25 mm between 3 and 3.5 mm, 3 codes
+        between 3 and 3.25 mm); give the pupils the frames need, or a finer bank.
     pupils_mm
         The bank's pupils, mm (see :func:`pupil_bank_mm`); default 2-8 mm in steps of 0.5
         (Luidolt's range, §5.2.1 ii). A frame's pupil must lie within them.
@@ -400,9 +413,9 @@ class LiveNight:
         check_choice("precision", precision, PRECISIONS)
         self.dtype = np.dtype(precision)
         self.model = _resolve(glare_model if glare_model is not None else "vos")
-        has_pupil = dataclasses.is_dataclass(self.model) and "pupil_mm" in {
-            f.name for f in dataclasses.fields(self.model)
-        }
+        has_pupil = has_eye_field(self.model, "pupil_mm")
+        # the Vos regime follows each frame's L_i (Spencer §3.1), as render_night sets it
+        self._has_regime = has_eye_field(self.model, "regime")
         given = given_eye_state(self.model) if has_pupil else None
         if given is not None:  # each frame's tracked pupil would replace it, unsaid
             raise ValueError(
@@ -497,7 +510,7 @@ class LiveNight:
         self._rod_matrix = scotopic_colour(
             np.eye(3), adaptation_luminance_cd_m2=0.0, colourspace=colourspace
         )
-        self._models: dict[float, GlareModel] = {}  # the bank's model of each pupil
+        self._models: dict[tuple, GlareModel] = {}  # the bank's model of a pupil and regime
         # the direct blur's colour: the space, its luminance row (summing to 1) and white
         self._space_rgb = colour.RGB_COLOURSPACES[colourspace]
         self._y_row = np.asarray(self._space_rgb.matrix_RGB_to_XYZ[1], float)
@@ -508,10 +521,9 @@ class LiveNight:
         self.frames = 0
 
     # the bank ----------------------------------------------------------------------------
-    def _entry(self, level: int, pupil: float) -> np.ndarray | None:
-        """``max(X - T_j, 0) ⊛ K_p`` for the threshold ``T_j = r^j`` (kept), None without
-        excess."""
-        model = self._model_for(pupil)
+    def _entry(self, level: int, model: GlareModel) -> np.ndarray | None:
+        """``max(X - T_j, 0) ⊛ K`` for the threshold ``T_j = r^j`` and a model of the bank
+        (:meth:`_model_for`), kept; None without excess."""
         key = (level, model)
         if key in self._bank:
             self._bank.move_to_end(key)
@@ -523,10 +535,17 @@ class LiveNight:
             renderer = self._renderers.get(model)
             if renderer is None:
                 # Spencer's sum spreads onto every pixel (Yoshida's only onto those below L)
-                renderer = GlareRenderer(
-                    model, pixel_deg=self.pixel_deg, shape=self.shape, l_dmax_cd_m2=self.l_dmax,
-                    composition="Spencer1995", tolerance_codes=0.0,
-                )  # fmt: skip
+                try:
+                    renderer = GlareRenderer(
+                        model, pixel_deg=self.pixel_deg, shape=self.shape,
+                        l_dmax_cd_m2=self.l_dmax, composition="Spencer1995", tolerance_codes=0.0,
+                    )  # fmt: skip
+                except ValueError as error:  # a bank's pupil the model cannot render here
+                    raise ValueError(
+                        f"pupils_mm: the glare model cannot be rendered at one of the bank's "
+                        f"pupils ({self.pupils_mm.min():g}-{self.pupils_mm.max():g} mm) at "
+                        f"{self.pixel_deg:g} deg a pixel: {error}"
+                    ) from None
                 self._renderers[model] = renderer
             # the renderer spreads the excess over L_dmax: L_dmax + E has the excess E
             spread = np.asarray(renderer.render(self.l_dmax + excess).spread)
@@ -571,25 +590,19 @@ class LiveNight:
         self.build_s += time.perf_counter() - start
         return entry
 
-    def _model_for(self, pupil: float) -> GlareModel:
-        """The model of a pupil of the bank; pupils whose kernels are equal share one (the
-        Vos PSF's pupil only drops the halo below 3 mm, Spencer §2.1)."""
-        if not self._has_pupil:
+    def _model_for(self, pupil: float, eye_regime: Regime | None) -> GlareModel:
+        """The model of a pupil of the bank and a frame's regime; pupils whose kernels are
+        equal share one (the Vos PSF's pupil only drops the halo below 3 mm, Spencer §2.1)."""
+        if not self._has_pupil and eye_regime is None:
             return self.model
         if isinstance(self.model, VosGlare):
             below = pupil < HALO_PUPIL_MM
             pupil = float(np.nextafter(HALO_PUPIL_MM, 0.0)) if below else HALO_PUPIL_MM
-        pupil = float(pupil)
-        model = self._models.get(pupil)
+        key = (float(pupil) if self._has_pupil else None, eye_regime)
+        model = self._models.get(key)
         if model is None:  # made once: a model checks its fields as it is made
-            given = {"pupil_mm": pupil}
-            if hasattr(type(self.model), "field_luminance_cd_m2"):  # it set the pupil: unused
-                given["field_luminance_cd_m2"] = type(self.model).field_luminance_cd_m2
-            if isinstance(self.model, VosGlare):  # under 3 mm, no halo to shape
-                model = self.model.with_eye_state(**given)
-            else:
-                model = dataclasses.replace(self.model, **given)
-            self._models[pupil] = model
+            model = eye_state_model(self.model, pupil_mm=key[0], regime=eye_regime)
+            self._models[key] = model
         return model
 
     # one frame ---------------------------------------------------------------------------
@@ -686,13 +699,14 @@ class LiveNight:
             previous, target, frame_time_s, tau_rod_s=self.tau_rod_s, tau_cone_s=self.tau_cone_s
         )
         exposure = self.key / max(self._state, MIN_LUMINANCE_CD_M2)
+        eye_regime = regime(self._state) if self._has_regime else None
         made = self.bank_entries
         exact, direct, matrix, codes = 0, None, None, None
         with self._threads.limit(limits=1, user_api="blas"):
             if self.acuity:  # §5.3, of the glared display, before the colour (Luidolt ch. 4)
-                direct = self._acuity(exposure, pupil)
+                direct = self._acuity(exposure, pupil, eye_regime)
             else:
-                self._compose(exposure, pupil, gaze)
+                self._compose(exposure, pupil, eye_regime, gaze)
             if direct is not None and self.scotopic and not self._rod_positive:
                 exact, direct = self._patch(direct.result(), None, None, None), None
             if self.scotopic:  # §5.4: "after tone mapping", of the adapted luminance
@@ -715,10 +729,13 @@ class LiveNight:
             exact_px=exact,
         )
 
-    def _terms(self, exposure: float, pupil: float) -> list[tuple[int, float, float]]:
-        """``(level, pupil, weight)`` of the bank entries around the frame's threshold
+    def _terms(
+        self, exposure: float, pupil: float, eye_regime: Regime | None
+    ) -> list[tuple[int, GlareModel, float]]:
+        """``(level, model, weight)`` of the bank entries around the frame's threshold
         ``T = L_dmax / s`` (between ``T_j = r^j`` and ``T_{j+1}``) and pupil (between the
-        bank's ``p_i`` and ``p_{i+1}``): bilinear weights, those of 0 left out."""
+        bank's ``p_i`` and ``p_{i+1}``), the models of the frame's regime: bilinear weights,
+        those of 0 left out."""
         threshold = self.l_dmax / exposure
         place = math.log(threshold) / math.log(self.threshold_ratio)
         base = math.floor(place)
@@ -731,12 +748,13 @@ class LiveNight:
         u = min(max((threshold - t_low) / (t_high - t_low), 0.0), 1.0)
         index = int(np.searchsorted(self.pupils_mm, pupil, side="right")) - 1
         index = min(max(index, 0), len(self.pupils_mm) - 1)
-        pupils = [(float(self.pupils_mm[index]), 1.0)]
+        pupils = [(self._model_for(float(self.pupils_mm[index]), eye_regime), 1.0)]
         if index + 1 < len(self.pupils_mm):
             p0, p1 = float(self.pupils_mm[index]), float(self.pupils_mm[index + 1])
             t = (pupil - p0) / (p1 - p0)
-            if t > 0 and self._model_for(p0) != self._model_for(p1):
-                pupils = [(p0, 1.0 - t), (p1, t)]
+            m0, m1 = self._model_for(p0, eye_regime), self._model_for(p1, eye_regime)
+            if t > 0 and m0 != m1:
+                pupils = [(m0, 1.0 - t), (m1, t)]
         return [
             (index_t, p, weight_t * weight_p)
             for index_t, weight_t in ((level, 1.0 - u), (level + step, u))
@@ -744,13 +762,19 @@ class LiveNight:
             for p, weight_p in pupils
         ]
 
-    def _compose(self, exposure: float, pupil: float, gaze: tuple[float, float]) -> None:
+    def _compose(
+        self,
+        exposure: float,
+        pupil: float,
+        eye_regime: Regime | None,
+        gaze: tuple[float, float],
+    ) -> None:
         dtype = self.dtype.type
         out, spread, work = self._out, self._spread, self._work
         np.multiply(self._display, dtype(exposure), out=out)
         terms = []
-        for step, p, weight in self._terms(exposure, pupil):
-            entry = self._entry(step, p)
+        for step, model, weight in self._terms(exposure, pupil, eye_regime):
+            entry = self._entry(step, model)
             if entry is not None:
                 terms.append((entry, dtype(weight * exposure)))
         l_dmax = dtype(self.l_dmax)
@@ -780,17 +804,17 @@ class LiveNight:
         return (rows[:, None] * cols[None, :]).astype(self.dtype)
 
     # the acuity loss -------------------------------------------------------------------
-    def _acuity_entry(self, level: int, pupil: float) -> tuple[np.ndarray, np.ndarray, int]:
+    def _acuity_entry(self, level: int, model: GlareModel) -> tuple[np.ndarray, np.ndarray, int]:
         """The frame with acuity loss at the exposure ``s_j = L_dmax / T_j`` divided by
         ``s_j``, which channels meet ``L_dmax`` there, and the largest blur radius (pixels)
         of the frame's ladder levels."""
-        key = ("acuity", level, self._model_for(pupil))
+        key = ("acuity", level, model)
         if key in self._bank:
             self._bank.move_to_end(key)
             return self._bank[key]
         exposure = self.l_dmax / self._threshold(level)
         display = self.scene * exposure
-        spread = self._entry(level, pupil)  # counted and timed there
+        spread = self._entry(level, model)  # counted and timed there
         start = time.perf_counter()
         if spread is not None:
             display = compose(display, spread.astype(float) * exposure, self.l_dmax, self.method)
@@ -814,20 +838,20 @@ class LiveNight:
         )
         return self._store(key, entry, start)
 
-    def _acuity(self, exposure: float, pupil: float) -> Future | None:
+    def _acuity(self, exposure: float, pupil: float, eye_regime: Regime | None) -> Future | None:
         """Replace the display in ``_out`` by its acuity loss from the bank's interpolation;
         the pixels near a kink are blurred directly on the second core: their future
         (:meth:`_blur_kinks`, for :meth:`_patch`), or None when there are none."""
         dtype = self.dtype.type
         out, work = self._out, self._work
         keys, masks, radii, spreads, blurred = [], [], [], [], []
-        for step, p, weight in self._terms(exposure, pupil):
-            entry, clamped, radius = self._acuity_entry(step, p)
+        for step, model, weight in self._terms(exposure, pupil, eye_regime):
+            entry, clamped, radius = self._acuity_entry(step, model)
             blurred.append((entry, dtype(weight * exposure)))
-            spread = self._entry(step, p)
+            spread = self._entry(step, model)
             if spread is not None:
                 spreads.append((spread, weight))
-            keys.append((step, self._model_for(p)))
+            keys.append((step, model))
             masks.append(clamped)
             radii.append(radius)
         geometry = self._geometry(tuple(keys), masks, radii)
@@ -1088,16 +1112,24 @@ class LiveNight:
         samples = []  # the middle of every (halved) interval from one step below to one above
         for base in range(math.floor(places[0]) - 1, math.floor(places[1]) + 2):
             parts = 2 ** self._halvings(base)
-            samples += [base + (k + 0.5) / parts for k in range(parts)]
-        wanted: dict[tuple, tuple[int, float]] = {}
-        for place in samples:
-            exposure = self.l_dmax / self.threshold_ratio**place
+            samples += [
+                (self.l_dmax / self.threshold_ratio ** (base + (k + 0.5) / parts), None)
+                for k in range(parts)
+            ]
+        if self._has_regime:  # each regime's models for the frames beside a regime's bound
+            samples = [(exposure, regime(self.key / exposure)) for exposure, _ in samples] + [
+                (self.key / bound, regime(side))
+                for bound in (SCOTOPIC_UPPER_CD_M2, MESOPIC_UPPER_CD_M2)
+                if low / self.threshold_ratio <= bound <= high * self.threshold_ratio
+                for side in (np.nextafter(bound, 0.0), np.nextafter(bound, math.inf))
+            ]
+        wanted: dict[tuple, tuple[int, GlareModel]] = {}
+        for exposure, eye_regime in samples:
             for pupil in self.pupils_mm:
-                for step, p, _ in self._terms(exposure, float(pupil)):
-                    model = self._model_for(p)
-                    wanted.setdefault((step, model), (step, p))
+                for step, model, _ in self._terms(exposure, float(pupil), eye_regime):
+                    wanted.setdefault((step, model), (step, model))
                     if self.acuity:
-                        wanted.setdefault(("acuity", step, model), (step, p))
+                        wanted.setdefault(("acuity", step, model), (step, model))
         missing = [key for key in wanted if key not in self._bank]
         pixels = self.shape[0] * self.shape[1]
         image_bytes = pixels * 3 * self.dtype.itemsize
@@ -1110,11 +1142,11 @@ class LiveNight:
         if progress is not None:
             progress(0, len(missing))
         for index, key in enumerate(missing, start=1):
-            step, pupil = wanted[key]
+            step, model = wanted[key]
             if key[0] == "acuity":
-                self._acuity_entry(step, pupil)
+                self._acuity_entry(step, model)
             else:
-                self._entry(step, pupil)
+                self._entry(step, model)
             if progress is not None:
                 progress(index, len(missing))
         return LivePreparation(

@@ -50,7 +50,7 @@ import numpy as np
 from glarelab.glare._validation import check_choice, check_image, check_in_range, check_positive
 from glarelab.glare.models import _resolve
 from glarelab.glare.models.base import GlareModel
-from glarelab.glare.models.eye import pupil_diameter_mm, regime
+from glarelab.glare.models.eye import Regime, pupil_diameter_mm, regime
 from glarelab.glare.models.spencer1995 import VosGlare
 from glarelab.glare.night.acuity import (
     BLUR_METHODS,
@@ -151,6 +151,70 @@ def given_eye_state(model) -> str | None:
     return None
 
 
+def eye_state_model(
+    model: GlareModel, *, pupil_mm: float | None, regime: Regime | None
+) -> GlareModel:
+    """A glare model with an eye state: a pupil and a Vos regime, where it has them.
+
+    Parameters
+    ----------
+    model
+        A glare model. Fields it has are replaced: ``pupil_mm`` (and the field luminance
+        that would otherwise set it, reset to its default), ``regime`` (the Vos PSF's), and
+        those of a model inside it (``HybridGlare.wave``) likewise. A model without them (the
+        Gaussian) is returned as it is.
+    pupil_mm
+        The pupil diameter, mm, or None to leave the pupil as it is.
+    regime
+        ``'photopic'``, ``'mesopic'`` or ``'scotopic'`` (Spencer §3.1), or None to leave it.
+
+    Returns
+    -------
+    GlareModel
+        The model of that eye state; a :class:`~glarelab.glare.VosGlare` through
+        :meth:`~glarelab.glare.VosGlare.with_eye_state`, which leaves what shapes a halo unset
+        where the state has none.
+
+    Examples
+    --------
+    >>> from glarelab.glare import HybridGlare
+    >>> m = eye_state_model(HybridGlare(), pupil_mm=4.0, regime="scotopic")
+    >>> m.regime, m.wave.pupil_mm
+    ('scotopic', 4.0)
+    """
+    if not dataclasses.is_dataclass(model):
+        return model
+    names = {f.name for f in dataclasses.fields(model)}
+    changes: dict[str, object] = {}
+    if pupil_mm is not None and "pupil_mm" in names:
+        changes["pupil_mm"] = pupil_mm
+        if "field_luminance_cd_m2" in names:  # the pupil is given: what set it is not used
+            changes["field_luminance_cd_m2"] = type(model).field_luminance_cd_m2
+    if regime is not None and "regime" in names:
+        changes["regime"] = regime
+    for name in names:
+        value = getattr(model, name)
+        if isinstance(value, GlareModel) and dataclasses.is_dataclass(value):
+            changes[name] = eye_state_model(value, pupil_mm=pupil_mm, regime=regime)
+    if isinstance(model, VosGlare):  # a frame without a halo leaves what shapes it unset
+        return model.with_eye_state(**changes) if changes else model
+    return dataclasses.replace(model, **changes) if changes else model
+
+
+def has_eye_field(model: GlareModel, name: str) -> bool:
+    """Whether a model, or a model inside it (``HybridGlare.wave``), has the field ``name``
+    (``'pupil_mm'``, ``'regime'``)."""
+    if not dataclasses.is_dataclass(model):
+        return False
+    for spec in dataclasses.fields(model):
+        if spec.name == name:
+            return True
+        inner = getattr(model, spec.name)
+        if isinstance(inner, GlareModel) and has_eye_field(inner, name):
+            return True
+    return False
+
+
 def adapted_model(
     model: GlareModel, adaptation_luminance_cd_m2: float, *, pupil_step_mm: float = PUPIL_STEP_MM
 ) -> GlareModel:
@@ -159,10 +223,11 @@ def adapted_model(
     Parameters
     ----------
     model
-        A glare model. Fields it has are replaced: ``pupil_mm`` by the Moon & Spencer pupil
-        of the luminance (rounded to ``pupil_step_mm``), ``regime`` (the Vos PSF's) by the
-        luminance's regime (Spencer §3.1), and a nested model (``HybridGlare.wave``) likewise.
-        A model without them (the Gaussian) is returned as it is.
+        A glare model. Fields it has are replaced (:func:`eye_state_model`): ``pupil_mm`` by
+        the Moon & Spencer pupil of the luminance (rounded to ``pupil_step_mm``), ``regime``
+        (the Vos PSF's) by the luminance's regime (Spencer §3.1), and a nested model
+        (``HybridGlare.wave``) likewise. A model without them (the Gaussian) is returned as
+        it is.
     adaptation_luminance_cd_m2
         The adapted luminance, cd/m², >= 0.
     pupil_step_mm
@@ -179,24 +244,10 @@ def adapted_model(
         check_image("adaptation_luminance_cd_m2", [[adaptation_luminance_cd_m2]])[0, 0]
     )
     step = check_positive("pupil_step_mm", pupil_step_mm, unit="mm")
-    if not dataclasses.is_dataclass(model):
-        return model
-    names = {f.name for f in dataclasses.fields(model)}
-    changes = {}
-    if "pupil_mm" in names:
-        pupil = float(pupil_diameter_mm(luminance))
-        changes["pupil_mm"] = round(round(pupil / step) * step, 6)
-        if "field_luminance_cd_m2" in names:  # the pupil is given: what set it is not used
-            changes["field_luminance_cd_m2"] = type(model).field_luminance_cd_m2
-    if "regime" in names:
-        changes["regime"] = regime(luminance)
-    for name in names:
-        value = getattr(model, name)
-        if isinstance(value, GlareModel) and dataclasses.is_dataclass(value):
-            changes[name] = adapted_model(value, luminance, pupil_step_mm=step)
-    if isinstance(model, VosGlare):  # a frame without a halo leaves what shapes it unset
-        return model.with_eye_state(**changes) if changes else model
-    return dataclasses.replace(model, **changes) if changes else model
+    pupil = float(pupil_diameter_mm(luminance))
+    return eye_state_model(
+        model, pupil_mm=round(round(pupil / step) * step, 6), regime=regime(luminance)
+    )
 
 
 def render_night(
