@@ -350,7 +350,9 @@ def test_spencers_renormalisation_of_a_halo_the_kernel_barely_holds_is_refused(r
         with pytest.raises(ValueError, match=r"holds under 1 % of the .* halo of a channel") as e:
             model.kernel(0.05, (n, n), colour=colour)
     across = int(re.search(r"at least (\d+) px across", str(e.value))[1])
-    k = model.kernel(0.05, (across, across), colour=colour)  # the size the message names
+    with pytest.raises(ValueError, match=r"holds under 1 %"):  # the least size: 2 px less is
+        model.kernel(0.05, (across - 2, across - 2), colour=colour)  # refused (it named 95 px
+    k = model.kernel(0.05, (across, across), colour=colour)  # where 77 px was accepted)
     assert np.isfinite(k.values).all() and (k.values >= 0).all()
     np.testing.assert_allclose(k.values.sum(axis=(0, 1)), 1.0, rtol=1e-9)
     np.testing.assert_allclose(k.energy_outside, 0.0, atol=1e-12)

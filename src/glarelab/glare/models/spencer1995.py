@@ -526,13 +526,23 @@ class VosGlare(GlareModel):
             f"{names[i]} {100 * held[i]:.2g} %"
             for i in np.flatnonzero(held < SPENCER_MIN_HALO_HELD)
         )
-        theta = np.arange(0.0, HALO_TABLE_MAX_DEG + 0.005, 0.01)
-        reach = 0.0
-        for profile in profiles:  # the disc holding the least accepted share of each halo
-            mass = radial_mass(profile, theta, breakpoints=(2.0, 3.0, 4.0))
-            share = mass / radial_mass(profile, np.array([180.0]))[0]
-            reach = max(reach, float(theta[np.argmax(share >= SPENCER_MIN_HALO_HELD)]))
-        across = 2 * math.ceil(reach / pixel_deg) + 1
+        totals = [radial_mass(profile, np.array([180.0]))[0] for profile in profiles]
+
+        def holds(side_px: int) -> bool:  # a square kernel of that side holds every halo
+            half = side_px * pixel_deg / 2
+            return all(
+                rectangle_mass(profile, half, half, breakpoints=(2.0, 3.0, 4.0)) / total
+                >= SPENCER_MIN_HALO_HELD
+                for profile, total in zip(profiles, totals, strict=True)
+            )
+
+        # the least odd square side that holds the share (by bisection: the share grows with
+        # the side), from the disc of the halo table's reach, which holds it whole
+        low, high = 0, math.ceil(HALO_TABLE_MAX_DEG / pixel_deg)  # sides 2 k + 1
+        while low < high:
+            middle = (low + high) // 2
+            low, high = (low, middle) if holds(2 * middle + 1) else (middle + 1, high)
+        across = 2 * low + 1
         return (
             f"normalisation='Spencer1995' renormalises each filter to sum to one over the "
             f"kernel (Spencer 1995 §3.2), but a {shape[0]} × {shape[1]} px kernel at "
