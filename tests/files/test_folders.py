@@ -187,3 +187,74 @@ def test_docs_run_again_keeps_a_file_edited_since(tmp_path, capsys):
     assert main(["docs", "--out", str(out)]) == 2
     assert "data.md was edited since glarelab wrote it" in capsys.readouterr().err
     assert (out / "data.md").read_text(encoding="utf-8") == edited
+
+
+KILLED_AFTER_THE_SWAP = """
+import os, sys
+from pathlib import Path
+from glarelab.files import folders
+final, staging = Path(sys.argv[1]), Path(sys.argv[2])
+staging = staging.rename(staging.with_name(f".report.building-{os.getpid()}"))  # this build's
+folders._remove_earlier = lambda earlier, final, kind: os._exit(9)  # killed right there
+folders.replace_folder(staging, final, kind="report")
+"""
+
+
+DIE_AT_THE_RENAME_ASIDE = """
+_rename = Path.rename
+def rename(self, target):
+    if ".old-" in Path(target).name:
+        os._exit(9)
+    return _rename(self, target)
+Path.rename = rename
+"""
+
+
+@pytest.mark.parametrize("when", ["swapped", "renamed", "before-aside"])
+def test_a_note_in_the_earlier_output_survives_a_kill_before_it_is_moved(
+    tmp_path, monkeypatch, when
+):
+    """A process killed after swapping in the new output and before moving a person's note
+    out of the earlier one left the earlier one as a staging folder, which the next build
+    removed whole, the note with it: it is now left as a replaced output, whose note the
+    next build moves into the new one."""
+    import subprocess
+    import sys
+
+    from glarelab.files import folders
+    from glarelab.files.folders import restore_folder
+
+    final, staging = _a_report_being_rebuilt(tmp_path)
+    (final / "my-notes.txt").write_text("keep me\n")
+    script = KILLED_AFTER_THE_SWAP
+    if when == "renamed":  # a file system without the swap: two renames
+        script = script.replace("folders._remove", "folders._exchange = lambda a, b: False\n"
+                                "folders._remove")  # fmt: skip
+    elif when == "before-aside":  # swapped, and killed before the earlier output is renamed
+        script = script.replace("folders._remove", DIE_AT_THE_RENAME_ASIDE + "\nfolders._remove")
+    run = subprocess.run([sys.executable, "-c", script, str(final), str(staging)], check=False)
+    assert run.returncode == 9
+    assert (final / "table.csv").read_text() == "new\n"  # the new output is in place
+    with pytest.warns(UserWarning, match="kept in it: my-notes.txt"):
+        restore_folder(final)  # as the next build does first
+    assert (final / "my-notes.txt").read_text() == "keep me\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["report"]
+    # and killed by a signal's exception in this process: the caller's cleanup of its
+    # staging folder no longer removes the earlier output with the note
+    (tmp_path / "again").mkdir()
+    final, staging = _a_report_being_rebuilt(tmp_path / "again")
+    (final / "my-notes.txt").write_text("keep me too\n")
+
+    def interrupted(earlier, final, kind):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(folders, "_remove_earlier", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        try:
+            replace_folder(staging, final, kind="report")
+        finally:
+            import shutil
+
+            shutil.rmtree(staging, ignore_errors=True)  # as every caller's `finally`
+    kept = [p for p in (tmp_path / "again").rglob("my-notes.txt")]
+    assert [p.read_text() for p in kept] == ["keep me too\n"]
