@@ -180,3 +180,15 @@ def test_a_small_lamp_does_not_make_the_night_day():
 def test_bad_input_is_refused_by_name(call, pattern):
     with pytest.raises(ValueError, match=pattern):
         call()
+
+
+def test_a_window_of_zero_is_refused_without_a_gaze_too():
+    # accepted (and unused) without a gaze, refused with one
+    with pytest.raises(ValueError, match=r"^window_sigma_deg must be a finite number > 0 deg"):
+        adaptation.frame_luminance(np.ones((4, 4)), pixel_deg=0.05, window_sigma_deg=0)
+
+
+def test_a_bad_initial_state_is_named_as_given():
+    # the error named adaptation_step's previous_cd_m2, an argument the caller never gave
+    with pytest.raises(ValueError, match=r"^initial_cd_m2 must be in \[0, inf\] cd/m², got -1"):
+        adaptation.adaptation_luminance(np.array([1.0]), 0.1, initial_cd_m2=-1)

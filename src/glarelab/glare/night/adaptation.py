@@ -295,6 +295,8 @@ def adaptation_luminance(
     times = np.broadcast_to(np.asarray(frame_time_s, dtype=float), targets.shape)
     if not (np.isfinite(times).all() and (times >= 0).all()):
         raise ValueError(f"frame_time_s must be finite and >= 0 s; got {frame_time_s!r}")
+    if initial_cd_m2 is not None:  # named as given, not as adaptation_step's previous state
+        initial_cd_m2 = check_in_range("initial_cd_m2", initial_cd_m2, 0.0, math.inf, unit="cd/m²")
     state = float(targets[0]) if initial_cd_m2 is None else initial_cd_m2
     out = np.empty_like(targets)
     for index, (target, step) in enumerate(zip(targets, times, strict=True)):
@@ -327,8 +329,8 @@ def frame_luminance(
         ``(row, column)`` where the eye looks, in pixels (may lie outside the image); None
         (default): the whole frame alike, as Krawczyk et al. 2005.
     window_sigma_deg
-        Standard deviation of the Gaussian window around the gaze, degrees; default 5 (an
-        assumption: Luidolt gives no width).
+        Standard deviation of the Gaussian window around the gaze, degrees, > 0 (judged
+        without a gaze too); default 5 (an assumption: Luidolt gives no width).
     mean
         ``'log'`` (default): the weighted logarithmic mean, luminances below 1e-6 cd/m² (the
         absolute threshold) taken as 1e-6; ``'arithmetic'``: the weighted mean, as Luidolt
@@ -371,6 +373,8 @@ def frame_luminance(
     """
     image = check_image("image_cd_m2", image_cd_m2, channels=(3,))
     pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
+    # judged with a gaze or without (where the whole frame is alike): as window_mean judges it
+    window_sigma_deg = check_positive("window_sigma_deg", window_sigma_deg, unit="deg")
     check_choice("mean", mean, ADAPTATION_MEANS)
     check_choice("colourspace", colourspace, sorted(colour.RGB_COLOURSPACES))  # grey too
     y = luminance(image, colourspace=colourspace) if image.ndim == 3 else image.astype(float)
