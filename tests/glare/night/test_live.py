@@ -359,3 +359,9 @@ def test_a_hybrid_models_wave_pupil_follows_the_tracked_pupil():
         assert np.abs(codes(frame.image) - codes(reference.frames)).max() < 0.01, pupil
     assert np.abs(codes(images[3.0]) - codes(images[5.0])).max() > 1.0
     assert pupil_bank_mm(HybridGlare(), (2.0, 4.0))[1:3].tolist() == [np.nextafter(3.0, 0), 3.0]
+
+
+def test_a_bad_glare_method_is_named_as_given():
+    # the error named the renderer's "composition", not the glare_method the caller gave
+    with pytest.raises(ValueError, match=r"^glare_method must be one of 'Yoshida2008'"):
+        LiveNight(np.full((8, 8), 0.05), pixel_deg=0.1, glare_method="bogus")

@@ -91,7 +91,7 @@ from glarelab.glare.night.adaptation import (
 )
 from glarelab.glare.night.pipeline import eye_state_model, given_eye_state, has_eye_field
 from glarelab.glare.night.scotopic import rod_weights, scotopic_colour
-from glarelab.glare.rendering.compose import check_composition, compose
+from glarelab.glare.rendering.compose import COMPOSITIONS, compose
 from glarelab.glare.rendering.display import CodeTable
 from glarelab.glare.rendering.renderer import GlareRenderer
 
@@ -409,7 +409,7 @@ class LiveNight:
         check_choice("adaptation_mean", adaptation_mean, ("log", "arithmetic"))
         self.tau_rod_s = check_positive("tau_rod_s", tau_rod_s, unit="s")
         self.tau_cone_s = check_positive("tau_cone_s", tau_cone_s, unit="s")
-        self.method = check_composition(glare_method, where="LiveNight")
+        self.method = check_choice("glare_method", glare_method, COMPOSITIONS)  # as given
         check_choice("precision", precision, PRECISIONS)
         self.dtype = np.dtype(precision)
         self.model = _resolve(glare_model if glare_model is not None else "vos")
