@@ -600,11 +600,18 @@ def _looks_night(args: argparse.Namespace) -> int:
     for index, (name, chosen) in enumerate(pipelines.items(), start=1):
         _log(f"[{index}/{len(pipelines)}] {name}: {', '.join(chosen)}")
         start = time.perf_counter()
+        adapted = (  # the adaptation's options only where it runs (else refused as unused)
+            {
+                "frame_time_s": shown["frame_time_s"],
+                "initial_adaptation_cd_m2": shown["initial_adaptation_cd_m2"],
+            }
+            if "adaptation" in chosen
+            else {}
+        )
         night = glare.render_night(
             shown["frames"], pixel_deg=spec["pixel_deg"], effects=chosen,
             display_max_cd_m2=l_dmax, adapted_display_cd_m2=spec["adapted_display_cd_m2"],
-            frame_time_s=shown["frame_time_s"],
-            initial_adaptation_cd_m2=shown["initial_adaptation_cd_m2"],
+            **adapted,
         )  # fmt: skip
         # the adaptation's pair while the eye adapts, the others once it has
         at = adapting if name in ("all", "no_adaptation") else len(night.frames) - 1

@@ -401,16 +401,24 @@ def build_night(protocol: Protocol, *, progress=None) -> dict:
     for index, condition in enumerate(conditions, start=1):
         effects = tuple(e for e in glare.night.EFFECTS if e in condition["effects"])
         if effects not in rendered:  # two conditions of one pipeline share its rendering
+            # the options of the effects the condition keeps (render_night refuses the others)
+            adapting = (
+                {
+                    "frame_time_s": shown["frame_time_s"] if n > 1 else None,
+                    "initial_adaptation_cd_m2": shown["initial_adaptation_cd_m2"],
+                }
+                if "adaptation" in effects
+                else {}
+            )
             night = glare.render_night(
                 shown["frames"] if n > 1 else shown["frames"][0],
                 pixel_deg=pixel,
                 effects=effects,
-                glare_model=model,
+                glare_model=model if "glare" in effects else None,
                 display_max_cd_m2=display["max_cd_m2"],
                 adapted_display_cd_m2=min(scene["adapted_display_cd_m2"], display["max_cd_m2"]),
-                frame_time_s=shown["frame_time_s"] if n > 1 else None,
                 gaze_px=shown["gaze_px"],
-                initial_adaptation_cd_m2=shown["initial_adaptation_cd_m2"],
+                **adapting,
             )
             rendered[effects] = night
         night = rendered[effects]

@@ -62,6 +62,8 @@ def test_each_effect_changes_the_image_and_only_when_on(effect):
     others = tuple(e for e in night.EFFECTS if e != effect)
     options = {"pixel_deg": PIXEL, "frame_time_s": 0.2, "initial_adaptation_cd_m2": 0.1}
     with_it = night.render_night(sequence, **options)
+    if effect == "adaptation":  # its options would be ignored without it, and are refused
+        options = {"pixel_deg": PIXEL}
     without = night.render_night(sequence, effects=others, **options)
     assert not np.allclose(with_it.frames[1], without.frames[1], rtol=1e-3, atol=1e-6)
 
@@ -180,10 +182,12 @@ def test_no_nan_and_no_negative_light_from_0_to_1e9_cd_m2(
     values = 10.0 ** np.array(exponents[: height * width * 3]).reshape(height, width, 3)
     values[values < 10.0 ** (-8 + 17 * black)] = 0.0  # true black pixels, up to all of them
     values[0, 0] = 1e9 if values.size > 3 else values[0, 0]
-    out = night.render_night(
-        [values] * frames, pixel_deg=0.1, effects=effects, frame_time_s=1 / 60,
-        glare_model=glare.GaussianGlare(sigma_deg=0.2), scotopic_method=scotopic_method,
-    )  # fmt: skip
+    options = {  # each only with its effect (refused without it, which would ignore it)
+        "frame_time_s": 1 / 60 if "adaptation" in effects and frames > 1 else None,
+        "glare_model": glare.GaussianGlare(sigma_deg=0.2) if "glare" in effects else None,
+        "scotopic_method": scotopic_method if "scotopic" in effects else "Luidolt2020",
+    }
+    out = night.render_night([values] * frames, pixel_deg=0.1, effects=effects, **options)
     for frame in out.frames:
         assert np.isfinite(frame).all() and (frame >= 0).all() and (frame <= 100.0).all()
     assert np.isfinite(out.adaptation_cd_m2).all() and (out.adaptation_cd_m2 >= 0).all()

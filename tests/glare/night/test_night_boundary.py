@@ -89,3 +89,58 @@ def test_a_wrong_shape_or_name_is_refused_naming_the_argument(call, match):
 def test_an_unknown_colourspace_is_refused_for_a_grey_image_too():
     with pytest.raises(ValueError, match="colourspace"):
         glare.frame_luminance(np.full((20, 20), 3.0), pixel_deg=0.1, colourspace="sRGB-ish")
+
+
+@pytest.mark.parametrize(
+    ("option", "effect"),
+    [
+        ({"glare_model": "hybrid"}, "glare"),
+        ({"glare_method": "Spencer1995"}, "glare"),
+        ({"tolerance_codes": 0.0}, "glare"),
+        ({"glare_falloff_deg": 2.0, "gaze_px": (4, 4)}, "glare"),
+        ({"pupil_from_adaptation": False}, "glare"),
+        ({"acuity_method": "Luidolt2020"}, "acuity"),
+        ({"blur": "exact"}, "acuity"),
+        ({"levels_per_octave": 4}, "acuity"),
+        ({"acuity_space": "linear"}, "acuity"),
+        ({"scotopic_method": "Spencer1995"}, "scotopic"),
+        ({"initial_adaptation_cd_m2": 1.0}, "adaptation"),
+        ({"tau_rod_s": 5.0}, "adaptation"),
+        ({"tau_cone_s": 0.2}, "adaptation"),
+        ({"frame_time_s": 0.1}, "adaptation"),
+    ],
+)
+def test_an_option_of_an_effect_left_out_is_refused_naming_it_and_the_effect(option, effect):
+    # render_night(effects=('adaptation',), glare_model='hybrid') equalled the render
+    # without it: the options of an effect left out were taken and ignored
+    others = tuple(e for e in glare.night.EFFECTS if e != effect)
+    name = next(k for k in option if k != "gaze_px")
+    with pytest.raises(
+        ValueError, match=rf"^{name}=.*the effect '{effect}' is left out"
+    ) as raised:
+        render_night([SCENE] * 2, pixel_deg=0.05, effects=others, **option)
+    assert "\n" not in str(raised.value)
+
+
+@pytest.mark.parametrize(
+    ("option", "match"),
+    [
+        ({"tau_rod_s": 5.0}, r"^tau_rod_s=5.0: one frame without initial_adaptation_cd_m2"),
+        ({"tau_cone_s": 0.2}, r"^tau_cone_s=0.2: one frame without initial_adaptation_cd_m2"),
+        ({"frame_time_s": 0.1}, r"^frame_time_s=0.1: one frame without initial_adaptation"),
+        ({"glare_model": "gaussian", "pupil_from_adaptation": False},
+         r"^pupil_from_adaptation=False with glare_model='gaussian': the model has no pupil"),
+        ({"blur": "exact", "levels_per_octave": 4},
+         r"^levels_per_octave=4 with blur='exact': it spaces the 'layers' ladder"),
+        ({"glare_method": "bogus"}, r"^glare_method must be one of 'Yoshida2008'"),
+        ({"acuity_space": "bogus"}, r"^acuity_space must be one of 'lightness', 'linear'"),
+        ({"window_sigma_deg": 0}, r"^window_sigma_deg must be a finite number > 0 deg, got 0"),
+    ],
+)  # fmt: skip
+def test_an_option_that_would_be_ignored_or_is_bad_is_refused_under_its_own_name(option, match):
+    # one frame has no adaptation dynamics, the Gaussian no pupil, the exact blur no ladder:
+    # each was taken and ignored; a bad glare_method or acuity_space was named as the
+    # renderer's "composition" or the blur's "space", a zero window without a gaze accepted
+    with pytest.raises(ValueError, match=match) as raised:
+        render_night(SCENE, pixel_deg=0.05, **option)
+    assert "\n" not in str(raised.value)

@@ -47,7 +47,13 @@ from typing import Literal
 
 import numpy as np
 
-from glarelab.glare._validation import check_choice, check_image, check_in_range, check_positive
+from glarelab.glare._validation import (
+    check_choice,
+    check_flag,
+    check_image,
+    check_in_range,
+    check_positive,
+)
 from glarelab.glare.models import _resolve
 from glarelab.glare.models.base import GlareModel
 from glarelab.glare.models.eye import Regime, pupil_diameter_mm, regime
@@ -70,6 +76,7 @@ from glarelab.glare.night.adaptation import (
 )
 from glarelab.glare.night.scotopic import METHODS as SCOTOPIC_METHODS
 from glarelab.glare.night.scotopic import SPENCER1995_DESATURATION, scotopic_colour
+from glarelab.glare.rendering.compose import COMPOSITIONS
 from glarelab.glare.rendering.renderer import GlareRenderer
 
 __all__ = [
@@ -117,6 +124,38 @@ class NightResult:
     models: list = field(repr=False)
     error_bound_codes: np.ndarray
     effects: tuple[str, ...]
+
+
+def _at_default(value, default) -> bool:
+    """Whether an option holds its default (None, a flag, a name or a number)."""
+    if default is None or isinstance(default, bool):
+        return value is default
+    return isinstance(value, str | int | float | np.number) and value == default
+
+
+def takes_eye_state(model) -> bool:
+    """Whether :func:`adapted_model` sets anything of a model: a ``pupil_mm`` or a
+    ``regime`` of its own or of a model inside it (``HybridGlare.wave``).
+
+    Parameters
+    ----------
+    model : glarelab.glare.GlareModel
+        A glare model.
+
+    Returns
+    -------
+    bool
+        False for the Gaussian (and a model that is not a dataclass).
+    """
+    if not dataclasses.is_dataclass(model):
+        return False
+    for spec in dataclasses.fields(model):
+        if spec.name in ("pupil_mm", "regime"):
+            return True
+        inner = getattr(model, spec.name)
+        if isinstance(inner, GlareModel) and takes_eye_state(inner):
+            return True
+    return False
 
 
 def given_eye_state(model) -> str | None:
@@ -289,11 +328,14 @@ def render_night(
         Visual angle of a pixel, degrees, > 0.
     effects
         Which of ``'adaptation'``, ``'glare'``, ``'acuity'``, ``'scotopic'`` to apply; default
-        all. The exposure is always applied. The options of an effect left out (a glare model,
-        an initial adaptation, an acuity method) are taken and unused, so that one set of
-        options serves every ablation of a pipeline (``NightResult.effects`` says what ran);
-        an option that the chosen effect's method would ignore is refused (``desaturation``
-        with Luidolt's scotopic colour).
+        all. The exposure is always applied, from the luminance around the gaze
+        (``gaze_px``, ``window_sigma_deg``, ``adaptation_mean``, ``colourspace``). An option
+        of an effect left out, set away from its default, is refused, as it would be ignored
+        (a glare model without ``'glare'``, an initial adaptation without ``'adaptation'``, an
+        acuity method without ``'acuity'``, a scotopic method without ``'scotopic'``): an
+        ablation of a pipeline gives only the options of the effects it keeps. So is an
+        option that the chosen effect's method would ignore (``desaturation`` with Luidolt's
+        scotopic colour, ``levels_per_octave`` with a blur other than ``'layers'``).
     glare_model
         The glare model (an object or a name of :data:`glarelab.glare.GLARE_MODELS`); default
         the Vos PSF (Spencer 1995).
@@ -304,7 +346,9 @@ def render_night(
         default 10.
     frame_time_s
         Duration of each frame (a number, or one per frame), seconds; needed for a sequence
-        with adaptation.
+        with adaptation. One frame without ``initial_adaptation_cd_m2`` is adapted to at once,
+        so nothing evolves: ``frame_time_s``, ``tau_rod_s`` and ``tau_cone_s`` are refused
+        there.
     gaze_px
         ``(row, column)`` of the gaze, one for all frames or one per frame (None: the whole
         frame alike); it may lie outside the frame (a look off the screen: the adaptation
@@ -315,9 +359,11 @@ def render_night(
     pupil_from_adaptation
         Set the glare model's pupil (and Vos regime) from ``L_i`` (:func:`adapted_model`);
         default True. A model given a ``pupil_mm`` of its own is then refused (the pupil
-        would be replaced every frame): give False to keep it.
+        would be replaced every frame): give False to keep it. False is refused for a model
+        without a pupil or regime (the Gaussian), which it would not change.
     window_sigma_deg, adaptation_mean, tau_rod_s, tau_cone_s
-        Adaptation (:func:`glarelab.glare.night.adaptation.frame_luminance`, eqs. 5.2-5.4).
+        Adaptation (:func:`glarelab.glare.night.adaptation.frame_luminance`, eqs. 5.2-5.4);
+        the window and the mean also set the exposure without the effect ``'adaptation'``.
     glare_falloff_deg
         σ of Luidolt's Gaussian falloff around the gaze, degrees (§5.2.3): the glared frame
         is blended with the unglared one by the falloff's weight
@@ -328,7 +374,7 @@ def render_night(
         renderer's error tolerance in display codes (:class:`glarelab.glare.GlareRenderer`).
     acuity_method, blur, levels_per_octave, acuity_space
         Acuity (:func:`glarelab.glare.night.acuity.acuity_blur`); the lightness is taken for the
-        display's white.
+        display's white. ``levels_per_octave`` only with ``blur='layers'``.
     scotopic_method, desaturation
         Colour (:func:`glarelab.glare.night.scotopic.scotopic_colour`); ``desaturation``
         only with the effect ``'scotopic'`` and ``scotopic_method='Spencer1995'``.
@@ -345,7 +391,8 @@ def render_night(
     ------
     ValueError
         For a bad image or sequence (empty, shapes differ, negative or non-finite values),
-        an unknown effect or method, or a bad number, each named.
+        an unknown effect or method, a bad number, or an option that would be ignored (that of
+        an effect left out), each named.
 
     Examples
     --------
@@ -375,6 +422,55 @@ def render_night(
     twice = sorted({e for e in chosen if chosen.count(e) > 1})
     if twice:
         raise ValueError(f"effects = {chosen!r}: {', '.join(twice)} given twice; each once")
+    # named as the caller gave them, not as the renderer's composition or the blur's space
+    check_choice("glare_method", glare_method, COMPOSITIONS)
+    check_choice("acuity_space", acuity_space, ("lightness", "linear"))
+    check_flag("pupil_from_adaptation", pupil_from_adaptation)
+    options = {  # each effect's options, with their defaults: unused where it is left out
+        "adaptation": {
+            "initial_adaptation_cd_m2": (initial_adaptation_cd_m2, None),
+            "frame_time_s": (frame_time_s, None),
+            "tau_rod_s": (tau_rod_s, TAU_ROD_S),
+            "tau_cone_s": (tau_cone_s, TAU_CONE_S),
+        },
+        "glare": {
+            "glare_model": (glare_model, None),
+            "pupil_from_adaptation": (pupil_from_adaptation, True),
+            "glare_falloff_deg": (glare_falloff_deg, None),
+            "glare_method": (glare_method, "Yoshida2008"),
+            "tolerance_codes": (tolerance_codes, 0.5),
+        },
+        "acuity": {
+            "acuity_method": (acuity_method, "Krawczyk2005"),
+            "blur": (blur, "layers"),
+            "levels_per_octave": (levels_per_octave, LEVELS_PER_OCTAVE),
+            "acuity_space": (acuity_space, "lightness"),
+        },
+        "scotopic": {"scotopic_method": (scotopic_method, "Luidolt2020")},
+    }
+    for effect in EFFECTS:
+        for name, (value, default) in options[effect].items():
+            if effect not in chosen and not _at_default(value, default):
+                raise ValueError(
+                    f"{name}={value!r:.80}: the effect {effect!r} is left out of effects="
+                    f"{chosen!r}, so it would be ignored; add {effect!r} to effects or leave "
+                    f"{name} at its default ({default!r})"
+                )
+    if "adaptation" in chosen and n == 1 and initial_adaptation_cd_m2 is None:
+        for name in ("frame_time_s", "tau_rod_s", "tau_cone_s"):  # nothing evolves
+            value, default = options["adaptation"][name]
+            if not _at_default(value, default):
+                raise ValueError(
+                    f"{name}={value!r}: one frame without initial_adaptation_cd_m2 is adapted "
+                    "to at once, nothing evolves, so it would be ignored; give "
+                    "initial_adaptation_cd_m2 (or a sequence of frames), or leave "
+                    f"{name} at its default ({default!r})"
+                )
+    if "acuity" in chosen and blur != "layers" and levels_per_octave != LEVELS_PER_OCTAVE:
+        raise ValueError(
+            f"levels_per_octave={levels_per_octave!r} with blur={blur!r}: it spaces the "
+            f"'layers' ladder, which that blur does not use; leave it at {LEVELS_PER_OCTAVE}"
+        )
     if frame_time_s is not None and not np.isscalar(frame_time_s):
         if len(frame_time_s) != n:
             raise ValueError(
@@ -426,6 +522,12 @@ def render_night(
     base = None
     if "glare" in chosen:
         base = _resolve(glare_model if glare_model is not None else "vos")
+        if not pupil_from_adaptation and not takes_eye_state(base):
+            raise ValueError(
+                f"pupil_from_adaptation=False with glare_model={glare_model!r:.80}: the model "
+                "has no pupil or regime for the adaptation to set, so it would be ignored; "
+                "leave it True"
+            )
         given = given_eye_state(base)
         if pupil_from_adaptation and given is not None:  # it would be replaced every frame
             raise ValueError(
