@@ -147,7 +147,7 @@ def test_a_live_session_follows_the_mouse_survives_blinks_and_a_lost_tracker(scr
         adapted_display_cd_m2=scene["adapted_display_cd_m2"], tolerance_codes=0.0,
     )  # fmt: skip
     offline = render_night(
-        street["img"], gaze_px=(0.0, 0.0),
+        street["img"], gaze_px=(0.0, 0.0), frame_time_s=0.0,
         initial_adaptation_cd_m2=float(row["adaptation_cd_m2"]), **settings,
     )  # fmt: skip
     lut = synthetic_calibration(

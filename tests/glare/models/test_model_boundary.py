@@ -140,7 +140,7 @@ def test_a_bad_kernel_argument_is_refused_naming_it(model, data):
             GaussianGlare(sigma_deg=90.0, sampling="pixel"),
             GaussianGlare(normalisation="Yoshida2008"),
             VosGlare(),
-            VosGlare(age=60.0, pupil_mm=8.0),
+            VosGlare(regime="mesopic", age=60.0, pupil_mm=2.0),  # no halo: any pixel
         ]
     ),
     half=st.integers(0, 7),
@@ -408,3 +408,19 @@ def test_check_kernel_refuses_what_kernel_refuses_for_the_halos_sampling():
         model.kernel(0.05, (101, 101))
     assert str(made.value) == str(checked.value)
     model.check_kernel(0.01, (101, 101))
+
+
+def test_a_pupil_of_the_photopic_psf_is_refused_and_each_frames_eye_state_leaves_it_unset():
+    """VosGlare(pupil_mm=2) gave the photopic kernel without the pupil (it has no halo to
+    drop), without a word; the command line refused --pupil-mm there."""
+    with pytest.raises(ValueError, match=r"^pupil_mm=2 with regime='photopic': .* ignored"):
+        VosGlare(pupil_mm=2)
+    assert VosGlare().with_eye_state(pupil_mm=2.0).pupil_mm is None
+    mesopic = VosGlare(regime="mesopic", pupil_mm=5.0)
+    assert mesopic.with_eye_state(pupil_mm=2.0, regime="photopic") == VosGlare()
+    assert VosGlare().with_eye_state(pupil_mm=2.0, regime="mesopic").pupil_mm == 2.0
+    # the hybrid model's Vos part takes the wave part's pupil only where it has a halo
+    wave = WaveOpticsGlare(pupil_mm=2.0, eyelashes=False, eyelid=False, particles=0)
+    made = HybridGlare(wave=wave).kernel(0.05, (11, 11))
+    assert made.description["pupil_mm"] is None and np.isfinite(made.values).all()
+    assert HybridGlare(wave=wave, regime="mesopic")._vos().halo_skipped

@@ -59,13 +59,13 @@ class HybridGlare(GlareModel):
         VosGlare(regime=self.regime, age=self.age, flare_lines=self.flare_lines, seed=self.seed)
 
     def _vos(self) -> VosGlare:
+        # one eye: the halo needs a 3 mm pupil (the photopic PSF has no halo, and no pupil)
         return VosGlare(
             regime=self.regime,
             age=self.age,
             flare_lines=self.flare_lines,
             seed=self.seed,
-            pupil_mm=self.wave.pupil_diameter,  # one eye: the halo needs a 3 mm pupil
-        )
+        ).with_eye_state(pupil_mm=self.wave.pupil_diameter)
 
     def halo(self) -> str:
         return self._vos().halo()
@@ -127,13 +127,7 @@ class HybridGlare(GlareModel):
             The kernel, each channel summing to its PSF energy inside the support, with its
             energy account.
         """
-        vos_model = VosGlare(
-            regime=self.regime,
-            age=self.age,
-            flare_lines=self.flare_lines,
-            seed=self.seed,
-            pupil_mm=self.wave.pupil_diameter,  # one eye: the halo needs a 3 mm pupil
-        )
+        vos_model = self._vos()
         parts = vos_model.parts(pixel_deg, shape, colour=colour)
         diffraction = self.wave.kernel(pixel_deg, shape, colour=colour)
         w0 = parts["weights"][0]

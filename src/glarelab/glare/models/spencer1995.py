@@ -105,8 +105,9 @@ class VosGlare(GlareModel):
         Below 3 mm the lenticular halo is dropped and its weight returned to ``f0``: a beam
         narrower than 3 mm passes the clear centre of the lens (Spencer §2.1), and eq. 8's
         halo weight is "diverted from the central peak" (§3.1.1). The photopic PSF has no
-        halo, so there the pupil changes nothing; it is still taken, as the eye's state that
-        the night pipeline and the live mode give every frame's model in every regime.
+        halo, so there the pupil would change nothing and is refused; :meth:`with_eye_state`
+        (the state the night pipeline and the live mode give every frame's model) leaves it
+        unset there.
     normalisation
         ``'psf'`` (default): each component holds the PSF's energy inside the kernel, and the
         energy beyond it is reported as ``energy_outside`` (not spread). ``'Spencer1995'``:
@@ -216,12 +217,21 @@ class VosGlare(GlareModel):
                         f"ignored; leave it at its default ({unset!r}) or give a pupil and "
                         "regime with a halo"
                     )
+        if self.pupil_mm is not None and vos.WEIGHTS[self.regime][3] == 0.0:
+            raise ValueError(
+                f"pupil_mm={self.pupil_mm!r} with regime={self.regime!r}: the pupil drops the "
+                "lenticular halo when under 3 mm (Spencer §2.1), and the photopic PSF (eq. 5) "
+                "has none, so it would be ignored; leave pupil_mm None or give regime "
+                "'mesopic' or 'scotopic'"
+            )
 
     def with_eye_state(self, **state) -> VosGlare:
         """This model with another eye state (``pupil_mm``, ``regime``); where that state
         leaves no lenticular halo (a pupil under 3 mm, the photopic regime), the options that
-        shape only the halo (:data:`HALO_OPTIONS`) return to their defaults, as the state a
-        night pipeline or a live session gives each frame is no choice of the user's.
+        shape only the halo (:data:`HALO_OPTIONS`) return to their defaults, and in the
+        photopic regime, whose PSF has no halo for a pupil to drop, the pupil is left unset,
+        as the state a night pipeline or a live session gives each frame is no choice of the
+        user's.
 
         Parameters
         ----------
@@ -240,8 +250,13 @@ class VosGlare(GlareModel):
         True
         >>> m.with_eye_state(pupil_mm=5.0).wavelength_nm
         550.0
+        >>> print(m.with_eye_state(pupil_mm=5.0, regime="photopic").pupil_mm)
+        None
         """
         unset = {name: _field_default(name) for name in HALO_OPTIONS}
+        eye_regime = state.get("regime", self.regime)  # an unknown one is refused when made
+        if isinstance(eye_regime, str) and vos.WEIGHTS.get(eye_regime, (1.0,) * 4)[3] == 0.0:
+            state = {**state, "pupil_mm": None}  # no halo for the pupil to drop
         if dataclasses.replace(self, **{**unset, **state}).weights[3] == 0.0:
             state = {**state, **unset}
         return dataclasses.replace(self, **state)
