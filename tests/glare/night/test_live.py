@@ -365,3 +365,37 @@ def test_a_bad_glare_method_is_named_as_given():
     # the error named the renderer's "composition", not the glare_method the caller gave
     with pytest.raises(ValueError, match=r"^glare_method must be one of 'Yoshida2008'"):
         LiveNight(np.full((8, 8), 0.05), pixel_deg=0.1, glare_method="bogus")
+
+
+@pytest.mark.parametrize(
+    ("options", "match"),
+    [
+        ({"pupils_mm": (3.0, 50.0)}, r"^pupils_mm holds 50 mm, outside the 0.5-10 mm"),
+        ({"pupils_mm": (0.2, 3.0), "glare_model": VosGlare(regime="mesopic")},
+         r"^pupils_mm holds 0.2 mm, outside the 0.5-10 mm"),
+        ({"pupils_mm": (0.7, 3.0), "glare_model": "wave"},
+         r"^pupils_mm holds 0.7 mm, which the glare model refuses \(pupil_mm must be in \[1, 10\]"),
+        ({"pupils_mm": (0.7, 3.0), "glare_model": "hybrid"},  # its wave part's pupil
+         r"^pupils_mm holds 0.7 mm, which the glare model refuses \(pupil_mm must be in \[1, 10\]"),
+        ({"pupils_mm": (2.0, 4.0, 6.0), "glare_model": "gaussian"},
+         r"^pupils_mm=\(2.0, 4.0, 6.0\) with glare_model='gaussian': the model takes no frame's"),
+    ],
+)  # fmt: skip
+def test_bank_pupils_the_model_would_refuse_or_ignore_are_refused(options, match):
+    # pupils_mm=(3, 50) rendered frames at a 40 mm pupil, which VosGlare itself refuses
+    with pytest.raises(ValueError, match=match):
+        LiveNight(np.full((8, 8), 0.05), pixel_deg=0.1, **options)
+
+
+def test_a_frame_reports_the_pupil_its_glare_was_rendered_for():
+    # the Gaussian, which has no pupil, reported the frame's 4 mm
+    scene = np.full((8, 8), 0.05)
+    frame = LiveNight(scene, pixel_deg=0.1, glare_model="gaussian").frame(
+        gaze_px=None, pupil_mm=4.0, frame_time_s=0.0
+    )
+    assert np.isnan(frame.pupil_mm)
+    hybrid = LiveNight(scene, pixel_deg=0.5, glare_model="hybrid", pupils_mm=(3.0, 5.0))
+    frame = hybrid.frame(gaze_px=None, pupil_mm=4.0, frame_time_s=0.0)
+    assert frame.pupil_mm == 4.0  # its wave part's, set each frame
+    vos = LiveNight(scene, pixel_deg=0.1).frame(gaze_px=None, pupil_mm=4.0, frame_time_s=0.0)
+    assert vos.pupil_mm == 4.0

@@ -144,3 +144,14 @@ def test_an_option_that_would_be_ignored_or_is_bad_is_refused_under_its_own_name
     with pytest.raises(ValueError, match=match) as raised:
         render_night(SCENE, pixel_deg=0.05, **option)
     assert "\n" not in str(raised.value)
+
+
+def test_the_pupil_reported_is_the_one_the_glare_was_rendered_for():
+    # the hybrid model reported NaN though its wave part has a pupil each frame
+    scene = np.full((16, 16, 3), 0.05)
+    scene[8, 8] = 5e4
+    hybrid = render_night(scene, pixel_deg=0.1, glare_model="hybrid")
+    assert hybrid.pupil_mm.tolist() == [hybrid.models[0].wave.pupil_mm] == [5.2]
+    vos = render_night(scene, pixel_deg=0.1)
+    assert vos.pupil_mm.tolist() == [vos.models[0].pupil_mm]
+    assert np.isnan(render_night(scene, pixel_deg=0.1, glare_model="gaussian").pupil_mm).all()

@@ -44,6 +44,7 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from collections import OrderedDict
 from collections.abc import Callable
 from concurrent.futures import Future, ThreadPoolExecutor
@@ -67,7 +68,7 @@ from glarelab.glare.models.eye import (
     regime,
 )
 from glarelab.glare.models.hybrid import HybridGlare
-from glarelab.glare.models.spencer1995 import VosGlare
+from glarelab.glare.models.spencer1995 import PUPIL_RANGE_MM, VosGlare
 from glarelab.glare.night.acuity import (
     LEVELS_PER_OCTAVE,
     MIN_LUMINANCE_CD_M2,
@@ -89,7 +90,12 @@ from glarelab.glare.night.adaptation import (
     rod_sensitivity,
     window_mean,
 )
-from glarelab.glare.night.pipeline import eye_state_model, given_eye_state, has_eye_field
+from glarelab.glare.night.pipeline import (
+    eye_state_model,
+    given_eye_state,
+    has_eye_field,
+    model_pupil_mm,
+)
 from glarelab.glare.night.scotopic import rod_weights, scotopic_colour
 from glarelab.glare.rendering.compose import COMPOSITIONS, compose
 from glarelab.glare.rendering.display import CodeTable
@@ -164,6 +170,28 @@ def _clusters(kinks: np.ndarray, reach: int, block: int = 32) -> list[tuple[slic
     return boxes
 
 
+def _check_bank_pupil(model: GlareModel, pupil: float) -> None:
+    """Refuse a bank pupil the model would refuse (the Vos PSF's
+    :data:`~glarelab.glare.models.spencer1995.PUPIL_RANGE_MM`, whatever its regime; the
+    wave-optics model's 1-10 mm), naming ``pupils_mm``."""
+    if isinstance(model, VosGlare):
+        low, high = PUPIL_RANGE_MM
+        if not low <= pupil <= high:
+            raise ValueError(
+                f"pupils_mm holds {pupil:g} mm, outside the {low:g}-{high:g} mm the Vos PSF "
+                "takes; give pupils within it"
+            )
+        return
+    try:
+        with warnings.catch_warnings():  # a frame's model warns when it is made
+            warnings.simplefilter("ignore")
+            eye_state_model(model, pupil_mm=pupil, regime=None)
+    except ValueError as error:
+        raise ValueError(
+            f"pupils_mm holds {pupil:g} mm, which the glare model refuses ({error})"
+        ) from None
+
+
 def pupil_bank_mm(
     model: GlareModel, pupils_mm: tuple[float, ...] | np.ndarray = PUPIL_BANK_MM
 ) -> np.ndarray:
@@ -215,7 +243,10 @@ class LiveFrame:
     gaze_px
         ``(row, column)`` used (the last valid one when the frame had none).
     pupil_mm
-        The pupil used, mm (the last valid one when the frame had none).
+        The pupil the glare was rendered for, mm: the frame's (the last valid one when the
+        frame had none) for a model that takes each frame's pupil (a hybrid model's wave part
+        takes it; the Vos PSF in the photopic regime takes it with no halo for it to drop);
+        NaN for a model without a pupil (the Gaussian).
     target_cd_m2
         The windowed luminance around the gaze (eq. 5.1, §5.1).
     adaptation_cd_m2
@@ -270,7 +301,10 @@ class LiveNight:
         between 3 and 3.25 mm); give the pupils the frames need, or a finer bank.
     pupils_mm
         The bank's pupils, mm (see :func:`pupil_bank_mm`); default 2-8 mm in steps of 0.5
-        (Luidolt's range, §5.2.1 ii). A frame's pupil must lie within them.
+        (Luidolt's range, §5.2.1 ii). A frame's pupil must lie within them, and they within
+        the model's range (the Vos PSF's 0.5-10 mm, the wave-optics model's 1-10 mm). Refused
+        for a model without a frame's pupil (the Gaussian), which would
+        ignore them.
     display_max_cd_m2
         The display's white ``L_dmax``, cd/m², > 0; default 100.
     adapted_display_cd_m2
@@ -422,12 +456,22 @@ class LiveNight:
                 f"glare_model has {given}, which each frame's pupil (from the eye tracker) "
                 "replaces: leave it unset"
             )
+        if not has_pupil and pupils_mm is not PUPIL_BANK_MM:  # a bank of one model
+            raise ValueError(
+                f"pupils_mm={pupils_mm!r:.80} with glare_model={glare_model!r:.80}: the model "
+                "takes no frame's pupil, so they would be ignored; leave pupils_mm at its "
+                "default"
+            )
         self.pupils_mm = (
             pupil_bank_mm(self.model, pupils_mm)
             if has_pupil
             else np.array([float(np.median(pupils_mm))])
         )
         self._has_pupil = has_pupil
+        self._model_pupil_mm = model_pupil_mm(self.model)  # a model without a frame's pupil
+        if has_pupil:  # each pupil within the model's range, as the model judges it
+            for pupil in np.unique(np.asarray(pupils_mm, dtype=float)):
+                _check_bank_pupil(self.model, float(pupil))
         y = luminance(self.scene, colourspace=colourspace)
         self.adaptation_mean = adaptation_mean
         self._y = (
@@ -720,7 +764,7 @@ class LiveNight:
             image=self._out,
             codes=codes,
             gaze_px=gaze,
-            pupil_mm=pupil,
+            pupil_mm=pupil if self._has_pupil else self._model_pupil_mm,
             target_cd_m2=target,
             adaptation_cd_m2=self._state,
             exposure=exposure,

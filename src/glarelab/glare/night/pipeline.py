@@ -107,7 +107,11 @@ class NightResult:
     exposure
         ``(N,)`` display cd/m² per scene cd/m².
     pupil_mm
-        ``(N,)`` pupil diameter of each frame's glare model (NaN without glare).
+        ``(N,)`` the pupil each frame's glare was rendered for, mm: from the adapted luminance
+        when ``pupil_from_adaptation`` sets it (the Vos PSF in the photopic regime, which
+        has no halo for it to drop, takes the regime alone), else the model's own
+        (:func:`model_pupil_mm`); NaN without glare, or for a model without a pupil (the
+        Gaussian).
     models
         The glare model of each frame (None without glare).
     error_bound_codes
@@ -147,15 +151,50 @@ def takes_eye_state(model) -> bool:
     bool
         False for the Gaussian (and a model that is not a dataclass).
     """
-    if not dataclasses.is_dataclass(model):
-        return False
+    return has_eye_field(model, "pupil_mm") or has_eye_field(model, "regime")
+
+
+def model_pupil_mm(model) -> float:
+    """The pupil a glare model is made for, mm: its ``pupil_diameter`` (the wave-optics
+    model's, given or from its field luminance), its ``pupil_mm``, or that of a model inside
+    it (``HybridGlare.wave``); NaN for none (the Gaussian, a Vos PSF without a pupil).
+
+    Parameters
+    ----------
+    model : glarelab.glare.GlareModel or None
+        A glare model.
+
+    Returns
+    -------
+    float
+        The pupil diameter, mm, or NaN.
+
+    Examples
+    --------
+    >>> from glarelab.glare import GaussianGlare, VosGlare
+    >>> model_pupil_mm(VosGlare(regime="mesopic", pupil_mm=4.0)), model_pupil_mm(GaussianGlare())
+    (4.0, nan)
+    """
+    if model is None or not dataclasses.is_dataclass(model):
+        return math.nan
+    for name in ("pupil_diameter", "pupil_mm"):
+        value = getattr(model, name, None)
+        if value is not None:
+            return float(value)
     for spec in dataclasses.fields(model):
-        if spec.name in ("pupil_mm", "regime"):
-            return True
         inner = getattr(model, spec.name)
-        if isinstance(inner, GlareModel) and takes_eye_state(inner):
-            return True
-    return False
+        if isinstance(inner, GlareModel):
+            found = model_pupil_mm(inner)
+            if not math.isnan(found):
+                return found
+    return math.nan
+
+
+def frame_pupil_mm(adaptation_luminance_cd_m2: float, step_mm: float = PUPIL_STEP_MM) -> float:
+    """The Moon & Spencer pupil of an adapted luminance rounded to ``step_mm``, as
+    :func:`adapted_model` gives it."""
+    pupil = float(pupil_diameter_mm(adaptation_luminance_cd_m2))
+    return round(round(pupil / step_mm) * step_mm, 6)
 
 
 def given_eye_state(model) -> str | None:
@@ -283,9 +322,8 @@ def adapted_model(
         check_image("adaptation_luminance_cd_m2", [[adaptation_luminance_cd_m2]])[0, 0]
     )
     step = check_positive("pupil_step_mm", pupil_step_mm, unit="mm")
-    pupil = float(pupil_diameter_mm(luminance))
     return eye_state_model(
-        model, pupil_mm=round(round(pupil / step) * step, 6), regime=regime(luminance)
+        model, pupil_mm=frame_pupil_mm(luminance, step), regime=regime(luminance)
     )
 
 
@@ -578,7 +616,12 @@ def render_night(
             )
             display = scotopic_colour(display, method=scotopic_method, **options)
         out_frames.append(np.clip(display, 0.0, l_dmax))
-        pupils.append(getattr(model, "pupil_mm", None) if model is not None else None)
+        if model is None or not has_eye_field(base, "pupil_mm"):
+            pupils.append(math.nan)
+        elif pupil_from_adaptation:  # the eye's, which a photopic Vos PSF does not take
+            pupils.append(frame_pupil_mm(float(level)))
+        else:
+            pupils.append(model_pupil_mm(model))
         models.append(model)
         bounds.append(bound)
         if progress is not None:
@@ -588,7 +631,7 @@ def render_night(
         targets_cd_m2=targets,
         adaptation_cd_m2=adapted,
         exposure=exposure,
-        pupil_mm=np.array([math.nan if p is None else float(p) for p in pupils]),
+        pupil_mm=np.array(pupils, dtype=float),
         models=models,
         error_bound_codes=np.array(bounds),
         effects=chosen,
