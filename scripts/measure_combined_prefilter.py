@@ -314,7 +314,7 @@ def check() -> None:
                 print(f"bitmap {spacing:g} mm, {w:g} nm {name}: "
                       f"{reference[i][mask].sum() / exact[mask].sum() - 1:+.5f}")  # fmt: skip
 
-    model = WaveOpticsGlare(pupil_mm=3.0, diaphragm_sides=3, **NONE, spectral="reference",
+    model = WaveOpticsGlare(pupil_mm=3.0, diaphragm_sides=3, **NONE,
                             spectrum=TWO_WAVELENGTHS)  # fmt: skip
     reference = fine_exact_kernels(model)
     regions = masks()
@@ -385,7 +385,7 @@ def others(out: Path) -> None:
             None if kind == "rim" else (image, spacing),
         )
     for case, (parameters, exact) in cases.items():
-        model = WaveOpticsGlare(**parameters, spectral="reference", spectrum=TWO_WAVELENGTHS)
+        model = WaveOpticsGlare(**parameters, spectrum=TWO_WAVELENGTHS)
         one_sample, one_sample_s = timed(one_sample_kernels, model)
         prefiltered, prefilter_s = prefilter_kernels(model, DIAPHRAGM_PREFILTER), None
         if model.obstacle_image is not None:
@@ -462,7 +462,7 @@ def main() -> None:
         if args.only and case not in args.only:
             rows.extend(r for key, r in kept.items() if key[0] == case)
             continue
-        model = WaveOpticsGlare(**parameters, spectral="reference", spectrum=TWO_WAVELENGTHS)
+        model = WaveOpticsGlare(**parameters, spectrum=TWO_WAVELENGTHS)
         before, before_s = timed(one_sample_kernels, model)
         (now, nm), now_s = timed(model.monochromatic_kernels, PIXEL_DEG, SHAPE)
         reference = fine_exact_kernels(model)

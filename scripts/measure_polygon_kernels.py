@@ -154,7 +154,7 @@ def main() -> None:
             rotation = axis_rotation_deg(sides)
             model = WaveOpticsGlare(
                 pupil_mm=diameter, **CAMERA, diaphragm_sides=sides,
-                diaphragm_rotation_deg=rotation, spectral="reference",
+                diaphragm_rotation_deg=rotation,
                 spectrum=Spectrum(n_wavelengths=2, wavelength_range_nm=(380.0, 780.0)),
             )  # fmt: skip
             now, nm = model.monochromatic_kernels(PIXEL_DEG, SHAPE)

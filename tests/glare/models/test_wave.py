@@ -301,3 +301,13 @@ def test_under_luidolts_convention_only_light_beyond_the_support_is_booked_outsi
     assert_allclose(scaled.energy_outside, share * np.asarray(unit.energy_outside), rtol=1e-9)
     total = scaled.values.sum(axis=(0, 1)) + scaled.energy_outside
     assert_allclose(total, share, rtol=1e-12)
+
+
+def test_a_reference_spectrum_that_would_equal_the_scaled_one_is_refused():
+    # under the exact pixel integration without the Fresnel term one autocorrelation serves
+    # every wavelength: spectral='reference' gave the 'scaled' kernel bit for bit, unsaid
+    with pytest.raises(ValueError, match=r"^spectral='reference' with pixel_integration='exact'"):
+        WaveOpticsGlare(pupil_mm=3.0, **CAMERA, spectral="reference")
+    # where it acts: a Fresnel term per wavelength, or one FFT per wavelength
+    WaveOpticsGlare(pupil_mm=3.0, **CAMERA, spectral="reference", fresnel=True)
+    WaveOpticsGlare(pupil_mm=3.0, **CAMERA, spectral="reference", pixel_integration="rebin")

@@ -153,7 +153,7 @@ def test_circular_pupil_kernel_is_the_pixel_integrated_airy_pattern(
 ):
     low, high = sorted((low, high + 10.0))
     spectrum = Spectrum(n_wavelengths=2, wavelength_range_nm=(low, min(high, 780.0)))
-    model = WaveOpticsGlare(pupil_mm=pupil_mm, **CAMERA, spectral="reference", spectrum=spectrum)
+    model = WaveOpticsGlare(pupil_mm=pupil_mm, **CAMERA, spectrum=spectrum)
     kernels, nm = model.monochromatic_kernels(pixel_deg, SHAPE)
     for kernel, wavelength in zip(kernels, nm, strict=True):
         assert_matches(kernel, airy_pixels(pupil_mm, wavelength, pixel_deg, SHAPE[0] // 2))

@@ -91,7 +91,7 @@ def test_reference_is_the_airy_pattern():
 
 def _monochromatic(pupil_mm, low_nm, high_nm, pixel_deg, shape):
     spectrum = Spectrum(n_wavelengths=2, wavelength_range_nm=(low_nm, high_nm))
-    model = WaveOpticsGlare(pupil_mm=pupil_mm, **CAMERA, spectral="reference", spectrum=spectrum)
+    model = WaveOpticsGlare(pupil_mm=pupil_mm, **CAMERA, spectrum=spectrum)
     return model.monochromatic_kernels(pixel_deg, shape)
 
 
@@ -190,7 +190,7 @@ def test_polygon_rings_and_border_are_the_polygons_transform(
     spectrum = Spectrum(n_wavelengths=2, wavelength_range_nm=(380.0, 780.0))
     model = WaveOpticsGlare(
         pupil_mm=diameter_mm, **CAMERA, diaphragm_sides=sides,
-        diaphragm_rotation_deg=rotation_deg, spectral="reference", spectrum=spectrum,
+        diaphragm_rotation_deg=rotation_deg, spectrum=spectrum,
     )  # fmt: skip
     kernels, nm = model.monochromatic_kernels(pixel_deg, shape)
     kernel, wavelength = kernels[wavelength_index], nm[wavelength_index]
@@ -221,7 +221,7 @@ def test_a_diaphragm_behind_the_lid_keeps_the_polygons_transform(sides, rotation
     spectrum = Spectrum(n_wavelengths=2, wavelength_range_nm=(380.0, 780.0))
     model = WaveOpticsGlare(
         pupil_mm=2.0, **{**CAMERA, "eyelid": True}, diaphragm_sides=sides,
-        diaphragm_rotation_deg=rotation_deg, spectral="reference", spectrum=spectrum,
+        diaphragm_rotation_deg=rotation_deg, spectrum=spectrum,
     )  # fmt: skip
     kernels, nm = model.monochromatic_kernels(pixel_deg, shape)
     y, x = np.indices(shape) - 15
@@ -247,7 +247,7 @@ def test_a_diaphragm_behind_a_cross_screen_matches_a_finely_drawn_aperture():
     pixel_deg, shape, fine = 0.02, (31, 31), 16.0 / 4096
     model = WaveOpticsGlare(
         pupil_mm=4.0, **CAMERA, diaphragm_sides=6, cross_screen="4-point",
-        spectral="reference", spectrum=Spectrum(n_wavelengths=2, wavelength_range_nm=(380.0, 780.0)),
+        spectrum=Spectrum(n_wavelengths=2, wavelength_range_nm=(380.0, 780.0)),
     )  # fmt: skip
     (_, kernel), (_, wavelength) = model.monochromatic_kernels(pixel_deg, shape)
     acf = aperture_autocorrelation(model._aperture_crop(ap.ApertureGrid(1029, fine)), fine)
@@ -273,7 +273,7 @@ def test_eye_with_lid_lashes_and_particles_matches_a_finely_sampled_zero_padded_
 
     pixel_deg, shape, n = 0.02, (41, 41), 3072
     spectrum = Spectrum(n_wavelengths=2, wavelength_range_nm=(380.0, 780.0))
-    model = WaveOpticsGlare(pupil_mm=2.0, spectral="reference", spectrum=spectrum)
+    model = WaveOpticsGlare(pupil_mm=2.0, spectrum=spectrum)
     kernels, nm = model.monochromatic_kernels(pixel_deg, shape)
     fine = model.grid_for(pixel_deg, shape).spacing_mm / 2
     crop = model._aperture_crop(ap.ApertureGrid(n, fine))
@@ -341,7 +341,7 @@ def test_a_cross_screen_matches_a_finely_drawn_aperture(parameters, index, befor
     # before: the border with the one-sample cover, % (scripts/measure_combined_prefilter.py
     # --others, docs/optics/others_prefilter.csv); now within 0.3 %
     spectrum = Spectrum(n_wavelengths=2, wavelength_range_nm=(380.0, 780.0))
-    model = WaveOpticsGlare(**{**CAMERA, **parameters}, spectral="reference", spectrum=spectrum)
+    model = WaveOpticsGlare(**{**CAMERA, **parameters}, spectrum=spectrum)
     kernels, nm = model.monochromatic_kernels(0.02, (31, 31))
     reference = _finely_drawn(model, float(nm[index]))
     for name, mask in _ring_and_border().items():
@@ -356,7 +356,7 @@ def test_a_round_pupil_behind_the_lid_matches_a_finely_drawn_aperture():
     # for 8 mm with the source 10° right), now +0.05 % (a reference on 0.004 mm is within
     # 0.02 % of one on 0.002 mm here)
     spectrum = Spectrum(n_wavelengths=2, wavelength_range_nm=(380.0, 780.0))
-    model = WaveOpticsGlare(pupil_mm=4.6, **{**CAMERA, "eyelid": True}, spectral="reference",
+    model = WaveOpticsGlare(pupil_mm=4.6, **{**CAMERA, "eyelid": True},
                             spectrum=spectrum)  # fmt: skip
     kernels, nm = model.monochromatic_kernels(0.02, (31, 31))
     reference = _finely_drawn(model, float(nm[0]), spacing_mm=16 / 4096)
@@ -397,7 +397,7 @@ def _assert_bitmap_within(image, spacing_mm, *, rtol):
     an obstacle bitmap against its exact pixel-integrated transform."""
     spectrum = Spectrum(n_wavelengths=2, wavelength_range_nm=(380.0, 780.0))
     model = WaveOpticsGlare(pupil_mm=3.6, **CAMERA, obstacle_image=image,
-                            obstacle_spacing_mm=spacing_mm, spectral="reference",
+                            obstacle_spacing_mm=spacing_mm,
                             spectrum=spectrum)  # fmt: skip
     kernels, nm = model.monochromatic_kernels(0.02, (31, 31))
     reference = _bitmap_pixels(image, spacing_mm, float(nm[0]))
@@ -438,7 +438,7 @@ def test_an_obstacle_image_cut_by_the_pupil_divides_the_transfer_out_within_the_
     image = np.where(lines | (np.abs(y - 0.4) <= 0.025 + 1e-9), 0.0, 1.0)
     spectrum = Spectrum(n_wavelengths=2, wavelength_range_nm=(380.0, 780.0))
     model = WaveOpticsGlare(pupil_mm=3.0, **CAMERA, obstacle_image=image,
-                            obstacle_spacing_mm=spacing, spectral="reference",
+                            obstacle_spacing_mm=spacing,
                             spectrum=spectrum)  # fmt: skip
     kernels, nm = model.monochromatic_kernels(0.02, (31, 31))
     reference = _finely_drawn(model, float(nm[0]), spacing_mm=16 / 4096)
@@ -509,7 +509,7 @@ def test_a_square_diaphragm_with_edges_half_way_between_samples_is_within_half_a
     spectrum = Spectrum(n_wavelengths=2, wavelength_range_nm=(380.0, 780.0))
     model = WaveOpticsGlare(
         pupil_mm=diameter_mm, **CAMERA, diaphragm_sides=4, diaphragm_rotation_deg=45.0,
-        spectral="reference", spectrum=spectrum,
+        spectrum=spectrum,
     )  # fmt: skip
     kernels, nm = model.monochromatic_kernels(pixel_deg, shape)
     border = _ring_and_border()["border"]

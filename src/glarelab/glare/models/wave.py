@@ -259,6 +259,9 @@ class WaveOpticsGlare(GlareModel):
     spectral
         ``'scaled'`` (default): one FFT, exact scaled copies per wavelength (Luidolt eq. 5.12);
         ``'reference'``: one FFT per wavelength; ``'kakimoto'``: 680/530/460 nm as R/G/B.
+        Under ``pixel_integration='exact'`` without ``fresnel`` one autocorrelation of the
+        aperture serves every wavelength exactly, so ``'reference'`` would be ``'scaled'``
+        and is refused there.
     spectrum
         Wavelength sampling and display for 'scaled' and 'reference'; default 31 wavelengths
         380-780 nm, Rec. 709.
@@ -443,6 +446,14 @@ class WaveOpticsGlare(GlareModel):
                 f"field_luminance_cd_m2={self.field_luminance_cd_m2!r} has no effect with "
                 f"pupil_mm={self.pupil_mm!r} (it sets the pupil only when pupil_mm is None): "
                 "give one of them"
+            )
+        if self.spectral == "reference" and self.pixel_integration == "exact" and not self.fresnel:
+            raise ValueError(
+                "spectral='reference' with pixel_integration='exact' and fresnel=False: each "
+                "wavelength's PSF is then integrated from the one autocorrelation of the "
+                "aperture, as 'scaled' does, so it would be ignored; give spectral='scaled', "
+                "fresnel=True (a Fresnel term per wavelength) or pixel_integration='rebin' "
+                "(one FFT per wavelength)"
             )
         if self.seed != defaults["seed"] and not (self.eyelashes or self.particles):
             raise ValueError(
@@ -1031,7 +1042,9 @@ def compare_spectral_methods(
     Parameters
     ----------
     model
-        The wave-optics model; its ``spectral`` method is replaced by each in turn.
+        The wave-optics model; its ``spectral`` method is replaced by each in turn. Under
+        ``pixel_integration='exact'`` without ``fresnel`` the reference is the scaled copies,
+        exact there (:class:`WaveOpticsGlare` refuses ``'reference'`` as the same kernel).
     pixel_deg
         Visual angle of one pixel in degrees, in [1e-5, 180].
     shape
@@ -1045,8 +1058,9 @@ def compare_spectral_methods(
     """
     kernels = {}
     seconds = {}
+    exact = model.pixel_integration == "exact" and not model.fresnel
     for method in SPECTRAL_METHODS:
-        variant = replace(model, spectral=method)
+        variant = replace(model, spectral="scaled" if method == "reference" and exact else method)
         start = time.perf_counter()
         kernels[method] = variant.kernel(pixel_deg, shape, colour=True).values
         seconds[method] = time.perf_counter() - start
