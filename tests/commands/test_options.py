@@ -136,6 +136,8 @@ def scene(tmp_path):
          "--source-x-deg with --no-eyelashes and --no-eyelid"),
         (["--model", "wave", "--seed", "3", "--no-eyelashes", "--particles", "0"],
          "--seed with --no-eyelashes and --particles 0"),
+        # the exact grid's one autocorrelation serves every wavelength: it was 'scaled'
+        (["--model", "wave", "--spectral", "reference"], "--spectral reference without --fresnel"),
         (["--l-dmax", "500", "--calibration", "{calibration}"], "above the --calibration's"),
     ],
 )  # fmt: skip

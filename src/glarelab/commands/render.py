@@ -73,6 +73,13 @@ def _check_options(args: argparse.Namespace) -> None:
             "halo when under 3 mm (Spencer §2.1), and the photopic PSF has none, so it would "
             "be ignored; give --regime mesopic or scotopic"
         )
+    reference = getattr(args, "spectral", "scaled") == "reference"
+    if args.model in ("wave", "hybrid") and reference and not getattr(args, "fresnel", False):
+        raise ValueError(
+            "--spectral reference without --fresnel: each wavelength's PSF is integrated from "
+            "one autocorrelation of the aperture, as --spectral scaled does, so it would be "
+            "ignored; give --fresnel (a Fresnel term per wavelength) or leave --spectral scaled"
+        )
     if args.model == "vos" and "seed" in given and "flare_lines" not in given:
         raise ValueError(
             "--seed without --flare-lines: the seed places Spencer's flare lines, and the vos "
@@ -227,7 +234,10 @@ def _add_model_options(parser: argparse.ArgumentParser, default: str = "vos") ->
     wave.add_argument("--no-eyelid", action="store_true")
     wave.add_argument("--particles", type=count(0, MAX_PARTICLES), default=1000)
     wave.add_argument("--fresnel", action="store_true", help="Luidolt eq. 5.6 Fresnel term")
-    wave.add_argument("--spectral", choices=glare.wave.SPECTRAL_METHODS, default="scaled")
+    wave.add_argument(
+        "--spectral", choices=glare.wave.SPECTRAL_METHODS, default="scaled",
+        help="reference (one Fresnel term per wavelength) only with --fresnel",
+    )  # fmt: skip
     wave.add_argument("--source-x-deg", type=number(-60, 60), default=0.0)
     wave.add_argument("--diaphragm-sides", type=count(3, 360), default=None)
     wave.add_argument("--cross-screen", choices=("4-point", "trigonal"), default=None)
