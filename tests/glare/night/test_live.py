@@ -399,3 +399,9 @@ def test_a_frame_reports_the_pupil_its_glare_was_rendered_for():
     assert frame.pupil_mm == 4.0  # its wave part's, set each frame
     vos = LiveNight(scene, pixel_deg=0.1).frame(gaze_px=None, pupil_mm=4.0, frame_time_s=0.0)
     assert vos.pupil_mm == 4.0
+
+
+def test_an_unknown_glare_model_is_named_as_given():
+    # the error named the renderer's "model", not the glare_model the caller gave
+    with pytest.raises(ValueError, match=r"^glare_model must be one of 'Yoshida2008'"):
+        LiveNight(np.full((8, 8), 0.05), pixel_deg=0.1, glare_model="bogus")

@@ -155,3 +155,9 @@ def test_the_pupil_reported_is_the_one_the_glare_was_rendered_for():
     vos = render_night(scene, pixel_deg=0.1)
     assert vos.pupil_mm.tolist() == [vos.models[0].pupil_mm]
     assert np.isnan(render_night(scene, pixel_deg=0.1, glare_model="gaussian").pupil_mm).all()
+
+
+def test_an_unknown_glare_model_is_named_as_given():
+    # the error named the renderer's "model", not the glare_model the caller gave
+    with pytest.raises(ValueError, match=r"^glare_model must be one of 'Yoshida2008'"):
+        render_night(SCENE, pixel_deg=0.05, glare_model="bogus")

@@ -113,24 +113,26 @@ def make_model(method: str, **parameters) -> GlareModel:
     return GLARE_MODELS[method](**parameters)
 
 
-def _resolve(model: GlareModel | str) -> GlareModel:
+def _resolve(model: GlareModel | str, name: str = "model") -> GlareModel:
+    """The model a caller's argument ``name`` names (an object, or a name of
+    :data:`GLARE_MODELS`), its errors naming ``name``."""
     if isinstance(model, str):
         if model not in GLARE_MODELS:  # named as the caller's argument, not make_model's
             same = [name for name in GLARE_MODELS if name.lower() == model.strip().lower()]
             raise ValueError(
-                f"model must be one of {', '.join(repr(m) for m in GLARE_MODELS)}; got "
+                f"{name} must be one of {', '.join(repr(m) for m in GLARE_MODELS)}; got "
                 f"{model!r}" + (f" (names are case-sensitive: {same[0]!r})" if same else "")
             )
         return make_model(model)
     if isinstance(model, type):
         raise ValueError(
-            f"model must be a glare model object, e.g. {model.__name__}(), not the class "
+            f"{name} must be a glare model object, e.g. {model.__name__}(), not the class "
             f"{model.__name__} itself"
         )
     if isinstance(model, GlareModel) or callable(getattr(model, "kernel", None)):
         return as_model(model)
     raise ValueError(
-        f"model must be a glare model (e.g. GaussianGlare(), VosGlare()) or one of "
+        f"{name} must be a glare model (e.g. GaussianGlare(), VosGlare()) or one of "
         f"{', '.join(repr(m) for m in GLARE_MODELS)}; got {model!r}"
     )
 

@@ -446,7 +446,7 @@ class LiveNight:
         self.method = check_choice("glare_method", glare_method, COMPOSITIONS)  # as given
         check_choice("precision", precision, PRECISIONS)
         self.dtype = np.dtype(precision)
-        self.model = _resolve(glare_model if glare_model is not None else "vos")
+        self.model = _resolve(glare_model if glare_model is not None else "vos", "glare_model")
         has_pupil = has_eye_field(self.model, "pupil_mm")
         # the Vos regime follows each frame's L_i (Spencer §3.1), as render_night sets it
         self._has_regime = has_eye_field(self.model, "regime")

@@ -559,7 +559,7 @@ def render_night(
     exposure = key / np.maximum(adapted, MIN_LUMINANCE_CD_M2)
     base = None
     if "glare" in chosen:
-        base = _resolve(glare_model if glare_model is not None else "vos")
+        base = _resolve(glare_model if glare_model is not None else "vos", "glare_model")
         if not pupil_from_adaptation and not takes_eye_state(base):
             raise ValueError(
                 f"pupil_from_adaptation=False with glare_model={glare_model!r:.80}: the model "
