@@ -142,7 +142,6 @@ def test_a_live_session_follows_the_mouse_survives_blinks_and_a_lost_tracker(scr
             VosGlare(), pupil_mm=float(mapped), regime=regime(float(row["adaptation_cd_m2"]))
         ),
         pupil_from_adaptation=False,
-        frame_time_s=0.0,
         display_max_cd_m2=display["max_cd_m2"],
         adapted_display_cd_m2=scene["adapted_display_cd_m2"], tolerance_codes=0.0,
     )  # fmt: skip
