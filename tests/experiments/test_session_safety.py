@@ -371,6 +371,26 @@ def test_a_completed_session_is_not_resumed(tmp_path):
     assert data_files(tmp_path) == before
 
 
+def test_a_completed_session_cut_short_names_the_missing_trials_on_resume(tmp_path):
+    """A completed session's CSV cut short was refused as 'a completed session: there is
+    nothing to resume', hiding the trials missing, which the analysis names."""
+    assert simulated(tmp_path).returncode == 0
+    (csv,) = tmp_path.glob("P01_luidolt2020_s1_*.csv")
+    recorded = json.loads(csv.with_suffix(".json").read_text())["trials"]
+    assert recorded > 4
+    csv.write_text("".join(csv.read_text().splitlines(keepends=True)[:4]))  # 3 trials
+    before = data_files(tmp_path)
+    done = simulated(tmp_path, "luidolt2020", "P01", "--resume")
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.strip().endswith(
+        f"{csv.name}: trials 4-{recorded} of the {recorded} the completed session recorded "
+        "missing (rows deleted, or the file cut short?); a completed session is not resumed: "
+        "put its rows back from a copy of the file, or keep it for the record and start a new "
+        "session number"
+    )
+    assert data_files(tmp_path) == before
+
+
 def test_a_disk_that_fills_during_a_session_stops_it_with_its_reason(
     small_disk,  # noqa: F811 - the fixture
     stimulus_sets,

@@ -427,6 +427,16 @@ def _check_resume(
             "a new session number"
         )
     if sidecar.get("status") == "completed":
+        recorded, held = sidecar.get("trials"), len(files.rows)
+        if isinstance(recorded, int) and not isinstance(recorded, bool) and held < recorded:
+            missing = f"{held + 1}" if held + 1 == recorded else f"{held + 1}-{recorded}"
+            raise SessionError(
+                f"{files.csv_path.name}: trial{'s' if held + 1 < recorded else ''} {missing} "
+                f"of the {recorded} the completed session recorded missing (rows deleted, or "
+                "the file cut short?); a completed session is not resumed: put its rows back "
+                "from a copy of the file, or keep it for the record and start a new session "
+                "number"
+            )
         raise SessionError(
             f"{files.csv_path.name} is a completed session: there is nothing to resume"
         )
