@@ -20,6 +20,7 @@ import pandas as pd
 import pytest
 
 from glarelab.analysis.dataset import DataError
+from glarelab.analysis.load import load_sessions
 from glarelab.analysis.psychopy_import import import_psychopy
 from glarelab.analysis.report import write_report
 from glarelab.protocols import columns, load_protocol
@@ -514,6 +515,13 @@ def test_a_file_and_its_resave_are_not_two_participants(simulated, tmp_path):
     import_psychopy(protocol, [source], tmp_path / "out")
     with pytest.raises(DataError, match=r"its trials are those of .*_yoshida2008_s1_.*\.csv"):
         import_psychopy(protocol, [copy], tmp_path / "out")  # in a later import too
+    # imported into a folder of its own, the analysis of both folders names the pair
+    (second,) = import_psychopy(protocol, [copy], tmp_path / "elsewhere")
+    first = next((tmp_path / "out").glob("*.csv"))
+    with pytest.raises(DataError) as refused:
+        load_sessions(protocol, [first, second.csv])
+    (problem,) = refused.value.problems
+    assert problem.startswith(f"{second.csv}: its trials are those of {first}, cell for cell")
 
 
 def test_the_end_of_block_rows_of_an_outer_loop_are_no_trials(simulated, tmp_path):

@@ -66,7 +66,9 @@ def test_a_pilot_is_left_out_listed_and_analysed_only_when_asked(yoshida, tmp_pa
         source,
         tmp_path,
         name=source.name.replace("sim01", "pil01").replace(".csv", "_pilot.csv"),
-        rows=lambda lines: renamed(lines, "sim01", "pil01"),
+        # another person's times: sim01's trials under another id are refused as one
+        # person's session counted twice
+        rows=lambda lines: _set_cell(renamed(lines, "sim01", "pil01"), 2, "time_s", "9.5"),
         # a pilot's sidecar says it at the top and in each run, as a --pilot run writes it
         sidecar={
             "pilot": True,
@@ -307,6 +309,55 @@ def test_two_sessions_of_one_participant_are_named(yoshida, tmp_path):
     with pytest.raises(DataError, match=r"participant sim01: 2 sessions in 2 files: .*\(session "
                        r"1\), .*_s2_.*\(session 2\); the analysis takes one session per"):  # fmt: skip
         load_sessions(protocol, [*files, second])
+
+
+def _as_resaved(lines, old, new, *, times=None):
+    """A session's lines as a spreadsheet re-saves them under participant ``new`` (15
+    significant digits: 1.0020008087158203 becomes 1.00200080871582); ``times`` puts that
+    text in every time column instead (an experiment that timed nothing)."""
+    header = lines[0].rstrip("\n").split(",")
+    timed = [i for i, n in enumerate(header) if n == "onset_s" or n.endswith("time_s")]
+    out = [lines[0]]
+    for line in renamed(lines[1:], old, new):
+        cells = line.rstrip("\n").split(",")
+        cells = [f"{float(c):.15g}" if re.fullmatch(r"-?\d+\.\d+", c) else c for c in cells]
+        for i in timed if times is not None else ():
+            cells[i] = times
+        out.append(",".join(cells) + "\n")
+    return out
+
+
+def test_one_persons_session_under_two_participant_ids_is_refused(yoshida, tmp_path):
+    """A participant's PsychoPy file and its spreadsheet re-save (participant P10), imported
+    in two runs into two folders, were analysed as two participants: N inflated, no word."""
+    protocol, files = yoshida
+    twin = copy_session(
+        files[1],
+        tmp_path,
+        name=files[1].name.replace("sim02", "P10"),
+        rows=lambda lines: _as_resaved(lines, "sim02", "P10"),
+        sidecar={"participant": "P10"},
+    )
+    with pytest.raises(DataError) as refused:
+        load_sessions(protocol, [*files, twin])
+    (problem,) = refused.value.problems
+    assert problem.startswith(f"{twin}: its trials are those of {files[1]}, cell for cell")
+    assert "participant P10's session 1 and participant sim02's session 1" in problem
+    assert problem.endswith("give one of the two files")
+    # answers alike, but no time that tells two people apart: two participants
+    (tmp_path / "timeless").mkdir()
+    timeless = [
+        copy_session(
+            files[1],
+            tmp_path / "timeless",
+            name=files[1].name.replace("sim02", who),
+            rows=lambda lines, who=who: _as_resaved(lines, "sim02", who, times="0.0"),
+            sidecar={"participant": who},
+        )
+        for who in ("P10", "P11")
+    ]
+    dataset = load_sessions(protocol, [files[0], *timeless])
+    assert set(dataset.trials["participant"]) == {"sim01", "P10", "P11"}
 
 
 # ------------------------------------------------------------------ the property test

@@ -24,7 +24,9 @@ A session is counted only if the analysis can vouch for it:
   flipped or a label swapped is named by file, line and trial;
 - it is not a pilot (sidecar ``pilot: true``): pilot sessions are left out and listed, or
   analysed and listed when the caller asks (``include_pilots``);
-- it is the only session of its participant among the files.
+- it is the only session of its participant among the files, and its trials are not another
+  participant's, cell for cell and times included (one person's session imported twice under
+  two ids, as a file and its spreadsheet re-save).
 
 A design with a missing cell is refused naming the participant and the cell, unless the caller
 asks to exclude incomplete participants, in which case they are excluded and listed (the report
@@ -1128,7 +1130,8 @@ def load_sessions(
         a row cut short; a sidecar whose status, trial count, refresh rate or counterbalance
         contradicts its runs, its protocol or its CSV's block order; sessions that ran on
         different stimulus sets; a CSV of another study; a CSV without its sidecar (unless
-        ``include_no_sidecar``); a file given twice; two sessions of one participant; sessions
+        ``include_no_sidecar``); a file given twice; two sessions of one participant; two
+        participants whose trials are the same, cell for cell and times included; sessions
         that did not complete or hold no trials (unless ``include_aborted``); nothing left
         but pilots; and (unless ``exclude_incomplete``) every participant missing a design
         cell.
@@ -1141,6 +1144,7 @@ def load_sessions(
     files = []
     replayed: list[str] = []  # what the paradigm's replay of each session finds
     edited: list[str] = []  # rows that are not the ones their session wrote
+    keys: list[tuple[Path, str, int, tuple]] = []  # each file's trials (_trials_key)
     if not paths:
         raise DataError(["no CSV files given"])
     paradigm = paradigm_analysis(protocol)
@@ -1218,12 +1222,16 @@ def load_sessions(
         edited += _row_digests(path, sidecar, read)
         files.append(str(path))
         rows += read
+        text = path.read_text(encoding="utf-8-sig")  # the cells as written, for _trials_key
+        cells = csv.DictReader(io.StringIO(text, newline=""))
+        keys.append((path, read[0]["participant"], read[0]["session"], _trials_key(cells)))
         # named after the values no session can write (paradigm.check), which a replay of the
         # staircase would only echo as a step out of place
         replayed += _paradigm_session_checks(paradigm, path, read, sidecar, protocol)
         if sidecar is not None:
             sidecars[str(path)] = sidecar
     problems += _one_stimulus_set(sidecars)
+    problems += _same_trials_twice(keys)
     if problems:
         raise DataError(problems + edited)
     if not rows and pilots and not include_pilots:
@@ -1296,6 +1304,56 @@ def load_sessions(
         pilots_included=include_pilots,
         flags=paradigm.flags(kept, protocol),
     )
+
+
+_WHO = ("study", "participant", "session")  # not what a participant did
+
+
+def _number(text: str) -> str:
+    """A cell as a number to 12 significant digits where it is one (a spreadsheet keeps 15:
+    1.0020008087158203 is saved as 1.00200080871582, 7000.0 as 7000), else as written."""
+    try:
+        value = float(text)
+    except ValueError:
+        return text
+    return f"{value:.12g}" if math.isfinite(value) else text
+
+
+def _trials_key(rows) -> tuple:
+    """What a session's participant did, to know it again under another participant id or
+    session: its rows (mappings of column to cell text, in any order) without who and which
+    session, each cell as :func:`_number` reads it; empty where the times do not tell two
+    people apart: no time recorded, or every time the same (``--set time_s=0``), as answers
+    alone, which two people may well give alike. Times (``onset_s``, ``time_s``, a question's
+    ``…_time_s``) recorded to the millisecond are no two people's alike."""
+    cells = [
+        tuple(sorted((k, _number(v)) for k, v in row.items() if k not in _WHO))
+        for row in rows
+        if any(row.values())  # a row of empty cells a spreadsheet left
+    ]
+    times = {v for row in cells for k, v in row if v and (k == "onset_s" or k.endswith("time_s"))}
+    return tuple(sorted(cells)) if len(times) > 1 else ()
+
+
+def _same_trials_twice(keys: list[tuple[Path, str, int, tuple]]) -> list[str]:
+    """Sessions of two participants whose trials are the same, cell for cell and times
+    included (:func:`_trials_key`): one person's session imported or copied twice under two
+    ids (a file and its spreadsheet re-save) would count as two people. (Two files of one
+    participant are named by :func:`_several_sessions`, whatever their trials.)"""
+    problems, first = [], {}
+    for path, participant, session, key in keys:
+        if not key:
+            continue
+        twin = first.setdefault(key, (path, participant, session))
+        if twin[1] != participant:
+            problems.append(
+                f"{path}: its trials are those of {twin[0]}, cell for cell (times included), "
+                f"as participant {participant}'s session {session} and participant {twin[1]}'s "
+                f"session {twin[2]}: one person's session imported or copied twice under two "
+                "ids (a file and its spreadsheet re-save?); no two people answer to the "
+                "millisecond alike: give one of the two files"
+            )
+    return problems
 
 
 def _several_sessions(trials: pd.DataFrame) -> list[str]:

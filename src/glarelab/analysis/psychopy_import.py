@@ -51,7 +51,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 
 from glarelab.analysis.dataset import DataError
-from glarelab.analysis.load import _other_delimiter, _parse
+from glarelab.analysis.load import _other_delimiter, _parse, _trials_key
 from glarelab.files.atomic import write_text
 from glarelab.files.inputs import input_file
 from glarelab.protocols import columns
@@ -596,26 +596,10 @@ def import_psychopy(
     return [p[0] for p in planned]
 
 
-_WHO = ("study", "participant", "session")  # not what a participant did
-
-
-def _trials_key(text: str) -> tuple:
-    """What a session file's participant did: its rows without who and which session; empty
-    where no row holds a time (answers alone, which two people may well give alike)."""
-    rows = list(csv.DictReader(io.StringIO(text, newline="")))
-    if not any(row.get("time_s") or row.get("onset_s") for row in rows):
-        return ()
-    return tuple(tuple(_number(v) for k, v in row.items() if k not in _WHO) for row in rows)
-
-
-def _number(text: str) -> str:
-    """A cell as a number to 12 significant digits where it is one (a spreadsheet keeps 15:
-    1.0020008087158203 is saved as 1.00200080871582, 7000.0 as 7000), else as written."""
-    try:
-        value = float(text)
-    except ValueError:
-        return text
-    return f"{value:.12g}" if math.isfinite(value) else text
+def _trials_of(text: str) -> tuple:
+    """:func:`glarelab.analysis.load._trials_key` of a session file's text: the analysis's
+    rule, so that what the import refuses and what the analysis refuses are one."""
+    return _trials_key(csv.DictReader(io.StringIO(text, newline="")))
 
 
 def _same_trials(planned: list, out: Path) -> list[str]:
@@ -627,11 +611,11 @@ def _same_trials(planned: list, out: Path) -> list[str]:
     earlier = []
     for path in sorted(out.glob("*.csv")) if out.is_dir() else []:
         try:
-            earlier.append((path, _trials_key(path.read_text(encoding="utf-8"))))
+            earlier.append((path, _trials_of(path.read_text(encoding="utf-8"))))
         except (OSError, ValueError):
             continue
     for imported, text, _ in planned:
-        key = _trials_key(text)
+        key = _trials_of(text)
         twin = seen.get(key) or next((p for p, k in earlier if k == key), None)
         if twin is not None and key:
             problems.append(
