@@ -474,6 +474,50 @@ def test_an_instructions_row_with_a_trial_value_is_named_not_imported_as_a_trial
     assert not (tmp_path / "out").exists()
 
 
+def test_an_instructions_row_without_the_experiment_info_names_its_trial_value(
+    simulated, tmp_path
+):
+    """An instructions row without participant or session, but with the mapped response time,
+    was refused as 'line 2: no session', not saying what made it a trial row."""
+    pytest.importorskip("psychopy.data")
+    protocol = load_protocol("yoshida2008")
+    own = sorted(simulated.glob("*_yoshida2008_s1_*.csv"))[0]
+    source = write_psychopy(own, protocol, tmp_path, rt_name="key_resp.rt")
+    rows = list(csv.reader(source.open(encoding="utf-8")))
+    header = rows[0]
+    rows[1][header.index("key_resp.rt")] = "1.5"
+    rows[1][header.index("session")] = ""
+    with source.open("w", encoding="utf-8", newline="") as handle:
+        csv.writer(handle).writerows(rows)
+    mapping = {"key_resp.rt": "time_s"}
+    with pytest.raises(DataError) as refused:
+        import_psychopy(protocol, [source], tmp_path / "out", mapping=mapping)
+    assert refused.value.problems == [
+        f"{source}, line 2: no session, which every trial records, but key_resp.rt='1.5' "
+        "makes it a trial row: a row outside the trial loop (instructions) with a value in a "
+        "trial column? Leave that row's trial columns empty, or remove it"
+    ]
+    for row in rows[1:]:  # the experiment's info dialog left empty: said once, not per row
+        row[header.index("session")] = ""
+    with source.open("w", encoding="utf-8", newline="") as handle:
+        csv.writer(handle).writerows(rows)
+    with pytest.raises(DataError) as refused:
+        import_psychopy(protocol, [source], tmp_path / "out", mapping=mapping)
+    assert refused.value.problems == [
+        f"{source}: no session on any trial row (column 'session' empty: the experiment's "
+        "info dialog left empty?); write the session into the column"
+    ]
+    # a session the experiment did not record is given with --set
+    rows[1][header.index("key_resp.rt")] = ""
+    at = header.index("session")
+    with source.open("w", encoding="utf-8", newline="") as handle:
+        csv.writer(handle).writerows([row[:at] + row[at + 1 :] for row in rows])
+    (imported,) = import_psychopy(
+        protocol, [source], tmp_path / "out", mapping=mapping, values={"session": "2"}
+    )
+    assert imported.session == 2 and imported.trials == len(rows) - 2
+
+
 def test_a_session_glarelab_ran_is_refused_not_imported_as_psychopys(simulated, tmp_path):
     """A pilot, simulated or aborted session of glarelab's own, given to import-psychopy, was
     written as pilot false, simulated false, completed: the analysis then counted it."""

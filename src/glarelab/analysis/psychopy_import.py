@@ -28,7 +28,7 @@ trial. The mapping is explicit and its result is said, never silent:
   (the experiment's clock at each entry, which Builder's routines record) where every trial row
   has one, so a file sorted in a spreadsheet is put back, else in file order (said);
 - a trial row without a value that every trial records (a row outside the loop with a value
-  in a mapped column) is refused, naming its line;
+  in a mapped column) is refused, naming its line and the value;
   optional columns not recorded are empty; a required column not recorded is refused, unless
   ``values`` gives it one value for every trial (recorded in the sidecar).
 
@@ -460,10 +460,32 @@ def import_psychopy(
             for _, cells in records
             if len(cells) == len(header)
         ]
+        for name in ("participant", "session"):  # not recorded: --set gives it (or nothing)
+            for _, record in rows if name not in taken else ():
+                record[name] = values.get(name, "")
+        never = [
+            n for n in ("participant", "session") if rows and all(r[n] == "" for _, r in rows)
+        ]
+        for name in never:  # the experiment info's field left empty: no row's own problem
+            problems.append(
+                f"{source}: no {name} on any trial row (column {header[renamed.index(name)]!r} "
+                f"empty: the experiment's info dialog left empty?); write the {name} into the "
+                "column"
+            )
         for line, record in rows:
-            for name in ("participant", "session"):
-                if record.get(name, "") == "":
-                    problems.append(f"{source}, line {line}: no {name}")
+            unnamed = [n for n in ("participant", "session") if record[n] == "" and n not in never]
+            if unnamed:  # a row outside the trial loop with a value in a trial column?
+                given = ", ".join(
+                    f"{header[renamed.index(n)]}={record[n]!r}"
+                    for n in data_columns
+                    if record[n] != ""
+                )
+                problems.append(
+                    f"{source}, line {line}: no {' and no '.join(unnamed)}, which every trial "
+                    f"records, but {given} makes it a trial row: a row outside the trial loop "
+                    "(instructions) with a value in a trial column? Leave that row's trial "
+                    "columns empty, or remove it"
+                )
             participant = record.get("participant", "")
             if participant and not TOKEN.match(participant):
                 problems.append(
