@@ -344,6 +344,22 @@ def test_an_import_into_a_stimulus_set_is_refused(tmp_path):
     assert done.returncode == 2 and "inside the stimulus set" in done.stderr, done.stderr
 
 
+def test_an_out_that_is_a_file_is_refused_as_no_folder(tmp_path):
+    """``--out`` given a session file was refused with the system's bare 'File exists'."""
+    protocol = load_protocol("yoshida2008")
+    source = tmp_path / "run.csv"  # a PsychoPy file without trial rows
+    source.write_text(",".join(c.name for c in columns(protocol)) + ",thisRow.t,notes,\n")
+    taken = tmp_path / "a_file.csv"
+    taken.write_text("kept\n")
+    with pytest.raises(ValueError) as refused:
+        import_psychopy(protocol, [source], taken)
+    assert str(refused.value) == (
+        f"--out {taken} is a file; the imported session files go into a folder (give a "
+        "folder's path, new or existing)"
+    )
+    assert taken.read_text() == "kept\n"
+
+
 def test_a_file_saved_with_semicolons_is_named_as_such(tmp_path):
     """A spreadsheet in a German locale saved the run with ';': 'no column key_resp.rt'."""
     protocol = load_protocol("yoshida2008")

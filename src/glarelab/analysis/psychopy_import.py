@@ -321,6 +321,8 @@ def import_psychopy(
         stays the one the experiment recorded), two columns mapped to one, a participant id
         that cannot name a file, a session file that exists already, a last column with no
         name that holds data.
+    ValueError
+        If ``out`` is a file, not a folder (nothing is read or written).
 
     Examples
     --------
@@ -332,6 +334,11 @@ def import_psychopy(
     >>> import_psychopy(load_protocol("yoshida2008"), [folder / "run.csv"], folder / "out")
     []
     """
+    if Path(out).exists() and not Path(out).is_dir():
+        raise ValueError(
+            f"--out {out} is a file; the imported session files go into a folder (give a "
+            "folder's path, new or existing)"
+        )
     mapping = dict(mapping or {})
     values = dict(values or {})
     schema = columns(protocol)
