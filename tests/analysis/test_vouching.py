@@ -360,6 +360,32 @@ def test_one_persons_session_under_two_participant_ids_is_refused(yoshida, tmp_p
     assert set(dataset.trials["participant"]) == {"sim01", "P10", "P11"}
 
 
+def test_a_design_cell_given_twice_is_named_with_plain_values(yoshida, tmp_path):
+    """A participant's two trials at one cell were named "at ('vos', np.int64(4))"."""
+    protocol, files = yoshida
+
+    def one_cell_twice(lines):
+        header = lines[0].rstrip("\n").split(",")
+        rows = [line.rstrip("\n").split(",") for line in lines]
+        main = [r for r in rows[1:] if r[header.index("block")] == "main"]
+        for name in ("method", "level", "level_index", "l_disk_cd_m2"):
+            main[1][header.index(name)] = main[0][header.index(name)]
+        return [",".join(r) + "\n" for r in rows]
+
+    # as imported from PsychoPy: no trial_order recorded to name the row by
+    twice = copy_session(files[0], tmp_path, rows=one_cell_twice, sidecar={"trial_order": None})
+    text = twice.read_text().splitlines()
+    header = text[0].split(",")
+    first = next(line.split(",") for line in text[1:] if ",main," in line)
+    cell = {"method": first[header.index("method")],
+            "level_index": int(first[header.index("level_index")])}  # fmt: skip
+    with pytest.raises(DataError) as refused:
+        load_sessions(protocol, [twice, *files[1:]])
+    assert f"participant sim01 has 2 trials at {cell}: unbalanced design" in (
+        refused.value.problems
+    )
+
+
 # ------------------------------------------------------------------ the property test
 STUDIES = ("yoshida2008", "spencer1995", "luidolt2020")
 NAMED = re.compile(r"line \d+|trials? \d+")

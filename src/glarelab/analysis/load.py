@@ -1278,9 +1278,12 @@ def load_sessions(
                     )
                     break
         if design.one_trial_per_cell and (counts > 1).any():
-            cell = counts[counts > 1].index[0]
+            twice = counts[counts > 1]
+            cell = twice.index.tolist()[0]  # plain values (not numpy's np.int64(4))
+            at = dict(zip(factors, cell if isinstance(cell, tuple) else (cell,), strict=True))
             problems.append(
-                f"participant {participant} has {counts.max()} trials at {cell}: unbalanced design"
+                f"participant {participant} has {int(twice.iloc[0])} trials at {at}: "
+                "unbalanced design"
             )
     if problems:
         raise DataError(problems)
