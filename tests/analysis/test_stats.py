@@ -567,6 +567,50 @@ def test_an_effect_without_error_variance_is_refused():
         assert np.isfinite(rm_anova(noisy, "v", names, "s")["F"]).all()
 
 
+def test_an_effect_without_error_variance_is_reported_without_dividing_by_it():
+    """Participants with identical data printed a bare 'RuntimeWarning: divide by zero' of
+    statsmodels' F = MS_effect / MS_error, where the report already says 'no error variance'."""
+    import warnings
+
+    from statsmodels.stats.anova import AnovaRM
+
+    df, names = random_design((3, 2), n=5, seed=3)
+    rng = np.random.default_rng(1)
+    # whole halves: the sums are exact, so the error of f1 is 0, not rounding
+    noise = {(s, a): rng.integers(-8, 8) / 2 for s in df["s"].unique() for a in df["f0"].unique()}
+    # f1 moves every subject by 2.5 alike: f1 and f0 × f1 have no error variance, f0 has
+    data = df.assign(
+        v=1e3
+        + df["f1"].map({"L0": 0.0, "L1": 2.5})
+        + df["f0"].map({"L0": 0.0, "L1": 1.0, "L2": 3.0})
+        + [noise[key] for key in zip(df["s"], df["f0"], strict=True)]
+    )
+    # three participants' identical matches (one session imported three times)
+    matches = [283.5, 262.5, 271.5, 250.0, 316.5, 279.5]
+    identical = pd.DataFrame(
+        {
+            "s": np.repeat(["P07", "P08", "P10"], 6),
+            "L_disk": [4, 4, 6, 5, 5, 6] * 3,
+            "method": ["vos", "gaussian", "gaussian", "vos", "gaussian", "vos"] * 3,
+            "v": matches * 3,
+        }
+    )
+    with warnings.catch_warnings(record=True) as caught:  # restored on leaving
+        warnings.simplefilter("always")
+        table = rm_anova(data, "v", names, "s", untestable="report").set_index("source")
+        alike = rm_anova(identical, "v", ["L_disk", "method"], "s", untestable="report")
+    assert [str(w.message) for w in caught] == []
+    assert (alike["sphericity"] == "not testable").all() and alike["F"].isna().all()
+    assert table.loc["f1", "note"].startswith("not testable: 'v' has no error variance for f1")
+    assert table.loc["f0 × f1", "sphericity"] == "not testable"
+    assert (table.loc["f1", "df1"], table.loc["f1", "df2"]) == (1.0, 4.0)
+    with np.errstate(divide="ignore", invalid="ignore"):  # statsmodels' own F of f0
+        fitted = AnovaRM(data, "v", "s", within=names).fit().anova_table.loc["f0"]
+    assert (table.loc["f0", "df1"], table.loc["f0", "df2"]) == (2.0, 8.0)
+    assert table.loc["f0", "F"] == pytest.approx(fitted["F Value"], rel=1e-9)
+    assert table.loc["f0", "p"] == pytest.approx(fitted["Pr > F"], rel=1e-9)
+
+
 def test_t_tests_refuse_nan_instead_of_returning_it():
     with pytest.raises(
         ValueError,

@@ -347,12 +347,27 @@ def rm_anova(
         {"subject": df[subject].to_numpy(), "dv": df[dv].to_numpy(float)}
         | {name: df[f].to_numpy() for name, f in zip(safe, factors, strict=True)}
     )
-    fit = AnovaRM(renamed, "dv", "subject", within=safe).fit().anova_table
     effects = [
         effect
         for order in range(1, len(factors) + 1)
         for effect in itertools.combinations(range(len(factors)), order)
     ]
+    # no error variance beyond rounding: F is 0/0 or effect/rounding (statsmodels gave
+    # F = -2.8 for constant data, R's car NaN, and divides by the zero error)
+    untestable_effects = {
+        effect
+        for effect in effects
+        if _no_variance(
+            np.var(_effect_scores(values, levels, effect), axis=0, ddof=1).mean(), scale
+        )
+    }
+    # statsmodels divides every effect by its error: not fitted where one has none, whose
+    # others' F and p follow from the contrast scores' sums of squares below
+    fit = (
+        None
+        if untestable_effects
+        else AnovaRM(renamed, "dv", "subject", within=safe).fit().anova_table
+    )
     # sums of squares of the effects and their error terms from the orthonormal contrast
     # scores; the subjects' own (the scores on the grand mean) is the error of the intercept
     sums = {}
@@ -367,19 +382,12 @@ def rm_anova(
     rows = []
     for order in range(1, len(factors) + 1):
         for effect in itertools.combinations(range(len(factors)), order):
-            table_row = fit.loc[":".join(safe[i] for i in effect)]
-            df1, df2 = float(table_row["Num DF"]), float(table_row["Den DF"])
-            f_value = float(table_row["F Value"])
-            p_value = float(table_row["Pr > F"])
-            if f_value < 0:
-                # an effect's sum of squares is never negative: a negative F is the rounding of
-                # an effect that is exactly 0 (equal means, as settings on a coarse grid give)
-                f_value, p_value = 0.0, 1.0
             scores = _effect_scores(values, levels, effect)
             source = " × ".join(str(factors[i]) for i in effect)
-            # no error variance beyond rounding: F is 0/0 or effect/rounding (statsmodels gave
-            # F = -2.8 for constant data, R's car NaN)
-            if _no_variance(np.var(scores, axis=0, ddof=1).mean(), scale):
+            # as AnovaRM's: the effect's contrasts, and as many per subject but one
+            df1 = float(scores.shape[1])
+            df2 = df1 * (len(scores) - 1)
+            if effect in untestable_effects:
                 why = (
                     f"{dv!r} has no error variance for {source}: every subject's scores on "
                     "its contrasts are equal (to rounding), so F is undefined"
@@ -388,6 +396,18 @@ def rm_anova(
                     raise ValueError(f"rm_anova: {why}")
                 rows.append(_untestable_row(source, df1, df2, f"not testable: {why}"))
                 continue
+            if fit is not None:
+                table_row = fit.loc[":".join(safe[i] for i in effect)]
+                df1, df2 = float(table_row["Num DF"]), float(table_row["Den DF"])
+                f_value = float(table_row["F Value"])
+                p_value = float(table_row["Pr > F"])
+            else:  # as AnovaRM computes it: (SS_effect / df1) / (SS_error / df2)
+                f_value = (sums[effect][0] / df1) / (sums[effect][1] / df2)
+                p_value = float(sps.f.sf(f_value, df1, df2))
+            if f_value < 0:
+                # an effect's sum of squares is never negative: a negative F is the rounding of
+                # an effect that is exactly 0 (equal means, as settings on a coarse grid give)
+                f_value, p_value = 0.0, 1.0
             sphericity = _sphericity(scores, values.shape[1])
             eps_gg, eps_hf = sphericity["eps_gg"], sphericity["eps_hf"]
             rows.append(
