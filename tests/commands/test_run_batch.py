@@ -3,6 +3,7 @@ sessions that completed are kept as they are, the others resumed or run, and the
 an uninterrupted one would."""
 
 import csv
+import json
 
 from glarelab.cli import main
 
@@ -48,3 +49,27 @@ def test_a_batch_resumed_with_another_seed_is_refused(tmp_path, capsys):
     assert "--seed 9: sim01, sim02 of this batch" in err and "give --seed 4" in err
     assert sorted(p.name for p in out.iterdir()) == before
     assert main([*run, "--seed", "4", "--participants", "3", "--resume"]) == 0
+
+
+def test_a_batch_resumed_on_a_stimulus_set_rebuilt_since_is_refused(tmp_path, capsys):
+    """Resumed on a set rebuilt since (another manifest), a batch added a participant of the
+    new set without a word, although a seed change is refused; the analysis then refused the
+    mix."""
+    out = tmp_path / "batch"
+    run = ["run", "yoshida2008", "--simulate", "--seed", "4", "--out", str(out)]
+    assert main([*run, "--participants", "1"]) == 0
+    (sidecar,) = out.glob("sim01_*.json")
+    data = json.loads(sidecar.read_text())
+    now = data["stimulus_set_manifest_sha256"]
+    data["stimulus_set_manifest_sha256"] = "c" * 64  # as the set was when sim01 ran
+    sidecar.write_text(json.dumps(data))
+    before = sorted(p.name for p in out.iterdir())
+    capsys.readouterr()
+    assert main([*run, "--participants", "2", "--resume"]) == 2
+    err = capsys.readouterr().err
+    assert (
+        f"(manifest sha256 {now[:12]}…): sim01 of this batch in {out} ran on the set with "
+        "manifest sha256 cccccccccccc… (rebuilt since?); a batch goes on with the set it began "
+        "with: give that set (--stimuli), or another --out for a batch on this one"
+    ) in err
+    assert sorted(p.name for p in out.iterdir()) == before

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import hashlib
 import json
 import sys
 from pathlib import Path
@@ -129,26 +130,49 @@ def _batch_resume(out: Path, participant: str, study: str, session: int) -> bool
     return True  # resumed, or refused by the session's own checks, naming why
 
 
-def _check_batch_seed(out: Path, ids: list[str], study: str, session: int, seed: int) -> None:
+def _check_batch_seed(
+    out: Path, ids: list[str], study: str, session: int, seed: int, stimuli
+) -> None:
     """Refuse a batch resumed with another seed than its sessions were simulated with (their
-    sidecars' ``simulated_observer_seed``): the batch would mix observers of two seeds."""
+    sidecars' ``simulated_observer_seed``), or on another stimulus set than they ran on (their
+    ``stimulus_set_manifest_sha256``, a set rebuilt since): the batch would mix observers of
+    two seeds, or sessions of two sets, which the analysis refuses."""
     from glarelab.experiments.data import session_files
 
+    manifest = None
+    if stimuli is not None:  # a folder that is no set is named by the session's own checks
+        with contextlib.suppress(OSError):
+            data = (Path(stimuli) / "manifest.json").read_bytes()
+            manifest = hashlib.sha256(data).hexdigest()
     others: dict[int, list[str]] = {}
+    sets: dict[str, list[str]] = {}
     for participant in ids:
         for sidecar in (p for p in session_files(out, participant, study, session)
                         if p.suffix == ".json"):  # fmt: skip
             with contextlib.suppress(OSError, ValueError, AttributeError):
-                info = json.loads(sidecar.read_text(encoding="utf-8")).get("participant_info")
+                recorded = json.loads(sidecar.read_text(encoding="utf-8"))
+                info = recorded.get("participant_info")
                 used = (info or {}).get("simulated_observer_seed")
                 if isinstance(used, int) and used != seed:
                     others.setdefault(used, []).append(participant)
+                ran_on = recorded.get("stimulus_set_manifest_sha256")
+                if manifest is not None and isinstance(ran_on, str) and ran_on != manifest:
+                    sets.setdefault(ran_on, []).append(participant)
     if others:
         used, who = next(iter(others.items()))
         raise ValueError(
             f"--seed {seed}: {', '.join(who[:4])}{' …' if len(who) > 4 else ''} of this batch "
             f"in {out} were simulated with seed {used}; a batch goes on with the seed it began "
             f"with: give --seed {used}, or another --out for a batch of seed {seed}"
+        )
+    if sets:
+        ran_on, who = next(iter(sets.items()))
+        raise ValueError(
+            f"the stimulus set {stimuli} (manifest sha256 {manifest[:12]}…): "
+            f"{', '.join(who[:4])}{' …' if len(who) > 4 else ''} of this batch in {out} ran on "
+            f"the set with manifest sha256 {ran_on[:12]}… (rebuilt since?); a batch goes on "
+            "with the set it began with: give that set (--stimuli), or another --out for a "
+            "batch on this one"
         )
 
 
@@ -254,8 +278,8 @@ def _run_session(args: argparse.Namespace) -> int:
             stimuli = cached_stimulus_set(protocol)
             _log(f"stimulus set: {stimuli}")
         batch = args.participant is None
-        if args.resume and batch:  # a batch goes on with the seed it began with
-            _check_batch_seed(out, ids, protocol.study, args.session, args.seed)
+        if args.resume and batch:  # a batch goes on with the seed and set it began with
+            _check_batch_seed(out, ids, protocol.study, args.session, args.seed, stimuli)
         for number, participant in enumerate(ids, start=1):
             resume = args.resume
             if resume and batch:  # a batch goes on where it stopped
