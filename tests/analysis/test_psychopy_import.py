@@ -534,6 +534,29 @@ def test_an_instructions_row_without_the_experiment_info_names_its_trial_value(
     assert imported.session == 2 and imported.trials == len(rows) - 2
 
 
+def test_trials_recorded_as_another_study_are_refused_at_import(simulated, tmp_path):
+    """A file whose study cells say spencer1995 imported as a yoshida2008 session without a
+    word (sidecar yoshida2008, rows spencer1995); only the analysis refused it, every row."""
+    pytest.importorskip("psychopy.data")
+    protocol = load_protocol("yoshida2008")
+    own = sorted(simulated.glob("*_yoshida2008_s1_*.csv"))[0]
+    source = write_psychopy(own, protocol, tmp_path, rt_name="time_s")
+    rows = list(csv.reader(source.open(encoding="utf-8")))
+    at = rows[0].index("study")
+    for row in rows[2:]:  # the trial rows (the instructions' row records no study)
+        row[at] = "spencer1995"
+    with source.open("w", encoding="utf-8", newline="") as handle:
+        csv.writer(handle).writerows(rows)
+    with pytest.raises(DataError) as refused:
+        import_psychopy(protocol, [source], tmp_path / "out")
+    assert refused.value.problems == [
+        f"{source}, lines 3, 4, 5, 6, 7, 8, 9, 10 …, column 'study': 'spencer1995', not "
+        "'yoshida2008': trials of another study? Import a file with the protocol of the study "
+        "it records"
+    ]
+    assert not (tmp_path / "out").exists()
+
+
 def test_a_session_glarelab_ran_is_refused_not_imported_as_psychopys(simulated, tmp_path):
     """A pilot, simulated or aborted session of glarelab's own, given to import-psychopy, was
     written as pilot false, simulated false, completed: the analysis then counted it."""

@@ -23,7 +23,8 @@ trial. The mapping is explicit and its result is said, never silent:
   alone) are dropped and counted;
 - ``True``/``False`` become ``true``/``false``; an integer column written as ``35.0`` (a float
   PsychoPy was given) becomes ``35``; PsychoPy's zero-padded session (``001``) becomes ``1``;
-- the ``study`` column, if the experiment did not record it, is the protocol's; ``trial``, if
+- the ``study`` column, if the experiment did not record it, is the protocol's (a recorded
+  study other than the protocol's is refused, naming its lines); ``trial``, if
   not recorded, numbers the trial rows in the order ``nextEntry`` wrote them: by ``thisRow.t``
   (the experiment's clock at each entry, which Builder's routines record) where every trial row
   has one, so a file sorted in a spreadsheet is put back, else in file order (said);
@@ -320,7 +321,8 @@ def import_psychopy(
         recorded nor given, a value given for a column the file records (the participant
         stays the one the experiment recorded), two columns mapped to one, a participant id
         that cannot name a file, a session file that exists already, a last column with no
-        name that holds data.
+        name that holds data, a study recorded on a trial row that is not the protocol's,
+        trials equal to another session's of the import or of ``out`` (times included).
     ValueError
         If ``out`` is a file, not a folder (nothing is read or written).
 
@@ -470,6 +472,19 @@ def import_psychopy(
         for name in ("participant", "session"):  # not recorded: --set gives it (or nothing)
             for _, record in rows if name not in taken else ():
                 record[name] = values.get(name, "")
+        if "study" in taken:  # the analysis refuses every row of another study: said now
+            others: dict[str, list[int]] = {}
+            for line, record in rows:
+                if record["study"] != protocol.study:
+                    others.setdefault(record["study"], []).append(line)
+            for value, lines in others.items():
+                shown = ", ".join(map(str, lines[:8])) + (" …" if len(lines) > 8 else "")
+                problems.append(
+                    f"{source}, line{'s' if len(lines) > 1 else ''} {shown}, column "
+                    f"{header[renamed.index('study')]!r}: {value!r}, not {protocol.study!r}: "
+                    "trials of another study? Import a file with the protocol of the study "
+                    "it records"
+                )
         never = [
             n for n in ("participant", "session") if rows and all(r[n] == "" for _, r in rows)
         ]
