@@ -360,6 +360,18 @@ def test_an_out_that_is_a_file_is_refused_as_no_folder(tmp_path):
     assert taken.read_text() == "kept\n"
 
 
+def test_a_ragged_csv_of_its_own_in_out_is_no_bug(tmp_path):
+    """A CSV of the lab's own in ``--out`` with rows longer or shorter than its header stopped
+    the import with a TypeError where it compares the trials of the sessions there."""
+    protocol = load_protocol("yoshida2008")
+    source = tmp_path / "run.csv"  # a PsychoPy file without trial rows
+    source.write_text(",".join(c.name for c in columns(protocol)) + ",thisRow.t,notes,\n")
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "notes.csv").write_text("a,time_s\n1,2,3\n4\n")
+    assert import_psychopy(protocol, [source], out) == []
+
+
 def test_a_file_saved_with_semicolons_is_named_as_such(tmp_path):
     """A spreadsheet in a German locale saved the run with ';': 'no column key_resp.rt'."""
     protocol = load_protocol("yoshida2008")

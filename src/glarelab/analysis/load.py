@@ -1329,8 +1329,14 @@ def _trials_key(rows) -> tuple:
     people apart: no time recorded, or every time the same (``--set time_s=0``), as answers
     alone, which two people may well give alike. Times (``onset_s``, ``time_s``, a question's
     ``…_time_s``) recorded to the millisecond are no two people's alike."""
-    cells = [
-        tuple(sorted((k, _number(v)) for k, v in row.items() if k not in _WHO))
+    cells = [  # a ragged row of a file not a session's (csv.DictReader: None, lists) too
+        tuple(
+            sorted(
+                (str(k), _number(v) if isinstance(v, str) else repr(v))
+                for k, v in row.items()
+                if k not in _WHO
+            )
+        )
         for row in rows
         if any(row.values())  # a row of empty cells a spreadsheet left
     ]
