@@ -475,7 +475,7 @@ def import_psychopy(
         if "study" in taken:  # the analysis refuses every row of another study: said now
             others: dict[str, list[int]] = {}
             for line, record in rows:
-                if record["study"] != protocol.study:
+                if record["study"] not in ("", protocol.study):  # empty: named below
                     others.setdefault(record["study"], []).append(line)
             for value, lines in others.items():
                 shown = ", ".join(map(str, lines[:8])) + (" …" if len(lines) > 8 else "")
