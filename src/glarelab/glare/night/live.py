@@ -297,8 +297,9 @@ class LiveNight:
         model's wave pupil) to each pupil of the bank (a model without one has a bank of one
         entry), and the Vos ``regime`` to that of the frame's ``L_i`` (Spencer §3.1). A
         wave-optics kernel is not linear in the pupil: between two bank pupils it is
-        interpolated (measured up to 12 codes at 3.25 mm between 3 and 3.5 mm, 3 codes
-        between 3 and 3.25 mm); give the pupils the frames need, or a finer bank.
+        interpolated, tens of codes off on ordinary scenes (the wave model 47 codes at 3.25 mm
+        between 3 and 3.5 mm, docs/night-vision.md); give the bank the pupils the frames
+        need.
     pupils_mm
         The bank's pupils, mm (see :func:`pupil_bank_mm`); default 2-8 mm in steps of 0.5
         (Luidolt's range, §5.2.1 ii). A frame's pupil must lie within them, and they within
