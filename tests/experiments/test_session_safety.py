@@ -580,3 +580,36 @@ def test_a_ctrl_c_on_the_end_screen_ends_the_command_with_the_session_complete(t
         )
     (sidecar,) = tmp_path.glob("P01_*.json")
     assert json.loads(sidecar.read_text())["status"] == "completed"
+
+
+@pytest.mark.parametrize(
+    ("collecting", "error", "ended_by"),
+    [
+        (False, ValueError("ioHub started without the eye tracker 'eyelink'"), None),
+        (True, ValueError("black_raw must exceed white_raw"), "error: ValueError: black_raw"),
+        (True, OSError(28, "No space left on device", "x.log"), "could not write x.log: No sp"),
+    ],
+)
+def test_a_run_that_fails_as_it_starts_is_not_left_running(tmp_path, collecting, error, ended_by):
+    """A failure while the front-end started (a tracker that would not start, a pupil
+    calibration refused, a full disk) left the sidecar saying 'running', which blocked the
+    participant's session: nothing collected leaves no file, as any refusal before the start;
+    what the tracker recorded is kept with its end."""
+    protocol = load_protocol("luidolt2020")
+
+    class Failing(SimulatedFrontend):
+        def start(self, **settings):
+            super().start(**settings)
+            self.collecting = collecting
+            raise error
+
+    frontend = Failing(make_observer(protocol, "P01", seed=0, stimuli=None))
+    with pytest.raises(type(error)):
+        run_session(protocol, "P01", out=tmp_path, frontend=frontend, simulated=True)
+    if not collecting:
+        assert data_files(tmp_path) == {}
+        return
+    (sidecar,) = tmp_path.glob("*.json")
+    recorded = json.loads(sidecar.read_text())
+    assert recorded["status"] == "aborted" and recorded["runs"][-1]["status"] == "aborted"
+    assert recorded["runs"][-1]["ended_by"].startswith(ended_by)

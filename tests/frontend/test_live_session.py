@@ -258,3 +258,28 @@ def test_a_killed_live_session_leaves_no_iohub_server_holding_its_output(screen,
     assert done.returncode == 128 + signal.SIGKILL, done.stderr[-3000:]
     assert servers_file.read_text().split()  # killed with ioHub's server up
     assert next(data.glob("*_iohub.log")).is_file()  # where the server wrote
+
+
+def _during_the_pupil_calibration(screen, data):
+    """A live session started, now showing Luidolt's pupil calibration (ioHub recording)."""
+    screen.run(
+        "run", "luidolt2020-live", "--pilot", "--eyetracker", "mouse", "--participant", "P1",
+        "--out", data, "--pupil-calibration-s", "30",
+    )  # fmt: skip
+    screen.wait_for_log(data, r"pupil calibration: a white screen")
+    time.sleep(1.0)
+
+
+def test_a_signal_during_the_pupil_calibration_keeps_the_session_as_aborted(screen, tmp_path):
+    """SIGTERM while the pupil range was measured removed every file of the session, ioHub's
+    store of the samples recorded with them: they are kept, the sidecar says aborted."""
+    data = tmp_path / "data"
+    _during_the_pupil_calibration(screen, data)
+    screen.signal(signal.SIGTERM)
+    assert screen.wait(timeout=60) == 3, screen.stderr[-3000:]
+    names = {p.name.split("_pilot")[-1] for p in data.iterdir() if not p.name.startswith(".")}
+    assert {".csv", ".json", ".log", "_frames.tsv", "_iohub.log"} <= names, names
+    assert any(p.name.endswith(".hdf5") for p in data.iterdir())
+    sidecar = json.loads(next(data.glob("*.json")).read_text())
+    assert sidecar["status"] == "aborted" and sidecar["runs"][-1]["ended_by"] == "SIGTERM"
+

@@ -767,23 +767,30 @@ def _run_session_locked(
                         f"could not write {files.sidecar_path} ({error.strerror or error}); the "
                         "session did not start"
                     ) from None
-                frontend.start(
-                    run=len(sidecar["runs"]),
-                    started=_iso(started),
-                    refresh_hz=rate,
-                    pace=facts is not None and not _refresh_verified(checks),
-                    frames_path=files.frames_path if facts is not None else None,
-                    log_path=files.log_path if facts is not None else None,
-                )
-                pupil = getattr(frontend, "pupil_calibration", None)
-                if pupil is not None:  # Luidolt's pupil range, measured as the run started
-                    sidecar["runs"][-1]["pupil_calibration"] = pupil.as_dict()
-                    files.write_sidecar(sidecar)
+                try:
+                    frontend.start(
+                        run=len(sidecar["runs"]),
+                        started=_iso(started),
+                        refresh_hz=rate,
+                        pace=facts is not None and not _refresh_verified(checks),
+                        frames_path=files.frames_path if facts is not None else None,
+                        log_path=files.log_path if facts is not None else None,
+                    )
+                    pupil = getattr(frontend, "pupil_calibration", None)
+                    if pupil is not None:  # Luidolt's pupil range, measured as the run started
+                        sidecar["runs"][-1]["pupil_calibration"] = pupil.as_dict()
+                        files.write_sidecar(sidecar)
+                except BaseException as error:  # stopped or failed while starting
+                    if files.created and not getattr(frontend, "collecting", False):
+                        raise  # nothing collected: the new session's files are discarded
+                    started_run = True  # what the tracker recorded, or a resumed run, is kept
+                    _finish_run(sidecar, files, None, None, "aborted", _ended_by(error, files))
+                    raise
                 started_run = True  # from here the files are the run's record, kept
                 _run_trials(engine, frontend, files, sidecar, protocol, rate, resume, stop)
             finally:
                 frontend.close()
-        except SessionAborted:
+        except BaseException:
             if files.created and not files.rows and not started_run:  # stopped before its start
                 files.discard()
             raise
@@ -969,15 +976,28 @@ def _run_trials(engine, frontend, files, sidecar, protocol: Protocol, rate, resu
             raise SessionAborted(stop.reason)  # the command stops as Ctrl-C asks (exit 3)
 
 
+def _ended_by(error: BaseException, files: SessionFiles) -> str:
+    """Why a run ended before its first trial, as its sidecar says (the room set aside for
+    the sidecar's end is given back when the disk failed)."""
+    if isinstance(error, SessionAborted):
+        return error.args[0] if error.args else "escape"
+    if isinstance(error, OSError):
+        files.release_reserve()
+        where = f" {error.filename}" if error.filename else ""
+        return f"could not write{where}: {error.strerror or error}"
+    return f"error: {type(error).__name__}: {error}"
+
+
 def _finish_run(sidecar, files, engine, loop, status, reason) -> None:
-    """Write the run's end into the sidecar whole; a Ctrl-C meanwhile is delivered after it."""
+    """Write the run's end into the sidecar whole; a Ctrl-C meanwhile is delivered after it
+    (``loop`` None: the run ended before its first trial)."""
     with _signals_deferred():
         ended = _now()
         sidecar["runs"][-1] |= {
             "ended": _iso(ended),
             "status": status,
             "trials_after": len(files.rows),
-            "ignored_key_presses": loop.total_ignored,
+            "ignored_key_presses": 0 if loop is None else loop.total_ignored,
             "ended_by": reason,
         }
         sidecar |= {

@@ -157,6 +157,7 @@ class PsychoPyFrontend:
         self.facts: ScreenFacts | None = None
         self._screen: dict | None = None
         self._screenshot_taken = False
+        self.collecting = False  # the eye tracker has recorded: the session's files are kept
 
     def _set_calibration(self) -> Calibration | None:
         if self.stimuli is None:
@@ -289,6 +290,7 @@ class PsychoPyFrontend:
         if device != "mouse":  # the tracker's own calibration (MouseGaze needs none)
             self.tracker.device_handle.runSetupProcedure()
         self.tracker.start()
+        self.collecting = True
         self.log(
             f"eye tracker {device} recording"
             + (f"; ioHub's raw events kept in {store.name} (session run{run})" if store else "")
@@ -301,6 +303,7 @@ class PsychoPyFrontend:
             f"pupil calibration: a white screen, then a black one, {self.pupil_calibration_s:g} "
             "s each (Luidolt 2020 §5.2.1 ii)"
         )
+        self.records.flush()  # on disk before the screens: where a stop then came from
         calibration = calibrate_pupil(
             self.window, self.tracker, screen_s=self.pupil_calibration_s, simulate_cd_m2=simulate
         )
