@@ -283,3 +283,18 @@ def test_a_signal_during_the_pupil_calibration_keeps_the_session_as_aborted(scre
     sidecar = json.loads(next(data.glob("*.json")).read_text())
     assert sidecar["status"] == "aborted" and sidecar["runs"][-1]["ended_by"] == "SIGTERM"
 
+
+
+def test_escape_during_the_pupil_calibration_ends_the_session(screen, tmp_path):
+    """Escape while the pupil range was measured was lost: the calibration ran on and the
+    instructions waited; it ends the session as aborted, as on every screen."""
+    data = tmp_path / "data"
+    _during_the_pupil_calibration(screen, data)
+    screen.focus_window()
+    screen.key("Escape")
+    assert screen.wait(timeout=20) == 3, screen.stderr[-3000:]
+    sidecar = json.loads(next(data.glob("*.json")).read_text())
+    assert sidecar["status"] == "aborted"
+    assert sidecar["runs"][-1]["ended_by"] == "escape during the pupil calibration"
+    assert "pupil calibration aborted: escape at" in next(data.glob("*_pilot.log")).read_text()
+

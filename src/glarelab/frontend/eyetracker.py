@@ -32,6 +32,7 @@ import math
 import os
 import subprocess
 import sys
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -508,6 +509,7 @@ def calibrate_pupil(
     screen_s: float = CALIBRATION_SCREEN_S,
     unit: str = "mm",
     simulate_cd_m2: tuple[float, float] | None = None,
+    stop: Callable[[], None] | None = None,
 ) -> PupilCalibration:
     """Luidolt's pupil range calibration: a white screen, then a black one, ``screen_s`` each.
 
@@ -529,6 +531,9 @@ def calibrate_pupil(
         replaced by Moon & Spencer's pupil of the screen's luminance
         (:func:`glarelab.glare.models.eye.pupil_diameter_mm`), a simulated eye; default None:
         the tracker's pupil.
+    stop
+        Called after every flip: it ends the calibration by raising (a session's Escape);
+        default None.
 
     Returns
     -------
@@ -584,6 +589,8 @@ def calibrate_pupil(
             end = time.monotonic() + screen_s
             while time.monotonic() < end:
                 window.flip()
+                if stop is not None:
+                    stop()
                 pupil = source.sample()[2]
                 if simulated is not None and _finite(pupil) and pupil > 0:  # not a blink
                     pupil = float(pupil_diameter_mm(screens[name]))

@@ -304,9 +304,22 @@ class PsychoPyFrontend:
             "s each (Luidolt 2020 §5.2.1 ii)"
         )
         self.records.flush()  # on disk before the screens: where a stop then came from
+        def escape() -> None:  # Escape ends the session here too, as on every screen
+            if self.scripted is not None:  # a dry run's keys answer screens, one per read
+                return
+            presses = self.keys.read(text_entry=False)
+            pressed = next((t for name, t in presses if name == "escape"), None)
+            if pressed is not None:
+                from glarelab.experiments.loop import SessionAborted
+
+                self.log(f"pupil calibration aborted: escape at {pressed:.4f}")
+                self.records.flush()
+                raise SessionAborted("escape during the pupil calibration")
+
         calibration = calibrate_pupil(
-            self.window, self.tracker, screen_s=self.pupil_calibration_s, simulate_cd_m2=simulate
-        )
+            self.window, self.tracker, screen_s=self.pupil_calibration_s,
+            simulate_cd_m2=simulate, stop=escape,
+        )  # fmt: skip
         self.pupil_calibration = calibration
         record = calibration.as_dict()
         self.log(
