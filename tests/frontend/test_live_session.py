@@ -284,7 +284,6 @@ def test_a_signal_during_the_pupil_calibration_keeps_the_session_as_aborted(scre
     assert sidecar["status"] == "aborted" and sidecar["runs"][-1]["ended_by"] == "SIGTERM"
 
 
-
 def test_escape_during_the_pupil_calibration_ends_the_session(screen, tmp_path):
     """Escape while the pupil range was measured was lost: the calibration ran on and the
     instructions waited; it ends the session as aborted, as on every screen."""
@@ -298,3 +297,29 @@ def test_escape_during_the_pupil_calibration_ends_the_session(screen, tmp_path):
     assert sidecar["runs"][-1]["ended_by"] == "escape during the pupil calibration"
     assert "pupil calibration aborted: escape at" in next(data.glob("*_pilot.log")).read_text()
 
+
+def test_a_screenshot_of_a_live_session_is_its_scene(screen, tmp_path):
+    """--screenshot saved the first comment box of a live session, its scene black, not the
+    first trial's screen: it is the scene's first frame, saved while the scene is viewed."""
+    from PIL import Image
+
+    data, shot = tmp_path / "data", tmp_path / "shot.png"
+    screen.run(
+        "run", "luidolt2020-live", "--pilot", "--eyetracker", "mouse", "--participant", "P1",
+        "--out", data, "--pupil-calibration-s", "0.3", "--screenshot", shot,
+    )  # fmt: skip
+    screen.wait_for_log(data, r"instructions screen onset")
+    screen.focus_window()
+    screen.key("space")
+    found = screen.wait_for_log(
+        data, r"trial 1 live: scene (\d+) x (\d+) px at window pixels (\d+), (\d+)"
+    )
+    width, height, left, top = (int(v) for v in found.groups())
+    frames = screen.wait_for_file("*_frames.tsv", data)
+    wait_for(screen, frames, lambda r: True)
+    assert shot.is_file()  # before any question
+    image = np.asarray(Image.open(shot).convert("L"), dtype=float)
+    scene = image[top : top + height, left : left + width]
+    assert scene.max() > 100 and scene.std() > 5, (scene.max(), scene.std())
+    screen.key("Escape")
+    assert screen.wait(timeout=60) == 3, screen.stderr[-3000:]

@@ -73,7 +73,8 @@ class PsychoPyFrontend:
     scripted_keys
         Key names to use instead of the keyboard (dry runs), consumed in order.
     screenshot
-        Save the first trial's screen here (PNG of the back buffer, before its flip).
+        Save the first trial's screen here (PNG of the back buffer, before its flip; a live
+        scene's first frame).
     size
         Window size in pixels when not full screen; default (1280, 800).
     pilot
@@ -304,6 +305,7 @@ class PsychoPyFrontend:
             "s each (Luidolt 2020 §5.2.1 ii)"
         )
         self.records.flush()  # on disk before the screens: where a stop then came from
+
         def escape() -> None:  # Escape ends the session here too, as on every screen
             if self.scripted is not None:  # a dry run's keys answer screens, one per read
                 return
@@ -457,20 +459,26 @@ class PsychoPyFrontend:
         comment = self.keys.comment_so_far() if screen.get("text_entry") else None
         self.screen_text.draw(screen, stims, comment=comment)
 
+    def _save_screenshot(self) -> None:
+        """Save the back buffer, the pilot mark drawn on it, as ``--screenshot`` (once)."""
+        from PIL import Image
+
+        from glarelab.files.atomic import atomic_path
+
+        mark = self.screen_text.pilot_mark  # drawn by the flip: here before the grab
+        if mark is not None:
+            mark.draw()
+        self.screenshot.parent.mkdir(parents=True, exist_ok=True)
+        with atomic_path(self.screenshot) as temporary:
+            Image.fromarray(grab_screen(self.window)).save(temporary, format="PNG")
+        self._screenshot_taken = True
+
     def _flip(self, *, capture: bool = False) -> float:
         if capture and self.screenshot is not None and not self._screenshot_taken:
-            from PIL import Image
-
-            from glarelab.files.atomic import atomic_path
-
-            mark = self.screen_text.pilot_mark  # drawn by the flip: here before the grab
-            if mark is not None:
+            mark = self.screen_text.pilot_mark
+            if mark is not None:  # not drawn twice
                 mark.autoDraw = False
-                mark.draw()
-            self.screenshot.parent.mkdir(parents=True, exist_ok=True)
-            with atomic_path(self.screenshot) as temporary:
-                Image.fromarray(grab_screen(self.window)).save(temporary, format="PNG")
-            self._screenshot_taken = True
+            self._save_screenshot()
             shown = self.window.flip()
             if mark is not None:
                 mark.autoDraw = True
@@ -620,6 +628,10 @@ class PsychoPyFrontend:
         escape: list[float] = []
 
         def stop() -> bool:
+            if self.screenshot is not None and not self._screenshot_taken:
+                view.stim.draw()  # the first frame, drawn again for --screenshot
+                self._save_screenshot()
+                self.window.clearBuffer()
             if self.scripted is None:
                 self.keys.held += self.keys.read(text_entry=False)
                 escape.extend(t for name, t in self.keys.held if name == "escape")
