@@ -662,3 +662,17 @@ def test_a_scenes_glare_model_takes_its_halo_options_and_refuses_an_eye_state(pa
     with pytest.raises(ProtocolError) as refused:
         parse_protocol(data)
     assert any(f"scene.glare_parameters: {named}" in p for p in refused.value.problems)
+
+
+def test_a_monitor_applies_to_a_live_scene_whose_file_leaves_keys_out():
+    """--monitor on luidolt2020-live was refused over scene.start_cd_m2 and
+    scene.frame_rate_hz, keys the file does not give (its defaults were written back in)."""
+    from glarelab.protocols.core import with_monitor
+
+    protocol = load_protocol("luidolt2020-live")
+    assert protocol["scene"]["live"]
+    mounted = with_monitor(
+        protocol, name="lab", resolution_px=(1920, 1080), width_cm=60.0, distance_cm=120.0
+    )
+    assert mounted["viewing"]["distance_m"] == 1.2
+    assert mounted["scene"] == protocol["scene"]

@@ -526,6 +526,13 @@ def with_monitor(
         data["viewing"]["distance_m"] = float(distance_cm) / 100.0
     for table in ("display", "viewing"):  # keys left at their defaults need not be given
         data[table] = {k: v for k, v in data[table].items() if v is not None}
+    scene = getattr(PARADIGMS[protocol.paradigm], "SCENE", None)
+    if scene and isinstance(data.get("scene"), dict):  # as the file gave it: a scene refuses
+        data["scene"] = {  # some keys only where given (a live scene's frame_rate_hz)
+            k: v
+            for k, v in data["scene"].items()
+            if k not in scene or scene[k].required or v != scene[k].default
+        }
     try:
         return parse_protocol(
             data,
