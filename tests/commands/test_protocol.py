@@ -176,3 +176,32 @@ def test_spencers_renormalisation_of_a_window_too_small_for_the_halo_is_refused(
         use.model.kernel(use.pixel_deg, use.shape)
     shipped = _edited(tmp_path, "spencer1995", "window_px = 300 ", "window_px = 300 ")
     assert _check(shipped, capsys)[0] in (0, 1)  # 1: a drawing rounded on the display
+
+
+def test_a_live_scene_whose_bank_the_model_cannot_make_is_refused(tmp_path, capsys):
+    """A live scene with the wave-optics model passed the check; the session refused its
+    aperture grid some two minutes in, after the calibration and the instructions, while the
+    bank was made. The check, and the run before its window, refuse it by key."""
+    from glarelab.glare.night.live import LiveNight
+    from glarelab.protocols.rating import scene_glare_model
+    from glarelab.stimuli.night import night_kernels, night_scene
+
+    path = _edited(tmp_path, "luidolt2020-live", 'glare_model = "vos"', 'glare_model = "wave"')
+    status, err = _check(path, capsys)
+    assert status == 2 and "Traceback" not in err, err
+    assert "  - scene.glare_model (the bank's 8 mm pupil): the aperture grid would need" in err
+    protocol = parse_protocol(tomllib.loads(path.read_text()), folder=tmp_path)
+    assert night_kernels(protocol)[-1].where == "scene.glare_model (the bank's 8 mm pupil)"
+    street = night_scene(protocol)  # the session's bank: the same grid refused
+    live = LiveNight(
+        street["img"], pixel_deg=street["pixel_deg"], pupils_mm=(8.0,),
+        glare_model=scene_glare_model(protocol["scene"]),
+    )  # fmt: skip
+    with pytest.raises(ValueError, match="the aperture grid would need 9262² samples"):
+        live.prepare()
+    capsys.readouterr()
+    data = tmp_path / "data"
+    assert main(["run", "--protocol", str(path), "--pilot", "--eyetracker", "mouse",
+                 "--participant", "P1", "--out", str(data)]) == 2  # fmt: skip
+    assert "scene.glare_model (the bank's 8 mm pupil)" in capsys.readouterr().err
+    assert not data.exists()

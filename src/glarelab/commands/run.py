@@ -218,6 +218,14 @@ def _check_run_options(args: argparse.Namespace, protocol) -> None:
             "shows no images, so it would ignore a stimulus set"
         )
     check_counterbalance(protocol, args.counterbalance)
+    if live and not args.simulate:  # its bank is made after the pupil calibration: refused now
+        from glarelab.protocols import ProtocolError
+        from glarelab.stimuli.kernels import check_kernels
+        from glarelab.stimuli.paradigms import paradigm_stimuli
+
+        refused = check_kernels(paradigm_stimuli(protocol).kernels(protocol))
+        if refused:
+            raise ProtocolError(protocol.source, refused)
 
 
 def _parser_actions():

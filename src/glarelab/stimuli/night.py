@@ -38,12 +38,14 @@ from glarelab.glare._validation import check_choice, check_in_range, check_posit
 from glarelab.protocols import Protocol
 from glarelab.protocols import pixel_deg as display_pixel_deg
 from glarelab.protocols.rating import scene_glare_model
+from glarelab.stimuli.kernels import KernelUse
 from glarelab.stimuli.preview import to_display
 from glarelab.stimuli.shapes import ImageRow
 
 __all__ = [
     "SEQUENCES",
     "build_night",
+    "night_kernels",
     "night_plan",
     "night_row",
     "night_scene",
@@ -506,6 +508,55 @@ def night_scene(protocol: Protocol) -> dict:
         ambient_cd_m2=scene["ambient_cd_m2"],
         rng=np.random.default_rng([protocol.seed, scene["seed"]]),
     )
+
+
+def night_kernels(protocol: Protocol) -> list[KernelUse]:
+    """The glare kernels a live scene's bank digitises before its first frame: the scene's
+    glare model at each pupil of the bank (:func:`glarelab.glare.night.live.pupil_bank_mm`),
+    over the scene at its pixel angle; none for a scene a stimulus set renders (its night
+    pipeline plans its kernels per frame, from the adaptation) or without a scene.
+
+    Parameters
+    ----------
+    protocol
+        A validated protocol of the rating paradigm.
+
+    Returns
+    -------
+    list of glarelab.stimuli.kernels.KernelUse
+        Named ``scene.glare_model``, with the bank's pupil.
+
+    Examples
+    --------
+    >>> from glarelab.protocols import load_protocol
+    >>> uses = night_kernels(load_protocol("luidolt2020-live"))
+    >>> uses[0].where, uses[0].shape
+    ("scene.glare_model (the bank's 2 mm pupil)", (799, 1279))
+    >>> night_kernels(load_protocol("night2026"))
+    []
+    """
+    from glarelab.glare.models.digitise import kernel_shape_for
+    from glarelab.glare.night.live import pupil_bank_mm
+    from glarelab.glare.night.pipeline import eye_state_model, has_eye_field
+
+    scene = protocol.data.get("scene")
+    if not scene or not scene["live"]:
+        return []
+    model = scene_glare_model(scene)
+    pixel = scene["pixel_deg"] or display_pixel_deg(protocol)
+    width, height = scene["size_px"]
+    shape = kernel_shape_for((height, width))  # the renderer's of the scene
+    if not has_eye_field(model, "pupil_mm"):  # one model for every pupil
+        return [KernelUse("scene.glare_model", model, pixel, shape)]
+    return [
+        KernelUse(
+            f"scene.glare_model (the bank's {pupil:g} mm pupil)",
+            eye_state_model(model, pupil_mm=float(pupil), regime=None),
+            pixel,
+            shape,
+        )
+        for pupil in pupil_bank_mm(model)
+    ]
 
 
 def night_row(protocol: Protocol, display_pixel_deg: float) -> ImageRow | None:

@@ -24,7 +24,7 @@ from glarelab.stimuli.matching import (
     matching_kernels,
     matching_row,
 )
-from glarelab.stimuli.night import build_night, night_row, shows_scene
+from glarelab.stimuli.night import build_night, night_kernels, night_row, shows_scene
 from glarelab.stimuli.shapes import ImageRow
 from glarelab.stimuli.staircase import (
     build_staircase,
@@ -177,7 +177,7 @@ register_paradigm(
 )
 register_paradigm(
     "rating",
-    ParadigmStimuli(build_night, night_row, None, shows_scene, no_backgrounds, no_kernels),
+    ParadigmStimuli(build_night, night_row, None, shows_scene, no_backgrounds, night_kernels),
 )
 
 
