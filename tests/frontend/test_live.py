@@ -2,11 +2,16 @@
 
 from __future__ import annotations
 
+import errno
+import json
+import os
 from types import SimpleNamespace
 
 import numpy as np
+import pytest
 
-from glarelab.frontend.live import LiveView
+from glarelab.frontend.eyetracker import PupilCalibration
+from glarelab.frontend.live import FRAME_COLUMNS, LiveView, _Record, run_live
 from glarelab.glare.rendering.display import CodeTable
 
 
@@ -63,3 +68,88 @@ def test_the_free_viewing_lasts_its_seconds_from_the_first_frame_shown():
     assert flips[0] == 3.0
     assert flips[-1] - flips[0] >= 1.0 - 1e-9
     assert view.frames == 51  # 1 s of 20 ms frames after the first
+
+
+SCENE = np.full((20, 30, 3), 0.02)
+
+
+def test_run_live_refuses_an_earlier_runs_record_before_the_window_opens(tmp_path):
+    # a second run into the same frames path replaced a 239-frame record with 61 frames
+    frames = tmp_path / "P01_frames.tsv"
+    frames.write_text("frame\n0\n")
+    with pytest.raises(ValueError, match=r"P01_frames.tsv' already exists.*another name"):
+        run_live(SCENE, pixel_deg=0.1, frames_path=frames, duration_s=0.1)
+    assert frames.read_text() == "frame\n0\n"
+    # an earlier run's json alone is refused too, and the claimed frames file given back
+    other = tmp_path / "P02_frames.tsv"
+    (tmp_path / "P02_live.json").write_text("{}")
+    with pytest.raises(ValueError, match=r"P02_live.json' already exists"):
+        run_live(SCENE, pixel_deg=0.1, frames_path=other, duration_s=0.1)
+    assert not other.exists() and (tmp_path / "P02_live.json").read_text() == "{}"
+
+
+def test_a_second_run_writing_the_same_record_at_once_is_refused(tmp_path):
+    # two runs into one path at once both ended 0 with their rows interleaved
+    frames = tmp_path / "P01_frames.tsv"
+    first = _Record(frames, tmp_path / "P01_live.json")
+    try:
+        with pytest.raises(ValueError, match="a run writing it now"):
+            _Record(frames, tmp_path / "P01_live.json")
+        first.row(range(len(FRAME_COLUMNS)))
+    finally:
+        first.close()
+    assert len(frames.read_text().splitlines()) == 2
+
+
+def test_a_row_the_disk_cannot_take_is_cut_off_whole(tmp_path, monkeypatch):
+    # a full disk left a half-written last row and a json without its end
+    frames = tmp_path / "P01_frames.tsv"
+    record = _Record(frames, tmp_path / "P01_live.json")
+    record.facts({"tracker": "mouse"})
+    assert json.loads(record.sidecar.read_text())["status"] == "cut short"
+    record.row(range(14))
+    write = os.write
+
+    def full(fd, data):  # half the row goes, then the disk is full
+        if fd == record.fd and len(data) > 10:
+            write(fd, data[: len(data) // 2])
+            raise OSError(errno.ENOSPC, "No space left on device")
+        return write(fd, data)
+
+    monkeypatch.setattr(os, "write", full)
+    with pytest.raises(OSError):
+        record.row(range(14))
+    monkeypatch.setattr(os, "write", write)
+    record.close()
+    lines = frames.read_text().split("\n")
+    assert lines[-1] == "" and len(lines) == 3  # the header and the one whole row
+    assert lines[1].split("\t") == [str(v) for v in range(14)]
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"refresh_hz": -60}, "refresh_hz must be a finite number > 0 Hz, got -60"),
+        ({"refresh_hz": 0}, "refresh_hz must be a finite number > 0"),
+        ({"duration_s": -1}, "duration_s must be"),
+        ({"calibrate": True, "calibration_s": 0}, "calibration_s must be a finite number > 0"),
+        ({"tracker": "nonsense"}, "tracker must be one of"),
+        (
+            {"calibration": PupilCalibration(white_raw=3.0, black_raw=5.5, range_mm=(1, 10))},
+            r"calibration.range_mm = \(1, 10\) mm leaves the renderer's pupils, 2-8 mm",
+        ),
+    ],
+)
+def test_run_live_refuses_bad_arguments_before_the_window_opens(tmp_path, change, message):
+    # refresh_hz=-60 flagged 364 of 365 frames dropped, 0 divided by zero after the window
+    # opened, duration_s=-1 ran a frame, a 1-10 mm calibration died when the pupil passed 8 mm
+    frames = tmp_path / "P01_frames.tsv"
+    with pytest.raises(ValueError, match=message):
+        run_live(SCENE, pixel_deg=0.1, frames_path=frames, **change)
+    assert list(tmp_path.iterdir()) == []  # nothing written
+
+
+def test_run_live_names_a_missing_folder_not_the_tracker(tmp_path):
+    frames = tmp_path / "nofolder" / "P01_frames.tsv"
+    with pytest.raises(ValueError, match="nofolder' does not exist; make it first"):
+        run_live(SCENE, pixel_deg=0.1, frames_path=frames, duration_s=0.1)

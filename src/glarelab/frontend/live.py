@@ -16,6 +16,8 @@ scene's free-viewing period with it.
 from __future__ import annotations
 
 import json
+import math
+import os
 from pathlib import Path
 
 import numpy as np
@@ -24,11 +26,13 @@ from glarelab.display.calibration import synthetic_calibration
 from glarelab.files.atomic import write_text
 from glarelab.frontend.eyetracker import (
     CALIBRATION_SCREEN_S,
+    TRACKERS,
     GazeFilter,
     IoHubEyeTracker,
     PupilCalibration,
     calibrate_pupil,
 )
+from glarelab.glare._validation import check_in_range, check_positive
 from glarelab.glare.night.live import LiveNight
 from glarelab.glare.rendering.display import CodeTable
 
@@ -51,6 +55,77 @@ FRAME_COLUMNS = (
     "new_bank_entries",
 )
 DROPPED_FACTOR = 1.5  # a flip later than 1.5 refresh periods after the previous one lost a frame
+
+
+RESERVE_BYTES = 64 * 1024  # kept free beside a run's record for its last _live.json
+
+
+class _Record:
+    """A run's ``_frames.tsv`` and ``_live.json``: the frames file created exclusively (a
+    record already there, or a run writing it now, is refused), each row written whole (a row
+    the disk cannot take is cut off, never left half), and room kept for the last json."""
+
+    def __init__(self, frames_path: Path, sidecar: Path) -> None:
+        self.frames_path, self.sidecar = frames_path, sidecar
+        self.reserve = frames_path.with_name(f".{frames_path.name}.reserve")
+        self.rows, self.size, self._facts = 0, 0, None
+        try:
+            self.fd = os.open(frames_path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
+        except FileExistsError:
+            raise ValueError(
+                f"frames_path {str(frames_path)!r} already exists (an earlier run's record, or "
+                "a run writing it now): a run never writes over one; give another name or move "
+                "it away"
+            ) from None
+        try:
+            if sidecar.exists():
+                raise ValueError(
+                    f"{str(sidecar)!r} already exists (an earlier run's record): a run never "
+                    "writes over one; give frames_path another name or move it away"
+                )
+            self._write(("\t".join(FRAME_COLUMNS) + "\n").encode())
+            with self.reserve.open("wb") as handle:
+                handle.write(bytes(RESERVE_BYTES))
+        except BaseException:
+            self.close(discard=True)
+            raise
+
+    def _write(self, data: bytes) -> None:
+        try:
+            done = 0
+            while done < len(data):
+                done += os.write(self.fd, data[done:])
+        except OSError:
+            os.ftruncate(self.fd, self.size)  # the rows written before stay whole
+            raise
+        self.size += len(data)
+
+    def row(self, values) -> None:
+        """Write one frame's row (on the disk before the next frame: unbuffered)."""
+        self._write(("\t".join(map(str, values)) + "\n").encode())
+        self.rows += 1
+
+    def facts(self, facts: dict) -> None:
+        """Write the json's facts, ``status`` ``'cut short'`` until :meth:`end`."""
+        self._facts = facts
+        write_text(self.sidecar, json.dumps({**facts, "status": "cut short"}, indent=1))
+
+    def end(self, summary: dict, status: str | None = None) -> None:
+        """Write the json's summary and its ``status`` (default ``'aborted'`` or ``'ended'``
+        as the summary says)."""
+        self.reserve.unlink(missing_ok=True)  # the room for this json on a full disk
+        status = status or ("aborted" if summary.get("aborted") else "ended")
+        record = {**(self._facts or {}), "status": status, "summary": summary}
+        write_text(self.sidecar, json.dumps(record, indent=1))
+
+    def close(self, *, discard: bool = False) -> None:
+        """Close the frames file; ``discard``: remove the record (no frame was shown)."""
+        os.close(self.fd)
+        self.reserve.unlink(missing_ok=True)
+        if discard:
+            self.frames_path.unlink(missing_ok=True)
+            if self._facts is not None:  # written by this run
+                self.sidecar.unlink(missing_ok=True)
 
 
 class LiveView:
@@ -245,16 +320,22 @@ def run_live(
     pixel_deg
         Visual angle of a pixel, degrees, > 0.
     frames_path
-        The per-frame record, a ``..._frames.tsv`` file (its folder must exist); a
-        ``..._live.json`` beside it holds the window's position, the tracker, the calibration
-        and, at the end, the counts; ``..._iohub.log``, the output of ioHub's server.
+        The per-frame record, a ``..._frames.tsv`` file (its folder must exist; neither it nor
+        its ``_live.json`` may exist: a run never writes over a record, and it creates the
+        file exclusively, so a second run into it at the same time is refused); a
+        ``..._live.json`` beside it holds the window's position, the tracker, the calibration,
+        ``status`` (``'cut short'`` until the run ends: a run killed, or whose record the disk
+        could not take, keeps it; then ``'ended'`` or ``'aborted'``) and the counts;
+        ``..._iohub.log``, the output of ioHub's server. A run that fails before its first
+        frame leaves no record.
     tracker
         An ioHub eye tracker name (:data:`~glarelab.frontend.eyetracker.TRACKERS`) or class
         path; default ``'mouse'``.
     settings
         More of the tracker's ioHub configuration; default None.
     calibration
-        Luidolt's pupil range, or None: the tracker's pupil in mm, clamped to 2-8 mm.
+        Luidolt's pupil range, or None: the tracker's pupil in mm, clamped to 2-8 mm. Its
+        ``range_mm`` must lie within the renderer's pupils (2-8 mm).
     calibrate
         Measure the pupil range first (:func:`~glarelab.frontend.eyetracker.calibrate_pupil`,
         a white and a black screen of ``calibration_s`` each), in place of ``calibration``;
@@ -262,7 +343,7 @@ def run_live(
         (Moon & Spencer's of ``display_max_cd_m2`` and of a thousandth of it, the display's
         black here).
     calibration_s
-        How long each calibration screen is shown, s; default 5 (Luidolt 2020 §5.2.1 ii).
+        How long each calibration screen is shown, s, > 0; default 5 (Luidolt 2020 §5.2.1 ii).
     scotopic
         Also Luidolt's scotopic colour of the adapted luminance (§5.4); default False.
     display_max_cd_m2, adapted_display_cd_m2
@@ -270,9 +351,10 @@ def run_live(
     bits
         Bits per channel of the display's codes; default 8.
     refresh_hz
-        The display's refresh rate, Hz, for counting dropped frames; default 60.
+        The display's refresh rate, Hz, > 0, for pacing and counting dropped frames; default
+        60.
     duration_s
-        End after this long, s; None (default): only Escape ends the run.
+        End after this long, s, >= 0; None (default): only Escape ends the run.
     fullscreen
         Whether the window fills the screen (the scene centred); default False.
 
@@ -285,28 +367,79 @@ def run_live(
     Raises
     ------
     ValueError
-        For a bad scene, number or tracker name.
-    RuntimeError
+        For a bad scene, number, tracker name, calibration range or frames path (its folder
+        missing, a record there), each before the window opens.
+    ~glarelab.frontend.eyetracker.TrackerError
         When ioHub cannot start the tracker.
+    OSError
+        When the record cannot be written (a full disk): the rows written stay whole and the
+        ``_live.json`` says the run was cut short.
     """
-    from psychopy import core, event
-
-    from glarelab.frontend.window import open_window
-
     frames_path = Path(frames_path)
     if not frames_path.name.endswith("_frames.tsv"):
         raise ValueError(f"frames_path must end in _frames.tsv; got {frames_path.name!r}")
+    if not frames_path.parent.is_dir():
+        raise ValueError(
+            f"frames_path {str(frames_path)!r}: its folder {str(frames_path.parent)!r} does not "
+            "exist; make it first"
+        )
+    check_positive("refresh_hz", refresh_hz, unit="Hz")
+    if duration_s is not None:
+        check_in_range("duration_s", duration_s, 0.0, math.inf, unit="s")
+    if calibrate:
+        check_positive("calibration_s", calibration_s, unit="s")
+    if not (
+        tracker in TRACKERS or (isinstance(tracker, str) and tracker.startswith("eyetracker.hw."))
+    ):
+        raise ValueError(
+            f"tracker must be one of {sorted(TRACKERS)} or an ioHub eye tracker class path; "
+            f"got {tracker!r}"
+        )
+    if calibration is not None and not isinstance(calibration, PupilCalibration):
+        raise ValueError(f"calibration must be a PupilCalibration or None; got {calibration!r}")
     live = LiveNight(
         scene_cd_m2, pixel_deg=pixel_deg, display_max_cd_m2=display_max_cd_m2,
         adapted_display_cd_m2=adapted_display_cd_m2, scotopic=scotopic,
     )  # fmt: skip
+    bank = (float(live.pupils_mm[0]), float(live.pupils_mm[-1]))
+    if calibration is not None and not (
+        bank[0] <= calibration.range_mm[0] and calibration.range_mm[1] <= bank[1]
+    ):
+        raise ValueError(
+            f"calibration.range_mm = {tuple(calibration.range_mm)!r} mm leaves the renderer's "
+            f"pupils, {bank[0]:g}-{bank[1]:g} mm: give a range within them (Luidolt's 2-8 mm)"
+        )
+    sidecar = frames_path.with_name(frames_path.name[: -len("_frames.tsv")] + "_live.json")
+    record = _Record(frames_path, sidecar)  # refuses an existing record, before the window
+    shown = False
+    try:
+        summary = _show(
+            live, record, tracker=tracker, settings=settings, calibration=calibration,
+            calibrate=calibrate, calibration_s=calibration_s, bits=bits, refresh_hz=refresh_hz,
+            duration_s=duration_s, fullscreen=fullscreen, display_max_cd_m2=display_max_cd_m2,
+        )  # fmt: skip
+        shown = True
+        return summary
+    finally:
+        record.close(discard=not shown and record.rows == 0)  # no frame shown: no record
+
+
+def _show(
+    live: LiveNight, record: _Record, *, tracker, settings, calibration, calibrate,
+    calibration_s, bits, refresh_hz, duration_s, fullscreen, display_max_cd_m2,
+) -> dict:  # fmt: skip
+    """:func:`run_live` once its arguments are checked and its record claimed."""
+    from psychopy import core, event
+
+    from glarelab.frontend.window import open_window
+
     live.prepare()  # every bank entry a gaze on the scene can need, before the first frame
     height, width = live.shape
     lut = synthetic_calibration(
         max_cd_m2=display_max_cd_m2, black_cd_m2=display_max_cd_m2 / 1000, bit_depth=bits
     ).lut
     window, _ = open_window(bits=bits, fullscreen=fullscreen, size=(width, height))
-    sidecar = frames_path.with_name(frames_path.name[: -len("_frames.tsv")] + "_live.json")
+    sidecar = record.sidecar
     source = None
     try:
         source = IoHubEyeTracker(
@@ -328,29 +461,42 @@ def run_live(
             "window_pos_px": window_pos,
             "pupil_calibration": None if calibration is None else calibration.as_dict(),
         }
-        write_text(sidecar, json.dumps(facts, indent=1))
+        # until the run ends, the record says it was cut short (a full disk, a kill)
+        record.facts(facts)
         view = LiveView(window, live, lut=lut, bits=bits, calibration=calibration)
         source.start()
         aborted = []
-        with frames_path.open("w", encoding="utf-8") as handle:
-            handle.write("\t".join(FRAME_COLUMNS) + "\n")
-            handle.flush()
 
-            def write_row(values, interval):
-                handle.write("\t".join(map(str, values)) + "\n")
-                handle.flush()  # the record of every frame shown survives an abort
+        def stop():
+            if event.getKeys(keyList=["escape"]):
+                aborted.append(True)
+            return bool(aborted)
 
-            def stop():
-                if event.getKeys(keyList=["escape"]):
-                    aborted.append(True)
-                return bool(aborted)
-
+        try:
             view.run(
-                source, clock=core.Clock(), refresh_hz=refresh_hz, write_row=write_row,
-                stop=stop, duration_s=duration_s,
+                source, clock=core.Clock(), refresh_hz=refresh_hz,
+                write_row=lambda values, interval: record.row(values), stop=stop,
+                duration_s=duration_s,
             )  # fmt: skip
+        except BaseException as error:
+            reason = f"{type(error).__name__}: {error}"
+            try:
+                record.end(
+                    {**view.summary(source), "aborted": True, "ended_by": reason}, "cut short"
+                )
+            except OSError:  # the json written before the first frame says 'cut short'
+                pass
+            if isinstance(error, OSError):
+                raise OSError(
+                    error.errno,
+                    f"run_live could not write its record ({error.strerror or error}); it "
+                    f"stopped after {view.frames} frame(s), each row whole, and "
+                    f"{record.sidecar.name} says it was cut short",
+                    str(record.frames_path),
+                ) from error
+            raise
         summary = {**view.summary(source), "aborted": bool(aborted)}
-        write_text(sidecar, json.dumps({**facts, "summary": summary}, indent=1))
+        record.end(summary)
         return summary
     finally:
         if source is not None:
