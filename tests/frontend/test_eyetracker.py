@@ -4,16 +4,20 @@ from __future__ import annotations
 
 import math
 import time
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 from glarelab.frontend.eyetracker import (
+    MOUSE_GAZE_SETTINGS,
     PUPIL_FILTER_S,
     GazeFilter,
+    IoHubEyeTracker,
     PupilCalibration,
     calibrate_pupil,
     datastore_settings,
+    tracker_config,
 )
 
 
@@ -40,7 +44,92 @@ def test_blinks_and_lost_samples_hold_the_last_state_and_are_counted():
         state = f.update(t, *sample)
         assert (state.gaze_x_px, state.gaze_y_px, state.pupil_mm) == (50.0, 40.0, 4.0)
         assert not (state.valid_gaze or state.valid_pupil)
-    assert f.counts() == {"samples": 4, "lost": 3, "blinks": 3, "off_screen": 0}
+    # one blink of three samples (it was counted as three)
+    assert f.counts() == {"samples": 4, "lost": 3, "blinks": 1, "off_screen": 0}
+
+
+def test_a_blink_counts_once_and_the_start_up_and_a_disconnect_not_at_all():
+    # two MouseGaze blinks were logged as 0 blinks; the start-up frame and a disconnect's
+    # samples counted as blinks
+    f = GazeFilter((200, 100))
+    f.update(0.0, None, None, None, blink=False)  # no sample yet
+    f.update(0.01, None, None, None)  # still none: the tracker has not seen the eye
+    times = iter(np.arange(0.02, 1.0, 0.01))
+    for blinking in (False, True, True, False, True, False):
+        pupil = None if blinking else 5.0
+        f.update(next(times), None if blinking else 5.0, 5.0, pupil, blink=blinking)
+    for _ in range(3):  # a disconnect: samples lost, the eye not reported closed
+        f.update(next(times), None, None, None, blink=False)
+    assert (f.blinks, f.lost) == (2, 8)  # lost: 2 at the start, 3 blinking, 3 disconnected
+
+
+def test_a_non_finite_time_is_refused_and_leaves_the_state():
+    # time_s = NaN made the pupil NaN for every later sample
+    f = GazeFilter((200, 100))
+    f.update(0.0, 5.0, 5.0, 4.0)
+    for bad in (math.nan, math.inf, "1"):
+        with pytest.raises(ValueError, match="time_s must be a finite number"):
+            f.update(bad, 5.0, 5.0, 6.0)
+    state = f.update(0.1, 5.0, 5.0, 6.0)
+    assert math.isfinite(state.pupil_mm) and f.samples == 2
+
+
+def _tracker(event, window=(640, 400)):
+    """An IoHubEyeTracker whose device gives one binocular sample of ioHub's fields."""
+    from psychopy.iohub.devices.eyetracker.eye_events import (
+        BinocularEyeSampleEvent,
+        MonocularEyeSampleEvent,
+    )
+
+    names = list(BinocularEyeSampleEvent.CLASS_ATTRIBUTE_NAMES)
+    tracker = object.__new__(IoHubEyeTracker)
+    tracker.io = SimpleNamespace()
+    tracker.device_handle = SimpleNamespace(getLastSample=lambda: [event.get(n, 0) for n in names])
+    tracker.window = SimpleNamespace(size=window)
+    tracker.disconnects = 0
+    tracker._names = {"mono": list(MonocularEyeSampleEvent.CLASS_ATTRIBUTE_NAMES), "bino": names}
+    return tracker
+
+
+def test_a_binocular_tracker_that_loses_one_eye_gives_the_other_eyes_pupil():
+    # a lost eye (ioHub: status 2 the right, 20 the left; its fields 0) halved the pupil
+    both = {
+        "left_gaze_x": 10.0, "right_gaze_x": 12.0, "left_gaze_y": 5.0, "right_gaze_y": 7.0,
+        "left_pupil_measure1": 6.0, "right_pupil_measure1": 5.0, "status": 0,
+    }  # fmt: skip
+    assert _tracker(both).sample() == (331.0, 194.0, 5.5)
+    right_lost = {**both, "right_gaze_x": 0, "right_gaze_y": 0, "right_pupil_measure1": 0}
+    tracker = _tracker({**right_lost, "status": 2})
+    assert tracker.sample() == (330.0, 195.0, 6.0) and not tracker.blinking
+    left_lost = {**both, "left_gaze_x": 0, "left_gaze_y": 0, "left_pupil_measure1": 0}
+    assert _tracker({**left_lost, "status": 20}).sample() == (332.0, 193.0, 5.0)
+    tracker = _tracker({**both, "status": 22})  # both eyes missing: a blink
+    assert tracker.sample() == (None, None, None) and tracker.blinking
+
+
+def test_the_mouse_settings_are_a_copy_of_their_own():
+    # editing the returned settings changed MOUSE_GAZE_SETTINGS for every later session
+    _, settings = tracker_config("mouse")
+    settings["runtime_settings"]["sampling_rate"] = 1
+    settings["controls"]["blink"].clear()
+    assert MOUSE_GAZE_SETTINGS["runtime_settings"]["sampling_rate"] == 200
+    assert tracker_config("mouse")[1]["controls"]["blink"] == ["LEFT_BUTTON", "RIGHT_BUTTON"]
+
+
+def test_a_tracker_file_whose_settings_are_a_list_says_so(tmp_path):
+    # it said "must configure exactly one ioHub eye tracker ...; found 1"
+    path = tmp_path / "tracker.yaml"
+    path.write_text("eyetracker.hw.mouse.EyeTracker:\n  - sampling_rate: 100\n")
+    with pytest.raises(ValueError, match=r"settings of eyetracker.hw.mouse.EyeTracker must be a"):
+        tracker_config(str(path))
+
+
+def test_a_pupil_calibration_names_a_field_that_is_not_a_number():
+    # PupilCalibration(white_raw="3") gave a bare "TypeError: must be real number, not str"
+    with pytest.raises(ValueError, match=r"white_raw must be a finite number.*'3'"):
+        PupilCalibration(white_raw="3", black_raw=5.0)
+    with pytest.raises(ValueError, match="range_mm must be"):
+        PupilCalibration(white_raw=3.0, black_raw=5.0, range_mm="2-8")
 
 
 def test_gaze_off_the_window_is_clamped_and_counted():

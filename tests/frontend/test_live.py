@@ -42,7 +42,7 @@ def _view(clock: Clock, first_render_s: float, render_s: float) -> LiveView:
             adaptation_cd_m2=1.0, new_entries=0,
         )  # fmt: skip
 
-    view.filter = SimpleNamespace(update=lambda *a: state)
+    view.filter = SimpleNamespace(update=lambda *a, **k: state)
     view.live = SimpleNamespace(frame=frame)
     view.top = 255
     view.encode = CodeTable(np.linspace(0.0, 1.0, 256))

@@ -158,4 +158,6 @@ def test_the_frame_log_gaze_follows_the_mouse_and_escape_ends_as_aborted(screen,
     recorded = rows(frames)
     assert summary["aborted"] is True and summary["frames"] == len(recorded)
     assert summary["lost"] == sum(r["valid_gaze"] == "0" for r in recorded) > 1  # the blink
+    # one blink of many samples, counted once (it was 0, and the start-up frame 1)
+    assert summary["blinks"] == 1
     assert [int(r["frame"]) for r in recorded] == list(range(len(recorded)))

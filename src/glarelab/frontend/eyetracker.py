@@ -11,7 +11,8 @@
 - :class:`GazeFilter`: what a frame uses of the tracker's last sample. A lost sample (none, or
   no gaze) and a blink (pupil 0 or missing, which made Luidolt's glare flicker) hold the last
   valid state; a gaze off the window is clamped to its edge; the pupil is smoothed by a
-  first-order low-pass of time constant :data:`PUPIL_FILTER_S`; each fault is counted.
+  first-order low-pass of time constant :data:`PUPIL_FILTER_S`; each fault is counted (a blink
+  once, however many samples it lasts).
 - :class:`IoHubEyeTracker`: the samples of an ioHub eye tracker (``launchHubServer`` with the
   tracker's device class, :data:`TRACKERS`), in window pixels from the top-left. The simulated
   ``MouseGaze`` tracker (``'mouse'``) moves the gaze with the mouse, reports a constant 5 mm
@@ -28,6 +29,7 @@ Luidolt, L. (2020). Perception of light in virtual reality. TU Wien, §5.2.1 ii,
 from __future__ import annotations
 
 import contextlib
+import copy
 import math
 import os
 import subprocess
@@ -39,6 +41,7 @@ from typing import Any
 
 import numpy as np
 
+from glarelab.files.values import is_real
 from glarelab.frontend.iohub_guard import start_guard
 
 __all__ = [
@@ -142,7 +145,8 @@ def tracker_config(spec: str) -> tuple[str, dict]:
     Returns
     -------
     tuple of (str, dict)
-        The device class path (or name) and its settings.
+        The device class path (or name) and its settings, a copy of the caller's own (editing
+        it changes no later session's).
 
     Raises
     ------
@@ -158,7 +162,7 @@ def tracker_config(spec: str) -> tuple[str, dict]:
     from pathlib import Path
 
     if spec in TRACKERS:
-        return spec, (dict(MOUSE_GAZE_SETTINGS) if spec == "mouse" else {})
+        return spec, (copy.deepcopy(MOUSE_GAZE_SETTINGS) if spec == "mouse" else {})
     path = Path(spec)
     if path.suffix.lower() not in (".yaml", ".yml"):
         raise ValueError(
@@ -181,7 +185,12 @@ def tracker_config(spec: str) -> tuple[str, dict]:
                     for k, v in item.items()
                     if isinstance(k, str) and k.startswith("eyetracker.hw.")
                 ]
-    if len(entries) != 1 or not isinstance(entries[0][1], dict | None):
+    if len(entries) == 1 and not isinstance(entries[0][1], dict | None):
+        raise ValueError(
+            f"--eyetracker {spec}: the settings of {entries[0][0]} must be a mapping (name: "
+            f"value lines below it); got a {type(entries[0][1]).__name__}"
+        )
+    if len(entries) != 1:
         raise ValueError(
             f"--eyetracker {spec}: must configure exactly one ioHub eye tracker "
             f"(eyetracker.hw.<maker>.<model>.EyeTracker: ...); found {len(entries)}"
@@ -234,7 +243,18 @@ class PupilCalibration:
     simulated: str | None = None
 
     def __post_init__(self) -> None:
-        low, high = (float(v) for v in self.range_mm)
+        for name in ("white_raw", "black_raw"):
+            if not is_real(getattr(self, name)):
+                raise ValueError(
+                    f"{name} must be a finite number (the tracker's pupil); got "
+                    f"{getattr(self, name)!r}"
+                )
+        try:
+            low, high = (float(v) for v in self.range_mm)
+        except (TypeError, ValueError):
+            raise ValueError(
+                f"range_mm must be (low, high) mm with 0 < low < high; got {self.range_mm!r}"
+            ) from None
         if not (0 < low < high and math.isfinite(high)):
             raise ValueError(
                 f"range_mm must be (low, high) mm with 0 < low < high; got {self.range_mm!r}"
@@ -407,6 +427,8 @@ class GazeFilter:
     samples: int = field(default=0, init=False)
     _state: GazeState | None = field(default=None, init=False, repr=False)
     _time_s: float | None = field(default=None, init=False, repr=False)
+    _blinking: bool = field(default=False, init=False, repr=False)
+    _seen: bool = field(default=False, init=False, repr=False)
 
     def __post_init__(self) -> None:
         try:
@@ -427,22 +449,35 @@ class GazeFilter:
         gaze_x_px: float | None,
         gaze_y_px: float | None,
         pupil_raw: float | None,
+        *,
+        blink: bool | None = None,
     ) -> GazeState:
         """The state after one sample (None for a field the tracker did not give).
 
         Parameters
         ----------
         time_s
-            The sample's time, s.
+            The sample's time, s, a finite number.
         gaze_x_px, gaze_y_px
             Gaze in window pixels from the top-left, or None (lost, blink).
         pupil_raw
             The tracker's pupil (its unit), or None / 0 / NaN (blink, lost).
+        blink
+            Whether the tracker reported the eye closed in this sample
+            (:attr:`IoHubEyeTracker.blinking`); None (default): a sample without a pupil is
+            one.
 
         Returns
         -------
         GazeState
+
+        Raises
+        ------
+        ValueError
+            For a time that is not a finite number (the state is left as it was).
         """
+        if not (is_real(time_s) and math.isfinite(time_s)):
+            raise ValueError(f"time_s must be a finite number of seconds; got {time_s!r}")
         self.samples += 1
         width, height = self.window_px
         previous = self._state
@@ -480,8 +515,14 @@ class GazeFilter:
                 keep = math.exp(-elapsed / self.pupil_filter_s)
                 pupil = previous.pupil_mm * keep + measured * (1.0 - keep)
         else:
-            self.blinks += 1
             pupil = previous.pupil_mm if previous else 5.0
+        if blink is None:
+            blink = not valid_pupil
+        # a blink counted once, as it starts, and only once the tracker has seen the eye (the
+        # samples before the first one and those lost to a disconnect are lost, not blinks)
+        self.blinks += bool(blink) and not self._blinking and self._seen
+        self._blinking = bool(blink)
+        self._seen = self._seen or (valid_gaze and valid_pupil)
         self._time_s = float(time_s)
         self._state = GazeState(x, y, pupil, valid_gaze, valid_pupil, clamped)
         return self._state
@@ -492,7 +533,10 @@ class GazeFilter:
         Returns
         -------
         dict
-            ``samples``, ``lost`` (no gaze), ``blinks`` (no pupil), ``off_screen``.
+            ``samples``; ``lost``, the samples without a gaze (lost, a blink's, none from a
+            disconnected tracker); ``blinks``, the blinks (each run of samples the tracker
+            reported the eye closed in counts once, from the first sample with the eye seen);
+            ``off_screen``, the samples with the gaze off the window.
         """
         return {
             "samples": self.samples,
@@ -736,6 +780,7 @@ class IoHubEyeTracker:
             self._stop_guard()
             raise TrackerError(f"ioHub started without the eye tracker {tracker!r}")
         self.disconnects = 0
+        self.blinking = False  # whether the last sample had the eye closed
 
     def start(self) -> None:
         """Start recording (ioHub keeps the raw samples as it stores them); ``disconnects``
@@ -760,8 +805,11 @@ class IoHubEyeTracker:
         Returns
         -------
         tuple
-            ``(gaze_x_px, gaze_y_px, pupil_raw)``.
+            ``(gaze_x_px, gaze_y_px, pupil_raw)``: a binocular tracker's mean of the eyes it
+            found (one eye's alone when it lost the other). A sample with the eye(s) not
+            found or without a pupil is a blink (:attr:`blinking` true): all three None.
         """
+        self.blinking = False
         server = getattr(self.io, "_server_process", None)
         if server is not None and server.poll() is not None:
             # ioHub's server has ended: a request would wait for its answer for ever
@@ -778,19 +826,35 @@ class IoHubEyeTracker:
             self._names["mono"] if len(raw) == len(self._names["mono"]) else self._names["bino"]
         )
         event = dict(zip(names, raw, strict=False))
-        if "gaze_x" in event:
-            x, y, pupil = event["gaze_x"], event["gaze_y"], event["pupil_measure1"]
-        else:  # binocular: the mean of the eyes
-            x = 0.5 * (event["left_gaze_x"] + event["right_gaze_x"])
-            y = 0.5 * (event["left_gaze_y"] + event["right_gaze_y"])
-            pupil = 0.5 * (event["left_pupil_measure1"] + event["right_pupil_measure1"])
         width, height = self.window.size
-        # ioHub's status is 0 for a sample with its eye(s) found (MouseGaze: 2 in a blink);
-        # its UNDEFINED is 0, the centre's coordinate too, so the status decides
-        if event.get("status", 0) != 0 or not (_finite(x) and _finite(y)):
-            return None, None, float(pupil) if _finite(pupil) and pupil > 0 else None
-        pupil_raw = float(pupil) if _finite(pupil) and pupil > 0 else None
-        return float(x) + width / 2, height / 2 - float(y), pupil_raw
+        # ioHub's status is 0 for a sample with its eye(s) found (MouseGaze: 2 in a blink); a
+        # binocular sample's is 20 with the left eye missing, 2 the right, 22 both. Its
+        # UNDEFINED is 0, the centre's coordinate too, so the status decides
+        status = int(event.get("status") or 0)
+        if "gaze_x" in event:
+            eyes = [("", status == 0)]
+        else:  # binocular: the mean of the eyes found, one eye's alone
+            eyes = [("left_", status // 10 % 10 == 0), ("right_", status % 10 == 0)]
+        found = [prefix for prefix, ok in eyes if ok]
+        gazes = [
+            (float(event[f"{p}gaze_x"]), float(event[f"{p}gaze_y"]))
+            for p in found
+            if _finite(event[f"{p}gaze_x"]) and _finite(event[f"{p}gaze_y"])
+        ]
+        pupils = [
+            float(event[f"{p}pupil_measure1"])
+            for p in found
+            if _finite(event[f"{p}pupil_measure1"]) and event[f"{p}pupil_measure1"] > 0
+        ]
+        pupil_raw = sum(pupils) / len(pupils) if pupils else None
+        self.blinking = pupil_raw is None  # the eye closed: its pupil not measured
+        if not found:  # a blink: no gaze either
+            return None, None, None
+        if not gazes:
+            return None, None, pupil_raw
+        x = sum(g[0] for g in gazes) / len(gazes)
+        y = sum(g[1] for g in gazes) / len(gazes)
+        return x + width / 2, height / 2 - y, pupil_raw
 
     def close(self) -> None:
         """Stop recording and the ioHub server (a tracker or server already gone: nothing)."""

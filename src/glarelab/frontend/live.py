@@ -231,8 +231,9 @@ class LiveView:
             tracker_now = source.time_s()
             x, y, pupil = source.sample()
             state = self.filter.update(
-                now, None if x is None else x - left, None if y is None else y - top, pupil
-            )
+                now, None if x is None else x - left, None if y is None else y - top, pupil,
+                blink=getattr(source, "blinking", None),
+            )  # fmt: skip
             elapsed = 0.0 if last_now is None else now - last_now  # one frame's time
             last_now = now
             frame = self.live.frame(
