@@ -234,10 +234,13 @@ def number(low: float | None = None, high: float | None = None, *, above: bool =
         bad |= high is not None and value > high
         if bad:
             left = "(" if above else "["
-            raise argparse.ArgumentTypeError(
-                f"{text} must be a finite number in {left}{low if low is not None else '-inf'}, "
-                f"{high if high is not None else 'inf'}]"
-            )
+            if high is not None:
+                allowed = f" in {left}{low if low is not None else '-inf'}, {high}]"
+            elif low is not None:
+                allowed = f" {'>' if above else '>='} {low}"
+            else:
+                allowed = ""
+            raise argparse.ArgumentTypeError(f"{text} must be a finite number{allowed}")
         return value
 
     return parse

@@ -89,13 +89,20 @@ def check_in_range(
     lb = "[" if low_inclusive else "("
     hb = "]" if high_inclusive else ")"
     allowed = f"{lb}{low:g}, {high:g}{hb}{' ' + unit if unit else ''}"
+    if high == math.inf and math.isfinite(low):  # "in [0, inf]" reads as if inf were allowed
+        allowed = f"{'>=' if low_inclusive else '>'} {low:g}{' ' + unit if unit else ''}"
     try:
         number = real_number(value)
     except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number in {allowed}, got {value!r}") from None
+        raise ValueError(
+            f"{name} must be a {'finite ' if high == math.inf else ''}number "
+            f"{'' if high == math.inf and math.isfinite(low) else 'in '}{allowed}, got {value!r}"
+        ) from None
     above = number >= low if low_inclusive else number > low
     below = number <= high if high_inclusive else number < high
     if not (math.isfinite(number) and above and below):
+        if high == math.inf and math.isfinite(low):
+            raise ValueError(f"{name} must be a finite number {allowed}, got {_describe(value)}")
         raise ValueError(f"{name} must be in {allowed}, got {_describe(value)}")
     return number
 

@@ -190,5 +190,13 @@ def test_a_window_of_zero_is_refused_without_a_gaze_too():
 
 def test_a_bad_initial_state_is_named_as_given():
     # the error named adaptation_step's previous_cd_m2, an argument the caller never gave
-    with pytest.raises(ValueError, match=r"^initial_cd_m2 must be in \[0, inf\] cd/m², got -1"):
+    with pytest.raises(
+        ValueError, match=r"^initial_cd_m2 must be a finite number >= 0 cd/m², got -1"
+    ):
         adaptation.adaptation_luminance(np.array([1.0]), 0.1, initial_cd_m2=-1)
+
+
+def test_an_infinite_frame_time_is_called_not_finite():
+    # it said "frame_time_s must be in [0, inf] s, got inf", as if inf were allowed
+    with pytest.raises(ValueError, match=r"frame_time_s must be a finite number >= 0 s, got inf"):
+        adaptation.adaptation_step(1.0, 2.0, math.inf)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import re
 
 import numpy as np
@@ -405,3 +406,36 @@ def test_an_unknown_glare_model_is_named_as_given():
     # the error named the renderer's "model", not the glare_model the caller gave
     with pytest.raises(ValueError, match=r"^glare_model must be one of 'Yoshida2008'"):
         LiveNight(np.full((8, 8), 0.05), pixel_deg=0.1, glare_model="bogus")
+
+
+def test_a_refused_frame_leaves_the_held_gaze_and_pupil(scene):
+    # a frame refused for its time (or its pupil) still left its gaze and pupil held for the
+    # next frame without a sample
+    live = LiveNight(scene, pixel_deg=PIXEL_DEG)
+    live.frame(gaze_px=(5.0, 5.0), pupil_mm=5.0, frame_time_s=0.0)
+    with pytest.raises(ValueError, match="frame_time_s must be a finite number >= 0 s"):
+        live.frame(gaze_px=(30.0, 50.0), pupil_mm=7.0, frame_time_s=-0.01)
+    with pytest.raises(ValueError, match="pupil_mm must lie within the bank"):
+        live.frame(gaze_px=(30.0, 50.0), pupil_mm=9.5, frame_time_s=0.01)
+    held = live.frame(gaze_px=None, pupil_mm=None, frame_time_s=0.01)
+    assert (held.gaze_px, held.pupil_mm) == ((5.0, 5.0), 5.0)
+
+
+@pytest.mark.parametrize("pupil", [-3.0, math.inf, "5"])
+def test_a_bad_pupil_is_refused_for_a_model_without_a_frames_pupil(scene, pupil):
+    # the Gaussian model accepted pupil_mm=-3 and returned it
+    live = LiveNight(scene, pixel_deg=PIXEL_DEG, glare_model="gaussian")
+    with pytest.raises(ValueError, match="pupil_mm must be a finite number > 0 mm"):
+        live.frame(gaze_px=(5.0, 5.0), pupil_mm=pupil, frame_time_s=0.0)
+
+
+def test_a_bank_of_text_names_its_argument():
+    # pupil_bank_mm(model, "2,4") said "could not convert string to float: '2,4'"
+    with pytest.raises(ValueError, match="pupils_mm must be at least one finite pupil"):
+        pupil_bank_mm(VosGlare(), "2,4")
+
+
+def test_an_infinite_initial_adaptation_is_called_not_finite():
+    # it said "must be in [0, inf] cd/m², got inf"
+    with pytest.raises(ValueError, match="initial_adaptation_cd_m2 must be a finite number >= 0"):
+        LiveNight(np.ones((8, 8)), pixel_deg=PIXEL_DEG, initial_adaptation_cd_m2=math.inf)

@@ -56,6 +56,7 @@ from scipy import ndimage
 from threadpoolctl import ThreadpoolController
 
 from glarelab.files.memory import check_memory
+from glarelab.files.values import is_real
 from glarelab.glare._colour import colour
 from glarelab.glare._validation import check_choice, check_image, check_in_range, check_positive
 from glarelab.glare.models import _resolve
@@ -223,7 +224,13 @@ def pupil_bank_mm(
     >>> pupil_bank_mm(VosGlare(), (2.0, 4.0)).round(9).tolist()
     [2.0, 3.0, 3.0, 4.0]
     """
-    bank = np.asarray(pupils_mm, dtype=float).reshape(-1)
+    try:
+        bank = np.asarray(pupils_mm, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise ValueError(
+            f"pupils_mm must be at least one finite pupil > 0 mm, a list of numbers; got "
+            f"{pupils_mm!r}"
+        ) from None
     if bank.size == 0 or not (np.isfinite(bank).all() and (bank > 0).all()):
         raise ValueError(f"pupils_mm must be at least one finite pupil > 0 mm; got {pupils_mm!r}")
     if isinstance(model, VosGlare | HybridGlare) and bank.min() < HALO_PUPIL_MM <= bank.max():
@@ -685,8 +692,10 @@ class LiveNight:
         Raises
         ------
         ValueError
-            For a pupil outside the bank, a gaze that is not finite or too far off the image,
-            or a negative frame time.
+            For a pupil that is not a finite number > 0 (whatever the model) or lies outside
+            the bank, a gaze that is not finite or too far off the image, or a frame time that
+            is not a finite number >= 0; a refused frame leaves the held gaze, pupil and
+            adaptation as they were.
 
         Notes
         -----
@@ -715,6 +724,27 @@ class LiveNight:
             gaze = self._gaze
         else:
             gaze = ((self.shape[0] - 1) / 2, (self.shape[1] - 1) / 2)
+        # everything checked before the state changes: a refused frame leaves the held gaze,
+        # pupil and adaptation as they were
+        if pupil_mm is not None and pupil_mm != 0:
+            low, high = float(self.pupils_mm[0]), float(self.pupils_mm[-1])
+            number = float(pupil_mm) if is_real(pupil_mm) else math.nan
+            if not (math.isfinite(number) and number > 0):
+                raise ValueError(
+                    f"pupil_mm must be a finite number > 0 mm (or None or 0 for no sample); "
+                    f"got {pupil_mm!r}"
+                )
+            if self._has_pupil and not low <= number <= high:
+                raise ValueError(
+                    f"pupil_mm must lie within the bank, {low:g}-{high:g} mm (or be None or 0 "
+                    f"for no sample); got {pupil_mm!r}"
+                )
+            pupil = number
+        elif self._pupil is None:
+            pupil = float(self.pupils_mm[len(self.pupils_mm) // 2])
+        else:
+            pupil = self._pupil
+        frame_time_s = check_in_range("frame_time_s", frame_time_s, 0.0, math.inf, unit="s")
         # one BLAS thread for the window's two products: a 1280 × 720 matrix-vector product
         # takes 0.5 ms on one thread and 15 ms on a busy 2-core machine's two (measured)
         with self._threads.limit(limits=1, user_api="blas"):
@@ -726,19 +756,7 @@ class LiveNight:
             )
         target = math.exp(mean) if self.adaptation_mean == "log" else mean
         self._gaze = gaze
-        if pupil_mm is not None and pupil_mm != 0:
-            low, high = float(self.pupils_mm[0]), float(self.pupils_mm[-1])
-            if not (
-                self._has_pupil is False or low <= float(pupil_mm) <= high
-            ) or not math.isfinite(float(pupil_mm)):
-                raise ValueError(
-                    f"pupil_mm must lie within the bank, {low:g}-{high:g} mm (or be None or 0 "
-                    f"for no sample); got {pupil_mm!r}"
-                )
-            self._pupil = float(pupil_mm)
-        elif self._pupil is None:
-            self._pupil = float(self.pupils_mm[len(self.pupils_mm) // 2])
-        pupil = self._pupil
+        self._pupil = pupil
         previous = target if self._state is None else self._state
         self._state = adaptation_step(
             previous, target, frame_time_s, tau_rod_s=self.tau_rod_s, tau_cone_s=self.tau_cone_s
