@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from glarelab.files.atomic import write_text
-from glarelab.files.folders import record_written
+from glarelab.files.folders import edited_since, record_written
 
 from .common import PROTOCOL_HELP, count, folder_to_write, output_folder, writes_into
 from .common import log as _log
@@ -87,8 +87,16 @@ def _bench(args: argparse.Namespace) -> int:
                 f"choose from {', '.join(LIVE_WORKLOADS)}"
             )
         out = output_folder(args.out, "bench")
+        for name in ("live.csv", "live.md"):  # before the bench's minutes, not after
+            if edited_since(out, name):
+                raise ValueError(
+                    f"{out / name} was edited since glarelab wrote it; bench --live would "
+                    "overwrite it, so copy what you changed elsewhere, remove the file, or give "
+                    "another --out (nothing was changed)"
+                )
         only = tuple(args.only) if args.only else None
-        write_live_bench(out, live_bench(only=only, log=_log))
+        write_live_bench(out, live_bench(only=only, repeats=args.repeats, log=_log))
+        record_written(out, ["live.csv", "live.md"])  # edited later: refused, not overwritten
         _log(f"wrote {out / 'live.csv'} and live.md")
         print(out.resolve())
         return 0
@@ -154,7 +162,12 @@ def add(commands) -> None:
         help="skip the one-call workload in fresh processes (empty and warm kernel cache)",
     )
     bench.add_argument("--no-startup", action="store_true", help="skip the start-up times")
-    bench.add_argument("--repeats", type=count(1, 100), default=3, help="timings per case")
+    bench.add_argument(
+        "--repeats",
+        type=count(1, 100),
+        default=3,
+        help="timings per case (with --live: timed passes over the 60-frame path)",
+    )
     bench.add_argument(
         "--acuity",
         action="store_true",
