@@ -134,6 +134,7 @@ def test_a_row_the_disk_cannot_take_is_cut_off_whole(tmp_path, monkeypatch):
         ({"duration_s": -1}, "duration_s must be"),
         ({"calibrate": True, "calibration_s": 0}, "calibration_s must be a finite number > 0"),
         ({"tracker": "nonsense"}, "tracker must be one of"),
+        ({"tracker": ["mouse"]}, "tracker must be one of"),
         (
             {"calibration": PupilCalibration(white_raw=3.0, black_raw=5.5, range_mm=(1, 10))},
             r"calibration.range_mm = \(1, 10\) mm leaves the renderer's pupils, 2-8 mm",

@@ -49,5 +49,5 @@ def test_disk_geometry():
     assert n % 2 == 1 and s["img"][n // 2, n // 2] == 4000.0
     area_deg2 = s["mask"].sum() * 0.01**2
     assert abs(area_deg2 - np.pi * 0.15**2) / (np.pi * 0.15**2) < 0.02
-    with pytest.raises(ValueError, match="disk_cd_m2 must be in"):
+    with pytest.raises(ValueError, match="disk_cd_m2 must be a finite number >= 0"):
         disk(field_deg=1, pixel_deg=0.1, disk_diameter_deg=0.3, disk_cd_m2=-1, background_cd_m2=0)

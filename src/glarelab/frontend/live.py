@@ -389,8 +389,9 @@ def run_live(
         check_in_range("duration_s", duration_s, 0.0, math.inf, unit="s")
     if calibrate:
         check_positive("calibration_s", calibration_s, unit="s")
-    if not (
-        tracker in TRACKERS or (isinstance(tracker, str) and tracker.startswith("eyetracker.hw."))
+    if not isinstance(tracker, str) or not (
+        tracker in TRACKERS
+        or (tracker.startswith("eyetracker.hw.") and tracker.endswith("EyeTracker"))
     ):
         raise ValueError(
             f"tracker must be one of {sorted(TRACKERS)} or an ioHub eye tracker class path; "

@@ -39,7 +39,7 @@ def test_a_time_constant_that_is_not_positive_is_refused_naming_it(name, value, 
         ({"desaturation": 0.3}, "desaturation = 0.3: only Spencer's scotopic colour takes it"),
         (
             {"initial_adaptation_cd_m2": -1.0, "frame_time_s": None},
-            "initial_adaptation_cd_m2 must be in [0, inf) cd/m², got -1",
+            "initial_adaptation_cd_m2 must be a finite number >= 0 cd/m², got -1",
         ),
     ],
 )
