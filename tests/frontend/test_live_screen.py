@@ -125,8 +125,17 @@ def test_the_frame_log_gaze_follows_the_mouse_and_escape_ends_as_aborted(screen,
         "0.00",
         "5.0000",
     )
-    wait_for_row(
+    after = wait_for_row(
         screen, frames, lambda r: int(r["frame"]) > int(blink["frame"]) and r["valid_gaze"] == "1"
+    )
+    # a second blink, counted apart from the first
+    subprocess.run([*xdotool, "mousedown", "1", "mousedown", "3"], env=screen.env, check=True)
+    second = wait_for_row(
+        screen, frames, lambda r: int(r["frame"]) > int(after["frame"]) and r["valid_gaze"] == "0"
+    )
+    subprocess.run([*xdotool, "mouseup", "1", "mouseup", "3"], env=screen.env, check=True)
+    wait_for_row(
+        screen, frames, lambda r: int(r["frame"]) > int(second["frame"]) and r["valid_gaze"] == "1"
     )
     # the screen, read back from the X server once the eye has adapted to the last gaze,
     # shows render_night of that gaze, pupil and adaptation (8-bit codes, ±1 for the little
@@ -158,6 +167,6 @@ def test_the_frame_log_gaze_follows_the_mouse_and_escape_ends_as_aborted(screen,
     recorded = rows(frames)
     assert summary["aborted"] is True and summary["frames"] == len(recorded)
     assert summary["lost"] == sum(r["valid_gaze"] == "0" for r in recorded) > 1  # the blink
-    # one blink of many samples, counted once (it was 0, and the start-up frame 1)
-    assert summary["blinks"] == 1
+    # two blinks of many samples each, each counted once (they were 0, the start-up frame 1)
+    assert summary["blinks"] == 2
     assert [int(r["frame"]) for r in recorded] == list(range(len(recorded)))
