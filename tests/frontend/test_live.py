@@ -12,6 +12,7 @@ import pytest
 
 from glarelab.frontend.eyetracker import PupilCalibration
 from glarelab.frontend.live import FRAME_COLUMNS, LiveView, _Record, run_live
+from glarelab.glare.night.live import LiveNight
 from glarelab.glare.rendering.display import CodeTable
 
 
@@ -154,3 +155,11 @@ def test_run_live_names_a_missing_folder_not_the_tracker(tmp_path):
     frames = tmp_path / "nofolder" / "P01_frames.tsv"
     with pytest.raises(ValueError, match="nofolder' does not exist; make it first"):
         run_live(SCENE, pixel_deg=0.1, frames_path=frames, duration_s=0.1)
+
+
+def test_a_live_view_refuses_a_calibration_beyond_its_bank():
+    # a session's live scene would die midway when the pupil passed the bank's 8 mm
+    live = LiveNight(SCENE, pixel_deg=0.1)
+    wide = PupilCalibration(white_raw=3.0, black_raw=5.5, range_mm=(1.0, 10.0))
+    with pytest.raises(ValueError, match=r"calibration.range_mm = \(1.0, 10.0\) mm leaves"):
+        LiveView(None, live, lut=np.linspace(0.0, 1.0, 256), bits=8, calibration=wide)

@@ -212,7 +212,8 @@ class PupilCalibration:
     unit
         The tracker's pupil unit (``'mm'``, ``'px'``, ``'area'``...), recorded.
     range_mm
-        The range mapped to, mm; default Luidolt's 2-8.
+        The range mapped to, mm (the tracker's values clamped to it); default Luidolt's 2-8,
+        the live renderer's pupils: a live scene refuses a range beyond them.
     screen_s
         How long each screen was shown, s (recorded); None: not measured here.
     valid_samples

@@ -128,6 +128,19 @@ class _Record:
                 self.sidecar.unlink(missing_ok=True)
 
 
+def _check_calibration(calibration: PupilCalibration | None, live: LiveNight) -> None:
+    """Refuse a pupil calibration whose range leaves the renderer's bank (a frame's pupil
+    beyond it would stop the viewing midway)."""
+    bank = (float(live.pupils_mm[0]), float(live.pupils_mm[-1]))
+    if calibration is not None and not (
+        bank[0] <= calibration.range_mm[0] and calibration.range_mm[1] <= bank[1]
+    ):
+        raise ValueError(
+            f"calibration.range_mm = {tuple(calibration.range_mm)!r} mm leaves the renderer's "
+            f"pupils, {bank[0]:g}-{bank[1]:g} mm: give a range within them (Luidolt's 2-8 mm)"
+        )
+
+
 class LiveView:
     """One scene shown live in a window: per refresh the tracker's last sample, through the
     fault filter, rendered, encoded, shown and recorded.
@@ -144,7 +157,8 @@ class LiveView:
     bits
         Bits per channel of the codes.
     calibration
-        Luidolt's pupil range, or None: the tracker's pupil in mm, clamped to 2-8 mm.
+        Luidolt's pupil range, or None: the tracker's pupil in mm, clamped to 2-8 mm. Its
+        ``range_mm`` must lie within the renderer's pupils (2-8 mm).
     pos_px
         Centre of the scene in the window, pixels from the window's centre (PsychoPy's
         ``pos``); default the centre.
@@ -160,6 +174,7 @@ class LiveView:
         calibration: PupilCalibration | None = None,
         pos_px: tuple[float, float] = (0.0, 0.0),
     ) -> None:
+        _check_calibration(calibration, live)
         from psychopy import visual
 
         height, width = live.shape
@@ -403,14 +418,7 @@ def run_live(
         scene_cd_m2, pixel_deg=pixel_deg, display_max_cd_m2=display_max_cd_m2,
         adapted_display_cd_m2=adapted_display_cd_m2, scotopic=scotopic,
     )  # fmt: skip
-    bank = (float(live.pupils_mm[0]), float(live.pupils_mm[-1]))
-    if calibration is not None and not (
-        bank[0] <= calibration.range_mm[0] and calibration.range_mm[1] <= bank[1]
-    ):
-        raise ValueError(
-            f"calibration.range_mm = {tuple(calibration.range_mm)!r} mm leaves the renderer's "
-            f"pupils, {bank[0]:g}-{bank[1]:g} mm: give a range within them (Luidolt's 2-8 mm)"
-        )
+    _check_calibration(calibration, live)
     sidecar = frames_path.with_name(frames_path.name[: -len("_frames.tsv")] + "_live.json")
     record = _Record(frames_path, sidecar)  # refuses an existing record, before the window
     shown = False
