@@ -465,7 +465,7 @@ class GazeFilter:
             The tracker's pupil (its unit), or None / 0 / NaN (blink, lost).
         blink
             Whether the tracker reported the eye closed in this sample
-            (:attr:`IoHubEyeTracker.blinking`); None (default): a sample without a pupil is
+            (``IoHubEyeTracker.blinking``); None (default): a sample without a pupil is
             one.
 
         Returns
@@ -808,7 +808,7 @@ class IoHubEyeTracker:
         tuple
             ``(gaze_x_px, gaze_y_px, pupil_raw)``: a binocular tracker's mean of the eyes it
             found (one eye's alone when it lost the other). A sample with the eye(s) not
-            found or without a pupil is a blink (:attr:`blinking` true): all three None.
+            found or without a pupil is a blink (``blinking`` true): all three None.
         """
         self.blinking = False
         server = getattr(self.io, "_server_process", None)
