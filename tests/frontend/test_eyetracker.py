@@ -31,9 +31,13 @@ def test_pupil_calibration_maps_white_to_2_and_black_to_8_mm():
 
 
 def test_a_tracker_without_pupil_range_is_refused():
-    # MouseGaze reports 5 mm on both screens: no range to map
-    with pytest.raises(ValueError, match="black_raw must exceed white_raw"):
+    # MouseGaze reports 5 mm on both screens: no range to map (and the way out named, where
+    # it said only that black_raw must exceed white_raw)
+    with pytest.raises(ValueError, match=r"5 mm on the white screen and on the black.*"
+                       r"MouseGaze.*--eyetracker mouse"):  # fmt: skip
         PupilCalibration.from_samples([5.0, 5.0], [5.0, 5.0])
+    with pytest.raises(ValueError, match="black_raw must exceed white_raw"):
+        PupilCalibration.from_samples([6.0, 6.0], [5.0, 5.0])
 
 
 def test_blinks_and_lost_samples_hold_the_last_state_and_are_counted():

@@ -314,6 +314,15 @@ class PupilCalibration:
                 raise ValueError(f"{name} holds no valid pupil sample (all missing or 0)")
             means.append(round(float(valid.mean()), 12))
             counts.append(int(valid.size))
+        if means[0] == means[1]:  # one value on both screens: no pupil that follows light
+            raise ValueError(
+                f"the tracker's pupil was {means[0]:g} {unit} on the white screen and on the "
+                "black: a pupil that does not follow the screen's light (a simulated tracker "
+                "such as MouseGaze, whose pupil is constant) cannot be calibrated; use a "
+                "tracker that measures the pupil, or the 'mouse' tracker (--eyetracker mouse), "
+                "whose calibration "
+                "simulates the eye's pupil"
+            )
         return cls(
             white_raw=means[0], black_raw=means[1], unit=unit, screen_s=screen_s,
             valid_samples=(counts[0], counts[1]), simulated=simulated,

@@ -135,6 +135,8 @@ def test_an_option_of_an_effect_left_out_is_refused_naming_it_and_the_effect(opt
         ({"glare_method": "bogus"}, r"^glare_method must be one of 'Yoshida2008'"),
         ({"acuity_space": "bogus"}, r"^acuity_space must be one of 'lightness', 'linear'"),
         ({"window_sigma_deg": 0}, r"^window_sigma_deg must be a finite number > 0 deg, got 0"),
+        ({"window_sigma_deg": 20.0}, r"^window_sigma_deg=20.0 without a gaze \(gaze_px\)"),
+        ({"window_sigma_deg": 1.0, "gaze_px": [None]}, r"^window_sigma_deg=1.0 without a gaze"),
     ],
 )  # fmt: skip
 def test_an_option_that_would_be_ignored_or_is_bad_is_refused_under_its_own_name(option, match):

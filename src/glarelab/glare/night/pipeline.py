@@ -402,6 +402,8 @@ def render_night(
     window_sigma_deg, adaptation_mean, tau_rod_s, tau_cone_s
         Adaptation (:func:`glarelab.glare.night.adaptation.frame_luminance`, eqs. 5.2-5.4);
         the window and the mean also set the exposure without the effect ``'adaptation'``.
+        ``window_sigma_deg`` weighs the luminance around a gaze: without one it is refused
+        away from its default (every pixel counts alike).
     glare_falloff_deg
         σ of Luidolt's Gaussian falloff around the gaze, degrees (§5.2.3): the glared frame
         is blended with the unglared one by the falloff's weight
@@ -504,6 +506,16 @@ def render_night(
                     "initial_adaptation_cd_m2 (or a sequence of frames), or leave "
                     f"{name} at its default ({default!r})"
                 )
+    no_gaze = gaze_px is None or (
+        isinstance(gaze_px, list) and all(gaze is None for gaze in gaze_px)
+    )
+    check_positive("window_sigma_deg", window_sigma_deg, unit="deg")
+    if no_gaze and not _at_default(window_sigma_deg, WINDOW_SIGMA_DEG):
+        raise ValueError(
+            f"window_sigma_deg={window_sigma_deg!r:.40} without a gaze (gaze_px): the window "
+            "around the gaze weighs the luminance, and without one every pixel counts alike, "
+            f"so it would be ignored; give gaze_px or leave it at {WINDOW_SIGMA_DEG!r}"
+        )
     if "acuity" in chosen and blur != "layers" and levels_per_octave != LEVELS_PER_OCTAVE:
         raise ValueError(
             f"levels_per_octave={levels_per_octave!r} with blur={blur!r}: it spaces the "
