@@ -613,3 +613,34 @@ def test_a_run_that_fails_as_it_starts_is_not_left_running(tmp_path, collecting,
     recorded = json.loads(sidecar.read_text())
     assert recorded["status"] == "aborted" and recorded["runs"][-1]["status"] == "aborted"
     assert recorded["runs"][-1]["ended_by"].startswith(ended_by)
+
+
+def test_a_signal_that_the_windows_cleanup_turns_into_another_error_still_stops_the_session(
+    tmp_path,
+):
+    """SIGTERM during the pupil calibration raised the stop inside a GL call of a flip, and the
+    calibration's last flip then failed with ctypes' ArgumentError: that error, not the stop,
+    reached the command, which called it a bug (exit 70). The stop the signal asked for wins."""
+    import ctypes
+    import os
+    import signal
+
+    from glarelab.experiments.session import SessionAborted
+
+    protocol = load_protocol("luidolt2020")
+
+    class Interrupted(SimulatedFrontend):
+        def start(self, **settings):
+            super().start(**settings)
+            self.collecting = True
+            try:
+                os.kill(os.getpid(), signal.SIGTERM)  # the handler raises the stop here
+            except SessionAborted:
+                raise ctypes.ArgumentError("argument 1: TypeError: wrong type") from None
+
+    frontend = Interrupted(make_observer(protocol, "P01", seed=0, stimuli=None))
+    with pytest.raises(SessionAborted, match="SIGTERM"):
+        run_session(protocol, "P01", out=tmp_path, frontend=frontend, simulated=True)
+    (sidecar,) = tmp_path.glob("*.json")
+    run = json.loads(sidecar.read_text())["runs"][-1]
+    assert (run["status"], run["ended_by"]) == ("aborted", "SIGTERM")

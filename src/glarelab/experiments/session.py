@@ -781,11 +781,15 @@ def _run_session_locked(
                         sidecar["runs"][-1]["pupil_calibration"] = pupil.as_dict()
                         files.write_sidecar(sidecar)
                 except BaseException as error:  # stopped or failed while starting
+                    if stop.reason is not None and not isinstance(error, SessionAborted):
+                        # a signal's stop that the window's cleanup turned into its own error
+                        # (a flip cut short inside a GL call fails the next one)
+                        error = SessionAborted(stop.reason)
                     if files.created and not getattr(frontend, "collecting", False):
-                        raise  # nothing collected: the new session's files are discarded
+                        raise error  # nothing collected: the new session's files are discarded
                     started_run = True  # what the tracker recorded, or a resumed run, is kept
                     _finish_run(sidecar, files, None, None, "aborted", _ended_by(error, files))
-                    raise
+                    raise error
                 started_run = True  # from here the files are the run's record, kept
                 _run_trials(engine, frontend, files, sidecar, protocol, rate, resume, stop)
             finally:

@@ -649,10 +649,17 @@ def calibrate_pupil(
                 if simulated is not None and _finite(pupil) and pupil > 0:  # not a blink
                     pupil = float(pupil_diameter_mm(screens[name]))
                 pupils.append(math.nan if pupil is None else float(pupil))
-    finally:
-        if before is not None:
-            window.color = before
-        window.flip()
+    except BaseException:
+        # stopped (a signal's exception may cut a GL call short, and the next flip then
+        # fails): the window is put back as it can be, and the stop goes on
+        with contextlib.suppress(Exception):
+            if before is not None:
+                window.color = before
+            window.flip()
+        raise
+    if before is not None:
+        window.color = before
+    window.flip()
     return PupilCalibration.from_samples(
         samples["white"], samples["black"], unit=unit, screen_s=float(screen_s),
         simulated=simulated,
