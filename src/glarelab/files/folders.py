@@ -434,9 +434,7 @@ def _aside_stem(final: Path) -> str:
 
 def _leftovers(final: Path) -> None:
     """Remove the staging and replaced folders of ``final`` that killed processes left, and
-    put back an earlier ``final`` that a process killed between two renames left aside; a
-    replaced folder's files that a person saved into it (not glarelab's as written) are moved
-    into ``final`` first (:func:`_remove_earlier`)."""
+    put back an earlier ``final`` that a process killed between two renames left aside."""
     for kind in ("old", "building"):
         pattern = f".{glob_escape(_aside_stem(final))}.{kind}-*"
         for leftover in sorted(final.parent.glob(pattern)):
@@ -446,13 +444,6 @@ def _leftovers(final: Path) -> None:
             if kind == "old" and not final.exists() and not final.is_symlink():
                 with contextlib.suppress(FileNotFoundError):  # another process put it back
                     leftover.rename(final)  # the earlier output, complete
-            elif (
-                (kind == "old" or (leftover / LISTING).is_file())
-                and final.is_dir()
-                and not final.is_symlink()
-            ):  # an earlier output, killed before it was cleared (a staging folder is listed
-                # only when complete: as the new output, its files are all glarelab's)
-                _remove_earlier(leftover, final, None)
             else:
                 shutil.rmtree(leftover, ignore_errors=True)
 
@@ -573,21 +564,14 @@ def replace_folder(
                     os.close(handle)
         fsync_folder(root)
     final = Path(final).resolve()
-    aside = final.with_name(f".{_aside_stem(final)}.old-{os.getpid()}")
     for _attempt in range(5):  # another process may put its own output there meanwhile
         if final.is_dir() and not final.is_symlink() and _exchange(staging, final):
             fsync_folder(final.parent)
-            # staging is now the earlier output: under the name of a replaced output, which
-            # a caller's cleanup of its staging folder leaves alone, so that a process cut
-            # short before the files a person saved there are moved leaves them to the next
-            # build (_leftovers, which also rescues them from a staging folder's leftover)
-            shutil.rmtree(aside, ignore_errors=True)
-            staging.rename(aside)
-            _remove_earlier(aside, final, kind)
+            _remove_earlier(staging, final, kind)  # staging is now the earlier output
             return
         old = None
         if final.exists():
-            old = aside
+            old = final.with_name(f".{_aside_stem(final)}.old-{os.getpid()}")
             shutil.rmtree(old, ignore_errors=True)
             try:
                 final.rename(old)
@@ -622,23 +606,19 @@ def _same_entry(first: Path, second: Path) -> bool:
         return False
 
 
-def _remove_earlier(earlier: Path, final: Path, kind: str | None) -> None:
+def _remove_earlier(earlier: Path, final: Path, kind: str) -> None:
     """Remove the output ``final`` replaced, once the files a person saved into it while the
     new one was made (files glarelab did not write there, or edited since) are moved into
     ``final``, at their own paths (``NAME.kept`` where the new output has a file of that
     name); the command's start had checked the folder, but a note saved during a minutes-long
     build was deleted with it. Where one cannot be moved, the earlier folder is kept beside
-    ``final`` as ``NAME.kept-PID``. Either way a warning names them. ``kind`` None (a
-    leftover of a killed process, its kind unknown): a file listed as any kind's is
-    glarelab's."""
+    ``final`` as ``NAME.kept-PID``. Either way a warning names them."""
     listed, written = _listing(earlier), _hashes(earlier)
     moved, failed = [], False
     for entry in _entries(earlier):
         source = earlier / entry
-        if (
-            entry in listed
-            and kind in (None, listed[entry])
-            and (entry not in written or _sha256(source) == written[entry])
+        if listed.get(entry) == kind and (
+            entry not in written or _sha256(source) == written[entry]
         ):
             continue  # glarelab's, as written: replaced by the new output
         target = final / entry
@@ -657,7 +637,6 @@ def _remove_earlier(earlier: Path, final: Path, kind: str | None) -> None:
             failed = True
             continue
         moved.append(target.relative_to(final).as_posix())
-    what = kind or "output"
     if failed:
         kept = final.with_name(f"{final.name}.kept-{os.getpid()}")
         try:
@@ -665,7 +644,7 @@ def _remove_earlier(earlier: Path, final: Path, kind: str | None) -> None:
         except OSError:
             kept = earlier
         warnings.warn(
-            f"{final}: files saved into it while the new {what} was made could not all be "
+            f"{final}: files saved into it while the new {kind} was made could not all be "
             f"moved into it; the earlier folder is kept as {kept}",
             stacklevel=3,
         )
@@ -673,7 +652,7 @@ def _remove_earlier(earlier: Path, final: Path, kind: str | None) -> None:
     shutil.rmtree(earlier, ignore_errors=True)
     if moved:
         warnings.warn(
-            f"{final}: {len(moved)} file(s) saved into it while the new {what} was made were "
+            f"{final}: {len(moved)} file(s) saved into it while the new {kind} was made were "
             f"kept in it: {', '.join(moved[:5])}{' ...' if len(moved) > 5 else ''}",
             stacklevel=3,
         )
