@@ -311,18 +311,22 @@ def test_two_sessions_of_one_participant_are_named(yoshida, tmp_path):
         load_sessions(protocol, [*files, second])
 
 
-def _as_resaved(lines, old, new, *, times=None):
+def _as_resaved(lines, old, new, *, times=None, digits=15, time=None):
     """A session's lines as a spreadsheet re-saves them under participant ``new`` (15
-    significant digits: 1.0020008087158203 becomes 1.00200080871582); ``times`` puts that
-    text in every time column instead (an experiment that timed nothing)."""
+    significant digits: 1.0020008087158203 becomes 1.00200080871582, or ``digits``);
+    ``times`` puts that text in every time column instead (an experiment that timed
+    nothing), ``time`` rewrites each time's value."""
     header = lines[0].rstrip("\n").split(",")
     timed = [i for i, n in enumerate(header) if n == "onset_s" or n.endswith("time_s")]
     out = [lines[0]]
     for line in renamed(lines[1:], old, new):
         cells = line.rstrip("\n").split(",")
-        cells = [f"{float(c):.15g}" if re.fullmatch(r"-?\d+\.\d+", c) else c for c in cells]
-        for i in timed if times is not None else ():
-            cells[i] = times
+        cells = [f"{float(c):.{digits}g}" if re.fullmatch(r"-?\d+\.\d+", c) else c for c in cells]
+        for i in timed:
+            if times is not None:
+                cells[i] = times
+            elif time is not None and cells[i]:
+                cells[i] = repr(time(float(cells[i])))
         out.append(",".join(cells) + "\n")
     return out
 
@@ -358,6 +362,54 @@ def test_one_persons_session_under_two_participant_ids_is_refused(yoshida, tmp_p
     ]
     dataset = load_sessions(protocol, [files[0], *timeless])
     assert set(dataset.trials["participant"]) == {"sim01", "P10", "P11"}
+
+
+@pytest.mark.parametrize(
+    ("how", "resave"),
+    [
+        ("10 significant digits", {"digits": 10}),
+        ("times to the millisecond", {"time": lambda t: round(t, 3)}),
+        ("times to the millisecond, sorted by time", {"time": lambda t: round(t, 3)}),
+    ],
+)
+def test_a_resave_with_fewer_digits_is_the_same_person(yoshida, tmp_path, how, resave):
+    """A re-save that keeps 10 significant digits (or rounds the times to the millisecond)
+    was not the same trials to 12 digits: one person's file and its re-save were two
+    participants."""
+    protocol, files = yoshida
+
+    def rows(lines):
+        out = _as_resaved(lines, "sim02", "P10", **resave)
+        if "sorted" in how:  # a spreadsheet's sort by another column keeps each row whole
+            out[1:] = sorted(out[1:], key=lambda line: line.split(",")[::-1])
+        return out
+
+    twin = copy_session(
+        files[1],
+        tmp_path,
+        name=files[1].name.replace("sim02", "P10"),
+        rows=rows,
+        sidecar={"participant": "P10", "trial_order": None},
+    )
+    with pytest.raises(DataError) as refused:
+        load_sessions(protocol, [*files, twin])
+    (problem,) = refused.value.problems
+    assert problem.startswith(f"{twin}: its trials are those of {files[1]}, cell for cell")
+
+
+def test_times_10_ms_apart_are_two_people(yoshida, tmp_path):
+    """The same answers with every time 10 ms later are not one file re-saved: two
+    participants, whom the analysis takes (the tolerance is the millisecond)."""
+    protocol, files = yoshida
+    other = copy_session(
+        files[1],
+        tmp_path,
+        name=files[1].name.replace("sim02", "P10"),
+        rows=lambda lines: _as_resaved(lines, "sim02", "P10", time=lambda t: t + 0.01),
+        sidecar={"participant": "P10", "trial_order": None},
+    )
+    dataset = load_sessions(protocol, [*files, other])
+    assert "P10" in set(dataset.trials["participant"])
 
 
 def test_a_design_cell_given_twice_is_named_with_plain_values(yoshida, tmp_path):

@@ -42,9 +42,10 @@ import io
 import json
 import math
 import re
+from collections.abc import Sequence
 from datetime import datetime
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, TypeVar
 
 import pandas as pd
 
@@ -1144,7 +1145,7 @@ def load_sessions(
     files = []
     replayed: list[str] = []  # what the paradigm's replay of each session finds
     edited: list[str] = []  # rows that are not the ones their session wrote
-    keys: list[tuple[Path, str, int, tuple]] = []  # each file's trials (_trials_key)
+    keys: list[tuple[Path, str, int, _Trials | None]] = []  # each file's (_trials_of)
     if not paths:
         raise DataError(["no CSV files given"])
     paradigm = paradigm_analysis(protocol)
@@ -1222,9 +1223,9 @@ def load_sessions(
         edited += _row_digests(path, sidecar, read)
         files.append(str(path))
         rows += read
-        text = path.read_text(encoding="utf-8-sig")  # the cells as written, for _trials_key
+        text = path.read_text(encoding="utf-8-sig")  # the cells as written, for _trials_of
         cells = csv.DictReader(io.StringIO(text, newline=""))
-        keys.append((path, read[0]["participant"], read[0]["session"], _trials_key(cells)))
+        keys.append((path, read[0]["participant"], read[0]["session"], _trials_of(cells)))
         # named after the values no session can write (paradigm.check), which a replay of the
         # staircase would only echo as a step out of place
         replayed += _paradigm_session_checks(paradigm, path, read, sidecar, protocol)
@@ -1312,55 +1313,96 @@ def load_sessions(
 _WHO = ("study", "participant", "session")  # not what a participant did
 
 
-def _number(text: str) -> str:
-    """A cell as a number to 12 significant digits where it is one (a spreadsheet keeps 15:
-    1.0020008087158203 is saved as 1.00200080871582, 7000.0 as 7000), else as written."""
+_Name = TypeVar("_Name")
+TIME_TOLERANCE_S = 0.001  # a time re-saved to the millisecond is the same time
+NUMBER_TOLERANCE = 1e-9  # relative: a spreadsheet's re-save to 10 significant digits
+
+
+class _Trials:
+    """What a session's participant did, to know it again under another participant id or
+    session (:func:`_trials_of`): its rows without who and which session, in a canonical
+    order, the text cells as written and the numbers as numbers."""
+
+    def __init__(self, shape: tuple, numbers: list[float], is_time: list[bool]) -> None:
+        self.shape = shape  # columns, rows and text cells: equal in two copies (hashable)
+        self.numbers = numbers
+        self.is_time = is_time
+
+    def same(self, other: _Trials) -> bool:
+        """The same trials, numbers to :data:`NUMBER_TOLERANCE` and times to
+        :data:`TIME_TOLERANCE_S` (a re-save to 10 significant digits or the millisecond)."""
+        if self.shape != other.shape:
+            return False
+        for a, b, time in zip(self.numbers, other.numbers, self.is_time, strict=True):
+            allowed = TIME_TOLERANCE_S if time else NUMBER_TOLERANCE * max(abs(a), abs(b))
+            if abs(a - b) > allowed + 1e-12:
+                return False
+        return True
+
+
+def _is_time(column: str) -> bool:
+    return column == "onset_s" or column.endswith("time_s")
+
+
+def _trials_of(rows) -> _Trials | None:
+    """A session's :class:`_Trials` from its rows (mappings of column to cell text, in any
+    order); None where the times do not tell two people apart: no time recorded, or every
+    time within :data:`TIME_TOLERANCE_S` of the others (``--set time_s=0``), as answers
+    alone, which two people may well give alike. Times (``onset_s``, ``time_s``, a
+    question's ``…_time_s``) recorded to the millisecond are no two people's alike."""
+    table = []
+    for row in rows:
+        if not any(row.values()):  # a row of empty cells a spreadsheet left
+            continue
+        cells = []  # a ragged row of a file not a session's (csv.DictReader: None, lists) too
+        for k, v in sorted(row.items(), key=lambda item: str(item[0])):
+            if k in _WHO:
+                continue
+            number = _finite(v) if isinstance(v, str) else None
+            cells.append((str(k), repr(v) if not isinstance(v, str) else v, number))
+        table.append(cells)
+    # rows by their numbers and text (a spreadsheet's sort keeps each row's cells)
+    table.sort(key=lambda cells: [(k, n is None, n if n is not None else t) for k, t, n in cells])
+    times = [n for cells in table for k, _, n in cells if n is not None and _is_time(k)]
+    if not times or max(times) - min(times) <= TIME_TOLERANCE_S:
+        return None
+    shape = tuple(tuple((k, None if n is not None else t) for k, t, n in cells) for cells in table)
+    numbers = [n for cells in table for _, _, n in cells if n is not None]
+    is_time = [_is_time(k) for cells in table for k, _, n in cells if n is not None]
+    return _Trials(shape, numbers, is_time)
+
+
+def _finite(text: str) -> float | None:
     try:
         value = float(text)
     except ValueError:
-        return text
-    return f"{value:.12g}" if math.isfinite(value) else text
+        return None
+    return value if math.isfinite(value) else None
 
 
-def _trials_key(rows) -> tuple:
-    """What a session's participant did, to know it again under another participant id or
-    session: its rows (mappings of column to cell text, in any order) without who and which
-    session, each cell as :func:`_number` reads it; empty where the times do not tell two
-    people apart: no time recorded, or every time the same (``--set time_s=0``), as answers
-    alone, which two people may well give alike. Times (``onset_s``, ``time_s``, a question's
-    ``…_time_s``) recorded to the millisecond are no two people's alike."""
-    cells = [  # a ragged row of a file not a session's (csv.DictReader: None, lists) too
-        tuple(
-            sorted(
-                (str(k), _number(v) if isinstance(v, str) else repr(v))
-                for k, v in row.items()
-                if k not in _WHO
-            )
-        )
-        for row in rows
-        if any(row.values())  # a row of empty cells a spreadsheet left
-    ]
-    times = {v for row in cells for k, v in row if v and (k == "onset_s" or k.endswith("time_s"))}
-    return tuple(sorted(cells)) if len(times) > 1 else ()
+def _twin(trials: _Trials | None, earlier: Sequence[tuple[_Name, _Trials | None]]) -> _Name | None:
+    """The first of ``earlier`` (pairs of what to name and its trials) with the same trials."""
+    if trials is None:
+        return None
+    return next((name for name, other in earlier if other and trials.same(other)), None)
 
 
-def _same_trials_twice(keys: list[tuple[Path, str, int, tuple]]) -> list[str]:
+def _same_trials_twice(keys: list[tuple[Path, str, int, _Trials | None]]) -> list[str]:
     """Sessions of two participants whose trials are the same, cell for cell and times
-    included (:func:`_trials_key`): one person's session imported or copied twice under two
+    included (:func:`_trials_of`): one person's session imported or copied twice under two
     ids (a file and its spreadsheet re-save) would count as two people. (Two files of one
     participant are named by :func:`_several_sessions`, whatever their trials.)"""
-    problems, first = [], {}
-    for path, participant, session, key in keys:
-        if not key:
-            continue
-        twin = first.setdefault(key, (path, participant, session))
-        if twin[1] != participant:
+    problems = []
+    for i, (path, participant, session, trials) in enumerate(keys):
+        others = [((p, who, s), t) for p, who, s, t in keys[:i] if who != participant]
+        twin = _twin(trials, others)
+        if twin is not None:
             problems.append(
-                f"{path}: its trials are those of {twin[0]}, cell for cell (times included), "
-                f"as participant {participant}'s session {session} and participant {twin[1]}'s "
-                f"session {twin[2]}: one person's session imported or copied twice under two "
-                "ids (a file and its spreadsheet re-save?); no two people answer to the "
-                "millisecond alike: give one of the two files"
+                f"{path}: its trials are those of {twin[0]}, cell for cell (times to the "
+                f"millisecond), as participant {participant}'s session {session} and "
+                f"participant {twin[1]}'s session {twin[2]}: one person's session imported or "
+                "copied twice under two ids (a file and its spreadsheet re-save?); no two "
+                "people answer to the millisecond alike: give one of the two files"
             )
     return problems
 

@@ -52,7 +52,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 
 from glarelab.analysis.dataset import DataError
-from glarelab.analysis.load import _other_delimiter, _parse, _trials_key
+from glarelab.analysis.load import _other_delimiter, _parse, _Trials, _trials_of, _twin
 from glarelab.files.atomic import write_text
 from glarelab.files.inputs import input_file
 from glarelab.protocols import columns
@@ -640,34 +640,35 @@ def import_psychopy(
     return [p[0] for p in planned]
 
 
-def _trials_of(text: str) -> tuple:
-    """:func:`glarelab.analysis.load._trials_key` of a session file's text: the analysis's
+def _trials_in(text: str) -> _Trials | None:
+    """:func:`glarelab.analysis.load._trials_of` of a session file's text: the analysis's
     rule, so that what the import refuses and what the analysis refuses are one."""
-    return _trials_key(csv.DictReader(io.StringIO(text, newline="")))
+    return _trials_of(csv.DictReader(io.StringIO(text, newline="")))
 
 
 def _same_trials(planned: list, out: Path) -> list[str]:
     """Sessions of this import whose trials equal another's, or a session's already in
-    ``out``, times included (no two people answer to the millisecond alike): a file and its
-    spreadsheet re-save (participant ``001`` became ``1``) were two participants with the same
-    trials."""
-    problems, seen = [], {}
-    earlier = []
+    ``out``, times included to the millisecond (no two people answer to the millisecond
+    alike): a file and its spreadsheet re-save (participant ``001`` became ``1``) were two
+    participants with the same trials."""
+    problems: list[str] = []
+    earlier: list = []
     for path in sorted(out.glob("*.csv")) if out.is_dir() else []:
         try:
-            earlier.append((path, _trials_of(path.read_text(encoding="utf-8"))))
+            earlier.append((path.name, _trials_in(path.read_text(encoding="utf-8"))))
         except (OSError, ValueError):
             continue
+    seen: list = []
     for imported, text, _ in planned:
-        key = _trials_of(text)
-        twin = seen.get(key) or next((p for p, k in earlier if k == key), None)
-        if twin is not None and key:
+        trials = _trials_in(text)
+        twin = _twin(trials, seen) or _twin(trials, earlier)
+        if twin is not None:
             problems.append(
-                f"{imported.source}: its trials are those of {twin.name}, cell for cell, as "
+                f"{imported.source}: its trials are those of {twin}, cell for cell, as "
                 f"participant {imported.participant}'s session {imported.session}: a file and "
                 "its re-save (a spreadsheet makes 001 into 1)? Import one of them"
             )
-        seen.setdefault(key, imported.source)
+        seen.append((imported.source.name, trials))
     return problems
 
 
