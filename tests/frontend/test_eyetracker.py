@@ -177,7 +177,8 @@ class Eye:
 
 def test_calibrate_pupil_shows_white_then_black_and_maps_their_means():
     screen = Screen()
-    c = calibrate_pupil(screen, Eye(screen), screen_s=0.05)
+    with pytest.warns(UserWarning, match=r"screen_s=0\.05: Luidolt's pupil calibration .* 5 s"):
+        c = calibrate_pupil(screen, Eye(screen), screen_s=0.05)  # a real pupil, unsettled
     assert (c.white_raw, c.black_raw) == (3.0, 7.0)  # blinks left out of both means
     assert screen.color == (0.0, 0.0, 0.0) and screen.flips > 4  # the colour put back
 

@@ -34,6 +34,7 @@ import math
 import os
 import subprocess
 import sys
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -600,6 +601,12 @@ def calibrate_pupil(
         For a bad duration, or a screen without a valid pupil or with no range between them
         (MouseGaze reports 5 mm on both: give ``simulate_cd_m2``).
 
+    Warns
+    -----
+    UserWarning
+        For screens shorter than Luidolt's 5 s with the tracker's own pupil: the pupil may
+        not have settled.
+
     Notes
     -----
     "We calibrate our eye tracker to a user's pupil size, by showing a black or white screen
@@ -614,6 +621,14 @@ def calibrate_pupil(
 
     if not (math.isfinite(screen_s) and screen_s > 0):
         raise ValueError(f"screen_s must be a duration > 0 s; got {screen_s!r}")
+    if screen_s < CALIBRATION_SCREEN_S and simulate_cd_m2 is None:
+        warnings.warn(
+            f"screen_s={screen_s:g}: Luidolt's pupil calibration shows each screen "
+            f"{CALIBRATION_SCREEN_S:g} s; on a shorter one the pupil may not have settled to "
+            "the screen (it dilates in the dark over seconds), and the range measured is "
+            "too narrow",
+            stacklevel=2,
+        )
     simulated = None
     if simulate_cd_m2 is not None:
         try:
