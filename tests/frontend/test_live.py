@@ -163,3 +163,17 @@ def test_a_live_view_refuses_a_calibration_beyond_its_bank():
     wide = PupilCalibration(white_raw=3.0, black_raw=5.5, range_mm=(1.0, 10.0))
     with pytest.raises(ValueError, match=r"calibration.range_mm = \(1.0, 10.0\) mm leaves"):
         LiveView(None, live, lut=np.linspace(0.0, 1.0, 256), bits=8, calibration=wide)
+
+
+@pytest.mark.parametrize(
+    ("window_px", "fits"),
+    [((640, 400), True), ((639, 400), False), ((640, 399), False), ((1280, 800), True)],
+)
+def test_a_live_view_knows_whether_the_scene_fits_its_window(window_px, fits):
+    """A pilot's window smaller than the scene cut its edges off without a word: the
+    session warns where the view does not fit (to the pixel, the scene centred)."""
+    view = object.__new__(LiveView)
+    view.live = type("Live", (), {"shape": (400, 640)})()
+    view.window_px = window_px
+    view.origin_px = (window_px[0] / 2 - 320, window_px[1] / 2 - 200)
+    assert view.fits is fits

@@ -195,8 +195,21 @@ class LiveView:
             win_w / 2 + pos_px[0] - width / 2,
             win_h / 2 - pos_px[1] - height / 2,
         )
+        self.window_px = (win_w, win_h)
         self.frames = self.dropped = 0
         self.render_ms: list[float] = []
+
+    @property
+    def fits(self) -> bool:
+        """Whether the whole scene is on the window (a smaller window cuts its edges off)."""
+        height, width = self.live.shape
+        left, top = self.origin_px
+        return (
+            left >= 0
+            and top >= 0
+            and left + width <= self.window_px[0]
+            and top + height <= self.window_px[1]
+        )
 
     def run(
         self,

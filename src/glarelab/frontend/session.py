@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import json
 import math
+import sys
 import time
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -616,6 +617,13 @@ class PsychoPyFrontend:
             f"{view.origin_px[0]:g}, {view.origin_px[1]:g} (top-left), codes through the "
             f"{'session' if calibration is self.calibration else 'synthetic'} calibration"
         )
+        if not view.fits:  # a pilot's window smaller than the scene
+            cut = (
+                f"the live scene ({live.shape[1]} x {live.shape[0]} px) does not fit the window "
+                f"({view.window_px[0]} x {view.window_px[1]} px): its edges are not shown"
+            )
+            self.log(f"{what}: {cut}")
+            print(f"[glarelab] warning: {cut}", file=sys.stderr, flush=True)
         self.records.flush()  # the scene's place is known before its first frame
         clock = logging.defaultClock
         period = 1.0 / self.refresh_hz
