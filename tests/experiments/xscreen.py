@@ -67,16 +67,18 @@ class XScreen:
             subprocess.run([_need("setxkbmap"), layout], env=self.env, check=True)
         self.process: subprocess.Popen | None = None
         self.stderr_path = self.tmp_path / "glarelab.stderr"
+        self.stdout_path = self.tmp_path / "glarelab.stdout"
 
     # --- the program ----------------------------------------------------------------------
 
     def run(self, *args) -> subprocess.Popen:
         """Start ``glarelab ARGS`` on this screen."""
         self.stderr_file = self.stderr_path.open("w")
+        self.stdout_file = self.stdout_path.open("w")
         self.process = subprocess.Popen(
             [sys.executable, "-m", "glarelab", *map(str, args)],
             env=self.env,
-            stdout=subprocess.DEVNULL,
+            stdout=self.stdout_file,
             stderr=self.stderr_file,
         )
         return self.process
@@ -96,11 +98,16 @@ class XScreen:
         """Wait for the program to end; its exit status."""
         code = self.process.wait(timeout=timeout)
         self.stderr_file.close()
+        self.stdout_file.close()
         return code
 
     @property
     def stderr(self) -> str:
         return self.stderr_path.read_text() if self.stderr_path.exists() else ""
+
+    @property
+    def stdout(self) -> str:
+        return self.stdout_path.read_text() if self.stdout_path.exists() else ""
 
     def signal(self, number: int) -> None:
         self.process.send_signal(number)

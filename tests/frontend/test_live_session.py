@@ -292,6 +292,9 @@ def test_escape_during_the_pupil_calibration_ends_the_session(screen, tmp_path):
     screen.focus_window()
     screen.key("Escape")
     assert screen.wait(timeout=20) == 3, screen.stderr[-3000:]
+    # ioHub's words on its server's end go to its log, not the session's terminal
+    assert "ioHub Server" not in screen.stdout + screen.stderr, screen.stdout
+    assert "ioHub Server Process Completed" in next(data.glob("*_iohub.log")).read_text()
     sidecar = json.loads(next(data.glob("*.json")).read_text())
     assert sidecar["status"] == "aborted"
     assert sidecar["runs"][-1]["ended_by"] == "escape during the pupil calibration"

@@ -794,6 +794,7 @@ class IoHubEyeTracker:
         # the request ioHub's client sends to stop its server, packed as its client packs it
         self._guard = start_guard(port, msgpack.Packer().pack(("STOP_IOHUB_SERVER",)))
         try:
+            self._server_log = server_log
             with _output_to(server_log):
                 self.io = launchHubServer(
                     window=window, udp_port=port, **store, **{device: config}
@@ -808,7 +809,7 @@ class IoHubEyeTracker:
                 f"ioHub could not start the eye tracker {tracker!r}: {error}"
             ) from error
         if self.device_handle is None:
-            self.io.quit()
+            self._quit()
             self._stop_guard()
             raise TrackerError(f"ioHub started without the eye tracker {tracker!r}")
         self.disconnects = 0
@@ -898,10 +899,16 @@ class IoHubEyeTracker:
             pass
         finally:
             try:
-                self.io.quit()
+                self._quit()
             except Exception:  # the server already gone: nothing to quit
                 pass
             self._stop_guard()
+
+    def _quit(self) -> None:
+        """ioHub's quit, whose words on the server's end ("ioHub Server Process Completed
+        With Code: 0") go to the server's log, not the session's terminal."""
+        with _output_to(getattr(self, "_server_log", None)):
+            self.io.quit()
 
     def _stop_guard(self) -> None:
         """Stop the guard of a server this process quit (or never started)."""
