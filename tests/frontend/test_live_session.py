@@ -326,3 +326,25 @@ def test_a_screenshot_of_a_live_session_is_its_scene(screen, tmp_path):
     assert scene.max() > 100 and scene.std() > 5, (scene.max(), scene.std())
     screen.key("Escape")
     assert screen.wait(timeout=60) == 3, screen.stderr[-3000:]
+
+
+def test_a_signal_during_the_live_scene_logs_its_frames_so_far(screen, tmp_path):
+    """SIGTERM while the scene was viewed was recorded as the end, but the log had no line of
+    the scene's frames and tracker faults, which a scene that ends otherwise has."""
+    data = tmp_path / "data"
+    screen.run(
+        "run", "luidolt2020-live", "--pilot", "--eyetracker", "mouse", "--participant", "P1",
+        "--out", data, "--pupil-calibration-s", "0.3",
+    )  # fmt: skip
+    screen.wait_for_log(data, r"instructions screen onset")
+    screen.focus_window()
+    screen.key("space")
+    frames = screen.wait_for_file("*_frames.tsv", data)
+    wait_for(screen, frames, lambda r: int(r["frame"]) > 5)
+    screen.signal(signal.SIGTERM)
+    assert screen.wait(timeout=60) == 3, screen.stderr[-3000:]
+    log = next(data.glob("*_pilot.log")).read_text()
+    found = re.search(r"trial 1 live: (\d+) frames \(cut short\), \d+ dropped.*disconnects", log)
+    assert found and int(found.group(1)) > 5, log[-2000:]
+    sidecar = json.loads(next(data.glob("*.json")).read_text())
+    assert sidecar["status"] == "aborted" and sidecar["runs"][-1]["ended_by"] == "SIGTERM"

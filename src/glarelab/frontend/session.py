@@ -24,6 +24,7 @@ order, for the session loop.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import sys
@@ -646,6 +647,7 @@ class PsychoPyFrontend:
             return bool(escape)
 
         handle = self.records.open_live()
+        flips = None
         try:
             flips = view.run(
                 self.tracker, clock=clock, refresh_hz=self.refresh_hz,
@@ -657,13 +659,11 @@ class PsychoPyFrontend:
         finally:
             if handle is not None:
                 handle.close()
-        summary = view.summary(self.tracker)
-        self.log(
-            f"{what}: {summary['frames']} frames, {summary['dropped']} dropped, median render "
-            f"{summary['render_ms_median']:.2f} ms; tracker faults: {summary['lost']} lost "
-            f"samples, {summary['blinks']} blinks, {summary['off_screen']} off the scene, "
-            f"{summary['disconnects']} disconnects"
-        )
+            if flips is None:  # a signal or a fault mid-scene: its frames so far, logged
+                with contextlib.suppress(Exception):
+                    self._log_live_summary(what, view, cut=True)
+                    self.records.flush()
+        summary = self._log_live_summary(what, view)
         if escape:
             self.window.clearBuffer()
             end = self.window.flip()
@@ -682,6 +682,18 @@ class PsychoPyFrontend:
             frames=screen["frames"],
             dropped_frames=summary["dropped"],
         )
+
+    def _log_live_summary(self, what: str, view, *, cut: bool = False) -> dict:
+        """The live scene's frames and the tracker's faults, a line of the log."""
+        summary = view.summary(self.tracker)
+        self.log(
+            f"{what}: {summary['frames']} frames{' (cut short)' if cut else ''}, "
+            f"{summary['dropped']} dropped, median render "
+            f"{summary['render_ms_median']:.2f} ms; tracker faults: {summary['lost']} lost "
+            f"samples, {summary['blinks']} blinks, {summary['off_screen']} off the scene, "
+            f"{summary['disconnects']} disconnects"
+        )
+        return summary
 
     def _prepare_live(self, live, screen: dict) -> None:
         """Make the live scene's bank before its first frame (:meth:`LiveNight.prepare`), the
