@@ -256,6 +256,8 @@ class PsychoPyFrontend:
             live_columns=FRAME_COLUMNS[1:] if self.eyetracker is not None else (),
         )
         if self.eyetracker is not None:
+            # the run's first lines on disk before ioHub's store of the samples can fill it
+            self.records.flush()
             self._start_tracker(run, frames_path)
         self.keys.start()
 
