@@ -68,6 +68,7 @@ LEAST_KERNELS = 8  # cell-to-cell least kernels kept (one per grid, reach and ch
 # When the FFT's round-off bound exceeds the tolerance, the image is spread directly (no
 # round-off) if that is estimated to cost at most DIRECT_FALLBACK times the FFT.
 DIRECT_FALLBACK = 50.0
+FLOAT32_UNIT_ROUNDOFF = 2.0**-24  # a float32 rounding: at most this much of the value
 PRECISIONS = ("float64", "float32")
 WHITE_ROUNDING = (
     1e-9  # l_dmax above the display's white by less is its rounding (a JSON round trip)
@@ -101,8 +102,11 @@ class GlareRenderer:
         Removed (it was the composition rule, and read as a model's name): refused with a
         TypeError.
     precision
-        ``'float64'`` (default) or ``'float32'`` (convolved in float64 where float32 FFT
-        round-off could show, next to a sun).
+        The image's and the result's dtype: ``'float64'`` (default) or ``'float32'``. A
+        planned render (``tolerance_codes`` > 0) sums its spread in float64 and plans its
+        transforms' precision either way (float32 where the bound keeps the tolerance), and
+        counts float32's roundings of the excess and the result; the exact paths convolve in
+        float64 where float32 FFT round-off could show, next to a sun.
     tolerance_codes
         Largest error allowed against the exact render, display codes, >= 0; default 0.5.
         0 (or ``None``): exact paths only.
@@ -609,6 +613,8 @@ class GlareRenderer:
         self.say(f"error bound {error:.3g} display codes")
         parameters["convolution_precision"] = sorted(used)
         result.update(error_bound_codes=error, far_relative_error=relative)
+        # the image's precision (a planned render summed its spread in float64)
+        out, spread = out.astype(self.dtype, copy=False), spread.astype(self.dtype, copy=False)
         if not scene.colour:
             out, spread = out[..., 0], spread[..., 0]
         elif spread.shape[2] == 1:
@@ -637,25 +643,32 @@ class GlareRenderer:
         float32 transforms' ``(a, r)``) and the far tail's relative error."""
         absolute = self._absolute(scene, plan, used) + roundoff[0]
         ratio = relative / max(1.0 - relative, 1e-12) + roundoff[1]
+        stored = 0.0
+        if self.dtype == np.float32 and plan.tolerance_codes > 0:
+            # the excess rounded to float32 (each ΔL within u of its value: the spread within
+            # u of its own), and the output rounded to float32: u of a value, at most
+            # u · max L / step(L) codes
+            ratio += FLOAT32_UNIT_ROUNDOFF
+            stored = FLOAT32_UNIT_ROUNDOFF * self.code_bound.relative_codes
         if ratio:
-            return self.code_bound.codes(
+            return stored + self.code_bound.codes(
                 scene.planes,
                 spread,
                 absolute=absolute,
                 relative=ratio,
-                tolerance_codes=plan.tolerance_codes,
+                tolerance_codes=max(plan.tolerance_codes - stored, 0.0),
             )
         return self._exact_error(scene, spread, absolute, plan.tolerance_codes)
 
     def _absolute(self, scene: Scene, plan: GlarePlan, used: set[str]) -> float:
         """The part of the error bound that does not grow with the spread, cd/m², but for
         planned float32 transforms: the cut's bound and the float64 FFT round-off (about
-        ``ε log2 n`` times the largest spread, ``ΣΔL · max K``, anywhere in the image); an
-        image in float32 adds what :func:`~glarelab.glare.rendering._convolve.convolution_dtype`
-        allows."""
+        ``ε log2 n`` times the largest spread, ``ΣΔL · max K``, anywhere in the image); the
+        exact path's float32 transforms (an image in float32, tolerance 0) add what
+        :func:`~glarelab.glare.rendering._convolve.convolution_dtype` allows."""
         absolute = plan.cut_bound_cd_m2
-        if self.dtype == np.float32:
-            absolute += FLOAT32_NOISE_LIMIT_CD_M2
+        if plan.tolerance_codes == 0 and plan.path in ("fft", "multires") and "float32" in used:
+            absolute += FLOAT32_NOISE_LIMIT_CD_M2  # the exact path's float32 transforms
         if plan.path in ("fft", "multires"):
             peak = self.kernel_peak(plan.colour_kernel)
             n = 4 * self.shape[0] * self.shape[1]
@@ -668,11 +681,16 @@ class GlareRenderer:
         height, width = self.shape
         box, out_box = plan.source_box, plan.out_box
         n = plan.convolutions
-        spread = np.zeros((height, width, n), dtype=self.dtype)
+        # a planned render sums its spread in float64 whatever the image's precision (the
+        # transforms' own precision is planned): a float32 sum of many lamps' spreads would
+        # round once per lamp
+        planned = plan.tolerance_codes > 0
+        dtype = np.dtype(np.float64) if planned else self.dtype
+        spread = np.zeros((height, width, n), dtype=dtype)
         used: set[str] = set()
         roundoff = (0.0, 0.0)
         if out_box is None:
-            return spread, {self.dtype.name}, roundoff
+            return spread, {dtype.name}, roundoff
         o = np.s_[out_box[0] : out_box[1], out_box[2] : out_box[3]]
         reach = plan.reach_px
         for c in range(n):
@@ -687,11 +705,11 @@ class GlareRenderer:
                 else:
                     a, b = self.kernel_half
                     k = k[a - reach[0] : a + reach[0] + 1, b - reach[1] : b + reach[1] + 1]
-                used.add(self.dtype.name)
+                used.add(dtype.name)
                 direct_spread(
                     excess,
                     box[::2],
-                    k.astype(self.dtype, copy=False),
+                    k.astype(dtype, copy=False),
                     out_box,
                     spread[..., c],
                     quadrant=symmetric,
