@@ -28,18 +28,28 @@ __all__ = [
     "PathCosts",
     "coarse_lengths",
     "cores",
+    "fft_unit",
     "machine_costs",
     "measure_costs",
     "n_log_n",
 ]
 
-COSTS_VERSION = 7  # bump when what is measured changes (7: 21 rounds, not 7)
+COSTS_VERSION = 8  # bump when what is measured changes (8: the FFT at a second size)
 # calibration rounds: the FFT's fastest, the others' median ratio to it. Four calibrations
 # on the quiet 2-core machine put a scaled kernel copy at 13.8-21.6 FFT units with 7 rounds
 # (0.5 s), 14.2-16.2 with 21 (1.3 s, once per machine): on two lamps and a glint (512²)
 # the direct path and the FFT are within 15 % of each other, and the wider spread chose
 # the FFT where the direct spread was faster
 ROUNDS = 21
+# The FFT's cost per n log2 n grows once its arrays leave the caches: measured with a 2048²
+# box into 4096² transforms (n = LARGE_FFT_POINTS) beside the 1024² unit, it was 2.1 times
+# the unit in float64 and 3.5 times in float32 (2-core machine, load average 3.4), where
+# 2048² transforms cost the unit's. The unit grows log-linearly from SMALL_FFT_POINTS to
+# LARGE_FFT_POINTS and stays there beyond; a 2048² scene with a sun's glint (4096²
+# transforms) was costed at half its time and rendered by FFT in twice the direct path's.
+SMALL_FFT_POINTS = 2**22
+LARGE_FFT_POINTS = 2**24
+LARGE_ROUNDS = 3  # the large transforms' rounds (0.2-0.4 s each)
 
 
 def cores() -> int:
@@ -58,7 +68,9 @@ class PathCosts:
     ----------
     fft_s, fft32_s
         A forward and an inverse pruned real FFT and the product, per ``n log2 n`` of the
-        ``N0 × N1`` transform, in float64 and float32.
+        ``N0 × N1`` transform, in float64 and float32, up to :data:`SMALL_FFT_POINTS`.
+    fft_large_s, fft32_large_s
+        The same from :data:`LARGE_FFT_POINTS` on (:func:`fft_unit` between the two).
     direct_pixel_s
         A scaled kernel copy, per output pixel and bright pixel.
     correlate_s, correlate_weight_s
@@ -83,6 +95,10 @@ class PathCosts:
 
     fft_s: float = 4.5e-10
     fft32_s: float = 3.0e-10
+    # the defaults' unit was set on large transforms already (4.5e-10 s where the 1024²
+    # unit measured 2.6-3.4e-10 s): no growth
+    fft_large_s: float = 4.5e-10
+    fft32_large_s: float = 3.0e-10
     direct_pixel_s: float = 2.5e-9
     correlate_s: float = 4.5e-9
     correlate_weight_s: float = 0.4e-9
@@ -176,6 +192,42 @@ def n_log_n(lengths: tuple[int, int]) -> float:
     """
     n = int(lengths[0]) * int(lengths[1])
     return n * math.log2(max(n, 2))
+
+
+def fft_unit(points: int, costs: PathCosts, precision: str = "float64") -> float:
+    """Seconds per ``n log2 n`` of an FFT pair of ``points`` points: the small transforms'
+    unit up to :data:`SMALL_FFT_POINTS`, the large ones' from :data:`LARGE_FFT_POINTS`, and
+    log-linear in ``log2 n`` between.
+
+    Parameters
+    ----------
+    points
+        ``n = N0 N1``.
+    costs
+        The machine's costs.
+    precision
+        ``'float64'`` or ``'float32'``.
+
+    Returns
+    -------
+    float
+        Seconds per ``n log2 n``.
+
+    Examples
+    --------
+    >>> costs = PathCosts(fft_s=1.0, fft_large_s=4.0)
+    >>> [fft_unit(2**k, costs) for k in (20, 22, 23, 24, 26)]
+    [1.0, 1.0, 2.0, 4.0, 4.0]
+    """
+    if precision == "float32":
+        small, large = costs.fft32_s, costs.fft32_large_s
+    elif precision == "float64":
+        small, large = costs.fft_s, costs.fft_large_s
+    else:
+        raise ValueError(f"precision must be 'float64' or 'float32'; got {precision!r}")
+    low, high = math.log2(SMALL_FFT_POINTS), math.log2(LARGE_FFT_POINTS)
+    share = min(max((math.log2(max(points, 2)) - low) / (high - low), 0.0), 1.0)
+    return small * (large / small) ** share
 
 
 def measure_costs() -> PathCosts:
@@ -275,6 +327,7 @@ def measure_costs() -> PathCosts:
         },
         "fft64",
     )
+    large = _large_fft_units(rng, spectral_spread, fastest, unit)
     pixel_s = fastest["pixel"] / (n * n)
     cluster_s = fastest["small"] / (n * n)
     weight_s = max((fastest["big"] / (n * n) - cluster_s) / (144 - 9), 1e-12)
@@ -282,6 +335,8 @@ def measure_costs() -> PathCosts:
     return PathCosts(
         fft_s=per[np.float64],
         fft32_s=per[np.float32],
+        fft_large_s=per[np.float64] * large[np.float64],
+        fft32_large_s=per[np.float32] * large[np.float32],
         direct_pixel_s=pixel_s,
         correlate_s=max(cluster_s - 9 * weight_s, 1e-12),
         correlate_weight_s=weight_s,
@@ -291,6 +346,35 @@ def measure_costs() -> PathCosts:
         preview_s=fastest["preview"] / (size * size),
         threads=cores(),
     )
+
+
+def _large_fft_units(rng, spectral_spread, fastest, unit) -> dict:
+    """How many times the small transforms' unit (``fastest`` of :func:`measure_costs`,
+    per ``unit`` = ``n log2 n``) an FFT pair of :data:`LARGE_FFT_POINTS` takes, per
+    ``n log2 n``, in float64 and float32: the fastest of :data:`LARGE_ROUNDS` rounds."""
+    side = math.isqrt(LARGE_FFT_POINTS)
+    n = side // 2
+    lengths = (side, side)
+    box = (0, n, 0, n)
+    excess = rng.random((n, n))
+    spectrum = rng.random((side, side // 2 + 1)) + 0j  # a kernel's spectrum's shape
+    large = n_log_n(lengths)
+    found = {}
+    for dtype, cdtype in ((np.float64, np.complex128), (np.float32, np.complex64)):
+        work, kept = excess.astype(dtype), spectrum.astype(cdtype)
+        best = min(
+            _timed(lambda work=work, kept=kept: spectral_spread(work, box, box, kept, lengths))
+            for _ in range(LARGE_ROUNDS)
+        )
+        small = fastest["fft64" if dtype is np.float64 else "fft32"] / unit
+        found[dtype] = max(best / large / small, 1.0)
+    return found
+
+
+def _timed(function) -> float:
+    start = time.perf_counter()
+    function()
+    return time.perf_counter() - start
 
 
 def machine_costs(folder: str | os.PathLike | None) -> PathCosts:

@@ -40,7 +40,13 @@ import numpy as np
 from glarelab.glare.models.base import GlareModel
 from glarelab.glare.rendering._convolve import fft_length, fft_roundoff, spread
 from glarelab.glare.rendering.compose import over_channels
-from glarelab.glare.rendering.costs import DEFAULT_COSTS, PathCosts, coarse_lengths, n_log_n
+from glarelab.glare.rendering.costs import (
+    DEFAULT_COSTS,
+    PathCosts,
+    coarse_lengths,
+    fft_unit,
+    n_log_n,
+)
 from glarelab.glare.rendering.display import block_reduce
 from glarelab.glare.rendering.multires import PAD_NODES, cell_sums, far_spread
 from glarelab.glare.rendering.scene import Scene
@@ -63,8 +69,9 @@ MULTIRES_MIN_REACH = 4  # multi-resolution only when the reach is at least 4 R0
 # (measured on VosGlare, all regimes: 5e-4 at R0 = 16 f); the render measures it exactly.
 FAR_ERROR_SAFETY = 0.25
 # Costs: glarelab.glare.rendering.costs.PathCosts, measured on the machine at the threads the
-# render uses (a forward and an inverse real FFT of n points per n log2 n, FFT_LARGE times
-# that beyond FFT_LARGE_POINTS, where the arrays leave the caches; the direct spread per
+# render uses (a forward and an inverse real FFT of n points per n log2 n, a unit that grows
+# with n where the arrays leave the caches, costs.fft_unit, and FFT_LARGE times that beyond
+# FFT_LARGE_POINTS (8192² transforms, measured beside 4096² ones); the direct spread per
 # output pixel; the far tail's splat and interpolation per image pixel, its coarse
 # convolution per n log2 n of its own transform, the preview when not made yet, and the error
 # bound that grows with the spread per image pixel, for the far tail and float32 transforms).
@@ -249,8 +256,8 @@ def fft_cost(
 ) -> float:
     """Estimated seconds of one forward and one inverse real FFT of ``N0 × N1`` points."""
     n = lengths[0] * lengths[1]
-    unit = costs.fft32_s if precision == "float32" else costs.fft_s
-    return (FFT_LARGE if n > FFT_LARGE_POINTS else 1.0) * unit * n * math.log2(max(n, 2))
+    large = FFT_LARGE if n > FFT_LARGE_POINTS else 1.0
+    return large * fft_unit(n, costs, precision) * n * math.log2(max(n, 2))
 
 
 def plan_glare(
