@@ -1330,7 +1330,8 @@ def test_a_comment_never_runs_as_a_spreadsheet_formula(sandbox, tmp_path):
     source = next((sandbox / "data").glob("sim01_luidolt2020_*.csv"))
     frame = pd.read_csv(source, keep_default_na=False)
     frame.loc[0, "comment"] = '=HYPERLINK("http://example.org","click")'
-    frame.loc[1, "comment"] = "-2 is what I'd say"
+    frame.loc[1, "comment"] = "-2+3+cmd|' /C calc'!A0"  # OWASP's: "-" and a digit run too
+    frame.loc[2, "comment"] = "-0.5"
     csv = tmp_path / source.name
     frame.to_csv(csv, index=False)
     shutil.copy(source.with_suffix(".json"), csv.with_suffix(".json"))
@@ -1338,7 +1339,8 @@ def test_a_comment_never_runs_as_a_spreadsheet_formula(sandbox, tmp_path):
     assert main(["analyse", "luidolt2020", str(csv), "--out", str(tmp_path / "r")]) == 0
     comments = pd.read_csv(tmp_path / "r" / "comments.csv", keep_default_na=False)
     assert '\'=HYPERLINK("http://example.org","click")' in set(comments["comment"])
-    assert "-2 is what I'd say" in set(comments["comment"])  # a number's sign stays
+    assert "'-2+3+cmd|' /C calc'!A0" in set(comments["comment"])
+    assert "-0.5" in set(comments["comment"])  # a number's sign stays
     assert pd.read_csv(csv, keep_default_na=False).loc[0, "comment"].startswith("=HYPERLINK")
 
 

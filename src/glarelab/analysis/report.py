@@ -482,14 +482,22 @@ def _spreadsheet_safe(table: pd.DataFrame) -> pd.DataFrame:
 
     def safe(value):
         if isinstance(value, str) and (
-            value.startswith(FORMULA_STARTS)
-            or (value.startswith("-") and not value[1:2].isdigit() and value[1:2] != ".")
-        ):
+            value.startswith(FORMULA_STARTS) or (value.startswith("-") and not _number(value))
+        ):  # "-1+1" and "-2+3+cmd|' /C calc'!A0" are formulas; "-0.5" is a number
             return "'" + value
         return value
 
     text = table.select_dtypes(include=["object", "string"]).columns
     return table.assign(**{column: table[column].map(safe) for column in text})
+
+
+def _number(text: str) -> bool:
+    """Whether the whole cell reads as a number (a spreadsheet shows it, runs nothing)."""
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
 
 
 def _write_figure(path: Path, figure: Figure) -> None:
