@@ -252,6 +252,18 @@ def test_any_registered_glare_model_with_its_parameters():
         parse_protocol(data)
 
 
+@pytest.mark.parametrize("value", [3, "x"])
+def test_a_halo_spectrum_that_is_no_table_is_refused_at_load(value):
+    """vos halo_spectrum = 3 passed protocol check, and the build died with an
+    AttributeError deep in the halo's spectrum."""
+    data = raw("yoshida2008")
+    method = next(m for m in data["glare"]["methods"] if m["model"] == "vos")
+    method["parameters"] = {**method.get("parameters", {}), "regime": "mesopic"}
+    method["parameters"]["halo_spectrum"] = value
+    with pytest.raises(ProtocolError, match=r"halo_spectrum must be a HaloSpectrum"):
+        parse_protocol(data)
+
+
 @pytest.mark.parametrize(
     ("study", "edit", "match"),
     [

@@ -200,3 +200,11 @@ def test_flare_lines_refuse_what_cannot_be_their_kernel_or_randomness(options, n
 
     with pytest.raises(ValueError, match=f"^{name} must"):
         flare_line_pattern(n_lines=5, **options)
+
+
+@pytest.mark.parametrize("value", [3, "x", None])
+def test_vos_refuses_a_halo_spectrum_that_is_not_one(value):
+    """VosGlare(halo_spectrum=3) was accepted and failed in the digitiser with
+    "'int' object has no attribute 'wavelengths_nm'"."""
+    with pytest.raises(ValueError, match=r"halo_spectrum must be a HaloSpectrum .*; got "):
+        VosGlare(regime="mesopic", halo_spectrum=value)

@@ -157,6 +157,11 @@ class VosGlare(GlareModel):
         check_choice("normalisation", self.normalisation, NORMALISATIONS)
         if self.pupil_mm is not None:
             check_in_range("pupil_mm", self.pupil_mm, *PUPIL_RANGE_MM, unit="mm")
+        if not isinstance(self.halo_spectrum, HaloSpectrum):  # a protocol's halo_spectrum = 3
+            raise ValueError(
+                f"halo_spectrum must be a HaloSpectrum (a protocol's table of its keys); got "
+                f"{self.halo_spectrum!r:.80}"
+            )
         if self.wavelength_nm is not None:
             vos.f3(0.0, self.wavelength_nm)  # validates the wavelength
             if np.ndim(self.wavelength_nm) != 0:  # f3 takes arrays; a model's halo has one
