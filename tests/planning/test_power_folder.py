@@ -123,3 +123,24 @@ def test_a_run_started_while_another_process_runs_on_the_folder_names_that_proce
     # the next run, with the first one gone, takes the folder (the kill left its lock file)
     assert main([*TINY, "--replications", "2", "--out", str(out)]) == 0
     assert (out / "power.csv").is_file()
+
+
+def test_a_resume_on_another_stimulus_set_is_refused(tmp_path, capsys):
+    """A run resumed with another --stimuli (the same protocol built with another
+    calibration) mixed its replications with the first set's: run.json now records the
+    set's manifest, and a resume on another set is refused as one with another seed is."""
+    import json
+
+    out = tmp_path / "power"
+    shown = ["power", "yoshida2008", "--participants", "3", "--seed", "5", "--workers", "0"]
+    assert main([*shown, "--replications", "1", "--out", str(out)]) == 0
+    run = json.loads((out / "run.json").read_text())
+    assert len(run["stimuli_sha256"]) == 64  # the cached set the observers looked at
+    run["stimuli_sha256"] = "0" * 64  # as if made with another set
+    (out / "run.json").write_text(json.dumps(run, indent=2, sort_keys=True) + "\n")
+    before = (out / "replications.jsonl").read_text()
+    capsys.readouterr()
+    assert main([*shown, "--replications", "2", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "made with other inputs (stimuli_sha256 '000" in err, err
+    assert (out / "replications.jsonl").read_text() == before

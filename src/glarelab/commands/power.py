@@ -208,7 +208,12 @@ def _power(args: argparse.Namespace) -> int:
     from glarelab.experiments.session import shows_images
     from glarelab.files.folders import restore_folder
     from glarelab.planning.effects import WITHOUT_F_TESTS
-    from glarelab.planning.power import check_run_folder, power_analysis, run_inputs
+    from glarelab.planning.power import (
+        check_run_folder,
+        power_analysis,
+        run_inputs,
+        stimuli_sha256,
+    )
 
     twice = sorted({n for n in args.participants if args.participants.count(n) > 1})
     if twice:  # the same size twice is simulated once: say so rather than drop it
@@ -237,7 +242,13 @@ def _power(args: argparse.Namespace) -> int:
     _check_workers(args)
     restore_folder(args.out)  # a run killed mid-swap may have left it aside
     check_run_folder(
-        args.out, run_inputs(protocol, seed=args.seed, participants=args.participants)
+        args.out,
+        run_inputs(
+            protocol,
+            seed=args.seed,
+            participants=args.participants,
+            stimuli_sha256=None if args.stimuli is None else stimuli_sha256(args.stimuli),
+        ),
     )
     with contextlib.ExitStack() as stack:
         client = _cluster(stack, args)

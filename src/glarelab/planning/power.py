@@ -508,10 +508,16 @@ def _folder_lock(out: Path) -> ProcessLock:
     return ProcessLock(final.parent / f".{final.name}.power.lock", refusal=refusal)
 
 
-def run_inputs(protocol: Protocol, *, seed: int, participants: Sequence[int]) -> dict:
-    """What a folder's replications depend on (its ``run.json``): the protocol, the seed and
-    the sample sizes. The number of replications is not among them: more can be added later,
-    and fewer summarised.
+def run_inputs(
+    protocol: Protocol,
+    *,
+    seed: int,
+    participants: Sequence[int],
+    stimuli_sha256: str | None = None,
+) -> dict:
+    """What a folder's replications depend on (its ``run.json``): the protocol, the seed,
+    the sample sizes and the stimulus set the observers look at. The number of replications
+    is not among them: more can be added later, and fewer summarised.
 
     Parameters
     ----------
@@ -521,19 +527,41 @@ def run_inputs(protocol: Protocol, *, seed: int, participants: Sequence[int]) ->
         The simulated observers' seed.
     participants
         The sample sizes; recorded sorted, each once.
+    stimuli_sha256
+        The sha256 of the stimulus set's manifest (:func:`stimuli_sha256`), or None: not
+        recorded (a protocol that shows no images; a check before the set is known).
 
     Returns
     -------
     dict
-        ``format``, ``study``, ``protocol_sha256``, ``seed`` and ``participants``.
+        ``format``, ``study``, ``protocol_sha256``, ``seed``, ``participants`` and, when
+        given, ``stimuli_sha256``.
     """
-    return {
+    run = {
         "format": RUN_FORMAT,
         "study": protocol.study,
         "protocol_sha256": protocol.sha256,
         "seed": seed,
         "participants": sorted(set(int(n) for n in participants)),
     }
+    return run if stimuli_sha256 is None else run | {"stimuli_sha256": stimuli_sha256}
+
+
+def stimuli_sha256(stimuli: str | Path) -> str:
+    """The sha256 of a stimulus set's ``manifest.json``: a resumed run on another set (of
+    another calibration) mixed its replications with the first set's.
+
+    Parameters
+    ----------
+    stimuli
+        The set's folder.
+
+    Returns
+    -------
+    str
+        Hex digest.
+    """
+    return hashlib.sha256((Path(stimuli) / "manifest.json").read_bytes()).hexdigest()
 
 
 def check_run_folder(out: str | Path, run: dict) -> None:
@@ -681,16 +709,22 @@ def power_analysis(
     if stimuli is not None:
         _check_stimuli(Path(stimuli), protocol)
     out = Path(out)
-    run = run_inputs(protocol, seed=seed, participants=sizes)
     with _folder_lock(out):
         restore_folder(out)
-        check_run_folder(out, run)
-        out.mkdir(parents=True, exist_ok=True)
-        if not (out / "run.json").is_file():
-            write_text(out / "run.json", json.dumps(run, indent=2, sort_keys=True) + "\n")
+        check_run_folder(out, run_inputs(protocol, seed=seed, participants=sizes))
         if shows_images(protocol) and stimuli is None:
             log(f"building (or reusing) the {protocol.study} stimulus set the observers look at")
             stimuli = cached_stimulus_set(protocol, progress=None)
+        run = run_inputs(
+            protocol,
+            seed=seed,
+            participants=sizes,
+            stimuli_sha256=None if stimuli is None else stimuli_sha256(stimuli),
+        )
+        check_run_folder(out, run)  # the set's too: a resume on another set is refused
+        out.mkdir(parents=True, exist_ok=True)
+        if not (out / "run.json").is_file():
+            write_text(out / "run.json", json.dumps(run, indent=2, sort_keys=True) + "\n")
         job = PowerJob(
             protocol,
             participants=tuple(sizes),
