@@ -419,7 +419,11 @@ def make_plan(renderer, scene: Scene) -> GlarePlan:
     )
     machine = renderer.costs
     precision, roundoff, roundoff_codes, precision_note = renderer.dtype.name, 0.0, 0.0, None
-    optimistic = fft_cost(lengths, machine, "float32")
+    # the float32 FFT at its cheapest: its transforms and the check of its bound, which
+    # grows with the spread (a plan of its precision costs the kernel's norms: 37 ms for
+    # a 4095² kernel, paid in vain where the direct path is cheaper still)
+    pixels = scene.planes.shape[0] * scene.planes.shape[1]
+    optimistic = fft_cost(lengths, machine, "float32") + machine.bound_s * pixels
     direct = _direct_cost(scene, out, reach, optimistic, machine)
     if tolerance > 0:
         precision = "float64"
@@ -429,7 +433,7 @@ def make_plan(renderer, scene: Scene) -> GlarePlan:
             )
     costs = {"fft": fft_cost(lengths, machine, precision) * convolutions}
     if precision == "float32":  # its round-off grows with the spread: checked pixel by pixel
-        costs["fft"] += machine.bound_s * scene.planes.shape[0] * scene.planes.shape[1]
+        costs["fft"] += machine.bound_s * pixels
     costs["direct"] = (
         direct
         if direct >= costs["fft"] / convolutions or direct < optimistic
