@@ -24,6 +24,7 @@ from glarelab.analysis.stats import (
     pairwise_tests,
     rm_anova,
     similarity_groups,
+    ttest_one_sample,
     ttest_paired,
     ttest_welch,
     wilcoxon_signed_rank,
@@ -741,3 +742,83 @@ def test_the_paired_test_decides_no_variance_as_it_did_by_its_sd(rms, steps):
         sd = math.nextafter(sd, math.inf if steps > 0 else 0.0)
     assert _no_variance(sd**2, rms) == (sd <= threshold)
     assert _no_variance(float("nan"), rms)  # the ANOVA's NaN variance: no test
+
+
+# R 4.2's t.test of the same data at an ordinary scale (t, df, p, interval): t, df and p do
+# not depend on the unit, and the interval scales with it. R's own t.test gives t = 0, p = 1
+# at 1e300 (its variance overflows to Inf).
+R_SCALED_TTESTS = [
+    (
+        lambda k: ttest_one_sample([1 * k, 2 * k, 3 * k]),
+        (
+            3.464101615137754830,
+            2.0,
+            0.074179900227448525,
+            -0.484137711750329769,
+            4.484137711750329380,
+        ),
+    ),
+    (
+        lambda k: ttest_one_sample([-k, 0.0, k], mu=0.5 * k),
+        (
+            -0.86602540378443871,
+            2.0,
+            0.47776703213290650,
+            -2.48413771175032982,
+            2.48413771175032982,
+        ),
+    ),
+    (
+        lambda k: ttest_paired([3 * k, 5 * k, 4 * k], [k, k, k]),
+        (
+            5.196152422706632024,
+            2.0,
+            0.035098718645984649,
+            0.515862288249670065,
+            5.484137711750329380,
+        ),
+    ),
+    (
+        lambda k: ttest_welch([1 * k, 2 * k, 3 * k], [5 * k, 6 * k, 8 * k]),
+        (
+            -4.110960958218892181,
+            3.448275862068966635,
+            0.019855117523634853,
+            -7.454217285228927459,
+            -1.212449381437738172,
+        ),
+    ),
+]
+
+
+@pytest.mark.parametrize("scale", [1.0, 1e300, 1e-300, 1e-160])
+@pytest.mark.parametrize("case", range(len(R_SCALED_TTESTS)))
+def test_t_tests_do_not_depend_on_the_unit_of_the_values(case, scale):
+    """At 1e300 the squares overflowed (t = 0, p = 1, or a false "essentially constant"
+    note), at 1e-300 they underflowed (a false note): the tests now work on the values
+    divided by a power of two near their magnitude."""
+    call, expected = R_SCALED_TTESTS[case]
+    result = call(scale)
+    assert not result["note"], result
+    ours = [
+        result["t"],
+        result["df"],
+        result["p"],
+        result["ci_low"] / scale,
+        result["ci_high"] / scale,
+    ]
+    assert_allclose(ours, expected, rtol=R_TOLERANCE)
+
+
+@pytest.mark.parametrize(
+    ("call", "what"),
+    [
+        (lambda: ttest_one_sample([1e308, 1.5e308, 1.7e308]), "upper end"),
+        (lambda: ttest_one_sample([-1e308, 0.0, 1e308], mu=1e308), "lower end"),
+        (lambda: ttest_paired([1.7e308, -1.7e308, 1.7e308], [-1.7e308, 1.7e308, 0.0]), "interval"),
+        (lambda: ttest_welch([1.7e308, 1.6e308], [-1.7e308, -1.6e308]), "difference"),
+    ],
+)
+def test_t_tests_refuse_results_beyond_float64_rather_than_print_inf(call, what):
+    with pytest.raises(ValueError, match=f"too large to compute with: the .*{what}.*1.8e308"):
+        call()

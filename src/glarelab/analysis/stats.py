@@ -623,31 +623,69 @@ def _confidence_level(confidence: float, caller: str) -> float:
     return float(confidence)
 
 
+def _unit(*values: np.ndarray | float) -> float:
+    """The power of two at the magnitude of ``values`` (1 for all zeros): the t-tests work on
+    the values divided by it, so that squares neither overflow (1e300² is inf) nor underflow.
+    Dividing by a power of two is exact, so ordinary data give the same bits as unscaled."""
+    largest = max(float(np.max(np.abs(v), initial=0.0)) for v in values)
+    return math.ldexp(1.0, math.frexp(largest)[1] - 1) if largest > 0 else 1.0
+
+
 def _t_result(
-    estimate: float, se: float, dof: float, confidence: float, scale: float, what: str
+    estimate: float,
+    se: float,
+    dof: float,
+    confidence: float,
+    scale: float,
+    what: str,
+    unit: float = 1.0,
+    caller: str = "",
+    shift: float = 0.0,
 ) -> dict:
     """t, df, two-sided p and the interval of ``estimate``; where the standard error is zero
-    or below R's threshold (``10 ε`` of ``scale``), no test, and ``note`` says why."""
+    or below R's threshold (``10 ε`` of ``scale``), no test, and ``note`` says why.
+    ``estimate``, ``se`` and ``scale`` are in units of ``unit`` (see :func:`_unit`); the
+    estimate and interval (shifted by ``shift``, in the same units) are returned in the
+    data's unit, and refused (``caller`` named) where they lie beyond float64's range."""
     nan = float("nan")
-    result = {"t": nan, "df": float(dof), "p": nan, "estimate": float(estimate)}
+    result = {"t": nan, "df": float(dof), "p": nan, "estimate": float(estimate) * unit}
     if se == 0 and estimate == 0:
         return result | {"ci_low": nan, "ci_high": nan, "note": f"not testable: {what} are all 0"}
     if se <= CONSTANT * scale:
         return result | {
             "ci_low": nan,
             "ci_high": nan,
-            "note": f"not testable: {what} are essentially constant (each {estimate:.6g}): "
+            "note": f"not testable: {what} are essentially constant "
+            f"(each {result['estimate']:.6g}): "
             "no variance to test against (R's t.test: data are essentially constant)",
         }
     t = estimate / se
     half = float(sps.t.ppf(0.5 + confidence / 2, dof)) * se
-    return result | {
+    result |= {
         "t": float(t),
         "p": float(2 * sps.t.sf(abs(t), dof)),
-        "ci_low": float(estimate - half),
-        "ci_high": float(estimate + half),
+        "ci_low": float(estimate - half + shift) * unit,
+        "ci_high": float(estimate + half + shift) * unit,
         "note": "",
     }
+    _representable(result, caller)
+    return result
+
+
+def _representable(result: dict, caller: str) -> None:
+    """Refuse a t-test whose estimate or interval lies beyond float64 (about 1.8e308)."""
+    names = {
+        "estimate": "difference",
+        "mean": "mean",
+        "ci_low": "interval's lower end",
+        "ci_high": "interval's upper end",
+    }
+    for key, name in names.items():
+        if key in result and math.isinf(result[key]):
+            raise ValueError(
+                f"{caller}: the values are too large to compute with: the {name} lies beyond "
+                f"float64's range (about 1.8e308); express them in a larger unit"
+            )
 
 
 def ttest_one_sample(x: Sequence[float], *, mu: float = 0.0, confidence: float = 0.95) -> dict:
@@ -673,8 +711,9 @@ def ttest_one_sample(x: Sequence[float], *, mu: float = 0.0, confidence: float =
     Raises
     ------
     ValueError
-        For fewer than 2 values, a value (or ``mu``) that is NaN or infinite, or a
-        confidence outside (0, 1).
+        For fewer than 2 values, a value (or ``mu``) that is NaN or infinite, a
+        confidence outside (0, 1), or a mean or interval beyond float64's range (about
+        1.8e308; values of any smaller magnitude are tested as in a unit near their own).
 
     Examples
     --------
@@ -688,20 +727,24 @@ def ttest_one_sample(x: Sequence[float], *, mu: float = 0.0, confidence: float =
         raise ValueError(f"ttest_one_sample: mu must be a finite number; got {mu!r}")
     if x.size < 2:
         raise ValueError(f"ttest_one_sample needs at least 2 values; got {x.size}")
+    unit = _unit(x, mu)
+    x = x / unit
     mean = float(x.mean())
     se = float(x.std(ddof=1)) / math.sqrt(x.size)
     result = _t_result(
-        mean - mu,
+        mean - mu / unit,
         se,
         x.size - 1,
         confidence,
         abs(mean),
         "the values" if mu == 0 else f"the values minus mu = {mu:g}",
+        unit,
+        "ttest_one_sample",
+        shift=mu / unit,  # the interval of the mean, not of mean - mu
     )
-    result["mean"] = mean
-    result["ci_low"] += mu
-    result["ci_high"] += mu
+    result["mean"] = mean * unit
     del result["estimate"]
+    _representable(result, "ttest_one_sample")
     return result
 
 
@@ -729,8 +772,8 @@ def ttest_paired(a: Sequence[float], b: Sequence[float], *, confidence: float = 
     ------
     ValueError
         For samples of different sizes, fewer than 2 pairs, a value that is NaN or infinite
-        (drop incomplete pairs first: R's ``t.test`` drops them silently), or a confidence
-        outside (0, 1).
+        (drop incomplete pairs first: R's ``t.test`` drops them silently), a confidence
+        outside (0, 1), or a difference or interval beyond float64's range (about 1.8e308).
 
     Examples
     --------
@@ -745,6 +788,8 @@ def ttest_paired(a: Sequence[float], b: Sequence[float], *, confidence: float = 
             f"ttest_paired needs two samples of the same size, at least 2; got {a.size} and "
             f"{b.size}"
         )
+    unit = _unit(a, b)
+    a, b = a / unit, b / unit
     d = a - b
     mean = float(d.mean())
     sd = float(d.std(ddof=1))
@@ -754,7 +799,9 @@ def ttest_paired(a: Sequence[float], b: Sequence[float], *, confidence: float = 
         # values' rounding is no variance (R's t.test would test a 1-ulp difference)
         sd = 0.0
     se = sd / math.sqrt(d.size)
-    result = _t_result(mean, se, d.size - 1, confidence, abs(mean), "the differences")
+    result = _t_result(
+        mean, se, d.size - 1, confidence, abs(mean), "the differences", unit, "ttest_paired"
+    )
     result["mean_difference"] = result.pop("estimate")
     return result
 
@@ -780,8 +827,9 @@ def ttest_welch(a: Sequence[float], b: Sequence[float], *, confidence: float = 0
     Raises
     ------
     ValueError
-        For fewer than 2 values in a sample, a value that is NaN or infinite, or a
-        confidence outside (0, 1).
+        For fewer than 2 values in a sample, a value that is NaN or infinite, a
+        confidence outside (0, 1), or a difference or interval beyond float64's range
+        (about 1.8e308).
     """
     a = _sample(a, "a", "ttest_welch")
     b = _sample(b, "b", "ttest_welch")
@@ -790,12 +838,16 @@ def ttest_welch(a: Sequence[float], b: Sequence[float], *, confidence: float = 0
         raise ValueError(
             f"ttest_welch needs at least 2 values in each sample; got {a.size} and {b.size}"
         )
+    unit = _unit(a, b)
+    a, b = a / unit, b / unit
     va, vb = a.var(ddof=1) / a.size, b.var(ddof=1) / b.size
     se = math.sqrt(va + vb)
     dof = (va + vb) ** 2 / (va**2 / (a.size - 1) + vb**2 / (b.size - 1)) if se > 0 else math.nan
     scale = max(abs(float(a.mean())), abs(float(b.mean())))
     difference = float(a.mean() - b.mean())
-    result = _t_result(difference, se, dof, confidence, scale, "both samples' values")
+    result = _t_result(
+        difference, se, dof, confidence, scale, "both samples' values", unit, "ttest_welch"
+    )
     if result["note"]:  # R: "data are essentially constant" whatever the difference
         result["note"] = (
             "not testable: neither sample varies (R's t.test: data are essentially constant)"
