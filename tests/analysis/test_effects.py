@@ -287,3 +287,51 @@ def test_a_dz_interval_flag_that_is_no_bool_is_refused(flag):
     """``dz_interval='no'`` is true to ``if``: the interval was computed anyway."""
     with pytest.raises(ValueError, match=r"^paired_effect: dz_interval must be True or False"):
         paired_effect([1.0, 2.0, 4.0], [0.0, 1.5, 2.0], dz_interval=flag)
+
+
+X_MASKED = np.ma.masked_array([1.5, -0.3, 2.2, 0.8, 3.1, -1.2, 0.4, 2.9], [0, 0, 0, 0, 1, 0, 0, 1])
+
+
+@pytest.mark.parametrize(
+    ("call", "pattern"),
+    [
+        (lambda: hodges_lehmann(X_MASKED), "hodges_lehmann: x must be a plain array"),
+        (lambda: rank_biserial(X_MASKED), "rank_biserial: x must be a plain array"),
+        (
+            lambda: paired_effect(
+                np.ma.masked_array([1.0, 2, 3, 40], [0, 0, 0, 1]), [1.5, 1, 2, 3]
+            ),
+            "paired_effect: a must be a plain array",
+        ),
+        (
+            lambda: paired_effect([1.0, 2, 3], np.ma.masked_array([1.0, 2, 4], [1, 0, 0])),
+            "b must be a plain",
+        ),
+        (
+            lambda: rank_biserial(["1.5", "-0.3", "2.2"]),
+            r"rank_biserial: x must hold real numbers.*'1.5'",
+        ),
+        (lambda: rank_biserial([True, True, False, True]), r"x must hold real numbers.*True"),
+        (lambda: hodges_lehmann(["1", "2", "3"]), r"hodges_lehmann: x must hold real numbers"),
+        (
+            lambda: rank_biserial("abc"),
+            r"rank_biserial: x must be a sequence of numbers; got the string 'abc'",
+        ),
+        (
+            lambda: paired_effect([1.0, 2.0, 3.0], [True, False, True]),
+            r"paired_effect: b must hold real",
+        ),
+    ],
+)
+def test_the_effect_sizes_refuse_masked_arrays_strings_and_bools(call, pattern):
+    """A masked array's hidden values were used (hodges_lehmann gave 1.225 for 0.6) and
+    strings and bools were read as numbers: they are refused as the t-tests refuse them."""
+    with pytest.raises(TypeError, match=pattern):
+        call()
+
+
+@pytest.mark.parametrize("mu", ["4", True, float("nan")])
+def test_rank_biserial_and_hodges_lehmann_refuse_a_mu_that_is_not_a_number(mu):
+    for f in (rank_biserial, hodges_lehmann):
+        with pytest.raises(ValueError, match=f"{f.__name__}: mu must be a finite number"):
+            f([1.0, 2.0, 3.0], mu=mu)

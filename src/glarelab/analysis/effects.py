@@ -43,6 +43,7 @@ from scipy import stats as sps
 
 from glarelab.analysis.stats import (
     WILCOXON_EXACT_BELOW_N,
+    _sample,
     corrected_df,
     signed_rank_counts,
 )
@@ -131,15 +132,23 @@ def eta2_partial_ci(
 
 
 def _pairs(a: Sequence[float], b: Sequence[float] | None, caller: str) -> np.ndarray:
-    x = np.asarray(a, dtype=float)
+    """``a - b`` (or ``a`` as ``x``) as a 1-D float array of finite numbers, refusing as the
+    t-tests do a masked array (its mask would be dropped), a string, a bool or None."""
+    x = _sample(a, "x" if b is None else "a", caller)
     if b is not None:
-        y = np.asarray(b, dtype=float)
+        y = _sample(b, "b", caller)
         if x.shape != y.shape:
             raise ValueError(f"{caller}: a and b must have the same size; got {x.size}, {y.size}")
         x = x - y
-    if x.ndim != 1 or not np.isfinite(x).all():
+    if not np.isfinite(x).all():
         raise ValueError(f"{caller}: the values must be finite numbers in one dimension")
     return x
+
+
+def _mu(mu: float, caller: str) -> float:
+    if not (is_real(mu) and math.isfinite(mu)):
+        raise ValueError(f"{caller}: mu must be a finite number; got {mu!r}")
+    return float(mu)
 
 
 def paired_effect(
@@ -173,6 +182,9 @@ def paired_effect(
     ValueError
         For fewer than 2 pairs, unequal sizes, non-finite values, or differences without
         variance (d_z undefined).
+    TypeError
+        For a masked array (its mask would be dropped), or a string, bool or None among the
+        values.
 
     Examples
     --------
@@ -245,6 +257,14 @@ def rank_biserial(x: Sequence[float], *, mu: float = 0.0, confidence: float = CO
         the non-zero differences. NaN where every difference is zero (no test) or the
         interval is undefined (``|r| = 1``: the limits are then ±1 as effectsize's).
 
+    Raises
+    ------
+    ValueError
+        For a value or ``mu`` that is NaN or infinite, or a confidence outside (0, 1).
+    TypeError
+        For a masked array (its mask would be dropped), or a string, bool or None among the
+        values.
+
     Examples
     --------
     >>> result = rank_biserial([5, 5, 4, 6, 3, 5, 6, 4, 5, 7], mu=4)
@@ -252,7 +272,7 @@ def rank_biserial(x: Sequence[float], *, mu: float = 0.0, confidence: float = CO
     0.8333
     """
     confidence = _confidence(confidence, "rank_biserial")
-    d = _pairs(x, None, "rank_biserial") - mu
+    d = _pairs(x, None, "rank_biserial") - _mu(mu, "rank_biserial")
     nan = float("nan")
     nonzero = d != 0
     m = int(nonzero.sum())
@@ -301,6 +321,9 @@ def hodges_lehmann(x: Sequence[float], *, mu: float = 0.0, confidence: float = C
     ValueError
         For an empty sample, a value or ``mu`` that is NaN or infinite, or a confidence
         outside (0, 1).
+    TypeError
+        For a masked array (its mask would be dropped), or a string, bool or None among the
+        values.
 
     Notes
     -----
@@ -332,9 +355,7 @@ def hodges_lehmann(x: Sequence[float], *, mu: float = 0.0, confidence: float = C
     2.25
     """
     confidence = _confidence(confidence, "hodges_lehmann")
-    if not math.isfinite(mu):
-        raise ValueError(f"hodges_lehmann: mu must be a finite number; got {mu!r}")
-    d = _pairs(x, None, "hodges_lehmann") - mu
+    d = _pairs(x, None, "hodges_lehmann") - _mu(mu, "hodges_lehmann")
     if d.size == 0:
         raise ValueError("hodges_lehmann: x is empty")
     nan = float("nan")
