@@ -11,7 +11,7 @@ from collections.abc import Iterable
 
 import numpy as np
 
-from glarelab.files.values import is_real, is_whole, plain_array
+from glarelab.files.values import is_real, is_whole, plain_array, real_array
 
 __all__ = [
     "check_choice",
@@ -190,6 +190,30 @@ def check_luminances(name: str, value: object) -> np.ndarray:
         raise ValueError(f"{name} must hold numbers >= 0 (cd/m²), not True/False")
     check_image(name, array.reshape(1, -1) if array.size else np.zeros((1, 1)))
     return array.astype(float)
+
+
+def check_real(name: str, value: object) -> np.ndarray:
+    """Return ``value`` (a number or an array of any shape) as a float array, else raise
+    ``ValueError`` naming ``name``: a string (``'0.25'``), a bool, a complex number, None or
+    a masked array is refused, not converted. Range and finiteness are the caller's."""
+    if isinstance(value, np.ma.MaskedArray):
+        raise ValueError(
+            f"{name} must be a plain array, not a masked array (its mask would be ignored)"
+        )
+    if isinstance(value, np.ndarray) and value.ndim == 0:
+        value = value[()]
+    if is_real(value):
+        return np.asarray(value, dtype=float)
+    if isinstance(value, str | bytes) or value is None or not hasattr(value, "__len__"):
+        raise ValueError(f"{name} must be a real number or an array of them; got {value!r}")
+    try:
+        return real_array(value, name)
+    except TypeError as error:
+        raise ValueError(str(error)) from None
+    except ValueError:  # rows of different lengths
+        raise ValueError(
+            f"{name} must be an array of numbers; got rows of different lengths"
+        ) from None
 
 
 def _first(array: np.ndarray, bad: np.ndarray) -> str:

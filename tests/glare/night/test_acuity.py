@@ -265,3 +265,24 @@ def test_the_layers_blur_at_chosen_pixels_equals_the_whole_images():
     whole = acuity.varying_blur(image, sigma, levels_per_octave=16)
     chosen = acuity._layers_at(image, sigma[rows, cols], rows, cols, 16)
     np.testing.assert_allclose(chosen, whole[rows, cols], atol=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("cpd", "shown"),
+    [
+        (True, "True"),  # was read as 1 cpd (3.96e-06 cd/m²)
+        ("13.85", "'13.85'"),  # was read as 13.85
+        (np.array([True]), "True"),
+        (np.ma.masked_array([13.85, 20.0], [0, 1]), "masked array"),  # the mask was dropped
+        ([13.85, "x"], "'x' at position 1"),
+        (1 + 0j, r"\(1\+0j\)"),
+    ],
+)
+def test_luminance_for_acuity_refuses_what_is_not_real_numbers(cpd, shown):
+    with pytest.raises(ValueError, match=f"^cpd must .*{shown}"):
+        acuity.luminance_for_acuity(cpd)
+
+
+def test_luminance_for_acuity_of_valid_numbers_is_unchanged():
+    assert acuity.luminance_for_acuity(13.85) == 0.14545650817873282
+    assert acuity.luminance_for_acuity(np.array([13.85]))[0] == 0.14545650817873282

@@ -200,3 +200,17 @@ def test_an_infinite_frame_time_is_called_not_finite():
     # it said "frame_time_s must be in [0, inf] s, got inf", as if inf were allowed
     with pytest.raises(ValueError, match=r"frame_time_s must be a finite number >= 0 s, got inf"):
         adaptation.adaptation_step(1.0, 2.0, math.inf)
+
+
+@pytest.mark.parametrize(
+    ("frame_time_s", "shown"),
+    [
+        (True, "True"),  # was read as 1 s
+        ("0.25", "'0.25'"),
+        (np.ma.masked_array([0.25, 0.5, 0.25, 0.25], [0, 1, 0, 0]), "masked array"),
+        ([0.25, "0.5", 0.25, 0.25], "'0.5' at position 1"),
+    ],
+)
+def test_adaptation_luminance_refuses_frame_times_that_are_not_real_numbers(frame_time_s, shown):
+    with pytest.raises(ValueError, match=f"^frame_time_s must .*{shown}"):
+        adaptation.adaptation_luminance(np.full(4, 0.04), frame_time_s, initial_cd_m2=10.0)

@@ -218,3 +218,43 @@ def test_a_luminance_per_pixel_broadcasts():
 def test_bad_input_is_refused_by_name(call, pattern):
     with pytest.raises(ValueError, match=pattern):
         call()
+
+
+@pytest.mark.parametrize(
+    ("rgb", "shown"),
+    [
+        (["1", "0", "0.5"], "'1' at position 0"),
+        ([True, False, True], "True at position 0"),
+        (np.array([1 + 0j, 0, 0]), r"\(1\+0j\)"),
+        (np.ma.masked_array([1.0, 0.2, 0.5], [0, 1, 0]), "masked array"),  # was [1, 0.76, 0.85]
+        ("abc", "'abc'"),
+    ],
+)
+def test_desaturate_refuses_rgb_that_is_not_real_numbers(rgb, shown):
+    with pytest.raises(ValueError, match=f"^rgb must .*{shown}"):
+        scotopic.desaturate_Spencer1995(rgb)
+
+
+@pytest.mark.parametrize(
+    ("tint", "shown"),
+    [
+        ((True, True, True), "True at position 0"),
+        (("1", "1", "1"), "'1' at position 0"),
+        (np.ma.masked_array([1.0, 1.0, 1.0], [0, 1, 0]), "masked array"),
+        ("abc", "'abc'"),
+    ],
+)
+def test_the_scotopic_shift_refuses_a_tint_that_is_not_real_numbers(tint, shown):
+    with pytest.raises(ValueError, match=f"^tint must .*{shown}"):
+        scotopic.scotopic_shift_Luidolt2020(np.full(3, 0.2), 0.0, tint=tint)
+
+
+def test_the_scotopic_shift_refuses_a_masked_rgb():
+    with pytest.raises(ValueError, match=r"^rgb must be a plain array, not a masked array"):
+        scotopic.scotopic_shift_Luidolt2020(np.ma.masked_array(np.full(3, 0.2), [0, 1, 0]), 0.0)
+
+
+def test_the_night_colours_of_valid_rgb_are_unchanged():
+    assert scotopic.desaturate_Spencer1995(np.array([1.0, 0.0, 0.5])).tolist() == [1.0, 0.7, 0.85]
+    shifted = scotopic.scotopic_shift_Luidolt2020(np.full(3, 0.2), 0.0)
+    assert_allclose(shifted, [0.20821284, 0.192349, 0.25183838], rtol=0, atol=5e-9)

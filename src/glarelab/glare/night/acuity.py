@@ -63,6 +63,7 @@ from glarelab.glare._validation import (
     check_in_range,
     check_luminances,
     check_positive,
+    check_real,
 )
 
 __all__ = [
@@ -146,6 +147,11 @@ def luminance_for_acuity(cpd: float | np.ndarray) -> float | np.ndarray:
     float or numpy.ndarray
         Luminance in cd/m².
 
+    Raises
+    ------
+    ValueError
+        For a ``cpd`` outside the range, or a string, bool, complex number or masked array.
+
     Notes
     -----
     .. math:: Y = \\exp\\bigl(-1.64 \\tan(1.49 - 0.06 R) - 0.575646\\bigr) \\qquad (5.17)
@@ -159,7 +165,7 @@ def luminance_for_acuity(cpd: float | np.ndarray) -> float | np.ndarray:
     >>> round(luminance_for_acuity(13.85), 4)  # the headset's 13.85 px/deg
     0.1455
     """
-    r = np.asarray(cpd, dtype=float)
+    r = check_real("cpd", cpd)
     a, b, c, d = LARSON1997
     high = a * math.pi / 2 + d
     if not np.isfinite(r).all() or (r <= 0).any() or (r >= high).any():

@@ -37,6 +37,7 @@ from glarelab.glare._validation import (
     check_in_range,
     check_luminances,
     check_positive,
+    check_real,
     real_number,
 )
 
@@ -266,8 +267,9 @@ def adaptation_luminance(
     Raises
     ------
     ValueError
-        For an empty sequence, negative or non-finite luminances or times, or a frame-time
-        array of another length.
+        For an empty sequence, negative or non-finite luminances or times, a frame time
+        that is a string, a bool, a complex number or a masked array, or a frame-time array
+        of another length.
 
     References
     ----------
@@ -285,6 +287,7 @@ def adaptation_luminance(
             f"targets_cd_m2 must be a 1-D sequence of at least one luminance; got shape "
             f"{np.shape(targets_cd_m2)}"
         )
+    frame_times = check_real("frame_time_s", frame_time_s)
     if np.ndim(frame_time_s) not in (0, 1) or (
         np.ndim(frame_time_s) == 1 and np.size(frame_time_s) != targets.size
     ):
@@ -292,7 +295,7 @@ def adaptation_luminance(
             f"frame_time_s must be a number or one per frame ({targets.size}); got shape "
             f"{np.shape(frame_time_s)}"
         )
-    times = np.broadcast_to(np.asarray(frame_time_s, dtype=float), targets.shape)
+    times = np.broadcast_to(frame_times, targets.shape)
     if not (np.isfinite(times).all() and (times >= 0).all()):
         raise ValueError(f"frame_time_s must be finite and >= 0 s; got {frame_time_s!r}")
     if initial_cd_m2 is not None:  # named as given, not as adaptation_step's previous state

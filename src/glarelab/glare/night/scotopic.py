@@ -46,7 +46,7 @@ import numpy as np
 from colour.recovery import MSDS_BASIS_FUNCTIONS_sRGB_MALLETT2019
 
 from glarelab.glare._colour import colour
-from glarelab.glare._validation import check_choice, check_in_range
+from glarelab.glare._validation import check_choice, check_in_range, check_real
 from glarelab.glare.night.adaptation import rod_sensitivity
 
 __all__ = [
@@ -359,7 +359,7 @@ def scotopic_shift_Luidolt2020(
     array = _rgb("rgb", rgb)
     check_choice("rod", rod, ("scotopic", "photopic"))
     check_choice("colourspace", colourspace, sorted(colour.RGB_COLOURSPACES))
-    tint_rgb = np.asarray(tint, dtype=float)
+    tint_rgb = check_real("tint", tint)
     if tint_rgb.shape != (3,) or not np.isfinite(tint_rgb).all() or (tint_rgb <= 0).any():
         raise ValueError(f"tint must be three linear RGB values > 0; got {tint!r}")
     y_row = np.asarray(colour.RGB_COLOURSPACES[colourspace].matrix_RGB_to_XYZ[1], float)
@@ -433,7 +433,7 @@ def scotopic_colour(
 
 
 def _rgb(name: str, value) -> np.ndarray:
-    array = np.asarray(value, dtype=float)
+    array = check_real(name, value)
     if array.shape[-1:] != (3,):
         raise ValueError(f"{name} must have 3 channels in its last axis; got shape {array.shape}")
     if not np.isfinite(array).all() or (array < 0).any():
