@@ -219,3 +219,42 @@ def test_staircase_rows_the_protocol_cannot_write_are_refused(simulated, tmp_pat
     shutil.copy(source.with_suffix(".json"), bad.with_suffix(".json"))
     with pytest.raises(DataError, match=re.escape(named)):
         load_sessions(load_protocol("spencer1995"), [bad])
+
+
+@pytest.mark.parametrize(
+    "flag", ["exclude_incomplete", "include_aborted", "include_pilots", "include_no_sidecar"]
+)
+@pytest.mark.parametrize("value", ["no", 1, None])
+def test_load_sessions_refuses_a_flag_that_is_not_a_bool(flag, value, tmp_path):
+    """exclude_incomplete='no' is true to `if`: it dropped participants missing a cell, and
+    include_pilots='no' analysed pilots as participants."""
+    with pytest.raises(TypeError, match=f"^{flag} must be True or False; got {value!r}"):
+        load_sessions(load_protocol("spencer1995"), [tmp_path / "x.csv"], **{flag: value})
+
+
+def test_load_sessions_reads_one_path_as_one_file(tmp_path):
+    """A single path string was iterated over its characters ('/: not a file', 'w: no such
+    file', ...)."""
+    missing = str(tmp_path / "x.csv")
+    with pytest.raises(DataError) as error:
+        load_sessions(load_protocol("spencer1995"), missing)
+    assert len(error.value.problems) == 1 and "x.csv: no such file" in error.value.problems[0]
+
+
+@pytest.mark.parametrize(
+    ("protocol", "paths", "pattern"),
+    [
+        (
+            "spencer1995",
+            ["x.csv"],
+            r"^protocol must be a Protocol \(load_protocol\('spencer1995'\)",
+        ),
+        (None, ["x.csv"], "^protocol must be a Protocol .*NoneType"),
+        ("P", [None], r"^paths must hold file paths \(str or Path\); got None"),
+        ("P", 12, "^paths must be a list of session CSV paths; got 12"),
+    ],
+)
+def test_load_sessions_names_an_argument_of_the_wrong_kind(protocol, paths, pattern):
+    protocol = load_protocol("spencer1995") if protocol == "P" else protocol
+    with pytest.raises(TypeError, match=pattern):
+        load_sessions(protocol, paths)

@@ -44,6 +44,7 @@ import math
 import re
 from collections.abc import Sequence
 from datetime import datetime
+from os import PathLike
 from pathlib import Path
 from typing import TYPE_CHECKING, TypeVar
 
@@ -1076,6 +1077,24 @@ def _session(path: Path, rows: list[dict], sidecar: dict | None) -> dict:
     }
 
 
+def _arguments(protocol, *flags: object) -> None:
+    """Refuse a protocol that is not one (a study's name) and a flag that is not a bool
+    (the string 'no' is true to ``if``: ``exclude_incomplete='no'`` would drop participants)."""
+    from glarelab.protocols import Protocol
+
+    if not isinstance(protocol, Protocol):
+        raise TypeError(
+            f"protocol must be a Protocol (load_protocol({protocol!r}) reads a study's); got "
+            f"{protocol!r}"
+            if isinstance(protocol, str)
+            else f"protocol must be a Protocol (from load_protocol); got {type(protocol).__name__}"
+        )
+    names = ("exclude_incomplete", "include_aborted", "include_pilots", "include_no_sidecar")
+    for name, flag in zip(names, flags, strict=True):
+        if not isinstance(flag, bool):
+            raise TypeError(f"{name} must be True or False; got {flag!r}")
+
+
 def load_sessions(
     protocol: Protocol,
     paths: list[str | Path],
@@ -1094,7 +1113,8 @@ def load_sessions(
     protocol
         The study's validated protocol.
     paths
-        Session CSV files; each one's JSON sidecar (same name) is read where it exists.
+        Session CSV files (a list, or one path); each one's JSON sidecar (same name) is read
+        where it exists.
     exclude_incomplete
         Drop participants with a missing design cell (listed in ``Dataset.excluded``) instead
         of refusing the data.
@@ -1124,6 +1144,10 @@ def load_sessions(
 
     Raises
     ------
+    TypeError
+        For a protocol that is not a :class:`~glarelab.protocols.Protocol` (a study's name:
+        use ``load_protocol``), a path that is not a str or Path, or a flag that is not
+        True or False.
     DataError
         Naming file, line and column of every bad cell; a sidecar that disagrees with its
         CSV, its file name, the protocol or the stimulus set; values the protocol or its
@@ -1146,6 +1170,14 @@ def load_sessions(
     replayed: list[str] = []  # what the paradigm's replay of each session finds
     edited: list[str] = []  # rows that are not the ones their session wrote
     keys: list[tuple[Path, str, int, _Trials | None]] = []  # each file's (_trials_of)
+    _arguments(protocol, exclude_incomplete, include_aborted, include_pilots, include_no_sidecar)
+    if isinstance(paths, str | PathLike):  # one file: not the characters of its name
+        paths = [paths]
+    if not isinstance(paths, Sequence) or isinstance(paths, bytes):
+        raise TypeError(f"paths must be a list of session CSV paths; got {paths!r}")
+    for raw in paths:
+        if not isinstance(raw, str | PathLike):
+            raise TypeError(f"paths must hold file paths (str or Path); got {raw!r}")
     if not paths:
         raise DataError(["no CSV files given"])
     paradigm = paradigm_analysis(protocol)
