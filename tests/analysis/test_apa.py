@@ -12,6 +12,8 @@ from hypothesis import strategies as st
 from glarelab.analysis import apa
 from glarelab.analysis.apa import (
     anova_effect,
+    apa_F,
+    apa_t,
     format_table,
     header,
     p_cell,
@@ -197,4 +199,28 @@ def test_an_impossible_statistic_is_refused_not_printed(call, match):
     """``apa_p(True)`` printed 'p > .999', ``apa_t(-1, ...)`` 't(-1) = 2.00', ``apa_F(2, 0, ...)``
     'F(2, 0) = 3.00', and ``number(1.5, -1)`` ended in Python's format error."""
     with pytest.raises(ValueError, match=match):
+        call()
+
+
+@pytest.mark.parametrize(
+    ("call", "pattern"),
+    [
+        (
+            lambda: apa_F(2, 18, np.nan, 0.5),
+            r"^apa_F: f_value must be a finite number >= 0; got nan",
+        ),
+        (
+            lambda: apa_F(2, 18, -3.0, 0.5),
+            r"^apa_F: f_value must be a finite number >= 0; got -3.0",
+        ),
+        (lambda: apa_F(2, 18, np.inf, 0.0), r"^apa_F: f_value .* got inf"),
+        (lambda: apa_F(2, 18, "3", 0.0), r"^apa_F: f_value .* got '3'"),
+        (lambda: apa_t(10, np.inf, 0.0), r"^apa_t: t must be a finite number; got inf"),
+        (lambda: apa_t(10, np.nan, 0.5), r"^apa_t: t must be a finite number; got nan"),
+        (lambda: apa_t(10, True, 0.5), r"^apa_t: t must be a finite number; got True"),
+    ],
+)
+def test_the_formatters_refuse_a_statistic_that_is_not_a_finite_number(call, pattern):
+    """'F(2, 18) = nan', 'F(2, 18) = -3.00' and 't(10) = inf' were printed."""
+    with pytest.raises(ValueError, match=pattern):
         call()

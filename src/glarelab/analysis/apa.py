@@ -187,6 +187,21 @@ def _dof(value: object, name: str) -> float:
     return float(value)
 
 
+def _statistic(value: object, name: str, *, low: float = -math.inf) -> float:
+    """A test statistic as a finite number >= ``low``, else a ValueError naming it (a test
+    that could not be computed has no statistic to print)."""
+    number = isinstance(value, int | float | np.integer | np.floating) and not isinstance(
+        value, bool | np.bool_
+    )
+    if not (number and math.isfinite(value) and value >= low):
+        allowed = "a finite number" + (f" >= {low:g}" if math.isfinite(low) else "")
+        raise ValueError(
+            f"{name} must be {allowed}; got {value!r} (a test that could not be computed has "
+            "no statistic to print; say why instead)"
+        )
+    return float(value)
+
+
 def degrees(value: float) -> str:
     """Degrees of freedom: whole ones as integers, corrected (fractional) ones with two
     decimals; ``1 / 11 × 11`` is 1 (a float a hair from a whole number is that number).
@@ -224,12 +239,19 @@ def apa_F(df1: float, df2: float, f_value: float, p: float) -> str:
     str
         The text.
 
+    Raises
+    ------
+    ValueError
+        For degrees of freedom that are not finite numbers above 0, an F that is negative,
+        NaN or infinite, or a p outside [0, 1].
+
     Examples
     --------
     >>> apa_F(5, 45, 23.684, 0.00001)
     'F(5, 45) = 23.68, p < .001'
     """
     _dof(df1, "apa_F: df1"), _dof(df2, "apa_F: df2")
+    f_value = _statistic(f_value, "apa_F: f_value", low=0.0)
     return f"F({degrees(df1)}, {degrees(df2)}) = {fixed(f_value, 2)}, {apa_p(p)}"
 
 
@@ -363,12 +385,19 @@ def apa_t(dof: float, t: float, p: float) -> str:
     str
         The text.
 
+    Raises
+    ------
+    ValueError
+        For degrees of freedom that are not a finite number above 0, a t that is NaN or
+        infinite, or a p outside [0, 1].
+
     Examples
     --------
     >>> apa_t(9, -0.004, 0.997), apa_t(16.83, 1.7749, 0.048)
     ('t(9) = 0.00, p = .997', 't(16.8) = 1.77, p = .048')
     """
     dof = _dof(dof, "apa_t: dof")
+    t = _statistic(t, "apa_t: t")
     d = f"{dof:.0f}" if dof.is_integer() else f"{dof:.1f}"
     return f"t({d}) = {fixed(t, 2)}, {apa_p(p)}"
 
