@@ -99,3 +99,10 @@ def test_a_complex_error_sd_is_refused():
     """np.complex128(1 + 1j) was taken as 1 (with numpy's ComplexWarning)."""
     with pytest.raises(ValueError, match=r"^error_sd must be a finite number > 0"):
         one_way_power([0.0, 1.0], error_sd=np.complex128(1 + 1j), subjects=5)
+
+
+@pytest.mark.parametrize("alpha", [np.complex128(0.05), 0.05 + 0j])
+def test_one_way_power_names_a_complex_alpha(alpha):
+    """scipy's "ufunc 'fdtri' not supported for the input types" was all a user saw."""
+    with pytest.raises(ValueError, match=r"^alpha must be a number in \(0, 1\); got"):
+        one_way_power([0, 0.5], error_sd=1, subjects=10, alpha=alpha)

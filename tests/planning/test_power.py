@@ -1,5 +1,6 @@
 import json
 
+import numpy as np
 import pandas as pd
 import pytest
 from hypothesis import given, settings
@@ -137,3 +138,30 @@ def test_binomial_interval_refuses_what_is_no_count_or_level(arguments, match):
     successes, trials, level = arguments
     with pytest.raises(ValueError, match=match):
         binomial_interval(successes, trials, level=level)
+
+
+@pytest.mark.parametrize("level", [np.complex128(0.95), 0.95 + 0j, "0.95", True])
+def test_binomial_interval_names_a_level_that_is_not_a_real_number(level):
+    """A complex level gave scipy's "ufunc '_beta_ppf' not supported for the input types"."""
+    with pytest.raises(ValueError, match=r"^level must be a confidence level in"):
+        binomial_interval(1, 2, level=level)
+
+
+@pytest.mark.parametrize("target", ["0.8", 0.8 + 0j, True])
+def test_recommend_names_a_target_that_is_not_a_number(target):
+    """'<' not supported between instances of 'int' and 'str'."""
+    table = pd.DataFrame({"effect": ["a"], "participants": [6], "power": [0.7], "ci_low": [0.6]})
+    with pytest.raises(ValueError, match=r"^target must be a number in \(0, 1\); got"):
+        recommend(table, target=target)
+
+
+@pytest.mark.parametrize(
+    ("power", "pattern"),
+    [
+        ([1, 2, 3], r"^power must be the power table .*got list"),  # 'list' has no groupby
+        (pd.DataFrame({"effect": ["a"], "participants": [6], "power": [0.7]}), "has no ci_low"),
+    ],
+)
+def test_recommend_names_a_power_table_it_cannot_read(power, pattern):
+    with pytest.raises(ValueError, match=pattern):
+        recommend(power)

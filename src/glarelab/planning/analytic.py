@@ -29,7 +29,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats as sps
 
-from glarelab.files.values import plain_array
+from glarelab.files.values import is_real, plain_array
 from glarelab.planning.effects import anova_effects
 
 __all__ = ["OneWayJob", "noncentrality", "one_way_power"]
@@ -136,7 +136,7 @@ def one_way_power(
     >>> round(one_way_power([0.0, 0.3, 0.6, 0.9], error_sd=1.0, subjects=12), 4)
     0.4246
     """
-    if isinstance(alpha, bool | np.bool_) or not isinstance(alpha, int | float | np.number):
+    if not is_real(alpha):  # a bool, a string, a complex number
         raise ValueError(f"alpha must be a number in (0, 1); got {alpha!r}")
     if not 0 < alpha < 1:
         raise ValueError(f"alpha must be in (0, 1); got {alpha!r}")

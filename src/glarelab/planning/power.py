@@ -59,6 +59,7 @@ from glarelab.files.folders import (
     staging_folder,
 )
 from glarelab.files.locks import ProcessLock
+from glarelab.files.values import is_real
 from glarelab.planning.effects import CORRECTIONS, SphericityChoice, chosen_p
 
 if TYPE_CHECKING:
@@ -119,19 +120,15 @@ def binomial_interval(successes: int, trials: int, *, level: float = 0.95) -> tu
             raise ValueError(f"{name} must be a whole number; got {value!r}")
     if trials < 1 or not 0 <= successes <= trials:
         raise ValueError(f"need 0 <= successes <= trials, trials >= 1; got {successes}, {trials}")
-    if (
-        isinstance(level, bool | np.bool_)
-        or not isinstance(level, int | float | np.number)
-        or not 0 < level < 1
-    ):
+    if not is_real(level) or not 0 < level < 1:  # a bool, a string, a complex number
         raise ValueError(f"level must be a confidence level in (0, 1), e.g. 0.95; got {level!r}")
     low, high = proportion_confint(successes, trials, alpha=1 - level, method="beta")
     return float(low), float(high)
 
 
 def _check_alpha(alpha: float) -> float:
-    if not 0 < alpha < 1:
-        raise ValueError(f"alpha must be in (0, 1); got {alpha!r}")
+    if not is_real(alpha) or not 0 < alpha < 1:
+        raise ValueError(f"alpha must be a number in (0, 1); got {alpha!r}")
     return float(alpha)
 
 
@@ -250,7 +247,8 @@ def recommend(power: pd.DataFrame, *, target: float = 0.8) -> pd.DataFrame:
     Raises
     ------
     ValueError
-        For a ``target`` outside (0, 1).
+        For a ``target`` that is not a number in (0, 1), or a ``power`` that is not a
+        DataFrame with those columns.
 
     Examples
     --------
@@ -259,8 +257,19 @@ def recommend(power: pd.DataFrame, *, target: float = 0.8) -> pd.DataFrame:
     >>> recommend(table, target=0.8)[["n_power", "n_confident"]].to_numpy().tolist()
     [[8, 10]]
     """
-    if not 0 < target < 1:
-        raise ValueError(f"target must be in (0, 1); got {target!r}")
+    if not is_real(target) or not 0 < target < 1:
+        raise ValueError(f"target must be a number in (0, 1); got {target!r}")
+    if not isinstance(power, pd.DataFrame):
+        raise ValueError(
+            f"power must be the power table (a DataFrame from summarise); got "
+            f"{type(power).__name__}"
+        )
+    missing = [c for c in ("effect", "participants", "power", "ci_low") if c not in power]
+    if missing:
+        raise ValueError(
+            f"power must have the columns effect, participants, power and ci_low (the table "
+            f"summarise returns); it has no {', '.join(missing)}"
+        )
     rows = []
     for effect, part in power.groupby("effect", sort=False):
         part = part.sort_values("participants")
