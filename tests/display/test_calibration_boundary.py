@@ -281,3 +281,14 @@ def test_a_header_typed_with_spaces_after_the_commas_is_read(tmp_path):
     plain.write_text("code,luminance_cd_m2\n0,0.5\n128,20\n255,100\n64,5\n")
     spaced.write_text("code, luminance_cd_m2 \n0,0.5\n128,20\n255,100\n64,5\n")
     assert read_readings(spaced) == read_readings(plain)
+
+
+def test_masked_readings_are_refused_in_one_line():
+    """numpy's MaskError "Cannot convert masked element to a Python int" was all a user saw."""
+    readings = np.array(READINGS, dtype=float)
+    mask = np.zeros_like(readings, dtype=bool)
+    mask[1] = True
+    with pytest.raises(
+        TypeError, match=r"^readings: readings must be a plain array, not a masked"
+    ):
+        fit_calibration(np.ma.masked_array(readings, mask), bit_depth=8)

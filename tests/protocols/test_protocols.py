@@ -688,3 +688,12 @@ def test_a_monitor_applies_to_a_live_scene_whose_file_leaves_keys_out():
     )
     assert mounted["viewing"]["distance_m"] == 1.2
     assert mounted["scene"] == protocol["scene"]
+
+
+@pytest.mark.parametrize("cells", [123, None, "p01,1,true"])
+def test_row_digest_names_cells_that_are_not_a_row(cells):
+    """'int' object is not iterable (and a string was digested as its characters)."""
+    from glarelab.protocols import row_digest
+
+    with pytest.raises(TypeError, match=r"^row_digest: cells must be the row's cells"):
+        row_digest(cells)

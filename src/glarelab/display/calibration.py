@@ -903,10 +903,17 @@ def fit_calibration(
         outside the bit depth, a luminance neither 0 nor within ``MIN_READING_CD_M2``-
         ``MAX_DISPLAY_CD_M2``, a repeated code, readings that do not increase with code
         (named), readings without code 0 and the top code, or another ``method``.
+    TypeError
+        For readings that are not a sequence of pairs (a string, a dict), or a masked array.
     """
     if isinstance(readings, str | bytes | dict) or not hasattr(readings, "__iter__"):
         raise TypeError(
             f"{source}: readings must be a sequence of (code, cd/m²) pairs; got {readings!r:.80}"
+        )
+    if isinstance(readings, np.ma.MaskedArray):
+        raise TypeError(
+            f"{source}: readings must be a plain array, not a masked array (its mask would be "
+            "ignored); leave the masked readings out"
         )
     if method not in METHODS:
         raise ValueError(f"method must be one of {', '.join(METHODS)}; got {method!r}")

@@ -193,5 +193,9 @@ def row_digest(cells: Iterable[str]) -> str:
     >>> row_digest(["p01", "1", "true"])
     '5e2465a763afae07'
     """
+    if isinstance(cells, str | bytes) or not isinstance(cells, Iterable):
+        raise TypeError(
+            f"row_digest: cells must be the row's cells as a list of text; got {cells!r}"
+        )
     text = json.dumps(list(cells), ensure_ascii=False, separators=(",", ":"))
     return hashlib.sha256(text.encode("utf-8")).hexdigest()[:ROW_DIGEST_HEX_DIGITS]
