@@ -128,7 +128,7 @@ def binomial_interval(successes: int, trials: int, *, level: float = 0.95) -> tu
 
 def _check_alpha(alpha: float) -> float:
     if not is_real(alpha) or not 0 < alpha < 1:
-        raise ValueError(f"alpha must be a number in (0, 1); got {alpha!r}")
+        raise ValueError(f"alpha must be in (0, 1); got {alpha!r}")
     return float(alpha)
 
 
