@@ -1,7 +1,7 @@
 """The participant dialog of ``glarelab run`` without ``--participant``: PsychoPy's dialog,
 asking again, with what was typed kept and the whole problem written above the fields, until
-every entry is valid. Sex and vision correction start empty: only what the experimenter
-chooses is recorded (an empty one is not given)."""
+every entry is valid. Sex and vision correction start as ``--sex`` and ``--vision`` gave them,
+else empty: only what the experimenter chooses is recorded (an empty one is not given)."""
 
 from __future__ import annotations
 
@@ -61,8 +61,8 @@ def experiment_info(
         "participant": "",
         "session": args.session,
         "age": args.age,
-        "sex": "",
-        "vision": "",
+        "sex": getattr(args, "sex", None) or "",  # as given on the command line
+        "vision": getattr(args, "vision", None) or "",
     }
     problem = None
     while True:  # a bad entry is named and asked again, with what was typed kept
