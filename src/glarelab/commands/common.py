@@ -476,6 +476,7 @@ def output_file(
     force: bool = False,
     shared: bool = False,
     verified_ok: bool = False,
+    forceable: bool = True,
 ) -> Path:
     """A file a command writes: its suffix must say what it holds, it must not be an input,
     a file of a stimulus set or report, or a verified calibration; its folder must exist.
@@ -500,6 +501,8 @@ def output_file(
     verified_ok
         Whether a verified calibration may be overwritten (``calibrate verify``); default
         False.
+    forceable
+        Whether the command has ``--force`` (the messages offer it); default True.
 
     Returns
     -------
@@ -535,20 +538,22 @@ def output_file(
             f"{path} is a display calibration with a verification pass ({status}): the {what} "
             "would overwrite it; give another name (nothing was changed)"
         )
+    overwrite = f", or --force to overwrite it with the {what}" if forceable else ""
     if path.is_symlink() and not force:
+        replace = f", or --force to replace the link with the {what}" if forceable else ""
         raise ValueError(
             f"{path} is a symbolic link (to {os.readlink(path)}); glarelab does not write "
-            f"through links: give another name, or --force to replace the link with the {what}"
+            f"through links: give another name{replace}"
         )
     if path.exists() and not force and not shared and path.name not in listed_files(path.parent):
         raise ValueError(
-            f"{path} exists and glarelab did not write it there; give another name, or --force "
-            f"to overwrite it with the {what} (nothing was changed)"
+            f"{path} exists and glarelab did not write it there; give another name{overwrite} "
+            "(nothing was changed)"
         )
     if not force and edited_since(path.parent, path.name):  # a gallery figure retouched
         raise ValueError(
-            f"{path} was edited since glarelab wrote it; give another name, or --force to "
-            f"overwrite it with the {what} (nothing was changed)"
+            f"{path} was edited since glarelab wrote it; give another name{overwrite} (nothing "
+            "was changed)"
         )
     return path
 

@@ -347,6 +347,7 @@ def _run_session(args: argparse.Namespace) -> int:
             (".png",),
             "screenshot",
             inputs=[args.calibration, args.scripted_keys],
+            forceable=False,  # run has no --force
         )
         claim_output(args.screenshot, "run --screenshot")
     frontend = PsychoPyFrontend(
