@@ -207,6 +207,9 @@ def test_the_rating_report_has_a_visible_neutral_category_and_every_participant(
     html = report.read_text()
     assert [t for _, t in figures(html)] == ["Ratings per category", "Every participant's ratings"]
     assert "grey: the neutral 4" in html
+    # a questionnaire shows no images: no stimulus set to give (every way to give one is
+    # refused), so the report does not ask for one
+    assert "--stimuli SET" not in html
     results = (tmp_path / "results.md").read_text()
     assert "Wilcoxon signed-rank tests, Holm-corrected across the 6 categories" in results
     # the neutral bar is drawn in a grey that differs from white and from its neighbours

@@ -387,13 +387,19 @@ def _html(
     ]
     if methods:
         parts.append(f"<p class='results'>{html.escape(methods)}</p>")
+    from glarelab.stimuli.stimulus_set import shows_images
+
     number = 0
     if stimuli:
         parts.append("<h3 id='stimuli'>Stimuli</h3>")
         for figure in stimuli:
             number += 1
             parts.append(_figure_html(number, figure))
-    elif not had_set and paradigm_analysis(protocol).stimulus_figures is not None:
+    elif (
+        not had_set
+        and paradigm_analysis(protocol).stimulus_figures is not None
+        and shows_images(protocol)  # a questionnaire without a scene has no set to give
+    ):
         parts.append(
             "<p class='note'>The stimuli are shown when the report is given the stimulus set "
             "(<code>glarelab analyse … --stimuli SET</code>).</p>"
