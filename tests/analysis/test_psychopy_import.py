@@ -498,7 +498,12 @@ def test_an_instructions_row_with_a_trial_value_is_named_not_imported_as_a_trial
     with pytest.raises(DataError) as refused:
         import_psychopy(protocol, [source], tmp_path / "out", mapping={"key_resp.rt": "time_s"})
     (problem,) = refused.value.problems
-    assert problem.startswith(f"{source}, line 2: no ") and "outside the trial loop" in problem
+    # named by its line and the value that made it a trial row (as docs/analysis.md says),
+    # not by the 19 columns it lacks
+    assert problem.startswith(
+        f"{source}, line 2: key_resp.rt='1.2' makes it a trial row, but it has no "
+    ), problem
+    assert "more, which every trial records" in problem and "outside the trial loop" in problem
     assert not (tmp_path / "out").exists()
 
 

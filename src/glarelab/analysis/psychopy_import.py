@@ -540,10 +540,19 @@ def import_psychopy(
                         row[column.name] = ""
                 empty = [c.name for c in schema if not c.optional and row[c.name] == ""]
                 if empty:  # a row outside the trial loop with a value in a mapped column
+                    given = ", ".join(
+                        f"{header[renamed.index(n)]}={record[n]!r}"
+                        for n in data_columns
+                        if record.get(n, "") != ""
+                    )
+                    missing = ", ".join(empty[:4]) + (
+                        f" and {len(empty) - 4} more" if len(empty) > 4 else ""
+                    )
                     problems.append(
-                        f"{source}, line {line}: no {', '.join(empty)}, which every trial "
-                        "records: a row outside the trial loop (instructions) with a value "
-                        "in a trial column? Leave that row's trial columns empty, or remove it"
+                        f"{source}, line {line}: {given or 'a value'} makes it a trial row, "
+                        f"but it has no {missing}, which every trial records: a row outside "
+                        "the trial loop (instructions) with a value in a trial column? Leave "
+                        "that row's trial columns empty, or remove it"
                     )
                 cells_rows.append(row)
             if all(_INTEGRAL.fullmatch(r["trial"]) for r in cells_rows):
