@@ -311,3 +311,24 @@ def test_a_reference_spectrum_that_would_equal_the_scaled_one_is_refused():
     # where it acts: a Fresnel term per wavelength, or one FFT per wavelength
     WaveOpticsGlare(pupil_mm=3.0, **CAMERA, spectral="reference", fresnel=True)
     WaveOpticsGlare(pupil_mm=3.0, **CAMERA, spectral="reference", pixel_integration="rebin")
+
+
+def test_models_of_two_obstacle_images_are_not_equal_nor_share_a_kernel():
+    """Two wave models with different aperture images compared equal (the image is left out
+    of the comparison), and a renderer took one's kernel for the other's without a word."""
+    from glarelab.glare import GlareRenderer
+
+    first = np.ones((32, 32))
+    first[10:20, :] = 0.0
+    second = np.ones((32, 32))
+    second[:, 10:20] = 0.0
+    a = WaveOpticsGlare(obstacle_image=first, obstacle_spacing_mm=0.1)
+    b = WaveOpticsGlare(obstacle_image=second, obstacle_spacing_mm=0.1)
+    same = WaveOpticsGlare(obstacle_image=first.copy(), obstacle_spacing_mm=0.1)
+    assert a != b and a == same and hash(a) == hash(same)
+    assert a != WaveOpticsGlare(obstacle_image=first.astype(np.float32), obstacle_spacing_mm=0.1)
+    kernel = a.kernel(0.05, (31, 31))
+    assert kernel.description["obstacle_image"].startswith("user image, sha256 ")
+    with pytest.raises(ValueError, match="kernel was digitised"):
+        GlareRenderer(b, pixel_deg=0.05, shape=(16, 16), kernel=kernel)
+    GlareRenderer(same, pixel_deg=0.05, shape=(16, 16), kernel=kernel)  # its own image's

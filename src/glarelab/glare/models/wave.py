@@ -68,6 +68,7 @@ Ritschel, T., Ihrke, M., Frisvad, J. R., et al. (2009). Temporal glare. Eurograp
 
 from __future__ import annotations
 
+import hashlib
 import math
 import time
 import warnings
@@ -363,6 +364,32 @@ class WaveOpticsGlare(GlareModel):
     pixel_integration: Literal["exact", "rebin"] = "exact"
     pupil_convention: Literal["unit-energy", "Luidolt2020"] = "unit-energy"
     aperture_grid: Literal["exact", "fast"] = "exact"
+
+    def __eq__(self, other: object) -> bool:
+        """Equal fields and the same obstacle image (values, shape and dtype): two models of
+        different aperture images compared equal, and a renderer took one's kernel for the
+        other's."""
+        if other.__class__ is not self.__class__:
+            return NotImplemented
+        mine = tuple(getattr(self, f.name) for f in fields(self) if f.compare)
+        theirs = tuple(getattr(other, f.name) for f in fields(self) if f.compare)
+        return mine == theirs and _obstacle_digest(self) == _obstacle_digest(other)
+
+    def description(self, colour: bool) -> dict:
+        """The model's name and parameters (:meth:`GlareModel.description`), the obstacle
+        image by its digest.
+
+        Parameters
+        ----------
+        colour
+            Whether the kernel described is the colour one.
+
+        Returns
+        -------
+        dict
+            ``model``, the parameters and ``colour``.
+        """
+        return super().description(colour) | {"obstacle_image": _obstacle_digest(self)}
 
     def __post_init__(self) -> None:
         for flag in ("eyelashes", "eyelid", "fresnel"):
@@ -957,7 +984,7 @@ class WaveOpticsGlare(GlareModel):
             "model": "WaveOpticsGlare",
             "admitted_share": share,
             **{k: v for k, v in asdict(self).items() if k not in ("spectrum", "obstacle_image")},
-            "obstacle_image": None if self.obstacle_image is None else "user image",
+            "obstacle_image": _obstacle_digest(self),
             "spectrum": asdict(self.spectrum),
             "pupil_diameter_mm": self.pupil_diameter,
             "wavelengths_nm": wavelengths.tolist(),
@@ -1108,3 +1135,15 @@ def kernel_colour_error(reference: np.ndarray, values: np.ndarray, colourspace: 
         "delta_e_max": float(delta.max()),
         "luminance_error": float(np.abs(y - y_ref).sum() / y_ref.sum()),
     }
+
+
+def _obstacle_digest(model: WaveOpticsGlare) -> str | None:
+    """A model's obstacle image as its kernel's description names it: None, or ``'user
+    image'`` and the sha256 of its shape, dtype and values."""
+    image = model.obstacle_image
+    if image is None:
+        return None
+    array = np.ascontiguousarray(image)
+    digest = hashlib.sha256(f"{array.shape} {array.dtype.str}".encode())
+    digest.update(array.tobytes())
+    return f"user image, sha256 {digest.hexdigest()}"
