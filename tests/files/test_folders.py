@@ -187,3 +187,57 @@ def test_docs_run_again_keeps_a_file_edited_since(tmp_path, capsys):
     assert main(["docs", "--out", str(out)]) == 2
     assert "data.md was edited since glarelab wrote it" in capsys.readouterr().err
     assert (out / "data.md").read_text(encoding="utf-8") == edited
+
+
+@pytest.mark.parametrize("claim", ["claim_files", "list_files"])
+def test_a_name_whose_write_failed_does_not_make_a_later_file_glarelabs(tmp_path, claim):
+    """A write that failed on a full disk left the name listed: a user's file saved under it
+    later was taken for glarelab's and overwritten without --force."""
+    from glarelab.files import folders
+
+    getattr(folders, claim)(tmp_path, ["out.exr"], "render")  # the write then fails
+    assert listed_files(tmp_path) == {"out.exr": "render"}  # nothing there: nothing to take
+    (tmp_path / "out.exr").write_text("participant data\n")
+    assert listed_files(tmp_path) == {}
+    with pytest.raises(ValueError, match=r"out\.exr exists and glarelab did not write it"):
+        folders.claim_files(tmp_path, ["out.exr"], "render")
+    folders.claim_files(tmp_path, ["new.exr"], "render")
+    (tmp_path / "new.exr").write_text("written\n")
+    folders.record_written(tmp_path, ["new.exr"])  # written: glarelab's
+    folders.claim_files(tmp_path, ["new.exr"], "render")
+
+
+@pytest.mark.parametrize("command", ["render", "psf"])
+def test_render_and_psf_whose_write_fails_leave_a_later_user_file_alone(
+    tmp_path, monkeypatch, capsys, command
+):
+    import errno
+
+    import numpy as np
+
+    from glarelab.cli import main
+    from glarelab.commands import render
+    from glarelab.stimuli.exr import write_exr
+
+    monkeypatch.chdir(tmp_path)
+    scene = np.full((17, 17), 10.0)
+    scene[8, 8] = 1e5
+    write_exr("in.exr", scene)
+    out = "out.exr" if command == "render" else "psf.png"
+    args = {
+        "render": ["render", "in.exr", out, "--pixel-deg", "0.05", "--model", "gaussian"],
+        "psf": ["psf", "--model", "gaussian", "--size", "31", "--out", out],
+    }[command]
+
+    def full(path, *_args, **_kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device", str(path))
+
+    with monkeypatch.context() as patch:
+        patch.setattr(render, "write_exr" if command == "render" else "psf_png", full)
+        assert main(args) != 0
+    assert not (tmp_path / out).exists()
+    (tmp_path / out).write_text("participant data\n")
+    capsys.readouterr()
+    assert main(args) == 2
+    assert "glarelab did not write it there" in capsys.readouterr().err
+    assert (tmp_path / out).read_text() == "participant data\n"

@@ -7,6 +7,7 @@ from pathlib import Path
 
 from glarelab.display.calibration import Calibration
 from glarelab.display.photometer import PHOTOMETERS
+from glarelab.files.folders import record_written
 from glarelab.protocols import load_protocol
 
 from .common import add_monitor_options, apply_monitor, claim_output, count, number, output_file
@@ -121,6 +122,7 @@ def _check_display(args: argparse.Namespace) -> int:
             )
     claim_output(out, "check-display")  # the next check (after a driver change) replaces it
     _log(f"wrote {write_check(result, out)}")
+    record_written(Path(out).parent, [Path(out).name])  # written: a later check replaces it
     passed = all(c["passed"] for c in result["checks"]) and result.get("images_exact", True)
     return 0 if passed else 1
 

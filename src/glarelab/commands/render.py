@@ -407,6 +407,7 @@ def _render(args: argparse.Namespace) -> int:
                 l_dmax_cd_m2=args.l_dmax,
                 scale=args.preview_scale or "display",
             )
+            record_written(Path(args.preview).parent, [Path(args.preview).name])
             _log(f"wrote {args.preview}")
     if folder:
         record_written(Path(output), names)

@@ -10,6 +10,7 @@ import sys
 from pathlib import Path
 
 from glarelab.display.calibration import Calibration
+from glarelab.files.folders import record_written
 from glarelab.files.inputs import read_input_text
 from glarelab.protocols import load_protocol
 
@@ -362,22 +363,26 @@ def _run_session(args: argparse.Namespace) -> int:
         pilot=args.pilot,
         monitor=monitor,
     )
-    sidecar = run_session(
-        protocol,
-        args.participant,
-        out=out,
-        frontend=frontend,
-        session=args.session,
-        stimuli=args.stimuli,
-        calibration=calibration,
-        allow_uncalibrated=args.allow_uncalibrated,
-        resume=args.resume,
-        counterbalance=args.counterbalance,
-        participant_info={"age": args.age, "sex": args.sex, "vision_correction": args.vision},
-        accept_mismatch=tuple(args.accept_mismatch or ()),
-        allow_unmeasured_refresh=args.allow_unmeasured_refresh,
-        pilot=args.pilot,
-    )
+    try:
+        sidecar = run_session(
+            protocol,
+            args.participant,
+            out=out,
+            frontend=frontend,
+            session=args.session,
+            stimuli=args.stimuli,
+            calibration=calibration,
+            allow_uncalibrated=args.allow_uncalibrated,
+            resume=args.resume,
+            counterbalance=args.counterbalance,
+            participant_info={"age": args.age, "sex": args.sex, "vision_correction": args.vision},
+            accept_mismatch=tuple(args.accept_mismatch or ()),
+            allow_unmeasured_refresh=args.allow_unmeasured_refresh,
+            pilot=args.pilot,
+        )
+    finally:
+        if args.screenshot is not None and Path(args.screenshot).is_file():
+            record_written(Path(args.screenshot).parent, [Path(args.screenshot).name])
     run = sidecar["runs"][-1]
     _log(
         f"{args.participant}: {sidecar['trials']} trials, {sidecar['status']}"

@@ -49,8 +49,15 @@ LISTING = ".glarelab-files.json"  # the files glarelab wrote into a folder, by k
 LISTING_LOCK = ".glarelab-files.lock"  # held while the listing is read, changed and written
 
 
-def _listing(folder: Path) -> dict[str, str]:
-    """``{relative path: kind}`` of the files glarelab wrote into ``folder`` (empty if none)."""
+UNWRITTEN = ""  # the sha256 recorded for a file claimed before it existed, until it is written
+
+
+def _listing(folder: Path, *, unwritten: bool = False) -> dict[str, str]:
+    """``{relative path: kind}`` of the files glarelab wrote into ``folder`` (empty if none).
+
+    A file claimed while it did not exist whose write never completed (its content still
+    :data:`UNWRITTEN`) is not glarelab's once something is there: a write that failed on a
+    full disk does not make a user's file saved under its name later glarelab's."""
     try:
         listing = json.loads((folder / LISTING).read_text(encoding="utf-8"))
     except (OSError, ValueError):
@@ -58,7 +65,30 @@ def _listing(folder: Path) -> dict[str, str]:
     files = listing.get("files") if isinstance(listing, dict) else None
     if not isinstance(files, dict):
         return {}
-    return {str(name): str(kind) for name, kind in files.items()}
+    if unwritten:  # as listed, unwritten files too
+        return {str(name): str(kind) for name, kind in files.items()}
+    hashes = listing.get("sha256")
+    claimed = {
+        str(name)
+        for name, digest in (hashes.items() if isinstance(hashes, dict) else ())
+        if digest == UNWRITTEN
+    }
+    return {
+        str(name): str(kind)
+        for name, kind in files.items()
+        if str(name) not in claimed
+        or not ((folder / str(name)).exists() or (folder / str(name)).is_symlink())
+    }
+
+
+def _claimed_hashes(folder: Path, names: Iterable[str]) -> dict[str, str]:
+    """The recorded content of the listed files, with ``names`` (about to be written) marked
+    :data:`UNWRITTEN` where no file is there yet, and unrecorded where one is."""
+    names = list(names)
+    absent = {
+        n: UNWRITTEN for n in names if not (folder / n).exists() and not (folder / n).is_symlink()
+    }
+    return _hashes_but(folder, names) | absent
 
 
 def _hashes(folder: Path) -> dict[str, str]:
@@ -277,7 +307,9 @@ def edited_since(folder: Path, name: str) -> bool:
 
 def claim_files(folder: Path, names: Iterable[str], kind: str, *, force: bool = False) -> None:
     """Before writing ``names`` into a shared ``folder``: refuse if one exists and glarelab did
-    not write it there; otherwise list them as glarelab's.
+    not write it there; otherwise list them as glarelab's. A name with no file yet is listed
+    as unwritten until :func:`record_written` records it: should its write fail, a file saved
+    under that name later is not taken for glarelab's.
 
     Parameters
     ----------
@@ -313,7 +345,7 @@ def claim_files(folder: Path, names: Iterable[str], kind: str, *, force: bool = 
                     "copy what you changed elsewhere, remove the file, or give another folder "
                     "(nothing was changed)"
                 )
-        _write_listing(folder, listed | dict.fromkeys(names, kind), _hashes_but(folder, names))
+        _write_listing(folder, listed | dict.fromkeys(names, kind), _claimed_hashes(folder, names))
 
 
 def record_written(folder: Path, names: Iterable[str]) -> None:
@@ -334,7 +366,7 @@ def record_written(folder: Path, names: Iterable[str]) -> None:
             digest = _sha256(folder / name)
             if digest is not None:
                 hashes[name] = digest
-        _write_listing(folder, _listing(folder), hashes)
+        _write_listing(folder, _listing(folder, unwritten=True), hashes)
 
 
 def _hashes_but(folder: Path, names: Iterable[str]) -> dict[str, str]:
@@ -369,7 +401,8 @@ def list_files(folder: Path, names: Iterable[str], kind: str) -> None:
         The folder; it must exist. Files listed there before stay listed.
     names
         The files to add to the listing, relative to ``folder``; no check that glarelab
-        wrote them (:func:`claim_files` checks first).
+        wrote them (:func:`claim_files` checks first). A name with no file yet is listed as
+        unwritten until :func:`record_written` records it, as :func:`claim_files` does.
     kind
         The kind of output the listing records the files as (``'stimulus set'``, ``'report'``,
         ``'power'``, ...): an output replaces or overwrites only files of its own kind.
@@ -378,7 +411,7 @@ def list_files(folder: Path, names: Iterable[str], kind: str) -> None:
     names = list(names)
     with _listing_held(folder):
         _write_listing(
-            folder, _listing(folder) | dict.fromkeys(names, kind), _hashes_but(folder, names)
+            folder, _listing(folder) | dict.fromkeys(names, kind), _claimed_hashes(folder, names)
         )
 
 
