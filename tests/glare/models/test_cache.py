@@ -382,3 +382,35 @@ def test_a_cache_variable_naming_a_file_is_refused_by_name(tmp_path, monkeypatch
     monkeypatch.setenv(CACHE_DIR_ENV, str(tmp_path / "f"))
     with pytest.raises(ValueError, match=rf"^{CACHE_DIR_ENV}=.*f: not a folder"):
         KernelCache()
+
+
+def test_another_obstacle_image_is_another_key(tmp_path):
+    """The obstacle image is left out of the wave model's repr: a render with another aperture
+    image read the first image's kernel from the cache."""
+    cache = KernelCache(tmp_path)
+    a = np.ones((64, 64))
+    a[:, 30:34] = 0.0  # a vertical bar
+    b = a.T.copy()  # a horizontal one
+    keys = [
+        cache.key(_wave(image), 0.05, SHAPE, colour=False)
+        for image in (a, b, a.astype(np.float32), a[:32], None)
+    ]
+    assert None not in keys and len(set(keys)) == len(keys)
+    hybrid = [
+        cache.key(
+            glare.HybridGlare(wave=_wave(image)),
+            0.05,
+            SHAPE,
+            colour=False,
+        )
+        for image in (a, b)
+    ]
+    assert hybrid[0] != hybrid[1]
+    again = _wave(a.copy())
+    assert cache.key(again, 0.05, SHAPE, colour=False) == keys[0]
+
+
+def _wave(image):
+    if image is None:
+        return glare.WaveOpticsGlare()
+    return glare.WaveOpticsGlare(obstacle_image=image, obstacle_spacing_mm=0.1)

@@ -9,11 +9,12 @@ cache keeps each kernel in a file of the user's cache folder (``platformdirs``; 
 What makes a cached kernel the kernel that would be digitised:
 
 - **The key** is a SHA-256 of the model's class and ``repr`` (a frozen dataclass lists every
-  parameter), the pixel size (exactly, as ``float.hex``), the kernel shape, colour or
-  luminance, glarelab's version and a fingerprint of the ``glare`` package's source (so a
-  change to the digitisation in a development tree is never served stale kernels). A model
-  whose ``repr`` does not pin down its parameters (an object address ``at 0x…``, or an array
-  shortened with ``...``) is not cached.
+  parameter), a digest of the fields left out of the ``repr`` (a wave-optics model's obstacle
+  image: its bytes, shape and dtype), the pixel size (exactly, as ``float.hex``), the kernel
+  shape, colour or luminance, glarelab's version and a fingerprint of the ``glare`` package's
+  source (so a change to the digitisation in a development tree is never served stale kernels).
+  A model whose ``repr`` does not pin down its parameters (an object address ``at 0x…``, or an
+  array shortened with ``...``) is not cached.
 - **Every file is checked**: a CRC-32 of the whole entry is stored at its end (zlib's, 2.6×
   faster than SHA-256 on a 33 MB entry, and made for catching accidental damage); an entry
   that does not match (a torn write, a flipped bit, a truncated file) is removed and the
@@ -37,6 +38,7 @@ info`` and ``glarelab cache clear`` show and empty it.
 from __future__ import annotations
 
 import ast
+import dataclasses
 import hashlib
 import json
 import math
@@ -95,6 +97,28 @@ def _source_fingerprint(model: object) -> str:
         digest.update(path.name.encode())
         digest.update(path.read_bytes())
     return digest.hexdigest()
+
+
+def _hidden_fields(model: object, prefix: str = "") -> list[str]:
+    """A digest of each dataclass field left out of ``model``'s repr (a wave-optics model's
+    obstacle image: its bytes, shape and dtype), in the models it holds too (a hybrid's wave
+    model), so two models that differ there get two keys."""
+    if not dataclasses.is_dataclass(model) or isinstance(model, type):
+        return []
+    found = []
+    for spec in dataclasses.fields(model):
+        value = getattr(model, spec.name, None)
+        name = f"{prefix}{spec.name}"
+        if spec.repr:
+            found += _hidden_fields(value, f"{name}.")
+            continue
+        if isinstance(value, np.ndarray):
+            array = np.ascontiguousarray(value)
+            digest = hashlib.sha256(array.tobytes()).hexdigest()
+            found.append(f"{name}={digest}:{array.shape}:{array.dtype.str}")
+        else:
+            found.append(f"{name}={value!r}")
+    return found
 
 
 def _version() -> str:
@@ -183,8 +207,9 @@ class KernelCache:
         Parameters
         ----------
         model
-            The glare model; its class, its ``repr`` (its parameters) and the source of its
-            module are in the key, so an edited model never reads an old kernel.
+            The glare model; its class, its ``repr`` (its parameters), a digest of the fields
+            left out of the repr (an obstacle image's bytes, shape and dtype) and the source
+            of its module are in the key, so an edited model never reads an old kernel.
         pixel_deg
             Visual angle of one pixel in degrees.
         shape
@@ -213,6 +238,11 @@ class KernelCache:
             [int(n) for n in shape],
             bool(colour),
         ]
+        hidden = _hidden_fields(model)
+        if any(" at 0x" in text for text in hidden):
+            return None
+        if hidden:  # an obstacle image: not in the repr, but it decides the kernel
+            parts.append(hidden)
         return hashlib.sha256(json.dumps(parts).encode()).hexdigest()
 
     def path(self, key: str) -> Path:
@@ -319,8 +349,9 @@ class KernelCache:
         Parameters
         ----------
         model
-            The glare model; its class, its ``repr`` (its parameters) and the source of its
-            module are in the key, so an edited model never reads an old kernel.
+            The glare model; its class, its ``repr`` (its parameters), a digest of the fields
+            left out of the repr (an obstacle image's bytes, shape and dtype) and the source
+            of its module are in the key, so an edited model never reads an old kernel.
         pixel_deg
             Visual angle of one pixel in degrees.
         shape
