@@ -16,6 +16,7 @@ from glarelab.files.atomic import atomic_path, write_text
 from glarelab.files.folders import record_written
 from glarelab.files.inputs import input_file
 from glarelab.glare._validation import check_image
+from glarelab.glare.rendering.renderer import RENDER_BYTES_PER_PIXEL
 from glarelab.stimuli.apertures import load_aperture_image
 from glarelab.stimuli.exr import read_exr, write_exr
 from glarelab.stimuli.preview import preview_png, psf_figure, psf_png
@@ -33,10 +34,7 @@ from .common import (
 )
 from .common import log as _log
 
-# bytes per pixel a render needs at its peak (measured on 512²-2048² scenes, exact and planned
-# renders: 230-240 for luminance, 300 for RGB; with headroom)
 DEFAULT_L_DMAX_CD_M2 = 220.0  # --l-dmax without a calibration: Yoshida 2008 §3's display
-RENDER_BYTES_PER_PIXEL = {1: 260, 3: 340}
 # a kernel's digitisation: about 110 bytes per pixel, plus the wave model's pupil spectra
 PSF_BYTES_PER_PIXEL = 128
 PSF_FIXED_BYTES = 0.5 * 2**30

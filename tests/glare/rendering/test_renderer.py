@@ -183,3 +183,25 @@ def test_a_log_that_cannot_be_called_is_refused_when_the_renderer_is_made():
     """log=5 was taken and failed at the first render: 'int' object is not callable."""
     with pytest.raises(ValueError, match="log must be a function"):
         GlareRenderer(VosGlare(), pixel_deg=0.05, shape=(8, 8), log=5, cache=False)
+
+
+def test_an_image_too_large_for_the_memory_is_refused_before_allocation():
+    """A 100000² image was allocated until the system killed the process."""
+    import re
+
+    from glarelab.files.memory import available_memory
+    from glarelab.glare import GaussianGlare, GlareRenderer, add_glare, render_glare
+
+    if available_memory() is None:
+        pytest.skip("the system reports no available memory")
+    huge = np.broadcast_to(np.float64(300.0), (100_000, 100_000))  # 8 bytes held, not 80 GB
+    refused = re.compile(
+        r"shape \(100000, 100000\) needs about [\d.]+ GiB of memory, [\d.]+ GiB are available"
+    )
+    for render in (render_glare, add_glare):
+        with pytest.raises(ValueError, match=refused):
+            render(huge, GaussianGlare(0.1), pixel_deg=0.05)
+    with pytest.raises(ValueError, match=refused):
+        GlareRenderer(GaussianGlare(0.1), pixel_deg=0.05, shape=(100_000, 100_000))
+    small = GlareRenderer(GaussianGlare(0.1), pixel_deg=0.05, shape=(31, 31))
+    assert small.render(np.full((31, 31), 300.0)).image.shape == (31, 31)

@@ -30,6 +30,7 @@ from glarelab.glare.rendering.renderer import (
     GlareRenderer,
     GlareResult,
     _renderer_for,
+    check_render_memory,
     check_tolerance,
 )
 
@@ -103,8 +104,9 @@ def render_glare(
     ------
     ValueError
         For a non-2-D (or non-RGB) image, NaN/Inf or negative luminance, a non-positive
-        ``pixel_deg`` or ``l_dmax_cd_m2``, an unknown composition or precision, or an even
-        kernel shape.
+        ``pixel_deg`` or ``l_dmax_cd_m2``, an unknown composition or precision, an even
+        kernel shape, or an image whose render needs more memory than the system has
+        (refused before anything is allocated, naming both sizes).
     TypeError
         For ``method=`` (its message names ``composition=``).
 
@@ -210,6 +212,8 @@ def add_glare(
     >>> bool((add_glare(dim, VosGlare(), pixel_deg=0.1) == dim).all())
     True
     """
+    if isinstance(luminance_cd_m2, np.ndarray):  # refused before a scan of its pixels
+        check_render_memory(luminance_cd_m2.shape)
     image = check_image("luminance_cd_m2", luminance_cd_m2, channels=(3,))
     l_dmax = check_positive("l_dmax_cd_m2", l_dmax_cd_m2, unit="cd/m²")
     if l_dmax > MAX_LUMINANCE_CD_M2:  # as the renderer, which a dim image does not reach

@@ -20,6 +20,7 @@ from typing import Literal
 
 import numpy as np
 
+from glarelab.files.memory import check_memory
 from glarelab.glare._validation import (
     check_choice,
     check_image,
@@ -80,6 +81,35 @@ MAX_RENDER_PIXEL_DEG = 10.0
 # tables' logarithms stay finite (an image of 1e306 cd/m² overflowed them: IndexError), in
 # float32 too (3.5e38 cd/m² became inf)
 MAX_LUMINANCE_CD_M2 = 1e30
+# bytes per pixel a render needs at its peak (measured on 512²-2048² scenes, exact and planned
+# renders: 230-240 for luminance, 300 for RGB; with headroom)
+RENDER_BYTES_PER_PIXEL = {1: 260, 3: 340}
+
+
+def check_render_memory(shape: tuple[int, ...], name: str = "luminance_cd_m2") -> None:
+    """Refuse an image of ``shape`` whose render needs more memory than the system has,
+    before anything is allocated (a 100000² image was allocated until the process was killed).
+
+    Parameters
+    ----------
+    shape
+        The image's ``(H, W)`` or ``(H, W, C)``.
+    name
+        The argument, for the message.
+
+    Raises
+    ------
+    ValueError
+        Naming the shape, the memory the render needs and the memory available.
+    """
+    shape = tuple(int(n) for n in shape)
+    if len(shape) not in (2, 3):
+        return  # the image's own check names it
+    channels = 3 if len(shape) == 3 else 1
+    check_memory(
+        RENDER_BYTES_PER_PIXEL[channels] * shape[0] * shape[1],
+        f"rendering {name} of shape {shape}",
+    )
 
 
 class GlareRenderer:
@@ -187,6 +217,7 @@ class GlareRenderer:
         self.method, self.dtype = self.composition, np.dtype(precision)
         self.tolerance_codes = check_tolerance(tolerance_codes)
         self.shape = check_image_shape(shape)
+        check_render_memory(self.shape, "an image")
         self.lut = display_lut(display, self.l_dmax)
         white = float(self.lut[-1])
         if self.l_dmax > white * (1.0 + WHITE_ROUNDING):
@@ -485,6 +516,8 @@ class GlareRenderer:
 
     # one image ----------------------------------------------------------------------------
     def _scene(self, luminance_cd_m2) -> tuple[np.ndarray, Scene]:
+        if isinstance(luminance_cd_m2, np.ndarray):  # refused before a scan of its pixels
+            check_render_memory(luminance_cd_m2.shape)
         image = check_image("luminance_cd_m2", luminance_cd_m2, channels=(3,))
         if image.shape[:2] != self.shape:
             raise ValueError(
@@ -859,6 +892,8 @@ def _renderer_for(
 ) -> tuple[np.ndarray, GlareRenderer]:
     """The one-call functions' start: the image checked (``(H, W)`` or ``(H, W, 3)``, finite,
     >= 0) and a :class:`GlareRenderer` of its shape with ``options``, which it checks."""
+    if isinstance(luminance_cd_m2, np.ndarray):  # refused before a scan of its pixels
+        check_render_memory(luminance_cd_m2.shape)
     image = check_image("luminance_cd_m2", luminance_cd_m2, channels=(3,))
     return image, GlareRenderer(model, shape=image.shape[:2], **options)
 
