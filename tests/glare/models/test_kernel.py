@@ -109,3 +109,19 @@ def test_the_energy_account_of_a_render_does_not_depend_on_what_was_asked_before
     renderer.kernel().values  # noqa: B018 - unfolded, as an FFT render does
     assert renderer.kernel().total() == total
     assert renderer.render(image).energy_outside_image == before
+
+
+@pytest.mark.parametrize(
+    ("fields", "refused"),
+    [
+        ({"values": np.ones((4, 4)), "pixel_deg": 0.1}, r"values must have odd sizes"),
+        ({"values": "abc", "pixel_deg": 0.1}, r"values must be a 2-D or 3-D array of numbers"),
+        ({"values": np.ones((3, 3)), "pixel_deg": -1}, r"pixel_deg must be a finite number > 0"),
+        ({"values": np.ones(3), "pixel_deg": 0.1}, r"values must be a 2-D \(KH, KW\) or 3-D"),
+        ({"quadrant": np.ones((2, 2), bool), "pixel_deg": 0.1}, r"quadrant must hold real"),
+    ],
+)
+def test_a_malformed_kernel_is_refused_when_made(fields, refused):
+    """An even shape, a string for values and a negative pixel size were all accepted."""
+    with pytest.raises(ValueError, match=refused):
+        Kernel(**fields)

@@ -147,11 +147,12 @@ def test_a_grey_scene_given_a_colour_kernel_reports_the_channel_it_was_rendered_
 def test_the_kernel_norms_are_the_full_kernels_sums(form, channels):
     """``Σ|K|`` and ``(ΣK²)^½`` (the round-off bound's), summed by blocks of rows and, for a
     quadrant, weighted for the offsets it stands for: the sums over the unfolded kernel, the
-    largest channel's, negative weights included; rows past one block (601 > 2 × 256)."""
+    largest channel's; rows past one block (601 > 2 × 256)."""
     from glarelab.glare.models.digitise import Kernel, mirror_quadrant
 
     rng = np.random.default_rng(7)
-    quadrant = rng.random((301, 283, *channels)) - 0.2
+    quadrant = rng.random((301, 283, *channels))
+    quadrant /= mirror_quadrant(quadrant).sum(axis=(0, 1)).max()  # a kernel sums to <= 1
     full = mirror_quadrant(quadrant)
     given = (  # made by hand: no model in its description
         Kernel(quadrant=quadrant, pixel_deg=0.05)
@@ -205,3 +206,49 @@ def test_an_image_too_large_for_the_memory_is_refused_before_allocation():
         GlareRenderer(GaussianGlare(0.1), pixel_deg=0.05, shape=(100_000, 100_000))
     small = GlareRenderer(GaussianGlare(0.1), pixel_deg=0.05, shape=(31, 31))
     assert small.render(np.full((31, 31), 300.0)).image.shape == (31, 31)
+
+
+def _point_scene() -> np.ndarray:
+    image = np.full((31, 31), 100.0)
+    image[15, 15] = 1e4
+    return image
+
+
+@pytest.mark.parametrize(
+    ("values", "refused"),
+    [
+        (np.full((3, 3), np.nan), r"kernel must be finite; got nan at index \(0, 0\)"),
+        (np.array([[0, 0, 0], [0, 1.2, 0], [0, -0.2, 0]]), r"kernel must be >= 0"),
+        (np.full((3, 3), 5.0), r"kernel sums to 45; a kernel holds at most"),
+    ],
+)
+def test_a_kernel_given_with_nan_negative_values_or_too_much_light_is_refused(values, refused):
+    """They rendered without a word: NaN pixels, light taken away, or 45 times the energy."""
+    from glarelab.glare import Kernel, render_glare
+
+    given = Kernel(values=values, pixel_deg=0.05, description={"model": "GaussianGlare"})
+    with pytest.raises(ValueError, match=refused):
+        render_glare(_point_scene(), GaussianGlare(0.1), pixel_deg=0.05, kernel=given)
+
+
+def test_a_custom_models_bad_kernel_is_refused():
+    from glarelab.glare import Kernel, render_glare
+
+    class NaNModel:
+        def kernel(self, pixel_deg, shape, *, colour=False):
+            return Kernel(values=np.full(shape, np.nan), pixel_deg=pixel_deg)
+
+    with pytest.raises(ValueError, match=r"the kernel of .* must be finite"):
+        render_glare(_point_scene(), NaNModel(), pixel_deg=0.05)
+
+
+def test_the_models_kernels_sum_to_at_most_one_and_pass_the_check():
+    from glarelab.glare.rendering.renderer import KERNEL_SUM_ROUNDING
+
+    for model in (GaussianGlare(0.1), VosGlare(), glare.WaveOpticsGlare(particles=0)):
+        for colour in (False, True):
+            kernel = model.kernel(0.05, (61, 61), colour=colour)
+            assert np.max(kernel.total()) <= 1.0 + KERNEL_SUM_ROUNDING / 1e6
+            given = GlareRenderer(model, pixel_deg=0.05, shape=(31, 31), kernel=kernel)
+            assert given.kernel(colour) is not None
+

@@ -101,7 +101,9 @@ class Kernel:
     Raises
     ------
     ValueError
-        Unless exactly one of ``values`` and ``quadrant`` is given.
+        Unless exactly one of ``values`` and ``quadrant`` is given; for ``values`` or
+        ``quadrant`` that are not a 2-D or 3-D array of real numbers, ``values`` of an even
+        size, or a ``pixel_deg`` that is not a finite number > 0.
 
     Examples
     --------
@@ -126,8 +128,16 @@ class Kernel:
             raise ValueError("Kernel needs exactly one of values and quadrant")
         if pixel_deg is None:
             raise ValueError("Kernel needs pixel_deg")
+        check_positive("pixel_deg", pixel_deg, unit="°")
+        if values is not None:
+            values = _kernel_array("values", values)
+            if values.shape[0] % 2 == 0 or values.shape[1] % 2 == 0:
+                raise ValueError(
+                    f"values must have odd sizes (a kernel is centred on a pixel); got shape "
+                    f"{values.shape}"
+                )
         if quadrant is not None:
-            quadrant = _read_only(quadrant)
+            quadrant = _read_only(_kernel_array("quadrant", quadrant))
         # light outside a kernel is never negative: -1e-16 is the rounding of a kernel that
         # holds all of it (a total summed to one plus a few ulp)
         if np.ndim(energy_outside) == 0:
@@ -225,6 +235,31 @@ class Kernel:
             else:
                 fields["values"] = self._values
         return Kernel(**(fields | changes))
+
+
+def _kernel_array(name: str, array: object) -> np.ndarray:
+    """``array`` as a kernel's values: a 2-D ``(KH, KW)`` or 3-D ``(KH, KW, C)`` array of real
+    numbers (the caller's own array, not a copy, where it is one)."""
+    if isinstance(array, np.ma.MaskedArray):
+        raise ValueError(f"Kernel {name} must be a plain array, not a masked array")
+    if isinstance(array, str | bytes) or array is None:
+        raise ValueError(
+            f"Kernel {name} must be a 2-D or 3-D array of numbers; got {type(array).__name__}"
+        )
+    try:
+        values = np.asarray(array)
+    except ValueError:
+        raise ValueError(f"Kernel {name} must be an array of numbers; got ragged rows") from None
+    if values.dtype == bool or not (
+        np.issubdtype(values.dtype, np.floating) or np.issubdtype(values.dtype, np.integer)
+    ):
+        raise ValueError(f"Kernel {name} must hold real numbers; got dtype {values.dtype}")
+    if values.ndim not in (2, 3) or min(values.shape, default=0) < 1:
+        raise ValueError(
+            f"Kernel {name} must be a 2-D (KH, KW) or 3-D (KH, KW, C) array; got shape "
+            f"{values.shape}"
+        )
+    return values
 
 
 def _read_only(array) -> np.ndarray:

@@ -230,6 +230,7 @@ class GlareRenderer:
         self._given = None
         if kernel is not None:
             _check_kernel_of(kernel, self.model)
+            check_kernel_values(kernel, "kernel")
             if not np.isclose(kernel.pixel_deg, self.pixel_deg, rtol=1e-12, atol=0):
                 raise ValueError(
                     f"kernel was digitised for pixel_deg = {kernel.pixel_deg!r}, not {pixel_deg!r}"
@@ -324,8 +325,16 @@ class GlareRenderer:
             return self.model.kernel(pixel_deg, shape, colour=colour)
 
         if self.cache is None:
-            return build()
-        return self.cache.kernel(self.model, pixel_deg, shape, colour=colour, build=build, log=log)
+            kernel = build()
+        else:
+            kernel = self.cache.kernel(
+                self.model, pixel_deg, shape, colour=colour, build=build, log=log
+            )
+        what = f"the kernel of {type(self.model).__name__}"
+        if not isinstance(kernel, Kernel):
+            raise TypeError(f"{what} must be a Kernel; got {type(kernel).__name__}")
+        check_kernel_values(kernel, what)
+        return kernel
 
     def kernel_peak(self, colour: bool = False) -> float:
         """The reference kernel's largest value (found once).
@@ -823,6 +832,45 @@ def _sums(part: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         l1 = l1 + np.abs(block).sum(axis=(0, 1))
         l2 = l2 + (block * block).sum(axis=(0, 1))
     return l1, l2
+
+
+# a digitised kernel sums to at most 1 (the share of its PSF inside its support; measured
+# 1 + 2.2e-16 at most); a float32 kernel's roundings stay far below this
+KERNEL_SUM_ROUNDING = 1e-6
+
+
+def check_kernel_values(kernel: Kernel, what: str) -> None:
+    """Refuse a kernel with NaN, Inf or negative values, or a channel summing to more than
+    1 (more light than its source sends): it would render without a word otherwise.
+
+    Parameters
+    ----------
+    kernel
+        The kernel.
+    what
+        The kernel, for the message (``'kernel'``, ``"VosGlare's kernel"``).
+
+    Raises
+    ------
+    ValueError
+        Naming the first bad value, or the sum.
+    """
+    part = kernel.quadrant if kernel.quadrant is not None else kernel.values
+    low, high = np.min(part), np.max(part)  # NaN propagates
+    if not (np.isfinite(low) and np.isfinite(high)):
+        bad = tuple(int(i) for i in np.argwhere(~np.isfinite(part))[0])
+        raise ValueError(f"{what} must be finite; got {float(part[bad])!r} at index {bad}")
+    if low < 0:
+        raise ValueError(
+            f"{what} must be >= 0 (a kernel spreads light, it takes none away); got {float(low)!r}"
+        )
+    total = float(np.max(kernel.total()))
+    if total > 1.0 + KERNEL_SUM_ROUNDING:
+        raise ValueError(
+            f"{what} sums to {total:.6g}; a kernel holds at most its source's light (each "
+            "channel sums to <= 1, the share of the PSF inside its support): divide it by "
+            "its sum, or digitise it with glarelab.glare.digitise_kernel"
+        )
 
 
 def _check_kernel_of(kernel, model: GlareModel) -> None:
