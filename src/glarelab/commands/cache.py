@@ -41,7 +41,8 @@ def add(commands) -> None:
         help="show or clear the cache of digitised kernels",
         description="Digitised kernels are kept in the user's cache folder ($GLARELAB_CACHE, "
         "else platformdirs' user cache, which honours XDG_CACHE_HOME), bounded in size "
-        "($GLARELAB_CACHE_MAX_MB, default 2048) with the least recently used removed first. "
+        "($GLARELAB_CACHE_MAX_MB, at least 1, default 2048) with the least recently used "
+        "removed first. "
         "glarelab --no-cache (or GLARELAB_NO_CACHE=1) digitises without it.",
     )
     actions = cache.add_subparsers(dest="action", required=True, metavar="ACTION")

@@ -414,3 +414,18 @@ def _wave(image):
     if image is None:
         return glare.WaveOpticsGlare()
     return glare.WaveOpticsGlare(obstacle_image=image, obstacle_spacing_mm=0.1)
+
+
+def test_a_bool_a_fraction_of_a_byte_or_less_than_a_mib_is_refused(tmp_path, monkeypatch):
+    """max_bytes=True became 1 byte, 0.5 became 0 and GLARELAB_CACHE_MAX_MB=1e-9 became 0:
+    nothing was ever kept, and nothing said so."""
+    for bad in (True, 0.5, 2.5):
+        with pytest.raises(ValueError, match=r"^max_bytes must be a positive whole number"):
+            KernelCache(tmp_path, max_bytes=bad)
+    assert KernelCache(tmp_path, max_bytes=1e9).max_bytes == 10**9
+    for small in ("1e-9", "0.5"):
+        monkeypatch.setenv("GLARELAB_CACHE_MAX_MB", small)
+        with pytest.raises(ValueError, match=rf"at least 1 MiB .* turns it off\), got '{small}'$"):
+            KernelCache(tmp_path)
+    monkeypatch.setenv("GLARELAB_CACHE_MAX_MB", "1.5")
+    assert KernelCache(tmp_path).max_bytes == 1572864

@@ -70,6 +70,7 @@ __all__ = [
 CACHE_DIR_ENV = "GLARELAB_CACHE"  # the suite's cache root (stimulus sets of observers too)
 NO_CACHE_ENV = "GLARELAB_NO_CACHE"
 MAX_MB_ENV = "GLARELAB_CACHE_MAX_MB"
+MIN_MB = 1  # a smaller GLARELAB_CACHE_MAX_MB is refused: it would keep no kernel
 DEFAULT_MAX_BYTES = 2 * 2**30  # 2 GiB: about sixty 4095² kernels (stored as quadrants)
 FORMAT = 1  # raise when the file layout or the meaning of a key changes
 SUFFIX = ".kernel"
@@ -148,13 +149,15 @@ class KernelCache:
         folder (``platformdirs.user_cache_dir('glarelab')``, which honours
         ``XDG_CACHE_HOME``).
     max_bytes
-        Largest total size of the entries, bytes, > 0; ``None``: ``$GLARELAB_CACHE_MAX_MB``
-        MiB, else :data:`DEFAULT_MAX_BYTES`.
+        Largest total size of the entries, a whole number of bytes >= 1 (not a bool);
+        ``None``: ``$GLARELAB_CACHE_MAX_MB`` MiB (at least 1), else
+        :data:`DEFAULT_MAX_BYTES`.
 
     Raises
     ------
     ValueError
-        For a size that is not a positive number.
+        For a size that is not a positive whole number of bytes, or a
+        ``GLARELAB_CACHE_MAX_MB`` that is not a number >= 1.
 
     Examples
     --------
@@ -185,11 +188,13 @@ class KernelCache:
             megabytes = os.environ.get(MAX_MB_ENV)
             max_bytes = DEFAULT_MAX_BYTES if not megabytes else _megabytes(megabytes)
         try:
-            limit = float(max_bytes)
+            limit = math.nan if isinstance(max_bytes, bool) else float(max_bytes)
         except (TypeError, ValueError):
             limit = math.nan
-        if not math.isfinite(limit) or limit <= 0:
-            raise ValueError(f"max_bytes must be a positive number of bytes, got {max_bytes!r}")
+        if not math.isfinite(limit) or limit < 1 or limit != math.floor(limit):
+            raise ValueError(
+                f"max_bytes must be a positive whole number of bytes, got {max_bytes!r}"
+            )
         self.max_bytes = int(limit)
         self._fingerprints: dict[str, str] = {}
         self._warned = False
@@ -469,7 +474,12 @@ def _megabytes(text: str) -> float:
         value = math.nan
     if not math.isfinite(value) or value <= 0:  # named here: max_bytes would show bytes
         raise ValueError(f"{MAX_MB_ENV} must be a positive number of MiB, got {text!r}")
-    return value * 2**20
+    if value < MIN_MB:  # 1e-9 MiB kept nothing, and nothing said so
+        raise ValueError(
+            f"{MAX_MB_ENV} must be at least {MIN_MB} MiB (a smaller cache keeps no kernel; "
+            f"GLARELAB_NO_CACHE=1 turns it off), got {text!r}"
+        )
+    return math.floor(value * 2**20)
 
 
 NO_CACHE_VALUES = ("", "0", "1")
