@@ -252,3 +252,11 @@ def test_the_models_kernels_sum_to_at_most_one_and_pass_the_check():
             given = GlareRenderer(model, pixel_deg=0.05, shape=(31, 31), kernel=kernel)
             assert given.kernel(colour) is not None
 
+
+@pytest.mark.parametrize("method", ["kernel", "kernel_peak", "kernel_norms"])
+@pytest.mark.parametrize("colour", ["yes", 1, None])
+def test_colour_must_be_true_or_false(method, colour):
+    """kernel(colour='yes') returned the colour kernel; digitise_kernel refuses the same."""
+    renderer = GlareRenderer(VosGlare(regime="mesopic"), pixel_deg=0.05, shape=(31, 31))
+    with pytest.raises(ValueError, match=rf"^colour must be True or False, got {colour!r}$"):
+        getattr(renderer, method)(colour=colour)

@@ -23,6 +23,7 @@ import numpy as np
 from glarelab.files.memory import check_memory
 from glarelab.glare._validation import (
     check_choice,
+    check_flag,
     check_image,
     check_pixel_deg,
     check_positive,
@@ -295,6 +296,7 @@ class GlareRenderer:
         Kernel
             The kernel of the renderer's shape (or the one given), kept for the next images.
         """
+        colour = check_flag("colour", colour)  # the string 'no' is true to if
         if self._given is not None:
             given = self._given
             if len(given.shape) == 3 and not colour:  # the first channel, as before
@@ -350,6 +352,7 @@ class GlareRenderer:
         float
             The peak, a fraction of the source's energy per pixel.
         """
+        colour = check_flag("colour", colour)  # the string 'no' is true to if
         if colour not in self._peaks:
             self._peaks[colour] = float(self.kernel(colour).peak)
         return self._peaks[colour]
@@ -377,6 +380,7 @@ class GlareRenderer:
         tuple of float
             ``(Σ|K|, (ΣK²)^½)``, dimensionless (the kernel's weights per pixel).
         """
+        colour = check_flag("colour", colour)  # the string 'no' is true to if
         if colour not in self._norms:
             kernel = self.kernel(colour)
             if kernel.quadrant is not None:  # an offset off the axes stands for four
