@@ -158,6 +158,8 @@ def test_scalar_in_scalar_out_and_arrays_broadcast():
     age=st.one_of(st.none(), st.floats(20.0, 70.0)),
 )
 def test_psf_is_a_finite_non_negative_density(theta, regime, wavelength, age):
+    if regime == "photopic":  # no halo: a wavelength would be ignored, and is refused
+        wavelength = vos.HALO_REFERENCE_NM
     value = vos.psf(theta, regime, wavelength, age)
     assert math.isfinite(value) and value >= 0
 
@@ -172,3 +174,19 @@ def test_volume_helper_agrees_with_scipy_quad():
     for profile in (vos.f0, vos.f1, vos.f2, lambda t: vos.psf(t, "scotopic", 450.0)):
         assert_allclose(vos.volume(profile), eq4_volume(profile), rtol=1e-6)
     assert_allclose(vos.volume(vos.f2, upper_deg=5.0), eq4_volume(vos.f2, 5.0), rtol=1e-6)
+
+
+@pytest.mark.parametrize("function", ["f0", "f1", "f2", "psf"])
+def test_a_masked_array_is_refused_not_its_mask_dropped(function):
+    """f1(masked_array([0.5, 0.1], mask=[0, 1])) computed the masked entry and dropped the mask."""
+    theta = np.ma.masked_array([0.5, 0.1], mask=[0, 1])
+    with pytest.raises(ValueError, match=r"^theta_deg must be a plain array, not a masked"):
+        getattr(vos, function)(theta)
+
+
+def test_a_wavelength_for_the_photopic_psf_is_refused_as_ignored():
+    """psf(θ, 'photopic', wavelength_nm=450) returned the photopic PSF without a word."""
+    with pytest.raises(ValueError, match=r"^wavelength_nm=450: it shapes only the halo"):
+        vos.psf(3.0, "photopic", wavelength_nm=450)
+    assert vos.psf(3.0, "photopic") == vos.psf(3.0, "photopic", wavelength_nm=568.0)
+    assert vos.psf(3.0, "mesopic", wavelength_nm=450) != vos.psf(3.0, "mesopic")

@@ -98,6 +98,11 @@ AGE_VALIDATED_YEARS: Final = (20.0, 70.0)
 def _numbers(name: str, values: object) -> np.ndarray:
     """``values`` as a float array, refusing bools, strings and other non-numbers (which
     ``asarray(dtype=float)`` would turn into 1.0 or 568.0)."""
+    if isinstance(values, np.ma.MaskedArray):
+        raise ValueError(
+            f"{name} must be a plain array, not a masked array (its mask would be ignored); "
+            "give values.filled(value) or values.compressed()"
+        )
     try:
         array = np.asarray(values)
     except ValueError:  # a ragged list
@@ -409,7 +414,8 @@ def psf(
     regime
         ``'photopic'`` (eq. 5, no halo), ``'mesopic'`` (eq. 8) or ``'scotopic'`` (eq. 9).
     wavelength_nm
-        Wavelength of the halo term in nm, 380-780; default 568 nm.
+        Wavelength of the halo term in nm, 380-780; default 568 nm. Only the default with
+        a regime without a halo (``'photopic'``): another would be ignored.
     age
         Observer's age in years (eq. 10), or ``None`` for the standard observer.
 
@@ -421,8 +427,9 @@ def psf(
     Raises
     ------
     ValueError
-        For a negative or non-finite angle, an unknown regime, a wavelength that is not one
-        number in 380-780 nm, or an age outside eq. 10's range (see :func:`weights`).
+        For a negative or non-finite angle, a masked array, an unknown regime, a wavelength
+        that is not one number in 380-780 nm (or is not the default in a regime without a
+        halo), or an age outside eq. 10's range (see :func:`weights`).
 
     Notes
     -----
@@ -451,6 +458,12 @@ def psf(
             "(call psf once per wavelength, or f3 for the halo at many)"
         )
     wavelength = float(wavelength)
+    if not w3 and wavelength != HALO_REFERENCE_NM:
+        raise ValueError(
+            f"wavelength_nm={wavelength_nm!r}: it shapes only the halo, and the {regime} PSF "
+            f"(eq. 5) has no lenticular halo, so it would be ignored; leave it at its default "
+            f"({HALO_REFERENCE_NM!r}) or give a regime with a halo"
+        )
     values = w0 * f0(theta) + w1 * f1(theta) + w2 * f2(theta)
     if w3:
         values = values + w3 * f3(theta, wavelength)
