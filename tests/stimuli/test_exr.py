@@ -51,3 +51,15 @@ def test_disk_geometry():
     assert abs(area_deg2 - np.pi * 0.15**2) / (np.pi * 0.15**2) < 0.02
     with pytest.raises(ValueError, match="disk_cd_m2 must be a finite number >= 0"):
         disk(field_deg=1, pixel_deg=0.1, disk_diameter_deg=0.3, disk_cd_m2=-1, background_cd_m2=0)
+
+
+def test_a_float16_image_is_written_without_a_warning(tmp_path):
+    """The check against float32's largest cast 3.4e38 to float16: 'overflow encountered in
+    cast', an error under warnings-as-errors for a valid image."""
+    import warnings
+
+    image = np.full((2, 2), 3.0, np.float16)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        write_exr(tmp_path / "half.exr", image)
+    np.testing.assert_array_equal(read_exr(tmp_path / "half.exr"), image.astype(np.float32))

@@ -98,7 +98,7 @@ def write_exr(path: str | Path, image: np.ndarray) -> Path:
             f"image must be >= 0 (linear luminance, cd/m²) to be written as EXR; it holds "
             f"{_first(array, array < 0)}"
         )
-    if array.size and array.max() > FLOAT32_MAX:
+    if array.size and float(array.max()) > FLOAT32_MAX:  # float16's max: no cast of 3.4e38
         raise ValueError(
             f"image must be at most {FLOAT32_MAX:.8g}, float32's largest, to be written as EXR "
             f"(it would become inf); it holds {_first(array, array > FLOAT32_MAX)}"
