@@ -27,6 +27,13 @@ def test_pupil_accepts_arrays_and_keeps_their_shape():
     diameters = eye.pupil_diameter_mm(field)
     assert diameters.shape == (2, 2)
     assert_allclose(diameters[1, 0], eye.pupil_diameter_mm(10.0), rtol=1e-15)
+    # a stack of frames (3-D) was refused as "must be a 2-D (H, W) array", though the
+    # docs say "scalar or array"
+    stack = np.stack([field, 10 * field, field / 10])
+    stacked = eye.pupil_diameter_mm(stack)
+    assert stacked.shape == (3, 2, 2)
+    assert_allclose(stacked[0], diameters, rtol=0, atol=0)
+    assert_allclose(stacked[1, 0, 1], eye.pupil_diameter_mm(1.0), rtol=1e-15)
 
 
 @given(

@@ -82,9 +82,10 @@ def pupil_diameter_mm(field_luminance_cd_m2: float | np.ndarray) -> float | np.n
         )
     if isinstance(field_luminance_cd_m2, np.ma.MaskedArray):  # asarray would drop the mask
         check_image("field_luminance_cd_m2", field_luminance_cd_m2)
-    array = check_image(  # its own dtype checked (strings and bools refused), then float
-        "field_luminance_cd_m2",
-        np.atleast_2d(plain_array("field_luminance_cd_m2", field_luminance_cd_m2)),
+    plain = plain_array("field_luminance_cd_m2", field_luminance_cd_m2)
+    array = check_image(  # its own dtype checked (strings and bools refused), then float;
+        "field_luminance_cd_m2",  # any shape, as one row (a stack of frames too)
+        plain.reshape(1, -1) if plain.ndim != 2 else plain,
     ).astype(float)
     with np.errstate(divide="ignore"):
         log_l = np.log10(array)  # -inf at L = 0, where tanh(-inf) = -1 gives the 7.9 mm limit
