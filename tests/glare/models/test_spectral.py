@@ -74,3 +74,13 @@ def test_other_display_primaries_are_configurable():
         HaloSpectrum(colourspace="my monitor")
     with pytest.raises(ValueError, match="n_wavelengths must be an integer >= 2"):
         HaloSpectrum(n_wavelengths=1)
+
+
+@pytest.mark.parametrize("given", [(400,), "ab", (400, 500, 600), 5])
+def test_a_wavelength_range_that_is_not_two_numbers_is_named(given):
+    """HaloSpectrum(wavelength_range_nm=(400,)) gave Python's "not enough values to unpack
+    (expected 2, got 1)", naming neither the argument nor what is allowed."""
+    from glarelab.glare.models.spectral import HaloSpectrum
+
+    with pytest.raises(ValueError, match=r"wavelength_range_nm must be \(low, high\) in nm"):
+        HaloSpectrum(wavelength_range_nm=given)

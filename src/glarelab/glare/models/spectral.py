@@ -81,7 +81,12 @@ class Spectrum:
     def __post_init__(self) -> None:
         check_in_range("in_gamut_above", self.in_gamut_above, 0.0, 1.0)
         check_positive_int("n_wavelengths", self.n_wavelengths, minimum=2)
-        low, high = self.wavelength_range_nm
+        given = self.wavelength_range_nm
+        if isinstance(given, str | bytes) or np.ndim(given) != 1 or len(given) != 2:
+            raise ValueError(
+                f"wavelength_range_nm must be (low, high) in nm within 380-780; got {given!r:.80}"
+            )
+        low, high = given
         check_in_range("wavelength_range_nm[0]", low, 380.0, 780.0, unit="nm")
         check_in_range("wavelength_range_nm[1]", high, low, 780.0, unit="nm", low_inclusive=False)
         if (self.colourspace, self.illuminant) != _DEFAULT_NAMES:  # valid names, colour unread
