@@ -241,6 +241,13 @@ def test_a_custom_models_bad_kernel_is_refused():
     with pytest.raises(ValueError, match=r"the kernel of .* must be finite"):
         render_glare(_point_scene(), NaNModel(), pixel_deg=0.05)
 
+    class OneByOne:  # numpy's "non-broadcastable output operand" reached the user
+        def kernel(self, pixel_deg, shape, *, colour=False):
+            return Kernel(values=np.ones((1, 1)) / 2, pixel_deg=pixel_deg)
+
+    with pytest.raises(ValueError, match=r"the kernel of .* has shape \(1, 1\), not the "):
+        render_glare(_point_scene(), OneByOne(), pixel_deg=0.05)
+
 
 def test_the_models_kernels_sum_to_at_most_one_and_pass_the_check():
     from glarelab.glare.rendering.renderer import KERNEL_SUM_ROUNDING

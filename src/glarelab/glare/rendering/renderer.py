@@ -337,6 +337,11 @@ class GlareRenderer:
             raise TypeError(f"{what} must be a Kernel; got {type(kernel).__name__}")
         if _custom(self.model):  # glarelab's own models are tested to make sound kernels (a
             check_kernel_values(kernel, what)  # pass over a 4095² kernel costs a one call 4 %)
+            if tuple(kernel.shape[:2]) != tuple(shape):
+                raise ValueError(
+                    f"{what} has shape {tuple(kernel.shape[:2])}, not the {tuple(shape)} asked "
+                    "for: its kernel method must digitise the shape it is given"
+                )
         return kernel
 
     def kernel_peak(self, colour: bool = False) -> float:
