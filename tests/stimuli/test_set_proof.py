@@ -132,3 +132,44 @@ def test_a_file_browsers_own_file_in_a_copied_set_is_no_problem(copy, name):
     assert prove_stimulus_set(copy) == []
     (copy / "notes.txt").write_text("a person's file is still named\n")
     assert any("notes.txt" in p for p in prove_stimulus_set(copy))
+
+
+def _exr_protocol(folder: Path, path: str) -> Path:
+    """Yoshida's protocol with a uniform 50 cd/m² EXR background at ``path``, relative to the
+    protocol file in ``folder``."""
+    text = (ROOT / "src" / "glarelab" / "protocols" / "yoshida2008.toml").read_text()
+    start = text.index("[background]")
+    end = text.index("\n[", start + 1)
+    table = f'[background]\nkind = "exr"\npath = "{path}"\npixel_deg = 0.2\n'
+    protocol = folder / "proto" / "exrbg.toml"
+    (folder / "proto" / path).parent.mkdir(parents=True, exist_ok=True)
+    protocol.write_text(text[:start] + table + text[end:])
+    write_exr(folder / "proto" / path, np.full((16, 16), 50.0, np.float32))
+    return protocol
+
+
+@pytest.mark.parametrize("relative", ["bg.exr", "images/bg.exr"])
+def test_a_set_with_an_exr_background_is_proven_anywhere(relative, tmp_path, monkeypatch):
+    """The proof read the background from the working folder: the set was unprovable there,
+    or 'does not match a rebuild' beside another bg.exr; it keeps its own copy now."""
+    monkeypatch.setenv("GLARELAB_CACHE", str(tmp_path / "cache"))
+    folder = tmp_path / "set"
+    build_stimulus_set(load_protocol(_exr_protocol(tmp_path, relative)), folder, progress=None)
+    assert (folder / relative).read_bytes() == (tmp_path / "proto" / relative).read_bytes()
+    elsewhere = tmp_path / "elsewhere"
+    (elsewhere / relative).parent.mkdir(parents=True)
+    write_exr(elsewhere / relative, np.full((16, 16), 20.0, np.float32))
+    monkeypatch.chdir(elsewhere)
+    shutil.rmtree(tmp_path / "cache")  # another machine: nothing proven
+    assert prove_stimulus_set(folder) == []
+    write_exr(folder / relative, np.full((16, 16), 20.0, np.float32))  # a changed background
+    assert prove_stimulus_set(folder) == [
+        f"{relative}: changed (sha256 differs from the manifest)"
+    ]
+
+
+def test_a_background_outside_the_protocols_folder_is_refused_before_the_build(tmp_path):
+    protocol = load_protocol(_exr_protocol(tmp_path / "a", "../bg.exr"))
+    with pytest.raises(ValueError, match=r"background.path = '\.\./bg.exr': .*must not leave"):
+        build_stimulus_set(protocol, tmp_path / "set", progress=None)
+    assert not (tmp_path / "set").exists()

@@ -129,7 +129,12 @@ BACKGROUNDS: dict[str, Schema] = {
     },
     "exr": {
         "kind": _KIND,
-        "path": Key(str, "a linear luminance EXR (cd/m²), relative to the protocol file"),
+        "path": Key(
+            str,
+            "a linear luminance EXR (cd/m²), relative to the protocol file; a stimulus set "
+            "keeps a copy under this path and is proven from it, so a relative path must not "
+            "leave the protocol's folder ('..')",
+        ),
         "pixel_deg": Key(
             float, "visual angle of the file's pixels", unit="deg", low=1e-4, high=10.0
         ),

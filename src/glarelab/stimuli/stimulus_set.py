@@ -14,8 +14,10 @@ luminance-profile plots through the
 disk centre (``profiles_*.png``, like Yoshida et al.'s Figure 3); ``README.md``, an index of
 the files and images; and ``manifest.json``: the validated protocol and its hash, the
 calibration and its hash, the geometry, every image's parameters and encoding report, the
-package versions, and the sha256 of every file. Nothing in it depends on the time or the
-place of the build, so the same protocol and calibration give identical files.
+package versions, and the sha256 of every file. A protocol's EXR background given by a path
+relative to the protocol file is kept in the set under that path (listed and hashed as its
+other files), and the set is proven from that copy wherever it is. Nothing in it depends on
+the time or the place of the build, so the same protocol and calibration give identical files.
 """
 
 from __future__ import annotations
@@ -490,7 +492,8 @@ def build_stimulus_set(
         would be encoded for another display, most of their pixels clipped), a calibration no
         calibration file can hold (:meth:`glarelab.display.calibration.Calibration.checked`: a
         status ``passed`` without verification measurements), or an ``out`` that is a file or
-        a folder holding something other than a stimulus set.
+        a folder holding something other than a stimulus set, or an EXR background whose
+        relative path leaves the protocol's folder (``..``: the set keeps a copy under it).
     """
     if not shows_images(protocol):
         raise ValueError(
@@ -533,6 +536,7 @@ def build_stimulus_set(
             "replaces its folder whole, so copy what you added elsewhere and remove the edited "
             "files, or give another folder as --out (nothing was changed)"
         )
+    _kept_backgrounds(protocol)  # a background the set cannot keep: before the rendering
     stimuli = paradigm_stimuli(protocol)
     refused = check_kernels(stimuli.kernels(protocol))  # before minutes of rendering
     if refused:
@@ -562,6 +566,40 @@ def _edited_since_built(folder: Path) -> list[str]:
         and not (folder / name).is_symlink()
         and _sha256(folder / name) != expected
     ]
+
+
+def _exr_paths(value) -> list[str]:
+    """The ``path`` of every EXR background in a protocol table."""
+    if isinstance(value, dict):
+        found = [value["path"]] if value.get("kind") == "exr" and "path" in value else []
+        return found + [p for v in value.values() for p in _exr_paths(v)]
+    if isinstance(value, list):
+        return [p for v in value for p in _exr_paths(v)]
+    return []
+
+
+def _kept_backgrounds(protocol: Protocol) -> list[str]:
+    """The EXR backgrounds a set keeps a copy of, under the protocol's relative path, so that
+    it is proven from its own folder anywhere (an absolute path is read where it is)."""
+    kept = []
+    for name in sorted(set(_exr_paths(protocol.data))):
+        path = Path(name)
+        if path.is_absolute():
+            continue
+        if ".." in path.parts or not path.parts:
+            raise ValueError(
+                f"background.path = {name!r}: the stimulus set keeps a copy of the background "
+                "under its path relative to the protocol file, so it must not leave the "
+                "protocol's folder ('..'); move the EXR beside the protocol or below its folder, "
+                "or give its absolute path"
+            )
+        if path.parts[0] in (MANIFEST, INDEX, LISTING):
+            raise ValueError(
+                f"background.path = {name!r}: a file the stimulus set writes itself has this "
+                "name; rename the EXR or move it into a folder below the protocol's"
+            )
+        kept.append(path.as_posix())
+    return kept
 
 
 def _write_set(out: Path, protocol: Protocol, built: dict, calibration: Calibration) -> dict:
@@ -598,6 +636,16 @@ def _write_set(out: Path, protocol: Protocol, built: dict, calibration: Calibrat
         plots.append(name)
     write_text(out / INDEX, _index(protocol, calibration, records, plots, built["geometry"]))
     files = sorted(f for r in records.values() for f in r["files"]) + plots + [INDEX]
+    for name in _kept_backgrounds(protocol):  # the set is proven from this copy
+        if name in files:
+            raise ValueError(
+                f"background.path = {name!r}: the stimulus set writes a file of this name "
+                "itself; rename the EXR or move it into a folder below the protocol's"
+            )
+        source = protocol.folder / name if protocol.folder is not None else Path(name)
+        (out / name).parent.mkdir(parents=True, exist_ok=True)
+        write_bytes(out / name, source.read_bytes())
+        files.append(name)
     manifest = {
         "format": FORMAT,
         "study": protocol.study,
@@ -707,7 +755,8 @@ def _manifest_of(folder: Path, data: bytes | None = None) -> dict:
     if not isinstance(files, dict) or not files:
         raise ValueError(f"{path}: must list the set's files and their sha256 under 'files'")
     for name, digest in files.items():
-        unsafe = Path(name).is_absolute() or len(Path(name).parts) != 1 or name in (".", "..")
+        parts = Path(name).parts  # a file of the set, or of a folder in it (a background)
+        unsafe = Path(name).is_absolute() or not parts or {".", ".."} & {*name.split("/")}
         if unsafe or not isinstance(digest, str):
             raise ValueError(f"{path}: the file entry {name!r} is not a file name of the set")
     return manifest
@@ -747,11 +796,18 @@ def verify_stimulus_set(folder: str | Path) -> list[str]:
             problems.append(f"{name}: {what}, not the file" if what else f"{name}: missing")
         elif _sha256(path) != expected:
             problems.append(f"{name}: changed (sha256 differs from the manifest)")
-    for path in sorted(folder.iterdir()):
-        if path.name not in listed and path.name not in (MANIFEST, LISTING):
+    # the folders a kept background is in (its path relative to the protocol's folder)
+    folders = {p.as_posix() for name in listed for p in Path(name).parents} - {"."}
+    entries = [*folder.iterdir()]
+    for name in sorted(folders):
+        if (folder / name).is_dir() and not (folder / name).is_symlink():
+            entries += (folder / name).iterdir()
+    for path in sorted(entries):
+        name = path.relative_to(folder).as_posix()
+        if name not in listed and name not in (MANIFEST, LISTING) and name not in folders:
             if is_system_file(path.name):
                 continue  # a file browser's .DS_Store, ._NAME
-            problems.append(f"{path.name}: not in the manifest (added after the build?)")
+            problems.append(f"{name}: not in the manifest (added after the build?)")
     images = manifest.get("images")
     if isinstance(images, dict):
         for name, record in sorted(images.items()):
@@ -853,8 +909,10 @@ def prove_stimulus_set(folder: str | Path, *, progress=None) -> list[str]:
     try:
         # the manifest holds the protocol as validated (defaults filled in, unset keys None):
         # validated again without its unset keys, it must hash as it did
-        protocol = parse_protocol(
-            _without_none(manifest["protocol"]), source=f"{folder / MANIFEST} protocol"
+        protocol = parse_protocol(  # its EXR backgrounds are the set's copies
+            _without_none(manifest["protocol"]),
+            source=f"{folder / MANIFEST} protocol",
+            folder=folder.resolve(),
         )
         calibration = Calibration.from_json(
             manifest["calibration"], source=f"{folder / MANIFEST} calibration"
