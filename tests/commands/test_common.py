@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import os
+from pathlib import Path
 
+import numpy as np
 import pytest
 
 from glarelab.commands.common import number
@@ -34,3 +37,42 @@ def test_a_refusal_offers_force_only_where_the_command_has_it(tmp_path):
     with pytest.raises(ValueError, match=r"give another name, or --force to overwrite it"):
         output_file(users, (".png",), "figure")
     assert users.read_bytes() == b"a user's picture"
+
+
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["render", "in.exr", "ro/out.exr", "--pixel-deg", "0.05"],
+        ["psf", "--model", "gaussian", "--size", "31", "--out", "ro/x.png"],
+        ["check-display", "yoshida2008", "--out", "ro/c.json", "--windowed", "--frames", "30"],
+    ],
+)
+def test_an_output_in_a_folder_that_cannot_be_written_is_refused_before_the_work(
+    command, tmp_path, monkeypatch, capsys
+):
+    """render, psf and check-display rendered (or checked the display) first, then failed
+    naming '.glarelab-files.lock'; the folder is named before any work now."""
+    from glarelab.cli import main
+    from glarelab.commands import render
+    from glarelab.stimuli.exr import write_exr
+
+    monkeypatch.chdir(tmp_path)
+    write_exr(tmp_path / "in.exr", np.full((8, 8), 500.0, np.float32))
+    (tmp_path / "ro").mkdir()
+    access = os.access
+    read_only = str(tmp_path / "ro")
+    monkeypatch.setattr(  # a read-only folder, as chattr +i makes one even for root
+        os,
+        "access",
+        lambda p, mode, **kw: os.path.abspath(p) != read_only and access(p, mode, **kw),
+    )
+
+    def work(*args, **kwargs):
+        raise AssertionError("the work started")
+
+    monkeypatch.setattr(render, "build_model", work)
+    monkeypatch.setattr("glarelab.frontend.check_display.check_display", work, raising=False)
+    assert main(command) == 2
+    err = capsys.readouterr().err
+    assert f"the folder {Path('ro')} cannot be written into" in err, err
+    assert ".glarelab-files.lock" not in err

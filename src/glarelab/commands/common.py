@@ -479,7 +479,8 @@ def output_file(
     forceable: bool = True,
 ) -> Path:
     """A file a command writes: its suffix must say what it holds, it must not be an input,
-    a file of a stimulus set or report, or a verified calibration; its folder must exist.
+    a file of a stimulus set or report, or a verified calibration; its folder must exist and
+    be writable.
     Without ``force`` it must not be a symbolic link, nor a file glarelab did not write there
     (as the folder's listing, :mod:`glarelab.files.folders`, says); ``shared`` says the caller
     has checked the folder's listing itself (a batch of outputs).
@@ -526,6 +527,11 @@ def output_file(
             raise ValueError(f"{path} is also an input: the {what} would overwrite it")
     if not path.parent.is_dir():
         raise ValueError(f"{path}: no folder {path.parent} to write the {what} into")
+    if not os.access(path.parent, os.W_OK | os.X_OK):  # before the work, not after it
+        raise ValueError(
+            f"{path}: the folder {path.parent} cannot be written into (read-only, or not this "
+            f"user's to write); give the {what} a folder you may write into (nothing was done)"
+        )
     whole = inside_whole_output(path)
     if whole is not None:
         raise ValueError(
