@@ -487,6 +487,23 @@ def test_the_disks_light_is_counted_as_the_build_draws_it(disk_deg, pixel_deg, s
     )
 
 
+def test_a_waves_obstacle_image_is_refused_naming_the_key_and_why():
+    """'could not convert string to float: 'pic.png'' named neither the key nor the way."""
+    data = copy.deepcopy(raw("yoshida2008"))
+    data["glare"]["methods"][0]["model"] = "wave"
+    data["glare"]["methods"][0]["parameters"] = {
+        "obstacle_image": "pic.png",
+        "obstacle_spacing_mm": 0.1,
+    }
+    with pytest.raises(ProtocolError) as refused:
+        parse_protocol(data, source="test.toml", folder=PROTOCOLS)
+    assert (
+        "glare.methods[0].parameters.obstacle_image = 'pic.png': an image array, which a "
+        "protocol cannot give" in str(refused.value)
+    ), refused.value
+    assert "could not convert" not in str(refused.value)
+
+
 def test_an_unknown_model_parameter_is_named_with_the_models_parameters():
     data = copy.deepcopy(raw("yoshida2008"))
     data["glare"]["methods"][0]["parameters"]["sigma"] = 1.0

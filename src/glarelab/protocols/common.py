@@ -225,7 +225,12 @@ METHOD: Schema = {
     "name": Key(str, "the method's name in the data and the report", token=True),
     "title": Key(str, "the method's name in figures and text", default=""),
     "model": Key(str, "a glare model registered in glare.GLARE_MODELS (gaussian, vos, wave, …)"),
-    "parameters": Key(dict, "the model's parameters (its constructor's keywords)", default={}),
+    "parameters": Key(
+        dict,
+        "the model's parameters (its constructor's keywords, but for an image array: wave's "
+        "obstacle_image)",
+        default={},
+    ),
     "labels": LEVEL_LABELS,
     "levels_cd_m2": LEVELS_CD_M2,
 }
@@ -322,6 +327,17 @@ def check_glare_model(
                 f"{where}.{parameters_key}: {model!r} has no parameter "
                 f"{', '.join(map(repr, unknown))}; its parameters are "
                 f"{', '.join(allowed)}"
+            )
+            return
+        arrays = [  # an image array (wave's obstacle_image): TOML holds none
+            f.name for f in dataclasses.fields(cls) if f.init and "ndarray" in str(f.type)
+        ]
+        given = [key for key in arrays if parameters.get(key) is not None]
+        if given:
+            problems.append(
+                f"{where}.{parameters_key}.{given[0]} = {parameters[given[0]]!r}: an image "
+                "array, which a protocol cannot give (the Python API takes one, and the "
+                "render and psf commands read one with --aperture-image); leave it out"
             )
             return
     try:
