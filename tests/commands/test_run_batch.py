@@ -73,3 +73,13 @@ def test_a_batch_resumed_on_a_stimulus_set_rebuilt_since_is_refused(tmp_path, ca
         "with: give that set (--stimuli), or another --out for a batch on this one"
     ) in err
     assert sorted(p.name for p in out.iterdir()) == before
+
+
+def test_an_out_folder_that_cannot_be_made_is_named_as_out(tmp_path, capsys):
+    """'[Errno 2] No such file or directory: '/proc/x'' named neither --out nor the folder."""
+    (tmp_path / "a-file").write_text("")
+    out = tmp_path / "a-file" / "x"  # under a file: no folder can be made there
+    run = ["run", "luidolt2020", "--simulate", "--participants", "1", "--out", str(out)]
+    assert main(run) == 2
+    err = capsys.readouterr().err
+    assert f"--out {out}: cannot create the folder (" in err, err

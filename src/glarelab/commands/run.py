@@ -266,6 +266,13 @@ def _run_session(args: argparse.Namespace) -> int:
             "whole: give a folder of its own for the session files (nothing was written)"
         )
     _check_run_options(args, protocol)
+    try:  # made now, so that a path where no folder can be is named as --out's
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise ValueError(
+            f"--out {out}: cannot create the folder ({error.strerror or error}); give a folder "
+            "that can be made and written into (nothing was written)"
+        ) from None
     if args.simulate:
         from glarelab.experiments.session import make_observer, shows_images
         from glarelab.stimuli.stimulus_set import cached_stimulus_set
