@@ -148,24 +148,25 @@ def _exr_protocol(folder: Path, path: str) -> Path:
     return protocol
 
 
-@pytest.mark.parametrize("relative", ["bg.exr", "images/bg.exr"])
+@pytest.mark.parametrize("relative", ["background.exr", "images/bg.exr"])
 def test_a_set_with_an_exr_background_is_proven_anywhere(relative, tmp_path, monkeypatch):
     """The proof read the background from the working folder: the set was unprovable there,
-    or 'does not match a rebuild' beside another bg.exr; it keeps its own copy now."""
+    or 'does not match a rebuild' beside another bg.exr; it keeps its own copy now (in a folder
+    of its own: the set has an image named background.exr)."""
     monkeypatch.setenv("GLARELAB_CACHE", str(tmp_path / "cache"))
     folder = tmp_path / "set"
     build_stimulus_set(load_protocol(_exr_protocol(tmp_path, relative)), folder, progress=None)
-    assert (folder / relative).read_bytes() == (tmp_path / "proto" / relative).read_bytes()
+    kept = folder / "backgrounds" / relative
+    assert kept.read_bytes() == (tmp_path / "proto" / relative).read_bytes()
     elsewhere = tmp_path / "elsewhere"
     (elsewhere / relative).parent.mkdir(parents=True)
     write_exr(elsewhere / relative, np.full((16, 16), 20.0, np.float32))
     monkeypatch.chdir(elsewhere)
     shutil.rmtree(tmp_path / "cache")  # another machine: nothing proven
     assert prove_stimulus_set(folder) == []
-    write_exr(folder / relative, np.full((16, 16), 20.0, np.float32))  # a changed background
-    assert prove_stimulus_set(folder) == [
-        f"{relative}: changed (sha256 differs from the manifest)"
-    ]
+    write_exr(kept, np.full((16, 16), 20.0, np.float32))  # a changed background
+    changed = f"backgrounds/{relative}: changed (sha256 differs from the manifest)"
+    assert prove_stimulus_set(folder) == [changed]
 
 
 def test_a_background_outside_the_protocols_folder_is_refused_before_the_build(tmp_path):

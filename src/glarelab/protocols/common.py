@@ -132,8 +132,8 @@ BACKGROUNDS: dict[str, Schema] = {
         "path": Key(
             str,
             "a linear luminance EXR (cd/m²), relative to the protocol file; a stimulus set "
-            "keeps a copy under this path and is proven from it, so a relative path must not "
-            "leave the protocol's folder ('..')",
+            "keeps a copy under this path in its backgrounds folder and is proven from it, so "
+            "a relative path must not leave the protocol's folder ('..')",
         ),
         "pixel_deg": Key(
             float, "visual angle of the file's pixels", unit="deg", low=1e-4, high=10.0

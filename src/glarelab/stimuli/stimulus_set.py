@@ -15,9 +15,10 @@ disk centre (``profiles_*.png``, like Yoshida et al.'s Figure 3); ``README.md``,
 the files and images; and ``manifest.json``: the validated protocol and its hash, the
 calibration and its hash, the geometry, every image's parameters and encoding report, the
 package versions, and the sha256 of every file. A protocol's EXR background given by a path
-relative to the protocol file is kept in the set under that path (listed and hashed as its
-other files), and the set is proven from that copy wherever it is. Nothing in it depends on
-the time or the place of the build, so the same protocol and calibration give identical files.
+relative to the protocol file is kept in the set's ``backgrounds`` folder under that path
+(listed and hashed as its other files), and the set is proven from that copy wherever it is.
+Nothing in it depends on the time or the place of the build, so the same protocol and
+calibration give identical files.
 """
 
 from __future__ import annotations
@@ -73,6 +74,8 @@ __all__ = [
 
 MANIFEST = "manifest.json"
 INDEX = "README.md"
+# the protocol's EXR backgrounds, each under its path relative to the protocol file
+BACKGROUNDS = "backgrounds"
 # v4: NAME.png 8-bit (an 8-bit display's codes as they are), NAME_<bits>bit.png for deeper ones
 FORMAT = "glarelab stimulus set v4"
 PNG_MAX = 65535
@@ -579,8 +582,9 @@ def _exr_paths(value) -> list[str]:
 
 
 def _kept_backgrounds(protocol: Protocol) -> list[str]:
-    """The EXR backgrounds a set keeps a copy of, under the protocol's relative path, so that
-    it is proven from its own folder anywhere (an absolute path is read where it is)."""
+    """The EXR backgrounds a set keeps a copy of in its folder :data:`BACKGROUNDS`, under the
+    protocol's relative path, so that it is proven from its own copy anywhere (an absolute path
+    is read where it is)."""
     kept = []
     for name in sorted(set(_exr_paths(protocol.data))):
         path = Path(name)
@@ -592,11 +596,6 @@ def _kept_backgrounds(protocol: Protocol) -> list[str]:
                 "under its path relative to the protocol file, so it must not leave the "
                 "protocol's folder ('..'); move the EXR beside the protocol or below its folder, "
                 "or give its absolute path"
-            )
-        if path.parts[0] in (MANIFEST, INDEX, LISTING):
-            raise ValueError(
-                f"background.path = {name!r}: a file the stimulus set writes itself has this "
-                "name; rename the EXR or move it into a folder below the protocol's"
             )
         kept.append(path.as_posix())
     return kept
@@ -637,15 +636,10 @@ def _write_set(out: Path, protocol: Protocol, built: dict, calibration: Calibrat
     write_text(out / INDEX, _index(protocol, calibration, records, plots, built["geometry"]))
     files = sorted(f for r in records.values() for f in r["files"]) + plots + [INDEX]
     for name in _kept_backgrounds(protocol):  # the set is proven from this copy
-        if name in files:
-            raise ValueError(
-                f"background.path = {name!r}: the stimulus set writes a file of this name "
-                "itself; rename the EXR or move it into a folder below the protocol's"
-            )
         source = protocol.folder / name if protocol.folder is not None else Path(name)
-        (out / name).parent.mkdir(parents=True, exist_ok=True)
-        write_bytes(out / name, source.read_bytes())
-        files.append(name)
+        (out / BACKGROUNDS / name).parent.mkdir(parents=True, exist_ok=True)
+        write_bytes(out / BACKGROUNDS / name, source.read_bytes())
+        files.append(f"{BACKGROUNDS}/{name}")
     manifest = {
         "format": FORMAT,
         "study": protocol.study,
@@ -912,7 +906,7 @@ def prove_stimulus_set(folder: str | Path, *, progress=None) -> list[str]:
         protocol = parse_protocol(  # its EXR backgrounds are the set's copies
             _without_none(manifest["protocol"]),
             source=f"{folder / MANIFEST} protocol",
-            folder=folder.resolve(),
+            folder=(folder / BACKGROUNDS).resolve(),
         )
         calibration = Calibration.from_json(
             manifest["calibration"], source=f"{folder / MANIFEST} calibration"
