@@ -251,6 +251,29 @@ def _scripted_key_names(path: Path, names: list[str]) -> None:
         )
 
 
+def _check_out_can_be_made(out: Path) -> None:
+    """Refuse an ``--out`` whose folder cannot be made, naming it (the folders made to find
+    out are removed again: a refused session leaves nothing)."""
+    missing = []
+    while not out.exists() and not out.is_symlink() and out.parent != out:
+        missing.append(out)
+        out = out.parent
+    made = []
+    try:
+        for folder in reversed(missing):
+            folder.mkdir()
+            made.append(folder)
+    except OSError as error:
+        raise ValueError(
+            f"--out {missing[0]}: cannot create the folder ({error.strerror or error}); give "
+            "a folder that can be made and written into (nothing was written)"
+        ) from None
+    finally:
+        for folder in reversed(made):
+            with contextlib.suppress(OSError):
+                folder.rmdir()
+
+
 def _run_session(args: argparse.Namespace) -> int:
     from glarelab.experiments.session import SimulatedFrontend, run_session
 
@@ -266,13 +289,7 @@ def _run_session(args: argparse.Namespace) -> int:
             "whole: give a folder of its own for the session files (nothing was written)"
         )
     _check_run_options(args, protocol)
-    try:  # made now, so that a path where no folder can be is named as --out's
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as error:
-        raise ValueError(
-            f"--out {out}: cannot create the folder ({error.strerror or error}); give a folder "
-            "that can be made and written into (nothing was written)"
-        ) from None
+    _check_out_can_be_made(out)
     if args.simulate:
         from glarelab.experiments.session import make_observer, shows_images
         from glarelab.stimuli.stimulus_set import cached_stimulus_set
