@@ -98,7 +98,8 @@ class XScreen:
         """Wait for the program to end; its exit status."""
         code = self.process.wait(timeout=timeout)
         self.stderr_file.close()
-        self.stdout_file.close()
+        if getattr(self, "stdout_file", None) is not None:  # a process started by run()
+            self.stdout_file.close()
         return code
 
     @property
