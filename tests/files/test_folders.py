@@ -241,3 +241,18 @@ def test_render_and_psf_whose_write_fails_leave_a_later_user_file_alone(
     assert main(args) == 2
     assert "glarelab did not write it there" in capsys.readouterr().err
     assert (tmp_path / out).read_text() == "participant data\n"
+
+
+def test_a_name_written_but_not_yet_recorded_stays_listed_when_another_is_claimed(tmp_path):
+    """psf claims its image, writes it, then claims its axes figure before recording the
+    image: the axes' claim dropped the image from the listing, and a second psf run took
+    its own image for a user's file ("exists and glarelab did not write it there")."""
+    from glarelab.files.folders import claim_files, listed_files, record_written
+
+    claim_files(tmp_path, ["p.png"], "psf")
+    (tmp_path / "p.png").write_bytes(b"image")
+    claim_files(tmp_path, ["p_axes.png"], "psf")
+    (tmp_path / "p_axes.png").write_bytes(b"axes")
+    record_written(tmp_path, ["p.png", "p_axes.png"])
+    assert {"p.png", "p_axes.png"} <= set(listed_files(tmp_path))
+    claim_files(tmp_path, ["p.png", "p_axes.png"], "psf")  # the second run: its own files

@@ -345,7 +345,11 @@ def claim_files(folder: Path, names: Iterable[str], kind: str, *, force: bool = 
                     "copy what you changed elsewhere, remove the file, or give another folder "
                     "(nothing was changed)"
                 )
-        _write_listing(folder, listed | dict.fromkeys(names, kind), _claimed_hashes(folder, names))
+        # listed anew with every name claimed before, written or not: the filtered listing
+        # above dropped another output's name written but not yet recorded (psf's image
+        # beside its axes), and a second run then took its own image for a user's
+        every = _listing(folder, unwritten=True)
+        _write_listing(folder, every | dict.fromkeys(names, kind), _claimed_hashes(folder, names))
 
 
 def record_written(folder: Path, names: Iterable[str]) -> None:
@@ -411,7 +415,9 @@ def list_files(folder: Path, names: Iterable[str], kind: str) -> None:
     names = list(names)
     with _listing_held(folder):
         _write_listing(
-            folder, _listing(folder) | dict.fromkeys(names, kind), _claimed_hashes(folder, names)
+            folder,
+            _listing(folder, unwritten=True) | dict.fromkeys(names, kind),
+            _claimed_hashes(folder, names),
         )
 
 
