@@ -26,8 +26,11 @@ def test_a_sweep_builds_one_verified_set_per_point_and_resumes(tmp_path):
     again = sweep("yoshida2008", settings, tmp_path, **SILENT)
     assert (tmp_path / "sets" / "000" / "manifest.json").stat().st_mtime_ns == written
     pd.testing.assert_frame_equal(again.drop(columns="build_s"), index.drop(columns="build_s"))
-    with pytest.raises(ValueError, match="holds a sweep of another grid"):
+    with pytest.raises(ValueError, match=r"holds a sweep of other inputs \(another grid or "):
         sweep("yoshida2008", [parse_setting("stimulus.disk_deg=0.3")], tmp_path, **SILENT)
+    # another seed was refused as "another grid, protocol or simulation", not naming it
+    with pytest.raises(ValueError, match=r"other inputs \(seed 1 then, 7 now\): give another"):
+        sweep("yoshida2008", settings, tmp_path, seed=7, **SILENT)
 
 
 def test_a_questionnaire_sweep_needs_simulation_and_gives_its_tests(tmp_path):

@@ -230,10 +230,27 @@ def prepare(
             before = None
         if before != config:
             raise ValueError(
-                f"{out} holds a sweep of another grid, protocol or simulation: give another "
-                "--out, or delete it to start again"
+                f"{out} holds a sweep of {_other_inputs(before, config)}: give another --out, "
+                "or delete it to start again"
             )
     return points, config
+
+
+def _other_inputs(before, config: dict) -> str:
+    """What differs between an earlier sweep's ``sweep.json`` and this one's: the seed and
+    the simulation named with their values (a re-run with another --seed was only "another
+    grid, protocol or simulation")."""
+    if not isinstance(before, dict):
+        return "other inputs (its sweep.json cannot be read)"
+    parts = []
+    if before.get("points") != config["points"]:
+        parts.append("another grid or protocol")
+    for key in ("simulate", "seed"):
+        if before.get(key) != config[key]:
+            parts.append(f"{key} {before.get(key)!r} then, {config[key]!r} now")
+    if before.get("format") != config["format"]:
+        parts.append(f"another format ({before.get('format')!r})")
+    return f"other inputs ({'; '.join(parts) or 'sweep.json edited'})"
 
 
 def sweep(
