@@ -63,6 +63,7 @@ __all__ = [
     "MAX_MB_ENV",
     "NO_CACHE_ENV",
     "KernelCache",
+    "array_sha256",
     "default_cache",
     "resolve_cache",
 ]
@@ -100,6 +101,34 @@ def _source_fingerprint(model: object) -> str:
     return digest.hexdigest()
 
 
+def array_sha256(array: np.ndarray) -> str:
+    """The sha256 of an array's shape, dtype and values (in C order): two arrays get one
+    digest only when they are the same array.
+
+    Parameters
+    ----------
+    array
+        Any NumPy array.
+
+    Returns
+    -------
+    str
+        The hexadecimal digest.
+
+    Examples
+    --------
+    >>> a = np.zeros((2, 3))
+    >>> array_sha256(a) == array_sha256(a.reshape(3, 2))
+    False
+    >>> array_sha256(a) == array_sha256(np.asfortranarray(a))
+    True
+    """
+    contiguous = np.ascontiguousarray(array)
+    digest = hashlib.sha256(f"{contiguous.shape} {contiguous.dtype.str}".encode())
+    digest.update(contiguous.tobytes())
+    return digest.hexdigest()
+
+
 def _hidden_fields(model: object, prefix: str = "") -> list[str]:
     """A digest of each dataclass field left out of ``model``'s repr (a wave-optics model's
     obstacle image: its bytes, shape and dtype), in the models it holds too (a hybrid's wave
@@ -114,9 +143,7 @@ def _hidden_fields(model: object, prefix: str = "") -> list[str]:
             found += _hidden_fields(value, f"{name}.")
             continue
         if isinstance(value, np.ndarray):
-            array = np.ascontiguousarray(value)
-            digest = hashlib.sha256(array.tobytes()).hexdigest()
-            found.append(f"{name}={digest}:{array.shape}:{array.dtype.str}")
+            found.append(f"{name}={array_sha256(value)}")
         else:
             found.append(f"{name}={value!r}")
     return found

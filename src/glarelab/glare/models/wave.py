@@ -68,7 +68,6 @@ Ritschel, T., Ihrke, M., Frisvad, J. R., et al. (2009). Temporal glare. Eurograp
 
 from __future__ import annotations
 
-import hashlib
 import math
 import time
 import warnings
@@ -91,6 +90,7 @@ from glarelab.glare._validation import (
 )
 from glarelab.glare.models import apertures as ap
 from glarelab.glare.models.base import GlareModel
+from glarelab.glare.models.cache import array_sha256
 from glarelab.glare.models.digitise import Kernel, check_kernel_shape
 from glarelab.glare.models.eye import pupil_diameter_mm
 from glarelab.glare.models.fraunhofer import (
@@ -1143,7 +1143,4 @@ def _obstacle_digest(model: WaveOpticsGlare) -> str | None:
     image = model.obstacle_image
     if image is None:
         return None
-    array = np.ascontiguousarray(image)
-    digest = hashlib.sha256(f"{array.shape} {array.dtype.str}".encode())
-    digest.update(array.tobytes())
-    return f"user image, sha256 {digest.hexdigest()}"
+    return f"user image, sha256 {array_sha256(image)}"
