@@ -20,13 +20,13 @@ from glarelab.experiments.session import (
     SimulatedFrontend,
     make_observer,
     run_session,
-    shows_images,
 )
 from glarelab.files.folders import check_replaceable, record_files
 from glarelab.protocols import load_protocol
 from glarelab.stimuli.stimulus_set import (
     build_stimulus_set,
     default_calibration,
+    shows_images,
     verify_stimulus_set,
 )
 

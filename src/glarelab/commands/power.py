@@ -205,7 +205,6 @@ def _check_workers(args: argparse.Namespace) -> None:
 def _power(args: argparse.Namespace) -> int:
     import pandas as pd
 
-    from glarelab.experiments.session import shows_images
     from glarelab.files.folders import restore_folder
     from glarelab.planning.effects import WITHOUT_F_TESTS
     from glarelab.planning.power import (
@@ -214,6 +213,7 @@ def _power(args: argparse.Namespace) -> int:
         run_inputs,
         stimuli_sha256,
     )
+    from glarelab.stimuli.stimulus_set import shows_images
 
     twice = sorted({n for n in args.participants if args.participants.count(n) > 1})
     if twice:  # the same size twice is simulated once: say so rather than drop it

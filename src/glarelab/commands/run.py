@@ -179,7 +179,8 @@ def _check_batch_seed(
 
 def _check_run_options(args: argparse.Namespace, protocol) -> None:
     """Refuse every option the session would ignore, in one line."""
-    from glarelab.experiments.session import check_counterbalance, shows_images
+    from glarelab.experiments.session import check_counterbalance
+    from glarelab.stimuli.stimulus_set import shows_images
 
     defaults = {a.dest: a.default for a in _parser_actions()}
     given = [n for n in (*SCREEN_ONLY, *SIMULATED_ONLY) if getattr(args, n) != defaults[n]]
@@ -291,8 +292,8 @@ def _run_session(args: argparse.Namespace) -> int:
     _check_run_options(args, protocol)
     _check_out_can_be_made(out)
     if args.simulate:
-        from glarelab.experiments.session import make_observer, shows_images
-        from glarelab.stimuli.stimulus_set import cached_stimulus_set
+        from glarelab.experiments.session import make_observer
+        from glarelab.stimuli.stimulus_set import cached_stimulus_set, shows_images
 
         if args.participant is not None and args.participants is not None:
             raise ValueError(

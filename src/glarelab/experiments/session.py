@@ -50,8 +50,7 @@ from glarelab.experiments.engine import Press, first_screen
 from glarelab.experiments.loop import SessionAborted, SessionLoop, Shown
 from glarelab.experiments.paradigms import paradigm_run
 from glarelab.protocols import DATA_FORMAT
-from glarelab.stimuli.stimulus_set import package_versions, prove_stimulus_set
-from glarelab.stimuli.stimulus_set import shows_images as _shows_images
+from glarelab.stimuli.stimulus_set import package_versions, prove_stimulus_set, shows_images
 
 if TYPE_CHECKING:
     from glarelab.protocols import Protocol
@@ -63,28 +62,11 @@ __all__ = [
     "make_engine",
     "make_observer",
     "run_session",
-    "shows_images",
 ]
 
 PACKAGES = ("numpy", "scipy", "OpenEXR", "colour-science", "psychopy", "glarelab")
 INFO_KEYS = ("age", "sex", "vision_correction")
 END_TEXT = "The session is complete. Thank you!\n\nPlease tell the experimenter."
-
-
-def shows_images(protocol: Protocol) -> bool:
-    """Whether the protocol shows images (and so needs a stimulus set).
-
-    Parameters
-    ----------
-    protocol : glarelab.protocols.Protocol
-        The study's protocol.
-
-    Returns
-    -------
-    bool
-        Whether it does (:func:`glarelab.stimuli.stimulus_set.shows_images`).
-    """
-    return _shows_images(protocol)
 
 
 def check_counterbalance(protocol: Protocol, counterbalance: int | None) -> None:

@@ -690,10 +690,9 @@ def power_analysis(
         For bad arguments (named), an ``out`` holding replications of other inputs, or one
         that another power run is writing into (naming its process and host).
     """
-    from glarelab.experiments.session import shows_images
     from glarelab.planning.execute import Progress, ResultLog, run_tasks
     from glarelab.planning.simulate import PowerJob
-    from glarelab.stimuli.stimulus_set import cached_stimulus_set
+    from glarelab.stimuli.stimulus_set import cached_stimulus_set, shows_images
 
     sizes = sorted(set(int(n) for n in participants))
     if not sizes or sizes[0] < 2 or sizes[-1] > MAX_PARTICIPANTS:

@@ -36,11 +36,15 @@ from glarelab.experiments.session import (
     SimulatedFrontend,
     make_observer,
     run_session,
-    shows_images,
 )
 from glarelab.observers.looking import ObservedSet
 from glarelab.planning.effects import effects
-from glarelab.stimuli.stimulus_set import StimulusSet, cached_stimulus_set, verify_stimulus_set
+from glarelab.stimuli.stimulus_set import (
+    StimulusSet,
+    cached_stimulus_set,
+    shows_images,
+    verify_stimulus_set,
+)
 
 if TYPE_CHECKING:
     from glarelab.protocols import Protocol

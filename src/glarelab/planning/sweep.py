@@ -92,8 +92,11 @@ class SweepJob:
             components), ``build_s`` (seconds) and ``effects``
             (:func:`glarelab.planning.effects.effects` of the simulation; empty without).
         """
-        from glarelab.experiments.session import shows_images
-        from glarelab.stimuli.stimulus_set import build_stimulus_set, default_calibration
+        from glarelab.stimuli.stimulus_set import (
+            build_stimulus_set,
+            default_calibration,
+            shows_images,
+        )
 
         point = self.points[index]
         protocol = point.protocol
@@ -187,7 +190,7 @@ def prepare(
         whose observers cannot be simulated, or an ``out`` holding a sweep of other inputs.
     """
     from glarelab.experiments.paradigms import paradigm_run
-    from glarelab.experiments.session import shows_images
+    from glarelab.stimuli.stimulus_set import shows_images
 
     if isinstance(simulate, bool) or not isinstance(simulate, int) or simulate < 0:
         raise ValueError(f"simulate must be a whole number >= 0; got {simulate!r}")
