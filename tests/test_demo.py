@@ -1,6 +1,7 @@
 """The demo runs the whole study, and its report says what the analysis computes."""
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -67,3 +68,56 @@ def test_demo_report_matches_a_fresh_analysis_and_names_the_protocol(tmp_path):
     assert [s["participant"] for s in provenance["sessions"]] == [
         f"sim{n:02d}" for n in range(1, 11)
     ]
+
+
+WHOLE_STUDY_STATE = r"""
+import locale, os, random, signal, sys, warnings
+from pathlib import Path
+
+import numpy as np
+
+# what these libraries set when they are imported is theirs, as it would be in a user's script
+# that imports them (statsmodels' and scipy's warnings filters, colour-science's, threadpoolctl's
+# KMP_DUPLICATE_LIB_OK); what the suite does after that must leave everything as it was
+import colour, matplotlib, pandas, scipy.stats, statsmodels.api, threadpoolctl  # noqa: E401
+
+def state():
+    return {
+        "warnings filters": [repr(entry) for entry in warnings.filters],
+        "environment": dict(os.environ),
+        "numpy print options": np.get_printoptions(),
+        "numpy errors": np.geterr(),
+        "numpy random state": repr(np.random.get_state()),
+        "random state": repr(random.getstate()),
+        "threads": sorted(
+            (pool["internal_api"], pool["num_threads"])
+            for pool in threadpoolctl.threadpool_info()
+        ),
+        "matplotlib settings": {key: repr(value) for key, value in matplotlib.rcParams.items()},
+        "locale": locale.setlocale(locale.LC_ALL),
+        "working folder": os.getcwd(),
+        "signal handlers": [signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)],
+    }
+
+before = state()
+from glarelab.demo import run_demo
+
+run_demo("spencer1995", Path(sys.argv[1]), participants=2, log=lambda line: None)
+after = state()
+print(sorted(key for key in before if before[key] != after[key]))
+"""
+
+
+def test_a_whole_study_leaves_the_interpreters_global_state_as_it_was(tmp_path):
+    # a user's own backend (a notebook's, a GUI's): stands for one the suite must not switch
+    env = {**os.environ, "MPLBACKEND": "template"}
+    done = subprocess.run(
+        [sys.executable, "-c", WHOLE_STUDY_STATE, str(tmp_path / "demo")],
+        capture_output=True,
+        text=True,
+        timeout=900,
+        check=False,
+        env=env,
+    )
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stdout.strip().splitlines()[-1] == "[]"

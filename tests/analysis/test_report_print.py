@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import re
 
+import matplotlib.text
 import pandas as pd
 import pytest
 
@@ -13,9 +14,9 @@ from glarelab.analysis.figures import (
     MIN_PRINTED_PT,
     PRINT_WIDTH_IN,
     legible,
-    plt,
     png,
     printed_scale,
+    subplots,
 )
 from glarelab.analysis.report import SPLIT_COLUMNS, column_parts, corrected_beside
 
@@ -77,17 +78,17 @@ def test_every_figure_has_its_pdf_and_svg(reports, study):
 
 
 def test_no_text_prints_below_8_pt_at_a_pages_width():
-    figure, axes = plt.subplots(1, 5, figsize=(13, 2.5))  # drawn twice a page's width
+    figure, axes = subplots(1, 5, figsize=(13, 2.5))  # drawn twice a page's width
     for axis in axes:
         axis.plot([0, 1], [0, 1], label="a line")
         axis.set_xlabel("level", fontsize=9)
         axis.set_title("method", fontsize=10)
         axis.legend(fontsize=7)
     legible(figure)
-    figure.canvas.draw()
+    figure.draw_without_rendering()
     scale = printed_scale(figure)
     assert scale == pytest.approx(PRINT_WIDTH_IN / 13)
-    texts = [t for t in figure.findobj(plt.Text) if t.get_text() and t.get_visible()]
+    texts = [t for t in figure.findobj(matplotlib.text.Text) if t.get_text() and t.get_visible()]
     assert len(texts) > 20  # tick labels among them
     smallest = min(t.get_fontsize() for t in texts) * scale
     assert smallest >= MIN_PRINTED_PT - 1e-9

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from unittest import mock
 
+import matplotlib.text
 import pandas as pd
 import pytest
 
@@ -35,10 +36,12 @@ def test_legends_stay_off_the_curves_and_text_prints_at_8_pt(draw):
     def keep(figure):  # as png() draws it
         figures.legible(figure)
         figure.tight_layout()
-        figure.canvas.draw()
+        figure.draw_without_rendering()
         drawn.append(figure)
         scale = figures.printed_scale(figure)
-        texts = [t for t in figure.findobj(figures.plt.Text) if t.get_text() and t.get_visible()]
+        texts = [
+            t for t in figure.findobj(matplotlib.text.Text) if t.get_text() and t.get_visible()
+        ]
         assert min(t.get_fontsize() for t in texts) * scale >= figures.MIN_PRINTED_PT - 1e-9
         for axis in figure.axes:
             legend = axis.get_legend()

@@ -13,9 +13,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
+import matplotlib.figure
 
 __all__ = [
     "MIN_PRINTED_PT",
@@ -23,12 +21,13 @@ __all__ = [
     "Figure",
     "Rendered",
     "as_figure",
-    "plt",
     "png",
     "small_multiples",
+    "subplots",
 ]
 
 PRINT_WIDTH_IN = 6.5  # a page's text width (US Letter and A4 with 1-inch margins)
+SVG_HASH_SALT = "glarelab"  # the seed of the ids in a figure's SVG (matplotlib's svg.hashsalt)
 MIN_PRINTED_PT = 8.0  # the smallest text a journal accepts in a printed figure (APA 7: 8-14 pt)
 
 
@@ -49,12 +48,11 @@ def legible(figure) -> None:
     """Enlarge every text of ``figure`` that would print below :data:`MIN_PRINTED_PT` at
     :data:`PRINT_WIDTH_IN` wide (tick labels, legends, annotations, titles).
 
-    >>> figure, axis = plt.subplots(figsize=(13, 3))
+    >>> figure, axis = subplots(figsize=(13, 3))
     >>> _ = axis.set_xlabel("level", fontsize=6)
     >>> legible(figure)
     >>> float(axis.xaxis.label.get_fontsize() * printed_scale(figure))
     8.0
-    >>> plt.close(figure)
     """
     from matplotlib.text import Text
 
@@ -152,12 +150,54 @@ def png(figure) -> Rendered:
         ("svg", {"Creator": None, "Date": None}),
     ):
         buffer = io.BytesIO()
-        figure.savefig(buffer, format=kind, dpi=110, metadata=metadata, bbox_inches="tight")
+        # a fixed salt: the SVG's clip-path ids are the same each time (random otherwise)
+        with matplotlib.rc_context({"svg.hashsalt": SVG_HASH_SALT}):
+            figure.savefig(buffer, format=kind, dpi=110, metadata=metadata, bbox_inches="tight")
         saved[kind] = buffer.getvalue()
-    plt.close(figure)
     rendered = Rendered(saved["png"])
     rendered.pdf, rendered.svg = saved["pdf"], saved["svg"]
     return rendered
+
+
+def subplots(
+    rows: int = 1,
+    columns: int = 1,
+    *,
+    figsize: tuple[float, float],
+    dpi: float | None = None,
+    facecolor: str | None = None,
+    **options,
+):
+    """A new figure and its axes, as ``matplotlib.pyplot.subplots`` makes them, without pyplot:
+    no backend is chosen and no figure is kept open, so a user's interactive backend (a
+    notebook's, a GUI's) and figures are left as they were.
+
+    Parameters
+    ----------
+    rows, columns
+        The grid of axes; default one axis.
+    figsize
+        The figure's width and height, inches.
+    dpi, facecolor
+        As for :class:`matplotlib.figure.Figure`; default matplotlib's settings.
+    **options
+        To :meth:`matplotlib.figure.Figure.subplots` (``sharex``, ``squeeze``, ...).
+
+    Returns
+    -------
+    figure : matplotlib.figure.Figure
+        The figure (saved with its ``savefig``; nothing to close).
+    axes : matplotlib.axes.Axes or numpy.ndarray
+        Its axes, as ``pyplot.subplots`` returns them.
+
+    Examples
+    --------
+    >>> figure, axes = subplots(1, 2, figsize=(4, 2), squeeze=False)
+    >>> axes.shape
+    (1, 2)
+    """
+    figure = matplotlib.figure.Figure(figsize=figsize, dpi=dpi, facecolor=facecolor)
+    return figure, figure.subplots(rows, columns, **options)
 
 
 def small_multiples(panels: int, *, width_in: float = 2.3, height_in: float = 2.0, columns=5):
@@ -182,7 +222,7 @@ def small_multiples(panels: int, *, width_in: float = 2.3, height_in: float = 2.
     """
     columns = max(1, min(columns, panels))
     rows = math.ceil(panels / columns)
-    figure, axes = plt.subplots(
+    figure, axes = subplots(
         rows,
         columns,
         figsize=(width_in * columns + 0.6, height_in * rows + 0.6),

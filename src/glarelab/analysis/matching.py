@@ -33,6 +33,7 @@ from __future__ import annotations
 import itertools
 from typing import TYPE_CHECKING, NamedTuple
 
+import matplotlib
 import numpy as np
 import pandas as pd
 from scipy import stats as sps
@@ -54,7 +55,7 @@ from glarelab.analysis.effects import (
     within_subject_ci,
 )
 from glarelab.analysis.export import participants_wide
-from glarelab.analysis.figures import Figure, plt, png, small_multiples
+from glarelab.analysis.figures import Figure, png, small_multiples, subplots
 from glarelab.analysis.methods import display_text
 from glarelab.analysis.stats import (
     anova_residuals,
@@ -1145,7 +1146,7 @@ def _participants(trials: pd.DataFrame, names: list[str], titles: dict, labels: 
     participants = sorted(trials["participant"].unique())
     figure, axes = small_multiples(len(participants))
     means = trials.groupby(["method", LEVEL_POSITION])["match_cd_m2"].mean()
-    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    colours = matplotlib.rcParams["axes.prop_cycle"].by_key()["color"]
     for axis, participant in zip(axes, participants, strict=True):
         part = trials[trials["participant"] == participant]
         for index, (method, marker) in enumerate(zip(names, MARKERS, strict=False)):
@@ -1184,7 +1185,7 @@ def _participants(trials: pd.DataFrame, names: list[str], titles: dict, labels: 
 def _figure4(
     summary: pd.DataFrame, names: list[str], titles: dict, l_dmax: float, bounds: bool
 ) -> bytes:
-    figure, axes = plt.subplots(
+    figure, axes = subplots(
         1, len(names), figsize=(4.5 * len(names), 3.8), sharey=True, squeeze=False
     )
     curves = (
@@ -1223,7 +1224,7 @@ def _figure4(
 
 
 def _figure5(summary: pd.DataFrame, names: list[str], titles: dict) -> bytes:
-    figure, axis = plt.subplots(figsize=(5.5, 3.8))
+    figure, axis = subplots(figsize=(5.5, 3.8))
     for method, marker in zip(names, MARKERS, strict=False):
         part = summary[summary["method"] == method]
         axis.errorbar(

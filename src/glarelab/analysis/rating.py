@@ -37,7 +37,7 @@ from glarelab.analysis.apa import (
 from glarelab.analysis.dataset import Dataset, Design, no_flags
 from glarelab.analysis.effects import hodges_lehmann, rank_biserial
 from glarelab.analysis.export import participants_wide
-from glarelab.analysis.figures import Figure, plt, png
+from glarelab.analysis.figures import Figure, png, subplots
 from glarelab.analysis.methods import display_text
 from glarelab.analysis.stats import holm, holm_confidence, wilcoxon_signed_rank
 
@@ -638,7 +638,7 @@ def stimulus_figures(protocol: Protocol, shown) -> list[Figure]:
 def _by_condition(summary, conditions, categories, scale, anchors) -> bytes:
     """One row per condition: the ratings of each category as diverging stacked bars."""
     rows = len(conditions)
-    figure, axes = plt.subplots(
+    figure, axes = subplots(
         rows, 1, figsize=(7, (0.32 * len(categories) + 0.9) * rows + 0.8), squeeze=False
     )
     colours = _colours(scale)
@@ -680,7 +680,7 @@ def _bars(axis, summary: pd.DataFrame, scale: range, colours) -> None:
 
 
 def _diverging(summary: pd.DataFrame, scale: range, anchors: list[str]) -> bytes:
-    figure, axis = plt.subplots(figsize=(7, 0.5 * len(summary) + 1.5))
+    figure, axis = subplots(figsize=(7, 0.5 * len(summary) + 1.5))
     colours = _colours(scale)
     y = np.arange(len(summary))[::-1]
     below = len(scale) // 2  # ratings left of the middle; an odd scale has a neutral one
@@ -716,8 +716,8 @@ def _colours(scale: range) -> list:
     """Reds below the middle of the scale, blues above it, and a grey middle category that
     shows against white (a diverging map's own middle is nearly white)."""
     below = len(scale) // 2
-    reds = plt.cm.RdBu(np.linspace(0.08, 0.35, below)) if below else []
-    blues = plt.cm.RdBu(np.linspace(0.65, 0.92, below)) if below else []
+    reds = matplotlib.colormaps["RdBu"](np.linspace(0.08, 0.35, below)) if below else []
+    blues = matplotlib.colormaps["RdBu"](np.linspace(0.65, 0.92, below)) if below else []
     middle = [matplotlib.colors.to_rgba(NEUTRAL)] if len(scale) % 2 else []
     return [*reds, *middle, *blues]
 
@@ -727,9 +727,7 @@ def _participants(trials: pd.DataFrame, categories: list[str], scale: range) -> 
     ratings = trials.pivot_table(
         index="participant", columns="category", values="rating", aggfunc="first"
     ).reindex(index=participants, columns=categories)
-    figure, axis = plt.subplots(
-        figsize=(1.1 * len(categories) + 2.0, 0.32 * len(participants) + 1.6)
-    )
+    figure, axis = subplots(figsize=(1.1 * len(categories) + 2.0, 0.32 * len(participants) + 1.6))
     cmap = matplotlib.colors.ListedColormap(_colours(scale))
     norm = matplotlib.colors.BoundaryNorm(np.arange(scale[0] - 0.5, scale[-1] + 1), cmap.N)
     axis.imshow(ratings.to_numpy(float), cmap=cmap, norm=norm, aspect="auto")

@@ -25,6 +25,7 @@ from __future__ import annotations
 import warnings
 from typing import TYPE_CHECKING
 
+import matplotlib
 import numpy as np
 import pandas as pd
 from matplotlib.ticker import MaxNLocator
@@ -39,7 +40,7 @@ from glarelab.analysis.effects import (
     within_subject_ci,
 )
 from glarelab.analysis.export import participants_wide
-from glarelab.analysis.figures import Figure, plt, png, small_multiples
+from glarelab.analysis.figures import Figure, png, small_multiples, subplots
 from glarelab.analysis.methods import display_text
 from glarelab.analysis.stats import (
     anova_residuals,
@@ -1056,7 +1057,7 @@ def _participants(matches: pd.DataFrame, contexts: list[str]) -> bytes:
     participants = sorted(matches["participant"].unique())
     figure, axes = small_multiples(len(participants))
     means = matches.groupby(["context", "glare_level"])["match_reversals"].mean()
-    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    colours = matplotlib.rcParams["axes.prop_cycle"].by_key()["color"]
     for axis, participant in zip(axes, participants, strict=True):
         part = matches[matches["participant"] == participant]
         for index, (context, marker) in enumerate(zip(contexts, MARKERS, strict=False)):
@@ -1088,7 +1089,7 @@ def _participants(matches: pd.DataFrame, contexts: list[str]) -> bytes:
 
 
 def _figure13(summary: pd.DataFrame, contexts: list[str], peak_fraction: float) -> bytes:
-    figure, axis = plt.subplots(figsize=(6, 4))
+    figure, axis = subplots(figsize=(6, 4))
     for context, marker in zip(contexts, MARKERS, strict=False):
         part = summary[summary["context"] == context]
         if part.empty:

@@ -18,10 +18,12 @@ import io
 import json
 from pathlib import Path
 
+import matplotlib
+import matplotlib.figure
 import numpy as np
 
 from glarelab.analysis.dataset import DataError
-from glarelab.analysis.figures import plt, png
+from glarelab.analysis.figures import png, subplots
 from glarelab.protocols import Protocol
 from glarelab.stimuli.shown import ShownSet
 
@@ -158,7 +160,9 @@ def image_grid(panels: list[tuple[np.ndarray, str]], *, columns: int | None = No
     rows = -(-len(panels) // columns)
     cell_w, cell_h = width + GAP_PX, height + TITLE_PX + GAP_PX
     total_w, total_h = columns * cell_w + GAP_PX, rows * cell_h + GAP_PX
-    figure = plt.figure(figsize=(total_w / DPI, total_h / DPI), dpi=DPI, facecolor="white")
+    figure = matplotlib.figure.Figure(
+        figsize=(total_w / DPI, total_h / DPI), dpi=DPI, facecolor="white"
+    )
     for index, (picture, label) in enumerate(panels):
         row, column = divmod(index, columns)
         h, w = picture.shape[:2]
@@ -178,7 +182,6 @@ def image_grid(panels: list[tuple[np.ndarray, str]], *, columns: int | None = No
         )
     buffer = io.BytesIO()
     figure.savefig(buffer, format="png", dpi=DPI, metadata={"Software": None})
-    plt.close(figure)
     return buffer.getvalue()
 
 
@@ -268,10 +271,12 @@ def profiles(
     bytes
         The PNG file's content.
     """
-    figure, axes = plt.subplots(
+    figure, axes = subplots(
         1, len(groups), figsize=(4.6 * len(groups), 3.6), sharey=True, squeeze=False
     )
-    colours = plt.cm.viridis(np.linspace(0.0, 0.9, max(len(m) for m in groups.values())))
+    colours = matplotlib.colormaps["viridis"](
+        np.linspace(0.0, 0.9, max(len(m) for m in groups.values()))
+    )
     for axis, (group, members) in zip(axes[0], groups.items(), strict=True):
         for colour, (label, x, values) in zip(colours, members, strict=False):
             axis.plot(x, values, lw=1.2, color=colour, label=label)

@@ -148,11 +148,11 @@ def _pareto(results: list[dict], title: str, path: Path) -> None:
     peers are squares, the plan's points are joined (its tolerance is the knob)."""
     from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
-    from glarelab.analysis.figures import plt, png
+    from glarelab.analysis.figures import png, subplots
 
     floor = 1e-4  # errors below this are drawn on it (a log axis has no zero)
     markers = "oD^v<>phX*P"  # squares are for peers
-    figure, axis = plt.subplots(figsize=(8.5, 4.2))
+    figure, axis = subplots(figsize=(8.5, 4.2))
     plan = [r for r in results if r["variant"].startswith(("default", "plan"))]
     plan.sort(key=lambda r: r["seconds"])
     axis.plot(

@@ -578,10 +578,7 @@ NIGHT_LOOKS = {  # the street of the night2026 protocol at three quarters of its
 
 def _looks_night(args: argparse.Namespace) -> int:
     """The night street with each effect of the pipeline on and off, side by side."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
 
     from glarelab.stimuli.night import night_sequence, night_street
     from glarelab.stimuli.preview import to_display
@@ -634,7 +631,8 @@ def _looks_night(args: argparse.Namespace) -> int:
             "adaptation_cd_m2": night.adaptation_cd_m2.tolist(),
             "pupil_mm": [None if np.isnan(p) else float(p) for p in night.pupil_mm],
         }
-    figure, axes = plt.subplots(len(effects), 2, figsize=(9.6, 3.2 * len(effects)), dpi=100)
+    figure = Figure(figsize=(9.6, 3.2 * len(effects)), dpi=100)
+    axes = figure.subplots(len(effects), 2)
     for row, effect in enumerate(effects):
         when = (
             f"{spec['adapting_s']:g} s after leaving {spec['start_cd_m2']:g} cd/m²"
@@ -657,7 +655,6 @@ def _looks_night(args: argparse.Namespace) -> int:
     figure.tight_layout()
     with atomic_path(out / "night.png") as temporary:
         figure.savefig(temporary, format="png", metadata={"Software": None})
-    plt.close(figure)
     write_text(out / "manifest.json", json.dumps(manifest, indent=2, default=str))
     record_written(out, written)
     _log(f"wrote {out / 'night.png'} and {out / 'manifest.json'}")
@@ -668,10 +665,7 @@ def _looks_night(args: argparse.Namespace) -> int:
 def _looks(args: argparse.Namespace) -> int:
     if args.night:
         return _looks_night(args)
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
 
     names = [f"{n}{end}" for n in DEMO_MODELS for end in (".exr", ".png", "_log.png")]
     written = ["stimulus.exr", *names, "profiles.png", "manifest.json"]
@@ -681,7 +675,8 @@ def _looks(args: argparse.Namespace) -> int:
     pixel_deg = stimulus["pixel_deg"]
     n = stimulus["img"].shape[0]
     offsets = (np.arange(n) - n // 2) * pixel_deg
-    figure, axis = plt.subplots(figsize=(7, 4.5), dpi=120)
+    figure = Figure(figsize=(7, 4.5), dpi=120)
+    axis = figure.subplots()
     manifest = {"stimulus": {k: v for k, v in stimulus.items() if k not in ("img", "mask")}}
     for index, (name, (label, model, colour)) in enumerate(DEMO_MODELS.items(), start=1):
         _log(f"[{index}/{len(DEMO_MODELS)}] {label}")
@@ -711,7 +706,6 @@ def _looks(args: argparse.Namespace) -> int:
     figure.tight_layout()
     with atomic_path(out / "profiles.png") as temporary:
         figure.savefig(temporary, format="png")
-    plt.close(figure)
     write_text(out / "manifest.json", json.dumps(manifest, indent=2, default=str))
     record_written(out, written)
     _log(f"wrote {out / 'profiles.png'} and {out / 'manifest.json'}")

@@ -300,13 +300,14 @@ def _groups(effects: list[str]) -> dict[str, list[str]]:
 
 def _panels(effects: pd.Series, **options):
     """The effects grouped by :func:`_groups` (in order of appearance) and a figure with a
-    panel for each group, two columns at most; ``options`` go to ``plt.subplots``."""
-    from glarelab.analysis.figures import plt
+    panel for each group, two columns at most; ``options`` go to
+    :func:`glarelab.analysis.figures.subplots`."""
+    from glarelab.analysis.figures import subplots
 
     groups = _groups(list(dict.fromkeys(effects)))
     columns = min(len(groups), 2)  # a page's width (6.5 in) at 8 pt and more
     rows = math.ceil(len(groups) / columns)
-    figure, axes = plt.subplots(
+    figure, axes = subplots(
         rows, columns, figsize=(3.3 * columns, 3.4 * rows), squeeze=False, **options
     )
     return groups, figure, axes

@@ -240,9 +240,7 @@ def psf_figure(
     ['.pdf', '.png']
     """
     import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
 
     if not (isinstance(pixel_deg, int | float) and np.isfinite(pixel_deg) and pixel_deg > 0):
         raise ValueError(f"pixel_deg must be a positive number of degrees; got {pixel_deg!r}")
@@ -250,7 +248,8 @@ def psf_figure(
     pixels = psf_to_display(array, dynamic_range=dynamic_range, peak=peak)
     size = array.shape[0]
     half = size * pixel_deg / 2
-    figure, axis = plt.subplots(figsize=(4.8, 3.6))
+    figure = Figure(figsize=(4.8, 3.6))
+    axis = figure.subplots()
     axis.imshow(
         pixels,
         cmap="gray",
@@ -285,5 +284,4 @@ def psf_figure(
     with atomic_path(path.with_suffix(".pdf")) as temporary:
         figure.savefig(temporary, format="pdf", metadata={"Creator": None, "Producer": None,
                                                          "CreationDate": None})  # fmt: skip
-    plt.close(figure)
     return path

@@ -423,10 +423,7 @@ def package_versions(names=PACKAGES) -> dict[str, str]:
 def _profile_plots(
     out: Path, groups_by: tuple[str, str], images: dict, geometry: dict
 ) -> list[str]:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
 
     written = []
     pixel = geometry["pixel_deg"]
@@ -436,7 +433,8 @@ def _profile_plots(
         if info["kind"] == kind:
             groups.setdefault(info[key], []).append((name, info))
     for group, members in groups.items():
-        figure, axes = plt.subplots(2, len(members), figsize=(2.0 * len(members), 4.2), dpi=110)
+        figure = Figure(figsize=(2.0 * len(members), 4.2), dpi=110)
+        axes = figure.subplots(2, len(members))
         axes = np.atleast_2d(axes).reshape(2, len(members))
         for column, (_name, info) in enumerate(members):
             img = info["img"]
@@ -455,7 +453,6 @@ def _profile_plots(
         name = f"profiles_{group}.png"
         with atomic_path(out / name) as temporary:
             figure.savefig(temporary, format="png", metadata={"Software": None})
-        plt.close(figure)
         written.append(name)
     return written
 
