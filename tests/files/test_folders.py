@@ -8,8 +8,11 @@ import pytest
 from glarelab.files.folders import (
     LISTING,
     check_replaceable,
+    edited_since,
+    files_claimed,
     listed_files,
     record_files,
+    record_written,
     replace_folder,
     staging_folder,
 )
@@ -256,3 +259,26 @@ def test_a_name_written_but_not_yet_recorded_stays_listed_when_another_is_claime
     record_written(tmp_path, ["p.png", "p_axes.png"])
     assert {"p.png", "p_axes.png"} <= set(listed_files(tmp_path))
     claim_files(tmp_path, ["p.png", "p_axes.png"], "psf")  # the second run: its own files
+
+
+def test_claims_of_work_that_failed_leave_the_listing_as_the_work_found_it(tmp_path):
+    folder = tmp_path / "out"
+    folder.mkdir()
+    with files_claimed(folder, ["a.txt", "b.txt"], "render"):
+        for name in ("a.txt", "b.txt"):
+            (folder / name).write_text("first")
+    record_written(folder, ["a.txt", "b.txt"])
+    before = json.loads((folder / LISTING).read_text())
+    with pytest.raises(RuntimeError), files_claimed(folder, ["a.txt", "b.txt", "c.txt"], "render"):
+        (folder / "b.txt").write_text("second")  # written, then the work fails
+        raise RuntimeError("refused")
+    after = json.loads((folder / LISTING).read_text())
+    assert after["files"] == before["files"]  # c.txt, never written, is not claimed
+    assert after["sha256"]["a.txt"] == before["sha256"]["a.txt"]  # untouched: as recorded
+    assert after["sha256"]["b.txt"] != before["sha256"]["b.txt"]  # rewritten: recorded anew
+    assert not edited_since(folder, "b.txt")
+    new = tmp_path / "new"
+    new.mkdir()
+    with pytest.raises(KeyboardInterrupt), files_claimed(new, ["x"], "render", created=True):
+        raise KeyboardInterrupt
+    assert not new.exists()

@@ -4,17 +4,20 @@ that never lose a file, a memory check before large work, and the progress log."
 from __future__ import annotations
 
 import argparse
+import contextlib
 import copy
 import json
 import math
 import os
 import sys
+from collections.abc import Iterator
 from pathlib import Path
 
 from glarelab.files.atomic import write_text
 from glarelab.files.folders import (
     claim_files,
     edited_since,
+    files_claimed,
     list_files,
     listed_files,
     without_link_loop,
@@ -38,6 +41,7 @@ __all__ = [
     "output_file",
     "output_folder",
     "writes_into",
+    "writing_into",
 ]
 
 PROTOCOL_HELP = "a shipped study's name (yoshida2008, spencer1995, luidolt2020, …) or a TOML file"
@@ -376,6 +380,31 @@ def writes_into(path: Path, names: list[str], command: str, *, force: bool = Fal
     path.mkdir(parents=True, exist_ok=True)
     claim_files(path, names, command, force=force)
     return path
+
+
+@contextlib.contextmanager
+def writing_into(
+    path: Path, names: list[str], command: str, *, force: bool = False
+) -> Iterator[Path]:
+    """:func:`writes_into` for the work done inside the ``with`` block: should it be refused
+    or fail before a file is written, the folder is left as it was found (the claims of the
+    files not written dropped, the folder removed if it was made for them and is empty).
+
+    Parameters
+    ----------
+    path, names, command, force
+        As for :func:`writes_into`.
+
+    Yields
+    ------
+    pathlib.Path
+        ``path``, existing.
+    """
+    path = folder_to_write(path, names)
+    created = not (path.exists() or path.is_symlink())
+    path.mkdir(parents=True, exist_ok=True)
+    with files_claimed(path, names, command, force=force, created=created):
+        yield path
 
 
 def folder_to_write(path: Path, names: list[str]) -> Path:

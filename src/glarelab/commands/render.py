@@ -31,6 +31,7 @@ from .common import (
     number,
     output_file,
     writes_into,
+    writing_into,
 )
 from .common import log as _log
 
@@ -326,10 +327,19 @@ def _render(args: argparse.Namespace) -> int:
                 check_image("luminance", read_exr(source), channels=(3,))
             except ValueError as error:
                 raise ValueError(f"input {source}: {error}; nothing was rendered") from None
-        writes_into(Path(output), names, "render", force=args.force)
-        targets = [Path(output) / name for name in names]
-    else:
-        targets = [Path(output)]
+        # a refusal from here on (the model's options, the calibration, an image the
+        # renderer refuses) leaves the folder as it was: no claim of a file never written
+        with writing_into(Path(output), names, "render", force=args.force):
+            targets = [Path(output) / name for name in names]
+            return _render_images(args, inputs, targets, folder=True)
+    return _render_images(args, inputs, [Path(output)], folder=False)
+
+
+def _render_images(
+    args: argparse.Namespace, inputs: list[str], targets: list[Path], *, folder: bool
+) -> int:
+    """Render each input into its target: one file, or (``folder``) the files of a folder
+    :func:`_render` claimed them in."""
     sources = [*inputs, args.aperture_image, args.calibration]
     for target in targets:
         output_file(target, (".exr",), "rendered image", inputs=sources, force=args.force,
@@ -408,7 +418,7 @@ def _render(args: argparse.Namespace) -> int:
             record_written(Path(args.preview).parent, [Path(args.preview).name])
             _log(f"wrote {args.preview}")
     if folder:
-        record_written(Path(output), names)
+        record_written(targets[0].parent, [target.name for target in targets])
     return 0
 
 
@@ -504,10 +514,10 @@ def _gallery(args: argparse.Namespace) -> int:
     models = gallery_models()
     figures = [f"{n}_axes{end}" for n in models for end in (".png", ".pdf")]
     written = [f"{n}.png" for n in models] + figures + ["wave_gallery.json"]
-    out = writes_into(Path(args.out), written, "gallery")
-    check_memory(
+    check_memory(  # before the folder is made: a refusal leaves nothing behind
         PSF_FIXED_BYTES + PSF_BYTES_PER_PIXEL * 3 * args.size**2, f"a {args.size}² kernel"
     )
+    out = writes_into(Path(args.out), written, "gallery")
     captions = {}
     series = {}
     for index, (name, (caption, model)) in enumerate(models.items(), start=1):

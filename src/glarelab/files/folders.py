@@ -24,7 +24,7 @@ import os
 import shutil
 import time
 import warnings
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 
 from glarelab.files.atomic import _alive, fsync_folder, glob_escape, short_name, write_text
@@ -35,6 +35,7 @@ __all__ = [
     "check_replaceable",
     "claim_files",
     "edited_since",
+    "files_claimed",
     "list_files",
     "listed_files",
     "record_files",
@@ -350,6 +351,55 @@ def claim_files(folder: Path, names: Iterable[str], kind: str, *, force: bool = 
         # beside its axes), and a second run then took its own image for a user's
         every = _listing(folder, unwritten=True)
         _write_listing(folder, every | dict.fromkeys(names, kind), _claimed_hashes(folder, names))
+
+
+@contextlib.contextmanager
+def files_claimed(
+    folder: Path, names: Iterable[str], kind: str, *, force: bool = False, created: bool = False
+) -> Iterator[None]:
+    """:func:`claim_files` for the work in the ``with`` block; should it be refused or fail,
+    the folder's listing is left as the work found it: the names still without a file leave
+    it, a file the work did not touch keeps the content recorded before, one it wrote is
+    recorded as written. The listing goes if it then lists nothing, and ``folder`` too if
+    the command made it (``created``) and it is empty.
+
+    Parameters
+    ----------
+    folder, names, kind, force
+        As for :func:`claim_files`.
+    created
+        Whether the command made ``folder`` for these files; default False.
+    """
+    folder = Path(folder)
+    names = list(names)
+    recorded = _hashes(folder)
+    found = {name: _sha256(folder / name) for name in names}
+    claim_files(folder, names, kind, force=force)
+    try:
+        yield
+    except BaseException:
+        with _listing_held(folder):
+            files, hashes = _listing(folder, unwritten=True), _hashes(folder)
+            for name in names:
+                now = _sha256(folder / name)
+                if not ((folder / name).exists() or (folder / name).is_symlink()):
+                    files.pop(name, None)
+                    hashes.pop(name, None)
+                elif now != found[name] and now is not None:  # written before the failure
+                    hashes[name] = now
+                elif name in recorded:  # as it was: its content as recorded before
+                    hashes[name] = recorded[name]
+                else:
+                    hashes.pop(name, None)
+            if files:
+                _write_listing(folder, files, hashes)
+            else:
+                with contextlib.suppress(FileNotFoundError):
+                    (folder / LISTING).unlink()
+        if created and not files:
+            with contextlib.suppress(OSError):  # not empty: something else was made there
+                folder.rmdir()
+        raise
 
 
 def record_written(folder: Path, names: Iterable[str]) -> None:
