@@ -4,6 +4,7 @@ fractional or bool codes, and luminances that are not numbers are refused naming
 
 import math
 import re
+import warnings
 
 import numpy as np
 import pytest
@@ -292,3 +293,13 @@ def test_masked_readings_are_refused_in_one_line():
         TypeError, match=r"^readings: readings must be a plain array, not a masked"
     ):
         fit_calibration(np.ma.masked_array(readings, mask), bit_depth=8)
+
+
+def test_a_gog_fit_of_a_step_shows_no_warning_of_the_optimisers_trials():
+    # a display jumping from black to white at code 2: the optimiser tries negative gammas,
+    # whose power of zero drive is inf; those trials are not the user's concern
+    readings = [(0, 0.5), (1, 0.6), (2, 399.0), (1023, 400.0)]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        fitted = fit_calibration(readings, bit_depth=10, method="gog")
+    assert np.all(np.isfinite(fitted.lut))

@@ -927,10 +927,18 @@ def fit_calibration(
         black, peak = data[0, 1], data[-1, 1]
 
         def curve(x, gain, offset, gamma):
-            return _gog(x, gain, offset, gamma, black, peak)
+            # the optimiser's trials reach a negative gamma at zero drive (inf) and overflow:
+            # not the user's concern; the fit found is checked below
+            with np.errstate(divide="ignore", over="ignore", invalid="ignore"):
+                return _gog(x, gain, offset, gamma, black, peak)
 
         params, _ = curve_fit(curve, fraction, data[:, 1], p0=(1.0, 0.0, 2.2), maxfev=20_000)
         residuals = curve(fraction, *params) - data[:, 1]
+        if not (np.all(np.isfinite(params)) and np.all(np.isfinite(residuals))):
+            raise ValueError(
+                f"{source}: the gain-offset-gamma model does not fit these readings (its fit "
+                "does not give a finite luminance at every code); use method 'pchip-log'"
+            )
         model = {
             "gain": float(params[0]),
             "offset": float(params[1]),
