@@ -2,6 +2,7 @@
 the paper's numbers, hand calculations and the exact per-pixel blur."""
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -286,3 +287,19 @@ def test_luminance_for_acuity_refuses_what_is_not_real_numbers(cpd, shown):
 def test_luminance_for_acuity_of_valid_numbers_is_unchanged():
     assert acuity.luminance_for_acuity(13.85) == 0.14545650817873282
     assert acuity.luminance_for_acuity(np.array([13.85]))[0] == 0.14545650817873282
+
+
+@settings(max_examples=200, deadline=None)
+@given(cpd=st.floats(52.7, 52.83) | st.floats(1e-300, 60.0))
+def test_luminance_for_acuity_is_finite_or_refused_up_to_the_asymptote(cpd):
+    # eq. 5.14's luminance grows without bound towards 52.82 cycles/deg: within the last
+    # 0.04 it was inf, with numpy's overflow warning only
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        try:
+            y = acuity.luminance_for_acuity(cpd)
+        except ValueError as error:
+            assert str(error).startswith("cpd must be in (0, 52.776)")
+            assert cpd >= 52.776
+        else:
+            assert np.isfinite(y) and y > 0

@@ -140,7 +140,9 @@ def luminance_for_acuity(cpd: float | np.ndarray) -> float | np.ndarray:
     Parameters
     ----------
     cpd
-        Acuity in cycles per degree, in (0, 52.8) (the range of eq. 5.14 above 0 cd/m²).
+        Acuity in cycles per degree, in (0, 52.776): eq. 5.14's range above 0 cd/m²
+        (0-52.82) up to where its luminance, growing without bound towards 52.82, leaves the
+        range of a float (about 1.8e308 cd/m²).
 
     Returns
     -------
@@ -167,10 +169,13 @@ def luminance_for_acuity(cpd: float | np.ndarray) -> float | np.ndarray:
     """
     r = check_real("cpd", cpd)
     a, b, c, d = LARSON1997
-    high = a * math.pi / 2 + d
+    # eq. 5.14's asymptote, a π/2 + D = 52.82, less the last cycles/deg whose luminance is
+    # beyond a float: 10^((tan((R − D)/A) − C)/B) < 1.8e308
+    high = a * math.atan(c + b * math.log10(np.finfo(float).max)) + d
     if not np.isfinite(r).all() or (r <= 0).any() or (r >= high).any():
         raise ValueError(
-            f"cpd must be in (0, {high:.4g}) cycles/deg (eq. 5.14's range); got {cpd!r}"
+            f"cpd must be in (0, {high:.5g}) cycles/deg (eq. 5.14's range, its luminance "
+            f"finite); got {cpd!r}"
         )
     y = 10.0 ** ((np.tan((r - d) / a) - c) / b)
     return float(y) if np.ndim(cpd) == 0 else y
