@@ -208,3 +208,14 @@ def test_a_pipe_or_a_folder_is_named_as_what_it_is_not_as_no_such_file(tmp_path)
         read_exr(tmp_path / "folder.exr")
     with pytest.raises(FileNotFoundError, match=r"^no EXR file at .*none\.exr"):
         read_exr(tmp_path / "none.exr")
+
+
+def test_a_negative_value_read_from_a_foreign_or_damaged_file_is_refused(tmp_path):
+    # another tool writes what write_exr refuses; a damaged uncompressed chunk reads as any value
+    values = np.full((8, 8), 5.0, np.float32)
+    values[3, 4] = -8.3
+    header = {"compression": OpenEXR.NO_COMPRESSION, "type": OpenEXR.scanlineimage}
+    with OpenEXR.File(header, {"Y": values}) as exr:
+        exr.write(str(tmp_path / "negative.exr"))
+    with pytest.raises(ValueError, match=r"holds a negative value.*-8\.3.* at index \(3, 4\)"):
+        read_exr(tmp_path / "negative.exr")

@@ -221,7 +221,8 @@ def read_exr(path: str | Path) -> np.ndarray:
     ------
     ValueError
         If ``path`` is a named pipe or a device, or the file is not OpenEXR, is damaged,
-        holds a NaN or infinite pixel (a damaged chunk decodes as NaN), holds neither a ``Y``
+        holds a NaN, infinite or negative pixel (a damaged chunk decodes as NaN, a damaged
+        uncompressed one as any value), holds neither a ``Y``
         channel nor ``R``, ``G`` and ``B``, has more than one part, a ``pixelAspectRatio``
         other than 1, or a ``dataWindow`` other than its ``displayWindow`` (a data window that
         equals the display window is read whole, wherever its origin).
@@ -266,5 +267,10 @@ def read_exr(path: str | Path) -> np.ndarray:
         raise ValueError(
             f"{path} holds NaN or Inf (damaged, or not a luminance image): "
             + _first(image, ~np.isfinite(image))
+        )
+    if (image < 0).any():  # a luminance or a transmission: never below 0 (write_exr's rule)
+        raise ValueError(
+            f"{path} holds a negative value, where a luminance must be >= 0 cd/m² (damaged, "
+            "or not a linear luminance image?): " + _first(image, image < 0)
         )
     return image
