@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from glarelab import glare
+from glarelab.files.values import is_real, plain_array
 from glarelab.glare.models.digitise import kernel_shape_for
 from glarelab.protocols import Protocol, pixel_deg
 from glarelab.protocols.common import glare_model
@@ -58,10 +59,14 @@ def box_filter(image: np.ndarray, factor: int) -> np.ndarray:
     """
     if not (isinstance(factor, int | np.integer) and not isinstance(factor, bool)) or factor < 1:
         raise ValueError(f"factor must be a whole number >= 1; got {factor!r}")
+    image = plain_array("image", image)
+    if image.ndim not in (2, 3):
+        raise ValueError(f"image must be (H, W) or (H, W, C); got shape {image.shape}")
     if factor == 1:
         return image.copy()
     h, w = image.shape[0] // factor, image.shape[1] // factor
-    return image[: h * factor, : w * factor].reshape(h, factor, w, factor).mean(axis=(1, 3))
+    blocks = image[: h * factor, : w * factor].reshape(h, factor, w, factor, *image.shape[2:])
+    return blocks.mean(axis=(1, 3))
 
 
 def compose_target(background: np.ndarray, coverage: np.ndarray, disk_cd_m2: float) -> np.ndarray:
@@ -94,11 +99,7 @@ def compose_target(background: np.ndarray, coverage: np.ndarray, disk_cd_m2: flo
     >>> compose_target(np.array([5.0, 0.0]), np.array([0.0, 1.0]), 120.0).tolist()
     [5.0, 120.0]
     """
-    number = isinstance(disk_cd_m2, int | float | np.integer | np.floating) and not isinstance(
-        disk_cd_m2, bool | np.bool_
-    )
-    if not (number and np.isfinite(disk_cd_m2) and disk_cd_m2 >= 0):
-        raise ValueError(f"disk_cd_m2 must be a finite luminance >= 0, cd/m²; got {disk_cd_m2!r}")
+    _check_disk(disk_cd_m2)
     background, coverage = np.asarray(background, float), np.asarray(coverage, float)
     if not (np.isfinite(coverage).all() and ((coverage >= 0) & (coverage <= 1)).all()):
         raise ValueError("coverage must hold area fractions, finite and within 0-1")
@@ -123,8 +124,19 @@ def target_terms(disk_cd_m2: float) -> list[tuple[str, float]]:
     -------
     list of tuple of (str, float)
         ``(image, weight)``: the background once, the disk's coverage times ``disk_cd_m2``.
+
+    Raises
+    ------
+    ValueError
+        For a disk luminance that is not a finite number >= 0.
     """
+    _check_disk(disk_cd_m2)
     return [("target_background", 1.0), ("target_coverage", float(disk_cd_m2))]
+
+
+def _check_disk(disk_cd_m2: object) -> None:
+    if not (is_real(disk_cd_m2) and np.isfinite(float(disk_cd_m2)) and float(disk_cd_m2) >= 0):  # type: ignore[arg-type]
+        raise ValueError(f"disk_cd_m2 must be a finite luminance >= 0, cd/m²; got {disk_cd_m2!r}")
 
 
 def _odd(n: float) -> int:
