@@ -285,7 +285,10 @@ def test_bad_parameters_are_refused(cls, changes, message):
 
 
 def test_randomness_only_through_a_generator():
-    with pytest.raises(ValueError, match=r"rng must be a numpy.random.Generator; got int"):
+    with pytest.raises(
+        ValueError,
+        match=r"rng must be a numpy.random.Generator \(np.random.default_rng\(seed\)\); got 42",
+    ):
         ObserverNoise().draw(42)
 
 

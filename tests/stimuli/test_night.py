@@ -228,3 +228,22 @@ def test_the_set_rebuilds_to_its_own_manifest(built, tmp_path, monkeypatch):
     _, folder, _ = built
     monkeypatch.setenv("GLARELAB_CACHE", str(tmp_path))  # nothing remembered: rebuilt
     assert prove_stimulus_set(folder) == []
+
+
+@pytest.mark.parametrize("rng", [0, None, np.random.RandomState(0)])
+def test_a_street_drawn_without_a_generator_is_refused_naming_rng(rng):
+    message = r"^rng must be a numpy.random.Generator \(np.random.default_rng\(seed\)\); got"
+    with pytest.raises(ValueError, match=message):
+        night_street((64, 48), pixel_deg=0.1, rng=rng)
+
+
+@pytest.mark.parametrize("street", [{}, {"img": np.zeros((4, 4, 3))}, None, "street"])
+def test_a_sequence_of_what_is_not_a_street_is_refused_naming_street(street):
+    with pytest.raises(ValueError, match=r"^street must be a night_street\(\) scene"):
+        night_sequence(street, "gaze", seconds=1.0, frame_rate_hz=4.0)
+
+
+@pytest.mark.parametrize("frames", [[], (), None])
+def test_a_strip_of_no_frames_is_refused_naming_frames(frames):
+    with pytest.raises(ValueError, match=r"^frames must be a non-empty list"):
+        preview_strip(frames, l_dmax_cd_m2=100.0)

@@ -1,4 +1,5 @@
-"""Values given to glarelab's functions: which count as real numbers and whole numbers.
+"""Values given to glarelab's functions: which count as real numbers, whole numbers and
+random generators.
 
 NumPy reads a bool as 0 or 1, a string such as ``'2'`` as 2.0 and a masked array's hidden
 values as if they were there, all without a word. These checks are shared by every layer that
@@ -13,7 +14,15 @@ import re
 
 import numpy as np
 
-__all__ = ["DECIMAL_TEXT", "WHOLE_TEXT", "is_real", "is_whole", "plain_array", "real_array"]
+__all__ = [
+    "DECIMAL_TEXT",
+    "WHOLE_TEXT",
+    "check_generator",
+    "is_real",
+    "is_whole",
+    "plain_array",
+    "real_array",
+]
 
 # a number as a person or a program writes it in a text file: digits, a decimal point, an
 # exponent (nan and inf read, for the caller to refuse with its own words); not what Python
@@ -171,3 +180,38 @@ def real_array(values: object, what: str) -> np.ndarray:
         f"{what} must hold real numbers (not strings, bools or None); got {value!r} at "
         f"position {position}"
     )
+
+
+def check_generator(rng: object, name: str = "rng") -> np.random.Generator:
+    """``rng`` if it is a :class:`numpy.random.Generator` (every draw of the suite goes
+    through one the caller passes), else a ValueError naming ``name``.
+
+    Parameters
+    ----------
+    rng
+        What was given.
+    name
+        The argument, as the message should name it; default ``'rng'``.
+
+    Returns
+    -------
+    numpy.random.Generator
+        ``rng``.
+
+    Raises
+    ------
+    ValueError
+        For anything else: a seed, None, the legacy ``RandomState``.
+
+    Examples
+    --------
+    >>> check_generator(0)
+    Traceback (most recent call last):
+    ...
+    ValueError: rng must be a numpy.random.Generator (np.random.default_rng(seed)); got 0
+    """
+    if not isinstance(rng, np.random.Generator):
+        raise ValueError(
+            f"{name} must be a numpy.random.Generator (np.random.default_rng(seed)); got {rng!r}"
+        )
+    return rng

@@ -34,6 +34,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
+from glarelab.files.values import check_generator
 from glarelab.glare._validation import check_in_range
 from glarelab.observers.brightness import BrightnessModel, Percept
 
@@ -345,8 +346,7 @@ class ObserverNoise:
         ValueError
             When ``rng`` is not a :class:`numpy.random.Generator`.
         """
-        if not isinstance(rng, np.random.Generator):
-            raise ValueError(f"rng must be a numpy.random.Generator; got {type(rng).__name__}")
+        check_generator(rng)
         return Observer(
             gain=float(observer_gains(rng.standard_normal(), self.gain_sd)), noise=self
         )
@@ -370,8 +370,7 @@ class ObserverNoise:
         ValueError
             When ``rng`` is not a :class:`numpy.random.Generator`.
         """
-        if not isinstance(rng, np.random.Generator):
-            raise ValueError(f"rng must be a numpy.random.Generator; got {type(rng).__name__}")
+        check_generator(rng)
         return float(rng.normal(0.0, self.block_sd)) if self.block_sd > 0 else 0.0
 
 

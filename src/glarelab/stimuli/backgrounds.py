@@ -26,6 +26,8 @@ from pathlib import Path
 import numpy as np
 from scipy import ndimage
 
+from glarelab.files.values import check_generator
+from glarelab.glare._validation import check_in_range
 from glarelab.stimuli.exr import read_exr
 from glarelab.stimuli.sky import cloudy_sky
 
@@ -259,7 +261,14 @@ def lamp_scene(size: int, *, rng: np.random.Generator, peak_cd_m2: float) -> dic
     dict
         ``img``: ``(size, size)`` luminance, cd/m²; ``desk`` and ``lamp``: boolean masks of
         the same shape.
+
+    Raises
+    ------
+    ValueError
+        For an ``rng`` that is not a generator, or ``peak_cd_m2`` not in (0, 1e9].
     """
+    check_generator(rng)
+    check_in_range("peak_cd_m2", peak_cd_m2, 0.0, 1e9, unit="cd/m²", low_inclusive=False)
     img = np.full((size, size), ROOM_CD_M2)
     c = size / 2
     y, x = np.indices((size, size)) + 0.5

@@ -34,6 +34,7 @@ from typing import Literal
 import numpy as np
 
 from glarelab import glare
+from glarelab.files.values import check_generator
 from glarelab.glare._validation import check_choice, check_in_range, check_positive
 from glarelab.protocols import Protocol
 from glarelab.protocols import pixel_deg as display_pixel_deg
@@ -115,7 +116,8 @@ def night_street(
     Raises
     ------
     ValueError
-        For a size, pixel size, number or luminance out of range, each named.
+        For a size, pixel size, number or luminance out of range, each named, or an
+        ``rng`` that is not a generator.
 
     Examples
     --------
@@ -130,6 +132,7 @@ def night_street(
     ):
         raise ValueError(f"size_px must be (width, height), each 16-4096 pixels; got {size_px!r}")
     pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
+    check_generator(rng)
     if isinstance(lamps, bool) or not isinstance(lamps, int | np.integer) or not 1 <= lamps <= 12:
         raise ValueError(f"lamps must be a whole number from 1 to 12; got {lamps!r}")
     lamp = check_in_range("lamp_cd_m2", lamp_cd_m2, 0.0, 1e9, unit="cd/m²", low_inclusive=False)
@@ -236,6 +239,12 @@ def night_sequence(
         ``frames`` (list of images), ``frame_time_s``, ``gaze_px`` (one ``(row, column)`` per
         frame, or None), ``initial_adaptation_cd_m2`` (or None).
 
+    Raises
+    ------
+    ValueError
+        For a ``street`` that is not a :func:`night_street` scene, an unknown ``sequence``,
+        or a time, rate or luminance out of its range.
+
     Examples
     --------
     >>> street = night_street((64, 48), pixel_deg=0.1, rng=np.random.default_rng(0))
@@ -247,6 +256,12 @@ def night_sequence(
     seconds = check_positive("seconds", seconds, unit="s")
     rate = check_positive("frame_rate_hz", frame_rate_hz, unit="Hz")
     start = check_in_range("start_cd_m2", start_cd_m2, 0.0, 1e9, unit="cd/m²")
+    if not (isinstance(street, dict) and {"img", "lamps_px"} <= street.keys()):
+        raise ValueError(
+            "street must be a night_street() scene (a dict with 'img' and 'lamps_px'); got "
+            f"{type(street).__name__}"
+            + (f" with keys {sorted(street)}" if isinstance(street, dict) else "")
+        )
     img = street["img"]
     if sequence == "still":
         return {
@@ -301,7 +316,14 @@ def preview_strip(frames: list[np.ndarray], *, l_dmax_cd_m2: float) -> np.ndarra
     -------
     numpy.ndarray
         uint8 ``(H, n × W + 4 (n - 1), 3)``.
+
+    Raises
+    ------
+    ValueError
+        For no frames.
     """
+    if not (isinstance(frames, list | tuple) and len(frames) > 0):
+        raise ValueError(f"frames must be a non-empty list of frames; got {frames!r:.60}")
     count = min(len(frames), PREVIEW_FRAMES)
     picks = np.unique(np.round(np.linspace(0, len(frames) - 1, count)).astype(int))
     tiles = [to_display(frames[i], l_dmax_cd_m2=l_dmax_cd_m2) for i in picks]

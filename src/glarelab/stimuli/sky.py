@@ -16,6 +16,8 @@ import math
 
 import numpy as np
 
+from glarelab.files.values import check_generator
+
 __all__ = ["CONTRAST_TOLERANCE", "cloudy_sky"]
 
 # the RMS contrast a sky delivers may differ from the one asked by sampling (1-2 % at 0.15);
@@ -84,10 +86,7 @@ def cloudy_sky(
     >>> round(float(sky.mean()), 6), bool(sky.max() <= 220.0)
     (150.0, True)
     """
-    if not isinstance(rng, np.random.Generator):
-        raise ValueError(
-            f"rng must be a numpy.random.Generator (np.random.default_rng(seed)), got {rng!r}"
-        )
+    check_generator(rng)
     if not (
         isinstance(shape, tuple | list)
         and len(shape) == 2

@@ -91,3 +91,9 @@ def test_a_masked_luminance_is_refused_not_its_masked_value_used():
     """np.asarray dropped the mask: the masked element got a pupil of its hidden value."""
     with pytest.raises(ValueError, match="masked array"):
         eye.pupil_diameter_mm(np.ma.array([10.0, 100.0], mask=[False, True]))
+
+
+@pytest.mark.parametrize("shape", [(0,), (0, 3), (2, 0)])
+def test_no_luminances_give_no_diameters(shape):
+    # as acuity_cpd and the other night functions do (it was refused, naming shape (1, 0))
+    assert eye.pupil_diameter_mm(np.zeros(shape)).shape == shape

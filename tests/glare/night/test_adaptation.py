@@ -2,6 +2,7 @@
 analytic properties of an exponential approach."""
 
 import math
+import warnings
 
 import colour
 import numpy as np
@@ -214,3 +215,24 @@ def test_an_infinite_frame_time_is_called_not_finite():
 def test_adaptation_luminance_refuses_frame_times_that_are_not_real_numbers(frame_time_s, shown):
     with pytest.raises(ValueError, match=f"^frame_time_s must .*{shown}"):
         adaptation.adaptation_luminance(np.full(4, 0.04), frame_time_s, initial_cd_m2=10.0)
+
+
+@pytest.mark.parametrize(
+    ("gaze", "expected"),
+    [
+        ((1e4, -1e4), 380.0),
+        ((1e300, -1e300), 380.0),
+        ((-1e308, -1e308), 0.0),
+        ((10.0, 1e20), 219.0),
+    ],
+)
+def test_a_gaze_however_far_off_the_frame_weights_its_nearest_pixels(gaze, expected):
+    # the docs: the gaze may lie outside the image; beyond ~40 σ every weight underflowed and
+    # the gaze was refused, and beyond 1e154 px the squares overflowed
+    values = np.arange(400.0).reshape(20, 20)  # row r, column c: 20 r + c
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        mean = adaptation.window_mean(values, pixel_deg=0.1, gaze_px=gaze, window_sigma_deg=0.05)
+    assert_allclose(mean, expected, rtol=1e-12, atol=1e-12)
+    uniform = adaptation.frame_luminance(np.full((20, 20), 7.0), pixel_deg=0.1, gaze_px=gaze)
+    assert_allclose(uniform, 7.0, rtol=1e-12)

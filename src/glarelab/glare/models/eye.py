@@ -83,6 +83,9 @@ def pupil_diameter_mm(field_luminance_cd_m2: float | np.ndarray) -> float | np.n
     if isinstance(field_luminance_cd_m2, np.ma.MaskedArray):  # asarray would drop the mask
         check_image("field_luminance_cd_m2", field_luminance_cd_m2)
     plain = plain_array("field_luminance_cd_m2", field_luminance_cd_m2)
+    real = np.issubdtype(plain.dtype, np.integer) or np.issubdtype(plain.dtype, np.floating)
+    if plain.size == 0 and real:  # no luminances, no diameters: as acuity_cpd and the others
+        return np.empty(plain.shape)
     array = check_image(  # its own dtype checked (strings and bools refused), then float;
         "field_luminance_cd_m2",  # any shape, as one row (a stack of frames too)
         plain.reshape(1, -1) if plain.ndim != 2 else plain,

@@ -20,6 +20,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from glarelab.files.values import check_generator
 from glarelab.glare._validation import check_positive, check_positive_int
 from glarelab.glare.models.digitise import check_kernel_shape
 
@@ -85,10 +86,7 @@ def flare_line_pattern(
     >>> p.shape, bool(p.min() >= 0)
     ((101, 101), True)
     """
-    if not isinstance(rng, np.random.Generator):
-        raise ValueError(
-            f"rng must be a numpy.random.Generator (np.random.default_rng(seed)), got {rng!r}"
-        )
+    check_generator(rng)
     n_lines = check_positive_int("n_lines", n_lines)
     if n_lines > MAX_FLARE_LINES:
         raise ValueError(

@@ -426,8 +426,8 @@ def window_mean(
     Raises
     ------
     ValueError
-        For a bad pixel size, window or gaze, or a gaze so far off the image that no pixel
-        has any weight.
+        For a bad pixel size, window or gaze (a gaze however far off the image is weighted
+        relative to its nearest pixel).
 
     Notes
     -----
@@ -447,8 +447,8 @@ def window_mean(
     pixel_deg = check_positive("pixel_deg", pixel_deg, unit="deg")
     window_sigma_deg = check_positive("window_sigma_deg", window_sigma_deg, unit="deg")
     y = np.asarray(values)
-    if y.ndim != 2:
-        raise ValueError(f"values must be an (H, W) array; got shape {y.shape}")
+    if y.ndim != 2 or y.size == 0:
+        raise ValueError(f"values must be an (H, W) array of pixels; got shape {y.shape}")
     try:
         row, col = (real_number(v) for v in gaze_px)  # not a bool, a string or an array
     except (TypeError, ValueError):
@@ -456,14 +456,21 @@ def window_mean(
     if not (math.isfinite(row) and math.isfinite(col)):
         raise ValueError(f"gaze_px must be finite; got {gaze_px!r}")
     sigma_px = window_sigma_deg / pixel_deg
-    rows = np.exp(-0.5 * ((np.arange(y.shape[0]) - row) / sigma_px) ** 2)
-    cols = np.exp(-0.5 * ((np.arange(y.shape[1]) - col) / sigma_px) ** 2)
+    # a gaze farther than 800 σ² beyond an edge weights that edge's pixels alone: the next
+    # pixels' weight relative to theirs, exp(-distance / σ²), is below the smallest float;
+    # brought that near, the squares below stay finite however far the gaze was
+    margin = 800.0 * sigma_px**2 + 1.0
+    row = min(max(row, -margin), y.shape[0] - 1 + margin)
+    col = min(max(col, -margin), y.shape[1] - 1 + margin)
+    row_exponents = -0.5 * ((np.arange(y.shape[0]) - row) / sigma_px) ** 2
+    col_exponents = -0.5 * ((np.arange(y.shape[1]) - col) / sigma_px) ** 2
+    rows, cols = np.exp(row_exponents), np.exp(col_exponents)
     total = rows.sum() * cols.sum()
-    if total <= 0.0:  # the gaze so far off the frame that every weight underflows
-        raise ValueError(
-            f"gaze_px = {gaze_px!r} is too far from the {y.shape} frame for a window of "
-            f"{window_sigma_deg:g}°: no pixel has any weight"
-        )
+    if not total >= np.finfo(float).tiny:  # a gaze far off the frame: its weights underflow
+        # relative to the largest weight (the ratio is the same; the nearest pixel's is 1)
+        rows = np.exp(row_exponents - row_exponents.max())
+        cols = np.exp(col_exponents - col_exponents.max())
+        total = rows.sum() * cols.sum()
     return float(rows @ y @ cols / total)
 
 
