@@ -230,8 +230,8 @@ def test_a_model_class_is_refused_naming_the_object_to_give():
 @pytest.mark.parametrize(
     "lut",
     [np.array([0.0, 1.0, 0.5]), np.array([1.0]), np.array([0.0, np.nan, 2.0]),
-     np.array([-1.0, 2.0]), "sRGB"],
-    ids=["not increasing", "one code", "NaN", "negative", "a name"],
+     np.array([-1.0, 2.0]), "sRGB", None],
+    ids=["not increasing", "one code", "NaN", "negative", "a name", "None"],
 )  # fmt: skip
 def test_a_display_table_no_display_has_is_refused_when_made(lut):
     """``Display(np.array([0, 1, 0.5]))`` was made, and failed only where it was used."""

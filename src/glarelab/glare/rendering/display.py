@@ -59,7 +59,8 @@ class Display:
     lut: np.ndarray
 
     def __post_init__(self) -> None:  # a table as display_lut takes it, or refused now
-        if isinstance(self.lut, str | bytes) or hasattr(self.lut, "lut"):
+        # None would be display_lut's reference display (its white 1 cd/m² here): not a table
+        if self.lut is None or isinstance(self.lut, str | bytes) or hasattr(self.lut, "lut"):
             raise ValueError(f"lut must be a code → cd/m² table; got {self.lut!r:.80}")
         try:
             lut = display_lut(self.lut, 1.0)
