@@ -106,3 +106,19 @@ def test_one_way_power_names_a_complex_alpha(alpha):
     """scipy's "ufunc 'fdtri' not supported for the input types" was all a user saw."""
     with pytest.raises(ValueError, match=r"^alpha must be a number in \(0, 1\); got"):
         one_way_power([0, 0.5], error_sd=1, subjects=10, alpha=alpha)
+
+
+@pytest.mark.parametrize(
+    ("option", "value"),
+    [("seed", -1), ("seed", 1.5), ("seed", "a"), ("seed", None), ("seed", True),
+     ("participants", [2.5, 6]), ("participants", [float("nan")]), ("participants", "46"),
+     ("participants", []), ("participants", [1, 6]), ("error_sd", float("inf")),
+     ("error_sd", "1"), ("subject_sd", float("nan")), ("subject_sd", -0.1)],
+)  # fmt: skip
+def test_a_job_refuses_what_would_fail_only_on_a_worker(option, value):
+    # each was taken, and failed in run() on a Dask worker with a message of numpy's
+    options = {"error_sd": 1.0, "subject_sd": 0.5, "participants": [4, 6], "seed": 1}
+    with pytest.raises(ValueError, match=rf"^{option} must be"):
+        OneWayJob([0.0, 1.0], **{**options, option: value})
+    job = OneWayJob([0.0, 1.0], **{**options, "participants": np.array([6, 4, 6])})
+    assert job.participants == (4, 6) and job.run(0)["replication"] == 0

@@ -29,7 +29,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats as sps
 
-from glarelab.files.values import is_real, plain_array
+from glarelab.files.values import is_real, is_whole, plain_array
 from glarelab.planning.effects import anova_effects
 
 __all__ = ["OneWayJob", "noncentrality", "one_way_power"]
@@ -173,7 +173,12 @@ class OneWayJob:
     participants
         The sample sizes ``n`` to analyse, each >= 2.
     seed
-        The seed of every replication's draws.
+        The seed of every replication's draws, a whole number >= 0.
+
+    Raises
+    ------
+    ValueError
+        For means, SDs, sample sizes or a seed out of range or not numbers, each named.
     """
 
     kind = "one-way"
@@ -188,15 +193,23 @@ class OneWayJob:
         seed: int,
     ):
         self.means = _means(means_per_condition)
-        if not error_sd > 0 or not subject_sd >= 0:
+        self.error_sd = _error_sd(error_sd)
+        if not (is_real(subject_sd) and np.isfinite(subject_sd) and subject_sd >= 0):  # type: ignore[call-overload, operator]
+            raise ValueError(f"subject_sd must be a finite number >= 0; got {subject_sd!r}")
+        self.subject_sd = float(subject_sd)  # type: ignore[arg-type]
+        if (
+            isinstance(participants, str | bytes)
+            or not isinstance(participants, Sequence | np.ndarray)
+            or len(participants) == 0
+            or not all(is_whole(n) and n >= 2 for n in participants)
+        ):
             raise ValueError(
-                f"error_sd must be > 0 and subject_sd >= 0; got {error_sd!r}, {subject_sd!r}"
+                f"participants must be sample sizes, whole numbers >= 2; got {participants!r}"
             )
-        if not participants or min(participants) < 2:
-            raise ValueError(f"participants must be sample sizes >= 2; got {participants!r}")
-        self.error_sd, self.subject_sd = float(error_sd), float(subject_sd)
-        self.participants = tuple(sorted(set(participants)))
-        self.seed = seed
+        self.participants = tuple(sorted({int(n) for n in participants}))
+        if not (is_whole(seed) and seed >= 0):
+            raise ValueError(f"seed must be a whole number >= 0; got {seed!r}")
+        self.seed = int(seed)
 
     def run(self, replication: int) -> dict:
         """One simulated study at every sample size.
