@@ -71,3 +71,9 @@ def test_a_device_or_pipe_at_the_path_is_refused_and_kept(tmp_path, kind):
     mode = os.lstat(target).st_mode
     assert stat.S_ISFIFO(mode) if kind == "fifo" else stat.S_ISCHR(mode)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out.exr"]
+
+
+@pytest.mark.parametrize(("name", "room"), [(None, 5), (b"table", 5), ("table", -1), ("t", 2.0)])
+def test_short_name_refuses_what_is_no_name_or_room(name, room):
+    with pytest.raises(ValueError, match=r"^(name|room) must be"):
+        short_name(name, room=room)

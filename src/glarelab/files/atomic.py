@@ -55,6 +55,11 @@ def short_name(name: str, *, room: int) -> str:
         ``name`` when it fits; else its start, ``~`` and 12 hexadecimal digits of its SHA-256
         (distinct names stay distinct).
 
+    Raises
+    ------
+    ValueError
+        For a ``name`` that is not a str, or a ``room`` that is not a whole number >= 0.
+
     Examples
     --------
     >>> short_name("table", room=40)
@@ -63,6 +68,10 @@ def short_name(name: str, *, room: int) -> str:
     >>> len(short_name(long, room=40).encode()) + 40 <= NAME_MAX_BYTES
     True
     """
+    if not isinstance(name, str):
+        raise ValueError(f"name must be a file name (a str); got {name!r}")
+    if isinstance(room, bool) or not isinstance(room, int) or room < 0:
+        raise ValueError(f"room must be a whole number of bytes >= 0; got {room!r}")
     if len(name.encode()) + room <= NAME_MAX_BYTES:
         return name
     import hashlib
