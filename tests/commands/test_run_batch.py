@@ -83,3 +83,26 @@ def test_an_out_folder_that_cannot_be_made_is_named_as_out(tmp_path, capsys):
     assert main(run) == 2
     err = capsys.readouterr().err
     assert f"--out {out}: cannot create the folder (" in err, err
+
+
+def test_a_completed_session_that_lost_or_changed_rows_is_not_kept(tmp_path, capsys):
+    """It was "completed before, kept" (exit 0) with half its rows; analyse refused it later."""
+    run = ["run", "luidolt2020", "--simulate", "--seed", "4", "--participants", "2"]
+    for damage in ("cut", "edited"):
+        out = tmp_path / damage
+        assert main([*run, "--out", str(out)]) == 0
+        (second,) = out.glob("sim02_*.csv")
+        lines = second.read_text().splitlines(keepends=True)
+        if damage == "cut":
+            second.write_text("".join(lines[:3]))  # the header and two of the six trials
+        else:
+            cells = lines[2].rstrip("\r\n").split(",")
+            cells[-2] = "1" if cells[-2] != "1" else "2"  # one rating changed
+            lines[2] = ",".join(cells) + "\n"
+            second.write_text("".join(lines))
+        capsys.readouterr()
+        assert main([*run, "--out", str(out), "--resume"]) == 2
+        err = capsys.readouterr().err
+        assert "sim01: completed before, kept" in err
+        named = "trials 3-6 of the 6" if damage == "cut" else "trial 2 is not the row"
+        assert f"{second.name}: {named}" in err and "give another --out" in err, err

@@ -292,7 +292,7 @@ def _run_session(args: argparse.Namespace) -> int:
     _check_run_options(args, protocol)
     _check_out_can_be_made(out)
     if args.simulate:
-        from glarelab.experiments.session import make_observer
+        from glarelab.experiments.session import check_completed_session, make_observer
         from glarelab.stimuli.stimulus_set import cached_stimulus_set, shows_images
 
         if args.participant is not None and args.participants is not None:
@@ -318,7 +318,10 @@ def _run_session(args: argparse.Namespace) -> int:
             resume = args.resume
             if resume and batch:  # a batch goes on where it stopped
                 resume = _batch_resume(out, participant, protocol.study, args.session)
-                if resume is None:
+                if resume is None:  # as it was written, or refused naming what changed
+                    check_completed_session(
+                        protocol, participant, out=out, session=args.session, pilot=args.pilot
+                    )
                     _log(f"[{number}/{len(ids)}] {participant}: completed before, kept")
                     continue
             observer = make_observer(protocol, participant, seed=args.seed, stimuli=stimuli)

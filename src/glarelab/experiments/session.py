@@ -58,6 +58,7 @@ if TYPE_CHECKING:
 __all__ = [
     "SessionAborted",
     "SimulatedFrontend",
+    "check_completed_session",
     "check_counterbalance",
     "make_engine",
     "make_observer",
@@ -391,6 +392,76 @@ def _iso(moment: datetime) -> str:
     return moment.isoformat(timespec="seconds")
 
 
+def _rows_changed(sidecar: dict, files: SessionFiles) -> str | None:
+    """What differs between the CSV's rows and those the session wrote (its sidecar's
+    ``row_sha256``, data format 0.5 on): the first row changed, or fewer rows; None if none."""
+    recorded = sidecar.get("row_sha256")
+    if not isinstance(recorded, list):
+        return None
+    rows = files.row_digests()
+    pairs = zip(rows, recorded, strict=False)  # rows after the last: a killed run's
+    edited = [n for n, (a, b) in enumerate(pairs, start=1) if a != b]
+    if edited:
+        return f"trial {edited[0]} is not the row the session wrote (changed since?)"
+    if len(rows) < len(recorded):
+        return f"it holds {len(rows)} trials, the session recorded {len(recorded)}"
+    return None
+
+
+def _check_completed_rows(
+    sidecar: dict, files: SessionFiles, advice: str = "start a new session number"
+) -> None:
+    """Refuse a completed session whose CSV lost trials it recorded."""
+    recorded, held = sidecar.get("trials"), len(files.rows)
+    if isinstance(recorded, int) and not isinstance(recorded, bool) and held < recorded:
+        missing = f"{held + 1}" if held + 1 == recorded else f"{held + 1}-{recorded}"
+        raise SessionError(
+            f"{files.csv_path.name}: trial{'s' if held + 1 < recorded else ''} {missing} "
+            f"of the {recorded} the completed session recorded missing (rows deleted, or "
+            "the file cut short?); a completed session is not resumed: put its rows back "
+            f"from a copy of the file, or keep it for the record and {advice}"
+        )
+
+
+def check_completed_session(
+    protocol: Protocol, participant: str, *, out: Path, session: int, pilot: bool = False
+) -> None:
+    """Refuse a completed session whose CSV no longer holds the rows it wrote: a batch that
+    goes on (``run --simulate --resume``) keeps it only as it was.
+
+    Parameters
+    ----------
+    protocol, participant
+        The study and the participant's id.
+    out
+        The folder of the session's files.
+    session
+        The session's number.
+    pilot
+        Whether it is a pilot session; default False.
+
+    Raises
+    ------
+    SessionError
+        Naming the CSV and its first trial missing or changed.
+    """
+    files = SessionFiles(
+        protocol, participant, session, Path(out), resume=True, started=_now(), pilot=pilot
+    )
+    try:
+        sidecar = files.read_sidecar()
+        _check_completed_rows(sidecar, files, "give another --out")
+        what = _rows_changed(sidecar, files)
+        if what is not None:
+            raise SessionError(
+                f"{files.csv_path.name}: {what}; a completed session is kept only with the "
+                "rows it wrote: put them back from a copy of the file, or keep it for the "
+                "record and give another --out"
+            )
+    finally:
+        files.close()
+
+
 def _check_resume(
     sidecar: dict,
     files: SessionFiles,
@@ -409,34 +480,16 @@ def _check_resume(
             "a new session number"
         )
     if sidecar.get("status") == "completed":
-        recorded, held = sidecar.get("trials"), len(files.rows)
-        if isinstance(recorded, int) and not isinstance(recorded, bool) and held < recorded:
-            missing = f"{held + 1}" if held + 1 == recorded else f"{held + 1}-{recorded}"
-            raise SessionError(
-                f"{files.csv_path.name}: trial{'s' if held + 1 < recorded else ''} {missing} "
-                f"of the {recorded} the completed session recorded missing (rows deleted, or "
-                "the file cut short?); a completed session is not resumed: put its rows back "
-                "from a copy of the file, or keep it for the record and start a new session "
-                "number"
-            )
+        _check_completed_rows(sidecar, files)
         raise SessionError(
             f"{files.csv_path.name} is a completed session: there is nothing to resume"
         )
-    recorded = sidecar.get("row_sha256")
-    if isinstance(recorded, list):  # data format 0.5 on: the rows are the ones it wrote
-        rows = files.row_digests()
-        pairs = zip(rows, recorded, strict=False)  # rows after the last: a killed run's
-        edited = [n for n, (a, b) in enumerate(pairs, start=1) if a != b]
-        if edited or len(rows) < len(recorded):
-            what = (
-                f"trial {edited[0]} is not the row the session wrote (changed since?)"
-                if edited
-                else f"it holds {len(rows)} trials, the session recorded {len(recorded)}"
-            )
-            raise SessionError(
-                f"{files.csv_path.name}: {what}; a session is resumed only with the rows it "
-                "wrote: keep the file for the record and start a new session number"
-            )
+    what = _rows_changed(sidecar, files)
+    if what is not None:
+        raise SessionError(
+            f"{files.csv_path.name}: {what}; a session is resumed only with the rows it "
+            "wrote: keep the file for the record and start a new session number"
+        )
     changed = []
     for what, key, now in (
         ("protocol", "protocol_sha256", protocol.sha256),
