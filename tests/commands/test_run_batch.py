@@ -106,3 +106,16 @@ def test_a_completed_session_that_lost_or_changed_rows_is_not_kept(tmp_path, cap
         assert "sim01: completed before, kept" in err
         named = "trials 3-6 of the 6" if damage == "cut" else "trial 2 is not the row"
         assert f"{second.name}: {named}" in err and "give another --out" in err, err
+
+
+def test_a_session_whose_csv_was_deleted_is_named_not_taken_for_a_new_one(tmp_path, capsys):
+    """It was refused as 'already has data; ... or --resume', with --resume given."""
+    run = ["run", "luidolt2020", "--simulate", "--seed", "5", "--participants", "2"]
+    assert main([*run, "--out", str(tmp_path)]) == 0
+    (second,) = tmp_path.glob("sim02_*.csv")
+    second.unlink()
+    capsys.readouterr()
+    assert main([*run, "--out", str(tmp_path), "--resume"]) == 2
+    err = capsys.readouterr().err
+    assert f"{second.with_suffix('.json').name} has no CSV beside it" in err, err
+    assert "or --resume to continue it" not in err

@@ -122,6 +122,13 @@ def _batch_resume(out: Path, participant: str, study: str, session: int) -> bool
 
     files = session_files(out, participant, study, session)
     if not any(p.suffix == ".csv" for p in files):
+        sidecars = [p for p in files if p.suffix == ".json"]
+        if sidecars:  # a session ran: its trials are gone, not never written
+            raise ValueError(
+                f"{sidecars[0]} has no CSV beside it (deleted or moved?): {participant}'s "
+                f"session {session} ran, and without its trials it can be neither kept nor "
+                "resumed; put the CSV back, or give another --out"
+            )
         return False
     for sidecar in (p for p in files if p.suffix == ".json"):
         with contextlib.suppress(OSError, ValueError):
