@@ -85,6 +85,9 @@ MAX_LUMINANCE_CD_M2 = 1e30
 # bytes per pixel a render needs at its peak (measured on 512²-2048² scenes, exact and planned
 # renders: 230-240 for luminance, 300 for RGB; with headroom)
 RENDER_BYTES_PER_PIXEL = {1: 260, 3: 340}
+# below this the system is not asked (psutil's reading costs 0.1 ms, a tenth of a 271² render):
+# a render of a 440² RGB image or less; a system without 64 MiB to give is out of the question
+SMALL_RENDER_BYTES = 64 * 2**20
 
 
 def check_render_memory(shape: tuple[int, ...], name: str = "luminance_cd_m2") -> None:
@@ -101,16 +104,16 @@ def check_render_memory(shape: tuple[int, ...], name: str = "luminance_cd_m2") -
     Raises
     ------
     ValueError
-        Naming the shape, the memory the render needs and the memory available.
+        Naming the shape, the memory the render needs and the memory available (a render
+        of less than :data:`SMALL_RENDER_BYTES` is not checked).
     """
     shape = tuple(int(n) for n in shape)
     if len(shape) not in (2, 3):
         return  # the image's own check names it
     channels = 3 if len(shape) == 3 else 1
-    check_memory(
-        RENDER_BYTES_PER_PIXEL[channels] * shape[0] * shape[1],
-        f"rendering {name} of shape {shape}",
-    )
+    needed = RENDER_BYTES_PER_PIXEL[channels] * shape[0] * shape[1]
+    if needed >= SMALL_RENDER_BYTES:
+        check_memory(needed, f"rendering {name} of shape {shape}")
 
 
 class GlareRenderer:
