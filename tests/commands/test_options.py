@@ -149,6 +149,14 @@ def test_render_options_that_would_be_ignored_are_refused(extra, named, scene, c
     refused(argv, capsys, tmp_path, named)
 
 
+def test_psf_luminance_with_the_achromatic_gaussian_is_refused(capsys, tmp_path):
+    """``psf --model gaussian --luminance`` wrote the same bytes as without it, silently."""
+    argv = ["psf", "--out", tmp_path / "k.png", "--model", "gaussian", "--size", "11"]
+    refused([*argv, "--luminance"], capsys, tmp_path, "--luminance: not an option of --model "
+            "gaussian, which would ignore it")  # fmt: skip
+    assert main([str(a) for a in argv]) == 0  # without it, the kernel
+
+
 def test_hybrid_flare_lines_act_and_their_seed_with_them(scene, tmp_path):
     """``render --model hybrid --flare-lines`` was refused as an option hybrid ignores; the
     hybrid model takes Spencer's flare lines (on its Vos part) and their seed."""

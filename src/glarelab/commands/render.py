@@ -423,6 +423,11 @@ def _render_images(
 
 
 def _psf(args: argparse.Namespace) -> int:
+    if args.luminance and args.model == "gaussian":
+        raise ValueError(
+            "--luminance: not an option of --model gaussian, which would ignore it (the "
+            "Gaussian is achromatic: its kernel is a luminance kernel either way)"
+        )
     sources = [args.aperture_image]
     output_file(args.out, (".png",), "kernel image", inputs=sources, force=args.force)
     # the kernel as a figure: axes in degrees and the intensity scale, PNG and PDF
@@ -793,7 +798,11 @@ def add(commands) -> None:
     psf.add_argument(
         "--size", type=odd_size, default=401, help="kernel size in pixels (odd, 3-16385)"
     )
-    psf.add_argument("--luminance", action="store_true", help="luminance only, no colour")
+    psf.add_argument(
+        "--luminance",
+        action="store_true",
+        help="luminance only, no colour (not with --model gaussian, achromatic either way)",
+    )
     psf.add_argument("--force", action="store_true", help=FORCE_HELP)
     _add_model_options(psf, default="wave")
     psf.set_defaults(run=_psf)
