@@ -146,6 +146,17 @@ def test_a_decimal_comma_is_shown_as_written_with_its_own_fix(tmp_path, row, sho
     assert "94,83)" not in str(refused.value)
 
 
+def test_empty_cells_after_the_last_column_are_ignored(tmp_path):
+    # a spreadsheet export ending each row in ',' was refused as a decimal comma, its fix
+    # ('write 0,0.42') the line as it stood
+    path = tmp_path / "r.csv"
+    path.write_text("code,luminance_cd_m2\n0,0.42,\n85,10.5, \n170,40.2,,\n255,100,\n")
+    assert read_readings(path) == [(0, 0.42), (85, 10.5), (170, 40.2), (255, 100.0)]
+    path.write_text("code,luminance_cd_m2\n0,0.42,\n85,10,5,\n")  # a decimal comma still is
+    with pytest.raises(ValueError, match=r"line 3: 4 cells for 2 columns .* decimal comma"):
+        read_readings(path)
+
+
 def test_a_calibration_made_in_python_is_admitted_only_as_its_file_would_be(tmp_path):
     """A status ``passed`` without a verification pass (or with one not its own) is refused by
     a session and a build, as it is in a file (``Calibration.load``)."""

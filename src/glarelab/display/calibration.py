@@ -788,7 +788,8 @@ def read_readings(path: str | Path) -> list[tuple[int, float]]:
     ----------
     path
         The CSV file (UTF-8, a byte-order mark allowed, or UTF-16/32 with one: "Unicode
-        text"); other columns are ignored.
+        text"); other columns are ignored, and so are empty cells after the last column (a
+        spreadsheet's trailing comma).
 
     Returns
     -------
@@ -830,6 +831,8 @@ def read_readings(path: str | Path) -> list[tuple[int, float]]:
         )
     for row in reader:
         line = reader.line_num  # the file's own line: empty lines are skipped, not counted
+        if None in row and not any(cell.strip() for cell in row[None]):
+            del row[None]  # empty cells after the last column: a spreadsheet's trailing comma
         if None in row:  # more cells than columns: a decimal comma splits a number
             cells = [row[name] or "" for name in reader.fieldnames] + list(row[None])
             written = ",".join(cells)
