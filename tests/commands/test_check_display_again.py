@@ -59,3 +59,27 @@ def test_check_display_runs_again_over_its_own_result(tmp_path, capsys, monkeypa
 @pytest.fixture(autouse=True)
 def _no_window(monkeypatch):
     monkeypatch.delenv("DISPLAY", raising=False)  # nothing here may open one
+
+
+def test_a_calibration_of_another_display_files_no_check_under_it(tmp_path, capsys, monkeypatch):
+    """``check-display yoshida2008 --calibration`` of Spencer's 8-bit display filed its check
+    next to that calibration, the display's own check pushed to ``.previous.json``."""
+    readings = ROOT / "calibrations" / "example-readings-spencer1995.csv"
+    calibration = tmp_path / "sp.json"
+    argv = ["calibrate", "fit", str(readings), "--out", str(calibration), "--bit-depth", "8"]
+    assert main(argv) == 0
+    with monkeypatch.context() as patched:  # the Spencer display's own check
+        patched.setattr(check_display_module, "check_display", _measured)
+        assert main(["check-display", "spencer1995", "--calibration", str(calibration)]) == 0
+    written = calibration.with_suffix(".display-check.json")
+    own = written.read_text()
+    capsys.readouterr()
+    argv = ["check-display", "yoshida2008", "--calibration", str(calibration), "--windowed"]
+    assert main([*argv, "--frames", "30"]) == 2
+    err = capsys.readouterr().err
+    assert "the calibration is for a 8-bit display, the protocol's display is 10-bit" in err
+    assert written.read_text() == own
+    assert not written.with_suffix(".previous.json").exists()
+    assert main(["check-display", "yoshida2008", "--out", str(tmp_path / "c.json"),
+                 "--accept-mismatch", "calibration"]) == 2  # fmt: skip
+    assert "--accept-mismatch calibration without --calibration" in capsys.readouterr().err

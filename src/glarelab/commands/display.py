@@ -27,6 +27,11 @@ def _check_display(args: argparse.Namespace) -> int:
             f"{shown} without --photometer: only the photometer's readings use it, so it would "
             "be ignored; give --photometer MODEL --port PORT, or leave it out"
         )
+    if args.accept_mismatch and args.calibration is None:
+        raise ValueError(
+            "--accept-mismatch calibration without --calibration: there is no calibration "
+            "whose mismatch could be accepted, so it would be ignored"
+        )
     protocol, monitor = apply_monitor(args, load_protocol(args.protocol))
     calibration = Calibration.load(args.calibration) if args.calibration else None
     if args.out is not None:
@@ -60,6 +65,7 @@ def _check_display(args: argparse.Namespace) -> int:
             patch_protocol=_patch_protocol(args),
             log=_log,
             monitor=monitor,
+            accept_mismatch="calibration" in (args.accept_mismatch or ()),
         )
     finally:
         if meter is not None:
@@ -77,6 +83,7 @@ def _check_display(args: argparse.Namespace) -> int:
         print(
             f"  {'ok  ' if check['passed'] else 'FAIL'} {check['name']}: protocol "
             f"{check['expected']}, display {check['actual']}"
+            + (f" (accepted: --accept-mismatch {check['name']})" if check.get("accepted") else "")
         )
     if "images" in result:
         images = result["images"]
@@ -123,7 +130,8 @@ def _check_display(args: argparse.Namespace) -> int:
     claim_output(out, "check-display")  # the next check (after a driver change) replaces it
     _log(f"wrote {write_check(result, out)}")
     record_written(Path(out).parent, [Path(out).name])  # written: a later check replaces it
-    passed = all(c["passed"] for c in result["checks"]) and result.get("images_exact", True)
+    passed = all(c["passed"] or c.get("accepted") for c in result["checks"])
+    passed = passed and result.get("images_exact", True)
     return 0 if passed else 1
 
 
@@ -159,7 +167,20 @@ def add(commands) -> None:
         help="also draw every image of this set, read the screen back and compare it with the "
         "set's codes (and time a flash of it)",
     )
-    check.add_argument("--calibration", type=Path, default=None, help="the display calibration")
+    check.add_argument(
+        "--calibration",
+        type=Path,
+        default=None,
+        help="the display calibration (of the protocol's display: its bit depth and white)",
+    )
+    check.add_argument(
+        "--accept-mismatch",
+        nargs="+",
+        choices=("calibration",),
+        metavar="CHECK",
+        help="check although the calibration's white is not the protocol display's "
+        "(calibration; recorded in the check)",
+    )
     add_monitor_options(check)
     check.add_argument(
         "--out", type=Path, default=None, help="JSON to write (default: next to --calibration)"

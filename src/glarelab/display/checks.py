@@ -40,6 +40,7 @@ __all__ = [
     "check_calibration",
     "check_screen",
     "enforce",
+    "refuse_other_display",
     "timing_rate_hz",
 ]
 
@@ -134,6 +135,68 @@ def check_calibration(protocol: Protocol, calibration) -> list[Check]:
             and abs(white - display["max_cd_m2"]) <= tolerance * display["max_cd_m2"],
         )
     ]
+
+
+def refuse_other_display(
+    protocol: Protocol,
+    calibration,
+    *,
+    accept_mismatch: bool = False,
+    codes: str,
+    encoded: str,
+    anyway: str,
+) -> Check:
+    """Refuse a calibration of another display than the protocol's, as a stimulus set's build
+    and a display check do: a bit depth not the display's always, a white not its
+    ``max_cd_m2`` (:func:`check_calibration`) unless ``accept_mismatch``.
+
+    Parameters
+    ----------
+    protocol : glarelab.protocols.Protocol
+        The protocol, with a ``[display]``.
+    calibration : glarelab.display.calibration.Calibration
+        The calibration given.
+    accept_mismatch
+        Accept a white that is not the display's (``--accept-mismatch calibration``); default
+        False.
+    codes
+        What a bit depth of another display would do, in words (``"the set's images are that
+        display's codes"``).
+    encoded
+        What a white of another display would do, in words.
+    anyway
+        How to go on anyway, in words (``"build anyway with --accept-mismatch calibration
+        (sessions check again)"``).
+
+    Returns
+    -------
+    Check
+        The ``calibration`` check, ``accepted`` when it failed and ``accept_mismatch``.
+
+    Raises
+    ------
+    ValueError
+        For a bit depth not the display's, or a white not its own unless ``accept_mismatch``,
+        naming both.
+    """
+    display = protocol["display"]
+    if calibration.bit_depth != display["bit_depth"]:
+        raise ValueError(
+            f"the calibration is for a {calibration.bit_depth}-bit display, the protocol's "
+            f"display is {display['bit_depth']}-bit: {codes}, so no mismatch of bit depth can "
+            "be accepted; calibrate the protocol's display, or set the protocol's "
+            "display.bit_depth to your display's"
+        )
+    (fits,) = check_calibration(protocol, calibration)
+    if not fits.passed and not accept_mismatch:
+        raise ValueError(
+            f"the calibration is not of the {protocol.study} protocol's display: it is "
+            f"{fits.actual}, the protocol asks for {fits.expected}; {encoded}. Calibrate the "
+            f"protocol's display, edit the protocol's [display] for yours, or {anyway}"
+        )
+    if not fits.passed:
+        return Check(fits.name, fits.expected, fits.actual, False, accepted=True)
+    return fits
 
 
 def check_screen(protocol: Protocol, facts: ScreenFacts) -> list[Check]:

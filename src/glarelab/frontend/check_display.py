@@ -49,7 +49,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from glarelab.display.checks import check_screen, timing_rate_hz
+from glarelab.display.checks import check_screen, refuse_other_display, timing_rate_hz
 from glarelab.experiments.engine import first_screen
 from glarelab.experiments.layout import row_layout
 from glarelab.experiments.loop import DROPPED_INTERVAL
@@ -125,6 +125,7 @@ def check_display(
     patch_protocol=None,
     log=print,
     monitor=None,
+    accept_mismatch: bool = False,
 ) -> dict:
     """Measure the display a protocol's sessions will run on; return the findings.
 
@@ -135,7 +136,9 @@ def check_display(
     stimuli
         A stimulus set of a flashing protocol: also measure a frame of its flash.
     calibration
-        The calibration the sessions will use (recorded; its images are encoded with it).
+        The calibration the sessions will use (recorded; its images are encoded with it): one
+        of the protocol's display, its bit depth and white
+        (:func:`glarelab.display.checks.refuse_other_display`).
     frames
         Flips per measurement; default 600 (10 s at 60 Hz).
     fullscreen
@@ -149,16 +152,38 @@ def check_display(
     monitor
         The PsychoPy Monitor Center monitor of the window (``--monitor``); default the
         protocol's display.
+    accept_mismatch
+        Check although the calibration's white is not the protocol display's (recorded in the
+        findings' ``calibration`` check); default False.
 
     Returns
     -------
     dict
         The findings, as :func:`write_check` records them.
+
+    Raises
+    ------
+    ValueError
+        Before the window opens: for a protocol without a display, ``frames`` below 10, or a
+        calibration of another display (a bit depth not the protocol's, or a white not its
+        own unless ``accept_mismatch``).
     """
     if not protocol.data.get("display"):
         raise ValueError(f"the {protocol.study} protocol describes no display to check")
     if frames < 10:
         raise ValueError(f"frames must be at least 10; got {frames!r}")
+    fits = []
+    if calibration is not None:  # the check is filed as this display's, under its calibration
+        fits = [
+            refuse_other_display(
+                protocol,
+                calibration,
+                accept_mismatch=accept_mismatch,
+                codes="the check would be recorded under that display's calibration",
+                encoded="the check would be recorded under another display's calibration",
+                anyway="check anyway with --accept-mismatch calibration (recorded in the check)",
+            )
+        ]
     device = PsychoPyFrontend(
         protocol,
         stimuli=stimuli,
@@ -171,7 +196,7 @@ def check_display(
     facts = device.open()
     try:
         window = device.window
-        checks = check_screen(protocol, facts)
+        checks = fits + check_screen(protocol, facts)
         records = [check.__dict__ for check in checks]
         period = 1.0 / timing_rate_hz(protocol, facts, records)
         log(f"flipping {frames} empty frames")

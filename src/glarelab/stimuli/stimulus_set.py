@@ -488,7 +488,7 @@ def build_stimulus_set(
     ValueError
         For a protocol without stimuli, a calibration whose bit depth is not the display's or
         (unless ``accept_mismatch``) whose white is not its ``max_cd_m2`` within its
-        ``white_tolerance`` (:func:`glarelab.display.checks.check_calibration`: the images
+        ``white_tolerance`` (:func:`glarelab.display.checks.refuse_other_display`: the images
         would be encoded for another display, most of their pixels clipped), a calibration no
         calibration file can hold (:meth:`glarelab.display.calibration.Calibration.checked`: a
         status ``passed`` without verification measurements), or an ``out`` that is a file or
@@ -502,24 +502,17 @@ def build_stimulus_set(
         )
     calibration = calibration or default_calibration(protocol)
     calibration = calibration.checked()  # one made in Python, as its file would be read
-    if calibration.bit_depth != protocol["display"]["bit_depth"]:
-        raise ValueError(
-            f"the calibration is for a {calibration.bit_depth}-bit display, the protocol's "
-            f"display is {protocol['display']['bit_depth']}-bit: the set's images are that "
-            "display's codes, so no mismatch of bit depth can be accepted; calibrate the "
-            "protocol's display, or set the protocol's display.bit_depth to your display's"
-        )
-    from glarelab.display.checks import check_calibration
+    from glarelab.display.checks import refuse_other_display
 
-    (fits,) = check_calibration(protocol, calibration)
-    if not fits.passed and not accept_mismatch:
-        raise ValueError(
-            f"the calibration is not of the {protocol.study} protocol's display: it is "
-            f"{fits.actual}, the protocol asks for {fits.expected}; the set would be encoded "
-            "for another display (luminances above its white clipped). Calibrate the "
-            "protocol's display, edit the protocol's [display] for yours, or build anyway with "
-            "--accept-mismatch calibration (sessions check again)"
-        )
+    refuse_other_display(
+        protocol,
+        calibration,
+        accept_mismatch=accept_mismatch,
+        codes="the set's images are that display's codes",
+        encoded="the set would be encoded for another display (luminances above its white "
+        "clipped)",
+        anyway="build anyway with --accept-mismatch calibration (sessions check again)",
+    )
     if (
         Path(out).is_dir()
         and not (Path(out) / LISTING).exists()
