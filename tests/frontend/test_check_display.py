@@ -47,3 +47,16 @@ def test_a_calibration_of_another_display_is_refused_before_the_window(no_window
     own = Calibration.load(CALIBRATIONS / "SYNTHETIC-yoshida2008-433cd-10bit.json")
     with pytest.raises(WindowOpened):
         check_display(yoshida, calibration=own)
+
+
+def test_a_stimulus_set_of_another_protocol_is_named_as_such(no_window):
+    """A yoshida2008 set given to spencer1995's check was refused only with 'glare_none_07.exr
+    is not in its manifest', a file the user never made."""
+    from glarelab.stimuli.stimulus_set import cached_stimulus_set
+
+    yoshida = cached_stimulus_set(load_protocol("yoshida2008"), progress=None)
+    with pytest.raises(ValueError, match=r"the stimulus set .* was built from another protocol "
+                       r"\(yoshida2008\)"):  # fmt: skip
+        check_display(load_protocol("spencer1995"), stimuli=yoshida, frames=30)
+    with pytest.raises(WindowOpened):  # its own protocol's
+        check_display(load_protocol("yoshida2008"), stimuli=yoshida, frames=30)

@@ -53,6 +53,7 @@ from glarelab.display.checks import check_screen, refuse_other_display, timing_r
 from glarelab.experiments.engine import first_screen
 from glarelab.experiments.layout import row_layout
 from glarelab.experiments.loop import DROPPED_INTERVAL
+from glarelab.experiments.session import _check_set_protocol
 from glarelab.files.atomic import write_text
 from glarelab.frontend.session import PsychoPyFrontend
 from glarelab.frontend.window import measure_frame_intervals
@@ -134,7 +135,8 @@ def check_display(
     protocol
         The protocol whose display is checked (its ``[display]`` table).
     stimuli
-        A stimulus set of a flashing protocol: also measure a frame of its flash.
+        A stimulus set of the protocol (its manifest names the protocol it was built from):
+        read its images back, and for a flashing protocol also measure a frame of its flash.
     calibration
         The calibration the sessions will use (recorded; its images are encoded with it): one
         of the protocol's display, its bit depth and white
@@ -164,14 +166,16 @@ def check_display(
     Raises
     ------
     ValueError
-        Before the window opens: for a protocol without a display, ``frames`` below 10, or a
-        calibration of another display (a bit depth not the protocol's, or a white not its
-        own unless ``accept_mismatch``).
+        Before the window opens: for a protocol without a display, ``frames`` below 10, a
+        stimulus set built from another protocol, or a calibration of another display (a bit
+        depth not the protocol's, or a white not its own unless ``accept_mismatch``).
     """
     if not protocol.data.get("display"):
         raise ValueError(f"the {protocol.study} protocol describes no display to check")
     if frames < 10:
         raise ValueError(f"frames must be at least 10; got {frames!r}")
+    if stimuli is not None:  # a set of another protocol: named as such, not by a missing image
+        _check_set_protocol(protocol, Path(stimuli))
     fits = []
     if calibration is not None:  # the check is filed as this display's, under its calibration
         fits = [
