@@ -194,6 +194,34 @@ def test_a_damaged_chunk_is_refused_not_read_as_nan(tmp_path):
         read_exr(tmp_path / "bad.exr")
 
 
+def test_a_damaged_chunk_table_is_one_line_naming_the_file(tmp_path, capfd):
+    """A tiled file whose chunk table OpenEXR cannot rebuild printed thirty lines of the
+    library's errors, then 'Invalid part index '0': file has 0 parts.', naming no file."""
+    import Imath
+
+    header = OpenEXR.Header(50, 40)
+    header["channels"] = {"Y": Imath.Channel(Imath.PixelType(Imath.PixelType.FLOAT))}
+    header["tiles"] = Imath.TileDescription(
+        16,
+        16,
+        Imath.LevelMode(Imath.LevelMode.ONE_LEVEL),
+        Imath.LevelRoundingMode(Imath.LevelRoundingMode.ROUND_DOWN),
+    )
+    tiled = OpenEXR.OutputFile(str(tmp_path / "tiled.exr"), header)
+    tiled.writePixels({"Y": np.full((40, 50), 100.0, np.float32).tobytes()})
+    tiled.close()
+    capfd.readouterr()
+    with pytest.raises(ValueError, match=r"tiled\.exr cannot be read as OpenEXR \(truncated or "
+                       r"damaged\?\): no part of it could be read; OpenEXR: .*chunk table"):  # fmt: skip
+        read_exr(tmp_path / "tiled.exr")
+    assert capfd.readouterr() == ("", "")  # the library's lines are in the message, once
+    import os
+
+    os.write(2, b"after\n")  # the descriptor is the process's own again
+    assert capfd.readouterr().err == "after\n"
+    assert read_exr(write_exr(tmp_path / "good.exr", np.ones((3, 4)))).shape == (3, 4)
+
+
 def test_a_pipe_or_a_folder_is_named_as_what_it_is_not_as_no_such_file(tmp_path):
     """A named pipe given as an EXR (a background, an input) was 'no EXR file at ...'."""
     import os

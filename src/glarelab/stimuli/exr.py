@@ -6,8 +6,13 @@ Half floats overflow at 65,504, far below the luminance of a lamp or the sun (Sp
 
 from __future__ import annotations
 
+import contextlib
 import errno
+import io
 import os
+import sys
+import tempfile
+import threading
 from pathlib import Path
 
 import numpy as np
@@ -174,6 +179,48 @@ def _check_layout(data: bytes, length: int, stream) -> bool | None:
     return False
 
 
+class _Unreadable(Exception):
+    """The OpenEXR library opened a file but read none of it."""
+
+
+_LIBRARY_OUTPUT = threading.Lock()  # file descriptor 2 is held back by one read at a time
+
+
+@contextlib.contextmanager
+def _held_library_output(said: list[str]):
+    """Hold back what the OpenEXR library prints during a read: its C core writes each error
+    to file descriptor 2, its Python binding a warning to ``sys.stdout`` (a damaged chunk
+    table gave thirty lines before the exception). A read that succeeds writes them out
+    after; one that fails leaves their lines in ``said`` for its message. File descriptor 2
+    is restored whatever happens."""
+    sys.stderr.flush()
+    with _LIBRARY_OUTPUT, tempfile.TemporaryFile() as held:
+        try:
+            saved = os.dup(2)
+        except OSError:  # no standard error to hold back
+            yield
+            return
+        printed = io.StringIO()
+        failed = True
+        try:
+            os.dup2(held.fileno(), 2)
+            with contextlib.redirect_stdout(printed):
+                yield
+            failed = False
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+            held.seek(0)
+            errors = held.read()
+            if failed:
+                text = errors.decode("utf-8", "replace") + printed.getvalue()
+                said.extend(line.strip() for line in text.splitlines() if line.strip())
+            else:
+                sys.stdout.write(printed.getvalue())
+                if errors:
+                    os.write(2, errors)
+
+
 def _check_header(path: Path, exr) -> None:
     """Refuse what reading the first part's pixels would silently drop: other parts, a pixel
     aspect ratio other than 1 (the kernel is round in pixels), a data window that is not the
@@ -220,7 +267,9 @@ def read_exr(path: str | Path) -> np.ndarray:
     Raises
     ------
     ValueError
-        If ``path`` is a named pipe or a device, or the file is not OpenEXR, is damaged,
+        If ``path`` is a named pipe or a device, or the file is not OpenEXR, is damaged
+        (in one line, with what the OpenEXR library found: the lines it prints while
+        reading are held back, and written out only after a read that succeeds),
         holds a NaN, infinite or negative pixel (a damaged chunk decodes as NaN, a damaged
         uncompressed one as any value), holds neither a ``Y``
         channel nor ``R``, ``G`` and ``B``, has more than one part, a ``pixelAspectRatio``
@@ -242,13 +291,18 @@ def read_exr(path: str | Path) -> np.ndarray:
             f"{path} cannot be read: it is cut short, ending before its last scan lines (a "
             "copy or a write that did not finish?); give the complete file"
         )
+    said: list[str] = []
     try:
-        with OpenEXR.File(str(path), separate_channels=True) as exr:
+        with _held_library_output(said), OpenEXR.File(str(path), separate_channels=True) as exr:
+            if not exr.parts:  # no part's pixels read (a damaged chunk table): said, not raised
+                raise _Unreadable("no part of it could be read")
             _check_header(path, exr)
             channels = {name: np.asarray(c.pixels) for name, c in exr.channels().items()}
-    except (RuntimeError, IndexError) as error:  # OpenEXR: the file is damaged
+    except (RuntimeError, IndexError, _Unreadable) as error:  # OpenEXR: the file is damaged
+        reason = said[0].removeprefix(f"{path}: ") if said else ""
         raise ValueError(
             f"{path} cannot be read as OpenEXR (truncated or damaged?): {error}"
+            + (f"; OpenEXR: {reason}" if reason and reason not in str(error) else "")
         ) from None
     if {"R", "G", "B"} <= channels.keys() and "Y" in channels:
         raise ValueError(
