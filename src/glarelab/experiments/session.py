@@ -26,7 +26,6 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
-import json
 import os
 import signal
 import socket
@@ -50,7 +49,12 @@ from glarelab.experiments.engine import Press, first_screen
 from glarelab.experiments.loop import SessionAborted, SessionLoop, Shown
 from glarelab.experiments.paradigms import paradigm_run
 from glarelab.protocols import DATA_FORMAT
-from glarelab.stimuli.stimulus_set import package_versions, prove_stimulus_set, shows_images
+from glarelab.stimuli.stimulus_set import (
+    check_set_protocol,
+    package_versions,
+    prove_stimulus_set,
+    shows_images,
+)
 
 if TYPE_CHECKING:
     from glarelab.protocols import Protocol
@@ -175,7 +179,7 @@ def make_observer(protocol: Protocol, participant: str, *, seed: int, stimuli):
             f"a simulated {protocol.study} observer needs the stimulus set to look at"
         )
     if stimuli is not None and not isinstance(stimuli, ObservedSet):
-        _check_set_protocol(protocol, Path(stimuli))
+        check_set_protocol(protocol, Path(stimuli))
     return observer(
         protocol,
         participant,
@@ -347,25 +351,8 @@ def _check_stimuli(protocol: Protocol, stimuli: Path | None) -> str | None:
         raise ValueError(
             f"the stimulus set {stimuli} fails its manifest: " + "; ".join(problems[:5])
         )
-    _check_set_protocol(protocol, Path(stimuli))
+    check_set_protocol(protocol, Path(stimuli))
     return hashlib.sha256((Path(stimuli) / "manifest.json").read_bytes()).hexdigest()
-
-
-def _check_set_protocol(protocol: Protocol, stimuli: Path) -> None:
-    """The stimulus set was built from this protocol (its manifest's ``protocol_sha256``)."""
-    try:
-        manifest = json.loads((stimuli / "manifest.json").read_text(encoding="utf-8"))
-        built = manifest.get("protocol_sha256") if isinstance(manifest, dict) else None
-    except (OSError, ValueError):
-        built = None  # no readable manifest: named by the set's proof
-    if built is not None and built != protocol.sha256:
-        study = manifest.get("study")
-        raise ValueError(
-            f"the stimulus set {stimuli} was built from another protocol"
-            + (f" ({study})" if isinstance(study, str) and study != protocol.study else "")
-            + f" (sha256 {str(built)[:12]}…, this one {protocol.sha256[:12]}…); "
-            "rebuild it with glarelab stimuli build"
-        )
 
 
 def _check_set_in_use(frontend, stimuli: Path | None, manifest_sha: str | None) -> None:

@@ -53,10 +53,10 @@ from glarelab.display.checks import check_screen, refuse_other_display, timing_r
 from glarelab.experiments.engine import first_screen
 from glarelab.experiments.layout import row_layout
 from glarelab.experiments.loop import DROPPED_INTERVAL
-from glarelab.experiments.session import _check_set_protocol
 from glarelab.files.atomic import write_text
 from glarelab.frontend.session import PsychoPyFrontend
 from glarelab.frontend.window import measure_frame_intervals
+from glarelab.stimuli.stimulus_set import check_set_protocol
 
 if TYPE_CHECKING:
     from glarelab.protocols import Protocol
@@ -175,7 +175,7 @@ def check_display(
     if frames < 10:
         raise ValueError(f"frames must be at least 10; got {frames!r}")
     if stimuli is not None:  # a set of another protocol: named as such, not by a missing image
-        _check_set_protocol(protocol, Path(stimuli))
+        check_set_protocol(protocol, Path(stimuli))
     fits = []
     if calibration is not None:  # the check is filed as this display's, under its calibration
         fits = [

@@ -59,6 +59,7 @@ __all__ = [
     "StimulusSet",
     "build_stimulus_set",
     "cached_stimulus_set",
+    "check_set_protocol",
     "codes_png",
     "compose",
     "default_calibration",
@@ -80,6 +81,38 @@ BACKGROUNDS = "backgrounds"
 FORMAT = "glarelab stimulus set v4"
 PNG_MAX = 65535
 PACKAGES = ("numpy", "scipy", "colour-science", "OpenEXR", "matplotlib", "pillow", "glarelab")
+
+
+def check_set_protocol(protocol: Protocol, stimuli: Path) -> None:
+    """Refuse a stimulus set built from another protocol (its manifest's ``protocol_sha256``),
+    naming the study it was built for.
+
+    Parameters
+    ----------
+    protocol
+        The protocol the set is to be used with.
+    stimuli
+        The set's folder; a set without a readable manifest is left to its proof
+        (:func:`prove_stimulus_set`).
+
+    Raises
+    ------
+    ValueError
+        Naming the set, the study and both protocols' sha256.
+    """
+    try:
+        manifest = json.loads((stimuli / "manifest.json").read_text(encoding="utf-8"))
+        built = manifest.get("protocol_sha256") if isinstance(manifest, dict) else None
+    except (OSError, ValueError):
+        built = None  # no readable manifest: named by the set's proof
+    if built is not None and built != protocol.sha256:
+        study = manifest.get("study")
+        raise ValueError(
+            f"the stimulus set {stimuli} was built from another protocol"
+            + (f" ({study})" if isinstance(study, str) and study != protocol.study else "")
+            + f" (sha256 {str(built)[:12]}…, this one {protocol.sha256[:12]}…); "
+            "rebuild it with glarelab stimuli build"
+        )
 
 
 def shows_images(protocol: Protocol) -> bool:
