@@ -589,6 +589,28 @@ def test_a_session_glarelab_ran_is_refused_not_imported_as_psychopys(simulated, 
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.parametrize("study", STUDIES)
+def test_a_reports_table_of_trials_is_refused_not_imported_as_psychopys(reports, study, tmp_path):
+    """A report's trials.csv (simulated observers' rows, with the session file of each) was
+    imported as PsychoPy's: its sessions said simulated false, and the analysis of them spoke of
+    participants where simulated observers had been run."""
+    protocol = load_protocol(study)
+    table = reports[study] / "trials.csv"
+    named = pd.read_csv(table, keep_default_na=False)["file"].unique()
+    with pytest.raises(DataError) as refused:
+        import_psychopy(protocol, [table], tmp_path / "out")
+    (problem,) = refused.value.problems
+    assert problem.startswith(f"{table}: a glarelab report's table of trials")
+    assert named[0] in problem
+    assert "give glarelab analyse the session files it names" in problem
+    moved = tmp_path / "moved.csv"  # out of its report folder, its columns reordered
+    frame = pd.read_csv(table, dtype=str, keep_default_na=False)
+    frame[list(reversed(frame.columns))].to_csv(moved, index=False)
+    with pytest.raises(DataError, match=r"a glarelab report's table of trials"):
+        import_psychopy(protocol, [moved], tmp_path / "out")
+    assert not (tmp_path / "out").exists()
+
+
 def test_a_file_and_its_resave_are_not_two_participants(simulated, tmp_path):
     """A participant's file and its spreadsheet re-save (participant 001 became 1) imported
     as two participants with the same trials: 11 participants in the report where 10 ran."""

@@ -322,7 +322,9 @@ def import_psychopy(
         stays the one the experiment recorded), two columns mapped to one, a participant id
         that cannot name a file, a session file that exists already, a last column with no
         name that holds data, a study recorded on a trial row that is not the protocol's,
-        trials equal to another session's of the import or of ``out`` (times included).
+        trials equal to another session's of the import or of ``out`` (times included), a
+        session glarelab ran (its sidecar beside it, or exactly a session file's columns) and
+        a glarelab report's ``trials.csv`` (a session file's columns and ``file``).
     ValueError
         If ``out`` is a file, not a folder (nothing is read or written).
 
@@ -379,6 +381,19 @@ def import_psychopy(
                 f"{source}: a glarelab session file's columns, exactly (its sidecar missing?): "
                 "PsychoPy's files add columns of their own (thisRow.t, notes, a loop's thisN); "
                 "a session glarelab ran is analysed with its sidecar, never imported"
+            )
+            continue
+        if "file" in header and sorted(n for n in header if n != "file") == sorted(
+            c.name for c in schema
+        ):  # a report's trials.csv: the session columns and the session file of each row
+            at = header.index("file")
+            named = list(dict.fromkeys(c[at] for _, c in records if len(c) > at and c[at]))
+            shown = ", ".join(named[:3]) + (f" … ({len(named)} files)" if len(named) > 3 else "")
+            problems.append(
+                f"{source}: a glarelab report's table of trials (the session files' columns and "
+                f"'file', the session file each row was analysed from: {shown or 'none'}): "
+                "give glarelab analyse the session files it names, with their sidecars; "
+                "import-psychopy takes the CSV PsychoPy's ExperimentHandler wrote"
             )
             continue
         if len(problems) > found or not header:
