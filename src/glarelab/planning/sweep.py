@@ -187,7 +187,9 @@ def prepare(
         For a bad key or value, or points that do not validate.
     ValueError
         For a protocol that shows no images without ``simulate``, ``simulate`` of 1, a point
-        whose observers cannot be simulated, or an ``out`` holding a sweep of other inputs.
+        whose observers cannot be simulated, or an ``out`` holding a sweep of other inputs
+        (naming what differs: the study, each key whose values differ, the same points in
+        another order, the seed or the simulation).
     """
     from glarelab.experiments.paradigms import paradigm_run
     from glarelab.stimuli.stimulus_set import shows_images
@@ -224,6 +226,8 @@ def prepare(
         "points": [{"point": p.index, "protocol_sha256": p.protocol.sha256} for p in points],
         "simulate": simulate,
         "seed": seed,
+        "study": first.study,
+        "grid": [[s.key, [_shown(v) for v in s.values]] for s in settings],
     }
     path = Path(out) / "sweep.json"
     if path.is_file():
@@ -231,7 +235,8 @@ def prepare(
             before = json.loads(path.read_text(encoding="utf-8"))
         except (json.JSONDecodeError, UnicodeDecodeError):
             before = None
-        if before != config:
+        named = {k: v for k, v in config.items() if k not in ("study", "grid")}
+        if before not in (config, named):  # named: written before the grid was recorded
             raise ValueError(
                 f"{out} holds a sweep of {_other_inputs(before, config)}: give another --out, "
                 "or delete it to start again"
@@ -240,20 +245,58 @@ def prepare(
 
 
 def _other_inputs(before, config: dict) -> str:
-    """What differs between an earlier sweep's ``sweep.json`` and this one's: the seed and
-    the simulation named with their values (a re-run with another --seed was only "another
-    grid, protocol or simulation")."""
+    """What differs between an earlier sweep's ``sweep.json`` and this one's: the grid or
+    study (:func:`_other_points`), the seed and the simulation named with their values."""
     if not isinstance(before, dict):
         return "other inputs (its sweep.json cannot be read)"
     parts = []
     if before.get("points") != config["points"]:
-        parts.append("another grid or protocol")
+        parts.append(_other_points(before, config))
     for key in ("simulate", "seed"):
         if before.get(key) != config[key]:
             parts.append(f"{key} {before.get(key)!r} then, {config[key]!r} now")
     if before.get("format") != config["format"]:
         parts.append(f"another format ({before.get('format')!r})")
     return f"other inputs ({'; '.join(parts) or 'sweep.json edited'})"
+
+
+def _shown(value) -> str:
+    """A grid value as ``--set`` takes it: ``0.2``, ``photopic``, ``[220, 4000]``."""
+    return value if isinstance(value, str) else json.dumps(value, default=str)
+
+
+def _other_points(before: dict, config: dict) -> str:
+    """How an earlier sweep's points differ from this one's: the protocol's study, each key
+    whose values differ (``study.seed = 1,2 then, 1,3 now``), or the same points in another
+    order (resumed only in the earlier order: points are numbered in it)."""
+    grid = before.get("grid")
+    if not isinstance(grid, list) or not all(
+        isinstance(g, list) and len(g) == 2 and isinstance(g[1], list) for g in grid
+    ):  # a sweep.json written before the grid was recorded in it
+        return "another grid or protocol"
+    parts = []
+    if before.get("study") != config["study"]:
+        parts.append(f"protocol {before.get('study')} then, {config['study']} now")
+    then, now = {k: v for k, v in grid}, dict(config["grid"])
+    if list(then) != list(now) and set(then) == set(now):
+        parts.append(f"keys in the order {', '.join(then)} then, {', '.join(now)} now")
+    for key in [*now, *(k for k in then if k not in now)]:
+        was = ",".join(map(str, then[key])) if key in then else "(not varied)"
+        is_ = ",".join(now[key]) if key in now else "(not varied)"
+        if was != is_:
+            parts.append(f"{key} = {was} then, {is_} now")
+    try:
+        shas = sorted(p["protocol_sha256"] for p in before["points"])
+    except (KeyError, TypeError):
+        shas = None
+    if shas == sorted(p["protocol_sha256"] for p in config["points"]):
+        return (
+            f"the same points in another order, {'; '.join(parts)}: give them in the earlier "
+            "order to resume it"
+        )
+    if not parts:
+        parts.append(f"the {config['study']} protocol edited (its points' sha256 differ)")
+    return "; ".join(parts)
 
 
 def sweep(
