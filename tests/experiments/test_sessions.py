@@ -14,6 +14,7 @@ from PIL import Image
 from glarelab.cli import main
 from glarelab.display.calibration import Calibration
 from glarelab.experiments.data import read_rows
+from glarelab.experiments.session import check_counterbalance
 from glarelab.protocols import columns, load_protocol
 from glarelab.stimuli.stimulus_set import default_calibration
 
@@ -86,6 +87,26 @@ def test_simulated_participants_write_schema_valid_csvs(tmp_path, study, trials)
     if study == "spencer1995":  # half the participants see the context first
         orders = [json.loads(p.with_suffix(".json").read_text())["counterbalance"] for p in csvs]
         assert sorted(orders) == [0] * 5 + [1] * 5
+
+
+@pytest.mark.parametrize(
+    ("study", "said"),
+    [
+        ("luidolt2020", "its categories are always asked in the protocol's order"),
+        ("night2026", "its conditions come in an order randomised per participant, the "
+                      "categories of each in the protocol's order"),
+        ("yoshida2008", "its references are shown in an order randomised per participant"),
+    ],
+)  # fmt: skip
+def test_a_refused_block_order_says_how_the_trials_are_ordered(study, said):
+    """Luidolt's --counterbalance was refused as "its order is randomised per participant",
+    where its six categories are always asked in the same order."""
+    with pytest.raises(ValueError) as refused:
+        check_counterbalance(load_protocol(study), 1)
+    assert str(refused.value) == (
+        f"--counterbalance 1: the {study} protocol's paradigm ({load_protocol(study).paradigm}) "
+        f"has no blocks to order ({said}); give no --counterbalance"
+    )
 
 
 def test_existing_data_is_never_overwritten(tmp_path):

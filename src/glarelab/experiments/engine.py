@@ -107,6 +107,24 @@ class Engine(ABC):
     """Whether the engine orders its blocks by ``counterbalance`` (otherwise a given
     ``counterbalance`` is refused: there is nothing for it to order)."""
 
+    @classmethod
+    def ordered(cls, protocol) -> str | None:
+        """How the engine orders a session's trials, said when a ``counterbalance`` is refused
+        (:func:`glarelab.experiments.session.check_counterbalance`).
+
+        Parameters
+        ----------
+        protocol : glarelab.protocols.Protocol
+            The study's protocol, of the engine's paradigm.
+
+        Returns
+        -------
+        str or None
+            A clause such as "its categories are always asked in the protocol's order"; None
+            (this default): not said.
+        """
+        return None
+
     @property
     @abstractmethod
     def done(self) -> bool:

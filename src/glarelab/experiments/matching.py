@@ -51,7 +51,8 @@ class MatchingEngine(Engine):
     session
         The session's number, from 1; default 1.
     counterbalance
-        Not used: the trial order is randomised per participant. Default None.
+        Not used: the references come in the protocol's order or one randomised per
+        participant (``trials.order``). Default None.
     refresh_hz
         Not used: nothing is timed. Default 60, Hz.
     """
@@ -102,6 +103,24 @@ class MatchingEngine(Engine):
         self.index = 0
         self.phase = "instructions"
         self._new_trial()
+
+    @classmethod
+    def ordered(cls, protocol: Protocol) -> str:
+        """The references' order: the protocol's, or randomised per participant.
+
+        Parameters
+        ----------
+        protocol : glarelab.protocols.Protocol
+            The study's protocol (its ``trials.order``).
+
+        Returns
+        -------
+        str
+            The clause :func:`glarelab.experiments.session.check_counterbalance` says.
+        """
+        if protocol["trials"]["order"] == "fixed":
+            return "its references are shown in the protocol's order"
+        return "its references are shown in an order randomised per participant"
 
     # --- state ------------------------------------------------------------------------
 

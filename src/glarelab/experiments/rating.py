@@ -42,7 +42,8 @@ class RatingEngine(Engine):
     session
         The session's number, from 1; default 1.
     counterbalance
-        Not used: the conditions' order is randomised per participant. Default None.
+        Not used: the categories are asked in the protocol's order, the conditions' (if any)
+        in an order randomised per participant. Default None.
     refresh_hz
         The display's refresh rate, Hz, > 0: how many refreshes each frame of the scene
         stays on (:func:`glarelab.stimuli.night.night_plan`). Default 60.
@@ -78,6 +79,28 @@ class RatingEngine(Engine):
         self.phase = "instructions"
         self.rating: int | None = None
         self.typed = ""
+
+    @classmethod
+    def ordered(cls, protocol: Protocol) -> str:
+        """The categories' order, always the protocol's; the conditions' (if any), randomised
+        per participant.
+
+        Parameters
+        ----------
+        protocol : glarelab.protocols.Protocol
+            The study's protocol (its ``conditions``).
+
+        Returns
+        -------
+        str
+            The clause :func:`glarelab.experiments.session.check_counterbalance` says.
+        """
+        if protocol.data.get("conditions"):
+            return (
+                "its conditions come in an order randomised per participant, the categories "
+                "of each in the protocol's order"
+            )
+        return "its categories are always asked in the protocol's order"
 
     @property
     def done(self) -> bool:

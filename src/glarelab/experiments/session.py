@@ -88,7 +88,8 @@ def check_counterbalance(protocol: Protocol, counterbalance: int | None) -> None
     ------
     ValueError
         For a ``counterbalance`` given to a paradigm whose engine does not order blocks by it
-        (:attr:`glarelab.experiments.engine.Engine.counterbalanced`).
+        (:attr:`glarelab.experiments.engine.Engine.counterbalanced`), saying how it orders
+        the trials (:meth:`glarelab.experiments.engine.Engine.ordered`).
 
     Examples
     --------
@@ -96,11 +97,13 @@ def check_counterbalance(protocol: Protocol, counterbalance: int | None) -> None
     >>> check_counterbalance(load_protocol("spencer1995"), 1)
     >>> check_counterbalance(load_protocol("luidolt2020"), None)
     """
-    if counterbalance is not None and not paradigm_run(protocol).engine.counterbalanced:
+    engine = paradigm_run(protocol).engine
+    if counterbalance is not None and not engine.counterbalanced:
+        order = engine.ordered(protocol)
         raise ValueError(
             f"--counterbalance {counterbalance}: the {protocol.study} protocol's paradigm "
-            f"({protocol.paradigm}) has no blocks to order (its order is randomised per "
-            "participant); give no --counterbalance"
+            f"({protocol.paradigm}) has no blocks to order{f' ({order})' if order else ''}; "
+            "give no --counterbalance"
         )
 
 
