@@ -31,6 +31,7 @@ __all__ = [
     "PROTOCOL_HELP",
     "HelpFormatter",
     "Parser",
+    "add_accept_calibration",
     "check_memory",
     "claim_output",
     "count",
@@ -685,3 +686,23 @@ def apply_monitor(args: argparse.Namespace, protocol):
         f"{facts['distance_cm']} cm"
     )
     return protocol, monitor
+
+
+def add_accept_calibration(parser: argparse.ArgumentParser, help_text: str) -> None:
+    """Add ``--accept-mismatch calibration`` (``stimuli build``, ``check-display``): go on
+    although the calibration's white is not the protocol display's, recorded.
+
+    Parameters
+    ----------
+    parser
+        The command's parser.
+    help_text
+        The option's help: what the command does anyway.
+    """
+    parser.add_argument(
+        "--accept-mismatch",
+        nargs="+",
+        choices=("calibration",),
+        metavar="CHECK",
+        help=help_text,
+    )

@@ -10,7 +10,15 @@ from glarelab.display.photometer import PHOTOMETERS
 from glarelab.files.folders import record_written
 from glarelab.protocols import load_protocol
 
-from .common import add_monitor_options, apply_monitor, claim_output, count, number, output_file
+from .common import (
+    add_accept_calibration,
+    add_monitor_options,
+    apply_monitor,
+    claim_output,
+    count,
+    number,
+    output_file,
+)
 from .common import log as _log
 
 # the options that act only through the photometer, with their defaults
@@ -173,13 +181,10 @@ def add(commands) -> None:
         default=None,
         help="the display calibration (of the protocol's display: its bit depth and white)",
     )
-    check.add_argument(
-        "--accept-mismatch",
-        nargs="+",
-        choices=("calibration",),
-        metavar="CHECK",
-        help="check although the calibration's white is not the protocol display's "
-        "(calibration; recorded in the check)",
+    add_accept_calibration(
+        check,
+        "check although the calibration's white is not the protocol display's (calibration; "
+        "recorded in the check)",
     )
     add_monitor_options(check)
     check.add_argument(

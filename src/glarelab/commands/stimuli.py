@@ -11,7 +11,7 @@ from glarelab.display.calibration import Calibration
 from glarelab.protocols import load_protocol
 from glarelab.stimuli.stimulus_set import build_stimulus_set, prove_stimulus_set
 
-from .common import PROTOCOL_HELP, add_monitor_options, apply_monitor
+from .common import PROTOCOL_HELP, add_accept_calibration, add_monitor_options, apply_monitor
 from .common import log as _log
 
 
@@ -97,13 +97,10 @@ def add(commands) -> None:
         help="folder for the set: new, empty, or an earlier set (replaced whole)",
     )
     build.add_argument("--calibration", type=Path, default=None, help="display calibration JSON")
-    build.add_argument(
-        "--accept-mismatch",
-        nargs="+",
-        choices=("calibration",),
-        metavar="CHECK",
-        help="build although the calibration's white is not the protocol display's "
-        "(calibration); sessions check again",
+    add_accept_calibration(
+        build,
+        "build although the calibration's white is not the protocol display's (calibration); "
+        "sessions check again",
     )
     add_monitor_options(build, gamma=True)
     build.set_defaults(run=_stimuli_build)
