@@ -224,3 +224,14 @@ def test_the_formatters_refuse_a_statistic_that_is_not_a_finite_number(call, pat
     """'F(2, 18) = nan', 'F(2, 18) = -3.00' and 't(10) = inf' were printed."""
     with pytest.raises(ValueError, match=pattern):
         call()
+
+
+@pytest.mark.parametrize("digits", [0, -1, 2.0, True, "3", None])
+def test_significant_digits_that_are_no_count_are_refused(digits):
+    with pytest.raises(ValueError, match=r"^digits must be a whole number >= 1"):
+        apa.significant(1.0, digits)
+
+
+@pytest.mark.parametrize("value", [-0.004, -0.0, -0.00499, 0.004])
+def test_a_unit_interval_that_rounds_to_zero_has_no_sign(value):
+    assert apa.unit_interval(value) == ".00"

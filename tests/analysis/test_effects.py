@@ -335,3 +335,15 @@ def test_rank_biserial_and_hodges_lehmann_refuse_a_mu_that_is_not_a_number(mu):
     for f in (rank_biserial, hodges_lehmann):
         with pytest.raises(ValueError, match=f"{f.__name__}: mu must be a finite number"):
             f([1.0, 2.0, 3.0], mu=mu)
+
+
+def test_paired_effect_without_its_pairs_is_refused_not_a_one_sample_effect():
+    # paired_effect(a, None) returned the one-sample d of a against 0
+    with pytest.raises(TypeError, match=r"^paired_effect: b must be the values paired with a"):
+        paired_effect([1.2, 2.3, 3.1, 4.8], None)
+
+
+@pytest.mark.parametrize("confidence", ["0.9", True, None, [0.9]])
+def test_a_confidence_that_is_no_number_is_refused_naming_it(confidence):
+    with pytest.raises(ValueError, match=r"^eta2_partial_ci: confidence must lie strictly"):
+        eta2_partial_ci(5.0, 1, 10, confidence=confidence)

@@ -22,6 +22,7 @@ import numpy as np
 import pandas as pd
 
 from glarelab.analysis.stats import GG_BELOW, Correction, correction
+from glarelab.files.values import is_whole
 
 __all__ = [
     "anova_effect",
@@ -423,6 +424,8 @@ def unit_interval(value: float, decimals: int = 2) -> str:
     ('.69', '.422', '1.00', '-.05')
     >>> unit_interval(0.996), unit_interval(0.99996)  # never rounded up to 1
     ('.996', '> .999')
+    >>> unit_interval(-0.004), unit_interval(-0.0)  # no negative zero
+    ('.00', '.00')
     """
     if not math.isfinite(value):
         return ""
@@ -431,6 +434,8 @@ def unit_interval(value: float, decimals: int = 2) -> str:
             decimals += 1
         if abs(round(value, decimals)) >= 1:
             return "> .999" if value > 0 else "< -.999"
+    if round(value, decimals) == 0:  # -0.004 and -0.0: ".00", not a negative zero
+        value = 0.0
     text = f"{value:.{decimals}f}"
     return text.replace("0.", ".", 1) if abs(round(value, decimals)) < 1 else text
 
@@ -732,11 +737,18 @@ def significant(value: float, digits: int) -> str:
     str
         The text.
 
+    Raises
+    ------
+    ValueError
+        For ``digits`` that are not a whole number >= 1.
+
     Examples
     --------
     >>> significant(0.0254, 3), significant(0.01, 3), significant(12345.6, 3)
     ('0.0254', '0.01', '12,300')
     """
+    if not is_whole(digits) or digits < 1:
+        raise ValueError(f"digits must be a whole number >= 1; got {digits!r}")
     if value is None or (isinstance(value, float) and math.isnan(value)):
         return ""
     text = np.format_float_positional(

@@ -65,7 +65,7 @@ CONFIDENCE = 0.95
 
 
 def _confidence(level: float, caller: str) -> float:
-    if not 0 < level < 1:
+    if not (is_real(level) and 0 < level < 1):  # a string or a bool is no level
         raise ValueError(f"{caller}: confidence must lie strictly between 0 and 1; got {level!r}")
     return float(level)
 
@@ -195,6 +195,8 @@ def paired_effect(
     confidence = _confidence(confidence, "paired_effect")
     if not isinstance(dz_interval, bool | np.bool_):  # 'no' is true to `if`
         raise ValueError(f"paired_effect: dz_interval must be True or False; got {dz_interval!r}")
+    if b is None:  # _pairs would take a alone: a one-sample effect, not the pairs' one
+        raise TypeError("paired_effect: b must be the values paired with a; got None")
     d = _pairs(a, b, "paired_effect")
     n = d.size
     if n < 2:

@@ -44,7 +44,10 @@ def r_cell(value) -> str:
     -------
     str
         ``TRUE``/``FALSE`` for a boolean, the shortest round-trip text for a float, ``""`` for a
-        missing value, the text of anything else.
+        missing value, the text of anything else. A text ``NA`` is read back by R as missing,
+        quoted or not (its ``na.strings``): no participant's id may be ``NA``
+        (:data:`glarelab.experiments.data.MISSING_IDS`); a comment typed as ``NA`` is read as no
+        comment.
 
     Examples
     --------

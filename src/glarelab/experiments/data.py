@@ -73,6 +73,11 @@ class WriteFault(RuntimeError):
     went away): every trial recorded before is on disk, and the sidecar says why it ended."""
 
 
+# ids R's read.csv (its na.strings, "NA") or pandas' read_csv (its default na_values that
+# an id may spell) read back as a missing value
+MISSING_IDS = frozenset({"NA", "NaN", "nan", "null", "NULL", "None"})
+
+
 def check_session_id(participant: str, session: int) -> None:
     """Refuse a participant id that is not file-name safe, or a session number below 1.
 
@@ -80,7 +85,8 @@ def check_session_id(participant: str, session: int) -> None:
     ----------
     participant
         The participant's id: 1-64 letters, digits, ``_`` or ``-``, starting with a letter or
-        digit (it names the session's files).
+        digit (it names the session's files), not one R or pandas reads as missing
+        (:data:`MISSING_IDS`).
     session
         The session's number, an integer >= 1.
 
@@ -93,6 +99,11 @@ def check_session_id(participant: str, session: int) -> None:
         raise SessionError(
             "participant must be 1-64 letters, digits, '_' or '-', starting with a letter "
             f"or digit; got {participant!r}"
+        )
+    if participant in MISSING_IDS:
+        raise SessionError(
+            f"participant {participant!r} reads back as a missing value in R (read.csv) and "
+            "pandas, so the participant would drop out of the analysis there; give another id"
         )
     if isinstance(session, bool) or not isinstance(session, int) or session < 1:
         raise SessionError(f"session must be an integer >= 1; got {session!r}")
