@@ -714,3 +714,19 @@ def test_row_digest_names_cells_that_are_not_a_row(cells):
 
     with pytest.raises(TypeError, match=r"^row_digest: cells must be the row's cells"):
         row_digest(cells)
+
+
+@pytest.mark.parametrize(
+    ("option", "value", "named"),
+    [("resolution_px", (1920.5, 1080), "resolution_px"), ("resolution_px", ("1920", "1080"),
+     "resolution_px"), ("resolution_px", (True, True), "resolution_px"),
+     ("resolution_px", (1920,), "resolution_px"), ("width_cm", "53", "width_cm"),
+     ("distance_cm", float("nan"), "distance_cm"), ("width_cm", 0.0, "width_cm")],
+)  # fmt: skip
+def test_a_monitor_of_values_no_display_has_is_refused_naming_them(option, value, named):
+    # 1920.5 px was cut to 1920 and '53' cm read as 53, without a word; (True, True) was
+    # refused as a disk of 20.48°/px
+    from glarelab.protocols.core import with_monitor
+
+    with pytest.raises(ValueError, match=rf"^--monitor m: {named} must be"):
+        with_monitor(load_protocol("yoshida2008"), name="m", **{option: value})

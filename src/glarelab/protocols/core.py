@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import os
 import re
 import tomllib
@@ -22,6 +23,7 @@ from types import ModuleType
 from typing import Any
 
 from glarelab.files.inputs import as_path, read_input_text
+from glarelab.files.values import is_real, is_whole
 from glarelab.protocols import matching, rating, staircase
 from glarelab.protocols.common import display_pixel_deg
 from glarelab.protocols.keys import Key, ProtocolError, Schema, Tables, validate
@@ -517,8 +519,21 @@ def with_monitor(
         raise ValueError(f"--monitor {name}: the {protocol.study} protocol has no display")
     data = json.loads(json.dumps(protocol.data))  # a deep copy of the validated tables
     display = data["display"]
-    if resolution_px is not None:
+    if resolution_px is not None:  # not int(): 1920.5 was cut to 1920, '1920' read
+        if (
+            isinstance(resolution_px, str | bytes)
+            or not hasattr(resolution_px, "__len__")  # a tuple, list or array
+            or len(resolution_px) != 2
+            or not all(is_whole(v) and v >= 1 for v in resolution_px)
+        ):
+            raise ValueError(
+                f"--monitor {name}: resolution_px must be two whole numbers of pixels >= 1 "
+                f"(width, height); got {resolution_px!r}"
+            )
         display["resolution_px"] = [int(v) for v in resolution_px]
+    for option, value in (("width_cm", width_cm), ("distance_cm", distance_cm)):
+        if value is not None and not (is_real(value) and math.isfinite(value) and value > 0):
+            raise ValueError(f"--monitor {name}: {option} must be a number > 0; got {value!r}")
     if width_cm is not None:
         display["pixel_pitch_mm"] = float(width_cm) * 10.0 / display["resolution_px"][0]
         display["diagonal_in"] = None
