@@ -97,3 +97,10 @@ def test_a_masked_luminance_is_refused_not_its_masked_value_used():
 def test_no_luminances_give_no_diameters(shape):
     # as acuity_cpd and the other night functions do (it was refused, naming shape (1, 0))
     assert eye.pupil_diameter_mm(np.zeros(shape)).shape == shape
+
+
+def test_ragged_rows_and_an_empty_array_of_bools_are_named_for_what_they_are():
+    with pytest.raises(ValueError, match=r"^field_luminance_cd_m2 must be an array of numbers"):
+        eye.regime([[1.0], [1.0, 2.0]])  # numpy's own 'setting an array element' message
+    with pytest.raises(ValueError, match=r"luminances, numbers in cd/m²; got an empty array of"):
+        eye.pupil_diameter_mm(np.array([], bool))  # was 'no pixel; got shape (1, 0)'

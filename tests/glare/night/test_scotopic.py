@@ -258,3 +258,10 @@ def test_the_night_colours_of_valid_rgb_are_unchanged():
     assert scotopic.desaturate_Spencer1995(np.array([1.0, 0.0, 0.5])).tolist() == [1.0, 0.7, 0.85]
     shifted = scotopic.scotopic_shift_Luidolt2020(np.full(3, 0.2), 0.0)
     assert_allclose(shifted, [0.20821284, 0.192349, 0.25183838], rtol=0, atol=5e-9)
+
+
+@pytest.mark.parametrize("adapted", [-1.0, float("nan"), "0.1", True])
+def test_a_bad_adaptation_luminance_is_named_as_given(adapted):
+    # the messages named luminance_cd_m2, rod_sensitivity's argument
+    with pytest.raises(ValueError, match=r"^adaptation_luminance_cd_m2 must"):
+        scotopic.scotopic_colour(np.array([0.2, 0.2, 0.2]), adaptation_luminance_cd_m2=adapted)

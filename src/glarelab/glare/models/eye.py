@@ -84,7 +84,12 @@ def pupil_diameter_mm(field_luminance_cd_m2: float | np.ndarray) -> float | np.n
         check_image("field_luminance_cd_m2", field_luminance_cd_m2)
     plain = plain_array("field_luminance_cd_m2", field_luminance_cd_m2)
     real = np.issubdtype(plain.dtype, np.integer) or np.issubdtype(plain.dtype, np.floating)
-    if plain.size == 0 and real:  # no luminances, no diameters: as acuity_cpd and the others
+    if plain.size == 0:  # no luminances, no diameters: as acuity_cpd and the others
+        if not real:
+            raise ValueError(
+                "field_luminance_cd_m2 must hold luminances, numbers in cd/m²; got an empty "
+                f"array of {plain.dtype}"
+            )
         return np.empty(plain.shape)
     array = check_image(  # its own dtype checked (strings and bools refused), then float;
         "field_luminance_cd_m2",  # any shape, as one row (a stack of frames too)
@@ -128,10 +133,11 @@ def regime(field_luminance_cd_m2: float) -> Regime:
     >>> regime(0.001), regime(1.0), regime(100.0)
     ('scotopic', 'mesopic', 'photopic')
     """
-    if np.ndim(field_luminance_cd_m2) != 0:
+    plain = plain_array("field_luminance_cd_m2", field_luminance_cd_m2)  # ragged rows named
+    if plain.ndim != 0:
         raise ValueError(
             "field_luminance_cd_m2 must be a scalar luminance in cd/m², "
-            f"got an array of shape {np.shape(field_luminance_cd_m2)}"
+            f"got an array of shape {plain.shape}"
         )
     value = float(check_image("field_luminance_cd_m2", [[field_luminance_cd_m2]])[0, 0])
     if value < SCOTOPIC_UPPER_CD_M2:

@@ -46,7 +46,7 @@ import numpy as np
 from colour.recovery import MSDS_BASIS_FUNCTIONS_sRGB_MALLETT2019
 
 from glarelab.glare._colour import colour
-from glarelab.glare._validation import check_choice, check_in_range, check_real
+from glarelab.glare._validation import check_choice, check_in_range, check_luminances, check_real
 from glarelab.glare.night.adaptation import rod_sensitivity
 
 __all__ = [
@@ -365,6 +365,8 @@ def scotopic_shift_Luidolt2020(
     y_row = np.asarray(colour.RGB_COLOURSPACES[colourspace].matrix_RGB_to_XYZ[1], float)
     y_row = y_row / y_row.sum()
     tint_rgb = tint_rgb / float(tint_rgb @ y_row)
+    # checked under its own name (rod_sensitivity's would name luminance_cd_m2)
+    check_luminances("adaptation_luminance_cd_m2", adaptation_luminance_cd_m2)
     sigma = np.asarray(rod_sensitivity(adaptation_luminance_cd_m2), dtype=float)
     try:
         sigma = np.broadcast_to(sigma, array.shape[:-1])[..., None]
