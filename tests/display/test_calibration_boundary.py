@@ -314,3 +314,12 @@ def test_a_gog_fit_of_a_step_shows_no_warning_of_the_optimisers_trials():
         warnings.simplefilter("error")
         fitted = fit_calibration(readings, bit_depth=10, method="gog")
     assert np.all(np.isfinite(fitted.lut))
+
+
+def test_a_whole_float_code_in_a_list_is_refused_with_how_to_give_it():
+    # refused as 'must be a whole number; got 32.0', while an array of floats was taken
+    readings = [(0, 0.2), (32.0, 5.0), (64, 10.0), (128, 50.0), (255, 200.0)]
+    with pytest.raises(ValueError, match=r"got 32\.0 .* \(a float: write 32; an \(N, 2\) array"):
+        fit_calibration(readings, bit_depth=8)
+    as_array = fit_calibration(np.array(readings), bit_depth=8)
+    assert as_array.readings[1] == (32, 5.0)

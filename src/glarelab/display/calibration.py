@@ -33,6 +33,7 @@ import hashlib
 import io
 import itertools
 import json
+import math
 import warnings
 from dataclasses import dataclass, field, replace
 from functools import cached_property
@@ -737,9 +738,16 @@ def _check_readings(
             )
         code, value = reading
         if not is_whole(code):
+            whole_float = is_real(code) and math.isfinite(code) and float(code).is_integer()
             raise ValueError(
                 f"{source}: a reading's code must be a whole number (a drive level); got "
                 f"{code!r} in {reading!r}"
+                + (
+                    f" (a float: write {int(code)}; an (N, 2) array of floats is read as "
+                    "whole codes)"
+                    if whole_float
+                    else ""
+                )
             )
         if not is_real(value):
             raise ValueError(
