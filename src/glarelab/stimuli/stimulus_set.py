@@ -49,6 +49,7 @@ from glarelab.files.folders import (
     staging_folder,
 )
 from glarelab.files.inputs import as_path
+from glarelab.glare.models.cache import cache_root
 from glarelab.protocols import Protocol, ProtocolError
 from glarelab.stimuli.exr import read_exr, write_exr
 from glarelab.stimuli.kernels import check_kernels
@@ -847,14 +848,10 @@ def verify_stimulus_set(folder: str | Path) -> list[str]:
     return problems
 
 
-PROVEN_ENV = "GLARELAB_CACHE"
-
-
 def _proven_folder() -> Path:
     """Where the digests of manifests proven by a rebuild (or written by a build) on this
-    machine are kept: ``$GLARELAB_CACHE/proven-sets`` or ``~/.cache/glarelab/proven-sets``."""
-    root = os.environ.get(PROVEN_ENV) or Path.home() / ".cache" / "glarelab"
-    return Path(root) / "proven-sets"
+    machine are kept: ``proven-sets`` in :func:`glarelab.glare.models.cache.cache_root`."""
+    return cache_root() / "proven-sets"
 
 
 def _proof_key(manifest_sha256: str) -> Path:
@@ -1120,7 +1117,8 @@ def cached_stimulus_set(
     protocol
         A validated protocol that shows images.
     root
-        The cache folder; default ``None``: ``$GLARELAB_CACHE``, else ``~/.cache/glarelab``.
+        The cache folder; default ``None``: :func:`glarelab.glare.models.cache.cache_root`
+        (``$GLARELAB_CACHE``, else the user's cache folder).
         The set is ``ROOT/sets/STUDY-SHA``, named by the protocol's hash.
     progress
         ``progress(done, total, what)`` while a set is built; default :func:`progress_bar`.
@@ -1131,7 +1129,7 @@ def cached_stimulus_set(
         The set's folder, verified.
     """
     if root is None:
-        root = Path(os.environ.get("GLARELAB_CACHE") or Path.home() / ".cache" / "glarelab")
+        root = cache_root()
     folder = Path(root) / "sets" / f"{protocol.study}-{protocol.sha256[:16]}"
     if (folder / MANIFEST).is_file() and not verify_stimulus_set(folder):
         return folder

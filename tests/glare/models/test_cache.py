@@ -429,3 +429,13 @@ def test_a_bool_a_fraction_of_a_byte_or_less_than_a_mib_is_refused(tmp_path, mon
             KernelCache(tmp_path)
     monkeypatch.setenv("GLARELAB_CACHE_MAX_MB", "1.5")
     assert KernelCache(tmp_path).max_bytes == 1572864
+
+
+def test_a_cache_folder_given_with_a_tilde_is_the_home_folders(monkeypatch, tmp_path):
+    # GLARELAB_CACHE='~/cache' (quoted, the shell leaves it) made a folder named '~'
+    from glarelab.glare.models.cache import cache_root
+
+    monkeypatch.setenv("HOME", str(tmp_path))
+    monkeypatch.setenv("GLARELAB_CACHE", "~/lab-cache")
+    assert cache_root() == tmp_path / "lab-cache"
+    assert KernelCache().directory == tmp_path / "lab-cache" / "kernels"

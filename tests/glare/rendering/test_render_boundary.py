@@ -291,3 +291,12 @@ def test_a_luminance_beyond_what_the_arithmetic_holds_is_refused(value, options)
             done = add_glare(image, MODEL, pixel_deg=0.05, composition=composition,
                              precision=precision)  # fmt: skip
             assert np.isfinite(done).all()
+
+
+@pytest.mark.parametrize("cache", [3, {}, "", 1.5])
+def test_a_cache_argument_is_checked_when_nothing_is_spread_too(cache, tmp_path, monkeypatch):
+    # an image below l_dmax returned a copy, cache=3 or {} never looked at
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(ValueError, match=r"^cache must"):
+        add_glare(np.ones((4, 4)), "gaussian", pixel_deg=0.05, cache=cache)
+    assert list(tmp_path.iterdir()) == []

@@ -64,6 +64,8 @@ __all__ = [
     "NO_CACHE_ENV",
     "KernelCache",
     "array_sha256",
+    "cache_root",
+    "check_cache",
     "default_cache",
     "resolve_cache",
 ]
@@ -166,6 +168,25 @@ def _literal(description: dict) -> str | None:
     return text if same is True else None
 
 
+def cache_root() -> Path:
+    """The folder of glarelab's caches (kernels, the observers' stimulus sets, the proofs of
+    sets): ``$GLARELAB_CACHE``, a leading ``~`` expanded (a quoted ``'~/cache'`` made a
+    folder named ``~``), else the user's cache folder (``platformdirs.user_cache_dir``,
+    which honours ``XDG_CACHE_HOME``).
+
+    Returns
+    -------
+    pathlib.Path
+        The folder (made when first written to).
+    """
+    root = os.environ.get(CACHE_DIR_ENV)
+    if root:
+        return Path(root).expanduser()
+    import platformdirs
+
+    return Path(platformdirs.user_cache_dir("glarelab"))
+
+
 class KernelCache:
     """A folder of digitised kernels, keyed by everything that decides them.
 
@@ -199,17 +220,13 @@ class KernelCache:
 
     def __init__(self, directory: str | os.PathLike | None = None, *, max_bytes=None) -> None:
         if directory is None:
-            root = os.environ.get(CACHE_DIR_ENV)
-            if root and Path(root).exists() and not Path(root).is_dir():
+            root = cache_root()
+            if root.exists() and not root.is_dir():
                 raise ValueError(
                     f"{CACHE_DIR_ENV}={root}: not a folder; set it to a folder (the kernel cache "
                     "and the observers' stimulus sets are kept there), or unset it"
                 )
-            if not root:
-                import platformdirs
-
-                root = platformdirs.user_cache_dir("glarelab")
-            directory = Path(root) / "kernels"
+            directory = root / "kernels"
         self.directory = Path(directory)
         if max_bytes is None:
             megabytes = os.environ.get(MAX_MB_ENV)
@@ -634,14 +651,35 @@ def resolve_cache(cache) -> KernelCache | None:
     ValueError
         For anything else.
     """
+    check_cache(cache)
     if cache is None or cache is True:
         return default_cache()
     if cache is False:
         return None
     if isinstance(cache, KernelCache):
         return cache
+    return KernelCache(cache)
+
+
+def check_cache(cache: object) -> None:
+    """Refuse what :func:`resolve_cache` cannot take, without making or reading a cache (a
+    render with nothing to spread checks its argument too).
+
+    Parameters
+    ----------
+    cache
+        What was given.
+
+    Raises
+    ------
+    ValueError
+        For anything but ``True``, ``None``, ``False``, a :class:`KernelCache` or a folder's
+        name.
+    """
+    if cache is None or cache is True or cache is False or isinstance(cache, KernelCache):
+        return
     if isinstance(cache, str | os.PathLike):
         if "\0" in os.fspath(cache) or not str(os.fspath(cache)).strip():  # no folder's name
             raise ValueError(f"cache must name a folder; got {cache!r}")
-        return KernelCache(cache)
+        return
     raise ValueError(f"cache must be True, False, None, a KernelCache or a folder; got {cache!r}")

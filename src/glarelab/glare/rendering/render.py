@@ -20,6 +20,7 @@ from glarelab.glare._validation import (
     check_positive,
 )
 from glarelab.glare.models import GlareModel, _resolve
+from glarelab.glare.models.cache import check_cache
 from glarelab.glare.models.digitise import Kernel, check_kernel_shape
 from glarelab.glare.rendering.compose import check_composition
 from glarelab.glare.rendering.display import display_lut
@@ -237,6 +238,7 @@ def add_glare(
         if kernel_shape is not None:
             check_kernel_shape(kernel_shape, name="kernel_shape")
         display_lut(display, l_dmax)
+        check_cache(cache)
         _resolve(model)
         return image.copy()
     renderer = GlareRenderer(
