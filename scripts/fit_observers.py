@@ -781,10 +781,10 @@ def report(
 
 
 def figures(out: Path, summary: dict, yoshida: dict) -> None:
-    from glarelab.analysis.figures import plt, png
+    from glarelab.analysis.figures import png, subplots
 
     labels = {m: yoshida["labels"][m] for m in METHODS}
-    figure, axis = plt.subplots(figsize=(5.5, 3.8))
+    figure, axis = subplots(figsize=(5.5, 3.8))
     for method, marker in zip(METHODS, "os", strict=True):
         axis.errorbar(
             np.arange(1, 7),
@@ -802,7 +802,7 @@ def figures(out: Path, summary: dict, yoshida: dict) -> None:
     axis.legend(fontsize=7)
     _write(out / "figure5_simulated_boost.png", png(figure))
 
-    figure, axes = plt.subplots(1, 5, figsize=(13, 2.8))
+    figure, axes = subplots(1, 5, figsize=(13, 2.8))
     for axis, key in zip(axes, YOSHIDA_F, strict=True):
         q = summary["F"][key]
         axis.errorbar(
@@ -821,7 +821,7 @@ def figures(out: Path, summary: dict, yoshida: dict) -> None:
     _write(out / "yoshida_f_values.png", png(figure))
 
     s = summary["spencer"]
-    figure, axis = plt.subplots(figsize=(5.5, 3.8))
+    figure, axis = subplots(figsize=(5.5, 3.8))
     for c, context in enumerate(s["contexts"]):
         axis.errorbar(
             range(1, len(s["strengths"]) + 1),

@@ -34,7 +34,9 @@ import pandas as pd
 
 ROOT = Path(__file__).resolve().parents[1]
 
-from glarelab.analysis.figures import plt, png  # noqa: E402
+from matplotlib.lines import Line2D  # noqa: E402
+
+from glarelab.analysis.figures import png, subplots  # noqa: E402
 from glarelab.analysis.load import load_sessions  # noqa: E402
 from glarelab.analysis.paradigms import PARADIGMS  # noqa: E402
 from glarelab.observers.looking import ObservedSet  # noqa: E402
@@ -201,7 +203,7 @@ def markdown(summary: pd.DataFrame, seeds: int, participants: int, pattern: floa
 
 def figure(frame: pd.DataFrame, summary: pd.DataFrame):
     keys = [k for k in STATISTICS if not k.startswith("t_")]
-    fig, axes = plt.subplots(1, len(keys), figsize=(2.2 * len(keys), 3.8))
+    fig, axes = subplots(1, len(keys), figsize=(2.2 * len(keys), 3.8))
     rng = np.random.default_rng(0)  # jitter of the points only
     for axis, key in zip(axes, keys, strict=True):
         row = summary.set_index("statistic").loc[key]
@@ -225,10 +227,10 @@ def figure(frame: pd.DataFrame, summary: pd.DataFrame):
         axis.set_title(f"{title}, {row['df']}", fontsize=8)
     axes[0].set_ylabel("F (log scale)")
     handles = [
-        plt.Line2D([], [], ls="", marker="o", color="C3", label="a study, p < .05"),
-        plt.Line2D([], [], ls="", marker="o", color="C0", label="a study, n.s."),
-        plt.Line2D([], [], ls="", marker="s", color="k", label="median, 90 % interval"),
-        plt.Line2D([], [], ls="", marker="*", color="gold", mec="k", ms=11, label="Yoshida §5"),
+        Line2D([], [], ls="", marker="o", color="C3", label="a study, p < .05"),
+        Line2D([], [], ls="", marker="o", color="C0", label="a study, n.s."),
+        Line2D([], [], ls="", marker="s", color="k", label="median, 90 % interval"),
+        Line2D([], [], ls="", marker="*", color="gold", mec="k", ms=11, label="Yoshida §5"),
     ]
     fig.legend(
         handles=handles, loc="lower center", ncol=4, fontsize=8, frameon=False, borderaxespad=0.2
