@@ -110,7 +110,8 @@ def test_a_sidecar_without_row_digests_is_refused_unless_of_an_older_format(simu
     with pytest.raises(DataError, match="no row_sha256, which every session of data format"):
         load_sessions(protocol, [target])
     target.with_suffix(".json").write_text(json.dumps(sidecar | {"data_format": "0.4"}))
-    assert len(load_sessions(protocol, [target]).trials) == len(rows(source))
+    with pytest.warns(UserWarning, match=r"1 session\(s\) of a data format before 0\.5"):
+        assert len(load_sessions(protocol, [target]).trials) == len(rows(source))
     # a sidecar made to look older keeps its digests: they are checked all the same
     frame = rows(source)
     frame.at[0, "rating"] = "5" if frame.at[0, "rating"] != "5" else "3"
@@ -182,3 +183,25 @@ def test_any_cell_changed_to_another_columns_value_is_named(
     with pytest.raises(DataError) as refused:
         load_sessions(load_protocol(study), [target])
     assert any(re.search(rf"line {row + 2}\b", p) for p in refused.value.problems), refused.value
+
+
+def test_a_session_of_an_older_format_edited_since_is_analysed_with_a_word(simulated, tmp_path):
+    """A sidecar made to look like data format 0.4 (its digests removed) let an edited rating
+    through without a word: now analyse warns, and the report lists its rows as unchecked."""
+    from glarelab.analysis.report import write_report
+
+    protocol = load_protocol("luidolt2020")
+    sources = csvs(simulated, "luidolt2020")
+    frame = rows(sources[0])
+    frame.at[0, "rating"] = "1" if frame.at[0, "rating"] != "1" else "2"
+    (tmp_path / "data").mkdir()
+    edited = copy(sources[0], tmp_path / "data", frame, data_format="0.4")
+    sidecar = json.loads(edited.with_suffix(".json").read_text())
+    del sidecar["row_sha256"]
+    edited.with_suffix(".json").write_text(json.dumps(sidecar))
+    others = [copy(s, tmp_path / "data") for s in sources[1:]]
+    with pytest.warns(UserWarning, match=rf"an edit of their rows .*: {edited.name}"):
+        report = write_report(protocol, [edited, *others], tmp_path / "report")
+    page = report.read_text()
+    assert "Sessions whose rows are not checked" in page and edited.name in page
+    assert ",," not in page

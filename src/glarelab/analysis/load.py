@@ -42,6 +42,7 @@ import io
 import json
 import math
 import re
+import warnings
 from collections.abc import Sequence
 from datetime import datetime
 from os import PathLike
@@ -1074,6 +1075,8 @@ def _session(path: Path, rows: list[dict], sidecar: dict | None) -> dict:
         "sidecar": sidecar is not None,
         "simulated": None if sidecar is None else bool(sidecar.get("simulated")),
         "pilot": pilot,
+        # data format 0.4 and before record no row digests: an edit of a row goes unseen
+        "rows_checked": isinstance((sidecar or {}).get("row_sha256"), list),
     }
 
 
@@ -1328,6 +1331,17 @@ def load_sessions(
                 "excluded (--exclude-incomplete): nothing is left to analyse; "
                 + "; ".join(excluded.values())
             ]
+        )
+    unchecked = [
+        Path(s["file"]).name for s in sessions if s["sidecar"] and not s["rows_checked"]
+        and s["file"] in files
+    ]  # fmt: skip
+    if unchecked:
+        warnings.warn(
+            f"{len(unchecked)} session(s) of a data format before {ROW_DIGESTS_SINCE} record "
+            "no row digests, so an edit of their rows since the session cannot be seen; the "
+            f"report lists them: {', '.join(unchecked)}",
+            stacklevel=2,
         )
     return Dataset(
         study=protocol.study,

@@ -65,6 +65,7 @@ from glarelab.analysis.load import load_sessions
 from glarelab.analysis.methods import provenance, session_rows
 from glarelab.analysis.paradigms import paradigm_analysis
 from glarelab.files.folders import check_replaceable, replace_folder, staging_folder
+from glarelab.protocols import ROW_DIGESTS_SINCE
 
 if TYPE_CHECKING:
     from glarelab.protocols import Protocol
@@ -368,7 +369,7 @@ def _html(
     note = f" ({training} of them training trials, not analysed)" if training else ""
     who = {
         True: "simulated observers",
-        "mixed": "participants, some of them simulated observers (see Sessions),",
+        "mixed": "participants, some of them simulated observers (see Sessions)",
     }.get(origin.get("simulated"), "participants")
     version = (origin.get("packages") or {}).get("glarelab", "")
     parts = [
@@ -429,6 +430,21 @@ def _html(
             else "left out of the analysis (--include-pilots analyses them)"
         )
         parts.append(f"<h3>Pilot sessions, {how}</h3><ul>{items}</ul>")
+    unchecked = [
+        s for s in dataset.sessions
+        if s.get("sidecar") and not s.get("rows_checked", True) and s["file"] in dataset.files
+    ]  # fmt: skip
+    if unchecked:
+        items = "".join(
+            f"<li><code>{html.escape(Path(s['file']).name)}</code>: participant "
+            f"{html.escape(str(s['participant']))}, {s['trials']} trials</li>"
+            for s in unchecked
+        )
+        parts.append(
+            "<h3>Sessions whose rows are not checked</h3><p>Their sidecars are of a data "
+            f"format before {ROW_DIGESTS_SINCE}, which records no digest of each row: an edit "
+            f"of their rows since the session cannot be seen.</p><ul>{items}</ul>"
+        )
     if dataset.flags:
         items = "".join(f"<li>{html.escape(flag)}</li>" for flag in dataset.flags)
         listed = f"<ul>{items}</ul>"
