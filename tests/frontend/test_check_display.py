@@ -60,3 +60,19 @@ def test_a_stimulus_set_of_another_protocol_is_named_as_such(no_window):
         check_display(load_protocol("spencer1995"), stimuli=yoshida, frames=30)
     with pytest.raises(WindowOpened):  # its own protocol's
         check_display(load_protocol("yoshida2008"), stimuli=yoshida, frames=30)
+
+
+def test_a_file_swapped_in_the_set_is_named_as_the_sets_not_the_screens(no_window, tmp_path):
+    """One PNG copied over another was read back as '0.667 % exact, worst difference 201
+    codes', a fault of the screen."""
+    import shutil
+
+    from glarelab.stimuli.stimulus_set import cached_stimulus_set
+
+    protocol = load_protocol("yoshida2008")
+    copy = tmp_path / "set"
+    shutil.copytree(cached_stimulus_set(protocol, progress=None), copy)
+    pngs = sorted(copy.glob("*_10bit.png"))
+    shutil.copy(pngs[0], pngs[1])
+    with pytest.raises(ValueError, match=rf"fails its manifest: .*{pngs[1].name}"):
+        check_display(protocol, stimuli=copy, frames=30)

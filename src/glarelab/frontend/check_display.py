@@ -56,7 +56,7 @@ from glarelab.experiments.loop import DROPPED_INTERVAL
 from glarelab.files.atomic import write_text
 from glarelab.frontend.session import PsychoPyFrontend
 from glarelab.frontend.window import measure_frame_intervals
-from glarelab.stimuli.stimulus_set import check_set_protocol
+from glarelab.stimuli.stimulus_set import check_set_protocol, prove_stimulus_set
 
 if TYPE_CHECKING:
     from glarelab.protocols import Protocol
@@ -176,6 +176,13 @@ def check_display(
         raise ValueError(f"frames must be at least 10; got {frames!r}")
     if stimuli is not None:  # a set of another protocol: named as such, not by a missing image
         check_set_protocol(protocol, Path(stimuli))
+        # a file swapped or edited in the set: named as the set's, not read back as the
+        # screen's fault (a swapped PNG gave "0.667 % exact, worst difference 201 codes")
+        problems = prove_stimulus_set(Path(stimuli))
+        if problems:
+            raise ValueError(
+                f"the stimulus set {stimuli} fails its manifest: " + "; ".join(problems[:5])
+            )
     fits = []
     if calibration is not None:  # the check is filed as this display's, under its calibration
         fits = [

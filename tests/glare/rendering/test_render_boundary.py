@@ -300,3 +300,9 @@ def test_a_cache_argument_is_checked_when_nothing_is_spread_too(cache, tmp_path,
     with pytest.raises(ValueError, match=r"^cache must"):
         add_glare(np.ones((4, 4)), "gaussian", pixel_deg=0.05, cache=cache)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_float32_luminance_just_beyond_the_limit_is_shown_beyond_it():
+    # float32's 1e30 is 1.00000002e+30: shown as 1e+30, "beyond the 1e+30" read as a contradiction
+    with pytest.raises(ValueError, match=r"reaches 1\.00000002e\+30 cd/m², beyond the 1e\+30"):
+        add_glare(np.full((4, 4), 1e30, np.float32), "gaussian", pixel_deg=0.05, cache=False)

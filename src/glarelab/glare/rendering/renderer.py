@@ -547,8 +547,12 @@ class GlareRenderer:
                 f"got {image.shape[:2]}"
             )
         if image.size and float(image.max()) > MAX_LUMINANCE_CD_M2:
+            peak = float(image.max())
+            shown = f"{peak:.3g}"
+            if float(shown) <= MAX_LUMINANCE_CD_M2:  # float32's 1e30 is 1.00000002e+30
+                shown = f"{peak:.9g}"
             raise ValueError(
-                f"luminance_cd_m2 reaches {float(image.max()):.3g} cd/m², beyond the "
+                f"luminance_cd_m2 reaches {shown} cd/m², beyond the "
                 f"{MAX_LUMINANCE_CD_M2:g} cd/m² glarelab renders (the sun is 1.6e9)"
             )
         return image, Scene.of(image, self.l_dmax, self.method, self.dtype)
