@@ -205,3 +205,10 @@ def test_a_live_scene_whose_bank_the_model_cannot_make_is_refused(tmp_path, caps
                  "--participant", "P1", "--out", str(data)]) == 2  # fmt: skip
     assert "scene.glare_model (the bank's 8 mm pupil)" in capsys.readouterr().err
     assert not data.exists()
+
+
+def test_keys_of_neither_a_paradigm_nor_a_protocol_names_the_paradigms(capsys):
+    # 'matchin' was refused listing the shipped protocols only, though a paradigm is allowed
+    assert main(["protocol", "keys", "matchin"]) == 2
+    err = capsys.readouterr().err
+    assert "no protocol 'matchin'" in err and "or a paradigm: matching, staircase, rating" in err

@@ -19,7 +19,12 @@ def _protocol_keys(args: argparse.Namespace) -> int:
             f"({', '.join(PARADIGMS)}) or a protocol"
         )
     if paradigm not in PARADIGMS:  # a protocol: its paradigm (a refusal prints no table)
-        paradigm = load_protocol(paradigm).paradigm
+        try:
+            paradigm = load_protocol(paradigm).paradigm
+        except FileNotFoundError as error:  # neither: the paradigms named too
+            raise FileNotFoundError(
+                f"{str(error).rstrip('.')}; or a paradigm: {', '.join(PARADIGMS)}"
+            ) from None
     print("| key | unit | default | allowed | meaning |\n| --- | --- | --- | --- | --- |")
     for row in describe_schema(paradigm):
         print("| " + " | ".join(row) + " |")
