@@ -179,3 +179,13 @@ def test_a_gamma_display_refuses_what_cannot_be_a_display(options, pattern):
     negative gammas tables of NaN and inf, 0 bits one code, 40 bits an 8 TiB allocation."""
     with pytest.raises(ValueError, match=pattern):
         Display.gamma(100.0, **options)
+
+
+def test_a_masked_table_is_refused_not_used_without_its_mask():
+    """Display(masked) kept the masked codes as luminances (its white the masked 200 cd/m²)."""
+    lut = np.linspace(0.1, 200.0, 256)
+    masked = np.ma.array(lut, mask=np.r_[np.zeros(200, bool), np.ones(56, bool)])
+    with pytest.raises(ValueError, match="lut must be a plain array, not a masked array"):
+        Display(masked)
+    with pytest.raises(ValueError, match="display must be a plain array, not a masked array"):
+        CodeTable(masked)

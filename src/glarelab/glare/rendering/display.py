@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from glarelab.files.values import plain_array
 from glarelab.glare._validation import check_in_range, check_positive, check_positive_int
 from glarelab.glare.rendering.compose import METHODS, compose, over_channels
 
@@ -53,7 +54,8 @@ class Display:
     ----------
     lut
         The display's code → luminance table, cd/m², increasing, one entry per code, at
-        least two, finite and >= 0 (else ValueError).
+        least two, finite and >= 0, a plain array (not a masked one) or a list (else
+        ValueError).
     """
 
     lut: np.ndarray
@@ -62,6 +64,7 @@ class Display:
         # None would be display_lut's reference display (its white 1 cd/m² here): not a table
         if self.lut is None or isinstance(self.lut, str | bytes) or hasattr(self.lut, "lut"):
             raise ValueError(f"lut must be a code → cd/m² table; got {self.lut!r:.80}")
+        plain_array("lut", self.lut)  # a masked table's mask would be dropped
         try:
             lut = display_lut(self.lut, 1.0)
             if lut[0] < 0:
@@ -146,7 +149,7 @@ def display_lut(display, l_dmax_cd_m2: float) -> np.ndarray:
     ------
     ValueError
         For anything but a 1-D, finite, increasing table of numbers with at least two codes
-        (a display's name, a ragged list).
+        (a display's name, a ragged list, a masked array).
     """
     if display is None:
         l_dmax = check_positive("l_dmax_cd_m2", l_dmax_cd_m2, unit="cd/m²")
@@ -155,8 +158,11 @@ def display_lut(display, l_dmax_cd_m2: float) -> np.ndarray:
         "a Display, a calibration, or a 1-D increasing code → cd/m² table of >= 2 finite "
         "luminances"
     )
+    lut = getattr(display, "lut", display)
+    if isinstance(lut, np.ma.MaskedArray):  # its masked codes would be used as luminances
+        plain_array("display", lut)
     try:
-        lut = np.asarray(getattr(display, "lut", display))
+        lut = np.asarray(lut)
     except ValueError:  # a ragged list
         raise ValueError(f"display must be {allowed}; got {display!r}") from None
     if lut.dtype.kind not in "iuf":
