@@ -252,6 +252,21 @@ def test_any_registered_glare_model_with_its_parameters():
         parse_protocol(data)
 
 
+def test_a_wave_models_counts_are_bounded_in_a_protocol_as_in_the_model():
+    data = raw("yoshida2008")
+    data["glare"]["methods"].append(
+        {
+            "name": "wave",
+            "model": "wave",
+            "parameters": {"particles": 10**9},
+            "labels": ["w1", "w2", "w3", "w4", "w5", "w6"],
+            "levels_cd_m2": [220.0, 1000.0, 2000.0, 3000.0, 4000.0, 5000.0],
+        }
+    )
+    with pytest.raises(ProtocolError, match=r"particles must be an integer from 0 to 100000"):
+        parse_protocol(data)
+
+
 @pytest.mark.parametrize("value", [3, "x"])
 def test_a_halo_spectrum_that_is_no_table_is_refused_at_load(value):
     """vos halo_spectrum = 3 passed protocol check, and the build died with an

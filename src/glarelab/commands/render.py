@@ -16,6 +16,7 @@ from glarelab.files.atomic import atomic_path, write_text
 from glarelab.files.folders import record_written
 from glarelab.files.inputs import input_file
 from glarelab.glare._validation import check_image
+from glarelab.glare.models.wave import MAX_PARTICLES
 from glarelab.glare.rendering.renderer import RENDER_BYTES_PER_PIXEL
 from glarelab.stimuli.apertures import load_aperture_image
 from glarelab.stimuli.exr import read_exr, write_exr
@@ -193,7 +194,6 @@ def _made_model(args: argparse.Namespace) -> glare.GlareModel:
 
 MODEL_CHOICES = ("gaussian", "vos", "wave", "hybrid")
 MIN_PIXEL_DEG = 1e-5  # 0.04 arcsec, far below the eye's resolution; smaller is a typo
-MAX_PARTICLES = 100_000  # 100 times Luidolt's 1000 (Fig. 5.6); each is drawn into the pupil
 
 
 def _add_model_options(parser: argparse.ArgumentParser, default: str = "vos") -> None:

@@ -107,8 +107,13 @@ def check_in_range(
     return number
 
 
-def check_positive_int(name: str, value: int, *, minimum: int = 1) -> int:
-    """Return ``value`` if it is an integer >= ``minimum``, else raise ``ValueError``."""
+def check_positive_int(
+    name: str, value: int, *, minimum: int = 1, maximum: int | None = None
+) -> int:
+    """Return ``value`` if it is an integer >= ``minimum`` (and <= ``maximum`` when given),
+    else raise ``ValueError``."""
+    if maximum is not None and (not is_whole(value) or not minimum <= value <= maximum):
+        raise ValueError(f"{name} must be an integer from {minimum} to {maximum}, got {value!r}")
     if not is_whole(value) or value < minimum:
         raise ValueError(f"{name} must be an integer >= {minimum}, got {value!r}")
     return int(value)

@@ -195,7 +195,11 @@ def test_user_obstacle_image_is_used():
         ({"pupil_mm": 0.0}, r"pupil_mm must be in \[1, 10\] mm"),
         ({"pupil_mm": 12.0}, "pupil_mm"),
         ({"spectral": "fast"}, "spectral must be one of"),
-        ({"particles": -5}, "particles must be an integer >= 0"),
+        ({"particles": -5}, "particles must be an integer from 0 to 100000, got -5"),
+        # a billion particles asked for 7.45 GiB; a million lashes rendered for over an hour
+        ({"particles": 10**9}, "particles must be an integer from 0 to 100000, got 1000000000"),
+        ({"eyelash_count": 10**6}, "eyelash_count must be an integer from 0 to 1000, got 1000000"),
+        ({"eyelash_count": 1.5}, "eyelash_count must be an integer from 0 to 1000, got 1.5"),
         ({"cross_screen": "star"}, "cross_screen must be one of"),
         ({"field_luminance_cd_m2": -1.0}, "field_luminance_cd_m2 must be >= 0"),
         ({"obstacle_image": np.full((3, 3), 2.0), "obstacle_spacing_mm": 0.1}, r"\[0, 1\]"),

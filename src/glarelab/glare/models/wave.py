@@ -115,6 +115,8 @@ __all__ = [
     "IMAGE_TRANSFER_PARTS",
     "KAKIMOTO2004_WAVELENGTHS_NM",
     "LUIDOLT2020_PUPIL_RANGE_MM",
+    "MAX_EYELASHES",
+    "MAX_PARTICLES",
     "MIN_APERTURE_SAMPLES",
     "OBSTACLE_SAMPLES",
     "PIXEL_INTEGRATION_METHODS",
@@ -143,6 +145,12 @@ PSF_PERIOD_KERNELS = 3.0  # the PSF's period at the shortest wavelength, in kern
 PSF_PERIOD_KERNELS_FAST = 2.0  # the same for aperture_grid="fast" (the grid before issue 33)
 APERTURE_GRIDS = ("exact", "fast")
 OBSTACLE_SAMPLES = 12  # samples across a particle or an eyelash
+# Each lash or particle is drawn into the aperture one by one (about 5 ms a lash): a million
+# lashes ran for over an hour, a billion particles asked for 7.45 GiB. Particles: 100 times
+# Luidolt's 1000 (§5.2.4, Fig. 5.6). Lashes: an upper lid has about 90-160; 1000 lashes of
+# 0.09 mm cover the 12 mm lash line (133 side by side) more than seven times, and cost ~5 s.
+MAX_PARTICLES = 100_000
+MAX_EYELASHES = 1000
 # (subsamples, smoothing) of a diaphragm, alone or behind the lid, a 4-point screen or an
 # obstacle image, and of a round pupil behind these: its streaks' aliases 0.65 % of them, not
 # 9.7 %
@@ -248,9 +256,10 @@ class WaveOpticsGlare(GlareModel):
         Include the upper eyelid margin and eyelashes (Kakimoto §3.2); default True.
     eyelash_count, eyelash_thickness_mm, eyelash_curvature
         The procedural lashes (:func:`glarelab.glare.models.apertures.aperture_eyelashes`);
-        defaults 45, 0.09 mm, 0.35.
+        defaults 45, 0.09 mm, 0.35; at most :data:`MAX_EYELASHES` (1000) lashes.
     particles
-        Number of lens/cornea particles (Luidolt §5.2.4 default 1000); 0 for none.
+        Number of lens/cornea particles (Luidolt §5.2.4 default 1000); 0 for none; at most
+        :data:`MAX_PARTICLES` (100000).
     particle_size_mm
         Particle diameter; default 0.042 mm (Luidolt §5.2.4).
     fresnel
@@ -405,10 +414,10 @@ class WaveOpticsGlare(GlareModel):
         if self.pupil_mm is not None:
             check_in_range("pupil_mm", self.pupil_mm, 1.0, 10.0, unit="mm")
         pupil_diameter_mm(self.field_luminance_cd_m2)  # validates the luminance
-        check_positive_int("eyelash_count", self.eyelash_count, minimum=0)
+        check_positive_int("eyelash_count", self.eyelash_count, minimum=0, maximum=MAX_EYELASHES)
         check_positive("eyelash_thickness_mm", self.eyelash_thickness_mm, unit="mm")
         check_in_range("eyelash_curvature", self.eyelash_curvature, 0.0, 2.0)
-        check_positive_int("particles", self.particles, minimum=0)
+        check_positive_int("particles", self.particles, minimum=0, maximum=MAX_PARTICLES)
         check_positive("particle_size_mm", self.particle_size_mm, unit="mm")
         check_positive("fresnel_distance_mm", self.fresnel_distance_mm, unit="mm")
         check_choice("spectral", self.spectral, SPECTRAL_METHODS)
