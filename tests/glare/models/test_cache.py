@@ -133,6 +133,62 @@ def test_a_corrupt_entry_is_detected_removed_and_rebuilt(tmp_path, damage):
     assert cache.get(key) is not None
 
 
+def _rewritten(data: bytes, header=None, values=None) -> bytes:
+    """The entry with its header or values changed and its CRC-32 made to match again."""
+    import json
+    import struct
+    import zlib
+
+    magic = len(b"GLAREKERNEL\x00")
+    (length,) = struct.unpack_from("<Q", data, magic)
+    start = magic + 8
+    stored = json.loads(data[start : start + length])
+    array = np.frombuffer(data[start + length : -4], "<f8").copy()
+    if header is not None:
+        header(stored)
+    if values is not None:
+        values(array)
+    text = json.dumps(stored).encode()
+    text += b" " * (-(start + len(text)) % 8)
+    body = data[:magic] + struct.pack("<Q", len(text)) + text + array.tobytes()
+    return body + struct.pack("<I", zlib.crc32(body))
+
+
+@pytest.mark.parametrize(
+    "edit",
+    [
+        {"values": lambda v: v.__setitem__(slice(None), np.nan)},  # rendered a NaN image
+        {"values": lambda v: v.__setitem__(3, np.inf)},
+        {"values": lambda v: v.__setitem__(0, -1e-3)},
+        {"values": lambda v: v.__imul__(2.0)},  # summed to 2 with its energy outside
+        {"header": lambda h: h.__setitem__("shape", [1, -1])},  # a 1 × 441 kernel
+        {"header": lambda h: h.__setitem__("energy_outside", -5.0)},
+        {"header": lambda h: h.__setitem__("energy_outside", float("nan"))},
+    ],
+    ids=["nan", "inf", "negative", "doubled", "shape", "outside-negative", "outside-nan"],
+)
+def test_an_entry_whose_crc_matches_but_no_kernel_could_be_is_rebuilt(tmp_path, edit):
+    cache = KernelCache(tmp_path)
+    model = glare.VosGlare()
+    made = cache.kernel(model, 0.05, SHAPE)
+    (path,) = _entries(cache)
+    path.write_bytes(_rewritten(path.read_bytes(), **edit))
+    again = cache.kernel(model, 0.05, SHAPE)
+    _same(again, made)
+    assert cache.get(cache.key(model, 0.05, SHAPE, colour=False), SHAPE) is not None
+
+
+@pytest.mark.parametrize("colour", [False, True])
+def test_a_kernel_admitting_a_share_of_the_light_is_served_from_the_cache(tmp_path, colour):
+    """Under Luidolt's pupil convention a wave or hybrid kernel sums to less than 1 with its
+    energy outside: the cache serves it, not digitising it again each time."""
+    wave = glare.WaveOpticsGlare(pupil_convention="Luidolt2020", eyelashes=False, particles=0)
+    cache = KernelCache(tmp_path)
+    for model in (wave, glare.HybridGlare(wave=wave)):
+        made = cache.kernel(model, 0.05, SHAPE, colour=colour)
+        _same(cache.kernel(model, 0.05, SHAPE, colour=colour, build=pytest.fail), made)
+
+
 def test_an_entry_under_another_name_is_not_served(tmp_path):
     """A file copied or renamed onto another key's name holds the wrong kernel: refused."""
     cache = KernelCache(tmp_path)

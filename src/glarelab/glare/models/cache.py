@@ -18,7 +18,11 @@ What makes a cached kernel the kernel that would be digitised:
 - **Every file is checked**: a CRC-32 of the whole entry is stored at its end (zlib's, 2.6×
   faster than SHA-256 on a 33 MB entry, and made for catching accidental damage); an entry
   that does not match (a torn write, a flipped bit, a truncated file) is removed and the
-  kernel is digitised again.
+  kernel is digitised again. So is one whose CRC matches but whose kernel could not have been
+  digitised (an entry rewritten by another tool): values that are not finite or are
+  negative, a shape other than the one asked for, or values and ``energy_outside`` that do
+  not add up to the light the model admits (1, or its ``admitted_share``) within
+  :data:`ENERGY_TOLERANCE`.
 - **Writes are atomic** (:mod:`glarelab.files.atomic`, as every file the suite writes): a
   kernel is written to a temporary file in the cache folder, flushed to the disk and renamed
   onto its name, so two processes filling the cache at once each leave a complete entry, and a
@@ -60,6 +64,7 @@ from glarelab.glare.models.digitise import Kernel, mirror_quadrant
 __all__ = [
     "CACHE_DIR_ENV",
     "DEFAULT_MAX_BYTES",
+    "ENERGY_TOLERANCE",
     "MAX_MB_ENV",
     "NO_CACHE_ENV",
     "KernelCache",
@@ -79,6 +84,10 @@ FORMAT = 1  # raise when the file layout or the meaning of a key changes
 SUFFIX = ".kernel"
 _MAGIC = b"GLAREKERNEL\x00"
 _DIGEST_BYTES = 4
+# |sum + energy_outside - admitted share| of a kernel read back: digitised kernels are within
+# 1e-15; the float64 sum of a 4095² kernel added one by one errs by at most n ε ≈ 2e-9; an
+# error of 1e-6 in the glare's energy is a thousandth of a 10-bit display's code step
+ENERGY_TOLERANCE = 1e-6
 _STALE_PART_S = 3600.0  # temporary files older than this are left over from a crash
 
 
@@ -310,13 +319,16 @@ class KernelCache:
         return self.directory / f"{key}{SUFFIX}"
 
     # entries ------------------------------------------------------------------------------
-    def get(self, key: str) -> Kernel | None:
+    def get(self, key: str, shape: tuple[int, int] | None = None) -> Kernel | None:
         """The kernel stored under ``key``, or ``None`` (missing, or corrupt and removed).
 
         Parameters
         ----------
         key
             The entry's name (:meth:`key`). A hit marks the entry most recently used.
+        shape
+            The kernel shape ``(KH, KW)`` asked for; an entry of another is corrupt. Default
+            None: any.
 
         Returns
         -------
@@ -330,7 +342,7 @@ class KernelCache:
             return None
         if data is None:  # a FIFO or device under an entry's name: read, it would block
             return None  # for ever; a miss, replaced by the next put (a rename over it)
-        kernel = _decode(data, key)
+        kernel = _decode(data, key, shape)
         if kernel is None:  # corrupt: never served, removed so that it is written again
             try:
                 path.unlink()
@@ -420,7 +432,7 @@ class KernelCache:
         """
         key = self.key(model, pixel_deg, shape, colour=colour)
         if key is not None:
-            cached = self.get(key)
+            cached = self.get(key, shape)
             if cached is not None:
                 if log is not None:
                     log(f"kernel {shape[0]} × {shape[1]} read from the cache ({self.directory})")
@@ -589,8 +601,9 @@ def _encode(kernel: Kernel, key: str) -> bytes | None:
     return body + struct.pack("<I", zlib.crc32(body))
 
 
-def _decode(data: bytes, key: str) -> Kernel | None:
-    """The kernel of an entry's bytes, or None when they are not a whole, matching entry."""
+def _decode(data: bytes, key: str, shape: tuple[int, int] | None = None) -> Kernel | None:
+    """The kernel of an entry's bytes, or None when they are not a whole, matching entry of a
+    kernel that could have been digitised (:func:`_plausible`)."""
     if len(data) < len(_MAGIC) + 8 + _DIGEST_BYTES or not data.startswith(_MAGIC):
         return None
     body = memoryview(data)[:-_DIGEST_BYTES]  # no copy of the array's bytes
@@ -602,9 +615,9 @@ def _decode(data: bytes, key: str) -> Kernel | None:
         header = json.loads(bytes(body[start : start + length]))
         if header["key"] != key or header["format"] != FORMAT:
             return None
-        shape = tuple(int(n) for n in header["shape"])
+        stored = tuple(int(n) for n in header["shape"])
         values = np.frombuffer(body, dtype="<f8", offset=start + length)
-        values = values.reshape(shape)  # read-only, over the entry's bytes: no copy
+        values = values.reshape(stored)  # read-only, over the entry's bytes: no copy
         if header["layout"] == "quadrant":
             arrays = {"quadrant": values}
         elif header["layout"] == "full":
@@ -613,15 +626,35 @@ def _decode(data: bytes, key: str) -> Kernel | None:
             return None
         outside = header["energy_outside"]
         outside = np.asarray(outside, float) if header["energy_outside_array"] else float(outside)
-        return Kernel(
+        kernel = Kernel(
             **arrays,
             pixel_deg=float(header["pixel_deg"]),
             energy_outside=outside,
             quadrature_error=float(header["quadrature_error"]),
             description=ast.literal_eval(header["description"]),
         )
+        return kernel if _plausible(kernel, values, shape) else None
     except (KeyError, TypeError, ValueError, SyntaxError, struct.error):
         return None
+
+
+def _plausible(kernel: Kernel, values: np.ndarray, shape: tuple[int, int] | None) -> bool:
+    """Whether ``kernel`` (its stored ``values``) could be a digitised kernel of ``shape``:
+    finite values >= 0, and each channel's sum and ``energy_outside`` adding up to the light
+    the model admits, 1 or ``description['admitted_share']``, within
+    :data:`ENERGY_TOLERANCE`."""
+    if shape is not None and tuple(kernel.shape[:2]) != tuple(shape):
+        return False
+    if not (np.all(np.isfinite(values)) and np.all(values >= 0)):
+        return False
+    outside = np.asarray(kernel.energy_outside, dtype=float)
+    admitted = kernel.description.get("admitted_share", 1.0)
+    if not isinstance(admitted, float | int) or isinstance(admitted, bool):
+        return False
+    if not (np.all(np.isfinite(outside)) and np.all(outside >= 0)):
+        return False
+    error = np.abs(np.asarray(kernel.total(), dtype=float) + outside - admitted)
+    return bool(np.all(error <= ENERGY_TOLERANCE))
 
 
 def default_cache() -> KernelCache | None:

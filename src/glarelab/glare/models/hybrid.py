@@ -136,6 +136,8 @@ class HybridGlare(GlareModel):
             **vos_model.description(colour),
             "model": "HybridGlare",
             "wave": diffraction.description,
+            # the light the kernel books: the core's share of it is the wave model's
+            "admitted_share": 1.0 - w0 * (1.0 - diffraction.description["admitted_share"]),
         }
         return _combine(
             w0 * core,
