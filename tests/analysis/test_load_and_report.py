@@ -258,3 +258,17 @@ def test_load_sessions_names_an_argument_of_the_wrong_kind(protocol, paths, patt
     protocol = load_protocol("spencer1995") if protocol == "P" else protocol
     with pytest.raises(TypeError, match=pattern):
         load_sessions(protocol, paths)
+
+
+def test_a_sidecar_nested_too_deeply_is_named_not_a_crash(simulated, tmp_path, capsys):
+    """A sidecar of '[' * 100000 stopped analyse with a RecursionError ('a bug in glarelab')."""
+    for source in csvs(simulated, "spencer1995"):
+        shutil.copy(source, tmp_path)
+        shutil.copy(source.with_suffix(".json"), tmp_path)
+    files = sorted(tmp_path.glob("*.csv"))
+    files[0].with_suffix(".json").write_text("[" * 100000 + "]" * 100000)
+    out = tmp_path / "report"
+    assert main(["analyse", "spencer1995", *map(str, files), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert f"{files[0].with_suffix('.json')}: not valid JSON (arrays or objects nested too " in err
+    assert "Traceback" not in err and not out.exists()

@@ -323,3 +323,30 @@ def test_a_whole_float_code_in_a_list_is_refused_with_how_to_give_it():
         fit_calibration(readings, bit_depth=8)
     as_array = fit_calibration(np.array(readings), bit_depth=8)
     assert as_array.readings[1] == (32, 5.0)
+
+
+def test_a_calibration_nested_too_deeply_is_refused_in_one_line(tmp_path):
+    """'[' * 100000 made Calibration.load raise RecursionError, and render --calibration end
+    as 'a bug in glarelab' (exit 70)."""
+    import subprocess
+    import sys
+
+    from glarelab.display.calibration import Calibration
+    from glarelab.stimuli.exr import write_exr
+
+    deep = tmp_path / "deep.json"
+    deep.write_text("[" * 100000 + "]" * 100000)
+    with pytest.raises(ValueError, match=r"deep\.json: .*arrays or objects nested too deeply"):
+        Calibration.load(deep)
+    image = np.ones((16, 16), np.float32)
+    write_exr(tmp_path / "in.exr", image)
+    done = subprocess.run(
+        [sys.executable, "-m", "glarelab", "render", "--pixel-deg", "0.05", "--calibration",
+         str(deep), str(tmp_path / "in.exr"), str(tmp_path / "out.exr")],
+        capture_output=True, text=True, timeout=300, check=False,
+    )  # fmt: skip
+    assert done.returncode == 2
+    assert done.stderr.splitlines() == [
+        f"glarelab render: {deep}: a calibration must be a JSON file; arrays or objects nested "
+        "too deeply (glarelab's JSON files nest a few levels)"
+    ]

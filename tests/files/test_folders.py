@@ -282,3 +282,18 @@ def test_claims_of_work_that_failed_leave_the_listing_as_the_work_found_it(tmp_p
     with pytest.raises(KeyboardInterrupt), files_claimed(new, ["x"], "render", created=True):
         raise KeyboardInterrupt
     assert not new.exists()
+
+
+def test_a_listing_nested_too_deeply_is_read_as_no_listing(tmp_path):
+    """A listing of '{"a":' * 100000 stopped every write into the folder with a
+    RecursionError; an unreadable listing is an empty one, as a corrupt one is."""
+    (tmp_path / LISTING).write_text('{"a":' * 100000 + "1" + "}" * 100000)
+    assert listed_files(tmp_path) == {}
+    assert not edited_since(tmp_path, "out.exr")
+    (tmp_path / "out.exr").write_text("participant data\n")
+    from glarelab.files.folders import claim_files
+
+    with pytest.raises(ValueError, match=r"out\.exr exists and glarelab did not write it"):
+        claim_files(tmp_path, ["out.exr"], "render")
+    record_files(tmp_path, "render")
+    assert json.loads((tmp_path / LISTING).read_text())["files"]

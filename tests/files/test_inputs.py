@@ -3,12 +3,13 @@ UTF-8 or UTF-16/32 with its byte-order mark, any other encoding named by its fir
 
 from __future__ import annotations
 
+import json
 import os
 
 import pytest
 
 from glarelab.display.calibration import read_readings
-from glarelab.files.inputs import input_file, read_input_text
+from glarelab.files.inputs import input_file, loads_json, read_input_text
 from glarelab.protocols import load_protocol
 
 READINGS = "code,luminance_cd_m2\n0,0.42\n512,94.8\n1023,432.4\n"
@@ -99,3 +100,19 @@ def test_an_empty_path_is_refused_not_read_as_the_working_folder(text):
         as_path(text, what="protocol")
     with pytest.raises(ValueError, match=r"^protocol: the path is empty"):
         load_protocol(text)
+
+
+@pytest.mark.parametrize(
+    "text", ["[" * 100000 + "]" * 100000, '{"a":' * 100000 + "1" + "}" * 100000]
+)
+def test_json_nested_too_deeply_is_invalid_json_naming_the_file(text):
+    """json.loads raises RecursionError for such nesting, which every reader of a JSON file
+    let through as a crash."""
+    with pytest.raises(json.JSONDecodeError) as refused:
+        loads_json(text, source="deep.json")
+    assert str(refused.value) == (
+        "deep.json: arrays or objects nested too deeply (glarelab's JSON files nest a few levels)"
+    )
+    with pytest.raises(ValueError, match=r"^arrays or objects nested too deeply"):
+        loads_json(text.encode())
+    assert loads_json('{"a": [[1]]}') == {"a": [[1]]}

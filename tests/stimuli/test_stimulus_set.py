@@ -284,3 +284,27 @@ def test_codes_that_are_not_whole_numbers_are_refused_not_written(tmp_path, code
         write_codes(tmp_path / "c.png", codes, 10)
     assert not (tmp_path / "c.png").exists()
     write_codes(tmp_path / "c.png", np.array([[512.0, 3.0]]), 10)  # whole floats are codes
+
+
+def test_a_manifest_nested_too_deeply_is_a_damaged_set_not_a_crash(tmp_path):
+    """'{"a":' * 100000 as manifest.json stopped stimuli verify and run --stimuli with a
+    RecursionError ('a bug in glarelab', exit 70)."""
+    folder = tmp_path / "set"
+    folder.mkdir()
+    (folder / "manifest.json").write_text('{"a":' * 100000 + "1" + "}" * 100000)
+    nested = "arrays or objects nested too deeply (glarelab's JSON files nest a few levels)"
+    assert verify_stimulus_set(folder) == [
+        f"{folder / 'manifest.json'}: not valid JSON ({nested})"
+    ]
+    glarelab = [sys.executable, "-m", "glarelab"]
+    done = subprocess.run(
+        [*glarelab, "stimuli", "verify", str(folder)], capture_output=True, text=True, check=False
+    )
+    assert done.returncode == 1 and nested in done.stderr and "Traceback" not in done.stderr
+    done = subprocess.run(
+        [*glarelab, "run", "yoshida2008", "--simulate", "--participants", "1", "--stimuli",
+         str(folder), "--out", str(tmp_path / "data")],
+        capture_output=True, text=True, timeout=300, check=False,
+    )  # fmt: skip
+    assert done.returncode == 2 and nested in done.stderr
+    assert len(done.stderr.strip().splitlines()) == 1

@@ -18,6 +18,8 @@ from pathlib import Path
 
 import pandas as pd
 
+from glarelab.files.inputs import loads_json
+
 __all__ = ["live_frames", "live_sentence"]
 
 
@@ -145,7 +147,7 @@ def _runs_of_this_session(path: Path, csv_path: Path) -> None:
     pilot = csv_path.stem.endswith("_pilot")
     sidecar_path = csv_path.with_suffix(".json")
     try:
-        sidecar = json.loads(sidecar_path.read_text(encoding="utf-8"))
+        sidecar = loads_json(sidecar_path.read_text(encoding="utf-8"))
     except (OSError, ValueError):
         sidecar = None  # no sidecar (--include-no-sidecar) or one the loader judged already
     runs = sidecar.get("runs") if isinstance(sidecar, dict) else None

@@ -54,6 +54,7 @@ import pandas as pd
 from glarelab.analysis.dataset import DataError, Dataset, Design, where
 from glarelab.analysis.paradigms import paradigm_analysis
 from glarelab.display.checks import REFRESH_TOLERANCE_FRACTION
+from glarelab.files.inputs import loads_json
 from glarelab.files.values import DECIMAL_TEXT, WHOLE_TEXT
 from glarelab.protocols import DATA_FORMAT, ROW_DIGESTS_SINCE, columns, row_digest
 from glarelab.protocols.core import ORDER_FIELDS, session_order
@@ -350,7 +351,7 @@ def _read_sidecar(path: Path, problems: list[str]) -> dict | None:
         )
         return None
     try:
-        sidecar = json.loads(sidecar_path.read_text(encoding="utf-8"))
+        sidecar = loads_json(sidecar_path.read_text(encoding="utf-8"))
     except (json.JSONDecodeError, UnicodeDecodeError) as error:
         problems.append(f"{sidecar_path}: not valid JSON ({error})")
         return None

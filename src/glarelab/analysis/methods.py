@@ -8,6 +8,8 @@ import json
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from glarelab.files.inputs import loads_json
+
 if TYPE_CHECKING:
     from glarelab.protocols import Protocol
 
@@ -102,7 +104,7 @@ def provenance(
         manifest = Path(stimuli) / "manifest.json"
         if not manifest.is_file():
             raise ValueError(f"--stimuli {stimuli}: no manifest.json (not a stimulus set?)")
-        data = json.loads(manifest.read_text())
+        data = loads_json(manifest.read_text(), source=manifest)
         record["stimulus_set_manifest_sha256"] = hashlib.sha256(manifest.read_bytes()).hexdigest()
         record["stimulus_set_calibration_sha256"] = data.get("calibration_sha256")
         record["stimulus_set_calibration_status"] = data.get("calibration", {}).get("status")

@@ -54,7 +54,7 @@ from pathlib import Path
 from glarelab.analysis.dataset import DataError
 from glarelab.analysis.load import _other_delimiter, _parse, _Trials, _trials_of, _twin
 from glarelab.files.atomic import write_text
-from glarelab.files.inputs import input_file
+from glarelab.files.inputs import input_file, loads_json
 from glarelab.protocols import columns
 from glarelab.protocols.columns import DATA_FORMAT, row_digest
 from glarelab.protocols.keys import TOKEN
@@ -196,7 +196,7 @@ def _glarelab_session(source: Path) -> Path | None:
     """The sidecar beside ``source`` if it is a session glarelab ran (or imported), else None."""
     sidecar = source.with_suffix(".json")
     try:
-        data = json.loads(sidecar.read_text(encoding="utf-8"))
+        data = loads_json(sidecar.read_text(encoding="utf-8"))
     except (OSError, ValueError):
         return None
     if isinstance(data, dict) and {"data_format", "runs", "status"} <= set(data):

@@ -65,6 +65,7 @@ from glarelab.analysis.load import load_sessions
 from glarelab.analysis.methods import provenance, session_rows
 from glarelab.analysis.paradigms import paradigm_analysis
 from glarelab.files.folders import check_replaceable, replace_folder, staging_folder
+from glarelab.files.inputs import loads_json
 from glarelab.protocols import ROW_DIGESTS_SINCE
 
 if TYPE_CHECKING:
@@ -183,7 +184,7 @@ def set_hashes(stimuli: Path) -> dict:
     manifest = Path(stimuli) / "manifest.json"
     try:
         data = manifest.read_bytes()
-        readings = (json.loads(data).get("calibration") or {}).get("readings_sha256")
+        readings = (loads_json(data).get("calibration") or {}).get("readings_sha256")
     except (OSError, ValueError, AttributeError) as error:
         raise DataError([f"{manifest}: not a readable stimulus-set manifest ({error})"]) from None
     return {"manifest_sha256": hashlib.sha256(data).hexdigest(), "readings_sha256": readings}

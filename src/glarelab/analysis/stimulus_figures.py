@@ -15,7 +15,6 @@ calls it when it is given the set's folder.
 from __future__ import annotations
 
 import io
-import json
 from pathlib import Path
 
 import matplotlib
@@ -24,6 +23,7 @@ import numpy as np
 
 from glarelab.analysis.dataset import DataError
 from glarelab.analysis.figures import png, subplots
+from glarelab.files.inputs import loads_json
 from glarelab.protocols import Protocol
 from glarelab.stimuli.shown import ShownSet
 
@@ -95,7 +95,9 @@ class VerifiedSet(ShownSet):
         problems = verify_stimulus_set(self.folder)
         if problems:
             raise DataError([f"stimulus set {self.folder}: {p}" for p in problems])
-        manifest = json.loads((self.folder / "manifest.json").read_text())
+        manifest = loads_json(
+            (self.folder / "manifest.json").read_text(), source=self.folder / "manifest.json"
+        )
         if manifest.get("protocol_sha256") != protocol.sha256:
             raise DataError(
                 [

@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import contextlib
 import dataclasses
-import json
 import os
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -15,6 +14,7 @@ import numpy as np
 from glarelab.display.calibration import Calibration, fit_calibration, read_readings
 from glarelab.display.photometer import PHOTOMETERS
 from glarelab.files.atomic import write_bytes
+from glarelab.files.inputs import loads_json
 from glarelab.files.locks import ProcessLock
 
 from .common import claim_output, count, folder_to_write, number, one_line, output_file
@@ -370,7 +370,7 @@ def _measure_locked(args: argparse.Namespace) -> int:
         )
     else:
         if session_path.exists():
-            previous = json.loads(session_path.read_text())
+            previous = loads_json(session_path.read_text(), source=session_path)
             begun = previous.get("log") or previous.get("raw")
             if previous.get("phase") not in (None, "done") and begun:
                 raise ValueError(

@@ -6,7 +6,6 @@ from __future__ import annotations
 import argparse
 import contextlib
 import copy
-import json
 import math
 import os
 import sys
@@ -22,6 +21,7 @@ from glarelab.files.folders import (
     listed_files,
     without_link_loop,
 )
+from glarelab.files.inputs import loads_json
 from glarelab.files.memory import available_memory, refuse_beyond
 from glarelab.files.values import DECIMAL_TEXT, WHOLE_TEXT
 
@@ -470,7 +470,7 @@ def inside_whole_output(path: Path) -> str | None:
         manifest = folder / "manifest.json"
         if manifest.is_file() and manifest.stat().st_size < 2**26:
             try:
-                data = json.loads(manifest.read_text(encoding="utf-8"))
+                data = loads_json(manifest.read_text(encoding="utf-8"))
             except (OSError, ValueError):
                 continue
             if isinstance(data, dict) and str(data.get("format", "")).startswith(
@@ -487,7 +487,7 @@ def verified_calibration(path: Path) -> str | None:
     if not path.is_file() or path.stat().st_size > 2**26:
         return None
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
+        data = loads_json(path.read_text(encoding="utf-8"))
     except (OSError, ValueError):
         return None
     if isinstance(data, dict) and data.get("format") == CALIBRATION_FORMAT:

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import json
 import os
 from pathlib import Path
 
+from glarelab.files.inputs import loads_json
 from glarelab.protocols import load_protocol
 
 from .common import PROTOCOL_HELP, check_memory, count, number, output_folder
@@ -233,7 +233,8 @@ def _power(args: argparse.Namespace) -> int:
             raise ValueError(
                 f"--stimuli: the {protocol.study} protocol shows no images; give no --stimuli"
             )
-        manifest = json.loads((args.stimuli / "manifest.json").read_text())
+        manifest_path = args.stimuli / "manifest.json"
+        manifest = loads_json(manifest_path.read_text(), source=manifest_path)
         if manifest.get("protocol_sha256") != protocol.sha256:
             raise ValueError(
                 f"--stimuli {args.stimuli}: built from another protocol than "

@@ -5,13 +5,12 @@ from __future__ import annotations
 import argparse
 import contextlib
 import hashlib
-import json
 import sys
 from pathlib import Path
 
 from glarelab.display.calibration import Calibration
 from glarelab.files.folders import record_written
-from glarelab.files.inputs import read_input_text
+from glarelab.files.inputs import loads_json, read_input_text
 from glarelab.protocols import load_protocol
 
 from .common import (
@@ -132,7 +131,7 @@ def _batch_resume(out: Path, participant: str, study: str, session: int) -> bool
         return False
     for sidecar in (p for p in files if p.suffix == ".json"):
         with contextlib.suppress(OSError, ValueError):
-            data = json.loads(sidecar.read_text(encoding="utf-8"))
+            data = loads_json(sidecar.read_text(encoding="utf-8"))
             if isinstance(data, dict) and data.get("status") == "completed":
                 return None
     return True  # resumed, or refused by the session's own checks, naming why
@@ -158,7 +157,7 @@ def _check_batch_seed(
         for sidecar in (p for p in session_files(out, participant, study, session)
                         if p.suffix == ".json"):  # fmt: skip
             with contextlib.suppress(OSError, ValueError, AttributeError):
-                recorded = json.loads(sidecar.read_text(encoding="utf-8"))
+                recorded = loads_json(sidecar.read_text(encoding="utf-8"))
                 info = recorded.get("participant_info")
                 used = (info or {}).get("simulated_observer_seed")
                 if isinstance(used, int) and used != seed:

@@ -45,7 +45,7 @@ from scipy.interpolate import PchipInterpolator
 from scipy.optimize import curve_fit
 
 from glarelab.files.atomic import write_text
-from glarelab.files.inputs import as_path, read_input_text
+from glarelab.files.inputs import as_path, loads_json, read_input_text
 from glarelab.files.values import DECIMAL_TEXT, WHOLE_TEXT, is_real, is_whole, plain_array
 
 __all__ = [
@@ -536,7 +536,7 @@ class Calibration:
         path = as_path(path, what="calibration file")
         text = read_input_text(path, what="calibration file")
         try:
-            data = json.loads(text)
+            data = loads_json(text)
         except json.JSONDecodeError as error:
             raise ValueError(f"{path}: a calibration must be a JSON file; {error}") from None
         return cls.from_json(data, source=str(path))

@@ -37,6 +37,7 @@ import numpy as np
 
 from glarelab.display.calibration import Calibration, fit_calibration
 from glarelab.files.atomic import write_text
+from glarelab.files.inputs import loads_json
 from glarelab.files.locks import ProcessLock
 
 if TYPE_CHECKING:
@@ -476,7 +477,7 @@ class MeasurementSession:
         if not path.is_file():
             raise FileNotFoundError(f"no measurement session at {path} to resume")
         try:
-            data = json.loads(path.read_text(encoding="utf-8"))
+            data = loads_json(path.read_text(encoding="utf-8"))
         except (json.JSONDecodeError, UnicodeDecodeError) as error:
             raise ValueError(f"{path}: a measurement session must be JSON; {error}") from None
         if not isinstance(data, dict) or data.get("format") != SESSION_FORMAT:

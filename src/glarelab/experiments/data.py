@@ -39,6 +39,7 @@ from datetime import datetime
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from glarelab.files.inputs import loads_json
 from glarelab.files.locks import ProcessLock
 from glarelab.protocols import columns, format_value, row_digest
 
@@ -675,7 +676,7 @@ class SessionFiles:
         if not self.sidecar_path.is_file():
             return {}
         try:
-            data = json.loads(self.sidecar_path.read_text(encoding="utf-8"))
+            data = loads_json(self.sidecar_path.read_text(encoding="utf-8"))
         except (json.JSONDecodeError, UnicodeDecodeError) as error:
             raise SessionError(f"{self.sidecar_path} is not valid JSON ({error})") from None
         if not isinstance(data, dict):

@@ -28,6 +28,7 @@ from collections.abc import Iterable, Iterator
 from pathlib import Path
 
 from glarelab.files.atomic import _alive, fsync_folder, glob_escape, short_name, write_text
+from glarelab.files.inputs import loads_json
 from glarelab.files.locks import ProcessLock
 
 __all__ = [
@@ -60,7 +61,7 @@ def _listing(folder: Path, *, unwritten: bool = False) -> dict[str, str]:
     :data:`UNWRITTEN`) is not glarelab's once something is there: a write that failed on a
     full disk does not make a user's file saved under its name later glarelab's."""
     try:
-        listing = json.loads((folder / LISTING).read_text(encoding="utf-8"))
+        listing = loads_json((folder / LISTING).read_text(encoding="utf-8"))
     except (OSError, ValueError):
         return {}
     files = listing.get("files") if isinstance(listing, dict) else None
@@ -96,7 +97,7 @@ def _hashes(folder: Path) -> dict[str, str]:
     """``{relative path: sha256}`` of the files as glarelab wrote them into ``folder`` (empty
     for a listing written before the listing kept them)."""
     try:
-        listing = json.loads((folder / LISTING).read_text(encoding="utf-8"))
+        listing = loads_json((folder / LISTING).read_text(encoding="utf-8"))
     except (OSError, ValueError):
         return {}
     hashes = listing.get("sha256") if isinstance(listing, dict) else None

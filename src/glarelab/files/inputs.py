@@ -6,17 +6,29 @@ where a file is read gets a message naming it, not "no such file"; a FIFO is nev
 byte-order mark) or, when it starts with their byte-order mark, as UTF-16 or UTF-32, as
 spreadsheets and Windows editors save it ("Unicode text"); any other encoding is refused with
 the place of its first byte that is not UTF-8 (a NUL byte: UTF-16 without its mark).
+JSON is parsed by :func:`loads_json`: arrays or objects nested deeper than Python's parser
+recurses are refused as JSON that cannot be read, not a crash.
 """
 
 from __future__ import annotations
 
 import codecs
 import errno
+import json
 import os
 import stat
 from pathlib import Path
 
-__all__ = ["as_path", "input_file", "read_input_text"]
+__all__ = [
+    "NESTED_TOO_DEEPLY",
+    "JSONNestingError",
+    "as_path",
+    "input_file",
+    "loads_json",
+    "read_input_text",
+]
+
+NESTED_TOO_DEEPLY = "arrays or objects nested too deeply (glarelab's JSON files nest a few levels)"
 
 _BOMS = (  # longest first: UTF-32-LE's mark starts with UTF-16-LE's
     (codecs.BOM_UTF32_LE, "utf-32"),
@@ -174,3 +186,60 @@ def read_input_text(path: str | os.PathLike, *, what: str) -> str:
             f"{what} {path}: byte {error.start} is not {encoding.upper().removesuffix('-SIG')} "
             "text; save it as UTF-8 (a spreadsheet's 'CSV UTF-8')"
         ) from None
+
+
+class JSONNestingError(json.JSONDecodeError):
+    """JSON nested too deeply to parse: a :class:`json.JSONDecodeError` (so a
+    :class:`ValueError`), handled wherever invalid JSON is, whose message is one line.
+
+    Parameters
+    ----------
+    doc
+        The JSON text (or its bytes).
+    source
+        The file it was read from, to start the message; None: the message alone.
+    """
+
+    def __init__(self, doc: str | bytes, source: object = None) -> None:
+        text = doc if isinstance(doc, str) else doc.decode("utf-8", "replace")
+        super().__init__(NESTED_TOO_DEEPLY, text, 0)
+        self.args = (f"{source}: {NESTED_TOO_DEEPLY}" if source else NESTED_TOO_DEEPLY,)
+
+
+def loads_json(data: str | bytes, *, source: object = None) -> object:
+    """``json.loads(data)``, the one way glarelab parses JSON read from a file: nesting
+    too deep for the parser (``'[' * 100000``) is refused as invalid JSON, where
+    ``json.loads`` raises RecursionError.
+
+    Parameters
+    ----------
+    data
+        The JSON text (or its UTF-8 bytes).
+    source
+        The file it was read from, to start the message of a refusal that no caller wraps;
+        default None: the message alone (for a caller that names the file itself).
+
+    Returns
+    -------
+    object
+        The value.
+
+    Raises
+    ------
+    json.JSONDecodeError
+        For invalid JSON; :class:`JSONNestingError` for JSON nested too deeply.
+
+    Examples
+    --------
+    >>> loads_json('{"a": [1, 2]}')
+    {'a': [1, 2]}
+    >>> try:
+    ...     loads_json("[" * 100000 + "]" * 100000, source="deep.json")
+    ... except ValueError as error:
+    ...     print(error)
+    deep.json: arrays or objects nested too deeply (glarelab's JSON files nest a few levels)
+    """
+    try:
+        return json.loads(data)
+    except RecursionError:
+        raise JSONNestingError(data, source) from None

@@ -64,9 +64,9 @@ def set_image_codes(image: str | Path) -> tuple[np.ndarray, int]:
         raise FileNotFoundError(f"image: {str(image)!r} is not a file")
     manifest = path.parent / MANIFEST
     if manifest.is_file() and path.suffix == ".png":
-        import json
+        from glarelab.files.inputs import loads_json
 
-        data = json.loads(manifest.read_text(encoding="utf-8"))
+        data = loads_json(manifest.read_text(encoding="utf-8"), source=manifest)
         bits = int(data.get("calibration", {}).get("bit_depth", 8))
         if path.stem in data.get("images", {}) and bits > 8:
             path = path.with_name(codes_png(path.stem, bits))

@@ -25,7 +25,6 @@ order, for the session loop.
 from __future__ import annotations
 
 import contextlib
-import json
 import math
 import sys
 import time
@@ -39,6 +38,7 @@ from glarelab.display.checks import ScreenFacts
 from glarelab.experiments.engine import Press
 from glarelab.experiments.layout import Placement
 from glarelab.experiments.loop import Shown, count_dropped_frames
+from glarelab.files.inputs import loads_json
 from glarelab.frontend.images import ImageBank
 from glarelab.frontend.keys import SessionKeys
 from glarelab.frontend.records import SessionRecords
@@ -166,7 +166,7 @@ class PsychoPyFrontend:
         if self.stimuli is None:
             return None
         manifest_path = self.stimuli / "manifest.json"
-        manifest = json.loads(manifest_path.read_text(encoding="utf-8"))
+        manifest = loads_json(manifest_path.read_text(encoding="utf-8"), source=manifest_path)
         return Calibration.from_json(
             manifest["calibration"], source=f"{manifest_path} calibration"
         )

@@ -33,6 +33,8 @@ from pathlib import Path
 
 from distributed.diagnostics.plugin import WorkerPlugin
 
+from glarelab.files.inputs import loads_json
+
 __all__ = ["JobPlugin", "Progress", "ResultLog", "available_cores", "dask_client", "run_tasks"]
 
 
@@ -79,7 +81,7 @@ class ResultLog:
                 if not line.endswith(b"\n"):
                     break  # cut short: dropped below
                 try:
-                    record = json.loads(line)
+                    record = loads_json(line)
                 except json.JSONDecodeError:
                     break
                 if key is not None:

@@ -58,6 +58,7 @@ from glarelab.files.folders import (
     restore_folder,
     staging_folder,
 )
+from glarelab.files.inputs import loads_json
 from glarelab.files.locks import ProcessLock
 from glarelab.files.values import is_real
 from glarelab.planning.effects import CORRECTIONS, SphericityChoice, chosen_p
@@ -593,7 +594,7 @@ def check_run_folder(out: str | Path, run: dict) -> None:
     if not path.is_file():
         return
     try:
-        before = json.loads(path.read_text(encoding="utf-8"))
+        before = loads_json(path.read_text(encoding="utf-8"))
     except (json.JSONDecodeError, UnicodeDecodeError) as error:
         raise ValueError(
             f"{path} is not valid JSON ({error}): delete the folder to start again"
@@ -620,7 +621,8 @@ def _check_stimuli(stimuli: Path, protocol: Protocol) -> None:
     if problems:
         more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
         raise ValueError(f"stimuli {stimuli}: not an intact stimulus set: {problems[0]}{more}")
-    manifest = json.loads((Path(stimuli) / "manifest.json").read_text(encoding="utf-8"))
+    path = Path(stimuli) / "manifest.json"
+    manifest = loads_json(path.read_text(encoding="utf-8"), source=path)
     if manifest.get("protocol_sha256") != protocol.sha256:
         raise ValueError(
             f"stimuli {stimuli}: built from another protocol than {protocol.study}'s (its "

@@ -29,6 +29,7 @@ from typing import TYPE_CHECKING
 import pandas as pd
 
 from glarelab.files.atomic import write_bytes, write_text
+from glarelab.files.inputs import loads_json
 from glarelab.planning.grid import Point, Setting, grid
 
 if TYPE_CHECKING:
@@ -49,7 +50,8 @@ def _in_place(folder: Path, protocol: Protocol) -> bool:
 
     if not (folder / "manifest.json").is_file() or verify_stimulus_set(folder):
         return False
-    manifest = json.loads((folder / "manifest.json").read_text(encoding="utf-8"))
+    path = folder / "manifest.json"
+    manifest = loads_json(path.read_text(encoding="utf-8"), source=path)
     return manifest.get("protocol_sha256") == protocol.sha256
 
 
@@ -232,7 +234,7 @@ def prepare(
     path = Path(out) / "sweep.json"
     if path.is_file():
         try:
-            before = json.loads(path.read_text(encoding="utf-8"))
+            before = loads_json(path.read_text(encoding="utf-8"))
         except (json.JSONDecodeError, UnicodeDecodeError):
             before = None
         named = {k: v for k, v in config.items() if k not in ("study", "grid")}

@@ -48,7 +48,7 @@ from glarelab.files.folders import (
     replace_folder,
     staging_folder,
 )
-from glarelab.files.inputs import as_path
+from glarelab.files.inputs import as_path, loads_json
 from glarelab.glare.models.cache import cache_root
 from glarelab.protocols import Protocol, ProtocolError
 from glarelab.stimuli.exr import read_exr, write_exr
@@ -102,7 +102,7 @@ def check_set_protocol(protocol: Protocol, stimuli: Path) -> None:
         Naming the set, the study and both protocols' sha256.
     """
     try:
-        manifest = json.loads((stimuli / "manifest.json").read_text(encoding="utf-8"))
+        manifest = loads_json((stimuli / "manifest.json").read_text(encoding="utf-8"))
         built = manifest.get("protocol_sha256") if isinstance(manifest, dict) else None
     except (OSError, ValueError):
         built = None  # no readable manifest: named by the set's proof
@@ -764,7 +764,7 @@ def _manifest_of(folder: Path, data: bytes | None = None) -> dict:
     if data is None and not path.is_file():
         raise ValueError(f"{path}: missing (not a stimulus set?)")
     try:
-        manifest = json.loads(path.read_bytes() if data is None else data)
+        manifest = loads_json(path.read_bytes() if data is None else data)
     except (json.JSONDecodeError, UnicodeDecodeError) as error:
         raise ValueError(f"{path}: not valid JSON ({error})") from None
     if not isinstance(manifest, dict):
@@ -919,7 +919,7 @@ def prove_stimulus_set(folder: str | Path, *, progress=None) -> list[str]:
     digest = hashlib.sha256(data).hexdigest()
     if _proof_key(digest).is_file():
         return []
-    manifest = json.loads(data)
+    manifest = loads_json(data, source=folder / MANIFEST)
     try:
         # the manifest holds the protocol as validated (defaults filled in, unset keys None):
         # validated again without its unset keys, it must hash as it did

@@ -59,6 +59,7 @@ from pathlib import Path
 import numpy as np
 
 from glarelab.files.atomic import PARTIAL, atomic_path, special_file
+from glarelab.files.inputs import loads_json
 from glarelab.glare.models.digitise import Kernel, mirror_quadrant
 
 __all__ = [
@@ -612,7 +613,7 @@ def _decode(data: bytes, key: str, shape: tuple[int, int] | None = None) -> Kern
     try:
         (length,) = struct.unpack_from("<Q", data, len(_MAGIC))
         start = len(_MAGIC) + 8
-        header = json.loads(bytes(body[start : start + length]))
+        header = loads_json(bytes(body[start : start + length]))
         if header["key"] != key or header["format"] != FORMAT:
             return None
         stored = tuple(int(n) for n in header["shape"])

@@ -397,10 +397,11 @@ def machine_costs(folder: str | os.PathLike | None) -> PathCosts:
     if folder is None:
         return DEFAULT_COSTS
     from glarelab.files.atomic import write_text
+    from glarelab.files.inputs import loads_json
 
     path = Path(folder) / f"costs-{cores()}-threads.json"
     try:
-        stored = json.loads(path.read_text())
+        stored = loads_json(path.read_text())
         if stored.pop("version", None) == COSTS_VERSION:
             names = {f.name for f in fields(PathCosts)}
             if set(stored) == names:
