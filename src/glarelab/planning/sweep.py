@@ -121,7 +121,7 @@ class SweepJob:
                 build_stimulus_set(
                     protocol, folder, calibration=default_calibration(protocol), progress=None
                 )
-            manifest = json.loads((folder / "manifest.json").read_text(encoding="utf-8"))
+            manifest = loads_json((folder / "manifest.json").read_text(encoding="utf-8"))
             record |= {
                 "folder": str(folder.relative_to(self.out)),
                 "manifest_sha256": _manifest_sha(folder),
