@@ -113,7 +113,8 @@ def test_one_way_power_names_a_complex_alpha(alpha):
     [("seed", -1), ("seed", 1.5), ("seed", "a"), ("seed", None), ("seed", True),
      ("participants", [2.5, 6]), ("participants", [float("nan")]), ("participants", "46"),
      ("participants", []), ("participants", [1, 6]), ("error_sd", float("inf")),
-     ("error_sd", "1"), ("subject_sd", float("nan")), ("subject_sd", -0.1)],
+     ("error_sd", "1"), ("subject_sd", float("nan")), ("subject_sd", -0.1),
+     ("error_sd", 10**400), ("subject_sd", 10**400), ("subject_sd", True)],
 )  # fmt: skip
 def test_a_job_refuses_what_would_fail_only_on_a_worker(option, value):
     # each was taken, and failed in run() on a Dask worker with a message of numpy's

@@ -377,8 +377,7 @@ def writes_into(path: Path, names: list[str], command: str, *, force: bool = Fal
     ValueError
         If ``path`` is a file, or a file of ``names`` is there and glarelab did not write it.
     """
-    path = folder_to_write(path, names)
-    path.mkdir(parents=True, exist_ok=True)
+    path, _ = _folder_made(path, names)
     claim_files(path, names, command, force=force)
     return path
 
@@ -401,11 +400,18 @@ def writing_into(
     pathlib.Path
         ``path``, existing.
     """
+    path, created = _folder_made(path, names)
+    with files_claimed(path, names, command, force=force, created=created):
+        yield path
+
+
+def _folder_made(path: Path, names: list[str]) -> tuple[Path, bool]:
+    """The folder :func:`writes_into` and :func:`writing_into` write ``names`` into, checked
+    (:func:`folder_to_write`) and made; and whether it was made now."""
     path = folder_to_write(path, names)
     created = not (path.exists() or path.is_symlink())
     path.mkdir(parents=True, exist_ok=True)
-    with files_claimed(path, names, command, force=force, created=created):
-        yield path
+    return path, created
 
 
 def folder_to_write(path: Path, names: list[str]) -> Path:

@@ -70,7 +70,9 @@ def short_name(name: str, *, room: int) -> str:
     """
     if not isinstance(name, str):
         raise ValueError(f"name must be a file name (a str); got {name!r}")
-    if isinstance(room, bool) or not isinstance(room, int) or room < 0:
+    from .values import is_whole  # numpy, not needed to import this module
+
+    if not is_whole(room) or room < 0:
         raise ValueError(f"room must be a whole number of bytes >= 0; got {room!r}")
     if len(name.encode()) + room <= NAME_MAX_BYTES:
         return name

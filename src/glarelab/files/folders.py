@@ -331,27 +331,32 @@ def claim_files(folder: Path, names: Iterable[str], kind: str, *, force: bool = 
     ValueError
         Naming the first existing file the listing does not hold, or one edited since.
     """
-    names = list(names)
-    with _listing_held(Path(folder)):
-        listed, written = _listing(folder), _hashes(folder)
-        for name in names:
-            path = folder / name
-            if (path.exists() or path.is_symlink()) and name not in listed:
-                raise ValueError(
-                    f"{path} exists and glarelab did not write it there; {kind} would "
-                    "overwrite it, so give another folder or move the file (nothing was changed)"
-                )
-            if not force and name in written and path.exists() and _sha256(path) != written[name]:
-                raise ValueError(
-                    f"{path} was edited since glarelab wrote it; {kind} would overwrite it, so "
-                    "copy what you changed elsewhere, remove the file, or give another folder "
-                    "(nothing was changed)"
-                )
-        # listed anew with every name claimed before, written or not: the filtered listing
-        # above dropped another output's name written but not yet recorded (psf's image
-        # beside its axes), and a second run then took its own image for a user's
-        every = _listing(folder, unwritten=True)
-        _write_listing(folder, every | dict.fromkeys(names, kind), _claimed_hashes(folder, names))
+    folder = Path(folder)
+    with _listing_held(folder):
+        _claim_held(folder, list(names), kind, force=force)
+
+
+def _claim_held(folder: Path, names: list[str], kind: str, *, force: bool) -> None:
+    """:func:`claim_files`'s checks and listing, the folder's listing held by the caller."""
+    listed, written = _listing(folder), _hashes(folder)
+    for name in names:
+        path = folder / name
+        if (path.exists() or path.is_symlink()) and name not in listed:
+            raise ValueError(
+                f"{path} exists and glarelab did not write it there; {kind} would "
+                "overwrite it, so give another folder or move the file (nothing was changed)"
+            )
+        if not force and name in written and path.exists() and _sha256(path) != written[name]:
+            raise ValueError(
+                f"{path} was edited since glarelab wrote it; {kind} would overwrite it, so "
+                "copy what you changed elsewhere, remove the file, or give another folder "
+                "(nothing was changed)"
+            )
+    # listed anew with every name claimed before, written or not: the filtered listing
+    # above dropped another output's name written but not yet recorded (psf's image
+    # beside its axes), and a second run then took its own image for a user's
+    every = _listing(folder, unwritten=True)
+    _write_listing(folder, every | dict.fromkeys(names, kind), _claimed_hashes(folder, names))
 
 
 @contextlib.contextmanager
@@ -373,9 +378,10 @@ def files_claimed(
     """
     folder = Path(folder)
     names = list(names)
-    recorded = _hashes(folder)
-    found = {name: _sha256(folder / name) for name in names}
-    claim_files(folder, names, kind, force=force)
+    with _listing_held(folder):  # what the work finds, read as it is claimed
+        recorded = _hashes(folder)
+        found = {name: _sha256(folder / name) for name in names}
+        _claim_held(folder, names, kind, force=force)
     try:
         yield
     except BaseException:

@@ -23,6 +23,7 @@ Journal of the American Statistical Association 84(406).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -63,15 +64,22 @@ def _subjects(subjects: object) -> int:
     return int(subjects)
 
 
+def _sd(name: str, value: object, *, zero: bool = False) -> float:
+    """``value`` as a finite standard deviation > 0 (>= 0 with ``zero``), refused naming
+    ``name``."""
+    allowed = ">= 0" if zero else "> 0"
+    try:
+        sd = float(value) if is_real(value) else math.nan  # type: ignore[arg-type]
+    except OverflowError:  # an int past a float's range
+        sd = math.inf
+    if not (math.isfinite(sd) and (sd >= 0 if zero else sd > 0)):
+        raise ValueError(f"{name} must be a finite number {allowed}; got {value!r}")
+    return sd
+
+
 def _error_sd(error_sd: object) -> float:
     """``error_sd`` as a finite number > 0."""
-    if isinstance(error_sd, bool | np.bool_ | complex | np.complexfloating) or not isinstance(
-        error_sd, int | float | np.number
-    ):
-        raise ValueError(f"error_sd must be a finite number > 0; got {error_sd!r}")
-    if not (np.isfinite(error_sd) and error_sd > 0):
-        raise ValueError(f"error_sd must be a finite number > 0; got {error_sd!r}")
-    return float(error_sd)
+    return _sd("error_sd", error_sd)
 
 
 def noncentrality(
@@ -194,9 +202,7 @@ class OneWayJob:
     ):
         self.means = _means(means_per_condition)
         self.error_sd = _error_sd(error_sd)
-        if not (is_real(subject_sd) and np.isfinite(subject_sd) and subject_sd >= 0):  # type: ignore[call-overload, operator]
-            raise ValueError(f"subject_sd must be a finite number >= 0; got {subject_sd!r}")
-        self.subject_sd = float(subject_sd)  # type: ignore[arg-type]
+        self.subject_sd = _sd("subject_sd", subject_sd, zero=True)
         if (
             isinstance(participants, str | bytes)
             or not isinstance(participants, Sequence | np.ndarray)
