@@ -210,8 +210,28 @@ def test_codes_outside_the_bit_depth_are_refused(tmp_path):
         ValueError, match=r"codes must be in \[0, 255\] for bit_depth 8; got 0-256"
     ):
         write_codes(tmp_path / "x.png", np.array([[0, 256]]), 8)
-    with pytest.raises(ValueError, match="bit_depth must be 1-16; got 17"):
+    with pytest.raises(ValueError, match="bit_depth must be a whole number 1-16; got 17"):
         write_codes(tmp_path / "x.png", np.array([[0]]), 17)
+
+
+@pytest.mark.parametrize("writer", [write_codes, write_display_png])
+@pytest.mark.parametrize(
+    ("codes", "bit_depth", "message"),
+    [
+        (np.array([1, 2, 3]), 10, r"codes must be an image, \(H, W\) greyscale or \(H, W, 3\) "
+         r"RGB, of at least one pixel; got shape \(3,\)"),  # was a 3 × 1 column image
+        (np.ones((2, 2, 4), int), 10, r"got shape \(2, 2, 4\)"),
+        (np.zeros((0, 4), int), 10, r"got shape \(0, 4\)"),
+        (np.ma.masked_array(np.ones((4, 4), int), mask=np.eye(4)), 10,
+         "codes must be a plain array, not a masked array"),  # the mask was dropped
+        (np.ones((2, 2), int), 10.0, "bit_depth must be a whole number 1-16; got 10.0"),
+        (np.ones((2, 2), int), True, "bit_depth must be a whole number 1-16; got True"),
+    ],
+)  # fmt: skip
+def test_codes_that_are_no_image_are_refused(writer, codes, bit_depth, message, tmp_path):
+    with pytest.raises(ValueError, match=message):
+        writer(tmp_path / "x.png", codes, bit_depth)
+    assert not list(tmp_path.iterdir())
 
 
 def test_a_calibration_for_another_bit_depth_is_refused(tmp_path):

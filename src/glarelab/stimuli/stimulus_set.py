@@ -49,6 +49,7 @@ from glarelab.files.folders import (
     staging_folder,
 )
 from glarelab.files.inputs import as_path, loads_json
+from glarelab.files.values import is_whole, plain_array
 from glarelab.glare.models.cache import cache_root
 from glarelab.protocols import Protocol, ProtocolError
 from glarelab.stimuli.exr import read_exr, write_exr
@@ -210,7 +211,9 @@ def write_codes(path: str | Path, codes: np.ndarray, bit_depth: int) -> None:
     Raises
     ------
     ValueError
-        For a ``bit_depth`` outside 1-16, or codes outside 0 … 2^bit_depth − 1.
+        For a ``bit_depth`` that is not a whole number 1-16, codes that are not an ``(H, W)``
+        or ``(H, W, 3)`` image of whole numbers (a masked array: its mask would be lost), or
+        codes outside 0 … 2^bit_depth − 1.
     """
     codes = _checked_codes(codes, bit_depth)
     top = 2**bit_depth - 1
@@ -250,7 +253,8 @@ def write_display_png(path: str | Path, codes: np.ndarray, bit_depth: int) -> No
     Raises
     ------
     ValueError
-        For a ``bit_depth`` outside 1-16, or codes outside 0 … 2^bit_depth − 1.
+        For a ``bit_depth`` that is not a whole number 1-16, codes that are not an ``(H, W)``
+        or ``(H, W, 3)`` image of whole numbers, or codes outside 0 … 2^bit_depth − 1.
 
     Examples
     --------
@@ -299,10 +303,17 @@ def codes_png(name: str, bit_depth: int) -> str:
 
 
 def _checked_codes(codes: np.ndarray, bit_depth: int) -> np.ndarray:
-    if not 1 <= bit_depth <= 16:
-        raise ValueError(f"bit_depth must be 1-16; got {bit_depth!r}")
+    """``codes`` as an image of whole codes for ``bit_depth`` bits, refused otherwise."""
+    if not (is_whole(bit_depth) and 1 <= bit_depth <= 16):
+        raise ValueError(f"bit_depth must be a whole number 1-16; got {bit_depth!r}")
+    bit_depth = int(bit_depth)
     top = 2**bit_depth - 1
-    codes = np.asarray(codes)
+    codes = plain_array("codes", codes)
+    if not (codes.ndim == 2 or (codes.ndim == 3 and codes.shape[2] == 3)) or not codes.size:
+        raise ValueError(
+            f"codes must be an image, (H, W) greyscale or (H, W, 3) RGB, of at least one "
+            f"pixel; got shape {codes.shape}"
+        )
     if codes.dtype.kind == "b" or codes.dtype.kind not in "uif":
         raise ValueError(f"codes must be whole numbers (display codes); got dtype {codes.dtype}")
     if codes.dtype.kind == "f":  # a float array of whole codes is taken; NaN or 511.7 not
