@@ -670,3 +670,34 @@ def test_the_end_of_block_rows_of_an_outer_loop_are_no_trials(simulated, tmp_pat
     (blocked,) = import_psychopy(protocol, [target], tmp_path / "out_b")
     assert blocked.csv.read_bytes() == plain.csv.read_bytes()
     assert len(blocked.dropped_rows) > len(plain.dropped_rows)
+
+
+@pytest.mark.parametrize(
+    ("column", "value", "named"),
+    [("rating", "4.5", "'4.5'"), ("rating", "9", "9"), ("category", "Glare Appearence",
+     "Glare Appearence")],
+)  # fmt: skip
+def test_a_session_the_analysis_would_refuse_is_refused_at_import(
+    column, value, named, simulated, tmp_path
+):
+    """A rating of 4.5 or 9 (of 1-7), a misspelt category: imported without a word, and
+    refused only by the analysis one command later; now named at the import, at the source's
+    line, and nothing written."""
+    pytest.importorskip("psychopy.data")
+    protocol = load_protocol("luidolt2020")
+    own = sorted(simulated.glob("*_luidolt2020_s1_*.csv"))[0]
+    source = write_psychopy(own, protocol, tmp_path, rt_name="time_s")
+    rows = list(csv.reader(source.open(encoding="utf-8")))
+    at = rows[0].index(column)
+    line = next(n for n, row in enumerate(rows[1:], start=2) if len(row) > at and row[at])
+    rows[line - 1][at] = value
+    with source.open("w", encoding="utf-8", newline="") as handle:
+        csv.writer(handle).writerows(rows)
+    with pytest.raises(DataError) as refused:
+        import_psychopy(protocol, [source], tmp_path / "out")
+    problems = [p for p in refused.value.problems if named in p]
+    assert problems, refused.value.problems
+    assert f"{source}, line {line}" in problems[0], problems[0]
+    assert "the analysis would refuse it" in problems[0]
+    assert "glarelab-import-" not in str(refused.value)  # the temporary copy is never named
+    assert not (tmp_path / "out").exists()

@@ -323,8 +323,11 @@ def import_psychopy(
         that cannot name a file, a session file that exists already, a last column with no
         name that holds data, a study recorded on a trial row that is not the protocol's,
         trials equal to another session's of the import or of ``out`` (times included), a
-        session glarelab ran (its sidecar beside it, or exactly a session file's columns) and
-        a glarelab report's ``trials.csv`` (a session file's columns and ``file``).
+        session glarelab ran (its sidecar beside it, or exactly a session file's columns), a
+        glarelab report's ``trials.csv`` (a session file's columns and ``file``), and what
+        the analysis refuses in a session read alone (its own loader,
+        :func:`glarelab.analysis.load.load_sessions`: a rating outside the scale, a category
+        the study does not have), named at the source's line.
     ValueError
         If ``out`` is a file, not a folder (nothing is read or written).
 
@@ -364,6 +367,7 @@ def import_psychopy(
         raise DataError(problems)
     out = Path(out)
     planned: list[tuple[Imported, str, dict]] = []
+    lines_of: dict[Path, list[int]] = {}  # each session file's rows: their source lines
     for raw in sources:
         source = Path(raw)
         found = len(problems)
@@ -540,6 +544,7 @@ def import_psychopy(
         version = next((r["psychopyVersion"] for r in originals if r.get("psychopyVersion")), None)
         for (participant, session), trial_rows in sessions.items():
             cells_rows = []
+            source_lines = []  # each written row's line in the source
             for number, (line, record) in enumerate(trial_rows, start=1):
                 row = {}
                 for column in schema:
@@ -570,10 +575,13 @@ def import_psychopy(
                         "that row's trial columns empty, or remove it"
                     )
                 cells_rows.append(row)
+                source_lines.append(line)
             if all(_INTEGRAL.fullmatch(r["trial"]) for r in cells_rows):
                 # in trial order, as a session writes them: row_sha256 is by trial (trial n at
                 # entry n), and a file sorted in a spreadsheet keeps its trials' numbers
-                cells_rows.sort(key=lambda r: int(r["trial"]))
+                order = sorted(range(len(cells_rows)), key=lambda i: int(cells_rows[i]["trial"]))
+                cells_rows = [cells_rows[i] for i in order]
+                source_lines = [source_lines[i] for i in order]
             try:
                 number = int(session)
             except ValueError:
@@ -640,10 +648,13 @@ def import_psychopy(
                 },
             }
             planned.append((imported, _csv_text(schema, cells_rows), sidecar))
+            lines_of[imported.csv] = source_lines
     names = [p[0].csv for p in planned]
     for name in sorted({n for n in names if names.count(n) > 1}):
         problems.append(f"{name}: two sessions of the sources would get this name")
     problems += _same_trials(planned, out)
+    if not problems:
+        problems += _as_analysed(protocol, planned, lines_of)
     if problems:
         raise DataError(problems)
     out.mkdir(parents=True, exist_ok=True)
@@ -662,6 +673,53 @@ def import_psychopy(
             path.unlink(missing_ok=True)
         raise
     return [p[0] for p in planned]
+
+
+# the one problem of a session read alone that is no problem of its file: a session cut
+# short lacks design cells, which the analysis of the study names (or --exclude-incomplete)
+_INCOMPLETE = re.compile(r"^every participant \(\d+\) misses a cell of the design")
+
+
+def _as_analysed(protocol, planned: list, lines_of: dict[Path, list[int]]) -> list[str]:
+    """What ``glarelab analyse`` would refuse in each planned session, read alone by the
+    analysis' own loader (``load_sessions``) from a temporary copy: a rating of 4.5, a
+    category the study does not have, a staircase step out of place. Named by the source file
+    and its line, so that no session is written that the analysis can never read."""
+    import tempfile
+
+    from glarelab.analysis.load import load_sessions
+
+    problems: list[str] = []
+    with tempfile.TemporaryDirectory(prefix="glarelab-import-") as folder:
+        for imported, text, sidecar in planned:
+            copy = Path(folder) / imported.csv.name
+            copy.write_text(text, encoding="utf-8")
+            copy.with_suffix(".json").write_text(json.dumps(sidecar), encoding="utf-8")
+            try:
+                load_sessions(protocol, [copy], exclude_incomplete=True, include_pilots=True)
+            except DataError as error:
+                lines, source = lines_of[imported.csv], imported.source
+
+                def source_line(match: re.Match, lines=lines, source=source) -> str:
+                    row = int(match.group(1)) - 2  # the session file's line 1 is its header
+                    at = f", line {lines[row]}" if 0 <= row < len(lines) else ""
+                    return f"{source}{at}"
+
+                for problem in error.problems:
+                    if _INCOMPLETE.match(problem):
+                        continue
+                    problem = re.sub(re.escape(str(copy)) + r", line (\d+)", source_line, problem)
+                    problem = problem.replace(
+                        str(copy.with_suffix(".json")), f"{imported.csv.stem}.json (its sidecar)"
+                    ).replace(str(copy), f"{imported.source}")
+                    problems.append(
+                        f"{problem} (participant {imported.participant}, session "
+                        f"{imported.session}: the analysis would refuse it; correct the file)"
+                    )
+            finally:
+                copy.unlink(missing_ok=True)
+                copy.with_suffix(".json").unlink(missing_ok=True)
+    return problems
 
 
 def _trials_in(text: str) -> _Trials | None:
