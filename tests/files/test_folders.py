@@ -1,6 +1,7 @@
 """A folder replaced whole while another process puts its own output at the same place."""
 
 import json
+import re
 from pathlib import Path
 
 import pytest
@@ -297,3 +298,19 @@ def test_a_listing_nested_too_deeply_is_read_as_no_listing(tmp_path):
         claim_files(tmp_path, ["out.exr"], "render")
     record_files(tmp_path, "render")
     assert json.loads((tmp_path / LISTING).read_text())["files"]
+
+
+def test_an_output_held_refuses_a_second_holder_and_leaves_no_folder_it_made(tmp_path):
+    from glarelab.files.folders import output_lock
+
+    out = tmp_path / "new" / "deeper" / "report"
+    with output_lock(out, "analysis"):
+        assert (out.parent / ".report.output.lock").is_file()
+        with pytest.raises(ValueError, match=rf"^{re.escape(str(out))} is in use by another "
+                           r"glarelab analysis \(pid \d+ on .*\): wait for it to end, or give "
+                           r"another --out \(nothing was changed\)$"):  # fmt: skip
+            output_lock(out, "analysis").acquire()
+    assert sorted(tmp_path.iterdir()) == []  # the folders made for the lock are gone
+    with output_lock(out, "analysis"):
+        out.mkdir()  # the work wrote there: kept
+    assert sorted(p.name for p in out.parent.iterdir()) == ["report"]

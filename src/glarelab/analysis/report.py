@@ -64,7 +64,12 @@ from glarelab.analysis.live import live_frames, live_sentence
 from glarelab.analysis.load import load_sessions
 from glarelab.analysis.methods import provenance, session_rows
 from glarelab.analysis.paradigms import paradigm_analysis
-from glarelab.files.folders import check_replaceable, replace_folder, staging_folder
+from glarelab.files.folders import (
+    check_replaceable,
+    output_lock,
+    replace_folder,
+    staging_folder,
+)
 from glarelab.files.inputs import loads_json
 from glarelab.protocols import ROW_DIGESTS_SINCE
 
@@ -584,6 +589,29 @@ def write_report(
         For bad input: the data, sessions the analysis cannot vouch for, or a stimulus set
         that fails its manifest or was built from another protocol (nothing is written).
     """
+    options = {
+        "exclude_incomplete": exclude_incomplete,
+        "include_aborted": include_aborted,
+        "include_pilots": include_pilots,
+        "include_no_sidecar": include_no_sidecar,
+        "stimuli": stimuli,
+    }
+    with output_lock(out, "analysis"):  # a second analysis into it at once: refused
+        return _write_report(protocol, paths, out, **options)
+
+
+def _write_report(
+    protocol: Protocol,
+    paths: list[str | Path],
+    out: str | Path,
+    *,
+    exclude_incomplete: bool,
+    include_aborted: bool,
+    include_pilots: bool,
+    include_no_sidecar: bool,
+    stimuli: str | Path | None,
+) -> Path:
+    """:func:`write_report` once ``out`` is held."""
     out = check_replaceable(
         out, kind="report", what="report", inputs=[*paths, *([stimuli] if stimuli else [])]
     )

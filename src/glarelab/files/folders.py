@@ -39,6 +39,7 @@ __all__ = [
     "files_claimed",
     "list_files",
     "listed_files",
+    "output_lock",
     "record_files",
     "record_written",
     "replace_folder",
@@ -520,6 +521,80 @@ def _write_listing(
             f"into {folder} under that name; move it away"
         )
     write_text(path, json.dumps(listing, indent=1) + "\n")
+
+
+def output_lock(out: str | Path, kind: str, *, suffix: str = "output") -> ProcessLock:
+    """The lock of a folder one process makes whole at a time (a stimulus set, a report, a
+    power run): a file ``.NAME.SUFFIX.lock`` beside it (the folder itself is swapped). Two
+    builds into one ``--out`` at once would each end "done" while the later replaced the
+    other's output; the second is refused instead, naming the first.
+
+    Parameters
+    ----------
+    out
+        The folder (``--out``), as the user gave it (named in the refusal).
+    kind
+        What holds it, for the refusal (``'stimulus set build'``, ``'analysis'``, …).
+    suffix
+        The lock file's kind, ``output`` unless an output kept its own name.
+
+    Returns
+    -------
+    glarelab.files.locks.ProcessLock
+        Not yet held; held, it refuses a second holder with a ``ValueError`` naming ``out``,
+        the holder and what to do. A folder in which no lock can be made is refused with a
+        ``ValueError`` too.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> with output_lock(folder / "report", "analysis"):
+    ...     sorted(p.name for p in folder.iterdir())
+    ['.report.output.lock']
+    """
+    final = without_link_loop(out, what=kind).resolve()
+
+    def refusal(holder: str) -> ValueError:
+        return ValueError(
+            f"{out} is in use by another glarelab {kind} ({holder}): wait for it to end, "
+            "or give another --out (nothing was changed)"
+        )
+
+    name = short_name(final.name, room=len(f"..{suffix}.lock") + 1)
+    return _OutputLock(final.parent / f".{name}.{suffix}.lock", refusal=refusal, out=out)
+
+
+class _OutputLock(ProcessLock):
+    """:class:`ProcessLock` whose folder refusing a file is named as ``--out``'s."""
+
+    def __init__(self, path: Path, *, refusal, out: str | Path):
+        super().__init__(path, refusal=refusal)
+        self.out = out
+
+    def acquire(self) -> None:
+        # the folders made for the lock: removed on release if the work left them empty
+        self._made = [p for p in [self.path.parent, *self.path.parent.parents] if not p.exists()]
+        try:
+            super().acquire()
+        except OSError as error:  # a read-only or virtual parent: named by --out
+            self._remove_made()
+            raise ValueError(
+                f"--out {self.out}: no file can be made in {self.path.parent} "
+                f"({error.strerror}); give another --out"
+            ) from None
+
+    def release(self) -> None:
+        super().release()
+        self._remove_made()
+
+    def _remove_made(self) -> None:
+        for folder in getattr(self, "_made", []):  # innermost first
+            try:
+                folder.rmdir()
+            except OSError:  # the work wrote there: kept, and so are its parents
+                break
+        self._made = []
 
 
 def _aside_stem(final: Path) -> str:

@@ -54,6 +54,7 @@ from glarelab.files.atomic import write_bytes, write_text
 from glarelab.files.folders import (
     LISTING,
     listed_files,
+    output_lock,
     replace_folder,
     restore_folder,
     staging_folder,
@@ -508,15 +509,7 @@ def _link_tree(source: Path, target: Path) -> None:
 
 def _folder_lock(out: Path) -> ProcessLock:
     """The lock of a power run's folder: a file beside it (the folder itself is swapped)."""
-    final = out.resolve()
-
-    def refusal(holder: str) -> ValueError:
-        return ValueError(
-            f"{out} is in use by another glarelab power run ({holder}): wait for it to end, "
-            "or give another --out (nothing was changed)"
-        )
-
-    return ProcessLock(final.parent / f".{final.name}.power.lock", refusal=refusal)
+    return output_lock(out, "power run", suffix="power")
 
 
 def run_inputs(

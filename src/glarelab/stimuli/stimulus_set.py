@@ -44,6 +44,7 @@ from glarelab.files.folders import (
     LISTING,
     check_replaceable,
     is_system_file,
+    output_lock,
     record_files,
     replace_folder,
     staging_folder,
@@ -558,6 +559,12 @@ def build_stimulus_set(
         "clipped)",
         anyway="build anyway with --accept-mismatch calibration (sessions check again)",
     )
+    with output_lock(out, "stimulus set build"):  # a second build into it at once: refused
+        return _build_into(protocol, out, calibration, progress)
+
+
+def _build_into(protocol: Protocol, out: str | Path, calibration: Calibration, progress) -> dict:
+    """:func:`build_stimulus_set` once its calibration is checked and ``out`` held."""
     if (
         Path(out).is_dir()
         and not (Path(out) / LISTING).exists()
