@@ -1,5 +1,7 @@
 import copy
 import datetime
+import json
+import pickle
 import re
 import tomllib
 from pathlib import Path
@@ -745,3 +747,45 @@ def test_a_monitor_of_values_no_display_has_is_refused_naming_them(option, value
 
     with pytest.raises(ValueError, match=rf"^--monitor m: {named} must be"):
         with_monitor(load_protocol("yoshida2008"), name="m", **{option: value})
+
+
+@pytest.mark.parametrize(
+    "change",
+    [
+        lambda p: p.data["viewing"].__setitem__("distance_m", 0.5),
+        lambda p: p["viewing"].update(distance_m=-5.0),
+        lambda p: p.data.pop("display"),
+        lambda p: p.data["study"].setdefault("new", 1),
+        lambda p: p.data["display"]["resolution_px"].__setitem__(0, 640),
+        lambda p: p.data["display"]["resolution_px"].append(1),
+        lambda p: p.data["display"]["resolution_px"].sort(),
+        lambda p: p.data.__delitem__("study"),
+        lambda p: p.data["study"].clear(),
+    ],
+)
+def test_a_validated_protocol_cannot_be_changed(change):
+    """``protocol.data["viewing"]["distance_m"] = 0.5`` changed the geometry and the sets
+    built from it while ``sha256`` still named the file: a set so built failed its own
+    verify, and -5 m gave a negative pixel size."""
+
+    protocol = load_protocol("yoshida2008")
+    before = json.dumps(protocol.data, sort_keys=True)
+    with pytest.raises(TypeError, match=r"^a Protocol's tables cannot be changed"):
+        change(protocol)
+    assert json.dumps(protocol.data, sort_keys=True) == before
+    assert protocol == load_protocol("yoshida2008")
+    mine = copy.deepcopy(protocol.data)  # a copy is the user's to change
+    mine["viewing"]["distance_m"] = 0.5
+    mine["display"]["resolution_px"].append(1)
+    assert type(mine) is dict and type(mine["display"]["resolution_px"]) is list
+    assert pickle.loads(pickle.dumps(protocol)) == protocol  # to Dask's workers and back
+
+
+@pytest.mark.parametrize("cells", [["a", 3], ["a", None], ["a", 1.5], [True]])
+def test_a_row_digest_is_of_text_cells_only(cells):
+    """``row_digest(["a", 3])`` gave the digest of JSON ``["a",3]``, which no CSV row (read
+    as text, ``"3"``) can have."""
+    from glarelab.protocols.columns import row_digest
+
+    with pytest.raises(TypeError, match=r"^row_digest: cells must be the row's cells as written"):
+        row_digest(cells)

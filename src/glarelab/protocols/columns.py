@@ -197,5 +197,12 @@ def row_digest(cells: Iterable[str]) -> str:
         raise TypeError(
             f"row_digest: cells must be the row's cells as a list of text; got {cells!r}"
         )
-    text = json.dumps(list(cells), ensure_ascii=False, separators=(",", ":"))
+    cells = list(cells)
+    others = [cell for cell in cells if not isinstance(cell, str)]
+    if others:  # 3 and "3" are different JSON: a digest no CSV row, read as text, can have
+        raise TypeError(
+            f"row_digest: cells must be the row's cells as written, text (format_value); "
+            f"got {others[0]!r}"
+        )
+    text = json.dumps(cells, ensure_ascii=False, separators=(",", ":"))
     return hashlib.sha256(text.encode("utf-8")).hexdigest()[:ROW_DIGEST_HEX_DIGITS]

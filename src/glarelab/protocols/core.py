@@ -10,6 +10,7 @@ each with its key, value and what is allowed; then the paradigm checks the rules
 
 from __future__ import annotations
 
+import copy
 import hashlib
 import json
 import math
@@ -152,6 +153,65 @@ def session_order(paradigm: str) -> tuple[str, ...]:
         ) from None
 
 
+class _Refused:
+    """Refuse every change of a validated protocol's tables: its hash, its stimulus sets and
+    its sessions record what was validated (``protocol.data["viewing"]["distance_m"] = 0.5``
+    changed the geometry, not the hash). A copy (``copy.deepcopy``) is plain and changeable."""
+
+    __slots__ = ()
+
+    def _refuse(self, *args, **kwargs):
+        raise TypeError(
+            "a Protocol's tables cannot be changed (its sha256, stimulus sets and sessions "
+            "record the validated protocol): change the protocol file and load it again "
+            "(load_protocol), or validate tables of your own (parse_protocol)"
+        )
+
+
+class _Table(_Refused, dict):
+    """A table of a validated protocol: a dict that cannot be changed."""
+
+    __slots__ = ()
+    __setitem__ = __delitem__ = __ior__ = _Refused._refuse
+    clear = pop = popitem = setdefault = update = _Refused._refuse
+
+    def __deepcopy__(self, memo) -> dict:
+        return {key: copy.deepcopy(value, memo) for key, value in self.items()}
+
+    def __copy__(self) -> dict:
+        return dict(self)
+
+    def __reduce__(self):
+        return (_Table, (dict(self),))
+
+
+class _Array(_Refused, list):
+    """An array of a validated protocol: a list that cannot be changed."""
+
+    __slots__ = ()
+    __setitem__ = __delitem__ = __iadd__ = __imul__ = _Refused._refuse
+    append = clear = extend = insert = pop = remove = reverse = sort = _Refused._refuse
+
+    def __deepcopy__(self, memo) -> list:
+        return [copy.deepcopy(value, memo) for value in self]
+
+    def __copy__(self) -> list:
+        return list(self)
+
+    def __reduce__(self):
+        return (_Array, (list(self),))
+
+
+def _frozen(value: Any) -> Any:
+    """``value`` with every dict and list in it made unchangeable (:class:`_Table`,
+    :class:`_Array`): equal to it, read and written to JSON as it is."""
+    if isinstance(value, Mapping):
+        return _Table({key: _frozen(item) for key, item in value.items()})
+    if isinstance(value, list | tuple):
+        return _Array(_frozen(item) for item in value)
+    return value
+
+
 @dataclass(frozen=True)
 class Protocol:
     """A validated protocol: ``data`` mirrors the file with defaults filled in.
@@ -184,6 +244,9 @@ class Protocol:
     source: str
     sha256: str
     folder: Path | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "data", _frozen(self.data))
 
     def __getitem__(self, key: str) -> Any:
         return self.data[key]
