@@ -350,3 +350,46 @@ def test_a_calibration_nested_too_deeply_is_refused_in_one_line(tmp_path):
         f"glarelab render: {deep}: a calibration must be a JSON file; arrays or objects nested "
         "too deeply (glarelab's JSON files nest a few levels)"
     ]
+
+
+def test_a_synthetic_calibration_relabelled_unverified_is_refused(tmp_path):
+    """A synthetic gamma curve given status 'unverified' (by hand in its file, or with
+    ``replace``) was admitted as a display's measured calibration."""
+    import json
+    from dataclasses import replace
+
+    from glarelab.display.calibration import (
+        Calibration,
+        synthetic_calibration,
+        usable_calibration,
+    )
+
+    synthetic = synthetic_calibration(max_cd_m2=200.0, black_cd_m2=0.2, bit_depth=10)
+    path = synthetic.save(tmp_path / "synthetic.json")
+    data = json.loads(path.read_text())
+    data["status"] = "unverified"
+    edited = tmp_path / "edited.json"
+    edited.write_text(json.dumps(data))
+    with pytest.raises(ValueError, match=r"status 'unverified' for a synthetic display"):
+        Calibration.load(edited)
+    relabelled = replace(synthetic, status="unverified")
+    with pytest.raises(ValueError, match=r"status 'unverified' for a synthetic display"):
+        usable_calibration(relabelled)
+    with pytest.raises(ValueError, match=r"status 'unverified' for a synthetic display"):
+        relabelled.save(tmp_path / "relabelled.json")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["edited.json", "synthetic.json"]
+
+
+def test_save_refuses_what_load_would_refuse(tmp_path):
+    """``Calibration.save`` wrote files the next ``Calibration.load`` refused: a status
+    'passed' without a verification pass, a model added to a pchip calibration."""
+    from dataclasses import replace
+
+    readings = [(0, 0.5), (128, 40.0), (200, 120.0), (255, 200.0)]
+    fitted = fit_calibration(readings, bit_depth=8)
+    with pytest.raises(ValueError, match="status 'passed' without verification measurements"):
+        replace(fitted, status="passed").save(tmp_path / "passed.json")
+    fitted.model["gamma"] = 2.2  # its model dict is the caller's to change
+    with pytest.raises(ValueError, match="has no model; it holds one"):
+        fitted.save(tmp_path / "model.json")
+    assert list(tmp_path.iterdir()) == []

@@ -415,7 +415,15 @@ class Calibration:
         -------
         pathlib.Path
             ``path``.
+
+        Raises
+        ------
+        ValueError
+            For a calibration :meth:`load` would refuse (:meth:`checked`: a status its
+            verification pass does not give, a model its readings do not give, ...): nothing
+            is written.
         """
+        self.checked(source=str(path))  # never a file the next session cannot load
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         write_text(path, json.dumps(self.to_json(), indent=2) + "\n")  # whole or not at all
@@ -650,6 +658,15 @@ def _check_status(calibration: Calibration, source: str) -> None:
     status = calibration.status
     if status == "synthetic" and not calibration.label.startswith("SYNTHETIC"):
         raise ValueError(f"{source}: status 'synthetic' for a display not labelled SYNTHETIC")
+    if status != "synthetic" and (
+        calibration.label.startswith("SYNTHETIC") or calibration.created == "synthetic"
+    ):  # a synthetic curve relabelled would pass for a display's measurement
+        raise ValueError(
+            f"{source}: status {status!r} for a synthetic display (labelled "
+            f"{calibration.label[:40]!r}, created {calibration.created!r}): a synthetic "
+            "calibration is a gamma curve, never measured, and keeps status 'synthetic' "
+            "(edited?); fit a calibration from readings (glarelab calibrate fit)"
+        )
     if status == "unverified" and verification:
         raise ValueError(
             f"{source}: status 'unverified' but it holds a verification pass; its status "
