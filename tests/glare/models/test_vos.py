@@ -44,7 +44,8 @@ def test_components_have_unit_volume(component):
 
 @pytest.mark.parametrize("wavelength", [380.0, 400.0, 500.0, 568.0, 650.0, 700.0, 780.0])
 def test_halo_has_unit_volume_at_every_wavelength(wavelength):
-    assert_allclose(eq4_volume(lambda t: vos.f3(t, wavelength)), 1.0, rtol=0.01)
+    # the docs' "within 0.04 % of 1" (README: where we depart), not 1.0000 as they said
+    assert_allclose(eq4_volume(lambda t: vos.f3(t, wavelength)), 1.0, rtol=4e-4)
 
 
 @pytest.mark.parametrize("regime", vos.REGIMES)
