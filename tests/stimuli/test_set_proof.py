@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import re
 import shutil
 import subprocess
 import sys
@@ -174,3 +175,22 @@ def test_a_background_outside_the_protocols_folder_is_refused_before_the_build(t
     with pytest.raises(ValueError, match=r"background.path = '\.\./bg.exr': .*must not leave"):
         build_stimulus_set(protocol, tmp_path / "set", progress=None)
     assert not (tmp_path / "set").exists()
+
+
+def test_a_background_inside_the_set_it_would_replace_is_refused(tmp_path, monkeypatch):
+    """A protocol pointing at the set's own copy of its background (kept as the master),
+    rebuilt into that set: the rebuild replaced the folder whole and deleted the only copy of
+    the EXR, said '48 files', and the set still verified."""
+    monkeypatch.setenv("GLARELAB_CACHE", str(tmp_path / "cache"))
+    folder = tmp_path / "set"
+    build_stimulus_set(load_protocol(_exr_protocol(tmp_path, "bg.exr")), folder, progress=None)
+    master = folder / "backgrounds" / "bg.exr"
+    before = master.read_bytes()
+    text = (tmp_path / "proto" / "exrbg.toml").read_text()
+    inside = tmp_path / "proto" / "inside.toml"
+    inside.write_text(text.replace('path = "bg.exr"', f'path = "{master}"'))
+    with pytest.raises(ValueError, match=rf"^{re.escape(str(master))} is inside .*set, which the "
+                       r"stimulus set replaces whole: give another folder \(nothing was changed\)"):  # fmt: skip
+        build_stimulus_set(load_protocol(inside), folder, progress=None)
+    assert master.read_bytes() == before
+    assert prove_stimulus_set(folder) == []

@@ -40,6 +40,7 @@ def _stimuli_build(args: argparse.Namespace) -> int:
         args.out,
         calibration=calibration,
         accept_mismatch="calibration" in (args.accept_mismatch or ()),
+        inputs=[args.calibration] if args.calibration else [],
     )
     encodings = [r.get("encoding", {}) for r in manifest["images"].values()]
     above = sum(e.get("above_max", 0) for e in encodings)

@@ -31,6 +31,7 @@ import shutil
 import struct
 import sys
 import zlib
+from collections.abc import Sequence
 from importlib import metadata
 from pathlib import Path
 
@@ -510,6 +511,7 @@ def build_stimulus_set(
     calibration: Calibration | None = None,
     progress=progress_bar,
     accept_mismatch: bool = False,
+    inputs: Sequence[str | Path] = (),
 ) -> dict:
     """Build a study's stimulus set into folder ``out`` and return its manifest.
 
@@ -528,6 +530,9 @@ def build_stimulus_set(
     accept_mismatch
         Build although the calibration's white is not the protocol display's (a set for
         another display, knowingly; sessions check again).
+    inputs
+        Other files the set is made from (the calibration's file), refused inside ``out``
+        as the protocol file and its EXR backgrounds are: the rebuild would delete them.
 
     Raises
     ------
@@ -560,10 +565,12 @@ def build_stimulus_set(
         anyway="build anyway with --accept-mismatch calibration (sessions check again)",
     )
     with output_lock(out, "stimulus set build"):  # a second build into it at once: refused
-        return _build_into(protocol, out, calibration, progress)
+        return _build_into(protocol, out, calibration, progress, [*map(Path, inputs)])
 
 
-def _build_into(protocol: Protocol, out: str | Path, calibration: Calibration, progress) -> dict:
+def _build_into(
+    protocol: Protocol, out: str | Path, calibration: Calibration, progress, inputs: list[Path]
+) -> dict:
     """:func:`build_stimulus_set` once its calibration is checked and ``out`` held."""
     if (
         Path(out).is_dir()
@@ -572,7 +579,9 @@ def _build_into(protocol: Protocol, out: str | Path, calibration: Calibration, p
         and not verify_stimulus_set(out)
     ):
         record_files(Path(out), "stimulus set")  # a whole set of an earlier version: its own
-    final = check_replaceable(out, kind="stimulus set", what="stimulus set")
+    final = check_replaceable(
+        out, kind="stimulus set", what="stimulus set", inputs=_protocol_inputs(protocol) + inputs
+    )
     edited = _edited_since_built(final)
     if edited:  # a set listed before the listing kept contents: its manifest says
         shown = ", ".join(edited[:3]) + (f" and {len(edited) - 3} more" if len(edited) > 3 else "")
@@ -621,6 +630,16 @@ def _exr_paths(value) -> list[str]:
     if isinstance(value, list):
         return [p for v in value for p in _exr_paths(v)]
     return []
+
+
+def _protocol_inputs(protocol: Protocol) -> list[Path]:
+    """The files a build reads from its protocol: the protocol file and its EXR backgrounds
+    (a set replaced whole must not hold them: its rebuild would delete them)."""
+    inputs = [Path(protocol.source)] if Path(protocol.source).is_file() else []
+    folder = protocol.folder if protocol.folder is not None else Path.cwd()
+    for name in _exr_paths(protocol.data):
+        inputs.append(Path(name) if Path(name).is_absolute() else folder / name)
+    return inputs
 
 
 def _kept_backgrounds(protocol: Protocol) -> list[str]:
