@@ -4,6 +4,7 @@ what reading one part's pixels would drop (other parts, a pixel aspect ratio, a 
 inside a larger frame) is refused naming the file and the attribute."""
 
 import math
+import re
 
 import numpy as np
 import OpenEXR
@@ -247,3 +248,27 @@ def test_a_negative_value_read_from_a_foreign_or_damaged_file_is_refused(tmp_pat
         exr.write(str(tmp_path / "negative.exr"))
     with pytest.raises(ValueError, match=r"holds a negative value.*-8\.3.* at index \(3, 4\)"):
         read_exr(tmp_path / "negative.exr")
+
+
+@pytest.mark.parametrize(("channels", "sampled"), [("Y", "Y"), ("RGB", "B")])
+def test_a_subsampled_channel_is_refused_not_read_as_a_smaller_image(channels, sampled, tmp_path):
+    """A Y channel stored 2 × 2 subsampled was read as a half-size image, and render wrote a
+    40 × 30 output for an 80 × 60 input, at another angular scale; a subsampled B gave numpy's
+    "all input arrays must have the same shape", naming neither file nor channel."""
+    import Imath
+
+    full = Imath.PixelType(Imath.PixelType.FLOAT)
+    image = np.full((60, 80), 50.0, np.float32)
+    header = OpenEXR.Header(80, 60)
+    header["channels"] = {
+        c: Imath.Channel(full, 2, 2) if c == sampled else Imath.Channel(full) for c in channels
+    }
+    path = tmp_path / "sub.exr"
+    out = OpenEXR.OutputFile(str(path), header)
+    out.writePixels(
+        {c: (image[::2, ::2] if c == sampled else image).copy().tobytes() for c in channels}
+    )
+    out.close()
+    with pytest.raises(ValueError, match=rf"^{re.escape(str(path))}: channel {sampled} is "
+                       r"subsampled \(2 × 2 pixels per sample"):  # fmt: skip
+        read_exr(path)

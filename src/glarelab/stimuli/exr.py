@@ -272,7 +272,8 @@ def read_exr(path: str | Path) -> np.ndarray:
         reading are held back, and written out only after a read that succeeds),
         holds a NaN, infinite or negative pixel (a damaged chunk decodes as NaN, a damaged
         uncompressed one as any value), holds neither a ``Y``
-        channel nor ``R``, ``G`` and ``B``, has more than one part, a ``pixelAspectRatio``
+        channel nor ``R``, ``G`` and ``B``, a subsampled one, has more than one part,
+        a ``pixelAspectRatio``
         other than 1, or a ``dataWindow`` other than its ``displayWindow`` (a data window that
         equals the display window is read whole, wherever its origin).
     FileNotFoundError
@@ -297,13 +298,26 @@ def read_exr(path: str | Path) -> np.ndarray:
             if not exr.parts:  # no part's pixels read (a damaged chunk table): said, not raised
                 raise _Unreadable("no part of it could be read")
             _check_header(path, exr)
-            channels = {name: np.asarray(c.pixels) for name, c in exr.channels().items()}
+            read = exr.channels()
+            channels = {name: np.asarray(c.pixels) for name, c in read.items()}
+            sampled = {  # (x, y) pixels per sample of a channel that is not full resolution
+                name: (int(c.xSampling), int(c.ySampling))
+                for name, c in read.items()
+                if name in ("Y", "R", "G", "B") and (c.xSampling, c.ySampling) != (1, 1)
+            }
     except (RuntimeError, IndexError, _Unreadable) as error:  # OpenEXR: the file is damaged
         reason = said[0].removeprefix(f"{path}: ") if said else ""
         raise ValueError(
             f"{path} cannot be read as OpenEXR (truncated or damaged?): {error}"
             + (f"; OpenEXR: {reason}" if reason and reason not in str(error) else "")
         ) from None
+    if sampled:  # read as a smaller image, at another angular scale, without a word
+        name, (x, y) = sorted(sampled.items())[0]
+        raise ValueError(
+            f"{path}: channel {name} is subsampled ({x} × {y} pixels per sample, as chroma in "
+            "a YC image); glarelab reads channels with one sample per pixel: write the image "
+            "at full resolution"
+        )
     if {"R", "G", "B"} <= channels.keys() and "Y" in channels:
         raise ValueError(
             f"{path} holds both a Y channel and R, G, B channels; glarelab reads one scene, "
