@@ -393,3 +393,13 @@ def test_save_refuses_what_load_would_refuse(tmp_path):
     with pytest.raises(ValueError, match="has no model; it holds one"):
         fitted.save(tmp_path / "model.json")
     assert list(tmp_path.iterdir()) == []
+
+
+def test_check_calibration_names_a_path_given_for_a_calibration():
+    """``check_calibration(protocol, "file.json")`` ended in AttributeError: 'str' object has no
+    attribute 'max_cd_m2'."""
+    from glarelab.display.checks import check_calibration
+    from glarelab.protocols import load_protocol
+
+    with pytest.raises(TypeError, match=r"^calibration must be a Calibration \(Calibration.load"):
+        check_calibration(load_protocol("yoshida2008"), "lab.json")

@@ -118,7 +118,20 @@ def check_calibration(protocol: Protocol, calibration) -> list[Check]:
     -------
     list of Check
         The ``calibration`` check, or none.
+
+    Raises
+    ------
+    TypeError
+        For a ``calibration`` that is not a Calibration (a file's path: read it with
+        ``Calibration.load``).
     """
+    from glarelab.display.calibration import Calibration
+
+    if calibration is not None and not isinstance(calibration, Calibration):
+        raise TypeError(
+            f"calibration must be a Calibration (Calibration.load(path) reads a file) or None; "
+            f"got {type(calibration).__name__} {calibration!r}"
+        )
     if calibration is None or not protocol.data.get("display"):
         return []
     display = protocol["display"]
