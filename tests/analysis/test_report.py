@@ -11,6 +11,8 @@ from html import unescape
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from PIL import Image
 
 from glarelab.analysis import paradigms as analysis_paradigms
@@ -284,6 +286,48 @@ def test_a_comment_stays_in_its_markdown_cell(comment, cell):
     lines = text.splitlines()
     assert len(lines) == 3 and lines[2] == f"| sim01 | {cell} |"
     assert [line.replace(r"\|", "").count("|") for line in lines] == [3, 3, 3]
+
+
+def _rendered_cell(comment: str) -> str:
+    """The comment's cell of a report's Markdown table as a Markdown viewer shows it
+    (CommonMark with tables and strikethrough, raw HTML on, as GitHub and editors render)."""
+    import pandas as pd
+    from markdown_it import MarkdownIt
+
+    from glarelab.analysis.report import _markdown
+
+    viewer = MarkdownIt("commonmark", {"html": True}).enable(["table", "strikethrough"])
+    shown = viewer.render(_markdown(pd.DataFrame({"comment": [comment]})))
+    (cell,) = re.findall(r"<td>(.*?)</td>", shown, re.S)
+    return unescape(cell.replace("<br>", "\n"))
+
+
+@pytest.mark.parametrize(
+    "comment",
+    ["<script>alert(1)</script>", "<img src=x onerror=alert(1)>", "**bold** [link](http://evil)",
+     "&lt; is an entity", "__init__", "`code`", "~~gone~~", "<http://a.b>", "![i](x.png)",
+     "p < .001", "a_b_c", "5 > 3 * 2"],
+)  # fmt: skip
+def test_a_comment_is_shown_as_typed_not_as_markup(comment):
+    """A participant's ``<script>…`` reached comments.md as raw HTML (run or dropped by a
+    Markdown viewer), and ``**bold**`` or a link was formatted: only '|' was escaped."""
+    pytest.importorskip("markdown_it")
+    assert _rendered_cell(comment) == comment
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    st.text(
+        alphabet=st.characters(codec="utf-8", categories=["L", "N", "P", "S", "Zs"])
+        | st.sampled_from("<>&*_`[]()~|\\!#;/\n"),
+        max_size=40,
+    )
+)
+def test_every_comment_is_shown_as_typed(comment):
+    pytest.importorskip("markdown_it")
+    typed = "\n".join(line.strip() for line in comment.splitlines()).strip()
+    shown = "\n".join(line.strip() for line in _rendered_cell(comment).splitlines()).strip()
+    assert shown == typed
 
 
 @pytest.mark.parametrize("study", ["yoshida2008", "luidolt2020"])

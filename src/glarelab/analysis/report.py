@@ -49,6 +49,7 @@ import hashlib
 import html
 import io
 import json
+import re
 import shutil
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -108,10 +109,18 @@ code{background:#f3f3f3;padding:0 0.2em}.note{color:#555;font-size:0.92em}
 """
 
 
+# what a Markdown viewer would take for markup in a cell's text, escaped with a backslash
+# (CommonMark §2.4): the start of an HTML tag or autolink, an entity, emphasis, code, links
+# and strikethrough; a '<' before a space ('p < .001') or an '_' between letters or digits
+# ('sim01_yoshida2008') is text already and stays as written
+_MARKUP = re.compile(r"[\\|`*\[\]~]|<(?=[A-Za-z/!?])|&(?=#?\w+;)|(?<![^\W_])_|_(?![^\W_])")
+
+
 def _markdown_cell(value: object) -> str:
-    """A table cell's text as Markdown keeps it in its cell: a ``|`` escaped, a line break
-    written as ``<br>`` (a participant's comment may hold either)."""
-    text = str(value).replace("\\", "\\\\").replace("|", "\\|")
+    """A table cell's text as Markdown shows it as written, in its cell: markup characters
+    escaped (a participant's comment ``<script>…`` or ``**bold**`` is shown, not run or
+    formatted), a line break written as ``<br>``."""
+    text = _MARKUP.sub(lambda match: "\\" + match.group(), str(value))
     return "<br>".join(text.splitlines()) if ("\n" in text or "\r" in text) else text
 
 
