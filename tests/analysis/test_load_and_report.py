@@ -272,3 +272,27 @@ def test_a_sidecar_nested_too_deeply_is_named_not_a_crash(simulated, tmp_path, c
     err = capsys.readouterr().err
     assert f"{files[0].with_suffix('.json')}: not valid JSON (arrays or objects nested too " in err
     assert "Traceback" not in err and not out.exists()
+
+
+def test_the_sessions_table_counts_a_session_without_sidecar_from_its_rows(simulated, tmp_path):
+    """With --include-no-sidecar the Sessions table printed that session and its trials as
+    'nan', and every other session number as '1.0'."""
+    import html
+
+    files = csvs(simulated, "yoshida2008")
+    data = tmp_path / "data"
+    data.mkdir()
+    for path in files:
+        shutil.copy(path, data / path.name)
+        if path != files[0]:
+            shutil.copy(path.with_suffix(".json"), data / path.with_suffix(".json").name)
+    copies = sorted(str(p) for p in data.glob("*.csv"))
+    report = write_report(
+        load_protocol("yoshida2008"), copies, tmp_path / "report", include_no_sidecar=True
+    )
+    text = report.read_text(encoding="utf-8")
+    sessions = text[text.index("<h2 id='sessions'>") :]
+    cells = [html.unescape(c) for c in re.findall(r"<td[^>]*>(.*?)</td>", sessions)]
+    assert not {"nan", "1.0", "15.0"} & set(cells), cells
+    row = cells[cells.index(files[0].name) :][:8]
+    assert row[:3] == [files[0].name, "sim01", "1"] and "no sidecar" in row and "15" in row, row

@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from glarelab.files.inputs import loads_json
+from glarelab.files.values import is_whole
 
 if TYPE_CHECKING:
     from glarelab.protocols import Protocol
@@ -125,6 +126,12 @@ def _time(value: str | None, since: str | None = None) -> str:
     return time if since and since.startswith(date) else f"{date} {time}"
 
 
+def _count(value) -> int | str:
+    """A session number or a count as the table prints it: a whole number, or — (never
+    pandas' ``nan``, nor ``1.0`` where one row lacked it)."""
+    return int(value) if is_whole(value) else "—"
+
+
 def session_rows(
     files: list[str],
     sidecars: dict[str, dict],
@@ -164,11 +171,11 @@ def session_rows(
             {
                 "file": Path(file).name,
                 "participant": sidecar.get("participant"),
-                "session": sidecar.get("session"),
+                "session": _count(sidecar.get("session")),
                 "status": sidecar.get("status"),
                 "started": _time(sidecar.get("started")),
                 "ended": _time(sidecar.get("ended"), sidecar.get("started")),
-                "trials": sidecar.get("trials"),
+                "trials": _count(sidecar.get("trials")),
                 "runs": len(runs),
                 "simulated": "yes" if sidecar.get("simulated") else "no",
                 "host": ", ".join(sorted({str(r.get("host")) for r in runs if r.get("host")}))

@@ -674,9 +674,16 @@ def _write_report(
         )
         simulated = True if simulated_ids == len(flags) else simulated_ids
         methods = methods_paragraph(protocol, dataset.trials["participant"].nunique(), simulated)
-        unknown = {  # a CSV without its sidecar: listed, its origin unknown
-            file: {"status": "no sidecar", "participant": participant, "simulated": None}
-            for file, participant in dataset.trials.groupby("_file")["participant"].first().items()
+        by_file = dataset.trials.groupby("_file")
+        unknown = {  # a CSV without its sidecar: listed, its origin unknown, its rows counted
+            file: {
+                "status": "no sidecar",
+                "participant": rows["participant"].iloc[0],
+                "session": int(rows["session"].iloc[0]),
+                "trials": len(rows),
+                "simulated": None,
+            }
+            for file, rows in by_file
             if file not in dataset.sidecars
         }
         origin = provenance(unknown | dataset.sidecars, protocol.sha256, stimuli)
