@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 import pandas as pd
+import pytest
 from pandas.testing import assert_frame_equal
 
 from glarelab.analysis.report import write_report
@@ -121,3 +122,19 @@ def test_a_whole_study_leaves_the_interpreters_global_state_as_it_was(tmp_path):
     )
     assert done.returncode == 0, done.stderr[-2000:]
     assert done.stdout.strip().splitlines()[-1] == "[]"
+
+
+def test_a_first_demo_that_fails_leaves_no_folder(tmp_path, monkeypatch):
+    """On a full disk the first demo removed its building folder but left the new --out
+    holding only its listing (.glarelab-files.json)."""
+    import errno
+
+    import glarelab.demo
+
+    def full(*args, **kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(glarelab.demo, "build_stimulus_set", full)
+    with pytest.raises(OSError, match="No space left"):
+        glarelab.demo.run_demo("yoshida2008", tmp_path / "demo", participants=2, seed=1)
+    assert list(tmp_path.iterdir()) == []

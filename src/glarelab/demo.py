@@ -11,6 +11,7 @@ participant's session, a user's notes, a link to another folder) is refused unto
 
 from __future__ import annotations
 
+import contextlib
 import shutil
 from collections.abc import Callable
 from pathlib import Path
@@ -21,7 +22,7 @@ from glarelab.experiments.session import (
     make_observer,
     run_session,
 )
-from glarelab.files.folders import check_replaceable, record_files
+from glarelab.files.folders import LISTING, check_replaceable, record_files
 from glarelab.protocols import load_protocol
 from glarelab.stimuli.stimulus_set import (
     build_stimulus_set,
@@ -74,10 +75,24 @@ def run_demo(
     out = Path(out)
     protocol = load_protocol(protocol_name)
     check_replaceable(out, kind=KIND, what="demo folder")
+    created = not (out.exists() or out.is_symlink())
     out.mkdir(parents=True, exist_ok=True)
     for part in ("stimuli", "data", "report"):  # the demo's own output, rebuilt every time
         shutil.rmtree(out / part, ignore_errors=True)
     record_files(out, KIND)
+    try:
+        return _run(protocol, out, participants=participants, seed=seed, log=log)
+    except BaseException:
+        if created and {p.name for p in out.iterdir()} <= {LISTING}:
+            # a first run that failed (a full disk) leaves no folder holding only a listing
+            (out / LISTING).unlink(missing_ok=True)
+            with contextlib.suppress(OSError):
+                out.rmdir()
+        raise
+
+
+def _run(protocol, out: Path, *, participants: int, seed: int, log) -> Path:
+    """:func:`run_demo` in its folder, made and listed."""
     images = shows_images(protocol)
     steps = 4 if images else 3
     step = 0
