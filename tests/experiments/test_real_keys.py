@@ -455,6 +455,38 @@ def test_comments_typed_in_one_burst_with_the_rating_and_the_enter(screen, tmp_p
     assert "x@" in rows[1]["ignored_keys"]  # ...but a key pressed before trial 2's rating
 
 
+def test_a_rating_key_held_down_is_one_rating_and_no_comment(screen, tmp_path):
+    """A rating key held for a second filled the comment box with its auto-repeats
+    ('555555555'), saved as the participant's comment; a key held while typing the comment
+    still repeats, as in any text box."""
+    out = tmp_path / "data"
+    screen.run("run", "luidolt2020", "--participant", "P01", "--out", out)
+    screen.wait_for_log(out, r"session log")
+    screen.focus_window()
+    time.sleep(0.3)
+    screen.key("space")
+    screen.wait_for_log(out, r"trial 1 onset")
+    xdotool = shutil.which("xdotool")
+    subprocess.run([xdotool, "keydown", "5"], env=screen.env, check=True)
+    time.sleep(1.2)  # X's auto-repeat: after 660 ms, 25 a second
+    subprocess.run([xdotool, "keyup", "5"], env=screen.env, check=True)
+    screen.wait_for_log(out, r"screen comment of trial 1")
+    time.sleep(0.3)
+    save(screen.screenshot(), tmp_path / "held.png")
+    screen.type("ok")
+    subprocess.run([xdotool, "keydown", "o"], env=screen.env, check=True)
+    time.sleep(1.2)
+    subprocess.run([xdotool, "keyup", "o"], env=screen.env, check=True)
+    screen.key("Return")
+    screen.wait_for_log(out, r"trial 2 onset")
+    screen.key("Escape")
+    assert screen.wait() == 3, screen.stderr[-2000:]
+    _, rows = rows_of(out)
+    assert [r["rating"] for r in rows] == ["5"]
+    comment = rows[0]["comment"]
+    assert re.fullmatch(r"oko{3,}", comment), comment  # no 5 in it; the held o repeated
+
+
 def test_ctrl_c_while_the_window_opens_stops_cleanly(screen, tmp_path):
     out = tmp_path / "data"
     screen.run("run", "luidolt2020", "--participant", "P01", "--out", out)

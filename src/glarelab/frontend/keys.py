@@ -22,7 +22,14 @@ from glarelab.frontend.window import (
     typed_text,
 )
 
-__all__ = ["ScriptedKeys", "SessionKeys", "scripted_text_event", "unknown_key_names"]
+__all__ = [
+    "ScriptedKeys",
+    "SessionKeys",
+    "comment_start",
+    "past_held_key",
+    "scripted_text_event",
+    "unknown_key_names",
+]
 
 
 def unknown_key_names(names: list[str]) -> list[str]:
@@ -83,6 +90,89 @@ def scripted_text_event(name: str) -> tuple[str, str] | None:
     if name in SCRIPTED_MOTION:
         return ("motion", SCRIPTED_MOTION[name])
     return None
+
+
+_ENTER = (("text", "\r"), ("repeat", "\r"))  # the comment's end (typed_text's)
+
+
+def comment_start(events: list[tuple[str, str]], mark: int, symbols: set[str], rating: str) -> int:
+    """Where a comment begins in a window's text events (:class:`TextCapture`): after the
+    rating key's press from ``mark`` on, its own character, and that character auto-repeated
+    while the key stayed down (a rating key held for a second typed '555555555' into the
+    comment); characters typed before the box showed are kept.
+
+    Parameters
+    ----------
+    events
+        The window's text events.
+    mark
+        The first event of the rating screen.
+    symbols
+        The rating key's symbols in the keyboard's layout (:func:`key_symbols`), as text.
+    rating
+        The rating, as its key's name (``'5'``): found by its text where no key event is.
+
+    Returns
+    -------
+    int
+        The index of the comment's first event.
+
+    Examples
+    --------
+    >>> held = [("key", "53"), ("text", "5"), ("repeat", "5"), ("repeat", "5"), ("key", "104"),
+    ...         ("text", "h"), ("repeat", "h")]
+    >>> typed_text(held, comment_start(held, 0, {"53"}, "5"))[0]
+    'hh'
+    """
+    start = None
+    for index in range(mark, len(events)):
+        if events[index][0] == "key" and events[index][1] in symbols:
+            start = index + 1
+            if start < len(events) and events[start][0] == "text":
+                start += 1  # the rating key's own character
+            break
+    else:
+        for index in range(mark, len(events)):  # no key events: by its text
+            if events[index] == ("text", rating):
+                start = index + 1
+                break
+    if start is None:
+        return len(events)
+    own = events[start - 1][1] if events[start - 1][0] == "text" else None
+    while start < len(events) and events[start] == ("repeat", own):
+        start += 1  # the rating key held down
+    return start
+
+
+def past_held_key(events: list[tuple[str, str]], start: int) -> int:
+    """``start`` moved past the auto-repeats of the character just before it that arrived
+    since (:func:`comment_start` found those already there: the rating key may still be held
+    when the comment's box shows).
+
+    Parameters
+    ----------
+    events
+        The window's text events.
+    start
+        A comment's first event (:func:`comment_start`).
+
+    Returns
+    -------
+    int
+        The index of the first event that is not the held key's repeat.
+
+    Examples
+    --------
+    >>> events = [("key", "53"), ("text", "5")]
+    >>> start = comment_start(events, 0, {"53"}, "5")
+    >>> events += [("repeat", "5"), ("repeat", "5"), ("key", "111"), ("text", "o")]
+    >>> typed_text(events, past_held_key(events, start))[0]
+    'o'
+    """
+    own = next((v for k, v in reversed(events[:start]) if k in ("text", "repeat")), None)
+    while start < len(events) and events[start] == ("repeat", own):
+        start += 1
+    return start
 
 
 class ScriptedKeys:
@@ -209,34 +299,24 @@ class SessionKeys:
         the keyboard's layout: ``(`` for the 5 of a French keyboard), typed since the rating
         screen appeared; characters typed before the box showed are kept."""
         dispatch_events(self.window)
-        events = self.typing.events
         rating = str(screen.get("rating", ""))
         symbols = {str(s) for s in key_symbols(self.window, (rating, f"num_{rating}"))}
-        for index in range(self._typing_mark, len(events)):
-            if events[index][0] == "key" and events[index][1] in symbols:
-                index += 1
-                if index < len(events) and events[index][0] == "text":
-                    index += 1  # the rating key's own character
-                self._comment_start = index
-                return
-        for index in range(self._typing_mark, len(events)):  # no key events: by its text
-            if events[index] == ("text", rating):
-                self._comment_start = index + 1
-                return
-        self._comment_start = len(events)
+        self._comment_start = comment_start(self.typing.events, self._typing_mark, symbols, rating)
 
     def comment_so_far(self) -> tuple[str, int]:
         """The comment typed so far and the cursor's place in it (for its box)."""
-        text, cursor, _ = typed_text(self.typing.events, self._comment_start or 0)
+        events = self.typing.events
+        text, cursor, _ = typed_text(events, past_held_key(events, self._comment_start or 0))
         return text, cursor
 
     def typed(self) -> str:
         """The comment typed since the comment screen's rating key, up to its Enter."""
         dispatch_events(self.window)  # the characters typed before Enter
         start = self._comment_start if self._comment_start is not None else len(self.typing.events)
+        start = past_held_key(self.typing.events, start)
         text, _, _ = typed_text(self.typing.events, start)
         end = start
-        while end < len(self.typing.events) and self.typing.events[end] != ("text", "\r"):
+        while end < len(self.typing.events) and self.typing.events[end] not in _ENTER:
             end += 1
         self._typing_mark = min(end + 1, len(self.typing.events))  # the next screen's typing
         self._comment_start = None

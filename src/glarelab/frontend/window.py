@@ -31,6 +31,7 @@ __all__ = [
     "TextCapture",
     "compose_typed_text",
     "grab_screen",
+    "held_keys_press_once",
     "key_labels",
     "key_symbols",
     "measure_frame_intervals",
@@ -108,7 +109,44 @@ def open_window(
         window = visual.Window(**common)
     window.mouseVisible = False
     compose_typed_text(window)
+    held_keys_press_once(window)
     return window, window_bits()
+
+
+def held_keys_press_once(window) -> bool:
+    """Ask the X server to send a key held down as one press and repeated text (XKB's
+    detectable auto-repeat) on ``window``'s connection; whether it was set (only pyglet's X11
+    windows need it).
+
+    pyglet asks it only for the first connection it opens, and PsychoPy's window has another:
+    there a held key came as a release and a new press 25 times a second, so its repeated
+    characters could not be told from keys pressed again (a rating key held for a second typed
+    '555555555' into the comment that followed). :class:`TextCapture` then records them as
+    ``("repeat", text)``.
+
+    Parameters
+    ----------
+    window
+        The open PsychoPy window.
+
+    Returns
+    -------
+    bool
+        Whether the server now reports held keys so.
+    """
+    handle = getattr(window, "winHandle", None)
+    display = getattr(getattr(handle, "display", None), "_display", None)
+    if not (sys.platform.startswith("linux") and display):
+        return False
+    from pyglet.window import xlib as pyglet_xlib
+
+    supported = ctypes.c_int()
+    done = bool(
+        pyglet_xlib.XkbSetDetectableAutoRepeat(display, ctypes.c_int(1), ctypes.byref(supported))
+    )
+    if done and getattr(handle, "pressed_keys", None) is None:
+        handle.pressed_keys = set()  # where pyglet keeps the keys down, to press them once
+    return done
 
 
 def compose_typed_text(window) -> bool:
@@ -337,7 +375,9 @@ class KeyReader:
 class TextCapture:
     """Every text event of a window, in order: ``("text", characters)`` and
     ``("motion", name)`` (Backspace, Delete, arrows, Home, End), as pyglet reports them, each
-    after ``("key", symbol)`` of the key press that made it (pyglet's symbols are X keysyms).
+    after ``("key", symbol)`` of the key press that made it (pyglet's symbols are X keysyms);
+    the characters of a key held down, auto-repeated with no press of their own, as
+    ``("repeat", characters)``.
     Shift+Enter types a new line (``"\\n"``); ``returns`` says of each Enter pressed
     whether Shift was down.
 
@@ -353,6 +393,7 @@ class TextCapture:
         self.events: list[tuple[str, str]] = []
         self.returns: list[bool] = []  # each Enter pressed: whether with Shift
         self._shift_return = False
+        self._pressed = False  # a key press since the last text event
         window.winHandle.push_handlers(
             on_text=self._on_text, on_text_motion=self._on_motion, on_key_press=self._on_key
         )
@@ -362,12 +403,16 @@ class TextCapture:
             text = "\n"
         self._shift_return = False
         if text != "\t":  # a tab comes as its key (PsychoPy takes the text event for itself)
-            self.events.append(("text", text))
+            # a text event with no key press of its own is the window system's auto-repeat of
+            # a key held down (pyglet reports its press once)
+            self.events.append(("text" if self._pressed else "repeat", text))
+        self._pressed = False
 
     def _on_key(self, symbol: int, modifiers: int) -> None:
         from pyglet.window import key
 
         self.events.append(("key", str(symbol)))  # which key made the text that follows
+        self._pressed = True
         self._shift_return = symbol in (key.RETURN, key.ENTER) and bool(modifiers & key.MOD_SHIFT)
         if symbol in (key.RETURN, key.ENTER):
             self.returns.append(self._shift_return)
@@ -406,7 +451,7 @@ def typed_text(events: list[tuple[str, str]], start: int = 0) -> tuple[str, int,
     text: list[str] = []
     cursor = 0
     for kind, value in events[start:]:
-        if kind == "text":
+        if kind in ("text", "repeat"):  # a held key types its character again
             if value == "\r":  # Enter (Shift+Enter comes as a new line, "\n")
                 return "".join(text), cursor, True
             text[cursor:cursor] = list(value)
