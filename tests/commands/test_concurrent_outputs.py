@@ -132,3 +132,19 @@ def test_a_name_claimed_between_the_look_and_the_check_sends_the_run_to_the_next
     monkeypatch.setattr(calibrate, "output_file", raced)
     assert calibrate.calibration_out(out, replace=False, claim=True) == tmp_path / "lab-2.json"
     assert out.stat().st_size == 0  # the other run's name, left to it
+
+
+def test_simulated_sessions_started_at_once_share_one_cached_set(tmp_path):
+    """Simulated sessions at once on an empty cache each built the protocol's set into it; with
+    one build into a folder at a time the second would be refused, so the others wait for the
+    first build and use its set."""
+    import os
+
+    env = {**os.environ, "GLARELAB_CACHE": str(tmp_path / "cache")}
+    run = ["run", "spencer1995", "--simulate", "--out", str(tmp_path / "data")]
+    done = at_once([[*run, "--participant", p] for p in ("P01", "P02")], env=env)
+    assert [d.returncode for d in done] == [0, 0], [d.stderr for d in done]
+    (cached,) = (tmp_path / "cache" / "sets").iterdir()
+    assert [p.name for p in (tmp_path / "cache" / "sets").glob(".*")] == []  # no lock left
+    assert len(list((tmp_path / "data").glob("P0*_spencer1995_s1_*.csv"))) == 2
+    assert cached.name.startswith("spencer1995-")

@@ -30,6 +30,7 @@ import os
 import shutil
 import struct
 import sys
+import time
 import zlib
 from collections.abc import Sequence
 from importlib import metadata
@@ -51,6 +52,7 @@ from glarelab.files.folders import (
     staging_folder,
 )
 from glarelab.files.inputs import as_path, loads_json
+from glarelab.files.locks import ProcessLock
 from glarelab.files.values import is_whole, plain_array
 from glarelab.glare.models.cache import cache_root
 from glarelab.protocols import Protocol, ProtocolError
@@ -1142,6 +1144,9 @@ class StimulusSet:
         return compose(terms, self.image)
 
 
+CACHE_BUILD_WAIT_S = 3600.0  # longest wait for another process building a cached set
+
+
 def cached_stimulus_set(
     protocol: Protocol, *, root: Path | None = None, progress=progress_bar
 ) -> Path:
@@ -1170,8 +1175,29 @@ def cached_stimulus_set(
     folder = Path(root) / "sets" / f"{protocol.study}-{protocol.sha256[:16]}"
     if (folder / MANIFEST).is_file() and not verify_stimulus_set(folder):
         return folder
-    shutil.rmtree(folder, ignore_errors=True)  # the cache's own folder, damaged: rebuilt
-    build_stimulus_set(
-        protocol, folder, calibration=default_calibration(protocol), progress=progress
-    )
-    return folder
+    # one process checks and builds at a time; the others wait and then use its set (the
+    # simulated sessions of a batch run at once; a second build would have been refused,
+    # and its clearing of a damaged set could remove the one just built)
+    lock = ProcessLock(folder.parent / f".{folder.name}.cache.lock", refusal=BlockingIOError)
+    deadline = time.monotonic() + CACHE_BUILD_WAIT_S
+    while True:
+        try:
+            lock.acquire()
+            break
+        except BlockingIOError as held:
+            if time.monotonic() > deadline:
+                raise TimeoutError(
+                    f"{folder}: another glarelab process ({held}) has been building this cached "
+                    f"stimulus set for {CACHE_BUILD_WAIT_S:.0f} s; run again when it has ended"
+                ) from None
+            time.sleep(0.2)
+    try:
+        if (folder / MANIFEST).is_file() and not verify_stimulus_set(folder):
+            return folder  # built by the process waited for
+        shutil.rmtree(folder, ignore_errors=True)  # the cache's own folder, damaged: rebuilt
+        build_stimulus_set(
+            protocol, folder, calibration=default_calibration(protocol), progress=progress
+        )
+        return folder
+    finally:
+        lock.release()
