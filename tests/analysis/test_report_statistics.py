@@ -71,7 +71,9 @@ def test_a_category_everyone_rated_at_the_midpoint_is_left_out_of_the_family(pro
 
 def test_two_categories_keep_rs_decision_on_overall(protocol):
     """The issue's case: R's Holm p for Overall is .0385 ("differed"), not .077."""
-    protocol.data["questionnaire"]["categories"] = CATEGORIES[:2]  # the fixture's own copy
+    data = copy.deepcopy(protocol.data)
+    data["questionnaire"]["categories"] = CATEGORIES[:2]
+    protocol = dataclasses.replace(protocol, data=data)
     ratings = {"Glare Appearance": [4] * 8, "Overall": [7, 5, 3, 6, 6, 6, 6, 4]}
     result = PARADIGMS["rating"].analyse(questionnaire(ratings), protocol)
     overall = result["tables"]["summary"].set_index("category").loc["Overall"]

@@ -47,12 +47,20 @@ import io
 import json
 import math
 import re
+import tempfile
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
 
 from glarelab.analysis.dataset import DataError
-from glarelab.analysis.load import _other_delimiter, _parse, _Trials, _trials_of, _twin
+from glarelab.analysis.load import (
+    _other_delimiter,
+    _parse,
+    _Trials,
+    _trials_of,
+    _twin,
+    load_sessions,
+)
 from glarelab.files.atomic import write_text
 from glarelab.files.inputs import input_file, loads_json
 from glarelab.protocols import columns
@@ -685,10 +693,6 @@ def _as_analysed(protocol, planned: list, lines_of: dict[Path, list[int]]) -> li
     analysis' own loader (``load_sessions``) from a temporary copy: a rating of 4.5, a
     category the study does not have, a staircase step out of place. Named by the source file
     and its line, so that no session is written that the analysis can never read."""
-    import tempfile
-
-    from glarelab.analysis.load import load_sessions
-
     problems: list[str] = []
     with tempfile.TemporaryDirectory(prefix="glarelab-import-") as folder:
         for imported, text, sidecar in planned:
