@@ -128,3 +128,30 @@ def test_the_dialog_asks_again_after_a_bad_entry_and_escape_before_a_trial_keeps
     assert sidecar["runs"][0]["ended_by"] == "escape" and sidecar["ended"] >= sidecar["started"]
     log = path.with_suffix(".log").read_text()
     assert "instructions screen onset" in log and "escape at" in log
+
+
+def test_a_display_that_goes_away_ends_the_session_as_aborted(screen, tmp_path):
+    """The X server killed mid-session (a remote session closed, a crash): the process ended
+    with a segmentation fault (exit 139), its sidecar still 'running', its lock and reserve
+    left; it ends as a stop does (exit 3), aborted, every finished trial kept."""
+    out = tmp_path / "data"
+    screen.run("run", "luidolt2020", "--participant", "P01", "--out", out)
+    screen.wait_for_log(out, r"session log")
+    screen.focus_window()
+    time.sleep(0.3)
+    screen.key("space")
+    screen.wait_for_log(out, r"trial 1 onset")
+    screen.key("5")
+    screen.wait_for_log(out, r"screen comment of trial 1")
+    screen.key("Return")
+    screen.wait_for_log(out, r"trial 2 onset")
+    screen.server.kill()  # the display goes, the session's window with it
+    screen.server.wait(timeout=30)
+    assert screen.wait() == 3, screen.stderr[-2000:]
+    assert "the X display was lost" in screen.stderr and "Traceback" not in screen.stderr
+    path = session_csv(out)
+    sidecar = sidecar_of(path)
+    assert sidecar["status"] == "aborted" and sidecar["trials"] == 1
+    assert sidecar["runs"][-1]["ended_by"].startswith("display lost")
+    assert [r["rating"] for r in rows_of(path)] == ["5"]
+    assert sorted(p.name for p in out.iterdir() if p.name.startswith(".")) == []  # no reserve

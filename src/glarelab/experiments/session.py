@@ -816,6 +816,15 @@ def _run_session_locked(
                     _finish_run(sidecar, files, None, None, "aborted", _ended_by(error, files))
                     raise error
                 started_run = True  # from here the files are the run's record, kept
+                if hasattr(frontend, "display_lost"):  # a window whose display may go away
+
+                    def display_lost() -> None:
+                        files.release_reserve()  # the room set aside for the sidecar's end
+                        reason = "display lost: the X server ended or the session was closed"
+                        _finish_run(sidecar, files, None, None, "aborted", reason)
+                        files.close()  # the lock given back
+
+                    frontend.display_lost = display_lost
                 _run_trials(engine, frontend, files, sidecar, protocol, rate, resume, stop)
             finally:
                 frontend.close()

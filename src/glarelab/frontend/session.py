@@ -48,6 +48,7 @@ from glarelab.frontend.window import (
     grab_screen,
     measure_frame_intervals,
     measure_refresh,
+    on_display_lost,
     open_window,
     screen_resolution,
 )
@@ -161,6 +162,7 @@ class PsychoPyFrontend:
         self._screen: dict | None = None
         self._screenshot_taken = False
         self.collecting = False  # the eye tracker has recorded: the session's files are kept
+        self.display_lost = None  # the session's record of its end, should the display go
 
     def _set_calibration(self) -> Calibration | None:
         if self.stimuli is None:
@@ -185,6 +187,7 @@ class PsychoPyFrontend:
         self.window, bits = open_window(
             bits=self.display_bits, fullscreen=self.fullscreen, size=self.size, monitor=monitor
         )
+        on_display_lost(self.window, lambda: self.display_lost and self.display_lost())
         self._refresh_intervals = measure_frame_intervals(self.window, frames=60)
         self.facts = ScreenFacts(
             resolution_px=screen_resolution(self.window),

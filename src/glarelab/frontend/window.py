@@ -21,7 +21,9 @@ PsychoPy only when called.
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
+import os
 import sys
 
 import numpy as np
@@ -36,6 +38,7 @@ __all__ = [
     "key_symbols",
     "measure_frame_intervals",
     "measure_refresh",
+    "on_display_lost",
     "open_window",
     "read_framebuffer_codes",
     "screen_resolution",
@@ -111,6 +114,56 @@ def open_window(
     compose_typed_text(window)
     held_keys_press_once(window)
     return window, window_bits()
+
+
+def on_display_lost(window, ended) -> bool:
+    """Have the loss of ``window``'s X display (the server killed, a remote session closed)
+    end the process as a stop does: ``ended()`` records the end, then exit status 3. Xlib's
+    default ends the process at once, or pyglet's clean-up then crashed it (exit 139), with the
+    session's sidecar still 'running'.
+
+    Parameters
+    ----------
+    window
+        The open PsychoPy window.
+    ended
+        Called once the display is gone (it must not draw): writes what the session's end
+        says; its own failure is ignored, the process ends either way.
+
+    Returns
+    -------
+    bool
+        Whether the handler was set (only pyglet's X11 windows have one).
+
+    Notes
+    -----
+    Xlib calls the handler of a lost connection and ends the process when it returns, so it
+    never returns: it calls ``ended`` and ends the process with ``os._exit(3)`` (no clean-up
+    that would speak to the lost display).
+    """
+    handle = getattr(window, "winHandle", None)
+    if not (sys.platform.startswith("linux") and getattr(handle, "display", None)):
+        return False
+    import threading
+
+    from pyglet.libs.x11 import xlib
+
+    once = threading.Lock()  # each connection (and thread) reports the loss: one ends it
+
+    def lost(_display) -> int:
+        once.acquire()  # never released: a second caller waits for the exit
+        with contextlib.suppress(BaseException):
+            sys.stderr.write(
+                "[glarelab] the X display was lost (its server ended or the session was "
+                "closed): the session ends as aborted, every finished trial kept\n"
+            )
+            ended()
+        os._exit(3)
+
+    handler = xlib.XIOErrorHandler(lost)
+    window.glarelab_display_lost = handler  # kept alive as long as the window
+    xlib.XSetIOErrorHandler(handler)
+    return True
 
 
 def held_keys_press_once(window) -> bool:
