@@ -644,3 +644,25 @@ def test_a_signal_that_the_windows_cleanup_turns_into_another_error_still_stops_
     (sidecar,) = tmp_path.glob("*.json")
     run = json.loads(sidecar.read_text())["runs"][-1]
     assert (run["status"], run["ended_by"]) == ("aborted", "SIGTERM")
+
+
+def test_a_stop_in_the_middle_of_a_sidecar_write_leaves_no_temporary_file(tmp_path):
+    """SIGTERM to a simulated batch left a half-made ``….json.tmp`` in the data folder (2 of
+    4 stops): the write removed its temporary file on a full disk only, not on a stop."""
+
+    class Stopped:
+        def __str__(self):
+            raise KeyboardInterrupt  # the stop arrives while the sidecar is being written
+
+    files = SessionFiles(
+        load_protocol("luidolt2020"), "P01", 1, tmp_path, resume=False, started=datetime.now()
+    )
+    try:
+        files.open()
+        files.write_sidecar({"status": "running"})
+        with pytest.raises(KeyboardInterrupt):
+            files.write_sidecar({"status": "running", "stopped": Stopped()})
+        assert not files.sidecar_path.with_suffix(".json.tmp").exists()
+        assert json.loads(files.sidecar_path.read_text()) == {"status": "running"}
+    finally:
+        files.close()

@@ -668,7 +668,7 @@ class SessionFiles:
                 os.fsync(handle.fileno())
             os.replace(temporary, self.sidecar_path)
             _fsync_folder(self.sidecar_path.parent)
-        except OSError:
+        except BaseException:  # a full disk, or a stop (SIGTERM) in the middle of the write
             temporary.unlink(missing_ok=True)
             raise
 
@@ -693,7 +693,13 @@ class SessionFiles:
         if self.created and not self.rows:
             stem = self.csv_path.name.removesuffix(".csv")
             tracker = [self.out / tracker_store_name(stem, 1), self.out / f"{stem}_iohub.log"]
-            for path in (self.csv_path, self.sidecar_path, self.log_path, self.frames_path):
+            for path in (
+                self.csv_path,
+                self.sidecar_path,
+                self.sidecar_path.with_suffix(".json.tmp"),  # a write cut short by the stop
+                self.log_path,
+                self.frames_path,
+            ):
                 path.unlink(missing_ok=True)
             for path in tracker:
                 path.unlink(missing_ok=True)
