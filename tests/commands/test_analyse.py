@@ -64,3 +64,23 @@ def test_a_folder_among_the_sessions_is_named_as_one(sessions, tmp_path, capsys)
     err = capsys.readouterr().err
     assert f"{sessions[0].parent}: a folder; give the session CSV files in it" in err, err
     assert not (tmp_path / "rep").exists()
+
+
+@pytest.mark.parametrize("command", ["analyse", "import-psychopy"])
+def test_a_protocol_of_another_study_is_refused_in_one_line(command, tmp_path, capsys):
+    """``import-psychopy luidolt2020 … --protocol spencer1995.toml`` gave 14 "no column …"
+    lines and never said the two name different studies; analyse said it in one line."""
+    protocol = tmp_path / "spencer.toml"
+    assert main(["protocol", "copy", "spencer1995", str(protocol)]) == 0
+    capsys.readouterr()
+    source = tmp_path / "run.csv"
+    source.write_text("participant,rating\nP01,5\n")
+    argv = [command, "luidolt2020", str(source), "--protocol", str(protocol),
+            "--out", str(tmp_path / "out")]  # fmt: skip
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == (
+        f"glarelab {command}: --protocol {protocol} is the protocol of study 'spencer1995', "
+        "not of 'luidolt2020'; give the study's own protocol"
+    )
+    assert not (tmp_path / "out").exists()

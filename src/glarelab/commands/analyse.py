@@ -26,10 +26,9 @@ def _study_or_csv(args: argparse.Namespace, what: str) -> None:
         args.study = None
 
 
-def _analyse(args: argparse.Namespace) -> int:
-    from glarelab.analysis.report import write_report
-
-    _study_or_csv(args, "session CSV files")
+def _protocol(args: argparse.Namespace):
+    """STUDY's protocol, or ``--protocol``'s, which must then be STUDY's own (one line, not a
+    problem per column the other study lacks)."""
     protocol = load_protocol(args.protocol or args.study)
     if args.protocol is not None and args.study is not None and protocol.study != args.study:
         named = load_protocol(args.study).study if Path(args.study).suffix else args.study
@@ -38,6 +37,14 @@ def _analyse(args: argparse.Namespace) -> int:
                 f"--protocol {args.protocol} is the protocol of study {protocol.study!r}, not "
                 f"of {args.study!r}; give the study's own protocol"
             )
+    return protocol
+
+
+def _analyse(args: argparse.Namespace) -> int:
+    from glarelab.analysis.report import write_report
+
+    _study_or_csv(args, "session CSV files")
+    protocol = _protocol(args)
     for csv in args.csv:
         if Path(csv).is_dir():  # a shell's glob of a folder: the folder itself, not its files
             raise ValueError(
@@ -87,7 +94,7 @@ def _import_psychopy(args: argparse.Namespace) -> int:
             f"--out {args.out} is inside the {whole}, which glarelab replaces and checks as a "
             "whole: give a folder of its own for the session files (nothing was written)"
         )
-    protocol = load_protocol(args.protocol or args.study)
+    protocol = _protocol(args)
     for csv in args.csv:
         if Path(csv).suffix.lower() != ".csv":
             raise ValueError(f"{csv}: PsychoPy's data are the CSV its ExperimentHandler wrote")
