@@ -605,7 +605,7 @@ def write_report(
         "include_no_sidecar": include_no_sidecar,
         "stimuli": stimuli,
     }
-    with output_lock(out, "analysis"):  # a second analysis into it at once: refused
+    with output_lock(out, "analysis", what="report"):  # a second analysis into it at once: refused
         return _write_report(protocol, paths, out, **options)
 
 

@@ -658,9 +658,10 @@ def _check_status(calibration: Calibration, source: str) -> None:
     status = calibration.status
     if status == "synthetic" and not calibration.label.startswith("SYNTHETIC"):
         raise ValueError(f"{source}: status 'synthetic' for a display not labelled SYNTHETIC")
-    if status != "synthetic" and (
+    if status == "unverified" and (
         calibration.label.startswith("SYNTHETIC") or calibration.created == "synthetic"
-    ):  # a synthetic curve relabelled would pass for a display's measurement
+    ):  # a synthetic curve relabelled would pass for a display's measurement ('passed' needs
+        # a verification pass, checked below)
         raise ValueError(
             f"{source}: status {status!r} for a synthetic display (labelled "
             f"{calibration.label[:40]!r}, created {calibration.created!r}): a synthetic "

@@ -523,7 +523,9 @@ def _write_listing(
     write_text(path, json.dumps(listing, indent=1) + "\n")
 
 
-def output_lock(out: str | Path, kind: str, *, suffix: str = "output") -> ProcessLock:
+def output_lock(
+    out: str | Path, kind: str, *, what: str | None = None, suffix: str = "output"
+) -> ProcessLock:
     """The lock of a folder one process makes whole at a time (a stimulus set, a report, a
     power run): a file ``.NAME.SUFFIX.lock`` beside it (the folder itself is swapped). Two
     builds into one ``--out`` at once would each end "done" while the later replaced the
@@ -535,6 +537,9 @@ def output_lock(out: str | Path, kind: str, *, suffix: str = "output") -> Proces
         The folder (``--out``), as the user gave it (named in the refusal).
     kind
         What holds it, for the refusal (``'stimulus set build'``, ``'analysis'``, …).
+    what
+        What the folder is, for a refusal of a path with a loop of symbolic links on its way
+        (``'stimulus set'``, ``'report'``); default ``kind``.
     suffix
         The lock file's kind, ``output`` unless an output kept its own name.
 
@@ -553,7 +558,7 @@ def output_lock(out: str | Path, kind: str, *, suffix: str = "output") -> Proces
     ...     sorted(p.name for p in folder.iterdir())
     ['.report.output.lock']
     """
-    final = without_link_loop(out, what=kind).resolve()
+    final = without_link_loop(out, what=what or kind).resolve()
 
     def refusal(holder: str) -> ValueError:
         return ValueError(

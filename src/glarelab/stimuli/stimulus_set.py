@@ -566,7 +566,8 @@ def build_stimulus_set(
         "clipped)",
         anyway="build anyway with --accept-mismatch calibration (sessions check again)",
     )
-    with output_lock(out, "stimulus set build"):  # a second build into it at once: refused
+    # a second build into it at once: refused
+    with output_lock(out, "stimulus set build", what="stimulus set"):
         return _build_into(protocol, out, calibration, progress, [*map(Path, inputs)])
 
 
