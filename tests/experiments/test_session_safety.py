@@ -3,6 +3,7 @@ no failure of the disk or of the process loses a recorded trial."""
 
 import json
 import resource
+import shutil
 import signal
 import subprocess
 import sys
@@ -664,5 +665,29 @@ def test_a_stop_in_the_middle_of_a_sidecar_write_leaves_no_temporary_file(tmp_pa
             files.write_sidecar({"status": "running", "stopped": Stopped()})
         assert not files.sidecar_path.with_suffix(".json.tmp").exists()
         assert json.loads(files.sidecar_path.read_text()) == {"status": "running"}
+    finally:
+        files.close()
+
+
+def test_a_folder_removed_before_a_sidecar_write_gets_its_trials_back(tmp_path):
+    """The session's folder removed between two trials: when the sidecar's write came first
+    (before the next row's check), the session stopped with 'could not write' and its trials
+    were gone with the folder."""
+    out = tmp_path / "data"
+    files = SessionFiles(
+        load_protocol("luidolt2020"), "P01", 1, out, resume=False, started=datetime.now()
+    )
+    try:
+        files.open()
+        files.write_sidecar({"status": "running"})
+        files.write_row(
+            {"study": "luidolt2020", "participant": "P01", "session": 1, "trial": 1,
+             "block": "questionnaire", "onset_s": 1.0, "time_s": 2.0, "dropped_frames": 0,
+             "category": "Overall", "rating": 5}
+        )  # fmt: skip
+        shutil.rmtree(out.rename(tmp_path / "trash"))
+        with pytest.raises(OSError, match=r"its 1 trials are written back to "):
+            files.write_sidecar({"status": "running"})
+        assert len(files.csv_path.read_text().splitlines()) == 2  # the header and the trial
     finally:
         files.close()

@@ -668,8 +668,12 @@ class SessionFiles:
                 os.fsync(handle.fileno())
             os.replace(temporary, self.sidecar_path)
             _fsync_folder(self.sidecar_path.parent)
-        except BaseException:  # a full disk, or a stop (SIGTERM) in the middle of the write
+        except BaseException as error:  # a full disk, or a stop (SIGTERM) mid-write
             temporary.unlink(missing_ok=True)
+            if isinstance(error, FileNotFoundError) and not self.sidecar_path.parent.is_dir():
+                # the session's folder was removed: its trials are written back first, and
+                # the error says where (the sidecar's write can come before the next row's)
+                self.check_in_place()
             raise
 
     def read_sidecar(self) -> dict:
