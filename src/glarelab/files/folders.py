@@ -22,14 +22,13 @@ import hashlib
 import json
 import os
 import shutil
-import time
 import warnings
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 
 from glarelab.files.atomic import _alive, fsync_folder, glob_escape, short_name, write_text
 from glarelab.files.inputs import loads_json
-from glarelab.files.locks import ProcessLock
+from glarelab.files.locks import ProcessLock, waiting_for
 
 __all__ = [
     "LISTING",
@@ -487,23 +486,13 @@ def _listing_held(folder: Path):
     """Hold a folder's listing while it is read, changed and written: processes writing into
     one folder at once (four ``calibrate fit`` to one ``--out``) each add their files, where
     the last write would otherwise keep only its own."""
-    lock = ProcessLock(folder / LISTING_LOCK, refusal=lambda holder: BlockingIOError(holder))
-    deadline = time.monotonic() + LISTING_WAIT_S
-    while True:
-        try:
-            lock.acquire()
-            break
-        except BlockingIOError as held:
-            if time.monotonic() > deadline:
-                raise TimeoutError(
-                    f"{folder / LISTING}: another glarelab process ({held}) has held it for "
-                    f"{LISTING_WAIT_S:.0f} s; nothing was written"
-                ) from None
-            time.sleep(0.01)
-    try:
+    with waiting_for(
+        folder / LISTING_LOCK,
+        wait_s=LISTING_WAIT_S,
+        poll_s=0.01,
+        what=f"{folder / LISTING} (nothing was written)",
+    ):
         yield
-    finally:
-        lock.release()
 
 
 def _write_listing(

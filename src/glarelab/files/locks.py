@@ -15,10 +15,11 @@ import contextlib
 import os
 import socket
 import sys
-from collections.abc import Callable
+import time
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
-__all__ = ["ProcessLock"]
+__all__ = ["ProcessLock", "waiting_for"]
 
 
 class ProcessLock:
@@ -85,6 +86,54 @@ class ProcessLock:
 
     def __exit__(self, *exc) -> None:
         self.release()
+
+
+@contextlib.contextmanager
+def waiting_for(path: str | Path, *, wait_s: float, poll_s: float, what: str) -> Iterator[None]:
+    """Hold the lock ``path`` for the ``with`` block, waiting while another process holds it
+    (a :class:`ProcessLock` refuses at once): for work the next process needs done, not
+    refused (a folder's listing, a cached stimulus set being built).
+
+    Parameters
+    ----------
+    path
+        The lock file.
+    wait_s
+        The longest wait, s.
+    poll_s
+        How often to try again, s.
+    what
+        What is waited for, for the message of a wait that ran out.
+
+    Raises
+    ------
+    TimeoutError
+        When another process held it for ``wait_s``, naming it and ``what``.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> lock = Path(tempfile.mkdtemp()) / ".a.lock"
+    >>> with waiting_for(lock, wait_s=1.0, poll_s=0.01, what="a"):
+    ...     lock.exists()
+    True
+    """
+    lock = ProcessLock(path, refusal=BlockingIOError)
+    deadline = time.monotonic() + wait_s
+    while True:
+        try:
+            lock.acquire()
+            break
+        except BlockingIOError as held:
+            if time.monotonic() > deadline:
+                raise TimeoutError(
+                    f"{what}: another glarelab process ({held}) has held it for {wait_s:.0f} s"
+                ) from None
+            time.sleep(poll_s)
+    try:
+        yield
+    finally:
+        lock.release()
 
 
 if sys.platform == "win32":  # pragma: no cover - the lab machines of CI are Linux

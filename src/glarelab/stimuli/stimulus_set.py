@@ -30,7 +30,6 @@ import os
 import shutil
 import struct
 import sys
-import time
 import zlib
 from collections.abc import Sequence
 from importlib import metadata
@@ -52,7 +51,7 @@ from glarelab.files.folders import (
     staging_folder,
 )
 from glarelab.files.inputs import as_path, loads_json
-from glarelab.files.locks import ProcessLock
+from glarelab.files.locks import waiting_for
 from glarelab.files.values import is_whole, plain_array
 from glarelab.glare.models.cache import cache_root
 from glarelab.protocols import Protocol, ProtocolError
@@ -1179,20 +1178,12 @@ def cached_stimulus_set(
     # one process checks and builds at a time; the others wait and then use its set (the
     # simulated sessions of a batch run at once; a second build would have been refused,
     # and its clearing of a damaged set could remove the one just built)
-    lock = ProcessLock(folder.parent / f".{folder.name}.cache.lock", refusal=BlockingIOError)
-    deadline = time.monotonic() + CACHE_BUILD_WAIT_S
-    while True:
-        try:
-            lock.acquire()
-            break
-        except BlockingIOError as held:
-            if time.monotonic() > deadline:
-                raise TimeoutError(
-                    f"{folder}: another glarelab process ({held}) has been building this cached "
-                    f"stimulus set for {CACHE_BUILD_WAIT_S:.0f} s; run again when it has ended"
-                ) from None
-            time.sleep(0.2)
-    try:
+    with waiting_for(
+        folder.parent / f".{folder.name}.cache.lock",
+        wait_s=CACHE_BUILD_WAIT_S,
+        poll_s=0.2,
+        what=f"{folder} (a cached stimulus set being built; run again when it has ended)",
+    ):
         if (folder / MANIFEST).is_file() and not verify_stimulus_set(folder):
             return folder  # built by the process waited for
         shutil.rmtree(folder, ignore_errors=True)  # the cache's own folder, damaged: rebuilt
@@ -1200,5 +1191,3 @@ def cached_stimulus_set(
             protocol, folder, calibration=default_calibration(protocol), progress=progress
         )
         return folder
-    finally:
-        lock.release()
