@@ -536,8 +536,8 @@ def output_file(
     shared
         Whether the caller has checked the folder's listing itself; default False.
     verified_ok
-        Whether a verified calibration may be overwritten (``calibrate verify``); default
-        False.
+        Whether a verified calibration may be overwritten (``calibrate fit --replace``,
+        which keeps the earlier one beside it); default False.
     forceable
         Whether the command has ``--force`` (the messages offer it); default True.
 

@@ -11,7 +11,7 @@ from glarelab.display.calibration import Calibration
 from glarelab.protocols import load_protocol
 from glarelab.stimuli.stimulus_set import build_stimulus_set, prove_stimulus_set
 
-from .common import PROTOCOL_HELP, add_accept_calibration, add_monitor_options, apply_monitor
+from .common import add_accept_calibration, add_monitor_options, apply_monitor
 from .common import log as _log
 
 
@@ -90,7 +90,10 @@ def add(commands) -> None:
     stimuli = commands.add_parser("stimuli", help="build or verify a study's stimulus set")
     stimuli_commands = stimuli.add_subparsers(dest="stimuli_command", required=True)
     build = stimuli_commands.add_parser("build", help="build a stimulus set from a protocol")
-    build.add_argument("protocol", help=PROTOCOL_HELP)
+    build.add_argument(
+        "protocol",
+        help="a shipped study that shows images (yoshida2008, spencer1995, …) or a TOML file",
+    )
     build.add_argument(
         "--out",
         type=Path,

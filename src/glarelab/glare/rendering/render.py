@@ -70,8 +70,8 @@ def render_glare(
         A glare model (:class:`~glarelab.glare.GaussianGlare`,
         :class:`~glarelab.glare.VosGlare`) or its name.
     pixel_deg
-        Visual angle of one pixel in degrees, in (0, 10] (as the command line's
-        ``--pixel-deg``).
+        Visual angle of one pixel in degrees, in [1e-5, 10] (as the command line's
+        ``--pixel-deg``; 1e-5° is 0.04 arcsec, far below the eye's resolution).
     l_dmax_cd_m2
         Maximum luminance the display shows, cd/m², > 0; default 220 (Yoshida §3).
     composition

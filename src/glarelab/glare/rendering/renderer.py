@@ -124,7 +124,7 @@ class GlareRenderer:
     model
         A glare model or its name.
     pixel_deg
-        Visual angle of one pixel in degrees, in (0, 10].
+        Visual angle of one pixel in degrees, in [1e-5, 10].
     shape
         ``(H, W)`` of the images (RGB images ``(H, W, 3)`` are accepted too).
     l_dmax_cd_m2
