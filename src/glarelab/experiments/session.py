@@ -825,7 +825,11 @@ def _run_session_locked(
                         files.close()  # the lock given back
 
                     frontend.display_lost = display_lost
-                _run_trials(engine, frontend, files, sidecar, protocol, rate, resume, stop)
+                try:
+                    _run_trials(engine, frontend, files, sidecar, protocol, rate, resume, stop)
+                finally:  # the run's end is written: a display lost later rewrites nothing
+                    if hasattr(frontend, "display_lost"):
+                        frontend.display_lost = None
             finally:
                 frontend.close()
         except BaseException:
