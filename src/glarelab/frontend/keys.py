@@ -138,10 +138,7 @@ def comment_start(events: list[tuple[str, str]], mark: int, symbols: set[str], r
                 break
     if start is None:
         return len(events)
-    own = events[start - 1][1] if events[start - 1][0] == "text" else None
-    while start < len(events) and events[start] == ("repeat", own):
-        start += 1  # the rating key held down
-    return start
+    return past_held_key(events, start)  # the rating key held down
 
 
 def past_held_key(events: list[tuple[str, str]], start: int) -> int:
