@@ -565,9 +565,10 @@ class _OutputLock(ProcessLock):
     def __init__(self, path: Path, *, refusal, out: str | Path):
         super().__init__(path, refusal=refusal)
         self.out = out
+        self._made: list[Path] = []  # the folders made for the lock, innermost first
 
     def acquire(self) -> None:
-        # the folders made for the lock: removed on release if the work left them empty
+        # removed on release if the work left them empty
         self._made = [p for p in [self.path.parent, *self.path.parent.parents] if not p.exists()]
         try:
             super().acquire()
@@ -583,7 +584,7 @@ class _OutputLock(ProcessLock):
         self._remove_made()
 
     def _remove_made(self) -> None:
-        for folder in getattr(self, "_made", []):  # innermost first
+        for folder in self._made:
             try:
                 folder.rmdir()
             except OSError:  # the work wrote there: kept, and so are its parents
