@@ -12,7 +12,9 @@ each given the kernel already digitised.
   ``GaussianBlur`` (when ``cv2`` is installed), each truncated at 4-6 σ.
 
 Each returns a function of no arguments that renders the image (Yoshida's clamp at
-:data:`~glarelab.bench.scenes.L_DMAX`).
+:data:`~glarelab.bench.scenes.L_DMAX`). The FFT peers run their transforms with the
+renderer's threads (:func:`~glarelab.glare.rendering._convolve.fft_workers`: one thread on
+small grids, where starting threads costs more than they save, every core on large ones).
 """
 
 from __future__ import annotations
@@ -24,7 +26,7 @@ import numpy as np
 import scipy.fft
 
 from glarelab.bench.scenes import L_DMAX
-from glarelab.glare.rendering._convolve import FFT_WORKERS
+from glarelab.glare.rendering._convolve import fft_workers
 
 __all__ = [
     "FLOOR",
@@ -68,14 +70,15 @@ def spectrum_peer(image, kernel, dtype) -> Callable[[], np.ndarray]:
     placed = np.zeros(lengths + kernel.shape[2:], dtype=dtype)
     placed[: 2 * height - 1, : 2 * width - 1] = kernel
     placed = np.roll(placed, (1 - height, 1 - width), axis=(0, 1))
-    with scipy.fft.set_workers(FFT_WORKERS):
+    workers = fft_workers(lengths)
+    with scipy.fft.set_workers(workers):
         spectrum = scipy.fft.rfft2(placed, axes=(0, 1))
     if image.ndim == 3 and kernel.ndim == 2:
         spectrum = spectrum[..., None]
     work = image.astype(dtype)
 
     def peer():
-        with scipy.fft.set_workers(FFT_WORKERS):
+        with scipy.fft.set_workers(workers):
             excess = np.maximum(work - dtype(L_DMAX), dtype(0))
             transformed = scipy.fft.rfft2(excess, s=lengths, axes=(0, 1)) * spectrum
             spread = scipy.fft.irfft2(transformed, s=lengths, axes=(0, 1))[:height, :width]
@@ -103,9 +106,10 @@ def floor_peer(image) -> Callable[[], np.ndarray]:
     height, width = image.shape[:2]
     lengths = tuple(scipy.fft.next_fast_len(2 * n - 1, real=True) for n in (height, width))
     work = image.astype(np.float32)
+    workers = fft_workers(lengths)
 
     def peer():
-        with scipy.fft.set_workers(FFT_WORKERS):
+        with scipy.fft.set_workers(workers):
             excess = np.maximum(work - np.float32(L_DMAX), np.float32(0))
             transformed = scipy.fft.rfft2(excess, s=lengths, axes=(0, 1))
             scipy.fft.irfft2(transformed, s=lengths, axes=(0, 1))
@@ -132,9 +136,12 @@ def fftconvolve_peer(image, kernel) -> Callable[[], np.ndarray]:
 
     from scipy.signal import fftconvolve
 
+    padded = (image.shape[0] + kernel.shape[0] - 1, image.shape[1] + kernel.shape[1] - 1)
+    workers = fft_workers(padded)
+
     def peer():
         excess = np.maximum(image - L_DMAX, 0.0)
-        with scipy.fft.set_workers(FFT_WORKERS):
+        with scipy.fft.set_workers(workers):
             if image.ndim == 3:
                 k = kernel if kernel.ndim == 3 else kernel[..., None]
                 spread = fftconvolve(excess, k, mode="same", axes=(0, 1))

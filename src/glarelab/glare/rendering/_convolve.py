@@ -16,13 +16,21 @@ from glarelab.glare.models.digitise import mirror_quadrant
 __all__ = [
     "FFT_WORKERS",
     "FLOAT32_NOISE_LIMIT_CD_M2",
+    "SINGLE_THREAD_FFT_POINTS",
     "bounding_box",
     "convolution_dtype",
     "fft_roundoff",
+    "fft_workers",
     "spread",
 ]
 
 FFT_WORKERS = -1  # scipy.fft threads for the convolutions: all cores
+# Below this many points a 2-D transform runs in one thread: pocketfft starts its threads per
+# call, which cost more than they save on small grids. Measured on the 2-core machine (median
+# of 30, the pruned spread of a quarter-size box): 256² transforms 0.17 ms in one thread,
+# 0.56 ms on both cores; 96² (a 256² scene's coarse bound) 0.10 and 0.42 ms; 512² alike
+# (0.93 and 0.81 ms in float32, 1.15 and 1.40 ms in float64); 1024² and up faster on both.
+SINGLE_THREAD_FFT_POINTS = 512 * 512
 
 FLOAT32_NOISE_LIMIT_CD_M2 = 1e-3  # largest FFT round-off the float32 path may add anywhere
 # FFT round-off of a convolution by rfft · spectrum · irfft, per pixel (fft_roundoff): a white
@@ -48,6 +56,18 @@ DIRECT_THREAD_PIXELS = 256 * 256  # below this, a direct spread runs in one thre
 # A quadrant whose full kernel has at most this many pixels is unfolded for a direct spread
 # (about 0.3 ms): a bright pixel then adds one view of it, not up to nine pieces of the quadrant
 DIRECT_UNFOLD_PIXELS = 512 * 512
+
+
+def fft_workers(lengths) -> int:
+    """The ``scipy.fft`` workers for transforms of ``lengths`` (one thread below
+    :data:`SINGLE_THREAD_FFT_POINTS` points, else :data:`FFT_WORKERS`).
+
+    Examples
+    --------
+    >>> fft_workers((256, 256)), fft_workers((1024, 1024))
+    (1, -1)
+    """
+    return 1 if math.prod(int(n) for n in lengths) < SINGLE_THREAD_FFT_POINTS else FFT_WORKERS
 
 
 def convolution_dtype(excess: np.ndarray, kernel: np.ndarray, requested: np.dtype) -> np.dtype:
@@ -196,7 +216,7 @@ def _full_convolution(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     if not axes:
         return a * b
     lengths = [scipy.fft.next_fast_len(shape[axis], True) for axis in axes]
-    with scipy.fft.set_workers(FFT_WORKERS):  # every core: a scope, not global state
+    with scipy.fft.set_workers(fft_workers(lengths)):  # a scope, not global state
         product = scipy.fft.rfftn(a, lengths, axes=axes) * scipy.fft.rfftn(b, lengths, axes=axes)
         full = scipy.fft.irfftn(product, lengths, axes=axes)
     return full[: shape[0], : shape[1]].copy()
@@ -218,7 +238,7 @@ def kernel_spectrum(kernel: np.ndarray, lengths: tuple[int, int]) -> np.ndarray:
     placed = np.zeros(lengths, dtype=kernel.dtype)
     placed[: 2 * a + 1, : 2 * b + 1] = kernel
     placed = np.roll(placed, (-a, -b), axis=(0, 1))
-    with scipy.fft.set_workers(FFT_WORKERS):
+    with scipy.fft.set_workers(fft_workers(lengths)):
         return scipy.fft.rfft2(placed, overwrite_x=True)
 
 
@@ -243,7 +263,7 @@ def spectral_spread(
     n0, n1 = lengths
     cols = (np.arange(c0, c1) - u0) % n1
     rows = (np.arange(r0, r1) - o0) % n0
-    with scipy.fft.set_workers(FFT_WORKERS):
+    with scipy.fft.set_workers(fft_workers(lengths)):
         if cols[0] + cols.size <= n1:
             placed = np.zeros((r1 - r0, n1), dtype=excess.dtype)
             placed[:, cols[0] : cols[0] + cols.size] = excess
