@@ -20,7 +20,7 @@ from glarelab.glare.rendering._convolve import (
     spectral_spread,
 )
 from glarelab.glare.rendering.display import display_codes, display_lut
-from glarelab.glare.rendering.plan import LEAST_FACTOR, _least_spread
+from glarelab.glare.rendering.plan import LEAST_FACTOR, _least_spread, _lengths
 
 L_DMAX = 220.0
 SLACK_CODES = 1e-9  # and the exact render's own FFT round-off: see _check
@@ -383,3 +383,45 @@ def test_float32_round_off_is_within_its_bound_on_the_tightest_scene_measured():
     )
     worst = _roundoff_over_bound(image, VosGlare(regime="mesopic"), 0.05)
     assert 0.3 < worst <= 1.0, worst
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    image=scenes(large=True, kinds=("small", "medium"), background=(-0.5, 2.2)),
+    model=st.sampled_from(list(BOUNDED.values())),
+    pixel_deg=st.sampled_from([0.005, 0.02, 0.05]),
+    tolerance=st.sampled_from([0.5, 2.0]),
+    calibrated=st.booleans(),
+)
+def test_a_float64_image_reports_the_plans_float32_bound_at_least_the_checks(
+    image, model, pixel_deg, tolerance, calibrated
+):
+    # a float64 image whose plan takes float32 transforms reports the plan's bound, made
+    # before the spread is known, and does not check it pixel by pixel: that bound is at
+    # least what the check finds on the spread computed (CodeBound.roundoff_codes), here
+    # checked against the check itself, and against the exact render
+    lut = Calibration.load(CALIBRATION).lut if calibrated else None
+    error, result = _check(image, model, pixel_deg, tolerance, paths=("fft",), display=lut)
+    plan = result.plan
+    event(f"transforms {plan.fft_precision}")
+    if plan.path != "fft" or plan.fft_precision != "float32":
+        return
+    assert not result.fallback and result.error_bound_codes == plan.roundoff_codes
+    renderer = GlareRenderer(
+        model, pixel_deg=pixel_deg, shape=image.shape, tolerance_codes=tolerance, display=lut
+    )
+    scene = renderer._scene(image)[1]
+    lengths = _lengths(plan.source_box, plan.out_box, plan.reach_px)  # as the render's
+    a, r = fft_roundoff(
+        lengths, *scene.excess_norms(), *renderer.kernel_norms(plan.colour_kernel), np.float32
+    )
+    assert a == plan.roundoff_cd_m2  # the plan's lengths are the render's
+    spread = result.spread if result.spread.ndim == 3 else result.spread[..., None]
+    checked = renderer.code_bound.codes(
+        scene.planes,
+        spread,
+        absolute=a + renderer._absolute(scene, plan, {"float32"}),
+        relative=r,
+        tolerance_codes=tolerance,
+    )
+    assert error <= checked <= result.error_bound_codes <= tolerance, (error, checked, str(plan))

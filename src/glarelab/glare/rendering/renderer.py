@@ -19,6 +19,7 @@ from dataclasses import replace
 from typing import Literal
 
 import numpy as np
+import scipy.fft
 
 from glarelab.files.memory import check_memory
 from glarelab.glare._validation import (
@@ -44,6 +45,7 @@ from glarelab.glare.rendering._convolve import (
     direct_spread,
     fft_length,
     fft_roundoff,
+    fft_workers,
     kernel_spectrum,
     spectral_spread,
 )
@@ -282,6 +284,7 @@ class GlareRenderer:
         self._coarse: dict[tuple, np.ndarray] = {}
         self._multires: dict[tuple, MultiresKernels] = {}
         self._least: OrderedDict[tuple, np.ndarray] = OrderedDict()
+        self._least_spectra: OrderedDict[tuple, tuple] = OrderedDict()
         self._spectra: OrderedDict[tuple, np.ndarray] = OrderedDict()
 
     # what is kept between images ----------------------------------------------------------
@@ -482,6 +485,46 @@ class GlareRenderer:
             while len(self._least) > LEAST_KERNELS:
                 self._least.popitem(last=False)
         return self._least[key]
+
+    def least_spectrum(
+        self, factor: int, colour: bool, reach: tuple[int, int]
+    ) -> tuple[np.ndarray, tuple[int, int], float]:
+        """The spectrum of :meth:`least_kernel`, its least channel, for a linear convolution
+        with the cell sums of a whole image (the last :data:`LEAST_KERNELS` made are kept).
+
+        Parameters
+        ----------
+        factor
+            Pixels per cell side ``f``.
+        colour
+            Whether the colour kernel (one per channel) is meant, else the luminance kernel.
+        reach
+            ``(rows, columns)``: the kernel is cut beyond these offsets.
+
+        Returns
+        -------
+        tuple
+            The ``rfft2`` of the least kernel placed at the grid's corner, float64; the FFT
+            lengths ``(N0, N1)``, at least ``3 ceil(H / f) - 2`` by ``3 ceil(W / f) - 2``
+            (no wrap-around); the kernel's largest value.
+        """
+        key = (factor, colour, tuple(int(r) for r in reach))
+        if key in self._least_spectra:
+            self._least_spectra.move_to_end(key)
+        else:
+            kernel = self.least_kernel(factor, colour, reach)
+            kernel = kernel if kernel.ndim == 2 else kernel.min(axis=2)
+            cells = (-(-self.shape[0] // factor), -(-self.shape[1] // factor))
+            lengths = tuple(
+                scipy.fft.next_fast_len(c + k - 1, real=True)
+                for c, k in zip(cells, kernel.shape, strict=True)
+            )
+            with scipy.fft.set_workers(fft_workers(lengths)):
+                spectrum = scipy.fft.rfft2(kernel, s=lengths)
+            self._least_spectra[key] = (spectrum, lengths, float(kernel.max()))
+            while len(self._least_spectra) > LEAST_KERNELS:
+                self._least_spectra.popitem(last=False)
+        return self._least_spectra[key]
 
     def multires(self, factor: int, split_px: int, colour: bool) -> MultiresKernels:
         """Near and far kernels of one split, with the far path's error measured over the
@@ -700,6 +743,15 @@ class GlareRenderer:
     def _error(self, scene, plan, spread, used, roundoff, relative) -> float:
         """The error bound in codes: the cut, the FFT round-off (``roundoff``: the planned
         float32 transforms' ``(a, r)``) and the far tail's relative error."""
+        if (
+            plan.path == "fft"
+            and roundoff[0] > 0
+            and roundoff[0] == plan.roundoff_cd_m2
+            and self.dtype == np.float64
+        ):
+            # the plan's bound of these float32 transforms, at the darkest outputs they can
+            # leave, is at least what the check pixel by pixel would find
+            return plan.roundoff_codes
         absolute = self._absolute(scene, plan, used) + roundoff[0]
         ratio = relative / max(1.0 - relative, 1e-12) + roundoff[1]
         stored = 0.0
@@ -831,8 +883,13 @@ class GlareRenderer:
             part = spectral_spread(
                 excess.astype(work, copy=False), box, near_box, spectrum, lengths
             )
-            spread[..., c][near_box[0] : near_box[1], near_box[2] : near_box[3]] += part
-        np.maximum(spread, 0.0, out=spread)  # FFT round-off is not non-negative
+            near = spread[..., c][near_box[0] : near_box[1], near_box[2] : near_box[3]]
+            if plan.path == "fft":  # the only part: the rest of the spread stays 0
+                np.maximum(part, 0.0, out=near)  # FFT round-off is not non-negative
+            else:
+                near += part
+        if plan.path == "multires":  # the far tail's coarse transforms too
+            np.maximum(spread, 0.0, out=spread)
         return spread, used, roundoff
 
 

@@ -82,6 +82,20 @@ class Scene:
             self._splats["norms"] = (l1, l2)
         return self._splats["norms"]
 
+    def brightest_excess(self) -> np.ndarray:
+        """The largest excess of each pixel of the source box over the channels, cd/m²
+        (made once; a view for one channel)."""
+        if "brightest" not in self._splats:
+            self._splats["brightest"] = over_channels(self.excess, np.maximum)
+        return self._splats["brightest"]
+
+    def darkest_plane(self) -> np.ndarray:
+        """The smallest channel of each pixel, cd/m², ``(H, W)`` (made once; a view for one
+        channel)."""
+        if "darkest" not in self._splats:
+            self._splats["darkest"] = over_channels(self.planes, np.minimum)
+        return self._splats["darkest"]
+
     def splat(self, factor: int, channel: int | None) -> np.ndarray:
         """The excess of one channel (``None``: the brightest channel of each pixel) splatted
         onto the coarse grid of ``factor`` (:func:`glarelab.glare.rendering.multires.splat`), made
@@ -103,11 +117,7 @@ class Scene:
             channel = 0
         key = (factor, channel)
         if key not in self._splats:
-            excess = (
-                over_channels(self.excess, np.maximum)
-                if channel is None
-                else self.excess[..., channel]
-            )
+            excess = self.brightest_excess() if channel is None else self.excess[..., channel]
             self._splats[key] = splat(
                 excess.astype(np.float64, copy=False),
                 factor,
