@@ -77,9 +77,8 @@ class Scene:
         if "norms" not in self._splats:
             flat = self.excess.reshape(-1, self.excess.shape[2])
             flat = flat.astype(np.float64, copy=False)
-            l1 = _channel_sums(self.excess)
             l2 = float(np.sqrt(np.einsum("ij,ij->j", flat, flat).max()))
-            self._splats["norms"] = (l1, l2)
+            self._splats["norms"] = (self.total_excess, l2)  # ΣΔL: found with the scene
         return self._splats["norms"]
 
     def brightest_excess(self) -> np.ndarray:
