@@ -476,15 +476,13 @@ class GlareRenderer:
             ``(2 ceil(H / f) - 1, 2 ceil(W / f) - 1[, C])``, centred; the last
             :data:`LEAST_KERNELS` made are kept.
         """
-        key = (factor, colour, tuple(int(r) for r in reach))
-        if key in self._least:
-            self._least.move_to_end(key)
-        else:
+        cut = (int(reach[0]), int(reach[1]))
+
+        def make() -> np.ndarray:
             values = np.asarray(self.kernel(colour).values, dtype=np.float64)
-            self._least[key] = least_kernel(values, factor, key[2], self.shape)
-            while len(self._least) > LEAST_KERNELS:
-                self._least.popitem(last=False)
-        return self._least[key]
+            return least_kernel(values, factor, cut, self.shape)
+
+        return _kept(self._least, (factor, colour, cut), make, LEAST_KERNELS)
 
     def least_spectrum(
         self, factor: int, colour: bool, reach: tuple[int, int]
@@ -508,11 +506,10 @@ class GlareRenderer:
             lengths ``(N0, N1)``, at least ``3 ceil(H / f) - 2`` by ``3 ceil(W / f) - 2``
             (no wrap-around); the kernel's largest value.
         """
-        key = (factor, colour, tuple(int(r) for r in reach))
-        if key in self._least_spectra:
-            self._least_spectra.move_to_end(key)
-        else:
-            kernel = self.least_kernel(factor, colour, reach)
+        cut = (int(reach[0]), int(reach[1]))
+
+        def make() -> tuple[np.ndarray, tuple[int, int], float]:
+            kernel = self.least_kernel(factor, colour, cut)
             kernel = kernel if kernel.ndim == 2 else kernel.min(axis=2)
             cells = (-(-self.shape[0] // factor), -(-self.shape[1] // factor))
             lengths = tuple(
@@ -521,10 +518,9 @@ class GlareRenderer:
             )
             with scipy.fft.set_workers(fft_workers(lengths)):
                 spectrum = scipy.fft.rfft2(kernel, s=lengths)
-            self._least_spectra[key] = (spectrum, lengths, float(kernel.max()))
-            while len(self._least_spectra) > LEAST_KERNELS:
-                self._least_spectra.popitem(last=False)
-        return self._least_spectra[key]
+            return spectrum, (lengths[0], lengths[1]), float(kernel.max())
+
+        return _kept(self._least_spectra, (factor, colour, cut), make, LEAST_KERNELS)
 
     def multires(self, factor: int, split_px: int, colour: bool) -> MultiresKernels:
         """Near and far kernels of one split, with the far path's error measured over the
@@ -891,6 +887,18 @@ class GlareRenderer:
         if plan.path == "multires":  # the far tail's coarse transforms too
             np.maximum(spread, 0.0, out=spread)
         return spread, used, roundoff
+
+
+def _kept(cache: OrderedDict, key: tuple, make, limit: int):
+    """``cache[key]``, made by ``make()`` the first time; beyond ``limit`` entries the least
+    recently used is dropped."""
+    if key in cache:
+        cache.move_to_end(key)
+    else:
+        cache[key] = make()
+        while len(cache) > limit:
+            cache.popitem(last=False)
+    return cache[key]
 
 
 _SUM_ROWS = 256  # rows of a kernel summed at once (no temporary of the kernel's size)
