@@ -546,8 +546,9 @@ def _choose_precision(
     cut's, keeps what the far tail (``far_codes`` predicted) leaves of the tolerance: at the
     darkest pixel's code step, or else, when it could, at the darkest output each cell of
     :data:`LEAST_FACTOR` pixels can have
-    (:meth:`~glarelab.glare.rendering.display.CodeBound.roundoff_codes`; the render checks it
-    pixel by pixel and falls back to float64). Returns ``(precision, a, codes, note)``: the
+    (:meth:`~glarelab.glare.rendering.display.CodeBound.roundoff_codes`; a render with a far
+    tail or of an image kept in float32 checks it pixel by pixel and falls back to float64).
+    Returns ``(precision, a, codes, note)``: the
     bound's absolute part ``a`` and the whole bound in codes for float32, zeros for float64.
 
     The spread the kernel applied to ``reach`` pixels (the path's; the far tail's, of
@@ -558,8 +559,8 @@ def _choose_precision(
     most ``L / step(L)`` codes anywhere on the display; its absolute part ``a``, with the
     cut's bound and what the render adds for float64 round-off, is counted at each cell's
     lowest output: without a far tail, a bound on what the render's check finds pixel by
-    pixel, so that float32 so planned is kept (the check is the render's, afterwards, all
-    the same). On the 1024² city at night (2,000 lamps, Vos) the coarse preview of the far
+    pixel, so that float32 so planned is kept (a float64 image's render reports it without
+    the check). On the 1024² city at night (2,000 lamps, Vos) the coarse preview of the far
     tail, halved, put outputs at the display's black (0.5 cd/m², steps of 1e-4 cd/m²) where
     the spread is at least 7.4 cd/m², and predicted 460 codes; this bound is 0.46 codes, 0.43
     from the exact spread's least value in each cell (0.035 reached).
