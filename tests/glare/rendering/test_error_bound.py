@@ -17,6 +17,7 @@ from glarelab.glare.rendering._convolve import (
     fft_length,
     fft_roundoff,
     kernel_spectrum,
+    line_roundoff_norms,
     spectral_spread,
 )
 from glarelab.glare.rendering.display import display_codes, display_lut
@@ -343,6 +344,13 @@ def _roundoff_over_bound(plane, model, pixel_deg) -> float:
     single = spectral_spread(
         part.astype(np.float32), box, out, spectrum.astype(np.complex64), lengths
     )
+    rows, cols = (
+        line_roundoff_norms(
+            (part.sum(axis=axis), (part**2).sum(axis=axis)),
+            (np.abs(kernel).sum(axis=axis), (kernel**2).sum(axis=axis)),
+        )
+        for axis in (1, 0)
+    )
     a, r = fft_roundoff(
         lengths,
         float(part.sum()),
@@ -350,6 +358,8 @@ def _roundoff_over_bound(plane, model, pixel_deg) -> float:
         float(np.abs(kernel).sum()),
         float(np.sqrt((kernel**2).sum())),
         np.float32,
+        rows=rows,
+        cols=cols,
     )
     return float(np.max(np.abs(single - exact) / (a + r * np.abs(exact))))
 
@@ -371,17 +381,73 @@ def test_float32_round_off_of_one_source_is_within_its_bound(model, where, sourc
     assert _roundoff_over_bound(image, model, 0.04) <= 1.0
 
 
-def test_float32_round_off_is_within_its_bound_on_the_tightest_scene_measured():
-    # the tightest of 52 scenes measured for the bound (a glint of 6e8 cd/m² next to a lamp,
-    # mesopic Vos, drawn as the property test draws them): 0.65 of the bound
-    image = scene(
-        (135, 165),
-        seed=37729,
-        background_cd_m2=2.92,
-        sources=[("lamp", "anywhere", 5.259013300108505), ("glint", "anywhere", 8.78330557002095)],
-        colour=False,
-    )
-    worst = _roundoff_over_bound(image, VosGlare(regime="mesopic"), 0.05)
+def _edge_glints(seed: int):
+    """Glints of 1e4-1e9 cd/m² (1-3 px) along an image's top row, in its top left corner
+    and on its right edge, over a textured background of 1-600 cd/m²; the model and the
+    pixel drawn with them: where a row transform keeps its round-off in its row."""
+    rng = np.random.default_rng(seed)
+    height, width = int(rng.choice([128, 200, 256, 300])), int(rng.choice([128, 256, 300, 457]))
+    low = float(np.exp(rng.uniform(np.log(1.0), np.log(60.0))))
+    image = np.exp(rng.uniform(np.log(low), np.log(low * 10.0), (height, width)))
+    for _ in range(int(rng.integers(1, 6))):
+        size = int(rng.integers(1, 4))
+        col, level = int(rng.integers(0, width - size)), float(10 ** rng.uniform(4, 9))
+        edge = rng.integers(3)
+        if edge == 0:
+            image[0:size, col : col + size] = level
+        elif edge == 1:
+            image[0:size, 0:size] = level
+        else:
+            image[int(rng.integers(height - size)), width - size :] = level
+    model = list(BOUNDED.values())[seed % len(BOUNDED)]
+    pixel_deg = float(np.exp(rng.uniform(np.log(0.01), np.log(0.4))))
+    return image, model, pixel_deg
+
+
+# glints along an edge the white model alone (its constant then 10) did not bound: 1.07-1.85
+# times it (seed 21: mesopic Vos, 1.85)
+@pytest.mark.parametrize("seed", [5, 13, 16, 21, 25, 26])
+def test_float32_round_off_of_glints_along_an_edge_is_within_its_bound(seed):
+    image, model, pixel_deg = _edge_glints(seed)
+    assert _roundoff_over_bound(image, model, pixel_deg) <= 1.0
+
+
+@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 2**16))
+def test_float32_round_off_of_glints_along_the_edges_is_within_its_bound(seed):
+    image, model, pixel_deg = _edge_glints(seed)
+    worst = _roundoff_over_bound(image, model, pixel_deg)
+    event(f"round-off / bound {10 ** np.ceil(np.log10(max(worst, 1e-6))):g}")
+    assert worst <= 1.0, worst
+
+
+@pytest.mark.parametrize(
+    ("image", "model", "pixel_deg"),
+    [
+        pytest.param(  # a strip of 502 px, two glints: 0.50 of the bound (of 1,167 scenes)
+            scene(
+                (1, 502),
+                seed=2,
+                background_cd_m2=0.008699721837581406,
+                sources=[
+                    ("glint", "anywhere", 3.09745362387813),
+                    ("glint", "centre", 7.235643424276665),
+                ],
+                colour=False,
+            ),
+            VosGlare(),
+            0.2,
+            id="strip",
+        ),
+        pytest.param(*_edge_glints(28), id="edge glints, scotopic Vos"),  # 0.45
+    ],
+)
+def test_float32_round_off_is_within_its_bound_on_the_tightest_scenes_measured(
+    image, model, pixel_deg
+):
+    # the tightest of the scenes the bound's constant was measured on: within it, and not
+    # vacuously
+    worst = _roundoff_over_bound(image, model, pixel_deg)
     assert 0.3 < worst <= 1.0, worst
 
 
@@ -412,9 +478,7 @@ def test_a_float64_image_reports_the_plans_float32_bound_at_least_the_checks(
     )
     scene = renderer._scene(image)[1]
     lengths = _lengths(plan.source_box, plan.out_box, plan.reach_px)  # as the render's
-    a, r = fft_roundoff(
-        lengths, *scene.excess_norms(), *renderer.kernel_norms(plan.colour_kernel), np.float32
-    )
+    a, r = renderer.roundoff_bound(scene, lengths, plan.colour_kernel)
     assert a == plan.roundoff_cd_m2  # the plan's lengths are the render's
     spread = result.spread if result.spread.ndim == 3 else result.spread[..., None]
     checked = renderer.code_bound.codes(

@@ -145,9 +145,9 @@ def test_a_grey_scene_given_a_colour_kernel_reports_the_channel_it_was_rendered_
 @pytest.mark.parametrize("channels", [(), (3,)])
 @pytest.mark.parametrize("form", ["quadrant", "values"])
 def test_the_kernel_norms_are_the_full_kernels_sums(form, channels):
-    """``Σ|K|`` and ``(ΣK²)^½`` (the round-off bound's), summed by blocks of rows and, for a
-    quadrant, weighted for the offsets it stands for: the sums over the unfolded kernel, the
-    largest channel's; rows past one block (601 > 2 × 256)."""
+    """``Σ|K|`` and ``(ΣK²)^½`` (the round-off bound's), and the same of each row and column,
+    summed by blocks of rows and, for a quadrant, unfolded for the offsets it stands for: the
+    sums over the unfolded kernel, the largest channel's; rows past several blocks."""
     from glarelab.glare.models.digitise import Kernel, mirror_quadrant
 
     rng = np.random.default_rng(7)
@@ -164,6 +164,11 @@ def test_the_kernel_norms_are_the_full_kernels_sums(form, channels):
     l2 = np.sqrt((full * full).sum(axis=(0, 1)))
     colour = bool(channels)
     assert_allclose(renderer.kernel_norms(colour), (l1.max(), l2.max()), rtol=1e-13)
+    for axis, lines in zip((1, 0), renderer.kernel_lines(colour), strict=True):
+        expected = (np.abs(full).sum(axis=axis), (full * full).sum(axis=axis))
+        for got, want in zip(lines, expected, strict=True):
+            want = want.reshape(want.shape[0], -1).max(axis=1)  # the largest channel's
+            assert_allclose(got, want, rtol=1e-12, atol=0)
 
 
 def test_an_l_dmax_above_the_displays_white_is_refused():
@@ -260,7 +265,7 @@ def test_the_models_kernels_sum_to_at_most_one_and_pass_the_check():
             assert given.kernel(colour) is not None
 
 
-@pytest.mark.parametrize("method", ["kernel", "kernel_peak", "kernel_norms"])
+@pytest.mark.parametrize("method", ["kernel", "kernel_peak", "kernel_norms", "kernel_lines"])
 @pytest.mark.parametrize("colour", ["yes", 1, None])
 def test_colour_must_be_true_or_false(method, colour):
     """kernel(colour='yes') returned the colour kernel; digitise_kernel refuses the same."""

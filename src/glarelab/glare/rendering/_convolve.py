@@ -21,6 +21,8 @@ __all__ = [
     "convolution_dtype",
     "fft_roundoff",
     "fft_workers",
+    "line_roundoff_norms",
+    "line_sums",
     "spread",
 ]
 
@@ -33,18 +35,19 @@ FFT_WORKERS = -1  # scipy.fft threads for the convolutions: all cores
 SINGLE_THREAD_FFT_POINTS = 512 * 512
 
 FLOAT32_NOISE_LIMIT_CD_M2 = 1e-3  # largest FFT round-off the float32 path may add anywhere
-# FFT round-off of a convolution by rfft · spectrum · irfft, per pixel (fft_roundoff): a white
-# part ROUNDOFF_WHITE × √(2 ln n) times its modelled standard deviation, and a part
-# ROUNDOFF_RELATIVE · u · log2 n of the pixel's own spread. Measured in float32 on a city at
-# night, glints on water, a Yoshida disk, one lamp and a 7.5e8 cd/m² glint (Vos and Gaussian
-# kernels, power-of-two and 3-smooth lengths): the relative part reached 6.6 u log2 n. The
-# white part, with σ summing its three sources in quadrature (they are independent
-# roundings), reached 6.5 √(2 ln n) σ, on one lamp and on single glints and lamps at corners
-# and edges (52 scenes: those above and 40 random ones as the property tests draw them); a
-# city of 2,000 lamps 1.5. Summed linearly, σ was up to 1.7 times larger where the three are
-# alike: over the city's exact spread (the bench's display) the bound was 0.59 codes, now
-# 0.36, against 0.027 codes reached.
-ROUNDOFF_WHITE = 10.0
+# FFT round-off of a convolution by rfft · spectrum · irfft, per pixel (fft_roundoff): a part
+# ROUNDOFF_WHITE × √(2 ln n) times its modelled standard deviation (white, and kept in the
+# rows and columns of the sources and of the brightest spread), and a part
+# ROUNDOFF_RELATIVE · u · log2 n of the pixel's own spread. The constant needed, measured in
+# float32 on 1,103 scenes (the bench's; 150 with glints up to 1e9 cd/m² along the image's
+# edges; 150 single lamps or glints at corners, edges and centres; 150 random scenes of
+# 20-420 px, 300 of 2-64 px and 200 strips one pixel wide, drawn as the property tests draw
+# them, with the models with a tail bound; 140 with wave optics, the hybrid and flare
+# lines), reached 1.5 (a strip of 502 px) and 1.35 (glints along an edge); the 1024² city of
+# 2,000 lamps 0.48. A white model alone needed up to 26.8 and the bound with its constant
+# then, 10, failed on 44 of them (by up to 2.68 times): a glint's row keeps the round-off
+# of its row transform. The relative part reached 6.6 u log2 n.
+ROUNDOFF_WHITE = 3.0
 ROUNDOFF_RELATIVE = 10.0
 # Direct spread, seconds per output pixel (2-core machine): a scaled kernel copy costs
 # DIRECT_PIXEL_S per bright pixel; a correlation with a cluster's box CORRELATE_S plus
@@ -91,6 +94,9 @@ def fft_roundoff(
     kernel_l1: float,
     kernel_l2: float,
     dtype,
+    *,
+    rows: tuple[float, float],
+    cols: tuple[float, float],
 ) -> tuple[float, float]:
     """Bound on the round-off of :func:`spectral_spread` in ``dtype``: ``(a, r)`` such that
     each pixel's spread is off by at most ``a + r · S`` cd/m² (``S`` its spread).
@@ -106,6 +112,9 @@ def fft_roundoff(
     dtype
         The transforms' precision (its unit round-off ``u = ε / 2``); the kernel spectrum is
         made in float64 and rounded once to it.
+    rows, cols
+        ``(F, I)`` of :func:`line_roundoff_norms` along the rows and along the columns,
+        cd/m²: the round-off a row transform keeps in its row.
 
     Returns
     -------
@@ -125,7 +134,20 @@ def fft_roundoff(
        \\sigma = u \\sqrt{\\log_2 n\\,(|\\Delta L|_2 |K|_2)^2 + (\\log_2 n + 2)\\,|S|_2^2}
        \\,/ \\sqrt{n}, \\qquad |S|_2 \\le \\min(|\\Delta L|_2 |K|_1, |\\Delta L|_1 |K|_2)
 
-    (Parseval and Young's inequality), and the largest of ``n`` such errors is about
+    (Parseval and Young's inequality). A row transform's rounding stays in its row: the
+    forward transform of a source's row leaves an error of RMS :math:`u \\sqrt{\\log_2
+    N_1}\\,|\\Delta L_k|_2 / \\sqrt{N_1}` along row :math:`k`, which the kernel's rows
+    spread to the rows near it, and the inverse transform of an output row one of RMS
+    :math:`u \\sqrt{\\log_2 N_1}\\,|S_i|_2 / \\sqrt{N_1}` along it (the columns alike),
+    so that
+
+    .. math::
+
+       \\sigma^2 \\mathrel{+}= u^2 \\log_2 N_1\\,(F_r^2 + I_r^2) / N_1
+       + u^2 \\log_2 N_0\\,(F_c^2 + I_c^2) / N_0
+
+    with :math:`F, I` from :func:`line_roundoff_norms`: next to one glint this part is up to
+    :math:`\\sqrt{N_0}` times the white one. The largest of ``n`` such errors is about
     :math:`\\sqrt{2 \\ln n}\\,\\sigma`; next to the sources the error follows the spread
     itself. ``a = ROUNDOFF_WHITE · √(2 ln n) σ`` and ``r = ROUNDOFF_RELATIVE · u · log2 n``,
     with constants measured (:data:`ROUNDOFF_WHITE`): a bound tested on random scenes
@@ -139,23 +161,118 @@ def fft_roundoff(
 
     Examples
     --------
-    >>> a, r = fft_roundoff((1024, 1024), 1e6, 1e5, 1.0, 0.05, np.float32)
-    >>> bool(a < 1e-2), bool(r < 1e-4)
-    (True, True)
+    A spread whose brightest row holds half its norm rounds it mostly there:
+
+    >>> lines = {"rows": (5e3, 5e4), "cols": (5e3, 5e4)}
+    >>> a, r = fft_roundoff((1024, 1024), 1e6, 1e5, 1.0, 0.05, np.float32, **lines)
+    >>> f"{a:.2g} cd/m², r = {r:.2g}"
+    '0.0066 cd/m², r = 1.2e-05'
+    >>> lines = {"rows": (0.0, 0.0), "cols": (0.0, 0.0)}
+    >>> a, r = fft_roundoff((1024, 1024), 1e6, 1e5, 1.0, 0.05, np.float32, **lines)
+    >>> f"{a:.2g} cd/m² (white alone)"
+    '0.00022 cd/m² (white alone)'
     """
-    n = max(int(lengths[0]) * int(lengths[1]), 2)
+    n0, n1 = int(lengths[0]), int(lengths[1])
+    n = max(n0 * n1, 2)
     u = float(np.finfo(dtype).eps) / 2.0
     levels = math.log2(n)
     spread_l2 = min(excess_l2 * kernel_l1, excess_l1 * kernel_l2)
-    sigma = (
-        u
-        * math.sqrt(levels * (excess_l2 * kernel_l2) ** 2 + (levels + 2.0) * spread_l2**2)
-        / math.sqrt(n)
-    )
+    variance = (levels * (excess_l2 * kernel_l2) ** 2 + (levels + 2.0) * spread_l2**2) / n
+    for length, (forward, inverse) in ((n1, rows), (n0, cols)):
+        if length > 1:
+            variance += math.log2(length) * (forward**2 + inverse**2) / length
+    sigma = u * math.sqrt(variance)
     return (
         ROUNDOFF_WHITE * math.sqrt(2.0 * math.log(n)) * sigma,
         ROUNDOFF_RELATIVE * u * levels,
     )
+
+
+def line_roundoff_norms(
+    excess_lines: tuple[np.ndarray, np.ndarray], kernel_lines: tuple[np.ndarray, np.ndarray]
+) -> tuple[float, float]:
+    """Norms of the round-off one axis's transforms keep in their lines, for
+    :func:`fft_roundoff`: ``(F, I)``, cd/m².
+
+    Parameters
+    ----------
+    excess_lines
+        ``(Σ_j ΔL_kj, Σ_j ΔL_kj²)`` of each line ``k`` of the excess (rows: summed along
+        each row), cd/m² and (cd/m²)², in order.
+    kernel_lines
+        ``(Σ_j |K_dj|, Σ_j K_dj²)`` of each line ``d`` of the whole kernel, centred (offset
+        ``d`` at index ``d + half``).
+
+    Returns
+    -------
+    tuple of float
+        ``F = max_i (Σ_k |ΔL_k|_2² |K_{i-k}|_2²)^½``, the RMS over a line of what the
+        forward transforms' round-off becomes at line ``i``, and ``I``, a bound on the largest
+        line norm ``|S_i|_2`` of the spread, whose inverse transform rounds it:
+        ``max_i min(Σ_k |ΔL_k|_2 |K_{i-k}|_1, Σ_k |ΔL_k|_1 |K_{i-k}|_2)`` (the triangle
+        inequality and Young's, line by line).
+
+    Examples
+    --------
+    One glint of 1e6 cd/m² and a kernel of three lines:
+
+    >>> glint = (np.array([1e6]), np.array([1e12]))
+    >>> kernel = (np.array([0.1, 0.5, 0.1]), np.array([0.01, 0.2, 0.01]))
+    >>> [round(value) for value in line_roundoff_norms(glint, kernel)]
+    [447214, 447214]
+    """
+    (e1, e2), (k1, k2) = excess_lines, kernel_lines
+    forward = _line_convolution(e2, k2).max()
+    inverse = np.minimum(
+        _line_convolution(np.sqrt(e2), k1), _line_convolution(e1, np.sqrt(k2))
+    ).max()
+    return math.sqrt(float(forward)), float(inverse)
+
+
+def line_sums(
+    values: np.ndarray, *, absolute: bool
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``Σ|x|`` and ``Σx²`` of each row and of each column of ``values`` ``(H, W, ...)``, in
+    float64, by blocks of rows (one pass; no temporary of the array's size): ``(rows_l1,
+    rows_l2², cols_l1, cols_l2²)``, of shapes ``(H, ...)`` and ``(W, ...)``. ``absolute``
+    False skips ``|x|`` for values known not to be negative.
+
+    Examples
+    --------
+    >>> [line.tolist() for line in line_sums(np.array([[1.0, -2.0], [0.0, 3.0]]), absolute=True)]
+    [[3.0, 3.0], [5.0, 9.0], [1.0, 5.0], [1.0, 13.0]]
+    """
+    height, width = values.shape[:2]
+    rows_l1 = np.empty((height, *values.shape[2:]))
+    rows_l2 = np.empty_like(rows_l1)
+    cols_l1 = np.zeros((width, *values.shape[2:]))
+    cols_l2 = np.zeros_like(cols_l1)
+    for start in range(0, height, _LINE_BLOCK_ROWS):
+        block = np.asarray(values[start : start + _LINE_BLOCK_ROWS], dtype=np.float64)
+        stop = start + block.shape[0]
+        square = block * block
+        if absolute:
+            block = np.abs(block)
+        rows_l1[start:stop] = block.sum(axis=1)
+        rows_l2[start:stop] = square.sum(axis=1)
+        cols_l1 += block.sum(axis=0)
+        cols_l2 += square.sum(axis=0)
+    return rows_l1, rows_l2, cols_l1, cols_l2
+
+
+_LINE_BLOCK_ROWS = 64  # rows of line_sums' block: its temporaries stay in the cache
+
+
+def _line_convolution(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Full convolution of two non-negative 1-D arrays, float64 (by FFT when long: its
+    round-off, about 1e-13 of the largest value, is far below the constants above)."""
+    a, b = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
+    if a.size * b.size <= 1 << 16:
+        return np.convolve(a, b)
+    length = a.size + b.size - 1
+    fast = scipy.fft.next_fast_len(length, True)
+    product = scipy.fft.rfft(a, fast) * scipy.fft.rfft(b, fast)
+    return np.maximum(scipy.fft.irfft(product, fast)[:length], 0.0)
 
 
 def bounding_box(mask: np.ndarray) -> tuple[slice, slice]:

@@ -39,7 +39,7 @@ import numpy as np
 import scipy.fft
 
 from glarelab.glare.models.base import GlareModel
-from glarelab.glare.rendering._convolve import fft_length, fft_roundoff, fft_workers
+from glarelab.glare.rendering._convolve import fft_length, fft_workers
 from glarelab.glare.rendering.costs import (
     DEFAULT_COSTS,
     PathCosts,
@@ -569,9 +569,7 @@ def _choose_precision(
     quarter, a half, a quarter); the round-off now takes what the other two leave, since its
     bound is checked with theirs, pixel by pixel, by the same render."""
     budget = plan.tolerance_codes - far_codes
-    l1, l2 = scene.excess_norms()
-    k1, k2 = renderer.kernel_norms(plan.colour_kernel)
-    own, relative = fft_roundoff(lengths, l1, l2, k1, k2, np.float32)
+    own, relative = renderer.roundoff_bound(scene, lengths, plan.colour_kernel)
     absolute = own + renderer._absolute(scene, plan, set())  # the cut's, as the render adds
     # at the darkest pixel with no spread: a bound on what the render's check finds
     at_darkest = renderer.code_bound.roundoff_codes(

@@ -47,6 +47,8 @@ from glarelab.glare.rendering._convolve import (
     fft_roundoff,
     fft_workers,
     kernel_spectrum,
+    line_roundoff_norms,
+    line_sums,
     spectral_spread,
 )
 from glarelab.glare.rendering.compose import check_composition, compose
@@ -277,6 +279,7 @@ class GlareRenderer:
         self._given_grey: Kernel | None = None  # a given colour kernel's first channel
         self._peaks: dict[bool, float] = {}
         self._norms: dict[bool, tuple[float, float]] = {}
+        self._lines: dict[bool, tuple] = {}
         if costs is not None and costs != "machine" and not isinstance(costs, PathCosts):
             raise ValueError(f"costs must be None, 'machine' or a PathCosts; got {costs!r}")
         self._costs = DEFAULT_COSTS if costs is None else costs
@@ -392,20 +395,91 @@ class GlareRenderer:
         tuple of float
             ``(Σ|K|, (ΣK²)^½)``, dimensionless (the kernel's weights per pixel).
         """
+        self.kernel_lines(colour)  # found with them
+        return self._norms[check_flag("colour", colour)]
+
+    def kernel_lines(
+        self, colour: bool = False
+    ) -> tuple[tuple[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]:
+        """``(Σ|K|, ΣK²)`` of each row and of each column of the reference kernel, centred
+        (offset ``d`` at index ``d + half``), the largest over its channels (found once, with
+        :meth:`kernel_norms`; from the quadrant of a symmetric kernel, which is not
+        unfolded).
+
+        Parameters
+        ----------
+        colour
+            Whether the colour kernel (one per channel) is meant, else the luminance kernel
+            (default).
+
+        Returns
+        -------
+        tuple
+            ``((rows_l1, rows_l2²), (cols_l1, cols_l2²))``, float64 arrays.
+        """
         colour = check_flag("colour", colour)  # the string 'no' is true to if
-        if colour not in self._norms:
+        if colour not in self._lines:
             kernel = self.kernel(colour)
             if kernel.quadrant is not None:  # an offset off the axes stands for four
-                q = kernel.quadrant
-                whole, row, col, centre = (_sums(part) for part in (q, q[:1], q[:, :1], q[:1, :1]))
-                l1, l2 = (
-                    4 * w - 2 * r - 2 * c + o
-                    for w, r, c, o in zip(whole, row, col, centre, strict=True)
-                )
+                q = np.asarray(kernel.quadrant)
+                rows_l1, rows_l2, cols_l1, cols_l2 = line_sums(q, absolute=True)
+                axis = np.asarray(q[:, 0], dtype=np.float64)  # the kernel's column at 0
+                across = np.asarray(q[0], dtype=np.float64)  # and its row at 0
+                lines = [
+                    _unfold(2.0 * line - edge)
+                    for line, edge in (
+                        (rows_l1, np.abs(axis)),
+                        (rows_l2, axis * axis),
+                        (cols_l1, np.abs(across)),
+                        (cols_l2, across * across),
+                    )
+                ]
             else:
-                l1, l2 = _sums(kernel.values)
+                lines = list(line_sums(kernel.values, absolute=True))
+            l1, l2 = lines[0].sum(axis=0), lines[1].sum(axis=0)
             self._norms[colour] = (float(np.max(l1)), float(np.sqrt(np.max(l2))))
-        return self._norms[colour]
+            channels = [line.reshape(line.shape[0], -1).max(axis=1) for line in lines]
+            self._lines[colour] = ((channels[0], channels[1]), (channels[2], channels[3]))
+        return self._lines[colour]
+
+    def roundoff_bound(
+        self, scene: Scene, lengths: tuple[int, int], colour: bool
+    ) -> tuple[float, float]:
+        """The float32 round-off bound of a spread of ``scene``'s excess by FFTs.
+
+        Parameters
+        ----------
+        scene
+            The image's :class:`~glarelab.glare.rendering.scene.Scene`.
+        lengths
+            The FFT lengths ``N0 × N1``.
+        colour
+            Whether the colour kernel is meant, else the luminance kernel.
+
+        Returns
+        -------
+        tuple of float
+            ``(a, r)``: each pixel's spread is off by at most ``a + r S`` cd/m²
+            (:func:`~glarelab.glare.rendering._convolve.fft_roundoff`, with the norms of the
+            excess's and the kernel's rows and columns, found once per scene and kernel).
+        """
+        key = ("line roundoff", colour)
+        if key not in scene._splats:
+            (excess_rows, excess_cols), (kernel_rows, kernel_cols) = (
+                scene.line_norms(),
+                self.kernel_lines(colour),
+            )
+            scene._splats[key] = {
+                "rows": line_roundoff_norms(excess_rows, kernel_rows),
+                "cols": line_roundoff_norms(excess_cols, kernel_cols),
+            }
+        return fft_roundoff(
+            lengths,
+            *scene.excess_norms(),
+            *self.kernel_norms(colour),
+            np.float32,
+            **scene._splats[key],
+        )
 
     def tail_bound(self, colour: bool) -> TailBound | None:
         """The model's tail bounds for every radius up to the kernel's half-size.
@@ -856,12 +930,7 @@ class GlareRenderer:
             if plan.tolerance_codes > 0:
                 work = np.dtype(plan.fft_precision)
                 if work == np.float32:
-                    bound = fft_roundoff(
-                        lengths,
-                        *scene.excess_norms(),
-                        *self.kernel_norms(plan.colour_kernel),
-                        np.float32,
-                    )
+                    bound = self.roundoff_bound(scene, lengths, plan.colour_kernel)
                     roundoff = tuple(max(a, b) for a, b in zip(roundoff, bound, strict=True))
             else:
                 peak = np.array([self.kernel_peak(plan.colour_kernel)])
@@ -901,19 +970,9 @@ def _kept(cache: OrderedDict, key: tuple, make, limit: int):
     return cache[key]
 
 
-_SUM_ROWS = 256  # rows of a kernel summed at once (no temporary of the kernel's size)
-
-
-def _sums(part: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``Σ|K|`` and ``ΣK²`` of ``part`` over its first two axes, in float64, by blocks of
-    rows: a new process pays for every page it touches, and the whole-kernel temporaries
-    these sums once made (a weight array, ``|K|``, ``K²``) cost a fresh 2048² render 68 ms."""
-    l1 = l2 = np.zeros(part.shape[2:])
-    for start in range(0, part.shape[0], _SUM_ROWS):
-        block = np.asarray(part[start : start + _SUM_ROWS], dtype=np.float64)
-        l1 = l1 + np.abs(block).sum(axis=(0, 1))
-        l2 = l2 + (block * block).sum(axis=(0, 1))
-    return l1, l2
+def _unfold(half: np.ndarray) -> np.ndarray:
+    """The lines of a symmetric kernel at offsets ``-h … h`` from those at ``0 … h``."""
+    return np.concatenate([half[:0:-1], half])
 
 
 # a digitised kernel sums to at most 1 (the share of its PSF inside its support; measured

@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from glarelab.glare.rendering._convolve import clusters
+from glarelab.glare.rendering._convolve import clusters, line_sums
 from glarelab.glare.rendering.compose import excess as excess_of
 from glarelab.glare.rendering.compose import over_channels
 from glarelab.glare.rendering.multires import grid_shape, splat
@@ -74,12 +74,21 @@ class Scene:
 
     def excess_norms(self) -> tuple[float, float]:
         """``ΣΔL`` and ``(ΣΔL²)^½``, cd/m², the largest over the channels (found once)."""
-        if "norms" not in self._splats:
-            flat = self.excess.reshape(-1, self.excess.shape[2])
-            flat = flat.astype(np.float64, copy=False)
-            l2 = float(np.sqrt(np.einsum("ij,ij->j", flat, flat).max()))
-            self._splats["norms"] = (self.total_excess, l2)  # ΣΔL: found with the scene
+        self.line_norms()
         return self._splats["norms"]
+
+    def line_norms(self) -> tuple[tuple[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]:
+        """``(ΣΔL, ΣΔL²)`` of each row and of each column of the source box, the largest over
+        the channels, cd/m² and (cd/m²)² (made once, in one pass with :meth:`excess_norms`)."""
+        if "lines" not in self._splats:
+            rows_l1, rows_l2, cols_l1, cols_l2 = line_sums(self.excess, absolute=False)
+            l2 = float(np.sqrt(rows_l2.sum(axis=0).max()))
+            self._splats["norms"] = (self.total_excess, l2)  # ΣΔL: found with the scene
+            self._splats["lines"] = (
+                (rows_l1.max(axis=-1), rows_l2.max(axis=-1)),
+                (cols_l1.max(axis=-1), cols_l2.max(axis=-1)),
+            )
+        return self._splats["lines"]
 
     def brightest_excess(self) -> np.ndarray:
         """The largest excess of each pixel of the source box over the channels, cd/m²
