@@ -53,6 +53,21 @@ def test_render_round_trips_a_float32_exr(tmp_path, model):
     assert png.shape == image.shape and png.max() == 255
 
 
+def test_render_says_exact_only_without_float32_round_off(tmp_path, capsys):
+    """Every render of the whole kernel was called "(exact)", float32 transforms too."""
+    source = write_exr(tmp_path / "in.exr", yoshida_disk())
+    options = ["--pixel-deg", "0.02", "--explain"]
+    for tolerance, label in (("0.5", "the whole kernel; error bound 0.0"), ("0", "(exact)")):
+        target = tmp_path / f"out_{tolerance}.exr"
+        assert (
+            main(["render", str(source), str(target), *options, "--tolerance-codes", tolerance])
+            == 0
+        )
+        err = capsys.readouterr().err
+        done = next(line for line in err.splitlines() if "done in" in line)
+        assert label in done, done
+
+
 def test_render_many_files_into_a_folder_with_one_kernel(tmp_path, capsys):
     sources = []
     for level in (4000.0, 40000.0):

@@ -394,8 +394,13 @@ def _render_images(
         seconds = time.perf_counter() - start
         if result.plan.exact and result.energy_outside_image is not None:
             left = result.energy_outside_image / np.maximum(result.excess_energy, 1e-300)
+            how = (  # the whole kernel, but float32 transforms round
+                "exact"
+                if result.error_bound_codes == 0
+                else f"the whole kernel; error bound {result.error_bound_codes:.3g} codes"
+            )
             _log(
-                f"done in {seconds:.2f} s (exact); energy outside the kernel "
+                f"done in {seconds:.2f} s ({how}); energy outside the kernel "
                 f"{np.max(result.kernel.energy_outside):.3g}, outside the image "
                 f"{float(np.max(left)):.3g} of the excess"
             )

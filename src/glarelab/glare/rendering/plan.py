@@ -160,7 +160,8 @@ class GlarePlan:
 
     @property
     def exact(self) -> bool:
-        """True when nothing is approximated: no cut and no coarse far tail."""
+        """True when the kernel is not approximated: no cut and no coarse far tail (the
+        transforms may still round in float32: :attr:`fft_precision`)."""
         return self.cut_bound_cd_m2 == 0.0 and self.multires_factor == 1
 
     @property
@@ -423,10 +424,11 @@ def make_plan(renderer, scene: Scene) -> GlarePlan:
     # grows with the spread (a plan of its precision costs the kernel's norms: 37 ms for a
     # 4095² kernel, paid in vain where the direct path is cheaper still). A float64 image's
     # float32 transforms are not checked after the render (the plan's bound is at least the
-    # check's), but the plan charges the check all the same: charged nothing, float32 FFTs
-    # were taken where the direct path had been as cheap, and on glints along an image's
-    # edge their round-off exceeded the bound's white part by 1.7× (0.69 codes, bound 0.42,
-    # a 300 × 457 image with every default), an error the check's formula shares
+    # check's), but the plan charges the check all the same, a margin for the round-off
+    # bound's measured constant: charged nothing, float32 FFTs were taken where the direct
+    # path had been as cheap, and on glints along an image's edge their round-off exceeded
+    # the bound of the time, white alone (0.69 codes, bound 0.42, a 300 × 457 image with
+    # every default), which now counts the round-off a row transform keeps in its row
     pixels = scene.planes.shape[0] * scene.planes.shape[1]
     check = machine.bound_s * pixels
     optimistic = fft_cost(lengths, machine, "float32") + check
@@ -438,7 +440,7 @@ def make_plan(renderer, scene: Scene) -> GlarePlan:
                 renderer, scene, plan, lengths, step, reach
             )
     costs = {"fft": fft_cost(lengths, machine, precision) * convolutions}
-    if precision == "float32":  # its round-off grows with the spread: checked pixel by pixel
+    if precision == "float32":  # the check of its bound, run or not (above)
         costs["fft"] += check
     costs["direct"] = (
         direct
