@@ -514,3 +514,26 @@ def test_glints_along_an_edge_stay_within_the_default_bound():
         image[row, col] = level
     error, result = _check(image, VosGlare(), 0.2, 0.5)
     assert error <= result.error_bound_codes <= 0.5, (error, str(result.plan))
+
+
+def test_a_bound_over_the_tolerance_that_is_kept_is_said():
+    """20,000 glints of 1e9 cd/m² with a narrow Gaussian: the float64 FFT's round-off bound,
+    0.09 codes, is over the 0.05 asked; with the direct spread not allowed, the render kept
+    it and said nothing (``fallback`` empty)."""
+    rng = np.random.default_rng(7)
+    image = np.full((512, 512), 0.3)
+    image[rng.integers(0, 512, 20000), rng.integers(0, 200, 20000)] = 1e9
+    renderer = GlareRenderer(
+        GaussianGlare(sigma_deg=0.05),
+        pixel_deg=0.01,
+        shape=image.shape,
+        tolerance_codes=0.05,
+        paths=("fft",),
+        cache=False,
+    )
+    result = renderer.render(image)
+    assert result.plan.path == "fft" and result.error_bound_codes > 0.05
+    assert result.fallback == (
+        f"error bound {result.error_bound_codes:.3g} codes > 0.05, kept: the direct spread, "
+        "which does not round, is not among paths"
+    )

@@ -782,6 +782,20 @@ class GlareRenderer:
             spread, used, roundoff = self._spread(scene, plan)
             out = compose(scene.planes, spread, self.l_dmax, self.method)
             error = self._error(scene, plan, spread, used, roundoff, 0.0)
+        elif error > plan.tolerance_codes:  # said, not left silent: nothing cheaper is exact
+            if plan.path != "fft":
+                why = f"no path left to try on the {plan.path} path"
+            elif "direct" not in self.paths:
+                why = "the direct spread, which does not round, is not among paths"
+            else:
+                times = plan.costs.get("direct", math.inf) / plan.costs["fft"]
+                why = (
+                    f"the direct spread, which does not round, would cost about {times:.3g} "
+                    f"times the FFT (more than {DIRECT_FALLBACK:g})"
+                )
+            note = f"error bound {error:.3g} codes > {plan.tolerance_codes:g}, kept: {why}"
+            result["fallback"] = f"{result['fallback']}; {note}" if result["fallback"] else note
+            self.say(note)
         self.say(f"error bound {error:.3g} display codes")
         parameters["convolution_precision"] = sorted(used)
         result.update(error_bound_codes=error, far_relative_error=relative)
