@@ -128,3 +128,31 @@ def test_the_full_convolution_is_fftconvolves_to_the_bit(a_shape, b_shape, dtype
     got = _convolve._full_convolution(a, b)
     assert got.dtype == expected.dtype and got.shape == expected.shape
     np.testing.assert_array_equal(got, expected)
+
+
+def test_a_cluster_larger_than_the_kernel_slides_the_kernel_over_it(monkeypatch):
+    """A bright sky (80 % of the pixels over L_dmax, one cluster) under a kernel smaller than
+    it was correlated with the cluster as ndimage's filter, whose table of offsets grows as
+    the filter's size squared: a 300 × 256 sky under a 3 × 3 kernel raised MemoryError. The
+    kernel is now the filter; the sums are the plain ones, for the full kernel, its quadrant
+    and any number of threads."""
+    calls = []
+    correlate = _convolve.ndimage.correlate
+    monkeypatch.setattr(
+        _convolve.ndimage, "correlate", lambda *a, **k: calls.append(a) or correlate(*a, **k)
+    )
+    rng = np.random.default_rng(3)
+    excess = np.where(rng.random((40, 36)) < 0.8, rng.uniform(1, 80, (40, 36)), 0.0)
+    quadrant = rng.random((2, 3))
+    full = mirror_quadrant(quadrant)
+    shape, out_box = (46, 40), (0, 46, 3, 40)
+    reference = plain_spread(excess, (2, 1), full, out_box, shape)
+    for kernel, symmetric in ((full, False), (quadrant, True)):
+        for workers in (1, 2):
+            with patch.object(_convolve, "DIRECT_UNFOLD_PIXELS", 0):
+                got = direct_spread(
+                    excess, (2, 1), kernel, out_box, np.zeros(shape), quadrant=symmetric,
+                    workers=workers,
+                )  # fmt: skip
+            assert_allclose(got, reference, rtol=1e-12, atol=0)
+    assert calls == []  # the kernel slid over the cluster: no correlation with the cluster

@@ -530,6 +530,24 @@ def _window(kernel: np.ndarray, rows, cols) -> np.ndarray:
     return window
 
 
+def _convolve_cluster(weights, start, kernel, box, into, *, quadrant) -> None:
+    """Add the spread of a cluster larger than the kernel to ``into`` at the pixels of
+    ``box`` (which it reaches): the kernel slides over the cluster. ``ndimage`` keeps a table
+    of the filter's offsets for each border position, about the filter's size squared: with
+    the cluster as the filter, a 300 × 256 sky under a 3 × 3 kernel raised MemoryError."""
+    full = mirror_quadrant(kernel) if quadrant else kernel
+    a, b = full.shape[0] // 2, full.shape[1] // 2
+    (bh, bw), (q0, p0), (r0, r1, c0, c1) = weights.shape, start, box
+    y0, y1 = max(q0, r0 - a), min(q0 + bh, r1 + a)  # the cluster's rows and columns that
+    x0, x1 = max(p0, c0 - b), min(p0 + bw, c1 + b)  # reach the box
+    padded = np.zeros((r1 - r0 + 2 * a, c1 - c0 + 2 * b), dtype=into.dtype)
+    padded[y0 - r0 + a : y1 - r0 + a, x0 - c0 + b : x1 - c0 + b] = weights[
+        y0 - q0 : y1 - q0, x0 - p0 : x1 - p0
+    ]
+    spread = ndimage.convolve(padded, full, mode="constant")
+    into[r0:r1, c0:c1] += spread[a : a + r1 - r0, b : b + c1 - c0]
+
+
 def _correlate(weights, start, kernel, out_box, into, buffer, *, quadrant) -> None:
     """Add the spread of ``weights`` (a box whose first pixel is the image's ``start``) to
     ``into`` at the pixels of ``out_box`` it reaches (``buffer``: room for the correlation of
@@ -546,6 +564,9 @@ def _correlate(weights, start, kernel, out_box, into, buffer, *, quadrant) -> No
     if weights.size == 1 and not quadrant:  # one pixel: a scaled copy, one view
         window = kernel[r0 - q0 + a : r1 - q0 + a, c0 - p0 + b : c1 - p0 + b]
         into[r0:r1, c0:c1] += weights[0, 0] * window
+        return
+    if (2 * a + 1) * (2 * b + 1) < weights.size:  # a cluster larger than the kernel
+        _convolve_cluster(weights, start, kernel, (r0, r1, c0, c1), into, quadrant=quadrant)
         return
     flipped = weights[::-1, ::-1]
     columns = [
