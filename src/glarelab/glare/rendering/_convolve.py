@@ -243,24 +243,29 @@ def line_sums(
     [[3.0, 3.0], [5.0, 9.0], [1.0, 5.0], [1.0, 13.0]]
     """
     height, width = values.shape[:2]
-    rows_l1 = np.empty((height, *values.shape[2:]))
-    rows_l2 = np.empty_like(rows_l1)
-    cols_l1 = np.zeros((width, *values.shape[2:]))
-    cols_l2 = np.zeros_like(cols_l1)
+    channels = values.shape[2:]
+    lines = math.prod(channels)
+    rows_l1, rows_l2 = np.empty((height, lines)), np.empty((height, lines))
+    cols_l1, cols_l2 = np.zeros((width, *channels)), np.zeros((width, *channels))
     for start in range(0, height, _LINE_BLOCK_ROWS):
         block = np.asarray(values[start : start + _LINE_BLOCK_ROWS], dtype=np.float64)
         stop = start + block.shape[0]
         square = block * block
         if absolute:
             block = np.abs(block)
-        rows_l1[start:stop] = block.sum(axis=1)
-        rows_l2[start:stop] = square.sum(axis=1)
         cols_l1 += block.sum(axis=0)
         cols_l2 += square.sum(axis=0)
-    return rows_l1, rows_l2, cols_l1, cols_l2
+        # each channel's rows as a strided 2-D view: a sum over the middle axis of
+        # (rows, W, 3) runs an inner loop of 3 and took 100 ms at 2048²
+        flat, squares = block.reshape(stop - start, -1), square.reshape(stop - start, -1)
+        for channel in range(lines):
+            rows_l1[start:stop, channel] = flat[:, channel::lines].sum(axis=1)
+            rows_l2[start:stop, channel] = squares[:, channel::lines].sum(axis=1)
+    shape = (height, *channels)
+    return rows_l1.reshape(shape), rows_l2.reshape(shape), cols_l1, cols_l2
 
 
-_LINE_BLOCK_ROWS = 64  # rows of line_sums' block: its temporaries stay in the cache
+_LINE_BLOCK_ROWS = 16  # rows of line_sums' block: its temporaries stay in the cache
 
 
 def _line_convolution(a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -74,20 +74,20 @@ class Scene:
 
     def excess_norms(self) -> tuple[float, float]:
         """``ΣΔL`` and ``(ΣΔL²)^½``, cd/m², the largest over the channels (found once)."""
-        self.line_norms()
+        if "norms" not in self._splats:
+            flat = self.excess.reshape(-1, self.excess.shape[2])
+            flat = flat.astype(np.float64, copy=False)
+            l2 = float(np.sqrt(np.einsum("ij,ij->j", flat, flat).max()))
+            self._splats["norms"] = (self.total_excess, l2)  # ΣΔL: found with the scene
         return self._splats["norms"]
 
     def line_norms(self) -> tuple[tuple[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]:
-        """``(ΣΔL, ΣΔL²)`` of each row and of each column of the source box, the largest over
-        the channels, cd/m² and (cd/m²)² (made once, in one pass with :meth:`excess_norms`)."""
+        """``(ΣΔL, ΣΔL²)`` of each row and of each column of the source box, cd/m² and
+        (cd/m²)², of the brightest channel of each pixel (:meth:`brightest_excess`: at least
+        each channel's; made once)."""
         if "lines" not in self._splats:
-            rows_l1, rows_l2, cols_l1, cols_l2 = line_sums(self.excess, absolute=False)
-            l2 = float(np.sqrt(rows_l2.sum(axis=0).max()))
-            self._splats["norms"] = (self.total_excess, l2)  # ΣΔL: found with the scene
-            self._splats["lines"] = (
-                (rows_l1.max(axis=-1), rows_l2.max(axis=-1)),
-                (cols_l1.max(axis=-1), cols_l2.max(axis=-1)),
-            )
+            rows_l1, rows_l2, cols_l1, cols_l2 = line_sums(self.brightest_excess(), absolute=False)
+            self._splats["lines"] = ((rows_l1, rows_l2), (cols_l1, cols_l2))
         return self._splats["lines"]
 
     def brightest_excess(self) -> np.ndarray:
