@@ -424,20 +424,17 @@ def test_float32_round_off_of_glints_along_the_edges_is_within_its_bound(seed):
 @pytest.mark.parametrize(
     ("image", "model", "pixel_deg"),
     [
-        pytest.param(  # a strip of 502 px, two glints: 0.50 of the bound (of 1,167 scenes)
+        pytest.param(  # one glint in a corner, a narrow Gaussian: 0.34 of the bound
             scene(
-                (1, 502),
-                seed=2,
-                background_cd_m2=0.008699721837581406,
-                sources=[
-                    ("glint", "anywhere", 3.09745362387813),
-                    ("glint", "centre", 7.235643424276665),
-                ],
+                (229, 260),
+                seed=145,
+                background_cd_m2=25.31812656894582,
+                sources=[("glint", "corner", 3.8610358333598045)],
                 colour=False,
             ),
-            VosGlare(),
+            GaussianGlare(sigma_deg=0.05, sampling="pixel"),
             0.2,
-            id="strip",
+            id="corner glint, narrow Gaussian",
         ),
         pytest.param(*_edge_glints(28), id="edge glints, scotopic Vos"),  # 0.45
     ],
@@ -445,8 +442,8 @@ def test_float32_round_off_of_glints_along_the_edges_is_within_its_bound(seed):
 def test_float32_round_off_is_within_its_bound_on_the_tightest_scenes_measured(
     image, model, pixel_deg
 ):
-    # the tightest of the scenes the bound's constant was measured on: within it, and not
-    # vacuously
+    # the tightest of the scenes the bound's constant was measured on (strips aside, which
+    # take float64 transforms): within it, and not vacuously
     worst = _roundoff_over_bound(image, model, pixel_deg)
     assert 0.3 < worst <= 1.0, worst
 
@@ -537,3 +534,18 @@ def test_a_bound_over_the_tolerance_that_is_kept_is_said():
         f"error bound {result.error_bound_codes:.3g} codes > 0.05, kept: the direct spread, "
         "which does not round, is not among paths"
     )
+
+
+@pytest.mark.parametrize("column", [False, True])
+def test_a_strip_takes_float64_transforms(column):
+    """A strip's transforms are one-dimensional, and their round-off is not white: a
+    1 × 900 strip with one glint at its end (Vos with flare lines, 0.2°/px) took float32
+    transforms and was 0.58 codes off where the bound said 0.43 and 0.5 were asked."""
+    image = np.full((1, 900), 100.0)
+    image[0, 0] = 1486579.45607744
+    image[0, np.linspace(100, 800, 10).astype(int)] = 220.2  # the FFT is then the cheaper
+    image = image.T.copy() if column else image
+    model = VosGlare(flare_lines=True, seed=1)
+    error, result = _check(image, model, 0.2, 0.5)
+    assert result.plan.path == "fft" and result.plan.fft_precision == "float64"
+    assert error <= result.error_bound_codes <= 0.5, (error, result.error_bound_codes)

@@ -43,10 +43,12 @@ FLOAT32_NOISE_LIMIT_CD_M2 = 1e-3  # largest FFT round-off the float32 path may a
 # edges; 150 single lamps or glints at corners, edges and centres; 150 random scenes of
 # 20-420 px, 300 of 2-64 px and 200 strips one pixel wide, drawn as the property tests draw
 # them, with the models with a tail bound; 140 with wave optics, the hybrid and flare
-# lines), reached 1.5 (a strip of 502 px) and 1.35 (glints along an edge); the 1024² city of
-# 2,000 lamps 0.48. A white model alone needed up to 26.8 and the bound with its constant
-# then, 10, failed on 44 of them (by up to 2.68 times): a glint's row keeps the round-off
-# of its row transform. The relative part reached 6.6 u log2 n.
+# lines), reached 1.35 (glints along an edge) and 1.5 on a strip; the 1024² city of 2,000
+# lamps 0.48. A white model alone needed up to 26.8 and the bound with its constant then,
+# 10, failed on 44 of them (by up to 2.68 times): a glint's row keeps the round-off of its
+# row transform. The relative part reached 6.6 u log2 n. A strip's one-dimensional
+# transforms are not bounded so (up to 5.2 on a 1 × 900 strip): the plan keeps them in
+# float64 (glarelab.glare.rendering.plan._choose_precision).
 ROUNDOFF_WHITE = 3.0
 ROUNDOFF_RELATIVE = 10.0
 # Direct spread, seconds per output pixel (2-core machine): a scaled kernel copy costs
