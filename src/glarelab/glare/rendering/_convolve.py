@@ -271,15 +271,13 @@ _LINE_BLOCK_ROWS = 16  # rows of line_sums' block: its temporaries stay in the c
 
 
 def _line_convolution(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Full convolution of two non-negative 1-D arrays, float64 (by FFT when long: its
-    round-off, about 1e-13 of the largest value, is far below the constants above)."""
+    """Full convolution of two non-negative 1-D arrays, float64 (by :func:`_full_convolution`
+    when long: its round-off, about 1e-13 of the largest value, is far below the constants
+    above; what it leaves below zero is clipped)."""
     a, b = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
     if a.size * b.size <= 1 << 16:
         return np.convolve(a, b)
-    length = a.size + b.size - 1
-    fast = scipy.fft.next_fast_len(length, True)
-    product = scipy.fft.rfft(a, fast) * scipy.fft.rfft(b, fast)
-    return np.maximum(scipy.fft.irfft(product, fast)[:length], 0.0)
+    return np.maximum(_full_convolution(a[None, :], b[None, :])[0], 0.0)
 
 
 def bounding_box(mask: np.ndarray) -> tuple[slice, slice]:
