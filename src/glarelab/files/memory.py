@@ -4,19 +4,51 @@ killing the process) part-way through."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 __all__ = ["available_memory", "check_memory", "refuse_beyond"]
 
 
+MEMINFO = Path("/proc/meminfo")  # Linux's own account of its memory (proc(5))
+
+
 def available_memory() -> int | None:
-    """Bytes the system can still give without swapping (psutil's ``available``: Linux's
-    MemAvailable, and its counterpart on macOS and Windows, where there is no /proc/meminfo);
-    None where unknown."""
+    """Bytes the system can still give without swapping: Linux's ``MemAvailable``, read from
+    :data:`MEMINFO` (what psutil's ``available`` reports there), and psutil's ``available``
+    where there is no such file (macOS, Windows); None where unknown.
+
+    Notes
+    -----
+    On Linux the file is read rather than psutil imported: the import took 14-37 ms in a
+    fresh process, a tenth of a one-call render of a 2048² night scene, for one number the
+    kernel writes in a line of text.
+    """
+    from_file = _meminfo_available(MEMINFO)
+    if from_file is not None:
+        return from_file
     import psutil
 
     try:
         return int(psutil.virtual_memory().available)
     except (OSError, RuntimeError, NotImplementedError):
         return None
+
+
+def _meminfo_available(path: Path) -> int | None:
+    """``MemAvailable`` of a ``/proc/meminfo`` file in bytes (the kernel writes kB, of 1024
+    bytes); None where the file or the line is missing or unreadable (kernels before 3.14
+    have no such line: psutil estimates it)."""
+    try:
+        with path.open("rb") as file:
+            for line in file:
+                if line.startswith(b"MemAvailable:"):
+                    fields = line.split()
+                    if len(fields) == 3 and fields[2] == b"kB" and fields[1].isdigit():
+                        return int(fields[1]) * 1024
+                    return None
+    except OSError:
+        return None
+    return None
 
 
 def refuse_beyond(needed: float, free: int | None, what: str) -> None:

@@ -89,7 +89,7 @@ MAX_LUMINANCE_CD_M2 = 1e30
 # bytes per pixel a render needs at its peak (measured on 512²-2048² scenes, exact and planned
 # renders: 230-240 for luminance, 300 for RGB; with headroom)
 RENDER_BYTES_PER_PIXEL = {1: 260, 3: 340}
-# below this the system is not asked (psutil's reading costs 0.1 ms, a tenth of a 271² render):
+# below this the system is not asked (reading its memory costs 0.1 ms, a tenth of a 271² render):
 # a render of a 440² RGB image or less; a system without 64 MiB to give is out of the question
 SMALL_RENDER_BYTES = 64 * 2**20
 
