@@ -159,13 +159,27 @@ def _rewritten(data: bytes, header=None, values=None) -> bytes:
     [
         {"values": lambda v: v.__setitem__(slice(None), np.nan)},  # rendered a NaN image
         {"values": lambda v: v.__setitem__(3, np.inf)},
+        {"values": lambda v: v.__setitem__(-1, np.nan)},  # one NaN, at the support's corner
+        {"values": lambda v: v.__setitem__(0, np.inf)},  # on both axes of a quadrant
+        {"values": lambda v: v.__setitem__(5, -np.inf)},
         {"values": lambda v: v.__setitem__(0, -1e-3)},
         {"values": lambda v: v.__imul__(2.0)},  # summed to 2 with its energy outside
         {"header": lambda h: h.__setitem__("shape", [1, -1])},  # a 1 × 441 kernel
         {"header": lambda h: h.__setitem__("energy_outside", -5.0)},
         {"header": lambda h: h.__setitem__("energy_outside", float("nan"))},
     ],
-    ids=["nan", "inf", "negative", "doubled", "shape", "outside-negative", "outside-nan"],
+    ids=[
+        "nan",
+        "inf",
+        "one-nan",
+        "inf-centre",
+        "minus-inf",
+        "negative",
+        "doubled",
+        "shape",
+        "outside-negative",
+        "outside-nan",
+    ],
 )
 def test_an_entry_whose_crc_matches_but_no_kernel_could_be_is_rebuilt(tmp_path, edit):
     cache = KernelCache(tmp_path)
