@@ -37,11 +37,18 @@ def test_reading_it_does_not_import_psutil():
     ("text", "expected"),
     [
         ("MemTotal:       16384 kB\nMemAvailable:    2048 kB\n", 2048 * 1024),
-        ("MemAvailable:       0 kB\n", 0),
+        ("MemTotal:\t16384 kB\r\nMemFree: 9 kB\r\nMemAvailable:\t2048 kB", 2048 * 1024),
+        # the first of each line counts
+        ("MemTotal: 16384 kB\nMemAvailable: 2048 kB\nMemAvailable: 4096 kB\n", 2048 * 1024),
         ("MemTotal:       16384 kB\nMemFree:    2048 kB\n", None),  # kernels before 3.14
-        ("MemAvailable:    2048 MB\n", None),  # a unit the kernel does not write
-        ("MemAvailable:    -5 kB\n", None),
-        ("MemAvailable:\n", None),
+        ("MemAvailable:    2048 kB\n", None),  # no total to hold it to
+        # 0: a kernel bug, which psutil works around by estimating it (psutil issue 1915)
+        ("MemTotal:       16384 kB\nMemAvailable:       0 kB\n", None),
+        # above the total: some containers, where psutil takes MemFree
+        ("MemTotal:        8000 kB\nMemAvailable:    9000 kB\n", None),
+        ("MemTotal:       16384 kB\nMemAvailable:    2048 MB\n", None),  # not the kernel's unit
+        ("MemTotal:       16384 kB\nMemAvailable:    -5 kB\n", None),
+        ("MemTotal:       16384 kB\nMemAvailable:\n", None),
         ("", None),
     ],
 )
@@ -61,5 +68,12 @@ def test_without_the_line_psutil_answers(tmp_path, monkeypatch):
 
 def test_without_the_file_psutil_answers(tmp_path, monkeypatch):
     monkeypatch.setattr(memory, "MEMINFO", tmp_path / "absent")
+    free = memory.available_memory()
+    assert free is not None and 0 < free <= psutil.virtual_memory().total
+
+
+def test_a_folder_at_the_path_leaves_it_to_psutil(tmp_path, monkeypatch):
+    assert memory._meminfo_available(tmp_path) is None  # IsADirectoryError: an OSError
+    monkeypatch.setattr(memory, "MEMINFO", tmp_path)
     free = memory.available_memory()
     assert free is not None and 0 < free <= psutil.virtual_memory().total

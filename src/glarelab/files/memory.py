@@ -15,7 +15,8 @@ MEMINFO = Path("/proc/meminfo")  # Linux's own account of its memory (proc(5))
 def available_memory() -> int | None:
     """Bytes the system can still give without swapping: Linux's ``MemAvailable``, read from
     :data:`MEMINFO` (what psutil's ``available`` reports there), and psutil's ``available``
-    where there is no such file (macOS, Windows); None where unknown.
+    where there is no such file (macOS, Windows) or the file leaves it to psutil's estimate
+    (:func:`_meminfo_available`); None where unknown.
 
     Notes
     -----
@@ -36,19 +37,28 @@ def available_memory() -> int | None:
 
 def _meminfo_available(path: Path) -> int | None:
     """``MemAvailable`` of a ``/proc/meminfo`` file in bytes (the kernel writes kB, of 1024
-    bytes); None where the file or the line is missing or unreadable (kernels before 3.14
-    have no such line: psutil estimates it)."""
+    bytes); None where psutil is to answer instead: the file or either line missing or
+    unreadable (kernels before 3.14 have no ``MemAvailable``), ``MemAvailable`` 0 (a kernel
+    bug psutil works around by estimating it) or above ``MemTotal`` (some containers: psutil
+    takes ``MemFree``)."""
+    fields: dict[bytes, int] = {}
     try:
         with path.open("rb") as file:
             for line in file:
-                if line.startswith(b"MemAvailable:"):
-                    fields = line.split()
-                    if len(fields) == 3 and fields[2] == b"kB" and fields[1].isdigit():
-                        return int(fields[1]) * 1024
-                    return None
+                name, _, rest = line.partition(b":")
+                if name in (b"MemTotal", b"MemAvailable") and name not in fields:
+                    parts = rest.split()
+                    if len(parts) != 2 or parts[1] != b"kB" or not parts[0].isdigit():
+                        return None
+                    fields[name] = int(parts[0]) * 1024
+                    if len(fields) == 2:
+                        break
     except OSError:
         return None
-    return None
+    total, available = fields.get(b"MemTotal"), fields.get(b"MemAvailable")
+    if total is None or available is None or not 0 < available <= total:
+        return None
+    return available
 
 
 def refuse_beyond(needed: float, free: int | None, what: str) -> None:
