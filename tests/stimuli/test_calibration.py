@@ -138,7 +138,10 @@ def test_shipped_synthetic_calibrations_match_their_protocols():
         expected = default_calibration(
             load_protocol(root / "src" / "glarelab" / "protocols" / f"{study}.toml")
         )
-        assert np.array_equal(shipped.lut, expected.lut)
+        # equal but for the last bits of numpy's float64 power, which differ between CPUs
+        # (SVML on AVX-512, the C library's elsewhere: 1 ulp in a reading, up to 6 ulp in
+        # the table); any change of gamma, black or white moves it by far more
+        np.testing.assert_allclose(shipped.lut, expected.lut, rtol=1e-13, atol=0)
 
 
 def test_sessions_refuse_missing_failed_or_synthetic_calibrations():
