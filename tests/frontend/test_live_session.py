@@ -339,6 +339,7 @@ def test_a_signal_during_the_live_scene_logs_its_frames_so_far(screen, tmp_path)
     screen.wait_for_log(data, r"instructions screen onset")
     screen.focus_window()
     screen.key("space")
+    screen.wait_for_log(data, r"trial 1 live: scene")  # its bank made: 29 s on a slow machine
     frames = screen.wait_for_file("*_frames.tsv", data)
     wait_for(screen, frames, lambda r: int(r["frame"]) > 5)
     screen.signal(signal.SIGTERM)
