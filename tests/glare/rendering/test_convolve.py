@@ -156,3 +156,62 @@ def test_a_cluster_larger_than_the_kernel_slides_the_kernel_over_it(monkeypatch)
                 )  # fmt: skip
             assert_allclose(got, reference, rtol=1e-12, atol=0)
     assert calls == []  # the kernel slid over the cluster: no correlation with the cluster
+
+
+@settings(max_examples=120, deadline=None)
+@given(
+    scene=scenes(),
+    band_bytes=st.sampled_from([8, 64, 200, 4096, _convolve.COPY_BAND_BYTES]),
+    workers=st.integers(1, 3),
+)
+def test_a_clusters_copies_sum_as_its_correlation_does_to_the_bit(scene, band_bytes, workers):
+    """A compact cluster's scaled kernel copies, summed by bands of rows of any height, are
+    the numbers of ``scipy.ndimage.correlate`` of the kernel with the cluster: the same terms
+    added in the same order, whichever path the costs choose and however many threads."""
+    excess, origin, quadrant, out_box, shape = scene
+    full = mirror_quadrant(quadrant)
+    got = {}
+    for path, pixel_s in (("copies", 0.0), ("correlation", np.inf)):
+        for kernel, symmetric in ((full, False), (quadrant, True)):
+            with (
+                patch.object(_convolve, "COPY_PIXEL_S", pixel_s),
+                patch.object(_convolve, "COPY_BAND_BYTES", band_bytes),
+                patch.object(_convolve, "COPY_BOX_SPARE", np.inf),  # every box's copies summed
+                patch.object(_convolve, "COPY_BOX_PIXELS", 0),
+                patch.object(_convolve, "DIRECT_UNFOLD_PIXELS", 0),
+            ):
+                got[path, symmetric] = direct_spread(
+                    excess, origin, kernel, out_box, np.zeros(shape), quadrant=symmetric,
+                    workers=workers,
+                )  # fmt: skip
+    reference = plain_spread(excess, origin, full, out_box, shape)
+    assert_allclose(got["copies", False], reference, rtol=1e-12, atol=0)
+    for symmetric in (False, True):
+        assert np.array_equal(got["copies", symmetric], got["correlation", symmetric])
+
+
+def test_a_sparse_cluster_as_wide_as_the_kernel_copies_each_pixel_over_its_own_reach(
+    monkeypatch,
+):
+    """The copies of a thin cluster (a lamp's outline, 4-connected, its box 15 × 15) under a
+    61 × 61 kernel are added pixel by pixel, each over the kernel's reach: summed over the
+    box's reach they would cost (60 + 15)² / 61² = 1.5 times the work per pixel. A compact
+    3 × 3 cluster's copies are summed over its box's reach ((60 + 3)² / 61² = 1.07)."""
+    boxes = []
+    copies = _convolve._add_copies
+    monkeypatch.setattr(
+        _convolve, "_add_copies", lambda w, *a: boxes.append(w.shape) or copies(w, *a)
+    )
+    monkeypatch.setattr(_convolve, "COPY_BOX_PIXELS", 0)  # the box's shape alone decides
+    kernel = np.random.default_rng(4).random((61, 61))
+    outline = np.zeros((20, 20))
+    outline[2, 2:17] = 5.0  # an L of 29 pixels
+    outline[2:17, 16] = 7.0
+    compact = np.zeros((20, 20))
+    compact[5:8, 5:8] = 3.0
+    for excess, boxed in ((outline, False), (compact, True)):
+        boxes.clear()
+        got = direct_spread(excess, (0, 0), kernel, (0, 20, 0, 20), np.zeros((20, 20)))
+        reference = plain_spread(excess, (0, 0), kernel, (0, 20, 0, 20), (20, 20))
+        assert_allclose(got, reference, rtol=1e-12, atol=0)
+        assert bool(boxes) == boxed, boxes
