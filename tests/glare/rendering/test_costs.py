@@ -45,6 +45,40 @@ def test_costs_are_measured_once_and_kept(tmp_path):
         GlareRenderer(VosGlare(), pixel_deg=0.05, shape=(8, 8), costs="quiet")
 
 
+def test_the_direct_spread_is_costed_per_output_pixel_without_its_fixed_part(monkeypatch):
+    """A direct spread's time is a part that grows with its output and a part that does not
+    (its threads, its windows): timed over a 512² output alone, that fixed part was charged
+    per pixel, and the 2048² night scene's direct spread was costed at 1.6 times its time,
+    a tie with the FFT, which took 1.5 times as long. With a spread that costs a fixed 100 s
+    and then a set time per output pixel (on a clock of its own), the costs recover the
+    per-pixel parts: their ratios exactly, each within the rounds' spread of the FFT's time
+    (the unit the others are measured against; to 1e-4, the fake spread's own time)."""
+    from glarelab.glare.rendering import _convolve, costs
+
+    pixel_s, correlate_s, weight_s, fixed_s = 2e-6, 5e-6, 4e-7, 100.0
+    spent = [0.0]
+
+    def direct_spread(points, centre, kernel, out_box, into, *, quadrant, workers, groups=None):
+        area = (out_box[1] - out_box[0]) * (out_box[3] - out_box[2])
+        per_pixel = pixel_s if points.size == 1 else correlate_s + weight_s * points.size
+        spent[0] += fixed_s + area * per_pixel
+        return into
+
+    class Clock:
+        @staticmethod
+        def perf_counter():
+            return time.perf_counter() + spent[0]
+
+    monkeypatch.setattr(_convolve, "direct_spread", direct_spread)
+    monkeypatch.setattr(costs, "time", Clock)
+    measured = costs.measure_costs()
+    scale = measured.direct_pixel_s / pixel_s  # the FFT's fastest round over its median
+    assert 0.3 < scale <= 1.0 + 1e-6, scale
+    for name, value in (("correlate_s", correlate_s), ("correlate_weight_s", weight_s)):
+        ratio = getattr(measured, name) / measured.direct_pixel_s
+        assert ratio == pytest.approx(value / pixel_s, rel=1e-4), name
+
+
 def _scene(name: str) -> tuple[np.ndarray, float]:
     if name == "two lamps and a glint":
         return lamps_scene((512, 512), 2, pixel_deg=0.04, glint_cd_m2=1e7)

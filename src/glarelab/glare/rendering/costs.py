@@ -34,7 +34,7 @@ __all__ = [
     "n_log_n",
 ]
 
-COSTS_VERSION = 8  # bump when what is measured changes (8: the FFT at a second size)
+COSTS_VERSION = 9  # bump when what is measured changes (9: the direct spread per output pixel)
 # calibration rounds: the FFT's fastest, the others' median ratio to it. Four calibrations
 # on the quiet 2-core machine put a scaled kernel copy at 13.8-21.6 FFT units with 7 rounds
 # (0.5 s), 14.2-16.2 with 21 (1.3 s, once per machine): on two lamps and a glint (512²)
@@ -50,6 +50,13 @@ ROUNDS = 21
 SMALL_FFT_POINTS = 2**22
 LARGE_FFT_POINTS = 2**24
 LARGE_ROUNDS = 3  # the large transforms' rounds (0.2-0.4 s each)
+# The direct spread is timed over a 512² and a 1024² output, and costed per pixel by the
+# difference: timed over 512² alone, a 3 × 3 cluster from a 2049² quadrant cost 16.7 ns per
+# output pixel against 10.3 at 1024² and 8.2 at 2048² (2-core machine without AVX-512),
+# and the 2048² night scene with a sun's four clusters was costed at 1.6 times its direct
+# spread's time, a tie with its transforms which took 1.5 times the direct path. The
+# large cluster has BIG_SIDE² pixels (a correlation: 8 × 8 at 1024² in about 45 ms)
+BIG_SIDE = 8
 
 
 def cores() -> int:
@@ -269,9 +276,13 @@ def measure_costs() -> PathCosts:
     quadrant = kernel[: n + 1, : n + 1]
     centre = (n // 2, n // 2)
     one = np.ones((1, 1))
-    small, big = np.ones((3, 3)), np.ones((12, 12))
+    small, big = np.ones((3, 3)), np.ones((BIG_SIDE, BIG_SIDE))
     small_groups = [((slice(0, 3), slice(0, 3)), np.ones((3, 3), bool))]
-    big_groups = [((slice(0, 12), slice(0, 12)), np.ones((12, 12), bool))]
+    big_groups = [((slice(0, BIG_SIDE), slice(0, BIG_SIDE)), np.ones((BIG_SIDE,) * 2, bool))]
+    # the same over an output twice as wide, from a quadrant that reaches it: the difference
+    # is the cost per output pixel, without what a spread costs whatever its size
+    wide = np.random.default_rng(1).random((2 * n + 1, 2 * n + 1))
+    wide_into, wide_out, wide_centre = np.zeros((2 * n, 2 * n)), (0, 2 * n, 0, 2 * n), (n, n)
     # far tail of a 1024² image at 1/8: splat, interpolation and the per-pixel bound; its
     # coarse convolution; the plan's preview (the darkest pixel of each cell and a splat)
     size, factor = 1024, 8
@@ -300,7 +311,12 @@ def measure_costs() -> PathCosts:
 
     workers = cores()
 
-    def clustered(points, groups):
+    def clustered(points, groups, wider=False):
+        if wider:
+            return direct_spread(
+                points, wide_centre, wide, wide_out, wide_into, quadrant=True, workers=workers,
+                groups=groups,
+            )  # fmt: skip
         return direct_spread(
             points, centre, quadrant, out, into, quadrant=True, workers=workers, groups=groups
         )
@@ -313,11 +329,12 @@ def measure_costs() -> PathCosts:
             "fft32": lambda: spectral_spread(
                 work[np.float32], box, out, spectra[np.float32], lengths
             ),
-            "pixel": lambda: direct_spread(
-                one, centre, quadrant, out, into, quadrant=True, workers=workers
-            ),
+            "pixel": lambda: clustered(one, None),
             "small": lambda: clustered(small, small_groups),
             "big": lambda: clustered(big, big_groups),
+            "wide pixel": lambda: clustered(one, None, wider=True),
+            "wide small": lambda: clustered(small, small_groups, wider=True),
+            "wide big": lambda: clustered(big, big_groups, wider=True),
             "far": far_tail,
             "bound": check,
             "coarse": lambda: far_spread(
@@ -328,9 +345,14 @@ def measure_costs() -> PathCosts:
         "fft64",
     )
     large = _large_fft_units(rng, spectral_spread, fastest, unit)
-    pixel_s = fastest["pixel"] / (n * n)
-    cluster_s = fastest["small"] / (n * n)
-    weight_s = max((fastest["big"] / (n * n) - cluster_s) / (144 - 9), 1e-12)
+
+    def per_pixel(name: str) -> float:  # the wider output's extra time per extra pixel
+        extra = fastest[f"wide {name}"] - fastest[name]
+        return extra / (3 * n * n) if extra > 0 else fastest[f"wide {name}"] / (4 * n * n)
+
+    pixel_s = per_pixel("pixel")
+    cluster_s = per_pixel("small")
+    weight_s = max((per_pixel("big") - cluster_s) / (BIG_SIDE**2 - 9), 1e-12)
     per = {np.float64: fastest["fft64"] / unit, np.float32: fastest["fft32"] / unit}
     return PathCosts(
         fft_s=per[np.float64],
