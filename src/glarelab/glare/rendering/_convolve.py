@@ -577,20 +577,24 @@ def _add_copies(window: np.ndarray, weights: np.ndarray, into: np.ndarray) -> No
     a scaled copy of the window per bright pixel, summed by bands of rows small enough to stay
     in the processor's cache (:data:`COPY_BAND_BYTES`) before they are added to ``into``.
     The terms are added in the order of ``scipy.ndimage.correlate`` (row by row of the
-    weights, from zero), so a cluster's sum is the same by either path."""
+    weights, from zero, in float64, the sum rounded once to ``into``'s precision), so a
+    cluster's sum is the same by either path (but that ``ndimage`` leaves out a weight of at
+    most 2.2e-16, which the copies keep)."""
     rows, cols = into.shape
-    band = max(1, min(rows, COPY_BAND_BYTES // (cols * into.itemsize)))
-    total, term = np.empty((2, band, cols), dtype=into.dtype)
-    terms = [(i, j, weights[i, j]) for i, j in zip(*np.nonzero(weights), strict=True)]
+    band = max(1, min(rows, COPY_BAND_BYTES // (cols * 8)))
+    total, term = np.empty((2, band, cols))
+    terms = [(i, j, float(weights[i, j])) for i, j in zip(*np.nonzero(weights), strict=True)]
     for r0 in range(0, rows, band):
         r1 = min(rows, r0 + band)
         part, scaled = total[: r1 - r0], term[: r1 - r0]
         (i, j, weight), rest = terms[0], terms[1:]
-        np.multiply(window[r0 + i : r1 + i, j : j + cols], weight, out=part)
+        np.multiply(window[r0 + i : r1 + i, j : j + cols], weight, out=part, dtype=np.float64)
         for i, j, weight in rest:
-            np.multiply(window[r0 + i : r1 + i, j : j + cols], weight, out=scaled)
+            np.multiply(
+                window[r0 + i : r1 + i, j : j + cols], weight, out=scaled, dtype=np.float64
+            )
             part += scaled
-        into[r0:r1] += part
+        into[r0:r1] += part if into.dtype == np.float64 else part.astype(into.dtype)
 
 
 def _correlate(weights, start, kernel, out_box, into, buffer, *, quadrant, copies) -> None:
