@@ -6,6 +6,7 @@ from __future__ import annotations
 from unittest.mock import patch
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
@@ -202,7 +203,7 @@ def test_a_sparse_cluster_as_wide_as_the_kernel_copies_each_pixel_over_its_own_r
     """The copies of a thin cluster (a lamp's outline, 4-connected, its box 15 × 15) under a
     61 × 61 kernel are added pixel by pixel, each over the kernel's reach: summed over the
     box's reach they would cost (60 + 15)² / 61² = 1.5 times the work per pixel. A compact
-    3 × 3 cluster's copies are summed over its box's reach ((60 + 3)² / 61² = 1.07)."""
+    2 × 2 cluster's copies are summed over its box's reach ((60 + 2)² / 61² = 1.03)."""
     boxes = []
     copies = _convolve._add_copies
     monkeypatch.setattr(
@@ -214,10 +215,33 @@ def test_a_sparse_cluster_as_wide_as_the_kernel_copies_each_pixel_over_its_own_r
     outline[2, 2:17] = 5.0  # an L of 29 pixels
     outline[2:17, 16] = 7.0
     compact = np.zeros((20, 20))
-    compact[5:8, 5:8] = 3.0
+    compact[5:7, 5:7] = 3.0
     for excess, boxed in ((outline, False), (compact, True)):
         boxes.clear()
         got = direct_spread(excess, (0, 0), kernel, (0, 20, 0, 20), np.zeros((20, 20)))
         reference = plain_spread(excess, (0, 0), kernel, (0, 20, 0, 20), (20, 20))
         assert_allclose(got, reference, rtol=1e-12, atol=0)
         assert bool(boxes) == boxed, boxes
+
+
+def test_a_given_group_with_nothing_to_spread_adds_nothing_by_every_method():
+    """A caller's groups may hold pixels at zero excess (the groups of ``excess >= 0``): a
+    group with none above zero adds nothing, by copies (which found no first term to sum
+    and raised IndexError), correlation or the cheapest."""
+    kernel = np.random.default_rng(5).random((41, 41))
+    excess = np.zeros((6, 6))
+    excess[4, 4] = 2.0
+    groups = [
+        ((slice(0, 2), slice(0, 2)), np.ones((2, 2), bool)),  # all at zero excess
+        ((slice(4, 5), slice(4, 5)), np.ones((1, 1), bool)),
+    ]
+    reference = plain_spread(excess, (3, 3), kernel, (0, 20, 0, 20), (20, 20))
+    for method in ("cheapest", "correlation", "copies"):
+        with patch.object(_convolve, "COPY_BOX_PIXELS", 0):
+            got = direct_spread(
+                excess, (3, 3), kernel, (0, 20, 0, 20), np.zeros((20, 20)), groups=groups,
+                method=method,
+            )  # fmt: skip
+        assert_allclose(got, reference, rtol=1e-12, atol=0)
+    with pytest.raises(ValueError, match="method must be"):
+        direct_spread(excess, (3, 3), kernel, (0, 20, 0, 20), np.zeros((20, 20)), method="fft")

@@ -45,23 +45,34 @@ def test_costs_are_measured_once_and_kept(tmp_path):
         GlareRenderer(VosGlare(), pixel_deg=0.05, shape=(8, 8), costs="quiet")
 
 
-def test_the_direct_spread_is_costed_per_output_pixel_without_its_fixed_part(monkeypatch):
+def test_the_direct_spread_is_costed_at_512_squared_and_by_its_share_beyond(monkeypatch):
     """A direct spread's time is a part that grows with its output and a part that does not
-    (its threads, its windows): timed over a 512² output alone, that fixed part was charged
-    per pixel, and the 2048² night scene's direct spread was costed at 1.6 times its time,
-    a tie with the FFT, which took 1.5 times as long. With a spread that costs a fixed 100 s
-    and then a set time per output pixel (on a clock of its own), the costs recover the
-    per-pixel parts: their ratios exactly, each within the rounds' spread of the FFT's time
-    (the unit the others are measured against; to 1e-4, the fake spread's own time)."""
+    (its threads, its windows). Costed per pixel over 512² alone, the fixed part was charged
+    on every pixel of a larger output: the 2048² night scene's direct spread was put at 1.6
+    times its time, a tie with the FFT, which took 1.5 times as long; costed by the extra
+    time of a wider output alone, small scenes took the direct path at 1.2-1.5 times the
+    FFT's time. With spreads (on a clock of their own) whose fixed part is three times their
+    per-pixel work at 512², the costs keep the per-pixel costs at 512² in their ratios
+    (to 1e-4: the fake spreads' own time) and find the share of each further pixel, 1/4;
+    the FFT's rounds scale them all alike."""
     from glarelab.glare.rendering import _convolve, costs
 
-    pixel_s, correlate_s, weight_s, fixed_s = 2e-6, 5e-6, 4e-7, 100.0
+    side = costs.DIRECT_COST_SIDE
+    pixel_s, correlate_s, weight_s, copy_s, fixed = 2e-6, 5e-6, 4e-7, 1e-6, 3.0
     spent = [0.0]
 
-    def direct_spread(points, centre, kernel, out_box, into, *, quadrant, workers, groups=None):
+    def direct_spread(
+        points, centre, kernel, out_box, into, *, quadrant, workers, groups=None,
+        method="cheapest",
+    ):  # fmt: skip
         area = (out_box[1] - out_box[0]) * (out_box[3] - out_box[2])
-        per_pixel = pixel_s if points.size == 1 else correlate_s + weight_s * points.size
-        spent[0] += fixed_s + area * per_pixel
+        if points.size == 1:
+            rate = pixel_s
+        elif method == "copies":
+            rate = copy_s * points.size
+        else:
+            rate = correlate_s + weight_s * points.size
+        spent[0] += rate * (fixed * side**2 + area)
         return into
 
     class Clock:
@@ -72,9 +83,14 @@ def test_the_direct_spread_is_costed_per_output_pixel_without_its_fixed_part(mon
     monkeypatch.setattr(_convolve, "direct_spread", direct_spread)
     monkeypatch.setattr(costs, "time", Clock)
     measured = costs.measure_costs()
-    scale = measured.direct_pixel_s / pixel_s  # the FFT's fastest round over its median
-    assert 0.3 < scale <= 1.0 + 1e-6, scale
-    for name, value in (("correlate_s", correlate_s), ("correlate_weight_s", weight_s)):
+    assert measured.direct_wide_share == pytest.approx(1 / (1 + fixed), rel=1e-4)
+    scale = measured.direct_pixel_s / (pixel_s * (1 + fixed))  # the FFT's rounds
+    assert 0.3 < scale <= 1.0 + 1e-4, scale
+    for name, value in (
+        ("correlate_s", correlate_s),
+        ("correlate_weight_s", weight_s),
+        ("copy_pixel_s", copy_s),
+    ):
         ratio = getattr(measured, name) / measured.direct_pixel_s
         assert ratio == pytest.approx(value / pixel_s, rel=1e-4), name
 

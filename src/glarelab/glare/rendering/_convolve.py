@@ -6,6 +6,7 @@ import math
 import os
 from concurrent.futures import ThreadPoolExecutor
 from itertools import pairwise
+from typing import Literal
 
 import numpy as np
 import scipy.fft
@@ -59,8 +60,9 @@ CORRELATE_S = 4.5e-9
 CORRELATE_WEIGHT_S = 0.4e-9
 # A cluster's copies summed by bands of rows that stay in the processor's cache, COPY_PIXEL_S
 # per bright pixel. On a machine 1.35 times slower, 2-core, at 2048²: copies of 2 × 2 pixels
-# 21 ms against the correlation's 34, of 3 × 3 39 against 40, of 4 × 4 60 against 49
-COPY_PIXEL_S = 0.8e-9
+# 21 ms against the correlation's 34, of 3 × 3 39 against 40, of 4 × 4 60 against 49; three
+# 3 × 3 lamps at 512² 15.9 ms against 12.3-13.0: a full 3 × 3 box is correlated
+COPY_PIXEL_S = 1.0e-9
 # Bands of at most this many bytes (256 KiB: 3 × 3 copies over 2048² in one thread 45 ms,
 # 64 KiB 60 ms, 1 MiB 47 ms)
 COPY_BAND_BYTES = 256 * 1024
@@ -427,6 +429,16 @@ def clusters(bright: np.ndarray) -> list[tuple[tuple[slice, slice], np.ndarray]]
     ]
 
 
+def copies_summed(box_shape: tuple[int, int], half: tuple[int, int], spread_pixels: int) -> bool:
+    """Whether a cluster's kernel copies are summed together over its box's reach
+    (:func:`_add_copies`) rather than added one view per pixel: where a pixel spreads over at
+    least :data:`COPY_BOX_PIXELS` output pixels and the box widens a pixel's reach (the
+    kernel's half-size ``half``) by at most :data:`COPY_BOX_SPARE` times."""
+    reach = (2 * half[0] + 1) * (2 * half[1] + 1)
+    spare = (2 * half[0] + box_shape[0]) * (2 * half[1] + box_shape[1]) / reach
+    return spread_pixels >= COPY_BOX_PIXELS and spare <= COPY_BOX_SPARE
+
+
 def direct_spread(
     excess: np.ndarray,
     origin: tuple[int, int],
@@ -437,6 +449,7 @@ def direct_spread(
     quadrant: bool = False,
     workers: int | None = None,
     groups: list[tuple[tuple[slice, slice], np.ndarray]] | None = None,
+    method: Literal["cheapest", "correlation", "copies"] = "cheapest",
 ) -> np.ndarray:
     """Add the spread of the non-zero pixels of ``excess`` (whose first pixel is the image's
     ``origin``) to ``into`` (image-sized) at the pixels of ``out_box``: exact, with no FFT
@@ -453,19 +466,28 @@ def direct_spread(
     ``workers`` threads (default: every core; ``scipy.ndimage`` releases the GIL); each
     pixel's sum is taken in the same order whatever their number, so the result is the same.
     ``groups`` are the :func:`clusters` of ``excess > 0`` when the caller has them already.
+    ``method`` ``'correlation'`` or ``'copies'`` spreads every cluster of more than one
+    pixel so (the costs' calibration times each); ``'cheapest'`` chooses per cluster.
     """
+    if method not in ("cheapest", "correlation", "copies"):
+        raise ValueError(f"method must be 'cheapest', 'correlation' or 'copies'; got {method!r}")
     sources = []
-    half = np.array(kernel.shape) - 1 if quadrant else np.array(kernel.shape) // 2
+    half = tuple(k - 1 for k in kernel.shape) if quadrant else tuple(k // 2 for k in kernel.shape)
     reach = (2 * half[0] + 1) * (2 * half[1] + 1)
     spread = min(reach, (out_box[1] - out_box[0]) * (out_box[3] - out_box[2]))
     for box, mask in clusters(excess > 0) if groups is None else groups:
         weights = np.where(mask, excess[box], 0)
-        pixels = int(np.count_nonzero(mask))
+        pixels = int(np.count_nonzero(weights))
+        if pixels == 0:  # a caller's group with nothing to spread
+            continue
         start = (origin[0] + box[0].start, origin[1] + box[1].start)
-        spare = (2 * half[0] + weights.shape[0]) * (2 * half[1] + weights.shape[1]) / reach
-        boxed = spread >= COPY_BOX_PIXELS and spare <= COPY_BOX_SPARE
+        boxed = method == "copies" or (
+            method == "cheapest" and copies_summed(weights.shape, half, spread)
+        )
         copies = (COPY_PIXEL_S if boxed else DIRECT_PIXEL_S) * pixels
-        if CORRELATE_S + CORRELATE_WEIGHT_S * weights.size < copies:
+        if method == "correlation" and weights.size > 1:
+            sources.append((weights, start, False))
+        elif method == "cheapest" and CORRELATE_S + CORRELATE_WEIGHT_S * weights.size < copies:
             sources.append((weights, start, False))
         elif boxed:  # the box's copies summed together, over the box's reach
             sources.append((weights, start, True))

@@ -34,7 +34,7 @@ __all__ = [
     "n_log_n",
 ]
 
-COSTS_VERSION = 9  # bump when what is measured changes (9: the direct spread per output pixel)
+COSTS_VERSION = 9  # bump when what is measured changes (9: copies; direct spreads at two sizes)
 # calibration rounds: the FFT's fastest, the others' median ratio to it. Four calibrations
 # on the quiet 2-core machine put a scaled kernel copy at 13.8-21.6 FFT units with 7 rounds
 # (0.5 s), 14.2-16.2 with 21 (1.3 s, once per machine): on two lamps and a glint (512²)
@@ -50,12 +50,17 @@ ROUNDS = 21
 SMALL_FFT_POINTS = 2**22
 LARGE_FFT_POINTS = 2**24
 LARGE_ROUNDS = 3  # the large transforms' rounds (0.2-0.4 s each)
-# The direct spread is timed over a 512² and a 1024² output, and costed per pixel by the
-# difference: timed over 512² alone, a 3 × 3 cluster from a 2049² quadrant cost 16.7 ns per
-# output pixel against 10.3 at 1024² and 8.2 at 2048² (2-core machine without AVX-512),
-# and the 2048² night scene with a sun's four clusters was costed at 1.6 times its direct
-# spread's time, a tie with its transforms which took 1.5 times the direct path. The
-# large cluster has BIG_SIDE² pixels (a correlation: 8 × 8 at 1024² in about 45 ms)
+# The direct spread is timed over a DIRECT_COST_SIDE² output, where its cost per output pixel
+# includes what a spread costs whatever its size (threads, windows), and over one twice as
+# wide, whose extra time per extra pixel is ``direct_wide_share`` of that: a 3 × 3 cluster
+# from a 2049² quadrant cost 16.7 ns per output pixel at 512², 10.3 at 1024² and 8.2 at
+# 2048² (2-core machine without AVX-512). Costed per pixel at 512² alone, the 2048² night
+# scene with a sun's four clusters was put at 1.6 times its direct spread's time, a tie
+# with its transforms, which took 1.5 times the direct path; costed by the extra time alone,
+# small scenes (two to four lamps at 256² and 512²) took the direct path at 1.2-1.5 times
+# the FFT's time. The large cluster has BIG_SIDE² pixels (8 × 8: about 45 ms at 1024²)
+DIRECT_COST_SIDE = 512
+WIDE_SHARE_LIMITS = (0.1, 1.0)
 BIG_SIDE = 8
 
 
@@ -79,9 +84,14 @@ class PathCosts:
     fft_large_s, fft32_large_s
         The same from :data:`LARGE_FFT_POINTS` on (:func:`fft_unit` between the two).
     direct_pixel_s
-        A scaled kernel copy, per output pixel and bright pixel.
+        A scaled kernel copy (one view of the kernel), per output pixel and bright pixel.
     correlate_s, correlate_weight_s
         A cluster's correlation, per output pixel, plus per pixel of the cluster's box.
+    copy_pixel_s
+        A cluster's kernel copies summed in the cache, per output pixel and bright pixel.
+    direct_wide_share
+        What each output pixel beyond :data:`DIRECT_COST_SIDE`² costs a direct spread, as a
+        share of the costs above (measured over a ``DIRECT_COST_SIDE``² output).
     multires_s
         The far tail's splat and interpolation, per image pixel.
     bound_s
@@ -109,6 +119,8 @@ class PathCosts:
     direct_pixel_s: float = 2.5e-9
     correlate_s: float = 4.5e-9
     correlate_weight_s: float = 0.4e-9
+    copy_pixel_s: float = 0.8e-9
+    direct_wide_share: float = 0.6
     # the far tail's, the bound's and the preview's: their ratios to fft_s in the fastest of
     # five rounds on the 2-core machine (at a load average of 6-9: 9, 20, 3.3 and 4)
     multires_s: float = 4.0e-9
@@ -261,7 +273,7 @@ def measure_costs() -> PathCosts:
     )
 
     rng = np.random.default_rng(0)
-    n = 512  # a 512² box into a 1024² transform: large enough for the threads to matter
+    n = DIRECT_COST_SIDE  # a 512² box into a 1024² transform: large enough for threads to matter
     lengths = (2 * n, 2 * n)
     excess = rng.random((n, n))
     kernel = rng.random((2 * n - 1, 2 * n - 1))
@@ -311,15 +323,16 @@ def measure_costs() -> PathCosts:
 
     workers = cores()
 
-    def clustered(points, groups, wider=False):
+    def clustered(points, groups, wider=False, method="correlation"):
         if wider:
             return direct_spread(
                 points, wide_centre, wide, wide_out, wide_into, quadrant=True, workers=workers,
-                groups=groups,
+                groups=groups, method=method,
             )  # fmt: skip
         return direct_spread(
-            points, centre, quadrant, out, into, quadrant=True, workers=workers, groups=groups
-        )
+            points, centre, quadrant, out, into, quadrant=True, workers=workers, groups=groups,
+            method=method,
+        )  # fmt: skip
 
     fastest = _relative(
         {
@@ -332,9 +345,11 @@ def measure_costs() -> PathCosts:
             "pixel": lambda: clustered(one, None),
             "small": lambda: clustered(small, small_groups),
             "big": lambda: clustered(big, big_groups),
+            "copies": lambda: clustered(small, small_groups, method="copies"),
             "wide pixel": lambda: clustered(one, None, wider=True),
             "wide small": lambda: clustered(small, small_groups, wider=True),
             "wide big": lambda: clustered(big, big_groups, wider=True),
+            "wide copies": lambda: clustered(small, small_groups, wider=True, method="copies"),
             "far": far_tail,
             "bound": check,
             "coarse": lambda: far_spread(
@@ -346,13 +361,16 @@ def measure_costs() -> PathCosts:
     )
     large = _large_fft_units(rng, spectral_spread, fastest, unit)
 
-    def per_pixel(name: str) -> float:  # the wider output's extra time per extra pixel
-        extra = fastest[f"wide {name}"] - fastest[name]
-        return extra / (3 * n * n) if extra > 0 else fastest[f"wide {name}"] / (4 * n * n)
-
-    pixel_s = per_pixel("pixel")
-    cluster_s = per_pixel("small")
-    weight_s = max((per_pixel("big") - cluster_s) / (BIG_SIDE**2 - 9), 1e-12)
+    pixel_s = fastest["pixel"] / (n * n)
+    cluster_s = fastest["small"] / (n * n)
+    weight_s = max((fastest["big"] / (n * n) - cluster_s) / (BIG_SIDE**2 - 9), 1e-12)
+    # each further pixel of a wider output, as a share of a pixel's cost at n²: the median
+    # over the four spreads (a noisy one cannot make the direct path free or dear)
+    shares = [
+        (fastest[f"wide {name}"] - fastest[name]) / (3 * fastest[name])
+        for name in ("pixel", "small", "big", "copies")
+    ]
+    wide_share = min(max(float(np.median(shares)), WIDE_SHARE_LIMITS[0]), WIDE_SHARE_LIMITS[1])
     per = {np.float64: fastest["fft64"] / unit, np.float32: fastest["fft32"] / unit}
     return PathCosts(
         fft_s=per[np.float64],
@@ -362,6 +380,8 @@ def measure_costs() -> PathCosts:
         direct_pixel_s=pixel_s,
         correlate_s=max(cluster_s - 9 * weight_s, 1e-12),
         correlate_weight_s=weight_s,
+        copy_pixel_s=fastest["copies"] / (9 * n * n),
+        direct_wide_share=wide_share,
         multires_s=fastest["far"] / (size * size),
         bound_s=fastest["bound"] / (n * n),
         coarse_fft_s=fastest["coarse"] / n_log_n(coarse),

@@ -39,9 +39,10 @@ import numpy as np
 import scipy.fft
 
 from glarelab.glare.models.base import GlareModel
-from glarelab.glare.rendering._convolve import fft_length, fft_workers
+from glarelab.glare.rendering._convolve import copies_summed, fft_length, fft_workers
 from glarelab.glare.rendering.costs import (
     DEFAULT_COSTS,
+    DIRECT_COST_SIDE,
     PathCosts,
     coarse_lengths,
     fft_unit,
@@ -241,18 +242,26 @@ def _geometric_reach(source, target, half) -> tuple[int, int]:
 
 def _direct_cost(scene: Scene, out, reach, limit: float, costs: PathCosts) -> float:
     """Estimated seconds of spreading the scene's bright clusters directly; a lower bound
-    when that is already above ``limit`` (the clusters are then not looked for)."""
+    when that is already above ``limit`` (the clusters are then not looked for). Each
+    cluster costs what :func:`~glarelab.glare.rendering._convolve.direct_spread` spends on
+    it, the cheaper of its correlation and its copies (summed, or one view per pixel), per
+    output pixel it reaches: the costs' own up to :data:`DIRECT_COST_SIDE`² pixels, and
+    their ``direct_wide_share`` for each pixel beyond."""
     area = min((out[1] - out[0]) * (out[3] - out[2]), (2 * reach[0] + 1) * (2 * reach[1] + 1))
-    lowest = area * scene.bright_pixels * min(costs.direct_pixel_s, costs.correlate_weight_s)
+    base = DIRECT_COST_SIDE**2
+    pixels = area if area <= base else base + costs.direct_wide_share * (area - base)
+    cheapest = min(costs.direct_pixel_s, costs.correlate_weight_s, costs.copy_pixel_s)
+    lowest = pixels * scene.bright_pixels * cheapest
     if lowest >= limit:
         return lowest
-    return area * sum(
-        min(
-            costs.direct_pixel_s * int(mask.sum()),
-            costs.correlate_s + costs.correlate_weight_s * mask.size,
+    total = 0.0
+    for _, mask in scene.clusters():
+        bright = int(mask.sum())
+        copy_s = (
+            costs.copy_pixel_s if copies_summed(mask.shape, reach, area) else costs.direct_pixel_s
         )
-        for _, mask in scene.clusters()
-    )
+        total += min(copy_s * bright, costs.correlate_s + costs.correlate_weight_s * mask.size)
+    return pixels * total
 
 
 def fft_cost(
