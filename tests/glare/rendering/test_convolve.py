@@ -192,7 +192,8 @@ def test_a_clusters_copies_sum_as_its_correlation_does_to_the_bit(
                     workers=workers,
                 )  # fmt: skip
     reference = plain_spread(excess, origin, full, out_box, shape)
-    assert_allclose(got["copies", False], reference, rtol=1e-12 if dtype == np.float64 else 2e-7)
+    # float32: the kernel, the excess and each sum added to the image rounded (u = 6e-8 each)
+    assert_allclose(got["copies", False], reference, rtol=1e-12 if dtype == np.float64 else 1e-6)
     for symmetric in (False, True):
         assert np.array_equal(got["copies", symmetric], got["correlation", symmetric])
 
@@ -245,3 +246,49 @@ def test_a_given_group_with_nothing_to_spread_adds_nothing_by_every_method():
         assert_allclose(got, reference, rtol=1e-12, atol=0)
     with pytest.raises(ValueError, match="method must be"):
         direct_spread(excess, (3, 3), kernel, (0, 20, 0, 20), np.zeros((20, 20)), method="fft")
+
+
+@settings(max_examples=80, deadline=None)
+@given(
+    box=st.tuples(st.integers(1, 6), st.integers(1, 6)),
+    density=st.floats(0.05, 1.0),
+    half=st.tuples(st.integers(1, 700), st.integers(1, 700)),
+    seed=st.integers(0, 2**32 - 1),
+)
+def test_each_cluster_is_spread_as_cluster_method_says(box, density, half, seed):
+    """The plan prices each cluster by :func:`cluster_method`; the spread takes that way:
+    a correlation, its copies summed, or one view of the kernel per pixel (seen through
+    which of ``ndimage.correlate`` and ``_add_copies`` it calls)."""
+    rng = np.random.default_rng(seed)
+    mask = rng.random(box) < density
+    mask.flat[rng.integers(mask.size)] = True
+    excess = np.where(mask, rng.uniform(1, 10, box), 0.0)
+    kernel = np.ones((half[0] + 1, half[1] + 1))  # a quadrant of half-size ``half``
+    side = min(2 * max(half) + 8, 1100)
+    out_box = (0, side, 0, side)
+    groups = [((slice(0, box[0]), slice(0, box[1])), mask)]
+    spread = min((2 * half[0] + 1) * (2 * half[1] + 1), side * side)
+    expected = _convolve.cluster_method(box, int(mask.sum()), half, spread)
+    calls = {"correlation": 0, "copies": 0}
+    correlate, copies = _convolve.ndimage.correlate, _convolve._add_copies
+
+    def counted(name, function):
+        def call(*args, **kwargs):
+            calls[name] += 1
+            return function(*args, **kwargs)
+
+        return call
+
+    with (
+        patch.object(_convolve.ndimage, "correlate", counted("correlation", correlate)),
+        patch.object(_convolve, "_add_copies", counted("copies", copies)),
+        patch.object(_convolve, "DIRECT_UNFOLD_PIXELS", 0),
+    ):
+        direct_spread(
+            excess, (side // 2, side // 2), kernel, out_box, np.zeros((side, side)),
+            quadrant=True, groups=groups, workers=1,
+        )  # fmt: skip
+    if expected == "correlation" and mask.size > (2 * half[0] + 1) * (2 * half[1] + 1):
+        return  # a cluster larger than the kernel: the kernel slides over it (ndimage.convolve)
+    taken = [name for name, count in calls.items() if count] or ["views"]
+    assert taken == [expected], (calls, expected)

@@ -51,14 +51,14 @@ def test_the_direct_spread_is_costed_at_512_squared_and_by_its_share_beyond(monk
     on every pixel of a larger output: the 2048² night scene's direct spread was put at 1.6
     times its time, a tie with the FFT, which took 1.5 times as long; costed by the extra
     time of a wider output alone, small scenes took the direct path at 1.2-1.5 times the
-    FFT's time. With spreads (on a clock of their own) whose fixed part is three times their
+    FFT's time. With spreads (on a clock of their own) whose fixed part is twice their
     per-pixel work at 512², the costs keep the per-pixel costs at 512² in their ratios
-    (to 1e-4: the fake spreads' own time) and find the share of each further pixel, 1/4;
+    (to 1e-4: the fake spreads' own time) and find the share of each further pixel, 1/3;
     the FFT's rounds scale them all alike."""
     from glarelab.glare.rendering import _convolve, costs
 
     side = costs.DIRECT_COST_SIDE
-    pixel_s, correlate_s, weight_s, copy_s, fixed = 2e-6, 5e-6, 4e-7, 1e-6, 3.0
+    pixel_s, correlate_s, weight_s, copy_s, fixed = 2e-6, 5e-6, 4e-7, 1e-6, 2.0
     spent = [0.0]
 
     def direct_spread(
@@ -93,6 +93,67 @@ def test_the_direct_spread_is_costed_at_512_squared_and_by_its_share_beyond(monk
     ):
         ratio = getattr(measured, name) / measured.direct_pixel_s
         assert ratio == pytest.approx(value / pixel_s, rel=1e-4), name
+
+
+@pytest.mark.parametrize(
+    "damage",
+    [
+        {"direct_wide_share": "0.5"},
+        {"direct_wide_share": None},
+        {"direct_wide_share": 0.05},
+        {"correlate_s": -1e-8},
+        {"fft_s": float("nan")},
+        {"copy_pixel_s": float("inf")},
+        {"threads": 0},
+        {"threads": True},
+    ],
+)
+def test_a_stored_cost_no_calibration_makes_is_measured_again(tmp_path, monkeypatch, damage):
+    """A costs file of this version whose numbers are not what a calibration makes (a string,
+    null, a share outside its limits, a negative, NaN or infinite cost, no threads) is measured
+    again: a share stored as "0.5" made the plan multiply a string by the image's pixels."""
+    from dataclasses import asdict
+
+    from glarelab.glare.rendering import costs
+
+    fresh = PathCosts(fft_s=1.25e-9)
+    monkeypatch.setattr(costs, "measure_costs", lambda: fresh)
+    stored = tmp_path / f"costs-{cores()}-threads.json"
+    good = asdict(PathCosts()) | {"version": costs.COSTS_VERSION}
+    stored.write_text(json.dumps(good))
+    assert machine_costs(tmp_path) == PathCosts()  # read back as it was stored
+    stored.write_text(json.dumps(good | damage))
+    assert machine_costs(tmp_path) == fresh
+
+
+def test_the_direct_estimate_is_never_below_its_quick_lower_bound():
+    """With the clusters not looked for (the quick bound already over the limit), the plan
+    keeps the bound; it must not exceed the estimate the clusters give, whatever the costs
+    and however the clusters are spread (correlated, copies summed, one view per pixel)."""
+    from glarelab.glare.rendering.plan import _direct_cost
+    from glarelab.glare.rendering.scene import Scene
+
+    rng = np.random.default_rng(11)
+    for _ in range(40):
+        side = int(rng.integers(16, 2048))
+        image = np.zeros((side, side))
+        for _ in range(int(rng.integers(1, 6))):
+            y, x = rng.integers(0, side - 6, 2)
+            h, w = rng.integers(1, 6, 2)
+            image[y : y + h, x : x + w] = np.where(rng.random((h, w)) < 0.7, 1e4, 0.0)
+        image[side // 2, side // 2] = 1e4
+        scene = Scene.of(image, 220.0, "Yoshida2008", np.float64)
+        given = PathCosts(
+            **{
+                name: float(rng.uniform(0.1, 10.0) * 1e-9)
+                for name in ("direct_pixel_s", "correlate_s", "correlate_weight_s", "copy_pixel_s")
+            },
+            direct_wide_share=float(rng.uniform(0.3, 1.0)),
+        )
+        reach = tuple(int(v) for v in rng.integers(1, 2 * side, 2))
+        out = (0, side, 0, side)
+        lowest = _direct_cost(scene, out, reach, 0.0, given)
+        assert lowest <= _direct_cost(scene, out, reach, np.inf, given) * (1 + 1e-12)
 
 
 def _scene(name: str) -> tuple[np.ndarray, float]:

@@ -439,6 +439,25 @@ def copies_summed(box_shape: tuple[int, int], half: tuple[int, int], spread_pixe
     return spread_pixels >= COPY_BOX_PIXELS and spare <= COPY_BOX_SPARE
 
 
+def cluster_method(
+    box_shape: tuple[int, int], pixels: int, half: tuple[int, int], spread_pixels: int
+) -> Literal["correlation", "copies", "views"]:
+    """How :func:`direct_spread` spreads a cluster of ``pixels`` bright pixels in a box of
+    ``box_shape`` under a kernel of half-size ``half`` reaching ``spread_pixels`` output
+    pixels: ``'correlation'`` (one ``scipy.ndimage.correlate`` of the kernel with the box),
+    ``'copies'`` (its kernel copies summed in the cache, :func:`copies_summed`) or
+    ``'views'`` (one view of the kernel per pixel), the cheapest by :data:`DIRECT_PIXEL_S`,
+    :data:`COPY_PIXEL_S`, :data:`CORRELATE_S` and :data:`CORRELATE_WEIGHT_S`. The plan
+    prices the same choice with the machine's costs. A one-pixel box is one view."""
+    if box_shape[0] * box_shape[1] == 1:
+        return "views"
+    boxed = copies_summed(box_shape, half, spread_pixels)
+    copies = (COPY_PIXEL_S if boxed else DIRECT_PIXEL_S) * pixels
+    if CORRELATE_S + CORRELATE_WEIGHT_S * box_shape[0] * box_shape[1] < copies:
+        return "correlation"
+    return "copies" if boxed else "views"
+
+
 def direct_spread(
     excess: np.ndarray,
     origin: tuple[int, int],
@@ -481,15 +500,15 @@ def direct_spread(
         if pixels == 0:  # a caller's group with nothing to spread
             continue
         start = (origin[0] + box[0].start, origin[1] + box[1].start)
-        boxed = method == "copies" or (
-            method == "cheapest" and copies_summed(weights.shape, half, spread)
-        )
-        copies = (COPY_PIXEL_S if boxed else DIRECT_PIXEL_S) * pixels
-        if method == "correlation" and weights.size > 1:
+        if method == "cheapest":
+            how = cluster_method(weights.shape, pixels, half, spread)
+        elif method == "correlation":
+            how = "correlation" if weights.size > 1 else "views"
+        else:
+            how = "copies"
+        if how == "correlation":
             sources.append((weights, start, False))
-        elif method == "cheapest" and CORRELATE_S + CORRELATE_WEIGHT_S * weights.size < copies:
-            sources.append((weights, start, False))
-        elif boxed:  # the box's copies summed together, over the box's reach
+        elif how == "copies":  # the box's copies summed together, over the box's reach
             sources.append((weights, start, True))
         else:  # each pixel's copy over its own reach
             for y, x in zip(*np.nonzero(weights), strict=True):

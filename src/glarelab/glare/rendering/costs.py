@@ -34,7 +34,7 @@ __all__ = [
     "n_log_n",
 ]
 
-COSTS_VERSION = 9  # bump when what is measured changes (9: copies; direct spreads at two sizes)
+COSTS_VERSION = 10  # bump when what is measured changes (10: copies; direct spreads at two sizes)
 # calibration rounds: the FFT's fastest, the others' median ratio to it. Four calibrations
 # on the quiet 2-core machine put a scaled kernel copy at 13.8-21.6 FFT units with 7 rounds
 # (0.5 s), 14.2-16.2 with 21 (1.3 s, once per machine): on two lamps and a glint (512²)
@@ -60,7 +60,9 @@ LARGE_ROUNDS = 3  # the large transforms' rounds (0.2-0.4 s each)
 # small scenes (two to four lamps at 256² and 512²) took the direct path at 1.2-1.5 times
 # the FFT's time. The large cluster has BIG_SIDE² pixels (8 × 8: about 45 ms at 1024²)
 DIRECT_COST_SIDE = 512
-WIDE_SHARE_LIMITS = (0.1, 1.0)
+# measured 0.43-0.67; at 0.1 the direct path was taken for 10 lamps at 1024² and 20 at 2048²
+# where the FFT took 0.58 and 0.46 of its time
+WIDE_SHARE_LIMITS = (0.3, 1.0)
 BIG_SIDE = 8
 
 
@@ -119,7 +121,7 @@ class PathCosts:
     direct_pixel_s: float = 2.5e-9
     correlate_s: float = 4.5e-9
     correlate_weight_s: float = 0.4e-9
-    copy_pixel_s: float = 0.8e-9
+    copy_pixel_s: float = 1.0e-9  # glarelab.glare.rendering._convolve.COPY_PIXEL_S
     direct_wide_share: float = 0.6
     # the far tail's, the bound's and the preview's: their ratios to fft_s in the fastest of
     # five rounds on the 2-core machine (at a load average of 6-9: 9, 20, 3.3 and 4)
@@ -419,6 +421,18 @@ def _timed(function) -> float:
     return time.perf_counter() - start
 
 
+def _plausible(name: str, value) -> bool:
+    """A stored cost as :func:`measure_costs` makes it: a positive finite number (the
+    threads a positive integer, the share within :data:`WIDE_SHARE_LIMITS`)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return False
+    if name == "threads":
+        return isinstance(value, int) and value >= 1
+    if name == "direct_wide_share":
+        return WIDE_SHARE_LIMITS[0] <= value <= WIDE_SHARE_LIMITS[1]
+    return math.isfinite(value) and value > 0
+
+
 def machine_costs(folder: str | os.PathLike | None) -> PathCosts:
     """The costs of this machine at its thread count: read from ``folder`` (the kernel
     cache's), else measured and written there; :data:`DEFAULT_COSTS` without a folder.
@@ -446,7 +460,7 @@ def machine_costs(folder: str | os.PathLike | None) -> PathCosts:
         stored = loads_json(path.read_text())
         if stored.pop("version", None) == COSTS_VERSION:
             names = {f.name for f in fields(PathCosts)}
-            if set(stored) == names:
+            if set(stored) == names and all(_plausible(k, v) for k, v in stored.items()):
                 return PathCosts(**stored)
     except (OSError, ValueError, TypeError):
         pass

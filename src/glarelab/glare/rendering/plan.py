@@ -39,7 +39,7 @@ import numpy as np
 import scipy.fft
 
 from glarelab.glare.models.base import GlareModel
-from glarelab.glare.rendering._convolve import copies_summed, fft_length, fft_workers
+from glarelab.glare.rendering._convolve import cluster_method, fft_length, fft_workers
 from glarelab.glare.rendering.costs import (
     DEFAULT_COSTS,
     DIRECT_COST_SIDE,
@@ -244,8 +244,9 @@ def _direct_cost(scene: Scene, out, reach, limit: float, costs: PathCosts) -> fl
     """Estimated seconds of spreading the scene's bright clusters directly; a lower bound
     when that is already above ``limit`` (the clusters are then not looked for). Each
     cluster costs what :func:`~glarelab.glare.rendering._convolve.direct_spread` spends on
-    it, the cheaper of its correlation and its copies (summed, or one view per pixel), per
-    output pixel it reaches: the costs' own up to :data:`DIRECT_COST_SIDE`² pixels, and
+    it (:func:`~glarelab.glare.rendering._convolve.cluster_method`: its correlation, its
+    copies summed, or one view per pixel), priced by the machine's costs per output pixel it
+    reaches: the costs' own up to :data:`DIRECT_COST_SIDE`² pixels, and
     their ``direct_wide_share`` for each pixel beyond."""
     area = min((out[1] - out[0]) * (out[3] - out[2]), (2 * reach[0] + 1) * (2 * reach[1] + 1))
     base = DIRECT_COST_SIDE**2
@@ -257,10 +258,15 @@ def _direct_cost(scene: Scene, out, reach, limit: float, costs: PathCosts) -> fl
     total = 0.0
     for _, mask in scene.clusters():
         bright = int(mask.sum())
-        copy_s = (
-            costs.copy_pixel_s if copies_summed(mask.shape, reach, area) else costs.direct_pixel_s
-        )
-        total += min(copy_s * bright, costs.correlate_s + costs.correlate_weight_s * mask.size)
+        how = cluster_method(mask.shape, bright, reach, area)
+        if how == "correlation":
+            total += costs.correlate_s + costs.correlate_weight_s * mask.size
+        elif how == "copies":
+            total += costs.copy_pixel_s * bright
+        elif how == "views":
+            total += costs.direct_pixel_s * bright
+        else:
+            raise ValueError(f"unknown way to spread a cluster: {how!r}")
     return pixels * total
 
 
