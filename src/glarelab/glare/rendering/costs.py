@@ -92,8 +92,9 @@ class PathCosts:
     copy_pixel_s
         A cluster's kernel copies summed in the cache, per output pixel and bright pixel.
     direct_wide_share
-        What each output pixel beyond :data:`DIRECT_COST_SIDE`² costs a direct spread, as a
-        share of the costs above (measured over a ``DIRECT_COST_SIDE``² output).
+        What each output pixel beyond the first ``DIRECT_COST_SIDE ** 2`` costs a direct
+        spread, as a share of the costs above (measured over an output of that many pixels,
+        :data:`DIRECT_COST_SIDE` a side).
     multires_s
         The far tail's splat and interpolation, per image pixel.
     bound_s

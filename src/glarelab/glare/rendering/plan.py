@@ -246,7 +246,7 @@ def _direct_cost(scene: Scene, out, reach, limit: float, costs: PathCosts) -> fl
     cluster costs what :func:`~glarelab.glare.rendering._convolve.direct_spread` spends on
     it (:func:`~glarelab.glare.rendering._convolve.cluster_method`: its correlation, its
     copies summed, or one view per pixel), priced by the machine's costs per output pixel it
-    reaches: the costs' own up to :data:`DIRECT_COST_SIDE`² pixels, and
+    reaches: the costs' own up to ``DIRECT_COST_SIDE ** 2`` pixels, and
     their ``direct_wide_share`` for each pixel beyond."""
     area = min((out[1] - out[0]) * (out[3] - out[2]), (2 * reach[0] + 1) * (2 * reach[1] + 1))
     base = DIRECT_COST_SIDE**2
