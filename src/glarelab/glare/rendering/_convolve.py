@@ -68,8 +68,9 @@ COPY_PIXEL_S = 1.0e-9
 COPY_BAND_BYTES = 256 * 1024
 # A cluster's copies are summed together when its box's reach is at most COPY_BOX_SPARE times
 # a pixel's and a pixel spreads over at least COPY_BOX_PIXELS output pixels: below that the
-# box's windows cost more than they save (a 2 × 2 cluster, one thread: 257² 2.7 ms against
-# 1.6 ms copied pixel by pixel; 513² 5.8 against 6.8; 1025² 19 against 28)
+# box's windows cost more than they save (a 2 × 2 cluster, one thread, medians of 15 rounds:
+# 257² 3.0 ms summed against 1.9 copied pixel by pixel; 513² 6.3 against 7.4; 1025² 18.9
+# against 25.7)
 COPY_BOX_SPARE = 1.25
 COPY_BOX_PIXELS = 512 * 512
 DIRECT_THREAD_PIXELS = 256 * 256  # below this, a direct spread runs in one thread
@@ -491,7 +492,7 @@ def direct_spread(
     if method not in ("cheapest", "correlation", "copies"):
         raise ValueError(f"method must be 'cheapest', 'correlation' or 'copies'; got {method!r}")
     sources = []
-    half = tuple(k - 1 for k in kernel.shape) if quadrant else tuple(k // 2 for k in kernel.shape)
+    half = _kernel_half(kernel, quadrant)
     reach = (2 * half[0] + 1) * (2 * half[1] + 1)
     spread = min(reach, (out_box[1] - out_box[0]) * (out_box[3] - out_box[2]))
     for box, mask in clusters(excess > 0) if groups is None else groups:
@@ -613,6 +614,14 @@ def _convolve_cluster(weights, start, kernel, box, into, *, quadrant) -> None:
     into[r0:r1, c0:c1] += spread[a : a + r1 - r0, b : b + c1 - c0]
 
 
+def _kernel_half(kernel: np.ndarray, quadrant: bool) -> tuple[int, int]:
+    """The offsets a kernel reaches on each axis: a quadrant's size less one, a centred odd
+    kernel's half-size."""
+    if quadrant:
+        return kernel.shape[0] - 1, kernel.shape[1] - 1
+    return kernel.shape[0] // 2, kernel.shape[1] // 2
+
+
 def _add_copies(window: np.ndarray, weights: np.ndarray, into: np.ndarray) -> None:
     """``into[y, x] += Σ weights[i, j] · window[y + i, x + j]`` over the non-zero weights:
     a scaled copy of the window per bright pixel, summed by bands of rows small enough to stay
@@ -643,10 +652,7 @@ def _correlate(weights, start, kernel, out_box, into, buffer, *, quadrant, copie
     ``into`` at the pixels of ``out_box`` it reaches (``buffer``: room for the correlation of
     the largest window): by scaled kernel copies (``copies``, :func:`_add_copies`) or by one
     correlation of each kernel window with the box (``scipy.ndimage.correlate``)."""
-    if quadrant:
-        a, b = kernel.shape[0] - 1, kernel.shape[1] - 1
-    else:
-        a, b = kernel.shape[0] // 2, kernel.shape[1] // 2
+    a, b = _kernel_half(kernel, quadrant)
     (bh, bw), (q0, p0) = weights.shape, start
     r0, r1 = max(out_box[0], q0 - a), min(out_box[1], q0 + bh + a)
     c0, c1 = max(out_box[2], p0 - b), min(out_box[3], p0 + bw + b)

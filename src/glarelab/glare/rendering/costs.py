@@ -327,15 +327,12 @@ def measure_costs() -> PathCosts:
     workers = cores()
 
     def clustered(points, groups, wider=False, method="correlation"):
-        if wider:
-            return direct_spread(
-                points, wide_centre, wide, wide_out, wide_into, quadrant=True, workers=workers,
-                groups=groups, method=method,
-            )  # fmt: skip
+        where = (
+            (wide_centre, wide, wide_out, wide_into) if wider else (centre, quadrant, out, into)
+        )
         return direct_spread(
-            points, centre, quadrant, out, into, quadrant=True, workers=workers, groups=groups,
-            method=method,
-        )  # fmt: skip
+            points, *where, quadrant=True, workers=workers, groups=groups, method=method
+        )
 
     fastest = _relative(
         {
