@@ -61,20 +61,22 @@ def test_a_quadrant_spread_equals_the_full_kernels_at_every_thread_count(scene, 
     excess, origin, quadrant, out_box, shape = scene
     full = mirror_quadrant(quadrant)
     reference = plain_spread(excess, origin, full, out_box, shape)
-    one = direct_spread(excess, origin, full, out_box, np.zeros(shape), workers=1)
-    assert_allclose(one, reference, rtol=1e-12, atol=0)
     for kernel, symmetric, unfold in (
         (full, False, 0),
         (quadrant, True, 0),  # read through its views
         (quadrant, True, DIRECT_UNFOLD_PIXELS),  # unfolded, as small kernels are
     ):
-        # the same sums in the same order: equal to the bit, not within a tolerance
         with patch.object(_convolve, "DIRECT_UNFOLD_PIXELS", unfold):
-            got = direct_spread(
-                excess, origin, kernel, out_box, np.zeros(shape), quadrant=symmetric,
-                workers=workers,
+            one, got = (
+                direct_spread(
+                    excess, origin, kernel, out_box, np.zeros(shape), quadrant=symmetric,
+                    workers=threads,
+                )
+                for threads in (1, workers)
             )  # fmt: skip
+        # the threads share the rows: the same sums in the same order, equal to the bit
         assert np.array_equal(got, one)
+        assert_allclose(got, reference, rtol=1e-12, atol=0)
 
 
 def test_the_spread_from_a_reversed_view_adds_to_what_is_there_and_only_in_the_box():
@@ -89,22 +91,25 @@ def test_the_spread_from_a_reversed_view_adds_to_what_is_there_and_only_in_the_b
     assert_allclose(into, expected, rtol=0, atol=0)
 
 
-def test_each_pixel_of_a_sparse_scene_adds_one_view_of_a_small_kernel(monkeypatch):
+@pytest.mark.parametrize(("half", "side"), [(80, 64), (3, 256)])
+def test_each_pixel_of_a_sparse_scene_is_a_span_under_a_wide_kernel(monkeypatch, half, side):
     """A scene of many single bright pixels (stars, glints through leaves) adds a scaled copy
-    of the kernel per pixel: read from a small quadrant in up to nine pieces (negative, zero
-    and positive offsets on each axis), that was 2-3 times the time of one view of the full
-    kernel; a small quadrant is unfolded instead, and the sums are the same."""
-    pieces = []
-    window = _convolve._window
-    monkeypatch.setattr(_convolve, "_window", lambda *args: pieces.append(args) or window(*args))
-    rng = np.random.default_rng(1)
-    excess = np.where(rng.random((64, 64)) < 0.02, rng.uniform(1, 2, (64, 64)), 0.0)
-    quadrant = rng.random((11, 11))
-    got = direct_spread(
-        excess, (0, 0), quadrant, (0, 64, 0, 64), np.zeros((64, 64)), quadrant=True, workers=2
+    of the kernel per pixel: under a kernel as wide as the output, all of them in one pass
+    of spans over the output's bands; under a narrow one (7 px over 256, where a span's
+    stride would run over 73 values per output pixel it reaches) a correlation per pixel
+    from the unfolded kernel. The plain sums either way."""
+    calls = []
+    function = _convolve._span_spread
+    monkeypatch.setattr(
+        _convolve, "_span_spread", lambda *a, **k: calls.append(a) or function(*a, **k)
     )
-    assert pieces == []
-    reference = plain_spread(excess, (0, 0), mirror_quadrant(quadrant), (0, 64, 0, 64), (64, 64))
+    rng = np.random.default_rng(1)
+    excess = np.where(rng.random((side, side)) < 0.01, rng.uniform(1, 2, (side, side)), 0.0)
+    quadrant = rng.random((half + 1, half + 1))
+    box = (0, side, 0, side)
+    got = direct_spread(excess, (0, 0), quadrant, box, np.zeros((side, side)), quadrant=True)
+    assert len(calls) == (1 if half == 80 else 0)
+    reference = plain_spread(excess, (0, 0), mirror_quadrant(quadrant), box, (side, side))
     assert_allclose(got, reference, rtol=1e-12, atol=0)
 
 
@@ -156,79 +161,73 @@ def test_a_cluster_larger_than_the_kernel_slides_the_kernel_over_it(monkeypatch)
                     workers=workers,
                 )  # fmt: skip
             assert_allclose(got, reference, rtol=1e-12, atol=0)
-    assert calls == []  # the kernel slid over the cluster: no correlation with the cluster
+    # the kernel slid over the cluster: no correlation with the cluster (a lone pixel's,
+    # correlated with its own pixel, may be)
+    assert all(args[1].size == 1 for args in calls), [args[1].shape for args in calls]
 
 
 @settings(max_examples=120, deadline=None)
 @given(
     scene=scenes(),
-    band_bytes=st.sampled_from([8, 64, 200, 4096, _convolve.COPY_BAND_BYTES]),
-    workers=st.integers(1, 3),
-    dtype=st.sampled_from([np.float64, np.float32]),
+    band_values=st.sampled_from([1, 7, 64, 1000, _convolve.SPAN_BAND_VALUES]),
+    flush=st.sampled_from([1, 3, _convolve.SPAN32_FLUSH_TERMS]),
 )
-def test_a_clusters_copies_sum_as_its_correlation_does_to_the_bit(
-    scene, band_bytes, workers, dtype
+def test_spans_are_the_plain_sums_in_float64_and_within_their_bound_in_float32(
+    scene, band_values, flush
 ):
-    """A compact cluster's scaled kernel copies, summed by bands of rows of any height, are
-    the numbers of ``scipy.ndimage.correlate`` of the kernel with the cluster: the same terms
-    added in the same order, whichever path the costs choose and however many threads. In
-    float32 (an image kept in float32, rendered exactly) too: the correlation multiplies and
-    sums in float64 and rounds each cluster's sum once, and so do the copies."""
+    """Every bright pixel spread as a span, by bands of any height (down to one row) and
+    from the full kernel or its quadrant (whose negative rows are read into a band held
+    upside down), is the plain sum in float64 (to 1e-12; ``into`` counts only where the
+    kernel reaches: a value read past a row's support lands on zeros or on columns past the
+    output's) and within :func:`span_roundoff` of it in float32, pixel by pixel."""
     excess, origin, quadrant, out_box, shape = scene
-    excess, quadrant = excess.astype(dtype), quadrant.astype(dtype)
     full = mirror_quadrant(quadrant)
-    got = {}
-    for path, pixel_s in (("copies", 0.0), ("correlation", np.inf)):
-        for kernel, symmetric in ((full, False), (quadrant, True)):
+    reference = plain_spread(excess, origin, full, out_box, shape)
+    absolute, relative = _convolve.span_roundoff(
+        int(np.count_nonzero(excess)), float(excess.sum())
+    )
+    for kernel, symmetric in ((full, False), (quadrant, True)):
+        for precision in ("float64", "float32"):
             with (
-                patch.object(_convolve, "COPY_PIXEL_S", pixel_s),
-                patch.object(_convolve, "COPY_BAND_BYTES", band_bytes),
-                patch.object(_convolve, "COPY_BOX_SPARE", np.inf),  # every box's copies summed
-                patch.object(_convolve, "COPY_BOX_PIXELS", 0),
+                patch.object(_convolve, "SPAN_BAND_VALUES", band_values),
+                patch.object(_convolve, "SPAN32_FLUSH_TERMS", flush),
                 patch.object(_convolve, "DIRECT_UNFOLD_PIXELS", 0),
             ):
-                got[path, symmetric] = direct_spread(
-                    excess, origin, kernel, out_box, np.zeros(shape, dtype), quadrant=symmetric,
-                    workers=workers,
+                got = direct_spread(
+                    excess, origin, kernel, out_box, np.full(shape, 0.0), quadrant=symmetric,
+                    method="spans", precision=precision,
                 )  # fmt: skip
-    reference = plain_spread(excess, origin, full, out_box, shape)
-    # float32: the kernel, the excess and each sum added to the image rounded (u = 6e-8 each)
-    assert_allclose(got["copies", False], reference, rtol=1e-12 if dtype == np.float64 else 1e-6)
-    for symmetric in (False, True):
-        assert np.array_equal(got["copies", symmetric], got["correlation", symmetric])
+            if precision == "float64":
+                assert_allclose(got, reference, rtol=1e-12, atol=0)
+            else:
+                assert np.all(np.abs(got - reference) <= absolute + relative * reference)
 
 
-def test_a_sparse_cluster_as_wide_as_the_kernel_copies_each_pixel_over_its_own_reach(
-    monkeypatch,
-):
-    """The copies of a thin cluster (a lamp's outline, 4-connected, its box 15 × 15) under a
-    61 × 61 kernel are added pixel by pixel, each over the kernel's reach: summed over the
-    box's reach they would cost (60 + 15)² / 61² = 1.5 times the work per pixel. A compact
-    2 × 2 cluster's copies are summed over its box's reach ((60 + 2)² / 61² = 1.03)."""
-    boxes = []
-    copies = _convolve._add_copies
-    monkeypatch.setattr(
-        _convolve, "_add_copies", lambda w, *a: boxes.append(w.shape) or copies(w, *a)
-    )
-    monkeypatch.setattr(_convolve, "COPY_BOX_PIXELS", 0)  # the box's shape alone decides
-    kernel = np.random.default_rng(4).random((61, 61))
-    outline = np.zeros((20, 20))
-    outline[2, 2:17] = 5.0  # an L of 29 pixels
-    outline[2:17, 16] = 7.0
-    compact = np.zeros((20, 20))
-    compact[5:7, 5:7] = 3.0
-    for excess, boxed in ((outline, False), (compact, True)):
-        boxes.clear()
-        got = direct_spread(excess, (0, 0), kernel, (0, 20, 0, 20), np.zeros((20, 20)))
-        reference = plain_spread(excess, (0, 0), kernel, (0, 20, 0, 20), (20, 20))
-        assert_allclose(got, reference, rtol=1e-12, atol=0)
-        assert bool(boxes) == boxed, boxes
+def test_float32_spans_are_summed_a_few_at_a_time():
+    """4,096 glints of ``1 + 3 · 2^-18`` cd/m² under a flat kernel: added one after another
+    in float32, a sum past 256 rounds each new term's ``3 · 2^-18`` away (below half its
+    unit in the last place), 2.7 times the bound (:func:`span_roundoff`) by 4,096 terms;
+    summed :data:`SPAN32_FLUSH_TERMS` at a time into float64, the spread keeps the bound."""
+    weight = 1.0 + 3.0 * 2.0**-18  # a float32 number
+    excess = np.full((64, 64), weight)
+    kernel = np.ones((129, 129))  # reaches every pixel from every pixel
+    exact = 4096 * weight
+    absolute, relative = _convolve.span_roundoff(4096, float(excess.sum()))
+    bound = absolute + relative * exact
+    sequential = np.float32(0.0)
+    for _ in range(4096):
+        sequential += np.float32(weight)
+    assert abs(float(sequential) - exact) > 2.5 * bound
+    got = direct_spread(
+        excess, (0, 0), kernel, (0, 64, 0, 64), np.zeros((64, 64)), method="spans",
+        precision="float32",
+    )  # fmt: skip
+    assert np.abs(got - exact).max() <= bound
 
 
 def test_a_given_group_with_nothing_to_spread_adds_nothing_by_every_method():
     """A caller's groups may hold pixels at zero excess (the groups of ``excess >= 0``): a
-    group with none above zero adds nothing, by copies (which found no first term to sum
-    and raised IndexError), correlation or the cheapest."""
+    group with none above zero adds nothing, by spans, correlation or the cheapest."""
     kernel = np.random.default_rng(5).random((41, 41))
     excess = np.zeros((6, 6))
     excess[4, 4] = 2.0
@@ -237,12 +236,11 @@ def test_a_given_group_with_nothing_to_spread_adds_nothing_by_every_method():
         ((slice(4, 5), slice(4, 5)), np.ones((1, 1), bool)),
     ]
     reference = plain_spread(excess, (3, 3), kernel, (0, 20, 0, 20), (20, 20))
-    for method in ("cheapest", "correlation", "copies"):
-        with patch.object(_convolve, "COPY_BOX_PIXELS", 0):
-            got = direct_spread(
-                excess, (3, 3), kernel, (0, 20, 0, 20), np.zeros((20, 20)), groups=groups,
-                method=method,
-            )  # fmt: skip
+    for method in ("cheapest", "correlation", "spans"):
+        got = direct_spread(
+            excess, (3, 3), kernel, (0, 20, 0, 20), np.zeros((20, 20)), groups=groups,
+            method=method,
+        )  # fmt: skip
         assert_allclose(got, reference, rtol=1e-12, atol=0)
     with pytest.raises(ValueError, match="method must be"):
         direct_spread(excess, (3, 3), kernel, (0, 20, 0, 20), np.zeros((20, 20)), method="fft")
@@ -253,12 +251,14 @@ def test_a_given_group_with_nothing_to_spread_adds_nothing_by_every_method():
     box=st.tuples(st.integers(1, 6), st.integers(1, 6)),
     density=st.floats(0.05, 1.0),
     half=st.tuples(st.integers(1, 700), st.integers(1, 700)),
+    precision=st.sampled_from(["float64", "float32"]),
+    costs=st.none() | st.tuples(*[st.floats(1e-10, 1e-8)] * 3),
     seed=st.integers(0, 2**32 - 1),
 )
-def test_each_cluster_is_spread_as_cluster_method_says(box, density, half, seed):
-    """The plan prices each cluster by :func:`cluster_method`; the spread takes that way:
-    a correlation, its copies summed, or one view of the kernel per pixel (seen through
-    which of ``ndimage.correlate`` and ``_add_copies`` it calls)."""
+def test_each_cluster_is_spread_as_cluster_method_says(box, density, half, precision, costs, seed):
+    """The plan prices each cluster by :func:`cluster_method`; the spread takes that way,
+    with the same costs: a correlation or a span per pixel (seen through which of
+    ``ndimage.correlate`` and ``_span_spread`` it calls)."""
     rng = np.random.default_rng(seed)
     mask = rng.random(box) < density
     mask.flat[rng.integers(mask.size)] = True
@@ -267,10 +267,12 @@ def test_each_cluster_is_spread_as_cluster_method_says(box, density, half, seed)
     side = min(2 * max(half) + 8, 1100)
     out_box = (0, side, 0, side)
     groups = [((slice(0, box[0]), slice(0, box[1])), mask)]
-    spread = min((2 * half[0] + 1) * (2 * half[1] + 1), side * side)
-    expected = _convolve.cluster_method(box, int(mask.sum()), half, spread)
-    calls = {"correlation": 0, "copies": 0}
-    correlate, copies = _convolve.ndimage.correlate, _convolve._add_copies
+    values = _convolve.span_values(side, box[1] - 1, half[1])  # the spans' per output pixel
+    expected = _convolve.cluster_method(
+        box, int(mask.sum()), precision=precision, costs=costs, values=values
+    )
+    calls = {"correlation": 0, "spans": 0}
+    correlate, spans = _convolve.ndimage.correlate, _convolve._span_spread
 
     def counted(name, function):
         def call(*args, **kwargs):
@@ -281,14 +283,13 @@ def test_each_cluster_is_spread_as_cluster_method_says(box, density, half, seed)
 
     with (
         patch.object(_convolve.ndimage, "correlate", counted("correlation", correlate)),
-        patch.object(_convolve, "_add_copies", counted("copies", copies)),
+        patch.object(_convolve, "_span_spread", counted("spans", spans)),
         patch.object(_convolve, "DIRECT_UNFOLD_PIXELS", 0),
     ):
         direct_spread(
             excess, (side // 2, side // 2), kernel, out_box, np.zeros((side, side)),
-            quadrant=True, groups=groups, workers=1,
+            quadrant=True, groups=groups, workers=1, precision=precision, costs=costs,
         )  # fmt: skip
     if expected == "correlation" and mask.size > (2 * half[0] + 1) * (2 * half[1] + 1):
         return  # a cluster larger than the kernel: the kernel slides over it (ndimage.convolve)
-    taken = [name for name, count in calls.items() if count] or ["views"]
-    assert taken == [expected], (calls, expected)
+    assert [name for name, count in calls.items() if count] == [expected], (calls, expected)

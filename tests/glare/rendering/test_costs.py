@@ -58,18 +58,19 @@ def test_the_direct_spread_is_costed_at_512_squared_and_by_its_share_beyond(monk
     from glarelab.glare.rendering import _convolve, costs
 
     side = costs.DIRECT_COST_SIDE
-    pixel_s, correlate_s, weight_s, copy_s, fixed = 2e-6, 5e-6, 4e-7, 1e-6, 2.0
+    pixel_s, correlate_s, weight_s, span32_s, fixed = 2e-6, 5e-6, 4e-7, 1e-6, 2.0
     spent = [0.0]
 
     def direct_spread(
         points, centre, kernel, out_box, into, *, quadrant, workers, groups=None,
-        method="cheapest",
+        method="cheapest", precision="float64",
     ):  # fmt: skip
         area = (out_box[1] - out_box[0]) * (out_box[3] - out_box[2])
-        if points.size == 1:
-            rate = pixel_s
-        elif method == "copies":
-            rate = copy_s * points.size
+        if method == "spans":  # per value a span runs over
+            values = _convolve.span_values(
+                out_box[3] - out_box[2], points.shape[1] - 1, kernel.shape[1] - 1
+            )
+            rate = (pixel_s if precision == "float64" else span32_s) * points.size * values
         else:
             rate = correlate_s + weight_s * points.size
         spent[0] += rate * (fixed * side**2 + area)
@@ -89,7 +90,7 @@ def test_the_direct_spread_is_costed_at_512_squared_and_by_its_share_beyond(monk
     for name, value in (
         ("correlate_s", correlate_s),
         ("correlate_weight_s", weight_s),
-        ("copy_pixel_s", copy_s),
+        ("span32_pixel_s", span32_s),
     ):
         ratio = getattr(measured, name) / measured.direct_pixel_s
         assert ratio == pytest.approx(value / pixel_s, rel=1e-4), name
@@ -103,7 +104,7 @@ def test_the_direct_spread_is_costed_at_512_squared_and_by_its_share_beyond(monk
         {"direct_wide_share": 0.05},
         {"correlate_s": -1e-8},
         {"fft_s": float("nan")},
-        {"copy_pixel_s": float("inf")},
+        {"span32_pixel_s": float("inf")},
         {"threads": 0},
         {"threads": True},
     ],
@@ -129,7 +130,7 @@ def test_a_stored_cost_no_calibration_makes_is_measured_again(tmp_path, monkeypa
 def test_the_direct_estimate_is_never_below_its_quick_lower_bound():
     """With the clusters not looked for (the quick bound already over the limit), the plan
     keeps the bound; it must not exceed the estimate the clusters give, whatever the costs
-    and however the clusters are spread (correlated, copies summed, one view per pixel)."""
+    and however the clusters are spread (correlated or a span per pixel), in either precision."""
     from glarelab.glare.rendering.plan import _direct_cost
     from glarelab.glare.rendering.scene import Scene
 
@@ -146,14 +147,18 @@ def test_the_direct_estimate_is_never_below_its_quick_lower_bound():
         given = PathCosts(
             **{
                 name: float(rng.uniform(0.1, 10.0) * 1e-9)
-                for name in ("direct_pixel_s", "correlate_s", "correlate_weight_s", "copy_pixel_s")
+                for name in (
+                    "direct_pixel_s", "correlate_s", "correlate_weight_s", "span32_pixel_s"
+                )
             },
             direct_wide_share=float(rng.uniform(0.3, 1.0)),
-        )
+        )  # fmt: skip
         reach = tuple(int(v) for v in rng.integers(1, 2 * side, 2))
         out = (0, side, 0, side)
-        lowest = _direct_cost(scene, out, reach, 0.0, given)
-        assert lowest <= _direct_cost(scene, out, reach, np.inf, given) * (1 + 1e-12)
+        for precision in ("float64", "float32"):
+            lowest = _direct_cost(scene, out, reach, 0.0, given, precision)
+            exact = _direct_cost(scene, out, reach, np.inf, given, precision)
+            assert lowest <= exact * (1 + 1e-12)
 
 
 def _scene(name: str) -> tuple[np.ndarray, float]:

@@ -52,27 +52,28 @@ FLOAT32_NOISE_LIMIT_CD_M2 = 1e-3  # largest FFT round-off the float32 path may a
 # float64 (glarelab.glare.rendering.plan._choose_precision).
 ROUNDOFF_WHITE = 3.0
 ROUNDOFF_RELATIVE = 10.0
-# Direct spread, seconds per output pixel (2-core machine): a scaled kernel copy costs
-# DIRECT_PIXEL_S per bright pixel; a correlation with a cluster's box CORRELATE_S plus
-# CORRELATE_WEIGHT_S per pixel of the box (scipy.ndimage: 3 × 3 in 29 ms at 2048²)
-DIRECT_PIXEL_S = 2.5e-9
+# Direct spread, seconds per output pixel (2-core machine): a correlation with a cluster's
+# box costs CORRELATE_S plus CORRELATE_WEIGHT_S per pixel of the box (scipy.ndimage: 3 × 3 in
+# 29 ms at 2048²); a bright pixel's span (_span_spread) SPAN_PIXEL_S in float64 and
+# SPAN32_PIXEL_S in float32 per value it runs over (span_values per output pixel). On the
+# machine without AVX-512, over 2048² from the 1638 × 1894 quadrant of the night scene's Vos
+# kernel (its 31 bright pixels: three 3 × 3 lamps, a 2 × 2 sun; a stride of 3,124, 1.53
+# values per output pixel), minima of 7: correlated 155 ms, spans 109 ms in float64 and
+# 65 ms in float32 (0.55 and 0.33 ns a value); a lamp's nine spans in float32 over 1,400
+# rows 10.4 ms on BLAS's two threads, 13.9 ms on one
 CORRELATE_S = 4.5e-9
 CORRELATE_WEIGHT_S = 0.4e-9
-# A cluster's copies summed by bands of rows that stay in the processor's cache, COPY_PIXEL_S
-# per bright pixel. On a machine 1.35 times slower, 2-core, at 2048²: copies of 2 × 2 pixels
-# 21 ms against the correlation's 34, of 3 × 3 39 against 40, of 4 × 4 60 against 49; three
-# 3 × 3 lamps at 512² 15.9 ms against 12.3-13.0: a full 3 × 3 box is correlated
-COPY_PIXEL_S = 1.0e-9
-# Bands of at most this many bytes (256 KiB: 3 × 3 copies over 2048² in one thread 45 ms,
-# 64 KiB 60 ms, 1 MiB 47 ms)
-COPY_BAND_BYTES = 256 * 1024
-# A cluster's copies are summed together when its box's reach is at most COPY_BOX_SPARE times
-# a pixel's and a pixel spreads over at least COPY_BOX_PIXELS output pixels: below that the
-# box's windows cost more than they save (a 2 × 2 cluster, one thread, medians of 15 rounds:
-# 257² 3.0 ms summed against 1.9 copied pixel by pixel; 513² 6.3 against 7.4; 1025² 18.9
-# against 25.7)
-COPY_BOX_SPARE = 1.25
-COPY_BOX_PIXELS = 512 * 512
+SPAN_PIXEL_S = 0.55e-9
+SPAN32_PIXEL_S = 0.33e-9
+# A band of spans holds about this many values (its rows of the kernel's stride): 2^16 84.8
+# ms, 2^18 76.4, 2^20 157.5, 2^22 202.3 on the night scene in float32 (a stride of 3,941)
+SPAN_BAND_VALUES = 2**18
+# float32 spans are summed in float32 at most this many at a time, then added to the float64
+# output: the bound on their round-off grows with this number, not with the bright pixels
+SPAN32_FLUSH_TERMS = 32
+# float32 spans' terms and sums stay finite (below 3.4e38): the plan spreads float32 spans only
+# where the excess sums to at most this (cd/m² × pixels; a kernel's values are at most 1)
+SPAN32_MAX_TOTAL_EXCESS = 1e36
 DIRECT_THREAD_PIXELS = 256 * 256  # below this, a direct spread runs in one thread
 # A quadrant whose full kernel has at most this many pixels is unfolded for a direct spread
 # (about 0.3 ms): a bright pixel then adds one view of it, not up to nine pieces of the quadrant
@@ -430,33 +431,86 @@ def clusters(bright: np.ndarray) -> list[tuple[tuple[slice, slice], np.ndarray]]
     ]
 
 
-def copies_summed(box_shape: tuple[int, int], half: tuple[int, int], spread_pixels: int) -> bool:
-    """Whether a cluster's kernel copies are summed together over its box's reach
-    (:func:`_add_copies`) rather than added one view per pixel: where a pixel spreads over at
-    least :data:`COPY_BOX_PIXELS` output pixels and the box widens a pixel's reach (the
-    kernel's half-size ``half``) by at most :data:`COPY_BOX_SPARE` times."""
-    reach = (2 * half[0] + 1) * (2 * half[1] + 1)
-    spare = (2 * half[0] + box_shape[0]) * (2 * half[1] + box_shape[1]) / reach
-    return spread_pixels >= COPY_BOX_PIXELS and spare <= COPY_BOX_SPARE
-
-
 def cluster_method(
-    box_shape: tuple[int, int], pixels: int, half: tuple[int, int], spread_pixels: int
-) -> Literal["correlation", "copies", "views"]:
+    box_shape: tuple[int, int],
+    pixels: int,
+    *,
+    precision: Literal["float64", "float32"] = "float64",
+    costs: tuple[float, float, float] | None = None,
+    values: float = 1.0,
+) -> Literal["correlation", "spans"]:
     """How :func:`direct_spread` spreads a cluster of ``pixels`` bright pixels in a box of
-    ``box_shape`` under a kernel of half-size ``half`` reaching ``spread_pixels`` output
-    pixels: ``'correlation'`` (one ``scipy.ndimage.correlate`` of the kernel with the box),
-    ``'copies'`` (its kernel copies summed in the cache, :func:`copies_summed`) or
-    ``'views'`` (one view of the kernel per pixel), the cheapest by :data:`DIRECT_PIXEL_S`,
-    :data:`COPY_PIXEL_S`, :data:`CORRELATE_S` and :data:`CORRELATE_WEIGHT_S`. The plan
-    prices the same choice with the machine's costs. A one-pixel box is one view."""
-    if box_shape[0] * box_shape[1] == 1:
-        return "views"
-    boxed = copies_summed(box_shape, half, spread_pixels)
-    copies = (COPY_PIXEL_S if boxed else DIRECT_PIXEL_S) * pixels
-    if CORRELATE_S + CORRELATE_WEIGHT_S * box_shape[0] * box_shape[1] < copies:
+    ``box_shape``: ``'correlation'`` (one ``scipy.ndimage.correlate`` of the kernel with the
+    box) or ``'spans'`` (a scaled copy of the kernel per bright pixel, :func:`_span_spread`),
+    the cheaper by ``costs``, ``(correlate_s, correlate_weight_s, span_pixel_s)`` seconds
+    per output pixel (default: :data:`CORRELATE_S`, :data:`CORRELATE_WEIGHT_S` and the
+    precision's :data:`SPAN_PIXEL_S` or :data:`SPAN32_PIXEL_S`), a span's per value it runs
+    over, ``values`` per output pixel (:func:`span_values`). The plan prices the same choice
+    with the machine's costs.
+
+    Examples
+    --------
+    >>> cluster_method((3, 3), 9), cluster_method((3, 3), 9, precision="float32")
+    ('correlation', 'spans')
+    """
+    if precision not in ("float64", "float32"):
+        raise ValueError(f"precision must be 'float64' or 'float32'; got {precision!r}")
+    if costs is None:
+        span = SPAN_PIXEL_S if precision == "float64" else SPAN32_PIXEL_S
+        costs = (CORRELATE_S, CORRELATE_WEIGHT_S, span)
+    correlate_s, weight_s, span_s = costs
+    if correlate_s + weight_s * box_shape[0] * box_shape[1] < span_s * values * pixels:
         return "correlation"
-    return "copies" if boxed else "views"
+    return "spans"
+
+
+def span_roundoff(bright_pixels: int, total_excess: float) -> tuple[float, float]:
+    """Bound on the round-off of float32 spans (:func:`_span_spread`): ``(a, r)`` such that
+    each pixel's spread is off by at most ``a + r · S`` cd/m² (``S`` its spread, exact).
+
+    Parameters
+    ----------
+    bright_pixels
+        The spans spread (bright pixels), at most.
+    total_excess
+        ``ΣΔL`` of the spans, cd/m² × pixels.
+
+    Returns
+    -------
+    tuple of float
+        ``a`` in cd/m² and ``r``, dimensionless.
+
+    Notes
+    -----
+    Every term ``ΔL_q K(p - q)`` is at least 0 (a kernel's values are checked to be), so a
+    float32 sum of ``m`` of them, each rounded at most twice (the kernel value and the weight
+    rounded to float32, the product and the sum rounded unless fused), is within
+    :math:`\\gamma_{2m+2} = (2m+2) u / (1 - (2m+2) u)` of its exact value (Higham 2002,
+    §3.1 and §4.2), with :math:`u = 2^{-24}` and :math:`m` at most
+    :data:`SPAN32_FLUSH_TERMS`. Each such sum is added to the float64 output: at most
+    :math:`k = 2 (\\lceil N / m \\rceil + 1)` float64 additions at a pixel (``N`` the
+    bright pixels; a band's two halves at each of its flushes and at its end), each within
+    :math:`2^{-53}` of the running sum, :math:`\\gamma_k` with :math:`u = 2^{-53}`. Values
+    below float32's normal range (:math:`2^{-126}`) round by at most that much, wherever
+    they are flushed to zero: ``a`` counts :math:`2^{-125}` per term and per unit of
+    excess.
+
+    References
+    ----------
+    Higham, N. J. (2002). Accuracy and Stability of Numerical Algorithms (2nd ed.). SIAM.
+
+    Examples
+    --------
+    >>> a, r = span_roundoff(31, 1e9)
+    >>> f"{r:.3g}"
+    '3.93e-06'
+    """
+    terms = 2 * SPAN32_FLUSH_TERMS + 2
+    u32, u64 = 2.0**-24, 2.0**-53
+    sums = 2 * (math.ceil(max(int(bright_pixels), 1) / SPAN32_FLUSH_TERMS) + 1)
+    relative = terms * u32 / (1.0 - terms * u32) + sums * u64 / (1.0 - sums * u64)
+    absolute = (float(total_excess) + 2.0 * int(bright_pixels)) * 2.0**-125
+    return absolute, relative
 
 
 def direct_spread(
@@ -469,51 +523,59 @@ def direct_spread(
     quadrant: bool = False,
     workers: int | None = None,
     groups: list[tuple[tuple[slice, slice], np.ndarray]] | None = None,
-    method: Literal["cheapest", "correlation", "copies"] = "cheapest",
+    method: Literal["cheapest", "correlation", "spans"] = "cheapest",
+    precision: Literal["float64", "float32"] = "float64",
+    costs: tuple[float, float, float] | None = None,
 ) -> np.ndarray:
     """Add the spread of the non-zero pixels of ``excess`` (whose first pixel is the image's
-    ``origin``) to ``into`` (image-sized) at the pixels of ``out_box``: exact, with no FFT
-    round-off. Each cluster of bright pixels (a glint, a lamp, a sun) adds a scaled copy of
-    the kernel per pixel, or is one correlation of the kernel with the cluster's box
-    (``scipy.ndimage.correlate``), whichever is estimated cheaper; a small cluster's copies
-    under a wide kernel are summed by bands of rows in the cache (:func:`_add_copies`), in
-    the correlation's order, to the same numbers.
+    ``origin``) to ``into`` (image-sized) at the pixels of ``out_box``, with no FFT
+    round-off. Each cluster of bright pixels (a glint, a lamp, a sun) is one correlation of
+    the kernel with the cluster's box (``scipy.ndimage.correlate``, in float64), or adds a
+    scaled copy of the kernel per pixel (:func:`_span_spread`, in ``precision``), whichever
+    :func:`cluster_method` estimates cheaper by ``costs``.
 
     ``kernel`` is the centred odd kernel, or with ``quadrant=True`` the quadrant of offsets
     ``i, j >= 0`` of a kernel symmetric in both axes, read through reversed views where the
     offsets are negative (the full kernel is never made, unless it has at most
-    :data:`DIRECT_UNFOLD_PIXELS` pixels). The output rows are shared among
+    :data:`DIRECT_UNFOLD_PIXELS` pixels). The correlations share the output rows among
     ``workers`` threads (default: every core; ``scipy.ndimage`` releases the GIL); each
     pixel's sum is taken in the same order whatever their number, so the result is the same.
-    ``groups`` are the :func:`clusters` of ``excess > 0`` when the caller has them already.
-    ``method`` ``'correlation'`` or ``'copies'`` spreads every cluster of more than one
-    pixel so (the costs' calibration times each); ``'cheapest'`` chooses per cluster.
+    The spans run on BLAS's threads. ``groups`` are the :func:`clusters` of ``excess > 0``
+    when the caller has them already. ``method`` ``'correlation'`` or ``'spans'`` spreads
+    every cluster so (the costs' calibration times each);
+    ``'cheapest'`` chooses per cluster. float32 spans are within :func:`span_roundoff` of
+    the spread.
     """
-    if method not in ("cheapest", "correlation", "copies"):
-        raise ValueError(f"method must be 'cheapest', 'correlation' or 'copies'; got {method!r}")
-    sources = []
-    half = _kernel_half(kernel, quadrant)
-    reach = (2 * half[0] + 1) * (2 * half[1] + 1)
-    spread = min(reach, (out_box[1] - out_box[0]) * (out_box[3] - out_box[2]))
-    for box, mask in clusters(excess > 0) if groups is None else groups:
+    if method not in ("cheapest", "correlation", "spans"):
+        raise ValueError(f"method must be 'cheapest', 'correlation' or 'spans'; got {method!r}")
+    if precision not in ("float64", "float32"):
+        raise ValueError(f"precision must be 'float64' or 'float32'; got {precision!r}")
+    sources, spans = [], []
+    groups = clusters(excess > 0) if groups is None else groups
+    if groups:  # the spans' values per output pixel: their stride over a pixel's reach
+        columns = [(box[1].start, box[1].stop - 1) for box, _ in groups]
+        spread = max(hi for _, hi in columns) - min(lo for lo, _ in columns)
+        values = span_values(out_box[3] - out_box[2], spread, _kernel_half(kernel, quadrant)[1])
+    for box, mask in groups:
         weights = np.where(mask, excess[box], 0)
         pixels = int(np.count_nonzero(weights))
         if pixels == 0:  # a caller's group with nothing to spread
             continue
         start = (origin[0] + box[0].start, origin[1] + box[1].start)
         if method == "cheapest":
-            how = cluster_method(weights.shape, pixels, half, spread)
-        elif method == "correlation":
-            how = "correlation" if weights.size > 1 else "views"
+            how = cluster_method(
+                weights.shape, pixels, precision=precision, costs=costs, values=values
+            )
         else:
-            how = "copies"
+            how = method
         if how == "correlation":
-            sources.append((weights, start, False))
-        elif how == "copies":  # the box's copies summed together, over the box's reach
-            sources.append((weights, start, True))
-        else:  # each pixel's copy over its own reach
-            for y, x in zip(*np.nonzero(weights), strict=True):
-                sources.append((weights[y : y + 1, x : x + 1], (start[0] + y, start[1] + x), True))
+            sources.append((weights, start))
+        else:
+            rows, cols = np.nonzero(weights)
+            spans.append((rows + start[0], cols + start[1], weights[rows, cols]))
+    if spans:
+        points = tuple(np.concatenate(parts) for parts in zip(*spans, strict=True))
+        _span_spread(points, kernel, out_box, into, quadrant=quadrant, precision=precision)
     if not sources:
         return into
     if quadrant and (2 * kernel.shape[0] - 1) * (2 * kernel.shape[1] - 1) <= DIRECT_UNFOLD_PIXELS:
@@ -521,16 +583,14 @@ def direct_spread(
     workers = _direct_workers(out_box) if workers is None else max(1, int(workers))
     edges = np.linspace(out_box[0], out_box[1], workers + 1).round().astype(int)
     bands = [(int(lo), int(hi), out_box[2], out_box[3]) for lo, hi in pairwise(edges) if hi > lo]
-    scratch = max(w.shape[0] for w, _, _ in sources), max(w.shape[1] for w, _, _ in sources)
+    scratch = max(w.shape[0] for w, _ in sources), max(w.shape[1] for w, _ in sources)
 
     def spread_band(band) -> None:
         buffer = np.empty(
             (band[1] - band[0] + scratch[0]) * (band[3] - band[2] + scratch[1]), dtype=into.dtype
         )
-        for weights, start, copies in sources:
-            _correlate(
-                weights, start, kernel, band, into, buffer, quadrant=quadrant, copies=copies
-            )
+        for weights, start in sources:
+            _correlate(weights, start, kernel, band, into, buffer, quadrant=quadrant)
 
     if len(bands) == 1:
         spread_band(bands[0])
@@ -538,6 +598,131 @@ def direct_spread(
         with ThreadPoolExecutor(len(bands)) as pool:
             list(pool.map(spread_band, bands))
     return into
+
+
+def span_values(out_columns: int, source_columns: int, half_columns: int) -> float:
+    """Values a span runs over per output pixel it reaches (:func:`_span_spread`): its
+    band's stride, the output's ``out_columns`` plus the bright pixels' spread of columns
+    ``source_columns`` (their last less their first), over the columns a bright pixel
+    reaches, at most ``2 half_columns + 1``. About 1.5 for the night scene's 2048² output,
+    and large for a narrow kernel over a wide output, where a correlation costs less.
+
+    Examples
+    --------
+    >>> round(span_values(2048, 1076, 1893), 2), round(span_values(1024, 1000, 7), 2)
+    (1.53, 134.93)
+    """
+    reached = min(2 * half_columns + 1, out_columns)
+    return (out_columns + source_columns) / max(reached, 1)
+
+
+def _span_kernel(kernel: np.ndarray, quadrant: bool, first: int, stride: int, dtype):
+    """The kernel's rows for :func:`_span_spread`: a quadrant's rows of offsets ``0 … a``
+    (else every row), each the columns ``first … first + stride - 1`` of the row unfolded
+    to the column offsets ``-b … b`` (column ``b + d`` for offset ``d``), zeros outside
+    them, contiguous, in ``dtype``."""
+    b = _kernel_half(kernel, quadrant)[1]
+    rows = np.zeros((kernel.shape[0], stride), dtype=dtype)
+    lo, hi = max(first, 0), min(first + stride, 2 * b + 1)  # the support's columns in it
+    if lo >= hi:
+        return rows
+    if not quadrant:
+        rows[:, lo - first : hi - first] = kernel[:, lo:hi]
+        return rows
+    if lo < b:  # offsets lo - b … min(hi, b) - b - 1 < 0: the quadrant read backwards
+        top = min(hi, b)
+        rows[:, lo - first : top - first] = kernel[:, b - lo : b - top : -1]
+    if hi > b:  # offsets max(lo, b) - b … hi - b - 1 >= 0
+        low = max(lo, b)
+        rows[:, low - first : hi - first] = kernel[:, low - b : hi - b]
+    return rows
+
+
+def _span_spread(points, kernel, out_box, into, *, quadrant: bool, precision: str) -> None:
+    """Add ``w K(p - q)`` for each bright pixel ``q`` of weight ``w`` (``points``: arrays of
+    rows, columns and weights, image coordinates) to ``into`` at the pixels ``p`` of
+    ``out_box``: a BLAS ``axpy`` per bright pixel and band of output rows, over the band as
+    one run of values.
+
+    The kernel's rows are laid out with a stride ``S``, the output's columns plus the
+    bright pixels' spread of columns, holding the kernel columns any output column reads
+    (zeros past the support), and the band's output rows with the same stride: a pixel's
+    copy over the band's rows is then one run of memory in both, its values between rows
+    landing on zeros or on the band's columns past the output's (discarded). The rows below
+    a bright pixel and those above it are summed apart; a quadrant's rows above are read
+    downwards into a band held upside down, so that its rows run the way the kernel's do
+    (the same sums as the full kernel's, but that BLAS may round the ends of a run
+    otherwise). In float32 the sums are added to ``into`` at least every
+    :data:`SPAN32_FLUSH_TERMS` terms (:func:`span_roundoff`)."""
+    # imports scipy.linalg (about 70 ms) where nothing has yet: a display LUT read from a
+    # calibration file has
+    from scipy.linalg.blas import daxpy, saxpy
+
+    ys, xs, ws = (np.asarray(part) for part in points)
+    r0, r1, c0, c1 = out_box
+    a, b = _kernel_half(kernel, quadrant)
+    reached = (np.maximum(c0, xs - b) < np.minimum(c1, xs + b + 1)) & (ys - a < r1)
+    reached &= ys + a >= r0
+    if not reached.any():
+        return
+    ys, xs, ws = ys[reached], xs[reached], ws[reached]
+    width = c1 - c0
+    stride = width + int(xs.max() - xs.min())
+    first = c0 - int(xs.max()) + b  # the unfolded kernel's column at the layout's first
+    dtype = np.float32 if precision == "float32" else np.float64
+    axpy = saxpy if precision == "float32" else daxpy
+    flat = _span_kernel(kernel, quadrant, first, stride, dtype).ravel()
+    band = max(1, SPAN_BAND_VALUES // stride)
+    down, up = np.zeros(band * stride, dtype), np.zeros(band * stride, dtype)
+    flush = SPAN32_FLUSH_TERMS if precision == "float32" else len(ws)
+    order = -1 if quadrant else 1  # the order of the rows above the bright pixels' band
+    los, his = np.maximum(c0, xs - b), np.minimum(c1, xs + b + 1)
+
+    def add(y0: int, y1: int, used: list[bool]) -> None:
+        rows = y1 - y0
+        if used[0]:
+            into[y0:y1, c0:c1] += down[: rows * stride].reshape(rows, stride)[:, :width]
+            down[: rows * stride] = 0
+        if used[1]:
+            into[y0:y1, c0:c1] += up[: rows * stride].reshape(rows, stride)[::order, :width]
+            up[: rows * stride] = 0
+        used[:] = [False, False]
+
+    for y0 in range(r0, r1, band):
+        y1 = min(r1, y0 + band)
+        used, count = [False, False], 0
+        near = np.flatnonzero((ys - a < y1) & (ys + a >= y0))  # the pixels reaching the band
+        for y, x, w, lo, hi in zip(
+            ys[near].tolist(), xs[near].tolist(), ws[near].tolist(), los[near].tolist(),
+            his[near].tolist(), strict=True,
+        ):  # fmt: skip
+            column = lo - x + b - first  # the layout's column at the first output reached
+            # the rows at and below the bright pixel (offsets 0 … a), then those above it
+            # (-a … -1): each summed apart, from a quadrant as from the full kernel (the same
+            # terms in the same order)
+            ya, yb = max(y0, y), min(y1, y + a + 1)
+            if ya < yb:
+                axpy(
+                    flat, down, n=(yb - ya - 1) * stride + hi - lo, a=w,
+                    offx=(ya - y + (0 if quadrant else a)) * stride + column,
+                    offy=(ya - y0) * stride + lo - c0,
+                )  # fmt: skip
+                used[0] = True
+            ya, yb = max(y0, y - a), min(y1, y)
+            if ya < yb:
+                if quadrant:  # offsets -1 … -a downwards: into the upside-down band
+                    start = (y - yb + 1) * stride + column, (y1 - yb) * stride + lo - c0
+                else:
+                    start = (ya - y + a) * stride + column, (ya - y0) * stride + lo - c0
+                axpy(
+                    flat, up, n=(yb - ya - 1) * stride + hi - lo, a=w, offx=start[0],
+                    offy=start[1],
+                )  # fmt: skip
+                used[1] = True
+            count += 1
+            if count % flush == 0:
+                add(y0, y1, used)
+        add(y0, y1, used)
 
 
 def _direct_workers(out_box: tuple[int, int, int, int]) -> int:
@@ -622,45 +807,16 @@ def _kernel_half(kernel: np.ndarray, quadrant: bool) -> tuple[int, int]:
     return kernel.shape[0] // 2, kernel.shape[1] // 2
 
 
-def _add_copies(window: np.ndarray, weights: np.ndarray, into: np.ndarray) -> None:
-    """``into[y, x] += Σ weights[i, j] · window[y + i, x + j]`` over the non-zero weights:
-    a scaled copy of the window per bright pixel, summed by bands of rows small enough to stay
-    in the processor's cache (:data:`COPY_BAND_BYTES`) before they are added to ``into``.
-    The terms are added in the order of ``scipy.ndimage.correlate`` (row by row of the
-    weights, from zero, in float64, the sum rounded once to ``into``'s precision), so a
-    cluster's sum is the same by either path (but that ``ndimage`` leaves out a weight of at
-    most 2.2e-16, which the copies keep)."""
-    rows, cols = into.shape
-    band = max(1, min(rows, COPY_BAND_BYTES // (cols * 8)))
-    total, term = np.empty((2, band, cols))
-    terms = [(i, j, float(weights[i, j])) for i, j in zip(*np.nonzero(weights), strict=True)]
-    for r0 in range(0, rows, band):
-        r1 = min(rows, r0 + band)
-        part, scaled = total[: r1 - r0], term[: r1 - r0]
-        (i, j, weight), rest = terms[0], terms[1:]
-        np.multiply(window[r0 + i : r1 + i, j : j + cols], weight, out=part, dtype=np.float64)
-        for i, j, weight in rest:
-            np.multiply(
-                window[r0 + i : r1 + i, j : j + cols], weight, out=scaled, dtype=np.float64
-            )
-            part += scaled
-        into[r0:r1] += part if into.dtype == np.float64 else part.astype(into.dtype)
-
-
-def _correlate(weights, start, kernel, out_box, into, buffer, *, quadrant, copies) -> None:
-    """Add the spread of ``weights`` (a box whose first pixel is the image's ``start``) to
-    ``into`` at the pixels of ``out_box`` it reaches (``buffer``: room for the correlation of
-    the largest window): by scaled kernel copies (``copies``, :func:`_add_copies`) or by one
-    correlation of each kernel window with the box (``scipy.ndimage.correlate``)."""
+def _correlate(weights, start, kernel, out_box, into, buffer, *, quadrant) -> None:
+    """Add the spread of ``weights`` (a box of more than one pixel whose first pixel is the
+    image's ``start``) to ``into`` at the pixels of ``out_box`` it reaches (``buffer``: room
+    for the correlation of the largest window): one correlation of each kernel window with
+    the box (``scipy.ndimage.correlate``)."""
     a, b = _kernel_half(kernel, quadrant)
     (bh, bw), (q0, p0) = weights.shape, start
     r0, r1 = max(out_box[0], q0 - a), min(out_box[1], q0 + bh + a)
     c0, c1 = max(out_box[2], p0 - b), min(out_box[3], p0 + bw + b)
     if r0 >= r1 or c0 >= c1:
-        return
-    if weights.size == 1 and not quadrant:  # one pixel: a scaled copy, one view
-        window = kernel[r0 - q0 + a : r1 - q0 + a, c0 - p0 + b : c1 - p0 + b]
-        into[r0:r1, c0:c1] += weights[0, 0] * window
         return
     if (2 * a + 1) * (2 * b + 1) < weights.size:  # a cluster larger than the kernel
         _convolve_cluster(weights, start, kernel, (r0, r1, c0, c1), into, quadrant=quadrant)
@@ -674,12 +830,6 @@ def _correlate(weights, start, kernel, out_box, into, buffer, *, quadrant, copie
         rows = _select(d0, d1, a, quadrant)
         for ca, cb, cols in columns:
             window = _window(kernel, rows, cols)
-            if weights.size == 1:  # one pixel: a scaled copy
-                into[ra:rb, ca:cb] += weights[0, 0] * window
-                continue
-            if copies:
-                _add_copies(window, flipped, into[ra:rb, ca:cb])
-                continue
             out = buffer[: window.size].reshape(window.shape)
             ndimage.correlate(window, flipped, output=out, mode="constant")
             into[ra:rb, ca:cb] += out[bh // 2 : bh // 2 + rb - ra, bw // 2 : bw // 2 + cb - ca]

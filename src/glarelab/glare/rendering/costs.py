@@ -34,7 +34,7 @@ __all__ = [
     "n_log_n",
 ]
 
-COSTS_VERSION = 10  # bump when what is measured changes (10: copies; direct spreads at two sizes)
+COSTS_VERSION = 11  # bump when what is measured changes (11: spans in float64 and float32)
 # calibration rounds: the FFT's fastest, the others' median ratio to it. Four calibrations
 # on the quiet 2-core machine put a scaled kernel copy at 13.8-21.6 FFT units with 7 rounds
 # (0.5 s), 14.2-16.2 with 21 (1.3 s, once per machine): on two lamps and a glint (512²)
@@ -85,12 +85,12 @@ class PathCosts:
         ``N0 × N1`` transform, in float64 and float32, up to :data:`SMALL_FFT_POINTS`.
     fft_large_s, fft32_large_s
         The same from :data:`LARGE_FFT_POINTS` on (:func:`fft_unit` between the two).
-    direct_pixel_s
-        A scaled kernel copy (one view of the kernel), per output pixel and bright pixel.
+    direct_pixel_s, span32_pixel_s
+        A bright pixel's scaled kernel copy (a span), per value it runs over
+        (:func:`~glarelab.glare.rendering._convolve.span_values` per output pixel), in
+        float64 and in float32.
     correlate_s, correlate_weight_s
         A cluster's correlation, per output pixel, plus per pixel of the cluster's box.
-    copy_pixel_s
-        A cluster's kernel copies summed in the cache, per output pixel and bright pixel.
     direct_wide_share
         What each output pixel beyond the first ``DIRECT_COST_SIDE ** 2`` costs a direct
         spread, as a share of the costs above (measured over an output of that many pixels,
@@ -119,10 +119,12 @@ class PathCosts:
     # unit measured 2.6-3.4e-10 s): no growth
     fft_large_s: float = 4.5e-10
     fft32_large_s: float = 3.0e-10
-    direct_pixel_s: float = 2.5e-9
+    # glarelab.glare.rendering._convolve's SPAN_PIXEL_S, SPAN32_PIXEL_S, CORRELATE_S and
+    # CORRELATE_WEIGHT_S
+    direct_pixel_s: float = 0.55e-9
+    span32_pixel_s: float = 0.33e-9
     correlate_s: float = 4.5e-9
     correlate_weight_s: float = 0.4e-9
-    copy_pixel_s: float = 1.0e-9  # glarelab.glare.rendering._convolve.COPY_PIXEL_S
     direct_wide_share: float = 0.6
     # the far tail's, the bound's and the preview's: their ratios to fft_s in the fastest of
     # five rounds on the 2-core machine (at a load average of 6-9: 9, 20, 3.3 and 4)
@@ -264,6 +266,7 @@ def measure_costs() -> PathCosts:
     from glarelab.glare.rendering._convolve import (
         direct_spread,
         kernel_spectrum,
+        span_values,
         spectral_spread,
     )
     from glarelab.glare.rendering.display import CodeBound, block_reduce, display_lut
@@ -290,7 +293,6 @@ def measure_costs() -> PathCosts:
     # where the offsets are negative: how the renderer spreads a full-reach kernel directly
     quadrant = kernel[: n + 1, : n + 1]
     centre = (n // 2, n // 2)
-    one = np.ones((1, 1))
     small, big = np.ones((3, 3)), np.ones((BIG_SIDE, BIG_SIDE))
     small_groups = [((slice(0, 3), slice(0, 3)), np.ones((3, 3), bool))]
     big_groups = [((slice(0, BIG_SIDE), slice(0, BIG_SIDE)), np.ones((BIG_SIDE,) * 2, bool))]
@@ -326,13 +328,14 @@ def measure_costs() -> PathCosts:
 
     workers = cores()
 
-    def clustered(points, groups, wider=False, method="correlation"):
+    def clustered(points, groups, wider=False, method="correlation", precision="float64"):
         where = (
             (wide_centre, wide, wide_out, wide_into) if wider else (centre, quadrant, out, into)
         )
         return direct_spread(
-            points, *where, quadrant=True, workers=workers, groups=groups, method=method
-        )
+            points, *where, quadrant=True, workers=workers, groups=groups, method=method,
+            precision=precision,
+        )  # fmt: skip
 
     fastest = _relative(
         {
@@ -342,14 +345,16 @@ def measure_costs() -> PathCosts:
             "fft32": lambda: spectral_spread(
                 work[np.float32], box, out, spectra[np.float32], lengths
             ),
-            "pixel": lambda: clustered(one, None),
+            "spans": lambda: clustered(small, small_groups, method="spans"),
+            "spans32": lambda: clustered(small, small_groups, method="spans", precision="float32"),
             "small": lambda: clustered(small, small_groups),
             "big": lambda: clustered(big, big_groups),
-            "copies": lambda: clustered(small, small_groups, method="copies"),
-            "wide pixel": lambda: clustered(one, None, wider=True),
+            "wide spans": lambda: clustered(small, small_groups, wider=True, method="spans"),
+            "wide spans32": lambda: clustered(
+                small, small_groups, wider=True, method="spans", precision="float32"
+            ),
             "wide small": lambda: clustered(small, small_groups, wider=True),
             "wide big": lambda: clustered(big, big_groups, wider=True),
-            "wide copies": lambda: clustered(small, small_groups, wider=True, method="copies"),
             "far": far_tail,
             "bound": check,
             "coarse": lambda: far_spread(
@@ -361,14 +366,19 @@ def measure_costs() -> PathCosts:
     )
     large = _large_fft_units(rng, spectral_spread, fastest, unit)
 
-    pixel_s = fastest["pixel"] / (n * n)
     cluster_s = fastest["small"] / (n * n)
     weight_s = max((fastest["big"] / (n * n) - cluster_s) / (BIG_SIDE**2 - 9), 1e-12)
+    # a span's time is per value it runs over: the 3 × 3 cluster's spans run over
+    # span_values of them per output pixel, (n + 2) / n at n², (2n + 2) / 2n at (2n)²
+    values = span_values(n, 2, n)
+    for name in ("spans", "spans32"):
+        fastest[name] /= values
+        fastest[f"wide {name}"] /= span_values(2 * n, 2, 2 * n)
     # each further pixel of a wider output, as a share of a pixel's cost at n²: the median
     # over the four spreads (a noisy one cannot make the direct path free or dear)
     shares = [
         (fastest[f"wide {name}"] - fastest[name]) / (3 * fastest[name])
-        for name in ("pixel", "small", "big", "copies")
+        for name in ("spans", "spans32", "small", "big")
     ]
     wide_share = min(max(float(np.median(shares)), WIDE_SHARE_LIMITS[0]), WIDE_SHARE_LIMITS[1])
     per = {np.float64: fastest["fft64"] / unit, np.float32: fastest["fft32"] / unit}
@@ -377,10 +387,10 @@ def measure_costs() -> PathCosts:
         fft32_s=per[np.float32],
         fft_large_s=per[np.float64] * large[np.float64],
         fft32_large_s=per[np.float32] * large[np.float32],
-        direct_pixel_s=pixel_s,
+        direct_pixel_s=fastest["spans"] / (9 * n * n),
+        span32_pixel_s=fastest["spans32"] / (9 * n * n),
         correlate_s=max(cluster_s - 9 * weight_s, 1e-12),
         correlate_weight_s=weight_s,
-        copy_pixel_s=fastest["copies"] / (9 * n * n),
         direct_wide_share=wide_share,
         multires_s=fastest["far"] / (size * size),
         bound_s=fastest["bound"] / (n * n),

@@ -6,7 +6,9 @@ bright and where, which pixels can still change) and at the display (how many cd
 step is at the darkest pixel that can change) and chooses the cheapest of three paths whose
 error stays under ``tolerance_codes``:
 
-- **direct**: each bright pixel adds a scaled copy of the kernel (exact; for a few glints);
+- **direct**: each cluster of bright pixels is correlated with the kernel, or each bright
+  pixel adds a scaled copy of it (no FFT round-off; the copies summed in float32 where
+  their bound keeps the tolerance; for a few glints and lamps);
 - **fft**: one forward and one inverse FFT of the bright pixels' box with the kernel's
   spectrum, kept by the renderer across images (exact);
 - **multires**: the near kernel at full resolution, the far tail on a grid ``f`` times
@@ -39,7 +41,14 @@ import numpy as np
 import scipy.fft
 
 from glarelab.glare.models.base import GlareModel
-from glarelab.glare.rendering._convolve import cluster_method, fft_length, fft_workers
+from glarelab.glare.rendering._convolve import (
+    SPAN32_MAX_TOTAL_EXCESS,
+    cluster_method,
+    fft_length,
+    fft_workers,
+    span_roundoff,
+    span_values,
+)
 from glarelab.glare.rendering.costs import (
     DEFAULT_COSTS,
     DIRECT_COST_SIDE,
@@ -127,6 +136,11 @@ class GlarePlan:
         tail, that bound is at least what the render's check would find pixel by pixel
         (:meth:`~glarelab.glare.rendering.display.CodeBound.roundoff_codes`), so a render of
         a float64 image reports it and does not check again.
+    direct_precision
+        The precision of the direct path's spans (``'float32'`` where their round-off bound,
+        :func:`~glarelab.glare.rendering._convolve.span_roundoff`, keeps the tolerance with
+        the cut's; then ``roundoff_cd_m2`` is that bound's absolute part and
+        ``roundoff_codes`` its relative part's codes, added to the render's error bound).
     costs
         Estimated seconds of each path considered.
     notes
@@ -154,6 +168,7 @@ class GlarePlan:
     convolutions: int
     halo: str
     fft_precision: str = "float64"
+    direct_precision: str = "float64"
     roundoff_cd_m2: float = 0.0
     roundoff_codes: float = 0.0
     costs: dict = field(default_factory=dict)
@@ -197,9 +212,15 @@ class GlarePlan:
                 f"{self.multires_factor}× coarser"
             )
         elif self.path == "direct":
+            spans = (
+                f"spans in float32, round-off at most {self.roundoff_codes:.2g} codes"
+                if self.direct_precision == "float32"
+                else "exact"
+            )
             lines.append(
                 f"  path: direct — each cluster of the {self.bright_pixels} bright pixels "
-                f"correlated with a {2 * reach[0] + 1} × {2 * reach[1] + 1} px kernel (exact)"
+                f"correlated with a {2 * reach[0] + 1} × {2 * reach[1] + 1} px kernel or a "
+                f"copy of it per pixel ({spans})"
             )
         elif self.path == "fft":
             lines.append(
@@ -240,34 +261,69 @@ def _geometric_reach(source, target, half) -> tuple[int, int]:
     return min(int(rows), half[0]), min(int(cols), half[1])
 
 
-def _direct_cost(scene: Scene, out, reach, limit: float, costs: PathCosts) -> float:
-    """Estimated seconds of spreading the scene's bright clusters directly; a lower bound
-    when that is already above ``limit`` (the clusters are then not looked for). Each
-    cluster costs what :func:`~glarelab.glare.rendering._convolve.direct_spread` spends on
-    it (:func:`~glarelab.glare.rendering._convolve.cluster_method`: its correlation, its
-    copies summed, or one view per pixel), priced by the machine's costs per output pixel it
-    reaches: the costs' own up to ``DIRECT_COST_SIDE ** 2`` pixels, and
-    their ``direct_wide_share`` for each pixel beyond."""
+def direct_costs(costs: PathCosts, precision: str) -> tuple[float, float, float]:
+    """``(correlate_s, correlate_weight_s, span_pixel_s)`` of the machine's costs for a
+    direct spread whose spans are in ``precision``: what
+    :func:`~glarelab.glare.rendering._convolve.cluster_method` weighs."""
+    if precision == "float32":
+        span = costs.span32_pixel_s
+    elif precision == "float64":
+        span = costs.direct_pixel_s
+    else:
+        raise ValueError(f"precision must be 'float64' or 'float32'; got {precision!r}")
+    return costs.correlate_s, costs.correlate_weight_s, span
+
+
+def _direct_cost(
+    scene: Scene, out, reach, limit: float, costs: PathCosts, precision: str = "float64"
+) -> float:
+    """Estimated seconds of spreading the scene's bright clusters directly, its spans in
+    ``precision``; a lower bound when that is already above ``limit`` (the clusters are then
+    not looked for). Each cluster costs what
+    :func:`~glarelab.glare.rendering._convolve.direct_spread` spends on it
+    (:func:`~glarelab.glare.rendering._convolve.cluster_method`: its correlation or a span
+    per bright pixel), priced by the machine's costs per output pixel it reaches: the costs'
+    own up to ``DIRECT_COST_SIDE ** 2`` pixels, and their ``direct_wide_share`` for each
+    pixel beyond."""
     area = min((out[1] - out[0]) * (out[3] - out[2]), (2 * reach[0] + 1) * (2 * reach[1] + 1))
     base = DIRECT_COST_SIDE**2
     pixels = area if area <= base else base + costs.direct_wide_share * (area - base)
-    cheapest = min(costs.direct_pixel_s, costs.correlate_weight_s, costs.copy_pixel_s)
-    lowest = pixels * scene.bright_pixels * cheapest
+    weighed = direct_costs(costs, precision)
+    values = span_values(out[3] - out[2], scene.source_box[3] - 1 - scene.source_box[2], reach[1])
+    lowest = pixels * scene.bright_pixels * min(weighed[1], weighed[2] * values)
     if lowest >= limit:
         return lowest
     total = 0.0
     for _, mask in scene.clusters():
         bright = int(mask.sum())
-        how = cluster_method(mask.shape, bright, reach, area)
+        how = cluster_method(mask.shape, bright, precision=precision, costs=weighed, values=values)
         if how == "correlation":
             total += costs.correlate_s + costs.correlate_weight_s * mask.size
-        elif how == "copies":
-            total += costs.copy_pixel_s * bright
-        elif how == "views":
-            total += costs.direct_pixel_s * bright
+        elif how == "spans":
+            total += weighed[2] * values * bright
         else:
             raise ValueError(f"unknown way to spread a cluster: {how!r}")
     return pixels * total
+
+
+def _span_precision(renderer, scene: Scene, cut_bound: float, step: float):
+    """``('float32', a, codes, note)`` when float32 spans' round-off bound
+    (:func:`~glarelab.glare.rendering._convolve.span_roundoff`: ``a`` cd/m² and a share
+    ``r`` of the spread) keeps the tolerance with the cut's bound ``cut_bound`` (cd/m², at
+    the darkest pixel's code step ``step``), else ``('float64', 0, 0, note)``. ``codes`` is
+    the relative part's, at most ``r / (1 - r)`` times the largest ``L / step(L)`` of the
+    display: a spread's error ``r S`` is at most ``r`` of the output it is part of."""
+    tolerance = renderer.tolerance_codes
+    if tolerance <= 0:
+        return "float64", 0.0, 0.0, None
+    if scene.total_excess > SPAN32_MAX_TOTAL_EXCESS:
+        note = f"float64 spans: the excess sums to more than {SPAN32_MAX_TOTAL_EXCESS:.0e}"
+        return "float64", 0.0, 0.0, note
+    absolute, relative = span_roundoff(scene.bright_pixels, scene.total_excess)
+    codes = relative / (1.0 - relative) * renderer.code_bound.relative_codes
+    if codes + (cut_bound + absolute) / step <= tolerance:
+        return "float32", absolute, codes, f"float32 spans: {codes:.2g} codes of round-off"
+    return "float64", 0.0, 0.0, f"float64 spans: float32 round-off could reach {codes:.2g} codes"
 
 
 def fft_cost(
@@ -447,7 +503,8 @@ def make_plan(renderer, scene: Scene) -> GlarePlan:
     pixels = scene.planes.shape[0] * scene.planes.shape[1]
     check = machine.bound_s * pixels
     optimistic = fft_cost(lengths, machine, "float32") + check
-    direct = _direct_cost(scene, out, reach, optimistic, machine)
+    spans, span_a, span_codes, span_note = _span_precision(renderer, scene, cut_bound, step)
+    direct = _direct_cost(scene, out, reach, optimistic, machine, spans)
     if tolerance > 0:
         precision = "float64"
         if direct >= optimistic:  # the FFT may win: plan its precision
@@ -460,7 +517,7 @@ def make_plan(renderer, scene: Scene) -> GlarePlan:
     costs["direct"] = (
         direct
         if direct >= costs["fft"] / convolutions or direct < optimistic
-        else _direct_cost(scene, out, reach, costs["fft"] / convolutions, machine)
+        else _direct_cost(scene, out, reach, costs["fft"] / convolutions, machine, spans)
     ) * convolutions
     exact_paths = [p for p in ("direct", "fft") if p in renderer.paths] or ["direct", "fft"]
     path, factor, split = min(exact_paths, key=costs.get), 1, 0
@@ -512,7 +569,13 @@ def make_plan(renderer, scene: Scene) -> GlarePlan:
                 notes.append(f"{far_note}: its near part needs {near[0]} transforms, dearer")
     if path in ("fft", "multires") and precision_note is not None:
         notes.append(precision_note)
-    if path not in ("fft", "multires"):
+    if path == "direct":
+        precision, roundoff, roundoff_codes = "float64", span_a, span_codes
+        if span_note is not None:
+            notes.append(span_note)
+    else:
+        spans = "float64"
+    if path not in ("fft", "multires", "direct"):
         precision, roundoff, roundoff_codes = "float64", 0.0, 0.0
     if len(renderer.paths) < len(PATHS):
         notes.append(f"path {path}: of the paths allowed, {', '.join(renderer.paths)}")
@@ -523,10 +586,19 @@ def make_plan(renderer, scene: Scene) -> GlarePlan:
             k: v
             for k, v in plan.__dict__.items()
             if k
-            not in ("path", "costs", "notes", "fft_precision", "roundoff_cd_m2", "roundoff_codes")
+            not in (
+                "path",
+                "costs",
+                "notes",
+                "fft_precision",
+                "direct_precision",
+                "roundoff_cd_m2",
+                "roundoff_codes",
+            )
         }
         | {"path": path, "multires_factor": factor, "split_px": split},
         fft_precision=precision,
+        direct_precision=spans,
         roundoff_cd_m2=roundoff,
         roundoff_codes=roundoff_codes,
         costs=costs,

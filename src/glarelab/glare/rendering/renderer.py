@@ -63,7 +63,7 @@ from glarelab.glare.rendering.multires import (
     multires_kernels,
     upsample,
 )
-from glarelab.glare.rendering.plan import PATHS, GlarePlan, make_plan
+from glarelab.glare.rendering.plan import PATHS, GlarePlan, direct_costs, make_plan
 from glarelab.glare.rendering.result import GlareResult, PlannedGlare
 from glarelab.glare.rendering.scene import Scene
 
@@ -650,17 +650,22 @@ class GlareRenderer:
         return spectrum
 
     # one image ----------------------------------------------------------------------------
-    def _scene(self, luminance_cd_m2) -> tuple[np.ndarray, Scene]:
-        if isinstance(luminance_cd_m2, np.ndarray):  # refused before a scan of its pixels
-            check_render_memory(luminance_cd_m2.shape)
-        image = check_image("luminance_cd_m2", luminance_cd_m2, channels=(3,))
+    def _scene(self, luminance_cd_m2, *, checked: bool = False) -> tuple[np.ndarray, Scene]:
+        """The image as an array and its scene; ``checked``: the image is an array that
+        :func:`~glarelab.glare._validation.check_image` has returned already (add_glare's)."""
+        if checked:
+            image = luminance_cd_m2
+        else:
+            if isinstance(luminance_cd_m2, np.ndarray):  # refused before a scan of its pixels
+                check_render_memory(luminance_cd_m2.shape)
+            image = check_image("luminance_cd_m2", luminance_cd_m2, channels=(3,))
         if image.shape[:2] != self.shape:
             raise ValueError(
                 f"luminance_cd_m2 must have the renderer's shape {self.shape}; "
                 f"got {image.shape[:2]}"
             )
-        if image.size and float(image.max()) > MAX_LUMINANCE_CD_M2:
-            peak = float(image.max())
+        peak = float(image.max()) if image.size else 0.0
+        if peak > MAX_LUMINANCE_CD_M2:
             shown = f"{peak:.3g}"
             if float(shown) <= MAX_LUMINANCE_CD_M2:  # float32's 1e30 is 1.00000002e+30
                 shown = f"{peak:.9g}"
@@ -711,7 +716,11 @@ class GlareRenderer:
         bound, passed through the display (:class:`glarelab.glare.rendering.display.CodeBound`).
         When it exceeds the tolerance anywhere, the exact path is taken instead.
         """
-        image, scene = self._scene(luminance_cd_m2)
+        return self._render(luminance_cd_m2, checked=False)
+
+    def _render(self, luminance_cd_m2, *, checked: bool) -> GlareResult:
+        """:meth:`render`; ``checked``: the image has been checked already (add_glare's)."""
+        image, scene = self._scene(luminance_cd_m2, checked=checked)
         plan = make_plan(self, scene)
         self.say(f"plan: {plan.path}")
         parameters = {
@@ -839,12 +848,16 @@ class GlareRenderer:
         absolute = self._absolute(scene, plan, used) + roundoff[0]
         ratio = relative / max(1.0 - relative, 1e-12) + roundoff[1]
         stored = 0.0
+        if plan.path == "direct" and plan.direct_precision == "float32":
+            # float32 spans: r / (1 - r) of the output at most, the plan's codes
+            absolute += plan.roundoff_cd_m2
+            stored = plan.roundoff_codes
         if self.dtype == np.float32 and plan.tolerance_codes > 0:
             # the excess rounded to float32 (each ΔL within u of its value: the spread within
             # u of its own), and the output rounded to float32: u of a value, at most
             # u · max L / step(L) codes
             ratio += FLOAT32_UNIT_ROUNDOFF
-            stored = FLOAT32_UNIT_ROUNDOFF * self.code_bound.relative_codes
+            stored += FLOAT32_UNIT_ROUNDOFF * self.code_bound.relative_codes
         if ratio:
             return stored + self.code_bound.codes(
                 scene.planes,
@@ -853,7 +866,9 @@ class GlareRenderer:
                 relative=ratio,
                 tolerance_codes=max(plan.tolerance_codes - stored, 0.0),
             )
-        return self._exact_error(scene, spread, absolute, plan.tolerance_codes)
+        return stored + self._exact_error(
+            scene, spread, absolute, max(plan.tolerance_codes - stored, 0.0)
+        )
 
     def _absolute(self, scene: Scene, plan: GlarePlan, used: set[str]) -> float:
         """The part of the error bound that does not grow with the spread, cd/m², but for
@@ -901,6 +916,8 @@ class GlareRenderer:
                     a, b = self.kernel_half
                     k = k[a - reach[0] : a + reach[0] + 1, b - reach[1] : b + reach[1] + 1]
                 used.add(dtype.name)
+                if plan.direct_precision == "float32":
+                    used.add("float32")
                 direct_spread(
                     excess,
                     box[::2],
@@ -910,6 +927,8 @@ class GlareRenderer:
                     quadrant=symmetric,
                     # the scene's own groups, where its excess is this one plane
                     groups=scene.clusters() if scene.excess.shape[2] == 1 else None,
+                    precision=plan.direct_precision,
+                    costs=direct_costs(self.costs, plan.direct_precision),
                 )
                 continue
             if plan.path == "fft":
