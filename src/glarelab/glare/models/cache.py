@@ -604,14 +604,30 @@ def _encode(kernel: Kernel, key: str) -> bytes | None:
 
 def _decode(data: bytes, key: str, shape: tuple[int, int] | None = None) -> Kernel | None:
     """The kernel of an entry's bytes, or None when they are not a whole, matching entry of a
-    kernel that could have been digitised (:func:`_plausible`)."""
+    kernel that could have been digitised (:func:`_plausible`). The bytes' CRC-32 and the
+    least of the values (the plausibility's one pass over them) are taken at once, each on a
+    core (both release the GIL: 12 and 9 ms for a 2048² quadrant of a one-call render)."""
+    from concurrent.futures import ThreadPoolExecutor
+
     if len(data) < len(_MAGIC) + 8 + _DIGEST_BYTES or not data.startswith(_MAGIC):
         return None
     body = memoryview(data)[:-_DIGEST_BYTES]  # no copy of the array's bytes
-    if struct.pack("<I", zlib.crc32(body)) != data[-_DIGEST_BYTES:]:
+    with ThreadPoolExecutor(1) as pool:
+        digest = pool.submit(zlib.crc32, body)
+        read = _read_entry(body, key)  # None for a header that does not parse or match
+        least = float(read[1].min()) if read is not None and read[1].size else math.nan
+        whole = struct.pack("<I", digest.result()) == data[-_DIGEST_BYTES:]
+    if not whole or read is None:
         return None
+    kernel = read[0]
+    return kernel if _plausible(kernel, least, shape) else None
+
+
+def _read_entry(body: memoryview, key: str) -> tuple[Kernel, np.ndarray] | None:
+    """The kernel and its stored values of an entry's bytes but the CRC, or None when its
+    header does not parse or is not this key's."""
     try:
-        (length,) = struct.unpack_from("<Q", data, len(_MAGIC))
+        (length,) = struct.unpack_from("<Q", body, len(_MAGIC))
         start = len(_MAGIC) + 8
         header = loads_json(bytes(body[start : start + length]))
         if header["key"] != key or header["format"] != FORMAT:
@@ -634,29 +650,32 @@ def _decode(data: bytes, key: str, shape: tuple[int, int] | None = None) -> Kern
             quadrature_error=float(header["quadrature_error"]),
             description=ast.literal_eval(header["description"]),
         )
-        return kernel if _plausible(kernel, values, shape) else None
     except (KeyError, TypeError, ValueError, SyntaxError, struct.error):
         return None
+    return kernel, values
 
 
-def _plausible(kernel: Kernel, values: np.ndarray, shape: tuple[int, int] | None) -> bool:
-    """Whether ``kernel`` (its stored ``values``) could be a digitised kernel of ``shape``:
-    finite values >= 0, and each channel's sum and ``energy_outside`` adding up to the light
-    the model admits, 1 or ``description['admitted_share']``, within
-    :data:`ENERGY_TOLERANCE`."""
+def _plausible(kernel: Kernel, least: float, shape: tuple[int, int] | None) -> bool:
+    """Whether ``kernel`` (the least of its stored values ``least``, NaN for none or a NaN)
+    could be a digitised kernel of ``shape``: finite values >= 0, and each channel's sum and
+    ``energy_outside`` adding up to the light the model admits, 1 or
+    ``description['admitted_share']``, within :data:`ENERGY_TOLERANCE`."""
     if shape is not None and tuple(kernel.shape[:2]) != tuple(shape):
         return False
-    # one pass over the values: the least is >= 0 (NaN compares False); an infinite value
-    # makes a channel's sum infinite, which the energy check below refuses
-    if values.size == 0 or not values.min() >= 0:
+    # the least is >= 0 (NaN compares False); an infinite value makes a channel's sum
+    # infinite, which the energy check below refuses
+    if not least >= 0:
         return False
-    outside = np.asarray(kernel.energy_outside, dtype=float)
-    admitted = kernel.description.get("admitted_share", 1.0)
-    if not isinstance(admitted, float | int) or isinstance(admitted, bool):
+    try:
+        outside = np.asarray(kernel.energy_outside, dtype=float)
+        admitted = kernel.description.get("admitted_share", 1.0)
+        if not isinstance(admitted, float | int) or isinstance(admitted, bool):
+            return False
+        if not (np.all(np.isfinite(outside)) and np.all(outside >= 0)):
+            return False
+        error = np.abs(np.asarray(kernel.total(), dtype=float) + outside - admitted)
+    except (KeyError, TypeError, ValueError, AttributeError):
         return False
-    if not (np.all(np.isfinite(outside)) and np.all(outside >= 0)):
-        return False
-    error = np.abs(np.asarray(kernel.total(), dtype=float) + outside - admitted)
     return bool(np.all(error <= ENERGY_TOLERANCE))
 
 

@@ -395,8 +395,10 @@ class VosGlare(GlareModel):
             profile = self._profile(halo)
             running_max = np.maximum.accumulate(profile(grid)[::-1])[::-1]
             peak = np.maximum(peak, running_max[np.searchsorted(grid, theta)])
-            total = radial_mass(profile, np.array([90.0]), breakpoints=(2.0, 3.0, 4.0))[0]
-            inside = radial_mass(profile, theta, breakpoints=(2.0, 3.0, 4.0))
+            # the whole hemisphere and each radius's disc: one integration of the profile
+            angles = np.concatenate([[90.0], theta])
+            masses = radial_mass(profile, angles, breakpoints=(2.0, 3.0, 4.0))
+            total, inside = masses[0], masses[1:]
             energy = np.maximum(energy, 1.0 - inside / total)
         pixel_sr = math.radians(pixel_deg) ** 2
         return TailBound(

@@ -254,7 +254,7 @@ def add_glare(
         kernel_shape=kernel_shape,
         cache=cache,
     )
-    return renderer.render(image).image
+    return renderer._render(image, checked=True).image  # checked above: no second scan
 
 
 def render_planned(
