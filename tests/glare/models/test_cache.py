@@ -167,6 +167,7 @@ def _rewritten(data: bytes, header=None, values=None) -> bytes:
         {"header": lambda h: h.__setitem__("shape", [1, -1])},  # a 1 × 441 kernel
         {"header": lambda h: h.__setitem__("energy_outside", -5.0)},
         {"header": lambda h: h.__setitem__("energy_outside", float("nan"))},
+        {"header": lambda h: h.__setitem__("shape", [float("inf"), 21])},  # OverflowError
     ],
     ids=[
         "nan",
@@ -179,6 +180,7 @@ def _rewritten(data: bytes, header=None, values=None) -> bytes:
         "shape",
         "outside-negative",
         "outside-nan",
+        "shape-infinite",
     ],
 )
 def test_an_entry_whose_crc_matches_but_no_kernel_could_be_is_rebuilt(tmp_path, edit):
@@ -190,6 +192,25 @@ def test_an_entry_whose_crc_matches_but_no_kernel_could_be_is_rebuilt(tmp_path, 
     again = cache.kernel(model, 0.05, SHAPE)
     _same(again, made)
     assert cache.get(cache.key(model, 0.05, SHAPE, colour=False), SHAPE) is not None
+
+
+def test_an_edited_header_under_the_old_crc_is_refused_before_it_is_read(tmp_path):
+    """The header is parsed while the CRC-32 is taken on another core: an entry edited in a
+    text editor (its shape made infinite, its CRC left as it was) is refused and rebuilt,
+    not an OverflowError out of the render."""
+    import zlib
+
+    cache = KernelCache(tmp_path)
+    model = glare.VosGlare()
+    made = cache.kernel(model, 0.05, SHAPE)
+    (path,) = _entries(cache)
+    data = path.read_bytes()
+    edited = _rewritten(data, header=lambda h: h.__setitem__("shape", [float("inf"), 21]))
+    edited = edited[:-4] + data[-4:]  # the old CRC
+    assert edited[-4:] != zlib.crc32(edited[:-4]).to_bytes(4, "little")
+    path.write_bytes(edited)
+    assert cache.get(cache.key(model, 0.05, SHAPE, colour=False)) is None
+    _same(cache.kernel(model, 0.05, SHAPE), made)
 
 
 @pytest.mark.parametrize("colour", [False, True])

@@ -113,6 +113,32 @@ def test_each_pixel_of_a_sparse_scene_is_a_span_under_a_wide_kernel(monkeypatch,
     assert_allclose(got, reference, rtol=1e-12, atol=0)
 
 
+def test_a_few_glints_across_a_wide_image_are_correlated_not_laid_out_for_spans(monkeypatch):
+    """Two glints at the two ends of a 512 × 4096 image under a 1023² kernel: their spans'
+    stride would run over 8,191 values a row, and the kernel's layout (512 × 8,191 values)
+    cost most of their time; correlated (a scaled view each), they took 0.4-0.8 of it."""
+    calls = []
+    function = _convolve._span_spread
+    monkeypatch.setattr(
+        _convolve, "_span_spread", lambda *a, **k: calls.append(a) or function(*a, **k)
+    )
+    quadrant = np.random.default_rng(2).random((512, 512))
+    excess = np.zeros((512, 4096))
+    excess[100, 0] = excess[400, 4095] = 1e6
+    box = (0, 512, 0, 4096)
+    for precision in ("float64", "float32"):
+        got = direct_spread(
+            excess, (0, 0), quadrant, box, np.zeros((512, 4096)), quadrant=True,
+            precision=precision,
+        )  # fmt: skip
+        assert calls == []
+    reference = np.zeros((512, 4096))
+    full = mirror_quadrant(quadrant)
+    reference[:, :512] += 1e6 * full[511 - 100 : 1023 - 100, 511:]
+    reference[:, -512:] += 1e6 * full[511 - 400 : 1023 - 400, :512]
+    assert_allclose(got, reference, rtol=1e-12, atol=0)
+
+
 @settings(max_examples=60, deadline=None)
 @given(
     a_shape=st.tuples(st.integers(1, 40), st.integers(1, 40)),
@@ -255,8 +281,8 @@ def test_a_given_group_with_nothing_to_spread_adds_nothing_by_every_method():
     costs=st.none() | st.tuples(*[st.floats(1e-10, 1e-8)] * 3),
     seed=st.integers(0, 2**32 - 1),
 )
-def test_each_cluster_is_spread_as_cluster_method_says(box, density, half, precision, costs, seed):
-    """The plan prices each cluster by :func:`cluster_method`; the spread takes that way,
+def test_each_cluster_is_spread_as_cluster_ways_says(box, density, half, precision, costs, seed):
+    """The plan prices each cluster by :func:`cluster_ways`; the spread takes that way,
     with the same costs: a correlation or a span per pixel (seen through which of
     ``ndimage.correlate`` and ``_span_spread`` it calls)."""
     rng = np.random.default_rng(seed)
@@ -267,9 +293,13 @@ def test_each_cluster_is_spread_as_cluster_method_says(box, density, half, preci
     side = min(2 * max(half) + 8, 1100)
     out_box = (0, side, 0, side)
     groups = [((slice(0, box[0]), slice(0, box[1])), mask)]
-    values = _convolve.span_values(side, box[1] - 1, half[1])  # the spans' per output pixel
-    expected = _convolve.cluster_method(
-        box, int(mask.sum()), precision=precision, costs=costs, values=values
+    (expected,) = _convolve.cluster_ways(
+        [(box, int(mask.sum()))],
+        area=min(side * side, (2 * half[0] + 1) * (2 * half[1] + 1)),
+        values=_convolve.span_values(side, box[1] - 1, half[1]),
+        layout_values=_convolve.span_layout_values(half[0] + 1, side, box[1] - 1),
+        precision=precision,
+        costs=costs,
     )
     calls = {"correlation": 0, "spans": 0}
     correlate, spans = _convolve.ndimage.correlate, _convolve._span_spread
@@ -292,4 +322,6 @@ def test_each_cluster_is_spread_as_cluster_method_says(box, density, half, preci
         )  # fmt: skip
     if expected == "correlation" and mask.size > (2 * half[0] + 1) * (2 * half[1] + 1):
         return  # a cluster larger than the kernel: the kernel slides over it (ndimage.convolve)
-    assert [name for name, count in calls.items() if count] == [expected], (calls, expected)
+    # a single pixel correlated is a scaled view of the kernel: no ndimage call
+    taken = [name for name, count in calls.items() if count] or ["correlation"]
+    assert taken == [expected], (calls, expected)

@@ -650,8 +650,8 @@ def _read_entry(body: memoryview, key: str) -> tuple[Kernel, np.ndarray] | None:
             quadrature_error=float(header["quadrature_error"]),
             description=ast.literal_eval(header["description"]),
         )
-    except (KeyError, TypeError, ValueError, SyntaxError, struct.error):
-        return None
+    except (KeyError, TypeError, ValueError, SyntaxError, OverflowError, struct.error):
+        return None  # OverflowError: an edited header's infinite shape or pixel size
     return kernel, values
 
 

@@ -71,6 +71,11 @@ SPAN_BAND_VALUES = 2**18
 # float32 spans are summed in float32 at most this many at a time, then added to the float64
 # output: the bound on their round-off grows with this number, not with the bright pixels
 SPAN32_FLUSH_TERMS = 32
+# Laying out the kernel's rows for spans (_span_kernel), seconds per value of the layout: 12 ms
+# for the night scene's 1638 × 3941 float32 rows in a fresh process, 1.9 ns a value; with one
+# or two glints across a 4096-wide image the layout was most of the spans' time, and a
+# correlation per pixel 1.2-2.2 times faster (the choice now counts it)
+SPAN_LAYOUT_S = 1.9e-9
 # float32 spans' terms and sums stay finite (below 3.4e38): the plan spreads float32 spans only
 # where the excess sums to at most this (cd/m² × pixels; a kernel's values are at most 1)
 SPAN32_MAX_TOTAL_EXCESS = 1e36
@@ -450,18 +455,70 @@ def cluster_method(
 
     Examples
     --------
-    >>> cluster_method((3, 3), 9), cluster_method((3, 3), 9, precision="float32")
-    ('correlation', 'spans')
+    >>> cluster_method((3, 3), 9), cluster_method((3, 3), 9, values=8.0)
+    ('spans', 'correlation')
     """
-    if precision not in ("float64", "float32"):
-        raise ValueError(f"precision must be 'float64' or 'float32'; got {precision!r}")
     if costs is None:
-        span = SPAN_PIXEL_S if precision == "float64" else SPAN32_PIXEL_S
-        costs = (CORRELATE_S, CORRELATE_WEIGHT_S, span)
+        costs = (CORRELATE_S, CORRELATE_WEIGHT_S, _span_cost(precision))
     correlate_s, weight_s, span_s = costs
     if correlate_s + weight_s * box_shape[0] * box_shape[1] < span_s * values * pixels:
         return "correlation"
     return "spans"
+
+
+def cluster_ways(
+    clusters: list[tuple[tuple[int, int], int]],
+    *,
+    area: int,
+    values: float,
+    layout_values: int,
+    precision: Literal["float64", "float32"] = "float64",
+    costs: tuple[float, float, float] | None = None,
+) -> list[Literal["correlation", "spans"]]:
+    """How :func:`direct_spread` spreads each cluster ``(box_shape, pixels)``: by
+    :func:`cluster_method`, unless the spans chosen, with the kernel's layout they share
+    (``layout_values`` values at :data:`SPAN_LAYOUT_S` each), cost more than correlating
+    those clusters over ``area`` output pixels: then every cluster is correlated. The plan
+    prices the same choice with the machine's costs.
+
+    Examples
+    --------
+    >>> cluster_ways([((1, 1), 1)], area=512**2, values=8.0, layout_values=10**6)
+    ['correlation']
+    >>> cluster_ways([((3, 3), 9)] * 3, area=2048**2, values=1.5, layout_values=5 * 10**6,
+    ...              precision="float32")
+    ['spans', 'spans', 'spans']
+    """
+    ways = [
+        cluster_method(shape, pixels, precision=precision, costs=costs, values=values)
+        for shape, pixels in clusters
+    ]
+    if "spans" not in ways:
+        return ways
+    correlate_s, weight_s, span_s = (
+        costs if costs is not None else (CORRELATE_S, CORRELATE_WEIGHT_S, _span_cost(precision))
+    )
+    chosen = [(shape, pixels) for (shape, pixels), way in zip(clusters, ways, strict=True)
+              if way == "spans"]  # fmt: skip
+    spans = sum(span_s * values * pixels for _, pixels in chosen) * area
+    spans += SPAN_LAYOUT_S * layout_values
+    correlated = sum(correlate_s + weight_s * shape[0] * shape[1] for shape, _ in chosen) * area
+    return ["correlation"] * len(ways) if spans > correlated else ways
+
+
+def span_layout_values(kernel_rows: int, out_columns: int, source_columns: int) -> int:
+    """Values of the kernel's layout for spans (:func:`_span_kernel`): its rows (a
+    quadrant's, else all) times the stride, the output's columns plus the bright pixels'
+    spread of columns."""
+    return kernel_rows * (out_columns + source_columns)
+
+
+def _span_cost(precision: str) -> float:
+    if precision == "float32":
+        return SPAN32_PIXEL_S
+    if precision == "float64":
+        return SPAN_PIXEL_S
+    raise ValueError(f"precision must be 'float64' or 'float32'; got {precision!r}")
 
 
 def span_roundoff(bright_pixels: int, total_excess: float) -> tuple[float, float]:
@@ -551,23 +608,31 @@ def direct_spread(
     if precision not in ("float64", "float32"):
         raise ValueError(f"precision must be 'float64' or 'float32'; got {precision!r}")
     sources, spans = [], []
-    groups = clusters(excess > 0) if groups is None else groups
-    if groups:  # the spans' values per output pixel: their stride over a pixel's reach
-        columns = [(box[1].start, box[1].stop - 1) for box, _ in groups]
-        spread = max(hi for _, hi in columns) - min(lo for lo, _ in columns)
-        values = span_values(out_box[3] - out_box[2], spread, _kernel_half(kernel, quadrant)[1])
-    for box, mask in groups:
+    found = []
+    for box, mask in clusters(excess > 0) if groups is None else groups:
         weights = np.where(mask, excess[box], 0)
         pixels = int(np.count_nonzero(weights))
-        if pixels == 0:  # a caller's group with nothing to spread
-            continue
-        start = (origin[0] + box[0].start, origin[1] + box[1].start)
-        if method == "cheapest":
-            how = cluster_method(
-                weights.shape, pixels, precision=precision, costs=costs, values=values
-            )
-        else:
-            how = method
+        if pixels:  # a caller's group may have nothing to spread
+            found.append((weights, (origin[0] + box[0].start, origin[1] + box[1].start), pixels))
+    if not found:
+        return into
+    if method == "cheapest":
+        a, b = _kernel_half(kernel, quadrant)
+        spread = max(p + w.shape[1] - 1 for w, (_, p), _ in found) - min(
+            p for _, (_, p), _ in found
+        )
+        width = out_box[3] - out_box[2]
+        ways = cluster_ways(
+            [(weights.shape, pixels) for weights, _, pixels in found],
+            area=min(width * (out_box[1] - out_box[0]), (2 * a + 1) * (2 * b + 1)),
+            values=span_values(width, spread, b),
+            layout_values=span_layout_values(a + 1, width, spread),
+            precision=precision,
+            costs=costs,
+        )
+    else:
+        ways = [method] * len(found)
+    for (weights, start, _), how in zip(found, ways, strict=True):
         if how == "correlation":
             sources.append((weights, start))
         else:
@@ -808,15 +873,19 @@ def _kernel_half(kernel: np.ndarray, quadrant: bool) -> tuple[int, int]:
 
 
 def _correlate(weights, start, kernel, out_box, into, buffer, *, quadrant) -> None:
-    """Add the spread of ``weights`` (a box of more than one pixel whose first pixel is the
-    image's ``start``) to ``into`` at the pixels of ``out_box`` it reaches (``buffer``: room
-    for the correlation of the largest window): one correlation of each kernel window with
-    the box (``scipy.ndimage.correlate``)."""
+    """Add the spread of ``weights`` (a box whose first pixel is the image's ``start``) to
+    ``into`` at the pixels of ``out_box`` it reaches (``buffer``: room for the correlation
+    of the largest window): one correlation of each kernel window with the box
+    (``scipy.ndimage.correlate``), or for a single pixel a scaled view of each window."""
     a, b = _kernel_half(kernel, quadrant)
     (bh, bw), (q0, p0) = weights.shape, start
     r0, r1 = max(out_box[0], q0 - a), min(out_box[1], q0 + bh + a)
     c0, c1 = max(out_box[2], p0 - b), min(out_box[3], p0 + bw + b)
     if r0 >= r1 or c0 >= c1:
+        return
+    if weights.size == 1 and not quadrant:  # one pixel: a scaled copy, one view
+        window = kernel[r0 - q0 + a : r1 - q0 + a, c0 - p0 + b : c1 - p0 + b]
+        into[r0:r1, c0:c1] += weights[0, 0] * window
         return
     if (2 * a + 1) * (2 * b + 1) < weights.size:  # a cluster larger than the kernel
         _convolve_cluster(weights, start, kernel, (r0, r1, c0, c1), into, quadrant=quadrant)
@@ -830,6 +899,9 @@ def _correlate(weights, start, kernel, out_box, into, buffer, *, quadrant) -> No
         rows = _select(d0, d1, a, quadrant)
         for ca, cb, cols in columns:
             window = _window(kernel, rows, cols)
+            if weights.size == 1:  # one pixel: a scaled copy
+                into[ra:rb, ca:cb] += weights[0, 0] * window
+                continue
             out = buffer[: window.size].reshape(window.shape)
             ndimage.correlate(window, flipped, output=out, mode="constant")
             into[ra:rb, ca:cb] += out[bh // 2 : bh // 2 + rb - ra, bw // 2 : bw // 2 + cb - ca]

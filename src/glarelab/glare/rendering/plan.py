@@ -43,9 +43,11 @@ import scipy.fft
 from glarelab.glare.models.base import GlareModel
 from glarelab.glare.rendering._convolve import (
     SPAN32_MAX_TOTAL_EXCESS,
-    cluster_method,
+    SPAN_LAYOUT_S,
+    cluster_ways,
     fft_length,
     fft_workers,
+    span_layout_values,
     span_roundoff,
     span_values,
 )
@@ -281,29 +283,39 @@ def _direct_cost(
     ``precision``; a lower bound when that is already above ``limit`` (the clusters are then
     not looked for). Each cluster costs what
     :func:`~glarelab.glare.rendering._convolve.direct_spread` spends on it
-    (:func:`~glarelab.glare.rendering._convolve.cluster_method`: its correlation or a span
+    (:func:`~glarelab.glare.rendering._convolve.cluster_ways`: its correlation or a span
     per bright pixel), priced by the machine's costs per output pixel it reaches: the costs'
     own up to ``DIRECT_COST_SIDE ** 2`` pixels, and their ``direct_wide_share`` for each
-    pixel beyond."""
+    pixel beyond; the spans' kernel layout at
+    :data:`~glarelab.glare.rendering._convolve.SPAN_LAYOUT_S` a value."""
     area = min((out[1] - out[0]) * (out[3] - out[2]), (2 * reach[0] + 1) * (2 * reach[1] + 1))
     base = DIRECT_COST_SIDE**2
     pixels = area if area <= base else base + costs.direct_wide_share * (area - base)
     weighed = direct_costs(costs, precision)
-    values = span_values(out[3] - out[2], scene.source_box[3] - 1 - scene.source_box[2], reach[1])
+    width, spread = out[3] - out[2], scene.source_box[3] - 1 - scene.source_box[2]
+    values = span_values(width, spread, reach[1])
     lowest = pixels * scene.bright_pixels * min(weighed[1], weighed[2] * values)
     if lowest >= limit:
         return lowest
-    total = 0.0
-    for _, mask in scene.clusters():
-        bright = int(mask.sum())
-        how = cluster_method(mask.shape, bright, precision=precision, costs=weighed, values=values)
+    found = [(mask.shape, int(mask.sum())) for _, mask in scene.clusters()]
+    ways = cluster_ways(
+        found,
+        area=area,
+        values=values,
+        layout_values=span_layout_values(reach[0] + 1, width, spread),
+        precision=precision,
+        costs=weighed,
+    )
+    total, layout = 0.0, 0.0
+    for (shape, bright), how in zip(found, ways, strict=True):
         if how == "correlation":
-            total += costs.correlate_s + costs.correlate_weight_s * mask.size
+            total += costs.correlate_s + costs.correlate_weight_s * shape[0] * shape[1]
         elif how == "spans":
             total += weighed[2] * values * bright
+            layout = SPAN_LAYOUT_S * span_layout_values(reach[0] + 1, width, spread)
         else:
             raise ValueError(f"unknown way to spread a cluster: {how!r}")
-    return pixels * total
+    return pixels * total + layout
 
 
 def _span_precision(renderer, scene: Scene, cut_bound: float, step: float):
