@@ -9,7 +9,12 @@ from scipy import integrate
 
 from glarelab.glare import VosGlare
 from glarelab.glare.models import vos
-from glarelab.glare.models.digitise import digitise_radial, kernel_shape_for, mirror_quadrant
+from glarelab.glare.models.digitise import (
+    digitise_radial,
+    gaussian_pixel_energies,
+    kernel_shape_for,
+    mirror_quadrant,
+)
 
 SR_PER_DEG2 = (math.pi / 180) ** 2
 
@@ -46,6 +51,27 @@ def test_centre_pixel_is_exact_even_for_coarse_pixels():
     # 1° pixels: f1's 0.02° peak is far narrower than a pixel
     values, _, _, _ = digitise_radial([vos.f1], pixel_deg=1.0, shape=(5, 5))
     assert_allclose(values[0, 2, 2], pixel_energy(vos.f1, 0, 0, 1.0), rtol=1e-6)
+
+
+@pytest.mark.parametrize(("width_deg", "pixel_deg"), [(0.0707, 0.02), (0.0707, 0.05), (1.0, 0.01)])
+def test_gaussian_pixel_energies_are_accurate_far_in_the_tail(width_deg, pixel_deg):
+    # the energy of pixel i is ∫ exp(-(x/w)²)/(w √π) over it: scipy's quad, relative only,
+    # down to 1e-250 (a difference of two erf near 1 left round-off of 1e-17 there)
+    energies = gaussian_pixel_energies(width_deg, pixel_deg, 400)
+    assert energies[0] > 0 and np.all(energies >= 0)
+    offsets = [i for i in range(1, 401) if 1e-250 < energies[i] or i < 3]
+    assert len(offsets) > 20
+
+    def density(x):
+        return math.exp(-((x / width_deg) ** 2)) / (width_deg * math.sqrt(math.pi))
+
+    for i in offsets:
+        expected, _ = integrate.quad(
+            density, (i - 0.5) * pixel_deg, (i + 0.5) * pixel_deg, epsabs=0.0, epsrel=1e-12
+        )
+        assert_allclose(energies[i], expected, rtol=1e-8, err_msg=f"pixel {i}")
+    # past them the energy is below 1e-250, not round-off
+    assert np.all(energies[offsets[-1] + 1 :] <= 1e-250)
 
 
 @pytest.mark.parametrize("pixel_deg", [1e-4, 0.003, 0.0119, 0.1, 1.0, 5.0])

@@ -99,6 +99,24 @@ def test_tail_bounds_bound_the_digitised_kernel(model, colour):
         assert energy <= 3 * left.max() + 1e-9  # and is not wildly loose
 
 
+@pytest.mark.parametrize("sampling", ["pixel", "point"])
+@pytest.mark.parametrize("normalisation", ["Yoshida2008", "infinite"])
+def test_a_gaussian_tail_bound_holds_relatively_far_out(sampling, normalisation):
+    # a glint of 1e9 cd/m² shows a tail of 1e-17; the bound must hold there, not to 1e-12
+    model = GaussianGlare(sigma_deg=0.05, sampling=sampling, normalisation=normalisation)
+    pixel = 0.02
+    kernel = model.kernel(pixel, (101, 101))
+    radii = np.array([3, 8, 12, 16, 20, 24, 30])
+    bound = model.tail_bound(pixel, radii)
+    y, x = np.indices(kernel.values.shape) - 50
+    outside_square = np.maximum(np.abs(y), np.abs(x))
+    for r, peak, energy in zip(radii, bound.peak, bound.energy, strict=True):
+        outside = kernel.values[outside_square > r]
+        assert outside.max() <= peak * (1 + 1e-9), r
+        assert outside.sum() <= energy * (1 + 1e-9) + 1e-300, r
+        assert energy <= 3 * outside.sum() + 1e-300, r  # and is not wildly loose
+
+
 def test_the_far_path_error_is_measured_on_the_model_over_the_whole_kernel():
     # smootherstep blend, cubic splat and interpolation, sharpened cell averages: the far
     # path's relative error falls as (f / R0)²; measured 5e-4 at R0 = 16 f, photopic

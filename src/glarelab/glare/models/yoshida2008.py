@@ -129,6 +129,9 @@ class GaussianGlare(GlareModel):
         energy outside ``1 - (Σ_{|i|≤r} a_i)²`` for the normalised 1-D profile ``a``. Under
         ``normalisation='Yoshida2008'`` the cut kernel is normalised over its support (eq. 2's
         ``k``), so it is marked renormalised; under ``'infinite'`` a cut loses that energy.
+        The energy is taken as ``t (2 - t)`` with ``t = 2 Σ_{i>r} a_i`` the 1-D profile's tail,
+        summed from the outside in: ``1 - (Σ_{|i|≤r} a_i)²`` is 0 in floating point wherever
+        the tail is below 1e-16, while a glint of 1e9 cd/m² shows it.
 
         Parameters
         ----------
@@ -155,11 +158,25 @@ class GaussianGlare(GlareModel):
             profile = np.exp(-(np.arange(n + 1, dtype=float) ** 2) / (2.0 * sigma_px**2))
         else:
             profile = gaussian_pixel_energies(self.sigma_deg * math.sqrt(2.0), pixel_deg, n)
-        profile = profile / self._profile_total(sigma_px, profile)
-        inside = 2.0 * np.cumsum(profile) - profile[0]  # Σ_{|i|≤r} a_i
+        total = self._profile_total(sigma_px, profile)
+        profile = profile / total
+        # the tail t = 2 Σ_{i>r} a_i summed from the outside in, and what lies past the
+        # profile's last offset n: nothing under 'Yoshida2008' (normalised over |i| ≤ n), the
+        # exact erfc for pixel energies, and for point samples ∫_n^∞ exp(-x²/2σ²) dx, which
+        # bounds the samples' sum past n
+        beyond = 2.0 * np.cumsum(profile[::-1])[::-1]  # beyond[i] = 2 Σ_{j≥i} a_j
+        if self.normalisation == "Yoshida2008":
+            past_n = 0.0
+        elif self.sampling == "pixel":
+            past_n = math.erfc((n + 0.5) / (sigma_px * math.sqrt(2.0)))
+        else:
+            past_n = (
+                sigma_px * math.sqrt(2.0 * math.pi) * math.erfc(n / (sigma_px * math.sqrt(2.0)))
+            ) / total
+        tail = beyond[radius + 1] + past_n
         return TailBound(
             peak=profile[radius + 1] * profile[0],
-            energy=np.clip(1.0 - inside[radius] ** 2, 0.0, 1.0),
+            energy=np.clip(tail * (2.0 - tail), 0.0, 1.0),
             renormalised=self.normalisation == "Yoshida2008",
         )
 
