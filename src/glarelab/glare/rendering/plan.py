@@ -298,11 +298,12 @@ def _direct_cost(
     if lowest >= limit:
         return lowest
     found = [(mask.shape, int(mask.sum())) for _, mask in scene.clusters()]
+    layout_values = span_layout_values(reach[0] + 1, width, spread)
     ways = cluster_ways(
         found,
         area=area,
         values=values,
-        layout_values=span_layout_values(reach[0] + 1, width, spread),
+        layout_values=layout_values,
         precision=precision,
         costs=weighed,
     )
@@ -312,7 +313,7 @@ def _direct_cost(
             total += costs.correlate_s + costs.correlate_weight_s * shape[0] * shape[1]
         elif how == "spans":
             total += weighed[2] * values * bright
-            layout = SPAN_LAYOUT_S * span_layout_values(reach[0] + 1, width, spread)
+            layout = SPAN_LAYOUT_S * layout_values  # shared by every span
         else:
             raise ValueError(f"unknown way to spread a cluster: {how!r}")
     return pixels * total + layout
