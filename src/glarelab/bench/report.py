@@ -3,6 +3,7 @@ one Pareto plot per workload and model."""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 from glarelab.bench.peers import PEER, PEER_SPECTRUM, PEER_SPECTRUM_32
@@ -144,15 +145,16 @@ def write_plots(rows: list[dict], out: Path) -> None:
 
 
 def _pareto(results: list[dict], title: str, path: Path) -> None:
-    """Time against largest error, one marker per variant (legend at the side), log-log;
-    peers are squares, the plan's points are joined (its tolerance is the knob)."""
+    """Time against largest error, one marker per variant (legend below the axes, where it
+    takes no width from them), log-log; peers are squares, the plan's points are joined
+    (its tolerance is the knob)."""
     from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
     from glarelab.analysis.figures import png, subplots
 
     floor = 1e-4  # errors below this are drawn on it (a log axis has no zero)
-    markers = "oD^v<>phX*P"  # squares are for peers
-    figure, axis = subplots(figsize=(8.5, 4.2))
+    markers = "oD^v<>pdX*P"  # squares are for peers; 11 against 10 colours: no pair twice
+    figure, axis = subplots(figsize=(8.5, 5.0 + 0.16 * math.ceil((len(results) + 1) / 2)))
     plan = [r for r in results if r["variant"].startswith(("default", "plan"))]
     plan.sort(key=lambda r: r["seconds"])
     axis.plot(
@@ -184,5 +186,7 @@ def _pareto(results: list[dict], title: str, path: Path) -> None:
     axis.xaxis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
     axis.xaxis.set_major_formatter(FuncFormatter(lambda value, _: f"{value:g}"))
     axis.xaxis.set_minor_formatter(NullFormatter())  # minor labels collide on short spans
-    axis.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.02, 0.5), frameon=False)
+    axis.legend(
+        fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncols=2, frameon=False
+    )
     write_bytes(path, png(figure))
