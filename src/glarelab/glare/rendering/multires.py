@@ -114,9 +114,15 @@ def _splat_last(values: np.ndarray, factor: int, start: int, n_nodes: int) -> np
     """:func:`splat` along the last axis: pixels ``start …`` onto ``n_nodes`` nodes."""
     offset, first_cell = start % factor, start // factor
     cells = -(-(offset + values.shape[-1]) // factor)
-    padded = np.zeros((*values.shape[:-1], cells * factor))
-    padded[..., offset : offset + values.shape[-1]] = values
-    parts = padded.reshape(*values.shape[:-1], cells, factor) @ _phase_weights(factor)
+    if offset == 0 and values.shape[-1] == cells * factor and values.flags.c_contiguous:
+        padded = values  # whole cells already: no copy (32 MB of a 2048² image)
+    else:
+        padded = np.zeros((*values.shape[:-1], cells * factor))
+        padded[..., offset : offset + values.shape[-1]] = values
+    # one product of every cell's pixels with the phase weights (one BLAS call, not one a row)
+    parts = (padded.reshape(-1, factor) @ _phase_weights(factor)).reshape(
+        *values.shape[:-1], cells, 5
+    )
     out = np.zeros((*values.shape[:-1], n_nodes))
     for shift in range(5):
         node = first_cell + PAD_NODES - 2 + shift
@@ -151,10 +157,12 @@ def splat(excess: np.ndarray, factor: int, box, grid: tuple[int, int]) -> np.nda
     A box whose bright pixels are at most :data:`SPARSE_SPLAT_SHARE` of it (lamps, glints,
     a sun) is splatted pixel by pixel, sixteen products each; any other by dense products
     per cell along each axis. The two agree to the rounding of their sums."""
-    rows, cols = np.nonzero(excess)
-    if rows.size > SPARSE_SPLAT_SHARE * excess.size:
+    # counted before the pixels are listed: listing the 484,000 bright pixels of the 2048²
+    # leaves took 31 ms of a 93 ms preview that splats them densely
+    if np.count_nonzero(excess) > SPARSE_SPLAT_SHARE * excess.size:
         columns = _splat_last(excess, factor, box[2], grid[1])
         return _splat_last(columns.T, factor, box[0], grid[0]).T
+    rows, cols = np.nonzero(excess)
     first_row, row_weights = _cubic_at(rows + box[0], factor)
     first_col, col_weights = _cubic_at(cols + box[2], factor)
     values = excess[rows, cols].astype(np.float64, copy=False)
