@@ -117,6 +117,20 @@ def test_a_gaussian_tail_bound_holds_relatively_far_out(sampling, normalisation)
         assert energy <= 3 * outside.sum() + 1e-300, r  # and is not wildly loose
 
 
+@pytest.mark.parametrize("normalisation", ["Yoshida2008", "infinite"])
+def test_a_wide_gaussian_tail_bound_holds_where_its_profile_rounds_flat(normalisation):
+    # 5e5 px wide: neighbouring pixels' energies 1e-12 apart, their rounding as large; the
+    # largest value outside each square is bounded whatever order the rounding leaves
+    pixel = 7.411312135708248e-05
+    model = GaussianGlare(sigma_deg=5e5 * pixel, sampling="pixel", normalisation=normalisation)
+    renderer = GlareRenderer(model, pixel_deg=pixel, shape=(31, 31))
+    values = renderer.kernel().values  # (61, 61), normalised as the renderer renders
+    bound = renderer.tail_bound(False)
+    outside_square = np.maximum(*np.abs(np.indices(values.shape) - 30))
+    for r in range(30):
+        assert values[outside_square > r].max() <= bound.peak[r] * (1 + 1e-14), r
+
+
 def test_the_far_path_error_is_measured_on_the_model_over_the_whole_kernel():
     # smootherstep blend, cubic splat and interpolation, sharpened cell averages: the far
     # path's relative error falls as (f / R0)²; measured 5e-4 at R0 = 16 f, photopic

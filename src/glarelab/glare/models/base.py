@@ -42,11 +42,16 @@ class TailBound:
     renormalised
         Whether the model normalises its kernel over the support, so that cutting it also
         scales what is kept by ``1 / (1 - energy)``.
+    kept
+        The PSF's share inside the square, ``1 - energy``, where the model sums it to more
+        digits than that difference keeps (a kernel holding 1e-9 of a wide Gaussian); None:
+        ``1 - energy``.
     """
 
     peak: np.ndarray
     energy: np.ndarray
     renormalised: bool = False
+    kept: np.ndarray | None = None
 
 
 class GlareModel(abc.ABC):

@@ -475,11 +475,13 @@ def gaussian_pixel_energies(width_deg: float, pixel_deg: float, half_size: int) 
     """Energy per pixel of a unit 1-D Gaussian ``exp(-(x/width)²)/(width √π)``, offsets 0..n.
 
     Returns ``½[erf((i+½)Δ/w) - erf((i-½)Δ/w)]`` for ``i = 0 … half_size``; the 2-D kernel of
-    a separable Gaussian is the outer product of two of these, mirrored. Past the centre the
-    difference is taken of the complements, ``½[erfc((i-½)Δ/w) - erfc((i+½)Δ/w)]``: a
-    difference of two values of ``erf`` near 1 keeps only round-off (about 1e-17 where the
-    energy is 1e-170), which a glint of 1e9 cd/m² spreads as 1e-8 cd/m² over pixels the
-    Gaussian does not reach.
+    a separable Gaussian is the outer product of two of these, mirrored. Where the pixel's
+    near edge is past ``w/2`` the difference is taken of the complements,
+    ``½[erfc((i-½)Δ/w) - erfc((i+½)Δ/w)]``: a difference of two values of ``erf`` near 1
+    keeps only round-off (about 1e-17 where the energy is 1e-170), which a glint of 1e9
+    cd/m² spreads as 1e-8 cd/m² over pixels the Gaussian does not reach. Nearer the centre
+    ``erf`` is kept: there the complements are near 1 (1e-9 of a pixel's energy lost for a
+    Gaussian 1e5 pixels wide).
 
     Parameters
     ----------
@@ -498,11 +500,10 @@ def gaussian_pixel_energies(width_deg: float, pixel_deg: float, half_size: int) 
     from scipy.special import erf, erfc  # imported here: 0.2 s at start-up
 
     offsets = np.arange(half_size + 1, dtype=float)
-    energies = np.empty(half_size + 1)
-    energies[0] = erf(0.5 * pixel_deg / width_deg)
-    inner = erfc((offsets[1:] - 0.5) * pixel_deg / width_deg)
-    outer = erfc((offsets[1:] + 0.5) * pixel_deg / width_deg)
-    energies[1:] = 0.5 * (inner - outer)
+    near, far = (offsets - 0.5) * pixel_deg / width_deg, (offsets + 0.5) * pixel_deg / width_deg
+    tail = near >= 0.5  # both complements below 0.48: their difference keeps its digits
+    energies = 0.5 * (erf(far) - erf(near))
+    energies[tail] = 0.5 * (erfc(near[tail]) - erfc(far[tail]))
     return energies
 
 

@@ -131,7 +131,9 @@ class GaussianGlare(GlareModel):
         ``k``), so it is marked renormalised; under ``'infinite'`` a cut loses that energy.
         The energy is taken as ``t (2 - t)`` with ``t = 2 Σ_{i>r} a_i`` the 1-D profile's tail,
         summed from the outside in: ``1 - (Σ_{|i|≤r} a_i)²`` is 0 in floating point wherever
-        the tail is below 1e-16, while a glint of 1e9 cd/m² shows it.
+        the tail is below 1e-16, while a glint of 1e9 cd/m² shows it; what is kept,
+        ``(Σ_{|i|≤r} a_i)²``, is summed from the inside out, for the same reason where a
+        kernel holds a small share of a wide Gaussian.
 
         Parameters
         ----------
@@ -174,10 +176,15 @@ class GaussianGlare(GlareModel):
                 sigma_px * math.sqrt(2.0 * math.pi) * math.erfc(n / (sigma_px * math.sqrt(2.0)))
             ) / total
         tail = beyond[radius + 1] + past_n
+        inside = 2.0 * np.cumsum(profile) - profile[0]  # Σ_{|i|≤r} a_i, summed outwards
+        # the largest a_i a_j with |i| or |j| > r: the largest a_i past r times the largest
+        # a_j (the profile falls, but its rounding need not: 1e-13 apart a pixel 1e5 px in)
+        after = np.maximum.accumulate(profile[::-1])[::-1]  # after[i] = max_{j≥i} a_j
         return TailBound(
-            peak=profile[radius + 1] * profile[0],
+            peak=after[radius + 1] * after[0],
             energy=np.clip(tail * (2.0 - tail), 0.0, 1.0),
             renormalised=self.normalisation == "Yoshida2008",
+            kept=inside[radius] ** 2,
         )
 
     def _profile_total(self, sigma_px: float, profile: np.ndarray) -> float:

@@ -502,7 +502,8 @@ class GlareRenderer:
                 # the reference kernel is normalised over its own support, which holds at
                 # least 1 - E(its smaller half-size) of the PSF: its values are at most
                 # 1 / that times the PSF's
-                kept = 1.0 - float(bound.energy[min(self.kernel_half)])
+                half = min(self.kernel_half)
+                kept = float(1.0 - bound.energy[half] if bound.kept is None else bound.kept[half])
                 scale = 1.0 / kept if kept > 0 else np.inf
                 bound = TailBound(bound.peak * scale, np.minimum(bound.energy * scale, 1.0))
             self._bounds[colour] = bound
