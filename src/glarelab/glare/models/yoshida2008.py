@@ -125,8 +125,9 @@ class GaussianGlare(GlareModel):
     ) -> TailBound:
         """What a kernel cut to a centred square of half-size ``radius_px`` leaves out.
 
-        Exact for the separable kernel: the largest pixel outside is ``a[r+1] a[0]`` and the
-        energy outside ``1 - (Σ_{|i|≤r} a_i)²`` for the normalised 1-D profile ``a``. Under
+        Exact for the separable kernel: the largest pixel outside is ``max_{i>r} a_i · max a``
+        (``a[r+1] a[0]`` where the rounded profile falls) and the energy outside
+        ``1 - (Σ_{|i|≤r} a_i)²`` for the normalised 1-D profile ``a``. Under
         ``normalisation='Yoshida2008'`` the cut kernel is normalised over its support (eq. 2's
         ``k``), so it is marked renormalised; under ``'infinite'`` a cut loses that energy.
         The energy is taken as ``t (2 - t)`` with ``t = 2 Σ_{i>r} a_i`` the 1-D profile's tail,
